@@ -1,0 +1,61 @@
+"""The ``counterpart`` command: a thin dispatcher over subcommand modules.
+
+Each subcommand module exposes ``add_arguments(parser)`` and ``main(args) -> int``; it is imported
+only when its command runs, so ``counterpart topic list`` does not pay for OpenCV or scikit-learn.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+
+#: command -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "launch": ("bus.cli_launch", "run a graph from a launch file"),
+    "run": ("bus.cli_run", "run one node alone"),
+    "node": ("bus.cli_introspect", "list the nodes of a running launch"),
+    "topic": ("bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="counterpart", description="Counterpart: virtual interaction partners on a node graph.")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module, help_) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_, description=help_)
+        mod = importlib.import_module(module)
+        add = getattr(mod, f"add_arguments_{name}", None) or mod.add_arguments
+        add(p)
+        p.set_defaults(_module=module, _command=name)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    # like `python -m`: the user's own node modules in the working folder are importable
+    if os.getcwd() not in sys.path:
+        sys.path.insert(0, os.getcwd())
+    if argv and argv[0] == "run":  # node parameters are parsed by the node runner itself
+        from .runner import run_standalone
+
+        if len(argv) < 2 or argv[1].startswith("-"):
+            print("usage: counterpart run MODULE [--param K=V ...] [--remap PORT=TOPIC ...] [--policy PORT=latest]",
+                  file=sys.stderr)
+            sys.exit(2)
+        sys.exit(run_standalone(argv[1], argv[2:]))
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    if not getattr(args, "command", None):
+        ap.print_help()
+        sys.exit(2)
+    mod = importlib.import_module(args._module)
+    run = getattr(mod, f"main_{args._command}", None) or mod.main
+    try:
+        sys.exit(run(args))
+    except KeyboardInterrupt:
+        sys.exit(130)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,41 @@
+"""``counterpart launch FILE [--set node.param=value ...] [--replace node=module] [--check]``."""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+from .launchfile import LaunchError, check, load
+from .params import ParamError, parse_assignments
+from .runner import setup_logging
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", help="launch file: a path, or a name in the launch/ folder (demo.yaml)")
+    p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
+    p.add_argument("--replace", action="append", metavar="NODE=MODULE", help="run another module for a node")
+    p.add_argument("--check", action="store_true", help="check the graph and exit without starting it")
+
+
+def load_checked(file: str, sets: list[str] | None, replace: list[str] | None):
+    return check(load(file, parse_assignments(sets, "--set"), parse_assignments(replace, "--replace")))
+
+
+def main(args: argparse.Namespace) -> int:
+    from .supervisor import Launcher, prune_run_dirs
+
+    setup_logging("launch")
+    try:
+        graph = load_checked(args.file, args.set, args.replace)
+    except (LaunchError, ParamError) as exc:
+        print(f"counterpart launch: {exc}", file=sys.stderr)
+        return 2
+    if args.check:
+        print(f"{graph.file}: {len(graph.nodes)} nodes, {len(graph.topics)} topics: OK")
+        return 0
+    prune_run_dirs()
+    launcher = Launcher(graph)
+    logging.getLogger("launch").info("run directory %s", launcher.run_dir)
+    code = launcher.run()
+    launcher.cleanup()
+    return code

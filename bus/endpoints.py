@@ -1,0 +1,97 @@
+"""Where topics live: run directories and the two endpoints of every topic.
+
+Each topic is published on two sockets: a *reliable* one (XPUB with ZMQ_XPUB_NODROP: the publisher
+waits when a reliable subscriber lags) and a *latest* one (a lossy PUB for live subscribers that only
+want the newest message). With ``ipc://`` both live in a per-run directory of mode 0700; with
+``tcp://host:port`` the reliable socket takes ``port`` and the latest one ``port + 1``.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+_IPC_MAX = 100  # sun_path is 108 bytes on Linux, keep a margin
+
+
+def base_dir() -> Path:
+    """Per-user folder holding run directories (``$XDG_RUNTIME_DIR/counterpart`` or ``/tmp/counterpart-UID``)."""
+    env = os.environ.get("COUNTERPART_HOME")
+    if env:
+        root = Path(env)
+    elif os.environ.get("XDG_RUNTIME_DIR") and Path(os.environ["XDG_RUNTIME_DIR"]).is_dir():
+        root = Path(os.environ["XDG_RUNTIME_DIR"]) / "counterpart"
+    else:
+        root = Path(tempfile.gettempdir()) / f"counterpart-{os.getuid()}"
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)
+    return root
+
+
+def new_run_dir() -> Path:
+    """A fresh run directory, mode 0700, named by time and pid."""
+    path = base_dir() / f"run-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
+    path.mkdir(mode=0o700)
+    os.chmod(path, 0o700)
+    return path
+
+
+def standalone_dir() -> Path:
+    """Shared folder for nodes started alone (``counterpart run``) so they find each other by topic."""
+    path = base_dir() / "standalone"
+    path.mkdir(mode=0o700, exist_ok=True)
+    return path
+
+
+@dataclass(frozen=True)
+class TopicEndpoints:
+    """The reliable and latest endpoints of one topic (what publishers bind and subscribers connect)."""
+
+    reliable: str
+    latest: str
+
+    def to_dict(self) -> dict[str, str]:
+        return {"reliable": self.reliable, "latest": self.latest}
+
+    @staticmethod
+    def from_dict(d: dict[str, str]) -> "TopicEndpoints":
+        return TopicEndpoints(d["reliable"], d["latest"])
+
+
+def _file_stem(topic: str) -> str:
+    stem = re.sub(r"[^A-Za-z0-9_.-]", "~", topic)
+    if len(stem) > 40:
+        stem = stem[:24] + "-" + hashlib.sha1(topic.encode()).hexdigest()[:12]
+    return stem
+
+
+def ipc_endpoints(run_dir: Path, topic: str) -> TopicEndpoints:
+    stem = _file_stem(topic)
+    rel, lat = run_dir / f"{stem}.r", run_dir / f"{stem}.l"
+    if len(str(rel)) > _IPC_MAX:
+        raise ValueError(
+            f"ipc path {rel} is too long for a unix socket; set COUNTERPART_HOME to a shorter folder"
+        )
+    return TopicEndpoints(f"ipc://{rel}", f"ipc://{lat}")
+
+
+def tcp_endpoints(address: str) -> TopicEndpoints:
+    """``tcp://host:port`` -> reliable on port, latest on port + 1."""
+    m = re.fullmatch(r"tcp://([^:/]+):(\d+)", address)
+    if not m:
+        raise ValueError(f"tcp endpoint {address!r}: expected tcp://HOST:PORT")
+    host, port = m.group(1), int(m.group(2))
+    if not 0 < port < 65535:
+        raise ValueError(f"tcp endpoint {address!r}: port out of range")
+    return TopicEndpoints(f"tcp://{host}:{port}", f"tcp://{host}:{port + 1}")
+
+
+def bind_address(endpoint: str) -> str:
+    """What a publisher binds for ``endpoint``: a named host is bound as given, ``*`` is refused
+    unless spelled out as ``0.0.0.0`` (so nothing listens beyond loopback by accident)."""
+    if endpoint.startswith("tcp://*"):
+        raise ValueError(f"endpoint {endpoint}: bind to an explicit host (127.0.0.1, or 0.0.0.0 to listen everywhere)")
+    return endpoint

@@ -1,0 +1,339 @@
+"""Launch files: YAML descriptions of a graph, loaded, merged and checked before any process starts.
+
+Format (every key but ``nodes`` optional)::
+
+    include:                       # other launch files, relative to this one or in launch/
+      - base.yaml
+      - {file: cam.yaml, set: {camera.fps: 10}}
+    transport: ipc                 # ipc (default: a 0700 run directory) or tcp
+    host: 127.0.0.1                # tcp: the host to bind (loopback unless named)
+    port_base: 7300                # tcp: first port; each topic takes two (reliable, latest)
+    endpoints:                     # fixed tcp endpoints for chosen topics (to span launchers)
+      numbers: tcp://127.0.0.1:7400
+    external:                      # topics published by another launcher
+      numbers: {type: test.Number, endpoint: tcp://127.0.0.1:7400}
+    nodes:
+      relay:
+        run: tests.graph_nodes.relay      # module (or module:Class) holding the node
+        params: {gain: 2.0}
+        remap: {in: numbers, out: doubled} # port -> topic (default: topic = port name)
+        policy: reliable                   # default queue policy of every input
+        inputs: {in: {policy: latest}}     # per-input policy
+        restart: on-failure                # never | on-failure | always
+        max_restarts: 5
+        required: false                    # its exit stops the graph with its exit code
+        wait_subscribers: {out: 1}         # extra reliable subscribers to await (other launchers)
+
+Every error is a :class:`LaunchError` naming the file, the node and the key.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from messages import by_name, schema_id
+
+from .endpoints import TopicEndpoints, ipc_endpoints, tcp_endpoints
+from .node import STATS_PORT, Input, Node, Output, stats_topic
+from .params import ParamError
+from .runner import NodeLookupError, find_node_class
+from .transport import POLICIES
+
+RESTART_POLICIES = ("never", "on-failure", "always")
+NODE_KEYS = {"run", "params", "remap", "policy", "inputs", "restart", "max_restarts", "required", "wait_subscribers"}
+TOP_KEYS = {"include", "transport", "host", "port_base", "endpoints", "external", "nodes", "barrier_timeout"}
+
+
+class LaunchError(ValueError):
+    """A launch file that cannot run; the message names the file, node and key."""
+
+
+@dataclass
+class NodeDecl:
+    name: str
+    run: str
+    file: str
+    params: dict[str, Any] = field(default_factory=dict)
+    remap: dict[str, str] = field(default_factory=dict)
+    policy: str | None = None
+    input_policies: dict[str, str] = field(default_factory=dict)
+    restart: str = "never"
+    max_restarts: int = 5
+    required: bool = False
+    wait_subscribers: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class Graph:
+    """A checked graph: nodes with resolved classes, ports, topics and endpoints."""
+
+    file: str
+    nodes: dict[str, NodeDecl]
+    transport: str = "ipc"
+    host: str = "127.0.0.1"
+    port_base: int = 7300
+    fixed_endpoints: dict[str, str] = field(default_factory=dict)
+    external: dict[str, dict[str, Any]] = field(default_factory=dict)
+    barrier_timeout: float = 30.0
+    # filled by check()
+    classes: dict[str, type[Node]] = field(default_factory=dict)
+    params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    ports_in: dict[str, dict[str, Input]] = field(default_factory=dict)
+    ports_out: dict[str, dict[str, Output]] = field(default_factory=dict)
+    topics: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def input_topic(self, node: str, port: str) -> str:
+        return self.nodes[node].remap.get(port, port)
+
+    def output_topic(self, node: str, port: str) -> str:
+        if port == STATS_PORT:
+            return self.nodes[node].remap.get(port, stats_topic(node))
+        return self.nodes[node].remap.get(port, port)
+
+
+def find_launch_file(name: str | Path, relative_to: Path | None = None) -> Path:
+    """A launch file by path, relative to an including file, or by name in the ``launch`` package."""
+    p = Path(name)
+    tries = [p] if p.is_absolute() else ([relative_to / p] if relative_to else []) + [Path.cwd() / p]
+    for t in tries:
+        if t.is_file():
+            return t.resolve()
+    packaged = resources.files("launch") / str(name)
+    if packaged.is_file():
+        return Path(str(packaged))
+    raise LaunchError(f"launch file {name!s} not found (looked in {', '.join(str(t) for t in tries)} and the launch package)")
+
+
+def _err(file: str, node: str | None, key: str, msg: str) -> LaunchError:
+    where = f"{file}: node {node!r}: {key}" if node else f"{file}: {key}"
+    return LaunchError(f"{where}: {msg}")
+
+
+def _mapping(value: Any, file: str, node: str | None, key: str) -> dict[str, Any]:
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise _err(file, node, key, f"expected a mapping, got {type(value).__name__}")
+    return value
+
+
+def load(path: str | Path, sets: dict[str, Any] | None = None, replace: dict[str, str] | None = None,
+         _seen: tuple[Path, ...] = ()) -> Graph:
+    """Read a launch file (and its includes), apply ``--set node.param=value`` and
+    ``--replace node=module``. The result still needs :func:`check`."""
+    file_path = find_launch_file(path)
+    file = str(file_path)
+    if file_path in _seen:
+        raise LaunchError(f"{file}: include cycle through {' -> '.join(map(str, _seen))}")
+    try:
+        doc = yaml.safe_load(file_path.read_text()) or {}
+    except yaml.YAMLError as exc:
+        raise LaunchError(f"{file}: not valid YAML: {exc}") from None
+    if not isinstance(doc, dict):
+        raise LaunchError(f"{file}: the top level must be a mapping with 'nodes'")
+    unknown = sorted(set(doc) - TOP_KEYS)
+    if unknown:
+        raise _err(file, None, unknown[0], f"unknown key; expected one of {', '.join(sorted(TOP_KEYS))}")
+    graph = Graph(file=file, nodes={})
+    for inc in doc.get("include") or []:
+        inc_sets: dict[str, Any] = {}
+        if isinstance(inc, dict):
+            inc_sets = _mapping(inc.get("set"), file, None, "include.set")
+            inc = inc.get("file")
+        if not isinstance(inc, str):
+            raise _err(file, None, "include", "each entry is a file name or {file: NAME, set: {...}}")
+        try:
+            sub = load(find_launch_file(inc, file_path.parent), inc_sets, None, _seen + (file_path,))
+        except LaunchError as exc:
+            raise LaunchError(f"{file}: include {inc}: {exc}") from None
+        for name, decl in sub.nodes.items():
+            if name in graph.nodes:
+                raise _err(file, name, "include", f"node defined twice ({graph.nodes[name].file} and {decl.file})")
+            graph.nodes[name] = decl
+        graph.external.update(sub.external)
+        graph.fixed_endpoints.update(sub.fixed_endpoints)
+    graph.transport = doc.get("transport", "ipc")
+    if graph.transport not in ("ipc", "tcp"):
+        raise _err(file, None, "transport", f"{graph.transport!r} is not ipc or tcp")
+    graph.host = str(doc.get("host", "127.0.0.1"))
+    graph.port_base = int(doc.get("port_base", 7300))
+    graph.barrier_timeout = float(doc.get("barrier_timeout", 30.0))
+    for topic, ep in _mapping(doc.get("endpoints"), file, None, "endpoints").items():
+        try:
+            tcp_endpoints(str(ep))
+        except ValueError as exc:
+            raise _err(file, None, f"endpoints.{topic}", str(exc)) from None
+        graph.fixed_endpoints[topic] = str(ep)
+    for topic, ext in _mapping(doc.get("external"), file, None, "external").items():
+        ext = _mapping(ext, file, None, f"external.{topic}")
+        if "type" not in ext or "endpoint" not in ext:
+            raise _err(file, None, f"external.{topic}", "needs 'type' and 'endpoint'")
+        try:
+            tcp_endpoints(str(ext["endpoint"]))
+        except ValueError as exc:
+            raise _err(file, None, f"external.{topic}.endpoint", str(exc)) from None
+        graph.external[topic] = {"type": str(ext["type"]), "endpoint": str(ext["endpoint"]), "file": file}
+    nodes = doc.get("nodes")
+    if not isinstance(nodes, dict) or (not nodes and not graph.nodes):
+        if nodes is None and graph.nodes:
+            nodes = {}
+        else:
+            raise _err(file, None, "nodes", "expected a mapping of node names to node declarations")
+    for name, body in nodes.items():
+        if name in graph.nodes:
+            raise _err(file, name, "nodes", f"node defined twice ({graph.nodes[name].file} and {file})")
+        graph.nodes[name] = _node_decl(file, str(name), _mapping(body, file, name, "node"))
+    _apply_overrides(graph, sets or {}, replace or {})
+    return graph
+
+
+def _node_decl(file: str, name: str, body: dict[str, Any]) -> NodeDecl:
+    unknown = sorted(set(body) - NODE_KEYS)
+    if unknown:
+        raise _err(file, name, unknown[0], f"unknown key; expected one of {', '.join(sorted(NODE_KEYS))}")
+    if not isinstance(body.get("run"), str):
+        raise _err(file, name, "run", "missing: name the module that holds the node (e.g. nodes.camera)")
+    decl = NodeDecl(name=name, run=body["run"], file=file)
+    decl.params = dict(_mapping(body.get("params"), file, name, "params"))
+    decl.remap = {str(k): str(v) for k, v in _mapping(body.get("remap"), file, name, "remap").items()}
+    decl.policy = body.get("policy")
+    if decl.policy is not None and decl.policy not in POLICIES:
+        raise _err(file, name, "policy", f"{decl.policy!r} is not one of {', '.join(POLICIES)}")
+    for port, v in _mapping(body.get("inputs"), file, name, "inputs").items():
+        pol = _mapping(v, file, name, f"inputs.{port}").get("policy")
+        if pol not in POLICIES:
+            raise _err(file, name, f"inputs.{port}.policy", f"{pol!r} is not one of {', '.join(POLICIES)}")
+        decl.input_policies[str(port)] = pol
+    decl.restart = body.get("restart", "never")
+    if decl.restart not in RESTART_POLICIES:
+        raise _err(file, name, "restart", f"{decl.restart!r} is not one of {', '.join(RESTART_POLICIES)}")
+    decl.max_restarts = int(body.get("max_restarts", 5))
+    decl.required = bool(body.get("required", False))
+    decl.wait_subscribers = {str(k): int(v) for k, v in _mapping(body.get("wait_subscribers"), file, name, "wait_subscribers").items()}
+    return decl
+
+
+def _apply_overrides(graph: Graph, sets: dict[str, Any], replace: dict[str, str]) -> None:
+    for key, value in sets.items():
+        node, _, param = key.partition(".")
+        if not param:
+            raise LaunchError(f"--set {key}: expected NODE.PARAM=VALUE")
+        if node not in graph.nodes:
+            raise LaunchError(f"--set {key}: no node {node!r} in {graph.file}; nodes: {', '.join(graph.nodes)}")
+        if isinstance(value, str):
+            try:
+                value = yaml.safe_load(value)
+            except yaml.YAMLError:
+                pass
+        graph.nodes[node].params[param] = value
+    for node, module in replace.items():
+        if node not in graph.nodes:
+            raise LaunchError(f"--replace {node}={module}: no node {node!r} in {graph.file}; nodes: {', '.join(graph.nodes)}")
+        graph.nodes[node].run = module
+
+
+def check(graph: Graph) -> Graph:
+    """Resolve every node class, validate parameters, and check that every input has a publisher
+    of the same message type. Raises LaunchError naming file, node and key."""
+    publishers: dict[str, tuple[str, str, type]] = {}
+    for name, decl in graph.nodes.items():
+        try:
+            cls = find_node_class(decl.run)
+        except NodeLookupError as exc:
+            raise _err(decl.file, name, "run", str(exc)) from None
+        try:
+            params = cls.validate_params(decl.params)
+        except ParamError as exc:
+            raise _err(decl.file, name, "params", str(exc)) from None
+        ins, outs = cls.ports(params)
+        for port in decl.remap:
+            if port not in ins and port not in outs and port != STATS_PORT:
+                raise _err(decl.file, name, f"remap.{port}",
+                           f"{cls.__name__} has no port {port!r}; inputs: {', '.join(ins) or '-'}; outputs: {', '.join(outs) or '-'}")
+        for port in decl.input_policies:
+            if port not in ins:
+                raise _err(decl.file, name, f"inputs.{port}", f"{cls.__name__} has no input {port!r}; inputs: {', '.join(ins) or '-'}")
+        for port in decl.wait_subscribers:
+            if port not in outs:
+                raise _err(decl.file, name, f"wait_subscribers.{port}", f"{cls.__name__} has no output {port!r}")
+        graph.classes[name], graph.params[name] = cls, params
+        graph.ports_in[name], graph.ports_out[name] = ins, outs
+        for port, out in list(outs.items()) + [(STATS_PORT, Output(by_name("system.NodeStats")))]:
+            topic = graph.output_topic(name, port)
+            if topic in publishers:
+                other = publishers[topic]
+                raise _err(decl.file, name, f"outputs.{port}", f"topic {topic!r} is already published by node {other[0]!r}")
+            if topic in graph.external:
+                raise _err(decl.file, name, f"outputs.{port}", f"topic {topic!r} is declared external in this graph")
+            publishers[topic] = (name, port, out.type)
+    for topic, ext in graph.external.items():
+        try:  # after the node modules are imported, so that their message types are registered
+            ext_type = by_name(ext["type"])
+        except KeyError as exc:
+            raise _err(ext["file"], None, f"external.{topic}.type", str(exc).strip('"')) from None
+        publishers[topic] = ("(external)", topic, ext_type)
+    subscribers: dict[str, list[tuple[str, str, str]]] = {t: [] for t in publishers}
+    for name, decl in graph.nodes.items():
+        for port, inp in graph.ports_in[name].items():
+            topic = graph.input_topic(name, port)
+            if topic not in publishers:
+                raise _err(decl.file, name, f"inputs.{port}",
+                           f"no node publishes topic {topic!r}; published topics: {', '.join(sorted(publishers)) or '-'}")
+            pub_node, pub_port, pub_type = publishers[topic]
+            if inp.type is not None and pub_type is not inp.type:
+                raise _err(decl.file, name, f"inputs.{port}",
+                           f"type mismatch on topic {topic!r}: {pub_node}.{pub_port} publishes {schema_id(pub_type)}, "
+                           f"this input takes {schema_id(inp.type)}")
+            policy = decl.input_policies.get(port) or decl.policy or inp.policy
+            subscribers[topic].append((name, port, policy))
+    graph.topics = {
+        topic: {"type": schema_id(t), "publisher": f"{n}.{p}", "subscribers": subscribers[topic]}
+        for topic, (n, p, t) in publishers.items()
+    }
+    return graph
+
+
+def endpoints_for(graph: Graph, run_dir: Path) -> dict[str, TopicEndpoints]:
+    """Every topic's endpoints: fixed or external tcp ones, else ipc in the run dir or tcp ports."""
+    out: dict[str, TopicEndpoints] = {}
+    port = graph.port_base
+    for topic in sorted(graph.topics):
+        if topic in graph.external:
+            out[topic] = tcp_endpoints(graph.external[topic]["endpoint"])
+        elif topic in graph.fixed_endpoints:
+            out[topic] = tcp_endpoints(graph.fixed_endpoints[topic])
+        elif graph.transport == "tcp":
+            out[topic] = tcp_endpoints(f"tcp://{graph.host}:{port}")
+            port += 2
+        else:
+            out[topic] = ipc_endpoints(run_dir, topic)
+    return out
+
+
+def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
+    """The JSON spec each node process is started with."""
+    eps = endpoints_for(graph, run_dir)
+    specs = {}
+    for name, decl in graph.nodes.items():
+        spec: dict[str, Any] = {
+            "name": name, "module": decl.run, "params": copy.deepcopy(decl.params), "supervised": True,
+            "barrier_timeout": graph.barrier_timeout, "inputs": {}, "outputs": {},
+        }
+        for port, inp in graph.ports_in[name].items():
+            topic = graph.input_topic(name, port)
+            policy = decl.input_policies.get(port) or decl.policy or inp.policy
+            spec["inputs"][port] = {"topic": topic, "endpoints": eps[topic].to_dict(), "policy": policy}
+        for port in list(graph.ports_out[name]) + [STATS_PORT]:
+            topic = graph.output_topic(name, port)
+            reliable = sum(1 for _, _, pol in graph.topics[topic]["subscribers"] if pol == "reliable")
+            spec["outputs"][port] = {
+                "topic": topic, "endpoints": eps[topic].to_dict(),
+                "reliable_subscribers": reliable + decl.wait_subscribers.get(port, 0),
+            }
+        specs[name] = spec
+    return specs

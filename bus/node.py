@@ -1,0 +1,343 @@
+"""The Node API: declare inputs, outputs and parameters; handle messages; publish.
+
+A processing node::
+
+    class Relay(Node):
+        \"\"\"Forwards every number, scaled.\"\"\"
+        inputs = {"in": Input(Number)}
+        outputs = {"out": Output(Number)}
+        params = {"gain": Param(float, 1.0, "factor applied to each value")}
+
+        def on_message(self, port, msg):
+            self.publish("out", replace(msg, value=msg.value * self.p["gain"]))
+
+A source node has no inputs and overrides :meth:`Node.generate`, publishing until its data ends
+(then end of stream goes out on every output and the process exits 0) or ``self.stopping`` is set.
+
+A node is one process. It gets its wiring from the launcher (a JSON spec in the run directory) or,
+run alone, from :func:`standalone_spec`: there every topic lives in a shared per-user folder, so
+nodes started by hand with ``counterpart run`` find each other by topic name.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+import zmq
+
+from messages import EndOfStream, NodeStats, TopicStats
+
+from .endpoints import TopicEndpoints, ipc_endpoints, standalone_dir
+from .params import Param, resolve_params
+from .transport import LATEST, POLICIES, RELIABLE, Publisher, Subscriber
+
+STATS_PORT = "stats"
+STATS_PERIOD_S = 1.0
+
+
+@dataclass(frozen=True)
+class Input:
+    """An input port. ``type`` is a message class, or None for any message (recorders, echo)."""
+
+    type: type | None
+    policy: str = RELIABLE
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Output:
+    """An output port publishing messages of ``type``."""
+
+    type: type
+    doc: str = ""
+
+
+def stats_topic(node_name: str) -> str:
+    return f"{node_name}/stats"
+
+
+class _PortStats:
+    """Counters of one port over the current stats period."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.period_count = 0
+        self.latencies: list[float] = []
+
+    def snapshot(self, period: float) -> tuple[float, float]:
+        rate = self.period_count / period if period > 0 else 0.0
+        lat = float(np.median(self.latencies)) if self.latencies else 0.0
+        self.period_count = 0
+        self.latencies = []
+        return rate, lat
+
+
+class Node:
+    """Base class of every node process. Subclasses set ``inputs``, ``outputs``, ``params`` and
+    override :meth:`setup`, :meth:`on_message` (or ``on_<port>``), :meth:`on_end`, :meth:`generate`."""
+
+    inputs: ClassVar[dict[str, Input]] = {}
+    outputs: ClassVar[dict[str, Output]] = {}
+    params: ClassVar[dict[str, Param]] = {}
+
+    # ------------------------------------------------------------------ declared ports and params
+    @classmethod
+    def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The ports for the given (validated) parameters. Override when they depend on parameters."""
+        return dict(cls.inputs), dict(cls.outputs)
+
+    @classmethod
+    def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        return resolve_params(cls.params, given, where)
+
+    # ------------------------------------------------------------------------------ life cycle
+    def __init__(self, spec: dict[str, Any]) -> None:
+        self.name: str = spec["name"]
+        self.spec = spec
+        self.p: dict[str, Any] = self.validate_params(spec.get("params", {}), f"node {self.name!r}")
+        self.log = logging.getLogger(self.name)
+        self.stopping = False
+        self.ctx = zmq.Context.instance()
+        self._started = time.monotonic()
+        self._last_seq = -1
+        self._in: dict[str, Subscriber] = {}
+        self._out: dict[str, Publisher] = {}
+        self._in_stats: dict[str, _PortStats] = {}
+        self._out_stats: dict[str, _PortStats] = {}
+        self._proc_ms: list[float] = []
+        self._last_stats = time.monotonic()
+        self._stats_seq = 0
+        self._ppid = os.getppid()
+
+    def setup(self) -> None:
+        """Called once after the sockets are up, before any message. Load models here."""
+
+    def on_message(self, port: str, msg: Any) -> None:
+        """Handle one message on ``port``. Default: call ``self.on_<port>(msg)``."""
+        handler = getattr(self, f"on_{port}", None)
+        if handler is None:
+            raise NotImplementedError(f"{type(self).__name__} has no on_message or on_{port}")
+        handler(msg)
+
+    def on_end(self) -> None:
+        """Called once when every input has ended, before end of stream goes out downstream."""
+
+    def on_timer(self) -> None:
+        """Called about every ``timer_period`` seconds when the class sets it (not None)."""
+
+    timer_period: ClassVar[float | None] = None
+
+    def generate(self) -> None:
+        """Source nodes (no inputs) publish here until their data ends or ``self.stopping``."""
+        raise NotImplementedError(f"{type(self).__name__} has no inputs and must implement generate()")
+
+    def teardown(self) -> None:
+        """Called on every exit path after the loop; close files and devices here."""
+
+    # ------------------------------------------------------------------------------- publishing
+    def publish(self, port: str, msg: Any) -> None:
+        pub = self._out.get(port)
+        if pub is None:
+            raise KeyError(f"node {self.name!r} has no output port {port!r}; ports: {', '.join(self._out)}")
+        pub.send(msg)
+        st = self._out_stats[port]
+        st.count += 1
+        st.period_count += 1
+        seq = getattr(msg, "seq", -1)
+        if isinstance(seq, int) and seq > self._last_seq:
+            self._last_seq = seq
+        self._maybe_stats()
+
+    # ------------------------------------------------------------------------------- internals
+    def _open(self) -> None:
+        inputs, outputs = self.ports(self.p)
+        wiring_in = self.spec.get("inputs", {})
+        wiring_out = self.spec.get("outputs", {})
+        for port in inputs:
+            w = wiring_in[port]
+            policy = w.get("policy", inputs[port].policy)
+            self._in[port] = Subscriber(
+                self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]), policy,
+                on_bad=lambda kind, detail, port=port: self.log.warning(
+                    "dropped a bad message on %s (%s); further ones of this kind are only counted", port, detail
+                ),
+            )
+            self._in_stats[port] = _PortStats()
+        for port in list(outputs) + [STATS_PORT]:
+            w = wiring_out[port]
+            self._out[port] = Publisher(
+                self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]),
+                expected=int(w.get("reliable_subscribers", 0)),
+                barrier_timeout=float(self.spec.get("barrier_timeout", 30.0)),
+                should_stop=lambda: self.stopping,
+            )
+            self._out_stats[port] = _PortStats()
+
+    def _close(self) -> None:
+        for s in self._in.values():
+            s.close()
+        for p in self._out.values():
+            p.close()
+        # term() honours each socket's linger: what is still queued (the tail, end of stream) goes out
+        self.ctx.term()
+
+    def _maybe_stats(self, force: bool = False) -> None:
+        now = time.monotonic()
+        period = now - self._last_stats
+        if not force and period < STATS_PERIOD_S:
+            return
+        self._last_stats = now
+        ins, outs = [], []
+        for port, sub in self._in.items():
+            rate, lat = self._in_stats[port].snapshot(period)
+            ins.append(TopicStats(topic=sub.topic, port=port, count=sub.count, rate_hz=rate, drops=sub.drops,
+                                  bad=sum(sub.bad.values()), latency_ms=lat))
+        for port, pub in self._out.items():
+            if port == STATS_PORT:
+                continue
+            rate, _ = self._out_stats[port].snapshot(period)
+            outs.append(TopicStats(topic=pub.topic, port=port, count=self._out_stats[port].count, rate_hz=rate))
+        errors: dict[str, int] = {}
+        for sub in self._in.values():
+            for k, v in sub.bad.items():
+                errors[k] = errors.get(k, 0) + v
+        proc = self._proc_ms
+        self._proc_ms = []
+        msg = NodeStats(
+            stamp=time.monotonic_ns(), seq=self._stats_seq, node=self.name, pid=os.getpid(),
+            uptime_s=now - self._started, inputs=ins, outputs=outs,
+            proc_ms_mean=float(np.mean(proc)) if proc else 0.0, proc_ms_max=float(np.max(proc)) if proc else 0.0,
+            decode_errors=errors,
+        )
+        self._stats_seq += 1
+        self._out[STATS_PORT].send(msg)
+
+    def _parent_gone(self) -> bool:
+        return self.spec.get("supervised", False) and os.getppid() != self._ppid
+
+    def _loop(self) -> None:
+        poller = zmq.Poller()
+        owners: dict[zmq.Socket, str] = {}
+        for port, sub in self._in.items():
+            for s in sub.sockets:
+                poller.register(s, zmq.POLLIN)
+                owners[s] = port
+        next_timer = time.monotonic() + (self.timer_period or 0)
+        while not self.stopping:
+            open_ports = [p for p, s in self._in.items() if not s.ended]
+            if not open_ports:
+                break
+            timeout = 100
+            if self.timer_period is not None:
+                timeout = max(0, min(timeout, int((next_timer - time.monotonic()) * 1000)))
+            ready = dict(poller.poll(timeout))
+            for port in dict.fromkeys(owners[s] for s in ready):
+                sub = self._in[port]
+                msg = sub.receive()
+                if msg is None:
+                    continue
+                if isinstance(msg, EndOfStream):
+                    self.log.debug("end of stream on %s", port)
+                    continue
+                st = self._in_stats[port]
+                st.period_count += 1
+                stamp = getattr(msg, "stamp", 0)
+                if stamp:
+                    st.latencies.append((time.monotonic_ns() - stamp) / 1e6)
+                t0 = time.perf_counter()
+                self.on_message(port, msg)
+                self._proc_ms.append((time.perf_counter() - t0) * 1e3)
+            if self.timer_period is not None and time.monotonic() >= next_timer:
+                self.on_timer()
+                next_timer = time.monotonic() + self.timer_period
+            self._maybe_stats()
+            if self._parent_gone():
+                self.log.warning("launcher is gone; stopping")
+                self.stopping = True
+
+    def _send_eos(self, reason: str) -> None:
+        for port, pub in self._out.items():
+            pub.send_eos(self.name, self._last_seq, reason)
+
+    def run(self) -> int:
+        """Open sockets, set up, loop until end of stream or stop, send end of stream, clean up."""
+        _install_signal_handlers(self)
+        code = 0
+        self._open()
+        try:
+            self.setup()
+            if self._in:
+                self._loop()
+                if not self.stopping:
+                    self.on_end()
+            else:
+                self.generate()
+            self._maybe_stats(force=True)
+            self._send_eos("stopped" if self.stopping else "end")
+        finally:
+            try:
+                self.teardown()
+            finally:
+                self._close()
+        return code
+
+    # ------------------------------------------------------------------------------- entry points
+    @classmethod
+    def main(cls, argv: list[str] | None = None) -> None:
+        """Run this node alone from the command line (``python -m nodes.x --param k=v``)."""
+        from .runner import run_standalone
+
+        sys.exit(run_standalone(cls, argv))
+
+
+def _install_signal_handlers(node: Node) -> None:
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def stop(signum: int, frame: Any) -> None:
+        if node.stopping:  # second signal: the node is stuck; leave now
+            os._exit(128 + signum)
+        node.stopping = True
+
+    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGTERM, stop)
+
+
+def standalone_spec(
+    name: str, node_cls: type[Node], params: dict[str, Any], remap: dict[str, str], policy: dict[str, str]
+) -> dict[str, Any]:
+    """Wiring for a node run alone: every topic in the shared standalone folder, no barrier."""
+    p = node_cls.validate_params(params, f"node {name!r}")
+    inputs, outputs = node_cls.ports(p)
+    root = standalone_dir()
+    unknown = sorted(set(remap) - set(inputs) - set(outputs) - {STATS_PORT})
+    if unknown:
+        raise ValueError(f"--remap: node {name!r} has no port {', '.join(unknown)}; ports: {', '.join([*inputs, *outputs])}")
+    spec: dict[str, Any] = {"name": name, "params": params, "inputs": {}, "outputs": {}}
+    for port, inp in inputs.items():
+        topic = remap.get(port, port)
+        pol = policy.get(port, inp.policy)
+        if pol not in POLICIES:
+            raise ValueError(f"--policy {port}={pol}: expected one of {', '.join(POLICIES)}")
+        spec["inputs"][port] = {"topic": topic, "endpoints": ipc_endpoints(root, topic).to_dict(), "policy": pol}
+    for port in list(outputs) + [STATS_PORT]:
+        topic = remap.get(port, stats_topic(name) if port == STATS_PORT else port)
+        spec["outputs"][port] = {"topic": topic, "endpoints": ipc_endpoints(root, topic).to_dict()}
+    return spec
+
+
+def load_spec(path: str | Path) -> dict[str, Any]:
+    with open(path) as f:
+        return json.load(f)
+
+
+__all__ = ["Node", "Input", "Output", "Param", "RELIABLE", "LATEST", "stats_topic", "standalone_spec"]

@@ -1,0 +1,128 @@
+"""Process entry points: find a node class by module name and run it (under the launcher or alone)."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import inspect
+import logging
+import os
+import sys
+import traceback
+from typing import Any
+
+from .node import Node, load_spec, standalone_spec
+from .params import ParamError, parse_assignments
+
+
+class NodeLookupError(ImportError):
+    """The ``run:`` module of a node cannot be imported or holds no node class."""
+
+
+def find_node_class(module_name: str) -> type[Node]:
+    """The Node subclass of ``module_name`` (or of ``module_name.node``).
+
+    A module names its node with ``NODE = TheClass``, or defines exactly one Node subclass.
+    A ``module:Class`` form picks a class explicitly.
+    """
+    mod_name, _, cls_name = module_name.partition(":")
+    candidates = [mod_name, f"{mod_name}.node"]
+    errors = []
+    for name in candidates:
+        try:
+            mod = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name and (name == exc.name or name.startswith(exc.name + ".")):
+                errors.append(f"no module {name!r}")
+                continue
+            raise NodeLookupError(f"module {name!r} failed to import: {exc}") from exc
+        if cls_name:
+            cls = getattr(mod, cls_name, None)
+            if not (inspect.isclass(cls) and issubclass(cls, Node)):
+                raise NodeLookupError(f"{name!r} has no Node class {cls_name!r}")
+            return cls
+        explicit = getattr(mod, "NODE", None)
+        if inspect.isclass(explicit) and issubclass(explicit, Node):
+            return explicit
+        found = [
+            c for c in vars(mod).values()
+            if inspect.isclass(c) and issubclass(c, Node) and c is not Node and c.__module__ == mod.__name__
+        ]
+        if len(found) == 1:
+            return found[0]
+        if len(found) > 1:
+            raise NodeLookupError(
+                f"module {name!r} defines several nodes ({', '.join(c.__name__ for c in found)}); "
+                f"set NODE = <class> in it or write {name}:ClassName"
+            )
+        errors.append(f"module {name!r} defines no Node subclass")
+    raise NodeLookupError(f"cannot find a node in {module_name!r}: {'; '.join(errors)}")
+
+
+def setup_logging(name: str) -> None:
+    level = os.environ.get("COUNTERPART_LOG", "INFO").upper()
+    logging.basicConfig(
+        level=getattr(logging, level, logging.INFO),
+        format=f"[%(asctime)s.%(msecs)03d {name}] %(levelname)s %(message)s",
+        datefmt="%H:%M:%S",
+        stream=sys.stderr,
+    )
+
+
+def run_spec(spec: dict[str, Any]) -> int:
+    """Run a node from a launcher spec. Exit code: 0 after a clean end, 2 for bad parameters,
+    1 for an exception."""
+    setup_logging(spec["name"])
+    log = logging.getLogger(spec["name"])
+    try:
+        cls = find_node_class(spec["module"])
+        node = cls(spec)
+    except (ParamError, NodeLookupError) as exc:
+        log.error("%s", exc)
+        return 2
+    try:
+        return node.run()
+    except KeyboardInterrupt:
+        return 130
+    except Exception:
+        log.error("crashed:\n%s", traceback.format_exc())
+        return 1
+
+
+def run_standalone(cls: type[Node] | str, argv: list[str] | None = None) -> int:
+    """``counterpart run MODULE --param k=v --remap port=topic --policy port=latest``."""
+    ap = argparse.ArgumentParser(prog="counterpart run", description="Run one node alone.")
+    if isinstance(cls, str):
+        module = cls
+    else:
+        module = f"{cls.__module__}:{cls.__name__}"
+    ap.add_argument("--name", default=None, help="node name (default: the module's last part)")
+    ap.add_argument("--param", "-p", action="append", metavar="KEY=VALUE", help="set a parameter")
+    ap.add_argument("--remap", "-r", action="append", metavar="PORT=TOPIC", help="connect a port to a topic")
+    ap.add_argument("--policy", action="append", metavar="PORT=POLICY", help="reliable or latest per input")
+    args = ap.parse_args(argv)
+    try:
+        node_cls = find_node_class(module)
+        name = args.name or module.split(":")[0].split(".")[-1]
+        if name == "node":
+            name = module.split(":")[0].split(".")[-2]
+        spec = standalone_spec(
+            name, node_cls, parse_assignments(args.param), parse_assignments(args.remap, "--remap"),
+            parse_assignments(args.policy, "--policy"),
+        )
+    except (ParamError, NodeLookupError, ValueError) as exc:
+        print(f"counterpart run: {exc}", file=sys.stderr)
+        return 2
+    spec["module"] = module
+    return run_spec(spec)
+
+
+def main() -> None:
+    """``python -m bus.runner SPEC.json`` (what the launcher starts)."""
+    if len(sys.argv) != 2:
+        print("usage: python -m bus.runner SPEC.json", file=sys.stderr)
+        sys.exit(2)
+    sys.exit(run_spec(load_spec(sys.argv[1])))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,277 @@
+"""The launcher: start every node of a checked graph as its own process group and supervise it.
+
+- Each node runs ``python -m bus.runner SPEC`` in a new session (its own process group) with
+  PR_SET_PDEATHSIG, so it dies with the launcher even when the launcher is SIGKILLed; nodes also
+  watch their parent pid as a second guard.
+- Ctrl-C / SIGTERM: SIGINT to every group, then SIGTERM after ``INT_GRACE_S``, then SIGKILL after
+  ``TERM_GRACE_S``: everything is gone within 5 s.
+- ``restart``: never / on-failure / always, with exponential backoff (0.5 s doubling to 10 s; the
+  count resets after 30 s of healthy running) up to ``max_restarts``.
+- A ``required`` node's exit stops the graph with its exit code (after a clean 0 exit, the rest of
+  the graph gets ``DRAIN_S`` to finish on end of stream).
+- The graph ends by itself when every node has exited; the exit code is 0 when all exited 0.
+- The run directory holds ``registry.json`` (nodes, pids, topics, endpoints, types) for the
+  introspection commands, and ``base_dir()/latest`` points at it.
+"""
+from __future__ import annotations
+
+import ctypes
+import json
+import logging
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .endpoints import base_dir, new_run_dir
+from .launchfile import Graph, node_specs
+
+log = logging.getLogger("launch")
+
+INT_GRACE_S = 2.0
+TERM_GRACE_S = 1.5
+DRAIN_S = 10.0
+BACKOFF_START_S = 0.5
+BACKOFF_MAX_S = 10.0
+HEALTHY_S = 30.0
+
+_PR_SET_PDEATHSIG = 1
+
+
+def _child_setup() -> None:
+    """Runs in the child between fork and exec: die with the launcher."""
+    try:
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+    except OSError:
+        pass
+
+
+@dataclass
+class Proc:
+    name: str
+    cmd: list[str]
+    restart: str
+    max_restarts: int
+    required: bool
+    popen: subprocess.Popen | None = None
+    started: float = 0.0
+    restarts: int = 0
+    next_start: float | None = 0.0
+    exit_code: int | None = None
+    history: list[int] = field(default_factory=list)
+
+
+class Launcher:
+    """Runs one checked :class:`Graph` until it ends, is stopped, or a required node exits."""
+
+    def __init__(self, graph: Graph, run_dir: Path | None = None, env: dict[str, str] | None = None) -> None:
+        self.graph = graph
+        self.run_dir = run_dir or new_run_dir()
+        self.env = dict(os.environ if env is None else env)
+        self.procs: dict[str, Proc] = {}
+        self._stop_signal: int | None = None
+        self.specs = node_specs(graph, self.run_dir)
+        spec_dir = self.run_dir / "nodes"
+        spec_dir.mkdir(mode=0o700, exist_ok=True)
+        for name, spec in self.specs.items():
+            path = spec_dir / f"{name}.json"
+            path.write_text(json.dumps(spec, indent=1))
+            decl = graph.nodes[name]
+            self.procs[name] = Proc(
+                name=name, cmd=[sys.executable, "-m", "bus.runner", str(path)],
+                restart=decl.restart, max_restarts=decl.max_restarts, required=decl.required,
+            )
+
+    # ------------------------------------------------------------------------------ registry
+    def write_registry(self) -> None:
+        reg = {
+            "launch_file": self.graph.file,
+            "launcher_pid": os.getpid(),
+            "run_dir": str(self.run_dir),
+            "nodes": {
+                name: {
+                    "module": self.specs[name]["module"],
+                    "pid": p.popen.pid if p.popen and p.popen.poll() is None else None,
+                    "restarts": p.restarts,
+                    "exit_code": p.exit_code,
+                    "params": self.graph.params.get(name, {}),
+                    "inputs": {k: {"topic": v["topic"], "policy": v["policy"]} for k, v in self.specs[name]["inputs"].items()},
+                    "outputs": {k: {"topic": v["topic"]} for k, v in self.specs[name]["outputs"].items()},
+                }
+                for name, p in self.procs.items()
+            },
+            "topics": {
+                topic: {
+                    "type": info["type"],
+                    "publisher": info["publisher"],
+                    "subscribers": [f"{n}.{p} ({pol})" for n, p, pol in info["subscribers"]],
+                    "endpoints": next(
+                        (s["outputs"][port]["endpoints"] for s in self.specs.values() for port in s["outputs"]
+                         if s["outputs"][port]["topic"] == topic),
+                        None,
+                    ) or _external_endpoints(self.specs, topic),
+                }
+                for topic, info in self.graph.topics.items()
+            },
+        }
+        tmp = self.run_dir / "registry.json.tmp"
+        tmp.write_text(json.dumps(reg, indent=1, default=str))
+        os.replace(tmp, self.run_dir / "registry.json")
+
+    def _link_latest(self) -> None:
+        link = base_dir() / "latest"
+        tmp = base_dir() / f".latest-{os.getpid()}"
+        try:
+            if tmp.is_symlink():
+                tmp.unlink()
+            tmp.symlink_to(self.run_dir)
+            os.replace(tmp, link)
+        except OSError as exc:
+            log.debug("cannot update %s: %s", link, exc)
+
+    # ------------------------------------------------------------------------------- processes
+    def _start(self, p: Proc) -> None:
+        p.popen = subprocess.Popen(p.cmd, env=self.env, start_new_session=True, preexec_fn=_child_setup)
+        p.started = time.monotonic()
+        p.next_start = None
+        p.exit_code = None
+        log.info("started %s (pid %d)", p.name, p.popen.pid)
+
+    def _signal_all(self, sig: int) -> None:
+        for p in self.procs.values():
+            if p.popen is not None and p.popen.poll() is None:
+                try:
+                    os.killpg(p.popen.pid, sig)
+                except ProcessLookupError:
+                    pass
+
+    def _alive(self) -> list[Proc]:
+        return [p for p in self.procs.values() if p.popen is not None and p.popen.poll() is None]
+
+    def stop_all(self) -> None:
+        """SIGINT, then SIGTERM, then SIGKILL to every process group; returns when all are reaped."""
+        for sig, grace in ((signal.SIGINT, INT_GRACE_S), (signal.SIGTERM, TERM_GRACE_S), (signal.SIGKILL, 1.0)):
+            if not self._alive():
+                break
+            self._signal_all(sig)
+            deadline = time.monotonic() + grace
+            while self._alive() and time.monotonic() < deadline:
+                time.sleep(0.02)
+        for p in self.procs.values():
+            if p.popen is not None:
+                try:
+                    p.popen.wait(timeout=1.0)
+                except subprocess.TimeoutExpired:
+                    log.error("%s (pid %d) did not die", p.name, p.popen.pid)
+                if p.exit_code is None:
+                    p.exit_code = p.popen.returncode
+            # a node's own children live in its process group: make sure none is left
+            if p.popen is not None:
+                try:
+                    os.killpg(p.popen.pid, signal.SIGKILL)
+                except (ProcessLookupError, PermissionError):
+                    pass
+
+    def _on_signal(self, signum: int, frame: Any) -> None:
+        self._stop_signal = signum
+
+    def run(self) -> int:
+        """Start everything and supervise; returns the launcher's exit code."""
+        old = {s: signal.signal(s, self._on_signal) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+        self._link_latest()
+        code = 0
+        try:
+            for p in self.procs.values():
+                self._start(p)
+            self.write_registry()
+            code = self._supervise()
+        finally:
+            self.stop_all()
+            self.write_registry()
+            for s, h in old.items():
+                signal.signal(s, h)
+        return code
+
+    def _supervise(self) -> int:
+        drain_deadline: float | None = None
+        required_code: int | None = None
+        while True:
+            if self._stop_signal is not None:
+                log.info("stopping on signal %d", self._stop_signal)
+                return 128 + self._stop_signal
+            now = time.monotonic()
+            changed = False
+            for p in self.procs.values():
+                if p.popen is not None and p.exit_code is None and p.popen.poll() is not None:
+                    changed = True
+                    p.exit_code = p.popen.returncode
+                    p.history.append(p.exit_code)
+                    if now - p.started > HEALTHY_S:
+                        p.restarts = 0
+                    failed = p.exit_code != 0
+                    wants = p.restart == "always" or (p.restart == "on-failure" and failed)
+                    if wants and p.restarts < p.max_restarts and required_code is None and drain_deadline is None:
+                        delay = min(BACKOFF_MAX_S, BACKOFF_START_S * 2 ** p.restarts)
+                        p.restarts += 1
+                        p.next_start = now + delay
+                        log.warning("%s exited with %d; restart %d/%d in %.1f s", p.name, p.exit_code,
+                                    p.restarts, p.max_restarts, delay)
+                    else:
+                        (log.warning if failed else log.info)("%s exited with %d", p.name, p.exit_code)
+                        if p.required:
+                            if failed:
+                                log.error("required node %s failed: stopping the graph", p.name)
+                                return p.exit_code
+                            required_code = 0
+                            drain_deadline = now + DRAIN_S
+                if p.next_start is not None and p.popen is not None and now >= p.next_start and self._stop_signal is None:
+                    self._start(p)
+                    changed = True
+            if changed:
+                self.write_registry()
+            pending = [p for p in self.procs.values() if p.next_start is not None and p.popen is not None]
+            if not self._alive() and not pending:
+                codes = {p.name: p.exit_code for p in self.procs.values()}
+                failed = {n: c for n, c in codes.items() if c}
+                if failed:
+                    log.warning("graph ended; failed nodes: %s", ", ".join(f"{n} ({c})" for n, c in failed.items()))
+                    return next(iter(failed.values())) if required_code is None else required_code
+                log.info("graph ended")
+                return 0
+            if drain_deadline is not None and now > drain_deadline:
+                log.warning("required node ended; the rest did not finish within %.0f s: stopping them", DRAIN_S)
+                return required_code or 0
+            time.sleep(0.02)
+
+    def cleanup(self) -> None:
+        """Remove the run directory's sockets (the registry stays until the next launch prunes it)."""
+        for f in self.run_dir.glob("*"):
+            if f.is_socket():
+                f.unlink(missing_ok=True)
+
+
+def _external_endpoints(specs: dict[str, dict[str, Any]], topic: str) -> dict[str, str] | None:
+    for s in specs.values():
+        for w in s["inputs"].values():
+            if w["topic"] == topic:
+                return w["endpoints"]
+    return None
+
+
+def prune_run_dirs(keep: int = 10) -> None:
+    """Delete run directories of launchers that are gone, keeping the newest ``keep``."""
+    runs = sorted(base_dir().glob("run-*"), key=lambda p: p.stat().st_mtime)
+    for d in runs[:-keep] if keep else runs:
+        try:
+            os.kill(int(d.name.rsplit("-", 1)[1]), 0)
+            continue  # its launcher still runs
+        except PermissionError:
+            continue
+        except (ValueError, ProcessLookupError):
+            shutil.rmtree(d, ignore_errors=True)

@@ -1,0 +1,225 @@
+"""Publish/subscribe over ZeroMQ with the two queue policies of Counterpart.
+
+A :class:`Publisher` owns a topic's two sockets (see :mod:`bus.endpoints`). Messages are encoded once
+and sent on both; on the reliable socket the send waits (checking ``should_stop``) while a reliable
+subscriber lags, on the latest socket it never waits. End of stream is also sent on the reliable
+socket under the topic prefix ``EOS_PREFIX`` so that latest subscribers, which listen for that prefix
+alone there, can never miss it.
+
+A :class:`Subscriber` is one input: ``reliable`` reads every message in order; ``latest`` drains what
+is queued and keeps the newest, counting what it dropped (both in its own queue and, from gaps in the
+publisher's send counter, in ZeroMQ's).
+"""
+from __future__ import annotations
+
+import time
+from typing import Any, Callable, Sequence
+
+import zmq
+
+from messages import EndOfStream, encode
+from messages.codec import DEFAULT_LIMITS, DecodeError, Limits, decode_counted
+
+from .endpoints import TopicEndpoints, bind_address
+
+EOS_PREFIX = b"\x00eos:"
+RELIABLE = "reliable"
+LATEST = "latest"
+POLICIES = (RELIABLE, LATEST)
+
+
+class Publisher:
+    """Both sockets of one topic. ``expected`` reliable subscribers are awaited before the first send
+    (the startup barrier), for at most ``barrier_timeout`` seconds."""
+
+    def __init__(
+        self,
+        ctx: zmq.Context,
+        topic: str,
+        endpoints: TopicEndpoints,
+        expected: int = 0,
+        hwm: int = 16,
+        latest_hwm: int = 2,
+        barrier_timeout: float = 30.0,
+        should_stop: Callable[[], bool] = lambda: False,
+    ) -> None:
+        self.topic = topic
+        self.topic_b = topic.encode()
+        self.endpoints = endpoints
+        self.expected = expected
+        self.barrier_timeout = barrier_timeout
+        self.should_stop = should_stop
+        self.count = 0
+        self.subscribers = 0
+        self._barrier_done = expected <= 0
+        self.reliable = ctx.socket(zmq.XPUB)
+        self.reliable.setsockopt(zmq.SNDHWM, hwm)
+        self.reliable.setsockopt(zmq.XPUB_NODROP, 1)
+        self.reliable.setsockopt(zmq.XPUB_VERBOSER, 1)
+        self.reliable.setsockopt(zmq.SNDTIMEO, 100)
+        self.reliable.setsockopt(zmq.LINGER, 2000)
+        self.reliable.bind(bind_address(endpoints.reliable))
+        self.latest = ctx.socket(zmq.PUB)
+        self.latest.setsockopt(zmq.SNDHWM, latest_hwm)
+        self.latest.setsockopt(zmq.LINGER, 0)
+        self.latest.bind(bind_address(endpoints.latest))
+
+    # The reliable socket tells us who subscribed: b"\x01" + prefix, b"\x00" + prefix on leave.
+    def _read_subscriptions(self, timeout_ms: int = 0) -> None:
+        while self.reliable.poll(timeout_ms, zmq.POLLIN):
+            ev = self.reliable.recv()
+            if ev[1:] == b"":  # full subscribers only; EOS-only listeners are not counted
+                self.subscribers += 1 if ev[:1] == b"\x01" else -1
+            timeout_ms = 0
+
+    def wait_for_subscribers(self) -> bool:
+        """Block until ``expected`` reliable subscribers are connected (or timeout/stop)."""
+        deadline = time.monotonic() + self.barrier_timeout
+        while self.subscribers < self.expected:
+            if self.should_stop() or time.monotonic() > deadline:
+                return False
+            self._read_subscriptions(50)
+        self._barrier_done = True
+        return True
+
+    def send(self, msg: Any) -> None:
+        """Encode once, send on both sockets."""
+        parts = encode(msg, counter=self.count)
+        self.count += 1
+        self.send_parts(parts)
+
+    def send_parts(self, parts: Sequence[Any], eos: bool = False) -> None:
+        if not self._barrier_done:
+            self.wait_for_subscribers()
+            self._barrier_done = True
+        self._read_subscriptions()
+        self._send_reliable([self.topic_b, *parts])
+        if eos:
+            self._send_reliable([EOS_PREFIX + self.topic_b, *parts])
+        try:
+            self.latest.send_multipart([self.topic_b, *parts], flags=zmq.NOBLOCK, copy=False)
+        except zmq.Again:
+            pass
+
+    def _send_reliable(self, frames: list[Any]) -> None:
+        while True:
+            try:
+                self.reliable.send_multipart(frames, copy=False)
+                return
+            except zmq.Again:  # a reliable subscriber lags: keep waiting unless asked to stop
+                self._read_subscriptions()
+                if self.should_stop():
+                    return
+
+    def send_eos(self, node: str, seq: int, reason: str = "end") -> None:
+        parts = encode(EndOfStream(stamp=time.monotonic_ns(), seq=seq, node=node, reason=reason), counter=self.count)
+        self.count += 1
+        self.send_parts(parts, eos=True)
+
+    def close(self) -> None:
+        self.reliable.close()
+        self.latest.close()
+
+
+class Subscriber:
+    """One input. ``receive()`` returns the next message (reliable) or the newest one (latest), or
+    None when nothing is ready. Decode failures are counted per kind in ``bad`` and reported through
+    ``on_bad(kind, detail)`` the first time each kind occurs."""
+
+    def __init__(
+        self,
+        ctx: zmq.Context,
+        topic: str,
+        endpoints: TopicEndpoints,
+        policy: str = RELIABLE,
+        hwm: int = 16,
+        limits: Limits = DEFAULT_LIMITS,
+        on_bad: Callable[[str, str], None] | None = None,
+    ) -> None:
+        if policy not in POLICIES:
+            raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
+        self.topic = topic
+        self.policy = policy
+        self.limits = limits
+        self.on_bad = on_bad
+        self.count = 0
+        self.drops = 0
+        self.bad: dict[str, int] = {}
+        self.ended = False
+        self._last_counter: int | None = None
+        self.socket = ctx.socket(zmq.SUB)
+        self.socket.setsockopt(zmq.LINGER, 0)
+        self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else 2)
+        self.socket.setsockopt(zmq.SUBSCRIBE, b"")
+        self.socket.connect(endpoints.reliable if policy == RELIABLE else endpoints.latest)
+        self.eos_socket: zmq.Socket | None = None
+        if policy == LATEST:
+            self.eos_socket = ctx.socket(zmq.SUB)
+            self.eos_socket.setsockopt(zmq.LINGER, 0)
+            self.eos_socket.setsockopt(zmq.SUBSCRIBE, EOS_PREFIX)
+            self.eos_socket.connect(endpoints.reliable)
+
+    @property
+    def sockets(self) -> list[zmq.Socket]:
+        return [self.socket] + ([self.eos_socket] if self.eos_socket is not None else [])
+
+    def _bad(self, kind: str, detail: str) -> None:
+        self.bad[kind] = self.bad.get(kind, 0) + 1
+        if self.bad[kind] == 1 and self.on_bad is not None:
+            self.on_bad(kind, detail)
+
+    def _decode(self, frames: list[Any]) -> Any | None:
+        if len(frames) < 2:
+            self._bad("malformed", f"{len(frames)} frame(s); need topic and header")
+            return None
+        try:
+            msg, counter = decode_counted(frames[1:], self.limits)
+        except DecodeError as exc:
+            self._bad(exc.kind, exc.detail)
+            return None
+        if counter is not None:
+            last = self._last_counter
+            if last is not None and counter > last + 1:
+                self.drops += counter - last - 1
+            self._last_counter = counter
+        return msg
+
+    def receive(self) -> Any | None:
+        if self.eos_socket is not None and self.eos_socket.poll(0, zmq.POLLIN):
+            frames = self.eos_socket.recv_multipart(copy=False)
+            msg = self._decode(frames)
+            if isinstance(msg, EndOfStream):
+                self.ended = True
+                return msg
+        try:
+            frames = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
+        except zmq.Again:
+            return None
+        if self.policy == LATEST:
+            stale = 0
+            while True:  # keep the newest; every older message still queued is a drop
+                try:
+                    newer = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
+                except zmq.Again:
+                    break
+                frames = newer
+                stale += 1
+            self.drops += stale
+            if self._last_counter is not None:
+                self._last_counter += stale  # the drained ones are counted already, not as gaps
+        msg = self._decode(frames)
+        if msg is None:
+            return None
+        self.count += 1
+        if isinstance(msg, EndOfStream):
+            if self.ended:
+                return None
+            self.ended = True
+        return msg
+
+    def close(self) -> None:
+        for s in self.sockets:
+            s.close()
+
+
+__all__ = ["Publisher", "Subscriber", "RELIABLE", "LATEST", "POLICIES", "EOS_PREFIX"]

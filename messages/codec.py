@@ -1,0 +1,281 @@
+"""Wire codec: ``[topic, msgpack header, raw buffer, raw buffer, ...]``.
+
+The header is a msgpack map ``{"s": schema id, "f": fields, "a": [[dtype, shape], ...]}``. Arrays
+never travel inside msgpack: each one is replaced in ``f`` by an ext reference (code 1, the index of
+its buffer) and sent as its own ZeroMQ frame, so that large images go out and come in without
+copies (``np.frombuffer`` over the received frame; decoded arrays are read-only views).
+
+Decoding is defensive, because anything can connect to a socket: the header size, the msgpack
+container sizes, the number of arrays, their dtypes, ranks and byte sizes are all bounded, the schema
+id must be registered, and every field is checked against the class's type hints. Anything wrong
+raises :class:`DecodeError` with a short ``kind`` that receivers count and log once per kind.
+"""
+from __future__ import annotations
+
+import dataclasses
+import types
+import typing
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import msgpack
+import numpy as np
+
+from .core import REGISTRY, field_types, schema_id
+
+ARRAY_EXT = 1
+ALLOWED_DTYPES = frozenset(
+    np.dtype(t).str for t in ("?", "u1", "u2", "u4", "u8", "i1", "i2", "i4", "i8", "f2", "f4", "f8", "c8", "c16")
+)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Upper bounds enforced while decoding (bytes unless stated)."""
+
+    max_header: int = 1 << 20
+    max_arrays: int = 64
+    max_ndim: int = 8
+    max_array_bytes: int = 256 << 20
+    max_total_bytes: int = 512 << 20
+    max_container_len: int = 1 << 16
+
+
+DEFAULT_LIMITS = Limits()
+
+
+class DecodeError(ValueError):
+    """A received message that cannot be decoded; ``kind`` is a short category used for counting."""
+
+    def __init__(self, kind: str, detail: str) -> None:
+        super().__init__(f"{kind}: {detail}")
+        self.kind = kind
+        self.detail = detail
+
+
+# ----------------------------------------------------------------------------------------- encode
+
+
+def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
+    if isinstance(value, np.ndarray):
+        arrays.append(value)
+        return msgpack.ExtType(ARRAY_EXT, (len(arrays) - 1).to_bytes(4, "little"))
+    if isinstance(value, (bool, int, float, str, bytes)) or value is None:
+        return value
+    if isinstance(value, (np.integer, np.floating, np.bool_)):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_to_wire(v, arrays) for v in value]
+    if isinstance(value, dict):
+        return {k: _to_wire(v, arrays) for k, v in value.items()}
+    if dataclasses.is_dataclass(value):
+        return {f.name: _to_wire(getattr(value, f.name), arrays) for f in dataclasses.fields(value)}
+    raise TypeError(f"cannot encode value of type {type(value).__name__}")
+
+
+def encode(msg: Any, counter: int | None = None) -> list[Any]:
+    """Header bytes followed by one buffer per array (no topic frame). Arrays are not copied unless
+    they are not C-contiguous. ``counter`` is the publisher's send count, for drop detection."""
+    arrays: list[np.ndarray] = []
+    fields = {f.name: _to_wire(getattr(msg, f.name), arrays) for f in dataclasses.fields(msg)}
+    contiguous = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]
+    head = {"s": schema_id(msg), "f": fields, "a": [[a.dtype.str, list(a.shape)] for a in contiguous]}
+    if counter is not None:
+        head["n"] = counter
+    header = msgpack.packb(head, use_bin_type=True)
+    return [header, *(a.data if a.size else b"" for a in contiguous)]
+
+
+def encode_frames(topic: str | bytes, msg: Any) -> list[Any]:
+    """The full multipart message ``[topic, header, buffers...]``."""
+    t = topic.encode() if isinstance(topic, str) else topic
+    return [t, *encode(msg)]
+
+
+# ----------------------------------------------------------------------------------------- decode
+
+
+def _buffer(frame: Any) -> memoryview:
+    """A memoryview over a received part: zmq.Frame (copy=False), bytes or memoryview."""
+    buf = getattr(frame, "buffer", None)
+    if buf is not None:
+        return buf
+    return memoryview(frame)
+
+
+def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
+    """Unpack and shape-check the msgpack header."""
+    buf = _buffer(raw)
+    if buf.nbytes > limits.max_header:
+        raise DecodeError("oversized", f"header of {buf.nbytes} bytes exceeds {limits.max_header}")
+    n = limits.max_container_len
+    try:
+        header = msgpack.unpackb(
+            buf,
+            raw=False,
+            strict_map_key=True,
+            max_str_len=limits.max_header,
+            max_bin_len=limits.max_header,
+            max_array_len=n,
+            max_map_len=n,
+            max_ext_len=16,
+        )
+    except Exception as exc:  # msgpack raises several unrelated types on garbage
+        raise DecodeError("malformed", f"header is not valid msgpack ({type(exc).__name__}: {exc})") from None
+    if not isinstance(header, dict) or not isinstance(header.get("s"), str):
+        raise DecodeError("malformed", "header is not a map with a schema id 's'")
+    if not isinstance(header.get("f"), dict) or not isinstance(header.get("a", []), list):
+        raise DecodeError("malformed", "header lacks the fields map 'f' or the array list 'a'")
+    return header
+
+
+def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.ndarray]:
+    if len(specs) > limits.max_arrays:
+        raise DecodeError("oversized", f"{len(specs)} arrays exceed the limit of {limits.max_arrays}")
+    if len(specs) != len(parts):
+        raise DecodeError("bad_array", f"header names {len(specs)} arrays but {len(parts)} buffers arrived")
+    out = []
+    total = 0
+    for i, (spec, part) in enumerate(zip(specs, parts)):
+        if not (isinstance(spec, list) and len(spec) == 2 and isinstance(spec[0], str) and isinstance(spec[1], list)):
+            raise DecodeError("bad_array", f"array {i}: spec must be [dtype, shape]")
+        dt, shape = spec
+        if dt not in ALLOWED_DTYPES:
+            raise DecodeError("bad_array", f"array {i}: dtype {dt!r} not allowed")
+        if len(shape) > limits.max_ndim or not all(isinstance(s, int) and 0 <= s for s in shape):
+            raise DecodeError("bad_array", f"array {i}: bad shape {shape!r}")
+        dtype = np.dtype(dt)
+        nbytes = dtype.itemsize * int(np.prod(shape, dtype=np.float64))
+        total += nbytes
+        if nbytes > limits.max_array_bytes or total > limits.max_total_bytes:
+            raise DecodeError("oversized", f"array {i}: {nbytes} bytes exceed the limits")
+        buf = _buffer(part)
+        if buf.nbytes != nbytes:
+            raise DecodeError("bad_array", f"array {i}: {buf.nbytes} bytes received, {dtype}{shape} needs {nbytes}")
+        out.append(np.frombuffer(buf, dtype=dtype).reshape(shape) if nbytes else np.zeros(shape, dtype))
+    return out
+
+
+def decode(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> Any:
+    """Decode ``[header, buffers...]`` (no topic frame) into a message instance."""
+    return decode_counted(parts, limits)[0]
+
+
+def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
+    """Like :func:`decode`, also returning the publisher's send counter (None when absent)."""
+    if len(parts) < 1:
+        raise DecodeError("malformed", "no header frame")
+    header = read_header(parts[0], limits)
+    sid = header["s"]
+    cls = REGISTRY.get(sid)
+    if cls is None:
+        raise DecodeError("unknown_schema", f"schema {sid!r} is not registered here")
+    arrays = _arrays(header.get("a", []), parts[1:], limits)
+    counter = header.get("n")
+    return _build(cls, header["f"], arrays, sid), counter if type(counter) is int else None
+
+
+def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[str, Any]:
+    """Decode a full multipart message into ``(topic, message)``."""
+    if len(frames) < 2:
+        raise DecodeError("malformed", f"{len(frames)} frame(s); need at least topic and header")
+    try:
+        topic = bytes(_buffer(frames[0])).decode()
+    except UnicodeDecodeError:
+        raise DecodeError("malformed", "topic frame is not UTF-8") from None
+    return topic, decode(frames[1:], limits)
+
+
+# ------------------------------------------------------------------------------ type validation
+
+
+def _build(cls: type, fields: dict[str, Any], arrays: list[np.ndarray], where: str) -> Any:
+    kwargs = {}
+    for name, tp in field_types(cls).items():
+        if name in fields:
+            kwargs[name] = _check(fields[name], tp, arrays, f"{where}.{name}")
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:  # a required field is missing
+        raise DecodeError("bad_field", f"{where}: {exc}") from None
+
+
+def _check(value: Any, tp: Any, arrays: list[np.ndarray], where: str) -> Any:
+    checker = _CHECKERS.get(tp)
+    if checker is not None:
+        return checker(value, arrays, where)
+    origin = typing.get_origin(tp)
+    args = typing.get_args(tp)
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        errors = []
+        for a in args:
+            if a is type(None):
+                continue
+            try:
+                return _check(value, a, arrays, where)
+            except DecodeError as exc:
+                errors.append(exc.detail)
+        raise DecodeError("bad_field", f"{where}: no member of {tp} accepts the value ({'; '.join(errors)})")
+    if origin in (list, tuple, typing.Sequence):
+        if not isinstance(value, list):
+            raise DecodeError("bad_field", f"{where}: expected a list, got {type(value).__name__}")
+        if origin is tuple and args and not (len(args) == 2 and args[1] is Ellipsis):
+            if len(args) != len(value):
+                raise DecodeError("bad_field", f"{where}: expected {len(args)} items, got {len(value)}")
+            return tuple(_check(v, a, arrays, f"{where}[{i}]") for i, (v, a) in enumerate(zip(value, args)))
+        inner = args[0] if args else Any
+        items = [_check(v, inner, arrays, f"{where}[{i}]") for i, v in enumerate(value)]
+        return tuple(items) if origin is tuple else items
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise DecodeError("bad_field", f"{where}: expected a map, got {type(value).__name__}")
+        kt, vt = args if args else (Any, Any)
+        return {_check(k, kt, arrays, where): _check(v, vt, arrays, f"{where}[{k!r}]") for k, v in value.items()}
+    if tp is Any:
+        return _resolve_any(value, arrays)
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, dict):
+            raise DecodeError("bad_field", f"{where}: expected a {tp.__name__} map, got {type(value).__name__}")
+        return _build(tp, value, arrays, where)
+    raise DecodeError("bad_field", f"{where}: unsupported field type {tp}")
+
+
+def _resolve_any(value: Any, arrays: list[np.ndarray]) -> Any:
+    if isinstance(value, msgpack.ExtType):
+        return _array(value, arrays, "<any>")
+    if isinstance(value, list):
+        return [_resolve_any(v, arrays) for v in value]
+    if isinstance(value, dict):
+        return {k: _resolve_any(v, arrays) for k, v in value.items()}
+    return value
+
+
+def _array(value: Any, arrays: list[np.ndarray], where: str) -> np.ndarray:
+    if not (isinstance(value, msgpack.ExtType) and value.code == ARRAY_EXT and len(value.data) == 4):
+        raise DecodeError("bad_field", f"{where}: expected an array reference, got {type(value).__name__}")
+    idx = int.from_bytes(value.data, "little")
+    if idx >= len(arrays):
+        raise DecodeError("bad_array", f"{where}: array reference {idx} out of range")
+    return arrays[idx]
+
+
+def _scalar(*types_: type, convert: Callable[[Any], Any] | None = None) -> Callable[[Any, list, str], Any]:
+    def check(value: Any, arrays: list[np.ndarray], where: str) -> Any:
+        if type(value) not in types_:
+            names = "/".join(t.__name__ for t in types_)
+            raise DecodeError("bad_field", f"{where}: expected {names}, got {type(value).__name__}")
+        return convert(value) if convert else value
+
+    return check
+
+
+_CHECKERS: dict[Any, Callable[[Any, list, str], Any]] = {
+    int: _scalar(int),
+    float: _scalar(float, int, convert=float),
+    bool: _scalar(bool),
+    str: _scalar(str),
+    bytes: _scalar(bytes),
+    np.ndarray: _array,
+}

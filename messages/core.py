@@ -1,0 +1,161 @@
+"""Typed messages: frozen dataclasses with a registered schema id ``name/version``.
+
+A message class is declared with :func:`message`::
+
+    @message("camera.Frame", 1)
+    class Frame:
+        stamp: int = 0          # ns, CLOCK_MONOTONIC at capture of the originating frame
+        seq: int = 0            # frame number
+        image: np.ndarray = EMPTY
+        encoding: str = "bgr8"
+
+Every message carries ``stamp`` and ``seq``; the decorator adds them (with default 0) when the class
+does not declare them. Field types are plain Python types, ``np.ndarray``, lists/tuples/dicts of them,
+``X | None`` and nested :func:`struct` dataclasses (which may hold arrays themselves). Fields added in
+a later version must have defaults, so that messages from older senders still decode.
+"""
+from __future__ import annotations
+
+import dataclasses
+import sys
+import types
+import typing
+from typing import Any, Callable, TypeVar
+
+import numpy as np
+
+T = TypeVar("T")
+
+#: schema id ("name/version") -> message class
+REGISTRY: dict[str, type] = {}
+
+EMPTY = np.zeros(0, dtype=np.float32)
+EMPTY.setflags(write=False)
+
+
+def empty_array() -> np.ndarray:
+    """Default factory for array fields (a shared read-only empty float32 array)."""
+    return EMPTY
+
+
+def schema_id(cls_or_msg: Any) -> str:
+    """The ``name/version`` id of a message class or instance."""
+    cls = cls_or_msg if isinstance(cls_or_msg, type) else type(cls_or_msg)
+    try:
+        return cls.__schema_id__
+    except AttributeError:
+        raise TypeError(f"{cls.__name__} is not a registered message class (use @message)") from None
+
+
+def _add_stamp_seq(cls: type) -> None:
+    ann = cls.__dict__.get("__annotations__", {})
+    if "stamp" not in ann or "seq" not in ann:
+        # stamp and seq go first so that positional construction stays predictable
+        new_ann = {"stamp": int, "seq": int}
+        new_ann.update(ann)
+        cls.__annotations__ = new_ann
+        if "stamp" not in cls.__dict__:
+            cls.stamp = 0
+        if "seq" not in cls.__dict__:
+            cls.seq = 0
+
+
+def _array_defaults(cls: type) -> None:
+    """Arrays are mutable objects: give them a default_factory instead of a shared default."""
+    for name, default in list(cls.__dict__.items()):
+        if isinstance(default, np.ndarray):
+            arr = default
+
+            def factory(a: np.ndarray = arr) -> np.ndarray:
+                return a
+
+            setattr(cls, name, dataclasses.field(default_factory=factory))
+
+
+def struct(cls: type[T]) -> type[T]:
+    """A frozen dataclass usable as a nested field type inside messages (no schema id of its own)."""
+    _array_defaults(cls)
+    dc = dataclasses.dataclass(frozen=True, kw_only=True)(cls)
+    dc.__struct__ = True
+    return dc
+
+
+def message(name: str, version: int) -> Callable[[type[T]], type[T]]:
+    """Register a frozen dataclass as message ``name/version``."""
+    if "/" in name or not name:
+        raise ValueError(f"message name {name!r} must be non-empty and contain no '/'")
+    if not isinstance(version, int) or version < 1:
+        raise ValueError(f"message version must be an int >= 1, got {version!r}")
+
+    def wrap(cls: type[T]) -> type[T]:
+        _add_stamp_seq(cls)
+        _array_defaults(cls)
+        dc = dataclasses.dataclass(frozen=True, kw_only=True)(cls)
+        sid = f"{name}/{version}"
+        if sid in REGISTRY and REGISTRY[sid].__qualname__ != dc.__qualname__:
+            raise ValueError(f"schema id {sid} registered twice ({REGISTRY[sid].__qualname__}, {dc.__qualname__})")
+        dc.__schema_id__ = sid
+        dc.__struct__ = True
+        REGISTRY[sid] = dc
+        return dc
+
+    return wrap
+
+
+def lookup(sid: str) -> type:
+    """The message class registered under ``sid``; KeyError with the known ids otherwise."""
+    try:
+        return REGISTRY[sid]
+    except KeyError:
+        raise KeyError(f"unknown message schema {sid!r}; known: {', '.join(sorted(REGISTRY))}") from None
+
+
+def by_name(name: str) -> type:
+    """Resolve a type name as written in launch files: ``camera.Frame`` or ``camera.Frame/1``.
+
+    Without a version the highest registered version is returned.
+    """
+    if "/" in name:
+        return lookup(name)
+    versions = [(int(s.rsplit("/", 1)[1]), c) for s, c in REGISTRY.items() if s.rsplit("/", 1)[0] == name]
+    if not versions:
+        raise KeyError(f"unknown message type {name!r}; known: {', '.join(sorted(REGISTRY))}")
+    return max(versions, key=lambda vc: vc[0])[1]
+
+
+def field_types(cls: type) -> dict[str, Any]:
+    """Resolved type hints of a message or struct class (cached on the class)."""
+    cached = cls.__dict__.get("__cp_hints__")
+    if cached is None:
+        module = sys.modules.get(cls.__module__)
+        ns = dict(vars(module)) if module else {}
+        ns.setdefault("np", np)
+        cached = typing.get_type_hints(cls, globalns=ns)
+        cached = {f.name: cached[f.name] for f in dataclasses.fields(cls)}
+        setattr(cls, "__cp_hints__", cached)
+    return cached
+
+
+def describe(cls: type) -> dict[str, Any]:
+    """A JSON-able description of a message class (stored in bags so they are self-describing)."""
+    out: dict[str, Any] = {"schema": getattr(cls, "__schema_id__", cls.__qualname__), "fields": {}}
+    for fname, tp in field_types(cls).items():
+        out["fields"][fname] = type_name(tp)
+    return out
+
+
+def type_name(tp: Any) -> str:
+    origin = typing.get_origin(tp)
+    if origin is None:
+        if dataclasses.is_dataclass(tp):
+            return "struct " + describe_struct(tp)
+        return getattr(tp, "__name__", str(tp))
+    args = ", ".join(type_name(a) for a in typing.get_args(tp))
+    if origin in (typing.Union, types.UnionType):
+        return " | ".join(type_name(a) for a in typing.get_args(tp))
+    return f"{getattr(origin, '__name__', str(origin))}[{args}]"
+
+
+def describe_struct(tp: type) -> str:
+    inner = ", ".join(f"{k}: {type_name(v)}" for k, v in field_types(tp).items())
+    return f"{tp.__qualname__}{{{inner}}}"

@@ -1,0 +1,86 @@
+"""Small nodes for the runtime's multi-process tests: a counter source, a relay and a recording sink."""
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from bus import Input, Node, Output, Param
+from messages import message
+
+
+@message("test.Number", 1)
+class Number:
+    value: float = 0.0
+    payload: np.ndarray = np.zeros(0, np.uint8)
+
+
+class Counter(Node):
+    """Publishes ``count`` numbers 0, 1, 2, ... at ``rate`` Hz (0: as fast as possible)."""
+
+    outputs = {"out": Output(Number)}
+    params = {
+        "count": Param(int, 100, "how many numbers", min=0),
+        "rate": Param(float, 0.0, "messages per second, 0 for as fast as possible", min=0),
+        "payload_bytes": Param(int, 0, "bytes of array payload per message", min=0),
+    }
+
+    def generate(self) -> None:
+        period = 1.0 / self.p["rate"] if self.p["rate"] else 0.0
+        payload = np.arange(self.p["payload_bytes"], dtype=np.uint64).astype(np.uint8)
+        t_next = time.monotonic()
+        for i in range(self.p["count"]):
+            if self.stopping:
+                return
+            self.publish("out", Number(stamp=time.monotonic_ns(), seq=i, value=float(i), payload=payload))
+            if period:
+                t_next += period
+                time.sleep(max(0.0, t_next - time.monotonic()))
+
+
+class Relay(Node):
+    """Forwards numbers multiplied by ``gain``, optionally sleeping ``delay_ms`` per message."""
+
+    inputs = {"in": Input(Number)}
+    outputs = {"out": Output(Number)}
+    params = {
+        "gain": Param(float, 1.0, "factor"),
+        "delay_ms": Param(float, 0.0, "processing time to simulate", min=0),
+    }
+
+    def on_in(self, msg: Number) -> None:
+        if self.p["delay_ms"]:
+            time.sleep(self.p["delay_ms"] / 1000)
+        self.publish("out", replace(msg, value=msg.value * self.p["gain"]))
+
+
+class Sink(Node):
+    """Appends every received number (and its payload checksum) to ``path`` as JSON lines."""
+
+    inputs = {"in": Input(Number)}
+    params = {
+        "path": Param(str, "", "output file (JSON lines)", check=lambda v: None if v else "must name a file"),
+        "delay_ms": Param(float, 0.0, "processing time to simulate", min=0),
+    }
+
+    def setup(self) -> None:
+        self.f = open(self.p["path"], "a", buffering=1)
+        self.f.write(json.dumps({"event": "start", "pid": os.getpid()}) + "\n")
+
+    def on_in(self, msg: Number) -> None:
+        if self.p["delay_ms"]:
+            time.sleep(self.p["delay_ms"] / 1000)
+        self.f.write(json.dumps({"seq": msg.seq, "value": msg.value, "sum": int(msg.payload.sum())}) + "\n")
+
+    def on_end(self) -> None:
+        self.f.write(json.dumps({"event": "end", "drops": self._in["in"].drops}) + "\n")
+
+    def teardown(self) -> None:
+        self.f.close()
+
+
+if __name__ == "__main__":
+    Relay.main()
