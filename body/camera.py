@@ -1,0 +1,172 @@
+"""Pinhole camera: world (metres, Y up) to pixels, OpenCV convention.
+
+World to camera: ``X_c = R X_w + t``. Camera axes: x right, y down, z forward (optical axis).
+Pixels: ``u = fx * x_c / z_c + cx``, ``v = fy * y_c / z_c + cy`` (Hartley & Zisserman eq. 6.5,
+no lens distortion); pixel (0, 0) is the centre of the top-left pixel.
+
+``Camera.look_at`` builds a camera with no roll (image "up" is world +Y projected); its
+``fov_deg`` is the horizontal field of view and the pixels are square (fx = fy).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+_DICT_KEYS = ("fx", "fy", "cx", "cy", "width", "height", "R", "t")
+_LOOKAT_KEYS = ("eye", "target", "fov_deg", "width", "height")
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Pinhole camera.
+
+    Attributes:
+        fx, fy: focal lengths in pixels.
+        cx, cy: principal point in pixels.
+        width, height: image size in pixels.
+        R: (3, 3) world-to-camera rotation.
+        t: (3,) world-to-camera translation, metres (``X_c = R X_w + t``).
+    """
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    width: int
+    height: int
+    R: np.ndarray = field(default_factory=lambda: np.eye(3))
+    t: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        R = np.array(self.R, dtype=np.float64)
+        t = np.array(self.t, dtype=np.float64).reshape(-1)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+            raise ValueError(f"Camera.R must be a 3x3 rotation matrix, got {R.tolist()}")
+        if t.shape != (3,):
+            raise ValueError(f"Camera.t must have 3 elements (metres), got shape {t.shape}")
+        for name in ("fx", "fy"):
+            if not float(getattr(self, name)) > 0:
+                raise ValueError(f"Camera.{name}={getattr(self, name)!r}: focal length must be > 0 pixels")
+        for name in ("width", "height"):
+            v = getattr(self, name)
+            if int(v) != v or int(v) <= 0:
+                raise ValueError(f"Camera.{name}={v!r}: image size must be a positive integer")
+        R.setflags(write=False)
+        t.setflags(write=False)
+        object.__setattr__(self, "R", R)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "width", int(self.width))
+        object.__setattr__(self, "height", int(self.height))
+        for name in ("fx", "fy", "cx", "cy"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+
+    # -- construction -------------------------------------------------------------------------
+    @classmethod
+    def look_at(cls, eye: Any, target: Any, fov_deg: float, width: int, height: int) -> "Camera":
+        """Camera at ``eye`` (metres) looking at ``target``, horizontal field of view ``fov_deg``,
+        square pixels, principal point at the image centre, world +Y up in the image."""
+        eye = np.asarray(eye, dtype=np.float64)
+        target = np.asarray(target, dtype=np.float64)
+        if not 0 < fov_deg < 180:
+            raise ValueError(f"fov_deg={fov_deg!r}: horizontal field of view must be in (0, 180) degrees")
+        z = target - eye
+        if np.linalg.norm(z) < 1e-9:
+            raise ValueError("look_at: eye and target coincide; give a target away from the eye")
+        z /= np.linalg.norm(z)
+        x = np.cross(z, (0.0, 1.0, 0.0))
+        if np.linalg.norm(x) < 1e-9:
+            raise ValueError("look_at: viewing straight up or down; world up is undefined for roll")
+        x /= np.linalg.norm(x)
+        y = np.cross(z, x)
+        R = np.stack([x, y, z])
+        f = (width / 2.0) / np.tan(np.deg2rad(fov_deg) / 2.0)
+        return cls(f, f, (width - 1) / 2.0, (height - 1) / 2.0, width, height, R, -R @ eye)
+
+    # -- geometry -----------------------------------------------------------------------------
+    @property
+    def centre(self) -> np.ndarray:
+        """(3,) camera centre in world coordinates, metres (``-R^T t``)."""
+        return -self.R.T @ self.t
+
+    @property
+    def K(self) -> np.ndarray:
+        """(3, 3) intrinsic matrix."""
+        return np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1.0]])
+
+    def to_camera(self, X: np.ndarray) -> np.ndarray:
+        """(..., 3) world points -> (..., 3) camera coordinates, metres."""
+        return np.asarray(X, dtype=np.float64) @ self.R.T + self.t
+
+    def depth(self, X: np.ndarray) -> np.ndarray:
+        """(..., 3) world points -> (...) depth z_c along the optical axis, metres."""
+        return np.asarray(X, dtype=np.float64) @ self.R[2] + self.t[2]
+
+    def project(self, X: np.ndarray) -> np.ndarray:
+        """(..., 3) world points (metres) -> (..., 2) pixels (u, v).
+
+        Points at depth <= 1 mm (on or behind the camera) give NaN.
+        """
+        Xc = self.to_camera(X)
+        z = Xc[..., 2]
+        zs = np.where(z > 1e-3, z, np.nan)
+        return np.stack([self.fx * Xc[..., 0] / zs + self.cx, self.fy * Xc[..., 1] / zs + self.cy], axis=-1)
+
+    def rays(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Pixel coordinates (...) -> (..., 3) unit viewing directions in the world frame."""
+        u = np.asarray(u, dtype=np.float64)
+        v = np.asarray(v, dtype=np.float64)
+        d = np.stack([(u - self.cx) / self.fx, (v - self.cy) / self.fy, np.ones_like(u)], axis=-1)
+        d = d @ self.R  # R^T d for row vectors
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def ground_point(self, u: np.ndarray, v: np.ndarray, ground_y: float = 0.0) -> np.ndarray:
+        """Back-project pixels (...) onto the plane y = ground_y: (..., 3) metres.
+
+        NaN where the ray does not hit the plane in front of the camera (at or above the horizon).
+        """
+        d = self.rays(u, v)
+        c = self.centre
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (ground_y - c[1]) / d[..., 1]
+        s = np.where(np.isfinite(s) & (s > 0), s, np.nan)
+        return c + s[..., None] * d
+
+    def in_image(self, uv: np.ndarray) -> np.ndarray:
+        """(..., 2) pixels -> (...) bool, inside the image bounds (NaN is outside)."""
+        uv = np.asarray(uv)
+        return ((uv[..., 0] >= -0.5) & (uv[..., 0] < self.width - 0.5)
+                & (uv[..., 1] >= -0.5) & (uv[..., 1] < self.height - 0.5))
+
+    # -- parameters ---------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (floats, ints, nested lists) for launch files and message metadata."""
+        return {"fx": self.fx, "fy": self.fy, "cx": self.cx, "cy": self.cy,
+                "width": self.width, "height": self.height,
+                "R": self.R.tolist(), "t": self.t.tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Camera":
+        """Inverse of ``to_dict``. Also accepts the look-at form
+        ``{eye: [x, y, z], target: [x, y, z], fov_deg, width, height}``."""
+        if not isinstance(d, dict):
+            raise ValueError(f"camera parameters must be a mapping, got {type(d).__name__}")
+        keys = _LOOKAT_KEYS if "eye" in d else _DICT_KEYS
+        unknown = sorted(set(d) - set(keys))
+        missing = [k for k in keys if k not in d]
+        if unknown:
+            raise ValueError(f"camera parameters: unknown key(s) {unknown}; expected {list(keys)}")
+        if missing:
+            raise ValueError(f"camera parameters: missing key(s) {missing}; expected {list(keys)}")
+        if keys is _LOOKAT_KEYS:
+            return cls.look_at(d["eye"], d["target"], float(d["fov_deg"]), int(d["width"]), int(d["height"]))
+        return cls(**{k: d[k] for k in keys})
+
+
+def default_camera(width: int = 320, height: int = 240) -> Camera:
+    """The simulator's default view: camera 1.6 m high, 4 m in front of the origin (+Z),
+    looking at (0, 0.9, 0), 55 degrees horizontal field of view. Two people of 1.75 m standing
+    1 m apart around the origin (and up to about 3 m apart, from z = -1 to +1) are fully in view."""
+    return Camera.look_at((0.0, 1.6, 4.0), (0.0, 0.9, 0.0), 55.0, width, height)

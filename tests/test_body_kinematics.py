@@ -1,0 +1,201 @@
+"""Forward kinematics, pose limits, cones and rasterised silhouettes of the body model."""
+
+import numpy as np
+import pytest
+
+from body.camera import default_camera
+from body.kinematics import cone_endpoints, forward_kinematics, frames, lowest_point
+from body.pose import DOF, DOF_INDEX, DOF_NAMES, LOWER, UPPER, clip_to_limits, neutral_pose, within_limits
+from body.raster import (
+    cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps,
+)
+from body.skeleton import BONES, DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_SEGMENTS, PARENT, SEGMENTS, BodyDims
+
+J = JOINT_INDEX
+D = DEFAULT_DIMS
+
+
+def zero_pose(y: float = 1.0) -> np.ndarray:
+    P = np.zeros(DOF)
+    P[DOF_INDEX["root_y"]] = y
+    return P
+
+
+def random_poses(n: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lo, hi = LOWER.copy(), UPPER.copy()
+    lo[:3], hi[:3] = (-2, 0.5, -2), (2, 1.2, 2)
+    return rng.uniform(lo, hi, size=(n, DOF))
+
+
+def test_skeleton_tables():
+    assert JOINTS == ("head", "neck", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow",
+                      "r_wrist", "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle")
+    assert len(PARENT) == 14 and len(SEGMENTS) == N_SEGMENTS == 16
+    assert all(p < j for j, p in enumerate(PARENT) if p >= 0 and j != 0) and PARENT[0] == 1
+    assert len(DOF_NAMES) == DOF == 28 and LOWER.shape == UPPER.shape == (DOF,)
+    assert np.all(LOWER < UPPER)
+
+
+def test_neutral_pose_heights():
+    X = forward_kinematics(neutral_pose(D))[0]
+    assert X.shape == (14, 3)
+    np.testing.assert_allclose(X[J["l_ankle"], 1], D.ankle_height, atol=1e-12)
+    np.testing.assert_allclose(X[J["l_knee"], 1], D.ankle_height + D.shin, atol=1e-12)
+    np.testing.assert_allclose(X[J["l_hip"], 1], 0.93, atol=1e-12)
+    np.testing.assert_allclose(X[J["neck"], 1], 1.45, atol=1e-12)
+    np.testing.assert_allclose(X[J["head"], 1], 1.64, atol=1e-12)
+    # Left side is +X when facing +Z.
+    assert X[J["l_hip"], 0] == pytest.approx(D.hip_width / 2)
+    assert X[J["r_shoulder"], 0] == pytest.approx(-D.shoulder_width / 2)
+    # Stature 1.75 m: crown of the head cone; soles touch the ground.
+    ends, radii = cone_endpoints(neutral_pose(D))
+    assert ends[0, 0, 1, 1] == pytest.approx(1.75)
+    assert lowest_point(neutral_pose(D))[0] == pytest.approx(0.0, abs=0.005)
+
+
+def test_elbow_bend_90_puts_wrist_forward():
+    P = zero_pose()
+    P[DOF_INDEX["l_elbow_flex"]] = np.pi / 2
+    X = forward_kinematics(P)[0]
+    np.testing.assert_allclose(X[J["l_wrist"]] - X[J["l_elbow"]], (0, 0, D.forearm), atol=1e-12)
+    np.testing.assert_allclose(X[J["l_elbow"]], (D.shoulder_width / 2, 1.0 + D.torso_length
+                                                 - D.shoulder_drop - D.upper_arm, 0), atol=1e-12)
+    # Shoulder abduction 90 degrees: the left arm points to +X (its own left), horizontally.
+    P = zero_pose()
+    P[DOF_INDEX["l_shoulder_abd"]] = np.pi / 2
+    P[DOF_INDEX["r_shoulder_abd"]] = np.pi / 2
+    X = forward_kinematics(P)[0]
+    np.testing.assert_allclose(X[J["l_wrist"]] - X[J["l_shoulder"]], (D.upper_arm + D.forearm, 0, 0), atol=1e-12)
+    np.testing.assert_allclose(X[J["r_wrist"]] - X[J["r_shoulder"]], (-D.upper_arm - D.forearm, 0, 0), atol=1e-12)
+    # Shoulder flexion 90 degrees: arm points forward (+Z).
+    P = zero_pose()
+    P[DOF_INDEX["r_shoulder_flex"]] = np.pi / 2
+    X = forward_kinematics(P)[0]
+    np.testing.assert_allclose(X[J["r_elbow"]] - X[J["r_shoulder"]], (0, 0, D.upper_arm), atol=1e-12)
+
+
+def test_knee_hip_torso_head_signs():
+    P = zero_pose()
+    P[DOF_INDEX["l_hip_flex"]] = np.pi / 2
+    P[DOF_INDEX["l_knee_flex"]] = np.pi / 2
+    X = forward_kinematics(P)[0]
+    # Thigh forward, shin hanging straight down from the knee.
+    np.testing.assert_allclose(X[J["l_knee"]] - X[J["l_hip"]], (0, 0, D.thigh), atol=1e-12)
+    np.testing.assert_allclose(X[J["l_ankle"]] - X[J["l_knee"]], (0, -D.shin, 0), atol=1e-12)
+    P = zero_pose()
+    P[DOF_INDEX["torso_flex"]] = np.pi / 2
+    X = forward_kinematics(P)[0]
+    np.testing.assert_allclose(X[J["neck"]], (0, 1.0, D.torso_length), atol=1e-12)
+    P = zero_pose()
+    P[DOF_INDEX["head_turn"]] = np.pi / 2
+    P[DOF_INDEX["head_nod"]] = np.pi / 2
+    X = forward_kinematics(P)[0]
+    # Nodding by 90 degrees after turning left puts the head out to the person's left (+X).
+    np.testing.assert_allclose(X[J["head"]] - X[J["neck"]], (D.neck_to_head, 0, 0), atol=1e-12)
+
+
+def test_yaw_rotates_body_about_vertical():
+    P = neutral_pose(D, x=0.3, z=-0.2)
+    Q = P.copy()
+    Q[DOF_INDEX["root_yaw"]] = np.pi / 2
+    X, Y = forward_kinematics(np.stack([P, Q]))
+    root = np.array([0.3, D.hip_height, -0.2])
+    # Ry(90): (x, y, z) -> (z, y, -x) about the root.
+    rel = X - root
+    np.testing.assert_allclose(Y - root, np.stack([rel[:, 2], rel[:, 1], -rel[:, 0]], axis=1), atol=1e-12)
+    # The toes point along +Z at yaw 0 and along +X at yaw +90 degrees.
+    pts = frames(np.stack([P, Q]))[0]
+    from body.skeleton import ANCHOR_INDEX
+    toe = pts[:, ANCHOR_INDEX["l_toe"]] - pts[:, J["l_ankle"]]
+    assert toe[0, 2] > 0.1 and abs(toe[0, 0]) < 1e-9
+    assert toe[1, 0] > 0.1 and abs(toe[1, 2]) < 1e-9
+
+
+def test_bone_lengths_preserved_and_vectorised_equals_per_pose():
+    P = random_poses(200)
+    X = forward_kinematics(P)
+    X0 = forward_kinematics(neutral_pose(D))[0]
+    for j, p in BONES:
+        lengths = np.linalg.norm(X[:, j] - X[:, p], axis=-1)
+        np.testing.assert_allclose(lengths, np.linalg.norm(X0[j] - X0[p]), atol=1e-10)
+    hips = np.linalg.norm(X[:, J["l_hip"]] - X[:, J["r_hip"]], axis=-1)
+    np.testing.assert_allclose(hips, D.hip_width, atol=1e-10)
+    single = np.stack([forward_kinematics(p)[0] for p in P[:20]])
+    np.testing.assert_array_equal(single, X[:20])
+    ends, radii = cone_endpoints(P)
+    assert ends.shape == (200, 16, 2, 3) and radii.shape == (16, 2)
+
+
+def test_clip_to_limits():
+    P = random_poses(50) * 3.0
+    C = clip_to_limits(P)
+    assert within_limits(C).all()
+    assert not within_limits(P).all()
+    inside = random_poses(10)
+    inside[:, DOF_INDEX["root_yaw"]] = np.clip(inside[:, DOF_INDEX["root_yaw"]], -3.0, 3.0)
+    np.testing.assert_allclose(clip_to_limits(inside), inside)
+    # Elbow hyper-extension is clipped to straight; yaw wraps rather than clips.
+    Q = zero_pose()
+    Q[DOF_INDEX["l_elbow_flex"]] = -0.5
+    Q[DOF_INDEX["root_yaw"]] = 3 * np.pi / 2
+    C = clip_to_limits(Q)
+    assert C[DOF_INDEX["l_elbow_flex"]] == 0.0
+    assert C[DOF_INDEX["root_yaw"]] == pytest.approx(-np.pi / 2)
+    with pytest.raises(ValueError, match="28"):
+        clip_to_limits(np.zeros(5))
+
+
+def test_scaled_dims():
+    small = D.scaled(1.5)
+    assert small.height == 1.5
+    assert small.thigh == pytest.approx(D.thigh * 1.5 / 1.75)
+    ends, _ = cone_endpoints(neutral_pose(small), small)
+    assert ends[0, 0, 1, 1] == pytest.approx(1.5)
+    with pytest.raises(ValueError, match="height"):
+        D.scaled(-1)
+    with pytest.raises(ValueError, match="thigh"):
+        BodyDims(thigh=float("nan"))
+
+
+def test_silhouettes_contain_projected_joints_and_sample_points():
+    cam = default_camera()
+    P = np.stack([neutral_pose(D, x=-0.5, yaw=0.4), neutral_pose(D, x=0.5, yaw=-0.4), random_poses(1, 3)[0]])
+    P[2, :3] = (0.0, 0.9, 0.0)
+    S = rasterise_silhouettes(P, cam)
+    assert S.shape == (3, cam.height, cam.width) and S.dtype == bool
+    uv = np.round(cam.project(forward_kinematics(P))).astype(int)
+    assert cam.in_image(uv).all()
+    for i in range(3):
+        assert S[i, uv[i, :, 1], uv[i, :, 0]].all(), f"pose {i}: a joint falls outside its silhouette"
+    # A standing person 4 m away covers a plausible area and is taller than wide.
+    ys, xs = np.nonzero(S[0])
+    assert 1000 < S[0].sum() < 8000
+    assert (ys.max() - ys.min()) > 2 * (xs.max() - xs.min())
+    # Interior sample points fall inside the silhouette, nearly all of them.
+    inner = np.round(cone_interior_points(P, cam)).astype(int)
+    assert inner.shape == (3, 16 * 4 * 3, 2)
+    frac = np.mean([S[i, inner[i, :, 1], inner[i, :, 0]].mean() for i in range(3)])
+    assert frac > 0.97
+    # Outline points lie near the edge map.
+    out = cone_outline_points(P, cam)
+    assert out.shape == (3, 16 * 2 * 4, 2)
+    E = render_edge_maps(P, cam, mode="cones")
+    import cv2
+    dist = cv2.distanceTransform((~E[0]).astype(np.uint8), cv2.DIST_L2, 3)
+    o = np.round(out[0]).astype(int)
+    assert np.median(dist[o[:, 1], o[:, 0]]) <= 1.5
+    edges = render_edge_maps(P[:1], cam)
+    assert edges[0].sum() < S[0].sum() and (edges[0] <= S[0]).all()
+
+
+def test_vectorised_samplers_match_per_pose():
+    cam = default_camera()
+    P = random_poses(64, 7)
+    P[:, 1] = 0.9
+    P[:, [0, 2]] = 0.0
+    out = cone_outline_points(P, cam)
+    inn = cone_interior_points(P, cam, n_along=3, n_across=2)
+    for i in (0, 17, 63):
+        np.testing.assert_allclose(cone_outline_points(P[i], cam)[0], out[i])
+        np.testing.assert_allclose(cone_interior_points(P[i], cam, n_along=3, n_across=2)[0], inn[i])
