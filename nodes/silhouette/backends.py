@@ -1,0 +1,148 @@
+"""Background subtractors behind one interface: ours (Horprasert) and OpenCV's.
+
+``make_subtractor(name, **params)`` returns an object with
+
+* ``apply(frame) -> (H, W) bool`` foreground mask for a uint8 BGR frame (H, W, 3); the model
+  learns from every frame it is given (online, like ``cv2.BackgroundSubtractor.apply``);
+* ``labels``: the class labels of the last frame, (H, W) uint8 with the codes of
+  ``background`` (BACKGROUND 0, SHADOW 1, HIGHLIGHT 2, FOREGROUND 3), or None before the first
+  frame; ``provides_shadows`` says whether the backend ever labels shadows (otherwise
+  every pixel is BACKGROUND or FOREGROUND);
+* ``name`` and ``ready`` (False while the model is still warming up and reports no foreground).
+
+Shadows and highlights always count as background in the mask.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Protocol
+
+import cv2
+import numpy as np
+
+from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
+
+BACKEND_NAMES: tuple[str, ...] = ("horprasert", "mog2", "knn", "cnt", "gsoc")
+
+
+class Subtractor(Protocol):
+    name: str
+    provides_shadows: bool
+    labels: np.ndarray | None
+
+    @property
+    def ready(self) -> bool: ...
+
+    def apply(self, frame: np.ndarray) -> np.ndarray: ...
+
+
+class HorprasertSubtractor:
+    """Online wrapper of ``HorprasertBackground``.
+
+    The first ``train_frames`` frames are collected (no foreground is reported for them) and the
+    model is fitted on them, robustly by default because people may already be in view; after
+    that each frame is classified and then blended into the model (``update``).
+    ``fit(frames)`` instead trains at once, e.g. from a recording of the empty scene.
+    Other keyword parameters go to ``HorprasertBackground``.
+    """
+
+    name = "horprasert"
+    provides_shadows = True
+
+    def __init__(self, train_frames: int = 30, robust: bool = True, **model_params: Any) -> None:
+        if train_frames < 2:
+            raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
+        try:
+            self.model = HorprasertBackground(**model_params)
+        except TypeError as exc:
+            raise ValueError(f"horprasert: unknown parameter ({exc})") from None
+        self.train_frames = train_frames
+        self.robust = robust
+        self.labels: np.ndarray | None = None
+        self._buffer: list[np.ndarray] = []
+
+    @property
+    def ready(self) -> bool:
+        return self.model.is_fitted
+
+    def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> "HorprasertSubtractor":
+        self.model.fit(as_frame_stack(frames), robust=self.robust if robust is None else robust)
+        self._buffer = []
+        return self
+
+    def apply(self, frame: np.ndarray) -> np.ndarray:
+        if not self.model.is_fitted:
+            if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
+                raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
+            self._buffer.append(frame.copy())
+            if len(self._buffer) < self.train_frames:
+                self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
+                return np.zeros(frame.shape[:2], bool)
+            self.fit(self._buffer)
+        self.labels = self.model.apply_update(frame)
+        return self.labels == FOREGROUND
+
+
+class OpenCVSubtractor:
+    """Any ``cv2.BackgroundSubtractor``; its 255 / 127 / 0 output becomes FOREGROUND / SHADOW /
+    BACKGROUND. ``learning_rate`` is passed to ``apply`` (-1: the subtractor's own schedule)."""
+
+    def __init__(self, name: str, subtractor: Any, provides_shadows: bool, learning_rate: float = -1.0) -> None:
+        self.name = name
+        self.subtractor = subtractor
+        self.provides_shadows = provides_shadows
+        self.learning_rate = learning_rate
+        self.labels: np.ndarray | None = None
+        self._lut = np.full(256, BACKGROUND, np.uint8)
+        self._lut[255] = FOREGROUND
+        if provides_shadows:
+            self._lut[127] = SHADOW
+
+    @property
+    def ready(self) -> bool:
+        return self.labels is not None
+
+    def apply(self, frame: np.ndarray) -> np.ndarray:
+        if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8 or frame.ndim != 3:
+            raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {getattr(frame, 'shape', None)}")
+        raw = self.subtractor.apply(frame, learningRate=self.learning_rate)
+        self.labels = self._lut[raw]
+        return raw == 255
+
+
+def _create(name: str, fn: Callable[..., Any], params: dict[str, Any]) -> Any:
+    try:
+        return fn(**params)
+    except (TypeError, cv2.error) as exc:
+        raise ValueError(
+            f"{name}: cannot create the subtractor with parameters {sorted(params)}; use the "
+            f"keyword names of cv2 {fn.__name__} ({exc})"
+        ) from None
+
+
+def make_subtractor(name: str, **params: Any) -> Subtractor:
+    """Build a background subtractor by name (one of ``BACKEND_NAMES``).
+
+    ``horprasert``: our ``HorprasertSubtractor`` (params: train_frames, robust and any
+    ``HorprasertBackground`` parameter). ``mog2`` / ``knn``: cv2.createBackgroundSubtractorMOG2 /
+    KNN with ``detectShadows=True`` unless given (params: OpenCV's keyword names, e.g. history,
+    varThreshold, dist2Threshold; plus learning_rate). ``cnt`` / ``gsoc``:
+    cv2.bgsegm.createBackgroundSubtractorCNT / GSOC (no shadow class). Raises ValueError for an
+    unknown name or parameter.
+    """
+    key = name.lower() if isinstance(name, str) else name
+    if key not in BACKEND_NAMES:
+        raise ValueError(f"unknown background subtractor {name!r}; valid names: {', '.join(BACKEND_NAMES)}")
+    if key == "horprasert":
+        return HorprasertSubtractor(**params)
+    params = dict(params)
+    lr = float(params.pop("learning_rate", -1.0))
+    if key in ("mog2", "knn"):
+        params.setdefault("detectShadows", True)
+        fn = cv2.createBackgroundSubtractorMOG2 if key == "mog2" else cv2.createBackgroundSubtractorKNN
+        sub = _create(key, fn, params)
+        return OpenCVSubtractor(key, sub, provides_shadows=bool(params["detectShadows"]), learning_rate=lr)
+    if not hasattr(cv2, "bgsegm"):
+        raise ValueError(f"{key} needs cv2.bgsegm: install opencv-contrib-python-headless")
+    fn = cv2.bgsegm.createBackgroundSubtractorCNT if key == "cnt" else cv2.bgsegm.createBackgroundSubtractorGSOC
+    return OpenCVSubtractor(key, _create(key, fn, params), provides_shadows=False, learning_rate=lr)

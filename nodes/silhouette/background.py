@@ -1,0 +1,434 @@
+"""Statistical colour background model with shadow and highlight detection.
+
+Horprasert, Harwood & Davis, "A statistical approach for real-time robust background subtraction
+and shadow detection" (ICCV Frame-Rate Workshop, 1999). Each pixel i has an expected colour
+E_i = (mu_R, mu_G, mu_B) and a per-channel spread s_i = (s_R, s_G, s_B). For an observed colour
+I_i the model splits the difference from E_i into
+
+* brightness distortion (eq. 5)
+      alpha_i = sum_c (I_c mu_c / s_c^2) / sum_c (mu_c / s_c)^2
+  i.e. the scale of E_i closest to I_i in the spread-normalised colour space, and
+* chromaticity distortion (eq. 6)
+      CD_i = sqrt( sum_c ((I_c - alpha_i mu_c) / s_c)^2 ),
+  the distance of I_i from the line through the origin and E_i.
+
+Both are normalised by their per-pixel RMS over the training frames (eqs. 7, 8):
+a_i = RMS(alpha_i - 1), b_i = RMS(CD_i), alpha_hat = (alpha - 1) / a_i, CD_hat = CD / b_i.
+A pixel is then (eq. 9)
+
+* foreground   if CD_hat > tau_CD or alpha_hat < tau_alpha_lo, else
+* background   if tau_alpha2 < alpha_hat < tau_alpha1, else
+* shadow       if alpha_hat < 0 (darker, same chromaticity), else
+* highlight    (brighter, same chromaticity).
+
+The thresholds come from the distribution of the normalised distortions over the training frames
+for a target detection rate r: tau_CD is the r-quantile of CD_hat and [tau_alpha2, tau_alpha1] the
+central r-interval of alpha_hat. tau_alpha_lo keeps near-black pixels from being explained as a
+very deep shadow: it is the normalised brightness at which a typical pixel (median a) would be
+darker than ``min_shadow_brightness`` times its background.
+
+Frames are uint8 BGR, H x W x 3; all arithmetic is float32 and vectorised over pixels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import cv2
+import numpy as np
+
+BACKGROUND: int = 0
+SHADOW: int = 1
+HIGHLIGHT: int = 2
+FOREGROUND: int = 3
+CLASS_NAMES: tuple[str, str, str, str] = ("background", "shadow", "highlight", "foreground")
+
+# 1.4826 * MAD estimates the standard deviation of a Gaussian.
+_MAD_TO_SIGMA = 1.4826
+# Smallest automatic threshold on a normalised distortion.
+_MIN_TAU = 2.0
+# Bytes of float32 work memory per row block in the robust median pass.
+_BLOCK_BYTES = 64 * 1024 * 1024
+
+
+def as_frame_stack(frames: np.ndarray | Iterable[np.ndarray]) -> np.ndarray:
+    """Return training frames as one contiguous (N, H, W, 3) uint8 array.
+
+    ``frames`` is either such an array or an iterable of H x W x 3 uint8 BGR frames of one size.
+    Raises ValueError naming the offending frame when a shape or dtype does not fit.
+    """
+    if isinstance(frames, np.ndarray):
+        stack = frames
+    else:
+        items = list(frames)
+        if not items:
+            raise ValueError("frames is empty: pass at least 2 frames of shape (H, W, 3) uint8")
+        first = np.asarray(items[0])
+        for k, f in enumerate(items):
+            f = np.asarray(f)
+            if f.shape != first.shape or f.dtype != np.uint8:
+                raise ValueError(
+                    f"frame {k} has shape {f.shape} dtype {f.dtype}; every frame must be "
+                    f"uint8 with the shape of frame 0 {first.shape}"
+                )
+        stack = np.stack(items)
+    if stack.ndim != 4 or stack.shape[-1] != 3 or stack.dtype != np.uint8:
+        raise ValueError(
+            f"frames must be (N, H, W, 3) uint8 BGR, got shape {stack.shape} dtype {stack.dtype}"
+        )
+    return np.ascontiguousarray(stack)
+
+
+def _check_frame(frame: np.ndarray, shape: tuple[int, int]) -> None:
+    if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8 or frame.shape != (*shape, 3):
+        got = (getattr(frame, "shape", None), getattr(frame, "dtype", None))
+        raise ValueError(
+            f"frame must be a uint8 BGR array of shape {(*shape, 3)} (the training size), got {got}"
+        )
+
+
+class HorprasertBackground:
+    """Per-pixel colour background model with shadow/highlight classes (Horprasert et al. 1999).
+
+    Parameters
+    ----------
+    detection_rate : target fraction r of training (background) samples accepted as background;
+        sets tau_CD (r-quantile of CD_hat) and tau_alpha1/2 (central r-interval of alpha_hat).
+    learning_rate : running-average rate (per frame) for the mean colour of background-labelled
+        pixels in ``update``; 0 disables adaptation. Lighting drift slower than about
+        ``learning_rate`` * tau_alpha1 * a per frame keeps pixels in the background class.
+    spread_learning_rate : the same for the per-channel variance (smaller: variance estimates
+        from single frames are noisy).
+    shadow_learning_rate : rate for pixels labelled shadow or highlight (foreground: never).
+    min_spread : lower bound on each channel's spread s_c, grey levels; keeps the normalisation
+        finite for pixels that were constant in training (saturated, black, codec-flattened).
+    min_shadow_brightness : darkest shadow accepted, as a fraction of the background brightness;
+        sets tau_alpha_lo.
+    tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo : fixed thresholds; None (default) chooses them
+        from the training frames.
+    robust_inlier_k : in ``fit(robust=True)``, a training sample counts towards a, b and the
+        thresholds only if every channel lies within k robust spreads of the median.
+    max_threshold_samples : number of normalised distortion samples drawn to set the thresholds.
+    random_state : seed of that subsample.
+
+    Fitted attributes
+    -----------------
+    mean_ : (H, W, 3) float32 expected colour E, grey levels.  spread_ : (H, W, 3) float32 s.
+    a_, b_ : (H, W) float32 RMS brightness / chromaticity distortion.  thresholds_ : dict.
+    """
+
+    def __init__(
+        self,
+        detection_rate: float = 0.9999,
+        learning_rate: float = 0.05,
+        spread_learning_rate: float = 0.005,
+        shadow_learning_rate: float = 0.01,
+        min_spread: float = 1.5,
+        min_shadow_brightness: float = 0.4,
+        tau_cd: float | None = None,
+        tau_alpha1: float | None = None,
+        tau_alpha2: float | None = None,
+        tau_alpha_lo: float | None = None,
+        robust_inlier_k: float = 3.5,
+        max_threshold_samples: int = 2_000_000,
+        random_state: int | None = 0,
+    ) -> None:
+        if not 0.5 < detection_rate < 1.0:
+            raise ValueError(f"detection_rate must be in (0.5, 1), got {detection_rate}")
+        for name, v in (
+            ("learning_rate", learning_rate),
+            ("spread_learning_rate", spread_learning_rate),
+            ("shadow_learning_rate", shadow_learning_rate),
+        ):
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {v}")
+        if min_spread <= 0:
+            raise ValueError(f"min_spread must be > 0 grey levels, got {min_spread}")
+        if not 0.0 <= min_shadow_brightness < 1.0:
+            raise ValueError(f"min_shadow_brightness must be in [0, 1), got {min_shadow_brightness}")
+        if robust_inlier_k <= 0:
+            raise ValueError(f"robust_inlier_k must be > 0, got {robust_inlier_k}")
+        self.detection_rate = detection_rate
+        self.learning_rate = learning_rate
+        self.spread_learning_rate = spread_learning_rate
+        self.shadow_learning_rate = shadow_learning_rate
+        self.min_spread = min_spread
+        self.min_shadow_brightness = min_shadow_brightness
+        self.tau_cd = tau_cd
+        self.tau_alpha1 = tau_alpha1
+        self.tau_alpha2 = tau_alpha2
+        self.tau_alpha_lo = tau_alpha_lo
+        self.robust_inlier_k = robust_inlier_k
+        self.max_threshold_samples = max_threshold_samples
+        self.random_state = random_state
+        self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
+        self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
+        self.a_: np.ndarray | None = None
+        self.b_: np.ndarray | None = None
+        self.thresholds_: dict[str, float] = {}
+
+    # ------------------------------------------------------------------ fitting
+    @property
+    def is_fitted(self) -> bool:
+        return self.a_ is not None
+
+    @property
+    def mean_(self) -> np.ndarray:
+        """(H, W, 3) float32 expected colour E, grey levels (a view of the model)."""
+        self._require_fitted()
+        return np.moveaxis(self._mu, 0, -1)
+
+    @property
+    def spread_(self) -> np.ndarray:
+        """(H, W, 3) float32 per-channel spread s, grey levels (>= min_spread)."""
+        self._require_fitted()
+        return np.moveaxis(np.sqrt(self._var), 0, -1)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) of the frames the model was fitted on."""
+        self._require_fitted()
+        return self._mu.shape[1:]
+
+    def fit(self, frames: np.ndarray | Iterable[np.ndarray], robust: bool = False) -> "HorprasertBackground":
+        """Learn the background from training frames (N, H, W, 3) uint8 BGR, N >= 2.
+
+        ``robust=False``: frames are empty of people; E and s are the sample mean and standard
+        deviation (Horprasert eqs. 1-4). ``robust=True``: people may be present; E is the
+        per-pixel temporal median and s = 1.4826 * MAD, and a, b and the thresholds use only the
+        samples within ``robust_inlier_k`` spreads of the median. Pixels covered by a person in
+        more than half of the frames cannot be recovered this way.
+        """
+        stack = as_frame_stack(frames)
+        n = stack.shape[0]
+        if n < 2:
+            raise ValueError(f"fit needs at least 2 frames, got {n}")
+        if robust:
+            mean, spread = _median_mad(stack)
+        else:
+            acc = np.zeros(stack.shape[1:], np.float64)
+            acc2 = np.zeros(stack.shape[1:], np.float64)
+            for f in stack:
+                ff = f.astype(np.float64)
+                acc += ff
+                acc2 += ff * ff
+            m = acc / n
+            mean = m.astype(np.float32)
+            spread = np.sqrt(np.maximum(acc2 / n - m * m, 0.0) * n / (n - 1)).astype(np.float32)
+        self._mu = np.ascontiguousarray(np.moveaxis(mean, -1, 0), np.float32)
+        s2 = np.maximum(np.moveaxis(spread, -1, 0), self.min_spread).astype(np.float32) ** 2
+        self._var = np.ascontiguousarray(s2)
+        self.a_ = None
+        self._refresh_colour_terms(spread_changed=True)
+
+        # Pass 1: per-pixel RMS of the distortions (eqs. 7, 8) over the (inlier) samples.
+        h, w = self.shape
+        sum_a = np.zeros((h, w), np.float64)
+        sum_b = np.zeros((h, w), np.float64)
+        count = np.zeros((h, w), np.float64)
+        inliers = []
+        for f in stack:
+            alpha, cd2 = self._distortions(f)
+            inl = self._inlier_mask(f) if robust else None
+            wgt = np.ones((h, w), np.float32) if inl is None else inl.astype(np.float32)
+            inliers.append(inl)
+            sum_a += wgt * (alpha - 1.0) ** 2
+            sum_b += wgt * cd2
+            count += wgt
+        valid = count > 0
+        a = np.sqrt(sum_a / np.maximum(count, 1.0))
+        b = np.sqrt(sum_b / np.maximum(count, 1.0))
+        # A pixel whose few training samples happened to agree would get a near-zero RMS and
+        # flag all later noise. Floor a and b at half the RMS that Gaussian noise of spread s
+        # would give (var(alpha) = 1 / sum (E/s)^2, E[CD^2] = 2 degrees of freedom) and at a
+        # quarter of their typical value.
+        a_noise = 0.5 * np.sqrt(self._inv_den)
+        b_noise = 0.5 * np.sqrt(2.0)
+        med_a = float(np.median(a[valid])) if valid.any() else 0.0
+        med_b = float(np.median(b[valid])) if valid.any() else 0.0
+        a = np.maximum(np.where(valid, np.maximum(a, 0.25 * med_a), med_a), a_noise)
+        b = np.maximum(np.where(valid, np.maximum(b, 0.25 * med_b), med_b), b_noise)
+        self.a_ = np.maximum(a, 1e-6).astype(np.float32)
+        self.b_ = np.maximum(b, 1e-6).astype(np.float32)
+        med_a = float(np.median(self.a_))
+
+        # Pass 2: thresholds from the distribution of the normalised distortions.
+        rng = np.random.default_rng(self.random_state)
+        per_frame = max(1, self.max_threshold_samples // n)
+        ah_s, cd_s = [], []
+        for f, inl in zip(stack, inliers):
+            alpha, cd2 = self._distortions(f)
+            ah = ((alpha - 1.0) / self.a_).ravel()
+            ch = (np.sqrt(cd2) / self.b_).ravel()
+            idx = np.flatnonzero(inl) if inl is not None else None
+            pool = idx.size if idx is not None else ah.size
+            if pool == 0:
+                continue
+            pick = rng.integers(0, pool, size=min(per_frame, pool))
+            if idx is not None:
+                pick = idx[pick]
+            ah_s.append(ah[pick])
+            cd_s.append(ch[pick])
+        ah_all = np.concatenate(ah_s)
+        cd_all = np.concatenate(cd_s)
+        r = self.detection_rate
+        # Each automatic threshold is at least _MIN_TAU normalised units: training frames that
+        # are nearly noise-free (synthetic, a frozen stream) would otherwise give thresholds of
+        # zero. With real sensor noise the quantiles are 3-4 and the floor does not bind.
+        lo_q, hi_q = np.quantile(ah_all, [(1.0 - r) / 2.0, 1.0 - (1.0 - r) / 2.0])
+        auto_cd = max(float(np.quantile(cd_all, r)), _MIN_TAU)
+        tau_cd = auto_cd if self.tau_cd is None else float(self.tau_cd)
+        tau_a1 = max(float(hi_q), _MIN_TAU) if self.tau_alpha1 is None else float(self.tau_alpha1)
+        tau_a2 = min(float(lo_q), -_MIN_TAU) if self.tau_alpha2 is None else float(self.tau_alpha2)
+        if self.tau_alpha_lo is None:
+            tau_lo = (self.min_shadow_brightness - 1.0) / med_a
+            tau_lo = min(tau_lo, tau_a2 - 1.0)
+        else:
+            tau_lo = float(self.tau_alpha_lo)
+        if not (tau_lo < tau_a2 < 0.0 < tau_a1) or tau_cd <= 0.0:
+            raise ValueError(
+                "thresholds must satisfy tau_alpha_lo < tau_alpha2 < 0 < tau_alpha1 and tau_cd > 0; "
+                f"got tau_alpha_lo={tau_lo}, tau_alpha2={tau_a2}, tau_alpha1={tau_a1}, tau_cd={tau_cd}"
+            )
+        self.thresholds_ = {
+            "tau_cd": tau_cd,
+            "tau_alpha1": tau_a1,
+            "tau_alpha2": tau_a2,
+            "tau_alpha_lo": tau_lo,
+        }
+        self._refresh_thresholds()
+        return self
+
+    # ------------------------------------------------------------------ per frame
+    def distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Normalised distortions (alpha_hat, CD_hat), each (H, W) float32 (eqs. 5-8)."""
+        self._require_fitted()
+        _check_frame(frame, self.shape)
+        alpha, cd2 = self._distortions(frame)
+        return (alpha - 1.0) / self.a_, np.sqrt(cd2) / self.b_
+
+    def apply(self, frame: np.ndarray) -> np.ndarray:
+        """Classify each pixel of a uint8 BGR frame (H, W, 3).
+
+        Returns (H, W) uint8 labels: BACKGROUND 0, SHADOW 1, HIGHLIGHT 2, FOREGROUND 3 (eq. 9).
+        Does not change the model; call ``update`` for that.
+        """
+        self._require_fitted()
+        _check_frame(frame, self.shape)
+        alpha, cd2 = self._distortions(frame)
+        # Thresholds are precomputed in raw alpha / CD^2 units per pixel, saving the division.
+        labels = (alpha >= 1.0).astype(np.uint8)
+        labels += SHADOW  # 1 where darker than the background, 2 where brighter
+        np.copyto(labels, BACKGROUND, where=(alpha < self._alpha_hi) & (alpha > self._alpha_lo))
+        np.copyto(labels, FOREGROUND, where=(cd2 > self._cd2_max) | (alpha < self._alpha_min))
+        return labels
+
+    def update(self, frame: np.ndarray, labels: np.ndarray) -> None:
+        """Blend the frame into the model, never where ``labels == FOREGROUND``.
+
+        E <- (1 - r) E + r I and s^2 <- (1 - r_s) s^2 + r_s (I - E)^2 per pixel, with
+        r = ``learning_rate`` at BACKGROUND pixels and ``shadow_learning_rate`` at SHADOW and
+        HIGHLIGHT pixels (r_s likewise scaled from ``spread_learning_rate``), and r = 0 at
+        FOREGROUND. People never enter the model; slow lighting drift is followed. Shadow and
+        highlight pixels must adapt too: under a global drift the pixels that noise pushes out of
+        the background band would otherwise stop adapting and lag further every frame. Absorbing
+        a person's cast shadow this way is harmless, as shadow and background are both "not
+        foreground". a, b and the thresholds stay as trained.
+        """
+        self._require_fitted()
+        _check_frame(frame, self.shape)
+        if labels.shape != self.shape:
+            raise ValueError(f"labels must have shape {self.shape}, got {labels.shape}")
+        lr, slr = self.learning_rate, self.spread_learning_rate
+        if lr == 0.0 and slr == 0.0:
+            return
+        k = self.shadow_learning_rate / lr if lr > 0.0 else 0.0
+        rate = np.array([lr, k * lr, k * lr, 0.0], np.float32)[labels]
+        rate_s = rate * np.float32(slr / lr) if lr > 0.0 else np.where(labels == BACKGROUND, np.float32(slr), np.float32(0.0))
+        for c, plane in enumerate(cv2.split(frame)):
+            d = plane.astype(np.float32)
+            d -= self._mu[c]
+            if slr > 0.0:
+                self._var[c] += rate_s * (d * d - self._var[c])
+            if lr > 0.0:
+                d *= rate
+                self._mu[c] += d
+        if slr > 0.0:
+            np.maximum(self._var, np.float32(self.min_spread**2), out=self._var)
+        self._refresh_colour_terms(spread_changed=slr > 0.0)
+
+    def apply_update(self, frame: np.ndarray) -> np.ndarray:
+        """``apply`` then ``update`` with its labels; returns the labels."""
+        labels = self.apply(frame)
+        self.update(frame, labels)
+        return labels
+
+    def get_params(self) -> dict[str, Any]:
+        return {
+            k: getattr(self, k)
+            for k in (
+                "detection_rate", "learning_rate", "spread_learning_rate", "shadow_learning_rate",
+                "min_spread",
+                "min_shadow_brightness", "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
+                "robust_inlier_k", "max_threshold_samples", "random_state",
+            )
+        }
+
+    # ------------------------------------------------------------------ internals
+    def _require_fitted(self) -> None:
+        if self._mu is None:
+            raise RuntimeError("HorprasertBackground is not fitted: call fit(frames) first")
+
+    def _refresh_colour_terms(self, spread_changed: bool) -> None:
+        """Per-pixel constants of eqs. 5-6 (channel planes): 1/s, E/s^2, 1/sum (E/s)^2."""
+        if spread_changed:
+            self._inv_var = (1.0 / self._var).astype(np.float32)
+            self._inv_s = np.sqrt(self._inv_var)
+        self._w = self._mu * self._inv_var
+        den = (self._mu * self._w).sum(axis=0)
+        # A black background pixel has no brightness direction; alpha is then 0 and all of the
+        # observed colour shows up as chromaticity distortion.
+        self._inv_den = np.where(den > 1e-6, 1.0 / np.maximum(den, 1e-6), 0.0).astype(np.float32)
+
+    def _refresh_thresholds(self) -> None:
+        t = self.thresholds_
+        self._alpha_hi = (1.0 + t["tau_alpha1"] * self.a_).astype(np.float32)
+        self._alpha_lo = (1.0 + t["tau_alpha2"] * self.a_).astype(np.float32)
+        self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
+        self._cd2_max = ((t["tau_cd"] * self.b_) ** 2).astype(np.float32)
+
+    def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32."""
+        planes = [p.astype(np.float32) for p in cv2.split(frame)]
+        mu, w, inv_s = self._mu, self._w, self._inv_s
+        alpha = planes[0] * w[0]
+        alpha += planes[1] * w[1]
+        alpha += planes[2] * w[2]
+        alpha *= self._inv_den
+        cd2 = np.zeros_like(alpha)
+        for c in range(3):
+            d = planes[c]
+            d -= alpha * mu[c]
+            d *= inv_s[c]
+            d *= d
+            cd2 += d
+        return alpha, cd2
+
+    def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
+        z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
+        return z.max(axis=0) <= self.robust_inlier_k
+
+
+def _median_mad(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel temporal median and 1.4826 * MAD of (N, H, W, 3) uint8, row block by row block."""
+    n, h, w, _ = stack.shape
+    rows = max(1, int(_BLOCK_BYTES // (n * w * 3 * 4)))
+    med = np.empty((h, w, 3), np.float32)
+    mad = np.empty((h, w, 3), np.float32)
+    for y0 in range(0, h, rows):
+        blk = stack[:, y0 : y0 + rows].astype(np.float32)
+        m = np.median(blk, axis=0)
+        med[y0 : y0 + rows] = m
+        mad[y0 : y0 + rows] = np.median(np.abs(blk - m), axis=0) * _MAD_TO_SIGMA
+    return med, mad

@@ -1,0 +1,194 @@
+"""Horprasert background model and the subtractor backends on synthetic pixels.
+
+The scene: a smoothly textured background whose chromaticity varies over the image, Gaussian
+sensor noise (sigma 2.5 grey levels) in every frame, a person-like ellipse of a colour the
+background never has, and a cast shadow that is the background times 0.6 (same chromaticity).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.silhouette.background import (
+    BACKGROUND,
+    FOREGROUND,
+    HIGHLIGHT,
+    SHADOW,
+    HorprasertBackground,
+)
+from nodes.silhouette.backends import BACKEND_NAMES, make_subtractor
+
+H, W = 120, 160
+YY, XX = np.mgrid[0:H, 0:W]
+BG = np.stack(
+    [
+        90 + 40 * np.sin(XX / 9.0) + 10 * np.cos(YY / 5.0),
+        130 + 40 * np.cos(YY / 11.0 + XX / 23.0),
+        110 + 35 * np.sin((XX + YY) / 13.0),
+    ],
+    axis=-1,
+).astype(np.float32)
+PERSON_BGR = (200.0, 60.0, 40.0)
+SHADOW_BOX = (slice(80, 110), slice(20, 70))
+
+
+def person_mask(cx: float, cy: float = 60.0, rx: float = 15.0, ry: float = 35.0) -> np.ndarray:
+    return ((XX - cx) / rx) ** 2 + ((YY - cy) / ry) ** 2 < 1.0
+
+
+def render(
+    rng: np.random.Generator,
+    person_x: float | None = None,
+    shadow: bool = False,
+    gains: tuple[float, float, float] = (1.0, 1.0, 1.0),
+) -> np.ndarray:
+    f = BG * np.asarray(gains, np.float32) + rng.normal(0.0, 2.5, BG.shape)
+    if shadow:
+        f[SHADOW_BOX] *= 0.6
+    if person_x is not None:
+        f[person_mask(person_x)] = PERSON_BGR
+    return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+
+@pytest.fixture(scope="module")
+def empty_frames() -> np.ndarray:
+    rng = np.random.default_rng(0)
+    return np.stack([render(rng) for _ in range(30)])
+
+
+def class_fractions(labels: np.ndarray, region: np.ndarray) -> np.ndarray:
+    return np.bincount(labels[region].ravel(), minlength=4) / region.sum()
+
+
+def test_person_is_foreground_shadow_is_shadow_background_is_background(empty_frames):
+    model = HorprasertBackground().fit(empty_frames)
+    rng = np.random.default_rng(1)
+    labels = model.apply(render(rng, person_x=110.0, shadow=True))
+    assert labels.shape == (H, W) and labels.dtype == np.uint8
+    blob = person_mask(110.0)
+    shadow = np.zeros((H, W), bool)
+    shadow[SHADOW_BOX] = True
+    rest = ~blob & ~shadow
+    fb, fs, fr = class_fractions(labels, blob), class_fractions(labels, shadow), class_fractions(labels, rest)
+    assert fb[FOREGROUND] > 0.99
+    assert fs[SHADOW] > 0.97 and fs[FOREGROUND] < 0.02
+    assert fr[BACKGROUND] > 0.98 and fr[FOREGROUND] < 0.01
+
+
+def test_thresholds_are_chosen_from_training_distortions(empty_frames):
+    model = HorprasertBackground(detection_rate=0.999).fit(empty_frames)
+    t = model.thresholds_
+    assert t["tau_alpha_lo"] < t["tau_alpha2"] < 0.0 < t["tau_alpha1"]
+    # On the training frames themselves the detection rate is met by construction.
+    alpha_hat, cd_hat = model.distortions(empty_frames[3])
+    assert np.mean(cd_hat <= t["tau_cd"]) > 0.99
+    # Sensor noise of 2.5 grey levels on ~100-level pixels: RMS brightness distortion ~1-3 %.
+    assert 0.005 < float(np.median(model.a_)) < 0.05
+    stricter = HorprasertBackground(detection_rate=0.99).fit(empty_frames)
+    assert stricter.thresholds_["tau_cd"] < t["tau_cd"]
+
+
+def test_brighter_same_chromaticity_is_highlight_darker_is_shadow(empty_frames):
+    model = HorprasertBackground().fit(empty_frames)
+    rng = np.random.default_rng(2)
+    lab_hi = model.apply(render(rng, gains=(1.3, 1.3, 1.3)))
+    lab_lo = model.apply(render(rng, gains=(0.7, 0.7, 0.7)))
+    assert np.mean(lab_hi == HIGHLIGHT) > 0.95
+    assert np.mean(lab_lo == SHADOW) > 0.95
+
+
+def test_slow_lighting_drift_is_absorbed_not_foreground(empty_frames):
+    """A 200-frame drift of brightness and white balance (R +12 %, G +5 %, B -8 %)."""
+    adaptive = HorprasertBackground().fit(empty_frames)
+    frozen = HorprasertBackground(learning_rate=0.0, spread_learning_rate=0.0).fit(empty_frames)
+    rng = np.random.default_rng(3)
+    worst_fg = 0.0
+    for k in range(200):
+        t = k / 199.0
+        frame = render(rng, gains=(1.0 - 0.08 * t, 1.0 + 0.05 * t, 1.0 + 0.12 * t))
+        labels = adaptive.apply_update(frame)
+        worst_fg = max(worst_fg, float(np.mean(labels == FOREGROUND)))
+    assert worst_fg < 0.01
+    assert np.mean(labels == BACKGROUND) > 0.95
+    # Without adaptation the same final frame is mostly foreground: the test measures something.
+    assert np.mean(frozen.apply(frame) == FOREGROUND) > 0.5
+    drifted = BG * np.asarray((0.92, 1.05, 1.12), np.float32)
+    assert np.median(np.abs(adaptive.mean_ - drifted)) < 2.0
+
+
+def test_person_never_enters_the_model_while_standing_still(empty_frames):
+    model = HorprasertBackground(learning_rate=0.2).fit(empty_frames)
+    rng = np.random.default_rng(4)
+    for _ in range(40):
+        labels = model.apply_update(render(rng, person_x=80.0))
+    assert class_fractions(labels, person_mask(80.0))[FOREGROUND] > 0.99
+
+
+def test_robust_fit_learns_background_with_a_person_in_every_training_frame():
+    rng = np.random.default_rng(5)
+    # The person walks across the whole width during training: every frame has them.
+    train = np.stack([render(rng, person_x=20.0 + 4.0 * k) for k in range(30)])
+    robust = HorprasertBackground().fit(train, robust=True)
+    plain = HorprasertBackground().fit(train)
+    err_robust = np.abs(robust.mean_ - BG).max(axis=2)
+    err_plain = np.abs(plain.mean_ - BG).max(axis=2)
+    assert np.percentile(err_robust, 99) < 4.0
+    assert np.percentile(err_plain, 99) > 15.0  # the mean is smeared by the walker
+    labels = robust.apply(render(rng, person_x=100.0, shadow=True))
+    blob = person_mask(100.0)
+    assert class_fractions(labels, blob)[FOREGROUND] > 0.99
+    assert class_fractions(labels, ~blob)[FOREGROUND] < 0.02
+    # The plain fit, polluted by the walker, misses most of the person.
+    assert class_fractions(plain.apply(render(rng, person_x=100.0)), blob)[FOREGROUND] < 0.5
+
+
+def test_fit_rejects_bad_input(empty_frames):
+    with pytest.raises(ValueError, match="at least 2"):
+        HorprasertBackground().fit(empty_frames[:1])
+    with pytest.raises(ValueError, match="uint8"):
+        HorprasertBackground().fit(empty_frames.astype(np.float32))
+    model = HorprasertBackground().fit(empty_frames)
+    with pytest.raises(ValueError, match="shape"):
+        model.apply(np.zeros((10, 10, 3), np.uint8))
+    with pytest.raises(RuntimeError, match="fit"):
+        HorprasertBackground().apply(empty_frames[0])
+
+
+@pytest.mark.parametrize("name", BACKEND_NAMES)
+def test_every_backend_constructs_and_finds_the_person(name):
+    params = {"train_frames": 20} if name == "horprasert" else {}
+    sub = make_subtractor(name, **params)
+    rng = np.random.default_rng(6)
+    for _ in range(40):
+        mask = sub.apply(render(rng))
+    assert sub.ready
+    for k in range(3):
+        mask = sub.apply(render(rng, person_x=60.0 + 2 * k))
+    assert mask.shape == (H, W) and mask.dtype == bool
+    assert sub.labels is not None and sub.labels.shape == (H, W)
+    assert set(np.unique(sub.labels)) <= {BACKGROUND, SHADOW, HIGHLIGHT, FOREGROUND}
+    blob = person_mask(64.0)
+    assert mask[blob].mean() > 0.5, f"{name} found {mask[blob].mean():.2f} of the person"
+    assert mask[~person_mask(64.0, rx=22, ry=42)].mean() < 0.05
+
+
+def test_mog2_reports_shadows_as_background_class():
+    sub = make_subtractor("mog2")
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        sub.apply(render(rng))
+    mask = sub.apply(render(rng, shadow=True))
+    shadow = np.zeros((H, W), bool)
+    shadow[SHADOW_BOX] = True
+    assert np.mean(sub.labels[shadow] == SHADOW) > 0.5
+    assert mask[shadow].mean() < 0.2
+
+
+def test_unknown_backend_and_parameter_are_value_errors():
+    with pytest.raises(ValueError, match="horprasert, mog2, knn, cnt, gsoc"):
+        make_subtractor("vibe")
+    with pytest.raises(ValueError, match="histroy"):
+        make_subtractor("mog2", histroy=100)
+    with pytest.raises(ValueError, match="unknown parameter"):
+        make_subtractor("horprasert", tau=3.0)
