@@ -1,0 +1,243 @@
+"""Silhouette boundaries as closed uniform cubic B-splines (Baumberg & Hogg; Johnson et al. 1998).
+
+Curve convention. With n control points P_0..P_{n-1} (indices mod n) the curve parameter u runs
+over [0, n); on span i (u in [i, i+1), t = u - i)
+
+    C(u) = B0(t) P_{i-1} + B1(t) P_i + B2(t) P_{i+1} + B3(t) P_{i+2},
+    B0 = (1-t)^3/6, B1 = (3t^3 - 6t^2 + 4)/6, B2 = (-3t^3 + 3t^2 + 3t + 1)/6, B3 = t^3/6,
+
+so C(i) = (P_{i-1} + 4 P_i + P_{i+1}) / 6 lies next to P_i: control point k belongs to the curve
+point at u = k. A boundary is fitted by linear least squares to M points resampled at equal arc
+length, point j at u_j = j n / M, so the control points are evenly spaced along the outline.
+
+Ordering (Baumberg & Hogg). Point 0 is the reference point at the top of the head: where the
+silhouette's principal axis (the vertical axis, when the principal axis is closer to horizontal
+or undefined) leaves the boundary at its upper end, then moved to the highest boundary point
+within a small arc-length window around it. From there the boundary is traversed
+counter-clockwise as seen on screen (image x right, y down): from the top of the head towards
+image-left, down that side, along the bottom and up the image-right side. Image coordinates
+are pixels, x = column, y = row.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+# Resampled boundary points per control point for the least-squares fit.
+SAMPLES_PER_CTRL = 8
+
+
+def _basis(t: np.ndarray) -> np.ndarray:
+    """Uniform cubic B-spline basis, (len(t), 4) for B0..B3."""
+    t2, t3 = t * t, t * t * t
+    return np.stack(
+        [(1 - t) ** 3 / 6.0, (3 * t3 - 6 * t2 + 4) / 6.0, (-3 * t3 + 3 * t2 + 3 * t + 1) / 6.0, t3 / 6.0],
+        axis=1,
+    )
+
+
+@lru_cache(maxsize=64)
+def design_matrix(m: int, n: int) -> np.ndarray:
+    """(m, n) read-only matrix A with C(u_j) = A[j] @ P for u_j = j n / m, j = 0..m-1. Cached."""
+    if n < 4:
+        raise ValueError(f"a closed cubic B-spline needs n >= 4 control points, got n={n}")
+    if m < 1:
+        raise ValueError(f"number of curve samples must be >= 1, got {m}")
+    u = np.arange(m) * (n / m)
+    span = np.floor(u).astype(np.int64)
+    basis = _basis(u - span)
+    a = np.zeros((m, n))
+    rows = np.arange(m)
+    for k in range(4):
+        a[rows, (span - 1 + k) % n] += basis[:, k]
+    a.setflags(write=False)
+    return a
+
+
+@lru_cache(maxsize=64)
+def _fit_operator(m: int, n: int) -> np.ndarray:
+    """(n, m) least-squares solution operator pinv(A) for design_matrix(m, n). Cached."""
+    if m < n:
+        raise ValueError(f"need at least n={n} boundary samples to fit n control points, got {m}")
+    op = np.linalg.pinv(design_matrix(m, n))
+    op.setflags(write=False)
+    return op
+
+
+def resample_closed(points: np.ndarray, m: int) -> np.ndarray:
+    """Resample a closed polyline (K, 2) at m points of equal arc length, starting at points[0]."""
+    p = np.asarray(points, np.float64).reshape(-1, 2)
+    closed = np.vstack([p, p[:1]])
+    seg = np.hypot(*np.diff(closed, axis=0).T)
+    keep = np.concatenate([[True], seg > 1e-12])  # drop repeated points: interp needs increasing s
+    cum = np.concatenate([[0.0], np.cumsum(seg)])[keep]
+    closed = closed[keep]
+    total = cum[-1]
+    if total <= 0.0:
+        raise ValueError("boundary has zero length: all points coincide")
+    s = np.arange(m) * (total / m)
+    return np.stack([np.interp(s, cum, closed[:, 0]), np.interp(s, cum, closed[:, 1])], axis=1)
+
+
+def fit_closed_bspline(points: np.ndarray, n: int = 32, resample: bool = True) -> np.ndarray:
+    """Least-squares closed uniform cubic B-spline through an ordered closed boundary.
+
+    points : (M, 2) boundary, pixels, in traversal order; the curve starts (u = 0) at points[0].
+    n : number of control points (>= 4).
+    resample : resample the boundary at ``SAMPLES_PER_CTRL * n`` points of equal arc length first
+        (evenly spaced control points); False uses the given points as equally spaced samples.
+    Returns (n, 2) float64 control points.
+    """
+    p = np.asarray(points, np.float64)
+    if p.ndim != 2 or p.shape[1] != 2 or len(p) < 3:
+        raise ValueError(f"points must be (M, 2) with M >= 3, got shape {p.shape}")
+    if n < 4:
+        raise ValueError(f"a closed cubic B-spline needs n >= 4 control points, got n={n}")
+    if resample:
+        p = resample_closed(p, SAMPLES_PER_CTRL * n)
+    return _fit_operator(len(p), n) @ p
+
+
+def evaluate_closed_bspline(ctrl: np.ndarray, samples_per_span: int = 8) -> np.ndarray:
+    """Points on the curve at u = j / samples_per_span, j = 0..n*samples_per_span-1: (K, 2)."""
+    c = np.asarray(ctrl, np.float64)
+    if c.ndim != 2 or c.shape[1] != 2 or len(c) < 4:
+        raise ValueError(f"ctrl must be (n, 2) with n >= 4, got shape {c.shape}")
+    if samples_per_span < 1:
+        raise ValueError(f"samples_per_span must be >= 1, got {samples_per_span}")
+    return design_matrix(len(c) * samples_per_span, len(c)) @ c
+
+
+def spline_distance(contour: np.ndarray, ctrl: np.ndarray, samples_per_span: int = 16) -> float:
+    """Mean distance (pixels) from each contour point (M, 2) to the closed spline curve.
+
+    The curve is evaluated densely and treated as a closed polyline; distances are exact
+    point-to-segment distances.
+    """
+    p = np.asarray(contour, np.float64).reshape(-1, 2)
+    a = evaluate_closed_bspline(ctrl, samples_per_span)
+    ab = np.roll(a, -1, axis=0) - a
+    ab2 = np.maximum((ab * ab).sum(axis=1), 1e-12)
+    best = np.empty(len(p))
+    step = max(1, 2_000_000 // (4 * len(a)))
+    for s in range(0, len(p), step):
+        ap = p[s : s + step, None, :] - a[None]
+        t = np.clip((ap * ab[None]).sum(axis=2) / ab2, 0.0, 1.0)
+        d = ap - t[..., None] * ab[None]
+        best[s : s + step] = np.sqrt((d * d).sum(axis=2).min(axis=1))
+    return float(best.mean())
+
+
+def _signed_area2(p: np.ndarray) -> float:
+    """Twice the shoelace area in image coordinates; negative = counter-clockwise on screen."""
+    x, y = p[:, 0], p[:, 1]
+    return float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _up_axis(mask_u8: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centroid (2,) and unit upward axis (2,) of a binary mask (principal axis or vertical)."""
+    mo = cv2.moments(mask_u8, binaryImage=True)
+    c = np.array([mo["m10"] / mo["m00"], mo["m01"] / mo["m00"]])
+    cov = np.array([[mo["mu20"], mo["mu11"]], [mo["mu11"], mo["mu02"]]]) / mo["m00"]
+    evals, evecs = np.linalg.eigh(cov)
+    d = evecs[:, 1]
+    # Near-isotropic blobs have no principal axis; near-horizontal ones would put the
+    # "top" on a side: both fall back to the vertical axis.
+    if evals[1] < 1.1 * evals[0] or abs(d[1]) < np.sqrt(0.5):
+        return c, np.array([0.0, -1.0])
+    return c, (d if d[1] < 0 else -d)
+
+
+def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """Outer boundary of the largest region of a mask, ordered as described in the module doc.
+
+    mask : (H, W) bool or 0/non-zero array.
+    ref_window : half-width of the search for the locally highest point, as a fraction of the
+        boundary length.
+    Returns (contour (K, 2) float64 starting at the reference point, ref_point (2,) float64).
+    """
+    m = np.asarray(mask)
+    if m.ndim != 2:
+        raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
+    m8 = (m != 0).astype(np.uint8)
+    contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        raise ValueError("mask is empty: no silhouette to fit")
+    best = max(contours, key=cv2.contourArea)
+    p = best.reshape(-1, 2).astype(np.float64)
+    if len(p) < 3:
+        raise ValueError(f"silhouette too small for a boundary ({len(p)} boundary pixels)")
+    if _signed_area2(p) > 0:
+        p = p[::-1]
+    region = np.zeros_like(m8)
+    cv2.drawContours(region, [best], 0, 1, thickness=cv2.FILLED)
+    c, up = _up_axis(region)
+    rel = p - c
+    along = rel @ up
+    perp = np.abs(rel[:, 0] * up[1] - rel[:, 1] * up[0])
+    near = (perp <= 1.0) & (along > 0)
+    if near.any():
+        idx = np.flatnonzero(near)
+        # Outermost crossing (top of the head, not a shoulder); ties go to the nearest the axis.
+        i0 = int(idx[np.lexsort((perp[idx], -np.round(along[idx], 6)))[0]])
+    else:
+        i0 = int(np.argmin(np.where(along > 0, perp, np.inf)))
+    k = len(p)
+    w = max(2, int(round(ref_window * k)))
+    offsets = np.arange(-w, w + 1)
+    ys = p[(i0 + offsets) % k, 1]
+    top = ys == ys.min()
+    best_off = offsets[top][np.argmin(np.abs(offsets[top]))]
+    start = (i0 + int(best_off)) % k
+    p = np.roll(p, -start, axis=0)
+    return p, p[0].copy()
+
+
+def silhouette_spline(mask: np.ndarray, n: int = 32, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """Closed B-spline of a silhouette's outer boundary: (ctrl (n, 2), ref_point (2,)), pixels.
+
+    ctrl[0] belongs to the reference point at the top of the head; the order is counter-clockwise
+    on screen (see module doc). Raises ValueError for an empty mask.
+    """
+    contour, ref = oriented_boundary(mask, ref_window)
+    return fit_closed_bspline(contour, n), ref
+
+
+def shape_vector(ctrl: np.ndarray, height: float, pos: np.ndarray) -> np.ndarray:
+    """(2n,) actor-centred, height-normalised control points [x0, y0, x1, y1, ...]."""
+    c = np.asarray(ctrl, np.float64)
+    if c.ndim != 2 or c.shape[1] != 2:
+        raise ValueError(f"ctrl must be (n, 2), got shape {c.shape}")
+    if not height > 0:
+        raise ValueError(f"height must be > 0 pixels, got {height}")
+    return ((c - np.asarray(pos, np.float64).reshape(1, 2)) / height).ravel()
+
+
+def combined_shape_vector(
+    ctrl_a: np.ndarray,
+    height_a: float,
+    pos_a: np.ndarray,
+    ctrl_b: np.ndarray,
+    height_b: float,
+    pos_b: np.ndarray,
+) -> np.ndarray:
+    """Joint shape of two interacting people (Johnson, Galata & Hogg 1998), (4n + 3,) float64.
+
+    Layout, with h_m = (height_a + height_b) / 2:
+      [0, 2n)       shape_vector(ctrl_a, height_a, pos_a)  (x0, y0, x1, y1, ... of person a)
+      [2n, 4n)      shape_vector(ctrl_b, height_b, pos_b)
+      [4n, 4n + 2)  (pos_b - pos_a) / h_m                  relative separation
+      4n + 2        log(height_b / height_a)               relative scale
+    pos is each person's image position (the pipeline uses the region centroid), height their
+    height in pixels. The vector is unchanged by a common image translation and scaling.
+    """
+    ca, cb = np.asarray(ctrl_a), np.asarray(ctrl_b)
+    if ca.shape != cb.shape:
+        raise ValueError(f"ctrl_a and ctrl_b must have the same shape (n, 2), got {ca.shape} and {cb.shape}")
+    va = shape_vector(ca, height_a, pos_a)
+    vb = shape_vector(cb, height_b, pos_b)
+    sep = (np.asarray(pos_b, np.float64) - np.asarray(pos_a, np.float64)).reshape(2) / (0.5 * (height_a + height_b))
+    return np.concatenate([va, vb, sep, [np.log(height_b / height_a)]])
