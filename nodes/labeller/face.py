@@ -1,0 +1,208 @@
+"""Talking and laughing from the mouth region of a detected face (Okwechime et al. find the face
+with a Viola-Jones detector; here OpenCV's bundled Haar cascade
+``haarcascade_frontalface_default.xml``).
+
+How crude this is, honestly:
+
+- The face is found by a frontal Haar cascade: profiles, tilted heads, small, blurred or dark faces
+  are not found, and then both signals are UNKNOWN (never guessed). Faces narrower than
+  ``min_face_px`` are refused even when found.
+- The mouth region is simply the lower third of the face box (middle two thirds of its width),
+  resampled to a fixed ``patch_size`` and divided by its mean intensity. Its motion energy is the
+  mean absolute difference between consecutive patches. That energy also rises with head motion,
+  detector jitter of the face box, lighting flicker and chewing: it is "the lower face moves", not
+  speech recognition.
+- ``talking_score = mean motion energy over the window / talk_energy``; talking when >= 1.
+- Laughing is talking-like energy that is larger (``laugh_energy``) AND spread over a large vertical
+  extent of the mouth region (the fraction of patch rows whose motion exceeds half the strongest
+  row's, averaged over the window, >= ``laugh_extent``): a wide-open, shaking mouth.
+  ``laughing_score = min(energy / laugh_energy, extent / laugh_extent)``; laughing when >= 1.
+  Loud talking with big mouth movements will be called laughing; a silent smile will not.
+
+The thresholds are set by hand, not learned; measure them on your own footage.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from nodes.labeller.signals import UNKNOWN
+
+#: the Viola-Jones frontal face cascade shipped with OpenCV
+CASCADE_PATH: str = cv2.data.haarcascades + "haarcascade_frontalface_default.xml"
+
+Box = tuple[int, int, int, int]  # x, y, w, h in pixels
+
+
+def load_face_cascade(path: str = CASCADE_PATH) -> cv2.CascadeClassifier:
+    """Load a Haar cascade; raises FileNotFoundError naming the path if OpenCV cannot read it."""
+    cc = cv2.CascadeClassifier(path)
+    if cc.empty():
+        raise FileNotFoundError(
+            f"could not load the Haar cascade {path!r}; is opencv-contrib-python-headless installed?")
+    return cc
+
+
+def to_gray(image: np.ndarray) -> np.ndarray:
+    """(H,W) uint8 gray or (H,W,3) uint8 BGR -> (H,W) uint8 gray."""
+    img = np.asarray(image)
+    if img.dtype != np.uint8:
+        raise ValueError(f"image must be uint8, got {img.dtype}")
+    if img.ndim == 2:
+        return img
+    if img.ndim == 3 and img.shape[2] == 3:
+        return cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    raise ValueError(f"image must be (H,W) gray or (H,W,3) BGR, got shape {img.shape}")
+
+
+def detect_face(gray: np.ndarray, cascade: cv2.CascadeClassifier, min_face_px: int = 24,
+                roi: Box | None = None) -> Box | None:
+    """Largest frontal face (x, y, w, h) in pixels of the full image, or None.
+
+    gray: (H,W) uint8. roi: optional search region (x, y, w, h), e.g. the person's silhouette box.
+    """
+    x0 = y0 = 0
+    if roi is not None:
+        x, y, w, h = (int(v) for v in roi)
+        x0, y0 = max(0, x), max(0, y)
+        gray = gray[y0:max(y0, y + h), x0:max(x0, x + w)]
+    if gray.shape[0] < min_face_px or gray.shape[1] < min_face_px:
+        return None
+    faces = cascade.detectMultiScale(gray, scaleFactor=1.1, minNeighbors=5,
+                                     minSize=(min_face_px, min_face_px))
+    if len(faces) == 0:
+        return None
+    fx, fy, fw, fh = max(faces, key=lambda f: int(f[2]) * int(f[3]))
+    return int(fx) + x0, int(fy) + y0, int(fw), int(fh)
+
+
+def mouth_patch(gray: np.ndarray, face: Box, patch_size: tuple[int, int] = (32, 16)) -> np.ndarray | None:
+    """Lower third of the face box, middle two thirds of its width, resampled to patch_size
+    (width, height) and divided by its mean intensity. Returns (h, w) float32 or None if the region
+    leaves the image."""
+    x, y, w, h = face
+    mx0, mx1 = x + w // 6, x + w - w // 6
+    my0, my1 = y + (2 * h) // 3, y + h
+    if mx0 < 0 or my0 < 0 or mx1 > gray.shape[1] or my1 > gray.shape[0] or mx1 <= mx0 or my1 <= my0:
+        return None
+    patch = cv2.resize(gray[my0:my1, mx0:mx1], patch_size, interpolation=cv2.INTER_AREA)
+    patch = patch.astype(np.float32)
+    return patch / max(float(patch.mean()), 1.0)
+
+
+@dataclass(frozen=True)
+class FaceParams:
+    """fps: Hz. window_s: averaging window (s). min_face_px: smallest face width accepted (px).
+    talk_energy, laugh_energy: motion energies (mean |diff| of mean-normalised patches) of the
+    talking and laughing thresholds. laugh_extent: vertical extent fraction for laughing.
+    min_valid: fraction of the window that must hold measurements. detect_every: run the cascade
+    every n frames and reuse the last box in between."""
+
+    fps: float
+    window_s: float = 1.0
+    min_face_px: int = 24
+    talk_energy: float = 0.04
+    laugh_energy: float = 0.10
+    laugh_extent: float = 0.5
+    min_valid: float = 0.5
+    detect_every: int = 1
+    patch_size: tuple[int, int] = (32, 16)
+
+    def __post_init__(self) -> None:
+        if not self.fps > 0:
+            raise ValueError(f"fps must be > 0, got {self.fps}")
+        if self.min_face_px < 12:
+            raise ValueError(f"min_face_px must be >= 12 pixels, got {self.min_face_px}")
+        if self.detect_every < 1:
+            raise ValueError(f"detect_every must be >= 1, got {self.detect_every}")
+
+    @property
+    def w(self) -> int:
+        return max(2, int(round(self.window_s * self.fps)))
+
+
+class FaceSignalDetector:
+    """Streaming talking/laughing for one person.
+
+    ``update(image, roi=None, face_box=None) -> (talk_score, talking, laugh_score, laughing)``;
+    both labels are UNKNOWN on any frame without a face of at least ``min_face_px``, and until
+    ``min_valid`` of the window holds measurements. ``face_box`` bypasses the detector (a box from
+    another face tracker); ``roi`` restricts the search (e.g. to this person's silhouette box).
+    """
+
+    def __init__(self, fps: float, cascade: cv2.CascadeClassifier | None = None,
+                 **params: object) -> None:
+        self.params = FaceParams(fps=fps, **params)  # type: ignore[arg-type]
+        self._cascade = cascade
+        self._energy = np.full(self.params.w, np.nan)
+        self._extent = np.full(self.params.w, np.nan)
+        self._i = 0
+        self._prev: np.ndarray | None = None
+        self._box: Box | None = None
+        self._frame = 0
+
+    @property
+    def cascade(self) -> cv2.CascadeClassifier:
+        if self._cascade is None:
+            self._cascade = load_face_cascade()
+        return self._cascade
+
+    @cascade.setter
+    def cascade(self, value: cv2.CascadeClassifier) -> None:
+        self._cascade = value
+
+    @property
+    def face_box(self) -> Box | None:
+        """The face box used on the last frame, or None."""
+        return self._box
+
+    def reset(self) -> None:
+        self._energy.fill(np.nan)
+        self._extent.fill(np.nan)
+        self._prev = None
+        self._box = None
+
+    def _record(self, energy: float, extent: float) -> None:
+        self._energy[self._i] = energy
+        self._extent[self._i] = extent
+        self._i = (self._i + 1) % len(self._energy)
+
+    def update(self, image: np.ndarray, roi: Box | None = None,
+               face_box: Box | None = None) -> tuple[float, int, float, int]:
+        """image: (H,W) uint8 gray or (H,W,3) uint8 BGR. Returns
+        (talk_score, talking, laugh_score, laughing); scores nan where labels are UNKNOWN."""
+        p = self.params
+        gray = to_gray(image)
+        if face_box is None:
+            if self._box is None or self._frame % p.detect_every == 0:
+                self._box = detect_face(gray, self.cascade, p.min_face_px, roi)
+        else:
+            self._box = tuple(int(v) for v in face_box)  # type: ignore[assignment]
+        self._frame += 1
+        box = self._box
+        patch = None
+        if box is not None and box[2] >= p.min_face_px and box[3] >= p.min_face_px:
+            patch = mouth_patch(gray, box, p.patch_size)
+        if patch is None:
+            self._prev = None
+            self._record(np.nan, np.nan)
+            return float("nan"), UNKNOWN, float("nan"), UNKNOWN
+        if self._prev is None:
+            self._record(np.nan, np.nan)
+        else:
+            diff = np.abs(patch - self._prev)
+            rows = diff.mean(axis=1)
+            peak = float(rows.max())
+            extent = float(np.mean(rows > 0.5 * peak)) if peak > 1e-6 else 0.0
+            self._record(float(diff.mean()), extent)
+        self._prev = patch
+        valid = ~np.isnan(self._energy)
+        if valid.mean() < p.min_valid:
+            return float("nan"), UNKNOWN, float("nan"), UNKNOWN
+        energy = float(self._energy[valid].mean())
+        extent = float(self._extent[valid].mean())
+        talk = energy / p.talk_energy
+        laugh = min(energy / p.laugh_energy, extent / p.laugh_extent)
+        return talk, int(talk >= 1.0), laugh, int(laugh >= 1.0)

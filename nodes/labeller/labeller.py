@@ -1,0 +1,219 @@
+"""The social-signal labeller: every signal of :data:`SIGNALS` per person and frame.
+
+Inputs are chosen per person and frame, best first:
+
+1. the tracker's 3D joints (14,3) -> nod/shake relative to the neck (facing from the shoulders, plus
+   the tracker's head yaw when given), activity from shoulders and hips, gaze from the shoulder
+   normal (+ head yaw) against the direction to the other person;
+2. else the silhouette: head reference point relative to the silhouette centroid (2D nod/shake,
+   scaled by the height in pixels), activity from the upper-body spline points; gaze UNKNOWN;
+3. talking/laughing from the camera image where a frontal face of enough size is found (searched
+   in the person's box when given); UNKNOWN otherwise.
+
+A person switching between 3D and 2D input, or missing from a frame, restarts the windows of the
+affected detectors (so a window never mixes the two or spans a gap): those signals are UNKNOWN
+until a window has filled again.
+"""
+from __future__ import annotations
+
+from collections.abc import Hashable, Mapping
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from nodes.labeller.activity import ActivityDetector, activity_3d
+from nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade
+from nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_at_other
+from nodes.labeller.head_motion import HeadMotionDetector, HeadMotionDetector2D, head_motion
+from nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN, UNKNOWN_VALUE
+
+_H, _N = JOINT_INDEX["head"], JOINT_INDEX["neck"]
+_LS, _RS = JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]
+
+Labels = dict[str, tuple[float, int]]
+
+
+@dataclass(frozen=True)
+class PersonObservation:
+    """What is known about one person on one frame; any field may be None.
+
+    joints: (14,3) metres, project joint order, world Y up (tracker). head_yaw: head yaw relative to
+    the torso (rad, positive to the person's left) if the tracker gives it. head_px: silhouette
+    head reference point (2,) px; ref_px: body reference point (2,) px, e.g. the silhouette
+    centroid; height_px: silhouette height (px); control_points: (32,2) px spline from the top of
+    the head; box: (x, y, w, h) px region of the person in the image (face search region).
+    """
+
+    joints: np.ndarray | None = None
+    head_yaw: float | None = None
+    head_px: np.ndarray | None = None
+    ref_px: np.ndarray | None = None
+    height_px: float | None = None
+    control_points: np.ndarray | None = None
+    box: Box | None = None
+
+    def has_3d(self) -> bool:
+        return self.joints is not None and bool(np.isfinite(self.joints).all())
+
+    def has_2d_head(self) -> bool:
+        return (self.head_px is not None and self.ref_px is not None and self.height_px is not None
+                and self.height_px > 0)
+
+
+class _PersonState:
+    def __init__(self, lab: SocialLabeller) -> None:
+        self.head3 = HeadMotionDetector(lab.fps, lab.head_window_s, **lab.head_params)
+        self.head2 = HeadMotionDetector2D(lab.fps, lab.head_window_s, **lab.head_params)
+        self.act3 = ActivityDetector(lab.fps, **lab.activity_params)
+        self.act2 = ActivityDetector(lab.fps, **lab.activity_params)
+        self.face = FaceSignalDetector(lab.fps, cascade=lab._cascade, **lab.face_params)
+        self.mode = ""
+        self.last_frame = -2
+
+    def reset(self) -> None:
+        for d in (self.head3, self.head2, self.act3, self.act2, self.face):
+            d.reset()
+
+
+class SocialLabeller:
+    """Streaming labeller for any number of people.
+
+    fps: frame rate (Hz). head_window_s: FFT window of nod/shake (s). gaze_threshold: largest
+    angle (rad) between gaze and the direction to the other still counted as "at the other".
+    head_params / activity_params / face_params: extra keyword parameters of
+    :class:`~nodes.labeller.head_motion.HeadMotionParams`, :class:`~nodes.labeller.activity.ActivityDetector`
+    and :class:`~nodes.labeller.face.FaceParams`.
+
+    ``update(people, image=None, targets=None)`` -> ``{person_id: {signal: (score, label)}}`` with
+    every signal of :data:`SIGNALS`.
+    """
+
+    def __init__(self, fps: float, head_window_s: float = 1.6,
+                 gaze_threshold: float = float(np.radians(30.0)),
+                 head_params: Mapping[str, object] | None = None,
+                 activity_params: Mapping[str, object] | None = None,
+                 face_params: Mapping[str, object] | None = None) -> None:
+        self.fps = float(fps)
+        self.head_window_s = head_window_s
+        self.gaze_threshold = gaze_threshold
+        self.head_params = dict(head_params or {})
+        self.activity_params = dict(activity_params or {})
+        self.face_params = dict(face_params or {})
+        self._cascade: cv2.CascadeClassifier | None = None
+        self._people: dict[Hashable, _PersonState] = {}
+        self._frame = 0
+        _PersonState(self)  # validate every parameter now, not on the first person
+
+    def reset(self) -> None:
+        """Forget every person."""
+        self._people.clear()
+
+    def _state(self, pid: Hashable) -> _PersonState:
+        st = self._people.get(pid)
+        if st is None:
+            st = self._people[pid] = _PersonState(self)
+        if st.last_frame != self._frame - 1:
+            st.reset()
+        st.last_frame = self._frame
+        return st
+
+    def update(self, people: Mapping[Hashable, PersonObservation], image: np.ndarray | None = None,
+               targets: Mapping[Hashable, np.ndarray] | None = None) -> dict[Hashable, Labels]:
+        """Label one frame.
+
+        people: person id -> :class:`PersonObservation`. image: the camera frame (uint8 gray or
+        BGR) for talking/laughing, or None. targets: person id -> (3,) world point the person's gaze
+        is judged against (e.g. the virtual partner); by default the nearest other person's head.
+        """
+        heads = {pid: np.asarray(o.joints, dtype=np.float64)[_H]
+                 for pid, o in people.items() if o.has_3d()}
+        out: dict[Hashable, Labels] = {}
+        for pid, obs in people.items():
+            st = self._state(pid)
+            res: Labels = {s: UNKNOWN_VALUE for s in SIGNALS}
+            if obs.has_3d():
+                j = np.asarray(obs.joints, dtype=np.float64)
+                if st.mode != "3d":
+                    st.head3.reset()
+                    st.act3.reset()
+                st.mode = "3d"
+                yaw = float(facing_yaw_from_shoulders(j[_LS], j[_RS]))
+                yaw = yaw if yaw == yaw else None
+                ns, n, ss, s = st.head3.update(j[_H], j[_N], yaw, obs.head_yaw)
+                res["nod"], res["shake"] = (ns, n), (ss, s)
+                res["activity"] = st.act3.update_3d(j)
+                target = None if targets is None else targets.get(pid)
+                if target is None:
+                    target = _nearest_other(pid, heads)
+                if target is not None:
+                    g = gaze_at_other(j[_H], j[_LS], j[_RS], np.asarray(target, dtype=np.float64),
+                                      obs.head_yaw, self.gaze_threshold)
+                    res["gaze_at_other"] = (float(g.score[0]), int(g.label[0]))
+            elif obs.has_2d_head():
+                if st.mode != "2d":
+                    st.head2.reset()
+                    st.act2.reset()
+                st.mode = "2d"
+                ns, n, ss, s = st.head2.update(np.asarray(obs.head_px), np.asarray(obs.ref_px),
+                                               float(obs.height_px))  # type: ignore[arg-type]
+                res["nod"], res["shake"] = (ns, n), (ss, s)
+                if obs.control_points is not None:
+                    res["activity"] = st.act2.update_2d(obs.control_points, float(obs.height_px))  # type: ignore[arg-type]
+            else:
+                st.mode = ""
+            if image is not None:
+                if self._cascade is None:
+                    self._cascade = load_face_cascade()
+                st.face.cascade = self._cascade
+                ts, t, ls, lg = st.face.update(image, roi=obs.box)
+                res["talking"], res["laughing"] = (ts, t), (ls, lg)
+            else:
+                st.face.reset()
+            out[pid] = res
+        self._frame += 1
+        return out
+
+
+def _nearest_other(pid: Hashable, heads: Mapping[Hashable, np.ndarray]) -> np.ndarray | None:
+    if pid not in heads:
+        return None
+    me = heads[pid]
+    best, best_d = None, np.inf
+    for other, h in heads.items():
+        if other == pid:
+            continue
+        d = float(np.hypot(h[0] - me[0], h[2] - me[2]))
+        if d < best_d:
+            best, best_d = h, d
+    return best
+
+
+def label_pair_3d(joints_a: np.ndarray, joints_b: np.ndarray, fps: float, center: bool = True,
+                  head_window_s: float = 1.6, gaze_threshold: float = float(np.radians(30.0)),
+                  head_yaw_a: np.ndarray | None = None, head_yaw_b: np.ndarray | None = None,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Offline batch labels of two tracked people looking at each other (vectorised over frames).
+
+    joints_a, joints_b: (T,14,3) metres. center: centred nod/shake windows (better timing offline;
+    activity windows stay causal). Returns (scores_a, labels_a, scores_b, labels_b), each (T, 6) in
+    :data:`SIGNALS` order; talking/laughing are UNKNOWN (no images).
+    """
+    ja = np.asarray(joints_a, dtype=np.float64)
+    jb = np.asarray(joints_b, dtype=np.float64)
+    if ja.ndim != 3 or ja.shape[1:] != (14, 3) or jb.shape != ja.shape:
+        raise ValueError(f"joints_a and joints_b must both be (T,14,3) metres; got {ja.shape}, {jb.shape}")
+    outs = []
+    for me, other, hy in ((ja, jb, head_yaw_a), (jb, ja, head_yaw_b)):
+        t = me.shape[0]
+        sc = np.full((t, len(SIGNALS)), np.nan)
+        lb = np.full((t, len(SIGNALS)), UNKNOWN, dtype=np.int8)
+        yaw = np.nan_to_num(facing_yaw_from_shoulders(me[:, _LS], me[:, _RS]))
+        hm = head_motion(me[:, _H], me[:, _N], fps, head_window_s, facing_yaw=yaw, head_yaw=hy,
+                         center=center)
+        sc[:, 0], lb[:, 0], sc[:, 1], lb[:, 1] = hm.nod_score, hm.nod, hm.shake_score, hm.shake
+        g = gaze_at_other(me[:, _H], me[:, _LS], me[:, _RS], other[:, _H], hy, gaze_threshold)
+        sc[:, 2], lb[:, 2] = g.score, g.label
+        sc[:, 3], lb[:, 3] = activity_3d(me, fps)
+        outs += [sc, lb]
+    return outs[0], outs[1], outs[2], outs[3]

@@ -1,0 +1,61 @@
+"""Signal names and the label model shared by every labeller module.
+
+Every per-frame signal value is a pair ``(score, label)``:
+
+- ``score``: a float whose meaning is given by the module that computes it (documented there);
+  ``nan`` where the input cannot support the signal.
+- ``label``: ``1`` (present), ``0`` (absent) or :data:`UNKNOWN` (``-1``): the input cannot support
+  the signal (no face at enough resolution, window not yet full, joints missing, ...). A module
+  never guesses: it says UNKNOWN.
+
+Label arrays are ``int8``; score arrays are ``float64``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: the signals the labeller reports, in this order
+SIGNALS: tuple[str, ...] = ("nod", "shake", "gaze_at_other", "activity", "talking", "laughing")
+
+#: label value for "the input cannot support this signal"
+UNKNOWN: int = -1
+
+#: joint order used across the project (14 joints, metres, world frame Y up, facing +Z at yaw 0)
+JOINTS: tuple[str, ...] = (
+    "head", "neck", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow", "r_wrist",
+    "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle",
+)
+JOINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(JOINTS)}
+
+#: the torso joints used for activity (head and limbs excluded)
+TORSO_JOINTS: tuple[str, ...] = ("l_shoulder", "r_shoulder", "l_hip", "r_hip")
+
+#: (score, label) of a signal the input cannot support
+UNKNOWN_VALUE: tuple[float, int] = (float("nan"), UNKNOWN)
+
+
+def threshold_labels(score: np.ndarray, threshold: float) -> np.ndarray:
+    """Labels from scores: ``1`` where ``score >= threshold``, ``0`` below, UNKNOWN where nan.
+
+    score: any shape, float. Returns int8 of the same shape.
+    """
+    score = np.asarray(score, dtype=np.float64)
+    lab = (score >= threshold).astype(np.int8)
+    lab[np.isnan(score)] = UNKNOWN
+    return lab
+
+
+def labels_to_bool(labels: np.ndarray) -> np.ndarray:
+    """Presence as bool for mining: ``1 -> True``; ``0`` and UNKNOWN -> False.
+
+    UNKNOWN counts as "not observed present", which can only lower supports and confidences of
+    rules that involve the signal; it never invents a co-occurrence.
+    """
+    labels = np.asarray(labels)
+    if labels.dtype == bool:
+        return labels
+    bad = ~np.isin(labels, (1, 0, UNKNOWN))
+    if bad.any():
+        raise ValueError(
+            f"labels must be 1, 0 or {UNKNOWN} (UNKNOWN); found {np.unique(labels[bad])[:5]}")
+    return labels == 1

@@ -1,0 +1,171 @@
+"""Head nod / shake by FFT of head motion relative to the neck (nodes.labeller.head_motion)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionParams,
+                                        head_motion, head_motion_2d)
+from nodes.labeller.signals import UNKNOWN
+
+FPS = 25.0
+
+
+def _still(t: int, rng: np.random.Generator, noise: float = 0.002) -> tuple[np.ndarray, np.ndarray]:
+    neck = np.tile([0.0, 1.45, 0.0], (t, 1))
+    head = neck + [0.0, 0.17, 0.02]
+    return head + rng.normal(0, noise, (t, 3)), neck + rng.normal(0, noise, (t, 3))
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    d = np.diff(np.r_[0, mask.astype(int), 0])
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1))
+
+
+def test_nod_found_with_right_timing() -> None:
+    rng = np.random.default_rng(1)
+    t = 10 * int(FPS)
+    head, neck = _still(t, rng)
+    tt = np.arange(t) / FPS
+    on = (tt >= 3.0) & (tt < 6.0)
+    head[:, 1] += np.where(on, 0.025 * np.sin(2 * np.pi * 2.0 * (tt - 3.0)), 0.0)
+
+    off = head_motion(head, neck, FPS, center=True)
+    runs = _runs(off.nod == 1)
+    assert len(runs) == 1, runs
+    start, end = runs[0][0] / FPS, runs[0][1] / FPS
+    assert abs(start - 3.0) < 0.4 and abs(end - 6.0) < 0.4, (start, end)
+    assert not (off.shake == 1).any()
+    assert np.nanmax(off.nod_score) > 0.9
+
+    causal = head_motion(head, neck, FPS, center=False)
+    idx = np.flatnonzero(causal.nod == 1) / FPS
+    # causal windows end at the frame: detection starts after onset and ends within a window of the end
+    assert 3.0 < idx[0] < 3.0 + 1.0 and 6.0 < idx[-1] < 6.0 + 1.6
+    assert (causal.nod[(tt > 4.0) & (tt < 6.0)] == 1).all()
+
+
+def test_still_head_gives_no_nod_or_shake() -> None:
+    head, neck = _still(500, np.random.default_rng(2))
+    r = head_motion(head, neck, FPS)
+    known = r.nod != UNKNOWN
+    assert known.sum() == 500 - HeadMotionParams(FPS).n + 1
+    assert not (r.nod[known] == 1).any() and not (r.shake[known] == 1).any()
+    assert np.nanmax(r.nod_score) < 0.2
+
+
+def test_walking_person_gives_no_nod() -> None:
+    rng = np.random.default_rng(3)
+    t = 400
+    tt = np.arange(t) / FPS
+    # whole body: 1.3 m/s forward, 1.8 Hz vertical gait bob of 3 cm, 0.9 Hz sideways sway of 2 cm
+    body = np.stack([0.02 * np.sin(2 * np.pi * 0.9 * tt),
+                     1.45 + 0.03 * np.sin(2 * np.pi * 1.8 * tt),
+                     1.3 * tt], axis=-1)
+    neck = body + rng.normal(0, 0.002, (t, 3))
+    head = body + [0.0, 0.17, 0.02] + rng.normal(0, 0.002, (t, 3))
+    r = head_motion(head, neck, FPS)
+    assert not (r.nod == 1).any() and not (r.shake == 1).any()
+    # against a reference that only translates (no gait bob) the same head is called a nod:
+    # the test can fail, and the neck reference is what removes the gait
+    translating = np.tile([0.0, 1.45, 0.0], (t, 1))
+    translating[:, 2] = body[:, 2]
+    assert (head_motion(head, translating, FPS).nod == 1).any()
+
+
+def test_shake_is_a_shake_not_a_nod() -> None:
+    rng = np.random.default_rng(4)
+    t = 250
+    head, neck = _still(t, rng)
+    tt = np.arange(t) / FPS
+    on = (tt >= 2.0) & (tt < 7.0)
+    head[:, 0] += np.where(on, 0.02 * np.sin(2 * np.pi * 2.5 * tt), 0.0)   # sideways (person's left)
+    r = head_motion(head, neck, FPS, center=True)
+    assert (r.shake[(tt > 2.5) & (tt < 6.5)] == 1).all()
+    assert not (r.nod == 1).any()
+
+
+def test_shake_from_head_yaw_input() -> None:
+    rng = np.random.default_rng(5)
+    t = 250
+    head, neck = _still(t, rng)
+    tt = np.arange(t) / FPS
+    on = (tt >= 2.0) & (tt < 7.0)
+    yaw = np.where(on, np.radians(20.0) * np.sin(2 * np.pi * 2.0 * tt), 0.0) + rng.normal(0, 0.01, t)
+    with_yaw = head_motion(head, neck, FPS, head_yaw=yaw, center=True)
+    assert (with_yaw.shake[(tt > 2.5) & (tt < 6.5)] == 1).all()
+    assert not (with_yaw.nod == 1).any()
+    # a pure head rotation does not move the head centre: without the yaw input it is not seen
+    assert not (head_motion(head, neck, FPS, center=True).shake == 1).any()
+
+
+def test_pitch_nod_uses_the_facing_direction() -> None:
+    """A nod as a pitch about the neck moves the head forward; for a person facing +X the
+    forward axis is X, which only the facing yaw distinguishes from a sideways shake."""
+    rng = np.random.default_rng(6)
+    t = 200
+    tt = np.arange(t) / FPS
+    pitch = np.radians(10.0) * np.sin(2 * np.pi * 2.0 * tt)
+    neck = np.tile([0.0, 1.45, 0.0], (t, 1))
+    head = neck + np.stack([0.17 * np.sin(pitch), 0.17 * np.cos(pitch), 0 * tt], axis=-1)
+    head += rng.normal(0, 0.001, (t, 3))
+    r = head_motion(head, neck, FPS, facing_yaw=np.pi / 2)
+    known = r.nod != UNKNOWN
+    assert (r.nod[known] == 1).all() and not (r.shake == 1).any()
+    wrong = head_motion(head, neck, FPS, facing_yaw=0.0)
+    assert (wrong.shake[known] == 1).all()
+
+
+def test_streaming_matches_batch_and_starts_unknown() -> None:
+    rng = np.random.default_rng(7)
+    t = 300
+    head, neck = _still(t, rng)
+    tt = np.arange(t) / FPS
+    head[:, 1] += np.where((tt > 2) & (tt < 5), 0.03 * np.sin(2 * np.pi * 2.2 * tt), 0.0)
+    head[:, 0] += np.where((tt > 7) & (tt < 10), 0.03 * np.sin(2 * np.pi * 2.8 * tt), 0.0)
+    yaw = np.linspace(0, 0.5, t)
+    head[150, 1] = np.nan
+    batch = head_motion(head, neck, FPS, facing_yaw=yaw)
+    det = HeadMotionDetector(FPS, 1.6)
+    out = np.array([det.update(head[i], neck[i], facing_yaw=yaw[i]) for i in range(t)])
+    np.testing.assert_allclose(out[:, 0], batch.nod_score, atol=1e-9, equal_nan=True)
+    np.testing.assert_allclose(out[:, 2], batch.shake_score, atol=1e-9, equal_nan=True)
+    np.testing.assert_array_equal(out[:, 1].astype(int), batch.nod)
+    np.testing.assert_array_equal(out[:, 3].astype(int), batch.shake)
+    n = HeadMotionParams(FPS, 1.6).n
+    assert (batch.nod[:n - 1] == UNKNOWN).all() and batch.nod[n - 1] != UNKNOWN
+    # the missing sample makes every window that holds it unknown, and only those
+    assert (batch.nod[150:150 + n] == UNKNOWN).all()
+    assert batch.nod[150 + n] != UNKNOWN and batch.nod[149] != UNKNOWN
+    assert (batch.nod == 1).any() and (batch.shake == 1).any()
+
+
+def test_2d_nod_in_pixels_and_walking_silhouette() -> None:
+    rng = np.random.default_rng(8)
+    t = 300
+    tt = np.arange(t) / FPS
+    height = 300.0                                   # px for 1.7 m
+    px_per_m = height / 1.7
+    # silhouette walks right at 80 px/s with a 1.8 Hz bob of 5 px; centroid moves with it
+    ref = np.stack([100 + 80 * tt, 250 + 5 * np.sin(2 * np.pi * 1.8 * tt)], axis=-1)
+    head = ref + [0.0, -140.0]
+    head = head + rng.normal(0, 0.3, (t, 2))
+    nod = (tt > 5) & (tt < 9)
+    head[:, 1] += np.where(nod, 0.025 * px_per_m * np.sin(2 * np.pi * 2.0 * tt), 0.0)
+    r = head_motion_2d(head, ref, height, FPS, center=True)
+    assert (r.nod[(tt > 5.5) & (tt < 8.5)] == 1).all()
+    assert not (r.nod[tt < 4.5] == 1).any()
+    det = HeadMotionDetector2D(FPS, 1.6)
+    out = np.array([det.update(head[i], ref[i], height) for i in range(t)])
+    causal = head_motion_2d(head, ref, height, FPS)
+    np.testing.assert_allclose(out[:, 0], causal.nod_score, atol=1e-9, equal_nan=True)
+    assert det.update(head[0], ref[0], 0.0)[1] == UNKNOWN      # no height: cannot scale
+
+
+def test_bad_parameters_are_named() -> None:
+    with pytest.raises(ValueError, match="window_s"):
+        HeadMotionDetector(25.0, window_s=0.1)
+    with pytest.raises(ValueError, match="band_hz"):
+        HeadMotionParams(25.0, band_hz=(4.0, 1.0))
+    with pytest.raises(ValueError, match=r"\(T,3\)"):
+        head_motion(np.zeros((10, 2)), np.zeros((10, 2)), 25.0)
