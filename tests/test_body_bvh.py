@@ -157,3 +157,21 @@ def test_cmu_left_is_own_left(cmu):
         to_other = other[:, j["l_hip"]] + other[:, j["r_hip"]] - me[:, j["l_hip"]] - me[:, j["r_hip"]]
         cos = (fwd * to_other).sum(-1) / np.linalg.norm(fwd, axis=-1) / np.linalg.norm(to_other, axis=-1)
         assert np.median(cos) > 0.8
+
+
+@needs_cmu
+def test_cmu_inverse_kinematics(cmu):
+    # Mocap -> pose vectors -> our cone body with fitted dimensions: joints come back within
+    # a few cm (measured max 4.9 cm, at the shoulders, which are rigid in our model).
+    from body.ik import dims_from_joints, inverse_kinematics
+    from body.kinematics import forward_kinematics, lowest_point
+    from body.pose import within_limits
+    for b in cmu:
+        X = bvh_to_joints14(b)
+        dims = dims_from_joints(X)
+        assert 1.4 < dims.height < 1.8  # measured 1.58 m and 1.61 m
+        P = inverse_kinematics(X)
+        assert within_limits(P).all()
+        err = np.linalg.norm(forward_kinematics(P, dims) - X, axis=-1)
+        assert err.max() < 0.07 and np.median(err) < 0.01
+        assert abs(np.median(lowest_point(P, dims))) < 0.05

@@ -199,3 +199,26 @@ def test_vectorised_samplers_match_per_pose():
     for i in (0, 17, 63):
         np.testing.assert_allclose(cone_outline_points(P[i], cam)[0], out[i])
         np.testing.assert_allclose(cone_interior_points(P[i], cam, n_along=3, n_across=2)[0], inn[i])
+
+
+def test_inverse_kinematics_round_trip():
+    from body.ik import dims_from_joints, inverse_kinematics
+    P = random_poses(300, 11)
+    # What 14 joints cannot show is fixed by the solver: pelvis pitch and head turn.
+    P[:, DOF_INDEX["root_pitch"]] = 0.0
+    P[:, DOF_INDEX["head_turn"]] = 0.0
+    X = forward_kinematics(P)
+    Q = inverse_kinematics(X)
+    assert Q.shape == (300, DOF)
+    err = np.linalg.norm(forward_kinematics(Q) - X, axis=-1)
+    assert err.max() < 1e-3
+    # With elbows and knees clearly bent and limbs away from the gimbal poles (abduction of
+    # +-90 degrees), the angles themselves come back.
+    rng = np.random.default_rng(5)
+    P[:, [15, 19, 23, 27]] = rng.uniform(0.3, 2.5, (300, 4))
+    P[:, [13, 17, 21, 25]] = rng.uniform(-0.3, 1.2, (300, 4))
+    Q = inverse_kinematics(forward_kinematics(P))
+    np.testing.assert_allclose(Q[:, 3:], P[:, 3:], atol=1e-9)
+    d = dims_from_joints(forward_kinematics(random_poses(20, 2)))
+    for name in ("thigh", "shin", "upper_arm", "forearm", "hip_width", "shoulder_width", "torso_length"):
+        assert getattr(d, name) == pytest.approx(getattr(D, name), abs=1e-9)
