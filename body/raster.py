@@ -23,7 +23,7 @@ import numpy as np
 
 from body.camera import Camera
 from body.kinematics import cone_endpoints
-from body.skeleton import DEFAULT_DIMS, N_SEGMENTS, BodyDims
+from body.skeleton import N_SEGMENTS, BodyDims
 
 _SHIFT = 4  # fixed-point bits for sub-pixel accurate OpenCV drawing
 
@@ -74,8 +74,7 @@ def cone_outline_points_from_cones(ends: np.ndarray, radii: np.ndarray, camera: 
     return pts.reshape(pts.shape[0], -1, 2)
 
 
-def cone_outline_points(P: np.ndarray, camera: Camera, dims: BodyDims = DEFAULT_DIMS,
-                        per_side: int = 4) -> np.ndarray:
+def cone_outline_points(P: np.ndarray, dims: BodyDims, camera: Camera, per_side: int = 4) -> np.ndarray:
     """(N, DOF) poses -> (N, 16 * 2 * per_side, 2) pixel samples on the cone outlines.
 
     See ``cone_outline_points_from_cones`` for the ordering. Vectorised over N.
@@ -102,7 +101,7 @@ def cone_interior_points_from_cones(ends: np.ndarray, radii: np.ndarray, camera:
     return pts.reshape(pts.shape[0], -1, 2)
 
 
-def cone_interior_points(P: np.ndarray, camera: Camera, dims: BodyDims = DEFAULT_DIMS,
+def cone_interior_points(P: np.ndarray, dims: BodyDims, camera: Camera,
                          n_along: int = 4, n_across: int = 3) -> np.ndarray:
     """(N, DOF) poses -> (N, 16 * n_along * n_across, 2) pixel samples inside the cones."""
     ends, radii = cone_endpoints(P, dims)
@@ -153,14 +152,14 @@ def rasterise_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: 
     return out.astype(bool)
 
 
-def rasterise_silhouettes(P: np.ndarray, camera: Camera, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
+def rasterise_silhouettes(P: np.ndarray, dims: BodyDims, camera: Camera) -> np.ndarray:
     """(N, DOF) poses -> (N, H, W) bool silhouettes of the 16 cones. For a few poses
     (a Python loop over poses and cones draws with OpenCV)."""
     ends, radii = cone_endpoints(P, dims)
     return rasterise_cones(ends, radii, camera)
 
 
-def render_edge_maps(P: np.ndarray, camera: Camera, dims: BodyDims = DEFAULT_DIMS,
+def render_edge_maps(P: np.ndarray, dims: BodyDims, camera: Camera,
                      mode: str = "silhouette", thickness: int = 1) -> np.ndarray:
     """(N, DOF) poses -> (N, H, W) bool edge maps.
 
@@ -168,7 +167,7 @@ def render_edge_maps(P: np.ndarray, camera: Camera, dims: BodyDims = DEFAULT_DIM
     against a plain background). mode "cones": every cone's outline, hidden parts included.
     """
     if mode == "silhouette":
-        sil = rasterise_silhouettes(P, camera, dims).astype(np.uint8)
+        sil = rasterise_silhouettes(P, dims, camera).astype(np.uint8)
         kernel = np.ones((2 * thickness + 1, 2 * thickness + 1), np.uint8)
         eroded = np.stack([cv2.erode(s, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
                            for s in sil]) if len(sil) else sil

@@ -6,6 +6,7 @@ import pytest
 from body.camera import Camera, default_camera
 from body.kinematics import forward_kinematics
 from body.pose import neutral_pose
+from body.skeleton import DEFAULT_DIMS
 from body.raster import rasterise_silhouettes
 
 
@@ -53,7 +54,7 @@ def test_default_camera_sees_two_people():
     assert (cam.width, cam.height) == (320, 240)
     assert 1.4 < cam.centre[1] < 1.8 and 4.0 <= np.hypot(cam.centre[0], cam.centre[2]) <= 5.0
     P = np.stack([neutral_pose(x=-0.5, yaw=np.pi / 2), neutral_pose(x=0.5, yaw=-np.pi / 2)])
-    S = rasterise_silhouettes(P, cam)
+    S = rasterise_silhouettes(P, DEFAULT_DIMS, cam)
     # Fully in view: nothing touches the border, and both stand on the lower half of the image.
     for s in S:
         assert s.any() and not (s[0].any() or s[-1].any() or s[:, 0].any() or s[:, -1].any())

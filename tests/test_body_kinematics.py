@@ -162,7 +162,7 @@ def test_silhouettes_contain_projected_joints_and_sample_points():
     cam = default_camera()
     P = np.stack([neutral_pose(D, x=-0.5, yaw=0.4), neutral_pose(D, x=0.5, yaw=-0.4), random_poses(1, 3)[0]])
     P[2, :3] = (0.0, 0.9, 0.0)
-    S = rasterise_silhouettes(P, cam)
+    S = rasterise_silhouettes(P, D, cam)
     assert S.shape == (3, cam.height, cam.width) and S.dtype == bool
     uv = np.round(cam.project(forward_kinematics(P))).astype(int)
     assert cam.in_image(uv).all()
@@ -173,19 +173,19 @@ def test_silhouettes_contain_projected_joints_and_sample_points():
     assert 1000 < S[0].sum() < 8000
     assert (ys.max() - ys.min()) > 2 * (xs.max() - xs.min())
     # Interior sample points fall inside the silhouette, nearly all of them.
-    inner = np.round(cone_interior_points(P, cam)).astype(int)
+    inner = np.round(cone_interior_points(P, D, cam)).astype(int)
     assert inner.shape == (3, 16 * 4 * 3, 2)
     frac = np.mean([S[i, inner[i, :, 1], inner[i, :, 0]].mean() for i in range(3)])
     assert frac > 0.97
     # Outline points lie near the edge map.
-    out = cone_outline_points(P, cam)
+    out = cone_outline_points(P, D, cam)
     assert out.shape == (3, 16 * 2 * 4, 2)
-    E = render_edge_maps(P, cam, mode="cones")
+    E = render_edge_maps(P, D, cam, mode="cones")
     import cv2
     dist = cv2.distanceTransform((~E[0]).astype(np.uint8), cv2.DIST_L2, 3)
     o = np.round(out[0]).astype(int)
     assert np.median(dist[o[:, 1], o[:, 0]]) <= 1.5
-    edges = render_edge_maps(P[:1], cam)
+    edges = render_edge_maps(P[:1], D, cam)
     assert edges[0].sum() < S[0].sum() and (edges[0] <= S[0]).all()
 
 
@@ -194,11 +194,11 @@ def test_vectorised_samplers_match_per_pose():
     P = random_poses(64, 7)
     P[:, 1] = 0.9
     P[:, [0, 2]] = 0.0
-    out = cone_outline_points(P, cam)
-    inn = cone_interior_points(P, cam, n_along=3, n_across=2)
+    out = cone_outline_points(P, D, cam)
+    inn = cone_interior_points(P, D, cam, n_along=3, n_across=2)
     for i in (0, 17, 63):
-        np.testing.assert_allclose(cone_outline_points(P[i], cam)[0], out[i])
-        np.testing.assert_allclose(cone_interior_points(P[i], cam, n_along=3, n_across=2)[0], inn[i])
+        np.testing.assert_allclose(cone_outline_points(P[i], D, cam)[0], out[i])
+        np.testing.assert_allclose(cone_interior_points(P[i], D, cam, n_along=3, n_across=2)[0], inn[i])
 
 
 def test_inverse_kinematics_round_trip():
