@@ -1,0 +1,361 @@
+"""Foreground clean-up into person regions, and identities kept over time.
+
+``clean_mask`` turns a raw foreground mask into solid regions (morphological opening against
+speckle, closing across small gaps, holes filled, regions below a minimum area dropped).
+``PersonTracker`` gives each region a stable identity: regions are matched to the people of the
+previous frame by the overlap of each person's motion-predicted mask and, for the rest, by a
+Hungarian assignment on position and size. When people touch (a handshake) and their regions
+merge into one, the merged region is split between them: every pixel goes to the person whose
+predicted mask it lies deepest inside or, outside all of them, nearest to (distance
+transforms). Both keep their ids and are flagged ``merged``; identities are never exchanged
+between tracks. Image coordinates are pixels, x = column, y = row.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+LEFT = "left"
+RIGHT = "right"
+_INFEASIBLE = 1e6
+
+
+@dataclass(frozen=True, eq=False)
+class Person:
+    """One person in one frame.
+
+    id : stable integer identity (>= 0); the label image uses id + 1.
+    side : "left" or "right": the image half of the centroid when first seen; never changes.
+    bbox : (x, y, w, h) pixels.  area : pixels.  centroid : (x, y) pixels.
+    height : bbox height, pixels.  merged : the region was shared with another person this frame
+        and split between them.
+    ctrl : (n, 2) B-spline control points (pixels) and ref_point (2,) the reference point at the
+        top of the head; filled in by the pipeline, None from the tracker alone.
+    """
+
+    id: int
+    side: str
+    bbox: tuple[int, int, int, int]
+    area: int
+    centroid: tuple[float, float]
+    height: float
+    merged: bool = False
+    ctrl: np.ndarray | None = None
+    ref_point: np.ndarray | None = None
+
+
+def _disk(size: int) -> np.ndarray:
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
+
+
+def clean_mask(
+    mask: np.ndarray,
+    open_px: int = 3,
+    close_px: int = 7,
+    fill_holes: bool = True,
+    min_area: int = 0,
+) -> np.ndarray:
+    """Clean a foreground mask (H, W) into solid regions; returns (H, W) bool.
+
+    open_px / close_px : diameters (pixels) of the elliptical opening (removes speckle) and
+        closing (bridges small gaps, e.g. between a leg and the body); <= 1 skips the step.
+    fill_holes : fill every enclosed background hole (the outer contour is what we model).
+    min_area : drop connected regions (8-connected) smaller than this many pixels.
+    """
+    m = np.asarray(mask)
+    if m.ndim != 2:
+        raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
+    if open_px < 0 or close_px < 0 or min_area < 0:
+        raise ValueError(f"open_px, close_px and min_area must be >= 0, got {open_px}, {close_px}, {min_area}")
+    m8 = (m != 0).astype(np.uint8)
+    if open_px > 1:
+        m8 = cv2.morphologyEx(m8, cv2.MORPH_OPEN, _disk(open_px))
+    if close_px > 1:
+        m8 = cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _disk(close_px))
+    if fill_holes or min_area > 0:
+        contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        if fill_holes:
+            out = np.zeros_like(m8)
+            cv2.drawContours(out, contours, -1, 1, thickness=cv2.FILLED)
+            m8 = out
+        if min_area > 0:
+            n, labels, stats, _ = cv2.connectedComponentsWithStats(m8, connectivity=8)
+            keep = stats[:, cv2.CC_STAT_AREA] >= min_area
+            keep[0] = False
+            m8 = keep[labels].view(np.uint8)
+    return m8.astype(bool)
+
+
+@dataclass
+class _Track:
+    id: int
+    side: str
+    centroid: np.ndarray  # (2,) x, y
+    velocity: np.ndarray  # (2,) pixels per frame
+    crop: np.ndarray  # bool mask within the bbox
+    origin: np.ndarray  # (2,) int x0, y0 of the crop
+    area: int
+    height: float
+    missed: int = 0
+    shift: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))  # predicted offset
+
+    def predicted_origin(self) -> np.ndarray:
+        return self.origin + self.shift
+
+    def predicted_centroid(self) -> np.ndarray:
+        return self.centroid + self.shift
+
+
+def _paste(track: _Track, x0: int, y0: int, h: int, w: int) -> np.ndarray:
+    """The track's predicted mask in the window (x0, y0, w, h): (h, w) bool."""
+    out = np.zeros((h, w), bool)
+    ox, oy = track.predicted_origin()
+    ch, cw = track.crop.shape
+    ax0, ay0 = max(ox, x0), max(oy, y0)
+    ax1, ay1 = min(ox + cw, x0 + w), min(oy + ch, y0 + h)
+    if ax1 > ax0 and ay1 > ay0:
+        out[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0] = track.crop[ay0 - oy : ay1 - oy, ax0 - ox : ax1 - ox]
+    return out
+
+
+class PersonTracker:
+    """Keeps person identities over frames of cleaned foreground masks.
+
+    Parameters
+    ----------
+    min_area : regions smaller than this (pixels) are ignored.
+    max_missed : frames a person may go unseen (occluded, left the view) before the track ends.
+    max_distance : gate of the Hungarian assignment: a region further than this many person
+        heights from a person's predicted centroid cannot be theirs.
+    size_weight : weight of |log(area ratio)| against the normalised distance in the cost.
+    min_overlap : fraction of a person's predicted pixels that must fall in a region for the
+        person to claim it; a region claimed by two or more people is a merge and is split.
+    velocity_smoothing : exponential smoothing factor of the per-frame velocity (0 = last step).
+    """
+
+    def __init__(
+        self,
+        min_area: int = 50,
+        max_missed: int = 10,
+        max_distance: float = 0.75,
+        size_weight: float = 0.5,
+        min_overlap: float = 0.2,
+        velocity_smoothing: float = 0.5,
+    ) -> None:
+        if min_area < 1:
+            raise ValueError(f"min_area must be >= 1 pixel, got {min_area}")
+        if max_missed < 0:
+            raise ValueError(f"max_missed must be >= 0 frames, got {max_missed}")
+        if max_distance <= 0:
+            raise ValueError(f"max_distance must be > 0 (person heights), got {max_distance}")
+        if not 0.0 < min_overlap <= 1.0:
+            raise ValueError(f"min_overlap must be in (0, 1], got {min_overlap}")
+        if not 0.0 <= velocity_smoothing < 1.0:
+            raise ValueError(f"velocity_smoothing must be in [0, 1), got {velocity_smoothing}")
+        self.min_area = min_area
+        self.max_missed = max_missed
+        self.max_distance = max_distance
+        self.size_weight = size_weight
+        self.min_overlap = min_overlap
+        self.velocity_smoothing = velocity_smoothing
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget all people; the next id is 0 again."""
+        self._tracks: list[_Track] = []
+        self._next_id = 0
+
+    @property
+    def active_ids(self) -> list[int]:
+        """Ids of the people currently tracked (seen, or unseen for at most max_missed frames)."""
+        return [t.id for t in self._tracks]
+
+    def update(self, mask: np.ndarray) -> tuple[np.ndarray, list[Person]]:
+        """Track people in one cleaned foreground mask (H, W) bool.
+
+        Returns (labels (H, W) int32 with 0 = background and id + 1 per person, the list of
+        people seen in this frame sorted by id).
+        """
+        m = np.asarray(mask)
+        if m.ndim != 2:
+            raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
+        h_img, w_img = m.shape
+        n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
+        regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
+        tracks = self._tracks
+        for t in tracks:
+            t.shift = np.rint(t.velocity).astype(np.int64)
+
+        # Overlap of each track's predicted mask with each region: counts[t, r].
+        counts = np.zeros((len(tracks), n), np.int64)
+        for i, t in enumerate(tracks):
+            x0, y0 = t.predicted_origin()
+            ch, cw = t.crop.shape
+            ax0, ay0, ax1, ay1 = max(x0, 0), max(y0, 0), min(x0 + cw, w_img), min(y0 + ch, h_img)
+            if ax1 > ax0 and ay1 > ay0:
+                sub = comp[ay0:ay1, ax0:ax1][t.crop[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0]]
+                counts[i] = np.bincount(sub, minlength=n)
+        counts[:, 0] = 0
+        frac_track = counts / np.maximum([t.area for t in tracks], 1)[:, None] if tracks else counts.astype(float)
+        region_area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
+
+        assigned: dict[int, tuple[np.ndarray, int, int, bool]] = {}  # track idx -> (crop, x0, y0, merged)
+        used_regions: set[int] = set()
+        fresh: list[tuple[np.ndarray, int, int]] = []  # regions that start new tracks
+
+        # 1. Merges: a region that is the main region of two or more tracks is split between them.
+        if tracks and regions:
+            best = np.argmax(frac_track, axis=1)
+            strong = frac_track[np.arange(len(tracks)), best] >= self.min_overlap
+            for r in regions:
+                claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
+                if len(claim) >= 2:
+                    used_regions.add(r)
+                    for i, piece in self._split(comp, stats, r, [tracks[i] for i in claim]).items():
+                        assigned[claim[i]] = (*piece, True)
+
+        # 2. Hungarian assignment of the remaining tracks and regions on position and size.
+        free_t = [i for i in range(len(tracks)) if i not in assigned]
+        free_r = [r for r in regions if r not in used_regions]
+        if free_t and free_r:
+            cost = np.empty((len(free_t), len(free_r)))
+            for a, i in enumerate(free_t):
+                t = tracks[i]
+                scale = max(t.height, 10.0)
+                d = np.hypot(*(cents[free_r] - t.predicted_centroid()).T) / scale
+                size = np.abs(np.log(region_area[free_r] / max(t.area, 1)))
+                c = d + self.size_weight * size - frac_track[i, free_r]
+                ok = (d <= self.max_distance) | (frac_track[i, free_r] >= self.min_overlap)
+                cost[a] = np.where(ok, c, _INFEASIBLE)
+            rows, cols = linear_sum_assignment(cost)
+            for a, b in zip(rows, cols):
+                if cost[a, b] < _INFEASIBLE:
+                    r = free_r[b]
+                    assigned[free_t[a]] = (*self._region_crop(comp, stats, r), False)
+                    used_regions.add(r)
+
+        # 3. Left-over regions: a fragment of an assigned person (mostly inside their predicted
+        #    mask) joins them; anything else is a new person.
+        for r in regions:
+            if r in used_regions:
+                continue
+            owner = -1
+            if tracks:
+                frac_region = counts[:, r] / region_area[r]
+                i = int(np.argmax(frac_region))
+                if frac_region[i] >= 0.5 and i in assigned:
+                    owner = i
+            crop, x0, y0 = self._region_crop(comp, stats, r)
+            if owner >= 0:
+                assigned[owner] = (*_union(assigned[owner][:3], (crop, x0, y0)), assigned[owner][3])
+            else:
+                fresh.append((crop, x0, y0))
+
+        # 4. Update tracks, start new ones, retire the long unseen.
+        labels = np.zeros((h_img, w_img), np.int32)
+        people: list[Person] = []
+        alive: list[_Track] = []
+        for i, t in enumerate(tracks):
+            piece = assigned.get(i)
+            if piece is None or not piece[0].any():
+                t.missed += 1
+                t.centroid = t.centroid + t.velocity
+                t.origin = t.origin + t.shift
+                if t.missed <= self.max_missed:
+                    alive.append(t)
+                continue
+            crop, x0, y0, merged = piece
+            person = self._observe(t, crop, x0, y0, merged)
+            people.append(person)
+            alive.append(t)
+            _paint(labels, crop, x0, y0, t.id + 1)
+        # New people are numbered left to right, so ids do not depend on the labelling order.
+        fresh.sort(key=lambda f: f[1] + 0.5 * f[0].shape[1])
+        for crop, x0, y0 in fresh:
+            ys, xs = np.nonzero(crop)
+            c = np.array([xs.mean() + x0, ys.mean() + y0])
+            t = _Track(
+                id=self._next_id,
+                side=LEFT if c[0] < w_img / 2.0 else RIGHT,
+                centroid=c,
+                velocity=np.zeros(2),
+                crop=crop,
+                origin=np.array([x0, y0], np.int64),
+                area=int(crop.sum()),
+                height=float(crop.shape[0]),
+            )
+            self._next_id += 1
+            people.append(self._observe(t, crop, x0, y0, False))
+            alive.append(t)
+            _paint(labels, crop, x0, y0, t.id + 1)
+        self._tracks = alive
+        people.sort(key=lambda p: p.id)
+        return labels, people
+
+    # ------------------------------------------------------------------ internals
+    @staticmethod
+    def _region_crop(comp: np.ndarray, stats: np.ndarray, r: int) -> tuple[np.ndarray, int, int]:
+        x, y, w, h = (int(v) for v in stats[r, :4])
+        return comp[y : y + h, x : x + w] == r, x, y
+
+    @staticmethod
+    def _split(comp: np.ndarray, stats: np.ndarray, r: int, claim: list[_Track]) -> dict[int, tuple[np.ndarray, int, int]]:
+        """Share region r between the claiming tracks; returns claim index -> (crop, x0, y0)."""
+        x, y, w, h = (int(v) for v in stats[r, :4])
+        region = comp[y : y + h, x : x + w] == r
+        # Signed distance to each predicted mask: negative inside (depth), positive outside.
+        signed = np.empty((len(claim), h, w), np.float32)
+        for k, t in enumerate(claim):
+            pred = _paste(t, x, y, h, w).astype(np.uint8)
+            outside = cv2.distanceTransform(1 - pred, cv2.DIST_L2, 5)
+            inside = cv2.distanceTransform(pred, cv2.DIST_L2, 5)
+            signed[k] = outside - inside
+        owner = np.argmin(signed, axis=0)
+        pieces: dict[int, tuple[np.ndarray, int, int]] = {}
+        for k in range(len(claim)):
+            part = region & (owner == k)
+            if not part.any():
+                continue
+            ys, xs = np.nonzero(part)
+            y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+            pieces[k] = (part[y0:y1, x0:x1], x + int(x0), y + int(y0))
+        return pieces
+
+    def _observe(self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool) -> Person:
+        ys, xs = np.nonzero(crop)
+        c = np.array([xs.mean() + x0, ys.mean() + y0])
+        if t.missed == 0 and t.area > 0 and t.crop is not crop:
+            s = self.velocity_smoothing
+            t.velocity = s * t.velocity + (1.0 - s) * (c - t.centroid)
+        t.centroid, t.crop, t.origin = c, crop, np.array([x0, y0], np.int64)
+        t.area, t.height, t.missed = int(xs.size), float(crop.shape[0]), 0
+        return Person(
+            id=t.id,
+            side=t.side,
+            bbox=(int(x0), int(y0), int(crop.shape[1]), int(crop.shape[0])),
+            area=t.area,
+            centroid=(float(c[0]), float(c[1])),
+            height=t.height,
+            merged=merged,
+        )
+
+
+def _union(a: tuple[np.ndarray, int, int], b: tuple[np.ndarray, int, int]) -> tuple[np.ndarray, int, int]:
+    """Union of two bbox-cropped masks (crop, x0, y0)."""
+    (ca, xa, ya), (cb, xb, yb) = a, b
+    x0, y0 = min(xa, xb), min(ya, yb)
+    x1 = max(xa + ca.shape[1], xb + cb.shape[1])
+    y1 = max(ya + ca.shape[0], yb + cb.shape[0])
+    out = np.zeros((y1 - y0, x1 - x0), bool)
+    out[ya - y0 : ya - y0 + ca.shape[0], xa - x0 : xa - x0 + ca.shape[1]] |= ca
+    out[yb - y0 : yb - y0 + cb.shape[0], xb - x0 : xb - x0 + cb.shape[1]] |= cb
+    return out, x0, y0
+
+
+def _paint(labels: np.ndarray, crop: np.ndarray, x0: int, y0: int, value: int) -> None:
+    window = labels[y0 : y0 + crop.shape[0], x0 : x0 + crop.shape[1]]
+    window[crop] = value

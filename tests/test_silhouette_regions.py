@@ -1,0 +1,157 @@
+"""Mask clean-up and identity tracking on rasterised people (OpenCV-drawn masks)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from nodes.silhouette.regions import Person, PersonTracker, clean_mask
+
+H, W = 200, 320
+
+
+def draw_person(m: np.ndarray, cx: float, height: float, arm: int = 0) -> None:
+    """A standing figure with its feet at y = 190: head, body ellipse and an arm reaching out
+    horizontally by ``arm`` pixels (sign = direction)."""
+    cx = int(round(cx))
+    top = int(190 - height)
+    head_r = max(4, int(height * 0.09))
+    cv2.circle(m, (cx, top + head_r), head_r, 1, -1)
+    body_h = int(height - 2 * head_r)
+    cv2.ellipse(m, (cx, top + 2 * head_r + body_h // 2), (int(height * 0.14), body_h // 2), 0, 0, 360, 1, -1)
+    if arm:
+        y = top + 2 * head_r + int(body_h * 0.3)
+        cv2.line(m, (cx, y), (cx + arm, y + 5), 1, thickness=max(3, int(height * 0.05)))
+
+
+def scene(xa: float, xb: float, arm: int = 0, ha: float = 150, hb: float = 120) -> np.ndarray:
+    m = np.zeros((H, W), np.uint8)
+    draw_person(m, xa, ha, arm)
+    draw_person(m, xb, hb, -arm)
+    return m.astype(bool)
+
+
+def handshake_sequence() -> list[tuple[np.ndarray, float, float]]:
+    """A walks in from the left, B from the right, they shake hands (regions merge for many
+    frames, bodies even overlapping a little), then they step back apart."""
+    frames = []
+    xs_a = np.concatenate([np.linspace(50, 140, 20), np.full(10, 140.0), np.linspace(140, 60, 15)])
+    xs_b = np.concatenate([np.linspace(270, 175, 20), np.full(10, 175.0), np.linspace(175, 260, 15)])
+    for k, (xa, xb) in enumerate(zip(xs_a, xs_b)):
+        arm = 40 if 14 <= k < 34 else 0
+        frames.append((scene(xa, xb, arm), xa, xb))
+    return frames
+
+
+def test_clean_mask_removes_speckle_fills_holes_and_drops_small_regions():
+    m = np.zeros((H, W), np.uint8)
+    cv2.rectangle(m, (50, 40), (110, 180), 1, -1)
+    cv2.circle(m, (80, 100), 10, 0, -1)  # a hole (e.g. a background-coloured patch of shirt)
+    cv2.rectangle(m, (200, 50), (210, 60), 1, -1)  # 121 px: a small distractor
+    rng = np.random.default_rng(0)
+    noisy = m.astype(bool) | (rng.random((H, W)) < 0.01)  # salt noise
+    out = clean_mask(noisy, open_px=3, close_px=7, fill_holes=True, min_area=200)
+    assert out.dtype == bool and out.shape == (H, W)
+    assert out[100, 80]  # hole filled
+    assert not out[55, 205]  # small region dropped
+    outside = np.ones((H, W), bool)
+    outside[35:186, 45:116] = False
+    assert out[outside].sum() == 0  # all speckle gone
+    assert out[45:176, 55:106].all()
+    kept = clean_mask(noisy, min_area=100)
+    assert kept[55, 205]
+
+
+def test_tracker_keeps_ids_through_a_handshake_merge():
+    tracker = PersonTracker(min_area=100)
+    seen_merged = 0
+    for k, (mask, xa, xb) in enumerate(handshake_sequence()):
+        labels, people = tracker.update(mask)
+        assert labels.dtype == np.int32 and labels.shape == (H, W)
+        assert [p.id for p in people] == [0, 1], f"frame {k}: ids {[p.id for p in people]}"
+        a, b = people
+        assert (a.side, b.side) == ("left", "right")
+        # Identity follows the person: id 0 is always the one near A's true position.
+        assert abs(a.centroid[0] - xa) < 15 and abs(b.centroid[0] - xb) < 15, (k, a.centroid, b.centroid)
+        assert a.height == pytest.approx(150, abs=4) and b.height == pytest.approx(120, abs=4)
+        # The label image covers exactly the foreground, split between the two ids.
+        np.testing.assert_array_equal(labels > 0, mask)
+        assert (labels == 1).sum() == a.area and (labels == 2).sum() == b.area
+        n_regions = cv2.connectedComponents(mask.astype(np.uint8))[0] - 1
+        if n_regions == 1:
+            seen_merged += 1
+            assert a.merged and b.merged
+        else:
+            assert not a.merged and not b.merged
+    assert seen_merged >= 10  # the test really went through a long merge
+
+
+def test_merged_region_is_split_along_each_persons_own_shape():
+    """Against each person drawn alone: in merged frames the pixels given to A are A's."""
+    tracker = PersonTracker(min_area=100)
+    xs_a = np.concatenate([np.linspace(50, 140, 20), np.full(10, 140.0)])
+    xs_b = np.concatenate([np.linspace(270, 175, 20), np.full(10, 175.0)])
+    scores = []
+    for k, (xa, xb) in enumerate(zip(xs_a, xs_b)):
+        arm = 40 if k >= 14 else 0
+        ma, mb = np.zeros((H, W), np.uint8), np.zeros((H, W), np.uint8)
+        draw_person(ma, xa, 150, arm)
+        draw_person(mb, xb, 120, -arm)
+        ma, mb = ma.astype(bool), mb.astype(bool)
+        labels, people = tracker.update(ma | mb)
+        if people[0].merged:
+            only = ma ^ mb  # pixels that belong to exactly one person
+            correct = ((labels == 1) & ma & only).sum() + ((labels == 2) & mb & only).sum()
+            scores.append(correct / only.sum())
+    assert len(scores) >= 8
+    assert min(scores) > 0.97, scores
+
+
+def test_hungarian_keeps_ids_of_three_walkers_and_new_person_gets_new_id():
+    tracker = PersonTracker(min_area=100, max_missed=2)
+    for k in range(12):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 40 + 3 * k, 100)
+        draw_person(m, 160, 140 - k)  # stands, slowly crouches
+        draw_person(m, 280 - 4 * k, 80)
+        if k >= 6:
+            draw_person(m, 100 + 3 * k, 60)  # arrives later: new id 3
+        labels, people = tracker.update(m.astype(bool))
+        ids = {p.id: p for p in people}
+        assert set(ids) == ({0, 1, 2, 3} if k >= 6 else {0, 1, 2})
+        assert abs(ids[0].centroid[0] - (40 + 3 * k)) < 3
+        assert abs(ids[2].centroid[0] - (280 - 4 * k)) < 3
+        assert ids[0].side == "left" and ids[2].side == "right"
+    # Person 2 leaves: after max_missed frames without them the track ends.
+    for _ in range(4):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 76, 100)
+        labels, people = tracker.update(m.astype(bool))
+        assert [p.id for p in people] == [0]
+    assert tracker.active_ids == [0]
+
+
+def test_fragment_of_a_person_stays_with_them():
+    tracker = PersonTracker(min_area=50)
+    m = np.zeros((H, W), np.uint8)
+    draw_person(m, 100, 150)
+    tracker.update(m.astype(bool))
+    cut = m.copy()
+    cut[120:123, :] = 0  # legs detached from the body by a background-coloured belt
+    labels, people = tracker.update(cut.astype(bool))
+    assert len(people) == 1 and people[0].id == 0
+    assert people[0].area == int(cut.sum())
+
+
+def test_person_record_and_errors():
+    tracker = PersonTracker()
+    _, people = tracker.update(scene(80, 240))
+    p = people[0]
+    assert isinstance(p, Person)
+    x, y, w, h = p.bbox
+    assert h == p.height and w > 0 and p.area > 0 and p.ctrl is None
+    with pytest.raises(ValueError, match="2-D"):
+        tracker.update(np.zeros((4, 4, 3), bool))
+    with pytest.raises(ValueError, match="min_area"):
+        PersonTracker(min_area=0)
