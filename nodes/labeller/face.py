@@ -1,6 +1,6 @@
 """Talking and laughing from the mouth region of a detected face (Okwechime et al. find the face
-with a Viola-Jones detector; here OpenCV's bundled Haar cascade
-``haarcascade_frontalface_default.xml``).
+with a Viola-Jones detector; here OpenCV's Haar cascade ``haarcascade_frontalface_default.xml``,
+found by :func:`find_face_cascade`).
 
 How crude this is, honestly:
 
@@ -25,23 +25,54 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import os
+
 import cv2
 import numpy as np
 
 from nodes.labeller.signals import UNKNOWN
 
-#: the Viola-Jones frontal face cascade shipped with OpenCV
-CASCADE_PATH: str = cv2.data.haarcascades + "haarcascade_frontalface_default.xml"
-
 Box = tuple[int, int, int, int]  # x, y, w, h in pixels
 
+CASCADE_NAME = "haarcascade_frontalface_default.xml"
+#: environment variable naming the cascade file when OpenCV does not ship it
+CASCADE_ENV = "COUNTERPART_FACE_CASCADE"
+_SYSTEM_DIRS = ("/usr/share/opencv4/haarcascades", "/usr/share/opencv/haarcascades",
+                "/usr/local/share/opencv4/haarcascades", "/opt/homebrew/share/opencv4/haarcascades")
 
-def load_face_cascade(path: str = CASCADE_PATH) -> cv2.CascadeClassifier:
-    """Load a Haar cascade; raises FileNotFoundError naming the path if OpenCV cannot read it."""
+
+def find_face_cascade() -> str | None:
+    """Path of the Viola-Jones frontal face cascade, or None if none is found.
+
+    Looked for, in order: ``$COUNTERPART_FACE_CASCADE``; OpenCV's bundled data
+    (``cv2.data.haarcascades``, shipped by the 4.x wheels; the 5.0 wheels ship no cascade files);
+    the usual system folders (Debian/Ubuntu ``opencv-data``, Homebrew).
+    """
+    cands = []
+    env = os.environ.get(CASCADE_ENV)
+    if env:
+        cands.append(env)
+    data = getattr(getattr(cv2, "data", None), "haarcascades", None)
+    if data:
+        cands.append(os.path.join(data, CASCADE_NAME))
+    cands += [os.path.join(d, CASCADE_NAME) for d in _SYSTEM_DIRS]
+    return next((c for c in cands if os.path.isfile(c)), None)
+
+
+def load_face_cascade(path: str | None = None) -> cv2.CascadeClassifier:
+    """Load the Haar cascade at ``path`` (default: :func:`find_face_cascade`).
+
+    Raises FileNotFoundError saying where it looked and how to provide the file.
+    """
+    path = path or find_face_cascade()
+    if path is None:
+        raise FileNotFoundError(
+            f"no {CASCADE_NAME} found (looked in ${CASCADE_ENV}, cv2.data.haarcascades and "
+            f"{', '.join(_SYSTEM_DIRS)}); install OpenCV's cascade data (e.g. apt install "
+            f"opencv-data, or an opencv-contrib-python-headless 4.x wheel) or set {CASCADE_ENV}")
     cc = cv2.CascadeClassifier(path)
     if cc.empty():
-        raise FileNotFoundError(
-            f"could not load the Haar cascade {path!r}; is opencv-contrib-python-headless installed?")
+        raise FileNotFoundError(f"could not load the Haar cascade {path!r} (missing or not a cascade)")
     return cc
 
 
@@ -105,7 +136,7 @@ class FaceParams:
     min_face_px: int = 24
     talk_energy: float = 0.04
     laugh_energy: float = 0.10
-    laugh_extent: float = 0.5
+    laugh_extent: float = 0.3
     min_valid: float = 0.5
     detect_every: int = 1
     patch_size: tuple[int, int] = (32, 16)

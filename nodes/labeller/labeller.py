@@ -8,7 +8,8 @@ Inputs are chosen per person and frame, best first:
 2. else the silhouette: head reference point relative to the silhouette centroid (2D nod/shake,
    scaled by the height in pixels), activity from the upper-body spline points; gaze UNKNOWN;
 3. talking/laughing from the camera image where a frontal face of enough size is found (searched
-   in the person's box when given); UNKNOWN otherwise.
+   in the person's box when given); UNKNOWN otherwise, and UNKNOWN (with one RuntimeWarning) when
+   no Haar cascade file is installed (see :func:`nodes.labeller.face.find_face_cascade`).
 
 A person switching between 3D and 2D input, or missing from a frame, restarts the windows of the
 affected detectors (so a window never mixes the two or spans a gap): those signals are UNKNOWN
@@ -16,6 +17,7 @@ until a window has filled again.
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Hashable, Mapping
 from dataclasses import dataclass
 
@@ -101,9 +103,21 @@ class SocialLabeller:
         self.activity_params = dict(activity_params or {})
         self.face_params = dict(face_params or {})
         self._cascade: cv2.CascadeClassifier | None = None
+        self._cascade_missing = False
         self._people: dict[Hashable, _PersonState] = {}
         self._frame = 0
         _PersonState(self)  # validate every parameter now, not on the first person
+
+    def _face_cascade(self) -> cv2.CascadeClassifier | None:
+        """The face detector, loaded on first use; None (talking/laughing UNKNOWN, one warning)
+        when no cascade file can be found."""
+        if self._cascade is None and not self._cascade_missing:
+            try:
+                self._cascade = load_face_cascade()
+            except FileNotFoundError as e:
+                self._cascade_missing = True
+                warnings.warn(f"talking/laughing will be UNKNOWN: {e}", RuntimeWarning, stacklevel=3)
+        return self._cascade
 
     def reset(self) -> None:
         """Forget every person."""
@@ -162,9 +176,7 @@ class SocialLabeller:
                     res["activity"] = st.act2.update_2d(obs.control_points, float(obs.height_px))  # type: ignore[arg-type]
             else:
                 st.mode = ""
-            if image is not None:
-                if self._cascade is None:
-                    self._cascade = load_face_cascade()
+            if image is not None and self._face_cascade() is not None:
                 st.face.cascade = self._cascade
                 ts, t, ls, lg = st.face.update(image, roi=obs.box)
                 res["talking"], res["laughing"] = (ts, t), (ls, lg)

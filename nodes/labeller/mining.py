@@ -346,6 +346,8 @@ def _check_labels(a: np.ndarray, what: str) -> np.ndarray:
         return a.astype(np.int8)
     if not np.issubdtype(a.dtype, np.number):
         raise ValueError(f"{what}: labels must be numeric 1/0/{UNKNOWN} or bool, got dtype {a.dtype}")
+    if np.issubdtype(a.dtype, np.floating):
+        a = np.where(np.isnan(a), UNKNOWN, a)   # float32 label files may mark UNKNOWN as nan
     bad = ~np.isin(a, (1, 0, UNKNOWN))
     if bad.any():
         raise ValueError(f"{what}: labels must be 1, 0 or {UNKNOWN}; found {np.unique(a[bad])[:5]}")
@@ -353,8 +355,10 @@ def _check_labels(a: np.ndarray, what: str) -> np.ndarray:
 
 
 def read_labels_npz(path: str | os.PathLike[str]) -> LabelStreams:
-    """Label streams from an NPZ with keys ``signals_a`` (T,K), ``signals_b`` (T,K) (bool or
-    1/0/-1), ``signal_names`` (K,) str and ``fps`` (scalar) -- the two-person trajectory file."""
+    """Label streams from an NPZ with keys ``signals_a`` (T,K), ``signals_b`` (T,K) (bool, or
+    1/0/-1 integers, or float 1/0/-1 with nan for UNKNOWN), ``signal_names`` (K,) str and ``fps``
+    (scalar) -- the keys of the project's two-person trajectory file (``body.trajectory``); other
+    keys are ignored."""
     with np.load(path, allow_pickle=False) as z:
         missing = [k for k in ("signals_a", "signals_b", "signal_names") if k not in z.files]
         if missing:

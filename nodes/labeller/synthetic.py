@@ -57,7 +57,7 @@ def rotate_about_y(points: np.ndarray, yaw: np.ndarray, pivot: np.ndarray) -> np
 @dataclass(frozen=True)
 class Conversation:
     """joints_a, joints_b: (T,14,3) m; head_yaw_a/b: (T,) head yaw relative to the torso (rad);
-    truth_a/b: name -> (T,) bool for "nod", "shake", "gaze_at_other", "activity"."""
+    truth_a/b: name -> (T,) bool for "nod", "shake", "gaze_at_other", "activity" (sway or turning)."""
 
     fps: float
     joints_a: np.ndarray
@@ -88,10 +88,11 @@ def _person(rng: np.random.Generator, t: int, fps: float, position: Sequence[flo
             noise_m: float) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray]:
     tt = np.arange(t) / fps
     busy = np.zeros(t, dtype=bool)
-    nod = _segments(rng, t, fps, max(1, t // int(12 * fps)), (1.5, 3.0), busy)
-    shake = _segments(rng, t, fps, max(1, t // int(15 * fps)), (1.5, 3.0), nod)
-    turn = _segments(rng, t, fps, max(1, t // int(15 * fps)), (2.0, 4.0), nod | shake)
-    sway = _segments(rng, t, fps, max(1, t // int(15 * fps)), (2.0, 4.0), nod | shake | turn)
+    # about one nod per 15 s, one shake per 20 s, one turn and one sway per 25 s
+    nod = _segments(rng, t, fps, max(1, t // int(15 * fps)), (1.5, 3.0), busy)
+    shake = _segments(rng, t, fps, max(1, t // int(20 * fps)), (1.5, 3.0), nod)
+    turn = _segments(rng, t, fps, max(1, t // int(25 * fps)), (2.0, 4.0), nod | shake)
+    sway = _segments(rng, t, fps, max(1, t // int(25 * fps)), (2.0, 4.0), nod | shake | turn)
     # body yaw: turned 70 degrees away during `turn`, ramped over 0.4 s
     ramp = int(0.4 * fps)
     k = np.convolve(turn.astype(float), np.ones(ramp) / ramp, mode="same")
@@ -116,7 +117,9 @@ def _person(rng: np.random.Generator, t: int, fps: float, position: Sequence[flo
     moving = np.r_[UPPER, [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]]
     j[:, moving] += (left * sw[:, None])[:, None]
     j += rng.normal(0.0, noise_m, j.shape)
-    truth = {"nod": nod, "shake": shake, "activity": sway}
+    # activity truth: the torso sways, or the body is turning (the torso moves in both)
+    turning = np.abs(np.gradient(yaw)) * fps > 0.2
+    truth = {"nod": nod, "shake": shake, "activity": sway | turning}
     return j, yaw_head, truth, yaw
 
 
