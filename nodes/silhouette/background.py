@@ -24,8 +24,10 @@ A pixel is then (eq. 9)
 The thresholds come from the distribution of the normalised distortions over the training frames
 for a target detection rate r: tau_CD is the r-quantile of CD_hat and [tau_alpha2, tau_alpha1] the
 central r-interval of alpha_hat. tau_alpha_lo keeps near-black pixels from being explained as a
-very deep shadow: it is the normalised brightness at which a typical pixel (median a) would be
-darker than ``min_shadow_brightness`` times its background.
+very deep shadow. Chosen automatically it is per pixel, (min_shadow_brightness - 1) / a_i, i.e. a
+pixel darker than ``min_shadow_brightness`` times its background is foreground: a single global
+value on alpha_hat (the paper's form, used when tau_alpha_lo is given) would put that limit at
+very different brightnesses in bright, low-noise pixels (small a_i) and dark, noisy ones.
 
 Frames are uint8 BGR, H x W x 3; all arithmetic is float32 and vectorised over pixels.
 """
@@ -103,8 +105,8 @@ class HorprasertBackground:
     shadow_learning_rate : rate for pixels labelled shadow or highlight (foreground: never).
     min_spread : lower bound on each channel's spread s_c, grey levels; keeps the normalisation
         finite for pixels that were constant in training (saturated, black, codec-flattened).
-    min_shadow_brightness : darkest shadow accepted, as a fraction of the background brightness;
-        sets tau_alpha_lo.
+    min_shadow_brightness : darkest shadow accepted, as a fraction of the background brightness
+        (raw alpha); darker pixels are foreground. Sets the automatic tau_alpha_lo per pixel.
     tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo : fixed thresholds; None (default) chooses them
         from the training frames.
     robust_inlier_k : in ``fit(robust=True)``, a training sample counts towards a, b and the
@@ -282,8 +284,8 @@ class HorprasertBackground:
         tau_a1 = max(float(hi_q), _MIN_TAU) if self.tau_alpha1 is None else float(self.tau_alpha1)
         tau_a2 = min(float(lo_q), -_MIN_TAU) if self.tau_alpha2 is None else float(self.tau_alpha2)
         if self.tau_alpha_lo is None:
-            tau_lo = (self.min_shadow_brightness - 1.0) / med_a
-            tau_lo = min(tau_lo, tau_a2 - 1.0)
+            # Reported at the median a; applied per pixel (see _refresh_thresholds).
+            tau_lo = min((self.min_shadow_brightness - 1.0) / med_a, tau_a2 - 1.0)
         else:
             tau_lo = float(self.tau_alpha_lo)
         if not (tau_lo < tau_a2 < 0.0 < tau_a1) or tau_cd <= 0.0:
@@ -395,7 +397,10 @@ class HorprasertBackground:
         t = self.thresholds_
         self._alpha_hi = (1.0 + t["tau_alpha1"] * self.a_).astype(np.float32)
         self._alpha_lo = (1.0 + t["tau_alpha2"] * self.a_).astype(np.float32)
-        self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
+        if self.tau_alpha_lo is None:
+            self._alpha_min = np.minimum(np.float32(self.min_shadow_brightness), self._alpha_lo)
+        else:
+            self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
         self._cd2_max = ((t["tau_cd"] * self.b_) ** 2).astype(np.float32)
 
     def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

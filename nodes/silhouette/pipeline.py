@@ -1,0 +1,222 @@
+"""The silhouette algorithm per frame, and offline over a video file.
+
+frame (H, W, 3) uint8 BGR -> background subtraction (shadows count as background) -> clean-up
+-> people with stable ids (merged regions split) -> each person's outline as a closed cubic
+B-spline ordered from the top of the head (Johnson, Galata & Hogg 1998).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import cv2
+import numpy as np
+
+from .backends import HorprasertSubtractor, make_subtractor
+from .regions import Person, PersonTracker, clean_mask
+from .spline import silhouette_spline
+
+
+@dataclass(frozen=True, eq=False)
+class FrameResult:
+    """What the extractor found in one frame.
+
+    index : 0-based number of the frame in this extractor's stream.
+    labels : (H, W) int32, 0 = background, person.id + 1 on each person's pixels.
+    people : people seen in this frame, sorted by id, each with ``ctrl`` (n_ctrl, 2) and
+        ``ref_point`` (2,) in image pixels (None if the region was too small for an outline).
+    classes : (H, W) uint8 background-model classes of the raw pixels (background.BACKGROUND,
+        SHADOW, HIGHLIGHT, FOREGROUND), or None if the backend gives none.
+    ready : False while the background model is still learning (no people reported).
+    """
+
+    index: int
+    labels: np.ndarray
+    people: list[Person]
+    classes: np.ndarray | None
+    ready: bool
+
+
+class SilhouetteExtractor:
+    """Frames in, people with B-spline outlines out.
+
+    Parameters
+    ----------
+    backend : background subtractor name (see ``backends.BACKEND_NAMES``).
+    n_ctrl : control points per outline (>= 4).
+    min_area : smallest person region, pixels.
+    open_px, close_px, fill_holes : mask clean-up (``regions.clean_mask``).
+    backend_params : keyword parameters of the subtractor (e.g. train_frames, learning_rate).
+    tracker_params : keyword parameters of ``PersonTracker`` other than min_area.
+    """
+
+    def __init__(
+        self,
+        backend: str = "horprasert",
+        n_ctrl: int = 32,
+        min_area: int = 300,
+        open_px: int = 3,
+        close_px: int = 7,
+        fill_holes: bool = True,
+        backend_params: dict[str, Any] | None = None,
+        tracker_params: dict[str, Any] | None = None,
+    ) -> None:
+        if n_ctrl < 4:
+            raise ValueError(f"n_ctrl must be >= 4 control points, got {n_ctrl}")
+        if min_area < 1:
+            raise ValueError(f"min_area must be >= 1 pixel, got {min_area}")
+        self.backend = backend
+        self.n_ctrl = n_ctrl
+        self.min_area = min_area
+        self.open_px = open_px
+        self.close_px = close_px
+        self.fill_holes = fill_holes
+        self.backend_params = dict(backend_params or {})
+        self.tracker_params = dict(tracker_params or {})
+        if "min_area" in self.tracker_params:
+            raise ValueError("set min_area on SilhouetteExtractor, not in tracker_params")
+        self.subtractor = make_subtractor(backend, **self.backend_params)
+        try:
+            self.tracker = PersonTracker(min_area=min_area, **self.tracker_params)
+        except TypeError as exc:
+            raise ValueError(f"tracker_params: unknown parameter ({exc})") from None
+        self._index = 0
+
+    def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> "SilhouetteExtractor":
+        """Train the Horprasert model now (e.g. on the first seconds of a recording)."""
+        if not isinstance(self.subtractor, HorprasertSubtractor):
+            raise ValueError(f"fit_background needs backend='horprasert', this extractor uses {self.backend!r}")
+        self.subtractor.fit(frames, robust=robust)
+        return self
+
+    def reset_tracks(self) -> None:
+        """Forget the people (new ids from 0); the background model is kept."""
+        self.tracker.reset()
+
+    def process(self, frame: np.ndarray) -> FrameResult:
+        """Run the whole algorithm on one uint8 BGR frame (H, W, 3)."""
+        fg = self.subtractor.apply(frame)
+        classes = self.subtractor.labels
+        index = self._index
+        self._index += 1
+        if not self.subtractor.ready:
+            return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], classes, False)
+        mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, self.min_area)
+        labels, people = self.tracker.update(mask)
+        return FrameResult(index, labels, [self._with_spline(labels, p) for p in people], classes, True)
+
+    def _with_spline(self, labels: np.ndarray, p: Person) -> Person:
+        x, y, w, h = p.bbox
+        # One pixel of margin so the outline of a region touching its bbox is traced closed.
+        crop = np.zeros((h + 2, w + 2), bool)
+        crop[1:-1, 1:-1] = labels[y : y + h, x : x + w] == p.id + 1
+        try:
+            ctrl, ref = silhouette_spline(crop, self.n_ctrl)
+        except ValueError:  # a sliver left by a split: no outline this frame
+            return p
+        offset = np.array([x - 1, y - 1], np.float64)
+        return dataclasses.replace(p, ctrl=ctrl + offset, ref_point=ref + offset)
+
+
+def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
+    p = os.fspath(path)
+    if not os.path.isfile(p):
+        raise FileNotFoundError(f"video file not found: {p!r}")
+    cap = cv2.VideoCapture(p)
+    if not cap.isOpened():
+        cap.release()
+        raise ValueError(f"cannot read video {p!r}: OpenCV could not open it (unknown format or codec)")
+    return cap
+
+
+def extract_video(
+    path: str | os.PathLike[str],
+    out_npz: str | os.PathLike[str],
+    max_frames: int | None = None,
+    train_frames: int = 30,
+    **params: Any,
+) -> dict[str, Any]:
+    """Run ``SilhouetteExtractor(**params)`` over a video file and save every person of every frame.
+
+    With the Horprasert backend the background is first fitted (robustly: people may be in
+    view) on the first ``train_frames`` frames, then every frame from the first is processed,
+    so all frames get results. Writes ``out_npz`` (np.savez_compressed), one row per person and
+    frame, P rows in total:
+
+      frame (P,) int32, id (P,) int32, side (P,) str, bbox (P, 4) int32 [x, y, w, h],
+      area (P,) int32, centroid (P, 2) float32 [x, y], height (P,) float32, merged (P,) bool,
+      ctrl (P, n_ctrl, 2) float32 and ref_point (P, 2) float32 (NaN where no outline),
+      n_frames () int, frame_size (2,) int [H, W], fps () float, params () str (JSON).
+
+    Returns a summary dict (n_frames, n_rows, max_people, fps, frame_size, out_npz).
+    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
+    """
+    extractor = SilhouetteExtractor(**params)
+    cap = _open_video(path)
+    fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    if isinstance(extractor.subtractor, HorprasertSubtractor):
+        train = []
+        while len(train) < train_frames:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            train.append(frame)
+        if len(train) < 2:
+            cap.release()
+            raise ValueError(f"cannot read video {os.fspath(path)!r}: fewer than 2 frames decode")
+        extractor.fit_background(train, robust=True)
+        cap.release()
+        cap = _open_video(path)
+    rows: list[tuple[int, Person]] = []
+    n_frames = 0
+    max_people = 0
+    size: tuple[int, int] | None = None
+    try:
+        while max_frames is None or n_frames < max_frames:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            size = frame.shape[:2]
+            result = extractor.process(frame)
+            rows.extend((result.index, p) for p in result.people)
+            max_people = max(max_people, len(result.people))
+            n_frames += 1
+    finally:
+        cap.release()
+    if n_frames == 0:
+        raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
+    n = extractor.n_ctrl
+    nan2 = np.full(2, np.nan)
+    np.savez_compressed(
+        out_npz,
+        frame=np.array([f for f, _ in rows], np.int32),
+        id=np.array([p.id for _, p in rows], np.int32),
+        side=np.array([p.side for _, p in rows], dtype="<U5"),
+        bbox=np.array([p.bbox for _, p in rows], np.int32).reshape(-1, 4),
+        area=np.array([p.area for _, p in rows], np.int32),
+        centroid=np.array([p.centroid for _, p in rows], np.float32).reshape(-1, 2),
+        height=np.array([p.height for _, p in rows], np.float32),
+        merged=np.array([p.merged for _, p in rows], bool),
+        ctrl=np.array(
+            [p.ctrl if p.ctrl is not None else np.full((n, 2), np.nan) for _, p in rows], np.float32
+        ).reshape(-1, n, 2),
+        ref_point=np.array(
+            [p.ref_point if p.ref_point is not None else nan2 for _, p in rows], np.float32
+        ).reshape(-1, 2),
+        n_frames=np.int64(n_frames),
+        frame_size=np.array(size, np.int64),
+        fps=np.float64(fps),
+        params=json.dumps({"train_frames": train_frames, **params}, default=str),
+    )
+    return {
+        "n_frames": n_frames,
+        "n_rows": len(rows),
+        "max_people": max_people,
+        "fps": fps,
+        "frame_size": list(size),
+        "out_npz": os.fspath(out_npz),
+    }

@@ -1,0 +1,107 @@
+"""The whole silhouette algorithm on a synthetic handshake and on real footage (vtest.avi)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from nodes.silhouette.background import FOREGROUND, SHADOW
+from nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_video
+from nodes.silhouette.spline import evaluate_closed_bspline
+from nodes.silhouette.synthetic import two_person_sequence
+
+VTEST = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "video", "vtest.avi")
+if not os.path.isfile(VTEST):
+    VTEST = "/work/shared/data/video/vtest.avi"
+
+
+@pytest.fixture(scope="module")
+def handshake():
+    return two_person_sequence(n_frames=60, empty_frames=20, seed=1)
+
+
+def test_synthetic_handshake_two_people_with_outlines_ids_and_no_shadows(handshake):
+    seq = handshake
+    ex = SilhouetteExtractor(n_ctrl=32, backend_params={"train_frames": 20})
+    merged_frames = 0
+    for k, frame in enumerate(seq.frames):
+        r = ex.process(frame)
+        assert isinstance(r, FrameResult) and r.index == k
+        # The model trains on frames 0-19 and is ready from the 20th frame on (which it also labels).
+        assert r.ready == (k >= 19)
+        if k < 20:
+            assert r.people == []
+            continue
+        assert [p.id for p in r.people] == [0, 1], f"frame {k}"
+        assert [p.side for p in r.people] == ["left", "right"]
+        truth = seq.person_masks[k]
+        for p, gt, h in zip(r.people, truth, seq.heights):
+            assert p.height == pytest.approx(h, abs=3)  # the shadow on the ground is not in it
+            assert p.ctrl.shape == (32, 2)
+            ys, xs = np.nonzero(gt)
+            top_x = xs[ys == ys.min()].mean()
+            assert abs(p.ref_point[1] - ys.min()) <= 1.5 and abs(p.ref_point[0] - top_x) <= 3
+            curve = evaluate_closed_bspline(p.ctrl, 4)
+            assert np.hypot(*(curve[0] - p.ref_point)) < 2.0
+        # Foreground matches the drawn people; the cast shadow is labelled shadow.
+        fg = r.labels > 0
+        people = truth.any(axis=0)
+        assert (fg & people).sum() / people.sum() > 0.97
+        assert (fg & ~people).sum() / people.sum() < 0.03
+        assert np.mean(r.classes[seq.shadow_masks[k]] == SHADOW) > 0.9
+        assert np.mean(r.classes[seq.shadow_masks[k]] == FOREGROUND) < 0.05
+        merged_frames += r.people[0].merged
+    assert merged_frames >= 15
+
+
+@pytest.mark.parametrize("backend", ["mog2", "knn"])
+def test_opencv_backends_run_through_the_extractor(handshake, backend):
+    ex = SilhouetteExtractor(backend=backend)
+    found = [len(ex.process(f).people) for f in handshake.frames[:35]]
+    assert max(found[20:]) == 2
+
+
+def test_bad_parameters_are_value_errors():
+    with pytest.raises(ValueError, match="n_ctrl"):
+        SilhouetteExtractor(n_ctrl=3)
+    with pytest.raises(ValueError, match="valid names"):
+        SilhouetteExtractor(backend="nope")
+    with pytest.raises(ValueError, match="horprasert"):
+        SilhouetteExtractor(backend="mog2").fit_background(np.zeros((3, 8, 8, 3), np.uint8))
+
+
+def test_extract_video_rejects_missing_and_undecodable_files(tmp_path):
+    with pytest.raises(FileNotFoundError, match="not found"):
+        extract_video(tmp_path / "missing.avi", tmp_path / "out.npz")
+    bad = tmp_path / "bad.avi"
+    bad.write_bytes(b"this is not a video" * 100)
+    with pytest.raises(ValueError, match="cannot read video"):
+        extract_video(bad, tmp_path / "out.npz")
+
+
+def test_vtest_several_people_in_later_frames_and_saved_rows(tmp_path):
+    if not os.path.isfile(VTEST):
+        pytest.skip(f"real footage absent: {VTEST} (see shared/data/README.md)")
+    out = tmp_path / "vtest_silhouettes.npz"
+    summary = extract_video(VTEST, out, max_frames=150, train_frames=30)
+    assert summary["n_frames"] == 150 and summary["frame_size"] == [576, 768]
+    d = np.load(out)
+    assert d["ctrl"].shape == (summary["n_rows"], 32, 2)
+    per_frame = np.bincount(d["frame"], minlength=150)
+    # Pedestrians are in view throughout; from frame 100 on there are at least three at once.
+    assert per_frame[100:].max() >= 4 and np.median(per_frame[100:]) >= 3
+    ok = ~np.isnan(d["ctrl"][:, 0, 0])
+    assert ok.mean() > 0.95
+    # Outlines lie on their person: control points near the bbox, reference point at its top.
+    x, y, w, h = d["bbox"][ok].T
+    rp = d["ref_point"][ok]
+    assert np.all((rp >= np.stack([x, y], 1) - 0.5) & (rp <= np.stack([x + w, y + h], 1)))
+    # ... at the top for nearly all (odd-shaped pieces of split regions can have it lower).
+    assert np.mean(rp[:, 1] <= y + 0.25 * h) > 0.95
+    # Ids are never reused within a frame.
+    for f in range(150):
+        ids = d["id"][d["frame"] == f]
+        assert len(ids) == len(set(ids.tolist()))
+    assert set(d["side"].tolist()) <= {"left", "right"}
