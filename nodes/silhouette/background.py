@@ -100,8 +100,9 @@ class HorprasertBackground:
     learning_rate : running-average rate (per frame) for the mean colour of background-labelled
         pixels in ``update``; 0 disables adaptation. Lighting drift slower than about
         ``learning_rate`` * tau_alpha1 * a per frame keeps pixels in the background class.
-    spread_learning_rate : the same for the per-channel variance (smaller: variance estimates
-        from single frames are noisy).
+    spread_learning_rate : the same for the per-channel variance. Off by default: single-frame
+        variance estimates are noisy, the thresholds were set for the trained spreads, and
+        adapting only E keeps ``update`` about twice as fast.
     shadow_learning_rate : rate for pixels labelled shadow or highlight (foreground: never).
     min_spread : lower bound on each channel's spread s_c, grey levels; keeps the normalisation
         finite for pixels that were constant in training (saturated, black, codec-flattened).
@@ -124,7 +125,7 @@ class HorprasertBackground:
         self,
         detection_rate: float = 0.9999,
         learning_rate: float = 0.05,
-        spread_learning_rate: float = 0.005,
+        spread_learning_rate: float = 0.0,
         shadow_learning_rate: float = 0.01,
         min_spread: float = 1.5,
         min_shadow_brightness: float = 0.4,
@@ -164,6 +165,7 @@ class HorprasertBackground:
         self.robust_inlier_k = robust_inlier_k
         self.max_threshold_samples = max_threshold_samples
         self.random_state = random_state
+        self._w: np.ndarray | None = None
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
@@ -221,6 +223,7 @@ class HorprasertBackground:
         self._mu = np.ascontiguousarray(np.moveaxis(mean, -1, 0), np.float32)
         s2 = np.maximum(np.moveaxis(spread, -1, 0), self.min_spread).astype(np.float32) ** 2
         self._var = np.ascontiguousarray(s2)
+        self._w = None
         self.a_ = None
         self._refresh_colour_terms(spread_changed=True)
 
@@ -345,17 +348,22 @@ class HorprasertBackground:
         lr, slr = self.learning_rate, self.spread_learning_rate
         if lr == 0.0 and slr == 0.0:
             return
+        bg = (labels == BACKGROUND).view(np.uint8)
+        sh = ((labels == SHADOW) | (labels == HIGHLIGHT)).view(np.uint8)
         k = self.shadow_learning_rate / lr if lr > 0.0 else 0.0
-        rate = np.array([lr, k * lr, k * lr, 0.0], np.float32)[labels]
-        rate_s = rate * np.float32(slr / lr) if lr > 0.0 else np.where(labels == BACKGROUND, np.float32(slr), np.float32(0.0))
+        # cv2.accumulateWeighted is dst <- (1 - r) dst + r src under a mask, in place.
         for c, plane in enumerate(cv2.split(frame)):
-            d = plane.astype(np.float32)
-            d -= self._mu[c]
+            f = plane.astype(np.float32)
             if slr > 0.0:
-                self._var[c] += rate_s * (d * d - self._var[c])
+                d = cv2.subtract(f, self._mu[c])
+                d2 = cv2.multiply(d, d)
+                cv2.accumulateWeighted(d2, self._var[c], slr, mask=bg)
+                if k > 0.0:
+                    cv2.accumulateWeighted(d2, self._var[c], slr * k, mask=sh)
             if lr > 0.0:
-                d *= rate
-                self._mu[c] += d
+                cv2.accumulateWeighted(f, self._mu[c], lr, mask=bg)
+                if k > 0.0:
+                    cv2.accumulateWeighted(f, self._mu[c], lr * k, mask=sh)
         if slr > 0.0:
             np.maximum(self._var, np.float32(self.min_spread**2), out=self._var)
         self._refresh_colour_terms(spread_changed=slr > 0.0)
@@ -384,14 +392,25 @@ class HorprasertBackground:
 
     def _refresh_colour_terms(self, spread_changed: bool) -> None:
         """Per-pixel constants of eqs. 5-6 (channel planes): 1/s, E/s^2, 1/sum (E/s)^2."""
+        if self._w is None or self._w.shape != self._mu.shape:
+            self._w = np.empty_like(self._mu)
+            self._inv_var = np.empty_like(self._mu)
+            self._inv_s = np.empty_like(self._mu)
+            self._inv_den = np.empty(self._mu.shape[1:], np.float32)
+            spread_changed = True
         if spread_changed:
-            self._inv_var = (1.0 / self._var).astype(np.float32)
-            self._inv_s = np.sqrt(self._inv_var)
-        self._w = self._mu * self._inv_var
-        den = (self._mu * self._w).sum(axis=0)
-        # A black background pixel has no brightness direction; alpha is then 0 and all of the
-        # observed colour shows up as chromaticity distortion.
-        self._inv_den = np.where(den > 1e-6, 1.0 / np.maximum(den, 1e-6), 0.0).astype(np.float32)
+            np.divide(np.float32(1.0), self._var, out=self._inv_var)
+            np.sqrt(self._inv_var, out=self._inv_s)
+        mu, w, den = self._mu, self._w, self._inv_den
+        np.multiply(mu, self._inv_var, out=w)
+        np.multiply(mu[0], w[0], out=den)
+        den += mu[1] * w[1]
+        den += mu[2] * w[2]
+        # A black background pixel has no brightness direction: 1/den -> 0 makes alpha 0 there
+        # and all of the observed colour shows up as chromaticity distortion.
+        black = den <= 1e-6
+        np.divide(1.0, np.maximum(den, 1e-6, out=den), out=den)
+        den[black] = 0.0
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
