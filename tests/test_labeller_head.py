@@ -169,3 +169,21 @@ def test_bad_parameters_are_named() -> None:
         HeadMotionParams(25.0, band_hz=(4.0, 1.0))
     with pytest.raises(ValueError, match=r"\(T,3\)"):
         head_motion(np.zeros((10, 2)), np.zeros((10, 2)), 25.0)
+
+
+def test_head_yaw_crossing_pi_is_unwrapped() -> None:
+    """A shake of a person whose head yaw sits near +-pi wraps every half cycle: the wrap must not
+    look like a 2*pi jump (batch and streaming alike)."""
+    rng = np.random.default_rng(9)
+    t = 150
+    head, neck = _still(t, rng)
+    tt = np.arange(t) / FPS
+    raw = np.pi + np.radians(15.0) * np.sin(2 * np.pi * 2.0 * tt)
+    wrapped = np.angle(np.exp(1j * raw))
+    assert (np.abs(np.diff(wrapped)) > np.pi).any()
+    batch = head_motion(head, neck, FPS, head_yaw=wrapped)
+    det = HeadMotionDetector(FPS)
+    out = np.array([det.update(head[i], neck[i], head_yaw=wrapped[i]) for i in range(t)])
+    known = batch.shake != UNKNOWN
+    assert (batch.shake[known] == 1).all() and not (batch.nod == 1).any()
+    np.testing.assert_allclose(out[:, 2], batch.shake_score, atol=1e-9, equal_nan=True)
