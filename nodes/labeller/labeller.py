@@ -8,7 +8,8 @@ Inputs are chosen per person and frame, best first:
 2. else the silhouette: head reference point relative to the silhouette centroid (2D nod/shake,
    scaled by the height in pixels), activity from the upper-body spline points; gaze UNKNOWN;
 3. talking/laughing from the camera image where a frontal face of enough size is found (searched
-   in the person's box when given); UNKNOWN otherwise, and UNKNOWN (with one RuntimeWarning) when
+   in the person's box; without a box only when the person is alone in the frame, since the face
+   could not be attributed otherwise); UNKNOWN otherwise, and UNKNOWN (with one RuntimeWarning) when
    no Haar cascade file is installed (see :func:`nodes.labeller.face.find_face_cascade`).
 
 A person switching between 3D and 2D input, or missing from a frame, restarts the windows of the
@@ -174,9 +175,13 @@ class SocialLabeller:
                 res["nod"], res["shake"] = (ns, n), (ss, s)
                 if obs.control_points is not None:
                     res["activity"] = st.act2.update_2d(obs.control_points, float(obs.height_px))  # type: ignore[arg-type]
+                else:
+                    st.act2.reset()   # a window must not span the gap
             else:
                 st.mode = ""
-            if image is not None and self._face_cascade() is not None:
+            # with several people, a face can only be attributed through the person's box
+            attributable = obs.box is not None or len(people) == 1
+            if image is not None and attributable and self._face_cascade() is not None:
                 st.face.cascade = self._cascade
                 ts, t, ls, lg = st.face.update(image, roi=obs.box)
                 res["talking"], res["laughing"] = (ts, t), (ls, lg)
