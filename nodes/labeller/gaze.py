@@ -54,7 +54,7 @@ def gaze_at_other(
     r_shoulder: np.ndarray,
     other: np.ndarray,
     head_yaw_rel: np.ndarray | float | None = None,
-    threshold: float = np.radians(30.0),
+    threshold: float = float(np.radians(30.0)),
 ) -> GazeResult:
     """Per-frame gaze at the other person.
 
