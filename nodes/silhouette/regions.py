@@ -92,22 +92,26 @@ def clean_mask(
 
 @dataclass
 class _Track:
+    """A person's state. ``crop``/``origin`` is their shape template: the mask of the last frame
+    in which they were seen on their own (not merged); prediction places it at the predicted
+    centroid, so a long merge cannot erode or grow anyone's shape."""
+
     id: int
     side: str
     centroid: np.ndarray  # (2,) x, y
     velocity: np.ndarray  # (2,) pixels per frame
-    crop: np.ndarray  # bool mask within the bbox
-    origin: np.ndarray  # (2,) int x0, y0 of the crop
-    area: int
-    height: float
+    crop: np.ndarray  # bool template mask within its bbox
+    origin: np.ndarray  # (2,) int x0, y0 of the template when it was taken
+    area: int  # template area, pixels
+    height: float  # template height, pixels
+    offset: np.ndarray  # (2,) template centroid - origin
     missed: int = 0
-    shift: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))  # predicted offset
-
-    def predicted_origin(self) -> np.ndarray:
-        return self.origin + self.shift
 
     def predicted_centroid(self) -> np.ndarray:
-        return self.centroid + self.shift
+        return self.centroid + self.velocity
+
+    def predicted_origin(self) -> np.ndarray:
+        return np.rint(self.predicted_centroid() - self.offset).astype(np.int64)
 
 
 def _paste(track: _Track, x0: int, y0: int, h: int, w: int) -> np.ndarray:
@@ -187,8 +191,6 @@ class PersonTracker:
         n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
         regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
         tracks = self._tracks
-        for t in tracks:
-            t.shift = np.rint(t.velocity).astype(np.int64)
 
         # Overlap of each track's predicted mask with each region: counts[t, r].
         counts = np.zeros((len(tracks), n), np.int64)
@@ -205,6 +207,7 @@ class PersonTracker:
 
         assigned: dict[int, tuple[np.ndarray, int, int, bool]] = {}  # track idx -> (crop, x0, y0, merged)
         used_regions: set[int] = set()
+        occluded: set[int] = set()
         fresh: list[tuple[np.ndarray, int, int]] = []  # regions that start new tracks
 
         # 1. Merges: a region that is the main region of two or more tracks is split between them.
@@ -215,11 +218,14 @@ class PersonTracker:
                 claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
                 if len(claim) >= 2:
                     used_regions.add(r)
+                    # A claimant left with no pixels is hidden behind the others: it sits out
+                    # the assignment below rather than grab someone else's region.
+                    occluded.update(claim)
                     for i, piece in self._split(comp, stats, r, [tracks[i] for i in claim]).items():
                         assigned[claim[i]] = (*piece, True)
 
         # 2. Hungarian assignment of the remaining tracks and regions on position and size.
-        free_t = [i for i in range(len(tracks)) if i not in assigned]
+        free_t = [i for i in range(len(tracks)) if i not in assigned and i not in occluded]
         free_r = [r for r in regions if r not in used_regions]
         if free_t and free_r:
             cost = np.empty((len(free_t), len(free_r)))
@@ -263,8 +269,7 @@ class PersonTracker:
             piece = assigned.get(i)
             if piece is None or not piece[0].any():
                 t.missed += 1
-                t.centroid = t.centroid + t.velocity
-                t.origin = t.origin + t.shift
+                t.centroid = t.predicted_centroid()
                 if t.missed <= self.max_missed:
                     alive.append(t)
                 continue
@@ -287,6 +292,8 @@ class PersonTracker:
                 origin=np.array([x0, y0], np.int64),
                 area=int(crop.sum()),
                 height=float(crop.shape[0]),
+                offset=c - np.array([x0, y0]),
+                missed=-1,  # no previous position: no velocity from the first observation
             )
             self._next_id += 1
             people.append(self._observe(t, crop, x0, y0, False))
@@ -328,18 +335,27 @@ class PersonTracker:
     def _observe(self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool) -> Person:
         ys, xs = np.nonzero(crop)
         c = np.array([xs.mean() + x0, ys.mean() + y0])
-        if t.missed == 0 and t.area > 0 and t.crop is not crop:
-            s = self.velocity_smoothing
-            t.velocity = s * t.velocity + (1.0 - s) * (c - t.centroid)
-        t.centroid, t.crop, t.origin = c, crop, np.array([x0, y0], np.int64)
-        t.area, t.height, t.missed = int(xs.size), float(crop.shape[0]), 0
+        # In a merge, a piece much smaller than the person's template (they are mostly hidden or
+        # the split is uncertain) says little about where they are: keep the prediction then.
+        trusted = not merged or xs.size >= 0.5 * t.area
+        s = self.velocity_smoothing
+        if trusted:
+            if t.missed == 0:
+                t.velocity = s * t.velocity + (1.0 - s) * (c - t.centroid)
+            t.centroid = c
+        else:
+            t.centroid = t.predicted_centroid()
+        if not merged:
+            t.crop, t.origin, t.offset = crop, np.array([x0, y0], np.int64), c - np.array([x0, y0])
+            t.area, t.height = int(xs.size), float(crop.shape[0])
+        t.missed = 0
         return Person(
             id=t.id,
             side=t.side,
             bbox=(int(x0), int(y0), int(crop.shape[1]), int(crop.shape[0])),
-            area=t.area,
+            area=int(xs.size),
             centroid=(float(c[0]), float(c[1])),
-            height=t.height,
+            height=float(crop.shape[0]),
             merged=merged,
         )
 
