@@ -1,0 +1,130 @@
+"""When frames go out (pacing), which frames (start, loop, limit) and in what form (size, gray).
+
+Pacing modes of a replayed source (a live device paces itself: every mode publishes as captured):
+
+- ``realtime``: frame k is due at ``t0 + k / fps`` on the monotonic clock; nothing is skipped. A
+  stall of more than :data:`REANCHOR_S` (or two frame periods) re-anchors the schedule instead of
+  bursting to catch up, so the output keeps the footage's spacing after a hiccup.
+- ``rate``: as ``realtime`` at ``rate`` times the footage's speed (2.0: twice as fast).
+- ``fast``: as fast as the source decodes and the bus accepts.
+- ``lockstep``: as ``fast``; meant for graphs whose consumers subscribe with the ``reliable``
+  policy, whose backpressure then blocks the camera so that no frame is dropped anywhere.
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable, Iterator
+
+import cv2
+import numpy as np
+
+PACING_MODES = ("realtime", "rate", "fast", "lockstep")
+REANCHOR_S = 0.25
+_SLEEP_SLICE_S = 0.05
+
+
+class Pacer:
+    """Schedules frame k of a replay. ``fps`` frames per second of the footage, ``rate`` speed factor
+    (used by ``rate`` mode); ``clock`` returns seconds (monotonic)."""
+
+    def __init__(self, mode: str, fps: float = 0.0, rate: float = 1.0, clock: Callable[[], float] = time.monotonic) -> None:
+        if mode not in PACING_MODES:
+            raise ValueError(f"pacing {mode!r}: expected one of {', '.join(PACING_MODES)}")
+        if mode in ("realtime", "rate") and not fps > 0:
+            raise ValueError(f"pacing {mode!r} needs the source's frame rate; got fps = {fps!r} (set parameter 'fps')")
+        if mode == "rate" and not rate > 0:
+            raise ValueError(f"pacing 'rate' needs rate > 0, got {rate!r}")
+        self.mode = mode
+        self.clock = clock
+        self.period = 0.0
+        if mode == "realtime":
+            self.period = 1.0 / fps
+        elif mode == "rate":
+            self.period = 1.0 / (fps * rate)
+        self.t0: float | None = None
+        self.k0 = 0
+        self.reanchors = 0
+
+    @property
+    def paced(self) -> bool:
+        return self.period > 0
+
+    def due(self, k: int) -> float | None:
+        """Monotonic time at which frame k is due, or None when unpaced (or before the first frame)."""
+        if not self.paced or self.t0 is None:
+            return None
+        return self.t0 + (k - self.k0) * self.period
+
+    def wait(self, k: int, should_stop: Callable[[], bool] = lambda: False) -> bool:
+        """Sleep until frame k is due (the first call starts the schedule). Returns False when
+        ``should_stop()`` became true while waiting."""
+        if not self.paced:
+            return not should_stop()
+        now = self.clock()
+        if self.t0 is None:
+            self.t0, self.k0 = now, k
+            return not should_stop()
+        due = self.due(k)
+        if now - due > max(REANCHOR_S, 2 * self.period):
+            self.t0, self.k0 = now, k
+            self.reanchors += 1
+            return not should_stop()
+        while now < due:
+            if should_stop():
+                return False
+            time.sleep(min(_SLEEP_SLICE_S, due - now))
+            now = self.clock()
+        return not should_stop()
+
+
+def frames(source, start_frame: int = 0, loop: bool = False, max_frames: int = 0) -> Iterator[tuple[np.ndarray, float]]:
+    """Yield ``(image, source_time)`` from an opened source: skip ``start_frame`` frames, go back to
+    ``start_frame`` at the end when ``loop``, stop after ``max_frames`` (0: no limit).
+
+    Raises ValueError when ``start_frame`` is at or past the end of the source, or when ``loop`` is
+    asked of a live source."""
+    if loop and getattr(source, "live", False):
+        raise ValueError(f"loop: source {source.uri} is a live device and cannot loop")
+    if start_frame:
+        if not hasattr(source, "skip"):
+            raise ValueError(f"start_frame: source {source.uri} cannot skip frames")
+        if source.skip(start_frame) < start_frame:
+            raise ValueError(f"start_frame {start_frame} is past the end of {source.uri}")
+    n = 0
+    while max_frames <= 0 or n < max_frames:
+        ok, image, t = source.read()
+        if not ok:
+            if not loop:
+                return
+            source.rewind()
+            if start_frame:
+                source.skip(start_frame)
+            ok, image, t = source.read()
+            if not ok:  # an empty loop would spin forever
+                return
+        yield image, t
+        n += 1
+
+
+def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple[int, int]:
+    """(width, height) of the output for a source of ``size`` pixels: both 0 keeps it, one of them
+    scales keeping the aspect ratio, both give that size exactly."""
+    w0, h0 = size
+    if width and height:
+        return int(width), int(height)
+    if width:
+        return int(width), max(1, round(h0 * width / w0))
+    if height:
+        return max(1, round(w0 * height / h0)), int(height)
+    return int(w0), int(h0)
+
+
+def convert(image: np.ndarray, size: tuple[int, int] | None = None, gray: bool = False) -> tuple[np.ndarray, str]:
+    """Resize (H, W, 3) uint8 BGR ``image`` to ``size`` = (width, height) pixels when it differs, and
+    make it (H, W) mono8 when ``gray``. Returns (image, encoding: ``bgr8`` or ``mono8``)."""
+    if size is not None and (image.shape[1], image.shape[0]) != tuple(size):
+        shrinking = size[0] * size[1] < image.shape[0] * image.shape[1]
+        image = cv2.resize(image, tuple(size), interpolation=cv2.INTER_AREA if shrinking else cv2.INTER_LINEAR)
+    if gray:
+        return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), "mono8"
+    return image, "bgr8"
