@@ -53,9 +53,10 @@ def sha(img: np.ndarray) -> str:
     return hashlib.sha1(np.ascontiguousarray(img).tobytes()).hexdigest()
 
 
-def test_lockstep_delivers_every_frame_bit_exact(tmp_path: Path) -> None:
+@pytest.mark.parametrize("prefetch", [4, 0])
+def test_lockstep_delivers_every_frame_bit_exact(tmp_path: Path, prefetch: int) -> None:
     path = write_video(tmp_path / "clip.avi", n=40, size=(160, 120), fps=25.0)
-    code, text, records = launch(tmp_path, {"source": str(path), "pacing": "lockstep"})
+    code, text, records = launch(tmp_path, {"source": str(path), "pacing": "lockstep", "prefetch": prefetch})
     assert code == 0, text
     got = frame_records(records)
     ref = cv2_frames(path)

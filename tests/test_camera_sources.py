@@ -11,7 +11,7 @@ import pytest
 
 from bus import ParamError
 from nodes.camera.node import Camera
-from nodes.camera.pacing import Pacer, convert, frames, output_size
+from nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size
 from nodes.camera.sources import (
     ImageFolderSource, SimulatorSource, SourceError, V4L2Source, VideoFileSource, make_source, parse_uri,
     read_with_retry, video_devices,
@@ -266,3 +266,28 @@ def test_convert_resize_and_gray() -> None:
     assert np.array_equal(out, cv2.cvtColor(cv2.resize(img, (40, 30), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY))
     same, enc = convert(img, (80, 60))
     assert enc == "bgr8" and same is img
+
+
+def test_prefetch_keeps_order_forwards_errors_and_stops() -> None:
+    assert list(Prefetch(iter(range(100)), depth=3)) == list(range(100))
+
+    def failing():
+        yield 1
+        yield 2
+        raise SourceError("frame 2 is damaged")
+
+    it = Prefetch(failing(), depth=2)
+    assert [next(it), next(it)] == [1, 2]
+    with pytest.raises(SourceError, match="frame 2 is damaged"):
+        next(it)
+    produced = []
+
+    def endless():
+        while True:
+            produced.append(1)
+            yield len(produced)
+
+    it = Prefetch(endless(), depth=2)
+    assert next(it) == 1
+    it.close()  # returns although the producer never ends; it stopped within depth + 2 items
+    assert len(produced) <= 5

@@ -7,16 +7,22 @@ Run in a graph (``run: nodes.camera``) or alone::
 Exit codes: 0 after the source ends (end of stream sent); 3 when the source cannot be opened or
 read (the error is logged and end of stream is sent first, so the rest of the graph ends cleanly);
 2 for bad parameters (the launcher refuses the graph before anything starts).
+
+``stamp`` of each Frame is CLOCK_MONOTONIC ns when the frame goes out: for a live device right after
+capture, for a replay when its pacing releases it, so a replay looks like a camera running now.
+An unpaced replay (``fast``, ``lockstep``) decodes in a prefetch thread a few frames ahead.
 """
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, Iterator
+
+import numpy as np
 
 from bus import Node, Output, Param, ParamError
 from messages import Frame
 
-from .pacing import PACING_MODES, Pacer, convert, frames, output_size
+from .pacing import PACING_MODES, Pacer, Prefetch, convert, frames, output_size
 from .sources import SourceError, make_source, parse_uri
 
 #: exit code of a camera whose source failed (after logging it and sending end of stream)
@@ -35,7 +41,8 @@ def _check_uri(value: str) -> str | None:
 class Camera(Node):
     """Publishes the frames of ``source`` on ``frame`` (messages.Frame), paced by ``pacing``."""
 
-    outputs = {"frame": Output(Frame, "every frame, BGR or mono8, stamp = monotonic ns at read")}
+    outputs = {"frame": Output(Frame, "every frame, bgr8 or mono8; stamp: monotonic ns when the frame is released "
+                                      "(live: right after capture; replay: after pacing)")}
     params = {
         "source": Param(str, DEFAULT_SOURCE, "file:PATH or a path, folder:DIR[?pattern=*.png], v4l2:/dev/videoN, "
                         "sim:SCENARIO[?seed=S]", check=_check_uri),
@@ -49,6 +56,7 @@ class Camera(Node):
         "loop": Param(bool, False, "start again at start_frame at the end of a replay"),
         "max_frames": Param(int, 0, "stop after this many frames (0: no limit)", min=0),
         "start_frame": Param(int, 0, "skip this many frames of the source first", min=0),
+        "prefetch": Param(int, 4, "frames an unpaced replay decodes ahead in a thread (0: decode inline)", min=0, max=64),
     }
 
     @classmethod
@@ -65,6 +73,7 @@ class Camera(Node):
     def setup(self) -> None:
         self.exit_code = 0
         self.source = None
+        self.prefetch: Prefetch | None = None
         self.published = 0
 
     def _fail(self, msg: str) -> None:
@@ -83,7 +92,6 @@ class Camera(Node):
         mode = "fast" if src.live and p["pacing"] in ("realtime", "rate") else p["pacing"]
         try:
             pacer = Pacer(mode, src.fps, p["rate"])
-            stream = frames(src, p["start_frame"], p["loop"], p["max_frames"])
         except ValueError as exc:
             return self._fail(f"source {src.uri}: {exc}")
         if p["pacing"] == "lockstep" and not int(self.spec["outputs"]["frame"].get("reliable_subscribers", 0)):
@@ -92,6 +100,13 @@ class Camera(Node):
         self.log.info("%s: %dx%d at %.3g fps (%s frames) -> %dx%d %s, pacing %s", src.uri, *src.size, src.fps,
                       src.frame_count if src.frame_count is not None else "?", *size,
                       "mono8" if p["gray"] else "bgr8", mode)
+        stream: Iterator[tuple[np.ndarray, str, float]] = (
+            (*convert(image, size, p["gray"]), t)
+            for image, t in frames(src, p["start_frame"], p["loop"], p["max_frames"])
+        )
+        if p["prefetch"] and not src.live and not pacer.paced:
+            # unpaced replay: decode (and convert) ahead in a thread so that it overlaps sending
+            stream = self.prefetch = Prefetch(stream, p["prefetch"])
         seq = 0
         try:
             while not self.stopping:
@@ -100,10 +115,8 @@ class Camera(Node):
                 item = next(stream, None)
                 if item is None:
                     break
-                stamp = time.monotonic_ns()
-                image, source_time = item
-                image, encoding = convert(image, size, p["gray"])
-                self.publish("frame", Frame(stamp=stamp, seq=seq, image=image, encoding=encoding,
+                image, encoding, source_time = item
+                self.publish("frame", Frame(stamp=time.monotonic_ns(), seq=seq, image=image, encoding=encoding,
                                             source=src.uri, source_time=source_time))
                 seq += 1
         except (SourceError, ValueError) as exc:
@@ -115,6 +128,8 @@ class Camera(Node):
         self.log.info("%s: published %d frames", src.uri, seq)
 
     def teardown(self) -> None:
+        if getattr(self, "prefetch", None) is not None:
+            self.prefetch.close()  # before the source: the thread may be inside read()
         if getattr(self, "source", None) is not None:
             self.source.close()
 

@@ -12,8 +12,10 @@ Pacing modes of a replayed source (a live device paces itself: every mode publis
 """
 from __future__ import annotations
 
+import queue
+import threading
 import time
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 import cv2
 import numpy as np
@@ -104,6 +106,61 @@ def frames(source, start_frame: int = 0, loop: bool = False, max_frames: int = 0
                 return
         yield image, t
         n += 1
+
+
+class Prefetch:
+    """Iterate ``items`` in a background thread, up to ``depth`` items ahead.
+
+    Decoding (``cv2.VideoCapture.read`` releases the GIL) then overlaps with encoding and sending
+    the previous frame, so a replay goes out at about the decoder's own rate. Exceptions raised by
+    ``items`` are re-raised by ``__next__`` in order. :meth:`close` stops and joins the thread: call
+    it before closing the source the items come from.
+    """
+
+    _END = object()
+
+    def __init__(self, items: Iterator[Any], depth: int = 4) -> None:
+        if depth < 1:
+            raise ValueError(f"prefetch depth must be >= 1, got {depth}")
+        self._items = items
+        self._q: queue.Queue = queue.Queue(maxsize=depth)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="prefetch", daemon=True)
+        self._thread.start()
+
+    def _put(self, x: Any) -> bool:
+        while not self._stop.is_set():
+            try:
+                self._q.put(x, timeout=0.05)
+                return True
+            except queue.Full:
+                pass
+        return False
+
+    def _run(self) -> None:
+        try:
+            for x in self._items:
+                if not self._put((True, x)):
+                    return
+        except BaseException as exc:  # handed to the consumer, which decides
+            self._put((False, exc))
+            return
+        self._put((True, self._END))
+
+    def __iter__(self) -> "Prefetch":
+        return self
+
+    def __next__(self) -> Any:
+        ok, x = self._q.get()
+        if not ok:
+            raise x
+        if x is self._END:
+            raise StopIteration
+        return x
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join()
 
 
 def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple[int, int]:
