@@ -16,6 +16,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("bus.cli_run", "run one node alone"),
     "node": ("bus.cli_introspect", "list the nodes of a running launch"),
     "topic": ("bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
+    "bag": ("bus.cli_bag", "record, play, inspect and export bags"),
 }
 
 

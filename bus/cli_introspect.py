@@ -80,7 +80,8 @@ def _subscriber(args: argparse.Namespace):
     reg = registry.read(args.run)
     if not reg["alive"]:
         raise registry.RegistryError(f"the launch in {reg['run_dir']} is not running")
-    return Subscriber(zmq.Context.instance(), args.topic, registry.topic_endpoints(reg, args.topic), LATEST)
+    return Subscriber(zmq.Context.instance(), args.topic, registry.topic_endpoints(reg, args.topic), LATEST,
+                      untyped=True)
 
 
 def main_topic(args: argparse.Namespace) -> int:
@@ -96,6 +97,7 @@ def main_topic(args: argparse.Namespace) -> int:
         print(f"counterpart topic: {exc}", file=sys.stderr)
         return 1
     from messages import EndOfStream, schema_id
+    from messages.codec import UntypedMessage
 
     start = last = time.monotonic()
     n = 0
@@ -116,7 +118,11 @@ def main_topic(args: argparse.Namespace) -> int:
             last = now
             n += 1
             if args.action == "echo":
-                print(json.dumps({"topic": args.topic, "type": schema_id(msg), "msg": summarise(msg)}), flush=True)
+                if isinstance(msg, UntypedMessage):
+                    kind, body = msg.schema, summarise(msg.fields)
+                else:
+                    kind, body = schema_id(msg), summarise(msg)
+                print(json.dumps({"topic": args.topic, "type": kind, "msg": body}), flush=True)
                 if args.count and n >= args.count:
                     return 0
             else:

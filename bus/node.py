@@ -186,7 +186,7 @@ class Node:
         for s in self._in.values():
             s.close()
         for p in self._out.values():
-            p.close()
+            p.close(linger_ms=200 if self.stopping else -1)
         # term() honours each socket's linger: what is still queued (the tail, end of stream) goes out
         self.ctx.term()
 
@@ -265,8 +265,12 @@ class Node:
                 self.stopping = True
 
     def _send_eos(self, reason: str) -> None:
-        for port, pub in self._out.items():
+        for pub in self._out.values():
             pub.send_eos(self.name, self._last_seq, reason)
+        deadline = time.monotonic() + float(self.spec.get("eos_timeout", 120.0))
+        for pub in self._out.values():
+            if not pub.wait_delivered(max(0.0, deadline - time.monotonic())) and not self.stopping:
+                self.log.warning("%s: %d reliable subscriber(s) did not confirm end of stream", pub.topic, pub.subscribers)
 
     def run(self) -> int:
         """Open sockets, set up, loop until end of stream or stop, send end of stream, clean up."""

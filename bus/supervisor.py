@@ -210,7 +210,8 @@ class Launcher:
             for p in self.procs.values():
                 if p.popen is not None and p.exit_code is None and p.popen.poll() is not None:
                     changed = True
-                    p.exit_code = p.popen.returncode
+                    rc = p.popen.returncode
+                    p.exit_code = rc if rc >= 0 else 128 - rc  # killed by signal N: 128 + N, as shells say
                     p.history.append(p.exit_code)
                     if now - p.started > HEALTHY_S:
                         p.restarts = 0

@@ -18,7 +18,7 @@ from typing import Any, Callable, Sequence
 import zmq
 
 from messages import EndOfStream, encode
-from messages.codec import DEFAULT_LIMITS, DecodeError, Limits, decode_counted
+from messages.codec import DEFAULT_LIMITS, DecodeError, Limits, decode_any, decode_counted
 
 from .endpoints import TopicEndpoints, bind_address
 
@@ -57,7 +57,6 @@ class Publisher:
         self.reliable.setsockopt(zmq.XPUB_NODROP, 1)
         self.reliable.setsockopt(zmq.XPUB_VERBOSER, 1)
         self.reliable.setsockopt(zmq.SNDTIMEO, 100)
-        self.reliable.setsockopt(zmq.LINGER, 2000)
         self.reliable.bind(bind_address(endpoints.reliable))
         self.latest = ctx.socket(zmq.PUB)
         self.latest.setsockopt(zmq.SNDHWM, latest_hwm)
@@ -116,9 +115,22 @@ class Publisher:
         self.count += 1
         self.send_parts(parts, eos=True)
 
-    def close(self) -> None:
-        self.reliable.close()
-        self.latest.close()
+    def wait_delivered(self, timeout: float) -> bool:
+        """After end of stream: wait until every reliable subscriber has left (they unsubscribe on
+        end of stream). ZeroMQ loses what is still in flight when a publisher closes its socket, so
+        a finite stream is complete only once its readers say they have read to the end."""
+        deadline = time.monotonic() + timeout
+        while self.subscribers > 0:
+            if self.should_stop() or time.monotonic() > deadline:
+                return False
+            self._read_subscriptions(50)
+        return True
+
+    def close(self, linger_ms: int = -1) -> None:
+        """Close; by default wait (in ``Context.term``) until reliable subscribers got everything.
+        Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers."""
+        self.reliable.close(linger=linger_ms)
+        self.latest.close(linger=0)
 
 
 class Subscriber:
@@ -135,13 +147,17 @@ class Subscriber:
         hwm: int = 16,
         limits: Limits = DEFAULT_LIMITS,
         on_bad: Callable[[str, str], None] | None = None,
+        untyped: bool = False,
     ) -> None:
+        """``untyped``: messages of schemas not registered here arrive as UntypedMessage
+        instead of being dropped (for tools that show any topic)."""
         if policy not in POLICIES:
             raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
         self.topic = topic
         self.policy = policy
         self.limits = limits
         self.on_bad = on_bad
+        self._decoder = decode_any if untyped else decode_counted
         self.count = 0
         self.drops = 0
         self.bad: dict[str, int] = {}
@@ -168,16 +184,16 @@ class Subscriber:
         if self.bad[kind] == 1 and self.on_bad is not None:
             self.on_bad(kind, detail)
 
-    def _decode(self, frames: list[Any]) -> Any | None:
+    def _decode(self, frames: list[Any], track: bool = True) -> Any | None:
         if len(frames) < 2:
             self._bad("malformed", f"{len(frames)} frame(s); need topic and header")
             return None
         try:
-            msg, counter = decode_counted(frames[1:], self.limits)
+            msg, counter = self._decoder(frames[1:], self.limits)
         except DecodeError as exc:
             self._bad(exc.kind, exc.detail)
             return None
-        if counter is not None:
+        if counter is not None and track:
             last = self._last_counter
             if last is not None and counter > last + 1:
                 self.drops += counter - last - 1
@@ -187,8 +203,8 @@ class Subscriber:
     def receive(self) -> Any | None:
         if self.eos_socket is not None and self.eos_socket.poll(0, zmq.POLLIN):
             frames = self.eos_socket.recv_multipart(copy=False)
-            msg = self._decode(frames)
-            if isinstance(msg, EndOfStream):
+            msg = self._decode(frames, track=False)
+            if isinstance(msg, EndOfStream) and not self.ended:
                 self.ended = True
                 return msg
         try:
@@ -215,6 +231,7 @@ class Subscriber:
             if self.ended:
                 return None
             self.ended = True
+            self.socket.setsockopt(zmq.UNSUBSCRIBE, b"")  # tells the publisher we read to the end
         return msg
 
     def close(self) -> None:

@@ -1,11 +1,11 @@
 """The message contract: typed message classes, schema ids and the msgpack/raw-buffer codec."""
 from .core import EMPTY, REGISTRY, by_name, describe, lookup, message, schema_id, struct
-from .codec import DEFAULT_LIMITS, DecodeError, Limits, decode, decode_frames, encode, encode_frames
+from .codec import DEFAULT_LIMITS, DecodeError, Limits, UntypedMessage, decode, decode_any, decode_frames, encode, encode_frames
 from .system import EndOfStream, NodeStats, TopicStats
 from .camera import Frame
 
 __all__ = [
     "EMPTY", "REGISTRY", "by_name", "describe", "lookup", "message", "schema_id", "struct",
-    "DEFAULT_LIMITS", "DecodeError", "Limits", "decode", "decode_frames", "encode", "encode_frames",
+    "DEFAULT_LIMITS", "DecodeError", "Limits", "UntypedMessage", "decode_any", "decode", "decode_frames", "encode", "encode_frames",
     "EndOfStream", "NodeStats", "TopicStats", "Frame",
 ]

@@ -152,7 +152,9 @@ def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.n
         buf = _buffer(part)
         if buf.nbytes != nbytes:
             raise DecodeError("bad_array", f"array {i}: {buf.nbytes} bytes received, {dtype}{shape} needs {nbytes}")
-        out.append(np.frombuffer(buf, dtype=dtype).reshape(shape) if nbytes else np.zeros(shape, dtype))
+        arr = np.frombuffer(buf, dtype=dtype).reshape(shape) if nbytes else np.zeros(shape, dtype)
+        arr.flags.writeable = False  # a view over the received frame: copy before changing it
+        out.append(arr)
     return out
 
 
@@ -184,6 +186,35 @@ def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
     except UnicodeDecodeError:
         raise DecodeError("malformed", "topic frame is not UTF-8") from None
     return topic, decode(frames[1:], limits)
+
+
+@dataclass(frozen=True)
+class UntypedMessage:
+    """A message whose schema is not registered in this process (introspection tools, bags):
+    its fields as plain values, arrays resolved."""
+
+    schema: str
+    fields: dict[str, Any]
+
+    @property
+    def stamp(self) -> int:
+        return int(self.fields.get("stamp", 0) or 0)
+
+    @property
+    def seq(self) -> int:
+        return int(self.fields.get("seq", 0) or 0)
+
+
+def decode_any(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
+    """Decode typed when the schema is registered here, else as an :class:`UntypedMessage`."""
+    if len(parts) < 1:
+        raise DecodeError("malformed", "no header frame")
+    header = read_header(parts[0], limits)
+    if header["s"] in REGISTRY:
+        return decode_counted(parts, limits)
+    arrays = _arrays(header.get("a", []), parts[1:], limits)
+    counter = header.get("n")
+    return UntypedMessage(header["s"], _resolve_any(header["f"], arrays)), counter if type(counter) is int else None
 
 
 # ------------------------------------------------------------------------------ type validation

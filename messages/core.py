@@ -61,15 +61,21 @@ def _add_stamp_seq(cls: type) -> None:
 
 
 def _array_defaults(cls: type) -> None:
-    """Arrays are mutable objects: give them a default_factory instead of a shared default."""
+    """Mutable defaults (arrays, lists, dicts) become default factories; ``list`` fields default to
+    lists even when written as ``= ()``, so that a decoded message equals a constructed one."""
+    ann = cls.__dict__.get("__annotations__", {})
     for name, default in list(cls.__dict__.items()):
+        if name not in ann:
+            continue
         if isinstance(default, np.ndarray):
-            arr = default
-
-            def factory(a: np.ndarray = arr) -> np.ndarray:
-                return a
-
-            setattr(cls, name, dataclasses.field(default_factory=factory))
+            factory = (lambda a=default: a)
+        elif isinstance(default, (list, tuple)) and str(ann[name]).startswith(("list", "typing.List")):
+            factory = (lambda d=tuple(default): list(d))
+        elif isinstance(default, dict):
+            factory = (lambda d=dict(default): dict(d))
+        else:
+            continue
+        setattr(cls, name, dataclasses.field(default_factory=factory))
 
 
 def struct(cls: type[T]) -> type[T]:

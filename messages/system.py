@@ -41,8 +41,4 @@ class NodeStats:
     outputs: list[TopicStats] = ()
     proc_ms_mean: float = 0.0
     proc_ms_max: float = 0.0
-    decode_errors: dict[str, int] = None  # kind -> count
-
-    def __post_init__(self) -> None:
-        if self.decode_errors is None:
-            object.__setattr__(self, "decode_errors", {})
+    decode_errors: dict[str, int] = {}  # kind -> count

@@ -64,6 +64,8 @@ class Sink(Node):
     params = {
         "path": Param(str, "", "output file (JSON lines)", check=lambda v: None if v else "must name a file"),
         "delay_ms": Param(float, 0.0, "processing time to simulate", min=0),
+        "exit_after": Param(int, 0, "exit with exit_code after this many messages (0: never)", min=0),
+        "exit_code": Param(int, 3, "the code for exit_after"),
     }
 
     def setup(self) -> None:
@@ -74,6 +76,10 @@ class Sink(Node):
         if self.p["delay_ms"]:
             time.sleep(self.p["delay_ms"] / 1000)
         self.f.write(json.dumps({"seq": msg.seq, "value": msg.value, "sum": int(msg.payload.sum())}) + "\n")
+        self.n = getattr(self, "n", 0) + 1
+        if self.n == self.p["exit_after"]:
+            self.f.close()
+            os._exit(self.p["exit_code"])
 
     def on_end(self) -> None:
         self.f.write(json.dumps({"event": "end", "drops": self._in["in"].drops}) + "\n")
@@ -82,5 +88,12 @@ class Sink(Node):
         self.f.close()
 
 
-if __name__ == "__main__":
-    Relay.main()
+class FrameSink(Node):
+    """Takes camera frames (used to provoke a type mismatch in launch checks)."""
+
+    from messages import Frame as _Frame
+
+    inputs = {"in": Input(_Frame)}
+
+    def on_in(self, msg) -> None:
+        pass
