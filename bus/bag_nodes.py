@@ -119,6 +119,8 @@ class Recorder(Node):
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
         topics = params.get("topics") or []
+        if not topics:
+            raise ParamError("parameter 'topics': name at least one topic to record")
         if any(not isinstance(t, str) or not t for t in topics):
             raise ParamError(f"parameter 'topics': expected a list of topic names, got {topics!r}")
         if STATS_PORT in topics:

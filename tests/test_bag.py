@@ -19,7 +19,7 @@ import pytest
 import yaml
 
 from bus.bag import BagReader, BagWriter, decode_fields, pack_parts, unpack_parts
-from bus.bag_nodes import Player
+from bus.bag_nodes import Player, Recorder
 from bus.cli_bag import export_bag
 from bus.params import ParamError
 from messages import Frame, encode
@@ -211,6 +211,10 @@ def test_player_names_an_unregistered_schema(tmp_path: Path) -> None:
     params = Player.validate_params({"path": str(tmp_path / "b.mcap"), "topics": ["numbers"], "remap": {"numbers": "n2"}})
     _, outs = Player.ports(params)
     assert list(outs) == ["n2"] and outs["n2"].type is Number
+    with pytest.raises(ParamError, match=r"'topics': nothing not in bag"):
+        Player.ports(Player.validate_params({"path": str(tmp_path / "b.mcap"), "topics": ["nothing"]}))
+    with pytest.raises(ParamError, match="'topics': name at least one topic"):
+        Recorder.ports(Recorder.validate_params({"path": "x.mcap"}))
     info = BagReader(tmp_path / "b.mcap").info()
     assert info["schemas"]["nowhere.Thing/3"]["inferred"] is True
     assert info["schemas"]["nowhere.Thing/3"]["fields"]["payload"].startswith("ndarray[uint8")
@@ -347,3 +351,42 @@ def test_cli_record_until_end_of_stream_then_info_and_play(tmp_path: Path, home:
     rows = [json.loads(line) for line in sink.read_text().splitlines()]
     assert [r["seq"] for r in rows if "seq" in r] == seqs
     assert rows[-1]["event"] == "end"
+
+
+def test_player_paces_loops_and_resends_exact_parts(tmp_path: Path, home: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import threading
+
+    import zmq
+
+    from bus.bag_nodes import RawSubscriber
+    from bus.endpoints import TopicEndpoints
+    from bus.node import standalone_spec
+
+    monkeypatch.setenv("COUNTERPART_HOME", str(home))
+    bag = tmp_path / "b.mcap"
+    with BagWriter(bag) as w:
+        for i, m in enumerate(_numbers(20)):
+            w.write("numbers", _parts_bytes(encode(m, counter=i)), log_time=10_000_000 * i)  # 10 ms apart
+    recorded = [_parts_bytes(x.parts) for x in BagReader(bag).records()]
+    spec = standalone_spec("player", Player, {"path": str(bag), "rate": 4.0, "loop": True}, {}, {})
+    spec["outputs"]["numbers"]["reliable_subscribers"] = 1  # start once the subscriber below is there
+    player = Player(spec)
+    ctx = zmq.Context()
+    sub = RawSubscriber(ctx, "numbers", TopicEndpoints.from_dict(spec["outputs"]["numbers"]["endpoints"]))
+    thread = threading.Thread(target=player.run)
+    thread.start()
+    got: list[list[bytes]] = []
+    try:
+        deadline = time.monotonic() + 20
+        while len(got) < 45 and time.monotonic() < deadline:
+            if sub.socket.poll(100):
+                msg = sub.receive()
+                if msg is not None:
+                    got.append(_parts_bytes(msg.parts))
+    finally:
+        player.stopping = True
+        thread.join(timeout=10)
+        sub.close()
+        ctx.term()
+    assert not thread.is_alive()
+    assert got[:45] == (recorded * 3)[:45]
