@@ -58,18 +58,23 @@ class Publisher:
         self.reliable.setsockopt(zmq.XPUB_VERBOSER, 1)
         self.reliable.setsockopt(zmq.SNDTIMEO, 100)
         self.reliable.bind(bind_address(endpoints.reliable))
-        self.latest = ctx.socket(zmq.PUB)
+        self.latest_subscribers = 0
+        self.latest = ctx.socket(zmq.XPUB)  # lossy; XPUB only to know whether anyone listens
+        self.latest.setsockopt(zmq.XPUB_VERBOSER, 1)
         self.latest.setsockopt(zmq.SNDHWM, latest_hwm)
         self.latest.setsockopt(zmq.LINGER, 0)
         self.latest.bind(bind_address(endpoints.latest))
 
-    # The reliable socket tells us who subscribed: b"\x01" + prefix, b"\x00" + prefix on leave.
+    # XPUB sockets tell who subscribed: b"\x01" + prefix, and b"\x00" + prefix on leave.
     def _read_subscriptions(self, timeout_ms: int = 0) -> None:
         while self.reliable.poll(timeout_ms, zmq.POLLIN):
             ev = self.reliable.recv()
             if ev[1:] == b"":  # full subscribers only; EOS-only listeners are not counted
                 self.subscribers += 1 if ev[:1] == b"\x01" else -1
             timeout_ms = 0
+        while self.latest.poll(0, zmq.POLLIN):
+            ev = self.latest.recv()
+            self.latest_subscribers += 1 if ev[:1] == b"\x01" else -1
 
     def wait_for_subscribers(self) -> bool:
         """Block until ``expected`` reliable subscribers are connected (or timeout/stop)."""
@@ -91,14 +96,18 @@ class Publisher:
         if not self._barrier_done:
             self.wait_for_subscribers()
             self._barrier_done = True
-        self._read_subscriptions()
-        self._send_reliable([self.topic_b, *parts])
+        # subscriptions change rarely: look at them on every 16th send, or always while nobody listens
+        if eos or self.count % 16 == 0 or not (self.subscribers and self.latest_subscribers):
+            self._read_subscriptions()
+        if self.subscribers > 0 or eos:
+            self._send_reliable([self.topic_b, *parts])
         if eos:
             self._send_reliable([EOS_PREFIX + self.topic_b, *parts])
-        try:
-            self.latest.send_multipart([self.topic_b, *parts], flags=zmq.NOBLOCK, copy=False)
-        except zmq.Again:
-            pass
+        if self.latest_subscribers > 0 or eos:
+            try:
+                self.latest.send_multipart([self.topic_b, *parts], flags=zmq.NOBLOCK, copy=False)
+            except zmq.Again:
+                pass
 
     def _send_reliable(self, frames: list[Any]) -> None:
         while True:
@@ -162,6 +171,7 @@ class Subscriber:
         self.drops = 0
         self.bad: dict[str, int] = {}
         self.ended = False
+        self._pending_eos: EndOfStream | None = None
         self._last_counter: int | None = None
         self.socket = ctx.socket(zmq.SUB)
         self.socket.setsockopt(zmq.LINGER, 0)
@@ -201,12 +211,15 @@ class Subscriber:
         return msg
 
     def receive(self) -> Any | None:
-        if self.eos_socket is not None and self.eos_socket.poll(0, zmq.POLLIN):
-            frames = self.eos_socket.recv_multipart(copy=False)
-            msg = self._decode(frames, track=False)
+        if self.eos_socket is not None and self._pending_eos is None and self.eos_socket.poll(0, zmq.POLLIN):
+            msg = self._decode(self.eos_socket.recv_multipart(copy=False), track=False)
             if isinstance(msg, EndOfStream) and not self.ended:
-                self.ended = True
-                return msg
+                # end of stream overtook the lossy socket: deliver what is still in flight there first
+                self._pending_eos = msg
+        if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
+            msg, self._pending_eos = self._pending_eos, None
+            self.ended = True
+            return msg
         try:
             frames = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
         except zmq.Again:
@@ -228,6 +241,7 @@ class Subscriber:
             return None
         self.count += 1
         if isinstance(msg, EndOfStream):
+            self._pending_eos = None
             if self.ended:
                 return None
             self.ended = True

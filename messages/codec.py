@@ -56,7 +56,20 @@ class DecodeError(ValueError):
 # ----------------------------------------------------------------------------------------- encode
 
 
+_SCALARS = (bool, int, float, str, bytes, type(None))
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+
+
+def _field_names(cls: type) -> tuple[str, ...]:
+    names = _FIELD_NAMES.get(cls)
+    if names is None:
+        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
+    return names
+
+
 def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
+    if type(value) in _SCALARS:
+        return value
     if isinstance(value, np.ndarray):
         arrays.append(value)
         return msgpack.ExtType(ARRAY_EXT, (len(arrays) - 1).to_bytes(4, "little"))
@@ -69,7 +82,7 @@ def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
     if isinstance(value, dict):
         return {k: _to_wire(v, arrays) for k, v in value.items()}
     if dataclasses.is_dataclass(value):
-        return {f.name: _to_wire(getattr(value, f.name), arrays) for f in dataclasses.fields(value)}
+        return {n: _to_wire(getattr(value, n), arrays) for n in _field_names(type(value))}
     raise TypeError(f"cannot encode value of type {type(value).__name__}")
 
 
@@ -77,7 +90,7 @@ def encode(msg: Any, counter: int | None = None) -> list[Any]:
     """Header bytes followed by one buffer per array (no topic frame). Arrays are not copied unless
     they are not C-contiguous. ``counter`` is the publisher's send count, for drop detection."""
     arrays: list[np.ndarray] = []
-    fields = {f.name: _to_wire(getattr(msg, f.name), arrays) for f in dataclasses.fields(msg)}
+    fields = {n: _to_wire(getattr(msg, n), arrays) for n in _field_names(type(msg))}
     contiguous = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]
     head = {"s": schema_id(msg), "f": fields, "a": [[a.dtype.str, list(a.shape)] for a in contiguous]}
     if counter is not None:
@@ -129,6 +142,9 @@ def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
     return header
 
 
+_DTYPES = {d: np.dtype(d) for d in ALLOWED_DTYPES}
+
+
 def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.ndarray]:
     if len(specs) > limits.max_arrays:
         raise DecodeError("oversized", f"{len(specs)} arrays exceed the limit of {limits.max_arrays}")
@@ -137,15 +153,19 @@ def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.n
     out = []
     total = 0
     for i, (spec, part) in enumerate(zip(specs, parts)):
-        if not (isinstance(spec, list) and len(spec) == 2 and isinstance(spec[0], str) and isinstance(spec[1], list)):
+        if not (type(spec) is list and len(spec) == 2 and type(spec[1]) is list):
             raise DecodeError("bad_array", f"array {i}: spec must be [dtype, shape]")
-        dt, shape = spec
-        if dt not in ALLOWED_DTYPES:
-            raise DecodeError("bad_array", f"array {i}: dtype {dt!r} not allowed")
-        if len(shape) > limits.max_ndim or not all(isinstance(s, int) and 0 <= s for s in shape):
-            raise DecodeError("bad_array", f"array {i}: bad shape {shape!r}")
-        dtype = np.dtype(dt)
-        nbytes = dtype.itemsize * int(np.prod(shape, dtype=np.float64))
+        dtype = _DTYPES.get(spec[0]) if type(spec[0]) is str else None
+        if dtype is None:
+            raise DecodeError("bad_array", f"array {i}: dtype {spec[0]!r} not allowed")
+        shape = spec[1]
+        if len(shape) > limits.max_ndim:
+            raise DecodeError("bad_array", f"array {i}: rank {len(shape)} exceeds {limits.max_ndim}")
+        nbytes = dtype.itemsize
+        for dim in shape:
+            if type(dim) is not int or dim < 0:
+                raise DecodeError("bad_array", f"array {i}: bad shape {shape!r}")
+            nbytes *= dim
         total += nbytes
         if nbytes > limits.max_array_bytes or total > limits.max_total_bytes:
             raise DecodeError("oversized", f"array {i}: {nbytes} bytes exceed the limits")
