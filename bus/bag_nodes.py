@@ -18,71 +18,17 @@ from __future__ import annotations
 
 import importlib
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from messages import EndOfStream, REGISTRY
-from messages.codec import DEFAULT_LIMITS, DecodeError, decode_counted, read_header
+from messages import REGISTRY
+from messages.codec import DEFAULT_LIMITS, DecodeError, read_header
 
 from .bag import COMPRESSIONS, DEFAULT_CHUNK_SIZE, BagReader, BagWriter
 from .node import STATS_PORT, Input, Node, Output
 from .params import Param, ParamError
-from .transport import RELIABLE, Subscriber
+from .transport import RELIABLE, RawMessage
 
-_EOS_SCHEMA = EndOfStream.__schema_id__
-
-
-@dataclass(frozen=True)
-class RawMessage:
-    """A received message left encoded: ``parts`` = [header, buffers...] as received."""
-
-    topic: str
-    parts: list[Any]
-    header: dict[str, Any]
-
-    @property
-    def schema(self) -> str:
-        return self.header["s"]
-
-    @property
-    def stamp(self) -> int:
-        stamp = self.header["f"].get("stamp", 0)
-        return stamp if type(stamp) is int else 0
-
-    @property
-    def seq(self) -> int:
-        seq = self.header["f"].get("seq", -1)
-        return seq if type(seq) is int else -1
-
-
-class RawSubscriber(Subscriber):
-    """A :class:`~bus.transport.Subscriber` whose ``receive()`` returns :class:`RawMessage` instead of
-    decoded messages: the header is unpacked and checked (so malformed input is still counted and
-    dropped, and send-counter gaps still count as drops) but arrays are not decoded and the schema
-    need not be registered. End of stream is decoded as usual so that ``ended`` works."""
-
-    def _decode(self, frames: list[Any]) -> Any | None:
-        if len(frames) < 2:
-            self._bad("malformed", f"{len(frames)} frame(s); need topic and header")
-            return None
-        parts = frames[1:]
-        try:
-            header = read_header(parts[0], self.limits)
-            if header["s"] == _EOS_SCHEMA:
-                return decode_counted(parts, self.limits)[0]
-            if len(header.get("a", [])) != len(parts) - 1:
-                raise DecodeError("bad_array", f"header names {len(header.get('a', []))} arrays, {len(parts) - 1} buffers arrived")
-        except DecodeError as exc:
-            self._bad(exc.kind, exc.detail)
-            return None
-        counter = header.get("n")
-        if type(counter) is int:
-            last = self._last_counter
-            if last is not None and counter > last + 1:
-                self.drops += counter - last - 1
-            self._last_counter = counter
-        return RawMessage(self.topic, parts, header)
 
 
 def _nonempty(v: Any) -> str | None:
@@ -125,14 +71,7 @@ class Recorder(Node):
             raise ParamError(f"parameter 'topics': expected a list of topic names, got {topics!r}")
         if STATS_PORT in topics:
             raise ParamError(f"parameter 'topics': {STATS_PORT!r} is reserved; record a node's stats as NODE/stats")
-        return {t: Input(None, RELIABLE, f"recorded topic {t}") for t in topics}, {}
-
-    def _open(self) -> None:
-        super()._open()
-        # Same sockets and counters, raw receiving (see RawSubscriber): swapping the class keeps the
-        # connections the launch barrier already counted.
-        for sub in self._in.values():
-            sub.__class__ = RawSubscriber
+        return {t: Input(None, RELIABLE, f"recorded topic {t}", raw=True) for t in topics}, {}
 
     def setup(self) -> None:
         import_modules(self.p["modules"])
@@ -224,17 +163,11 @@ class Player(Node):
         self.plan = self.selection(self.p)
 
     def _send_raw(self, port: str, parts: list[Any]) -> None:
-        self._out[port].send_parts(parts)
-        st = self._out_stats[port]
-        st.count += 1
-        st.period_count += 1
         try:
             seq = read_header(parts[0], DEFAULT_LIMITS)["f"].get("seq", -1)
         except DecodeError:
             seq = -1
-        if type(seq) is int and seq > self._last_seq:
-            self._last_seq = seq
-        self._maybe_stats()
+        self.publish_parts(port, parts, seq)
 
     def _wait_subscribers(self) -> None:
         for port, pub in self._out.items():
@@ -282,4 +215,4 @@ class Player(Node):
                 return
 
 
-__all__ = ["Recorder", "Player", "RawSubscriber", "RawMessage", "import_modules"]
+__all__ = ["Recorder", "Player", "import_modules"]

@@ -85,8 +85,8 @@ def record(args: argparse.Namespace) -> int:
     from messages import EndOfStream
 
     from .bag import BagWriter
-    from .bag_nodes import RawSubscriber, import_modules
-    from .transport import RELIABLE
+    from .bag_nodes import import_modules
+    from .transport import RELIABLE, Subscriber
 
     try:
         import_modules(args.module, "--module")
@@ -117,7 +117,7 @@ def record(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     ctx = zmq.Context.instance()
-    subs = {t: RawSubscriber(ctx, t, ep, RELIABLE) for t, ep in endpoints.items()}
+    subs = {t: Subscriber(ctx, t, ep, RELIABLE, raw=True) for t, ep in endpoints.items()}
     poller = zmq.Poller()
     owner = {}
     for t, s in subs.items():

@@ -250,7 +250,10 @@ def check(graph: Graph) -> Graph:
             params = cls.validate_params(decl.params)
         except ParamError as exc:
             raise _err(decl.file, name, "params", str(exc)) from None
-        ins, outs = cls.ports(params)
+        try:
+            ins, outs = cls.ports(params)
+        except (ParamError, ValueError, OSError) as exc:
+            raise _err(decl.file, name, "params", str(exc)) from None
         for port in decl.remap:
             if port not in ins and port not in outs and port != STATS_PORT:
                 raise _err(decl.file, name, f"remap.{port}",

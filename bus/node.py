@@ -51,6 +51,7 @@ class Input:
     type: type | None
     policy: str = RELIABLE
     doc: str = ""
+    raw: bool = False  # deliver transport.RawMessage (header checked, arrays not decoded): recorders
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,9 @@ class Node:
         self._last_stats = time.monotonic()
         self._stats_seq = 0
         self._ppid = os.getppid()
+        #: the process exit code; set it non-zero on a failure after which the node still ends cleanly
+        #: (end of stream goes out with reason "error")
+        self.exit_code = 0
 
     def setup(self) -> None:
         """Called once after the sockets are up, before any message. Load models here."""
@@ -149,11 +153,21 @@ class Node:
         if pub is None:
             raise KeyError(f"node {self.name!r} has no output port {port!r}; ports: {', '.join(self._out)}")
         pub.send(msg)
+        self._count_out(port, getattr(msg, "seq", -1))
+
+    def publish_parts(self, port: str, parts: list[Any], seq: int = -1) -> None:
+        """Publish already encoded parts ``[header, buffers...]`` unchanged (bag players)."""
+        pub = self._out.get(port)
+        if pub is None:
+            raise KeyError(f"node {self.name!r} has no output port {port!r}; ports: {', '.join(self._out)}")
+        pub.send_parts(parts)
+        self._count_out(port, seq)
+
+    def _count_out(self, port: str, seq: Any) -> None:
         st = self._out_stats[port]
         st.count += 1
         st.period_count += 1
-        seq = getattr(msg, "seq", -1)
-        if isinstance(seq, int) and seq > self._last_seq:
+        if type(seq) is int and seq > self._last_seq:
             self._last_seq = seq
         self._maybe_stats()
 
@@ -166,7 +180,7 @@ class Node:
             w = wiring_in[port]
             policy = w.get("policy", inputs[port].policy)
             self._in[port] = Subscriber(
-                self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]), policy,
+                self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]), policy, raw=inputs[port].raw,
                 on_bad=lambda kind, detail, port=port: self.log.warning(
                     "dropped a bad message on %s (%s); further ones of this kind are only counted", port, detail
                 ),
@@ -275,7 +289,6 @@ class Node:
     def run(self) -> int:
         """Open sockets, set up, loop until end of stream or stop, send end of stream, clean up."""
         _install_signal_handlers(self)
-        code = 0
         self._open()
         try:
             self.setup()
@@ -286,13 +299,13 @@ class Node:
             else:
                 self.generate()
             self._maybe_stats(force=True)
-            self._send_eos("stopped" if self.stopping else "end")
+            self._send_eos("stopped" if self.stopping else "error" if self.exit_code else "end")
         finally:
             try:
                 self.teardown()
             finally:
                 self._close()
-        return code
+        return self.exit_code
 
     # ------------------------------------------------------------------------------- entry points
     @classmethod

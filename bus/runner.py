@@ -102,9 +102,8 @@ def run_standalone(cls: type[Node] | str, argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     try:
         node_cls = find_node_class(module)
-        name = args.name or module.split(":")[0].split(".")[-1]
-        if name == "node":
-            name = module.split(":")[0].split(".")[-2]
+        parts = [p for p in module.split(":")[0].split(".") if p not in ("node", "__main__")]
+        name = args.name or (parts[-1] if parts else node_cls.__name__.lower())
         spec = standalone_spec(
             name, node_cls, parse_assignments(args.param), parse_assignments(args.remap, "--remap"),
             parse_assignments(args.policy, "--policy"),

@@ -13,12 +13,13 @@ publisher's send counter, in ZeroMQ's).
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import zmq
 
 from messages import EndOfStream, encode
-from messages.codec import DEFAULT_LIMITS, DecodeError, Limits, decode_any, decode_counted
+from messages.codec import DEFAULT_LIMITS, DecodeError, Limits, decode_any, decode_counted, read_header
 
 from .endpoints import TopicEndpoints, bind_address
 
@@ -51,6 +52,7 @@ class Publisher:
         self.should_stop = should_stop
         self.count = 0
         self.subscribers = 0
+        self.eos_listeners = 0
         self._barrier_done = expected <= 0
         self.reliable = ctx.socket(zmq.XPUB)
         self.reliable.setsockopt(zmq.SNDHWM, hwm)
@@ -69,8 +71,11 @@ class Publisher:
     def _read_subscriptions(self, timeout_ms: int = 0) -> None:
         while self.reliable.poll(timeout_ms, zmq.POLLIN):
             ev = self.reliable.recv()
-            if ev[1:] == b"":  # full subscribers only; EOS-only listeners are not counted
-                self.subscribers += 1 if ev[:1] == b"\x01" else -1
+            step = 1 if ev[:1] == b"\x01" else -1
+            if ev[1:] == b"":  # full subscribers (the startup barrier counts these)
+                self.subscribers += step
+            elif ev[1:] == EOS_PREFIX:  # latest subscribers listening for end of stream here
+                self.eos_listeners += step
             timeout_ms = 0
         while self.latest.poll(0, zmq.POLLIN):
             ev = self.latest.recv()
@@ -129,7 +134,8 @@ class Publisher:
         end of stream). ZeroMQ loses what is still in flight when a publisher closes its socket, so
         a finite stream is complete only once its readers say they have read to the end."""
         deadline = time.monotonic() + timeout
-        while self.subscribers > 0:
+        self._read_subscriptions()
+        while self.subscribers > 0 or self.eos_listeners > 0:
             if self.should_stop() or time.monotonic() > deadline:
                 return False
             self._read_subscriptions(50)
@@ -140,6 +146,44 @@ class Publisher:
         Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers."""
         self.reliable.close(linger=linger_ms)
         self.latest.close(linger=0)
+
+
+@dataclass(frozen=True)
+class RawMessage:
+    """A received message left encoded: ``parts`` = [header, buffers...] as received."""
+
+    topic: str
+    parts: list[Any]
+    header: dict[str, Any]
+
+    @property
+    def schema(self) -> str:
+        return self.header["s"]
+
+    @property
+    def stamp(self) -> int:
+        stamp = self.header["f"].get("stamp", 0)
+        return stamp if type(stamp) is int else 0
+
+    @property
+    def seq(self) -> int:
+        seq = self.header["f"].get("seq", -1)
+        return seq if type(seq) is int else -1
+
+
+_EOS_SCHEMA = EndOfStream.__schema_id__
+
+
+def decode_raw(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
+    """Check the header and the number of buffers, leave the arrays encoded; the schema need not be
+    registered. End of stream is decoded as usual so that subscribers see the end."""
+    header = read_header(parts[0], limits)
+    if header["s"] == _EOS_SCHEMA:
+        return decode_counted(parts, limits)
+    if len(header.get("a", [])) != len(parts) - 1:
+        raise DecodeError("bad_array", f"header names {len(header.get('a', []))} arrays, {len(parts) - 1} buffers arrived")
+    counter = header.get("n")
+    return RawMessage("", list(parts), header), counter if type(counter) is int else None
 
 
 class Subscriber:
@@ -157,16 +201,18 @@ class Subscriber:
         limits: Limits = DEFAULT_LIMITS,
         on_bad: Callable[[str, str], None] | None = None,
         untyped: bool = False,
+        raw: bool = False,
     ) -> None:
-        """``untyped``: messages of schemas not registered here arrive as UntypedMessage
-        instead of being dropped (for tools that show any topic)."""
+        """``untyped``: messages of schemas not registered here arrive as UntypedMessage instead of
+        being dropped (tools that show any topic); ``raw``: messages arrive as :class:`RawMessage`,
+        header checked but arrays left undecoded (recorders)."""
         if policy not in POLICIES:
             raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
         self.topic = topic
         self.policy = policy
         self.limits = limits
         self.on_bad = on_bad
-        self._decoder = decode_any if untyped else decode_counted
+        self._decoder = decode_raw if raw else decode_any if untyped else decode_counted
         self.count = 0
         self.drops = 0
         self.bad: dict[str, int] = {}
@@ -200,6 +246,8 @@ class Subscriber:
             return None
         try:
             msg, counter = self._decoder(frames[1:], self.limits)
+            if isinstance(msg, RawMessage):
+                msg = RawMessage(self.topic, msg.parts, msg.header)
         except DecodeError as exc:
             self._bad(exc.kind, exc.detail)
             return None
@@ -218,7 +266,7 @@ class Subscriber:
                 self._pending_eos = msg
         if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
             msg, self._pending_eos = self._pending_eos, None
-            self.ended = True
+            self._finish()
             return msg
         try:
             frames = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
@@ -244,13 +292,19 @@ class Subscriber:
             self._pending_eos = None
             if self.ended:
                 return None
-            self.ended = True
-            self.socket.setsockopt(zmq.UNSUBSCRIBE, b"")  # tells the publisher we read to the end
+            self._finish()
         return msg
+
+    def _finish(self) -> None:
+        """End of stream: unsubscribing tells the publisher we read to the end (it waits for that)."""
+        self.ended = True
+        self.socket.setsockopt(zmq.UNSUBSCRIBE, b"")
+        if self.eos_socket is not None:
+            self.eos_socket.setsockopt(zmq.UNSUBSCRIBE, EOS_PREFIX)
 
     def close(self) -> None:
         for s in self.sockets:
             s.close()
 
 
-__all__ = ["Publisher", "Subscriber", "RELIABLE", "LATEST", "POLICIES", "EOS_PREFIX"]
+__all__ = ["Publisher", "Subscriber", "RawMessage", "decode_raw", "RELIABLE", "LATEST", "POLICIES", "EOS_PREFIX"]

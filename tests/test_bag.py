@@ -358,7 +358,7 @@ def test_player_paces_loops_and_resends_exact_parts(tmp_path: Path, home: Path, 
 
     import zmq
 
-    from bus.bag_nodes import RawSubscriber
+    from bus.transport import Subscriber
     from bus.endpoints import TopicEndpoints
     from bus.node import standalone_spec
 
@@ -372,7 +372,7 @@ def test_player_paces_loops_and_resends_exact_parts(tmp_path: Path, home: Path, 
     spec["outputs"]["numbers"]["reliable_subscribers"] = 1  # start once the subscriber below is there
     player = Player(spec)
     ctx = zmq.Context()
-    sub = RawSubscriber(ctx, "numbers", TopicEndpoints.from_dict(spec["outputs"]["numbers"]["endpoints"]))
+    sub = Subscriber(ctx, "numbers", TopicEndpoints.from_dict(spec["outputs"]["numbers"]["endpoints"]), raw=True)
     thread = threading.Thread(target=player.run)
     thread.start()
     got: list[list[bytes]] = []

@@ -63,7 +63,8 @@ def test_latest_policy_drops_under_a_slow_consumer_and_counts_the_drops(tmp_path
     assert seqs == sorted(seqs) and len(set(seqs)) == len(seqs)  # newest first never goes backwards
     assert 10 < len(rows) < 400  # a 20 ms consumer cannot take 300 Hz
     # every message published after the first one received was delivered or counted as dropped
-    assert end["event"] == "end" and len(rows) + end["drops"] == 600 - seqs[0]
+    # (the count may also include a few that reached the socket before the first one delivered)
+    assert end["event"] == "end" and 600 - seqs[0] <= len(rows) + end["drops"] <= 600
     assert end["drops"] > 200
 
 

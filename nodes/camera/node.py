@@ -71,7 +71,6 @@ class Camera(Node):
         return p
 
     def setup(self) -> None:
-        self.exit_code = 0
         self.source = None
         self.prefetch: Prefetch | None = None
         self.published = 0
@@ -132,10 +131,6 @@ class Camera(Node):
             self.prefetch.close()  # before the source: the thread may be inside read()
         if getattr(self, "source", None) is not None:
             self.source.close()
-
-    def run(self) -> int:
-        code = super().run()
-        return code or getattr(self, "exit_code", 0)
 
 
 NODE = Camera
