@@ -16,18 +16,21 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("bus.cli_run", "run one node alone"),
     "node": ("bus.cli_introspect", "list the nodes of a running launch"),
     "topic": ("bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
+    "mine": ("nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
     "bag": ("bus.cli_bag", "record, play, inspect and export bags"),
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser; only ``command``'s module is imported (all of them with None, for --help)."""
     ap = argparse.ArgumentParser(prog="counterpart", description="Counterpart: virtual interaction partners on a node graph.")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in COMMANDS.items():
         p = sub.add_parser(name, help=help_, description=help_)
-        mod = importlib.import_module(module)
-        add = getattr(mod, f"add_arguments_{name}", None) or mod.add_arguments
-        add(p)
+        if command is None or name == command:
+            mod = importlib.import_module(module)
+            add = getattr(mod, f"add_arguments_{name}", None) or mod.add_arguments
+            add(p)
         p.set_defaults(_module=module, _command=name)
     return ap
 
@@ -45,7 +48,10 @@ def main(argv: list[str] | None = None) -> None:
                   file=sys.stderr)
             sys.exit(2)
         sys.exit(run_standalone(argv[1], argv[2:]))
-    ap = build_parser()
+    command = argv[0] if argv and argv[0] in COMMANDS else ""
+    ap = build_parser(command)
+    if not command and argv and argv[0] not in ("-h", "--help"):
+        ap.error(f"unknown command {argv[0]!r}; commands: {', '.join(COMMANDS)}")
     args = ap.parse_args(argv)
     if not getattr(args, "command", None):
         ap.print_help()

@@ -88,6 +88,7 @@ def main_topic(args: argparse.Namespace) -> int:
     try:
         if args.action == "list":
             reg = registry.read(args.run)
+            print(f"# {reg['launch_file']} ({'running' if reg['alive'] else 'ended'}, run dir {reg['run_dir']})")
             for topic, t in sorted(reg["topics"].items()):
                 subs = ", ".join(t["subscribers"]) or "-"
                 print(f"{topic:28s} {t['type']:28s} from {t['publisher']:20s} to {subs}")
