@@ -27,6 +27,7 @@ EOS_PREFIX = b"\x00eos:"
 RELIABLE = "reliable"
 LATEST = "latest"
 POLICIES = (RELIABLE, LATEST)
+ZERO_COPY_MIN = 16384  # bytes: below this, copying a buffer is cheaper than a zero-copy frame
 
 
 class Publisher:
@@ -104,20 +105,22 @@ class Publisher:
         # subscriptions change rarely: look at them on every 16th send, or always while nobody listens
         if eos or self.count % 16 == 0 or not (self.subscribers and self.latest_subscribers):
             self._read_subscriptions()
+        # zero-copy pays off for large buffers only; small messages are cheaper copied
+        copy = all((p.nbytes if isinstance(p, memoryview) else len(p)) < ZERO_COPY_MIN for p in parts)
         if self.subscribers > 0 or eos:
-            self._send_reliable([self.topic_b, *parts])
+            self._send_reliable([self.topic_b, *parts], copy)
         if eos:
-            self._send_reliable([EOS_PREFIX + self.topic_b, *parts])
+            self._send_reliable([EOS_PREFIX + self.topic_b, *parts], copy)
         if self.latest_subscribers > 0 or eos:
             try:
-                self.latest.send_multipart([self.topic_b, *parts], flags=zmq.NOBLOCK, copy=False)
+                self.latest.send_multipart([self.topic_b, *parts], flags=zmq.NOBLOCK, copy=copy)
             except zmq.Again:
                 pass
 
-    def _send_reliable(self, frames: list[Any]) -> None:
+    def _send_reliable(self, frames: list[Any], copy: bool) -> None:
         while True:
             try:
-                self.reliable.send_multipart(frames, copy=False)
+                self.reliable.send_multipart(frames, copy=copy)
                 return
             except zmq.Again:  # a reliable subscriber lags: keep waiting unless asked to stop
                 self._read_subscriptions()
