@@ -17,6 +17,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "node": ("bus.cli_introspect", "list the nodes of a running launch"),
     "topic": ("bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
     "mine": ("nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
+    "learn": ("bus.cli_learn", "train a model file (tracker-prior, responder)"),
+    "respond": ("nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
+    "sim": ("sim.cli", "render a simulated two-person scene with ground truth"),
     "bag": ("bus.cli_bag", "record, play, inspect and export bags"),
 }
 

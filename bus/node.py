@@ -52,6 +52,9 @@ class Input:
     policy: str = RELIABLE
     doc: str = ""
     raw: bool = False  # deliver transport.RawMessage (header checked, arrays not decoded): recorders
+    #: whether the node waits for this input's end of stream before it ends; False for side inputs
+    #: such as run-time controls, which would otherwise deadlock a graph with a feedback loop
+    awaits_end: bool = True
 
 
 @dataclass(frozen=True)
@@ -246,9 +249,9 @@ class Node:
                 poller.register(s, zmq.POLLIN)
                 owners[s] = port
         next_timer = time.monotonic() + (self.timer_period or 0)
+        awaited = [p for p, inp in self.ports(self.p)[0].items() if inp.awaits_end] or list(self._in)
         while not self.stopping:
-            open_ports = [p for p, s in self._in.items() if not s.ended]
-            if not open_ports:
+            if all(self._in[p].ended for p in awaited):
                 break
             timeout = 100
             if self.timer_period is not None:
