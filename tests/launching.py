@@ -66,6 +66,18 @@ def kill_tree(proc: subprocess.Popen) -> None:
         pass
 
 
+def stop_launch(proc: subprocess.Popen, timeout: float = 10) -> None:
+    """Ctrl-C the launcher as a user would, then make sure nothing is left."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        kill_tree(proc)
+
+
 def wait_for(pred, timeout: float = 20.0, interval: float = 0.05) -> bool:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:

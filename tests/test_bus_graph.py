@@ -20,8 +20,8 @@ import zmq
 from bus.endpoints import tcp_endpoints
 from messages import EndOfStream, encode_frames
 from tests.graph_nodes import Number
-from tests.launching import (REPO, descendants, kill_tree, read_jsonl, run_launch, start_launch, wait_for,
-                             write_launch)
+from tests.launching import (REPO, descendants, kill_tree, read_jsonl, run_launch, start_launch, stop_launch,
+                             wait_for, write_launch)
 
 N = "tests.graph_nodes:"
 
@@ -82,11 +82,7 @@ def test_killed_node_with_restart_policy_comes_back(tmp_path: Path) -> None:
         n = len(received(tmp_path / "sink.jsonl"))
         assert wait_for(lambda: len(received(tmp_path / "sink.jsonl")) > n + 20, 20)  # it receives again
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        finally:
-            kill_tree(proc)
+        stop_launch(proc)
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
@@ -223,11 +219,7 @@ def test_introspection_lists_nodes_and_topics_and_echoes(tmp_path: Path) -> None
         st = json.loads(stats.stdout)["msg"]
         assert st["node"] == "sink" and st["inputs"][0]["topic"] == "doubled" and st["inputs"][0]["count"] > 0
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        finally:
-            kill_tree(proc)
+        stop_launch(proc)
     gone = cli("topic", "echo", "doubled", "-n", "1")
     assert gone.returncode != 0 and "not running" in gone.stderr
     shutil.rmtree(home, ignore_errors=True)
