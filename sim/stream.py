@@ -1,0 +1,126 @@
+"""The simulator as a frame stream: what the camera node opens for ``sim:SCENARIO?seed=S&...``.
+
+    stream = open_stream("handshake", seed=3, width=320, height=240, fps=25)
+    frame, t = stream.render(i)        # (H, W, 3) uint8 BGR, scene time in seconds
+    truth = stream.truth(i)            # sim.render.FrameTruth: joints, masks, shadow, labels
+    stream.n_frames, stream.fps, stream.size   # size = (width, height)
+
+Options (keywords, strings accepted as they come from a URI query): ``emotion`` (neutral, happy,
+sad, angry), ``strength`` (0-1), ``initiator`` (a/b), ``interested`` (conversation: 1/0),
+``duration`` (conversation, seconds), ``frames`` (cap the frame count), ``noise`` (sensor noise
+sigma, grey levels), ``bvh_a``/``bvh_b`` (scenario "cmu").
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from body.camera import Camera, default_camera
+from body.trajectory import TwoPersonTrajectory
+from sim.render import FrameTruth, Renderer
+from sim.scenarios import Scenario, make_scenario
+
+_FLOAT = ("strength", "duration", "noise")
+_INT = ("frames",)
+_BOOL = ("interested",)
+_STR = ("emotion", "initiator", "bvh_a", "bvh_b")
+
+
+def _parse_options(kw: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in kw.items():
+        if v is None:
+            continue
+        if k in _FLOAT:
+            out[k] = float(v)
+        elif k in _INT:
+            out[k] = int(v)
+        elif k in _BOOL:
+            if isinstance(v, str):
+                if v.lower() not in ("1", "0", "true", "false", "yes", "no"):
+                    raise ValueError(f"option {k}={v!r}: use 1/0 or true/false")
+                v = v.lower() in ("1", "true", "yes")
+            out[k] = bool(v)
+        elif k in _STR:
+            out[k] = str(v)
+        else:
+            raise ValueError(f"unknown simulator option {k!r}; known: {sorted(_FLOAT + _INT + _BOOL + _STR)}")
+    return out
+
+
+class SimStream:
+    """A rendered scenario, frame by frame (see the module docstring).
+
+    Attributes:
+        scenario: the motion and labels.
+        renderer: the ``sim.render.Renderer``.
+        camera: the camera.
+        n_frames, fps, size ((width, height) pixels).
+    """
+
+    def __init__(self, scenario: Scenario, camera: Camera, seed: int = 0, noise_sigma: float = 2.0,
+                 n_frames: int | None = None) -> None:
+        if n_frames is not None:
+            if n_frames < 1:
+                raise ValueError(f"frames={n_frames}: need at least 1")
+            scenario = scenario.crop(min(n_frames, scenario.n_frames))
+        self.scenario = scenario
+        self.camera = camera
+        self.renderer = Renderer(scenario, camera, seed=seed, noise_sigma=noise_sigma)
+        self.seed = seed
+
+    @property
+    def n_frames(self) -> int:
+        return self.scenario.n_frames
+
+    @property
+    def fps(self) -> float:
+        return float(self.scenario.fps)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return (self.camera.width, self.camera.height)
+
+    def render(self, i: int) -> tuple[np.ndarray, float]:
+        """Frame ``i``: ((H, W, 3) uint8 BGR, scene time in seconds)."""
+        frame, truth = self.renderer.render(i)
+        return frame, truth.time_s
+
+    def render_with_truth(self, i: int, noise: bool = True) -> tuple[np.ndarray, FrameTruth]:
+        return self.renderer.render(i, noise=noise)
+
+    def truth(self, i: int) -> FrameTruth:
+        """Ground truth of frame ``i`` (renders it: the masks come from the drawing)."""
+        return self.renderer.render(i, noise=False)[1]
+
+    def background(self, i: int) -> np.ndarray:
+        return self.renderer.background(i)
+
+    @property
+    def trajectory(self) -> TwoPersonTrajectory:
+        return self.scenario.to_trajectory()
+
+    def close(self) -> None:
+        self.renderer._cache.clear()
+
+
+def open_stream(scenario: str = "handshake", seed: int = 0, width: int | None = 320,
+                height: int | None = 240, fps: float | None = 25.0, **kw: Any) -> SimStream:
+    """Open a simulated scene. ``width``/``height``/``fps`` of None mean 320/240/25.
+
+    Raises ValueError for an unknown scenario or option (the message lists the known ones).
+    """
+    opts = _parse_options(kw)
+    width = int(width or 320)
+    height = int(height or 240)
+    fps = float(fps or 25.0)
+    frames = opts.pop("frames", None)
+    noise = opts.pop("noise", 2.0)
+    sc = make_scenario(scenario, seed=int(seed), fps=fps, **opts)
+    return SimStream(sc, default_camera(width, height), seed=int(seed), noise_sigma=noise, n_frames=frames)
+
+
+def default_sequence() -> SimStream:
+    """The demo: handshake, seed 0, 320x240 at 25 fps."""
+    return open_stream("handshake", seed=0)
