@@ -94,7 +94,7 @@ def style(emotion: str, strength: float) -> Style:
     if emotion == "sad":
         return Style(emotion, s, 1 - 0.4 * s, 1 - 0.45 * s, 0.35 * s, 0.15 * s, 0.0)
     if emotion == "happy":
-        return Style(emotion, s, 1 + 0.25 * s, 1 + 0.3 * s, -0.08 * s, 0.0, 0.25 * s)
+        return Style(emotion, s, 1 + 0.25 * s, 1 + 0.3 * s, -0.08 * s, 0.0, 0.18 * s)
     return Style("neutral", s)
 
 
@@ -651,7 +651,6 @@ SCENARIOS: dict[str, Callable[..., Scenario]] = {
 def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Scenario:
     """Generate scenario ``name`` (one of ``SCENARIOS``; "cmu" needs ``bvh_a``/``bvh_b``)."""
     if name == "cmu":
-        from sim.capture import scenario_from_bvh
         a, b = kw.pop("bvh_a", None), kw.pop("bvh_b", None)
         if a is None or b is None:
             from sim.capture import default_cmu_pair
@@ -660,3 +659,10 @@ def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Sce
     if name not in SCENARIOS:
         raise ValueError(f"unknown scenario {name!r}; choose one of {sorted(SCENARIOS)} or 'cmu'")
     return SCENARIOS[name](seed=seed, fps=fps, **kw)
+
+
+def scenario_from_bvh(path_a: str, path_b: str, fps: float = 25.0, label: str = "handshake",
+                      seed: int = 0) -> Scenario:
+    """A BVH pair as a scenario; see ``sim.capture.scenario_from_bvh``."""
+    from sim.capture import scenario_from_bvh as _from_bvh
+    return _from_bvh(path_a, path_b, fps=fps, label=label, seed=seed)
