@@ -42,11 +42,10 @@ from typing import Any, Callable
 import numpy as np
 
 from body.kinematics import forward_kinematics, frames
-from body.pose import DOF, DOF_INDEX, clip_to_limits, neutral_pose
+from body.pose import DOF_INDEX, clip_to_limits, neutral_pose
 from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, JOINT_INDEX, BodyDims
 from body.trajectory import TwoPersonTrajectory
-from sim.motion import (Track, add_gait, apply_reach, ground, oscillation, ramp, reach,
-                        smooth_noise, window)
+from sim.motion import Track, add_gait, apply_reach, ground, oscillation, ramp, smooth_noise, window
 
 SIGNAL_NAMES: tuple[str, ...] = ("nod", "shake", "gaze_at_other", "talking", "activity")
 SIGNAL_INDEX: dict[str, int] = {n: i for i, n in enumerate(SIGNAL_NAMES)}
@@ -372,7 +371,6 @@ def pull(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
 
 def _meeting(c: _Ctx, kind: str) -> Scenario:
     geo = _hands_meet(c, high=(kind == "high_five"))
-    g = DOF_INDEX
     x_end = {"a": geo["mx"] - geo["d"]["a"], "b": geo["mx"] + geo["d"]["b"]}
     tracks = {p: Track(_start_pose(c, p, x_end[p])) for p in "ab"}
     arrive = _approach(c, tracks, x_end, float(c.rng.uniform(0.3, 0.8)))
@@ -436,7 +434,6 @@ def push(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
     """The initiator walks up and pushes the other on the chest with both hands; the pushed person
     recoils: leans back, arms flung out, head snapping back, stumbling backwards a few steps."""
     c = _context("push", seed, fps, emotion, strength, initiator)
-    g = DOF_INDEX
     I, O = c.init, c.other
     dO = c.dims[O]
     chest_y = dO.hip_height + dO.torso_length - dO.chest_drop * 0.6
@@ -522,7 +519,6 @@ def wave(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
     for p in "ab":
         Q = _idle(c, tracks[p].sample(times), times, p)
         Q[:, g["r_elbow_flex"]] += 0.4 * a * oscillation(times, *osc[p], 2.0 * c.st.speed)
-        Q[:, g["head_nod"]] += 0.0
         P[p] = ground(_legs(c, Q, p, busy=window(times, start[p], osc[p][1] + up, up)), c.dims[p])
     t_c, t_r = start[I] + up, start[I] + up + length[I]
     phase = np.where(times < t_c, 0, np.where(times < t_r, 1, 2))
