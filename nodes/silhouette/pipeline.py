@@ -16,6 +16,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from .background import BACKGROUND
 from .backends import HorprasertSubtractor, make_subtractor
 from .regions import Person, PersonTracker, clean_mask
 from .spline import silhouette_spline
@@ -50,6 +51,8 @@ class SilhouetteExtractor:
     n_ctrl : control points per outline (>= 4).
     min_area : smallest person region, pixels.
     open_px, close_px, fill_holes : mask clean-up (``regions.clean_mask``).
+    shadows : shadow and highlight pixels count as background (True, the default) or as foreground
+        (False: for grey images, where chromaticity cannot tell a shadow from a darker person).
     backend_params : keyword parameters of the subtractor (e.g. train_frames, learning_rate).
     tracker_params : keyword parameters of ``PersonTracker`` other than min_area.
     """
@@ -62,6 +65,7 @@ class SilhouetteExtractor:
         open_px: int = 3,
         close_px: int = 7,
         fill_holes: bool = True,
+        shadows: bool = True,
         backend_params: dict[str, Any] | None = None,
         tracker_params: dict[str, Any] | None = None,
     ) -> None:
@@ -75,6 +79,7 @@ class SilhouetteExtractor:
         self.open_px = open_px
         self.close_px = close_px
         self.fill_holes = fill_holes
+        self.shadows = shadows
         self.backend_params = dict(backend_params or {})
         self.tracker_params = dict(tracker_params or {})
         if "min_area" in self.tracker_params:
@@ -93,14 +98,29 @@ class SilhouetteExtractor:
         self.subtractor.fit(frames, robust=robust)
         return self
 
+    @property
+    def n_frames(self) -> int:
+        """Frames given to :meth:`learn` or :meth:`process` so far."""
+        return self._index
+
     def reset_tracks(self) -> None:
         """Forget the people (new ids from 0); the background model is kept."""
         self.tracker.reset()
+
+    def learn(self, frame: np.ndarray) -> FrameResult:
+        """Feed one uint8 BGR frame (H, W, 3) to the background model only: no clean-up, no people,
+        no tracks (a stream's first frames, while an online backend is still warming up)."""
+        self.subtractor.apply(frame)
+        index = self._index
+        self._index += 1
+        return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], self.subtractor.labels, False)
 
     def process(self, frame: np.ndarray) -> FrameResult:
         """Run the whole algorithm on one uint8 BGR frame (H, W, 3)."""
         fg = self.subtractor.apply(frame)
         classes = self.subtractor.labels
+        if not self.shadows and classes is not None:
+            fg = classes != BACKGROUND
         index = self._index
         self._index += 1
         if not self.subtractor.ready:

@@ -1,0 +1,155 @@
+"""The silhouette node: people as regions and B-spline outlines, on topic ``silhouettes``.
+
+Frame (bgr8 or mono8) in, Silhouettes out, exactly one per frame with the frame's ``seq`` and
+``stamp`` (lockstep replays and the labeller pair topics by seq). While the background model learns
+from the first ``train_frames`` frames the output has no people. The algorithm is
+:class:`nodes.silhouette.pipeline.SilhouetteExtractor`; this module only converts messages.
+
+Run in a graph (``run: nodes.silhouette``) or alone::
+
+    python -m nodes.silhouette --param backend=mog2 --param train_frames=50
+
+Grey (mono8) frames are converted to three equal channels; as chromaticity cannot tell a shadow
+from a darker person there, shadow detection is off for them (every change from the background is
+foreground). A frame of another size or encoding than the ones before (a camera restarted at a new
+resolution) starts the background model and the people afresh.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import cv2
+import numpy as np
+
+from bus import Input, Node, Output, Param
+from messages import Frame, Silhouettes
+from messages.silhouette import PersonShape
+
+from .backends import BACKEND_NAMES
+from .pipeline import FrameResult, SilhouetteExtractor
+from .regions import Person
+
+_NO_CTRL = np.zeros((0, 2), np.float32)
+_NO_POINT = np.full(2, np.nan, np.float32)
+#: the largest person label a uint8 mask can hold (id + 1)
+MAX_LABEL = 255
+
+
+def as_bgr(image: np.ndarray) -> np.ndarray:
+    """uint8 (H, W, 3) BGR from a bgr8 (H, W, 3) or mono8 (H, W) / (H, W, 1) image."""
+    if image.dtype != np.uint8:
+        raise ValueError(f"frame image must be uint8, got {image.dtype}")
+    if image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 1):
+        return cv2.cvtColor(image.reshape(image.shape[:2]), cv2.COLOR_GRAY2BGR)
+    if image.ndim == 3 and image.shape[2] == 3:
+        return image
+    raise ValueError(f"frame image must be (H, W, 3) bgr8 or (H, W) mono8, got shape {image.shape}")
+
+
+def person_shape(p: Person) -> PersonShape:
+    """The message form of one person (no outline: ``ctrl`` (0, 2) and ``ref_point`` NaN)."""
+    return PersonShape(
+        id=int(p.id), side=p.side,
+        ctrl=_NO_CTRL if p.ctrl is None else np.asarray(p.ctrl, np.float32),
+        ref_point=_NO_POINT if p.ref_point is None else np.asarray(p.ref_point, np.float32),
+        centroid=np.asarray(p.centroid, np.float32), bbox=tuple(int(v) for v in p.bbox),
+        height=float(p.height), area=int(p.area), merged=bool(p.merged),
+    )
+
+
+def label_mask(labels: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(H, W) uint8 mask from the extractor's int32 labels, and whether any id had to be clipped
+    (ids >= 255 share the value 255)."""
+    clipped = bool(labels.max(initial=0) > MAX_LABEL)
+    return np.minimum(labels, MAX_LABEL).astype(np.uint8), clipped
+
+
+class Silhouette(Node):
+    """Background subtraction with shadows (Horprasert et al. 1999), people with stable ids, and each
+    outline as a closed cubic B-spline from the top of the head (Baumberg & Hogg)."""
+
+    inputs = {"frame": Input(Frame, doc="bgr8 or mono8 frames")}
+    outputs = {"silhouettes": Output(Silhouettes, "one per frame; no people while the background is learnt")}
+    params = {
+        "backend": Param(str, "horprasert", "background subtractor", choices=BACKEND_NAMES),
+        "n_ctrl": Param(int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)",
+                        min=4, max=1024),
+        "min_area": Param(int, 300, "smallest person region (pixels)", min=1),
+        "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people",
+                              min=2, max=100_000),
+        "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
+        "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
+        "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
+        "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
+        "fill_holes": Param(bool, True, "fill holes inside each region"),
+    }
+
+    def setup(self) -> None:
+        self.extractor: SilhouetteExtractor | None = None
+        self.key: tuple[tuple[int, ...], bool] | None = None  # (frame size, mono) of the model
+        self.found = 0
+        self._warned: set[str] = set()
+
+    def _warn_once(self, kind: str, text: str, *args: Any) -> None:
+        if kind not in self._warned:
+            self._warned.add(kind)
+            self.log.warning(text, *args)
+
+    def _new_extractor(self, mono: bool) -> SilhouetteExtractor:
+        p = self.p
+        backend_params: dict[str, Any] = {}
+        if p["backend"] == "horprasert":
+            backend_params = {"train_frames": p["train_frames"], "robust": p["robust"]}
+        elif p["backend"] in ("mog2", "knn") and mono:
+            backend_params = {"detectShadows": False}
+        # without colour a shadow cannot be told from a darker person (Horprasert's test is on
+        # chromaticity): on grey frames every change from the background is foreground
+        return SilhouetteExtractor(backend=p["backend"], n_ctrl=p["n_ctrl"], min_area=p["min_area"],
+                                   open_px=p["open_px"], close_px=p["close_px"], fill_holes=p["fill_holes"],
+                                   shadows=not mono, backend_params=backend_params)
+
+    def _extract(self, image: np.ndarray, mono: bool) -> FrameResult:
+        key = (image.shape[:2], mono)
+        if self.extractor is None or key != self.key:
+            if self.key is not None:
+                self.log.warning("frames changed from %dx%d %s to %dx%d %s: learning the background again",
+                                 self.key[0][1], self.key[0][0], "mono8" if self.key[1] else "bgr8",
+                                 key[0][1], key[0][0], "mono8" if mono else "bgr8")
+            self.extractor, self.key = self._new_extractor(mono), key
+        ex = self.extractor
+        # horprasert trains itself on its first train_frames frames; the online OpenCV models only
+        # learn during as many frames, so that every backend reports people from the same frame on
+        if self.p["backend"] != "horprasert" and ex.n_frames < self.p["train_frames"] - 1:
+            return ex.learn(image)
+        return ex.process(image)
+
+    def on_frame(self, msg: Frame) -> None:
+        h, w = msg.image.shape[:2] if msg.image.ndim >= 2 else (0, 0)
+        try:
+            image = as_bgr(msg.image)
+        except ValueError as exc:
+            # one output per input all the same, so that downstream stays in step
+            self._warn_once("image", "frame %d: %s; publishing no people for such frames", msg.seq, exc)
+            self.publish("silhouettes", Silhouettes(stamp=msg.stamp, seq=msg.seq, width=w, height=h))
+            return
+        result = self._extract(image, mono=image.shape != msg.image.shape)
+        every = self.p["mask_every"]
+        labels = np.zeros(0, np.uint8)
+        if every and msg.seq % every == 0:
+            labels, clipped = label_mask(result.labels)
+            if clipped:
+                self._warn_once("ids", "person ids above %d do not fit the uint8 label mask; their pixels read %d",
+                                MAX_LABEL - 1, MAX_LABEL)
+        people = [person_shape(p) for p in result.people]
+        self.found += bool(people)
+        self.publish("silhouettes", Silhouettes(stamp=msg.stamp, seq=msg.seq, people=people, labels=labels,
+                                                width=w, height=h))
+
+    def on_end(self) -> None:
+        self.log.info("people found in %d frames", self.found)
+
+
+NODE = Silhouette
+
+if __name__ == "__main__":
+    Silhouette.main()
