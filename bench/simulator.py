@@ -1,6 +1,6 @@
 """Simulator rendering speed at 320x240 on one core (noise, shadows, ground truth included).
 
-Usage: python bench/sim.py (from the repository root). Prints one line per scenario and, last, one JSON object:
+Usage: python bench/simulator.py (from the repository root, with the project installed). Prints one line per scenario and, last, one JSON object:
 {"fps_median": ..., "fps": {scenario: ...}, "ms_per_frame_median": ..., "size": [320, 240], ...}
 """
 from __future__ import annotations
@@ -9,12 +9,6 @@ import json
 import os
 import sys
 import time
-
-# Run as `python bench/sim.py` from the repository root: this file's folder comes first on
-# sys.path and its name would hide the `sim` package; put the repository root first instead.
-_HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path[:] = [p for p in sys.path if os.path.abspath(p or ".") != _HERE]
-sys.path.insert(0, os.path.dirname(_HERE))
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
