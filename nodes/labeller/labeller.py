@@ -124,6 +124,13 @@ class SocialLabeller:
         """Forget every person."""
         self._people.clear()
 
+    def skip(self, n_frames: int = 1) -> None:
+        """``n_frames`` frames are missing from the stream (dropped upstream): every person's
+        windows restart at the next :meth:`update`, so that no window spans the gap."""
+        if n_frames < 0:
+            raise ValueError(f"n_frames must be >= 0, got {n_frames}")
+        self._frame += int(n_frames)
+
     def _state(self, pid: Hashable) -> _PersonState:
         st = self._people.get(pid)
         if st is None:
