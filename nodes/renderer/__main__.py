@@ -1,0 +1,7 @@
+"""``python -m nodes.renderer --param video=out.mp4 ...``: run the renderer node alone."""
+import sys
+
+from bus.runner import run_standalone
+
+if __name__ == "__main__":
+    sys.exit(run_standalone("nodes.renderer.node:Renderer"))

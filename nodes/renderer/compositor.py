@@ -1,0 +1,268 @@
+"""Pairing the renderer's topics by ``seq`` and compositing one output image per frame.
+
+Frames are the clock. A frame is rendered once its partner has arrived (when a partner is
+expected at all), or when a partner with a higher ``seq`` shows that this frame's partner will not
+come (topics arrive in order), or after ``timeout`` seconds, or when more than ``max_pending``
+frames wait. Overlays (silhouettes, pose, signals) never hold a frame back: each uses the message
+of the same ``seq`` when there is one, else the newest older one (an overlay a frame late is better
+than a flickering one). A frame whose partner did not come shows the newest older partner.
+
+No bus here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
+"""
+from __future__ import annotations
+
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Any
+
+import cv2
+import numpy as np
+
+from body.camera import Camera
+
+from . import draw
+
+STYLES = ("auto", "cones", "silhouette")
+OVERLAYS = ("skeleton", "splines", "signals", "stats", "controls")
+
+
+@dataclass
+class Bundle:
+    """Everything one output image is made of."""
+
+    frame: Any
+    partner: Any = None
+    silhouettes: Any = None
+    pose: Any = None
+    signals: Any = None
+    partner_exact: bool = False  # the partner's seq equals the frame's
+
+
+@dataclass
+class ControlState:
+    """The run-time controls in force (``None``: not set yet)."""
+
+    model: str | None = None
+    speaker: str | None = None
+    interest: int | None = None
+    emotion: str | None = None
+    strength: float | None = None
+
+    def update(self, msg: Any) -> None:
+        """Apply a ``messages.Control``: fields that are None stay as they are."""
+        for k in ("model", "speaker", "interest", "emotion", "strength"):
+            v = getattr(msg, k, None)
+            if v is not None:
+                setattr(self, k, v)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"model": self.model, "speaker": self.speaker, "interest": self.interest,
+                "emotion": self.emotion, "strength": self.strength}
+
+
+class _History:
+    """The newest messages of one topic by seq (bounded), for exact or newest-older lookup."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.items: OrderedDict[int, Any] = OrderedDict()
+        self.max_seq = -1
+
+    def add(self, msg: Any) -> None:
+        seq = int(msg.seq)
+        self.items[seq] = msg
+        self.items.move_to_end(seq)
+        self.max_seq = max(self.max_seq, seq)
+        while len(self.items) > self.size:
+            self.items.popitem(last=False)
+
+    def exact(self, seq: int) -> Any:
+        return self.items.get(seq)
+
+    def at_or_before(self, seq: int) -> Any:
+        best, best_seq = None, -1
+        for s, m in self.items.items():
+            if best_seq < s <= seq:
+                best, best_seq = m, s
+        return best
+
+
+def _first(a: Any, b: Any) -> Any:
+    return a if a is not None else b
+
+
+def scaled_camera(camera: Camera, width: int, height: int) -> Camera:
+    """The calibration for images of ``width`` x ``height`` pixels: intrinsics scaled by the size
+    ratio (a resized video), extrinsics unchanged."""
+    if (width, height) == (camera.width, camera.height):
+        return camera
+    sx, sy = width / camera.width, height / camera.height
+    return Camera(camera.fx * sx, camera.fy * sy, (camera.cx + 0.5) * sx - 0.5, (camera.cy + 0.5) * sy - 0.5,
+                  width, height, camera.R, camera.t)
+
+
+@dataclass
+class Compositor:
+    """Pairs frames with partner, silhouettes, pose and signals by seq and draws them.
+
+    Args:
+        camera: calibration of the 3D partner and skeleton projection (scaled to the frame size).
+        want_partner: whether a partner topic is subscribed (else frames render at once).
+        style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl) or ``auto`` (what the
+            partner message carries, cones first).
+        overlays: overlay name (:data:`OVERLAYS`) -> on/off.
+        timeout: seconds a frame waits for its partner.
+        max_pending: frames held at most; beyond it the oldest renders without waiting.
+        history: messages kept per side topic.
+    """
+
+    camera: Camera
+    want_partner: bool = True
+    style: str = "auto"
+    overlays: dict[str, bool] = field(default_factory=lambda: {k: True for k in OVERLAYS})
+    timeout: float = 0.5
+    max_pending: int = 128
+    history: int = 64
+
+    def __post_init__(self) -> None:
+        if self.style not in STYLES:
+            raise ValueError(f"style={self.style!r}: expected one of {', '.join(STYLES)}")
+        unknown = sorted(set(self.overlays) - set(OVERLAYS))
+        if unknown:
+            raise ValueError(f"unknown overlay(s) {unknown}; expected some of {list(OVERLAYS)}")
+        self.pending: OrderedDict[int, tuple[Any, float]] = OrderedDict()
+        self.partners = _History(self.history)
+        self.side = {k: _History(self.history) for k in ("silhouettes", "pose", "signals")}
+        self.stats: dict[str, Any] = {}
+        self.controls = ControlState()
+        self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0}
+        self._cams: dict[tuple[int, int], Camera] = {}
+
+    # ---------------------------------------------------------------------------------- input
+    def add_frame(self, msg: Any, now: float | None = None) -> None:
+        self.pending[int(msg.seq)] = (msg, time.monotonic() if now is None else now)
+
+    def add_partner(self, msg: Any) -> None:
+        self.partners.add(msg)
+
+    def add_side(self, kind: str, msg: Any) -> None:
+        """``kind``: silhouettes, pose or signals."""
+        self.side[kind].add(msg)
+
+    def add_stats(self, msg: Any) -> None:
+        """Keep the newest ``messages.NodeStats`` per node."""
+        self.stats[msg.node] = msg
+
+    def set_control(self, msg: Any) -> None:
+        """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches)."""
+        self.controls.update(msg)
+        for k, v in (getattr(msg, "overlays", None) or {}).items():
+            if k in OVERLAYS:
+                self.overlays[k] = bool(v)
+
+    # --------------------------------------------------------------------------------- pairing
+    def ready(self, now: float | None = None, flush: bool = False) -> list[Bundle]:
+        """Frames ready to render, oldest first, removed from the pending ones. ``flush``: all of
+        them (end of stream)."""
+        now = time.monotonic() if now is None else now
+        out = []
+        while self.pending:
+            seq, (frame, t) = next(iter(self.pending.items()))
+            partner = self.partners.exact(seq) if self.want_partner else None
+            done = (not self.want_partner or partner is not None or self.partners.max_seq > seq or flush
+                    or now - t >= self.timeout)
+            forced = not done and len(self.pending) > self.max_pending
+            if not (done or forced):
+                break
+            self.counts["forced"] += forced
+            del self.pending[seq]
+            out.append(self._bundle(frame, partner))
+        return out
+
+    def _bundle(self, frame: Any, partner: Any) -> Bundle:
+        seq = int(frame.seq)
+        exact = partner is not None
+        if self.want_partner:
+            if partner is None:
+                partner = self.partners.at_or_before(seq)
+            self.counts["partner_exact" if exact else "partner_held" if partner is not None else "partner_missing"] += 1
+        sides = {k: _first(h.exact(seq), h.at_or_before(seq)) for k, h in self.side.items()}
+        return Bundle(frame=frame, partner=partner, partner_exact=exact, **sides)
+
+    # ------------------------------------------------------------------------------- drawing
+    def camera_for(self, width: int, height: int) -> Camera:
+        cam = self._cams.get((width, height))
+        if cam is None:
+            cam = self._cams[(width, height)] = scaled_camera(self.camera, width, height)
+        return cam
+
+    def render(self, b: Bundle) -> np.ndarray:
+        """The composited (H, W, 3) uint8 BGR image of one bundle (a new array)."""
+        img = np.asarray(b.frame.image)
+        if img.ndim == 2:
+            img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+        elif img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
+            raise ValueError(f"frame {b.frame.seq}: image {img.dtype} {img.shape} is not bgr8 or mono8")
+        else:
+            img = img.copy()
+        cam = self.camera_for(img.shape[1], img.shape[0])
+        ov = self.overlays
+        if ov.get("splines") and b.silhouettes is not None:
+            for person in b.silhouettes.people:
+                if np.size(person.ctrl) >= 8:
+                    draw.draw_spline_outline(img, person.ctrl, draw.person_colour(person.id), 1,
+                                             person.ref_point, f"{person.id}")
+        if b.partner is not None:
+            self._draw_partner(img, b.partner, cam)
+        if ov.get("skeleton") and b.pose is not None:
+            for body in b.pose.people:
+                if np.shape(body.joints) == (14, 3) and np.isfinite(body.joints).all():
+                    draw.draw_skeleton(img, body.joints, cam, draw.person_colour(body.id))
+        if ov.get("signals") and b.signals is not None:
+            self._draw_signals(img, b, cam)
+        if ov.get("stats") and self.stats:
+            draw.draw_stats(img, self.stats)
+        if ov.get("controls"):
+            draw.draw_controls(img, self.controls_shown(b.partner))
+        self.counts["rendered"] += 1
+        return img
+
+    def controls_shown(self, partner: Any) -> dict[str, Any]:
+        """The controls for the overlay: those set here, else what the partner says is in force."""
+        shown = self.controls.as_dict()
+        if partner is not None:
+            shown["model"] = shown["model"] or partner.model or None
+            if shown["emotion"] is None:
+                shown["emotion"] = partner.emotion
+            if shown["strength"] is None:
+                shown["strength"] = partner.strength
+        return shown
+
+    def _draw_partner(self, img: np.ndarray, partner: Any, cam: Camera) -> None:
+        colour = draw.partner_colour(partner.emotion, partner.strength)
+        has_joints = np.shape(partner.joints) == (14, 3) and np.isfinite(partner.joints).all()
+        has_ctrl = np.ndim(partner.ctrl) == 2 and len(partner.ctrl) >= 4 and np.isfinite(partner.ctrl).all()
+        if self.style in ("auto", "cones") and has_joints:
+            draw.draw_partner_3d(img, partner.joints, cam, colour)
+        elif self.style in ("auto", "silhouette") and has_ctrl:
+            draw.draw_silhouette(img, partner.ctrl, colour)
+
+    def _draw_signals(self, img: np.ndarray, b: Bundle, cam: Camera) -> None:
+        boxes = {p.id: p.bbox for p in (b.silhouettes.people if b.silhouettes is not None else [])}
+        heads = {}
+        if b.pose is not None:
+            for body in b.pose.people:
+                if np.shape(body.joints) == (14, 3):
+                    heads[body.id] = cam.project(np.asarray(body.joints[0], np.float64))
+        for i, person in enumerate(b.signals.people):
+            if person.id in boxes and boxes[person.id][2] > 0:
+                x, y = boxes[person.id][0], max(boxes[person.id][1] - 18, 0)
+            elif person.id in heads and np.isfinite(heads[person.id]).all():
+                x, y = heads[person.id][0] - 30, max(heads[person.id][1] - 40, 0)
+            else:  # nowhere to anchor it: stack in the top-right corner
+                x, y = img.shape[1] * 0.55, 4 + 18 * i
+            draw.draw_signal_badges(img, (max(x, 0), y), list(person.names), person.labels, person.scores)
+
+
+__all__ = ["Compositor", "Bundle", "ControlState", "scaled_camera", "STYLES", "OVERLAYS"]

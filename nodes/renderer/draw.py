@@ -1,0 +1,419 @@
+"""Drawing the partner and the overlays into BGR images: plain functions over numpy arrays.
+
+The 3D partner is drawn as in Zheng et al. 2006 ("Virtual friend"): the 16 truncated cones of
+``body.skeleton`` are projected with the camera calibration and shaded. Each cone is cut into
+``n_rim`` side facets (quads between its two rim circles) plus its two flat ends; facets facing
+away from the camera are culled, the rest are shaded by Lambert's law
+
+    I = colour * (ambient + (1 - ambient) * max(0, n . l))
+
+(n the facet's outward unit normal, l the unit direction towards the light) and painted far to
+near by the mean camera depth of their corners (painter's algorithm), so a nearer cone covers a
+farther one. The joint-shape partner of Johnson, Galata & Hogg 1998 is a closed uniform cubic
+B-spline in image pixels, filled and outlined.
+
+Images are (H, W, 3) uint8 BGR and are drawn into in place; every function also returns the image.
+Pixel coordinates are (x = column, y = row); world coordinates are metres (Y up).
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any, Iterable, Mapping, Sequence
+
+import cv2
+import numpy as np
+
+from body.camera import Camera
+from body.ik import dims_from_joints, inverse_kinematics
+from body.kinematics import cone_endpoints
+from body.raster import cone_rims
+from body.skeleton import BONES, JOINT_INDEX, N_JOINTS
+
+_SHIFT = 4  # fixed-point bits: sub-pixel accurate polygon edges in OpenCV
+_SCALE = float(1 << _SHIFT)
+
+Colour = tuple[int, int, int]
+
+#: BGR colour of each emotion at full strength; the partner's colour blends from "neutral" to it
+EMOTION_COLOURS: dict[str, Colour] = {
+    "neutral": (200, 170, 140),
+    "happy": (40, 200, 250),
+    "sad": (190, 90, 30),
+    "angry": (40, 40, 220),
+}
+#: colours of people's overlays by id (cycled)
+PERSON_COLOURS: tuple[Colour, ...] = ((0, 220, 0), (255, 120, 0), (0, 140, 255), (220, 0, 220), (0, 220, 220))
+UNKNOWN_GREY: Colour = (128, 128, 128)
+_FONT = cv2.FONT_HERSHEY_SIMPLEX
+
+
+def person_colour(pid: int) -> Colour:
+    """The overlay colour of person ``pid`` (cycled over :data:`PERSON_COLOURS`)."""
+    return PERSON_COLOURS[int(pid) % len(PERSON_COLOURS)]
+
+
+def partner_colour(emotion: str = "neutral", strength: float = 0.0) -> Colour:
+    """BGR colour of the partner: the neutral colour blended towards ``emotion``'s colour by
+    ``strength`` in [0, 1] (clipped); unknown emotions count as neutral."""
+    base = np.array(EMOTION_COLOURS["neutral"], np.float64)
+    target = np.array(EMOTION_COLOURS.get(emotion, EMOTION_COLOURS["neutral"]), np.float64)
+    s = float(np.clip(strength if np.isfinite(strength) else 0.0, 0.0, 1.0))
+    return tuple(int(round(c)) for c in base + s * (target - base))  # type: ignore[return-value]
+
+
+# ------------------------------------------------------------------------------ 3D partner (cones)
+def partner_cones(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The 16 truncated cones of a body given by its 14 joints.
+
+    The joints are turned into a pose vector by ``body.ik.inverse_kinematics`` and into body
+    dimensions by ``body.ik.dims_from_joints``; forward kinematics of both gives cones whose limb
+    directions follow the joints, with head, hands and feet added.
+
+    Args:
+        joints: (14, 3) metres, world frame, ``body.skeleton.JOINTS`` order.
+    Returns:
+        ends (16, 2, 3) metres (start and end centre of each cone), radii (16, 2) metres.
+    """
+    X = np.asarray(joints, np.float64)
+    if X.shape != (N_JOINTS, 3):
+        raise ValueError(f"partner joints have shape {X.shape}; expected ({N_JOINTS}, 3) metres")
+    if not np.isfinite(X).all():
+        raise ValueError("partner joints contain NaN or inf; expected finite positions in metres")
+    P = inverse_kinematics(X)
+    ends, radii = cone_endpoints(P, dims_from_joints(X))
+    return ends[0], radii
+
+
+@lru_cache(maxsize=8)
+def _quad_index(n_rim: int) -> np.ndarray:
+    """(n_rim, 4, 2) (rim, point) indices of each side facet: a0, a1, b1, b0."""
+    k = np.arange(n_rim)
+    k1 = (k + 1) % n_rim
+    return np.stack([np.stack([np.zeros_like(k), k], 1), np.stack([np.zeros_like(k), k1], 1),
+                     np.stack([np.ones_like(k), k1], 1), np.stack([np.ones_like(k), k], 1)], 1)
+
+
+def default_light(camera: Camera) -> np.ndarray:
+    """(3,) unit world direction towards a light above, slightly right of and behind the camera."""
+    d = camera.R.T @ np.array([0.3, -0.6, -1.0])
+    return d / np.linalg.norm(d)
+
+
+def cone_facets(ends: np.ndarray, radii: np.ndarray, camera: Camera, light: np.ndarray | None = None,
+                n_rim: int = 16, ambient: float = 0.35) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """Visible facets of the cones, shaded and sorted far to near.
+
+    Args:
+        ends: (S, 2, 3) metres; radii: (S, 2) metres.
+        camera: projection.
+        light: (3,) world direction towards the light (default :func:`default_light`).
+        n_rim: facets around each cone.
+        ambient: shade of a facet turned away from the light, in [0, 1].
+    Returns:
+        polygons: list of (k, 2) float pixel polygons (4 corners for sides, n_rim for ends),
+        shade: (F,) intensities in [ambient, 1], depth: (F,) mean camera depth (m), far to near.
+    """
+    ends = np.asarray(ends, np.float64)
+    radii = np.asarray(radii, np.float64)
+    if ends.ndim != 3 or ends.shape[1:] != (2, 3) or radii.shape != ends.shape[:2]:
+        raise ValueError(f"cones: ends {ends.shape} must be (S, 2, 3) and radii {radii.shape} (S, 2)")
+    l_dir = default_light(camera) if light is None else np.asarray(light, np.float64) / np.linalg.norm(light)
+    rims = cone_rims(ends[None], radii, n_rim)[0]                          # (S, 2, n, 3)
+    S = len(ends)
+    eye = camera.centre
+    # side facets
+    qi = _quad_index(n_rim)
+    quads = rims[:, qi[..., 0], qi[..., 1]]                                # (S, n, 4, 3)
+    centroid = quads.mean(axis=2)
+    normal = np.cross(quads[:, :, 1] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 0])
+    radial = centroid - ends.mean(axis=1)[:, None]                        # facet centroids sit at mid-axis
+    normal *= np.where((normal * radial).sum(-1, keepdims=True) < 0, -1.0, 1.0)
+    # flat ends: outward normals along -axis (start) and +axis (end)
+    axis = ends[:, 1] - ends[:, 0]
+    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
+    cap_normal = np.stack([-axis, axis], 1)                                # (S, 2, 3)
+    cap_centroid = ends
+    # one flat list of facets: S*n quads then S*2 caps
+    normals = np.concatenate([normal.reshape(-1, 3), cap_normal.reshape(-1, 3)])
+    centroids = np.concatenate([centroid.reshape(-1, 3), cap_centroid.reshape(-1, 3)])
+    normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
+    facing = (normals * (eye - centroids)).sum(-1) > 0
+    shade = ambient + (1.0 - ambient) * np.clip(normals @ l_dir, 0.0, None)
+    quad_px = camera.project(quads).reshape(-1, 4, 2)
+    cap_px = camera.project(rims).reshape(-1, n_rim, 2)
+    quad_z = camera.depth(quads).reshape(-1, 4).mean(-1)
+    cap_z = camera.depth(rims).reshape(-1, n_rim).mean(-1)
+    depth = np.concatenate([quad_z, cap_z])
+    finite = np.concatenate([np.isfinite(quad_px).all(axis=(1, 2)), np.isfinite(cap_px).all(axis=(1, 2))])
+    keep = np.flatnonzero(facing & finite)
+    keep = keep[np.argsort(-depth[keep], kind="stable")]
+    nq = S * n_rim
+    polys = [quad_px[i] if i < nq else cap_px[i - nq] for i in keep]
+    return polys, shade[keep], depth[keep]
+
+
+def draw_cones(image: np.ndarray, ends: np.ndarray, radii: np.ndarray, camera: Camera,
+               colour: Colour = EMOTION_COLOURS["neutral"], light: np.ndarray | None = None,
+               n_rim: int = 16, ambient: float = 0.35) -> np.ndarray:
+    """Paint shaded truncated cones (S, 2, 3)/(S, 2) metres into ``image`` (H, W, 3) uint8 BGR,
+    far to near (see :func:`cone_facets`). Returns ``image``."""
+    _check_image(image)
+    polys, shade, _ = cone_facets(ends, radii, camera, light, n_rim, ambient)
+    base = np.asarray(colour, np.float64)
+    for poly, s in zip(polys, shade):
+        fixed = np.round(poly * _SCALE).astype(np.int32)
+        c = tuple(int(v) for v in np.clip(base * s, 0, 255))
+        cv2.fillConvexPoly(image, fixed, c, lineType=cv2.LINE_AA, shift=_SHIFT)
+    return image
+
+
+def draw_partner_3d(image: np.ndarray, joints: np.ndarray, camera: Camera,
+                    colour: Colour = EMOTION_COLOURS["neutral"], **kw: Any) -> np.ndarray:
+    """Draw a partner given by its (14, 3) joints (metres) as shaded cones. Returns ``image``."""
+    ends, radii = partner_cones(joints)
+    return draw_cones(image, ends, radii, camera, colour, **kw)
+
+
+# ------------------------------------------------------------------------- 2D silhouettes (splines)
+@lru_cache(maxsize=32)
+def _spline_matrix(n: int, samples_per_span: int) -> np.ndarray:
+    """(n * samples_per_span, n) matrix taking control points to curve points (read-only)."""
+    t = np.arange(samples_per_span) / samples_per_span
+    t2, t3 = t * t, t * t * t
+    basis = np.stack([(1 - t) ** 3, 3 * t3 - 6 * t2 + 4, -3 * t3 + 3 * t2 + 3 * t + 1, t3], 1) / 6.0
+    m = np.zeros((n * samples_per_span, n))
+    rows = np.arange(n * samples_per_span)
+    span = rows // samples_per_span
+    for k in range(4):
+        np.add.at(m, (rows, (span - 1 + k) % n), basis[rows % samples_per_span, k])
+    m.setflags(write=False)
+    return m
+
+
+def closed_bspline(ctrl: np.ndarray, samples_per_span: int = 8) -> np.ndarray:
+    """Points on the closed uniform cubic B-spline of control points ``ctrl`` (n, 2), n >= 4.
+
+    Span i (t in [0, 1)) is ``B0 P_{i-1} + B1 P_i + B2 P_{i+1} + B3 P_{i+2}`` with the uniform
+    cubic basis (the curve convention of ``nodes.silhouette.spline``), sampled at
+    t = j / samples_per_span. Returns (n * samples_per_span, 2) in the units of ``ctrl``.
+    """
+    c = np.asarray(ctrl, np.float64)
+    if c.ndim != 2 or c.shape[1] != 2 or len(c) < 4:
+        raise ValueError(f"spline control points have shape {c.shape}; expected (n, 2) with n >= 4")
+    if samples_per_span < 1:
+        raise ValueError(f"samples_per_span={samples_per_span}: must be >= 1")
+    return _spline_matrix(len(c), samples_per_span) @ c
+
+
+def draw_silhouette(image: np.ndarray, ctrl: np.ndarray, colour: Colour = EMOTION_COLOURS["neutral"],
+                    outline: Colour | None = (40, 40, 40), thickness: int = 1) -> np.ndarray:
+    """Fill the closed B-spline of ``ctrl`` (n, 2) pixels with ``colour`` and outline it.
+    Returns ``image``."""
+    _check_image(image)
+    pts = closed_bspline(ctrl)
+    if not np.isfinite(pts).all():
+        raise ValueError("silhouette control points contain NaN or inf; expected finite pixels")
+    fixed = [np.round(pts * _SCALE).astype(np.int32)]
+    # LINE_8 fills exactly the pixels whose centres are inside; OpenCV's anti-aliased fill grows the
+    # shape by about half a pixel, and the outline smooths the edge anyway
+    cv2.fillPoly(image, fixed, colour, lineType=cv2.LINE_8, shift=_SHIFT)
+    if outline is not None and thickness > 0:
+        cv2.polylines(image, fixed, True, outline, thickness, cv2.LINE_AA, _SHIFT)
+    return image
+
+
+# --------------------------------------------------------------------------------------- overlays
+#: lines of the skeleton overlay: the bones plus the hip line and the pelvis-to-neck spine
+_EXTRA_LINES = ((JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]),)
+SKELETON_LINES: tuple[tuple[int, int], ...] = tuple(BONES) + _EXTRA_LINES
+
+
+def draw_skeleton(image: np.ndarray, joints: np.ndarray, camera: Camera, colour: Colour = (0, 220, 0),
+                  thickness: int = 2, radius: int = 3) -> np.ndarray:
+    """Tracked skeleton: joints (14, 3) metres projected, bones as lines, the spine from the neck to
+    the mid-hip point, joints as dots. Joints behind the camera are left out. Returns ``image``."""
+    _check_image(image)
+    X = np.asarray(joints, np.float64)
+    if X.shape != (N_JOINTS, 3):
+        raise ValueError(f"skeleton joints have shape {X.shape}; expected ({N_JOINTS}, 3) metres")
+    pelvis = 0.5 * (X[JOINT_INDEX["l_hip"]] + X[JOINT_INDEX["r_hip"]])
+    uv = camera.project(np.vstack([X, pelvis]))
+    ok = np.isfinite(uv).all(-1)
+    fixed = np.round(np.nan_to_num(uv) * _SCALE).astype(np.int32)
+    lines = SKELETON_LINES + ((JOINT_INDEX["neck"], N_JOINTS),)
+    for a, b in lines:
+        if ok[a] and ok[b]:
+            cv2.line(image, tuple(fixed[a]), tuple(fixed[b]), colour, thickness, cv2.LINE_AA, _SHIFT)
+    for j in np.flatnonzero(ok[:N_JOINTS]):
+        cv2.circle(image, tuple(fixed[j]), radius << _SHIFT, colour, -1, cv2.LINE_AA, _SHIFT)
+    return image
+
+
+def draw_spline_outline(image: np.ndarray, ctrl: np.ndarray, colour: Colour = (0, 220, 0), thickness: int = 1,
+                        ref_point: np.ndarray | None = None, label: str = "", show_ctrl: bool = True) -> np.ndarray:
+    """A person's B-spline boundary (n, 2) pixels as a closed curve, its control points as dots,
+    its reference point (top of the head) as a ring and an optional label above it."""
+    _check_image(image)
+    pts = closed_bspline(ctrl)
+    fixed = np.round(pts * _SCALE).astype(np.int32)
+    cv2.polylines(image, [fixed], True, colour, thickness, cv2.LINE_AA, _SHIFT)
+    if show_ctrl:
+        for p in np.round(np.asarray(ctrl, np.float64) * _SCALE).astype(np.int32):
+            cv2.circle(image, tuple(p), 1 << _SHIFT, colour, -1, cv2.LINE_AA, _SHIFT)
+    ref = None if ref_point is None or np.size(ref_point) != 2 else np.asarray(ref_point, np.float64).reshape(2)
+    if ref is not None and np.isfinite(ref).all():
+        cv2.circle(image, tuple(np.round(ref * _SCALE).astype(np.int32)), 4 << _SHIFT, colour, 1, cv2.LINE_AA, _SHIFT)
+        if label:
+            put_text(image, label, (int(ref[0]) + 6, int(ref[1]) - 4), colour)
+    return image
+
+
+def put_text(image: np.ndarray, text: str, org: tuple[int, int], colour: Colour = (255, 255, 255),
+             scale: float = 0.4, thickness: int = 1, background: Colour | None = None) -> tuple[int, int]:
+    """Text with its baseline-left corner at ``org`` (pixels), optionally on a filled box.
+    Returns the text's (width, height) in pixels."""
+    (w, h), base = cv2.getTextSize(text, _FONT, scale, thickness)
+    x, y = org
+    if background is not None:
+        cv2.rectangle(image, (x - 2, y - h - 2), (x + w + 2, y + base), background, -1)
+    cv2.putText(image, text, (x, y), _FONT, scale, colour, thickness, cv2.LINE_AA)
+    return w, h + base
+
+
+def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Sequence[str],
+                       labels: np.ndarray, scores: np.ndarray | None = None, scale: float = 0.35) -> np.ndarray:
+    """Social-signal badges of one person: a row of small labelled boxes starting at ``anchor``
+    (x, y pixels, top-left). Label 1 (present): a bright box; 0 (absent): a dark box; -1
+    (unknown): grey. Returns ``image``."""
+    _check_image(image)
+    labels = np.asarray(labels).reshape(-1)
+    if len(labels) != len(names):
+        raise ValueError(f"signal badges: {len(names)} names but {len(labels)} labels; they must match")
+    h_img, w_img = image.shape[:2]
+    x, y = int(anchor[0]), int(anchor[1])
+    for i, name in enumerate(names):
+        text = _short(name)
+        (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
+        lab = int(labels[i])
+        if lab < 0:
+            fill, fg = UNKNOWN_GREY, (220, 220, 220)
+        elif lab > 0:
+            fill, fg = (0, 200, 255), (0, 0, 0)
+        else:
+            fill, fg = (60, 60, 60), (200, 200, 200)
+        bw, bh = tw + 6, th + base + 4
+        if x + bw > w_img:  # wrap to the next row instead of running off the image
+            x, y = int(anchor[0]), y + bh + 2
+        cv2.rectangle(image, (x, y), (x + bw, y + bh), fill, -1)
+        cv2.rectangle(image, (x, y), (x + bw, y + bh), (255, 255, 255) if lab > 0 else (0, 0, 0), 1)
+        cv2.putText(image, text, (x + 3, y + bh - base - 2), _FONT, scale, fg, 1, cv2.LINE_AA)
+        x += bw + 2
+        if y > h_img:
+            break
+    return image
+
+
+_SHORT = {"gaze_at_other": "gaze", "talking": "talk", "laughing": "laugh", "activity": "act"}
+
+
+def _short(name: str) -> str:
+    return _SHORT.get(name, name[:6])
+
+
+def stats_lines(stats: Mapping[str, Any]) -> list[str]:
+    """One text line per node from its latest ``messages.NodeStats``: the rate (Hz) of its first
+    output (else of its first input), input drops summed, the largest input latency (ms) and the
+    mean handler time (ms)."""
+    lines = []
+    for node in sorted(stats):
+        s = stats[node]
+        ports = list(s.outputs) or list(s.inputs)
+        rate = ports[0].rate_hz if ports else 0.0
+        drops = sum(t.drops for t in s.inputs)
+        lat = max((t.latency_ms for t in s.inputs), default=0.0)
+        lines.append(f"{node[:12]:<12} {rate:5.1f} Hz drop {drops:<4d} lat {lat:6.1f} ms proc {s.proc_ms_mean:5.1f} ms")
+    return lines
+
+
+def draw_stats(image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, int] = (4, 4),
+               scale: float = 0.33) -> np.ndarray:
+    """Per-node statistics (:func:`stats_lines`) as text on a dark box, top-left at ``origin``."""
+    _check_image(image)
+    lines = stats_lines(stats)
+    if not lines:
+        return image
+    sizes = [cv2.getTextSize(t, _FONT, scale, 1) for t in lines]
+    lh = max(h + b for (_, h), b in sizes) + 2
+    w = max(w for (w, _), _ in sizes) + 6
+    x, y = origin
+    roi = image[y:y + lh * len(lines) + 4, x:x + w]
+    roi[...] = (roi.astype(np.uint16) * 2 // 5).astype(np.uint8)  # darken: text stays readable on any frame
+    for i, t in enumerate(lines):
+        cv2.putText(image, t, (x + 3, y + (i + 1) * lh), _FONT, scale, (255, 255, 255), 1, cv2.LINE_AA)
+    return image
+
+
+def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float = 0.35) -> np.ndarray:
+    """The run-time controls in force along the bottom edge: model, speaker, interest, emotion and
+    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1])."""
+    _check_image(image)
+    h, w = image.shape[:2]
+    text = (f"{controls.get('model') or '-'}  speaker {controls.get('speaker') or '-'}  "
+            f"interest {controls.get('interest') or '-'}  {controls.get('emotion') or '-'}")
+    (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
+    bar_h = 6
+    top = h - th - base - bar_h - 8
+    roi = image[max(top, 0):, :]
+    roi[...] = (roi.astype(np.uint16) * 2 // 5).astype(np.uint8)
+    cv2.putText(image, text, (4, h - bar_h - 6 - base), _FONT, scale, (255, 255, 255), 1, cv2.LINE_AA)
+    s = controls.get("strength")
+    s = float(np.clip(s, 0.0, 1.0)) if isinstance(s, (int, float)) and np.isfinite(s) else 0.0
+    x0, x1, y0 = 4, w - 5, h - bar_h - 3
+    cv2.rectangle(image, (x0, y0), (x1, y0 + bar_h), (90, 90, 90), -1)
+    fill = partner_colour(str(controls.get("emotion") or "neutral"), 1.0)
+    xs = x0 + int(round(s * (x1 - x0)))
+    if xs > x0:
+        cv2.rectangle(image, (x0, y0), (xs, y0 + bar_h), fill, -1)
+    return image
+
+
+def contact_sheet(frames: Iterable[np.ndarray], cols: int = 4, pad: int = 2,
+                  background: Colour = (0, 0, 0)) -> np.ndarray:
+    """Tile images (each (H, W, 3) or (H, W) uint8) row by row into one BGR image, ``cols`` per
+    row with ``pad`` pixels between them; every tile is resized to the first one's size."""
+    tiles = [np.asarray(f) for f in frames]
+    if not tiles:
+        raise ValueError("contact_sheet: no frames given; pass at least one image")
+    if cols < 1:
+        raise ValueError(f"contact_sheet: cols={cols}; must be >= 1")
+    h, w = tiles[0].shape[:2]
+    rows = -(-len(tiles) // cols)
+    ncols = min(cols, len(tiles))
+    sheet = np.empty((rows * h + (rows - 1) * pad, ncols * w + (ncols - 1) * pad, 3), np.uint8)
+    sheet[...] = background
+    for i, t in enumerate(tiles):
+        if t.dtype != np.uint8:
+            raise ValueError(f"contact_sheet: frame {i} has dtype {t.dtype}; expected uint8")
+        if t.ndim == 2:
+            t = cv2.cvtColor(t, cv2.COLOR_GRAY2BGR)
+        if t.shape[:2] != (h, w):
+            t = cv2.resize(t, (w, h), interpolation=cv2.INTER_AREA)
+        r, c = divmod(i, cols)
+        sheet[r * (h + pad):r * (h + pad) + h, c * (w + pad):c * (w + pad) + w] = t
+    return sheet
+
+
+def _check_image(image: np.ndarray) -> None:
+    if not (isinstance(image, np.ndarray) and image.dtype == np.uint8 and image.ndim == 3 and image.shape[2] == 3):
+        got = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else type(image).__name__
+        raise ValueError(f"expected an (H, W, 3) uint8 BGR image to draw into, got {got}")
+    if not image.flags.writeable:
+        raise ValueError("the image to draw into is read-only; pass a copy (image.copy())")
+
+
+__all__ = [
+    "EMOTION_COLOURS", "PERSON_COLOURS", "UNKNOWN_GREY", "SKELETON_LINES",
+    "person_colour", "partner_colour", "partner_cones", "default_light", "cone_facets", "draw_cones",
+    "draw_partner_3d", "closed_bspline", "draw_silhouette", "draw_skeleton", "draw_spline_outline", "put_text",
+    "draw_signal_badges", "stats_lines", "draw_stats", "draw_controls", "contact_sheet",
+]

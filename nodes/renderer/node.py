@@ -1,0 +1,246 @@
+"""The renderer node: draws the partner into each camera frame, writes a video, serves a live page.
+
+Run in a graph (``run: nodes.renderer``)::
+
+    renderer:
+      run: nodes.renderer
+      params: {video: out.mp4, serve: true, port: 8080, pose: true, stats_topics: [camera/stats]}
+
+Inputs: ``frame`` (camera.Frame) always; ``partner`` (responder.Partner) unless ``partner: false``;
+``silhouettes``, ``pose``, ``signals`` when their params are true; one input per entry of
+``stats_topics`` (system.NodeStats, port named like the topic, policy latest, not awaited at end).
+Outputs: ``rendered`` (camera.Frame, the composited image, same stamp and seq as the frame) and
+``control`` (control.Control, what the web page sets).
+
+Pairing by seq, overlays and drawing are in :mod:`.compositor` and :mod:`.draw`; the video in
+:mod:`.video`; the page in :mod:`.web`. The video is closed at end of stream and in teardown, so a
+Ctrl-C leaves a playable file with every frame rendered so far.
+"""
+from __future__ import annotations
+
+import queue
+import time
+from pathlib import Path
+from typing import Any
+
+from body.camera import Camera, default_camera
+from bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
+from messages import Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
+
+from .compositor import OVERLAYS, STYLES, Bundle, Compositor
+from .controls import EMOTIONS, INTEREST_LEVELS, SPEAKERS, control_to_json, parse_control
+from .video import VideoWriter, write_png
+from .web import LiveServer, is_loopback
+
+DEFAULT_MODELS = ["dual_hmm", "joint_shape", "listener"]
+SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
+
+
+def _check_camera(value: dict[str, Any]) -> str | None:
+    try:
+        Camera.from_dict(value)
+    except (ValueError, TypeError) as exc:
+        return str(exc)
+    return None
+
+
+def _check_video(value: str) -> str | None:
+    if value and Path(value).suffix.lower() not in (".mp4", ".avi"):
+        return f"{value!r}: use a .mp4 (H.264 where OpenCV has it, else Motion-JPEG .avi) or .avi file, or '' for none"
+    return None
+
+
+def _check_topics(value: list[Any]) -> str | None:
+    bad = [t for t in value if not isinstance(t, str) or not t or t in ("frame", "partner", *SIDE_INPUTS)]
+    if bad:
+        return f"{bad}: each entry must be a stats topic name such as 'camera/stats'"
+    if len(set(value)) != len(value):
+        return f"{value}: a topic is listed twice"
+    return None
+
+
+class Renderer(Node):
+    """Composites the partner and overlays into every frame; video file, live page and controls."""
+
+    inputs = {"frame": Input(Frame, RELIABLE, "the camera frames: the renderer's clock")}
+    outputs = {
+        "rendered": Output(Frame, "the composited image of each frame (bgr8; the frame's stamp and seq)"),
+        "control": Output(Control, "run-time controls set on the web page"),
+    }
+    params = {
+        "partner": Param(bool, True, "subscribe to the partner (responder.Partner) and wait for it per frame"),
+        "silhouettes": Param(bool, False, "subscribe to silhouettes (B-spline overlay, badge placement)"),
+        "pose": Param(bool, False, "subscribe to the tracked 3D pose (skeleton overlay)"),
+        "signals": Param(bool, False, "subscribe to social signals (badge overlay)"),
+        "stats_topics": Param(list, [], "NodeStats topics to show, e.g. [camera/stats, tracker/stats]",
+                              check=_check_topics),
+        "video": Param(str, "", "output video: .mp4 (H.264, else written as .avi) or .avi (Motion-JPEG); '' none",
+                       check=_check_video),
+        "fps": Param(float, 25.0, "frame rate written into the video file", min=0.1, max=1000.0),
+        "serve": Param(bool, False, "serve the live web page"),
+        "host": Param(str, "127.0.0.1", "address of the web page; anything but loopback exposes the controls "
+                      "to the network"),
+        "port": Param(int, 8080, "port of the web page (0: any free port, logged and written to port_file)",
+                      min=0, max=65535),
+        "port_file": Param(str, "", "file to write the web page's port number to once it listens ('' none)"),
+        "jpeg_quality": Param(int, 80, "JPEG quality of the live stream", min=10, max=100),
+        "overlay_skeleton": Param(bool, True, "draw the tracked skeleton"),
+        "overlay_splines": Param(bool, True, "draw the people's B-spline silhouettes"),
+        "overlay_signals": Param(bool, True, "draw social-signal badges"),
+        "overlay_stats": Param(bool, True, "draw per-node statistics"),
+        "overlay_controls": Param(bool, True, "draw the controls in force (model, speaker, interest, emotion bar)"),
+        "camera": Param(dict, default_camera().to_dict(), "camera calibration (body.camera.Camera.to_dict or "
+                        "look-at form); scaled to the frame size", check=_check_camera),
+        "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), auto", choices=STYLES),
+        "pair_timeout": Param(float, 0.5, "seconds a frame waits for its partner", min=0.0),
+        "max_pending": Param(int, 128, "frames held waiting for partners at most", min=1, max=10000),
+        "snapshot_every": Param(int, 0, "save every Nth rendered frame as PNG in snapshot_dir (0: never)", min=0),
+        "snapshot_dir": Param(str, "", "folder of the PNG snapshots"),
+        "models": Param(list, DEFAULT_MODELS, "interaction models offered on the page"),
+    }
+    timer_period = 0.05
+
+    @classmethod
+    def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        p = super().validate_params(given, where)
+        prefix = f"{where}: " if where else ""
+        if p["snapshot_every"] and not p["snapshot_dir"]:
+            raise ParamError(f"{prefix}parameter 'snapshot_dir': needed when snapshot_every > 0")
+        if not all(isinstance(m, str) and m for m in p["models"]):
+            raise ParamError(f"{prefix}parameter 'models': expected a list of model names, got {p['models']!r}")
+        return p
+
+    @classmethod
+    def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        ins = dict(cls.inputs)
+        if params["partner"]:
+            ins["partner"] = Input(Partner, RELIABLE, "the partner of each frame (paired by seq)")
+        for name, tp in SIDE_INPUTS.items():
+            if params[name]:
+                ins[name] = Input(tp, RELIABLE, f"{name} overlay (paired by seq)")
+        for topic in params["stats_topics"]:
+            ins[topic] = Input(NodeStats, LATEST, "statistics of a node", awaits_end=False)
+        return ins, dict(cls.outputs)
+
+    # ------------------------------------------------------------------------------ life cycle
+    def setup(self) -> None:
+        p = self.p
+        overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
+        self.comp = Compositor(Camera.from_dict(p["camera"]), want_partner=p["partner"], style=p["style"],
+                               overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"])
+        self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
+        self.controls: queue.Queue[Control] = queue.Queue()
+        self.stats_ports = set(p["stats_topics"])
+        self.finished = False
+        self.last_seq = -1
+        self.server: LiveServer | None = None
+        if p["serve"]:
+            if not is_loopback(p["host"]):
+                self.log.warning("serving on %s: anyone who can reach it can watch and change the controls", p["host"])
+            self.server = LiveServer(p["host"], p["port"], self._on_web_control, self._state, self._stats,
+                                     p["jpeg_quality"]).start()
+            self.log.info("live page at %s", self.server.url)
+            if p["port_file"]:
+                Path(p["port_file"]).write_text(f"{self.server.port}\n")
+
+    def on_message(self, port: str, msg: Any) -> None:
+        if port == "frame":
+            self.comp.add_frame(msg)
+        elif port == "partner":
+            self.comp.add_partner(msg)
+        elif port in SIDE_INPUTS:
+            self.comp.add_side(port, msg)
+        elif port in self.stats_ports:
+            self.comp.add_stats(msg)
+            return
+        self._render_ready()
+
+    def on_timer(self) -> None:
+        self._apply_controls()
+        self._render_ready()
+
+    def on_end(self) -> None:
+        self._finish()
+
+    def teardown(self) -> None:
+        try:
+            if not self.finished and hasattr(self, "comp"):
+                self._finish(publish=False)  # Ctrl-C: what arrived still goes into the video
+        finally:
+            if getattr(self, "server", None) is not None:
+                self.server.close()
+
+    # ----------------------------------------------------------------------------------- work
+    def _finish(self, publish: bool = True) -> None:
+        self.finished = True
+        self._apply_controls(publish)
+        self._render_ready(flush=True, publish=publish)
+        if self.video is not None:
+            n = self.video.close()
+            self.log.info("wrote %d frames to %s", n, self.video.path)
+        c = self.comp.counts
+        if self.p["partner"]:
+            self.log.info("rendered %d frames: partner exact %d, held %d, missing %d, forced by max_pending %d",
+                          c["rendered"], c["partner_exact"], c["partner_held"], c["partner_missing"], c["forced"])
+
+    def _render_ready(self, flush: bool = False, publish: bool = True) -> None:
+        for b in self.comp.ready(time.monotonic(), flush=flush):
+            self._output(b, self.comp.render(b), publish)
+
+    def _output(self, b: Bundle, image: Any, publish: bool) -> None:
+        f = b.frame
+        if publish:
+            self.publish("rendered", Frame(stamp=f.stamp, seq=f.seq, image=image, encoding="bgr8",
+                                           source=f.source, source_time=f.source_time))
+        if self.video is not None:
+            self.video.write(image)
+        if self.server is not None:
+            self.server.push(image, f.seq)
+        n = self.p["snapshot_every"]
+        if n and self.comp.counts["rendered"] % n == 0:
+            write_png(Path(self.p["snapshot_dir"]) / f"frame{f.seq:06d}.png", image)
+        self.last_seq = f.seq
+
+    def _apply_controls(self, publish: bool = True) -> None:
+        while True:
+            try:
+                msg = self.controls.get_nowait()
+            except queue.Empty:
+                return
+            self.comp.set_control(msg)
+            if publish:
+                self.publish("control", msg)
+
+    # ------------------------------------------------------------------- web (server threads)
+    def _on_web_control(self, data: Any) -> dict[str, Any]:
+        msg = parse_control(data, self.p["models"])
+        self.controls.put(Control(stamp=time.monotonic_ns(), seq=max(self.last_seq, 0), model=msg.model,
+                                  speaker=msg.speaker, interest=msg.interest, emotion=msg.emotion,
+                                  strength=msg.strength, overlays=msg.overlays))
+        return control_to_json(msg)
+
+    def _state(self) -> dict[str, Any]:
+        return {"controls": self.comp.controls.as_dict(), "overlays": dict(self.comp.overlays),
+                "models": list(self.p["models"]), "emotions": list(EMOTIONS), "speakers": list(SPEAKERS),
+                "interest_levels": list(INTEREST_LEVELS), "seq": self.last_seq}
+
+    def _stats(self) -> dict[str, Any]:
+        out = {}
+        for node, s in sorted(dict(self.comp.stats).items()):
+            ports = list(s.outputs) or list(s.inputs)
+            out[node] = {
+                "rate_hz": ports[0].rate_hz if ports else 0.0,
+                "drops": sum(t.drops for t in s.inputs),
+                "latency_ms": max((t.latency_ms for t in s.inputs), default=0.0),
+                "proc_ms_mean": s.proc_ms_mean, "proc_ms_max": s.proc_ms_max, "uptime_s": s.uptime_s,
+                "inputs": [{"topic": t.topic, "rate_hz": t.rate_hz, "count": t.count, "drops": t.drops,
+                            "latency_ms": t.latency_ms} for t in s.inputs],
+                "outputs": [{"topic": t.topic, "rate_hz": t.rate_hz, "count": t.count} for t in s.outputs],
+            }
+        return out
+
+
+NODE = Renderer
+
+if __name__ == "__main__":
+    Renderer.main()

@@ -1,0 +1,170 @@
+"""Writing the composited video: H.264 in .mp4 where OpenCV's FFmpeg can, else Motion-JPEG .avi.
+
+OpenCV wheels differ in the encoders their FFmpeg carries (many have no software H.264 encoder;
+some open an ``avc1`` writer that then fails). So each candidate codec is probed once per process:
+a few frames are written to a temporary file and read back; only a codec whose file decodes with
+the right frame count is used. Motion-JPEG in AVI is built into OpenCV and always works.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+#: (fourcc, file suffix) tried in order for an .mp4 path; MJPG/.avi is the fallback
+H264_CANDIDATES: tuple[tuple[str, str], ...] = (("avc1", ".mp4"), ("H264", ".mp4"))
+FALLBACK: tuple[str, str] = ("MJPG", ".avi")
+_PROBED: dict[str, bool] = {}
+
+
+def _quiet_opencv() -> int:
+    """Silence OpenCV's own log while probing (failed encoders print errors); returns the old level."""
+    try:
+        old = cv2.utils.logging.getLogLevel()
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+        return old
+    except AttributeError:  # builds without the logging module
+        return -1
+
+
+def _restore_opencv(level: int) -> None:
+    if level >= 0:
+        cv2.utils.logging.setLogLevel(level)
+
+
+def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
+    """Whether OpenCV here writes ``fourcc`` into a ``suffix`` file that decodes back to ``n``
+    frames (probed once per process, in a temporary folder)."""
+    key = f"{fourcc}{suffix}"
+    if key in _PROBED:
+        return _PROBED[key]
+    ok = False
+    level = _quiet_opencv()
+    try:
+        with tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
+            path = os.path.join(tmp, "probe" + suffix)
+            wr = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*fourcc), 25.0, (64, 48))
+            if wr.isOpened():
+                for i in range(n):
+                    wr.write(np.full((48, 64, 3), 30 * i, np.uint8))
+                wr.release()
+                ok = count_frames(path) == n
+            else:
+                wr.release()
+    finally:
+        _restore_opencv(level)
+    _PROBED[key] = ok
+    return ok
+
+
+def count_frames(path: str | os.PathLike) -> int:
+    """Frames that decode from the video at ``path`` (read through, not the header's count)."""
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    try:
+        while cap.isOpened() and cap.grab():
+            n += 1
+    finally:
+        cap.release()
+    return n
+
+
+def choose_codec(path: str | os.PathLike) -> tuple[str, Path]:
+    """The fourcc and the actual output path for a requested ``path``: ``.mp4`` gets H.264 when a
+    probe shows it works here, else the same name with ``.avi`` and MJPG; ``.avi`` gets MJPG."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix == ".mp4":
+        for fourcc, sfx in H264_CANDIDATES:
+            if codec_works(fourcc, sfx):
+                return fourcc, p
+        fallback = p.with_suffix(FALLBACK[1])
+        log.warning("this OpenCV cannot write H.264: writing Motion-JPEG to %s instead of %s", fallback, p)
+        return FALLBACK[0], fallback
+    if suffix == ".avi":
+        return FALLBACK[0], p
+    raise ValueError(f"video path {str(path)!r}: use a .mp4 (H.264 where available) or .avi (Motion-JPEG) file")
+
+
+class VideoWriter:
+    """Writes BGR frames of one size to a video file, opened on the first frame.
+
+    ``path`` is the requested file; ``self.path`` the one written (``.avi`` when H.264 is not
+    available for ``.mp4``). ``close()`` is idempotent and must run for a playable file
+    (the node calls it at end of stream and in teardown).
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float = 25.0) -> None:
+        if not fps > 0:
+            raise ValueError(f"video fps={fps!r}: must be > 0 frames per second")
+        self.requested = Path(path)
+        self.fourcc, self.path = choose_codec(path)
+        self.fps = float(fps)
+        self.size: tuple[int, int] | None = None
+        self.frames = 0
+        self._writer: cv2.VideoWriter | None = None
+        self._closed = False
+
+    def write(self, image: np.ndarray) -> None:
+        """Append one (H, W, 3) uint8 BGR image (mono8 is converted). Every image must have the
+        size of the first."""
+        if self._closed:
+            raise ValueError(f"video {self.path} is closed; no more frames can be written")
+        if image.ndim == 2:
+            image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+        h, w = image.shape[:2]
+        if self._writer is None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (w, h))
+            if not self._writer.isOpened():
+                raise OSError(f"cannot open video {self.path} for writing ({self.fourcc}, {w}x{h})")
+            self.size = (w, h)
+            log.info("writing %s (%s, %dx%d, %.3g fps)", self.path, self.fourcc, w, h, self.fps)
+        elif (w, h) != self.size:
+            raise ValueError(f"frame of {w}x{h} pixels for video {self.path} of {self.size[0]}x{self.size[1]}; "
+                             "every frame of a video must have the same size")
+        self._writer.write(np.ascontiguousarray(image))
+        self.frames += 1
+
+    def close(self) -> int:
+        """Finish the file; returns the number of frames written."""
+        if not self._closed:
+            self._closed = True
+            if self._writer is not None:
+                self._writer.release()
+                self._writer = None
+        return self.frames
+
+    def __enter__(self) -> "VideoWriter":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
+    """Save ``image`` as a PNG (folders created); OSError naming the path when it fails."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    if not cv2.imwrite(str(p), image):
+        raise OSError(f"cannot write PNG snapshot {p}")
+    return p
+
+
+def encode_image(image: np.ndarray, ext: str = ".jpg", quality: int = 80) -> bytes:
+    """``image`` encoded as JPEG (``quality`` 1-100) or PNG bytes."""
+    params = [cv2.IMWRITE_JPEG_QUALITY, int(quality)] if ext == ".jpg" else []
+    ok, buf = cv2.imencode(ext, image, params)
+    if not ok:
+        raise ValueError(f"cannot encode a {image.dtype} {image.shape} image as {ext}")
+    return buf.tobytes()
+
+
+__all__ = ["VideoWriter", "choose_codec", "codec_works", "count_frames", "write_png", "encode_image",
+           "H264_CANDIDATES", "FALLBACK"]

@@ -1,0 +1,280 @@
+"""Renderer building blocks on real pixels: cones, silhouettes, overlays, pairing, video, controls."""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from body.camera import Camera, default_camera
+from body.raster import rasterise_cones
+from messages import Control, Frame, NodeStats, Partner, TopicStats
+from nodes.renderer import draw
+from nodes.renderer.compositor import Compositor, scaled_camera
+from nodes.renderer.controls import parse_control
+from nodes.renderer.video import VideoWriter, choose_codec, count_frames
+from nodes.silhouette.spline import evaluate_closed_bspline
+from tests.renderer_nodes import partner_joints, scene_frame
+
+CAM = default_camera(320, 240)
+BG = 70
+
+
+def blank(h: int = 240, w: int = 320) -> np.ndarray:
+    return np.full((h, w, 3), BG, np.uint8)
+
+
+def changed(img: np.ndarray) -> np.ndarray:
+    return (img != BG).any(-1)
+
+
+def cylinder(x: float, z: float, r: float = 0.15, y0: float = 0.3, y1: float = 1.5) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([[[x, y0, z], [x, y1, z]]], float), np.array([[r, r]])
+
+
+# ------------------------------------------------------------------------------------------ cones
+def test_partner_pixels_cover_the_projected_cones_and_nothing_far_away() -> None:
+    joints = partner_joints(0)
+    ends, radii = draw.partner_cones(joints)
+    img = draw.draw_partner_3d(blank(), joints, CAM, (0, 200, 255))
+    got = changed(img)
+    ref = rasterise_cones(ends[None], radii, CAM)[0].astype(np.uint8)
+    inner = cv2.erode(ref, np.ones((3, 3), np.uint8)).astype(bool)
+    near = cv2.dilate(ref, np.ones((5, 5), np.uint8)).astype(bool)
+    assert ref.sum() > 1500  # the partner is a sizeable figure in view
+    assert got[inner].mean() > 0.97  # every cone interior is painted
+    assert not got[~near].any()  # nothing painted away from the cones
+    # the partner stands right of centre (x = +0.6 m): the left half of the image is untouched
+    assert not got[:, :130].any()
+
+
+def test_draw_cones_painter_order_on_real_pixels() -> None:
+    near_e, r = cylinder(0.0, 0.8, r=0.12)
+    far_e, _ = cylinder(0.0, -0.8, r=0.3, y0=-1.0, y1=2.5)  # wider and taller: behind all of the near one
+    far_only = draw.draw_cones(blank(), far_e, r * 2.5, CAM, (0, 0, 255))
+    both_a = draw.draw_cones(draw.draw_cones(blank(), far_e, r * 2.5, CAM, (0, 0, 255)), near_e, r, CAM, (255, 0, 0))
+    near_mask = changed(draw.draw_cones(blank(), near_e, r, CAM, (255, 0, 0)))
+    core = cv2.erode(near_mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    assert core.sum() > 200 and changed(far_only)[core].all()  # the far cone is behind the near one there
+    # one call with both cones, in either order: the near one is on top over its whole core
+    for order in ((0, 1), (1, 0)):
+        ends = np.concatenate([(near_e, far_e)[i] for i in order])
+        radii = np.concatenate([(r, r * 2.5)[i] for i in order])
+        polys, _, depth = draw.cone_facets(ends, radii, CAM)
+        assert len(polys) == len(depth) and np.all(np.diff(depth) <= 1e-9)  # far to near
+        both = draw.draw_cones(blank(), ends, radii, CAM, (255, 0, 0))
+        assert np.array_equal(both[core], both_a[core])
+
+
+def test_shading_follows_the_light() -> None:
+    e, r = cylinder(0.0, 0.0, r=0.3)
+    light_from_left = np.array([-1.0, 0.0, 0.3])  # world -X is image left for this camera
+    img = draw.draw_cones(blank(), e, r, CAM, (200, 200, 200), light=light_from_left)
+    mask = changed(img)
+    cols = np.flatnonzero(mask.any(0))
+    mid_row = int(np.round(CAM.project(np.array([0.0, 0.9, 0.0]))[1]))
+    left = img[mid_row, cols[0] + 3:cols[0] + 8, 0].mean()
+    right = img[mid_row, cols[-1] - 7:cols[-1] - 2, 0].mean()
+    assert left > right + 60
+
+
+def test_cones_behind_the_camera_are_skipped() -> None:
+    e = np.array([[[0.0, 1.6, 4.5], [0.0, 1.6, 5.5]]])  # behind the camera at z = 4
+    img = draw.draw_cones(blank(), e, np.array([[0.2, 0.2]]), CAM)
+    assert not changed(img).any()
+
+
+# -------------------------------------------------------------------------------------- silhouette
+def ellipse_ctrl(cx: float = 100, cy: float = 120, ax: float = 40, ay: float = 70, n: int = 32) -> np.ndarray:
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.stack([cx + ax * np.cos(a), cy + ay * np.sin(a)], 1)
+
+
+def test_closed_bspline_matches_the_silhouette_node_convention() -> None:
+    rng = np.random.default_rng(0)
+    ctrl = rng.uniform(0, 200, (32, 2))
+    for k in (1, 4, 8):
+        np.testing.assert_allclose(draw.closed_bspline(ctrl, k), evaluate_closed_bspline(ctrl, k), atol=1e-9)
+
+
+def test_silhouette_fill_covers_the_curve_interior() -> None:
+    ctrl = ellipse_ctrl()
+    img = draw.draw_silhouette(blank(), ctrl, (0, 255, 0), outline=(0, 0, 0))
+    fill_only = draw.draw_silhouette(blank(), ctrl, (0, 255, 0), outline=None)
+    curve = draw.closed_bspline(ctrl, 16).astype(np.float32)
+    inside = np.zeros((240, 320), np.uint8)
+    cv2.fillPoly(inside, [np.round(curve).astype(np.int32)], 1)
+    interior = cv2.erode(inside, np.ones((5, 5), np.uint8)).astype(bool)
+    outside = ~cv2.dilate(inside, np.ones((5, 5), np.uint8)).astype(bool)
+    assert (img[interior] == (0, 255, 0)).all()
+    assert (img[outside] == BG).all()
+    coverage = (fill_only[..., 1].astype(float) - BG) / (255 - BG)  # anti-aliased edges count partly
+    assert coverage.sum() == pytest.approx(cv2.contourArea(curve), rel=0.02)
+    assert (changed(img) & ~changed(fill_only)).sum() > 100  # the outline rims the fill
+
+
+# ----------------------------------------------------------------------------------------- overlays
+def test_skeleton_marks_each_projected_joint() -> None:
+    joints = partner_joints(0)
+    img = draw.draw_skeleton(blank(), joints, CAM, (0, 255, 0))
+    uv = np.round(CAM.project(joints.astype(float))).astype(int)
+    assert all((img[v, u] != BG).any() for u, v in uv)
+    far = np.ones((240, 320), bool)
+    x0, y0 = uv.min(0) - 6
+    x1, y1 = uv.max(0) + 6
+    far[max(y0, 0):y1, max(x0, 0):x1] = False
+    assert not changed(img)[far].any()
+    with pytest.raises(ValueError, match=r"\(14, 3\)"):
+        draw.draw_skeleton(blank(), joints[:5], CAM)
+
+
+def test_spline_outline_and_badges() -> None:
+    img = draw.draw_spline_outline(blank(), ellipse_ctrl(), (0, 255, 0), ref_point=np.array([100, 50.0]), label="1")
+    assert changed(img)[120, 58:64].any() and not changed(img)[120, 80:120].any()  # outline only, hollow
+    img = draw.draw_signal_badges(blank(), (10, 10), ["nod", "shake", "gaze_at_other"], np.array([1, 0, -1]))
+    row = img[14]  # through the boxes
+    assert ((row == (0, 200, 255)).all(-1)).any()  # a present signal: bright badge
+    assert ((row == draw.UNKNOWN_GREY).all(-1)).any()  # unknown: grey
+    assert ((row == (60, 60, 60)).all(-1)).any()  # absent: dark
+    with pytest.raises(ValueError, match="names but"):
+        draw.draw_signal_badges(blank(), (0, 0), ["nod"], np.array([1, 0]))
+
+
+def test_stats_text_and_control_bar() -> None:
+    st = NodeStats(node="camera", outputs=[TopicStats(topic="frame", port="frame", rate_hz=25.0)],
+                   inputs=[TopicStats(topic="x", drops=3, latency_ms=4.5)], proc_ms_mean=1.25)
+    assert draw.stats_lines({"camera": st}) == ["camera        25.0 Hz drop 3    lat    4.5 ms proc   1.2 ms"]
+    assert changed(draw.draw_stats(blank(), {"camera": st}))[:20, :100].any()
+    widths = []
+    for s in (0.25, 0.75):
+        img = draw.draw_controls(blank(), {"emotion": "happy", "strength": s})
+        bar = img[-6]
+        widths.append(int((bar == draw.partner_colour("happy", 1.0)).all(-1).sum()))
+    assert widths[1] == pytest.approx(3 * widths[0], rel=0.05)
+
+
+def test_partner_colour_blends_by_strength() -> None:
+    assert draw.partner_colour("happy", 0.0) == draw.EMOTION_COLOURS["neutral"]
+    assert draw.partner_colour("angry", 1.0) == draw.EMOTION_COLOURS["angry"]
+    assert draw.partner_colour("angry", 7.0) == draw.EMOTION_COLOURS["angry"]
+
+
+def test_contact_sheet_tiles_in_rows() -> None:
+    frames = [np.full((20, 30, 3), 40 * i, np.uint8) for i in range(5)]
+    sheet = draw.contact_sheet(frames, cols=3, pad=2)
+    assert sheet.shape == (42, 94, 3)
+    assert (sheet[21 + 5, 32 + 5] == 160).all()  # frame 4: row 1, column 1
+    assert (sheet[20, 0] == 0).all()  # padding
+    with pytest.raises(ValueError, match="no frames"):
+        draw.contact_sheet([])
+
+
+# --------------------------------------------------------------------------------------- compositor
+def _frame(seq: int) -> Frame:
+    return Frame(seq=seq, image=scene_frame(seq, 160, 120))
+
+
+def _partner(seq: int, strength: float = 0.0) -> Partner:
+    return Partner(seq=seq, joints=partner_joints(seq), emotion="happy", strength=strength)
+
+
+def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
+    comp = Compositor(CAM, timeout=0.5)
+    for s in range(5):
+        comp.add_frame(_frame(s), now=0.0)
+    comp.add_partner(_partner(0))
+    comp.add_partner(_partner(1))
+    got = comp.ready(now=0.1)
+    assert [b.frame.seq for b in got] == [0, 1] and all(b.partner_exact for b in got)
+    comp.add_partner(_partner(3))  # partner 2 will not come
+    got = comp.ready(now=0.1)
+    assert [(b.frame.seq, b.partner.seq, b.partner_exact) for b in got] == [(2, 1, False), (3, 3, True)]
+    assert comp.ready(now=0.2) == []  # frame 4 still waits
+    assert [b.frame.seq for b in comp.ready(now=0.6)] == [4]
+    assert comp.counts == {"rendered": 0, "partner_exact": 3, "partner_held": 2, "partner_missing": 0, "forced": 0}
+
+
+def test_pairing_without_partner_and_max_pending() -> None:
+    comp = Compositor(CAM, want_partner=False)
+    comp.add_frame(_frame(0))
+    assert [b.partner for b in comp.ready()] == [None]
+    comp = Compositor(CAM, timeout=100.0, max_pending=3)
+    for s in range(5):
+        comp.add_frame(_frame(s), now=0.0)
+    assert [b.frame.seq for b in comp.ready(now=0.0)] == [0, 1]
+    assert comp.counts["forced"] == 2 and comp.counts["partner_missing"] == 2
+    assert [b.frame.seq for b in comp.ready(now=0.0, flush=True)] == [2, 3, 4]
+
+
+def test_render_draws_partner_at_the_scaled_camera_and_follows_strength() -> None:
+    comp = Compositor(CAM, overlays={"controls": False, "stats": False})
+    comp.add_frame(_frame(0))
+    comp.add_partner(_partner(0, strength=0.0))
+    img0 = comp.render(comp.ready()[0])
+    mask = (img0 != scene_frame(0, 160, 120)).any(-1)
+    small = scaled_camera(CAM, 160, 120)
+    ref = changed(draw.draw_partner_3d(blank(120, 160), partner_joints(0), small))
+    assert (mask == ref).mean() > 0.99  # drawn with the calibration scaled to the 160x120 frame
+    comp.add_frame(_frame(1))
+    comp.add_partner(_partner(1, strength=1.0))
+    img1 = comp.render(comp.ready()[0])
+    both = mask & (img1 != scene_frame(1, 160, 120)).any(-1)
+    b0, r0 = img0[both][:, 0].mean(), img0[both][:, 2].mean()
+    b1, r1 = img1[both][:, 0].mean(), img1[both][:, 2].mean()
+    assert b0 > r0 and r1 > b1 + 50  # neutral blue-grey turned happy orange
+
+
+def test_control_overlay_shows_the_control_values() -> None:
+    comp = Compositor(CAM, want_partner=False)
+    comp.set_control(Control(strength=0.2, emotion="sad"))
+    comp.add_frame(_frame(0))
+    a = comp.render(comp.ready()[0])
+    comp.set_control(Control(strength=0.9))
+    comp.add_frame(_frame(0))
+    b = comp.render(comp.ready()[0])
+    assert comp.controls.as_dict()["emotion"] == "sad"
+    diff = (a != b).any(-1)
+    assert diff[-12:].any() and not diff[:-12].any()  # only the control bar at the bottom changed
+    comp.set_control(Control(overlays={"controls": False}))
+    comp.add_frame(_frame(0))
+    c = comp.render(comp.ready()[0])
+    assert np.array_equal(c, scene_frame(0, 160, 120))
+
+
+def test_scaled_camera_projects_proportionally() -> None:
+    X = np.array([[0.3, 1.2, 0.1], [-0.5, 0.2, -0.4]])
+    half = scaled_camera(CAM, 160, 120)
+    np.testing.assert_allclose((CAM.project(X) + 0.5) / 2, half.project(X) + 0.5, atol=1e-9)
+
+
+# ------------------------------------------------------------------------------------------- video
+def test_video_writer_output_decodes_with_every_frame(tmp_path) -> None:
+    for name in ("clip.mp4", "clip2.avi"):
+        with VideoWriter(tmp_path / name, fps=10) as w:
+            for s in range(12):
+                w.write(scene_frame(s))
+        assert w.path.exists() and w.path.suffix in (".mp4", ".avi")
+        assert count_frames(w.path) == 12
+        cap = cv2.VideoCapture(str(w.path))
+        ok, first = cap.read()
+        assert ok and first.shape == (120, 160, 3)
+        assert np.abs(first.astype(int) - scene_frame(0)).mean() < 4  # lossy, but the same picture
+    with pytest.raises(ValueError, match=r"\.mp4"):
+        choose_codec(tmp_path / "x.mkv")
+    w = VideoWriter(tmp_path / "c.avi")
+    w.write(scene_frame(0))
+    with pytest.raises(ValueError, match="same size"):
+        w.write(scene_frame(0, 80, 60))
+    w.close()
+
+
+# ---------------------------------------------------------------------------------------- controls
+def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
+    c = parse_control({"strength": 0.7, "emotion": "happy", "interest": "3", "speaker": "partner",
+                       "overlays": {"stats": False}, "model": "a"}, models=["a", "b"])
+    assert (c.strength, c.emotion, c.interest, c.speaker, c.overlays, c.model) == (0.7, "happy", 3, "partner",
+                                                                                   {"stats": False}, "a")
+    for bad, msg in [({"strength": 1.5}, "strength"), ({"strength": "x"}, "strength"), ({"interest": 4}, "interest"),
+                     ({"emotion": "bored"}, "emotion"), ({"speaker": "dog"}, "speaker"), ({"volume": 1}, "volume"),
+                     ({"overlays": {"fog": True}}, "overlays"), ({"model": "c"}, "model"), ([1], "JSON object")]:
+        with pytest.raises(ValueError, match=msg):
+            parse_control(bad, models=["a", "b"])
