@@ -12,6 +12,7 @@ import sys
 
 #: command -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("bus.cli_demo", "the whole graph end to end on the built-in scene, your video or a camera"),
     "launch": ("bus.cli_launch", "run a graph from a launch file"),
     "run": ("bus.cli_run", "run one node alone"),
     "node": ("bus.cli_introspect", "list the nodes of a running launch"),
