@@ -1,0 +1,90 @@
+"""Training data for the responder: two-person trajectories from files, BVH pairs or the simulator.
+
+A data spec is one of::
+
+    PATH.npz                 a two-person trajectory file (body.trajectory format)
+    A.bvh:B.bvh              a BVH pair, one person per file (CMU style)
+    sim                      every simulator scenario, ``seeds`` seeds each
+    sim:handshake,push       the named simulator scenarios only
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from body.trajectory import TwoPersonTrajectory
+
+#: the simulator's interaction types (sim.scenarios.SCENARIOS), in a fixed order
+SIM_SCENARIOS: tuple[str, ...] = ("handshake", "high_five", "push", "pull", "wave", "conversation")
+EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
+
+Progress = Callable[[str], None]
+
+
+def sim_trajectories(scenarios: Sequence[str] = SIM_SCENARIOS, seeds: Sequence[int] = range(6),
+                     fps: float = 25.0, max_frames: int | None = 400,
+                     **kw: object) -> list[TwoPersonTrajectory]:
+    """Simulated interactions (joints only, no rendering), one per (scenario, seed).
+
+    ``max_frames`` crops long scenarios (conversations run 30 s) to keep training fast; extra keyword
+    arguments (``emotion``, ``strength``, ``initiator``) go to the scenario generators.
+    """
+    from sim.scenarios import make_scenario  # the simulator is only needed to build training data
+
+    out = []
+    for name in scenarios:
+        if name not in SIM_SCENARIOS:
+            raise ValueError(f"unknown simulator scenario {name!r}; choose from {', '.join(SIM_SCENARIOS)}")
+        for seed in seeds:
+            sc = make_scenario(name, seed=int(seed), fps=fps, **kw)
+            if max_frames and sc.n_frames > max_frames:
+                sc = sc.crop(max_frames)
+            out.append(sc.to_trajectory())
+    return out
+
+
+def load_data(specs: Sequence[str], seeds: Sequence[int] = range(6), fps: float = 25.0,
+              progress: Progress | None = None) -> list[TwoPersonTrajectory]:
+    """Trajectories for every spec (see the module docstring), resampled to ``fps``."""
+    say = progress or (lambda s: None)
+    out: list[TwoPersonTrajectory] = []
+    for spec in specs:
+        if spec == "sim" or spec.startswith("sim:"):
+            names = SIM_SCENARIOS if spec == "sim" else tuple(n for n in spec[4:].split(",") if n)
+            say(f"simulating {len(names)} scenario(s) x {len(list(seeds))} seed(s)")
+            out += sim_trajectories(names, seeds, fps)
+        elif spec.lower().endswith(".bvh") and ":" in spec:
+            a, b = spec.rsplit(":", 1) if spec.count(":") == 1 else _split_bvh_pair(spec)
+            for p in (a, b):
+                if not os.path.exists(p):
+                    raise FileNotFoundError(f"data {spec!r}: no such BVH file {p}")
+            say(f"reading BVH pair {a} + {b}")
+            out.append(TwoPersonTrajectory.from_bvh_pair(a, b).resample(fps))
+        else:
+            if not os.path.exists(spec):
+                raise FileNotFoundError(f"data {spec!r}: no such trajectory file (give PATH.npz, "
+                                        "A.bvh:B.bvh, sim or sim:NAME,NAME)")
+            say(f"reading {spec}")
+            tr = TwoPersonTrajectory.load(spec)
+            out.append(tr if abs(tr.fps - fps) < 1e-6 else tr.resample(fps))
+    if not out:
+        raise ValueError("no training data: give at least one --data spec")
+    return out
+
+
+def _split_bvh_pair(spec: str) -> tuple[str, str]:
+    i = spec.lower().find(".bvh:")
+    if i < 0:
+        raise ValueError(f"data {spec!r}: a BVH pair is A.bvh:B.bvh")
+    return spec[: i + 4], spec[i + 5 :]
+
+
+def summary(trajs: Sequence[TwoPersonTrajectory]) -> dict[str, object]:
+    """A JSON-able summary of training data for model metadata."""
+    labels: dict[str, int] = {}
+    for t in trajs:
+        labels[t.label] = labels.get(t.label, 0) + 1
+    return {"sequences": len(trajs), "frames": int(sum(t.n_frames for t in trajs)),
+            "fps": float(np.median([t.fps for t in trajs])) if trajs else 0.0, "labels": labels}

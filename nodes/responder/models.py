@@ -1,0 +1,148 @@
+"""Responder model files: one ``.npz`` holding the model's arrays and a JSON metadata string.
+
+Layout: arrays under their own names plus ``__meta__``, a JSON object::
+
+    {"format": "counterpart.responder.model", "version": 1, "model": "dual-hmm",
+     "config": {...constructor parameters and scalars...},
+     "training": {"sequences": 36, "frames": 5123, "fps": 25.0, "labels": {...}, "seconds": 12.3}}
+
+Loading a file of another format version raises :class:`ModelVersionError` naming the file, its
+version and the version this code reads. Default models live in
+``~/.cache/counterpart/models/responder-<model>.npz`` (``$COUNTERPART_MODELS`` overrides the folder)
+and are trained from the simulator when missing (:func:`load_default`).
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+MODEL_FORMAT = "counterpart.responder.model"
+MODEL_VERSION = 1
+MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion")
+
+
+class ModelVersionError(ValueError):
+    """A model file written by another format version."""
+
+
+class Storable(Protocol):
+    name: str
+
+    def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]: ...
+
+    @classmethod
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "Storable": ...
+
+
+def model_class(name: str) -> type:
+    """The class of model ``name`` (one of ``MODEL_NAMES``)."""
+    if name == "dual-hmm":
+        from .dual_hmm import DualHMM
+        return DualHMM
+    if name == "joint-shape":
+        from .joint_shape import JointShapeModel
+        return JointShapeModel
+    if name == "listener":
+        from .listener import ListenerModel
+        return ListenerModel
+    if name == "emotion":
+        from .emotion import EmotionModel
+        return EmotionModel
+    raise ValueError(f"unknown responder model {name!r}; choose one of {', '.join(MODEL_NAMES)}")
+
+
+def save_model(path: str | os.PathLike[str], model: Storable, training: dict[str, Any] | None = None) -> Path:
+    """Write ``model`` to ``path`` (``.npz`` appended if missing); returns the path written."""
+    path = Path(path)
+    if path.suffix != ".npz":
+        path = path.with_name(path.name + ".npz")
+    arrays, config = model.get_state()
+    meta = {"format": MODEL_FORMAT, "version": MODEL_VERSION, "model": model.name,
+            "config": config, "training": training or {}}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(tmp, __meta__=np.array(json.dumps(meta)), **arrays)
+    os.replace(tmp, path)
+    return path
+
+
+def read_meta(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The metadata of a model file, checked for format and version."""
+    return _open(path)[1]
+
+
+def _open(path: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    p = os.fspath(path)
+    if not os.path.exists(p):
+        raise FileNotFoundError(f"{p}: no such model file (train one with 'counterpart learn responder')")
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except (OSError, ValueError) as e:
+        raise ValueError(f"{p}: not a responder model file ({e})") from None
+    if "__meta__" not in arrays:
+        raise ValueError(f"{p}: not a responder model file (no metadata)")
+    meta = json.loads(str(arrays.pop("__meta__")))
+    if meta.get("format") != MODEL_FORMAT:
+        raise ValueError(f"{p}: format {meta.get('format')!r} is not a responder model ({MODEL_FORMAT!r})")
+    if meta.get("version") != MODEL_VERSION:
+        raise ModelVersionError(f"{p}: model file version {meta.get('version')!r}, but this counterpart reads "
+                                f"version {MODEL_VERSION}; retrain it with 'counterpart learn responder "
+                                f"--model {meta.get('model', 'M')} ...'")
+    return arrays, meta
+
+
+def load_model(path: str | os.PathLike[str], expected: str | None = None) -> Any:
+    """Load a model file; ``expected`` (a model name) is checked against the file's model."""
+    arrays, meta = _open(path)
+    name = meta.get("model")
+    if expected is not None and name != expected:
+        raise ValueError(f"{os.fspath(path)}: holds a {name!r} model, expected {expected!r}")
+    model = model_class(name).from_state(arrays, meta.get("config", {}))
+    model.training_ = meta.get("training", {})
+    return model
+
+
+def models_dir() -> Path:
+    """Folder of the default models: ``$COUNTERPART_MODELS`` or ``~/.cache/counterpart/models``."""
+    env = os.environ.get("COUNTERPART_MODELS")
+    return Path(env) if env else Path.home() / ".cache" / "counterpart" / "models"
+
+
+def default_model_path(name: str) -> Path:
+    """Where the default model ``name`` lives (it may not exist yet)."""
+    model_class(name)  # validates the name
+    return models_dir() / f"responder-{name}.npz"
+
+
+def build_default(name: str, progress: Callable[[str], None] | None = None) -> tuple[Any, dict[str, Any]]:
+    """Train model ``name`` on its default simulator data; returns (model, training summary)."""
+    from .data import summary
+    from .training import default_training_data, train
+
+    t0 = time.perf_counter()
+    data = default_training_data(name, progress)
+    model = train(name, data, progress)
+    training = dict(summary(data), source="sim (default)", seconds=round(time.perf_counter() - t0, 2))
+    return model, training
+
+
+def load_default(name: str, progress: Callable[[str], None] | None = None) -> Any:
+    """The default model ``name``: loaded from :func:`default_model_path`, built from the simulator
+    and saved there first when missing or of an older version."""
+    path = default_model_path(name)
+    if path.exists():
+        try:
+            return load_model(path, expected=name)
+        except ModelVersionError:
+            pass  # an old default: rebuild it
+    model, training = build_default(name, progress)
+    save_model(path, model, training)
+    model.training_ = training
+    return model

@@ -1,0 +1,65 @@
+"""The dual HMM learns a planted interaction and reproduces the partner from the observed person."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.responder.dual_hmm import DualHMM
+from nodes.responder.frames import actor_frame, relative_pair, to_world
+from nodes.responder.models import ModelVersionError, load_model, save_model
+from tests.responder_fixtures import mpjpe_mm, planted_pair
+
+
+@pytest.fixture(scope="module")
+def model() -> DualHMM:
+    return DualHMM(n_states=12, n_iter=15, both_roles=False).fit([planted_pair(s) for s in range(8)])
+
+
+def test_actor_frame_round_trip_and_facing() -> None:
+    tr = planted_pair(3)
+    o, th = actor_frame(tr.a)
+    la, lb = relative_pair(tr.a, tr.b)
+    assert np.allclose(to_world(la, o, th), tr.a, atol=1e-5)
+    # B stands 1.3 m straight ahead of A (+Z local), whatever the world heading
+    mid_b = 0.5 * (lb[:, 8] + lb[:, 11])
+    assert np.allclose(mid_b[:, [0, 2]], [[0.0, 1.3]], atol=0.03)
+
+
+def test_reproduces_planted_partner_at_new_places(model: DualHMM) -> None:
+    test = planted_pair(100)
+    pred = model.predict(test.a)
+    assert pred.shape == test.b.shape and pred.dtype == np.float32
+    err = mpjpe_mm(pred, test.b)
+    # baseline: the partner's mean pose, placed in A's frame (what a model without the observed gives)
+    _, lb = relative_pair(np.concatenate([planted_pair(s).a for s in range(8)]),
+                          np.concatenate([planted_pair(s).b for s in range(8)]))
+    o, th = actor_frame(test.a)
+    base = mpjpe_mm(to_world(np.broadcast_to(lb.mean(0), test.b.shape), o, th), test.b)
+    assert err < 0.35 * base, (err, base)
+    assert err < 40.0
+    # the answering left wrist follows A's raised right wrist in height
+    assert np.corrcoef(pred[:, 4, 1], test.a[:, 7, 1])[0, 1] > 0.9
+
+
+def test_viterbi_trellis_decoding_is_also_faithful(model: DualHMM) -> None:
+    test = planted_pair(101)
+    vit = DualHMM.from_state(*model.get_state())
+    vit.decode, vit.lag = "viterbi", 6
+    assert mpjpe_mm(vit.predict(test.a), test.b) < 60.0
+
+
+def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> None:
+    path = save_model(tmp_path / "m.npz", model, {"sequences": 8})
+    back = load_model(path, expected="dual-hmm")
+    test = planted_pair(102)
+    assert np.allclose(back.predict(test.a), model.predict(test.a), atol=1e-5)
+    # rewrite the metadata with another version: loading names the file and both versions
+    import json
+    z = dict(np.load(path))
+    meta = json.loads(str(z.pop("__meta__")))
+    meta["version"] = 99
+    np.savez(tmp_path / "old.npz", __meta__=np.array(json.dumps(meta)), **z)
+    with pytest.raises(ModelVersionError, match=r"old\.npz.*version 99.*reads version 1"):
+        load_model(tmp_path / "old.npz")
+    with pytest.raises(ValueError, match="holds a 'dual-hmm' model, expected 'listener'"):
+        load_model(path, expected="listener")
