@@ -48,9 +48,11 @@ def main(argv: list[str] | None = None) -> None:
         from .runner import run_standalone
 
         if len(argv) < 2 or argv[1].startswith("-"):
-            print("usage: counterpart run MODULE [--param K=V ...] [--remap PORT=TOPIC ...] [--policy PORT=latest]",
-                  file=sys.stderr)
-            sys.exit(2)
+            asked = len(argv) > 1 and argv[1] in ("-h", "--help")
+            print("usage: counterpart run MODULE [--name NAME] [--param K=V ...] [--remap PORT=TOPIC ...] "
+                  "[--policy PORT=latest]\n\nRun one node alone; MODULE is a module holding one Node, or "
+                  "module:Class.", file=sys.stdout if asked else sys.stderr)
+            sys.exit(0 if asked else 2)
         sys.exit(run_standalone(argv[1], argv[2:]))
     command = argv[0] if argv and argv[0] in COMMANDS else ""
     ap = build_parser(command)
