@@ -1,0 +1,105 @@
+"""The renderer node in launched graphs: a scene source -> renderer -> video file and `rendered` topic."""
+from __future__ import annotations
+
+import hashlib
+import re
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from body.camera import default_camera
+from bus.launchfile import LaunchError, check, load
+from messages import Frame, Partner
+from nodes.renderer import draw
+from nodes.renderer.compositor import Compositor, scaled_camera
+from nodes.renderer.video import count_frames
+from tests.launching import read_jsonl, run_launch, start_launch, stop_launch, wait_for, write_launch
+from tests.renderer_nodes import partner_joints, scene_frame
+
+W, H = 160, 120
+
+
+def graph(tmp_path: Path, source: dict, renderer: dict) -> Path:
+    return write_launch(tmp_path / "graph.yaml", {"nodes": {
+        "source": {"run": "tests.renderer_nodes:SceneSource", "params": source},
+        "renderer": {"run": "nodes.renderer", "params": renderer, "policy": "reliable"},
+        "sink": {"run": "tests.camera_sink", "params": {"path": str(tmp_path / "rendered.jsonl")},
+                 "remap": {"frame": "rendered"}, "policy": "reliable"},
+    }})
+
+
+def decode_all(path: Path) -> list[np.ndarray]:
+    cap = cv2.VideoCapture(str(path))
+    out = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            return out
+        out.append(f)
+
+
+def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path: Path) -> None:
+    n = 24
+    code, text = run_launch(graph(tmp_path, {"count": n, "width": W, "height": H, "emotion": "angry", "strength": 1.0},
+                                  {"video": str(tmp_path / "out.mp4")}), timeout=60)
+    assert code == 0, text
+    written = [p for p in (tmp_path / "out.mp4", tmp_path / "out.avi") if p.exists()]
+    assert len(written) == 1, text
+    assert f"wrote {n} frames to {written[0]}" in text
+    assert "partner exact 24, held 0, missing 0" in text
+    frames = decode_all(written[0])
+    assert len(frames) == n == count_frames(written[0])
+    cam = scaled_camera(default_camera(), W, H)
+    for seq in (0, n - 1):
+        mask = (draw.draw_partner_3d(np.zeros((H, W, 3), np.uint8), partner_joints(seq), cam) > 0).any(-1)
+        core = cv2.erode(mask.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+        far = ~cv2.dilate(mask.astype(np.uint8), np.ones((9, 9), np.uint8)).astype(bool)
+        far[-30:] = False  # the darkened control strip along the bottom
+        far[:10] = False  # the moving bar of the scene
+        img = frames[seq].astype(int)
+        # the angry partner is red where its cones project; the background elsewhere stays as it was
+        assert core.sum() > 150
+        assert (img[core][:, 2] - img[core][:, 0]).mean() > 60
+        assert np.abs(img[far] - scene_frame(seq, W, H)[far]).mean() < 3
+    # the `rendered` topic carries exactly what the compositor makes of each frame and its partner
+    records = read_jsonl(tmp_path / "rendered.jsonl")
+    assert records[-1] == {"event": "end", "drops": 0}
+    assert [r["seq"] for r in records[:-1]] == list(range(n))
+    comp = Compositor(default_camera())
+    for seq in (0, 7):
+        comp.add_frame(Frame(seq=seq, image=scene_frame(seq, W, H)))
+        comp.add_partner(Partner(seq=seq, model="test", joints=partner_joints(seq), emotion="angry", strength=1.0))
+        img = comp.render(comp.ready(flush=True)[0])
+        assert records[seq]["sha1"] == hashlib.sha1(img.tobytes()).hexdigest()
+
+
+def test_ctrl_c_leaves_a_playable_video_with_every_rendered_frame(tmp_path: Path) -> None:
+    snaps = tmp_path / "snaps"
+    file = graph(tmp_path, {"count": 100000, "rate": 30.0, "width": W, "height": H},
+                 {"video": str(tmp_path / "live.avi"), "snapshot_every": 5, "snapshot_dir": str(snaps)})
+    proc = start_launch(file)
+    try:
+        assert wait_for(lambda: len(read_jsonl(tmp_path / "rendered.jsonl")) >= 12, timeout=30), "no frames rendered"
+    finally:
+        stop_launch(proc)
+    text = proc.stdout.read()
+    m = re.search(r"wrote (\d+) frames to (\S+)", text)
+    assert m, text
+    written = int(m.group(1))
+    assert Path(m.group(2)) == tmp_path / "live.avi"
+    assert written >= 12
+    assert count_frames(tmp_path / "live.avi") == written
+    pngs = sorted(snaps.glob("frame*.png"))
+    assert len(pngs) == written // 5
+    assert cv2.imread(str(pngs[0])).shape == (H, W, 3)
+
+
+def test_bad_parameters_are_refused_before_start(tmp_path: Path) -> None:
+    for params, msg in [({"video": "x.mkv"}, "video"), ({"style": "wire"}, "style"),
+                        ({"snapshot_every": 3}, "snapshot_dir"), ({"camera": {"fx": 1}}, "camera"),
+                        ({"stats_topics": ["a/stats", "a/stats"]}, "listed twice")]:
+        file = graph(tmp_path, {"count": 1}, params)
+        with pytest.raises(LaunchError, match=msg):
+            check(load(file))
