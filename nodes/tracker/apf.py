@@ -1,0 +1,239 @@
+"""Annealed particle filter (Deutscher, Blake & Reid 2000) and a plain particle filter.
+
+One frame of the annealed filter (paper sect. 4, with the adaptive schedule of sect. 5)::
+
+    particles <- predict_fn(particles of the last frame)           dynamics / motion prior
+    for layer m = 1..M:
+        l_i   = log w(Z, x_i)                                       observation model
+        beta_m: the exponent whose weights pi_i ~ exp(beta_m l_i) give the survival rate
+                D = 1 / (N sum pi_i^2) = alpha      (eq. 11, solved by bisection on log beta)
+        estimate (last layer): weighted mean of the particles, best particle, ESS = N D
+        resample N particles by pi (systematic)
+        diffuse (not after the last layer): Gaussian noise per DOF, std proportional to the
+                weighted spread of the set, shrinking by ``shrink`` per layer; clip_to_limits
+
+Angles in radians, positions in metres (``body.pose``). The yaw is averaged on the circle.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from body.pose import DOF, LOWER, UPPER, YAW, clip_to_limits, wrap_angle
+
+LogLikelihood = Callable[[np.ndarray], np.ndarray]
+PredictFn = Callable[[np.ndarray, np.random.Generator], np.ndarray]
+
+#: lower bound of the per-DOF diffusion std: 5 mm for positions, about 0.6 degree for angles
+MIN_STD = np.where(np.arange(DOF) < 3, 0.005, 0.01)
+
+
+@dataclass
+class Estimate:
+    """Result of one filter step.
+
+    Attributes:
+        mean: (DOF,) weighted mean pose of the last layer (yaw: circular mean).
+        best: (DOF,) highest-likelihood particle of the last layer.
+        ess: effective sample size 1 / sum(pi^2) of the last layer's weights.
+        log_likelihood: log-likelihood of the best particle.
+        particles: (N, DOF) the resampled set carried to the next frame.
+        betas: (M,) chosen exponents per layer.
+        survival: (M,) achieved survival rates D per layer.
+        n_evals: likelihood evaluations spent on this frame.
+    """
+
+    mean: np.ndarray
+    best: np.ndarray
+    ess: float
+    log_likelihood: float
+    particles: np.ndarray
+    betas: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    survival: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    n_evals: int = 0
+
+
+def _normalised(ll: np.ndarray, beta: float) -> np.ndarray:
+    a = beta * (ll - ll.max())
+    w = np.exp(a)
+    return w / w.sum()
+
+
+def survival_rate(ll: np.ndarray, beta: float) -> float:
+    """D = 1 / (N sum pi^2) of weights pi ~ exp(beta * ll) (Deutscher eq. 11)."""
+    w = _normalised(ll, beta)
+    return float(1.0 / (len(ll) * np.dot(w, w)))
+
+
+def choose_beta(ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, iters: int = 40) -> float:
+    """The exponent beta whose weights exp(beta * ll) have survival rate ``survival``.
+
+    D(beta) falls monotonically from 1 (beta = 0) towards 1/N, so bisection on log beta finds it;
+    when the log-likelihoods are all equal every beta gives D = 1 and ``hi`` is returned.
+    """
+    if not 0 < survival < 1:
+        raise ValueError(f"survival={survival!r}: the target survival rate must lie in (0, 1)")
+    spread = float(ll.max() - ll.min())
+    if not np.isfinite(spread) or spread <= 0:
+        return hi
+    if survival_rate(ll, lo) <= survival:
+        return lo
+    if survival_rate(ll, hi) >= survival:
+        return hi
+    a, b = np.log(lo), np.log(hi)
+    for _ in range(iters):
+        m = 0.5 * (a + b)
+        if survival_rate(ll, np.exp(m)) > survival:
+            a = m
+        else:
+            b = m
+    return float(np.exp(0.5 * (a + b)))
+
+
+def systematic_resample(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """(N,) normalised weights -> (N,) indices, systematic resampling (one uniform draw)."""
+    N = len(w)
+    positions = (rng.random() + np.arange(N)) / N
+    idx = np.searchsorted(np.cumsum(w), positions)
+    return np.minimum(idx, N - 1)
+
+
+def weighted_mean_pose(P: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(N, DOF), (N,) -> (DOF,) weighted mean with the yaw averaged on the circle."""
+    m = w @ P
+    m[YAW] = np.arctan2(w @ np.sin(P[:, YAW]), w @ np.cos(P[:, YAW]))
+    return m
+
+
+def weighted_std(P: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(N, DOF), (N,) -> (DOF,) weighted standard deviation per DOF (yaw on the circle)."""
+    m = weighted_mean_pose(P, w)
+    d = P - m
+    d[:, YAW] = wrap_angle(d[:, YAW])
+    return np.sqrt(np.maximum(w @ (d * d), 0.0))
+
+
+class AnnealedParticleFilter:
+    """Annealed particle filter over 28-DOF poses.
+
+    Args:
+        n_layers: annealing layers M per frame (Deutscher: 10).
+        n_particles: N particles per layer.
+        survival: target survival rate alpha of every layer (Deutscher: 0.5).
+        diffusion: noise std as a fraction of the weighted particle spread after resampling.
+        shrink: factor by which the diffusion shrinks each layer (Deutscher's alpha_m schedule).
+        max_std: (DOF,) cap on the diffusion std (metres / radians); default 0.1 m and 0.35 rad.
+        min_std: (DOF,) floor of the diffusion std before shrinking (default ``MIN_STD``); a floor
+            near ``max_std`` keeps the search radius from collapsing with the particle set.
+        seed: seed or Generator of the filter's random numbers.
+    """
+
+    def __init__(self, n_layers: int = 10, n_particles: int = 256, survival: float = 0.5,
+                 diffusion: float = 0.6, shrink: float = 0.85, max_std: np.ndarray | None = None,
+                 min_std: np.ndarray | None = None, seed: int | np.random.Generator | None = 0) -> None:
+        if n_layers < 1:
+            raise ValueError(f"n_layers={n_layers}: need at least one annealing layer")
+        if n_particles < 2:
+            raise ValueError(f"n_particles={n_particles}: need at least two particles")
+        if not 0 < survival < 1:
+            raise ValueError(f"survival={survival!r}: must lie in (0, 1) (Deutscher uses 0.5)")
+        self.n_layers = int(n_layers)
+        self.n_particles = int(n_particles)
+        self.survival = float(survival)
+        self.diffusion = float(diffusion)
+        self.shrink = float(shrink)
+        self.max_std = np.where(np.arange(DOF) < 3, 0.1, 0.35) if max_std is None else np.asarray(max_std)
+        self.min_std = MIN_STD if min_std is None else np.asarray(min_std)
+        self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        self.particles: np.ndarray | None = None
+
+    def initialise(self, particles: np.ndarray) -> None:
+        """Set the particle set (K, DOF), K resampled to N if it differs."""
+        particles = clip_to_limits(np.asarray(particles, dtype=np.float64).reshape(-1, DOF))
+        if len(particles) != self.n_particles:
+            particles = particles[self.rng.integers(0, len(particles), self.n_particles)]
+        self.particles = particles
+
+    def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
+             n_layers: int | None = None) -> Estimate:
+        """Run one frame: predict, then ``n_layers`` (default ``self.n_layers``) annealing layers.
+
+        Args:
+            log_likelihood: (N, DOF) -> (N,) log w(Z, x) of this frame's observation.
+            predict_fn: (N, DOF), rng -> (N, DOF) dynamics applied to last frame's particles.
+        """
+        if self.particles is None:
+            raise RuntimeError("AnnealedParticleFilter.step before initialise(particles)")
+        M = self.n_layers if n_layers is None else int(n_layers)
+        P = self.particles
+        if predict_fn is not None:
+            P = clip_to_limits(predict_fn(P, self.rng))
+        betas, surv = np.empty(M), np.empty(M)
+        n_evals = 0
+        for m in range(M):
+            ll = log_likelihood(P)
+            n_evals += len(P)
+            beta = choose_beta(ll, self.survival)
+            w = _normalised(ll, beta)
+            betas[m], surv[m] = beta, 1.0 / (len(w) * np.dot(w, w))
+            if m == M - 1:
+                mean = weighted_mean_pose(P, w)
+                b = int(np.argmax(ll))
+                est_best, est_ll, ess = P[b].copy(), float(ll[b]), float(1.0 / np.dot(w, w))
+            idx = systematic_resample(w, self.rng)
+            P = P[idx]
+            if m < M - 1:
+                std = np.clip(self.diffusion * weighted_std(P, np.full(len(P), 1.0 / len(P))),
+                              self.min_std, self.max_std) * self.shrink ** m
+                P = clip_to_limits(P + self.rng.normal(size=P.shape) * std)
+        self.particles = P
+        return Estimate(mean, est_best, ess, est_ll, P, betas, surv, n_evals)
+
+
+class ParticleFilter:
+    """Plain SIR particle filter (CONDENSATION): one layer, weights from the raw likelihood.
+
+    With ``n_particles = n_layers x N`` of the annealed filter it spends the same number of
+    likelihood evaluations per frame; it is the baseline of Deutscher et al.'s comparison.
+    """
+
+    def __init__(self, n_particles: int = 2560, survival: float | None = 0.5,
+                 seed: int | np.random.Generator | None = 0) -> None:
+        """``survival``: the likelihood exponent is chosen per frame for this survival rate (the
+        fairest single-layer baseline: the same weighting as one annealing layer); None weights by
+        the raw likelihood exp(l) as in CONDENSATION."""
+        self.survival = survival
+        if n_particles < 2:
+            raise ValueError(f"n_particles={n_particles}: need at least two particles")
+        self.n_particles = int(n_particles)
+        self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        self.particles: np.ndarray | None = None
+
+    def initialise(self, particles: np.ndarray) -> None:
+        particles = clip_to_limits(np.asarray(particles, dtype=np.float64).reshape(-1, DOF))
+        if len(particles) != self.n_particles:
+            particles = particles[self.rng.integers(0, len(particles), self.n_particles)]
+        self.particles = particles
+
+    def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
+             n_layers: int | None = None) -> Estimate:
+        """Predict, weight by exp(log-likelihood), estimate, resample."""
+        if self.particles is None:
+            raise RuntimeError("ParticleFilter.step before initialise(particles)")
+        P = self.particles
+        if predict_fn is not None:
+            P = clip_to_limits(predict_fn(P, self.rng))
+        ll = log_likelihood(P)
+        w = _normalised(ll, 1.0 if self.survival is None else choose_beta(ll, self.survival))
+        b = int(np.argmax(ll))
+        est = Estimate(weighted_mean_pose(P, w), P[b].copy(), float(1.0 / np.dot(w, w)), float(ll[b]),
+                       P, np.ones(1), np.array([1.0 / (len(w) * np.dot(w, w))]), len(P))
+        self.particles = P[systematic_resample(w, self.rng)]
+        est.particles = self.particles
+        return est
+
+
+__all__ = ["AnnealedParticleFilter", "ParticleFilter", "Estimate", "choose_beta", "survival_rate",
+           "systematic_resample", "weighted_mean_pose", "weighted_std", "MIN_STD"]

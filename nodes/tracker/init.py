@@ -1,0 +1,86 @@
+"""Initialisation of a track from a silhouette, and lost-track detection.
+
+Placement (pinhole geometry, ``body.camera``): the feet stand where the ray through the bottom
+centre of the person's bounding box meets the ground (``Camera.ground_point``); the stature is
+the height at that place whose top projects onto the bbox's top row; the heading comes from the
+side of the frame the person stands on (the simulator's and a face-to-face interaction's layout:
+the left person faces +X, the right one -X), spread widely because a silhouette barely shows it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from body.camera import Camera
+from body.pose import DOF, DOF_INDEX, YAW, clip_to_limits, neutral_pose
+from body.skeleton import DEFAULT_DIMS, BodyDims
+
+#: heading (root_yaw, radians) assumed for a person on each side of the frame
+SIDE_YAW = {"left": np.pi / 2, "right": -np.pi / 2, "centre": 0.0}
+#: std of the wider first search: metres for the root, radians for the angles
+INIT_STD = np.r_[[0.08, 0.03, 0.15], [0.6, 0.05, 0.05], [0.1] * 6, [0.25] * 16]
+
+
+def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
+    """(H, W) bool -> (x, y, w, h) pixels of the foreground, or None when it is empty."""
+    ys, xs = np.nonzero(mask)
+    if len(xs) == 0:
+        return None
+    return int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1)
+
+
+def place_from_bbox(bbox: tuple[int, int, int, int], camera: Camera,
+                    base: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, float]:
+    """Ground position (3,) metres and stature (metres, clamped to 1.4-2.1) from a bbox (x, y, w, h).
+
+    Raises ValueError when the bbox bottom lies above the horizon (no ground point)."""
+    x, y, w, h = bbox
+    u = x + 0.5 * (w - 1)
+    g = camera.ground_point(np.float64(u), np.float64(y + h - 1))
+    if not np.isfinite(g).all():
+        raise ValueError(f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person")
+    # Height H at ground point g whose top (g + H up) projects to row y: solve v(H) = y on the ray.
+    d = camera.rays(np.float64(u), np.float64(y))
+    c = camera.centre
+    # closest approach of the ray c + s d to the vertical line through g
+    horiz = np.array([d[0], 0.0, d[2]])
+    s = np.dot(np.array([g[0] - c[0], 0.0, g[2] - c[2]]), horiz) / max(np.dot(horiz, horiz), 1e-12)
+    height = float(np.clip(c[1] + s * d[1], 1.4, 2.1))
+    return g, height
+
+
+def initial_particles(bbox: tuple[int, int, int, int], side: str, camera: Camera, n: int,
+                      rng: np.random.Generator, base: BodyDims = DEFAULT_DIMS,
+                      spread: float = 1.0) -> tuple[np.ndarray, BodyDims]:
+    """Particles (n, 28) for a new track and the body dimensions scaled to the measured stature.
+
+    The first particle is the un-jittered guess; the rest are spread by ``INIT_STD * spread``."""
+    if side not in SIDE_YAW:
+        raise ValueError(f"side={side!r}: expected one of {sorted(SIDE_YAW)}")
+    g, height = place_from_bbox(bbox, camera, base)
+    dims = base.scaled(height)
+    P0 = neutral_pose(dims, x=float(g[0]), z=float(g[2]), yaw=SIDE_YAW[side])
+    P = P0 + rng.normal(size=(n, DOF)) * INIT_STD * spread
+    P[0] = P0
+    return clip_to_limits(P), dims
+
+
+class LostDetector:
+    """Declares a track lost when its best image cost stays above ``threshold`` (a likelihood
+    collapse: the model no longer covers the silhouette) for ``patience`` frames in a row.
+
+    ``update(cost)`` takes the image cost (S_r + S_e + S_c of the best particle, 0 best, 3 worst)."""
+
+    def __init__(self, threshold: float = 0.9, patience: int = 3) -> None:
+        self.threshold = float(threshold)
+        self.patience = int(patience)
+        self.bad = 0
+
+    def update(self, cost: float) -> bool:
+        self.bad = self.bad + 1 if (not np.isfinite(cost) or cost > self.threshold) else 0
+        return self.bad >= self.patience
+
+    def reset(self) -> None:
+        self.bad = 0
+
+
+__all__ = ["SIDE_YAW", "INIT_STD", "bbox_from_mask", "place_from_bbox", "initial_particles", "LostDetector"]

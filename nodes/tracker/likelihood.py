@@ -1,0 +1,237 @@
+"""Observation model of the tracker: silhouette, edge and coverage terms over projected cones.
+
+Follows Deutscher, Blake & Reid 2000 (sect. 3, eqs. 4-6). For a pose X with model sample points
+projected into the image, the two "model -> image" costs are
+
+    S_r(X) = 1/K_r * sum_k (1 - p_r(x_k))^2     K_r points inside the cones (body.raster
+                                                  cone_interior_points), p_r the foreground mask
+    S_e(X) = 1/K_e * sum_k (1 - p_e(x_k))^2     K_e points on the cone outlines, p_e a smoothed
+                                                  edge map in [0, 1]
+
+and the weighting function is ``w(Z, X) = exp(-(S_r + S_e))``. A third, "image -> model" cost is
+added because the two terms above are satisfied by a body whose limbs hide inside the torso:
+``S_c(X)`` is the fraction of M foreground pixels (sampled once per frame) that no projected cone
+covers. The log-likelihood returned is ``-(w_sil S_r + w_edge S_e + w_cover S_c) * gain``.
+
+Everything is vectorised over N particles x points: one forward kinematics call, one projection
+of the 23 anchor points, broadcast sample-point arithmetic in float32 and one flat gather per map.
+Pixel units throughout; out-of-image points read 0 (no foreground, no edge).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from body.camera import Camera
+from body.kinematics import frames
+from body.skeleton import DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One person in one frame, ready for the likelihood.
+
+    Attributes:
+        fg: (H*W + 1,) float32 flattened foreground mask (1 person, 0 background), with a trailing
+            0 that out-of-image points read.
+        edge: (H*W + 1,) float32 flattened smoothed edge map in [0, 1], same layout.
+        cover_uv: (M, 2) float32 pixel positions of foreground samples for the coverage term.
+        width, height: image size in pixels.
+    """
+
+    fg: np.ndarray
+    edge: np.ndarray
+    cover_uv: np.ndarray
+    width: int
+    height: int
+
+    @property
+    def empty(self) -> bool:
+        """True when the mask holds no foreground pixel (nothing to track)."""
+        return self.cover_uv.shape[0] == 0
+
+
+def edge_map(image: np.ndarray | None, mask: np.ndarray, canny: tuple[int, int] = (40, 120),
+             dilate_px: int = 5, blur_sigma: float = 1.5) -> np.ndarray:
+    """Deutscher's smoothed edge map: Canny edges within the dilated foreground, Gaussian blurred
+    and scaled so that an edge pixel reads 1.
+
+    Args:
+        image: (H, W, 3) BGR or (H, W) gray uint8 frame, or None to use the mask's own boundary.
+        mask: (H, W) bool foreground of the tracked person.
+        canny: Canny hysteresis thresholds (grey levels).
+        dilate_px: how far outside the mask image edges still count (pixels).
+        blur_sigma: Gaussian sigma (pixels) of the smoothing that gives the cost a basin.
+    Returns:
+        (H, W) float32 in [0, 1].
+    """
+    m = mask.astype(np.uint8)
+    k = np.ones((2 * dilate_px + 1, 2 * dilate_px + 1), np.uint8)
+    region = cv2.dilate(m, k)
+    # The mask boundary is always an edge of the person, even where the image contrast is low.
+    boundary = m - cv2.erode(m, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    edges = boundary.astype(np.float32)
+    if image is not None:
+        gray = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+        e = cv2.Canny(gray, canny[0], canny[1]) > 0
+        edges = np.maximum(edges, (e & (region > 0)).astype(np.float32))
+    ksize = int(2 * round(3 * blur_sigma) + 1)
+    sm = cv2.GaussianBlur(edges, (ksize, ksize), blur_sigma)
+    peak = cv2.GaussianBlur(np.pad(np.ones((1, 1), np.float32), ksize), (ksize, ksize), blur_sigma).max()
+    return np.clip(sm / peak, 0.0, 1.0)
+
+
+def make_observation(image: np.ndarray | None, mask: np.ndarray, n_cover: int = 32,
+                     rng: np.random.Generator | None = None, **edge_kw) -> Observation:
+    """Build the per-frame maps once (Deutscher: computed once per frame, read by every particle).
+
+    Args:
+        image: (H, W[, 3]) uint8 frame or None (edges from the mask boundary only).
+        mask: (H, W) bool or uint8 foreground of this person.
+        n_cover: foreground pixels sampled for the coverage term (0 disables it).
+        rng: generator for the coverage sample (default: seeded 0, so a frame maps the same way).
+    """
+    mask = np.asarray(mask).astype(bool)
+    if mask.ndim != 2:
+        raise ValueError(f"mask has shape {mask.shape}; expected (H, W) foreground of one person")
+    if image is not None and image.shape[:2] != mask.shape:
+        raise ValueError(f"image {image.shape[:2]} and mask {mask.shape} differ in size")
+    H, W = mask.shape
+    fg = np.append(mask.ravel().astype(np.float32), np.float32(0))
+    edge = np.append(edge_map(image, mask, **edge_kw).ravel(), np.float32(0))
+    ys, xs = np.nonzero(mask)
+    rng = np.random.default_rng(0) if rng is None else rng
+    if len(xs) and n_cover:
+        pick = rng.choice(len(xs), size=min(n_cover, len(xs)), replace=False)
+        cover = np.stack([xs[pick], ys[pick]], axis=1).astype(np.float32)
+    else:
+        cover = np.zeros((0, 2), np.float32)
+    return Observation(fg, edge, cover, W, H)
+
+
+class ConeLikelihood:
+    """Log-likelihood of N poses against one Observation (see the module docstring).
+
+    Args:
+        camera: the calibrated camera.
+        dims: body dimensions of the tracked person.
+        n_along, n_across: interior grid per cone (as ``body.raster.cone_interior_points``).
+        per_side: outline points per long side of each cone (``cone_outline_points``).
+        w_sil, w_edge, w_cover: weights of S_r, S_e, S_c.
+        gain: overall scale of the cost (sharpness before annealing; the APF's beta rescales it).
+    """
+
+    def __init__(self, camera: Camera, dims: BodyDims = DEFAULT_DIMS, n_along: int = 4, n_across: int = 3,
+                 per_side: int = 4, w_sil: float = 1.0, w_edge: float = 1.0, w_cover: float = 1.0,
+                 gain: float = 1.0) -> None:
+        self.camera = camera
+        self.dims = dims
+        self.radii = dims.segment_radii().astype(np.float32)          # (S, 2)
+        self.w = (float(w_sil), float(w_edge), float(w_cover))
+        self.gain = float(gain)
+        # (s, t) of each sample: s along the axis, t across in units of the half-width.
+        s_in = np.repeat((np.arange(n_along) + 0.5) / n_along, n_across)
+        t_in = np.tile((2 * np.arange(n_across) + 1) / n_across - 1.0, n_along)
+        s_out = np.tile((np.arange(per_side) + 0.5) / per_side, 2)
+        t_out = np.repeat([1.0, -1.0], per_side)
+        self.n_in = len(s_in)
+        self.s = np.concatenate([s_in, s_out]).astype(np.float32)     # (K,)
+        self.t = np.concatenate([t_in, t_out]).astype(np.float32)
+        self.f = np.float32(0.5 * (camera.fx + camera.fy))
+        self.R = camera.R.astype(np.float32)
+        self.tc = camera.t.astype(np.float32)
+        self.n_evals = 0
+
+    # ---------------------------------------------------------------------------------------
+    def project(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(N, 28) poses -> cone end centres (N, S, 2, 2) px, half-widths (N, S, 2) px, depth ok
+        (N,) bool (every anchor in front of the camera)."""
+        pts = frames(P, self.dims)[0].astype(np.float32)              # (N, A, 3)
+        Xc = pts @ self.R.T + self.tc
+        z = Xc[..., 2]
+        ok = (z > 0.05).all(axis=1)
+        zi = 1.0 / np.maximum(z, np.float32(0.05))
+        uv = np.stack([self.camera.fx * Xc[..., 0] * zi + self.camera.cx,
+                       self.camera.fy * Xc[..., 1] * zi + self.camera.cy], axis=-1).astype(np.float32)
+        c = uv[:, SEGMENT_ANCHORS]                                    # (N, S, 2, 2)
+        rho = self.f * self.radii * zi[:, SEGMENT_ANCHORS]            # (N, S, 2)
+        return c, rho, ok
+
+    def sample_points(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(N, 28) -> interior points (N, S*K_in, 2), outline points (N, S*K_out, 2) px, ok (N,).
+
+        Same points as ``body.raster.cone_interior_points`` / ``cone_outline_points`` (trapezoid
+        approximation of each projected cone), computed in one broadcast."""
+        c, rho, ok = self.project(P)
+        u, v = self._points_uv(c, rho)
+        pts = np.stack([u, v], axis=-1)                               # (N, S, K, 2)
+        N = pts.shape[0]
+        return pts[:, :, :self.n_in].reshape(N, -1, 2), pts[:, :, self.n_in:].reshape(N, -1, 2), ok
+
+    def _points_uv(self, c: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples.
+
+        x and y are kept apart because reductions over a trailing axis of 2 are slow in numpy."""
+        x0, y0 = c[:, :, 0, 0, None], c[:, :, 0, 1, None]            # (N, S, 1)
+        ax, ay = c[:, :, 1, 0, None] - x0, c[:, :, 1, 1, None] - y0
+        L = np.sqrt(ax * ax + ay * ay)
+        ok = L > 1e-6
+        inv = np.where(ok, 1.0 / np.where(ok, L, 1.0), 0).astype(np.float32)
+        nx = np.where(ok, -ay * inv, np.float32(1.0))
+        ny = ax * inv
+        s, t = self.s, self.t
+        rt = (rho[..., :1] + s * (rho[..., 1:] - rho[..., :1])) * t   # (N, S, K)
+        return x0 + s * ax + rt * nx, y0 + s * ay + rt * ny
+
+    @staticmethod
+    def _lookup(flat: np.ndarray, u: np.ndarray, v: np.ndarray, W: int, H: int) -> np.ndarray:
+        """Nearest-pixel read of a flattened map; outside the image (or NaN) reads the trailing 0."""
+        ui = np.rint(u)
+        vi = np.rint(v)
+        inside = (ui >= 0) & (ui < W) & (vi >= 0) & (vi < H)
+        idx = np.where(inside, vi * W + ui, W * H).astype(np.intp)
+        return flat[idx]
+
+    def coverage_cost(self, c: np.ndarray, rho: np.ndarray, cover_uv: np.ndarray) -> np.ndarray:
+        """(N,) fraction of the M foreground samples outside every projected cone (capsule test:
+        distance to the cone's image axis below the interpolated half-width)."""
+        if cover_uv.shape[0] == 0:
+            return np.zeros(c.shape[0], np.float32)
+        x0, y0 = c[:, :, 0, 0, None], c[:, :, 0, 1, None]            # (N, S, 1)
+        ax, ay = c[:, :, 1, 0, None] - x0, c[:, :, 1, 1, None] - y0
+        inv_aa = 1.0 / np.maximum(ax * ax + ay * ay, np.float32(1e-6))
+        dx = cover_uv[:, 0] - x0                                      # (N, S, M)
+        dy = cover_uv[:, 1] - y0
+        s = np.clip((dx * ax + dy * ay) * inv_aa, 0.0, 1.0)
+        dx -= s * ax
+        dy -= s * ay
+        # + 1 px: a rasterised mask holds every pixel the body touches, the capsule test their centres
+        r = rho[..., :1] + s * (rho[..., 1:] - rho[..., :1]) + np.float32(1.0)
+        covered = (dx * dx + dy * dy <= r * r).any(axis=1)            # (N, M)
+        return 1.0 - covered.mean(axis=1, dtype=np.float32)
+
+    def terms(self, P: np.ndarray, obs: Observation) -> np.ndarray:
+        """(N, 28) -> (N, 3) costs S_r, S_e, S_c, each in [0, 1]; poses behind the camera get 1."""
+        P = np.asarray(P, dtype=np.float64)
+        if P.ndim != 2 or P.shape[1] != 28:
+            raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
+        c, rho, ok = self.project(P)
+        u, v = self._points_uv(c, rho)
+        W, H = obs.width, obs.height
+        k = self.n_in
+        S_r = ((1.0 - self._lookup(obs.fg, u[:, :, :k], v[:, :, :k], W, H)) ** 2).mean(axis=(1, 2))
+        S_e = ((1.0 - self._lookup(obs.edge, u[:, :, k:], v[:, :, k:], W, H)) ** 2).mean(axis=(1, 2))
+        S_c = self.coverage_cost(c, rho, obs.cover_uv) if self.w[2] else np.zeros_like(S_r)
+        out = np.stack([S_r, S_e, S_c], axis=1)
+        out[~ok] = 1.0
+        self.n_evals += P.shape[0]
+        return out
+
+    def __call__(self, P: np.ndarray, obs: Observation) -> np.ndarray:
+        """(N, 28) poses -> (N,) float64 log-likelihoods ``-gain * (w . [S_r, S_e, S_c])``."""
+        return -self.gain * (self.terms(P, obs) @ np.asarray(self.w, np.float32)).astype(np.float64)
+
+
+__all__ = ["Observation", "edge_map", "make_observation", "ConeLikelihood", "N_SEGMENTS"]

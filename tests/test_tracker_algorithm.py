@@ -1,0 +1,115 @@
+"""Tracker algorithms on silhouettes rendered from known poses (body.raster)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from body.camera import default_camera
+from body.kinematics import forward_kinematics
+from body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
+from body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
+from body.skeleton import DEFAULT_DIMS
+from nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
+from nodes.tracker.init import bbox_from_mask, place_from_bbox
+from nodes.tracker.likelihood import ConeLikelihood, make_observation
+from nodes.tracker.tracker import track_sequence
+from sim.scenarios import make_scenario
+
+CAM = default_camera()
+
+
+def _pose() -> np.ndarray:
+    P = neutral_pose(DEFAULT_DIMS, x=-0.5, yaw=0.4)
+    P[12], P[15], P[20], P[23] = 1.2, 0.8, 0.4, 0.6     # arm forward, elbow bent, hip and knee flexed
+    return P
+
+
+def _render(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mask = rasterise_silhouettes(P[None], DEFAULT_DIMS, CAM)[0]
+    edges = render_edge_maps(P[None], DEFAULT_DIMS, CAM, mode="cones")[0]
+    image = np.where(mask, 90, 200).astype(np.uint8)
+    image[edges] = 20                                     # shading seams where cones overlap
+    return image, mask
+
+
+def test_sample_points_match_body_raster() -> None:
+    P = np.stack([_pose(), neutral_pose()])
+    inner, outline, ok = ConeLikelihood(CAM).sample_points(P)
+    assert ok.all()
+    np.testing.assert_allclose(inner, cone_interior_points(P, DEFAULT_DIMS, CAM), atol=1e-3)
+    np.testing.assert_allclose(outline, cone_outline_points(P, DEFAULT_DIMS, CAM), atol=1e-3)
+
+
+def test_true_pose_scores_higher_than_perturbed_poses() -> None:
+    P = _pose()
+    image, mask = _render(P)
+    obs = make_observation(image, mask)
+    L = ConeLikelihood(CAM)
+    rng = np.random.default_rng(3)
+    for scale in (0.05, 0.15, 0.4):
+        noise = rng.normal(size=(64, DOF)) * scale
+        noise[:, :3] *= 0.3                                # metres
+        perturbed = np.clip(P + noise, LOWER, UPPER)
+        ll = L(np.vstack([P[None], perturbed]), obs)
+        assert ll[0] > ll[1:].max(), f"scale {scale}: true {ll[0]:.3f} vs best perturbed {ll[1:].max():.3f}"
+    # each single joint moved 0.3 rad costs likelihood
+    for dof in (12, 15, 20, 23):
+        Q = P.copy()
+        Q[dof] += 0.3
+        assert L(Q[None], obs)[0] < L(P[None], obs)[0], f"DOF {dof}"
+    # an empty mask is an empty observation, not an error
+    assert make_observation(image, np.zeros_like(mask)).empty
+
+
+def test_beta_hits_survival_rate() -> None:
+    rng = np.random.default_rng(0)
+    ll = -rng.gamma(2.0, 0.2, size=256)
+    for alpha in (0.2, 0.5, 0.8):
+        beta = choose_beta(ll, alpha)
+        assert abs(survival_rate(ll, beta) - alpha) < 1e-3
+    assert choose_beta(np.zeros(10), 0.5) > 0                 # flat likelihood: any beta, no crash
+    with pytest.raises(ValueError, match="survival"):
+        choose_beta(ll, 1.5)
+
+
+def test_annealing_schedule_and_limits() -> None:
+    P = _pose()
+    image, mask = _render(P)
+    obs = make_observation(image, mask)
+    L = ConeLikelihood(CAM)
+    apf = AnnealedParticleFilter(n_layers=6, n_particles=128, survival=0.5, seed=1)
+    rng = np.random.default_rng(1)
+    start = P + rng.normal(size=(128, DOF)) * 0.1
+    apf.initialise(start)
+    est = apf.step(lambda X: L(X, obs))
+    np.testing.assert_allclose(est.survival, 0.5, atol=0.02)
+    assert est.betas[-1] > est.betas[0]                   # the density sharpens over the layers
+    assert est.n_evals == 6 * 128
+    inside = (apf.particles >= LOWER) & (apf.particles <= UPPER)
+    inside[:, YAW] = True
+    assert inside.all()
+    truth = forward_kinematics(P)
+    err = np.linalg.norm(forward_kinematics(est.mean)[0] - truth[0], axis=-1).mean()
+    err0 = np.linalg.norm(forward_kinematics(start) - truth, axis=-1).mean()
+    assert err < 0.5 * err0, f"estimate {err:.3f} m vs initial particles {err0:.3f} m"
+
+
+def test_placement_from_bbox() -> None:
+    P = neutral_pose(DEFAULT_DIMS.scaled(1.8), x=0.6, z=-0.3)
+    mask = rasterise_silhouettes(P[None], DEFAULT_DIMS.scaled(1.8), CAM)[0]
+    g, height = place_from_bbox(bbox_from_mask(mask), CAM)
+    assert abs(height - 1.8) < 0.05
+    assert abs(g[0] - 0.6) < 0.05 and abs(g[2] + 0.3) < 0.15
+
+
+def test_tracker_follows_rendered_sequence() -> None:
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:20]
+    masks = rasterise_silhouettes(P, sc.dims_a, CAM)
+    out = track_sequence([None] * len(P), masks, CAM, side="left", n_layers=5, n_particles=128, seed=0)
+    truth = forward_kinematics(P, sc.dims_a)
+    err = np.linalg.norm(out["joints"] - truth, axis=-1).mean(axis=1)
+    assert out["joints"].shape == (20, 14, 3)
+    assert err.mean() < 0.15, f"mean joint error {err.mean():.3f} m"
+    # stays with the person: the pelvis within 0.25 m of the truth on every frame
+    assert np.abs(out["poses"][:, [0, 2]] - P[:, [0, 2]]).max() < 0.25
