@@ -1,0 +1,337 @@
+"""The learned motion prior of the tracker (Zheng et al. 2006, "Virtual friend", sect. 3).
+
+Training: pose vectors (``body.pose``, T x 28) of motion capture are reduced to their joint angles
+(``ANGLE_DOFS``: everything but the root position and heading), projected by PCA onto the
+components that keep ``energy`` (95%) of the variance, and a Gaussian HMM with ``n_states``
+states (hmmlearn ``GaussianHMM``, full covariances) is fitted to the PCA coefficient sequences.
+The per-DOF standard deviation of frame-to-frame changes gives the random walk.
+
+Prediction (``PriorPredictor``): the tracker feeds each frame's estimate back, keeping the filtered
+state posterior ``a_t(k) ~ N(y_t | mu_k, S_k) * sum_j a_{t-1}(j) A_jk`` (forward algorithm). For
+the next frame the predicted state mixture is ``a_t A``; a fraction ``hmm_weight`` of the particles
+get their joint angles drawn from that mixture (state k, then y ~ N(mu_k, S_k), back-projected),
+the rest diffuse by the random walk ``x + N(0, diag(rw_std^2))``. Root position and heading always
+follow the random walk.
+
+Files: ``.npz`` with the arrays and a ``meta`` JSON string (``version``, ``n_states``, ``energy``,
+``n_components``, ``dofs``, ``sources``, ``n_frames``). ``load`` refuses other versions.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+from body.pose import DOF, LOWER, UPPER, YAW, clip_to_limits, wrap_angle
+
+VERSION = 1
+#: joint angles modelled by PCA + HMM: root pitch and roll, torso, head, arms, legs
+ANGLE_DOFS: np.ndarray = np.arange(4, DOF)
+#: floor of the random walk per frame: 5 mm for positions, 0.01 rad for angles
+RW_FLOOR = np.where(np.arange(DOF) < 3, 0.005, 0.01)
+#: simulator scenarios and seeds of the default prior (the benches use seeds 0-9: kept apart)
+DEFAULT_TRAINING = tuple(f"sim:{n}?seed={s}" for n in ("handshake", "high_five", "push", "pull", "wave",
+                                                       "conversation") for s in (100, 101, 102))
+
+
+@dataclass
+class MotionPrior:
+    """PCA + Gaussian HMM of joint angles, with a random walk for the rest.
+
+    Args:
+        n_states: HMM states (Zheng: 20-40).
+        energy: fraction of variance the PCA keeps.
+        hmm_weight: share of particles predicted from the HMM (the rest: random walk).
+        rw_scale: multiplier of the learned per-frame std of the random walk.
+        seed: seed of the HMM fit.
+    """
+
+    n_states: int = 30
+    energy: float = 0.95
+    hmm_weight: float = 0.2
+    rw_scale: float = 1.5
+    seed: int = 0
+    # learned
+    pca_mean: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    components: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    startprob: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    transmat: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    means: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    covars: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
+    rw_std: np.ndarray = field(default_factory=lambda: RW_FLOOR.copy())
+    sources: list[str] = field(default_factory=list)
+    n_frames: int = 0
+
+    def __post_init__(self) -> None:
+        if not 1 <= int(self.n_states) <= 500:
+            raise ValueError(f"n_states={self.n_states!r}: expected 1..500 HMM states (Zheng: 20-40)")
+        if not 0 < self.energy <= 1:
+            raise ValueError(f"energy={self.energy!r}: the PCA variance fraction must lie in (0, 1]")
+        if not 0 <= self.hmm_weight <= 1:
+            raise ValueError(f"hmm_weight={self.hmm_weight!r}: must lie in [0, 1]")
+
+    @property
+    def fitted(self) -> bool:
+        return self.means.size > 0
+
+    @property
+    def n_components(self) -> int:
+        return int(self.components.shape[0])
+
+    # -------------------------------------------------------------------------------- learning
+    def fit(self, sequences: list[np.ndarray], sources: Iterable[str] = (), progress: bool = False) -> "MotionPrior":
+        """Fit PCA, HMM and random walk to pose sequences, each (T_i, 28) at the tracker's frame rate."""
+        from hmmlearn.hmm import GaussianHMM
+        from sklearn.decomposition import PCA
+
+        seqs = [np.asarray(s, dtype=np.float64) for s in sequences]
+        bad = [i for i, s in enumerate(seqs) if s.ndim != 2 or s.shape[1] != DOF or len(s) < 2]
+        if not seqs or bad:
+            raise ValueError(f"MotionPrior.fit: need pose sequences of shape (T >= 2, {DOF}); "
+                             f"bad ones at positions {bad}" if seqs else "MotionPrior.fit: no sequences given")
+        X = np.concatenate([s[:, ANGLE_DOFS] for s in seqs])
+        if len(X) < 2 * self.n_states:
+            raise ValueError(f"MotionPrior.fit: {len(X)} frames are too few for {self.n_states} states")
+        pca = PCA(n_components=self.energy if self.energy < 1 else None, svd_solver="full").fit(X)
+        self.pca_mean, self.components = pca.mean_, pca.components_
+        Y = self.to_latent(np.concatenate(seqs))
+        if progress:
+            print(f"tracker prior: {len(X)} frames, PCA keeps {self.n_components} of {X.shape[1]} "
+                  f"dimensions ({pca.explained_variance_ratio_.sum():.3f} of the variance); fitting "
+                  f"a {self.n_states}-state HMM", file=sys.stderr)
+        hmm = GaussianHMM(n_components=self.n_states, covariance_type="full", n_iter=25, min_covar=1e-4,
+                          random_state=self.seed)
+        hmm.fit(Y, lengths=[len(s) for s in seqs])
+        self.startprob, self.transmat = hmm.startprob_, hmm.transmat_
+        self.means, self.covars = hmm.means_, hmm.covars_
+        d = np.concatenate([np.diff(s, axis=0) for s in seqs])
+        d[:, YAW] = wrap_angle(d[:, YAW])
+        self.rw_std = np.maximum(d.std(axis=0), RW_FLOOR)
+        self.sources = list(sources)
+        self.n_frames = int(len(X))
+        return self
+
+    def to_latent(self, P: np.ndarray) -> np.ndarray:
+        """(N, 28) poses -> (N, d) PCA coefficients of the joint angles."""
+        return (np.asarray(P)[..., ANGLE_DOFS] - self.pca_mean) @ self.components.T
+
+    def from_latent(self, Y: np.ndarray) -> np.ndarray:
+        """(N, d) PCA coefficients -> (N, len(ANGLE_DOFS)) joint angles."""
+        return Y @ self.components + self.pca_mean
+
+    def state_loglik(self, Y: np.ndarray) -> np.ndarray:
+        """(N, d) -> (N, K) log N(y | mu_k, S_k) of every state."""
+        self._require()
+        L = np.linalg.cholesky(self.covars)                                   # (K, d, d)
+        diff = Y[:, None, :] - self.means[None]                               # (N, K, d)
+        z = np.linalg.solve(L[None], diff[..., None])[..., 0]
+        logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(-1)
+        d = Y.shape[1]
+        return -0.5 * ((z ** 2).sum(-1) + logdet + d * np.log(2 * np.pi))
+
+    def predictor(self) -> "PriorPredictor":
+        """A fresh per-track predictor (its own state posterior)."""
+        self._require()
+        return PriorPredictor(self)
+
+    def _require(self) -> None:
+        if not self.fitted:
+            raise RuntimeError("MotionPrior is not fitted; call fit() or MotionPrior.load(path)")
+
+    # -------------------------------------------------------------------------------- files
+    def meta(self) -> dict[str, Any]:
+        return {"version": VERSION, "kind": "counterpart.tracker_prior", "n_states": int(self.n_states),
+                "energy": float(self.energy), "n_components": self.n_components,
+                "dofs": [int(i) for i in ANGLE_DOFS], "hmm_weight": float(self.hmm_weight),
+                "rw_scale": float(self.rw_scale), "sources": list(self.sources), "n_frames": self.n_frames}
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the ``.npz`` (arrays + ``meta`` JSON); returns the path."""
+        self._require()
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".tmp.npz")
+        np.savez(tmp, meta=json.dumps(self.meta()), pca_mean=self.pca_mean, components=self.components,
+                 startprob=self.startprob, transmat=self.transmat, means=self.means, covars=self.covars,
+                 rw_std=self.rw_std)
+        os.replace(tmp, path)
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "MotionPrior":
+        """Read a prior file; ValueError naming the file for another version or a missing key."""
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(f"tracker prior {path} does not exist; train one with "
+                                    f"'counterpart learn tracker-prior --out {path}'")
+        with np.load(path, allow_pickle=False) as z:
+            if "meta" not in z:
+                raise ValueError(f"{path}: not a tracker prior (no 'meta' entry)")
+            meta = json.loads(str(z["meta"]))
+            if meta.get("kind") != "counterpart.tracker_prior":
+                raise ValueError(f"{path}: not a tracker prior (kind {meta.get('kind')!r})")
+            if meta.get("version") != VERSION:
+                raise ValueError(f"{path}: tracker prior version {meta.get('version')!r}, this program reads "
+                                 f"version {VERSION}; retrain it with 'counterpart learn tracker-prior'")
+            if meta.get("dofs") != [int(i) for i in ANGLE_DOFS]:
+                raise ValueError(f"{path}: prior models DOFs {meta.get('dofs')}, expected {list(ANGLE_DOFS)}")
+            arrays = {k: z[k] for k in ("pca_mean", "components", "startprob", "transmat", "means",
+                                        "covars", "rw_std")}
+        return cls(n_states=meta["n_states"], energy=meta["energy"], hmm_weight=meta["hmm_weight"],
+                   rw_scale=meta["rw_scale"], sources=meta["sources"], n_frames=meta["n_frames"], **arrays)
+
+
+class PriorPredictor:
+    """Per-track state of the prior: the filtered HMM posterior and the ``predict_fn`` of the APF.
+
+    Call ``update(pose)`` with each frame's estimate, and use the object as
+    ``predict_fn(particles (N, 28), rng) -> (N, 28)``.
+    """
+
+    def __init__(self, prior: MotionPrior) -> None:
+        self.prior = prior
+        self.alpha = prior.startprob.copy()
+        self._chol = np.linalg.cholesky(prior.covars)
+        self.std = prior.rw_std * prior.rw_scale
+
+    def reset(self) -> None:
+        self.alpha = self.prior.startprob.copy()
+
+    def update(self, pose: np.ndarray) -> np.ndarray:
+        """Forward-algorithm step with the estimate ``pose`` (28,); returns the posterior (K,)."""
+        ll = self.prior.state_loglik(self.prior.to_latent(np.asarray(pose)[None]))[0]
+        a = np.log(np.maximum(self.alpha @ self.prior.transmat, 1e-300)) + ll
+        a = np.exp(a - a.max())
+        self.alpha = a / a.sum()
+        return self.alpha
+
+    def predicted_states(self) -> np.ndarray:
+        """(K,) predicted state mixture of the next frame, alpha_t A."""
+        return self.alpha @ self.prior.transmat
+
+    def __call__(self, P: np.ndarray, rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
+        """Predict particles (N, 28) -> (N, 28); ``scale`` widens the random walk (re-initialisation)."""
+        out = P + rng.normal(size=P.shape) * (self.std * scale)
+        n_hmm = int(round(self.prior.hmm_weight * len(P)))
+        if n_hmm:
+            rows = rng.choice(len(P), size=n_hmm, replace=False)
+            mix = self.predicted_states()
+            k = rng.choice(len(mix), size=n_hmm, p=mix / mix.sum())
+            z = rng.normal(size=(n_hmm, self.prior.means.shape[1]))
+            Y = self.prior.means[k] + np.einsum("nij,nj->ni", self._chol[k], z)
+            out[rows[:, None], ANGLE_DOFS[None]] = self.prior.from_latent(Y)
+        return clip_to_limits(out)
+
+
+# ------------------------------------------------------------------------------------ data
+def _resample(P: np.ndarray, fps_in: float, fps_out: float) -> np.ndarray:
+    """Pose sequence at fps_in -> fps_out by nearest frames (motion capture at 120 Hz -> 25 Hz)."""
+    if abs(fps_in - fps_out) < 1e-6:
+        return P
+    t = np.arange(0, len(P) / fps_in, 1.0 / fps_out)
+    return P[np.minimum(np.rint(t * fps_in).astype(int), len(P) - 1)]
+
+
+def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.ndarray], list[str]]:
+    """Pose sequences (T, 28) at ``fps`` from training sources.
+
+    A source is ``sim:NAME[?seed=S]`` (both people of a simulator scenario), a ``.bvh`` file (one
+    person), a ``.npz`` two-person trajectory (``body.trajectory``; both people through
+    ``body.ik.inverse_kinematics``) or a simulator ``truth.npz`` holding ``poses_a``/``poses_b``,
+    or a folder of such files. Returns the sequences and one name per sequence.
+    """
+    seqs: list[np.ndarray] = []
+    names: list[str] = []
+    for src in sources:
+        src = str(src)
+        if src.startswith("sim:"):
+            from sim.scenarios import make_scenario
+            name, _, query = src[4:].partition("?")
+            seed = int(query.split("=", 1)[1]) if query.startswith("seed=") else 0
+            sc = make_scenario(name, seed=seed, fps=fps)
+            seqs += [sc.poses_a, sc.poses_b]
+            names += [f"{src}#a", f"{src}#b"]
+            continue
+        p = Path(src)
+        if p.is_dir():
+            files = sorted([*p.glob("*.npz"), *p.glob("*.bvh")])
+            if not files:
+                raise ValueError(f"training data folder {p} holds no .npz or .bvh file")
+            s, n = load_sequences([str(f) for f in files], fps)
+            seqs += s
+            names += n
+        elif not p.exists():
+            raise FileNotFoundError(f"training data {p} does not exist (give sim:NAME, a .bvh, a .npz or a folder)")
+        elif p.suffix.lower() == ".bvh":
+            from body.bvh import bvh_to_joints14, read_bvh
+            from body.ik import inverse_kinematics
+            b = read_bvh(p)
+            seqs.append(_resample(inverse_kinematics(bvh_to_joints14(b)), b.fps, fps))
+            names.append(str(p))
+        elif p.suffix.lower() == ".npz":
+            with np.load(p, allow_pickle=False) as z:
+                keys = set(z.files)
+                if {"poses_a", "poses_b"} <= keys:
+                    f_in = float(z["fps"]) if "fps" in keys else fps
+                    for who in ("a", "b"):
+                        seqs.append(_resample(np.asarray(z[f"poses_{who}"], np.float64), f_in, fps))
+                        names.append(f"{p}#{who}")
+                    continue
+            from body.ik import inverse_kinematics
+            from body.trajectory import TwoPersonTrajectory
+            tr = TwoPersonTrajectory.load(p)
+            for who, X in (("a", tr.a), ("b", tr.b)):
+                seqs.append(_resample(inverse_kinematics(X), tr.fps, fps))
+                names.append(f"{p}#{who}")
+        else:
+            raise ValueError(f"training data {p}: unknown kind; give sim:NAME, a .bvh, a .npz or a folder")
+    return seqs, names
+
+
+def train_prior(sources: Iterable[str], n_states: int = 30, energy: float = 0.95, fps: float = 25.0,
+                seed: int = 0, progress: bool = False) -> MotionPrior:
+    """Load ``sources`` (see ``load_sequences``) and fit a MotionPrior."""
+    sources = list(sources)
+    seqs, names = load_sequences(sources, fps)
+    if progress:
+        print(f"tracker prior: {len(seqs)} sequences from {len(sources)} source(s)", file=sys.stderr)
+    return MotionPrior(n_states=n_states, energy=energy, seed=seed).fit(seqs, names, progress=progress)
+
+
+def default_prior_path() -> Path:
+    """``$COUNTERPART_MODELS/tracker_prior.npz``, default ``~/.cache/counterpart/models/``."""
+    root = os.environ.get("COUNTERPART_MODELS") or os.path.join(Path.home(), ".cache", "counterpart", "models")
+    return Path(root) / "tracker_prior.npz"
+
+
+def load_default_prior(progress: bool = False) -> MotionPrior:
+    """The default prior, trained from the simulator (``DEFAULT_TRAINING``) and cached when missing
+    or of another version."""
+    path = default_prior_path()
+    if path.exists():
+        try:
+            return MotionPrior.load(path)
+        except ValueError as exc:
+            if progress:
+                print(f"tracker prior: {exc}; rebuilding it", file=sys.stderr)
+    prior = train_prior(DEFAULT_TRAINING, progress=progress)
+    prior.save(path)
+    return prior
+
+
+def resolve_prior(spec: str | None) -> MotionPrior | None:
+    """``"default"`` -> the default prior, ``"none"``/empty -> None (random walk only), else a path."""
+    if spec is None or spec in ("", "none"):
+        return None
+    if spec == "default":
+        return load_default_prior()
+    return MotionPrior.load(spec)
+
+
+__all__ = ["MotionPrior", "PriorPredictor", "VERSION", "ANGLE_DOFS", "DEFAULT_TRAINING", "load_sequences",
+           "train_prior", "default_prior_path", "load_default_prior", "resolve_prior"]

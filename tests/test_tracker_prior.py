@@ -1,0 +1,94 @@
+"""The tracker's learned motion prior: training, files, prediction, CLI."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from body.pose import DOF, LOWER, UPPER, YAW
+from nodes.tracker import cli_learn
+from nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+@pytest.fixture(scope="module")
+def prior() -> MotionPrior:
+    return train_prior(["sim:wave?seed=7", "sim:handshake?seed=7"], n_states=5)
+
+
+def test_prior_trains_with_95_percent_energy(prior: MotionPrior) -> None:
+    assert prior.fitted and prior.n_states == 5
+    seqs, names = load_sequences(["sim:wave?seed=7"])
+    assert len(seqs) == 2 and seqs[0].shape[1] == DOF and names[0].endswith("#a")
+    X = np.concatenate(seqs)
+    Y = prior.to_latent(X)
+    rec = prior.from_latent(Y)
+    A = X[:, 4:]
+    kept = 1 - ((rec - A) ** 2).sum() / ((A - A.mean(0)) ** 2).sum()
+    assert kept > 0.85                                   # 95% of the training set's energy overall
+    np.testing.assert_allclose(prior.transmat.sum(1), 1.0, atol=1e-6)
+
+
+def test_prior_saves_loads_and_rejects_other_versions(prior: MotionPrior, tmp_path: Path) -> None:
+    path = prior.save(tmp_path / "p.npz")
+    q = MotionPrior.load(path)
+    np.testing.assert_allclose(q.means, prior.means)
+    assert q.meta()["sources"] == prior.sources
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["meta"]))
+    meta["version"] = 99
+    arrays["meta"] = json.dumps(meta)
+    np.savez(tmp_path / "old.npz", **arrays)
+    with pytest.raises(ValueError, match="version 99.*retrain"):
+        MotionPrior.load(tmp_path / "old.npz")
+    with pytest.raises(FileNotFoundError, match="learn tracker-prior"):
+        MotionPrior.load(tmp_path / "missing.npz")
+
+
+def test_predictor_follows_the_hmm(prior: MotionPrior) -> None:
+    seqs, _ = load_sequences(["sim:wave?seed=7"])
+    pred = prior.predictor()
+    for pose in seqs[0][:30]:
+        alpha = pred.update(pose)
+    assert abs(alpha.sum() - 1) < 1e-9
+    rng = np.random.default_rng(0)
+    P = np.repeat(seqs[0][30][None], 500, axis=0)
+    out = pred(P, rng)
+    inside = (out >= LOWER) & (out <= UPPER)
+    inside[:, YAW] = True
+    assert out.shape == P.shape and inside.all()
+    moved = np.abs(out - P).max(axis=1)
+    # most particles take a small random-walk step; about hmm_weight of them jump to an HMM sample
+    assert 0.1 < np.mean(np.abs(out[:, 12:] - P[:, 12:]).max(axis=1) > 0.2) < 0.35
+    assert np.median(moved) < 0.2
+
+
+def test_cli_trains_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    p = argparse.ArgumentParser()
+    cli_learn.add_arguments(p)
+    out = tmp_path / "prior.npz"
+    args = p.parse_args(["--data", "sim:push?seed=3", "--states", "4", "--out", str(out)])
+    assert cli_learn.main(args) == 0
+    assert MotionPrior.load(out).n_states == 4
+    assert "tracker prior" in capsys.readouterr().err
+    bad = p.parse_args(["--data", str(tmp_path / "nothing.bvh"), "--out", str(out)])
+    assert cli_learn.main(bad) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_default_path_follows_env(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("COUNTERPART_MODELS", str(tmp_path))
+    assert default_prior_path() == tmp_path / "tracker_prior.npz"
+
+
+def test_prior_from_cmu_bvh() -> None:
+    bvh = DATA / "cmu" / "18_01.bvh"
+    if not bvh.exists():
+        pytest.skip(f"{bvh} absent (the CMU handshake of ../shared/data)")
+    seqs, _ = load_sequences([str(bvh)])
+    assert abs(len(seqs[0]) - 303 / 120 * 25) <= 2 and np.isfinite(seqs[0]).all()
