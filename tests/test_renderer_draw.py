@@ -142,7 +142,9 @@ def test_spline_outline_and_badges() -> None:
 def test_stats_text_and_control_bar() -> None:
     st = NodeStats(node="camera", outputs=[TopicStats(topic="frame", port="frame", rate_hz=25.0)],
                    inputs=[TopicStats(topic="x", drops=3, latency_ms=4.5)], proc_ms_mean=1.25)
-    assert draw.stats_lines({"camera": st}) == ["camera        25.0 Hz drop 3    lat    4.5 ms proc   1.2 ms"]
+    assert draw.stats_lines({"camera": st}) == ["camera       25.0Hz drop 3   lat  4.5ms proc  1.2ms"]
+    (w, _), _ = cv2.getTextSize(draw.stats_lines({"camera": st})[0], cv2.FONT_HERSHEY_SIMPLEX, draw.text_scale(blank(), 0.3), 1)
+    assert w < 310  # fits a 320-pixel frame
     assert changed(draw.draw_stats(blank(), {"camera": st}))[:20, :100].any()
     widths = []
     for s in (0.25, 0.75):

@@ -281,11 +281,13 @@ def put_text(image: np.ndarray, text: str, org: tuple[int, int], colour: Colour 
 
 
 def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Sequence[str],
-                       labels: np.ndarray, scores: np.ndarray | None = None, scale: float = 0.35) -> np.ndarray:
+                       labels: np.ndarray, scores: np.ndarray | None = None, scale: float | None = None) -> np.ndarray:
     """Social-signal badges of one person: a row of small labelled boxes starting at ``anchor``
     (x, y pixels, top-left). Label 1 (present): a bright box; 0 (absent): a dark box; -1
-    (unknown): grey. Returns ``image``."""
+    (unknown): grey. ``scores`` (K,) in [0, 1], when given, draw a white bar along the bottom of
+    each known badge. Returns ``image``."""
     _check_image(image)
+    scale = text_scale(image, 0.35) if scale is None else scale
     labels = np.asarray(labels).reshape(-1)
     if len(labels) != len(names):
         raise ValueError(f"signal badges: {len(names)} names but {len(labels)} labels; they must match")
@@ -307,6 +309,11 @@ def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Se
         cv2.rectangle(image, (x, y), (x + bw, y + bh), fill, -1)
         cv2.rectangle(image, (x, y), (x + bw, y + bh), (255, 255, 255) if lab > 0 else (0, 0, 0), 1)
         cv2.putText(image, text, (x + 3, y + bh - base - 2), _FONT, scale, fg, 1, cv2.LINE_AA)
+        if scores is not None and lab >= 0 and i < np.size(scores) and np.isfinite(scores[i]):
+            # the detector's score as a bar along the badge's bottom edge
+            sw = int(round(float(np.clip(scores[i], 0.0, 1.0)) * (bw - 2)))
+            if sw > 0:
+                cv2.line(image, (x + 1, y + bh - 1), (x + sw, y + bh - 1), (255, 255, 255), 1)
         x += bw + 2
         if y > h_img:
             break
@@ -331,14 +338,21 @@ def stats_lines(stats: Mapping[str, Any]) -> list[str]:
         rate = ports[0].rate_hz if ports else 0.0
         drops = sum(t.drops for t in s.inputs)
         lat = max((t.latency_ms for t in s.inputs), default=0.0)
-        lines.append(f"{node[:12]:<12} {rate:5.1f} Hz drop {drops:<4d} lat {lat:6.1f} ms proc {s.proc_ms_mean:5.1f} ms")
+        lines.append(f"{node[:12]:<12}{rate:5.1f}Hz drop {drops:<3d} lat{lat:5.1f}ms proc{s.proc_ms_mean:5.1f}ms")
     return lines
 
 
+def text_scale(image: np.ndarray, base: float) -> float:
+    """Font scale ``base`` for a 320-pixel-wide image, grown with wider images (up to 3x)."""
+    return base * float(np.clip(image.shape[1] / 320.0, 1.0, 3.0))
+
+
 def draw_stats(image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, int] = (4, 4),
-               scale: float = 0.33) -> np.ndarray:
-    """Per-node statistics (:func:`stats_lines`) as text on a dark box, top-left at ``origin``."""
+               scale: float | None = None) -> np.ndarray:
+    """Per-node statistics (:func:`stats_lines`) as text on a dark box, top-left at ``origin``;
+    ``scale`` None: :func:`text_scale` of 0.3."""
     _check_image(image)
+    scale = text_scale(image, 0.3) if scale is None else scale
     lines = stats_lines(stats)
     if not lines:
         return image
@@ -353,10 +367,12 @@ def draw_stats(image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, i
     return image
 
 
-def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float = 0.35) -> np.ndarray:
+def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float | None = None) -> np.ndarray:
     """The run-time controls in force along the bottom edge: model, speaker, interest, emotion and
-    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1])."""
+    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1]);
+    ``scale`` None: :func:`text_scale` of 0.35."""
     _check_image(image)
+    scale = text_scale(image, 0.35) if scale is None else scale
     h, w = image.shape[:2]
     text = (f"{controls.get('model') or '-'}  speaker {controls.get('speaker') or '-'}  "
             f"interest {controls.get('interest') or '-'}  {controls.get('emotion') or '-'}")
@@ -414,6 +430,6 @@ def _check_image(image: np.ndarray) -> None:
 __all__ = [
     "EMOTION_COLOURS", "PERSON_COLOURS", "UNKNOWN_GREY", "SKELETON_LINES",
     "person_colour", "partner_colour", "partner_cones", "default_light", "cone_facets", "draw_cones",
-    "draw_partner_3d", "closed_bspline", "draw_silhouette", "draw_skeleton", "draw_spline_outline", "put_text",
+    "draw_partner_3d", "closed_bspline", "text_scale", "draw_silhouette", "draw_skeleton", "draw_spline_outline", "put_text",
     "draw_signal_badges", "stats_lines", "draw_stats", "draw_controls", "contact_sheet",
 ]

@@ -133,6 +133,7 @@ class Renderer(Node):
         self.stats_ports = set(p["stats_topics"])
         self.finished = False
         self.last_seq = -1
+        self.last_partner: Partner | None = None
         self.server: LiveServer | None = None
         if p["serve"]:
             if not is_loopback(p["host"]):
@@ -200,6 +201,7 @@ class Renderer(Node):
         if n and self.comp.counts["rendered"] % n == 0:
             write_png(Path(self.p["snapshot_dir"]) / f"frame{f.seq:06d}.png", image)
         self.last_seq = f.seq
+        self.last_partner = b.partner
 
     def _apply_controls(self, publish: bool = True) -> None:
         while True:
@@ -220,7 +222,7 @@ class Renderer(Node):
         return control_to_json(msg)
 
     def _state(self) -> dict[str, Any]:
-        return {"controls": self.comp.controls.as_dict(), "overlays": dict(self.comp.overlays),
+        return {"controls": self.comp.controls_shown(self.last_partner), "overlays": dict(self.comp.overlays),
                 "models": list(self.p["models"]), "emotions": list(EMOTIONS), "speakers": list(SPEAKERS),
                 "interest_levels": list(INTEREST_LEVELS), "seq": self.last_seq}
 
