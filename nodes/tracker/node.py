@@ -1,0 +1,156 @@
+"""The tracker node: Frame + Silhouettes (paired by seq) -> Pose3D, one message per frame.
+
+Run in a graph (``run: nodes.tracker``) or alone::
+
+    python -m nodes.tracker --param people='[left, right]' --param prior=none
+
+Each person named in ``people`` (a side of the frame, as the silhouette node labels them) has its
+own :class:`nodes.tracker.tracker.Tracker`. A frame with nobody in view gives a Pose3D with no
+people (the tracks wait); a merged region is still tracked, with the mask the silhouette node
+split by its labels. A frame whose partner message never comes is dropped once it is
+``max_pending`` frames old.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import cv2
+import numpy as np
+
+from body.camera import Camera, default_camera
+from bus import Input, Node, Output, Param
+from messages import Frame, Pose3D, Silhouettes, TrackedBody
+
+from .prior import resolve_prior
+from .tracker import Tracker
+
+SIDES = ("left", "right")
+
+
+def _check_people(v: list) -> str | None:
+    if not 1 <= len(v) <= 2 or any(s not in SIDES for s in v) or len(set(v)) != len(v):
+        return f"{v!r}: expected one or two distinct sides out of {list(SIDES)}"
+    return None
+
+
+def _check_camera(v: dict) -> str | None:
+    if not v:
+        return None
+    try:
+        Camera.from_dict(v)
+    except (ValueError, TypeError) as exc:
+        return str(exc)
+    return None
+
+
+def _check_prior(v: str) -> str | None:
+    if v in ("default", "none", ""):
+        return None
+    from .prior import MotionPrior
+    try:
+        MotionPrior.load(v)
+    except (ValueError, FileNotFoundError, OSError) as exc:
+        return str(exc)
+    return None
+
+
+def person_mask(shape: Any, labels: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """(H, W) bool mask of one PersonShape: its label where the silhouette node sent labels,
+    else the polygon of its B-spline control points."""
+    if labels.size:
+        return labels == shape.id + 1
+    mask = np.zeros((size[1], size[0]), np.uint8)
+    if len(shape.ctrl) >= 3:
+        cv2.fillPoly(mask, [np.round(shape.ctrl).astype(np.int32)], 1)
+    return mask.astype(bool)
+
+
+class TrackerNode(Node):
+    """3D poses of the people of each frame (annealed particle filter, Deutscher et al. 2000)."""
+
+    inputs = {"frame": Input(Frame, doc="the video frames (edge term)"),
+              "silhouettes": Input(Silhouettes, doc="the people's masks (silhouette term)")}
+    outputs = {"pose": Output(Pose3D, "one per frame: the tracked people (empty when nobody is in view)")}
+    params = {
+        "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
+        "particles": Param(int, 256, "particles per layer", min=8, max=100000),
+        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right", check=_check_people),
+        "camera": Param(dict, {}, "calibration: {fx, fy, cx, cy, width, height, R, t} or {eye, target, fov_deg, "
+                        "width, height}; empty: the simulator's default camera at the frame size", check=_check_camera),
+        "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "
+                       "'none' (random walk), or a .npz path", check=_check_prior),
+        "seed": Param(int, 0, "seed of the particle filters"),
+        "max_pending": Param(int, 50, "frames kept while waiting for the other input", min=1),
+    }
+
+    def setup(self) -> None:
+        if self.p["prior"] == "default":
+            self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
+        self.prior = resolve_prior(self.p["prior"])
+        self.camera: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
+        self.trackers: dict[str, Tracker] = {}
+        self.frames: dict[int, Frame] = {}
+        self.sils: dict[int, Silhouettes] = {}
+        self.warned: set[str] = set()
+
+    def _tracker(self, side: str, size: tuple[int, int]) -> Tracker:
+        if self.camera is None:
+            self.camera = default_camera(*size)
+        elif (self.camera.width, self.camera.height) != size:
+            raise ValueError(f"parameter 'camera': calibrated for {self.camera.width}x{self.camera.height} but "
+                             f"frames are {size[0]}x{size[1]}")
+        if side not in self.trackers:
+            self.trackers[side] = Tracker(self.camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
+                                          seed=self.p["seed"] + SIDES.index(side))
+        return self.trackers[side]
+
+    def on_frame(self, msg: Frame) -> None:
+        self.frames[msg.seq] = msg
+        self._pair(msg.seq)
+
+    def on_silhouettes(self, msg: Silhouettes) -> None:
+        self.sils[msg.seq] = msg
+        self._pair(msg.seq)
+
+    def _pair(self, seq: int) -> None:
+        if seq in self.frames and seq in self.sils:
+            self._process(self.frames.pop(seq), self.sils.pop(seq))
+        for pending in (self.frames, self.sils):
+            for old in [s for s in pending if s < seq - self.p["max_pending"]]:
+                del pending[old]
+
+    def _warn_once(self, key: str, text: str) -> None:
+        if key not in self.warned:
+            self.warned.add(key)
+            self.log.warning("%s (further ones are not logged)", text)
+
+    def _process(self, frame: Frame, sil: Silhouettes) -> None:
+        image = frame.image if frame.image.size else None
+        size = (sil.width or (image.shape[1] if image is not None else 0),
+                sil.height or (image.shape[0] if image is not None else 0))
+        people: list[TrackedBody] = []
+        for side in self.p["people"]:
+            shape = next((s for s in sil.people if s.side == side), None)
+            if shape is None:
+                continue
+            try:
+                tr = self._tracker(side, size)
+                mask = person_mask(shape, sil.labels, size)
+                if shape.merged:
+                    self._warn_once("merged", f"frame {frame.seq}: {side} person merged with another; "
+                                    "tracking the part the silhouette node assigned to it")
+                r = tr.update(image, mask)
+            except ValueError as exc:
+                self._warn_once(f"error:{side}", f"frame {frame.seq}: {side} person not tracked: {exc}")
+                continue
+            if r is None:
+                continue
+            people.append(TrackedBody(id=shape.id, side=side, joints=r.joints, pose=r.pose, best_pose=r.best,
+                                      ess=float(r.ess), log_likelihood=float(r.log_likelihood), lost=bool(r.lost)))
+        self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, people=people))
+
+
+NODE = TrackerNode
+
+if __name__ == "__main__":
+    TrackerNode.main()
