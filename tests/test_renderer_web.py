@@ -37,7 +37,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
         "responder": {"run": "tests.renderer_nodes:ControlledResponder", "params": {"path": str(tmp / "controls.jsonl")}},
         "renderer": {"run": "nodes.renderer", "params": {
             "serve": True, "port": 0, "port_file": str(port_file), "stats_topics": ["source/stats", "responder/stats"],
-            "models": ["dual_hmm", "listener"]}},
+            "models": ["dual-hmm", "listener"]}},
     }})
     proc = start_launch(file)
     try:
@@ -140,7 +140,7 @@ def test_posted_control_reaches_the_bus_and_changes_the_partner(live: dict[str, 
     # the responder turned the partner happy (orange: red high, blue low) and the page shows it
     assert wait_for(lambda: (lambda b: b[2] - b[0] > 80)(mean_bgr(_frame(live["url"]), core)), timeout=10)
     state = json.loads(_get(live["url"] + "/state")[1])
-    assert state["controls"]["strength"] == 0.9 and state["models"] == ["dual_hmm", "listener"]
+    assert state["controls"]["strength"] == 0.9 and state["models"] == ["dual-hmm", "listener"]
     _post(live["url"] + "/control", {"strength": 0.0})
     assert wait_for(lambda: (lambda b: b[0] - b[2] > 30)(mean_bgr(_frame(live["url"]), core)), timeout=10)
 

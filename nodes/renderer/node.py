@@ -32,7 +32,8 @@ from .controls import EMOTIONS, INTEREST_LEVELS, SPEAKERS, control_to_json, pars
 from .video import VideoWriter, write_png
 from .web import LiveServer, is_loopback
 
-DEFAULT_MODELS = ["dual_hmm", "joint_shape", "listener"]
+#: the responder's model names (nodes.responder.models.MODEL_NAMES; a node does not import another node)
+DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
 
 
