@@ -1,0 +1,69 @@
+"""``counterpart respond --model FILE --input a.npz --out b.npz``: offline partner generation.
+
+The input is a two-person trajectory file; person ``--observed`` (a or b) is fed to the model
+frame by frame (with its signals for the listener model) and the output file holds the same
+observed person and the generated partner in the other slot (label ``generated:<label>``).
+``--model`` is a model file or ``default:NAME`` (dual-hmm, joint-shape... built when missing);
+``--emotion``/``--strength`` restyle the partner with the default emotion model.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from body.trajectory import TwoPersonTrajectory
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--model", required=True, help="model file, or default:dual-hmm / default:listener")
+    p.add_argument("--input", required=True, help="two-person trajectory file (.npz)")
+    p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
+    p.add_argument("--observed", choices=("a", "b"), default="a", help="the person fed to the model")
+    p.add_argument("--interest", type=int, choices=(1, 2, 3), default=3, help="listener interest level")
+    p.add_argument("--emotion", default="neutral", help="neutral, happy, sad or angry")
+    p.add_argument("--strength", type=float, default=0.0, help="emotion strength in [0, 1]")
+
+
+def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", interest: int = 3) -> np.ndarray:
+    """The partner's joints (T, 14, 3) for one person of ``traj`` (3D models: dual-hmm, listener)."""
+    obs = traj.a if observed == "a" else traj.b
+    name = getattr(model, "name", "")
+    if name == "dual-hmm":
+        return model.predict(obs)
+    if name == "listener":
+        if traj.signals_a is None:
+            raise ValueError("the listener model needs the observed person's signals in the input file")
+        sig = traj.signals_a if observed == "a" else traj.signals_b
+        model.reset()
+        model.interest = interest
+        return np.stack([model.step({n: bool(v == 1) for n, v in zip(traj.signal_names, row)}, x)
+                         for row, x in zip(sig, obs)])
+    raise ValueError(f"model {name!r} does not generate 3D joints; use dual-hmm or listener")
+
+
+def main(args: argparse.Namespace) -> int:
+    from .models import load_default, load_model
+
+    try:
+        if args.model.startswith("default:"):
+            model = load_default(args.model.split(":", 1)[1], lambda s: print(s, file=sys.stderr))
+        else:
+            model = load_model(args.model)
+        traj = TwoPersonTrajectory.load(args.input)
+        partner = generate(model, traj, args.observed, args.interest)
+        if args.emotion != "neutral" and args.strength > 0:
+            partner = load_default("emotion").modulate(partner, args.emotion, args.strength)
+        obs = traj.a if args.observed == "a" else traj.b
+        a, b = (obs, partner) if args.observed == "a" else (partner, obs)
+        out = TwoPersonTrajectory(a=a, b=b, fps=traj.fps, label=f"generated:{traj.label}",
+                                  meta={"model": getattr(model, "name", ""), "input": args.input,
+                                        "observed": args.observed, "emotion": args.emotion,
+                                        "strength": args.strength})
+        out.save(args.out)
+    except (ValueError, FileNotFoundError) as e:
+        print(f"counterpart respond: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {args.out} ({out.n_frames} frames)", file=sys.stderr)
+    return 0

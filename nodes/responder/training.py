@@ -1,0 +1,77 @@
+"""Training each responder model from two-person trajectories (and the simulator defaults)."""
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from body.trajectory import TwoPersonTrajectory
+
+from .data import EMOTIONS, SIM_SCENARIOS, sim_trajectories
+
+Progress = Callable[[str], None] | None
+
+
+def default_training_data(name: str, progress: Progress = None) -> list[TwoPersonTrajectory]:
+    """The simulator data each default model is trained on (sized to train in well under 60 s)."""
+    say = progress or (lambda s: None)
+    say(f"{name}: simulating training data")
+    if name == "dual-hmm":
+        return sim_trajectories(SIM_SCENARIOS, range(8), max_frames=300)
+    if name == "joint-shape":
+        return sim_trajectories(SIM_SCENARIOS, range(5), max_frames=250)
+    if name == "listener":
+        return sim_trajectories(("conversation",), range(8), max_frames=None)
+    if name == "emotion":
+        out = sim_trajectories(SIM_SCENARIOS, range(2), max_frames=200, emotion="neutral")
+        for e in EMOTIONS[1:]:
+            for s in (0.2, 0.5, 0.8, 1.0):
+                out += sim_trajectories(SIM_SCENARIOS, range(2), max_frames=200, emotion=e, strength=s)
+        return out
+    raise ValueError(f"unknown responder model {name!r}")
+
+
+def speaker_listener(t: TwoPersonTrajectory) -> tuple[np.ndarray, np.ndarray]:
+    """(speaker labels, listener labels) (T, K) of a conversation: the speaker talks more."""
+    if t.signals_a is None:
+        raise ValueError(f"trajectory {t.label!r} has no signals: the listener model needs signals_a/_b")
+    k = t.signal_names.index("talking") if "talking" in t.signal_names else None
+    a_talks = k is None or (t.signals_a[:, k] == 1).sum() >= (t.signals_b[:, k] == 1).sum()
+    return (t.signals_a, t.signals_b) if a_talks else (t.signals_b, t.signals_a)
+
+
+def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = None, **params: Any) -> Any:
+    """Fit model ``name`` on trajectories; ``params`` go to the model's constructor."""
+    say = progress or (lambda s: None)
+    if name == "dual-hmm":
+        from .dual_hmm import DualHMM
+        say(f"dual-hmm: fitting PCA + HMM on {len(data)} sequences")
+        return DualHMM(**params).fit(data)
+    if name == "joint-shape":
+        from .joint_shape import JointShapeModel
+        from .shapes import trajectory_shapes
+        say(f"joint-shape: silhouettes and splines of {len(data)} sequences")
+        shapes = [trajectory_shapes(t) for t in data]
+        say("joint-shape: prototypes, behaviours and Markov chain")
+        return JointShapeModel(**params).fit(shapes)
+    if name == "listener":
+        from .listener import ListenerModel, count_rules
+        fps = float(data[0].fps)
+        model = ListenerModel(fps=fps, **params)
+        offset = int(round(model.offset_s * fps))
+        groups: dict[str, list[TwoPersonTrajectory]] = {}
+        for t in data:
+            key = {True: "interested", False: "not_interested"}.get(t.meta.get("interested"), "interested")
+            groups.setdefault(key, []).append(t)
+        rules = {}
+        for key, ts in groups.items():
+            pairs = [speaker_listener(t) for t in ts]
+            rules[key] = count_rules([p[0] for p in pairs], [p[1] for p in pairs], data[0].signal_names, offset)
+            say(f"listener: {len(rules[key])} rules for {key} ({len(ts)} conversations)")
+        return model.fit(rules, {"offset": offset, "fps": fps})
+    if name == "emotion":
+        from .emotion import EmotionModel
+        say(f"emotion: ranking functions from {len(data)} labelled sequences")
+        return EmotionModel(**params).fit_trajectories(data)
+    raise ValueError(f"unknown responder model {name!r}")
