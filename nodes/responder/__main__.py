@@ -1,0 +1,7 @@
+"""``python -m nodes.responder --param model=dual-hmm ...``: run the responder node alone."""
+import sys
+
+from bus.runner import run_standalone
+
+if __name__ == "__main__":
+    sys.exit(run_standalone("nodes.responder.node:Responder"))

@@ -1,0 +1,155 @@
+"""The responder node: the observed person in, the generated partner out (``partner``, one per frame).
+
+Inputs (each optional by parameter, so a graph without a tracker still validates): ``pose``
+(tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
+``signals`` (labeller.SocialSignals, ``use_signals``) and ``control`` (control.Control, latest
+policy, a side input that does not hold the node open). The model in force decides which input
+drives the output: dual-hmm and listener produce one Partner per ``pose`` (listener: per
+``signals`` when there is no pose input), joint-shape one per ``silhouettes``; the others are
+paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
+emotion and strength at run time; ``None`` fields leave a setting unchanged.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from bus import Input, Node, Output, Param
+from messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
+
+from .emotion import EMOTIONS, StyleFilter
+
+MODELS = ("dual-hmm", "joint-shape", "listener")
+
+
+class Responder(Node):
+    """Generates the partner with the selected interaction model."""
+
+    inputs = {
+        "pose": Input(Pose3D, doc="tracked 3D people"),
+        "silhouettes": Input(Silhouettes, doc="people's B-spline silhouettes"),
+        "signals": Input(SocialSignals, doc="the people's social signals"),
+        "control": Input(Control, policy="latest", doc="run-time controls", awaits_end=False),
+    }
+    outputs = {"partner": Output(Partner, "the generated partner, one per frame of the driving input")}
+    params = {
+        "model": Param(str, "dual-hmm", "interaction model", choices=MODELS),
+        "model_file": Param(str, "default", "model file for the selected model, or 'default' (built from the "
+                            "simulator into ~/.cache/counterpart/models when missing)"),
+        "use_pose": Param(bool, True, "subscribe to 'pose'"),
+        "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
+        "use_signals": Param(bool, False, "subscribe to 'signals'"),
+        "use_control": Param(bool, True, "subscribe to 'control'"),
+        "speaker": Param(str, "person", "who speaks (listener model): person or partner", choices=("person", "partner")),
+        "interest": Param(int, 3, "listener interest level", min=1, max=3),
+        "emotion": Param(str, "neutral", "partner emotion", choices=EMOTIONS),
+        "strength": Param(float, 0.0, "emotion strength", min=0.0, max=1.0),
+        "observed": Param(str, "left", "which person the partner responds to", choices=("left", "right")),
+    }
+
+    @classmethod
+    def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        use = {"pose": params["use_pose"], "silhouettes": params["use_silhouettes"],
+               "signals": params["use_signals"], "control": params["use_control"]}
+        return {k: v for k, v in cls.inputs.items() if use[k]}, dict(cls.outputs)
+
+    def setup(self) -> None:
+        self.models: dict[str, Any] = {}
+        self.model = self.p["model"]
+        self.speaker, self.interest = self.p["speaker"], self.p["interest"]
+        self.emotion, self.strength = self.p["emotion"], self.p["strength"]
+        self._load(self.model, self.p["model_file"])
+        # the emotion model is small and built in seconds; load it up front so control switches are instant
+        self.style = StyleFilter(self._model("emotion"))
+        self.latest: dict[str, Any] = {}
+        self.count = 0
+
+    # ------------------------------------------------------------------ models
+    def _load(self, name: str, file: str = "default") -> Any:
+        from .models import load_default, load_model
+
+        if name not in self.models:
+            self.log.info("loading model %s (%s)", name, file)
+            self.models[name] = load_default(name) if file == "default" else load_model(file, expected=name)
+        return self.models[name]
+
+    def _model(self, name: str) -> Any:
+        try:
+            return self._load(name)
+        except (ValueError, FileNotFoundError) as e:
+            self.log.error("model %s unavailable: %s", name, e)
+            return None
+
+    # ------------------------------------------------------------------ inputs
+    def on_control(self, msg: Control) -> None:
+        if msg.model is not None:
+            if msg.model not in MODELS:
+                self.log.warning("control: unknown model %r ignored; models: %s", msg.model, ", ".join(MODELS))
+            elif self._model(msg.model) is not None:
+                self.model = msg.model
+                self.models[msg.model].reset()
+        if msg.speaker is not None and msg.speaker in ("person", "partner"):
+            self.speaker = msg.speaker
+        if msg.interest is not None and msg.interest in (1, 2, 3):
+            self.interest = int(msg.interest)
+        if msg.emotion is not None and msg.emotion in EMOTIONS:
+            self.emotion = msg.emotion
+        if msg.strength is not None:
+            self.strength = float(min(max(msg.strength, 0.0), 1.0))
+        self.log.info("control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
+                      self.model, self.speaker, self.interest, self.emotion, self.strength)
+
+    def _pick(self, people: list[Any]) -> Any:
+        if not people:
+            return None
+        side = [p for p in people if getattr(p, "side", "") == self.p["observed"]]
+        return side[0] if side else people[0]
+
+    def on_pose(self, msg: Pose3D) -> None:
+        self.latest["pose"] = msg
+        if self.model == "dual-hmm" or (self.model == "listener"):
+            self._emit(msg)
+
+    def on_silhouettes(self, msg: Silhouettes) -> None:
+        self.latest["silhouettes"] = msg
+        if self.model == "joint-shape":
+            self._emit(msg)
+
+    def on_signals(self, msg: SocialSignals) -> None:
+        self.latest["signals"] = msg
+        if self.model == "listener" and "pose" not in self._in:
+            self._emit(msg)
+
+    # ------------------------------------------------------------------ output
+    def _emit(self, driver: Any) -> None:
+        m = self._model(self.model)
+        if m is None:
+            return
+        out = dict(model=self.model, emotion=self.emotion, strength=self.strength)
+        if self.model == "dual-hmm":
+            body = self._pick(list(driver.people))
+            if body is None or body.lost or np.asarray(body.joints).shape != (14, 3):
+                return
+            joints = m.step(body.joints)
+            out.update(joints=self.style(joints, self.emotion, self.strength), observed_id=body.id,
+                       behaviour="respond", confidence=float(np.max(m.posterior_)))
+        elif self.model == "listener":
+            m.interest = self.interest
+            sig = self.latest.get("signals")
+            body = self._pick(list(self.latest["pose"].people)) if "pose" in self.latest else None
+            person = self._pick(list(sig.people)) if sig is not None else None  # the newest signals
+            speaking = {}
+            if person is not None and self.speaker == "person":
+                speaking = {n: bool(v == 1) for n, v in zip(person.names, np.asarray(person.labels))}
+            joints = m.step(speaking, None if body is None else body.joints)
+            out.update(joints=self.style(joints, self.emotion, self.strength),
+                       observed_id=-1 if body is None else body.id, behaviour=m.behaviour_ or "listen", confidence=1.0)
+        else:  # joint-shape
+            shape = self._pick(list(driver.people))
+            if shape is None or shape.height <= 0:
+                return
+            ctrl = m.step(shape.ctrl, shape.height, shape.centroid, mirrored=shape.side == "right")
+            out.update(ctrl=ctrl, observed_id=shape.id, behaviour=f"b{m.mode_}", confidence=m.confidence_)
+        self.publish("partner", Partner(stamp=driver.stamp, seq=driver.seq, **out))
+        self.count += 1

@@ -1,0 +1,79 @@
+"""The responder node in a real launch: Pose3D in, Partner out, Control switches take effect."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nodes.responder.dual_hmm import DualHMM
+from nodes.responder.emotion import EmotionModel
+from nodes.responder.listener import ListenerModel
+from nodes.responder.models import save_model
+from tests.launching import read_jsonl, run_launch, write_launch
+from tests.responder_fixtures import planted_pair
+
+
+@pytest.fixture(scope="module")
+def models_dir(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("models")
+    save_model(d / "responder-dual-hmm.npz", DualHMM(n_states=8, n_iter=10, both_roles=False)
+               .fit([planted_pair(s) for s in range(6)]))
+    # an emotion model whose angry style doubles the amplitude at full strength
+    em = EmotionModel().fit(np.random.default_rng(0).normal(size=(8, 7)), ["neutral", "angry"] * 4,
+                            [0, 1] * 4, ["g"] * 8)
+    em.k_amp_[:] = np.log(2.0)
+    em.k_speed_[:] = np.log(2.0)
+    save_model(d / "responder-emotion.npz", em)
+    save_model(d / "responder-listener.npz", ListenerModel().fit({"interested": [(("S:nod",), ("L:nod",), 0.9)]}))
+    return d
+
+
+def graph(tmp: Path, switch: str = "") -> Path:
+    return write_launch(tmp / "g.yaml", {"nodes": {
+        "source": {"run": "tests.responder_nodes:PoseSource", "params": {"frames": 60, "control_at": 30, "switch": switch}},
+        "responder": {"run": "nodes.responder", "params": {"model": "dual-hmm"}},
+        "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp / "out.jsonl")}},
+    }})
+
+
+def test_partner_per_pose_and_control_takes_effect(tmp_path: Path, models_dir: Path) -> None:
+    code, out = run_launch(graph(tmp_path), timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
+    assert code == 0, out
+    rows = read_jsonl(tmp_path / "out.jsonl")
+    assert [r["seq"] for r in rows] == list(range(60))
+    assert all(r["shape"] == [14, 3] and r["model"] == "dual-hmm" for r in rows)
+    assert all(r["emotion"] == "neutral" and r["strength"] == 0.0 for r in rows[:30])
+    assert all(r["emotion"] == "angry" and r["strength"] == 1.0 for r in rows[30:])
+    # the partner answers A's arm: its left wrist (joint 4) rises with A
+    truth = planted_pair(7, T=60)
+    pred = np.array([r["joints"] for r in rows])
+    assert np.corrcoef(pred[:30, 4, 1], truth.b[:30, 4, 1])[0, 1] > 0.8
+
+
+def test_control_switches_the_model(tmp_path: Path, models_dir: Path) -> None:
+    code, out = run_launch(graph(tmp_path, switch="listener"), timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
+    assert code == 0, out
+    rows = read_jsonl(tmp_path / "out.jsonl")
+    assert {r["model"] for r in rows[:30]} == {"dual-hmm"}
+    assert {r["model"] for r in rows[30:]} == {"listener"}
+    assert all(r["shape"] == [14, 3] for r in rows)
+
+
+def test_inputs_follow_the_use_params(tmp_path: Path) -> None:
+    from bus.launchfile import LaunchError, check, load
+    from nodes.responder.node import Responder
+
+    p = Responder.validate_params({"use_pose": False, "use_silhouettes": True, "use_control": False})
+    assert set(Responder.ports(p)[0]) == {"silhouettes"}
+    # a graph without a tracker: the pose input is switched off and the graph validates
+    f = write_launch(tmp_path / "g2.yaml", {"nodes": {
+        "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
+        "responder": {"run": "nodes.responder", "params": {"model": "listener", "use_pose": False}}}})
+    assert "responder" in check(load(f)).nodes
+    # with the pose input on, the missing publisher is named
+    f = write_launch(tmp_path / "g3.yaml", {"nodes": {
+        "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
+        "responder": {"run": "nodes.responder"}}})
+    with pytest.raises(LaunchError, match="inputs.pose"):
+        check(load(f))
