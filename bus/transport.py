@@ -54,6 +54,7 @@ class Publisher:
         self.count = 0
         self.subscribers = 0
         self.eos_listeners = 0
+        self._last_sub_read = 0.0
         self._barrier_done = expected <= 0
         self.reliable = ctx.socket(zmq.XPUB)
         self.reliable.setsockopt(zmq.SNDHWM, hwm)
@@ -102,8 +103,11 @@ class Publisher:
         if not self._barrier_done:
             self.wait_for_subscribers()
             self._barrier_done = True
-        # subscriptions change rarely: look at them on every 16th send, or always while nobody listens
-        if eos or self.count % 16 == 0 or not (self.subscribers and self.latest_subscribers):
+        # subscriptions change rarely: look at them every 20 ms (two polls per send would cost more
+        # than the rest of the send)
+        now = time.monotonic()
+        if eos or now - self._last_sub_read > 0.02:
+            self._last_sub_read = now
             self._read_subscriptions()
         # zero-copy pays off for large buffers only; small messages are cheaper copied
         copy = all((p.nbytes if isinstance(p, memoryview) else len(p)) < ZERO_COPY_MIN for p in parts)
