@@ -9,17 +9,13 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import logging
 import sys
 from pathlib import Path
 
-#: (module, function) building a default model file when missing; each prints its own progress
-MODEL_BUILDERS: tuple[tuple[str, str], ...] = (
-    ("nodes.tracker.prior", "ensure_default_prior"),
-    ("nodes.responder.models", "ensure_default_models"),
-)
+#: the responder's models offered on the live page, built before the graph starts
+RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,16 +28,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="out", help="output folder (default: out)")
     p.add_argument("--scenario", default="handshake", help="built-in scene when no --input/--live")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--frames", type=int, default=0, help="stop after this many frames (0: the whole scene or file)")
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
 
 
 def ensure_models() -> None:
-    for module, func in MODEL_BUILDERS:
-        try:
-            builder = getattr(importlib.import_module(module), func)
-        except (ImportError, AttributeError):
-            continue
-        builder(progress=True)
+    """Build the default model files the graph loads, when they are not cached yet."""
+    from nodes.responder.models import load_default
+    from nodes.tracker.prior import default_prior_path, load_default_prior
+
+    if not default_prior_path().exists():
+        print("  tracker motion prior (once)...", file=sys.stderr)
+    load_default_prior(progress=True)
+    for name in RESPONDER_MODELS:
+        load_default(name, progress=lambda m, name=name: print(f"  responder {name}: {m}", file=sys.stderr))
 
 
 def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:
@@ -99,6 +99,8 @@ def main(args: argparse.Namespace) -> int:
             sets.append(f"camera.source={Path(args.input).resolve()}")
         else:
             sets.append(f"camera.source=sim:{args.scenario}?seed={args.seed}")
+    if args.frames:
+        sets.append(f"camera.max_frames={args.frames}")
     sets += args.set or []
     try:
         graph = load_checked(file, sets, None)

@@ -5,6 +5,8 @@ Format (every key but ``nodes`` optional)::
     include:                       # other launch files, relative to this one or in launch/
       - base.yaml
       - {file: cam.yaml, set: {camera.fps: 10}}
+    policy: latest                 # default queue policy of the inputs of every node (included ones too)
+                                   # that does not set its own
     transport: ipc                 # ipc (default: a 0700 run directory) or tcp
     host: 127.0.0.1                # tcp: the host to bind (loopback unless named)
     port_base: 7300                # tcp: first port; each topic takes two (reliable, latest)
@@ -46,7 +48,7 @@ from .transport import POLICIES
 
 RESTART_POLICIES = ("never", "on-failure", "always")
 NODE_KEYS = {"run", "params", "remap", "policy", "inputs", "restart", "max_restarts", "required", "wait_subscribers"}
-TOP_KEYS = {"include", "transport", "host", "port_base", "endpoints", "external", "nodes", "barrier_timeout"}
+TOP_KEYS = {"include", "policy", "transport", "host", "port_base", "endpoints", "external", "nodes", "barrier_timeout"}
 
 
 class LaunchError(ValueError):
@@ -188,6 +190,12 @@ def load(path: str | Path, sets: dict[str, Any] | None = None, replace: dict[str
         if name in graph.nodes:
             raise _err(file, name, "nodes", f"node defined twice ({graph.nodes[name].file} and {file})")
         graph.nodes[name] = _node_decl(file, str(name), _mapping(body, file, name, "node"))
+    policy = doc.get("policy")
+    if policy is not None:
+        if policy not in POLICIES:
+            raise _err(file, None, "policy", f"{policy!r} is not one of {', '.join(POLICIES)}")
+        for decl in graph.nodes.values():
+            decl.policy = decl.policy or policy
     _apply_overrides(graph, sets or {}, replace or {})
     return graph
 

@@ -108,7 +108,10 @@ class MotionPrior:
                           random_state=self.seed)
         hmm.fit(Y, lengths=[len(s) for s in seqs])
         self.startprob, self.transmat = hmm.startprob_, hmm.transmat_
-        self.means, self.covars = hmm.means_, hmm.covars_
+        # a state fitted to few frames can end with a singular covariance; a floor keeps every state
+        # usable for sampling and scoring (Cholesky needs positive definite matrices)
+        floor = max(1e-6, 1e-3 * float(Y.var(axis=0).mean()))
+        self.means, self.covars = hmm.means_, hmm.covars_ + floor * np.eye(Y.shape[1])
         d = np.concatenate([np.diff(s, axis=0) for s in seqs])
         d[:, YAW] = wrap_angle(d[:, YAW])
         self.rw_std = np.maximum(d.std(axis=0), RW_FLOOR)
