@@ -66,6 +66,25 @@ def kill_tree(proc: subprocess.Popen) -> None:
         pass
 
 
+def free_port_pair() -> int:
+    """A port p with p and p + 1 free on 127.0.0.1 (a tcp topic takes both)."""
+    import socket
+
+    for _ in range(50):
+        with socket.socket() as a:
+            a.bind(("127.0.0.1", 0))
+            port = a.getsockname()[1]
+            if port >= 65534:
+                continue
+            with socket.socket() as b:
+                try:
+                    b.bind(("127.0.0.1", port + 1))
+                except OSError:
+                    continue
+        return port
+    raise RuntimeError("no two adjacent free ports found")
+
+
 def stop_launch(proc: subprocess.Popen, timeout: float = 10) -> None:
     """Ctrl-C the launcher as a user would, then make sure nothing is left."""
     if proc.poll() is None:

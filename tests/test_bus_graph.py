@@ -20,7 +20,7 @@ import zmq
 from bus.endpoints import tcp_endpoints
 from messages import EndOfStream, encode_frames
 from tests.graph_nodes import Number
-from tests.launching import (REPO, descendants, kill_tree, read_jsonl, run_launch, start_launch, stop_launch,
+from tests.launching import (REPO, descendants, free_port_pair, kill_tree, read_jsonl, run_launch, start_launch, stop_launch,
                              wait_for, write_launch)
 
 N = "tests.graph_nodes:"
@@ -125,7 +125,7 @@ def test_required_node_exit_stops_the_graph_with_its_code(tmp_path: Path) -> Non
 def test_rogue_publisher_does_not_stop_the_sink(tmp_path: Path) -> None:
     """Garbage, an unknown schema, a wrong field type and an oversized header reach a sink over tcp;
     it drops and counts them, keeps the good messages and ends normally."""
-    port = 7610
+    port = free_port_pair()
     doc = {
         "external": {"numbers": {"type": "test.Number", "endpoint": f"tcp://127.0.0.1:{port}"}},
         "nodes": {"sink": {"run": N + "Sink", "params": {"path": str(tmp_path / "sink.jsonl")}, "remap": {"in": "numbers"}}},
@@ -167,7 +167,7 @@ def test_rogue_publisher_does_not_stop_the_sink(tmp_path: Path) -> None:
 
 
 def test_graph_split_over_two_launchers_delivers_over_tcp(tmp_path: Path) -> None:
-    port = 7630
+    port = free_port_pair()
     a = write_launch(tmp_path / "a.yaml", {
         "endpoints": {"numbers": f"tcp://127.0.0.1:{port}"},
         "nodes": {"source": {"run": N + "Counter", "params": {"count": 200}, "remap": {"out": "numbers"},
@@ -182,7 +182,7 @@ def test_graph_split_over_two_launchers_delivers_over_tcp(tmp_path: Path) -> Non
     })
     pa, pb = start_launch(a), start_launch(b)
     try:
-        assert pa.wait(40) == 0
+        assert pa.wait(40) == 0, pa.stdout.read()
         assert pb.wait(40) == 0, pb.stdout.read()
         rows = received(tmp_path / "sink.jsonl")
         assert [r["value"] for r in rows] == [3.0 * i for i in range(200)]
