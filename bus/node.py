@@ -257,7 +257,8 @@ class Node:
             if self.timer_period is not None:
                 timeout = max(0, min(timeout, int((next_timer - time.monotonic()) * 1000)))
             ready = dict(poller.poll(timeout))
-            for port in dict.fromkeys(owners[s] for s in ready):
+            due = [owners[s] for s in ready] + [p for p, sub in self._in.items() if sub.pending]
+            for port in dict.fromkeys(due):
                 sub = self._in[port]
                 msg = sub.receive()
                 if msg is None:

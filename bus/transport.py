@@ -225,6 +225,7 @@ class Subscriber:
         self.bad: dict[str, int] = {}
         self.ended = False
         self._pending_eos: EndOfStream | None = None
+        self._eos_counter: int | None = None
         self._last_counter: int | None = None
         self.socket = ctx.socket(zmq.SUB)
         self.socket.setsockopt(zmq.LINGER, 0)
@@ -265,19 +266,30 @@ class Subscriber:
             self._last_counter = counter
         return msg
 
+    @property
+    def pending(self) -> bool:
+        """End of stream has arrived and will be returned once nothing more is in flight: call
+        :meth:`receive` again even when no socket is readable."""
+        return self._pending_eos is not None
+
     def receive(self) -> Any | None:
         if self.eos_socket is not None and self._pending_eos is None and self.eos_socket.poll(0, zmq.POLLIN):
-            msg = self._decode(self.eos_socket.recv_multipart(copy=False), track=False)
+            frames = self.eos_socket.recv_multipart(copy=False)
+            msg = self._decode(frames, track=False)
             if isinstance(msg, EndOfStream) and not self.ended:
                 # end of stream overtook the lossy socket: deliver what is still in flight there first
                 self._pending_eos = msg
-        if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
-            msg, self._pending_eos = self._pending_eos, None
-            self._finish()
-            return msg
+                self._eos_counter = read_header(frames[1], self.limits).get("n")
         try:
             frames = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
         except zmq.Again:
+            if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
+                msg, self._pending_eos = self._pending_eos, None
+                last, n = self._last_counter, self._eos_counter
+                if type(n) is int and last is not None and n > last + 1:
+                    self.drops += n - last - 1  # lost on the lossy socket after the last one received
+                self._finish()
+                return msg
             return None
         if self.policy == LATEST:
             stale = 0

@@ -123,14 +123,20 @@ class Responder(Node):
 
     # ------------------------------------------------------------------ output
     def _emit(self, driver: Any) -> None:
+        """One Partner per driving message; an empty one (no joints, no ctrl) when there is nobody to
+        respond to, so that downstream nodes pairing by seq never wait for a partner that won't come."""
+        out = dict(model=self.model, emotion=self.emotion, strength=self.strength)
+
+        def nobody() -> None:
+            self.publish("partner", Partner(stamp=driver.stamp, seq=driver.seq, behaviour="none", **out))
+
         m = self._model(self.model)
         if m is None:
-            return
-        out = dict(model=self.model, emotion=self.emotion, strength=self.strength)
+            return nobody()
         if self.model == "dual-hmm":
             body = self._pick(list(driver.people))
             if body is None or body.lost or np.asarray(body.joints).shape != (14, 3):
-                return
+                return nobody()
             joints = m.step(body.joints)
             out.update(joints=self.style(joints, self.emotion, self.strength), observed_id=body.id,
                        behaviour="respond", confidence=float(np.max(m.posterior_)))
@@ -148,7 +154,7 @@ class Responder(Node):
         else:  # joint-shape
             shape = self._pick(list(driver.people))
             if shape is None or shape.height <= 0:
-                return
+                return nobody()
             ctrl = m.step(shape.ctrl, shape.height, shape.centroid, mirrored=shape.side == "right")
             out.update(ctrl=ctrl, observed_id=shape.id, behaviour=f"b{m.mode_}", confidence=m.confidence_)
         self.publish("partner", Partner(stamp=driver.stamp, seq=driver.seq, **out))

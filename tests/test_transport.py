@@ -1,0 +1,46 @@
+"""Publisher/Subscriber in one process over real ipc sockets: policies and end of stream."""
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+import zmq
+
+from bus.endpoints import ipc_endpoints
+from bus.transport import LATEST, RELIABLE, Publisher, Subscriber
+from messages import EndOfStream
+from tests.graph_nodes import Number
+
+
+def _pump(sub: Subscriber, timeout: float = 5.0) -> list:
+    """What a node loop does: poll the subscriber's sockets, receive, also while an end is pending."""
+    got, deadline = [], time.monotonic() + timeout
+    while not sub.ended and time.monotonic() < deadline:
+        if any(s.poll(20) for s in sub.sockets) or sub.pending:
+            msg = sub.receive()
+            if msg is not None:
+                got.append(msg)
+    return got
+
+
+def test_latest_subscriber_ends_and_the_publisher_sees_it_has_read_to_the_end() -> None:
+    root = Path(tempfile.mkdtemp(dir="/tmp"))
+    ctx = zmq.Context()
+    pub = Publisher(ctx, "n", ipc_endpoints(root, "n"))
+    subs = {pol: Subscriber(ctx, "n", ipc_endpoints(root, "n"), pol) for pol in (RELIABLE, LATEST)}
+    time.sleep(0.3)  # let the subscriptions arrive (no barrier in this test)
+    for i in range(5):
+        pub.send(Number(seq=i, value=float(i)))
+    pub.send_eos("test", 4)
+    got = {pol: _pump(s) for pol, s in subs.items()}
+    assert [m.seq for m in got[RELIABLE]] == [0, 1, 2, 3, 4, 4]  # the last one is the end of stream
+    assert all(s.ended for s in subs.values())
+    latest = [m.seq for m in got[LATEST][:-1]]
+    assert isinstance(got[LATEST][-1], EndOfStream) and latest == sorted(latest)
+    assert len(latest) + subs[LATEST].drops == 5  # what the lossy socket lost is counted
+    assert pub.wait_delivered(5.0), (pub.subscribers, pub.eos_listeners)
+    for s in subs.values():
+        s.close()
+    pub.close(0)
+    ctx.term()
