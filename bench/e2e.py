@@ -88,7 +88,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=200, help="frames of the scene to play (25 fps)")
     args = ap.parse_args()
-    import nodes.responder.node  # noqa: F401  registers responder.Partner for decoding
+    import nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
     from bus.cli_demo import ensure_models
 
     ensure_models()
