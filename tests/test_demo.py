@@ -10,10 +10,12 @@ import tempfile
 from pathlib import Path
 
 import cv2
+import pytest
 
 from tests.launching import REPO
 
 
+@pytest.mark.timeout(600)  # trains every default model first: about 30 s on two idle cores
 def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path) -> None:
     env = {**os.environ, "COUNTERPART_MODELS": str(tmp_path / "models"),
            "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpd-", dir="/tmp")}
