@@ -38,7 +38,7 @@ class FrameSink(Node):
 
 
 #: the real test video of /work/shared/data (tests skip when it is absent)
-VTEST = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "video" / "vtest.avi"
+from tests.shared_data import VTEST  # noqa: E402,F401 (re-exported for the camera tests)
 
 
 def write_video(path: Path, n: int = 12, size: tuple[int, int] = (96, 72), fps: float = 25.0) -> Path:

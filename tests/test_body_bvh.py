@@ -1,6 +1,5 @@
 """BVH reader: a hand-written file with a known answer, error messages, and the CMU handshake."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -8,7 +7,7 @@ import pytest
 from body.bvh import CMU_SCALE, CMU_TO_JOINTS14, bvh_to_joints14, read_bvh
 from body.skeleton import JOINT_INDEX, JOINTS
 
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmu"
+from tests.shared_data import CMU as DATA
 CMU_A, CMU_B = DATA / "18_01.bvh", DATA / "19_01.bvh"
 
 TINY = """HIERARCHY

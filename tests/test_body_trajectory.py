@@ -1,7 +1,6 @@
 """Two-person trajectory files: round trip, resampling, clear errors, BVH conversion."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ from body.pose import neutral_pose
 from body.skeleton import JOINTS
 from body.trajectory import FORMAT_VERSION, TwoPersonTrajectory
 
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "cmu"
+from tests.shared_data import CMU as DATA
 
 
 def make(T: int = 50, fps: float = 25.0, signals: bool = True) -> TwoPersonTrajectory:

@@ -68,7 +68,7 @@ def test_lockstep_delivers_every_frame_bit_exact(tmp_path: Path, prefetch: int) 
     assert stamps == sorted(stamps) and all(r["received"] >= r["stamp"] for r in got)
 
 
-@pytest.mark.skipif(not VTEST.exists(), reason=f"real video {VTEST} absent (see /work/shared/data/README.md)")
+@pytest.mark.skipif(not VTEST.exists(), reason=f"real video {VTEST} absent (see ../shared/data/README.md)")
 def test_lockstep_real_video_first_100_frames_bit_exact(tmp_path: Path) -> None:
     code, text, records = launch(tmp_path, {"source": f"file:{VTEST}", "pacing": "lockstep", "max_frames": 100})
     assert code == 0, text

@@ -58,7 +58,7 @@ def test_video_file_skip_and_rewind_are_exact(tmp_path: Path) -> None:
     src.close()
 
 
-@pytest.mark.skipif(not VTEST.exists(), reason=f"real video {VTEST} absent (see /work/shared/data/README.md)")
+@pytest.mark.skipif(not VTEST.exists(), reason=f"real video {VTEST} absent (see ../shared/data/README.md)")
 def test_real_mp43_video_header_and_first_frames() -> None:
     src = VideoFileSource(VTEST)
     src.open()

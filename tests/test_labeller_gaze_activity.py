@@ -1,12 +1,13 @@
 """Gaze, activity, face (talking/laughing) and the combined SocialLabeller."""
 from __future__ import annotations
 
-import os
 import warnings
 
 import cv2
 import numpy as np
 import pytest
+
+from tests.shared_data import VTEST
 
 from nodes.labeller.activity import ActivityDetector, activity_2d, activity_3d
 from nodes.labeller.face import FaceSignalDetector, find_face_cascade, load_face_cascade
@@ -179,13 +180,12 @@ def test_no_face_gives_unknown() -> None:
     assert det.face_box is None
 
 
-@pytest.mark.skipif(not os.path.exists("../shared/data/video/vtest.avi"),
-                    reason="real pedestrian video ../shared/data/video/vtest.avi is absent")
+@pytest.mark.skipif(not VTEST.exists(), reason=f"real pedestrian video {VTEST} is absent")
 @needs_cascade
 def test_pedestrian_video_faces_below_min_size_are_unknown() -> None:
     """vtest.avi's pedestrians have faces of ~10 px: refused at min_face_px=24 everywhere their
     heads are (the cascade's false positives elsewhere in the scene are not faces we can test)."""
-    cap = cv2.VideoCapture("../shared/data/video/vtest.avi")
+    cap = cv2.VideoCapture(str(VTEST))
     ok, frame = cap.read()
     cap.release()
     assert ok

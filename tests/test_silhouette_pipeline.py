@@ -12,9 +12,7 @@ from nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_
 from nodes.silhouette.spline import evaluate_closed_bspline
 from nodes.silhouette.synthetic import two_person_sequence
 
-VTEST = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "video", "vtest.avi")
-if not os.path.isfile(VTEST):
-    VTEST = "/work/shared/data/video/vtest.avi"
+from tests.shared_data import VTEST
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ from body.pose import DOF, LOWER, UPPER, YAW
 from nodes.tracker import cli_learn
 from nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+from tests.shared_data import DATA
 
 
 @pytest.fixture(scope="module")
