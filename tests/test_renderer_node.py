@@ -15,6 +15,7 @@ from messages import Frame, Partner
 from nodes.renderer import draw
 from nodes.renderer.compositor import Compositor, scaled_camera
 from nodes.renderer.video import count_frames
+from tests.camera_sink import cv2_frames
 from tests.launching import read_jsonl, run_launch, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints, scene_frame
 
@@ -30,16 +31,6 @@ def graph(tmp_path: Path, source: dict, renderer: dict) -> Path:
     }})
 
 
-def decode_all(path: Path) -> list[np.ndarray]:
-    cap = cv2.VideoCapture(str(path))
-    out = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            return out
-        out.append(f)
-
-
 def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path: Path) -> None:
     n = 24
     code, text = run_launch(graph(tmp_path, {"count": n, "width": W, "height": H, "emotion": "angry", "strength": 1.0},
@@ -49,7 +40,7 @@ def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path:
     assert len(written) == 1, text
     assert f"wrote {n} frames to {written[0]}" in text
     assert "partner exact 24, held 0, missing 0" in text
-    frames = decode_all(written[0])
+    frames = cv2_frames(written[0])
     assert len(frames) == n == count_frames(written[0])
     cam = scaled_camera(default_camera(), W, H)
     for seq in (0, n - 1):

@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from body.pose import DOF, LOWER, UPPER, YAW, clip_to_limits, wrap_angle
+from body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 LogLikelihood = Callable[[np.ndarray], np.ndarray]
 PredictFn = Callable[[np.ndarray, np.random.Generator], np.ndarray]
@@ -115,6 +115,14 @@ def weighted_std(P: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(w @ (d * d), 0.0))
 
 
+def initial_set(particles: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
+    """(K, DOF) poses -> (n, DOF) within joint limits, drawn with replacement when K != n."""
+    particles = clip_to_limits(np.asarray(particles, dtype=np.float64).reshape(-1, DOF))
+    if len(particles) != n:
+        particles = particles[rng.integers(0, len(particles), n)]
+    return particles
+
+
 class AnnealedParticleFilter:
     """Annealed particle filter over 28-DOF poses.
 
@@ -151,10 +159,7 @@ class AnnealedParticleFilter:
 
     def initialise(self, particles: np.ndarray) -> None:
         """Set the particle set (K, DOF), K resampled to N if it differs."""
-        particles = clip_to_limits(np.asarray(particles, dtype=np.float64).reshape(-1, DOF))
-        if len(particles) != self.n_particles:
-            particles = particles[self.rng.integers(0, len(particles), self.n_particles)]
-        self.particles = particles
+        self.particles = initial_set(particles, self.n_particles, self.rng)
 
     def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
              n_layers: int | None = None) -> Estimate:
@@ -212,10 +217,8 @@ class ParticleFilter:
         self.particles: np.ndarray | None = None
 
     def initialise(self, particles: np.ndarray) -> None:
-        particles = clip_to_limits(np.asarray(particles, dtype=np.float64).reshape(-1, DOF))
-        if len(particles) != self.n_particles:
-            particles = particles[self.rng.integers(0, len(particles), self.n_particles)]
-        self.particles = particles
+        """Set the particle set (K, DOF), K resampled to N if it differs."""
+        self.particles = initial_set(particles, self.n_particles, self.rng)
 
     def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
              n_layers: int | None = None) -> Estimate:
