@@ -283,6 +283,11 @@ class Node:
                 self.stopping = True
 
     def _send_eos(self, reason: str) -> None:
+        # This node reads nothing more: leave every input first. Two nodes feeding each other (the
+        # renderer's controls to the responder, its partner back) would otherwise each wait below
+        # for the other to confirm an end of stream that neither reads any longer.
+        for sub in self._in.values():
+            sub.close()
         for pub in self._out.values():
             pub.send_eos(self.name, self._last_seq, reason)
         deadline = time.monotonic() + float(self.spec.get("eos_timeout", 120.0))
