@@ -33,7 +33,7 @@ import numpy as np
 from nodes.silhouette.backends import make_subtractor
 from nodes.silhouette.pipeline import SilhouetteExtractor
 from nodes.silhouette.regions import clean_mask
-from nodes.silhouette.spline import oriented_boundary, spline_distance
+from body.spline import oriented_boundary, spline_distance
 from nodes.silhouette.synthetic import two_person_sequence
 
 VTEST = os.environ.get("COUNTERPART_VTEST", "/work/shared/data/video/vtest.avi")

@@ -12,7 +12,6 @@ from nodes.renderer import draw
 from nodes.renderer.compositor import Compositor, scaled_camera
 from nodes.renderer.controls import parse_control
 from nodes.renderer.video import VideoWriter, choose_codec, count_frames
-from nodes.silhouette.spline import evaluate_closed_bspline
 from tests.renderer_nodes import partner_joints, scene_frame
 
 CAM = default_camera(320, 240)
@@ -87,13 +86,6 @@ def test_cones_behind_the_camera_are_skipped() -> None:
 def ellipse_ctrl(cx: float = 100, cy: float = 120, ax: float = 40, ay: float = 70, n: int = 32) -> np.ndarray:
     a = np.linspace(0, 2 * np.pi, n, endpoint=False)
     return np.stack([cx + ax * np.cos(a), cy + ay * np.sin(a)], 1)
-
-
-def test_closed_bspline_matches_the_silhouette_node_convention() -> None:
-    rng = np.random.default_rng(0)
-    ctrl = rng.uniform(0, 200, (32, 2))
-    for k in (1, 4, 8):
-        np.testing.assert_allclose(draw.closed_bspline(ctrl, k), evaluate_closed_bspline(ctrl, k), atol=1e-9)
 
 
 def test_silhouette_fill_covers_the_curve_interior() -> None:

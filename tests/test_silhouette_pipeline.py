@@ -9,7 +9,7 @@ import pytest
 
 from nodes.silhouette.background import FOREGROUND, SHADOW
 from nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_video
-from nodes.silhouette.spline import evaluate_closed_bspline
+from body.spline import evaluate_closed_bspline
 from nodes.silhouette.synthetic import two_person_sequence
 
 from tests.shared_data import VTEST

@@ -23,6 +23,7 @@ from typing import Any, Iterable, Mapping, Sequence
 import cv2
 import numpy as np
 
+from body.spline import evaluate_closed_bspline
 from body.camera import Camera
 from body.ik import dims_from_joints, inverse_kinematics
 from body.kinematics import cone_endpoints
@@ -175,34 +176,8 @@ def draw_partner_3d(image: np.ndarray, joints: np.ndarray, camera: Camera,
 
 
 # ------------------------------------------------------------------------- 2D silhouettes (splines)
-@lru_cache(maxsize=32)
-def _spline_matrix(n: int, samples_per_span: int) -> np.ndarray:
-    """(n * samples_per_span, n) matrix taking control points to curve points (read-only)."""
-    t = np.arange(samples_per_span) / samples_per_span
-    t2, t3 = t * t, t * t * t
-    basis = np.stack([(1 - t) ** 3, 3 * t3 - 6 * t2 + 4, -3 * t3 + 3 * t2 + 3 * t + 1, t3], 1) / 6.0
-    m = np.zeros((n * samples_per_span, n))
-    rows = np.arange(n * samples_per_span)
-    span = rows // samples_per_span
-    for k in range(4):
-        np.add.at(m, (rows, (span - 1 + k) % n), basis[rows % samples_per_span, k])
-    m.setflags(write=False)
-    return m
-
-
-def closed_bspline(ctrl: np.ndarray, samples_per_span: int = 8) -> np.ndarray:
-    """Points on the closed uniform cubic B-spline of control points ``ctrl`` (n, 2), n >= 4.
-
-    Span i (t in [0, 1)) is ``B0 P_{i-1} + B1 P_i + B2 P_{i+1} + B3 P_{i+2}`` with the uniform
-    cubic basis (the curve convention of ``nodes.silhouette.spline``), sampled at
-    t = j / samples_per_span. Returns (n * samples_per_span, 2) in the units of ``ctrl``.
-    """
-    c = np.asarray(ctrl, np.float64)
-    if c.ndim != 2 or c.shape[1] != 2 or len(c) < 4:
-        raise ValueError(f"spline control points have shape {c.shape}; expected (n, 2) with n >= 4")
-    if samples_per_span < 1:
-        raise ValueError(f"samples_per_span={samples_per_span}: must be >= 1")
-    return _spline_matrix(len(c), samples_per_span) @ c
+#: points on a closed uniform cubic B-spline (the silhouettes' curve, shared through body/)
+closed_bspline = evaluate_closed_bspline
 
 
 def draw_silhouette(image: np.ndarray, ctrl: np.ndarray, colour: Colour = EMOTION_COLOURS["neutral"],

@@ -2,7 +2,7 @@
 interaction behaviour models").
 
 Shapes. Each frame's joint shape is the combined shape vector of the observed person (first half)
-and the partner (second half), ``nodes.silhouette.spline.combined_shape_vector``: both B-spline
+and the partner (second half), ``body.spline.combined_shape_vector``: both B-spline
 silhouettes (n control points) actor-centred and height-normalised, their relative separation and
 log relative scale, x_t (4n + 3,). A PCA keeping ``energy`` of the variance gives y_t (m,). The
 observed person is always the first half; a right-hand observed person is mirrored left-right

@@ -3,7 +3,7 @@
 Each person is turned into cone-model poses (``body.ik``), rasterised alone through the camera
 (``body.raster.rasterise_silhouettes``: one mask per person, as the silhouette node separates
 people) and fitted with a closed B-spline of ``n`` control points
-(``nodes.silhouette.spline.silhouette_spline``), giving per frame the control points (n, 2)
+(``body.spline.silhouette_spline``), giving per frame the control points (n, 2)
 pixels, the region centroid (2,) pixels and the height (pixels, bounding box).
 """
 from __future__ import annotations
@@ -31,7 +31,7 @@ class ShapeTrack:
 
 def silhouette_track(joints: np.ndarray, camera: Camera, n: int = 32) -> ShapeTrack:
     """(T, 14, 3) joints (metres, world) -> the person's silhouette splines through ``camera``."""
-    from nodes.silhouette.spline import silhouette_spline  # the spline convention shared with the silhouette node
+    from body.spline import silhouette_spline  # the spline convention shared with the silhouette node
 
     X = np.asarray(joints, np.float64)
     P = inverse_kinematics(X)

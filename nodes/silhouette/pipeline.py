@@ -19,7 +19,7 @@ import numpy as np
 from .background import BACKGROUND
 from .backends import HorprasertSubtractor, make_subtractor
 from .regions import Person, PersonTracker, clean_mask
-from .spline import silhouette_spline
+from body.spline import silhouette_spline
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from nodes.silhouette.spline import (
+from body.spline import (
     combined_shape_vector,
     design_matrix,
     evaluate_closed_bspline,

@@ -1,5 +1,8 @@
 """Silhouette boundaries as closed uniform cubic B-splines (Baumberg & Hogg; Johnson et al. 1998).
 
+Shared by the silhouette node (which fits them), the responder (joint shapes) and the renderer
+(which fills them), so it lives with the body model rather than in one node.
+
 Curve convention. With n control points P_0..P_{n-1} (indices mod n) the curve parameter u runs
 over [0, n); on span i (u in [i, i+1), t = u - i)
 
