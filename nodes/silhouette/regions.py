@@ -13,7 +13,7 @@ between tracks. Image coordinates are pixels, x = column, y = row.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
