@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from body.camera import Camera
-from body.pose import DOF, DOF_INDEX, YAW, clip_to_limits, neutral_pose
+from body.pose import DOF, clip_to_limits, neutral_pose
 from body.skeleton import DEFAULT_DIMS, BodyDims
 
 #: heading (root_yaw, radians) assumed for a person on each side of the frame

@@ -27,7 +27,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from body.pose import DOF, LOWER, UPPER, YAW, clip_to_limits, wrap_angle
+from body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 VERSION = 1
 #: joint angles modelled by PCA + HMM: root pitch and roll, torso, head, arms, legs

@@ -23,7 +23,7 @@ from body.kinematics import forward_kinematics
 from body.pose import DOF, YAW, wrap_angle
 from body.skeleton import DEFAULT_DIMS, BodyDims
 
-from .apf import AnnealedParticleFilter, Estimate, ParticleFilter
+from .apf import AnnealedParticleFilter, ParticleFilter
 from .init import LostDetector, bbox_from_mask, initial_particles
 from .likelihood import ConeLikelihood, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor
