@@ -23,7 +23,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     src.add_argument("--input", metavar="FILE", help="run on your own video file instead of the built-in scene")
     src.add_argument("--live", action="store_true", help="use the V4L2 camera (launch/live.yaml)")
     p.add_argument("--device", default="/dev/video0", help="camera device for --live")
-    p.add_argument("--serve", action="store_true", help="serve the live page (http://127.0.0.1:PORT) until Ctrl-C")
+    p.add_argument("--serve", action="store_true",
+                   help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C")
     p.add_argument("--port", type=int, default=8080, help="port of the live page")
     p.add_argument("--out", default="out", help="output folder (default: out)")
     p.add_argument("--scenario", default="handshake", help="built-in scene when no --input/--live")
@@ -101,6 +102,8 @@ def main(args: argparse.Namespace) -> int:
             sets.append(f"camera.source=sim:{args.scenario}?seed={args.seed}")
     if args.frames:
         sets.append(f"camera.max_frames={args.frames}")
+    if args.serve and not args.live:
+        sets.append("camera.loop=true")  # keep the page alive until Ctrl-C
     sets += args.set or []
     try:
         graph = load_checked(file, sets, None)
@@ -112,7 +115,8 @@ def main(args: argparse.Namespace) -> int:
     watcher = StatsWatcher(launcher.run_dir)
     watcher.start()
     log.info("running %s (Ctrl-C to stop)%s", graph.file,
-             f"; live page on http://127.0.0.1:{args.port}" if args.serve else "")
+             (f"; live page on http://127.0.0.1:{args.port}" if args.port else "; the renderer logs the page's address")
+             if args.serve else "")
     code = launcher.run()
     watcher.stop()
     launcher.cleanup()
