@@ -170,3 +170,16 @@ def default_camera(width: int = 320, height: int = 240) -> Camera:
     looking at (0, 0.9, 0), 55 degrees horizontal field of view. Two people of 1.75 m standing
     1 m apart around the origin (and up to about 3 m apart, from z = -1 to +1) are fully in view."""
     return Camera.look_at((0.0, 1.6, 4.0), (0.0, 0.9, 0.0), 55.0, width, height)
+
+
+def camera_param_problem(value: dict[str, Any]) -> str | None:
+    """For node parameters: None when ``value`` is empty (use the default camera) or a valid
+    calibration for :meth:`Camera.from_dict`, else the error naming the bad key."""
+    if not value:
+        return None
+    try:
+        Camera.from_dict(value)
+    except (ValueError, TypeError) as exc:
+        return str(exc)
+    return None
+

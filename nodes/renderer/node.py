@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from body.camera import Camera, default_camera
+from body.camera import Camera, camera_param_problem, default_camera
 from bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
 from messages import Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
 
@@ -35,14 +35,6 @@ from .web import LiveServer, is_loopback
 #: the responder's model names (nodes.responder.models.MODEL_NAMES; a node does not import another node)
 DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
-
-
-def _check_camera(value: dict[str, Any]) -> str | None:
-    try:
-        Camera.from_dict(value)
-    except (ValueError, TypeError) as exc:
-        return str(exc)
-    return None
 
 
 def _check_video(value: str) -> str | None:
@@ -91,7 +83,7 @@ class Renderer(Node):
         "overlay_stats": Param(bool, True, "draw per-node statistics"),
         "overlay_controls": Param(bool, True, "draw the controls in force (model, speaker, interest, emotion bar)"),
         "camera": Param(dict, default_camera().to_dict(), "camera calibration (body.camera.Camera.to_dict or "
-                        "look-at form); scaled to the frame size", check=_check_camera),
+                        "look-at form); scaled to the frame size", check=camera_param_problem),
         "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), auto", choices=STYLES),
         "pair_timeout": Param(float, 0.5, "seconds a frame waits for its partner", min=0.0),
         "max_pending": Param(int, 128, "frames held waiting for partners at most", min=1, max=10000),
@@ -127,7 +119,7 @@ class Renderer(Node):
     def setup(self) -> None:
         p = self.p
         overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
-        self.comp = Compositor(Camera.from_dict(p["camera"]), want_partner=p["partner"], style=p["style"],
+        self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else default_camera(), want_partner=p["partner"], style=p["style"],
                                overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"])
         self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
         self.controls: queue.Queue[Control] = queue.Queue()

@@ -17,7 +17,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, default_camera
+from body.camera import Camera, camera_param_problem, default_camera
 from bus import Input, Node, Output, Param
 from messages import Frame, Pose3D, Silhouettes, TrackedBody
 
@@ -30,16 +30,6 @@ SIDES = ("left", "right")
 def _check_people(v: list) -> str | None:
     if not 1 <= len(v) <= 2 or any(s not in SIDES for s in v) or len(set(v)) != len(v):
         return f"{v!r}: expected one or two distinct sides out of {list(SIDES)}"
-    return None
-
-
-def _check_camera(v: dict) -> str | None:
-    if not v:
-        return None
-    try:
-        Camera.from_dict(v)
-    except (ValueError, TypeError) as exc:
-        return str(exc)
     return None
 
 
@@ -76,7 +66,7 @@ class TrackerNode(Node):
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
         "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right", check=_check_people),
         "camera": Param(dict, {}, "calibration: {fx, fy, cx, cy, width, height, R, t} or {eye, target, fov_deg, "
-                        "width, height}; empty: the simulator's default camera at the frame size", check=_check_camera),
+                        "width, height}; empty: the simulator's default camera at the frame size", check=camera_param_problem),
         "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "
                        "'none' (random walk), or a .npz path", check=_check_prior),
         "seed": Param(int, 0, "seed of the particle filters"),
