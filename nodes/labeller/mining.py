@@ -46,6 +46,13 @@ RULES_FORMAT = "counterpart.labeller.rules"
 RULES_VERSION = 1
 
 
+def _as_json(rule: Any) -> dict[str, Any]:
+    """A rule-like dataclass as JSON-able dict (item tuples as lists)."""
+    d = asdict(rule)
+    d["antecedent"], d["consequent"] = list(rule.antecedent), list(rule.consequent)
+    return d
+
+
 @dataclass(frozen=True)
 class Rule:
     """One association rule ``antecedent -> consequent``; items are "S:<signal>" / "L:<signal>",
@@ -68,10 +75,7 @@ class Rule:
                 f"(support {self.support:.3f}, confidence {self.confidence:.3f}, lift {self.lift:.2f})")
 
     def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["antecedent"] = list(self.antecedent)
-        d["consequent"] = list(self.consequent)
-        return d
+        return _as_json(self)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Rule:
@@ -246,10 +250,7 @@ class RuleComparison:
     ratio: float
 
     def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d["antecedent"] = list(self.antecedent)
-        d["consequent"] = list(self.consequent)
-        return d
+        return _as_json(self)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RuleComparison:
