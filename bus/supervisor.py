@@ -237,7 +237,9 @@ class Launcher:
             if changed:
                 self.write_registry()
             pending = [p for p in self.procs.values() if p.next_start is not None and p.popen is not None]
-            if not self._alive() and not pending:
+            # a process may exit between the scan above and this check: its code is read on the next pass
+            unread = [p for p in self.procs.values() if p.popen is not None and p.exit_code is None]
+            if not self._alive() and not pending and not unread:
                 codes = {p.name: p.exit_code for p in self.procs.values()}
                 failed = {n: c for n, c in codes.items() if c}
                 if failed:
