@@ -69,15 +69,178 @@ def vtest_source(n_frames: int) -> Source | None:
     return Source("vtest", np.stack(frames)) if frames else None
 
 
-def sim_source(n_frames: int) -> Source | None:
-    """TODO: frames with ground-truth person and shadow masks from the project simulator (sim/).
+@dataclass
+class SimSequence:
+    """A rendered simulator sequence: frames (N, H, W, 3) uint8 BGR, people (N, 2, H, W) bool
+    (A, B visible pixels), shadows (N, H, W) bool (cast shadow on the floor), and the number of
+    leading frames that are empty (room only, lit and noised like the rest)."""
 
-    Wire this to the simulator's renderer once it exists: return
-    Source("sim", frames (N, H, W, 3) uint8 BGR, people (N, H, W) bool, shadows (N, H, W) bool),
-    with the first TRAIN_FRAMES frames either empty or with people walking (the robust fit
-    copes with both). Until then the source is reported as unavailable.
+    name: str
+    frames: np.ndarray
+    people: np.ndarray
+    shadows: np.ndarray
+    empty_frames: int
+
+
+def render_sim(scenario: str, seed: int, empty_frames: int = 0, max_frames: int | None = None,
+               size: tuple[int, int] = (320, 240)) -> SimSequence:
+    """Render a simulator scenario with ground truth.
+
+    ``empty_frames`` > 0 puts that many frames of the empty room before the scene, at the scene
+    times -empty_frames/fps .. -1/fps (so the lighting drift runs on continuously into frame 0),
+    with the renderer's sensor noise. ``max_frames`` caps the scene's frames (not counting the
+    empty ones).
     """
-    return None
+    from sim.stream import open_stream
+
+    st = open_stream(scenario, seed=seed, width=size[0], height=size[1], frames=max_frames)
+    r = st.renderer
+    n = st.n_frames
+    h, w = size[1], size[0]
+    frames = np.empty((empty_frames + n, h, w, 3), np.uint8)
+    people = np.zeros((empty_frames + n, 2, h, w), bool)
+    shadows = np.zeros((empty_frames + n, h, w), bool)
+    for k in range(empty_frames):
+        t = (k - empty_frames) / st.fps
+        img = r.bg * np.float32(r.lighting.gain(t))
+        rng = np.random.default_rng([seed, 98, k])
+        img += rng.standard_normal(img.shape, dtype=np.float32) * np.float32(r.noise_sigma)
+        frames[k] = np.clip(np.rint(img), 0, 255).astype(np.uint8)
+    for i in range(n):
+        f, truth = r.render(i)
+        frames[empty_frames + i] = f
+        people[empty_frames + i] = truth.masks
+        shadows[empty_frames + i] = truth.shadow
+    st.close()
+    tag = f"{scenario}:{seed}" + (f"+{empty_frames}empty" if empty_frames else "")
+    return SimSequence(tag, frames, people, shadows, empty_frames)
+
+
+def _assign_truth(labels: np.ndarray, people: list, truth: np.ndarray, min_frac: float = 0.3) -> dict[int, int]:
+    """Published person id -> 0 (A) / 1 (B): the truth mask holding most of the person's pixels,
+    when it holds at least ``min_frac`` of them (else the person is not mapped this frame)."""
+    out: dict[int, int] = {}
+    for p in people:
+        mine = labels == p.id + 1
+        n = int(mine.sum())
+        if n == 0:
+            continue
+        ov = [int((mine & truth[k]).sum()) for k in range(2)]
+        k = int(np.argmax(ov))
+        if ov[k] >= min_frac * n:
+            out[p.id] = k
+    return out
+
+
+def _f1(tp: float, n_pred: float, n_gt: float) -> tuple[float, float, float]:
+    prec = tp / max(n_pred, 1.0)
+    rec = tp / max(n_gt, 1.0)
+    return prec, rec, 2 * prec * rec / max(prec + rec, 1e-12)
+
+
+def evaluate_sequence(seq: SimSequence, backend: str, train_frames: int = TRAIN_FRAMES,
+                      splines: bool = False) -> dict[str, Any]:
+    """Run one backend through ``SilhouetteExtractor`` as the node does and score what it publishes.
+
+    Scored frames: from ``max(empty_frames, train_frames)`` on (every backend has had
+    ``train_frames`` frames to learn and the scene has started). Foreground = the published label
+    mask (after clean-up, minimum area, tracking); truth = the union of both people's masks, cast
+    shadows count as background. Returns tp / predicted / truth pixel counts, shadow pixels
+    labelled foreground / shadow pixels, id swaps, and (``splines``) the spline distances.
+    """
+    params: dict[str, Any] = {}
+    if backend == "horprasert":
+        # Empty frames to learn from: the plain fit (Horprasert eqs. 1-4); people in view: robust.
+        params = {"train_frames": train_frames, "robust": seq.empty_frames < train_frames}
+    ex = SilhouetteExtractor(backend=backend, backend_params=params)
+    start = max(seq.empty_frames, train_frames)
+    tp = n_pred = n_gt = sh_fg = sh_n = 0
+    swaps = 0
+    last: dict[int, int] = {}
+    dists: list[float] = []
+    for k, frame in enumerate(seq.frames):
+        if backend != "horprasert" and ex.n_frames < train_frames - 1:
+            ex.learn(frame)
+            continue
+        r = ex.process(frame)
+        if k < start:
+            continue
+        fg = r.labels > 0
+        gt = seq.people[k].any(axis=0)
+        tp += int((fg & gt).sum())
+        n_pred += int(fg.sum())
+        n_gt += int(gt.sum())
+        sh = seq.shadows[k]
+        sh_fg += int((fg & sh).sum())
+        sh_n += int(sh.sum())
+        for pid, who in _assign_truth(r.labels, r.people, seq.people[k]).items():
+            if pid in last and last[pid] != who:
+                swaps += 1
+            last[pid] = who
+        if splines:
+            for p in r.people:
+                if p.ctrl is not None:
+                    contour, _ = oriented_boundary(r.labels == p.id + 1)
+                    dists.append(spline_distance(contour, p.ctrl))
+    return {"tp": tp, "pred": n_pred, "gt": n_gt, "shadow_fg": sh_fg, "shadow": sh_n,
+            "id_swaps": swaps, "frames": len(seq.frames) - start, "spline_px": dists}
+
+
+SIM_BACKENDS = ("horprasert", "mog2", "knn", "cnt")
+
+
+def sim_evaluation(scenarios: list[str], seeds: list[int], max_frames: int,
+                   backends: tuple[str, ...] = SIM_BACKENDS) -> dict[str, Any]:
+    """Every scenario x seed x start (empty room first / people from frame 0) x backend."""
+    per_seq: dict[str, Any] = {}
+    keys = ("tp", "pred", "gt", "shadow_fg", "shadow")
+    total = {b: dict.fromkeys(keys, 0) for b in backends}
+    by_start = {s: {b: dict.fromkeys(keys, 0) for b in backends} for s in ("empty_start", "people_start")}
+    swaps = 0
+    dists: list[float] = []
+    for sc in scenarios:
+        for seed in seeds:
+            for empty in (TRAIN_FRAMES, 0):
+                seq = render_sim(sc, seed, empty_frames=empty, max_frames=max_frames)
+                row: dict[str, Any] = {}
+                for b in backends:
+                    ev = evaluate_sequence(seq, b, splines=b == "horprasert")
+                    start = "empty_start" if empty else "people_start"
+                    for key in keys:
+                        total[b][key] += ev[key]
+                        by_start[start][b][key] += ev[key]
+                    row[f"f1_{b}"] = round(_f1(ev["tp"], ev["pred"], ev["gt"])[2], 4)
+                    if b == "horprasert":
+                        row["shadow_as_fg"] = round(ev["shadow_fg"] / max(ev["shadow"], 1), 4)
+                        row["id_swaps"] = ev["id_swaps"]
+                        if sc in ("handshake", "push"):
+                            swaps += ev["id_swaps"]
+                        dists.extend(ev["spline_px"])
+                per_seq[seq.name] = row
+                print(f"sim {seq.name}: {row}", flush=True)
+    def summary(t: dict[str, float]) -> dict[str, float]:
+        prec, rec, f1 = _f1(t["tp"], t["pred"], t["gt"])
+        return {"precision": prec, "recall": rec, "f1": f1, "shadow_as_fg": t["shadow_fg"] / max(t["shadow"], 1)}
+
+    out: dict[str, Any] = {"sequences": per_seq}
+    for b in backends:
+        out[b] = summary(total[b])
+    for start, tot in by_start.items():
+        out[start] = {b: summary(tot[b]) for b in backends}
+    out["id_swaps_handshake_push"] = swaps
+    out["spline_px"] = float(np.mean(dists)) if dists else None
+    out["spline_px_p95"] = float(np.percentile(dists, 95)) if dists else None
+    return out
+
+
+def sim_source(n_frames: int) -> Source | None:
+    """One simulator sequence (handshake, seed 0, 320x240) as a plain Source, people from frame 0.
+
+    The full simulator evaluation (several scenarios and seeds, with and without empty training
+    frames, every backend through the extractor) is ``sim_evaluation``.
+    """
+    seq = render_sim("handshake", 0, empty_frames=0, max_frames=n_frames)
+    return Source("sim", seq.frames, seq.people.any(axis=1), seq.shadows)
 
 
 SOURCES = {"synthetic": synthetic_source, "vtest": vtest_source, "sim": sim_source}
@@ -134,7 +297,8 @@ def _time_extractor(frames: np.ndarray) -> dict[str, Any]:
     }
 
 
-def run(source_names: list[str], n_frames: int) -> dict[str, Any]:
+def run(source_names: list[str], n_frames: int, scenarios: list[str], seeds: list[int],
+        sim_frames: int) -> dict[str, Any]:
     report: dict[str, Any] = {
         "bench": "silhouette",
         "cpu_threads": cv2.getNumThreads(),
@@ -161,6 +325,24 @@ def run(source_names: list[str], n_frames: int) -> dict[str, Any]:
             f"extractor {res['extractor_ms_per_frame']:.1f} ms, spline_px {res['spline_px']}",
             flush=True,
         )
+    srcs = report["sources"]
+    if "sim" in source_names:
+        ev = sim_evaluation(scenarios, seeds, sim_frames)
+        report["sim_evaluation"] = ev
+        for b, key in (("horprasert", "f1_ours"), ("mog2", "f1_mog2"), ("knn", "f1_knn"), ("cnt", "f1_cnt")):
+            report[key] = round(ev[b]["f1"], 4)
+            for start in ("empty_start", "people_start"):
+                report[f"{key}_{start}"] = round(ev[start][b]["f1"], 4)
+        report["shadow_as_fg"] = round(ev["horprasert"]["shadow_as_fg"], 4)
+        for start in ("empty_start", "people_start"):
+            report[f"shadow_as_fg_{start}"] = round(ev[start]["horprasert"]["shadow_as_fg"], 4)
+        report["spline_px"] = round(ev["spline_px"], 4) if ev["spline_px"] is not None else None
+        report["id_swaps"] = ev["id_swaps_handshake_push"]
+        report["sim_sequences"] = len(ev["sequences"])
+    if srcs.get("sim", {}).get("available"):
+        report["fps_320x240"] = round(1e3 / srcs["sim"]["extractor_ms_per_frame"], 1)
+    if srcs.get("vtest", {}).get("available"):
+        report["fps_768x576"] = round(1e3 / srcs["vtest"]["extractor_ms_per_frame"], 1)
     return report
 
 
@@ -168,12 +350,20 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--source", choices=[*SOURCES, "all"], default="all")
     ap.add_argument("--frames", type=int, default=150, help="frames per source, including 30 for training")
+    ap.add_argument("--scenarios", default="handshake,push,wave,conversation",
+                    help="simulator scenarios of the quality evaluation (comma-separated)")
+    ap.add_argument("--seeds", default="0,1,2", help="simulator seeds (comma-separated)")
+    ap.add_argument("--sim-frames", type=int, default=250, help="cap on each simulator sequence's frames")
+    ap.add_argument("--threads", type=int, default=1, help="OpenCV threads (1: the one-core figures)")
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if args.frames <= TRAIN_FRAMES + 1:
         ap.error(f"--frames must be > {TRAIN_FRAMES + 1} (the first {TRAIN_FRAMES} train the model)")
+    cv2.setNumThreads(args.threads)
     names = list(SOURCES) if args.source == "all" else [args.source]
-    report = run(names, args.frames)
+    scenarios = [s for s in args.scenarios.split(",") if s]
+    seeds = [int(s) for s in args.seeds.split(",") if s]
+    report = run(names, args.frames, scenarios, seeds, args.sim_frames)
     line = json.dumps(report)
     if args.out:
         with open(args.out, "w") as fh:

@@ -50,6 +50,12 @@ CLASS_NAMES: tuple[str, str, str, str] = ("background", "shadow", "highlight", "
 _MAD_TO_SIGMA = 1.4826
 # Smallest automatic threshold on a normalised distortion.
 _MIN_TAU = 2.0
+# Still frames before a foreground pixel is absorbed, after a robust (people in view) start.
+_AUTO_ABSORB_FRAMES = 20
+# Largest L1 distance of normalised colour (r, g, b sum to 1) and range of brightness ratio
+# between a still run and the surrounding background for it to be taken as uncovered background.
+_GHOST_CHROMA = 0.06
+_GHOST_BRIGHTNESS = (0.7, 1.4)
 # Bytes of float32 work memory per row block in the robust median pass.
 _BLOCK_BYTES = 64 * 1024 * 1024
 
@@ -112,6 +118,14 @@ class HorprasertBackground:
         from the training frames.
     robust_inlier_k : in ``fit(robust=True)``, a training sample counts towards a, b and the
         thresholds only if every channel lies within k robust spreads of the median.
+    absorb_frames : ghost removal. A foreground pixel whose colour stays within ``absorb_k``
+        spreads of the colour it had when its still run began, for this many consecutive frames,
+        is taken to be background that a person uncovered and becomes the model's E there. None
+        (default): 20 frames (0.8 s at 25 fps) after ``fit(robust=True)``, whose median can hold
+        people who stood still in the training frames, and 0 (never) after a plain fit from
+        empty frames, whose model is trusted. A still person is absorbed this way too; that is
+        the price of learning with people in view.
+    absorb_k : tolerance of the still test, in spreads s per channel (noise, slow drift).
     max_threshold_samples : number of normalised distortion samples drawn to set the thresholds.
     random_state : seed of that subsample.
 
@@ -134,6 +148,8 @@ class HorprasertBackground:
         tau_alpha2: float | None = None,
         tau_alpha_lo: float | None = None,
         robust_inlier_k: float = 3.5,
+        absorb_frames: int | None = None,
+        absorb_k: float = 4.0,
         max_threshold_samples: int = 2_000_000,
         random_state: int | None = 0,
     ) -> None:
@@ -162,7 +178,17 @@ class HorprasertBackground:
         self.tau_alpha1 = tau_alpha1
         self.tau_alpha2 = tau_alpha2
         self.tau_alpha_lo = tau_alpha_lo
+        if absorb_frames is not None and absorb_frames < 0:
+            raise ValueError(f"absorb_frames must be >= 0 frames (0: never) or None (auto), got {absorb_frames}")
+        if absorb_k <= 0:
+            raise ValueError(f"absorb_k must be > 0 spreads, got {absorb_k}")
         self.robust_inlier_k = robust_inlier_k
+        self.absorb_frames = absorb_frames
+        self.absorb_k = absorb_k
+        self.absorb_frames_: int = 0
+        self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
+        self._still_ref: np.ndarray | None = None  # (3, H, W) float32 mean colour of that run
+        self._last_alpha: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its alpha) of the last apply
         self.max_threshold_samples = max_threshold_samples
         self.random_state = random_state
         self._w: np.ndarray | None = None
@@ -224,6 +250,13 @@ class HorprasertBackground:
         s2 = np.maximum(np.moveaxis(spread, -1, 0), self.min_spread).astype(np.float32) ** 2
         self._var = np.ascontiguousarray(s2)
         self._w = None
+        if self.absorb_frames is None:
+            self.absorb_frames_ = _AUTO_ABSORB_FRAMES if robust else 0
+        else:
+            self.absorb_frames_ = int(self.absorb_frames)
+        self._last_alpha = None
+        self._still = np.zeros(self._mu.shape[1:], np.uint16)
+        self._still_ref = np.zeros_like(self._mu)
         self.a_ = None
         self._refresh_colour_terms(spread_changed=True)
 
@@ -322,6 +355,7 @@ class HorprasertBackground:
         self._require_fitted()
         _check_frame(frame, self.shape)
         alpha, cd2 = self._distortions(frame)
+        self._last_alpha = (frame, alpha)  # for the global-drift step of ``update`` on this frame
         # Thresholds are precomputed in raw alpha / CD^2 units per pixel, saving the division.
         labels = (alpha >= 1.0).astype(np.uint8)
         labels += SHADOW  # 1 where darker than the background, 2 where brighter
@@ -346,7 +380,10 @@ class HorprasertBackground:
         if labels.shape != self.shape:
             raise ValueError(f"labels must have shape {self.shape}, got {labels.shape}")
         lr, slr = self.learning_rate, self.spread_learning_rate
+        absorbed = self._absorb_still(frame, labels) if self.absorb_frames_ > 0 else False
         if lr == 0.0 and slr == 0.0:
+            if absorbed:
+                self._refresh_colour_terms(spread_changed=False)
             return
         bg = (labels == BACKGROUND).view(np.uint8)
         sh = ((labels == SHADOW) | (labels == HIGHLIGHT)).view(np.uint8)
@@ -366,7 +403,83 @@ class HorprasertBackground:
                     cv2.accumulateWeighted(f, self._mu[c], lr * k, mask=sh)
         if slr > 0.0:
             np.maximum(self._var, np.float32(self.min_spread**2), out=self._var)
+        if lr > 0.0:
+            self._follow_global_drift(frame, labels, bg)
         self._refresh_colour_terms(spread_changed=slr > 0.0)
+
+    def _follow_global_drift(self, frame: np.ndarray, labels: np.ndarray, bg: np.ndarray) -> None:
+        """Foreground pixels are never blended in, so under a lighting drift the model behind a
+        person who stands for seconds would lag, and the uncovered room would show as speckle.
+        Their E follows the scene-wide brightness change instead: the mean brightness
+        distortion alpha (eq. 5) over the background pixels, at the background's rate,
+        E <- E (1 + r (mean alpha - 1))."""
+        last = self._last_alpha
+        fg = labels == FOREGROUND
+        if last is None or last[0] is not frame or not fg.any():
+            return
+        alpha = last[1]
+        n_bg = int(np.count_nonzero(bg))
+        if n_bg < 0.05 * bg.size:
+            return
+        g = float(cv2.mean(alpha, mask=bg)[0])
+        step = np.float32(1.0 + self.learning_rate * (g - 1.0))
+        if step != 1.0:
+            for c in range(3):
+                np.multiply(self._mu[c], step, out=self._mu[c], where=fg)
+
+    def _absorb_still(self, frame: np.ndarray, labels: np.ndarray) -> bool:
+        """Ghost removal (see ``absorb_frames``). Returns whether any pixel was absorbed.
+
+        Each foreground pixel keeps the mean colour of its current still run and the run's
+        length; a frame more than ``absorb_k`` spreads (any channel) from that mean restarts the
+        run. A run of ``absorb_frames`` is absorbed only where the colour also matches the model
+        of the surrounding background (a normalised box average of E over the pixels not labelled
+        foreground, compared in chromaticity and, loosely, brightness): uncovered background
+        continues the room around it, a person standing still does not. Deep inside a large ghost
+        there is no such support yet; it is peeled from its rim inwards, frame by frame.
+        """
+        fg = labels == FOREGROUND
+        still, ref = self._still, self._still_ref
+        if not fg.any():
+            still.fill(0)
+            return False
+        planes = [p.astype(np.float32) for p in cv2.split(frame)]
+        dev = cv2.absdiff(planes[0], ref[0]) * self._inv_s[0]
+        for c in (1, 2):
+            np.maximum(dev, cv2.absdiff(planes[c], ref[c]) * self._inv_s[c], out=dev)
+        keep = fg & (dev <= self.absorb_k) & (still > 0)
+        restart = fg & ~keep
+        np.add(still, 1, out=still, where=keep)
+        still[restart] = 1
+        still[~fg] = 0
+        # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
+        inv_n = 1.0 / np.maximum(still, 1).astype(np.float32)
+        for c in range(3):
+            ref[c] += (planes[c] - ref[c]) * inv_n
+        done = still >= self.absorb_frames_
+        if not done.any():
+            return False
+        h, w = self.shape
+        k = max(15, (h // 8) | 1)
+        support = (~fg).astype(np.float32)
+        n = cv2.boxFilter(support, -1, (k, k), normalize=False)
+        done &= n >= 0.1 * k * k
+        if not done.any():
+            return False
+        inv = 1.0 / np.maximum(n, 1.0)
+        near = [cv2.boxFilter(self._mu[c] * support, -1, (k, k), normalize=False) * inv for c in range(3)]
+        # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
+        s_run = ref[0] + ref[1] + ref[2] + 1.0
+        s_near = near[0] + near[1] + near[2] + 1.0
+        chroma = sum(np.abs(ref[c] / s_run - near[c] / s_near) for c in range(3))
+        ratio = s_run / s_near
+        done &= (chroma <= _GHOST_CHROMA) & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1])
+        if not done.any():
+            return False
+        for c in range(3):
+            np.copyto(self._mu[c], ref[c], where=done)
+        still[done] = 0
+        return True
 
     def apply_update(self, frame: np.ndarray) -> np.ndarray:
         """``apply`` then ``update`` with its labels; returns the labels."""
@@ -381,7 +494,7 @@ class HorprasertBackground:
                 "detection_rate", "learning_rate", "spread_learning_rate", "shadow_learning_rate",
                 "min_spread",
                 "min_shadow_brightness", "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
-                "robust_inlier_k", "max_threshold_samples", "random_state",
+                "robust_inlier_k", "absorb_frames", "absorb_k", "max_threshold_samples", "random_state",
             )
         }
 
