@@ -3,16 +3,22 @@
 Frames are the clock. A frame is rendered once its partner has arrived (when a partner is
 expected at all), or when a partner with a higher ``seq`` shows that this frame's partner will not
 come (topics arrive in order), or after ``timeout`` seconds, or when more than ``max_pending``
-frames wait. Overlays (silhouettes, pose, signals) never hold a frame back: each uses the message
-of the same ``seq`` when there is one, else the newest older one (an overlay a frame late is better
-than a flickering one). A frame whose partner did not come shows the newest older partner.
+frames wait. With ``adaptive`` waiting a frame does not wait at all while the partners are late:
+when the median delay of the recent partners (partner arrival minus its frame's arrival; a partner
+that never came counts as infinitely late) exceeds ``timeout``, waiting would only add latency to
+every frame, so each frame renders at once with the newest partner. The delays are measured on
+every frame, waited for or not, so waiting resumes as soon as the partners keep up again.
+
+Overlays (silhouettes, pose, signals) never hold a frame back: each uses the message of the same
+``seq`` when there is one, else the newest older one (an overlay a frame late is better than a
+flickering one). A frame whose partner did not come shows the newest older partner.
 
 No bus here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
 """
 from __future__ import annotations
 
 import time
-from collections import OrderedDict
+from collections import OrderedDict, deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -112,9 +118,11 @@ class Compositor:
         style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl) or ``auto`` (what the
             partner message carries, cones first).
         overlays: overlay name (:data:`OVERLAYS`) -> on/off.
-        timeout: seconds a frame waits for its partner.
+        timeout: seconds a frame waits for its partner at most (from the frame's arrival).
         max_pending: frames held at most; beyond it the oldest renders without waiting.
         history: messages kept per side topic.
+        adaptive: skip the wait while the recent partners came later than ``timeout`` (module doc).
+        delay_window: partners whose delays decide ``adaptive`` waiting.
     """
 
     camera: Camera
@@ -124,6 +132,8 @@ class Compositor:
     timeout: float = 0.5
     max_pending: int = 128
     history: int = 64
+    adaptive: bool = False
+    delay_window: int = 25
 
     def __post_init__(self) -> None:
         if self.style not in STYLES:
@@ -138,13 +148,48 @@ class Compositor:
         self.controls = ControlState()
         self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0}
         self._cams: dict[tuple[int, int], Camera] = {}
+        self._unresolved: OrderedDict[int, float] = OrderedDict()  # seq -> arrival, partner delay unknown yet
+        self.delays: deque[float] = deque(maxlen=self.delay_window)  # seconds; inf: the partner never came
+        self.partners_late = False
+        self._max_frame_seq = -1
 
     # ---------------------------------------------------------------------------------- input
     def add_frame(self, msg: Any, now: float | None = None) -> None:
-        self.pending[int(msg.seq)] = (msg, time.monotonic() if now is None else now)
+        now = time.monotonic() if now is None else now
+        seq = int(msg.seq)
+        self.pending[seq] = (msg, now)
+        self._max_frame_seq = max(self._max_frame_seq, seq)
+        if seq > self.partners.max_seq:  # else its partner came first: on time, already counted
+            self._unresolved[seq] = now
+            if len(self._unresolved) > self.history:
+                self._unresolved.popitem(last=False)
+                self._record_delay(float("inf"))
 
-    def add_partner(self, msg: Any) -> None:
+    def add_partner(self, msg: Any, now: float | None = None) -> None:
+        seq = int(msg.seq)
+        if seq > self.partners.max_seq:
+            now = time.monotonic() if now is None else now
+            for s in [s for s in self._unresolved if s <= seq]:
+                t = self._unresolved.pop(s)
+                # frames before this partner's never get one (topics arrive in order)
+                self._record_delay(now - t if s == seq else float("inf"))
+            if seq > self._max_frame_seq:  # ahead of its frame: on time
+                self._record_delay(0.0)
         self.partners.add(msg)
+
+    def _record_delay(self, delay: float) -> None:
+        self.delays.append(delay)
+        self.partners_late = bool(np.median(self.delays) > self.timeout)
+
+    def _resolve_overdue(self, now: float) -> None:
+        """Frames whose partner is later than ``timeout`` count as never partnered: for the decision
+        (median delay > timeout) any delay beyond the timeout is the same."""
+        while self._unresolved:
+            s, t = next(iter(self._unresolved.items()))
+            if now - t <= self.timeout:
+                break
+            del self._unresolved[s]
+            self._record_delay(float("inf"))
 
     def add_side(self, kind: str, msg: Any) -> None:
         """``kind``: silhouettes, pose or signals."""
@@ -166,12 +211,13 @@ class Compositor:
         """Frames ready to render, oldest first, removed from the pending ones. ``flush``: all of
         them (end of stream)."""
         now = time.monotonic() if now is None else now
+        self._resolve_overdue(now)
         out = []
         while self.pending:
             seq, (frame, t) = next(iter(self.pending.items()))
             partner = self.partners.exact(seq) if self.want_partner else None
             done = (not self.want_partner or partner is not None or self.partners.max_seq > seq or flush
-                    or now - t >= self.timeout)
+                    or now - t >= self.timeout or (self.adaptive and self.partners_late))
             forced = not done and len(self.pending) > self.max_pending
             if not (done or forced):
                 break

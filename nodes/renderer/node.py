@@ -85,13 +85,17 @@ class Renderer(Node):
         "camera": Param(dict, default_camera().to_dict(), "camera calibration (body.camera.Camera.to_dict or "
                         "look-at form); scaled to the frame size", check=camera_param_problem),
         "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), auto", choices=STYLES),
-        "pair_timeout": Param(float, 0.5, "seconds a frame waits for its partner", min=0.0),
+        "pair_timeout": Param(float, 0.1, "seconds a frame waits for its partner at most (lockstep replay: long, "
+                              "so that every frame gets its own partner)", min=0.0),
+        "adaptive_wait": Param(bool, True, "render at once, with the newest partner, while the recent partners "
+                               "came later than pair_timeout (waiting would only delay every frame)"),
         "max_pending": Param(int, 128, "frames held waiting for partners at most", min=1, max=10000),
         "snapshot_every": Param(int, 0, "save every Nth rendered frame as PNG in snapshot_dir (0: never)", min=0),
         "snapshot_dir": Param(str, "", "folder of the PNG snapshots"),
         "models": Param(list, DEFAULT_MODELS, "interaction models offered on the page"),
     }
-    timer_period = 0.05
+    #: how often waiting frames are looked at: the resolution of pair_timeout
+    timer_period = 0.01
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
@@ -120,7 +124,8 @@ class Renderer(Node):
         p = self.p
         overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
         self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else default_camera(), want_partner=p["partner"], style=p["style"],
-                               overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"])
+                               overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"],
+                               adaptive=p["adaptive_wait"])
         self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
         self.controls: queue.Queue[Control] = queue.Queue()
         self.stats_ports = set(p["stats_topics"])
