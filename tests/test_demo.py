@@ -12,6 +12,7 @@ from pathlib import Path
 import cv2
 import pytest
 
+from bus.launchfile import check, find_launch_file, load
 from tests.launching import REPO
 
 
@@ -37,3 +38,27 @@ def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path
     assert set(stats) == {"camera", "silhouette", "tracker", "labeller", "responder", "renderer"}
     assert all(sum(t["count"] for t in st["inputs"] + st["outputs"]) > 0 for st in stats.values())
     assert str(videos[0]) in res.stdout and "contact sheet" in res.stdout
+
+
+def _subscriptions(file: str) -> dict[tuple[str, str], str]:
+    graph = check(load(find_launch_file(file)))
+    return {(node, port): policy for t in graph.topics.values() for node, port, policy in t["subscribers"]}
+
+
+def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_other_queues() -> None:
+    demo, replay = load(find_launch_file("demo.yaml")), load(find_launch_file("replay.yaml"))
+    assert set(replay.nodes) == set(demo.nodes) | {"recorder"}
+    # the lockstep/queue/pairing keys may differ; every other parameter is the same
+    own = {("camera", "pacing"), ("renderer", "video"), ("renderer", "pair_timeout"), ("renderer", "adaptive_wait")}
+    for name, decl in demo.nodes.items():
+        other = replay.nodes[name]
+        assert other.run == decl.run, name
+        keys = set(decl.params) | set(other.params)
+        assert {k: decl.params.get(k) for k in keys if (name, k) not in own} == \
+               {k: other.params.get(k) for k in keys if (name, k) not in own}, name
+    assert (demo.nodes["camera"].params["pacing"], replay.nodes["camera"].params["pacing"]) == ("realtime", "lockstep")
+    # real time: every input keeps the newest message except the renderer's frames; lockstep: nothing dropped
+    live = _subscriptions("demo.yaml")
+    assert live.pop(("renderer", "frame")) == "reliable" and set(live.values()) == {"latest"}
+    assert set(_subscriptions("replay.yaml").values()) == {"reliable"}
+    assert set(_subscriptions("live.yaml").items()) == set(_subscriptions("demo.yaml").items())

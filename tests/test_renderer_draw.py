@@ -187,6 +187,52 @@ def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
     assert comp.counts == {"rendered": 0, "partner_exact": 3, "partner_held": 2, "partner_missing": 0, "forced": 0}
 
 
+def test_adaptive_wait_renders_at_once_while_partners_are_late_and_waits_again_when_they_keep_up() -> None:
+    comp = Compositor(CAM, timeout=0.1, adaptive=True, delay_window=5)
+    # partners on time (20 ms after their frame): each frame waits for its own
+    for s in range(5):
+        comp.add_frame(_frame(s), now=s * 0.04)
+        assert comp.ready(now=s * 0.04) == []
+        comp.add_partner(_partner(s), now=s * 0.04 + 0.02)
+        assert [(b.frame.seq, b.partner_exact) for b in comp.ready(now=s * 0.04 + 0.02)] == [(s, True)]
+    assert not comp.partners_late
+    # a slow node: a partner for every third frame only, 0.3 s late
+    rendered = []
+    for s in range(5, 35):
+        t = 0.2 + (s - 5) * 0.04
+        comp.add_frame(_frame(s), now=t)
+        if s % 3 == 0 and s >= 8:
+            comp.add_partner(_partner(s - 7), now=t)  # the partner of the frame 0.28 s ago
+        rendered += [(b.frame.seq, t) for b in comp.ready(now=t)]
+    assert comp.partners_late
+    late = [(seq, 0.2 + (seq - 5) * 0.04) for seq in range(20, 35)]
+    assert [r for r in rendered if r[0] >= 20] == late  # rendered on arrival, no wait
+    assert comp.counts["partner_held"] > 20
+    # the node keeps up again: after a few partners on time the frames wait for their own again
+    t = 0.2 + 30 * 0.04
+    for s in range(35, 45):
+        comp.add_frame(_frame(s), now=t)
+        comp.ready(now=t)
+        comp.add_partner(_partner(s), now=t + 0.01)
+        comp.ready(now=t + 0.01)
+        t += 0.04
+    assert not comp.partners_late
+    comp.add_frame(_frame(45), now=t)
+    assert comp.ready(now=t + 0.05) == []  # waits (within the timeout) for partner 45
+    comp.add_partner(_partner(45), now=t + 0.06)
+    assert [(b.frame.seq, b.partner_exact) for b in comp.ready(now=t + 0.06)] == [(45, True)]
+
+
+def test_without_adaptive_wait_every_frame_waits_for_the_timeout() -> None:
+    comp = Compositor(CAM, timeout=0.1, adaptive=False, delay_window=5)
+    for s in range(20):
+        comp.add_frame(_frame(s), now=s * 0.04)
+    comp.add_partner(_partner(0), now=0.5)  # very late; frames 1.. never get theirs
+    assert comp.partners_late  # measured, but not acted on
+    assert [b.frame.seq for b in comp.ready(now=0.51)] == list(range(0, 11))  # 0 paired, 1..10 past the timeout
+    assert comp.ready(now=0.52) == []
+
+
 def test_pairing_without_partner_and_max_pending() -> None:
     comp = Compositor(CAM, want_partner=False)
     comp.add_frame(_frame(0))
