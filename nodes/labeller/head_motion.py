@@ -1,32 +1,49 @@
 """Head nod and head shake by frequency analysis of head motion (Okwechime et al., Sec. "head nod
 and shake": FFT of the head's vertical and horizontal motion over a short sliding window).
 
-Motion is taken **relative to the neck** (3D) or to a body reference point (2D) so that walking or
-whole-body motion (gait bob, sway, translation) cancels out. The relative motion is split into
-channels in the person's body frame:
+Where the head's motion comes from, best first (chosen per call by what is given):
 
-- nod channels: ``up`` (world Y) and ``forward`` (along the facing direction);
-- shake channels: ``lateral`` (towards the person's left) and, when the tracker gives a head yaw,
-  ``head_radius * yaw`` (the arc the face travels, in metres), because a head centre that sits on the
-  yaw axis hardly moves sideways in a real shake.
+- **the tracker's head angles** (``head_pitch`` / ``head_yaw``: the ``head_nod`` / ``head_turn``
+  degrees of freedom of the pose vector, ``body.pose``, relative to the torso): the nod channel is
+  ``pitch_radius * pitch`` (the arc the head centre travels about the neck joint, in metres, the
+  same motion the head point shows) and the shake channel ``head_radius * yaw`` (the arc the face
+  travels about the neck's vertical axis). A head shake is a rotation about the neck's vertical axis that hardly moves the head
+  centre (in the simulator's body model it does not move it at all), so its yaw velocity, not a
+  head point, is the natural shake signal. A given angle *replaces* the head-point channels of its
+  kind, because those are then redundant and a nod made with the head turned away would otherwise
+  leak into the lateral (shake) channel.
+- **the 3D head point relative to the neck** (tracker joints without angles): ``up`` (world Y) and
+  ``forward`` (along the facing direction) for nods, ``lateral`` (towards the person's left) for
+  shakes; relative to the neck so that walking and whole-body motion (gait bob, sway) cancel.
+- **the silhouette's head reference point** relative to a body reference point, in pixels scaled
+  to metres by the person's height (:func:`head_channels_2d`).
 
-For each window of ``N = round(window_s * fps)`` frames every channel has its window mean removed,
-is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided energies
-``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
+Each window of ``N = round(window_s * fps)`` frames of every channel is first reduced to its
+*oscillation*: the running median of width ``K = median_s * fps`` (odd, edges replicated inside
+the window) is subtracted. A running median follows any monotone movement exactly (a look away
+and the hold after it, a slow drift) and removes back-and-forth movement shorter than about ``K``
+frames, so the residual keeps nods and shakes but not head turns. The residual has its window mean
+removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
+energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
     nod_score   = sum_{k in band, c in nod}   P_ck / max(E_total, E_floor)
     shake_score = sum_{k in band, c in shake} P_ck / max(E_total, E_floor)
-    E_total     = sum_{k >= 1, all c} P_ck          (all relative head motion)
+    E_total     = sum_{k >= 1, all c} P_ck          (all oscillating head motion)
     E_floor     = a_floor^2 / 2 * sum_n w_n^2       (energy of a sinusoid of amplitude a_floor)
 
-so a score is the fraction of all relative head motion that is band-limited nod (resp. shake)
+with ``a_floor`` one of four floors: nod / shake, from the head point or from the tracker's angles
+(a difference of two tracked joints is the noisier measurement of the two, so its floors are
+higher).
+
+so a score is the fraction of all oscillating head motion that is band-limited nod (resp. shake)
 motion, scaled down when the motion is smaller than the amplitude floor ``a_floor``. Scores are in
 [0, 1]; the label is ``score >= threshold``. Windows that contain a missing (nan) sample give
-``nan`` / UNKNOWN, as do the frames before the first full window.
+``nan`` / UNKNOWN, as do the frames before the first full window. ``median_s = 0`` turns the
+median stage off (the plain FFT of the motion).
 
 Timing: ``center=False`` (the streaming default) labels frame ``t`` from the window that ends at
-``t`` (causal, lags the motion by up to a window); ``center=True`` (offline) from the window
-centred on ``t``.
+``t`` (causal: the labels are those of ``center=True`` delayed by ``N // 2`` frames, 0.8 s at the
+defaults); ``center=True`` (offline) from the window centred on ``t``.
 """
 from __future__ import annotations
 
@@ -37,9 +54,11 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from nodes.labeller.signals import UNKNOWN, threshold_labels
 
-#: channel order inside the detectors
-_NOD_CHANNELS = (0, 1)      # up, forward
-_SHAKE_CHANNELS = (2, 3)    # lateral, head_radius * yaw
+#: channel order inside the detectors: (nod_a, nod_b, shake_a, shake_b); from positions these are
+#: (up, forward, lateral, 0), from the tracker's angles (pitch_radius * pitch, 0, 0,
+#: head_radius * yaw)
+_NOD_CHANNELS = (0, 1)
+_SHAKE_CHANNELS = (2, 3)
 
 
 @dataclass(frozen=True)
@@ -48,8 +67,14 @@ class HeadMotionParams:
 
     fps: frames per second of the input (Hz). window_s: FFT window length (s), 1.5-2 s is typical.
     band_hz: (low, high) frequency band of nods and shakes (Hz). nod_floor_m / shake_floor_m:
-    amplitude floors (m) under which motion is scaled down. threshold: score threshold of the label.
-    head_radius_m: converts a head yaw (rad) to the arc the face travels (m).
+    amplitude floors (m) of head-point motion under which it is scaled down; pitch_floor_m /
+    yaw_floor_m: the same for the arcs of the tracker's head angles (nods are smaller movements than
+    shakes: a 5-10 degree nod moves the head centre 1.5-3 cm, a 15-20 degree shake the face 3 cm). threshold: score threshold of the label.
+    head_radius_m: converts a head yaw (rad) to the arc the face travels about the neck's vertical
+    axis (m). pitch_radius_m: converts a head pitch (rad) to the arc the head centre travels about
+    the neck joint (m; the neck-to-head distance), so angle and head-point nods share a scale.
+    median_s: width (s) of the running median whose residual is analysed (0: no median stage);
+    movements that go one way and stay are removed, back-and-forth ones up to about this long kept.
     """
 
     fps: float
@@ -57,8 +82,12 @@ class HeadMotionParams:
     band_hz: tuple[float, float] = (1.0, 4.0)
     nod_floor_m: float = 0.01
     shake_floor_m: float = 0.01
+    pitch_floor_m: float = 0.005
+    yaw_floor_m: float = 0.0075
     threshold: float = 0.5
     head_radius_m: float = 0.1
+    pitch_radius_m: float = 0.18
+    median_s: float = 0.44
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -76,8 +105,18 @@ class HeadMotionParams:
             raise ValueError(
                 f"band_hz {self.band_hz} holds no FFT bin for a {n}-frame window at {self.fps} fps "
                 f"(bins are {freqs[1]:.3g} Hz apart): widen the band or lengthen window_s")
-        if self.nod_floor_m <= 0 or self.shake_floor_m <= 0:
-            raise ValueError("nod_floor_m and shake_floor_m must be > 0 (metres)")
+        floors = {k: getattr(self, k) for k in ("nod_floor_m", "shake_floor_m", "pitch_floor_m", "yaw_floor_m")}
+        if min(floors.values()) <= 0:
+            raise ValueError(f"the amplitude floors must be > 0 (metres), got {floors}")
+        if not 0 <= self.median_s or self.median_k > n:
+            raise ValueError(
+                f"median_s must be >= 0 s and its width in frames ({self.median_k}) at most the "
+                f"window's ({n}), got median_s={self.median_s} at {self.fps} fps")
+
+    @property
+    def median_k(self) -> int:
+        """Running-median width in frames (odd; 1 = no median stage)."""
+        return max(int(round(self.median_s * self.fps)), 1) | 1 if self.median_s > 0 else 1
 
     @property
     def n(self) -> int:
@@ -103,14 +142,18 @@ class _Spectral:
         lo, hi = p.band_hz
         self.band = wt * ((freqs >= lo) & (freqs <= hi))
         sw2 = float(np.sum(self.w ** 2))
-        self.e_floor_nod = p.nod_floor_m ** 2 / 2.0 * sw2
-        self.e_floor_shake = p.shake_floor_m ** 2 / 2.0 * sw2
+        # floors: [nod, shake] x [head point, angle]
+        self.e_floor = np.array([[p.nod_floor_m, p.pitch_floor_m],
+                                 [p.shake_floor_m, p.yaw_floor_m]]) ** 2 / 2.0 * sw2
 
-    def scores(self, win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """win: (..., 4, N) channel windows (m) -> (nod_score, shake_score), each (...,)."""
+    def scores(self, win: np.ndarray, angles: tuple[bool, bool] = (False, False),
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """win: (..., 4, N) channel windows (m) -> (nod_score, shake_score), each (...,).
+        angles: (nod channels from the pitch, shake channels from the yaw), which picks the floors."""
         bad = np.isnan(win).any(axis=(-2, -1))
         if bad.any():
             win = np.where(np.isnan(win), 0.0, win)
+        win = oscillation_residual(win, self.p.median_k)
         x = (win - win.mean(axis=-1, keepdims=True)) * self.w
         spec = np.fft.rfft(x, axis=-1)
         pw = spec.real ** 2 + spec.imag ** 2                        # (..., 4, F)
@@ -119,11 +162,26 @@ class _Spectral:
         e_all = total.sum(axis=-1)
         nod_b = band[..., _NOD_CHANNELS[0]] + band[..., _NOD_CHANNELS[1]]
         shake_b = band[..., _SHAKE_CHANNELS[0]] + band[..., _SHAKE_CHANNELS[1]]
-        nod = nod_b / np.maximum(e_all, self.e_floor_nod)
-        shake = shake_b / np.maximum(e_all, self.e_floor_shake)
+        nod = nod_b / np.maximum(e_all, self.e_floor[0, int(angles[0])])
+        shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
         return nod, shake
+
+
+def oscillation_residual(win: np.ndarray, k: int) -> np.ndarray:
+    """``win - running_median(win, k)`` along the last axis (windows (..., N), any unit).
+
+    The median of width ``k`` (odd) is centred; the window's end samples are replicated ``k // 2``
+    times so every sample has a full neighbourhood (a monotone window stays monotone, so its
+    residual is exactly 0). ``k <= 1`` returns ``win`` unchanged. Vectorised over all leading axes.
+    """
+    if k <= 1:
+        return win
+    h = k // 2
+    padded = np.concatenate([np.repeat(win[..., :1], h, axis=-1), win,
+                             np.repeat(win[..., -1:], h, axis=-1)], axis=-1)
+    return win - np.median(sliding_window_view(padded, k, axis=-1), axis=-1)
 
 
 def facing_vectors(facing_yaw: np.ndarray | float, t: int) -> tuple[np.ndarray, np.ndarray]:
@@ -136,17 +194,39 @@ def facing_vectors(facing_yaw: np.ndarray | float, t: int) -> tuple[np.ndarray, 
     return fwd, left
 
 
+def _angle_arc(angle: np.ndarray | None, t: int, name: str, radius_m: float) -> np.ndarray | None:
+    """(T,) arc (m) of a head angle (rad), unwrapped over its known samples; None if not given."""
+    if angle is None:
+        return None
+    a = np.asarray(angle, dtype=np.float64)
+    if a.shape != (t,):
+        raise ValueError(f"{name} must be (T,) = ({t},) radians, got {a.shape}")
+    ok = ~np.isnan(a)
+    un = a.copy()
+    if ok.any():
+        un[ok] = np.unwrap(a[ok])
+    return radius_m * un
+
+
 def head_channels_3d(
     head: np.ndarray,
     neck: np.ndarray,
     facing_yaw: np.ndarray | float | None = None,
     head_yaw: np.ndarray | None = None,
     head_radius_m: float = 0.1,
+    head_pitch: np.ndarray | None = None,
+    pitch_radius_m: float = 0.18,
 ) -> np.ndarray:
-    """Relative head motion channels (T,4) = (up, forward, lateral, head_radius * head_yaw), metres.
+    """Head motion channels (T,4), metres: (nod_a, nod_b, shake_a, shake_b).
+
+    From positions: (up, forward, lateral, 0) of the head relative to the neck in the body frame.
+    With the tracker's head angles (relative to the torso, ``body.pose`` ``head_turn`` and
+    ``head_nod``): ``head_yaw`` makes the shake channels (0, head_radius_m * yaw) and
+    ``head_pitch`` the nod channels (pitch_radius_m * pitch, 0); a given angle replaces the position channels of its
+    kind (see the module docstring).
 
     head, neck: (T,3) world positions (m, Y up). facing_yaw: (T,) or scalar body yaw (rad, 0 faces
-    +Z); None means 0. head_yaw: (T,) head yaw (rad, any zero; unwrapped here) or None (channel 0).
+    +Z); None means 0. head_yaw, head_pitch: (T,) radians (any zero; unwrapped here) or None.
     """
     head = np.asarray(head, dtype=np.float64)
     neck = np.asarray(neck, dtype=np.float64)
@@ -155,21 +235,20 @@ def head_channels_3d(
     t = head.shape[0]
     rel = head - neck
     fwd, left = facing_vectors(0.0 if facing_yaw is None else facing_yaw, t)
-    ch = np.empty((t, 4))
-    ch[:, 0] = rel[:, 1]
-    ch[:, 1] = np.einsum("ij,ij->i", rel, fwd)
-    ch[:, 2] = np.einsum("ij,ij->i", rel, left)
-    if head_yaw is None:
-        ch[:, 3] = 0.0
+    ch = np.zeros((t, 4))
+    yaw_arc = _angle_arc(head_yaw, t, "head_yaw", head_radius_m)
+    pitch_arc = _angle_arc(head_pitch, t, "head_pitch", pitch_radius_m)
+    if pitch_arc is None:
+        ch[:, 0] = rel[:, 1]
+        ch[:, 1] = np.einsum("ij,ij->i", rel, fwd)
     else:
-        hy = np.asarray(head_yaw, dtype=np.float64)
-        if hy.shape != (t,):
-            raise ValueError(f"head_yaw must be (T,) = ({t},) radians, got {hy.shape}")
-        ok = ~np.isnan(hy)
-        un = hy.copy()
-        if ok.any():
-            un[ok] = np.unwrap(hy[ok])
-        ch[:, 3] = head_radius_m * un
+        ch[:, 0] = pitch_arc
+        ch[np.isnan(rel).any(axis=1), 1] = np.nan   # missing joints stay missing
+    if yaw_arc is None:
+        ch[:, 2] = np.einsum("ij,ij->i", rel, left)
+    else:
+        ch[:, 3] = yaw_arc
+        ch[np.isnan(rel).any(axis=1), 2] = np.nan
     return ch
 
 
@@ -215,12 +294,14 @@ class HeadMotionResult:
 
 
 def scores_from_channels(
-    channels: np.ndarray, params: HeadMotionParams, center: bool = False
+    channels: np.ndarray, params: HeadMotionParams, center: bool = False,
+    angles: tuple[bool, bool] = (False, False),
 ) -> HeadMotionResult:
     """Batch nod/shake over a whole (T,4) channel trajectory, vectorised over all windows.
 
     Frame ``t`` is scored from window ``[t-N+1, t]`` (causal) or ``[t-N//2, t-N//2+N)`` (center);
-    frames without a full window are UNKNOWN.
+    frames without a full window are UNKNOWN. angles: (nod channels from the tracker's pitch, shake
+    channels from its yaw), which picks the amplitude floors.
     """
     ch = np.asarray(channels, dtype=np.float64)
     if ch.ndim != 2 or ch.shape[1] != 4:
@@ -230,7 +311,7 @@ def scores_from_channels(
     shake = np.full(t, np.nan)
     if t >= n:
         win = sliding_window_view(ch.T, n, axis=1).transpose(1, 0, 2)   # (T-N+1, 4, N)
-        s_nod, s_shake = _Spectral(params).scores(win)
+        s_nod, s_shake = _Spectral(params).scores(win, angles)
         first = n // 2 if center else n - 1
         nod[first:first + len(s_nod)] = s_nod
         shake[first:first + len(s_shake)] = s_shake
@@ -246,19 +327,22 @@ def head_motion(
     facing_yaw: np.ndarray | float | None = None,
     head_yaw: np.ndarray | None = None,
     center: bool = False,
+    head_pitch: np.ndarray | None = None,
     **params: object,
 ) -> HeadMotionResult:
     """Nod and shake over a whole 3D trajectory.
 
     head, neck: (T,3) metres, world Y up. fps: Hz. window_s: FFT window (s). facing_yaw: body yaw
     (T,) or scalar, rad (e.g. from :func:`nodes.labeller.gaze.facing_yaw_from_shoulders`); None = 0.
-    head_yaw: optional (T,) head yaw (rad) from the tracker. center: centred (offline) windows instead
-    of causal ones. Other keyword parameters go to :class:`HeadMotionParams`.
+    head_yaw, head_pitch: optional (T,) head yaw / pitch relative to the torso (rad) from the
+    tracker's pose (:func:`head_channels_3d`). center: centred (offline) windows instead of causal
+    ones. Other keyword parameters go to :class:`HeadMotionParams`.
     Returns :class:`HeadMotionResult` of (T,) arrays.
     """
     p = HeadMotionParams(fps=fps, window_s=window_s, **params)  # type: ignore[arg-type]
-    ch = head_channels_3d(head, neck, facing_yaw, head_yaw, p.head_radius_m)
-    return scores_from_channels(ch, p, center)
+    ch = head_channels_3d(head, neck, facing_yaw, head_yaw, p.head_radius_m, head_pitch,
+                          p.pitch_radius_m)
+    return scores_from_channels(ch, p, center, (head_pitch is not None, head_yaw is not None))
 
 
 def head_motion_2d(
@@ -287,6 +371,7 @@ class _StreamingChannels:
         self._buf = np.full((4, 2 * n), np.nan)
         self._i = 0
         self._count = 0
+        self._angles = (False, False)   # (nod from a pitch, shake from a yaw) in the buffer
 
     def reset(self) -> None:
         """Forget the history (e.g. after the person was lost)."""
@@ -308,7 +393,7 @@ class _StreamingChannels:
         if self._count < n:
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
         win = self._buf[:, self._i:self._i + n]
-        s_nod, s_shake = self._spec.scores(win)
+        s_nod, s_shake = self._spec.scores(win, self._angles)
         th = self.params.threshold
         sn, ss = float(s_nod), float(s_shake)
         return (sn, UNKNOWN if sn != sn else int(sn >= th),
@@ -328,17 +413,29 @@ class HeadMotionDetector(_StreamingChannels):
     def __init__(self, fps: float, window_s: float = 1.6, **params: object) -> None:
         super().__init__(HeadMotionParams(fps=fps, window_s=window_s, **params))  # type: ignore[arg-type]
 
+    def _arc(self, angle: float, channel: int, r: float) -> float:
+        """Arc (m) of a head angle (rad) at radius ``r`` (m), unwrapped against the channel's
+        previous sample so that an angle crossing +-pi is not a 2 pi jump."""
+        prev = self._buf[channel, (self._i - 1) % self.params.n] / r
+        a = float(angle)
+        if prev == prev:
+            a = prev + (a - prev + np.pi) % (2 * np.pi) - np.pi
+        return a * r
+
     def update(
         self,
         head_xyz: np.ndarray,
         neck_xyz: np.ndarray,
         facing_yaw: float | None = None,
         head_yaw: float | None = None,
+        head_pitch: float | None = None,
     ) -> tuple[float, int, float, int]:
         """head_xyz, neck_xyz: (3,) metres (nan if missing). facing_yaw: body yaw (rad) or None
-        (= 0). head_yaw: head yaw (rad) or None. Returns (nod_score, nod, shake_score, shake).
+        (= 0). head_yaw, head_pitch: the tracker's head angles relative to the torso (rad) or None
+        (see :func:`head_channels_3d`). Returns (nod_score, nod, shake_score, shake).
 
-        A head_yaw stream should be given on every frame or never: missing frames count as yaw 0.
+        An angle given on some frames and not on others restarts the windows at every change (the
+        channels change kind), so give an angle on every frame or never.
         """
         h = np.asarray(head_xyz, dtype=np.float64)
         nk = np.asarray(neck_xyz, dtype=np.float64)
@@ -347,16 +444,20 @@ class HeadMotionDetector(_StreamingChannels):
         rx, ry, rz = h - nk
         yaw = 0.0 if facing_yaw is None else float(facing_yaw)
         s, c = np.sin(yaw), np.cos(yaw)
-        if head_yaw is None:
-            hy = 0.0
+        missing = np.nan if np.isnan(rx + ry + rz) else 0.0
+        angles = (head_pitch is not None, head_yaw is not None)
+        if angles != self._angles:
+            self.reset()   # the channels change kind: no window mixes two kinds
+            self._angles = angles
+        if head_pitch is None:
+            nod = (ry, rx * s + rz * c)
         else:
-            # unwrap against the previous sample so a yaw crossing +-pi is not a jump
-            prev = self._buf[3, (self._i - 1) % self.params.n] / self.params.head_radius_m
-            hy = float(head_yaw)
-            if prev == prev:
-                hy = prev + (hy - prev + np.pi) % (2 * np.pi) - np.pi
-            hy *= self.params.head_radius_m
-        self.push(np.array([ry, rx * s + rz * c, rx * c - rz * s, hy]))
+            nod = (self._arc(head_pitch, 0, self.params.pitch_radius_m), missing)
+        if head_yaw is None:
+            shake = (rx * c - rz * s, 0.0)
+        else:
+            shake = (missing, self._arc(head_yaw, 3, self.params.head_radius_m))
+        self.push(np.array([*nod, *shake]))
         return self.score()
 
 

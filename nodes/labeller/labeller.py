@@ -41,8 +41,10 @@ Labels = dict[str, tuple[float, int]]
 class PersonObservation:
     """What is known about one person on one frame; any field may be None.
 
-    joints: (14,3) metres, project joint order, world Y up (tracker). head_yaw: head yaw relative to
-    the torso (rad, positive to the person's left) if the tracker gives it. head_px: silhouette
+    joints: (14,3) metres, project joint order, world Y up (tracker). head_yaw / head_pitch: head
+    yaw (rad, positive to the person's left) and pitch (rad, positive chin down) relative to the
+    torso, the ``head_turn`` / ``head_nod`` of the tracker's pose vector when it publishes one (see
+    :mod:`nodes.labeller.head_motion`: they replace the head point for shakes / nods). head_px: silhouette
     head reference point (2,) px; ref_px: body reference point (2,) px, e.g. the silhouette
     centroid; height_px: silhouette height (px); control_points: (32,2) px spline from the top of
     the head; box: (x, y, w, h) px region of the person in the image (face search region).
@@ -50,6 +52,7 @@ class PersonObservation:
 
     joints: np.ndarray | None = None
     head_yaw: float | None = None
+    head_pitch: float | None = None
     head_px: np.ndarray | None = None
     ref_px: np.ndarray | None = None
     height_px: float | None = None
@@ -162,7 +165,7 @@ class SocialLabeller:
                 st.mode = "3d"
                 yaw = float(facing_yaw_from_shoulders(j[_LS], j[_RS]))
                 yaw = yaw if yaw == yaw else None
-                ns, n, ss, s = st.head3.update(j[_H], j[_N], yaw, obs.head_yaw)
+                ns, n, ss, s = st.head3.update(j[_H], j[_N], yaw, obs.head_yaw, obs.head_pitch)
                 res["nod"], res["shake"] = (ns, n), (ss, s)
                 res["activity"] = st.act3.update_3d(j)
                 target = None if targets is None else targets.get(pid)
@@ -216,10 +219,12 @@ def _nearest_other(pid: Hashable, heads: Mapping[Hashable, np.ndarray]) -> np.nd
 def label_pair_3d(joints_a: np.ndarray, joints_b: np.ndarray, fps: float, center: bool = True,
                   head_window_s: float = 1.6, gaze_threshold: float = float(np.radians(30.0)),
                   head_yaw_a: np.ndarray | None = None, head_yaw_b: np.ndarray | None = None,
+                  head_pitch_a: np.ndarray | None = None, head_pitch_b: np.ndarray | None = None,
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Offline batch labels of two tracked people looking at each other (vectorised over frames).
 
-    joints_a, joints_b: (T,14,3) metres. center: centred nod/shake windows (better timing offline;
+    joints_a, joints_b: (T,14,3) metres. head_yaw_a/b, head_pitch_a/b: (T,) head angles relative to
+    the torso (rad) from the tracker's pose, or None. center: centred nod/shake windows (better timing offline;
     activity windows stay causal). Returns (scores_a, labels_a, scores_b, labels_b), each (T, 6) in
     :data:`SIGNALS` order; talking/laughing are UNKNOWN (no images).
     """
@@ -228,13 +233,13 @@ def label_pair_3d(joints_a: np.ndarray, joints_b: np.ndarray, fps: float, center
     if ja.ndim != 3 or ja.shape[1:] != (14, 3) or jb.shape != ja.shape:
         raise ValueError(f"joints_a and joints_b must both be (T,14,3) metres; got {ja.shape}, {jb.shape}")
     outs = []
-    for me, other, hy in ((ja, jb, head_yaw_a), (jb, ja, head_yaw_b)):
+    for me, other, hy, hp in ((ja, jb, head_yaw_a, head_pitch_a), (jb, ja, head_yaw_b, head_pitch_b)):
         t = me.shape[0]
         sc = np.full((t, len(SIGNALS)), np.nan)
         lb = np.full((t, len(SIGNALS)), UNKNOWN, dtype=np.int8)
         yaw = np.nan_to_num(facing_yaw_from_shoulders(me[:, _LS], me[:, _RS]))
         hm = head_motion(me[:, _H], me[:, _N], fps, head_window_s, facing_yaw=yaw, head_yaw=hy,
-                         center=center)
+                         center=center, head_pitch=hp)
         sc[:, 0], lb[:, 0], sc[:, 1], lb[:, 1] = hm.nod_score, hm.nod, hm.shake_score, hm.shake
         g = gaze_at_other(me[:, _H], me[:, _LS], me[:, _RS], other[:, _H], hy, gaze_threshold)
         sc[:, 2], lb[:, 2] = g.score, g.label

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from body.pose import DOF, DOF_INDEX
 from bus import Input, Node, Output, Param, ParamError
 from messages import Frame, Pose3D, Silhouettes, SocialSignals
 from messages.labeller import PersonSignals
@@ -33,12 +34,26 @@ from .signals import SIGNALS
 #: the spline size the 2D activity detector reads (upper-body control points of 32)
 ACTIVITY_CTRL = 32
 
+_HEAD_TURN, _HEAD_NOD = DOF_INDEX["head_turn"], DOF_INDEX["head_nod"]
+
+
+def head_angles(pose: np.ndarray) -> tuple[float | None, float | None]:
+    """(head_yaw, head_pitch) relative to the torso (rad) from a tracker's pose vector
+    (``body.pose``: ``head_turn``, ``head_nod``); (None, None) when the pose is not a finite
+    (DOF,) vector (a tracker that publishes joints only)."""
+    p = np.asarray(pose, dtype=np.float64)
+    if p.shape != (DOF,) or not np.isfinite(p[[_HEAD_TURN, _HEAD_NOD]]).all():
+        return None, None
+    return float(p[_HEAD_TURN]), float(p[_HEAD_NOD])
+
 
 def observations(sil: Silhouettes, pose: Pose3D | None) -> tuple[dict[int, PersonObservation], dict[int, str]]:
     """Per person id: what the silhouettes (and pose, when given) say about them, and their side.
 
     A tracked body that is lost or has non-finite joints gives no 3D input (the labeller then falls
-    back to the person's silhouette). Control points other than (32, 2) are left out (2D activity
+    back to the person's silhouette). The head yaw and pitch come from the body's ``pose`` vector
+    when it has one (:func:`head_angles`): shakes are head rotations that barely move the head
+    joint, so they are seen in the yaw, not in the joints. Control points other than (32, 2) are left out (2D activity
     UNKNOWN), as are outlines the silhouette node could not trace.
     """
     obs: dict[int, PersonObservation] = {}
@@ -61,7 +76,9 @@ def observations(sil: Silhouettes, pose: Pose3D | None) -> tuple[dict[int, Perso
         if b.lost or joints.shape != (14, 3) or not np.isfinite(joints).all():
             continue
         base = obs.get(b.id, PersonObservation())
-        obs[b.id] = PersonObservation(joints=joints, head_yaw=base.head_yaw, head_px=base.head_px,
+        head_yaw, head_pitch = head_angles(b.pose)
+        obs[b.id] = PersonObservation(joints=joints, head_yaw=head_yaw, head_pitch=head_pitch,
+                                      head_px=base.head_px,
                                       ref_px=base.ref_px, height_px=base.height_px,
                                       control_points=base.control_points, box=base.box)
         sides.setdefault(b.id, b.side)
