@@ -135,6 +135,8 @@ def test_unknown_backend_refused_before_start_naming_it(tmp_path: Path, scene) -
     assert not (tmp_path / "sil.jsonl").exists(), "nothing may start when a parameter is bad"
     code, text = run_launch(graph(tmp_path, source, {}), "--set", "silhouette.train_frames=1", timeout=30)
     assert code == 2 and "'train_frames'" in text and "minimum" in text, text
+    code, text = run_launch(graph(tmp_path, source, {}), "--set", "silhouette.absorb_frames=-2", timeout=30)
+    assert code == 2 and "'absorb_frames'" in text and "minimum" in text, text
 
 
 def test_example_launch_file_runs_on_a_given_mjpg_video(tmp_path: Path, scene) -> None:

@@ -29,6 +29,16 @@ pixel darker than ``min_shadow_brightness`` times its background is foreground: 
 value on alpha_hat (the paper's form, used when tau_alpha_lo is given) would put that limit at
 very different brightnesses in bright, low-noise pixels (small a_i) and dark, noisy ones.
 
+Adaptation (``update``). Background pixels blend the frame into E at ``learning_rate``, shadow and
+highlight pixels at ``shadow_learning_rate``; foreground pixels are never blended in but follow the
+scene-wide lighting drift (the mean brightness distortion of the background pixels), so the room
+behind a person who stands for seconds is still right when they leave. After a robust start
+(people in view in the training frames) the median can hold a person who stood still there; when
+they leave, the room they uncover is foreground, a "ghost". Foreground that stays still for
+``absorb_frames`` frames and matches the room around it (chromaticity and brightness of a
+normalised local average of E) is absorbed into E; a still person, who does not match the room
+around them, is not.
+
 Frames are uint8 BGR, H x W x 3; all arithmetic is float32 and vectorised over pixels.
 """
 

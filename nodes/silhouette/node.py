@@ -78,6 +78,9 @@ class Silhouette(Node):
         "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people",
                               min=2, max=100_000),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
+        "absorb_frames": Param(int, -1, "horprasert: still frames before a ghost (room uncovered by someone who "
+                               "stood in the training frames) is absorbed; -1: 20 after a robust fit, "
+                               "never after a plain one; 0: never", min=-1, max=100_000),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -99,7 +102,8 @@ class Silhouette(Node):
         p = self.p
         backend_params: dict[str, Any] = {}
         if p["backend"] == "horprasert":
-            backend_params = {"train_frames": p["train_frames"], "robust": p["robust"]}
+            backend_params = {"train_frames": p["train_frames"], "robust": p["robust"],
+                              "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"]}
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
         # without colour a shadow cannot be told from a darker person (Horprasert's test is on
