@@ -61,7 +61,7 @@ def test_ghost_of_a_people_in_view_start_is_absorbed_and_still_people_are_not(ha
     # B's ghost appears when B walks off (about frame 40) and stays without absorption.
     assert np.nanmean(without[60:90, 0]) < 0.7
     assert np.nanmean(without[150:, 0]) < 0.85
-    # With it, the ghost is gone within about 70 frames of B leaving (20 still frames, then
+    # With it, the ghost is gone within about 70 frames of B leaving (10 still frames, then
     # peeled from the rim inwards) and stays gone.
     assert np.nanmin(with_absorb[110:180, 0]) > 0.95
     assert np.nanmean(with_absorb[110:, 0]) > 0.95

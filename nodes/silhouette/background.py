@@ -61,7 +61,7 @@ _MAD_TO_SIGMA = 1.4826
 # Smallest automatic threshold on a normalised distortion.
 _MIN_TAU = 2.0
 # Still frames before a foreground pixel is absorbed, after a robust (people in view) start.
-_AUTO_ABSORB_FRAMES = 20
+_AUTO_ABSORB_FRAMES = 10
 # Largest L1 distance of normalised colour (r, g, b sum to 1) and range of brightness ratio
 # between a still run and the surrounding background for it to be taken as uncovered background.
 _GHOST_CHROMA = 0.06
@@ -131,7 +131,7 @@ class HorprasertBackground:
     absorb_frames : ghost removal. A foreground pixel whose colour stays within ``absorb_k``
         spreads of the colour it had when its still run began, for this many consecutive frames,
         is taken to be background that a person uncovered and becomes the model's E there. None
-        (default): 20 frames (0.8 s at 25 fps) after ``fit(robust=True)``, whose median can hold
+        (default): 10 frames (0.4 s at 25 fps) after ``fit(robust=True)``, whose median can hold
         people who stood still in the training frames, and 0 (never) after a plain fit from
         empty frames, whose model is trusted. A still person is absorbed this way too; that is
         the price of learning with people in view.

@@ -79,7 +79,7 @@ class Silhouette(Node):
                               min=2, max=100_000),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
         "absorb_frames": Param(int, -1, "horprasert: still frames before a ghost (room uncovered by someone who "
-                               "stood in the training frames) is absorbed; -1: 20 after a robust fit, "
+                               "stood in the training frames) is absorbed; -1: 10 after a robust fit, "
                                "never after a plain one; 0: never", min=-1, max=100_000),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
