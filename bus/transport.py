@@ -13,6 +13,7 @@ publisher's send counter, in ZeroMQ's).
 from __future__ import annotations
 
 import time
+from time import monotonic as _monotonic
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -27,7 +28,11 @@ EOS_PREFIX = b"\x00eos:"
 RELIABLE = "reliable"
 LATEST = "latest"
 POLICIES = (RELIABLE, LATEST)
-ZERO_COPY_MIN = 16384  # bytes: below this, copying a buffer is cheaper than a zero-copy frame
+_RCVMORE = zmq.RCVMORE
+#: bytes: frames below this are copied into ZeroMQ, larger ones go out zero-copy. A zero-copy frame
+#: costs pyzmq a wake-up of its garbage-collector thread (which takes the GIL) once ZeroMQ has sent
+#: it; that outweighs copying a 320x240 gray image (76,800 B) but not a 640x480 BGR one (921,600 B).
+ZERO_COPY_MIN = 262144
 
 
 class Publisher:
@@ -61,12 +66,14 @@ class Publisher:
         self.reliable.setsockopt(zmq.XPUB_NODROP, 1)
         self.reliable.setsockopt(zmq.XPUB_VERBOSER, 1)
         self.reliable.setsockopt(zmq.SNDTIMEO, 100)
+        self.reliable.copy_threshold = ZERO_COPY_MIN  # pyzmq decides per frame (send with copy=False)
         self.reliable.bind(bind_address(endpoints.reliable))
         self.latest_subscribers = 0
         self.latest = ctx.socket(zmq.XPUB)  # lossy; XPUB only to know whether anyone listens
         self.latest.setsockopt(zmq.XPUB_VERBOSER, 1)
         self.latest.setsockopt(zmq.SNDHWM, latest_hwm)
         self.latest.setsockopt(zmq.LINGER, 0)
+        self.latest.copy_threshold = ZERO_COPY_MIN
         self.latest.bind(bind_address(endpoints.latest))
 
     # XPUB sockets tell who subscribed: b"\x01" + prefix, and b"\x00" + prefix on leave.
@@ -105,26 +112,27 @@ class Publisher:
             self._barrier_done = True
         # subscriptions change rarely: look at them every 20 ms (two polls per send would cost more
         # than the rest of the send)
-        now = time.monotonic()
+        now = _monotonic()
         if eos or now - self._last_sub_read > 0.02:
             self._last_sub_read = now
             self._read_subscriptions()
-        # zero-copy pays off for large buffers only; small messages are cheaper copied
-        copy = all((p.nbytes if isinstance(p, memoryview) else len(p)) < ZERO_COPY_MIN for p in parts)
+        frames = [self.topic_b, *parts]
         if self.subscribers > 0 or eos:
-            self._send_reliable([self.topic_b, *parts], copy)
+            self._send_reliable(frames)
         if eos:
-            self._send_reliable([EOS_PREFIX + self.topic_b, *parts], copy)
+            self._send_reliable([EOS_PREFIX + self.topic_b, *parts])
         if self.latest_subscribers > 0 or eos:
             try:
-                self.latest.send_multipart([self.topic_b, *parts], flags=zmq.NOBLOCK, copy=copy)
+                self.latest.send_multipart(frames, flags=zmq.NOBLOCK, copy=False)
             except zmq.Again:
                 pass
 
-    def _send_reliable(self, frames: list[Any], copy: bool) -> None:
+    def _send_reliable(self, frames: list[Any]) -> None:
+        # copy=False lets pyzmq copy each frame below the socket's copy_threshold and send the
+        # larger ones zero-copy
         while True:
             try:
-                self.reliable.send_multipart(frames, copy=copy)
+                self.reliable.send_multipart(frames, copy=False)
                 return
             except zmq.Again:  # a reliable subscriber lags: keep waiting unless asked to stop
                 self._read_subscriptions()
@@ -266,6 +274,15 @@ class Subscriber:
             self._last_counter = counter
         return msg
 
+    def _recv(self, flags: int) -> list[Any]:
+        """One multipart message: topic and header as bytes (cheaper than zmq.Frame objects for
+        small parts), the array buffers as frames that ``np.frombuffer`` views without a copy."""
+        sock = self.socket
+        frames = [sock.recv(flags)]
+        while sock.getsockopt(_RCVMORE):
+            frames.append(sock.recv(0, copy=len(frames) < 2))
+        return frames
+
     @property
     def pending(self) -> bool:
         """End of stream has arrived and will be returned once nothing more is in flight: call
@@ -281,7 +298,7 @@ class Subscriber:
                 self._pending_eos = msg
                 self._eos_counter = read_header(frames[1], self.limits).get("n")
         try:
-            frames = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
+            frames = self._recv(zmq.NOBLOCK)
         except zmq.Again:
             if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
                 msg, self._pending_eos = self._pending_eos, None
@@ -295,7 +312,7 @@ class Subscriber:
             stale = 0
             while True:  # keep the newest; every older message still queued is a drop
                 try:
-                    newer = self.socket.recv_multipart(flags=zmq.NOBLOCK, copy=False)
+                    newer = self._recv(zmq.NOBLOCK)
                 except zmq.Again:
                     break
                 frames = newer

@@ -21,6 +21,7 @@ from typing import Any, Callable, Sequence
 import msgpack
 import numpy as np
 
+from .compiled import Decoder, Encoder, compile_decoder, compile_encoder
 from .core import REGISTRY, field_types, schema_id
 
 ARRAY_EXT = 1
@@ -89,6 +90,15 @@ def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
 def encode(msg: Any, counter: int | None = None) -> list[Any]:
     """Header bytes followed by one buffer per array (no topic frame). Arrays are not copied unless
     they are not C-contiguous. ``counter`` is the publisher's send count, for drop detection."""
+    enc = _ENCODERS.get(type(msg))
+    if enc is None:
+        schema_id(msg)  # TypeError for anything that is not a registered message
+        enc = _ENCODERS[type(msg)] = compile_encoder(type(msg))
+    return enc(msg, counter)
+
+
+def encode_generic(msg: Any, counter: int | None = None) -> list[Any]:
+    """The field-by-field reference encoder that :mod:`messages.compiled` unrolls (same bytes)."""
     arrays: list[np.ndarray] = []
     fields = {n: _to_wire(getattr(msg, n), arrays) for n in _field_names(type(msg))}
     contiguous = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]
@@ -97,6 +107,11 @@ def encode(msg: Any, counter: int | None = None) -> list[Any]:
         head["n"] = counter
     header = msgpack.packb(head, use_bin_type=True)
     return [header, *(a.data if a.size else b"" for a in contiguous)]
+
+
+#: message class -> its compiled encoder / decoder (made on first use)
+_ENCODERS: dict[type, Encoder] = {}
+_DECODERS: dict[type, Decoder] = {}
 
 
 def encode_frames(topic: str | bytes, msg: Any) -> list[Any]:
@@ -110,6 +125,8 @@ def encode_frames(topic: str | bytes, msg: Any) -> list[Any]:
 
 def _buffer(frame: Any) -> memoryview:
     """A memoryview over a received part: zmq.Frame (copy=False), bytes or memoryview."""
+    if type(frame) is bytes:
+        return memoryview(frame)
     buf = getattr(frame, "buffer", None)
     if buf is not None:
         return buf
@@ -119,40 +136,49 @@ def _buffer(frame: Any) -> memoryview:
 def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
     """Unpack and shape-check the msgpack header."""
     buf = _buffer(raw)
-    if buf.nbytes > limits.max_header:
-        raise DecodeError("oversized", f"header of {buf.nbytes} bytes exceeds {limits.max_header}")
-    n = limits.max_container_len
+    size = buf.nbytes
+    if size > limits.max_header:
+        raise DecodeError("oversized", f"header of {size} bytes exceeds {limits.max_header}")
     try:
-        header = msgpack.unpackb(
-            buf,
-            raw=False,
-            strict_map_key=True,
-            max_str_len=limits.max_header,
-            max_bin_len=limits.max_header,
-            max_array_len=n,
-            max_map_len=n,
-            max_ext_len=16,
-        )
+        if size <= limits.max_container_len:
+            # msgpack bounds every string and container by the buffer's own length when no limit is
+            # given, which is within ours here: the plain call is the cheaper one
+            header = msgpack.unpackb(buf, max_ext_len=16)
+        else:
+            n = limits.max_container_len
+            header = msgpack.unpackb(
+                buf,
+                raw=False,
+                strict_map_key=True,
+                max_str_len=limits.max_header,
+                max_bin_len=limits.max_header,
+                max_array_len=n,
+                max_map_len=n,
+                max_ext_len=16,
+            )
     except Exception as exc:  # msgpack raises several unrelated types on garbage
         raise DecodeError("malformed", f"header is not valid msgpack ({type(exc).__name__}: {exc})") from None
-    if not isinstance(header, dict) or not isinstance(header.get("s"), str):
+    if type(header) is not dict or type(header.get("s")) is not str:
         raise DecodeError("malformed", "header is not a map with a schema id 's'")
-    if not isinstance(header.get("f"), dict) or not isinstance(header.get("a", []), list):
+    if type(header.get("f")) is not dict or type(header.get("a", _NO_ARRAYS)) is not list:
         raise DecodeError("malformed", "header lacks the fields map 'f' or the array list 'a'")
     return header
 
 
+_NO_ARRAYS: list[Any] = []
 _DTYPES = {d: np.dtype(d) for d in ALLOWED_DTYPES}
 
 
 def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.ndarray]:
+    if not specs and not parts:
+        return []
     if len(specs) > limits.max_arrays:
         raise DecodeError("oversized", f"{len(specs)} arrays exceed the limit of {limits.max_arrays}")
     if len(specs) != len(parts):
         raise DecodeError("bad_array", f"header names {len(specs)} arrays but {len(parts)} buffers arrived")
     out = []
     total = 0
-    for i, (spec, part) in enumerate(zip(specs, parts)):
+    for i, spec in enumerate(specs):
         if not (type(spec) is list and len(spec) == 2 and type(spec[1]) is list):
             raise DecodeError("bad_array", f"array {i}: spec must be [dtype, shape]")
         dtype = _DTYPES.get(spec[0]) if type(spec[0]) is str else None
@@ -169,11 +195,18 @@ def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.n
         total += nbytes
         if nbytes > limits.max_array_bytes or total > limits.max_total_bytes:
             raise DecodeError("oversized", f"array {i}: {nbytes} bytes exceed the limits")
-        buf = _buffer(part)
+        buf = _buffer(parts[i])
         if buf.nbytes != nbytes:
             raise DecodeError("bad_array", f"array {i}: {buf.nbytes} bytes received, {dtype}{shape} needs {nbytes}")
-        arr = np.frombuffer(buf, dtype=dtype).reshape(shape) if nbytes else np.zeros(shape, dtype)
-        arr.flags.writeable = False  # a view over the received frame: copy before changing it
+        if nbytes:
+            # a read-only view over the received frame (copy before changing it); making the view
+            # read-only first is cheaper than clearing the array's writeable flag afterwards
+            arr = np.frombuffer(buf.toreadonly(), dtype)
+            if len(shape) != 1:
+                arr = arr.reshape(shape)
+        else:
+            arr = np.zeros(shape, dtype)
+            arr.flags.writeable = False
         out.append(arr)
     return out
 
@@ -188,13 +221,15 @@ def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
     if len(parts) < 1:
         raise DecodeError("malformed", "no header frame")
     header = read_header(parts[0], limits)
-    sid = header["s"]
-    cls = REGISTRY.get(sid)
+    cls = REGISTRY.get(header["s"])
     if cls is None:
-        raise DecodeError("unknown_schema", f"schema {sid!r} is not registered here")
-    arrays = _arrays(header.get("a", []), parts[1:], limits)
+        raise DecodeError("unknown_schema", f"schema {header['s']!r} is not registered here")
+    dec = _DECODERS.get(cls)
+    if dec is None:
+        dec = _DECODERS[cls] = compile_decoder(cls)
+    arrays = _arrays(header.get("a", _NO_ARRAYS), parts[1:], limits)
     counter = header.get("n")
-    return _build(cls, header["f"], arrays, sid), counter if type(counter) is int else None
+    return dec(header["f"], arrays), counter if type(counter) is int else None
 
 
 def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[str, Any]:

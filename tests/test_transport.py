@@ -13,10 +13,11 @@ from messages import EndOfStream
 from tests.graph_nodes import Number
 
 
-def _pump(sub: Subscriber, timeout: float = 5.0) -> list:
-    """What a node loop does: poll the subscriber's sockets, receive, also while an end is pending."""
+def _pump(sub: Subscriber, timeout: float = 5.0, until: int | None = None) -> list:
+    """What a node loop does: poll the subscriber's sockets, receive, also while an end is pending;
+    until the end of stream (or ``until`` messages)."""
     got, deadline = [], time.monotonic() + timeout
-    while not sub.ended and time.monotonic() < deadline:
+    while not sub.ended and time.monotonic() < deadline and (until is None or len(got) < until):
         if any(s.poll(20) for s in sub.sockets) or sub.pending:
             msg = sub.receive()
             if msg is not None:
@@ -30,10 +31,15 @@ def test_latest_subscriber_ends_and_the_publisher_sees_it_has_read_to_the_end() 
     pub = Publisher(ctx, "n", ipc_endpoints(root, "n"))
     subs = {pol: Subscriber(ctx, "n", ipc_endpoints(root, "n"), pol) for pol in (RELIABLE, LATEST)}
     time.sleep(0.3)  # let the subscriptions arrive (no barrier in this test)
-    for i in range(5):
+    # a first message read by both: losses are counted from the publisher's send counter, and a
+    # subscriber can only count gaps after the first message it has seen
+    pub.send(Number(seq=0, value=0.0))
+    got = {pol: _pump(s, until=1) for pol, s in subs.items()}
+    for i in range(1, 5):
         pub.send(Number(seq=i, value=float(i)))
     pub.send_eos("test", 4)
-    got = {pol: _pump(s) for pol, s in subs.items()}
+    for pol, s in subs.items():
+        got[pol] += _pump(s)
     assert [m.seq for m in got[RELIABLE]] == [0, 1, 2, 3, 4, 4]  # the last one is the end of stream
     assert all(s.ended for s in subs.values())
     latest = [m.seq for m in got[LATEST][:-1]]

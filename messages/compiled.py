@@ -1,0 +1,130 @@
+"""Per-class encoders and decoders, written out once per message class.
+
+The generic codec (:mod:`messages.codec`) walks a class's fields with a loop of lookups and calls
+per field. For the small messages that make up most of a graph's traffic that walk cost more than the
+socket send itself, and it runs cold (the process has just woken up for the message), where every
+extra bytecode shows. So, the way :mod:`dataclasses` writes ``__init__``, each class gets two
+functions with one straight-line block per field:
+
+- the encoder passes a field on when its value already has its wire type (a Python scalar, or an
+  ``np.ndarray`` that becomes the next buffer reference) and leaves every other value (numpy
+  scalars, lists, dicts, nested structs) to the generic ``_to_wire``; the header is the same msgpack
+  map, byte for byte, as the generic encoder's;
+- the decoder accepts a value of exactly the declared scalar type inline and hands every other value
+  to the generic checker, which converts it (``int`` to ``float``) or raises the same
+  :class:`~messages.codec.DecodeError` with the same ``where``.
+
+Nothing here changes what is accepted or refused; ``tests/test_messages.py`` checks both paths agree.
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable
+
+import msgpack
+import numpy as np
+
+from .core import field_types
+
+#: declared scalar types whose values the decoder accepts inline when their type matches exactly
+_INLINE_SCALARS = (int, float, bool, str, bytes)
+#: wire references of the first buffers, made once (an ExtType per array per message otherwise)
+_REFS = tuple(msgpack.ExtType(1, i.to_bytes(4, "little")) for i in range(64))
+
+Encoder = Callable[[Any, "int | None"], list[Any]]
+Decoder = Callable[[dict[str, Any], list[np.ndarray]], Any]
+
+
+def _ref(index: int) -> msgpack.ExtType:
+    return _REFS[index] if index < len(_REFS) else msgpack.ExtType(1, index.to_bytes(4, "little"))
+
+
+def _finish(sid: str, fields: dict[str, Any], arrays: list[np.ndarray], counter: int | None) -> list[Any]:
+    """Header bytes and buffers, exactly as :func:`messages.codec.encode` lays them out."""
+    if arrays:
+        arrays = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]
+        specs = [[a.dtype.str, list(a.shape)] for a in arrays]
+    else:
+        specs = []
+    head = {"s": sid, "f": fields, "a": specs}
+    if counter is not None:
+        head["n"] = counter
+    return [msgpack.packb(head, use_bin_type=True), *(a.data if a.size else b"" for a in arrays)]
+
+
+def _compile(name: str, lines: list[str], namespace: dict[str, Any]) -> Callable[..., Any]:
+    exec("\n".join(lines), namespace)  # noqa: S102 - source built above from field names only
+    return namespace[name]
+
+
+def compile_encoder(cls: type) -> Encoder:
+    """``encode(msg, counter) -> [header, buffers...]`` for instances of message class ``cls``."""
+    from .codec import _SCALARS, _to_wire
+
+    hints = field_types(cls)
+    ns: dict[str, Any] = {
+        "_SCALARS": _SCALARS, "_to_wire": _to_wire, "_ndarray": np.ndarray, "_ref": _ref, "_finish": _finish,
+        "_SID": cls.__schema_id__,
+    }
+    lines = ["def encode(msg, counter):", "    arrays = []"]
+    names = []
+    for i, f in enumerate(dataclasses.fields(cls)):
+        tp, v = hints[f.name], f"v{i}"
+        names.append((f.name, v))
+        lines.append(f"    {v} = msg.{f.name}")
+        if tp is np.ndarray:
+            lines += [
+                f"    if type({v}) is _ndarray:",
+                f"        arrays.append({v})",
+                f"        {v} = _ref(len(arrays) - 1)",
+                "    else:",
+                f"        {v} = _to_wire({v}, arrays)",
+            ]
+        else:
+            lines.append(f"    if type({v}) not in _SCALARS: {v} = _to_wire({v}, arrays)")
+    lines.append("    return _finish(_SID, {" + ", ".join(f"{n!r}: {v}" for n, v in names) + "}, arrays, counter)")
+    return _compile("encode", lines, ns)
+
+
+def compile_decoder(cls: type) -> Decoder:
+    """``decode(fields, arrays) -> instance`` of message class ``cls`` from a header's field map and
+    the already checked arrays; raises DecodeError like :func:`messages.codec._build`."""
+    from .codec import DecodeError, _array, _check
+
+    hints = field_types(cls)
+    prefix = cls.__schema_id__
+    ns: dict[str, Any] = {
+        "_MISSING": dataclasses.MISSING, "_array": _array, "_check": _check, "DecodeError": DecodeError,
+        "_new": object.__new__, "_cls": cls,
+    }
+    lines = ["def decode(f, arrays):"]
+    names = []
+    for i, fld in enumerate(dataclasses.fields(cls)):
+        tp, v, where = hints[fld.name], f"v{i}", f"{prefix}.{fld.name}"
+        names.append((fld.name, v))
+        ns[f"_t{i}"] = tp
+        lines.append(f"    {v} = f.get({fld.name!r}, _MISSING)")
+        if fld.default is not dataclasses.MISSING:
+            ns[f"_d{i}"] = fld.default
+            lines.append(f"    if {v} is _MISSING: {v} = _d{i}")
+        elif fld.default_factory is not dataclasses.MISSING:
+            ns[f"_f{i}"] = fld.default_factory
+            lines.append(f"    if {v} is _MISSING: {v} = _f{i}()")
+        else:
+            lines.append(f"    if {v} is _MISSING: raise DecodeError('bad_field', {f'{prefix}: required field {fld.name!r} is missing'!r})")
+        if tp is np.ndarray:
+            lines.append(f"    else: {v} = _array({v}, arrays, {where!r})")
+        elif tp in _INLINE_SCALARS:
+            lines.append(f"    elif type({v}) is not _t{i}: {v} = _check({v}, _t{i}, arrays, {where!r})")
+        else:
+            lines.append(f"    else: {v} = _check({v}, _t{i}, arrays, {where!r})")
+    values = ", ".join(f"{n}={v}" for n, v in names)
+    if hasattr(cls, "__post_init__"):
+        lines.append(f"    return _cls({values})")
+    else:
+        # frozen dataclass filled without __init__ (a setattr call per field, which shows on small messages)
+        lines += ["    obj = _new(_cls)", f"    obj.__dict__.update({values})", "    return obj"]
+    return _compile("decode", lines, ns)
+
+
+__all__ = ["compile_encoder", "compile_decoder", "Encoder", "Decoder"]
