@@ -22,7 +22,10 @@ Each window of ``N = round(window_s * fps)`` frames of every channel is first re
 *oscillation*: the running median of width ``K = median_s * fps`` (odd, edges replicated inside
 the window) is subtracted. A running median follows any monotone movement exactly (a look away
 and the hold after it, a slow drift) and removes back-and-forth movement shorter than about ``K``
-frames, so the residual keeps nods and shakes but not head turns. The residual has its window mean
+frames, so the residual keeps nods and shakes but not head turns. The nod channels use
+``nod_median_s`` = 1 s, one period of the band's lowest frequency, so that slow nods pass whole;
+the shake channels a shorter ``shake_median_s`` = 0.44 s, so that a quick glance away and back (a
+single excursion of half a second or more) is followed by the median and not taken for a shake. The residual has its window mean
 removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
 energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
@@ -38,8 +41,8 @@ higher).
 so a score is the fraction of all oscillating head motion that is band-limited nod (resp. shake)
 motion, scaled down when the motion is smaller than the amplitude floor ``a_floor``. Scores are in
 [0, 1]; the label is ``score >= threshold``. Windows that contain a missing (nan) sample give
-``nan`` / UNKNOWN, as do the frames before the first full window. ``median_s = 0`` turns the
-median stage off (the plain FFT of the motion).
+``nan`` / UNKNOWN, as do the frames before the first full window. A median width of 0 turns
+the median stage off for its channels (the plain FFT of the motion).
 
 Timing: ``center=False`` (the streaming default) labels frame ``t`` from the window that ends at
 ``t`` (causal: the labels are those of ``center=True`` delayed by ``N // 2`` frames, 0.8 s at the
@@ -73,8 +76,9 @@ class HeadMotionParams:
     head_radius_m: converts a head yaw (rad) to the arc the face travels about the neck's vertical
     axis (m). pitch_radius_m: converts a head pitch (rad) to the arc the head centre travels about
     the neck joint (m; the neck-to-head distance), so angle and head-point nods share a scale.
-    median_s: width (s) of the running median whose residual is analysed (0: no median stage);
-    movements that go one way and stay are removed, back-and-forth ones up to about this long kept.
+    nod_median_s / shake_median_s: width (s) of the running median whose residual is analysed, on
+    the nod / shake channels (0: no median stage); movements that go one way and stay are removed,
+    back-and-forth ones up to about this long kept.
     """
 
     fps: float
@@ -87,7 +91,8 @@ class HeadMotionParams:
     threshold: float = 0.5
     head_radius_m: float = 0.1
     pitch_radius_m: float = 0.18
-    median_s: float = 0.44
+    nod_median_s: float = 1.0
+    shake_median_s: float = 0.44
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -108,15 +113,16 @@ class HeadMotionParams:
         floors = {k: getattr(self, k) for k in ("nod_floor_m", "shake_floor_m", "pitch_floor_m", "yaw_floor_m")}
         if min(floors.values()) <= 0:
             raise ValueError(f"the amplitude floors must be > 0 (metres), got {floors}")
-        if not 0 <= self.median_s or self.median_k > n:
-            raise ValueError(
-                f"median_s must be >= 0 s and its width in frames ({self.median_k}) at most the "
-                f"window's ({n}), got median_s={self.median_s} at {self.fps} fps")
+        for name in ("nod_median_s", "shake_median_s"):
+            v = getattr(self, name)
+            if not v >= 0 or self.median_k(v) > n:
+                raise ValueError(
+                    f"{name} must be >= 0 s and its width in frames ({self.median_k(v)}) at most "
+                    f"the window's ({n}), got {name}={v} at {self.fps} fps")
 
-    @property
-    def median_k(self) -> int:
-        """Running-median width in frames (odd; 1 = no median stage)."""
-        return max(int(round(self.median_s * self.fps)), 1) | 1 if self.median_s > 0 else 1
+    def median_k(self, seconds: float) -> int:
+        """A running-median width in frames (odd; 1 = no median stage)."""
+        return (max(int(round(seconds * self.fps)), 1) | 1) if seconds > 0 else 1
 
     @property
     def n(self) -> int:
@@ -153,7 +159,9 @@ class _Spectral:
         bad = np.isnan(win).any(axis=(-2, -1))
         if bad.any():
             win = np.where(np.isnan(win), 0.0, win)
-        win = oscillation_residual(win, self.p.median_k)
+        win = np.concatenate(
+            [oscillation_residual(win[..., :2, :], self.p.median_k(self.p.nod_median_s)),
+             oscillation_residual(win[..., 2:, :], self.p.median_k(self.p.shake_median_s))], axis=-2)
         x = (win - win.mean(axis=-1, keepdims=True)) * self.w
         spec = np.fft.rfft(x, axis=-1)
         pw = spec.real ** 2 + spec.imag ** 2                        # (..., 4, F)

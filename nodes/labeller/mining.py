@@ -99,12 +99,16 @@ def build_transactions(
     offset: int = 10,
     bag: int = 0,
     listener_names: Sequence[str] | None = None,
+    speaker_mask: np.ndarray | None = None,
 ) -> pd.DataFrame:
     """One-hot transactions (rows: speaker frames; columns "S:<name>" then "L:<name>"), bool.
 
     speaker_labels: (T,K) bool (or 1/0/UNKNOWN int). listener_labels: (T,K') of the same recording
     (same clock). names: the K speaker signal names (also the listener's unless listener_names).
     offset: s, frames (>= 0). bag: b, frames (>= 0). See the module docstring for the bagging.
+    speaker_mask: optional (T,) bool: keep only the frames ``t`` where it is True, e.g. the frames
+    where this person holds the turn in a conversation whose speaker and listener swap roles
+    (:func:`turn_transactions`); the listener's bag may still reach past the mask.
     """
     sp = _as_bool(speaker_labels, "speaker_labels")
     li = _as_bool(listener_labels, "listener_labels")
@@ -132,7 +136,36 @@ def build_transactions(
     if len(set(cols)) != len(cols):
         raise ValueError(f"signal names must be unique, got {list(names)} / {lnames}")
     data = np.concatenate([sp[first:first + n], lb], axis=1)
+    if speaker_mask is not None:
+        m = np.asarray(speaker_mask, dtype=bool)
+        if m.shape != (t,):
+            raise ValueError(f"speaker_mask must be (T,) = ({t},) bool, got shape {m.shape}")
+        data = data[m[first:first + n]]
     return pd.DataFrame(data, columns=cols)
+
+
+def turn_transactions(
+    labels_a: np.ndarray,
+    labels_b: np.ndarray,
+    names: Sequence[str],
+    talking: str = "talking",
+    offset: int = 10,
+    bag: int = 0,
+) -> pd.DataFrame:
+    """Transactions of a two-person conversation whose people take turns: each person is the
+    speaker on the frames where their ``talking`` label is 1 and the other is the listener there.
+
+    labels_a, labels_b: (T,K) labels of the two people (bool or 1/0/UNKNOWN); names: the K signal
+    names, which must include ``talking``. Returns the rows of both roles, pooled
+    (:func:`build_transactions` with ``speaker_mask``).
+    """
+    names = list(names)
+    if talking not in names:
+        raise ValueError(f"turn_transactions needs a {talking!r} signal to tell the speaker; names are {names}")
+    k = names.index(talking)
+    a, b = np.asarray(labels_a), np.asarray(labels_b)
+    return pd.concat([build_transactions(sp, li, names, offset, bag, speaker_mask=sp[:, k] == 1)
+                      for sp, li in ((a, b), (b, a))], ignore_index=True)
 
 
 def _association_rules(freq: pd.DataFrame, n_transactions: int, min_confidence: float) -> pd.DataFrame:
