@@ -197,7 +197,7 @@ class HorprasertBackground:
         self.absorb_k = absorb_k
         self.absorb_frames_: int = 0
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
-        self._still_ref: np.ndarray | None = None  # (3, H, W) float32 mean colour of that run
+        self._still_ref: np.ndarray | None = None  # (H * W, 3) float32 mean colour of that run
         self._last_alpha: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its alpha) of the last apply
         self.max_threshold_samples = max_threshold_samples
         self.random_state = random_state
@@ -266,7 +266,7 @@ class HorprasertBackground:
             self.absorb_frames_ = int(self.absorb_frames)
         self._last_alpha = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
-        self._still_ref = np.zeros_like(self._mu)
+        self._still_ref = np.zeros((self._mu[0].size, 3), np.float32)
         self.a_ = None
         self._refresh_colour_terms(spread_changed=True)
 
@@ -449,46 +449,55 @@ class HorprasertBackground:
         there is no such support yet; it is peeled from its rim inwards, frame by frame.
         """
         fg = labels == FOREGROUND
-        still, ref = self._still, self._still_ref
-        if not fg.any():
-            still.fill(0)
+        still, ref = self._still.reshape(-1), self._still_ref
+        # Runs only live on foreground pixels (a few percent of the frame): work on those alone.
+        idx = np.flatnonzero(fg)
+        prev = still[idx]
+        still.fill(0)
+        if idx.size == 0:
             return False
-        planes = [p.astype(np.float32) for p in cv2.split(frame)]
-        dev = cv2.absdiff(planes[0], ref[0]) * self._inv_s[0]
-        for c in (1, 2):
-            np.maximum(dev, cv2.absdiff(planes[c], ref[c]) * self._inv_s[c], out=dev)
-        keep = fg & (dev <= self.absorb_k) & (still > 0)
-        restart = fg & ~keep
-        np.add(still, 1, out=still, where=keep)
-        still[restart] = 1
-        still[~fg] = 0
+        obs = frame.reshape(-1, 3)[idx].astype(np.float32)  # (K, 3)
+        run = ref[idx]
+        dev = (np.abs(obs - run) * self._inv_s.reshape(3, -1)[:, idx].T).max(axis=1)
+        n = np.where((prev > 0) & (dev <= self.absorb_k), prev + 1, 1).astype(np.uint16)
+        still[idx] = n
         # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
-        inv_n = 1.0 / np.maximum(still, 1).astype(np.float32)
-        for c in range(3):
-            ref[c] += (planes[c] - ref[c]) * inv_n
-        done = still >= self.absorb_frames_
-        if not done.any():
+        run += (obs - run) / n[:, None].astype(np.float32)
+        ref[idx] = run
+        ripe = n >= self.absorb_frames_
+        if not ripe.any():
             return False
+        ys, xs = np.divmod(idx[ripe], self.shape[1])
+        run = run[ripe].T  # (3, K') the runs' mean colours
+        # The surround is a local average: computed at 1/4 resolution (16x fewer pixels) and
+        # read at the candidates only, as it only has to be smooth.
         h, w = self.shape
-        k = max(15, (h // 8) | 1)
-        support = (~fg).astype(np.float32)
-        n = cv2.boxFilter(support, -1, (k, k), normalize=False)
-        done &= n >= 0.1 * k * k
-        if not done.any():
-            return False
-        inv = 1.0 / np.maximum(n, 1.0)
-        near = [cv2.boxFilter(self._mu[c] * support, -1, (k, k), normalize=False) * inv for c in range(3)]
-        # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
-        s_run = ref[0] + ref[1] + ref[2] + 1.0
-        s_near = near[0] + near[1] + near[2] + 1.0
-        chroma = sum(np.abs(ref[c] / s_run - near[c] / s_near) for c in range(3))
-        ratio = s_run / s_near
-        done &= (chroma <= _GHOST_CHROMA) & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1])
-        if not done.any():
-            return False
+        sh, sw = max(1, h // 4), max(1, w // 4)
+        k = max(5, (h // 32) | 1)
+        bgm = (~fg).view(np.uint8)
+        support = cv2.resize(bgm.astype(np.float32), (sw, sh), interpolation=cv2.INTER_AREA)
+        frac = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)
+        sy = np.minimum(ys * sh // h, sh - 1)
+        sx = np.minimum(xs * sw // w, sw - 1)
+        cnt = frac[sy, sx]
+        near = np.empty_like(run)
         for c in range(3):
-            np.copyto(self._mu[c], ref[c], where=done)
-        still[done] = 0
+            small = cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
+            near[c] = cv2.boxFilter(small, -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
+        near /= np.maximum(cnt, 1e-3)
+        # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
+        s_run = run.sum(axis=0) + 1.0
+        s_near = near.sum(axis=0) + 1.0
+        chroma = np.abs(run / s_run - near / s_near).sum(axis=0)
+        ratio = s_run / s_near
+        sel = ((cnt >= 0.1) & (chroma <= _GHOST_CHROMA)
+               & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1]))
+        if not sel.any():
+            return False
+        ys, xs = ys[sel], xs[sel]
+        for c in range(3):
+            self._mu[c][ys, xs] = run[c, sel]
+        self._still[ys, xs] = 0
         return True
 
     def apply_update(self, frame: np.ndarray) -> np.ndarray:
