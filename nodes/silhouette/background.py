@@ -383,7 +383,9 @@ class HorprasertBackground:
         highlight pixels must adapt too: under a global drift the pixels that noise pushes out of
         the background band would otherwise stop adapting and lag further every frame. Absorbing
         a person's cast shadow this way is harmless, as shadow and background are both "not
-        foreground". a, b and the thresholds stay as trained.
+        foreground". a, b and the thresholds stay as trained. Foreground pixels follow the
+        scene-wide drift (``_follow_global_drift``), and after a robust fit still foreground that
+        matches the surrounding room is absorbed (``absorb_frames``).
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
