@@ -35,6 +35,20 @@ _RCVMORE = zmq.RCVMORE
 ZERO_COPY_MIN = 262144
 
 
+_SNDMORE = zmq.SNDMORE
+_socket_send = zmq.backend.Socket.send  # pyzmq's frame send, without the Python layer of zmq.Socket
+
+
+def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags: int) -> None:
+    """``[topic, *parts]`` as one multipart message, like ``send_multipart(copy=False)``: pyzmq
+    copies each part below the socket's ``copy_threshold`` and sends larger ones zero-copy. ZeroMQ
+    queues a multipart message whole or not at all (zmq.Again comes from the first part)."""
+    _socket_send(sock, topic, flags | _SNDMORE, False)
+    last = len(parts) - 1
+    for i, part in enumerate(parts):
+        _socket_send(sock, part, flags if i == last else flags | _SNDMORE, False)
+
+
 class Publisher:
     """Both sockets of one topic. ``expected`` reliable subscribers are awaited before the first send
     (the startup barrier), for at most ``barrier_timeout`` seconds."""
@@ -116,23 +130,20 @@ class Publisher:
         if eos or now - self._last_sub_read > 0.02:
             self._last_sub_read = now
             self._read_subscriptions()
-        frames = [self.topic_b, *parts]
         if self.subscribers > 0 or eos:
-            self._send_reliable(frames)
+            self._send_reliable(self.topic_b, parts)
         if eos:
-            self._send_reliable([EOS_PREFIX + self.topic_b, *parts])
+            self._send_reliable(EOS_PREFIX + self.topic_b, parts)
         if self.latest_subscribers > 0 or eos:
             try:
-                self.latest.send_multipart(frames, flags=zmq.NOBLOCK, copy=False)
+                _send_multipart(self.latest, self.topic_b, parts, zmq.NOBLOCK)
             except zmq.Again:
                 pass
 
-    def _send_reliable(self, frames: list[Any]) -> None:
-        # copy=False lets pyzmq copy each frame below the socket's copy_threshold and send the
-        # larger ones zero-copy
+    def _send_reliable(self, topic: bytes, parts: Sequence[Any]) -> None:
         while True:
             try:
-                self.reliable.send_multipart(frames, copy=False)
+                _send_multipart(self.reliable, topic, parts, 0)
                 return
             except zmq.Again:  # a reliable subscriber lags: keep waiting unless asked to stop
                 self._read_subscriptions()

@@ -6,10 +6,10 @@ socket send itself, and it runs cold (the process has just woken up for the mess
 extra bytecode shows. So, the way :mod:`dataclasses` writes ``__init__``, each class gets two
 functions with one straight-line block per field:
 
-- the encoder passes a field on when its value already has its wire type (a Python scalar, or an
-  ``np.ndarray`` that becomes the next buffer reference) and leaves every other value (numpy
-  scalars, lists, dicts, nested structs) to the generic ``_to_wire``; the header is the same msgpack
-  map, byte for byte, as the generic encoder's;
+- the encoder builds the header map in one expression when every field already holds its wire
+  type (Python scalars, C-contiguous arrays, whose buffer references are then fixed per class) and
+  hands any other message (numpy scalars, lists, dicts, nested structs, strided views) to
+  ``encode_generic``; the header is the same msgpack map, byte for byte, either way;
 - the decoder accepts a value of exactly the declared scalar type inline and hands every other value
   to the generic checker, which converts it (``int`` to ``float``) or raises the same
   :class:`~messages.codec.DecodeError` with the same ``where``.
@@ -28,28 +28,20 @@ from .core import field_types
 
 #: declared scalar types whose values the decoder accepts inline when their type matches exactly
 _INLINE_SCALARS = (int, float, bool, str, bytes)
-#: wire references of the first buffers, made once (an ExtType per array per message otherwise)
-_REFS = tuple(msgpack.ExtType(1, i.to_bytes(4, "little")) for i in range(64))
 
 Encoder = Callable[[Any, "int | None"], list[Any]]
 Decoder = Callable[[dict[str, Any], list[np.ndarray]], Any]
 
 
-def _ref(index: int) -> msgpack.ExtType:
-    return _REFS[index] if index < len(_REFS) else msgpack.ExtType(1, index.to_bytes(4, "little"))
+_DTYPE_STR: dict[np.dtype, str] = {}
 
 
-def _finish(sid: str, fields: dict[str, Any], arrays: list[np.ndarray], counter: int | None) -> list[Any]:
-    """Header bytes and buffers, exactly as :func:`messages.codec.encode` lays them out."""
-    if arrays:
-        arrays = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]
-        specs = [[a.dtype.str, list(a.shape)] for a in arrays]
-    else:
-        specs = []
-    head = {"s": sid, "f": fields, "a": specs}
-    if counter is not None:
-        head["n"] = counter
-    return [msgpack.packb(head, use_bin_type=True), *(a.data if a.size else b"" for a in arrays)]
+def _dtype_str(dtype: np.dtype) -> str:
+    """``dtype.str`` (which builds a new string on every call), remembered per dtype."""
+    text = _DTYPE_STR.get(dtype)
+    if text is None:
+        text = _DTYPE_STR[dtype] = dtype.str
+    return text
 
 
 def _compile(name: str, lines: list[str], namespace: dict[str, Any]) -> Callable[..., Any]:
@@ -58,31 +50,41 @@ def _compile(name: str, lines: list[str], namespace: dict[str, Any]) -> Callable
 
 
 def compile_encoder(cls: type) -> Encoder:
-    """``encode(msg, counter) -> [header, buffers...]`` for instances of message class ``cls``."""
-    from .codec import _SCALARS, _to_wire
+    """``encode(msg, counter) -> [header, buffers...]`` for instances of message class ``cls``.
+
+    The written-out path covers a message whose scalar fields hold Python scalars and whose
+    ``np.ndarray`` fields hold C-contiguous arrays; any other value (a numpy scalar, a list, a
+    nested struct, a strided view) sends the whole message through ``encode_generic``."""
+    from .codec import _SCALARS, encode_generic
 
     hints = field_types(cls)
     ns: dict[str, Any] = {
-        "_SCALARS": _SCALARS, "_to_wire": _to_wire, "_ndarray": np.ndarray, "_ref": _ref, "_finish": _finish,
-        "_SID": cls.__schema_id__,
+        "_SCALARS": _SCALARS, "_generic": encode_generic, "_ndarray": np.ndarray, "_dstr": _dtype_str,
+        "_packb": msgpack.packb, "_SID": cls.__schema_id__,
     }
-    lines = ["def encode(msg, counter):", "    arrays = []"]
-    names = []
+    lines = ["def encode(msg, counter):"]
+    wire, arrays = [], []
     for i, f in enumerate(dataclasses.fields(cls)):
         tp, v = hints[f.name], f"v{i}"
-        names.append((f.name, v))
         lines.append(f"    {v} = msg.{f.name}")
         if tp is np.ndarray:
-            lines += [
-                f"    if type({v}) is _ndarray:",
-                f"        arrays.append({v})",
-                f"        {v} = _ref(len(arrays) - 1)",
-                "    else:",
-                f"        {v} = _to_wire({v}, arrays)",
-            ]
+            k = len(arrays)
+            ns[f"_R{k}"] = msgpack.ExtType(1, k.to_bytes(4, "little"))
+            lines.append(f"    if type({v}) is not _ndarray or not {v}.flags.c_contiguous: return _generic(msg, counter)")
+            wire.append(f"{f.name!r}: _R{k}")
+            arrays.append(v)
+        elif tp in _INLINE_SCALARS:
+            lines.append(f"    if type({v}) not in _SCALARS: return _generic(msg, counter)")
+            wire.append(f"{f.name!r}: {v}")
         else:
-            lines.append(f"    if type({v}) not in _SCALARS: {v} = _to_wire({v}, arrays)")
-    lines.append("    return _finish(_SID, {" + ", ".join(f"{n!r}: {v}" for n, v in names) + "}, arrays, counter)")
+            return encode_generic  # lists, dicts, structs: nothing to gain from a written-out copy
+    specs = ", ".join(f"[_dstr({a}.dtype), list({a}.shape)]" for a in arrays)
+    lines += [
+        f"    head = {{'s': _SID, 'f': {{{', '.join(wire)}}}, 'a': [{specs}]}}",
+        "    if counter is not None:",
+        "        head['n'] = counter",
+        "    return [_packb(head, use_bin_type=True)" + "".join(f", {a}.data if {a}.size else b''" for a in arrays) + "]",
+    ]
     return _compile("encode", lines, ns)
 
 
