@@ -2,6 +2,9 @@
 the pose vector's head angles), and the node's reading of those angles from Pose3D."""
 from __future__ import annotations
 
+import argparse
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -9,12 +12,13 @@ import pytest
 from body.pose import DOF, DOF_INDEX
 from messages import Pose3D, Silhouettes
 from messages.tracker import TrackedBody
+from nodes.labeller import cli_mine
 from nodes.labeller.head_motion import HeadMotionParams, head_motion
 from nodes.labeller.labeller import PersonObservation, SocialLabeller
-from nodes.labeller.mining import mine_transactions, turn_transactions
+from nodes.labeller.mining import mine_transactions, read_rules, turn_transactions
 from nodes.labeller.node import head_angles, observations
 from nodes.labeller.signals import SIGNALS
-from sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, conversation
+from sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, Scenario, conversation
 
 FPS = 25.0
 NOD, SHAKE = SIGNALS.index("nod"), SIGNALS.index("shake")
@@ -29,7 +33,7 @@ def _overlaps(a: tuple[int, int], runs: list[tuple[int, int]]) -> bool:
     return any(s < a[1] and a[0] < e for s, e in runs)
 
 
-def _stream(sc, angles: bool) -> dict[str, np.ndarray]:
+def _stream(sc: Scenario, angles: bool) -> dict[str, np.ndarray]:
     """Streaming labels (T,6) per person, shifted back by the detector's latency (half a window)."""
     joints = sc.joints().astype(np.float32)
     lab = SocialLabeller(FPS)
@@ -127,3 +131,29 @@ def test_turn_taking_transactions_recover_the_planted_listener_rules() -> None:
         assert abs(hit.confidence - r["p_interested"]) < 0.15, (r, hit)
     with pytest.raises(ValueError, match="talking"):
         turn_transactions(sc.signals_a[:, :2], sc.signals_b[:, :2], names[:2])
+
+
+def test_cli_mine_with_turns_on_simulator_trajectory_files(tmp_path: Path,
+                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    """``counterpart mine --turns talking`` on the simulator's conversation files: the interested /
+    not-interested confidence ratio of the planted nod -> nod rule (0.8 / 0.3) comes back."""
+    files: dict[str, list[str]] = {"interested": [], "not_interested": []}
+    for scen, seeds in (("interested", range(600, 604)), ("not_interested", range(700, 704))):
+        for s in seeds:
+            path = tmp_path / f"{scen}_{s}.npz"
+            conversation(seed=s, fps=FPS, duration=60.0, interested=scen == "interested").to_trajectory().save(path)
+            files[scen].append(str(path))
+    parser = argparse.ArgumentParser()
+    cli_mine.add_arguments(parser)
+    out = tmp_path / "rules.json"
+    args = parser.parse_args(["--interested", *files["interested"], "--not-interested", *files["not_interested"],
+                              "--turns", "talking", "--min-support", "0.005", "--out", str(out)])
+    assert cli_mine.main(args) == 0
+    rf = read_rules(out)
+    assert rf.params["turns"] == "talking"
+    comp = {(c.antecedent, c.consequent): c for c in rf.comparisons}
+    nod = comp[(("S:nod",), ("L:nod",))]
+    assert abs(nod.confidence_a - 0.8) < 0.15 and abs(nod.confidence_b - 0.3) < 0.15, nod
+    bad = parser.parse_args(["--interested", files["interested"][0], "--turns", "speaking", "--out", str(out)])
+    assert cli_mine.main(bad) == 2
+    assert "speaking" in capsys.readouterr().err

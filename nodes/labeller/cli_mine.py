@@ -1,12 +1,15 @@
 """``counterpart mine``: mine speaker -> listener rules from label files of two scenarios.
 
     counterpart mine --interested A.npz [B.npz ...] [--not-interested C.npz ...] \\
-                     --offset 10 [--bag 0] --out rules.json
+                     --offset 10 [--bag 0] [--turns talking] --out rules.json
 
 Each input is a label file read by :func:`nodes.labeller.mining.read_labels` (``.npz`` with
 ``signals_a``/``signals_b``/``signal_names``/``fps``, or the documented ``.csv``); ``--speaker``
-and ``--listener`` name the two people in it (default ``a`` speaks, ``b`` listens). The output is a
-rules file (:func:`nodes.labeller.mining.write_rules`) with the rules of each scenario, the
+and ``--listener`` name the two people in it (default ``a`` speaks, ``b`` listens). In a
+conversation where the two take turns (the simulator's ``conversation`` trajectory files),
+``--turns talking`` makes the speaker of each frame whichever of the two has ``talking`` = 1 there
+and the other the listener, both roles pooled (:func:`nodes.labeller.mining.turn_transactions`).
+The output is a rules file (:func:`nodes.labeller.mining.write_rules`) with the rules of each scenario, the
 interested / not-interested confidence ratios of rules found in both, and the parameters used.
 Progress goes to stderr. The project's CLI dispatcher calls :func:`add_arguments` and :func:`main`.
 """
@@ -20,7 +23,7 @@ import mlxtend
 import pandas as pd
 
 from nodes.labeller.mining import (build_transactions, compare_scenarios, mine_transactions,
-                                   read_labels, write_rules)
+                                   read_labels, turn_transactions, write_rules)
 
 SCENARIOS = ("interested", "not_interested")
 
@@ -42,6 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--algorithm", choices=("apriori", "fpgrowth"), default="apriori")
     parser.add_argument("--speaker", default="a", help="person id of the speaker (default a)")
     parser.add_argument("--listener", default="b", help="person id of the listener (default b)")
+    parser.add_argument("--turns", metavar="SIGNAL", default=None,
+                        help="the two people take turns: on each frame the speaker is the one with "
+                             "SIGNAL (e.g. talking) = 1, the other listens; both roles pooled")
     parser.add_argument("--out", required=True, metavar="RULES.json", help="rules file to write")
 
 
@@ -76,7 +82,10 @@ def main(args: argparse.Namespace) -> int:
                 if st.fps is not None:
                     fps_seen.add(st.fps)
                 sp, li = st.people[args.speaker], st.people[args.listener]
-                tx = build_transactions(sp, li, names, args.offset, args.bag)
+                if args.turns:
+                    tx = turn_transactions(sp, li, names, args.turns, args.offset, args.bag)
+                else:
+                    tx = build_transactions(sp, li, names, args.offset, args.bag)
                 _log(f"{scenario}: {path}: {sp.shape[0]} frames, {len(names)} signals, "
                      f"fps {st.fps}, {len(tx)} transactions")
                 frames.append(tx)
@@ -102,6 +111,7 @@ def main(args: argparse.Namespace) -> int:
         "offset": args.offset, "bag": args.bag, "min_support": args.min_support,
         "min_confidence": args.min_confidence, "max_len": args.max_len or None,
         "algorithm": args.algorithm, "speaker": args.speaker, "listener": args.listener,
+        "turns": args.turns,
         "fps": sorted(fps_seen)[0] if len(fps_seen) == 1 else None,
         "signal_names": list(names or ()), "inputs": inputs, "mlxtend": mlxtend.__version__,
     }
