@@ -130,3 +130,30 @@ def test_identities_through_contact_in_the_simulator(scenario):
     assert all(len(v) == 1 for v in who.values()), who
     assert who[0] != who[1]
     assert merged > 0  # the contact did merge the regions
+
+
+def test_model_behind_a_long_still_person_follows_the_lighting_drift():
+    """Constructed images: the room brightens by 12% while a block stands still over one patch for
+    150 frames; when it leaves, the uncovered patch is background, not a speckled highlight."""
+    yy, xx = np.mgrid[0:60, 0:80]
+    room = np.stack([100 + 30 * np.sin(xx / 11.0), 120 + 20 * np.cos(yy / 7.0), 140 + 0 * xx], -1)
+    rng = np.random.default_rng(2)
+    patch = (slice(15, 45), slice(30, 50))
+
+    def frame(gain: float, block: bool) -> np.ndarray:
+        img = room * gain
+        if block:
+            img[patch] = (40, 40, 200)
+        return np.clip(img + rng.normal(0, 2, img.shape), 0, 255).astype(np.uint8)
+
+    model = HorprasertBackground().fit([frame(1.0, False) for _ in range(20)])
+    gains = np.linspace(1.0, 1.12, 150)
+    for g in gains:
+        labels = model.apply_update(frame(g, True))
+        assert np.mean(labels[patch] == FOREGROUND) > 0.95
+    after = model.apply(frame(gains[-1], False))
+    assert np.mean(after[patch] == 0) > 0.95  # BACKGROUND
+    assert np.mean(after == FOREGROUND) < 0.01
+    # The patch's expected colour moved with the room (the rest adapts at learning_rate too).
+    ratio = model.mean_[patch].mean() / room[patch].mean()
+    assert ratio == pytest.approx(1.12, abs=0.02)
