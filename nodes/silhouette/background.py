@@ -197,7 +197,7 @@ class HorprasertBackground:
         self.absorb_k = absorb_k
         self.absorb_frames_: int = 0
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
-        self._still_ref: np.ndarray | None = None  # (H * W, 3) float32 mean colour of that run
+        self._still_ref: np.ndarray | None = None  # (3, H * W) float32 mean colour of that run
         self._last_alpha: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its alpha) of the last apply
         self.max_threshold_samples = max_threshold_samples
         self.random_state = random_state
@@ -266,7 +266,7 @@ class HorprasertBackground:
             self.absorb_frames_ = int(self.absorb_frames)
         self._last_alpha = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
-        self._still_ref = np.zeros((self._mu[0].size, 3), np.float32)
+        self._still_ref = np.zeros((3, self._mu[0].size), np.float32)
         self.a_ = None
         self._refresh_colour_terms(spread_changed=True)
 
@@ -451,26 +451,32 @@ class HorprasertBackground:
         there is no such support yet; it is peeled from its rim inwards, frame by frame.
         """
         fg = labels == FOREGROUND
-        still, ref = self._still.reshape(-1), self._still_ref
-        # Runs only live on foreground pixels (a few percent of the frame): work on those alone.
+        still = self._still.reshape(-1)
+        # Runs only live on foreground pixels (a few percent of the frame): work on those alone,
+        # one flat channel plane at a time (1-D gathers and scatters are the cheap ones).
         idx = np.flatnonzero(fg)
         prev = still[idx]
         still.fill(0)
         if idx.size == 0:
             return False
-        obs = frame.reshape(-1, 3)[idx].astype(np.float32)  # (K, 3)
-        run = ref[idx]
-        dev = (np.abs(obs - run) * self._inv_s.reshape(3, -1)[:, idx].T).max(axis=1)
+        px = np.take(frame.reshape(-1, 3), idx, axis=0)  # (K, 3) uint8
+        obs = [px[:, c].astype(np.float32) for c in range(3)]
+        refs = [np.take(self._still_ref[c], idx) for c in range(3)]
+        dev = np.abs(obs[0] - refs[0]) * np.take(self._inv_s[0].reshape(-1), idx)
+        for c in (1, 2):
+            np.maximum(dev, np.abs(obs[c] - refs[c]) * np.take(self._inv_s[c].reshape(-1), idx), out=dev)
         n = np.where((prev > 0) & (dev <= self.absorb_k), prev + 1, 1).astype(np.uint16)
         still[idx] = n
         # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
-        run += (obs - run) / n[:, None].astype(np.float32)
-        ref[idx] = run
+        inv_n = 1.0 / n.astype(np.float32)
+        for c in range(3):
+            refs[c] += (obs[c] - refs[c]) * inv_n
+            self._still_ref[c][idx] = refs[c]
         ripe = n >= self.absorb_frames_
         if not ripe.any():
             return False
         ys, xs = np.divmod(idx[ripe], self.shape[1])
-        run = run[ripe].T  # (3, K') the runs' mean colours
+        run = np.stack([r[ripe] for r in refs])  # (3, K') the runs' mean colours
         # The surround is a local average: computed at 1/4 resolution (16x fewer pixels) and
         # read at the candidates only, as it only has to be smooth.
         h, w = self.shape
