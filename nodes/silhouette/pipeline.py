@@ -125,7 +125,8 @@ class SilhouetteExtractor:
         self._index += 1
         if not self.subtractor.ready:
             return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], classes, False)
-        mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, self.min_area)
+        # min_area 0: the tracker drops regions below min_area in its own labelling pass
+        mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, 0)
         labels, people = self.tracker.update(mask)
         return FrameResult(index, labels, [self._with_spline(labels, p) for p in people], classes, True)
 

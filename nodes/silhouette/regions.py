@@ -201,7 +201,11 @@ class PersonTracker:
             if ax1 > ax0 and ay1 > ay0:
                 sub = comp[ay0:ay1, ax0:ax1][t.crop[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0]]
                 counts[i] = np.bincount(sub, minlength=n)
-        counts[:, 0] = 0
+        # regions below min_area are no one's: as if the clean-up had removed them (the pipeline
+        # leaves that to this one labelling pass instead of labelling the mask twice)
+        small = stats[:, cv2.CC_STAT_AREA] < self.min_area
+        small[0] = True
+        counts[:, small] = 0
         frac_track = counts / np.maximum([t.area for t in tracks], 1)[:, None] if tracks else counts.astype(float)
         region_area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
 
