@@ -177,3 +177,42 @@ def test_person_record_and_errors():
         tracker.update(np.zeros((4, 4, 3), bool))
     with pytest.raises(ValueError, match="min_area"):
         PersonTracker(min_area=0)
+
+
+def test_newcomer_emerging_beside_a_tracked_person_gets_their_own_id():
+    """Someone who stood still through the background's training frames is not foreground; when
+    they start to move they emerge already touching the person beside them, a few columns a
+    frame. They become a new person and the tracked one keeps id and position (no swap)."""
+    tracker = PersonTracker(min_area=100)
+    b_x, a_x = 200.0, 165.0
+    split_at = None
+    for k in range(60):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, b_x, 120)
+        if k >= 30:
+            a = np.zeros((H, W), np.uint8)
+            x = a_x if k < 36 else a_x - 4.5 * (k - 35)
+            draw_person(a, x, 140)
+            a[:, : max(0, int(185 - 12 * (k - 29)))] = 0  # emerging column by column
+            m |= a
+        labels, people = tracker.update(m.astype(bool))
+        b = next(p for p in people if p.id == 0)
+        assert abs(b.centroid[0] - b_x) < 6, (k, b.centroid)
+        if len(people) == 2 and split_at is None:
+            split_at = k
+        if split_at is not None:
+            assert len(people) == 2, k
+            newcomer = next(p for p in people if p.id != 0)
+            assert newcomer.centroid[0] < b_x - 20, (k, newcomer)
+    assert split_at is not None and split_at <= 36
+    assert (labels[150, 60:100] == newcomer.id + 1).any()  # A, walked away, is labelled A
+
+
+def test_person_walking_towards_the_camera_is_not_split():
+    """A person growing steadily (coming closer) stays one person."""
+    tracker = PersonTracker(min_area=100)
+    for k in range(60):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 160, 90 + 1.5 * k, arm=20 if k % 20 < 10 else 0)
+        _, people = tracker.update(m.astype(bool))
+        assert [p.id for p in people] == [0], k

@@ -22,6 +22,13 @@ from scipy.optimize import linear_sum_assignment
 LEFT = "left"
 RIGHT = "right"
 _INFEASIBLE = 1e6
+#: newcomer check (see PersonTracker): frames a person must have been seen; growth past the usual
+#: area that keeps their template; frames it is kept before the new size is accepted; the rate of
+#: the usual area's running mean per frame
+NEWCOMER_MIN_AGE = 25
+NEWCOMER_FREEZE = 1.3
+NEWCOMER_PATIENCE = 10
+_USUAL_AREA_RATE = 0.2
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,6 +113,9 @@ class _Track:
     height: float  # template height, pixels
     offset: np.ndarray  # (2,) template centroid - origin
     missed: int = 0
+    seen: int = 0  # frames this person was observed in
+    usual_area: float = 0.0  # running mean of the template area (newcomer check)
+    frozen: int = 0  # consecutive frames the template was kept through a growth (newcomer check)
 
     def predicted_centroid(self) -> np.ndarray:
         return self.centroid + self.velocity
@@ -139,6 +149,15 @@ class PersonTracker:
     min_overlap : fraction of a person's predicted pixels that must fall in a region for the
         person to claim it; a region claimed by two or more people is a merge and is split.
     velocity_smoothing : exponential smoothing factor of the per-frame velocity (0 = last step).
+    newcomer_growth : someone who stood still through the background model's training frames is
+        part of the background, and when they move they appear already touching their neighbour,
+        in that neighbour's region. So, for an established person (seen ``NEWCOMER_MIN_AGE``
+        frames, clear of the image border): a region ``newcomer_growth`` times their usual area
+        or more is checked for a newcomer, and the part further than ``newcomer_margin`` person
+        heights from their predicted mask, if it is at least ``newcomer_min_frac`` of their usual
+        area, is split off as a new person. Their template is not updated from a region grown past
+        ``NEWCOMER_FREEZE`` times the usual area, so that it keeps their own shape while the
+        newcomer emerges (0 disables all of this).
     """
 
     def __init__(
@@ -149,6 +168,9 @@ class PersonTracker:
         size_weight: float = 0.5,
         min_overlap: float = 0.2,
         velocity_smoothing: float = 0.5,
+        newcomer_growth: float = 1.6,
+        newcomer_margin: float = 0.1,
+        newcomer_min_frac: float = 0.4,
     ) -> None:
         if min_area < 1:
             raise ValueError(f"min_area must be >= 1 pixel, got {min_area}")
@@ -166,6 +188,12 @@ class PersonTracker:
         self.size_weight = size_weight
         self.min_overlap = min_overlap
         self.velocity_smoothing = velocity_smoothing
+        if newcomer_growth < 0 or newcomer_margin < 0 or newcomer_min_frac <= 0:
+            raise ValueError(f"newcomer_growth={newcomer_growth} and newcomer_margin={newcomer_margin} must be "
+                             f">= 0, newcomer_min_frac={newcomer_min_frac} > 0")
+        self.newcomer_growth = newcomer_growth
+        self.newcomer_margin = newcomer_margin
+        self.newcomer_min_frac = newcomer_min_frac
         self.reset()
 
     def reset(self) -> None:
@@ -245,7 +273,15 @@ class PersonTracker:
             for a, b in zip(rows, cols):
                 if cost[a, b] < _INFEASIBLE:
                     r = free_r[b]
-                    assigned[free_t[a]] = (*self._region_crop(comp, stats, r), False)
+                    split = None
+                    if self._established(tracks[free_t[a]], w_img, h_img) and \
+                            region_area[r] >= self.newcomer_growth * tracks[free_t[a]].usual_area:
+                        split = self._split_newcomer(comp, stats, r, tracks[free_t[a]])
+                    if split is None:
+                        assigned[free_t[a]] = (*self._region_crop(comp, stats, r), False)
+                    else:
+                        assigned[free_t[a]] = (*split[0], True)
+                        fresh.append(split[1])
                     used_regions.add(r)
 
         # 3. Left-over regions: a fragment of an assigned person (mostly inside their predicted
@@ -278,7 +314,13 @@ class PersonTracker:
                     alive.append(t)
                 continue
             crop, x0, y0, merged = piece
-            person = self._observe(t, crop, x0, y0, merged)
+            # a region grown well past the person's usual size may hold an emerging newcomer:
+            # keep the template of their own shape until it is split off or the size settles
+            grown = not merged and self._established(t, w_img, h_img) and crop.sum() > NEWCOMER_FREEZE * t.usual_area
+            t.frozen = t.frozen + 1 if grown else 0
+            if t.frozen > NEWCOMER_PATIENCE:  # no newcomer after all: they did change size
+                t.frozen, t.usual_area = 0, float(crop.sum())
+            person = self._observe(t, crop, x0, y0, merged, keep_template=t.frozen > 0)
             people.append(person)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
@@ -329,19 +371,48 @@ class PersonTracker:
         pieces: dict[int, tuple[np.ndarray, int, int]] = {}
         for k in range(len(claim)):
             part = region & (owner == k)
-            if not part.any():
-                continue
-            ys, xs = np.nonzero(part)
-            y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
-            pieces[k] = (part[y0:y1, x0:x1], x + int(x0), y + int(y0))
+            if part.any():
+                pieces[k] = _crop_box(part, x, y)
         return pieces
 
-    def _observe(self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool) -> Person:
+    def _established(self, t: _Track, w_img: int, h_img: int) -> bool:
+        """Whether track t's usual size is known well enough for the newcomer check: seen long
+        enough, and its template clear of the image border (someone walking in grows fast)."""
+        if not self.newcomer_growth or t.seen < NEWCOMER_MIN_AGE:
+            return False
+        (x0, y0), (h, w) = t.origin, t.crop.shape
+        return x0 > 1 and y0 > 1 and x0 + w < w_img - 1 and y0 + h < h_img - 1
+
+    def _split_newcomer(self, comp: np.ndarray, stats: np.ndarray, r: int, t: _Track
+                        ) -> tuple[tuple[np.ndarray, int, int], tuple[np.ndarray, int, int]] | None:
+        """Region r, grown well past track t's usual area: (t's piece, the newcomer's piece), each
+        (crop, x0, y0), or None when what lies outside t's predicted mask is too small to be a
+        person (an arm stretched out, a step forward)."""
+        x, y, w, h = (int(v) for v in stats[r, :4])
+        region = comp[y : y + h, x : x + w] == r
+        pred = _paste(t, x, y, h, w).astype(np.uint8)
+        outside = cv2.distanceTransform(1 - pred, cv2.DIST_L2, 5)
+        far = (region & (outside > self.newcomer_margin * t.height)).view(np.uint8)
+        n, comp_far, st, _ = cv2.connectedComponentsWithStats(far, connectivity=8)
+        if n < 2:
+            return None
+        k = 1 + int(np.argmax(st[1:, cv2.CC_STAT_AREA]))
+        if st[k, cv2.CC_STAT_AREA] < max(self.min_area, self.newcomer_min_frac * t.usual_area):
+            return None
+        new = comp_far == k
+        mine = region & ~new
+        if not mine.any():
+            return None
+        return _crop_box(mine, x, y), _crop_box(new, x, y)
+
+    def _observe(self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool,
+                 keep_template: bool = False) -> Person:
         ys, xs = np.nonzero(crop)
         c = np.array([xs.mean() + x0, ys.mean() + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
         # the split is uncertain) says little about where they are: keep the prediction then.
-        trusted = not merged or xs.size >= 0.5 * t.area
+        # A grown region kept out of the template: its centroid is pulled by what joined it.
+        trusted = (not merged and not keep_template) or (merged and xs.size >= 0.5 * t.area)
         s = self.velocity_smoothing
         if trusted:
             if t.missed == 0:
@@ -349,9 +420,11 @@ class PersonTracker:
             t.centroid = c
         else:
             t.centroid = t.predicted_centroid()
-        if not merged:
+        if not merged and not keep_template:
             t.crop, t.origin, t.offset = crop, np.array([x0, y0], np.int64), c - np.array([x0, y0])
             t.area, t.height = int(xs.size), float(crop.shape[0])
+            t.usual_area = t.area if t.seen == 0 else t.usual_area + _USUAL_AREA_RATE * (t.area - t.usual_area)
+        t.seen += 1
         t.missed = 0
         return Person(
             id=t.id,
@@ -362,6 +435,13 @@ class PersonTracker:
             height=float(crop.shape[0]),
             merged=merged,
         )
+
+
+def _crop_box(part: np.ndarray, x: int, y: int) -> tuple[np.ndarray, int, int]:
+    """A non-empty mask (h, w) placed at (x, y) -> (its bbox crop, x0, y0)."""
+    ys, xs = np.nonzero(part)
+    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
+    return part[y0:y1, x0:x1], x + int(x0), y + int(y0)
 
 
 def _union(a: tuple[np.ndarray, int, int], b: tuple[np.ndarray, int, int]) -> tuple[np.ndarray, int, int]:
