@@ -6,11 +6,16 @@ One frame of the annealed filter (paper sect. 4, with the adaptive schedule of s
     for layer m = 1..M:
         l_i   = log w(Z, x_i)                                       observation model
         beta_m: the exponent whose weights pi_i ~ exp(beta_m l_i) give the survival rate
-                D = 1 / (N sum pi_i^2) = alpha      (eq. 11, solved by bisection on log beta)
+                D = 1 / (N sum pi_i^2) = alpha      (eq. 11, solved by a bracketing search on log beta)
         estimate (last layer): weighted mean of the particles, best particle, ESS = N D
         resample N particles by pi (systematic)
-        diffuse (not after the last layer): Gaussian noise per DOF, std proportional to the
-                weighted spread of the set, shrinking by ``shrink`` per layer; clip_to_limits
+        diffuse (not after the last layer): Gaussian noise per DOF, std = ``diffusion`` x the
+                spread of the resampled set, clipped to [min_std, max_std], x ``shrink``^m;
+                clip_to_limits
+
+With the diffusion proportional to the set's spread (Deutscher & Reid 2005), the search narrows by
+itself along the DOFs the observation pins down and stays broad along those it cannot see (depth
+and heading from one camera), so the weighted mean averages over them instead of following noise.
 
 Angles in radians, positions in metres (``body.pose``). The yaw is averaged on the circle.
 """
@@ -67,14 +72,19 @@ def survival_rate(ll: np.ndarray, beta: float) -> float:
     return float(1.0 / (len(ll) * np.dot(w, w)))
 
 
-def choose_beta(ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, iters: int = 40) -> float:
+def choose_beta(ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, rounds: int = 5,
+                grid: int = 16) -> float:
     """The exponent beta whose weights exp(beta * ll) have survival rate ``survival``.
 
-    D(beta) falls monotonically from 1 (beta = 0) towards 1/N, so bisection on log beta finds it;
-    when the log-likelihoods are all equal every beta gives D = 1 and ``hi`` is returned.
+    D(beta) falls monotonically from 1 (beta = 0) towards 1/N, so a bracketing search on log beta
+    finds it: each of ``rounds`` rounds evaluates D at ``grid`` points of the bracket at once (one
+    (grid, N) array) and keeps the cell where D crosses ``survival``; 5 rounds of 16 pin log beta
+    to about 1e-5. When the log-likelihoods are all equal every beta gives D = 1 and ``hi`` is
+    returned.
     """
     if not 0 < survival < 1:
         raise ValueError(f"survival={survival!r}: the target survival rate must lie in (0, 1)")
+    ll = np.asarray(ll, dtype=np.float64)
     spread = float(ll.max() - ll.min())
     if not np.isfinite(spread) or spread <= 0:
         return hi
@@ -82,13 +92,14 @@ def choose_beta(ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1
         return lo
     if survival_rate(ll, hi) >= survival:
         return hi
+    d = ll - ll.max()
     a, b = np.log(lo), np.log(hi)
-    for _ in range(iters):
-        m = 0.5 * (a + b)
-        if survival_rate(ll, np.exp(m)) > survival:
-            a = m
-        else:
-            b = m
+    for _ in range(rounds):
+        logb = np.linspace(a, b, grid)
+        w = np.exp(np.exp(logb)[:, None] * d)                      # (grid, N)
+        D = w.sum(axis=1) ** 2 / (len(d) * (w * w).sum(axis=1))     # 1 / (N sum pi^2)
+        k = int(np.clip(np.searchsorted(-D, -survival), 1, grid - 1))   # D[k-1] > survival >= D[k]
+        a, b = logb[k - 1], logb[k]
     return float(np.exp(0.5 * (a + b)))
 
 
@@ -133,8 +144,8 @@ class AnnealedParticleFilter:
         diffusion: noise std as a fraction of the weighted particle spread after resampling.
         shrink: factor by which the diffusion shrinks each layer (Deutscher's alpha_m schedule).
         max_std: (DOF,) cap on the diffusion std (metres / radians); default 0.1 m and 0.35 rad.
-        min_std: (DOF,) floor of the diffusion std before shrinking (default ``MIN_STD``); a floor
-            near ``max_std`` keeps the search radius from collapsing with the particle set.
+        min_std: (DOF,) floor of the diffusion std before shrinking (default ``MIN_STD``); the
+            tracker keeps it low so that the spread of the set, not the floor, sets the search.
         seed: seed or Generator of the filter's random numbers.
     """
 
@@ -162,13 +173,18 @@ class AnnealedParticleFilter:
         self.particles = initial_set(particles, self.n_particles, self.rng)
 
     def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
-             n_layers: int | None = None) -> Estimate:
+             n_layers: int | None = None, min_std: np.ndarray | None = None,
+             max_std: np.ndarray | None = None) -> Estimate:
         """Run one frame: predict, then ``n_layers`` (default ``self.n_layers``) annealing layers.
 
         Args:
             log_likelihood: (N, DOF) -> (N,) log w(Z, x) of this frame's observation.
             predict_fn: (N, DOF), rng -> (N, DOF) dynamics applied to last frame's particles.
+            min_std, max_std: (DOF,) diffusion bounds of this step only (default: the filter's);
+                a first search from a rough initial guess needs a wider one.
         """
+        lo = self.min_std if min_std is None else np.asarray(min_std)
+        hi = self.max_std if max_std is None else np.asarray(max_std)
         if self.particles is None:
             raise RuntimeError("AnnealedParticleFilter.step before initialise(particles)")
         M = self.n_layers if n_layers is None else int(n_layers)
@@ -191,7 +207,7 @@ class AnnealedParticleFilter:
             P = P[idx]
             if m < M - 1:
                 std = np.clip(self.diffusion * weighted_std(P, np.full(len(P), 1.0 / len(P))),
-                              self.min_std, self.max_std) * self.shrink ** m
+                              lo, hi) * self.shrink ** m
                 P = clip_to_limits(P + self.rng.normal(size=P.shape) * std)
         self.particles = P
         return Estimate(mean, est_best, ess, est_ll, P, betas, surv, n_evals)
@@ -221,8 +237,10 @@ class ParticleFilter:
         self.particles = initial_set(particles, self.n_particles, self.rng)
 
     def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
-             n_layers: int | None = None) -> Estimate:
-        """Predict, weight by exp(log-likelihood), estimate, resample."""
+             n_layers: int | None = None, min_std: np.ndarray | None = None,
+             max_std: np.ndarray | None = None) -> Estimate:
+        """Predict, weight by exp(log-likelihood), estimate, resample (one layer: ``n_layers`` and
+        the diffusion bounds are accepted for the annealed filter's interface and unused)."""
         if self.particles is None:
             raise RuntimeError("ParticleFilter.step before initialise(particles)")
         P = self.particles

@@ -58,6 +58,10 @@ def initial_particles(bbox: tuple[int, int, int, int], side: str, camera: Camera
         raise ValueError(f"side={side!r}: expected one of {sorted(SIDE_YAW)}")
     g, height = place_from_bbox(bbox, camera, base)
     dims = base.scaled(height)
+    # The bbox's bottom row is the sole of the foot nearest the camera, not the pelvis: the root
+    # stands about half a hip width plus an ankle radius further along the line of sight.
+    away = np.array([g[0] - camera.centre[0], 0.0, g[2] - camera.centre[2]])
+    g = g + away / max(float(np.linalg.norm(away)), 1e-9) * (dims.hip_width / 2 + dims.r_ankle)
     P0 = neutral_pose(dims, x=float(g[0]), z=float(g[2]), yaw=SIDE_YAW[side])
     P = P0 + rng.normal(size=(n, DOF)) * INIT_STD * spread
     P[0] = P0

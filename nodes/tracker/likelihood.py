@@ -11,7 +11,9 @@ projected into the image, the two "model -> image" costs are
 and the weighting function is ``w(Z, X) = exp(-(S_r + S_e))``. A third, "image -> model" cost is
 added because the two terms above are satisfied by a body whose limbs hide inside the torso:
 ``S_c(X)`` is the fraction of M foreground pixels (sampled once per frame) that no projected cone
-covers. The log-likelihood returned is ``-(w_sil S_r + w_edge S_e + w_cover S_c) * gain``.
+covers. A fourth, ``S_g``, asks a foot to touch the ground plane (``ConeLikelihood``), which with
+the calibrated camera ties the depth to the image row of the feet. The log-likelihood returned is
+``-(w_sil S_r + w_edge S_e + w_cover S_c + w_ground S_g) * gain``.
 
 Everything is vectorised over N particles x points: one forward kinematics call, one projection
 of the 23 anchor points, broadcast sample-point arithmetic in float32 and one flat gather per map.
@@ -26,7 +28,11 @@ import numpy as np
 
 from body.camera import Camera
 from body.kinematics import frames
-from body.skeleton import DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
+from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
+
+#: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
+#: (``r_toe`` above it)
+_FOOT_ANCHORS = np.array([ANCHOR_INDEX[n] for n in ("l_ankle", "r_ankle", "l_toe", "r_toe")])
 
 
 @dataclass(frozen=True)
@@ -121,16 +127,23 @@ class ConeLikelihood:
         per_side: outline points per long side of each cone (``cone_outline_points``).
         w_sil, w_edge, w_cover: weights of S_r, S_e, S_c.
         gain: overall scale of the cost (sharpness before annealing; the APF's beta rescales it).
+        w_ground, ground_sigma: weight and width (metres) of the ground-contact term
+            ``S_g = min(1, (h / ground_sigma)^2)``, h the height of the lowest sole above y = 0.
+            One camera cannot see depth; a foot on the ground plane fixes it (the image row of
+            the foot and the calibrated camera give the distance).
     """
 
     def __init__(self, camera: Camera, dims: BodyDims = DEFAULT_DIMS, n_along: int = 4, n_across: int = 3,
                  per_side: int = 4, w_sil: float = 1.0, w_edge: float = 1.0, w_cover: float = 1.0,
-                 gain: float = 1.0) -> None:
+                 gain: float = 1.0, w_ground: float = 1.0, ground_sigma: float = 0.05) -> None:
         self.camera = camera
         self.dims = dims
         self.radii = dims.segment_radii().astype(np.float32)          # (S, 2)
         self.w = (float(w_sil), float(w_edge), float(w_cover))
         self.gain = float(gain)
+        self.w_ground = float(w_ground)
+        self.ground_sigma = float(ground_sigma)
+        self.sole_offset = np.array([dims.ankle_height] * 2 + [dims.r_toe] * 2, np.float32)
         # (s, t) of each sample: s along the axis, t across in units of the half-width.
         s_in = np.repeat((np.arange(n_along) + 0.5) / n_along, n_across)
         t_in = np.tile((2 * np.arange(n_across) + 1) / n_across - 1.0, n_along)
@@ -148,7 +161,14 @@ class ConeLikelihood:
     def project(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, 28) poses -> cone end centres (N, S, 2, 2) px, half-widths (N, S, 2) px, depth ok
         (N,) bool (every anchor in front of the camera)."""
-        pts = frames(P, self.dims)[0].astype(np.float32)              # (N, A, 3)
+        return self._project(frames(P, self.dims)[0].astype(np.float32))
+
+    def ground_cost(self, pts: np.ndarray) -> np.ndarray:
+        """(N, A, 3) anchor points, metres -> (N,) S_g in [0, 1] (see the class docstring)."""
+        h = (pts[:, _FOOT_ANCHORS, 1] - self.sole_offset).min(axis=1)
+        return np.minimum((h / np.float32(self.ground_sigma)) ** 2, np.float32(1.0))
+
+    def _project(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         Xc = pts @ self.R.T + self.tc
         z = Xc[..., 2]
         ok = (z > 0.05).all(axis=1)
@@ -214,10 +234,16 @@ class ConeLikelihood:
 
     def terms(self, P: np.ndarray, obs: Observation) -> np.ndarray:
         """(N, 28) -> (N, 3) costs S_r, S_e, S_c, each in [0, 1]; poses behind the camera get 1."""
+        return self.evaluate(P, obs)[0]
+
+    def evaluate(self, P: np.ndarray, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 28) -> image costs (N, 3) S_r, S_e, S_c and ground costs (N,) S_g from one forward
+        kinematics (``combine`` turns them into log-likelihoods)."""
         P = np.asarray(P, dtype=np.float64)
         if P.ndim != 2 or P.shape[1] != 28:
             raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
-        c, rho, ok = self.project(P)
+        pts = frames(P, self.dims)[0].astype(np.float32)
+        c, rho, ok = self._project(pts)
         u, v = self._points_uv(c, rho)
         W, H = obs.width, obs.height
         k = self.n_in
@@ -227,11 +253,16 @@ class ConeLikelihood:
         out = np.stack([S_r, S_e, S_c], axis=1)
         out[~ok] = 1.0
         self.n_evals += P.shape[0]
-        return out
+        g = self.ground_cost(pts) if self.w_ground else np.zeros_like(S_r)
+        return out, g
 
     def __call__(self, P: np.ndarray, obs: Observation) -> np.ndarray:
-        """(N, 28) poses -> (N,) float64 log-likelihoods ``-gain * (w . [S_r, S_e, S_c])``."""
-        return -self.gain * (self.terms(P, obs) @ np.asarray(self.w, np.float32)).astype(np.float64)
+        """(N, 28) poses -> (N,) float64 log-likelihoods ``-gain * (w . [S_r, S_e, S_c] + w_ground S_g)``."""
+        return self.combine(*self.evaluate(P, obs))
+
+    def combine(self, terms: np.ndarray, ground: np.ndarray) -> np.ndarray:
+        """Image costs (N, 3) and ground costs (N,) of ``evaluate`` -> (N,) float64 log-likelihoods."""
+        return -self.gain * (terms @ np.asarray(self.w, np.float32) + self.w_ground * ground).astype(np.float64)
 
 
 __all__ = ["Observation", "edge_map", "make_observation", "ConeLikelihood", "N_SEGMENTS"]

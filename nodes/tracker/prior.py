@@ -32,8 +32,11 @@ from body.pose import DOF, YAW, clip_to_limits, wrap_angle
 VERSION = 1
 #: joint angles modelled by PCA + HMM: root pitch and roll, torso, head, arms, legs
 ANGLE_DOFS: np.ndarray = np.arange(4, DOF)
-#: floor of the random walk per frame: 5 mm for positions, 0.01 rad for angles
+#: floor of the random walk per frame: 5 mm for positions, 0.01 rad for angles, 0.02 rad (about
+#: 30 degrees per second at 25 fps) for the heading: training scenes where nobody turns must not
+#: stop the tracker from following a person who does
 RW_FLOOR = np.where(np.arange(DOF) < 3, 0.005, 0.01)
+RW_FLOOR[YAW] = 0.02
 #: simulator scenarios and seeds of the default prior (the benches use seeds 0-9: kept apart)
 DEFAULT_TRAINING = tuple(f"sim:{n}?seed={s}" for n in ("handshake", "high_five", "push", "pull", "wave",
                                                        "conversation") for s in (100, 101, 102))
@@ -200,7 +203,16 @@ class PriorPredictor:
         self.prior = prior
         self.alpha = prior.startprob.copy()
         self._chol = np.linalg.cholesky(prior.covars)
-        self.std = prior.rw_std * prior.rw_scale
+        # Mahalanobis distances of all states as matmuls (``log_prior``):
+        # (y - mu_k)' S_k^-1 (y - mu_k) = vec(y y') . vec(S_k^-1) - 2 y . S_k^-1 mu_k + mu_k' S_k^-1 mu_k
+        Sinv = np.linalg.inv(prior.covars)                                        # (K, d, d)
+        d = Sinv.shape[1]
+        self._q2 = Sinv.reshape(len(Sinv), d * d).T                               # (d*d, K)
+        Smu = np.einsum("kij,kj->ki", Sinv, prior.means)                          # (K, d)
+        self._q1 = -2 * Smu.T                                                     # (d, K)
+        self._q0 = np.einsum("ki,ki->k", Smu, prior.means)                        # (K,)
+        self._logdet = 2 * np.log(np.diagonal(self._chol, axis1=1, axis2=2)).sum(-1)
+        self.std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale
 
     def reset(self) -> None:
         self.alpha = self.prior.startprob.copy()
@@ -216,6 +228,25 @@ class PriorPredictor:
     def predicted_states(self) -> np.ndarray:
         """(K,) predicted state mixture of the next frame, alpha_t A."""
         return self.alpha @ self.prior.transmat
+
+    def log_prior(self, P: np.ndarray, resid_std: float = 0.15, uniform: float = 0.5) -> np.ndarray:
+        """(N, 28) poses -> (N,) log density of their joint angles under the prior, per angle DOF.
+
+        ``log p(x) = log sum_k w_k N(y | mu_k, S_k) + log N(r | 0, resid_std^2 I)`` with y the PCA
+        coefficients and r the residual off the PCA subspace (radians); the state weights w are
+        the predicted mixture ``alpha_t A`` blended with ``uniform`` of a flat one (a wrong state
+        estimate must not forbid a pose). Divided by ``len(ANGLE_DOFS)``; constants dropped.
+        This is the pose prior p(x_t | x_{t-1}) of the posterior the annealing layers sharpen.
+        """
+        A = np.asarray(P, dtype=np.float64)[:, ANGLE_DOFS]
+        Y = (A - self.prior.pca_mean) @ self.prior.components.T               # (N, d)
+        R = A - (Y @ self.prior.components + self.prior.pca_mean)
+        maha = (Y[:, :, None] * Y[:, None, :]).reshape(len(Y), -1) @ self._q2 + Y @ self._q1 + self._q0
+        w = (1 - uniform) * self.predicted_states() + uniform / len(self._logdet)
+        lk = np.log(np.maximum(w, 1e-300)) - 0.5 * (maha + self._logdet)          # (N, K)
+        m = lk.max(axis=1)
+        lse = m + np.log(np.exp(lk - m[:, None]).sum(axis=1))
+        return (lse - 0.5 * np.einsum("ni,ni->n", R, R) / resid_std ** 2) / len(ANGLE_DOFS)
 
     def __call__(self, P: np.ndarray, rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
         """Predict particles (N, 28) -> (N, 28); ``scale`` widens the random walk (re-initialisation)."""

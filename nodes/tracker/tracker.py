@@ -3,13 +3,19 @@
 Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006):
 
 1. maps of the person's mask and the frame (``likelihood.make_observation``);
-2. no track yet, or the track was lost: particles from the silhouette (``init``) and a wider
-   first search (``init_layers`` layers with the prior's random walk x ``init_spread``);
-3. otherwise ``predict_fn`` = the prior (HMM mixture + random walk) and ``n_layers`` layers;
-4. the annealed density is the posterior: image log-likelihood plus a Gaussian temporal term
-   ``-w_temporal / 2 * mean(((x - x_prev) / (c * rw_std))^2)`` around the previous estimate, which
-   keeps the search out of the silhouette's ambiguities (mirror-image limbs, depth);
-5. the estimate updates the HMM posterior and the lost detector.
+2. no track yet, or the track was lost: particles around the silhouette's guess (``init``: placed
+   from the bounding box, neutral pose, heading from the side of the frame, spread by
+   ``init_spread`` x ``INIT_STD``) and a longer first search (``init_layers`` layers, diffusion
+   bounded by [init_min, init_max] x that spread);
+3. otherwise ``predict_fn`` = the prior (HMM mixture + random walk; widened by ``predict_scale``
+   for the annealed filter) and ``n_layers`` layers;
+4. the annealed density is the posterior: the image log-likelihood (with its ground-contact term),
+   the prior's pose density ``w_prior * log p(x)`` (``PriorPredictor.log_prior``) and a Gaussian
+   temporal term ``-w_temporal / 2 * mean(((x - c) / s)^2)``: around the previous estimate with
+   s = ``temporal_sigma`` x the random walk's std, or, on a track's first frame, around the
+   silhouette's guess with s = its spread; it keeps the search out of the silhouette's
+   ambiguities (mirror-image limbs, depth, heading);
+5. the estimate (weighted mean of the last layer) updates the HMM posterior and the lost detector.
 """
 from __future__ import annotations
 
@@ -24,7 +30,7 @@ from body.pose import DOF, YAW, wrap_angle
 from body.skeleton import DEFAULT_DIMS, BodyDims
 
 from .apf import AnnealedParticleFilter, ParticleFilter
-from .init import LostDetector, bbox_from_mask, initial_particles
+from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
 from .likelihood import ConeLikelihood, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
@@ -70,17 +76,30 @@ class Tracker:
         n_layers, n_particles: annealing layers and particles per layer (Deutscher: 10 x 256).
         prior: learned MotionPrior, or None for a plain random walk.
         plain: use a plain particle filter of ``n_layers * n_particles`` particles instead (baseline).
-        w_temporal, temporal_sigma: weight and width (x rw_std) of the temporal term.
-        init_layers, init_spread: the wider first search.
+        w_temporal, temporal_sigma: weight and width (x the random walk's std) of the temporal term.
+        w_prior, resid_std: weight of the prior's pose density in the annealed density, and the
+            std (radians) of the joint angles off its PCA subspace (``PriorPredictor.log_prior``).
+        init_layers, init_spread: layers of the first search of a track and the spread of its
+            particles around the silhouette's guess (x ``init.INIT_STD``).
+        predict_scale: the annealed filter's prediction widens the random walk by this factor
+            (Deutscher: the first layer searches widest, the layers narrow it); the plain filter
+            predicts with the random walk itself.
+        apf_diffusion, apf_min, apf_max, apf_shrink: the annealed filter's diffusion: std =
+            ``apf_diffusion`` x the particle set's spread per DOF, clipped to [apf_min, apf_max] x
+            the random walk's std (the first search: [init_min, init_max] x its spread), x
+            ``apf_shrink`` per layer.
         dims: body dimensions (default: scaled to the stature measured at initialisation).
         seed: seed of all random numbers.
+        likelihood_kw: keyword arguments of ``ConeLikelihood``.
     """
 
     def __init__(self, camera: Camera, side: str = "left", n_layers: int = 10, n_particles: int = 256,
                  prior: MotionPrior | None = None, plain: bool = False, w_temporal: float = 1.0,
-                 temporal_sigma: float = 3.0, init_layers: int = 20, init_spread: float = 1.0,
-                 dims: BodyDims | None = None, seed: int = 0, likelihood_kw: dict | None = None,
-                 apf_min: float = 0.5, apf_max: float = 1.0, apf_shrink: float = 0.8) -> None:
+                 temporal_sigma: float = 3.0, w_prior: float = 1.0, resid_std: float = 0.15,
+                 init_layers: int = 20, init_spread: float = 0.5, predict_scale: float = 3.0,
+                 apf_diffusion: float = 0.5, apf_min: float = 0.05, apf_max: float = 3.0,
+                 apf_shrink: float = 1.0, init_min: float = 0.01, init_max: float = 1.0,
+                 dims: BodyDims | None = None, seed: int = 0, likelihood_kw: dict | None = None) -> None:
         self.camera = camera
         self.side = side
         self.n_layers = int(n_layers)
@@ -91,15 +110,19 @@ class Tracker:
             prior.predictor() if prior is not None else _RandomWalk(RW_FLOOR * 3.0))
         self.w_temporal = float(w_temporal)
         self.temporal_sigma = float(temporal_sigma)
+        self.w_prior = float(w_prior)
+        self.resid_std = float(resid_std)
         self.init_layers = int(init_layers)
         self.init_spread = float(init_spread)
+        self.predict_scale = float(predict_scale)
+        self.init_min, self.init_max = float(init_min), float(init_max)
         self.fixed_dims = dims
         self.dims: BodyDims = dims or DEFAULT_DIMS
         self.likelihood_kw = dict(likelihood_kw or {})
         self.likelihood = ConeLikelihood(camera, self.dims, **self.likelihood_kw)
         self.filter = (ParticleFilter(self.n_layers * self.n_particles, seed=self.rng) if self.plain else
                        AnnealedParticleFilter(self.n_layers, self.n_particles, seed=self.rng,
-                                              max_std=self.predictor.std * apf_max, diffusion=1.0,
+                                              max_std=self.predictor.std * apf_max, diffusion=apf_diffusion,
                                               min_std=self.predictor.std * apf_min, shrink=apf_shrink))
         self.lost_detector = LostDetector()
         self.prev: np.ndarray | None = None
@@ -115,13 +138,23 @@ class Tracker:
         self.predictor.reset()
         self.lost_detector.reset()
 
-    def _temporal(self, X: np.ndarray) -> np.ndarray:
-        if self.prev is None or not self.w_temporal:
+    def _temporal(self, X: np.ndarray, centre: np.ndarray | None = None,
+                  sig: np.ndarray | None = None) -> np.ndarray:
+        """Gaussian term around the previous estimate, or (first frame) around the initial guess
+        ``centre`` with its uncertainty ``sig``: the heading and depth barely show in one
+        silhouette, so without it the first search wanders along them."""
+        centre = self.prev if centre is None else centre
+        if centre is None or not self.w_temporal:
             return np.zeros(len(X))
-        sig = self.temporal_sigma * self.predictor.std
-        d = (X - self.prev) / sig
-        d[:, YAW] = wrap_angle(X[:, YAW] - self.prev[YAW]) / sig[YAW]
+        sig = self.temporal_sigma * self.predictor.std if sig is None else sig
+        d = (X - centre) / sig
+        d[:, YAW] = wrap_angle(X[:, YAW] - centre[YAW]) / sig[YAW]
         return -0.5 * self.w_temporal * (d * d).mean(axis=1)
+
+    def _pose_prior(self, X: np.ndarray) -> np.ndarray:
+        if not self.w_prior or not hasattr(self.predictor, "log_prior"):
+            return np.zeros(len(X))
+        return self.w_prior * self.predictor.log_prior(X, self.resid_std)
 
     def update(self, image: np.ndarray | None, mask: np.ndarray) -> TrackResult | None:
         """Track one frame. ``image`` (H, W[, 3]) uint8 or None; ``mask`` (H, W) bool of this
@@ -140,14 +173,21 @@ class Tracker:
             self.filter.initialise(P0)
             self.predictor.reset()
 
+        guess = P0[0] if start else None
+        wide = INIT_STD * self.init_spread if start else None
+
         def loglik(X: np.ndarray) -> np.ndarray:
-            return self.likelihood(X, obs) + self._temporal(X)
+            return self.likelihood(X, obs) + self._temporal(X, guess, wide) + self._pose_prior(X)
 
         if start:
-            est = self.filter.step(loglik, None, n_layers=self.init_layers)
+            est = self.filter.step(loglik, None, n_layers=self.init_layers, min_std=self.init_min * wide,
+                                   max_std=self.init_max * wide)
         else:
-            est = self.filter.step(loglik, self.predictor)
-        cost = float(self.likelihood.terms(est.best[None], obs).sum())
+            scale = 1.0 if self.plain else self.predict_scale
+            est = self.filter.step(loglik, lambda P, rng: self.predictor(P, rng, scale=scale))
+        terms, ground = self.likelihood.evaluate(est.best[None], obs)
+        cost = float(terms.sum())
+        image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
         self.prev = est.mean.copy()
         lost = self.lost_detector.update(cost)
@@ -155,7 +195,7 @@ class Tracker:
             self.reset()
         self.n_frames += 1
         return TrackResult(est.mean, est.best, forward_kinematics(est.mean, self.dims)[0].astype(np.float32),
-                           est.ess, float(self.likelihood(est.best[None], obs)[0]), cost, lost, start)
+                           est.ess, image_ll, cost, lost, start)
 
 
 def track_sequence(frames: Iterable[np.ndarray | None], masks: Iterable[np.ndarray], camera: Camera,
