@@ -59,7 +59,7 @@ def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> No
     meta = json.loads(str(z.pop("__meta__")))
     meta["version"] = 99
     np.savez(tmp_path / "old.npz", __meta__=np.array(json.dumps(meta)), **z)
-    with pytest.raises(ModelVersionError, match=r"old\.npz.*version 99.*reads version 1"):
+    with pytest.raises(ModelVersionError, match=r"old\.npz.*version 99.*reads version 2"):
         load_model(tmp_path / "old.npz")
     with pytest.raises(ValueError, match="holds a 'dual-hmm' model, expected 'listener'"):
         load_model(path, expected="listener")

@@ -2,25 +2,35 @@
 
 Training. Both people are expressed in the observed person's actor-centred frame
 (:mod:`nodes.responder.frames`), so the model does not depend on where the pair stands. Each
-person's local pose (14 joints x 3 = 42 numbers) is reduced by its own PCA keeping 95% of the
-energy (whitened): o_t (d_o,) for the observed person, p_t (d_p,) for the partner. The observed
-block also carries the person's ground velocity in their own frame (3 numbers, m/s, scaled by
-``velocity_weight``), which tells walking towards from standing. ONE Gaussian HMM (hmmlearn)
-is fitted to the concatenation x_t = [o_t, p_t], so the two people share one hidden state
-sequence and one transition matrix A (N x N)::
+person's own pose (14 joints x 3 = 42 numbers, in their own actor frame) is reduced by its own PCA
+keeping 95% of the energy (whitened). The observed block o_t is the observed person's PCA pose plus
+their ground velocity in their own frame (3 numbers, m/s, scaled by ``velocity_weight``), which
+tells walking towards from standing. The partner block p_t is the partner's placement in the
+observed frame (ground position x, z in metres; cos, sin of the relative heading), the partner's
+ground velocity (x, z, m/s, observed frame), all standardised, and the partner's PCA pose. ONE
+Gaussian HMM (hmmlearn, full covariances) emits the concatenation x_t = [o_t, p_t], so the two
+people share one hidden state sequence and one transition matrix A (N x N)::
 
     x_t | s_t = k  ~  N(mu_k, Sigma_k),   mu_k = [mu_o,k; mu_p,k],
     Sigma_k = [[S_oo,k, S_op,k], [S_po,k, S_pp,k]].
 
-With ``both_roles`` every training pair is used twice (A observed / B partner and the reverse).
+The states are fitted per interaction label (``TwoPersonTrajectory.label``): Baum-Welch on each
+label's sequences with N / (number of labels) states, joined into the one HMM with a
+block-diagonal A, start probabilities weighted by each label's share of the data and a small
+``leak`` towards the start distribution so that a change of interaction is followed. With
+``both_roles`` every training pair is used twice (A observed / B partner and the reverse).
 
 Generation, online (one frame at a time). Only the observed block is seen, so the state is
 filtered with the observed block's marginal Gaussians (forward algorithm, Rabiner eq. 19)::
 
-    alpha_t(k) ∝ [sum_j alpha_{t-1}(j) A_jk] N(o_t; mu_o,k, S_oo,k)
+    alpha_t(k) ∝ [sum_j alpha_{t-1}(j) A_jk] N(o_t; mu_o,k, S_oo,k)^w
 
-and the partner is the state-conditional Gaussian of the partner block given the observed block
-(Gaussian conditioning), mixed by the state posterior::
+with the evidence weight w = ``evidence_weight`` (< 1): successive frames are far from
+independent given the state and the full-covariance Gaussians are sharp, so with w = 1 the
+posterior snaps onto one interaction from the first few frames of standing, which look alike in
+every interaction; tempering keeps it spread until the interaction shows. The partner is the
+state-conditional Gaussian of the partner block given the observed block (Gaussian conditioning),
+mixed by the state posterior::
 
     E[p_t | o_t, s_t = k] = mu_p,k + S_po,k S_oo,k^{-1} (o_t - mu_o,k)
     p_t = sum_k alpha_t(k) E[p_t | o_t, k]                      (decode="filter")
@@ -29,8 +39,17 @@ and the partner is the state-conditional Gaussian of the partner block given the
 the last ``lag`` frames, started from the filtered posterior at t - lag, and the conditional mean
 of the best path's state at t: a hard, path-consistent state that changes less often.
 
-The partner's local pose is mapped back through the PCA and the observed person's frame to world
-joints (14, 3), metres.
+Placement. With ``placement="relative"`` the partner's ground position is the conditional mean
+above, frame by frame. With ``placement="tracked"`` (default) it is kept in the world by a Kalman
+filter: predicted with the conditional partner velocity (and its conditional covariance),
+corrected with the conditional position, whose covariance (the state mixture's moments of the
+conditional covariances S_pp - S_po S_oo^-1 S_op) is multiplied by ``inflation`` because the
+errors of successive frames are correlated. The partner keeps walking or stepping back where the
+observed person gives no cue, and snaps to the observed person where the state pins the
+position down (hands joined).
+
+The partner's own pose is mapped back through its PCA and placed with the placement and
+relative heading in the observed person's frame: world joints (14, 3), metres.
 """
 from __future__ import annotations
 
@@ -46,6 +65,10 @@ from body.trajectory import TwoPersonTrajectory
 from .frames import actor_frame, to_local, to_world
 
 DECODES = ("filter", "viterbi")
+#: the partner block: placement x, z (metres), cos, sin of the relative heading, ground velocity
+#: x, z (m/s), all in the observed frame; then the partner's own-pose PCA
+_NQ = 6
+_POS, _VEL = np.array([0, 1]), np.array([4, 5])
 
 
 def _pca_state(p: PCA) -> dict[str, np.ndarray]:
@@ -77,28 +100,66 @@ def partner_placement(partner: np.ndarray, origin: np.ndarray, theta: np.ndarray
     return np.stack([rel_o[:, 0], rel_o[:, 2], np.cos(d), np.sin(d)], axis=1), to_local(partner, po, pth)
 
 
+def partner_velocity(partner: np.ndarray, theta: np.ndarray, fps: float) -> np.ndarray:
+    """The partner's ground velocity (T, 2) (x, z in m/s) in the observed frame of heading theta (T,).
+
+    A backward difference, v_t = (r_t - r_{t-1}) fps (v_0 = 0), so that r_t = r_{t-1} + v_t / fps
+    integrates it exactly.
+    """
+    po, _ = actor_frame(partner)
+    d = np.diff(po, axis=0, prepend=po[:1]) * fps
+    return to_local(d[:, None, :], np.zeros_like(po), theta)[:, 0][:, [0, 2]]
+
+
+def _ground_rot(theta: float) -> np.ndarray:
+    """(2, 2) rotation of ground vectors (x, z) from the frame of heading theta to the world."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, s], [-s, c]])
+
+
+PLACEMENTS = ("tracked", "relative")
+
+
 class DualHMM:
     """One Gaussian HMM over [observed, partner] PCA poses; the partner by Gaussian conditioning.
 
-    Parameters: ``n_states`` N hidden states; ``energy`` PCA energy kept per person (0-1);
+    Parameters: ``n_states`` N hidden states in all (split between the interaction labels, at
+    least 2 each); ``energy`` PCA energy kept per person (0-1);
     ``velocity_weight`` scale of the observed ground velocity (m/s) in the observed block (0 drops
     it); ``n_iter`` Baum-Welch iterations; ``decode`` "filter" or "viterbi"; ``lag`` frames of the
-    fixed-lag trellis; ``both_roles`` train on A->B and B->A; ``random_state`` seed.
+    fixed-lag trellis; ``placement`` "tracked" (the partner's ground position kept in the world by a
+    Kalman filter, see the module docstring) or "relative" (the per-frame conditional alone);
+    ``inflation`` kappa, the factor on the placement measurement covariance (>= 1: successive
+    frames' measurement errors are correlated, not independent); ``process_noise`` q, m^2 per
+    frame added to the partner's position variance; ``evidence_weight`` w in (0, 1], the exponent
+    of the observation likelihood in the state filter; ``leak`` the probability per frame of
+    leaving an interaction's block of states; ``both_roles`` train on A->B and B->A;
+    ``min_covar`` ridge added to the state covariances (whitened units); ``random_state`` seed.
     """
 
     name = "dual-hmm"
 
     def __init__(self, n_states: int = 32, energy: float = 0.95, velocity_weight: float = 2.0,
-                 n_iter: int = 25, decode: str = "filter", lag: int = 8, both_roles: bool = True,
-                 min_covar: float = 1e-3, random_state: int = 0) -> None:
+                 n_iter: int = 25, decode: str = "filter", lag: int = 8, placement: str = "tracked",
+                 inflation: float = 3.0, process_noise: float = 1e-4, evidence_weight: float = 0.05,
+                 leak: float = 1e-5, both_roles: bool = True,
+                 min_covar: float = 1e-2, random_state: int = 0) -> None:
         if decode not in DECODES:
             raise ValueError(f"decode={decode!r}; choose one of {', '.join(DECODES)}")
+        if placement not in PLACEMENTS:
+            raise ValueError(f"placement={placement!r}; choose one of {', '.join(PLACEMENTS)}")
         if not 0 < energy <= 1:
             raise ValueError(f"energy={energy!r}: the PCA energy fraction must be in (0, 1]")
         if n_states < 1 or lag < 1:
             raise ValueError(f"n_states={n_states}, lag={lag}: both must be >= 1")
+        if not inflation >= 1 or not process_noise >= 0:
+            raise ValueError(f"inflation={inflation!r} must be >= 1 and process_noise={process_noise!r} >= 0")
         self.n_states, self.energy, self.velocity_weight = int(n_states), float(energy), float(velocity_weight)
         self.n_iter, self.decode, self.lag = int(n_iter), decode, int(lag)
+        self.placement, self.inflation, self.process_noise = placement, float(inflation), float(process_noise)
+        if not 0 < evidence_weight <= 1 or not 0 <= leak < 1:
+            raise ValueError(f"evidence_weight={evidence_weight!r} must be in (0, 1] and leak={leak!r} in [0, 1)")
+        self.evidence_weight, self.leak = float(evidence_weight), float(leak)
         self.both_roles, self.min_covar, self.random_state = bool(both_roles), float(min_covar), int(random_state)
 
     # ------------------------------------------------------------------ features
@@ -116,15 +177,17 @@ class DualHMM:
         d = np.diff(o, axis=0, prepend=o[:1]) * fps
         return to_local(d[:, None, :], np.zeros_like(o), th)[:, 0]
 
-    def _pairs(self, trajs: Sequence[TwoPersonTrajectory]) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    def _pairs(self, trajs: Sequence[TwoPersonTrajectory]) -> list[tuple[np.ndarray, ...]]:
         """Per role: (observed local pose (T,14,3), observed velocity (T,3), partner placement (T,4),
-        partner own-frame pose (T,14,3))."""
+        partner ground velocity (T,2), partner own-frame pose (T,14,3), interaction label)."""
         out = []
         for t in trajs:
             roles = [(t.a, t.b), (t.b, t.a)] if self.both_roles else [(t.a, t.b)]
             for obs, par in roles:
                 o, th = actor_frame(obs)
-                out.append((to_local(obs, o, th), self._velocity(obs, t.fps), *partner_placement(par, o, th)))
+                q, own = partner_placement(par, o, th)
+                out.append((to_local(obs, o, th), self._velocity(obs, t.fps), q,
+                            partner_velocity(par, th, t.fps), own, t.label))
         return out
 
     # ------------------------------------------------------------------ fitting
@@ -145,25 +208,48 @@ class DualHMM:
         pairs = self._pairs(trajectories)
         O = np.concatenate([p[0] for p in pairs]).reshape(-1, 42)
         V = np.concatenate([p[1] for p in pairs])
-        Q = np.concatenate([p[2] for p in pairs])
-        P = np.concatenate([p[3] for p in pairs]).reshape(-1, 42)
+        # the placement (metres, cos/sin of the relative heading) and the partner's ground velocity
+        # (m/s) are standardised like a whitened PCA block
+        Q = np.concatenate([np.concatenate([p[2], p[3]], axis=1) for p in pairs])
+        P = np.concatenate([p[4] for p in pairs]).reshape(-1, 42)
         self.pca_o_ = _Linear(**_pca_state(PCA(self.energy, whiten=True, svd_solver="full").fit(O)))
         self.pca_p_ = _Linear(**_pca_state(PCA(self.energy, whiten=True, svd_solver="full").fit(P)))
-        # the placement (metres, and cos/sin of the relative heading) is standardised like a PCA block
         self.place_mean_, self.place_scale_ = Q.mean(0), np.maximum(Q.std(0), 1e-3)
         X = np.concatenate([self._observed_features(O.reshape(-1, 14, 3), V),
                             (Q - self.place_mean_) / self.place_scale_, self.pca_p_.forward(P)], axis=1)
-        self.d_o_ = X.shape[1] - 4 - len(self.pca_p_.scale)
-        lengths = [len(p[0]) for p in pairs]
-        n = min(self.n_states, len(X))
-        hmm = GaussianHMM(n_components=n, covariance_type="full", n_iter=self.n_iter,
-                          min_covar=self.min_covar, random_state=self.random_state, tol=1e-3)
-        hmm.fit(X, lengths)
-        # states that collapsed onto a few frames (e.g. standing still: zero velocity) get a ridge so
-        # that every S_oo,k stays invertible
-        covars = hmm.covars_ + self.min_covar * np.eye(X.shape[1])
-        self._set_params(hmm.startprob_, hmm.transmat_, np.nan_to_num(hmm.means_), covars)
-        self.log_likelihood_ = float(hmm.score(X, lengths)) / len(X)
+        self.d_o_ = X.shape[1] - _NQ - len(self.pca_p_.scale)
+        lengths = np.array([len(p[0]) for p in pairs])
+        labels = [p[5] for p in pairs]
+        groups = sorted(set(labels))
+        n_each = max(2, self.n_states // len(groups))
+        starts, ends = np.cumsum(lengths) - lengths, np.cumsum(lengths)
+        blocks = []
+        for g in groups:
+            idx = [i for i, lab in enumerate(labels) if lab == g]
+            Xg = np.concatenate([X[starts[i]:ends[i]] for i in idx])
+            hmm = GaussianHMM(n_components=min(n_each, len(Xg)), covariance_type="full", n_iter=self.n_iter,
+                              min_covar=self.min_covar, random_state=self.random_state, tol=1e-3)
+            hmm.fit(Xg, lengths[idx])
+            blocks.append((hmm, len(idx) / len(pairs)))
+        # one HMM: block-diagonal transitions (one block per interaction type), weighted start
+        # probabilities, a small leak between blocks so a changed interaction is picked up
+        N = sum(h.n_components for h, _ in blocks)
+        A = np.zeros((N, N))
+        pi, means, covars = np.zeros(N), [], []
+        k = 0
+        for hmm, w in blocks:
+            n = hmm.n_components
+            A[k:k + n, k:k + n] = hmm.transmat_
+            pi[k:k + n] = w * hmm.startprob_
+            means.append(np.nan_to_num(hmm.means_))
+            # states that collapsed onto a few frames (e.g. standing still: zero velocity) get a ridge
+            # so that every S_oo,k stays invertible
+            covars.append(hmm.covars_ + self.min_covar * np.eye(X.shape[1]))
+            k += n
+        if len(blocks) > 1:
+            A = (1 - self.leak) * A + self.leak * np.broadcast_to(pi, A.shape)
+        self.block_labels_ = np.repeat(groups, [h.n_components for h, _ in blocks])   # the label of each state
+        self._set_params(pi / pi.sum(), A / A.sum(1, keepdims=True), np.concatenate(means), np.concatenate(covars))
         self.reset()
         return self
 
@@ -176,6 +262,11 @@ class DualHMM:
         self._inv_oo = np.linalg.inv(S_oo)
         self._logdet_oo = np.linalg.slogdet(S_oo)[1]
         self._gain = S_po @ self._inv_oo                       # (N, d_p, d_o)
+        # conditional covariances S_pp - S_po S_oo^-1 S_op of the ground position and velocity, metres
+        cond = self.covars_[:, do:, do:] - self._gain @ np.swapaxes(S_po, 1, 2)
+        sc = self.place_scale_
+        self._cov_pos = cond[:, _POS][:, :, _POS] * np.outer(sc[_POS], sc[_POS])
+        self._cov_vel = cond[:, _VEL][:, :, _VEL] * np.outer(sc[_VEL], sc[_VEL])
         self._log_A = np.log(np.maximum(self.transmat_, 1e-300))
         self._log_pi = np.log(np.maximum(self.startprob_, 1e-300))
 
@@ -186,6 +277,7 @@ class DualHMM:
         self._prev_origin: np.ndarray | None = None
         self._lls: list[np.ndarray] = []
         self._alphas: list[np.ndarray] = []
+        self._track: tuple[np.ndarray, np.ndarray] | None = None   # partner ground (x, z) world, (2, 2) cov
         self.posterior_ = None
 
     def _obs_loglik(self, o: np.ndarray) -> np.ndarray:
@@ -211,27 +303,60 @@ class DualHMM:
             vel = to_local(((origin - self._prev_origin) * self.fps_)[None], np.zeros(3), theta)[0]
         self._prev_origin = origin
         o = self._observed_features(to_local(X, origin, theta)[None], vel[None])[0]
-        ll = self._obs_loglik(o)
+        ll = self.evidence_weight * self._obs_loglik(o)
         prior = self._log_pi if self._alpha is None else logsumexp(self._alpha[:, None] + self._log_A, axis=0)
         la = prior + ll
         self._alpha = la - logsumexp(la)
         self.posterior_ = np.exp(self._alpha)
         cond = self._conditional(o)
         if self.decode == "filter":
-            z = self.posterior_ @ cond
+            w = self.posterior_
         else:
             self._lls.append(ll)
             self._alphas.append(self._alpha)
             if len(self._lls) > self.lag:
                 self._lls.pop(0)
                 self._alphas.pop(0)
-            z = cond[self._viterbi_end()]
-        return self._partner_world(z, origin, theta).astype(np.float32)
+            w = np.zeros(len(cond))
+            w[self._viterbi_end()] = 1.0
+        z = w @ cond
+        q = z[:_NQ] * self.place_scale_ + self.place_mean_
+        if self.placement == "tracked":
+            q[_POS] = self._track_position(cond, w, origin, theta)
+        return self._partner_world(q, z[_NQ:], origin, theta).astype(np.float32)
 
-    def _partner_world(self, z: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Partner block (4 + d_p,) -> partner world joints (14, 3) via the observed frame."""
-        q = z[:4] * self.place_scale_ + self.place_mean_
-        own = self.pca_p_.inverse(z[4:]).reshape(14, 3)
+    def _track_position(self, cond: np.ndarray, w: np.ndarray, origin: np.ndarray, theta: float) -> np.ndarray:
+        """Kalman filter of the partner's ground position in the world; returns it in the observed
+        frame (x, z), metres.
+
+        Predict with the state-weighted conditional partner velocity v (observed frame, m/s) and
+        its covariance; correct with the conditional placement m and covariance C, inflated by
+        kappa. Moments of the state mixture: m = sum_k w_k m_k, C = sum_k w_k (C_k + m_k m_k^T) - m m^T.
+        """
+        sc, mu = self.place_scale_, self.place_mean_
+        m_k = cond[:, _POS] * sc[_POS] + mu[_POS]                       # (N, 2) metres, observed frame
+        v_k = cond[:, _VEL] * sc[_VEL] + mu[_VEL]                       # (N, 2) m/s
+        m, v = w @ m_k, w @ v_k
+        C = np.einsum("n,nij->ij", w, self._cov_pos) + np.einsum("n,ni,nj->ij", w, m_k - m, m_k - m)
+        Cv = np.einsum("n,nij->ij", w, self._cov_vel) + np.einsum("n,ni,nj->ij", w, v_k - v, v_k - v)
+        R = _ground_rot(theta)
+        g = origin[[0, 2]]
+        meas, meas_cov = g + R @ m, self.inflation * (R @ C @ R.T)
+        if self._track is None:
+            pos, cov = meas, meas_cov
+        else:
+            pos, cov = self._track
+            pos = pos + R @ v / self.fps_
+            cov = cov + R @ Cv @ R.T / self.fps_ ** 2 + self.process_noise * np.eye(2)
+            K = cov @ np.linalg.inv(cov + meas_cov)
+            pos = pos + K @ (meas - pos)
+            cov = (np.eye(2) - K) @ cov
+        self._track = (pos, 0.5 * (cov + cov.T))
+        return R.T @ (pos - g)
+
+    def _partner_world(self, q: np.ndarray, zp: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Placement q (x, z, cos, sin; metres) and pose block zp (d_p,) -> partner world joints (14, 3)."""
+        own = self.pca_p_.inverse(zp).reshape(14, 3)
         rel = np.arctan2(q[3], q[2])
         p_origin = to_world(np.array([[q[0], 0.0, q[1]]]), origin, theta)[0]
         return to_world(own, p_origin, theta + rel)
@@ -259,9 +384,11 @@ class DualHMM:
                   "covars": self.covars_}
         for tag, lin in (("pca_o", self.pca_o_), ("pca_p", self.pca_p_)):
             arrays.update({f"{tag}_mean": lin.mean, f"{tag}_components": lin.components, f"{tag}_scale": lin.scale})
-        arrays.update(place_mean=self.place_mean_, place_scale=self.place_scale_)
+        arrays.update(place_mean=self.place_mean_, place_scale=self.place_scale_, block_labels=self.block_labels_)
         config = {"n_states": self.n_states, "energy": self.energy, "velocity_weight": self.velocity_weight,
-                  "n_iter": self.n_iter, "decode": self.decode, "lag": self.lag, "both_roles": self.both_roles,
+                  "n_iter": self.n_iter, "decode": self.decode, "lag": self.lag, "placement": self.placement,
+                  "inflation": self.inflation, "process_noise": self.process_noise,
+                  "evidence_weight": self.evidence_weight, "leak": self.leak, "both_roles": self.both_roles,
                   "min_covar": self.min_covar, "random_state": self.random_state, "fps": self.fps_,
                   "d_o": self.d_o_}
         return arrays, config
@@ -275,6 +402,7 @@ class DualHMM:
         m.pca_o_ = _Linear(arrays["pca_o_mean"], arrays["pca_o_components"], arrays["pca_o_scale"])
         m.pca_p_ = _Linear(arrays["pca_p_mean"], arrays["pca_p_components"], arrays["pca_p_scale"])
         m.place_mean_, m.place_scale_ = arrays["place_mean"], arrays["place_scale"]
+        m.block_labels_ = arrays["block_labels"]
         m._set_params(arrays["startprob"], arrays["transmat"], arrays["means"], arrays["covars"])
         m.reset()
         return m
