@@ -10,6 +10,7 @@ from body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
 from body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
 from body.skeleton import DEFAULT_DIMS
 from nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
+from nodes.tracker.fk import anchor_points
 from nodes.tracker.init import bbox_from_mask, place_from_bbox
 from nodes.tracker.likelihood import ConeLikelihood, make_observation
 from nodes.tracker.tracker import track_sequence
@@ -30,6 +31,32 @@ def _render(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     image = np.where(mask, 90, 200).astype(np.uint8)
     image[edges] = 20                                     # shading seams where cones overlap
     return image, mask
+
+
+def test_fast_anchor_points_match_body_kinematics() -> None:
+    from body.kinematics import frames
+    rng = np.random.default_rng(3)
+    P = LOWER + rng.random((64, DOF)) * (UPPER - LOWER)
+    P[:, :3] = rng.normal(size=(64, 3))
+    dims = DEFAULT_DIMS.scaled(1.7)
+    np.testing.assert_allclose(anchor_points(P, dims), frames(P, dims)[0], atol=1e-12)
+
+
+def test_coverage_cost_matches_direct_capsule_test() -> None:
+    rng = np.random.default_rng(4)
+    P = _pose()[None] + rng.normal(size=(16, DOF)) * 0.2
+    image, mask = _render(_pose())
+    obs = make_observation(image, mask)
+    L = ConeLikelihood(CAM)
+    c, rho, _ = L.project(P)
+    q = obs.cover_uv.astype(np.float64)
+    c0, a = c[:, :, 0, None].astype(np.float64), (c[:, :, 1] - c[:, :, 0])[:, :, None].astype(np.float64)
+    d = q[None, None] - c0                                                  # (N, S, M, 2)
+    s = np.clip((d * a).sum(-1) / np.maximum((a * a).sum(-1), 1e-6), 0, 1)
+    dist = np.linalg.norm(d - s[..., None] * a, axis=-1)
+    r = rho[..., :1] + s * (rho[..., 1:] - rho[..., :1]) + 1.0
+    expect = 1.0 - (dist <= r).any(axis=1).mean(axis=1)
+    np.testing.assert_allclose(L.coverage_cost(c, rho, obs.cover_uv), expect, atol=1.5 / len(q))
 
 
 def test_sample_points_match_body_raster() -> None:

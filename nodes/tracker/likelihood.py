@@ -15,9 +15,11 @@ covers. A fourth, ``S_g``, asks a foot to touch the ground plane (``ConeLikeliho
 the calibrated camera ties the depth to the image row of the feet. The log-likelihood returned is
 ``-(w_sil S_r + w_edge S_e + w_cover S_c + w_ground S_g) * gain``.
 
-Everything is vectorised over N particles x points: one forward kinematics call, one projection
-of the 23 anchor points, broadcast sample-point arithmetic in float32 and one flat gather per map.
-Pixel units throughout; out-of-image points read 0 (no foreground, no edge).
+Everything is vectorised over N particles x points: one forward kinematics call (``fk``), one
+projection of the 23 anchor points, the sample points of all cones as one small matmul in float32,
+one flat gather from the frame's per-pixel cost map (``Observation.cost``) and the coverage test
+as a matmul plus in-place array arithmetic. Pixel units throughout; out-of-image points read 0
+(no foreground, no edge).
 """
 from __future__ import annotations
 
@@ -27,8 +29,9 @@ import cv2
 import numpy as np
 
 from body.camera import Camera
-from body.kinematics import frames
 from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
+
+from .fk import anchor_points
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
 #: (``r_toe`` above it)
@@ -45,6 +48,8 @@ class Observation:
         edge: (H*W + 1,) float32 flattened smoothed edge map in [0, 1], same layout.
         cover_uv: (M, 2) float32 pixel positions of foreground samples for the coverage term.
         width, height: image size in pixels.
+        cost: (2 (H*W + 1),) float32 per-pixel costs ``(1 - fg)^2`` then ``(1 - edge)^2`` (out of
+            the image: 1), so that S_r and S_e are one gather; None: derived from fg and edge.
     """
 
     fg: np.ndarray
@@ -52,6 +57,13 @@ class Observation:
     cover_uv: np.ndarray
     width: int
     height: int
+    cost: np.ndarray | None = None
+
+    def cost_map(self) -> np.ndarray:
+        """The ``cost`` array (computed from fg and edge when it was not given)."""
+        if self.cost is not None:
+            return self.cost
+        return np.concatenate([(1.0 - self.fg) ** 2, (1.0 - self.edge) ** 2]).astype(np.float32)
 
     @property
     def empty(self) -> bool:
@@ -114,7 +126,8 @@ def make_observation(image: np.ndarray | None, mask: np.ndarray, n_cover: int = 
         cover = np.stack([xs[pick], ys[pick]], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)
-    return Observation(fg, edge, cover, W, H)
+    cost = np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32)
+    return Observation(fg, edge, cover, W, H, cost)
 
 
 class ConeLikelihood:
@@ -152,6 +165,8 @@ class ConeLikelihood:
         self.n_in = len(s_in)
         self.s = np.concatenate([s_in, s_out]).astype(np.float32)     # (K,)
         self.t = np.concatenate([t_in, t_out]).astype(np.float32)
+        # a sample is sum_j F_j G_j with F = (x0, ax, rho0 n, drho n) per cone: one matmul
+        self._G = np.stack([np.ones_like(self.s), self.s, self.t, self.s * self.t])   # (4, K)
         self.f = np.float32(0.5 * (camera.fx + camera.fy))
         self.R = camera.R.astype(np.float32)
         self.tc = camera.t.astype(np.float32)
@@ -161,11 +176,11 @@ class ConeLikelihood:
     def project(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, 28) poses -> cone end centres (N, S, 2, 2) px, half-widths (N, S, 2) px, depth ok
         (N,) bool (every anchor in front of the camera)."""
-        return self._project(frames(P, self.dims)[0].astype(np.float32))
+        return self._project(anchor_points(P, self.dims).astype(np.float32))
 
     def ground_cost(self, pts: np.ndarray) -> np.ndarray:
         """(N, A, 3) anchor points, metres -> (N,) S_g in [0, 1] (see the class docstring)."""
-        h = (pts[:, _FOOT_ANCHORS, 1] - self.sole_offset).min(axis=1)
+        h = self.sole_height(pts)
         return np.minimum((h / np.float32(self.ground_sigma)) ** 2, np.float32(1.0))
 
     def _project(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -193,48 +208,63 @@ class ConeLikelihood:
     def _points_uv(self, c: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples.
 
-        x and y are kept apart because reductions over a trailing axis of 2 are slow in numpy."""
-        x0, y0 = c[:, :, 0, 0, None], c[:, :, 0, 1, None]            # (N, S, 1)
-        ax, ay = c[:, :, 1, 0, None] - x0, c[:, :, 1, 1, None] - y0
+        Each sample is c0 + s a + (r0 + s dr) t n (axis a, unit normal n, sample (s, t)): linear
+        in (1, s, t, s t), so all of them are one (N S 2, 4) x (4, K) matmul."""
+        x0, y0 = c[:, :, 0, 0], c[:, :, 0, 1]                        # (N, S)
+        ax, ay = c[:, :, 1, 0] - x0, c[:, :, 1, 1] - y0
         L = np.sqrt(ax * ax + ay * ay)
         ok = L > 1e-6
         inv = np.where(ok, 1.0 / np.where(ok, L, 1.0), 0).astype(np.float32)
         nx = np.where(ok, -ay * inv, np.float32(1.0))
         ny = ax * inv
-        s, t = self.s, self.t
-        rt = (rho[..., :1] + s * (rho[..., 1:] - rho[..., :1])) * t   # (N, S, K)
-        return x0 + s * ax + rt * nx, y0 + s * ay + rt * ny
-
-    @staticmethod
-    def _lookup(flat: np.ndarray, u: np.ndarray, v: np.ndarray, W: int, H: int) -> np.ndarray:
-        """Nearest-pixel read of a flattened map; outside the image (or NaN) reads the trailing 0."""
-        ui = np.rint(u)
-        vi = np.rint(v)
-        inside = (ui >= 0) & (ui < W) & (vi >= 0) & (vi < H)
-        idx = np.where(inside, vi * W + ui, W * H).astype(np.intp)
-        return flat[idx]
+        r0, dr = rho[..., 0], rho[..., 1] - rho[..., 0]
+        # point = c0 + s a + (r0 + s dr) t n, per axis sum_j F_j G_j over (1, s, t, s t)
+        F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32)
+        uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)      # (N, S, 2, K)
+        return uv[:, :, 0], uv[:, :, 1]
 
     def coverage_cost(self, c: np.ndarray, rho: np.ndarray, cover_uv: np.ndarray) -> np.ndarray:
         """(N,) fraction of the M foreground samples outside every projected cone (capsule test:
-        distance to the cone's image axis below the interpolated half-width)."""
+        distance to the cone's image axis below the interpolated half-width + 1 px).
+
+        The projection of a sample q onto the axis and its squared distance come from 2 d.a and
+        |d|^2 (d = q - c0), both linear in (q_x, q_y, 1): one matmul over cones x samples, then
+        in-place arithmetic on the (N, S, M) arrays."""
         if cover_uv.shape[0] == 0:
             return np.zeros(c.shape[0], np.float32)
-        x0, y0 = c[:, :, 0, 0, None], c[:, :, 0, 1, None]            # (N, S, 1)
-        ax, ay = c[:, :, 1, 0, None] - x0, c[:, :, 1, 1, None] - y0
-        inv_aa = 1.0 / np.maximum(ax * ax + ay * ay, np.float32(1e-6))
-        dx = cover_uv[:, 0] - x0                                      # (N, S, M)
-        dy = cover_uv[:, 1] - y0
-        s = np.clip((dx * ax + dy * ay) * inv_aa, 0.0, 1.0)
-        dx -= s * ax
-        dy -= s * ay
+        # coordinates relative to the samples' centre keep the float32 squares accurate
+        o = cover_uv.mean(axis=0)
+        q = cover_uv - o                                              # (M, 2)
+        x0, y0 = c[:, :, 0, 0] - o[0], c[:, :, 0, 1] - o[1]          # (N, S)
+        ax, ay = c[:, :, 1, 0] - c[:, :, 0, 0], c[:, :, 1, 1] - c[:, :, 0, 1]
+        aa = np.maximum(ax * ax + ay * ay, np.float32(1e-6))
+        # with d = q - c0: 2 d.a and |d|^2 - |q|^2 are linear in (qx, qy, 1): one matmul
+        F = np.stack([np.stack([2 * ax, 2 * ay, -2 * (x0 * ax + y0 * ay)], axis=-1),
+                      np.stack([-2 * x0, -2 * y0, x0 * x0 + y0 * y0], axis=-1)]).astype(np.float32)
+        G = np.concatenate([q.T, np.ones((1, len(q)), np.float32)]).astype(np.float32)   # (3, M)
+        pd2, d2 = F @ G                                               # 2 x (N, S, M)
+        d2 += (q * q).sum(axis=1)                                     # |d|^2
+        # s = clip(d.a / |a|^2, 0, 1), the nearest axis point; |d - s a|^2 = |d|^2 - s (2 d.a - s |a|^2)
+        s = np.multiply(pd2, (0.5 / aa)[..., None])
+        np.clip(s, 0.0, 1.0, out=s)
+        tmp = np.multiply(s, aa[..., None])
+        np.subtract(pd2, tmp, out=tmp)
+        tmp *= s
+        d2 -= tmp                                                     # squared distance to the axis
         # + 1 px: a rasterised mask holds every pixel the body touches, the capsule test their centres
-        r = rho[..., :1] + s * (rho[..., 1:] - rho[..., :1]) + np.float32(1.0)
-        covered = (dx * dx + dy * dy <= r * r).any(axis=1)            # (N, M)
+        r = np.multiply(s, (rho[..., 1] - rho[..., 0])[..., None], out=tmp)
+        r += (rho[..., 0] + np.float32(1.0))[..., None]
+        r *= r
+        covered = (d2 <= r).any(axis=1)                               # (N, M)
         return 1.0 - covered.mean(axis=1, dtype=np.float32)
 
     def terms(self, P: np.ndarray, obs: Observation) -> np.ndarray:
         """(N, 28) -> (N, 3) costs S_r, S_e, S_c, each in [0, 1]; poses behind the camera get 1."""
         return self.evaluate(P, obs)[0]
+
+    def sole_height(self, pts: np.ndarray) -> np.ndarray:
+        """(N, A, 3) anchor points -> (N,) height of the lowest sole above the ground, metres."""
+        return (pts[:, _FOOT_ANCHORS, 1] - self.sole_offset).min(axis=1)
 
     def evaluate(self, P: np.ndarray, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
         """(N, 28) -> image costs (N, 3) S_r, S_e, S_c and ground costs (N,) S_g from one forward
@@ -242,13 +272,21 @@ class ConeLikelihood:
         P = np.asarray(P, dtype=np.float64)
         if P.ndim != 2 or P.shape[1] != 28:
             raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
-        pts = frames(P, self.dims)[0].astype(np.float32)
+        pts = anchor_points(P, self.dims).astype(np.float32)
         c, rho, ok = self._project(pts)
         u, v = self._points_uv(c, rho)
         W, H = obs.width, obs.height
         k = self.n_in
-        S_r = ((1.0 - self._lookup(obs.fg, u[:, :, :k], v[:, :, :k], W, H)) ** 2).mean(axis=(1, 2))
-        S_e = ((1.0 - self._lookup(obs.edge, u[:, :, k:], v[:, :, k:], W, H)) ** 2).mean(axis=(1, 2))
+        # one gather from the cost map: interior samples read (1 - fg)^2, outline ones (1 - edge)^2
+        ui, vi = np.rint(u), np.rint(v)
+        inside = (ui >= 0) & (ui < W) & (vi >= 0) & (vi < H)
+        vi *= W
+        vi += ui
+        idx = np.where(inside, vi, np.float32(W * H)).astype(np.intp)
+        idx[:, :, k:] += W * H + 1
+        cost = obs.cost_map()[idx]                                    # (N, S, K)
+        S_r = cost[:, :, :k].mean(axis=(1, 2))
+        S_e = cost[:, :, k:].mean(axis=(1, 2))
         S_c = self.coverage_cost(c, rho, obs.cover_uv) if self.w[2] else np.zeros_like(S_r)
         out = np.stack([S_r, S_e, S_c], axis=1)
         out[~ok] = 1.0
