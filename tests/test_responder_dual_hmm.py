@@ -59,7 +59,34 @@ def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> No
     meta = json.loads(str(z.pop("__meta__")))
     meta["version"] = 99
     np.savez(tmp_path / "old.npz", __meta__=np.array(json.dumps(meta)), **z)
-    with pytest.raises(ModelVersionError, match=r"old\.npz.*version 99.*reads version 2"):
+    with pytest.raises(ModelVersionError, match=r"old\.npz.*version 99.*reads version 3"):
         load_model(tmp_path / "old.npz")
     with pytest.raises(ValueError, match="holds a 'dual-hmm' model, expected 'listener'"):
         load_model(path, expected="listener")
+
+
+def test_phased_trajectories_get_time_ordered_states() -> None:
+    from hmmlearn.hmm import GaussianHMM
+
+    # the ordered start: states shared out between the phases by frames, along time within each
+    rng = np.random.default_rng(0)
+    seqs, phases = [], []
+    for T in (60, 90, 75):
+        t = np.linspace(0, 1, T)
+        seqs.append(np.stack([t, rng.normal(0, 0.01, T)], axis=1))
+        phases.append((t >= 0.25).astype(np.int32))
+    hmm = GaussianHMM(n_components=4, covariance_type="full", init_params="")
+    DualHMM(order_mix=0.2)._init_ordered(hmm, seqs, phases)
+    assert np.all(np.diff(hmm.means_[:, 0]) > 0)               # state k: the k-th stretch of time
+    assert hmm.means_[0, 0] < 0.25 <= hmm.means_[1, 0]          # one state for the first phase's quarter
+    assert np.argmax(hmm.startprob_) == 0
+    assert np.allclose(hmm.transmat_.sum(1), 1) and hmm.transmat_[0, 2] < hmm.transmat_[0, 1]
+    # phased trajectories fit and still reproduce the partner
+    data = [planted_pair(s) for s in range(6)]
+    for tr in data:
+        tr.phase = (np.arange(tr.n_frames) >= tr.n_frames // 3).astype(np.int32)
+    m = DualHMM(n_states=6, n_iter=10, both_roles=False).fit(data)
+    test = planted_pair(100)
+    assert mpjpe_mm(m.predict(test.a), test.b) < 60.0
+    with pytest.raises(ValueError, match="order_mix"):
+        DualHMM(order_mix=1.5)

@@ -15,10 +15,19 @@ people share one hidden state sequence and one transition matrix A (N x N)::
     Sigma_k = [[S_oo,k, S_op,k], [S_po,k, S_pp,k]].
 
 The states are fitted per interaction label (``TwoPersonTrajectory.label``): Baum-Welch on each
-label's sequences with N / (number of labels) states, joined into the one HMM with a
-block-diagonal A, start probabilities weighted by each label's share of the data and a small
-``leak`` towards the start distribution so that a change of interaction is followed. With
-``both_roles`` every training pair is used twice (A observed / B partner and the reverse).
+label's sequences with its share of the N states, in proportion to the label's number of phases
+(a three-phase interaction gets three times the states of a conversation). Where the label's
+trajectories carry phase labels with more than one phase (approach, contact, retreat),
+Baum-Welch starts from a time-ordered model (:meth:`DualHMM._init_ordered`): the states are
+shared out between the phases and along time within each phase, the first state is the start and
+the transitions run forward (mixed with ``order_mix`` of uniform). The states then follow the
+interaction's course, so the standing of the start (partner far away, about to walk in) and the
+standing of the end (partner still, after stepping back) are different states. Other labels (one
+phase all through, e.g. a conversation, or no phase labels) start from hmmlearn's k-means
+initialisation. The blocks are joined into the one HMM with a block-diagonal A, start
+probabilities weighted by each label's share of the data and a small ``leak`` towards the start
+distribution so that a change of interaction is followed. With ``both_roles`` every training
+pair is used twice (A observed / B partner and the reverse).
 
 Generation, online (one frame at a time). Only the observed block is seen, so the state is
 filtered with the observed block's marginal Gaussians (forward algorithm, Rabiner eq. 19)::
@@ -42,11 +51,10 @@ of the best path's state at t: a hard, path-consistent state that changes less o
 Placement. With ``placement="relative"`` the partner's ground position is the conditional mean
 above, frame by frame. With ``placement="tracked"`` (default) it is kept in the world by a Kalman
 filter: predicted with the conditional partner velocity (and its conditional covariance),
-corrected with the conditional position, whose covariance (the state mixture's moments of the
-conditional covariances S_pp - S_po S_oo^-1 S_op) is multiplied by ``inflation`` because the
-errors of successive frames are correlated. The partner keeps walking or stepping back where the
-observed person gives no cue, and snaps to the observed person where the state pins the
-position down (hands joined).
+corrected with the conditional position and its covariance (the state mixture's moments of the
+conditional covariances S_pp - S_po S_oo^-1 S_op). The partner keeps walking or stepping back
+where the observed person gives no cue, and snaps to the observed person where the state pins
+the position down (hands joined).
 
 The partner's own pose is mapped back through its PCA and placed with the placement and
 relative heading in the observed person's frame: world joints (14, 3), metres.
@@ -123,26 +131,28 @@ PLACEMENTS = ("tracked", "relative")
 class DualHMM:
     """One Gaussian HMM over [observed, partner] PCA poses; the partner by Gaussian conditioning.
 
-    Parameters: ``n_states`` N hidden states in all (split between the interaction labels, at
-    least 2 each); ``energy`` PCA energy kept per person (0-1);
+    Parameters: ``n_states`` N hidden states in all (shared out between the interaction labels in
+    proportion to their number of phases, at least 2 each); ``energy`` PCA energy kept per person
+    (0-1);
     ``velocity_weight`` scale of the observed ground velocity (m/s) in the observed block (0 drops
     it); ``n_iter`` Baum-Welch iterations; ``decode`` "filter" or "viterbi"; ``lag`` frames of the
     fixed-lag trellis; ``placement`` "tracked" (the partner's ground position kept in the world by a
     Kalman filter, see the module docstring) or "relative" (the per-frame conditional alone);
-    ``inflation`` kappa, the factor on the placement measurement covariance (>= 1: successive
-    frames' measurement errors are correlated, not independent); ``process_noise`` q, m^2 per
-    frame added to the partner's position variance; ``evidence_weight`` w in (0, 1], the exponent
-    of the observation likelihood in the state filter; ``leak`` the probability per frame of
-    leaving an interaction's block of states; ``both_roles`` train on A->B and B->A;
+    ``process_noise`` q, m^2 per frame added to the partner's position variance (keeps the
+    Kalman covariances invertible where the partner's placement is certain); ``evidence_weight``
+    w in (0, 1], the exponent of the observation likelihood in the state filter; ``leak`` the
+    probability per frame of leaving an interaction's block of states; ``both_roles`` train on A->B and B->A;
+    ``order_mix`` the uniform share mixed into the time-ordered start of a block's transitions
+    and start probabilities (1 uses hmmlearn's k-means start for every block);
     ``min_covar`` ridge added to the state covariances (whitened units); ``random_state`` seed.
     """
 
     name = "dual-hmm"
 
-    def __init__(self, n_states: int = 32, energy: float = 0.95, velocity_weight: float = 2.0,
+    def __init__(self, n_states: int = 48, energy: float = 0.95, velocity_weight: float = 2.0,
                  n_iter: int = 25, decode: str = "filter", lag: int = 8, placement: str = "tracked",
-                 inflation: float = 3.0, process_noise: float = 1e-4, evidence_weight: float = 0.05,
-                 leak: float = 1e-5, both_roles: bool = True,
+                 process_noise: float = 1e-4, evidence_weight: float = 0.05,
+                 leak: float = 1e-5, both_roles: bool = True, order_mix: float = 0.2,
                  min_covar: float = 1e-2, random_state: int = 0) -> None:
         if decode not in DECODES:
             raise ValueError(f"decode={decode!r}; choose one of {', '.join(DECODES)}")
@@ -152,15 +162,18 @@ class DualHMM:
             raise ValueError(f"energy={energy!r}: the PCA energy fraction must be in (0, 1]")
         if n_states < 1 or lag < 1:
             raise ValueError(f"n_states={n_states}, lag={lag}: both must be >= 1")
-        if not inflation >= 1 or not process_noise >= 0:
-            raise ValueError(f"inflation={inflation!r} must be >= 1 and process_noise={process_noise!r} >= 0")
         self.n_states, self.energy, self.velocity_weight = int(n_states), float(energy), float(velocity_weight)
         self.n_iter, self.decode, self.lag = int(n_iter), decode, int(lag)
-        self.placement, self.inflation, self.process_noise = placement, float(inflation), float(process_noise)
+        if not process_noise > 0:
+            raise ValueError(f"process_noise={process_noise!r} must be > 0")
+        self.placement, self.process_noise = placement, float(process_noise)
         if not 0 < evidence_weight <= 1 or not 0 <= leak < 1:
             raise ValueError(f"evidence_weight={evidence_weight!r} must be in (0, 1] and leak={leak!r} in [0, 1)")
         self.evidence_weight, self.leak = float(evidence_weight), float(leak)
         self.both_roles, self.min_covar, self.random_state = bool(both_roles), float(min_covar), int(random_state)
+        if not 0 <= order_mix <= 1:
+            raise ValueError(f"order_mix={order_mix!r} must be in [0, 1]")
+        self.order_mix = float(order_mix)
 
     # ------------------------------------------------------------------ features
     def _observed_features(self, obs_local: np.ndarray, vel: np.ndarray) -> np.ndarray:
@@ -179,7 +192,8 @@ class DualHMM:
 
     def _pairs(self, trajs: Sequence[TwoPersonTrajectory]) -> list[tuple[np.ndarray, ...]]:
         """Per role: (observed local pose (T,14,3), observed velocity (T,3), partner placement (T,4),
-        partner ground velocity (T,2), partner own-frame pose (T,14,3), interaction label)."""
+        partner ground velocity (T,2), partner own-frame pose (T,14,3), interaction label,
+        phase labels (T,) or None)."""
         out = []
         for t in trajs:
             roles = [(t.a, t.b), (t.b, t.a)] if self.both_roles else [(t.a, t.b)]
@@ -187,12 +201,21 @@ class DualHMM:
                 o, th = actor_frame(obs)
                 q, own = partner_placement(par, o, th)
                 out.append((to_local(obs, o, th), self._velocity(obs, t.fps), q,
-                            partner_velocity(par, th, t.fps), own, t.label))
+                            partner_velocity(par, th, t.fps), own, t.label, t.phase))
         return out
 
     # ------------------------------------------------------------------ fitting
     def fit(self, trajectories: Sequence[TwoPersonTrajectory]) -> "DualHMM":
-        """Fit PCAs and the joint HMM to two-person trajectories (observed = A, and B if both_roles)."""
+        """Fit PCAs and the joint HMM to two-person trajectories (observed = A, and B if both_roles).
+
+        Runs with one BLAS thread: the matrices are small, and threads contending for a few busy
+        cores made Baum-Welch several times slower."""
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1):
+            return self._fit(trajectories)
+
+    def _fit(self, trajectories: Sequence[TwoPersonTrajectory]) -> "DualHMM":
         import logging
 
         from hmmlearn.hmm import GaussianHMM
@@ -221,14 +244,33 @@ class DualHMM:
         lengths = np.array([len(p[0]) for p in pairs])
         labels = [p[5] for p in pairs]
         groups = sorted(set(labels))
-        n_each = max(2, self.n_states // len(groups))
+        members = {g: [i for i, lab in enumerate(labels) if lab == g] for g in groups}
+        phases = {g: [pairs[i][6] for i in members[g]] for g in groups}
+        # a label's phases: the distinct phase labels of its sequences (one where any has none)
+        n_phases = {g: 1 if any(ph is None for ph in phases[g]) else len(np.unique(np.concatenate(phases[g])))
+                    for g in groups}
+        total = sum(n_phases.values())
         starts, ends = np.cumsum(lengths) - lengths, np.cumsum(lengths)
+
+        def new_hmm(n: int, ordered: bool) -> Any:
+            # the priors (a ridge of one pseudo-frame, a vanishing pull of the means to 0) keep the
+            # M-step finite and positive definite for a state that Baum-Welch leaves (almost) empty
+            d = X.shape[1]
+            return GaussianHMM(n_components=n, covariance_type="full", n_iter=self.n_iter, min_covar=self.min_covar,
+                               covars_prior=self.min_covar * np.eye(d), covars_weight=d + 1, means_weight=1e-3,
+                               random_state=self.random_state, tol=1e-3, init_params="" if ordered else "stmc")
+
         blocks = []
         for g in groups:
-            idx = [i for i, lab in enumerate(labels) if lab == g]
+            idx = members[g]
             Xg = np.concatenate([X[starts[i]:ends[i]] for i in idx])
-            hmm = GaussianHMM(n_components=min(n_each, len(Xg)), covariance_type="full", n_iter=self.n_iter,
-                              min_covar=self.min_covar, random_state=self.random_state, tol=1e-3)
+            # the state budget is shared out by phases: a three-phase interaction gets three times
+            # the states of a one-phase one (a conversation)
+            n = min(max(2, self.n_states * n_phases[g] // total), len(Xg))
+            ordered = self.order_mix < 1 and n_phases[g] > 1
+            hmm = new_hmm(n, ordered)
+            if ordered:
+                self._init_ordered(hmm, [X[starts[i]:ends[i]] for i in idx], phases[g])
             hmm.fit(Xg, lengths[idx])
             blocks.append((hmm, len(idx) / len(pairs)))
         # one HMM: block-diagonal transitions (one block per interaction type), weighted start
@@ -239,7 +281,11 @@ class DualHMM:
         k = 0
         for hmm, w in blocks:
             n = hmm.n_components
-            A[k:k + n, k:k + n] = hmm.transmat_
+            # a state that Baum-Welch left empty has no transitions out (a zero row): it stays
+            T = np.nan_to_num(hmm.transmat_)
+            empty = T.sum(1) <= 0
+            T[empty] = np.eye(n)[empty]
+            A[k:k + n, k:k + n] = T
             pi[k:k + n] = w * hmm.startprob_
             means.append(np.nan_to_num(hmm.means_))
             # states that collapsed onto a few frames (e.g. standing still: zero velocity) get a ridge
@@ -252,6 +298,40 @@ class DualHMM:
         self._set_params(pi / pi.sum(), A / A.sum(1, keepdims=True), np.concatenate(means), np.concatenate(covars))
         self.reset()
         return self
+
+    def _init_ordered(self, hmm: Any, seqs: list[np.ndarray], phases: list[np.ndarray]) -> None:
+        """Time-ordered start for one block: the states are shared out between the interaction's
+        phases in proportion to their frames, and within a phase each sequence's frames are cut into
+        equal time segments; state k's Gaussian is fitted to its segments. Start in the first state,
+        stay or move one state on (A banded), both mixed with ``order_mix`` of uniform so that
+        Baum-Welch can still learn other transitions."""
+        n, d = hmm.n_components, seqs[0].shape[1]
+        names = sorted(set(np.concatenate(phases).tolist()))
+        counts = np.array([sum(int((ph == p).sum()) for ph in phases) for p in names], float)
+        share = np.maximum(1, np.floor(n * counts / counts.sum())).astype(int)
+        while share.sum() < n:
+            share[np.argmax(n * counts / counts.sum() - share)] += 1
+        while share.sum() > n:
+            share[np.argmax(share)] -= 1
+        first = np.cumsum(share) - share
+        assign = []
+        for ph in phases:
+            a = np.zeros(len(ph), int)
+            for p, f, c in zip(names, first, share):
+                idx = np.flatnonzero(ph == p)
+                a[idx] = f + (np.arange(len(idx)) * c) // max(len(idx), 1)
+            assign.append(a)
+        Xc, ac = np.concatenate(seqs), np.concatenate(assign)
+        means, covars = np.zeros((n, d)), np.zeros((n, d, d))
+        for k in range(n):
+            sk = Xc[ac == k] if (ac == k).sum() > d else Xc
+            means[k], covars[k] = sk.mean(0), np.cov(sk.T) + self.min_covar * np.eye(d)
+        stay = 1.0 - n / np.mean([len(x) for x in seqs])
+        A = np.eye(n) * stay + np.eye(n, k=1) * (1 - stay)
+        A[-1, -1] = 1.0
+        hmm.means_, hmm.covars_ = means, covars
+        hmm.transmat_ = (1 - self.order_mix) * A + self.order_mix / n
+        hmm.startprob_ = (1 - self.order_mix) * np.eye(n)[0] + self.order_mix / n
 
     def _set_params(self, startprob: np.ndarray, transmat: np.ndarray, means: np.ndarray, covars: np.ndarray) -> None:
         self.startprob_, self.transmat_ = np.asarray(startprob, float), np.asarray(transmat, float)
@@ -330,8 +410,8 @@ class DualHMM:
         frame (x, z), metres.
 
         Predict with the state-weighted conditional partner velocity v (observed frame, m/s) and
-        its covariance; correct with the conditional placement m and covariance C, inflated by
-        kappa. Moments of the state mixture: m = sum_k w_k m_k, C = sum_k w_k (C_k + m_k m_k^T) - m m^T.
+        its covariance; correct with the conditional placement m and its covariance C. Moments of
+        the state mixture: m = sum_k w_k m_k, C = sum_k w_k (C_k + m_k m_k^T) - m m^T.
         """
         sc, mu = self.place_scale_, self.place_mean_
         m_k = cond[:, _POS] * sc[_POS] + mu[_POS]                       # (N, 2) metres, observed frame
@@ -341,7 +421,7 @@ class DualHMM:
         Cv = np.einsum("n,nij->ij", w, self._cov_vel) + np.einsum("n,ni,nj->ij", w, v_k - v, v_k - v)
         R = _ground_rot(theta)
         g = origin[[0, 2]]
-        meas, meas_cov = g + R @ m, self.inflation * (R @ C @ R.T)
+        meas, meas_cov = g + R @ m, R @ C @ R.T
         if self._track is None:
             pos, cov = meas, meas_cov
         else:
@@ -387,8 +467,8 @@ class DualHMM:
         arrays.update(place_mean=self.place_mean_, place_scale=self.place_scale_, block_labels=self.block_labels_)
         config = {"n_states": self.n_states, "energy": self.energy, "velocity_weight": self.velocity_weight,
                   "n_iter": self.n_iter, "decode": self.decode, "lag": self.lag, "placement": self.placement,
-                  "inflation": self.inflation, "process_noise": self.process_noise,
-                  "evidence_weight": self.evidence_weight, "leak": self.leak, "both_roles": self.both_roles,
+                  "process_noise": self.process_noise, "evidence_weight": self.evidence_weight, "leak": self.leak,
+                  "both_roles": self.both_roles, "order_mix": self.order_mix,
                   "min_covar": self.min_covar, "random_state": self.random_state, "fps": self.fps_,
                   "d_o": self.d_o_}
         return arrays, config
