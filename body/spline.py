@@ -137,7 +137,7 @@ def spline_distance(contour: np.ndarray, ctrl: np.ndarray, samples_per_span: int
 def _signed_area2(p: np.ndarray) -> float:
     """Twice the shoelace area in image coordinates; negative = counter-clockwise on screen."""
     x, y = p[:, 0], p[:, 1]
-    return float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return float(np.dot(x[:-1], y[1:]) + x[-1] * y[0] - np.dot(x[1:], y[:-1]) - x[0] * y[-1])
 
 
 def _up_axis(mask_u8: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -195,7 +195,7 @@ def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.nd
     top = ys == ys.min()
     best_off = offsets[top][np.argmin(np.abs(offsets[top]))]
     start = (i0 + int(best_off)) % k
-    p = np.roll(p, -start, axis=0)
+    p = np.concatenate((p[start:], p[:start]))
     return p, p[0].copy()
 
 

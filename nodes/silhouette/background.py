@@ -198,7 +198,8 @@ class HorprasertBackground:
         self.absorb_frames_: int = 0
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
         self._still_ref: np.ndarray | None = None  # (3, H * W) float32 mean colour of that run
-        self._last_alpha: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its alpha) of the last apply
+        # (frame, its alpha, its float32 channel planes) of the last apply
+        self._last_alpha: tuple[np.ndarray, np.ndarray, list[np.ndarray]] | None = None
         self.max_threshold_samples = max_threshold_samples
         self.random_state = random_state
         self._w: np.ndarray | None = None
@@ -277,7 +278,7 @@ class HorprasertBackground:
         count = np.zeros((h, w), np.float64)
         inliers = []
         for f in stack:
-            alpha, cd2 = self._distortions(f)
+            alpha, cd2, _ = self._distortions(f)
             inl = self._inlier_mask(f) if robust else None
             wgt = np.ones((h, w), np.float32) if inl is None else inl.astype(np.float32)
             inliers.append(inl)
@@ -306,7 +307,7 @@ class HorprasertBackground:
         per_frame = max(1, self.max_threshold_samples // n)
         ah_s, cd_s = [], []
         for f, inl in zip(stack, inliers):
-            alpha, cd2 = self._distortions(f)
+            alpha, cd2, _ = self._distortions(f)
             ah = ((alpha - 1.0) / self.a_).ravel()
             ch = (np.sqrt(cd2) / self.b_).ravel()
             idx = np.flatnonzero(inl) if inl is not None else None
@@ -353,7 +354,7 @@ class HorprasertBackground:
         """Normalised distortions (alpha_hat, CD_hat), each (H, W) float32 (eqs. 5-8)."""
         self._require_fitted()
         _check_frame(frame, self.shape)
-        alpha, cd2 = self._distortions(frame)
+        alpha, cd2, _ = self._distortions(frame)
         return (alpha - 1.0) / self.a_, np.sqrt(cd2) / self.b_
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
@@ -364,8 +365,9 @@ class HorprasertBackground:
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
-        alpha, cd2 = self._distortions(frame)
-        self._last_alpha = (frame, alpha)  # for the global-drift step of ``update`` on this frame
+        alpha, cd2, planes = self._distortions(frame)
+        # for ``update`` on this frame: alpha for the global-drift step, the float channel planes
+        self._last_alpha = (frame, alpha, planes)
         # Thresholds are precomputed in raw alpha / CD^2 units per pixel, saving the division.
         labels = (alpha >= 1.0).astype(np.uint8)
         labels += SHADOW  # 1 where darker than the background, 2 where brighter
@@ -401,8 +403,9 @@ class HorprasertBackground:
         sh = ((labels == SHADOW) | (labels == HIGHLIGHT)).view(np.uint8)
         k = self.shadow_learning_rate / lr if lr > 0.0 else 0.0
         # cv2.accumulateWeighted is dst <- (1 - r) dst + r src under a mask, in place.
-        for c, plane in enumerate(cv2.split(frame)):
-            f = plane.astype(np.float32)
+        last = self._last_alpha
+        planes = last[2] if last is not None and last[0] is frame else _float_planes(frame)
+        for c, f in enumerate(planes):
             if slr > 0.0:
                 d = cv2.subtract(f, self._mu[c])
                 d2 = cv2.multiply(d, d)
@@ -436,8 +439,10 @@ class HorprasertBackground:
         g = float(cv2.mean(alpha, mask=bg)[0])
         step = np.float32(1.0 + self.learning_rate * (g - 1.0))
         if step != 1.0:
+            idx = np.flatnonzero(fg)  # a few percent of the frame: flat gathers beat a masked pass
             for c in range(3):
-                np.multiply(self._mu[c], step, out=self._mu[c], where=fg)
+                mu = self._mu[c].reshape(-1)
+                mu[idx] = mu[idx] * step
 
     def _absorb_still(self, frame: np.ndarray, labels: np.ndarray) -> bool:
         """Ghost removal (see ``absorb_frames``). Returns whether any pixel was absorbed.
@@ -550,7 +555,8 @@ class HorprasertBackground:
         # and all of the observed colour shows up as chromaticity distortion.
         black = den <= 1e-6
         np.divide(1.0, np.maximum(den, 1e-6, out=den), out=den)
-        den[black] = 0.0
+        if black.any():
+            den[black] = 0.0
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
@@ -562,9 +568,10 @@ class HorprasertBackground:
             self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
         self._cd2_max = ((t["tau_cd"] * self.b_) ** 2).astype(np.float32)
 
-    def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32."""
-        planes = [p.astype(np.float32) for p in cv2.split(frame)]
+    def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+        """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32, and the frame's three float32
+        channel planes (H, W), left unchanged for ``update``."""
+        planes = _float_planes(frame)
         mu, w, inv_s = self._mu, self._w, self._inv_s
         alpha = planes[0] * w[0]
         alpha += planes[1] * w[1]
@@ -572,16 +579,20 @@ class HorprasertBackground:
         alpha *= self._inv_den
         cd2 = np.zeros_like(alpha)
         for c in range(3):
-            d = planes[c]
-            d -= alpha * mu[c]
+            d = planes[c] - alpha * mu[c]
             d *= inv_s[c]
             d *= d
             cd2 += d
-        return alpha, cd2
+        return alpha, cd2, planes
 
     def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
         z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
         return z.max(axis=0) <= self.robust_inlier_k
+
+
+def _float_planes(frame: np.ndarray) -> list[np.ndarray]:
+    """The three channel planes of a uint8 (H, W, 3) frame as float32 (H, W)."""
+    return [p.astype(np.float32) for p in cv2.split(frame)]
 
 
 def _median_mad(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
