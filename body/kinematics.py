@@ -73,9 +73,97 @@ def _as_poses(P: np.ndarray) -> np.ndarray:
     return P
 
 
-def _apply(R: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """(N,3,3) x (3,) -> (N,3)."""
-    return R @ np.asarray(v, dtype=np.float64)
+# A rotation R is carried as its three columns (each (N, 3)): right-multiplying by an elementary
+# rotation mixes two columns with cos and sin, and R v = v0 col0 + v1 col1 + v2 col2. This avoids
+# stacking (N, 3, 3) matrices and multiplying them batch by batch, which dominated the cost of the
+# tracker's likelihood (N = 256 poses per call).
+Columns = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _rx(R: Columns, c: np.ndarray, s: np.ndarray) -> Columns:
+    """R Rx(a) from R's columns and cos a, sin a (each (N, 1))."""
+    a0, a1, a2 = R
+    return a0, a1 * c + a2 * s, a2 * c - a1 * s
+
+
+def _ry(R: Columns, c: np.ndarray, s: np.ndarray) -> Columns:
+    """R Ry(a)."""
+    a0, a1, a2 = R
+    return a0 * c - a2 * s, a1, a0 * s + a2 * c
+
+
+def _rz(R: Columns, c: np.ndarray, s: np.ndarray) -> Columns:
+    """R Rz(a)."""
+    a0, a1, a2 = R
+    return a0 * c + a1 * s, a1 * c - a0 * s, a2
+
+
+def _chain(P: np.ndarray, dims: BodyDims) -> tuple[np.ndarray, dict[str, Columns]]:
+    """The chain of the module docstring: anchor points (N, len(ANCHORS), 3) and the columns of
+    every body part's rotation."""
+    d = dims
+    C = np.cos(P)[:, :, None]                                     # (N, DOF, 1)
+    S = np.sin(P)[:, :, None]
+    cs = {n: (C[:, i], S[:, i]) for n, i in DOF_INDEX.items()}
+
+    def neg(n: str) -> tuple[np.ndarray, np.ndarray]:
+        c, s = cs[n]
+        return c, -s
+
+    N = len(P)
+    z = np.zeros((N, 1))
+    c, s = cs["root_yaw"]
+    R: dict[str, Columns] = {}
+    R["pelvis"] = _rz(_rx((np.concatenate([c, z, -s], 1), np.broadcast_to(np.array([0.0, 1.0, 0.0]), (N, 3)),
+                           np.concatenate([s, z, c], 1)), *cs["root_pitch"]), *neg("root_roll"))
+    pel = R["pelvis"]
+    tor = R["torso"] = _rz(_rx(_ry(pel, *cs["torso_twist"]), *cs["torso_flex"]), *neg("torso_lateral"))
+    hed = R["head"] = _rz(_rx(_ry(tor, *cs["head_turn"]), *cs["head_nod"]), *neg("head_tilt"))
+
+    pts = np.empty((N, len(ANCHORS), 3))
+    ix = ANCHOR_INDEX
+    pelvis = P[:, 0:3]
+    pts[:, ix["pelvis"]] = pelvis
+    neck = pelvis + d.torso_length * tor[1]
+    pts[:, ix["neck"]] = neck
+    pts[:, ix["chest"]] = neck - d.chest_drop * tor[1]
+    pts[:, ix["torso_bottom"]] = pelvis - d.torso_bottom_drop * tor[1]
+    head = neck + d.neck_to_head * hed[1]
+    pts[:, ix["head"]] = head
+    half = d.head_half_height * hed[1]
+    pts[:, ix["chin"]] = head - half
+    pts[:, ix["crown"]] = head + half
+    for sd, sign in (("l", 1.0), ("r", -1.0)):
+        # Arms and legs mirrored so that every positive angle means the same movement on both sides.
+        c, s = cs[f"{sd}_shoulder_abd"]
+        cr, sr = cs[f"{sd}_shoulder_rot"]
+        ua = R[f"{sd}_upper_arm"] = _ry(_rz(_rx(tor, *neg(f"{sd}_shoulder_flex")), c, sign * s), cr, -sign * sr)
+        fa = R[f"{sd}_forearm"] = _rx(ua, *neg(f"{sd}_elbow_flex"))
+        sh = neck + (sign * d.shoulder_width / 2) * tor[0] - d.shoulder_drop * tor[1]
+        el = sh - d.upper_arm * ua[1]
+        wr = el - d.forearm * fa[1]
+        pts[:, ix[f"{sd}_shoulder"]] = sh
+        pts[:, ix[f"{sd}_elbow"]] = el
+        pts[:, ix[f"{sd}_wrist"]] = wr
+        pts[:, ix[f"{sd}_hand_end"]] = wr - d.hand_length * fa[1]
+        c, s = cs[f"{sd}_hip_abd"]
+        cr, sr = cs[f"{sd}_hip_rot"]
+        th = R[f"{sd}_thigh"] = _ry(_rz(_rx(pel, *neg(f"{sd}_hip_flex")), c, sign * s), cr, -sign * sr)
+        sn = R[f"{sd}_shin"] = _rx(th, *cs[f"{sd}_knee_flex"])
+        hp = pelvis + (sign * d.hip_width / 2) * pel[0]
+        kn = hp - d.thigh * th[1]
+        an = kn - d.shin * sn[1]
+        pts[:, ix[f"{sd}_hip"]] = hp
+        pts[:, ix[f"{sd}_knee"]] = kn
+        pts[:, ix[f"{sd}_ankle"]] = an
+        pts[:, ix[f"{sd}_toe"]] = an - (d.ankle_height - d.r_toe) * sn[1] + d.foot_length * sn[2]
+    return pts, R
+
+
+def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
+    """(N, DOF) or (DOF,) poses -> (N, len(ANCHORS), 3) anchor points, metres: ``frames``
+    without building the rotation matrices (the tracker's likelihood needs the points alone)."""
+    return _chain(_as_poses(P), dims)[0]
 
 
 def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -90,54 +178,8 @@ def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, di
             ("pelvis", "torso", "head", "l_upper_arm", "l_forearm", "r_...", "l_thigh",
             "l_shin", "r_...").
     """
-    P = _as_poses(P)
-    d = dims
-    g = {name: P[:, i] for name, i in DOF_INDEX.items()}
-    R = {}
-    R["pelvis"] = rot_y(g["root_yaw"]) @ rot_x(g["root_pitch"]) @ rot_z(-g["root_roll"])
-    R["torso"] = R["pelvis"] @ rot_y(g["torso_twist"]) @ rot_x(g["torso_flex"]) @ rot_z(-g["torso_lateral"])
-    R["head"] = R["torso"] @ rot_y(g["head_turn"]) @ rot_x(g["head_nod"]) @ rot_z(-g["head_tilt"])
-
-    pts = np.empty((P.shape[0], len(ANCHORS), 3))
-    ix = ANCHOR_INDEX
-    pelvis = P[:, 0:3]
-    pts[:, ix["pelvis"]] = pelvis
-    neck = pelvis + _apply(R["torso"], (0.0, d.torso_length, 0.0))
-    pts[:, ix["neck"]] = neck
-    pts[:, ix["chest"]] = neck - _apply(R["torso"], (0.0, d.chest_drop, 0.0))
-    pts[:, ix["torso_bottom"]] = pelvis - _apply(R["torso"], (0.0, d.torso_bottom_drop, 0.0))
-    head = neck + _apply(R["head"], (0.0, d.neck_to_head, 0.0))
-    pts[:, ix["head"]] = head
-    half = _apply(R["head"], (0.0, d.head_half_height, 0.0))
-    pts[:, ix["chin"]] = head - half
-    pts[:, ix["crown"]] = head + half
-
-    for s, sign in (("l", 1.0), ("r", -1.0)):
-        # Arms: mirrored so that every positive angle means the same movement on both sides.
-        ua = (R["torso"] @ rot_x(-g[f"{s}_shoulder_flex"]) @ rot_z(sign * g[f"{s}_shoulder_abd"])
-              @ rot_y(-sign * g[f"{s}_shoulder_rot"]))
-        fa = ua @ rot_x(-g[f"{s}_elbow_flex"])
-        R[f"{s}_upper_arm"], R[f"{s}_forearm"] = ua, fa
-        sh = neck + _apply(R["torso"], (sign * d.shoulder_width / 2, -d.shoulder_drop, 0.0))
-        el = sh + _apply(ua, (0.0, -d.upper_arm, 0.0))
-        wr = el + _apply(fa, (0.0, -d.forearm, 0.0))
-        pts[:, ix[f"{s}_shoulder"]] = sh
-        pts[:, ix[f"{s}_elbow"]] = el
-        pts[:, ix[f"{s}_wrist"]] = wr
-        pts[:, ix[f"{s}_hand_end"]] = wr + _apply(fa, (0.0, -d.hand_length, 0.0))
-
-        th = (R["pelvis"] @ rot_x(-g[f"{s}_hip_flex"]) @ rot_z(sign * g[f"{s}_hip_abd"])
-              @ rot_y(-sign * g[f"{s}_hip_rot"]))
-        sn = th @ rot_x(g[f"{s}_knee_flex"])
-        R[f"{s}_thigh"], R[f"{s}_shin"] = th, sn
-        hp = pelvis + _apply(R["pelvis"], (sign * d.hip_width / 2, 0.0, 0.0))
-        kn = hp + _apply(th, (0.0, -d.thigh, 0.0))
-        an = kn + _apply(sn, (0.0, -d.shin, 0.0))
-        pts[:, ix[f"{s}_hip"]] = hp
-        pts[:, ix[f"{s}_knee"]] = kn
-        pts[:, ix[f"{s}_ankle"]] = an
-        pts[:, ix[f"{s}_toe"]] = an + _apply(sn, (0.0, -(d.ankle_height - d.r_toe), d.foot_length))
-    return pts, R
+    pts, cols = _chain(_as_poses(P), dims)
+    return pts, {name: np.stack(c, axis=-1) for name, c in cols.items()}
 
 
 def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from body.camera import default_camera
-from body.kinematics import cone_endpoints, forward_kinematics, frames, lowest_point
+from body.kinematics import anchor_points, cone_endpoints, forward_kinematics, frames, lowest_point, rot_x, rot_y, rot_z
 from body.pose import DOF, DOF_INDEX, DOF_NAMES, LOWER, UPPER, clip_to_limits, neutral_pose, within_limits
 from body.raster import (
     cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps,
 )
-from body.skeleton import BONES, DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_SEGMENTS, PARENT, SEGMENTS, BodyDims
+from body.skeleton import ANCHOR_INDEX, BONES, DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_SEGMENTS, PARENT, SEGMENTS, BodyDims
 
 J = JOINT_INDEX
 D = DEFAULT_DIMS
@@ -222,3 +222,30 @@ def test_inverse_kinematics_round_trip():
     d = dims_from_joints(forward_kinematics(random_poses(20, 2)))
     for name in ("thigh", "shin", "upper_arm", "forearm", "hip_width", "shoulder_width", "torso_length"):
         assert getattr(d, name) == pytest.approx(getattr(D, name), abs=1e-9)
+
+
+def test_frames_follow_the_documented_matrix_chain() -> None:
+    """The column-wise chain equals the module docstring's products of rot_x/rot_y/rot_z
+    matrices, and anchor_points equals frames' points."""
+    P = random_poses(40, seed=7)
+    dims = D.scaled(1.7)
+    pts, R = frames(P, dims)
+    g = {n: P[:, i] for n, i in DOF_INDEX.items()}
+    pel = rot_y(g["root_yaw"]) @ rot_x(g["root_pitch"]) @ rot_z(-g["root_roll"])
+    tor = pel @ rot_y(g["torso_twist"]) @ rot_x(g["torso_flex"]) @ rot_z(-g["torso_lateral"])
+    head = tor @ rot_y(g["head_turn"]) @ rot_x(g["head_nod"]) @ rot_z(-g["head_tilt"])
+    expect = {"pelvis": pel, "torso": tor, "head": head}
+    for s, sign in (("l", 1.0), ("r", -1.0)):
+        ua = tor @ rot_x(-g[f"{s}_shoulder_flex"]) @ rot_z(sign * g[f"{s}_shoulder_abd"]) @ rot_y(-sign * g[f"{s}_shoulder_rot"])
+        th = pel @ rot_x(-g[f"{s}_hip_flex"]) @ rot_z(sign * g[f"{s}_hip_abd"]) @ rot_y(-sign * g[f"{s}_hip_rot"])
+        expect.update({f"{s}_upper_arm": ua, f"{s}_forearm": ua @ rot_x(-g[f"{s}_elbow_flex"]),
+                       f"{s}_thigh": th, f"{s}_shin": th @ rot_x(g[f"{s}_knee_flex"])})
+    assert sorted(R) == sorted(expect)
+    for name, M in expect.items():
+        np.testing.assert_allclose(R[name], M, atol=1e-12, err_msg=name)
+    sn = expect["l_shin"]
+    toe = pts[:, J["l_ankle"]] + sn @ np.array([0.0, -(dims.ankle_height - dims.r_toe), dims.foot_length])
+    np.testing.assert_allclose(pts[:, ANCHOR_INDEX["l_toe"]], toe, atol=1e-12)
+    neck = P[:, :3] + tor @ np.array([0.0, dims.torso_length, 0.0])
+    np.testing.assert_allclose(pts[:, J["neck"]], neck, atol=1e-12)
+    np.testing.assert_allclose(anchor_points(P, dims), pts, atol=0)

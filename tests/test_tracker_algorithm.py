@@ -10,7 +10,6 @@ from body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
 from body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
 from body.skeleton import DEFAULT_DIMS
 from nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
-from nodes.tracker.fk import anchor_points
 from nodes.tracker.init import bbox_from_mask, place_from_bbox
 from nodes.tracker.likelihood import ConeLikelihood, make_observation
 from nodes.tracker.tracker import track_sequence
@@ -31,15 +30,6 @@ def _render(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     image = np.where(mask, 90, 200).astype(np.uint8)
     image[edges] = 20                                     # shading seams where cones overlap
     return image, mask
-
-
-def test_fast_anchor_points_match_body_kinematics() -> None:
-    from body.kinematics import frames
-    rng = np.random.default_rng(3)
-    P = LOWER + rng.random((64, DOF)) * (UPPER - LOWER)
-    P[:, :3] = rng.normal(size=(64, 3))
-    dims = DEFAULT_DIMS.scaled(1.7)
-    np.testing.assert_allclose(anchor_points(P, dims), frames(P, dims)[0], atol=1e-12)
 
 
 def test_coverage_cost_matches_direct_capsule_test() -> None:

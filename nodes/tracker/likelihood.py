@@ -29,9 +29,9 @@ import cv2
 import numpy as np
 
 from body.camera import Camera
+from body.kinematics import anchor_points
 from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
-from .fk import anchor_points
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
 #: (``r_toe`` above it)
