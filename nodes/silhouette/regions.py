@@ -273,10 +273,10 @@ class PersonTracker:
             for a, b in zip(rows, cols):
                 if cost[a, b] < _INFEASIBLE:
                     r = free_r[b]
+                    t = tracks[free_t[a]]
                     split = None
-                    if self._established(tracks[free_t[a]], w_img, h_img) and \
-                            region_area[r] >= self.newcomer_growth * tracks[free_t[a]].usual_area:
-                        split = self._split_newcomer(comp, stats, r, tracks[free_t[a]])
+                    if self._established(t, w_img, h_img) and region_area[r] >= self.newcomer_growth * t.usual_area:
+                        split = self._split_newcomer(comp, stats, r, t)
                     if split is None:
                         assigned[free_t[a]] = (*self._region_crop(comp, stats, r), False)
                     else:

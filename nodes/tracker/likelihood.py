@@ -15,7 +15,7 @@ covers. A fourth, ``S_g``, asks a foot to touch the ground plane (``ConeLikeliho
 the calibrated camera ties the depth to the image row of the feet. The log-likelihood returned is
 ``-(w_sil S_r + w_edge S_e + w_cover S_c + w_ground S_g) * gain``.
 
-Everything is vectorised over N particles x points: one forward kinematics call (``fk``), one
+Everything is vectorised over N particles x points: one forward kinematics call (``body.kinematics.anchor_points``), one
 projection of the 23 anchor points, the sample points of all cones as one small matmul in float32,
 one flat gather from the frame's per-pixel cost map (``Observation.cost``) and the coverage test
 as a matmul plus in-place array arithmetic. Pixel units throughout; out-of-image points read 0
@@ -36,6 +36,12 @@ from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHOR
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
 #: (``r_toe`` above it)
 _FOOT_ANCHORS = np.array([ANCHOR_INDEX[n] for n in ("l_ankle", "r_ankle", "l_toe", "r_toe")])
+
+
+def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
+    """Flattened fg and edge maps (H*W + 1,) -> (2 (H*W + 1),) float32 ``(1 - fg)^2`` then
+    ``(1 - edge)^2``: the per-sample costs of S_r and S_e."""
+    return np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -63,7 +69,7 @@ class Observation:
         """The ``cost`` array (computed from fg and edge when it was not given)."""
         if self.cost is not None:
             return self.cost
-        return np.concatenate([(1.0 - self.fg) ** 2, (1.0 - self.edge) ** 2]).astype(np.float32)
+        return _cost_map(self.fg, self.edge)
 
     @property
     def empty(self) -> bool:
@@ -126,8 +132,7 @@ def make_observation(image: np.ndarray | None, mask: np.ndarray, n_cover: int = 
         cover = np.stack([xs[pick], ys[pick]], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)
-    cost = np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32)
-    return Observation(fg, edge, cover, W, H, cost)
+    return Observation(fg, edge, cover, W, H, _cost_map(fg, edge))
 
 
 class ConeLikelihood:
