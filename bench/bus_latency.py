@@ -11,7 +11,10 @@ Each measurement runs a publisher and a subscriber in two processes over ipc:// 
 The raw reference uses the same frames per message as ours (topic, a small header, the payload) and
 the same per-frame copy policy (pyzmq ``copy_threshold`` = ``bus.transport.ZERO_COPY_MIN``, sent with
 ``copy=False``), so the ratio is what our codec and transport add, not a different copy choice.
-Raw and ours alternate ``--repeats`` times (which one goes first alternates too); a figure is the
+The publisher and the subscriber are pinned to two different CPUs, the same two for raw and ours
+(``--no-pin`` leaves placement to the scheduler, which on a 2-core machine puts the pair on one core
+in some runs and on two in others: that changes the wake-up time by more than the whole difference
+being measured). Raw and ours alternate ``--repeats`` times (which one goes first alternates too); a figure is the
 median over repeats of each run's median. ``*_ratio_*`` = median(ours) / median(raw); the spread
 fields give the per-repeat paired ratios (ours / raw of the same repeat) as [min, median, max].
 Last stdout line: one JSON object.
@@ -135,22 +138,42 @@ def _our_sub(root: str, q, ready, delay: float = 0.0) -> None:
     ctx.term()
 
 
+def _pinned(target, cpu: int | None, *args) -> None:
+    """Run ``target(*args)`` on one CPU (with ZeroMQ's I/O thread, created later, inheriting it)."""
+    if cpu is not None:
+        os.sched_setaffinity(0, {cpu})
+    target(*args)
+
+
+def _placement() -> tuple[int | None, int | None]:
+    """CPUs for the publisher and the subscriber: two different ones where there are two, so that
+    every run, raw and ours, has the same placement (the scheduler otherwise puts the pair on one
+    core in some runs and on two in others, which changes the wake-up time more than anything
+    measured here)."""
+    cpus = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    return (cpus[0], cpus[1]) if len(cpus) >= 2 and PIN else (None, None)
+
+
+PIN = True
+
+
 def run_pair(kind: str, n: int, size: int, gap: float, delay: float = 0.0):
-    root = tempfile.mkdtemp(prefix="cpb-", dir="/tmp")
-    ready = mp.Event()
-    q = mp.Queue()
-    if kind == "raw":
-        ep = f"ipc://{root}/raw"
-        sub = mp.Process(target=_raw_sub, args=(ep, q, ready))
-        pub = mp.Process(target=_raw_pub, args=(ep, n, size, gap, ready))
-    else:
-        sub = mp.Process(target=_our_sub, args=(root, q, ready, delay))
-        pub = mp.Process(target=_our_pub, args=(root, n, size, gap, ready))
-    sub.start()
-    pub.start()
-    result = q.get(timeout=120)
-    pub.join(30)
-    sub.join(30)
+    pub_cpu, sub_cpu = _placement()
+    with tempfile.TemporaryDirectory(prefix="cpb-", dir="/tmp") as root:
+        ready = mp.Event()
+        q = mp.Queue()
+        if kind == "raw":
+            ep = f"ipc://{root}/raw"
+            sub = mp.Process(target=_pinned, args=(_raw_sub, sub_cpu, ep, q, ready))
+            pub = mp.Process(target=_pinned, args=(_raw_pub, pub_cpu, ep, n, size, gap, ready))
+        else:
+            sub = mp.Process(target=_pinned, args=(_our_sub, sub_cpu, root, q, ready, delay))
+            pub = mp.Process(target=_pinned, args=(_our_pub, pub_cpu, root, n, size, gap, ready))
+        sub.start()
+        pub.start()
+        result = q.get(timeout=120)
+        pub.join(30)
+        sub.join(30)
     return result
 
 
@@ -163,7 +186,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--quick", action="store_true", help="fewer messages (smoke run)")
+    ap.add_argument("--no-pin", action="store_true", help="let the scheduler place the two processes")
     args = ap.parse_args()
+    global PIN
+    PIN = not args.no_pin
     n_lat, n_thr, n_rel = (150, 500, 2000) if args.quick else (400, 3000, 10000)
     out: dict[str, object] = {"repeats": args.repeats}
     for size in SIZES:

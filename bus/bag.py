@@ -37,7 +37,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Iterator, NamedTuple, Sequence
 
-import msgpack
 import numpy as np
 from mcap.exceptions import EndOfFile, McapError
 from mcap.reader import SeekingReader
@@ -46,7 +45,7 @@ from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
 from messages import REGISTRY, decode, describe, encode
-from messages.codec import ARRAY_EXT, DEFAULT_LIMITS, DecodeError, read_header
+from messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
 
 ENCODING = "counterpart-msgpack"
 PROFILE = "counterpart"
@@ -92,8 +91,8 @@ def unpack_parts(data: bytes | memoryview) -> list[memoryview]:
 
 
 def _infer_type(value: Any, arrays: list[list[Any]]) -> str:
-    if isinstance(value, msgpack.ExtType) and value.code == ARRAY_EXT:
-        idx = int.from_bytes(value.data, "little")
+    idx = array_index(value)
+    if idx is not None:
         dt, shape = arrays[idx] if idx < len(arrays) else ("?", [])
         return f"ndarray[{np.dtype(dt).name if dt != '?' else '?'}, ndim={len(shape)}]"
     if isinstance(value, list):
@@ -457,8 +456,9 @@ def decode_fields(parts: Sequence[Any]) -> tuple[str, dict[str, Any]]:
         arrays.append(np.frombuffer(buf, dtype=dtype).reshape(shape) if buf.nbytes else np.zeros(shape, dtype))
 
     def resolve(v: Any) -> Any:
-        if isinstance(v, msgpack.ExtType) and v.code == ARRAY_EXT:
-            return arrays[int.from_bytes(v.data, "little")]
+        idx = array_index(v)
+        if idx is not None:
+            return arrays[idx]
         if isinstance(v, list):
             return [resolve(x) for x in v]
         if isinstance(v, dict):

@@ -28,7 +28,6 @@ EOS_PREFIX = b"\x00eos:"
 RELIABLE = "reliable"
 LATEST = "latest"
 POLICIES = (RELIABLE, LATEST)
-_RCVMORE = zmq.RCVMORE
 #: bytes: frames below this are copied into ZeroMQ, larger ones go out zero-copy. A zero-copy frame
 #: costs pyzmq a wake-up of its garbage-collector thread (which takes the GIL) once ZeroMQ has sent
 #: it; that outweighs copying a 320x240 gray image (76,800 B) but not a 640x480 BGR one (921,600 B).
@@ -286,12 +285,15 @@ class Subscriber:
         return msg
 
     def _recv(self, flags: int) -> list[Any]:
-        """One multipart message: topic and header as bytes (cheaper than zmq.Frame objects for
-        small parts), the array buffers as frames that ``np.frombuffer`` views without a copy."""
+        """One multipart message as zmq.Frame objects (array buffers are viewed by ``np.frombuffer``
+        without a copy). A frame's ``more`` flag is read from the message itself, where asking the
+        socket for RCVMORE after each part cost 0.7 us per part."""
         sock = self.socket
-        frames = [sock.recv(flags)]
-        while sock.getsockopt(_RCVMORE):
-            frames.append(sock.recv(0, copy=len(frames) < 2))
+        frame = sock.recv(flags, copy=False)
+        frames = [frame]
+        while frame.more:
+            frame = sock.recv(0, copy=False)
+            frames.append(frame)
         return frames
 
     @property

@@ -55,12 +55,12 @@ def compile_encoder(cls: type) -> Encoder:
     The written-out path covers a message whose scalar fields hold Python scalars and whose
     ``np.ndarray`` fields hold C-contiguous arrays; any other value (a numpy scalar, a list, a
     nested struct, a strided view) sends the whole message through ``encode_generic``."""
-    from .codec import _SCALARS, encode_generic
+    from .codec import _SCALARS, encode_generic, pack_header
 
     hints = field_types(cls)
     ns: dict[str, Any] = {
         "_SCALARS": _SCALARS, "_generic": encode_generic, "_ndarray": np.ndarray, "_dstr": _dtype_str,
-        "_packb": msgpack.packb, "_SID": cls.__schema_id__,
+        "_pack": pack_header, "_SID": cls.__schema_id__,
     }
     lines = ["def encode(msg, counter):"]
     wire, arrays = [], []
@@ -83,7 +83,7 @@ def compile_encoder(cls: type) -> Encoder:
         f"    head = {{'s': _SID, 'f': {{{', '.join(wire)}}}, 'a': [{specs}]}}",
         "    if counter is not None:",
         "        head['n'] = counter",
-        "    return [_packb(head, use_bin_type=True)" + "".join(f", {a}.data if {a}.size else b''" for a in arrays) + "]",
+        "    return [_pack(head)" + "".join(f", {a}.data if {a}.size else b''" for a in arrays) + "]",
     ]
     return _compile("encode", lines, ns)
 
