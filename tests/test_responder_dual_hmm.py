@@ -6,7 +6,7 @@ import pytest
 
 from nodes.responder.dual_hmm import DualHMM
 from nodes.responder.frames import actor_frame, relative_pair, to_world
-from nodes.responder.models import ModelVersionError, load_model, save_model
+from nodes.responder.models import MODEL_VERSION, ModelVersionError, load_model, save_model
 from tests.responder_fixtures import mpjpe_mm, planted_pair
 
 
@@ -48,8 +48,23 @@ def test_viterbi_trellis_decoding_is_also_faithful(model: DualHMM) -> None:
     assert mpjpe_mm(vit.predict(test.a), test.b) < 60.0
 
 
+def test_placement_correction_forest_arrays_predict_as_scikit_learn() -> None:
+    from sklearn.ensemble import ExtraTreesRegressor
+
+    from nodes.responder.dual_hmm import _Forest
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(2000, 5))
+    Y = np.c_[np.sin(X[:, 0]) + X[:, 1] ** 2, X[:, 2] * (X[:, 3] > 0)]
+    et = ExtraTreesRegressor(7, min_samples_leaf=5, random_state=0).fit(X, Y)
+    forest = _Forest.from_sklearn(et)
+    Xt = rng.normal(size=(50, 5))
+    assert np.allclose(np.stack([forest.predict(x) for x in Xt]), et.predict(Xt), atol=1e-9)
+
+
 def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> None:
     path = save_model(tmp_path / "m.npz", model, {"sequences": 8})
+    # the cross-fitted placement correction travels in the file
+    assert model._forest is not None and "correction_value" in np.load(path).files
     back = load_model(path, expected="dual-hmm")
     test = planted_pair(102)
     assert np.allclose(back.predict(test.a), model.predict(test.a), atol=1e-5)
@@ -59,7 +74,7 @@ def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> No
     meta = json.loads(str(z.pop("__meta__")))
     meta["version"] = 99
     np.savez(tmp_path / "old.npz", __meta__=np.array(json.dumps(meta)), **z)
-    with pytest.raises(ModelVersionError, match=r"old\.npz.*version 99.*reads version 3"):
+    with pytest.raises(ModelVersionError, match=rf"old\.npz.*version 99.*reads version {MODEL_VERSION}"):
         load_model(tmp_path / "old.npz")
     with pytest.raises(ValueError, match="holds a 'dual-hmm' model, expected 'listener'"):
         load_model(path, expected="listener")

@@ -2,7 +2,7 @@
 
 Layout: arrays under their own names plus ``__meta__``, a JSON object::
 
-    {"format": "counterpart.responder.model", "version": 3, "model": "dual-hmm",
+    {"format": "counterpart.responder.model", "version": 4, "model": "dual-hmm",
      "config": {...constructor parameters and scalars...},
      "training": {"sequences": 36, "frames": 5123, "fps": 25.0, "labels": {...}, "seconds": 12.3}}
 
@@ -23,8 +23,9 @@ from typing import Any, Protocol
 import numpy as np
 
 MODEL_FORMAT = "counterpart.responder.model"
-MODEL_VERSION = 3   # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
-                    # 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation
+MODEL_VERSION = 4   # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
+                    # 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation;
+                    # 4: dual-hmm placement correction (cross-fitted forest arrays)
 MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion")
 
 
