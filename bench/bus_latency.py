@@ -47,6 +47,8 @@ class Blob:
 
 
 SIZES = (64, 76800, 921600)
+#: pin the publisher and the subscriber to two CPUs (``--no-pin`` clears it)
+PIN = True
 WARMUP = 50  # first messages of a latency run: connection set-up, first calls of every code path
 
 
@@ -152,9 +154,6 @@ def _placement() -> tuple[int | None, int | None]:
     measured here)."""
     cpus = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
     return (cpus[0], cpus[1]) if len(cpus) >= 2 and PIN else (None, None)
-
-
-PIN = True
 
 
 def run_pair(kind: str, n: int, size: int, gap: float, delay: float = 0.0):

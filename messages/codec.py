@@ -28,9 +28,9 @@ from .core import REGISTRY, field_types, schema_id
 ARRAY_EXT = 1
 #: ``ext_hook`` of the header unpacker: msgpack calls it as ``hook(code, data)`` for every ext value,
 #: and the builtin ``slice`` keeps both (``.start``, ``.stop``) without running any Python code.
-#: msgpack's own ``ExtType`` runs a Python constructor instead, which on a cold path (a node woken by
-#: one message) cost about 10 us of a 64 B message's 150 us one-way latency. Use :func:`array_index`
-#: to read a reference.
+#: msgpack's own ``ExtType`` runs a Python constructor per reference instead, which a node woken by
+#: one message pays cold: 15 us against 4.5 us to unpack a one-array header, in a measurement of
+#: single calls 2 ms apart. Use :func:`array_index` to read a reference.
 _EXT_HOOK = slice
 _LOCAL = threading.local()
 ALLOWED_DTYPES = frozenset(
@@ -118,7 +118,7 @@ def encode_generic(msg: Any, counter: int | None = None) -> list[Any]:
 
 def pack_header(head: dict[str, Any]) -> bytes:
     """``msgpack.packb(head, use_bin_type=True)`` with this thread's reusable packer: ``packb`` makes
-    and frees a packer and its buffer on every call, about 5 us of a cold send."""
+    and frees a packer and its buffer on every call (cold, 2 ms apart: 7.7 us against 2.9 us)."""
     try:
         packer = _LOCAL.packer
     except AttributeError:

@@ -369,8 +369,8 @@ class HorprasertBackground:
         # for ``update`` on this frame: alpha for the global-drift step, the float channel planes
         self._last_alpha = (frame, alpha, planes)
         # Thresholds are precomputed in raw alpha / CD^2 units per pixel, saving the division. The
-        # comparisons give 0/255 masks and the classes are combined bitwise (OpenCV: a sixth of the
-        # time of numpy's masked copies): SHADOW 1 where darker than the background, HIGHLIGHT 2
+        # comparisons give 0/255 masks and the classes are combined bitwise (OpenCV's compare and
+        # bitwise ops are cheaper than numpy's masked copies): SHADOW 1 where darker than the background, HIGHLIGHT 2
         # where brighter, cleared to BACKGROUND 0 inside the brightness band, FOREGROUND 3 (= all
         # bits) where the chromaticity or the darkening is too large.
         labels = cv2.add(cv2.bitwise_and(cv2.compare(alpha, 1.0, cv2.CMP_GE), 1), SHADOW)
