@@ -46,8 +46,11 @@ def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = N
     say = progress or (lambda s: None)
     if name == "dual-hmm":
         from .dual_hmm import DualHMM
-        say(f"dual-hmm: fitting PCA + HMM on {len(data)} sequences")
-        return DualHMM(**params).fit(data)
+        model = DualHMM(**params)
+        folds = model.correction_folds
+        extra = f", then the placement correction on {folds} held-out folds" if folds else ""
+        say(f"dual-hmm: fitting PCA + HMM on {len(data)} sequences{extra}")
+        return model.fit(data)
     if name == "joint-shape":
         from .joint_shape import JointShapeModel
         from .shapes import trajectory_shapes
