@@ -497,6 +497,12 @@ class DualHMM:
         # (m/s), fastest smoothed speed (m/s), path walked (m)
         self._n_seen, self._speeds, self._top_speed, self._path = 0, [], 0.0, 0.0
         self._rec: list[tuple[np.ndarray, np.ndarray]] | None = None
+        # (L, N) which states belong to each label of the correction's features: fixed per model,
+        # built once per sequence rather than per frame
+        self._label_member: np.ndarray | None = None
+        if hasattr(self, "block_labels_"):
+            labels = self._feature_labels if self._feature_labels is not None else np.unique(self.block_labels_)
+            self._label_member = (np.asarray(labels)[:, None] == self.block_labels_[None, :]).astype(float)
 
     def _obs_loglik(self, o: np.ndarray) -> np.ndarray:
         """(d_o,) observed block -> (N,) log N(o; mu_o,k, S_oo,k)."""
@@ -566,8 +572,7 @@ class DualHMM:
         mean_speed = float(np.mean(self._speeds))
         self._top_speed = max(self._top_speed, mean_speed)
         self._path += speed / self.fps_
-        labels = self._feature_labels if self._feature_labels is not None else np.unique(self.block_labels_)
-        member = (np.asarray(labels)[:, None] == self.block_labels_[None, :]).astype(float)   # (L, N)
+        member = self._label_member
         mass = member @ self.posterior_
         z_k = cond[:, _POS[1]] * self.place_scale_[_POS[1]] + self.place_mean_[_POS[1]]
         z_l = (member @ (self.posterior_ * z_k)) / np.maximum(mass, 1e-12)
