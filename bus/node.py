@@ -63,6 +63,9 @@ class Output:
 
     type: type
     doc: str = ""
+    #: send the last message again to ``latest`` subscribers that join later (run-time settings
+    #: such as controls, which are published rarely and must not be lost to a late or restarted node)
+    latched: bool = False
 
 
 def stats_topic(node_name: str) -> str:
@@ -115,6 +118,7 @@ class Node:
         self._last_seq = -1
         self._in: dict[str, Subscriber] = {}
         self._out: dict[str, Publisher] = {}
+        self._latched: list[Publisher] = []  # outputs whose last message new lossy subscribers get
         self._in_stats: dict[str, _PortStats] = {}
         self._out_stats: dict[str, _PortStats] = {}
         self._proc_ms: list[float] = []
@@ -196,8 +200,10 @@ class Node:
                 expected=int(w.get("reliable_subscribers", 0)),
                 barrier_timeout=float(self.spec.get("barrier_timeout", 30.0)),
                 should_stop=lambda: self.stopping,
+                latched=port in outputs and outputs[port].latched,
             )
             self._out_stats[port] = _PortStats()
+        self._latched = [self._out[p] for p in outputs if outputs[p].latched]
 
     def _close(self) -> None:
         for s in self._in.values():
@@ -277,6 +283,8 @@ class Node:
             if self.timer_period is not None and time.monotonic() >= next_timer:
                 self.on_timer()
                 next_timer = time.monotonic() + self.timer_period
+            for pub in self._latched:
+                pub.poll_subscriptions()
             self._maybe_stats()
             if self._parent_gone():
                 self.log.warning("launcher is gone; stopping")

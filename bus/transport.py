@@ -50,7 +50,13 @@ def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags:
 
 class Publisher:
     """Both sockets of one topic. ``expected`` reliable subscribers are awaited before the first send
-    (the startup barrier), for at most ``barrier_timeout`` seconds."""
+    (the startup barrier), for at most ``barrier_timeout`` seconds.
+
+    ``latched``: the last message sent is sent again to every ``latest`` subscriber that joins later
+    (ROS's latched topics), once :meth:`poll_subscriptions` or a send sees it join. A lossy subscriber
+    that connects after a rare message (a run-time control), or restarts, still gets the one in force;
+    the subscribers already there get it twice. Reliable subscribers are not sent it again: the
+    startup barrier gives them every message once. The parts are kept by reference."""
 
     def __init__(
         self,
@@ -62,6 +68,7 @@ class Publisher:
         latest_hwm: int = 2,
         barrier_timeout: float = 30.0,
         should_stop: Callable[[], bool] = lambda: False,
+        latched: bool = False,
     ) -> None:
         self.topic = topic
         self.topic_b = topic.encode()
@@ -74,6 +81,8 @@ class Publisher:
         self.eos_listeners = 0
         self._last_sub_read = 0.0
         self._barrier_done = expected <= 0
+        self.latched = latched
+        self._latched_parts: Sequence[Any] | None = None
         self.reliable = ctx.socket(zmq.XPUB)
         self.reliable.setsockopt(zmq.SNDHWM, hwm)
         self.reliable.setsockopt(zmq.XPUB_NODROP, 1)
@@ -99,9 +108,18 @@ class Publisher:
             elif ev[1:] == EOS_PREFIX:  # latest subscribers listening for end of stream here
                 self.eos_listeners += step
             timeout_ms = 0
+        joined = False
         while self.latest.poll(0, zmq.POLLIN):
             ev = self.latest.recv()
+            joined |= ev[:1] == b"\x01"
             self.latest_subscribers += 1 if ev[:1] == b"\x01" else -1
+        if joined and self._latched_parts is not None:
+            self._send_latest(self._latched_parts)
+
+    def poll_subscriptions(self) -> None:
+        """Read who joined or left now (a latched publisher's node loop calls this between sends)."""
+        self._last_sub_read = _monotonic()
+        self._read_subscriptions()
 
     def wait_for_subscribers(self) -> bool:
         """Block until ``expected`` reliable subscribers are connected (or timeout/stop)."""
@@ -133,11 +151,16 @@ class Publisher:
             self._send_reliable(self.topic_b, parts)
         if eos:
             self._send_reliable(EOS_PREFIX + self.topic_b, parts)
+        elif self.latched:
+            self._latched_parts = parts
         if self.latest_subscribers > 0 or eos:
-            try:
-                _send_multipart(self.latest, self.topic_b, parts, zmq.NOBLOCK)
-            except zmq.Again:
-                pass
+            self._send_latest(parts)
+
+    def _send_latest(self, parts: Sequence[Any]) -> None:
+        try:
+            _send_multipart(self.latest, self.topic_b, parts, zmq.NOBLOCK)
+        except zmq.Again:  # the lossy socket: a full queue drops (the subscriber counts the gap)
+            pass
 
     def _send_reliable(self, topic: bytes, parts: Sequence[Any]) -> None:
         while True:

@@ -21,7 +21,7 @@ import pytest
 from body.camera import default_camera
 from nodes.renderer import draw
 from nodes.renderer.compositor import scaled_camera
-from tests.launching import read_jsonl, start_launch, stop_launch, wait_for, write_launch
+from tests.launching import descendants, read_jsonl, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints
 
 W, H = 160, 120
@@ -34,7 +34,8 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     file = write_launch(tmp / "graph.yaml", {"nodes": {
         "source": {"run": "tests.renderer_nodes:SceneSource",
                    "params": {"count": 100000, "rate": 20.0, "width": W, "height": H, "partner": False}},
-        "responder": {"run": "tests.renderer_nodes:ControlledResponder", "params": {"path": str(tmp / "controls.jsonl")}},
+        "responder": {"run": "tests.renderer_nodes:ControlledResponder", "params": {"path": str(tmp / "controls.jsonl")},
+                      "restart": "on-failure"},
         "renderer": {"run": "nodes.renderer", "params": {
             "serve": True, "port": 0, "port_file": str(port_file), "stats_topics": ["source/stats", "responder/stats"],
             "models": ["dual-hmm", "listener"]}},
@@ -143,6 +144,21 @@ def test_posted_control_reaches_the_bus_and_changes_the_partner(live: dict[str, 
     assert state["controls"]["strength"] == 0.9 and state["models"] == ["dual-hmm", "listener"]
     _post(live["url"] + "/control", {"strength": 0.0})
     assert wait_for(lambda: (lambda b: b[0] - b[2] > 30)(mean_bgr(_frame(live["url"]), core)), timeout=10)
+
+
+def test_a_restarted_responder_gets_the_controls_in_force(live: dict[str, Any]) -> None:
+    # the page's control topic is latched: a responder that comes back after a crash is sent the
+    # controls in force (all of them, not only the last one posted), without anything posted again
+    assert _post(live["url"] + "/control", {"emotion": "sad", "interest": 2})[0] == 200
+    assert _post(live["url"] + "/control", {"strength": 0.4})[0] == 200
+    want = {"emotion": "sad", "interest": 2, "strength": 0.4}
+    in_force = lambda c: all(c[k] == v for k, v in want.items())  # noqa: E731
+    assert wait_for(lambda: any(map(in_force, read_jsonl(live["controls"]))), timeout=10)
+    (responder,) = [p for p in descendants(live["proc"].pid) if p.cmdline()[-1].endswith("/responder.json")]
+    n = len(read_jsonl(live["controls"]))
+    responder.kill()
+    assert wait_for(lambda: any(map(in_force, read_jsonl(live["controls"])[n:])), timeout=20), \
+        "the restarted responder did not get the controls in force"
 
 
 def test_bad_requests_are_answered_clearly(live: dict[str, Any]) -> None:

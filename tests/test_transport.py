@@ -50,3 +50,29 @@ def test_latest_subscriber_ends_and_the_publisher_sees_it_has_read_to_the_end() 
         s.close()
     pub.close(0)
     ctx.term()
+
+
+def test_a_latched_topic_gives_its_last_message_to_a_latest_subscriber_that_joins_later() -> None:
+    root = Path(tempfile.mkdtemp(dir="/tmp"))
+    ctx = zmq.Context()
+    pubs = {latched: Publisher(ctx, f"t{latched:d}", ipc_endpoints(root, f"t{latched:d}"), latched=latched)
+            for latched in (True, False)}
+    for pub in pubs.values():
+        pub.send(Number(seq=0, value=1.0))
+        pub.send(Number(seq=1, value=2.0))  # sent while nobody listens
+    subs = {latched: Subscriber(ctx, pub.topic, pub.endpoints, LATEST) for latched, pub in pubs.items()}
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and pubs[True].latest_subscribers < 1:
+        for pub in pubs.values():
+            pub.poll_subscriptions()  # what the node loop does between sends
+        time.sleep(0.01)
+    got = {latched: _pump(s, timeout=1.0, until=1) for latched, s in subs.items()}
+    assert [(m.seq, m.value) for m in got[True]] == [(1, 2.0)]  # the newest one, once
+    assert got[False] == [] and pubs[False].latest_subscribers == 1  # the lossy socket alone keeps nothing
+    pubs[True].send(Number(seq=2, value=3.0))  # and the topic goes on as usual
+    assert [m.seq for m in _pump(subs[True], timeout=2.0, until=1)] == [2] and subs[True].drops == 0
+    for s in subs.values():
+        s.close()
+    for pub in pubs.values():
+        pub.close(0)
+    ctx.term()

@@ -10,7 +10,7 @@ Inputs: ``frame`` (camera.Frame) always; ``partner`` (responder.Partner) unless 
 ``silhouettes``, ``pose``, ``signals`` when their params are true; one input per entry of
 ``stats_topics`` (system.NodeStats, port named like the topic, policy latest, not awaited at end).
 Outputs: ``rendered`` (camera.Frame, the composited image, same stamp and seq as the frame) and
-``control`` (control.Control, what the web page sets).
+``control`` (control.Control, the controls in force as set on the web page; latched).
 
 Pairing by seq, overlays and drawing are in :mod:`.compositor` and :mod:`.draw`; the video in
 :mod:`.video`; the page in :mod:`.web`. The video is closed at end of stream and in teardown, so a
@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import queue
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -58,7 +59,8 @@ class Renderer(Node):
     inputs = {"frame": Input(Frame, RELIABLE, "the camera frames: the renderer's clock")}
     outputs = {
         "rendered": Output(Frame, "the composited image of each frame (bgr8; the frame's stamp and seq)"),
-        "control": Output(Control, "run-time controls set on the web page"),
+        "control": Output(Control, "the run-time controls in force, set on the web page (latched: a node that "
+                                   "joins or restarts later gets them)", latched=True),
     }
     params = {
         "partner": Param(bool, True, "subscribe to the partner (responder.Partner) and wait for it per frame"),
@@ -208,8 +210,9 @@ class Renderer(Node):
             except queue.Empty:
                 return
             self.comp.set_control(msg)
-            if publish:
-                self.publish("control", msg)
+            if publish:  # all the controls in force, so the latched copy alone restores them
+                self.publish("control", replace(msg, **{k: v for k, v in self.comp.controls.as_dict().items()
+                                                        if v is not None}))
 
     # ------------------------------------------------------------------- web (server threads)
     def _on_web_control(self, data: Any) -> dict[str, Any]:
