@@ -131,6 +131,27 @@ def test_spline_outline_and_badges() -> None:
         draw.draw_signal_badges(blank(), (0, 0), ["nod"], np.array([1, 0]))
 
 
+def test_badges_of_people_standing_close_are_drawn_apart() -> None:
+    names = ["nod", "shake", "gaze_at_other", "activity", "talking", "laughing"]
+    img = np.zeros((240, 160, 3), np.uint8)
+    anchors = [(40.0, 20.0), (52.0, 24.0), (45.0, 220.0)]  # two heads side by side, one low down
+    rects = [draw.signal_badges_rect(img, a, names) for a in anchors]
+    assert rects[0][1] < rects[1][3] and rects[1][1] < rects[0][3]  # as anchored they overlap
+    shifts = draw.place_apart(rects, img.shape[0])
+    moved = [(x0, y0 + d, x1, y1 + d) for (x0, y0, x1, y1), d in zip(rects, shifts)]
+    for i in range(3):
+        for j in range(i):
+            a, b = moved[i], moved[j]
+            assert not (a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]), (moved, i, j)
+    assert shifts[0] == 0 and shifts[1] > 0 and all(r[3] <= img.shape[0] for r in moved)
+    # what is drawn stays inside the rectangle the layout was given
+    for (x, y), d in zip(anchors, shifts):
+        one = draw.draw_signal_badges(np.zeros_like(img), (x, y + d), names, np.ones(len(names)))
+        ys, xs = np.nonzero(one.any(-1))
+        r = draw.signal_badges_rect(img, (x, y + d), names)
+        assert r[0] <= xs.min() and xs.max() <= r[2] and r[1] <= ys.min() and ys.max() <= r[3]
+
+
 def test_stats_text_and_control_bar() -> None:
     st = NodeStats(node="camera", outputs=[TopicStats(topic="frame", port="frame", rate_hz=25.0)],
                    inputs=[TopicStats(topic="x", drops=3, latency_ms=4.5)], proc_ms_mean=1.25)

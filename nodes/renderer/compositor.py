@@ -301,6 +301,7 @@ class Compositor:
             for body in b.pose.people:
                 if np.shape(body.joints) == (14, 3):
                     heads[body.id] = cam.project(np.asarray(body.joints[0], np.float64))
+        anchors = []
         for i, person in enumerate(b.signals.people):
             if person.id in boxes and boxes[person.id][2] > 0:
                 x, y = boxes[person.id][0], max(boxes[person.id][1] - 18, 0)
@@ -308,7 +309,11 @@ class Compositor:
                 x, y = heads[person.id][0] - 30, max(heads[person.id][1] - 40, 0)
             else:  # nowhere to anchor it: stack in the top-right corner
                 x, y = img.shape[1] * 0.55, 4 + 18 * i
-            draw.draw_signal_badges(img, (max(x, 0), y), list(person.names), person.labels, person.scores)
+            anchors.append((max(x, 0), y))
+        # people standing close (a handshake) would have their rows of badges drawn over each other
+        rects = [draw.signal_badges_rect(img, a, list(p.names)) for a, p in zip(anchors, b.signals.people)]
+        for (x, y), dy, person in zip(anchors, draw.place_apart(rects, img.shape[0]), b.signals.people):
+            draw.draw_signal_badges(img, (x, y + dy), list(person.names), person.labels, person.scores)
 
 
 __all__ = ["Compositor", "Bundle", "ControlState", "scaled_camera", "STYLES", "OVERLAYS"]

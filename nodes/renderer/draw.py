@@ -255,6 +255,37 @@ def put_text(image: np.ndarray, text: str, org: tuple[int, int], colour: Colour 
     return w, h + base
 
 
+def _badge_boxes(shape: tuple[int, ...], anchor: tuple[float, float], names: Sequence[str],
+                 scale: float) -> list[tuple[int, int, int, int, str, int]]:
+    """Where the badges of ``names`` go: (x, y, width, height, text, baseline) each, in a row from
+    ``anchor`` that wraps at the image's right edge."""
+    h_img, w_img = shape[:2]
+    x, y = int(anchor[0]), int(anchor[1])
+    boxes = []
+    for name in names:
+        text = _short(name)
+        (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
+        bw, bh = tw + 6, th + base + 4
+        if x + bw > w_img:  # wrap to the next row instead of running off the image
+            x, y = int(anchor[0]), y + bh + 2
+        if y > h_img:
+            break
+        boxes.append((x, y, bw, bh, text, base))
+        x += bw + 2
+    return boxes
+
+
+def signal_badges_rect(image: np.ndarray, anchor: tuple[float, float], names: Sequence[str],
+                       scale: float | None = None) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) pixels that ``draw_signal_badges`` with the same arguments covers."""
+    scale = text_scale(image, 0.35) if scale is None else scale
+    boxes = _badge_boxes(image.shape, anchor, names, scale)
+    if not boxes:
+        return int(anchor[0]), int(anchor[1]), int(anchor[0]), int(anchor[1])
+    return (min(b[0] for b in boxes), min(b[1] for b in boxes),
+            max(b[0] + b[2] for b in boxes), max(b[1] + b[3] for b in boxes))
+
+
 def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Sequence[str],
                        labels: np.ndarray, scores: np.ndarray | None = None, scale: float | None = None) -> np.ndarray:
     """Social-signal badges of one person: a row of small labelled boxes starting at ``anchor``
@@ -266,11 +297,7 @@ def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Se
     labels = np.asarray(labels).reshape(-1)
     if len(labels) != len(names):
         raise ValueError(f"signal badges: {len(names)} names but {len(labels)} labels; they must match")
-    h_img, w_img = image.shape[:2]
-    x, y = int(anchor[0]), int(anchor[1])
-    for i, name in enumerate(names):
-        text = _short(name)
-        (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
+    for i, (x, y, bw, bh, text, base) in enumerate(_badge_boxes(image.shape, anchor, names, scale)):
         lab = int(labels[i])
         if lab < 0:
             fill, fg = UNKNOWN_GREY, (220, 220, 220)
@@ -278,9 +305,6 @@ def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Se
             fill, fg = (0, 200, 255), (0, 0, 0)
         else:
             fill, fg = (60, 60, 60), (200, 200, 200)
-        bw, bh = tw + 6, th + base + 4
-        if x + bw > w_img:  # wrap to the next row instead of running off the image
-            x, y = int(anchor[0]), y + bh + 2
         cv2.rectangle(image, (x, y), (x + bw, y + bh), fill, -1)
         cv2.rectangle(image, (x, y), (x + bw, y + bh), (255, 255, 255) if lab > 0 else (0, 0, 0), 1)
         cv2.putText(image, text, (x + 3, y + bh - base - 2), _FONT, scale, fg, 1, cv2.LINE_AA)
@@ -289,10 +313,28 @@ def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Se
             sw = int(round(float(np.clip(scores[i], 0.0, 1.0)) * (bw - 2)))
             if sw > 0:
                 cv2.line(image, (x + 1, y + bh - 1), (x + sw, y + bh - 1), (255, 255, 255), 1)
-        x += bw + 2
-        if y > h_img:
-            break
     return image
+
+
+def place_apart(rects: Sequence[tuple[int, int, int, int]], height: int, gap: int = 2) -> list[int]:
+    """Vertical shifts (pixels) that keep boxes (x0, y0, x1, y1) inside ``height`` rows and from
+    overlapping, placed in order: each box moves down below the boxes already placed that it would
+    overlap, or, where that runs past ``height``, up above them (not past the top). Where no
+    such place is free the last one tried is kept: the frame is too crowded."""
+    placed: list[tuple[int, int, int, int]] = []
+    shifts = []
+    for x0, y0, x1, y1 in rects:
+        h = y1 - y0
+        dy = min(0, height - y1)
+        for _ in range(len(placed) + 1):
+            hit = [r for r in placed if r[0] < x1 and x0 < r[2] and r[1] < y1 + dy and y0 + dy < r[3]]
+            if not hit:
+                break
+            down = max(r[3] for r in hit) + gap - y0
+            dy = down if y0 + down + h <= height else max(min(r[1] for r in hit) - gap - h - y0, -y0)
+        shifts.append(dy)
+        placed.append((x0, y0 + dy, x1, y1 + dy))
+    return shifts
 
 
 _SHORT = {"gaze_at_other": "gaze", "talking": "talk", "laughing": "laugh", "activity": "act"}
@@ -406,5 +448,5 @@ __all__ = [
     "EMOTION_COLOURS", "PERSON_COLOURS", "UNKNOWN_GREY", "SKELETON_LINES",
     "person_colour", "partner_colour", "partner_cones", "default_light", "cone_facets", "draw_cones",
     "draw_partner_3d", "closed_bspline", "text_scale", "draw_silhouette", "draw_skeleton", "draw_spline_outline", "put_text",
-    "draw_signal_badges", "stats_lines", "draw_stats", "draw_controls", "contact_sheet",
+    "draw_signal_badges", "signal_badges_rect", "place_apart", "stats_lines", "draw_stats", "draw_controls", "contact_sheet",
 ]
