@@ -216,3 +216,36 @@ def test_person_walking_towards_the_camera_is_not_split():
         draw_person(m, 160, 90 + 1.5 * k, arm=20 if k % 20 < 10 else 0)
         _, people = tracker.update(m.astype(bool))
         assert [p.id for p in people] == [0], k
+
+
+def test_parts_of_one_person_seen_first_are_joined_people_side_by_side_are_not():
+    # head and shoulders offset from the legs, as when a person who stood in the training frames
+    # steps off: the two parts overlap in columns and form one upright person
+    m = np.zeros((H, W), np.uint8)
+    cv2.rectangle(m, (100, 40), (118, 110), 1, -1)
+    cv2.rectangle(m, (112, 115), (130, 190), 1, -1)
+    m[:, 200:] = 0
+    _, people = PersonTracker(min_area=50).update(m.astype(bool))
+    assert [p.id for p in people] == [0] and people[0].area == int(m.sum())
+    # two people side by side, first seen together: two ids
+    _, people = PersonTracker(min_area=50).update(scene(100, 150, ha=150, hb=150))
+    assert [p.id for p in people] == [0, 1]
+
+
+def test_a_stale_track_does_not_take_a_person_who_then_takes_a_stray_fragment():
+    # a ghost (someone's place in the background while it was learnt) is seen, then absorbed;
+    # while its track is still kept, a stray fragment (feet, a shadow) appears beside the person
+    tracker = PersonTracker(min_area=50)
+    both = np.zeros((H, W), np.uint8)
+    draw_person(both, 90, 120)
+    draw_person(both, 150, 120)
+    tracker.update(both.astype(bool))
+    alone = np.zeros((H, W), np.uint8)
+    draw_person(alone, 150, 120)
+    for _ in range(3):
+        tracker.update(alone.astype(bool))
+    cv2.rectangle(alone, (195, 160), (215, 185), 1, -1)
+    _, people = tracker.update(alone.astype(bool))
+    person = [p for p in people if abs(p.centroid[0] - 150) < 10]
+    assert len(person) == 1 and person[0].id == 1
+    assert 0 not in [p.id for p in people]

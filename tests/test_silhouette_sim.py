@@ -157,3 +157,22 @@ def test_model_behind_a_long_still_person_follows_the_lighting_drift():
     # The patch's expected colour moved with the room (the rest adapts at learning_rate too).
     ratio = model.mean_[patch].mean() / room[patch].mean()
     assert ratio == pytest.approx(1.12, abs=0.02)
+
+
+def test_people_in_view_during_training_come_out_one_region_each(handshake_busy):
+    """The demo's start (train_frames 20, people in view): someone who stood still while the
+    background was learnt first appears in parts (head and shoulders, legs); each person must
+    still be one id, never three or four people for two."""
+    frames, masks, _ = handshake_busy
+    ex = SilhouetteExtractor(backend_params={"train_frames": 20})
+    counts = []
+    for k, f in enumerate(frames):
+        r = ex.process(f)
+        if r.ready and r.people:
+            counts.append(len(r.people))
+            for p in r.people:
+                sel = r.labels == p.id + 1
+                # each published person lies mostly on one true person
+                share = masks[k][:, sel].sum(axis=1)
+                assert share.max() >= 0.5 * sel.sum() or sel.sum() < 300, (k, p.id)
+    assert counts and max(counts) == 2

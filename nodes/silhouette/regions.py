@@ -29,6 +29,9 @@ NEWCOMER_MIN_AGE = 25
 NEWCOMER_FREEZE = 1.3
 NEWCOMER_PATIENCE = 10
 _USUAL_AREA_RATE = 0.2
+#: cost of leaving a track or a region out of the assignment; a pair costs its distance in person
+#: heights + size term - overlap, and is kept when cheaper than leaving both out (2 x this)
+UNMATCHED_COST = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,6 +148,10 @@ class PersonTracker:
     max_missed : frames a person may go unseen (occluded, left the view) before the track ends.
     max_distance : gate of the Hungarian assignment: a region further than this many person
         heights from a person's predicted centroid cannot be theirs.
+        A person or a region may also stay unassigned (``UNMATCHED_COST`` each), so the
+        assignment never pairs them up wrongly only to match everyone; regions left over
+        that stand one above the other with an upright union are one new person
+        (``group_stacked``).
     size_weight : weight of |log(area ratio)| against the normalised distance in the cost.
     min_overlap : fraction of a person's predicted pixels that must fall in a region for the
         person to claim it; a region claimed by two or more people is a merge and is split.
@@ -241,6 +248,7 @@ class PersonTracker:
         used_regions: set[int] = set()
         occluded: set[int] = set()
         fresh: list[tuple[np.ndarray, int, int]] = []  # regions that start new tracks
+        unowned: list[tuple[np.ndarray, int, int]] = []  # left-over regions no one claims
 
         # 1. Merges: a region that is the main region of two or more tracks is split between them.
         if tracks and regions:
@@ -269,9 +277,9 @@ class PersonTracker:
                 c = d + self.size_weight * size - frac_track[i, free_r]
                 ok = (d <= self.max_distance) | (frac_track[i, free_r] >= self.min_overlap)
                 cost[a] = np.where(ok, c, _INFEASIBLE)
-            rows, cols = linear_sum_assignment(cost)
+            rows, cols = linear_sum_assignment(_with_unmatched(cost, UNMATCHED_COST))
             for a, b in zip(rows, cols):
-                if cost[a, b] < _INFEASIBLE:
+                if a < len(free_t) and b < len(free_r) and cost[a, b] < _INFEASIBLE:
                     r = free_r[b]
                     t = tracks[free_t[a]]
                     split = None
@@ -299,7 +307,8 @@ class PersonTracker:
             if owner >= 0:
                 assigned[owner] = (*_union(assigned[owner][:3], (crop, x0, y0)), assigned[owner][3])
             else:
-                fresh.append((crop, x0, y0))
+                unowned.append((crop, x0, y0))
+        fresh += group_stacked(unowned)
 
         # 4. Update tracks, start new ones, retire the long unseen.
         labels = np.zeros((h_img, w_img), np.int32)
@@ -454,6 +463,53 @@ def _union(a: tuple[np.ndarray, int, int], b: tuple[np.ndarray, int, int]) -> tu
     out[ya - y0 : ya - y0 + ca.shape[0], xa - x0 : xa - x0 + ca.shape[1]] |= ca
     out[yb - y0 : yb - y0 + cb.shape[0], xb - x0 : xb - x0 + cb.shape[1]] |= cb
     return out, x0, y0
+
+
+def _with_unmatched(cost: np.ndarray, unmatched: float) -> np.ndarray:
+    """(T, R) assignment costs -> (T + R, R + T): each track and each region may also stay
+    unmatched at ``unmatched``. Without this, a full matching prefers two feasible but wrong pairs
+    (a stale track takes someone's region, who then takes a stray fragment) to one right pair."""
+    T, R = cost.shape
+    out = np.full((T + R, R + T), _INFEASIBLE)
+    out[:T, :R] = cost
+    out[np.arange(T), R + np.arange(T)] = unmatched
+    out[T + np.arange(R), np.arange(R)] = unmatched
+    out[T:, R:] = 0.0
+    return out
+
+
+def group_stacked(parts: list[tuple[np.ndarray, int, int]],
+                  max_aspect: float = 0.45) -> list[tuple[np.ndarray, int, int]]:
+    """Join first-sight regions that are parts of one standing person.
+
+    Someone who stood still while the background was learnt is partly background; when they move,
+    the parts of them that differ from it (head and shoulders, legs) come out as separate regions,
+    one above the other. Two regions whose column ranges overlap are one person when their union
+    is no wider than ``max_aspect`` times its height (a standing person, seen from any side, is
+    narrower than half their height; two people side by side are wider).
+
+    Args:
+        parts: (crop (h, w) bool, x0, y0) per region, pixels.
+    Returns:
+        the groups' unions, in the same form.
+    """
+    groups = list(parts)
+    joined = True
+    while joined:
+        joined = False
+        for i in range(len(groups)):
+            for j in range(i + 1, len(groups)):
+                (ca, xa, ya), (cb, xb, yb) = groups[i], groups[j]
+                overlap = min(xa + ca.shape[1], xb + cb.shape[1]) - max(xa, xb)
+                width = max(xa + ca.shape[1], xb + cb.shape[1]) - min(xa, xb)
+                height = max(ya + ca.shape[0], yb + cb.shape[0]) - min(ya, yb)
+                if overlap > 0 and width <= max_aspect * height:
+                    groups[i] = _union(groups[i], groups.pop(j))
+                    joined = True
+                    break
+            if joined:
+                break
+    return groups
 
 
 def _paint(labels: np.ndarray, crop: np.ndarray, x0: int, y0: int, value: int) -> None:
