@@ -494,22 +494,21 @@ def group_stacked(parts: list[tuple[np.ndarray, int, int]],
         the groups' unions, in the same form.
     """
     groups = list(parts)
-    joined = True
-    while joined:
-        joined = False
-        for i in range(len(groups)):
-            for j in range(i + 1, len(groups)):
-                (ca, xa, ya), (cb, xb, yb) = groups[i], groups[j]
-                overlap = min(xa + ca.shape[1], xb + cb.shape[1]) - max(xa, xb)
-                width = max(xa + ca.shape[1], xb + cb.shape[1]) - min(xa, xb)
-                height = max(ya + ca.shape[0], yb + cb.shape[0]) - min(ya, yb)
-                if overlap > 0 and width <= max_aspect * height:
-                    groups[i] = _union(groups[i], groups.pop(j))
-                    joined = True
-                    break
-            if joined:
-                break
-    return groups
+    while True:
+        pair = next(((i, j) for i in range(len(groups)) for j in range(i + 1, len(groups))
+                     if _upright_pair(groups[i], groups[j], max_aspect)), None)
+        if pair is None:
+            return groups
+        groups[pair[0]] = _union(groups[pair[0]], groups.pop(pair[1]))
+
+
+def _upright_pair(a: tuple[np.ndarray, int, int], b: tuple[np.ndarray, int, int], max_aspect: float) -> bool:
+    """Whether two bbox-cropped masks overlap in columns and their union is upright."""
+    (ca, xa, ya), (cb, xb, yb) = a, b
+    overlap = min(xa + ca.shape[1], xb + cb.shape[1]) - max(xa, xb)
+    width = max(xa + ca.shape[1], xb + cb.shape[1]) - min(xa, xb)
+    height = max(ya + ca.shape[0], yb + cb.shape[0]) - min(ya, yb)
+    return overlap > 0 and width <= max_aspect * height
 
 
 def _paint(labels: np.ndarray, crop: np.ndarray, x0: int, y0: int, value: int) -> None:
