@@ -27,11 +27,32 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from typing import TYPE_CHECKING  # noqa: E402
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 cv2.setNumThreads(1)
+
+if TYPE_CHECKING:
+    from nodes.tracker.tracker import Tracker
+
+
+def _track_timed(trk: Tracker, frames: list[np.ndarray], masks: list[np.ndarray]) -> tuple[np.ndarray, float, int]:
+    """Track a sequence -> joints (T, 14, 3) (NaN where nobody was in view), seconds spent on the
+    frames after the first (the first is the track's longer initial search) and their count."""
+    est = np.full((len(frames), 14, 3), np.nan)
+    t_sum, n = 0.0, 0
+    for i, (img, m) in enumerate(zip(frames, masks)):
+        t0 = time.perf_counter()
+        r = trk.update(img, m)
+        dt = time.perf_counter() - t0
+        if r is not None:
+            est[i] = r.joints
+            if i > 0:
+                t_sum += dt
+                n += 1
+    return est, t_sum, n
 
 
 def main() -> int:
@@ -60,7 +81,7 @@ def main() -> int:
         try:
             stream = open_stream(name, seed=scene_seed, frames=args.frames)
         except (ValueError, FileNotFoundError) as exc:
-            print(f"skipping {name}: {exc}", file=sys.stderr)
+            print(f"skipping {name}:{scene_seed}: {exc}", file=sys.stderr)
             continue
         frames, masks, truth3, truth2 = [], [], [], []
         for i in range(stream.n_frames):
@@ -75,17 +96,7 @@ def main() -> int:
             for kind in ("apf", "pf"):
                 trk = Tracker(cam, "left", args.layers, args.particles, prior=prior, plain=kind == "pf",
                               seed=seed)
-                est = np.full_like(truth3, np.nan)
-                t_sum, n = 0.0, 0
-                for i, (img, m) in enumerate(zip(frames, masks)):
-                    t0 = time.perf_counter()
-                    r = trk.update(img, m)
-                    dt = time.perf_counter() - t0
-                    if r is not None:
-                        est[i] = r.joints
-                        if i > 0:
-                            t_sum += dt
-                            n += 1
+                est, t_sum, n = _track_timed(trk, frames, masks)
                 e = np.linalg.norm(est - truth3, axis=-1).mean(axis=1)
                 errs.setdefault((kind, seed), []).append(e)
                 if kind == "apf":
