@@ -2,7 +2,7 @@
 a plain particle filter with the same likelihood evaluations, and speed on one core.
 
     python bench/tracker.py [--frames 200] [--scenarios handshake push wave cmu] [--prior PATH]
-                            [--seeds 0 1 2] [--scene-seeds 0]
+                            [--seeds 0 1 2] [--scene-seeds 0] [--views 1]
 
 Person A (the left one) of each scenario (simulator seed 0, or each of ``--scene-seeds``: tune on
 other seeds than the bench's; the default prior is trained on seeds 100-102) is tracked from the
@@ -15,6 +15,12 @@ PF of 2,560 particles), ratio (mpjpe_mm / mpjpe_pf_mm), the per-seed values (mpj
 mpjpe_pf_mm_per_seed), ms_per_frame (APF, per person and frame, one thread; median over seeds),
 us_per_eval (likelihood time per particle), max_err_mm_last100 (worst frame error over each
 sequence's last 100 frames, any seed), frames (per seed).
+
+``--views 2`` or ``3`` adds the cameras of ``EXTRA_EYES`` (the scene rendered from the side and from
+behind, aimed at person A): the tracker's likelihood sums over the views as in Deutscher et al.'s
+three-camera set-up. The figures stay those of person A against the truth; reproj_px is in the
+first (the default) camera. It shows what the one camera's ambiguities (depth, heading, limbs
+towards the camera) cost each filter.
 """
 from __future__ import annotations
 
@@ -36,9 +42,38 @@ cv2.setNumThreads(1)
 
 if TYPE_CHECKING:
     from nodes.tracker.tracker import Tracker
+    from sim.stream import SimStream
+
+#: camera positions (metres) of the extra views of ``--views``: left of the scene and behind-left,
+#: 2-2.2 m high, aimed at person A's place (-0.5, 0.9, 0); person B does not hide A from either
+EXTRA_EYES = ((-3.8, 2.0, 1.2), (-2.5, 2.2, -3.2))
 
 
-def _track_timed(trk: Tracker, frames: list[np.ndarray], masks: list[np.ndarray]) -> tuple[np.ndarray, float, int]:
+def _render_views(stream: SimStream, seed: int, views: int) -> tuple[list, list, np.ndarray, np.ndarray, list]:
+    """Frames and person A's masks (per frame: arrays with one view, lists of ``views`` with more),
+    person A's true joints (T, 14, 3) metres and their projections (T, 14, 2) in the first view."""
+    from body.camera import Camera
+    from sim.render import Renderer
+
+    cams = [stream.camera] + [Camera.look_at(eye, (-0.5, 0.9, 0.0), 55.0, *stream.size)
+                              for eye in EXTRA_EYES[:views - 1]]
+    extra = [Renderer(stream.scenario, cam, seed=seed) for cam in cams[1:]]
+    frames, masks, truth3, truth2 = [], [], [], []
+    for i in range(stream.n_frames):
+        img, tr = stream.render_with_truth(i)
+        truth3.append(tr.joints3d[0])
+        truth2.append(tr.joints2d[0])
+        if not extra:
+            frames.append(img)
+            masks.append(tr.masks[0])
+            continue
+        rendered = [(img, tr)] + [r.render(i) for r in extra]
+        frames.append([im for im, _ in rendered])
+        masks.append([t.masks[0] for _, t in rendered])
+    return frames, masks, np.array(truth3), np.array(truth2), cams
+
+
+def _track_timed(trk: Tracker, frames: list, masks: list) -> tuple[np.ndarray, float, int]:
     """Track a sequence -> joints (T, 14, 3) (NaN where nobody was in view), seconds spent on the
     frames after the first (the first is the track's longer initial search) and their count."""
     est = np.full((len(frames), 14, 3), np.nan)
@@ -70,6 +105,8 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="tracker seeds (runs per filter)")
     ap.add_argument("--scene-seeds", type=int, nargs="+", default=[0],
                     help="simulator seeds of the sequences")
+    ap.add_argument("--views", type=int, default=1, choices=range(1, len(EXTRA_EYES) + 2),
+                    help="cameras: 1 (monocular, the issue's figures) or more (see EXTRA_EYES)")
     args = ap.parse_args()
     prior = None if args.prior == "none" else load_default_prior(progress=True) if args.prior == "default" \
         else MotionPrior.load(args.prior)
@@ -83,18 +120,11 @@ def main() -> int:
         except (ValueError, FileNotFoundError) as exc:
             print(f"skipping {name}:{scene_seed}: {exc}", file=sys.stderr)
             continue
-        frames, masks, truth3, truth2 = [], [], [], []
-        for i in range(stream.n_frames):
-            img, tr = stream.render_with_truth(i)
-            frames.append(img)
-            masks.append(tr.masks[0])
-            truth3.append(tr.joints3d[0])
-            truth2.append(tr.joints2d[0])
-        truth3, truth2 = np.array(truth3), np.array(truth2)
-        cam = stream.camera
+        frames, masks, truth3, truth2, cams = _render_views(stream, scene_seed, args.views)
+        cam = cams[0]
         for seed in args.seeds:
             for kind in ("apf", "pf"):
-                trk = Tracker(cam, "left", args.layers, args.particles, prior=prior, plain=kind == "pf",
+                trk = Tracker(cams, "left", args.layers, args.particles, prior=prior, plain=kind == "pf",
                               seed=seed)
                 est, t_sum, n = _track_timed(trk, frames, masks)
                 e = np.linalg.norm(est - truth3, axis=-1).mean(axis=1)
@@ -109,7 +139,8 @@ def main() -> int:
         n_total += len(frames)
 
     # likelihood cost per particle evaluation
-    obs = make_observation(frames[0], masks[0])
+    frame0, mask0 = (frames[0], masks[0]) if args.views == 1 else (frames[0][0], masks[0][0])
+    obs = make_observation(frame0, mask0)                       # one view's cost
     L = ConeLikelihood(cam)
     from body.pose import neutral_pose
     P = neutral_pose()[None] + np.random.default_rng(0).normal(size=(args.particles, 28)) * 0.05
@@ -134,7 +165,7 @@ def main() -> int:
         "max_err_mm_last100": round(float(np.max(last100)) * 1e3, 1),
         "frames": n_total,
         "layers": args.layers, "particles": args.particles, "seeds": args.seeds,
-        "scene_seeds": args.scene_seeds,
+        "scene_seeds": args.scene_seeds, "views": args.views,
         "scenarios": args.scenarios, "prior": args.prior,
         "load_average": round(os.getloadavg()[0], 2),
     }

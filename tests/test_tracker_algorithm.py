@@ -4,15 +4,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from body.camera import default_camera
+from body.camera import Camera, default_camera
 from body.kinematics import forward_kinematics
 from body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
 from body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
 from body.skeleton import DEFAULT_DIMS
 from nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
 from nodes.tracker.init import bbox_from_mask, place_from_bbox
-from nodes.tracker.likelihood import ConeLikelihood, make_observation
-from nodes.tracker.tracker import track_sequence
+from nodes.tracker.likelihood import ConeLikelihood, MultiViewLikelihood, make_observation
+from nodes.tracker.tracker import Tracker, track_sequence
 from sim.scenarios import make_scenario
 
 CAM = default_camera()
@@ -130,3 +130,58 @@ def test_tracker_follows_rendered_sequence() -> None:
     assert err.mean() < 0.15, f"mean joint error {err.mean():.3f} m"
     # stays with the person: the pelvis within 0.25 m of the truth on every frame
     assert np.abs(out["poses"][:, [0, 2]] - P[:, [0, 2]]).max() < 0.25
+
+
+#: a second camera left of the scene, aimed at person A (as bench/tracker.py's ``--views 2``)
+SIDE_CAM = Camera.look_at((-3.8, 2.0, 1.2), (-0.5, 0.9, 0.0), 55.0, 320, 240)
+
+
+def test_a_second_view_sees_the_depth_one_camera_barely_does() -> None:
+    P = _pose()
+    obs = [make_observation(None, rasterise_silhouettes(P[None], DEFAULT_DIMS, cam)[0]) for cam in (CAM, SIDE_CAM)]
+    ray = P[:3] - CAM.centre
+    ray[1] = 0.0
+    ray /= np.linalg.norm(ray)
+    X = np.vstack([P] + [np.r_[P[:3] + d * ray, P[3:]] for d in (-0.3, -0.2, 0.2, 0.3)])   # along the view
+    mono = MultiViewLikelihood([CAM])(X, obs[:1])
+    np.testing.assert_array_equal(mono, ConeLikelihood(CAM)(X, obs[0]))   # one view: the plain likelihood
+    both = MultiViewLikelihood([CAM, SIDE_CAM])(X, obs)
+    margin_mono, margin_both = mono[0] - mono[1:], both[0] - both[1:]
+    assert (margin_mono > 0).all()
+    assert (margin_both > 3 * margin_mono).all(), f"two views {margin_both}, one view {margin_mono}"
+    # a view where the person is out of sight (empty mask) is left out, not counted as a miss
+    empty = make_observation(None, np.zeros((240, 320), bool))
+    np.testing.assert_allclose(MultiViewLikelihood([CAM, SIDE_CAM])(X, [obs[0], empty]), mono)
+
+
+def test_two_cameras_track_the_body_closer_than_one() -> None:
+    err = {1: [], 2: []}
+    for seed in (5, 6):
+        sc = make_scenario("handshake", seed=seed)
+        P = sc.poses_a[::2][:20]
+        front = rasterise_silhouettes(P, sc.dims_a, CAM)
+        side = rasterise_silhouettes(P, sc.dims_a, SIDE_CAM)
+        truth = forward_kinematics(P, sc.dims_a)
+        one = track_sequence([None] * len(P), front, CAM, n_layers=5, n_particles=128, seed=0)
+        two = track_sequence([None] * len(P), [[a, b] for a, b in zip(front, side)], [CAM, SIDE_CAM],
+                             n_layers=5, n_particles=128, seed=0)
+        err[1].append(np.linalg.norm(one["joints"] - truth, axis=-1).mean())
+        err[2].append(np.linalg.norm(two["joints"] - truth, axis=-1).mean())
+    one, two = np.mean(err[1]), np.mean(err[2])
+    assert two < 0.12 and two < 0.8 * one, f"two cameras {two:.3f} m, one camera {one:.3f} m"
+
+
+def test_several_cameras_need_one_mask_per_camera() -> None:
+    mask = rasterise_silhouettes(_pose()[None], DEFAULT_DIMS, CAM)[0]
+    trk = Tracker([CAM, SIDE_CAM], n_layers=2, n_particles=16)
+    with pytest.raises(ValueError, match="2 cameras: give a list of 2 masks"):
+        trk.update(None, mask)
+    with pytest.raises(ValueError, match="2 cameras: give a list of 2 frames"):
+        trk.update([None], [mask, mask])
+    with pytest.raises(ValueError, match="3 observations for 2 cameras"):
+        MultiViewLikelihood([CAM, SIDE_CAM])(_pose()[None], [make_observation(None, mask)] * 3)
+    with pytest.raises(ValueError, match="non-empty sequence of Cameras"):
+        Tracker([])
+    # the person out of the reference view: no estimate, no error
+    assert trk.update(None, [np.zeros_like(mask), mask]) is None
+    assert trk.update(None, [mask, mask]) is not None

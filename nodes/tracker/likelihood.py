@@ -15,6 +15,9 @@ covers. A fourth, ``S_g``, asks a foot to touch the ground plane (``ConeLikeliho
 the calibrated camera ties the depth to the image row of the feet. The log-likelihood returned is
 ``-(w_sil S_r + w_edge S_e + w_cover S_c + w_ground S_g) * gain``.
 
+Several calibrated cameras (Deutscher et al. use three) combine in ``MultiViewLikelihood``: the
+image costs of every view are summed over one forward kinematics.
+
 Everything is vectorised over N particles x points: one forward kinematics call (``body.kinematics.anchor_points``), one
 projection of the 23 anchor points, the sample points of all cones as one small matmul in float32,
 one flat gather from the frame's per-pixel cost map (``Observation.cost``) and the coverage test
@@ -24,6 +27,7 @@ as a matmul plus in-place array arithmetic. Pixel units throughout; out-of-image
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -133,6 +137,15 @@ def make_observation(image: np.ndarray | None, mask: np.ndarray, n_cover: int = 
     else:
         cover = np.zeros((0, 2), np.float32)
     return Observation(fg, edge, cover, W, H, _cost_map(fg, edge))
+
+
+def pose_anchor_points(P: np.ndarray, dims: BodyDims) -> np.ndarray:
+    """(N, 28) poses -> (N, A, 3) float32 anchor points in metres (one forward kinematics, shared by
+    every camera's view); a clear error for a wrong shape."""
+    P = np.asarray(P, dtype=np.float64)
+    if P.ndim != 2 or P.shape[1] != 28:
+        raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
+    return anchor_points(P, dims).astype(np.float32)
 
 
 class ConeLikelihood:
@@ -274,10 +287,13 @@ class ConeLikelihood:
     def evaluate(self, P: np.ndarray, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
         """(N, 28) -> image costs (N, 3) S_r, S_e, S_c and ground costs (N,) S_g from one forward
         kinematics (``combine`` turns them into log-likelihoods)."""
-        P = np.asarray(P, dtype=np.float64)
-        if P.ndim != 2 or P.shape[1] != 28:
-            raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
-        pts = anchor_points(P, self.dims).astype(np.float32)
+        pts = pose_anchor_points(P, self.dims)
+        g = self.ground_cost(pts) if self.w_ground else np.zeros(len(pts), np.float32)
+        return self.image_costs(pts, obs), g
+
+    def image_costs(self, pts: np.ndarray, obs: Observation) -> np.ndarray:
+        """(N, A, 3) float32 anchor points (``pose_anchor_points``) -> (N, 3) S_r, S_e, S_c of this
+        camera's view; poses with an anchor behind the camera get 1."""
         c, rho, ok = self._project(pts)
         u, v = self._points_uv(c, rho)
         W, H = obs.width, obs.height
@@ -295,9 +311,8 @@ class ConeLikelihood:
         S_c = self.coverage_cost(c, rho, obs.cover_uv) if self.w[2] else np.zeros_like(S_r)
         out = np.stack([S_r, S_e, S_c], axis=1)
         out[~ok] = 1.0
-        self.n_evals += P.shape[0]
-        g = self.ground_cost(pts) if self.w_ground else np.zeros_like(S_r)
-        return out, g
+        self.n_evals += pts.shape[0]
+        return out
 
     def __call__(self, P: np.ndarray, obs: Observation) -> np.ndarray:
         """(N, 28) poses -> (N,) float64 log-likelihoods ``-gain * (w . [S_r, S_e, S_c] + w_ground S_g)``."""
@@ -308,4 +323,47 @@ class ConeLikelihood:
         return -self.gain * (terms @ np.asarray(self.w, np.float32) + self.w_ground * ground).astype(np.float64)
 
 
-__all__ = ["Observation", "edge_map", "make_observation", "ConeLikelihood", "N_SEGMENTS"]
+class MultiViewLikelihood:
+    """The weighting function over several calibrated cameras (Deutscher et al. use three): the
+    image costs of every view in which the person is seen are summed, the ground term counts once.
+
+    With one camera it is ``ConeLikelihood`` itself. A second view sees the depth and the heading
+    that one silhouette leaves open (a limb towards the camera, a person turned towards or away).
+
+    Args:
+        cameras: the calibrated cameras, the first one the reference view (initialisation, 2D).
+        dims: body dimensions of the tracked person; ``likelihood_kw`` go to every view's
+            :class:`ConeLikelihood`.
+    """
+
+    def __init__(self, cameras: Sequence[Camera], dims: BodyDims = DEFAULT_DIMS, **likelihood_kw) -> None:
+        if not cameras:
+            raise ValueError("MultiViewLikelihood needs at least one camera")
+        self.views = [ConeLikelihood(cam, dims, **likelihood_kw) for cam in cameras]
+        self.dims = dims
+
+    def evaluate(self, P: np.ndarray, obs: Sequence[Observation]) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 28) poses, one Observation per camera -> image costs (N, 3) summed over the views
+        whose observation is not empty (0 <= each <= views seen), ground costs (N,)."""
+        if len(obs) != len(self.views):
+            raise ValueError(f"{len(obs)} observations for {len(self.views)} cameras; give one per camera")
+        pts = pose_anchor_points(P, self.dims)
+        terms = np.zeros((len(pts), 3), np.float32)
+        for view, o in zip(self.views, obs):
+            if not o.empty:
+                terms += view.image_costs(pts, o)
+        head = self.views[0]
+        g = head.ground_cost(pts) if head.w_ground else np.zeros(len(pts), np.float32)
+        return terms, g
+
+    def __call__(self, P: np.ndarray, obs: Sequence[Observation]) -> np.ndarray:
+        """(N, 28) poses -> (N,) float64 log-likelihoods (``ConeLikelihood.combine`` of the sums)."""
+        return self.combine(*self.evaluate(P, obs))
+
+    def combine(self, terms: np.ndarray, ground: np.ndarray) -> np.ndarray:
+        """Summed image costs (N, 3) and ground costs (N,) -> (N,) float64 log-likelihoods."""
+        return self.views[0].combine(terms, ground)
+
+
+__all__ = ["Observation", "edge_map", "make_observation", "ConeLikelihood", "MultiViewLikelihood",
+           "pose_anchor_points", "N_SEGMENTS"]

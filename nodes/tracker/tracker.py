@@ -2,7 +2,8 @@
 
 Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006):
 
-1. maps of the person's mask and the frame (``likelihood.make_observation``);
+1. maps of the person's mask and the frame (``likelihood.make_observation``), one per camera when
+   several calibrated cameras see the scene (``likelihood.MultiViewLikelihood`` sums their costs);
 2. no track yet, or the track was lost: particles around the silhouette's guess (``init``: placed
    from the bounding box, neutral pose, heading from the side of the frame, spread by
    ``init_spread`` x ``INIT_STD``) and a longer first search (``init_layers`` layers, diffusion
@@ -20,7 +21,7 @@ Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Iterable, Sequence
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from body.skeleton import DEFAULT_DIMS, BodyDims
 
 from .apf import AnnealedParticleFilter, ParticleFilter
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
-from .likelihood import ConeLikelihood, make_observation
+from .likelihood import MultiViewLikelihood, Observation, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
 
@@ -67,11 +68,20 @@ class _RandomWalk:
         return P + rng.normal(size=P.shape) * self.std * scale
 
 
+def _per_camera(x: object, n: int) -> bool:
+    """True when ``x`` is a list/tuple of ``n`` entries or an array stacked over ``n`` cameras."""
+    if isinstance(x, np.ndarray):
+        return x.ndim >= 3 and len(x) == n
+    return isinstance(x, (list, tuple)) and len(x) == n
+
+
 class Tracker:
-    """Tracks one person through frames + masks.
+    """Tracks one person through frames + masks of one camera, or of several calibrated cameras.
 
     Args:
-        camera: calibrated camera of the frames.
+        camera: calibrated camera of the frames, or a sequence of cameras that see the same scene
+            at the same instants (``update`` then takes one frame and one mask per camera; the
+            first camera is the reference view: the track starts from its silhouette).
         side: "left" / "right": the person's side of the frame (sets the initial heading).
         n_layers, n_particles: annealing layers and particles per layer (Deutscher: 10 x 256).
         prior: learned MotionPrior, or None for a plain random walk.
@@ -96,14 +106,17 @@ class Tracker:
         likelihood_kw: keyword arguments of ``ConeLikelihood``.
     """
 
-    def __init__(self, camera: Camera, side: str = "left", n_layers: int = 10, n_particles: int = 256,
+    def __init__(self, camera: Camera | Sequence[Camera], side: str = "left", n_layers: int = 10, n_particles: int = 256,
                  prior: MotionPrior | None = None, plain: bool = False, w_temporal: float = 1.0,
                  temporal_sigma: float = 3.0, w_prior: float = 0.5, resid_std: float = 0.15,
                  init_layers: int = 20, init_spread: float = 0.5, predict_scale: float = 3.0,
                  apf_diffusion: float = 0.5, apf_min: float = 0.05, apf_max: float = 3.0,
                  apf_shrink: float = 1.0, init_min: float = 0.01, init_max: float = 1.0,
                  dims: BodyDims | None = None, seed: int = 0, likelihood_kw: dict | None = None) -> None:
-        self.camera = camera
+        self.cameras = [camera] if isinstance(camera, Camera) else list(camera)
+        if not self.cameras or not all(isinstance(c, Camera) for c in self.cameras):
+            raise ValueError(f"camera={camera!r}: expected a Camera or a non-empty sequence of Cameras")
+        self.camera = self.cameras[0]
         self.side = side
         self.n_layers = int(n_layers)
         self.n_particles = int(n_particles)
@@ -122,7 +135,7 @@ class Tracker:
         self.fixed_dims = dims
         self.dims: BodyDims = dims or DEFAULT_DIMS
         self.likelihood_kw = dict(likelihood_kw or {})
-        self.likelihood = ConeLikelihood(camera, self.dims, **self.likelihood_kw)
+        self.likelihood = MultiViewLikelihood(self.cameras, self.dims, **self.likelihood_kw)
         self.filter = (ParticleFilter(self.n_layers * self.n_particles, seed=self.rng) if self.plain else
                        AnnealedParticleFilter(self.n_layers, self.n_particles, seed=self.rng,
                                               max_std=self.predictor.std * apf_max, diffusion=apf_diffusion,
@@ -159,20 +172,39 @@ class Tracker:
             return np.zeros(len(X))
         return self.w_prior * self.predictor.log_prior(X, self.resid_std)
 
-    def update(self, image: np.ndarray | None, mask: np.ndarray) -> TrackResult | None:
+    def _observations(self, image: np.ndarray | None | Sequence[np.ndarray | None],
+                      mask: np.ndarray | Sequence[np.ndarray]) -> list[Observation]:
+        """One Observation per camera from one frame and mask (one camera) or sequences of them."""
+        if len(self.cameras) == 1:
+            return [make_observation(image, mask, rng=self.rng)]
+        n = len(self.cameras)
+        if not _per_camera(mask, n):
+            raise ValueError(f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
+                             f"(got {type(mask).__name__} of shape {np.shape(mask)})")
+        images = [None] * n if image is None else image
+        if not _per_camera(images, n):
+            raise ValueError(f"the tracker has {n} cameras: give a list of {n} frames (or None), one per "
+                             f"camera (got {type(image).__name__})")
+        return [make_observation(im, m, rng=self.rng) for im, m in zip(images, mask)]
+
+    def update(self, image: np.ndarray | None | Sequence[np.ndarray | None],
+               mask: np.ndarray | Sequence[np.ndarray]) -> TrackResult | None:
         """Track one frame. ``image`` (H, W[, 3]) uint8 or None; ``mask`` (H, W) bool of this
-        person. Returns None (and keeps the track) when the mask is empty."""
-        obs = make_observation(image, mask, rng=self.rng)
-        if obs.empty:
+        person; with several cameras, lists of them in the cameras' order. Returns None (and keeps
+        the track) when the reference view's mask is empty; another view with an empty mask (the
+        person out of its sight) is left out of this frame's likelihood."""
+        obs = self._observations(image, mask)
+        if obs[0].empty:
             return None
         start = not self.tracking
         if start:
-            bbox = bbox_from_mask(np.asarray(mask, bool))
+            ref_mask = mask if len(self.cameras) == 1 else mask[0]
+            bbox = bbox_from_mask(np.asarray(ref_mask, bool))
             P0, dims = initial_particles(bbox, self.side, self.camera, self.filter.n_particles,
                                          self.rng, spread=self.init_spread)
             if self.fixed_dims is None:
                 self.dims = dims
-                self.likelihood = ConeLikelihood(self.camera, dims, **self.likelihood_kw)
+                self.likelihood = MultiViewLikelihood(self.cameras, dims, **self.likelihood_kw)
             self.filter.initialise(P0)
             self.predictor.reset()
 
@@ -189,7 +221,7 @@ class Tracker:
             scale = 1.0 if self.plain else self.predict_scale
             est = self.filter.step(loglik, lambda P, rng: self.predictor(P, rng, scale=scale))
         terms, ground = self.likelihood.evaluate(est.best[None], obs)
-        cost = float(terms.sum())
+        cost = float(terms.sum()) / sum(not o.empty for o in obs)     # per view seen: 0 best, 3 worst
         image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
         self.prev = est.mean.copy()
@@ -201,14 +233,16 @@ class Tracker:
                            est.ess, image_ll, cost, lost, start)
 
 
-def track_sequence(frames: Iterable[np.ndarray | None], masks: Iterable[np.ndarray], camera: Camera,
+def track_sequence(frames: Iterable[np.ndarray | None | Sequence[np.ndarray | None]],
+                   masks: Iterable[np.ndarray | Sequence[np.ndarray]], camera: Camera | Sequence[Camera],
                    side: str = "left", **tracker_kw) -> dict[str, np.ndarray]:
     """Track one person offline.
 
     Args:
-        frames: T images (H, W[, 3]) uint8, or None entries for mask-only tracking.
-        masks: T (H, W) bool masks of the person.
-        camera: the camera; ``side`` and ``tracker_kw`` go to :class:`Tracker`.
+        frames: T images (H, W[, 3]) uint8, or None entries for mask-only tracking; with several
+            cameras each entry is a list of one image (or None) per camera.
+        masks: T (H, W) bool masks of the person (several cameras: T lists of one per camera).
+        camera: the camera, or the cameras; ``side`` and ``tracker_kw`` go to :class:`Tracker`.
     Returns:
         dict with ``poses`` (T, 28), ``joints`` (T, 14, 3) float32 (NaN where nobody was in
         view), ``ess`` (T,), ``log_likelihood`` (T,), ``lost`` (T,) bool, ``dims`` (BodyDims).
