@@ -106,8 +106,8 @@ class Tracker:
         likelihood_kw: keyword arguments of ``ConeLikelihood``.
     """
 
-    def __init__(self, camera: Camera | Sequence[Camera], side: str = "left", n_layers: int = 10, n_particles: int = 256,
-                 prior: MotionPrior | None = None, plain: bool = False, w_temporal: float = 1.0,
+    def __init__(self, camera: Camera | Sequence[Camera], side: str = "left", n_layers: int = 10,
+                 n_particles: int = 256, prior: MotionPrior | None = None, plain: bool = False, w_temporal: float = 1.0,
                  temporal_sigma: float = 3.0, w_prior: float = 0.5, resid_std: float = 0.15,
                  init_layers: int = 20, init_spread: float = 0.5, predict_scale: float = 3.0,
                  apf_diffusion: float = 0.5, apf_min: float = 0.05, apf_max: float = 3.0,
