@@ -11,7 +11,7 @@ import dataclasses
 import json
 import os
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterator
 
 import cv2
 import numpy as np
@@ -154,31 +154,34 @@ def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
     return cap
 
 
-def extract_video(
-    path: str | os.PathLike[str],
-    out_npz: str | os.PathLike[str],
-    max_frames: int | None = None,
-    train_frames: int = 30,
-    **params: Any,
-) -> dict[str, Any]:
-    """Run ``SilhouetteExtractor(**params)`` over a video file and save every person of every frame.
-
-    With the Horprasert backend the background is first fitted (robustly: people may be in
-    view) on the first ``train_frames`` frames, then every frame from the first is processed,
-    so all frames get results. Writes ``out_npz`` (np.savez_compressed), one row per person and
-    frame, P rows in total:
-
-      frame (P,) int32, id (P,) int32, side (P,) str, bbox (P, 4) int32 [x, y, w, h],
-      area (P,) int32, centroid (P, 2) float32 [x, y], height (P,) float32, merged (P,) bool,
-      ctrl (P, n_ctrl, 2) float32 and ref_point (P, 2) float32 (NaN where no outline),
-      n_frames () int, frame_size (2,) int [H, W], fps () float, params () str (JSON).
-
-    Returns a summary dict (n_frames, n_rows, max_people, fps, frame_size, out_npz).
-    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
-    """
-    extractor = SilhouetteExtractor(**params)
+def video_fps(path: str | os.PathLike[str]) -> float:
+    """The frame rate a video file declares (0.0 when it declares none)."""
     cap = _open_video(path)
-    fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    try:
+        return float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    finally:
+        cap.release()
+
+
+def video_frame_count(path: str | os.PathLike[str]) -> int:
+    """The frame count a video file declares (0 when unknown; a guide for progress, not a promise)."""
+    cap = _open_video(path)
+    try:
+        return max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
+    finally:
+        cap.release()
+
+
+def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max_frames: int | None = None,
+               train_frames: int = 30) -> Iterator[tuple[np.ndarray, FrameResult]]:
+    """Yield (frame (H, W, 3) uint8 BGR, ``extractor.process(frame)``) for every frame of a video.
+
+    With the Horprasert backend the background is first fitted (robustly: people may be in view)
+    on the first ``train_frames`` frames, then the video is read again from its first frame, so
+    every frame gets a result. Raises FileNotFoundError for a missing file and ValueError for one
+    OpenCV cannot decode (fewer than 2 training frames, or no frame at all).
+    """
+    cap = _open_video(path)
     if isinstance(extractor.subtractor, HorprasertSubtractor):
         train = []
         while len(train) < train_frames:
@@ -192,24 +195,52 @@ def extract_video(
         extractor.fit_background(train, robust=True)
         cap.release()
         cap = _open_video(path)
+    n = 0
+    try:
+        while max_frames is None or n < max_frames:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            yield frame, extractor.process(frame)
+            n += 1
+    finally:
+        cap.release()
+    if n == 0:
+        raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
+
+
+def extract_video(
+    path: str | os.PathLike[str],
+    out_npz: str | os.PathLike[str],
+    max_frames: int | None = None,
+    train_frames: int = 30,
+    **params: Any,
+) -> dict[str, Any]:
+    """Run ``SilhouetteExtractor(**params)`` over a video file and save every person of every frame.
+
+    The frames come from :func:`iter_video` (with the Horprasert backend, the background is first
+    fitted on the first ``train_frames`` frames, so all frames get results). Writes ``out_npz``
+    (np.savez_compressed), one row per person and frame, P rows in total:
+
+      frame (P,) int32, id (P,) int32, side (P,) str, bbox (P, 4) int32 [x, y, w, h],
+      area (P,) int32, centroid (P, 2) float32 [x, y], height (P,) float32, merged (P,) bool,
+      ctrl (P, n_ctrl, 2) float32 and ref_point (P, 2) float32 (NaN where no outline),
+      n_frames () int, frame_size (2,) int [H, W], fps () float, params () str (JSON).
+
+    Returns a summary dict (n_frames, n_rows, max_people, fps, frame_size, out_npz).
+    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
+    """
+    extractor = SilhouetteExtractor(**params)
     rows: list[tuple[int, Person]] = []
     n_frames = 0
     max_people = 0
     size: tuple[int, int] | None = None
-    try:
-        while max_frames is None or n_frames < max_frames:
-            ok, frame = cap.read()
-            if not ok:
-                break
-            size = frame.shape[:2]
-            result = extractor.process(frame)
-            rows.extend((result.index, p) for p in result.people)
-            max_people = max(max_people, len(result.people))
-            n_frames += 1
-    finally:
-        cap.release()
-    if n_frames == 0:
-        raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
+    fps = video_fps(path)
+    for frame, result in iter_video(path, extractor, max_frames, train_frames):
+        size = frame.shape[:2]
+        rows.extend((result.index, p) for p in result.people)
+        max_people = max(max_people, len(result.people))
+        n_frames += 1
     n = extractor.n_ctrl
     nan2 = np.full(2, np.nan)
     np.savez_compressed(

@@ -22,15 +22,7 @@ from bus import Input, Node, Output, Param
 from messages import Frame, Pose3D, Silhouettes, TrackedBody
 
 from .prior import resolve_prior
-from .tracker import Tracker
-
-SIDES = ("left", "right")
-
-
-def _check_people(v: list) -> str | None:
-    if not 1 <= len(v) <= 2 or any(s not in SIDES for s in v) or len(set(v)) != len(v):
-        return f"{v!r}: expected one or two distinct sides out of {list(SIDES)}"
-    return None
+from .tracker import SIDES, Tracker, people_problem
 
 
 def _check_prior(v: str) -> str | None:
@@ -64,7 +56,7 @@ class TrackerNode(Node):
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
-        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right", check=_check_people),
+        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right", check=people_problem),
         "camera": Param(dict, {}, "calibration: {fx, fy, cx, cy, width, height, R, t} or {eye, target, fov_deg, "
                         "width, height}; empty: the simulator's default camera at the frame size", check=camera_param_problem),
         "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "

@@ -68,6 +68,17 @@ class _RandomWalk:
         return P + rng.normal(size=P.shape) * self.std * scale
 
 
+#: the sides of the frame a tracker can follow (as the silhouette node labels its people)
+SIDES = ("left", "right")
+
+
+def people_problem(people: list) -> str | None:
+    """None when ``people`` names one or two distinct sides out of SIDES, else what is wrong."""
+    if not 1 <= len(people) <= 2 or any(s not in SIDES for s in people) or len(set(people)) != len(people):
+        return f"{people!r}: expected one or two distinct sides out of {list(SIDES)}"
+    return None
+
+
 def _per_camera(x: object, n: int) -> bool:
     """True when ``x`` is a list/tuple of ``n`` entries or an array stacked over ``n`` cameras."""
     if isinstance(x, np.ndarray):
@@ -267,4 +278,4 @@ def track_sequence(frames: Iterable[np.ndarray | None | Sequence[np.ndarray | No
             "log_likelihood": np.array(ll), "lost": np.array(lost, bool), "dims": tr.dims}
 
 
-__all__ = ["Tracker", "TrackResult", "track_sequence"]
+__all__ = ["Tracker", "TrackResult", "track_sequence", "SIDES", "people_problem"]

@@ -1,0 +1,106 @@
+"""``counterpart track VIDEO --out poses.npz``: offline 3D tracking of a video file.
+
+The silhouette node's background model and the tracker's annealed particle filter, frame by frame,
+without the bus (``nodes.tracker.offline.track_video``); the layout of the output file is in its
+docstring. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
+Exit code 0 on success, 2 on bad input, 130 when interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import yaml
+
+from body.camera import Camera, camera_param_problem
+
+from .prior import resolve_prior
+from .tracker import SIDES
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("video", help="the video file (anything OpenCV decodes)")
+    p.add_argument("--out", required=True, help="output .npz (joints, poses, ess, ... per frame and side)")
+    p.add_argument("--people", nargs="+", default=["left"], choices=SIDES,
+                   help="sides of the frame to track: left, right or both (default: left)")
+    p.add_argument("--camera", default=None, metavar="FILE",
+                   help="calibration, JSON or YAML: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
+                        "fov_deg, width, height} (default: the simulator's camera at the video's size)")
+    p.add_argument("--prior", default="default",
+                   help="motion prior: 'default' (built from the simulator when missing), 'none', or a .npz")
+    p.add_argument("--layers", type=int, default=10, help="annealing layers per frame")
+    p.add_argument("--particles", type=int, default=256, help="particles per layer")
+    p.add_argument("--max-frames", type=int, default=None, help="track at most this many frames")
+    p.add_argument("--train-frames", type=int, default=30,
+                   help="first frames the background model is fitted on (people may be in view)")
+    p.add_argument("--backend", default="horprasert", help="background subtractor of the silhouette node")
+    p.add_argument("--seed", type=int, default=0, help="seed of the particle filters")
+
+
+def load_camera(path: str) -> Camera:
+    """A Camera from a JSON or YAML calibration file; ValueError naming the file and the bad key."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = yaml.safe_load(f)
+    except OSError as exc:
+        raise ValueError(f"--camera {path!r}: cannot read it ({exc.strerror})") from None
+    except yaml.YAMLError as exc:
+        raise ValueError(f"--camera {path!r}: not JSON or YAML ({exc})") from None
+    if not isinstance(data, dict) or not data:
+        raise ValueError(f"--camera {path!r}: expected a mapping of calibration keys")
+    problem = camera_param_problem(data)
+    if problem:
+        raise ValueError(f"--camera {path!r}: {problem}")
+    return Camera.from_dict(data)
+
+
+class _Progress:
+    """Prints 'frame i/N, x fps' on stderr at most every ``every`` seconds."""
+
+    def __init__(self, every: float = 2.0) -> None:
+        self.every = every
+        self.t0 = self.last = time.monotonic()
+
+    def __call__(self, done: int, declared: int) -> None:
+        now = time.monotonic()
+        if now - self.last >= self.every:
+            self.last = now
+            of = f"/{declared}" if declared else ""
+            print(f"[track] frame {done}{of}, {done / (now - self.t0):.1f} fps", file=sys.stderr, flush=True)
+
+
+def main(args: argparse.Namespace) -> int:
+    from .offline import track_video
+
+    for name in ("layers", "particles", "train_frames", "max_frames"):
+        if getattr(args, name) is not None and getattr(args, name) < 1:
+            print(f"counterpart track: --{name.replace('_', '-')} must be at least 1", file=sys.stderr)
+            return 2
+    try:
+        camera = load_camera(args.camera) if args.camera else None
+        if args.prior == "default":
+            print("[track] loading the default motion prior (built from the simulator on first use, "
+                  "about a minute)", file=sys.stderr, flush=True)
+        prior = resolve_prior(args.prior)
+        summary = track_video(args.video, args.out, people=args.people, camera=camera, prior=prior,
+                              layers=args.layers, particles=args.particles, max_frames=args.max_frames,
+                              train_frames=args.train_frames, seed=args.seed, progress=_Progress(),
+                              backend=args.backend)
+    except (ValueError, OSError) as exc:
+        print(f"counterpart track: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        saved = f"the frames done so far are in {args.out}" if os.path.exists(args.out) else "nothing written"
+        print(f"counterpart track: interrupted; {saved}", file=sys.stderr)
+        return 130
+    print(json.dumps(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(prog="counterpart track", description=__doc__.split("\n")[0])
+    add_arguments(ap)
+    sys.exit(main(ap.parse_args()))

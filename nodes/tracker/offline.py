@@ -1,0 +1,133 @@
+"""Offline 3D tracking of a video file, without the bus (``counterpart track``).
+
+The same algorithms as the graph ``camera -> silhouette -> tracker``: the silhouette node's
+extractor (``nodes.silhouette.pipeline.iter_video``: background fitted on the first seconds, people
+with sides and ids) and one :class:`nodes.tracker.tracker.Tracker` per tracked side, each fed the
+frame and its person's pixels of the label mask, frame by frame. For batch work on a corpus.
+"""
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from body.camera import Camera, default_camera
+from body.pose import DOF
+
+from .prior import MotionPrior
+from .tracker import SIDES, Tracker, people_problem
+
+#: progress(frames done, frames the file declares or 0)
+Progress = Callable[[int, int], None]
+
+
+def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], people: Sequence[str] = ("left",),
+                camera: Camera | None = None, prior: MotionPrior | None = None, layers: int = 10,
+                particles: int = 256, max_frames: int | None = None, train_frames: int = 30, seed: int = 0,
+                progress: Progress | None = None, **silhouette_params: Any) -> dict[str, Any]:
+    """Track the people of a video in 3D and save every frame's estimate.
+
+    Args:
+        path: the video file.
+        out_npz: the output (np.savez_compressed); written also when the run is interrupted
+            (KeyboardInterrupt) or a frame fails, with the frames done so far (``complete`` False).
+        people: sides of the frame to track, one or two of "left" / "right" (as the tracker node).
+        camera: the calibration; None: the simulator's default camera at the video's frame size.
+        prior: the motion prior (None: random walk).
+        layers, particles: annealing layers and particles per layer; ``seed``: of the filters
+            (side k gets seed + k, as in the node).
+        max_frames, train_frames: frames to track at most; frames the background is fitted on.
+        progress: called after every frame with (frames done, frames the file declares or 0).
+        silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
+    Returns:
+        A summary: n_frames, tracked (frames with an estimate, per side), fps, frame_size, out_npz.
+
+    The file holds T frames x P sides: ``sides`` (P,) str, ``joints`` (T, P, 14, 3) float32 metres
+    (NaN where the side is not tracked), ``poses`` and ``best_poses`` (T, P, 28), ``ess``,
+    ``log_likelihood`` (T, P) float64, ``lost`` (T, P) bool, ``ids`` (T, P) int32 (the silhouette
+    node's person id, -1 when absent), ``n_frames``, ``frame_size`` (2,) [H, W], ``fps``,
+    ``complete`` (bool), ``camera`` and ``params`` (JSON strings).
+
+    Raises FileNotFoundError / ValueError (a missing or undecodable video, bad people, a camera
+    calibrated for another frame size) before anything is written.
+    """
+    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_fps, video_frame_count
+
+    problem = people_problem(list(people))
+    if problem:
+        raise ValueError(f"people={problem}")
+    sides = list(people)
+    extractor = SilhouetteExtractor(**silhouette_params)
+    fps, declared = video_fps(path), video_frame_count(path)
+    trackers: dict[str, Tracker] = {}
+    rows: list[dict[str, np.ndarray]] = []
+    size: tuple[int, int] | None = None
+    complete = False
+    try:
+        for frame, result in iter_video(path, extractor, max_frames, train_frames):
+            if size is None:
+                camera = _camera_for(camera, frame.shape[:2])
+                size = frame.shape[:2]
+                trackers = {s: Tracker(camera, s, layers, particles, prior=prior, seed=seed + SIDES.index(s))
+                            for s in sides}
+            rows.append(_track_frame(frame, result, sides, trackers))
+            if progress is not None:
+                progress(len(rows), declared)
+        complete = True
+    finally:
+        if size is not None:
+            _save(out_npz, rows, sides, size, fps, complete, camera,
+                  {"people": sides, "layers": layers, "particles": particles, "seed": seed,
+                   "train_frames": train_frames, "max_frames": max_frames, "prior": prior is not None,
+                   **silhouette_params})
+    tracked = {s: int(sum(np.isfinite(r["joints"][k, 0, 0]) for r in rows)) for k, s in enumerate(sides)}
+    return {"n_frames": len(rows), "tracked": tracked, "fps": fps, "frame_size": list(size or (0, 0)),
+            "out_npz": os.fspath(out_npz)}
+
+
+def _camera_for(camera: Camera | None, size: tuple[int, int]) -> Camera:
+    """The calibration for frames of ``size`` (H, W): the default camera when None, else checked."""
+    if camera is None:
+        return default_camera(size[1], size[0])
+    if (camera.width, camera.height) != (size[1], size[0]):
+        raise ValueError(f"camera calibrated for {camera.width}x{camera.height} but the video's frames are "
+                         f"{size[1]}x{size[0]}; calibrate for the video's size")
+    return camera
+
+
+def _empty_row(P: int) -> dict[str, np.ndarray]:
+    """One frame's arrays for P sides, as if nobody were tracked."""
+    return {"joints": np.full((P, 14, 3), np.nan, np.float32), "poses": np.full((P, DOF), np.nan),
+            "best_poses": np.full((P, DOF), np.nan), "ess": np.zeros(P), "log_likelihood": np.full(P, -np.inf),
+            "lost": np.zeros(P, bool), "ids": np.full(P, -1, np.int32)}
+
+
+def _track_frame(frame: np.ndarray, result: Any, sides: list[str], trackers: dict[str, Tracker]) -> dict[str, np.ndarray]:
+    """One frame's row: every side's estimate from its person's pixels of the label mask."""
+    row = _empty_row(len(sides))
+    for k, side in enumerate(sides):
+        person = next((p for p in result.people if p.side == side), None)
+        if person is None:
+            continue
+        r = trackers[side].update(frame, result.labels == person.id + 1)
+        row["ids"][k] = person.id
+        if r is None:
+            continue
+        row["joints"][k], row["poses"][k], row["best_poses"][k] = r.joints, r.pose, r.best
+        row["ess"][k], row["log_likelihood"][k], row["lost"][k] = r.ess, r.log_likelihood, r.lost
+    return row
+
+
+def _save(out_npz: str | os.PathLike[str], rows: list[dict[str, np.ndarray]], sides: list[str],
+          size: tuple[int, int], fps: float, complete: bool, camera: Camera | None, params: dict[str, Any]) -> None:
+    stacked = {k: np.stack([r[k] for r in rows]) if rows else np.zeros((0,) + v.shape, v.dtype)
+               for k, v in _empty_row(len(sides)).items()}
+    np.savez_compressed(out_npz, sides=np.array(sides, dtype="<U5"), n_frames=np.int64(len(rows)),
+                        frame_size=np.array(size, np.int64), fps=np.float64(fps), complete=np.bool_(complete),
+                        camera=json.dumps(camera.to_dict() if camera is not None else {}),
+                        params=json.dumps(params, default=str), **stacked)
+
+
+__all__ = ["track_video"]

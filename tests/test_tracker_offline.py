@@ -1,0 +1,100 @@
+"""``counterpart track``: offline 3D tracking of a real video file, as a real process."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nodes.tracker.offline import track_video
+from nodes.tracker.prior import MotionPrior, train_prior
+from sim.cli import open_writer
+from sim.stream import open_stream
+
+EMPTY = 20          # frames of the empty room the background model is fitted on
+SCENE = 40
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarray, Path]:
+    """A video (the empty room, then a handshake), the people's true joints (SCENE, 2, 14, 3) and a
+    small motion prior trained on other handshakes."""
+    d = tmp_path_factory.mktemp("track")
+    st = open_stream("handshake", seed=3, frames=SCENE)
+    writer, _ = open_writer(str(d / "video.avi"), st.fps, st.size)
+    rng = np.random.default_rng(0)
+    for _ in range(EMPTY):      # sensor noise as on the scene's frames, so the model learns a spread
+        writer.write(np.clip(st.background(0) + rng.normal(0, 2, (240, 320, 3)), 0, 255).astype(np.uint8))
+    truth = []
+    for i in range(st.n_frames):
+        frame, t = st.render_with_truth(i)
+        writer.write(frame)
+        truth.append(t.joints3d)
+    writer.release()
+    prior = train_prior(["sim:handshake?seed=100", "sim:handshake?seed=101"], n_states=10)
+    return d / "video.avi", np.array(truth), Path(prior.save(str(d / "prior.npz")))
+
+
+def _track(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "bus.cli", "track", *args], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_track_follows_both_people_of_a_video(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
+    video, truth, prior = recording
+    out = tmp_path / "poses.npz"
+    r = _track(str(video), "--out", str(out), "--people", "left", "right", "--train-frames", str(EMPTY),
+               "--prior", str(prior), "--layers", "5", "--particles", "128")
+    assert r.returncode == 0, r.stderr
+    summary = json.loads(r.stdout.strip().splitlines()[-1])
+    assert summary["n_frames"] == EMPTY + SCENE and summary["tracked"] == {"left": SCENE, "right": SCENE}
+    d = np.load(out)
+    assert list(d["sides"]) == ["left", "right"] and bool(d["complete"])
+    assert d["joints"].shape == (EMPTY + SCENE, 2, 14, 3) and d["poses"].shape == (EMPTY + SCENE, 2, 28)
+    assert np.isnan(d["joints"][:EMPTY]).all()                      # the empty room: nobody tracked
+    assert (d["ids"][EMPTY:, 0] != d["ids"][EMPTY:, 1]).all()       # two people, never the same region
+    err = np.linalg.norm(d["joints"][EMPTY:] - truth, axis=-1).mean(axis=(0, 2))
+    assert (err < 0.1).all(), f"mean joint error per person {err} m"
+    assert json.loads(str(d["camera"]))["width"] == 320
+
+
+def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
+    video, _, _ = recording
+    out = tmp_path / "poses.npz"
+    r = _track(str(tmp_path / "missing.avi"), "--out", str(out))
+    assert r.returncode == 2 and "video file not found" in r.stderr
+    junk = tmp_path / "junk.avi"
+    junk.write_bytes(b"not a video" * 100)
+    r = _track(str(junk), "--out", str(out))
+    assert r.returncode == 2 and "cannot read video" in r.stderr
+    cam = tmp_path / "cam.yaml"
+    cam.write_text("eye: [0, 1.6, 4]\ntarget: [0, 0.9, 0]\nfov: 55\nwidth: 320\nheight: 240\n")
+    r = _track(str(video), "--out", str(out), "--camera", str(cam), "--prior", "none")
+    assert r.returncode == 2 and "fov" in r.stderr and "cam.yaml" in r.stderr
+    cam.write_text(json.dumps({"eye": [0, 1.6, 4], "target": [0, 0.9, 0], "fov_deg": 55, "width": 640,
+                               "height": 480}))
+    r = _track(str(video), "--out", str(out), "--camera", str(cam), "--prior", "none", "--train-frames", "5")
+    assert r.returncode == 2 and "calibrated for 640x480" in r.stderr
+    r = _track(str(video), "--out", str(out), "--people", "left", "left", "--prior", "none")
+    assert r.returncode == 2 and "distinct sides" in r.stderr
+    assert not out.exists()                                          # nothing half-written
+
+
+def test_an_interrupted_run_keeps_the_frames_done(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
+    video, _, prior = recording
+    out = tmp_path / "poses.npz"
+
+    def stop_after_25(done: int, declared: int) -> None:
+        assert declared == EMPTY + SCENE
+        if done == 25:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        track_video(video, out, prior=MotionPrior.load(str(prior)), layers=3, particles=64,
+                    train_frames=EMPTY, progress=stop_after_25)
+    d = np.load(out)
+    assert int(d["n_frames"]) == 25 and not bool(d["complete"]) and d["joints"].shape == (25, 1, 14, 3)
+    assert np.isfinite(d["joints"][EMPTY:25]).all()
