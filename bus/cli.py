@@ -20,6 +20,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "mine": ("nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
     "learn": ("bus.cli_learn", "train a model file (tracker-prior, responder)"),
     "respond": ("nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
+    "silhouettes": ("nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
     "track": ("nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),
     "sim": ("sim.cli", "render a simulated two-person scene with ground truth"),
     "bag": ("bus.cli_bag", "record, play, inspect and export bags"),

@@ -25,6 +25,12 @@ def test_every_command_has_help(command: str) -> None:
     assert "usage: counterpart" in res.stdout
 
 
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_every_command_is_in_the_readme(command: str) -> None:
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    assert f"`counterpart {command}" in readme, f"README.md documents no `counterpart {command} ...`"
+
+
 def test_unknown_command_is_named() -> None:
     res = cli("frobnicate")
     assert res.returncode == 2 and "unknown command 'frobnicate'" in res.stderr

@@ -103,3 +103,40 @@ def test_vtest_several_people_in_later_frames_and_saved_rows(tmp_path):
         ids = d["id"][d["frame"] == f]
         assert len(ids) == len(set(ids.tolist()))
     assert set(d["side"].tolist()) <= {"left", "right"}
+
+
+def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    from sim.cli import open_writer
+
+    video = tmp_path / "handshake.avi"
+    writer, _ = open_writer(str(video), 25.0, (handshake.frames.shape[2], handshake.frames.shape[1]))
+    for frame in handshake.frames:
+        writer.write(frame)
+    writer.release()
+    out = tmp_path / "people.npz"
+    r = subprocess.run([sys.executable, "-m", "bus.cli", "silhouettes", str(video), "--out", str(out),
+                        "--train-frames", "20"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    summary = json.loads(r.stdout.strip().splitlines()[-1])
+    n = len(handshake.frames)
+    assert summary["n_frames"] == n and summary["max_people"] == 2
+    d = np.load(out)
+    assert bool(d["complete"]) and int(d["n_frames"]) == n
+    per_frame = np.bincount(d["frame"], minlength=n)
+    assert (per_frame[:20] == 0).all() and np.mean(per_frame[20:] == 2) > 0.9   # the empty room, then two
+    r = subprocess.run([sys.executable, "-m", "bus.cli", "silhouettes", str(video), "--out", str(out),
+                        "--train-frames", "0"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "--train-frames must be at least 1" in r.stderr
+
+    def stop_after_30(done: int, declared: int) -> None:
+        if done == 30:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        extract_video(video, out, train_frames=20, progress=stop_after_30)
+    d = np.load(out)
+    assert int(d["n_frames"]) == 30 and not bool(d["complete"]) and d["frame"].max() == 29

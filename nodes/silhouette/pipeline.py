@@ -11,7 +11,7 @@ import dataclasses
 import json
 import os
 from dataclasses import dataclass
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import cv2
 import numpy as np
@@ -209,39 +209,9 @@ def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max
         raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
 
 
-def extract_video(
-    path: str | os.PathLike[str],
-    out_npz: str | os.PathLike[str],
-    max_frames: int | None = None,
-    train_frames: int = 30,
-    **params: Any,
-) -> dict[str, Any]:
-    """Run ``SilhouetteExtractor(**params)`` over a video file and save every person of every frame.
-
-    The frames come from :func:`iter_video` (with the Horprasert backend, the background is first
-    fitted on the first ``train_frames`` frames, so all frames get results). Writes ``out_npz``
-    (np.savez_compressed), one row per person and frame, P rows in total:
-
-      frame (P,) int32, id (P,) int32, side (P,) str, bbox (P, 4) int32 [x, y, w, h],
-      area (P,) int32, centroid (P, 2) float32 [x, y], height (P,) float32, merged (P,) bool,
-      ctrl (P, n_ctrl, 2) float32 and ref_point (P, 2) float32 (NaN where no outline),
-      n_frames () int, frame_size (2,) int [H, W], fps () float, params () str (JSON).
-
-    Returns a summary dict (n_frames, n_rows, max_people, fps, frame_size, out_npz).
-    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
-    """
-    extractor = SilhouetteExtractor(**params)
-    rows: list[tuple[int, Person]] = []
-    n_frames = 0
-    max_people = 0
-    size: tuple[int, int] | None = None
-    fps = video_fps(path)
-    for frame, result in iter_video(path, extractor, max_frames, train_frames):
-        size = frame.shape[:2]
-        rows.extend((result.index, p) for p in result.people)
-        max_people = max(max_people, len(result.people))
-        n_frames += 1
-    n = extractor.n_ctrl
+def _save_people(out_npz: str | os.PathLike[str], rows: list[tuple[int, Person]], n: int, n_frames: int,
+                 size: tuple[int, int], fps: float, complete: bool, params: dict[str, Any]) -> None:
+    """Write ``extract_video``'s file (its docstring gives the layout)."""
     nan2 = np.full(2, np.nan)
     np.savez_compressed(
         out_npz,
@@ -262,8 +232,56 @@ def extract_video(
         n_frames=np.int64(n_frames),
         frame_size=np.array(size, np.int64),
         fps=np.float64(fps),
-        params=json.dumps({"train_frames": train_frames, **params}, default=str),
+        complete=np.bool_(complete),
+        params=json.dumps(params, default=str),
     )
+
+
+def extract_video(
+    path: str | os.PathLike[str],
+    out_npz: str | os.PathLike[str],
+    max_frames: int | None = None,
+    train_frames: int = 30,
+    progress: Callable[[int, int], None] | None = None,
+    **params: Any,
+) -> dict[str, Any]:
+    """Run ``SilhouetteExtractor(**params)`` over a video file and save every person of every frame.
+
+    The frames come from :func:`iter_video` (with the Horprasert backend, the background is first
+    fitted on the first ``train_frames`` frames, so all frames get results). Writes ``out_npz``
+    (np.savez_compressed), one row per person and frame, P rows in total:
+
+      frame (P,) int32, id (P,) int32, side (P,) str, bbox (P, 4) int32 [x, y, w, h],
+      area (P,) int32, centroid (P, 2) float32 [x, y], height (P,) float32, merged (P,) bool,
+      ctrl (P, n_ctrl, 2) float32 and ref_point (P, 2) float32 (NaN where no outline),
+      n_frames () int, frame_size (2,) int [H, W], fps () float, params () str (JSON),
+      complete () bool: False when the run was interrupted (KeyboardInterrupt) or failed after
+      some frames: the file then holds the frames done.
+
+    ``progress``, when given, is called after every frame with (frames done, frames the file
+    declares or 0). Returns a summary dict (n_frames, n_rows, max_people, fps, frame_size, out_npz).
+    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
+    """
+    extractor = SilhouetteExtractor(**params)
+    rows: list[tuple[int, Person]] = []
+    n_frames = 0
+    max_people = 0
+    size: tuple[int, int] | None = None
+    fps, declared = video_fps(path), video_frame_count(path)
+    complete = False
+    try:
+        for frame, result in iter_video(path, extractor, max_frames, train_frames):
+            size = frame.shape[:2]
+            rows.extend((result.index, p) for p in result.people)
+            max_people = max(max_people, len(result.people))
+            n_frames += 1
+            if progress is not None:
+                progress(n_frames, declared)
+        complete = True
+    finally:
+        if size is not None:
+            _save_people(out_npz, rows, extractor.n_ctrl, n_frames, size, fps, complete,
+                         {"train_frames": train_frames, **params})
     return {
         "n_frames": n_frames,
         "n_rows": len(rows),

@@ -11,11 +11,12 @@ import argparse
 import json
 import os
 import sys
-import time
 
 import yaml
 
 from body.camera import Camera, camera_param_problem
+from bus.cli_progress import FrameProgress
+from nodes.silhouette.backends import BACKEND_NAMES
 
 from .prior import resolve_prior
 from .tracker import SIDES
@@ -36,7 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-frames", type=int, default=None, help="track at most this many frames")
     p.add_argument("--train-frames", type=int, default=30,
                    help="first frames the background model is fitted on (people may be in view)")
-    p.add_argument("--backend", default="horprasert", help="background subtractor of the silhouette node")
+    p.add_argument("--backend", default="horprasert", choices=BACKEND_NAMES,
+                   help="background subtractor of the silhouette node")
     p.add_argument("--seed", type=int, default=0, help="seed of the particle filters")
 
 
@@ -57,21 +59,6 @@ def load_camera(path: str) -> Camera:
     return Camera.from_dict(data)
 
 
-class _Progress:
-    """Prints 'frame i/N, x fps' on stderr at most every ``every`` seconds."""
-
-    def __init__(self, every: float = 2.0) -> None:
-        self.every = every
-        self.t0 = self.last = time.monotonic()
-
-    def __call__(self, done: int, declared: int) -> None:
-        now = time.monotonic()
-        if now - self.last >= self.every:
-            self.last = now
-            of = f"/{declared}" if declared else ""
-            print(f"[track] frame {done}{of}, {done / (now - self.t0):.1f} fps", file=sys.stderr, flush=True)
-
-
 def main(args: argparse.Namespace) -> int:
     from .offline import track_video
 
@@ -87,7 +74,7 @@ def main(args: argparse.Namespace) -> int:
         prior = resolve_prior(args.prior)
         summary = track_video(args.video, args.out, people=args.people, camera=camera, prior=prior,
                               layers=args.layers, particles=args.particles, max_frames=args.max_frames,
-                              train_frames=args.train_frames, seed=args.seed, progress=_Progress(),
+                              train_frames=args.train_frames, seed=args.seed, progress=FrameProgress("track"),
                               backend=args.backend)
     except (ValueError, OSError) as exc:
         print(f"counterpart track: {exc}", file=sys.stderr)
