@@ -9,11 +9,9 @@ Exit code 0 on success, 2 on bad input, 130 when interrupted.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
 
-from bus.cli_progress import FrameProgress
+from bus.cli_offline import FrameProgress, positive, run_offline
 
 from .backends import BACKEND_NAMES
 
@@ -32,23 +30,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     from .pipeline import extract_video
 
-    for name in ("train_frames", "max_frames"):
-        if getattr(args, name) is not None and getattr(args, name) < 1:
-            print(f"counterpart silhouettes: --{name.replace('_', '-')} must be at least 1", file=sys.stderr)
-            return 2
-    try:
-        summary = extract_video(args.video, args.out, max_frames=args.max_frames, train_frames=args.train_frames,
-                                progress=FrameProgress("silhouettes"), backend=args.backend,
-                                min_area=args.min_area, n_ctrl=args.n_ctrl)
-    except (ValueError, OSError) as exc:
-        print(f"counterpart silhouettes: {exc}", file=sys.stderr)
+    if not positive(args, ("train_frames", "max_frames"), "silhouettes"):
         return 2
-    except KeyboardInterrupt:
-        saved = f"the frames done so far are in {args.out}" if os.path.exists(args.out) else "nothing written"
-        print(f"counterpart silhouettes: interrupted; {saved}", file=sys.stderr)
-        return 130
-    print(json.dumps(summary))
-    return 0
+    return run_offline("silhouettes", args.out, lambda: extract_video(
+        args.video, args.out, max_frames=args.max_frames, train_frames=args.train_frames,
+        progress=FrameProgress("silhouettes"), backend=args.backend, min_area=args.min_area, n_ctrl=args.n_ctrl))
 
 
 if __name__ == "__main__":

@@ -8,14 +8,12 @@ Exit code 0 on success, 2 on bad input, 130 when interrupted.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
 
 import yaml
 
 from body.camera import Camera, camera_param_problem
-from bus.cli_progress import FrameProgress
+from bus.cli_offline import FrameProgress, positive, run_offline
 from nodes.silhouette.backends import BACKEND_NAMES
 
 from .prior import resolve_prior
@@ -62,29 +60,20 @@ def load_camera(path: str) -> Camera:
 def main(args: argparse.Namespace) -> int:
     from .offline import track_video
 
-    for name in ("layers", "particles", "train_frames", "max_frames"):
-        if getattr(args, name) is not None and getattr(args, name) < 1:
-            print(f"counterpart track: --{name.replace('_', '-')} must be at least 1", file=sys.stderr)
-            return 2
-    try:
+    if not positive(args, ("layers", "particles", "train_frames", "max_frames"), "track"):
+        return 2
+
+    def work() -> dict:
         camera = load_camera(args.camera) if args.camera else None
         if args.prior == "default":
             print("[track] loading the default motion prior (built from the simulator on first use, "
                   "about a minute)", file=sys.stderr, flush=True)
-        prior = resolve_prior(args.prior)
-        summary = track_video(args.video, args.out, people=args.people, camera=camera, prior=prior,
-                              layers=args.layers, particles=args.particles, max_frames=args.max_frames,
-                              train_frames=args.train_frames, seed=args.seed, progress=FrameProgress("track"),
-                              backend=args.backend)
-    except (ValueError, OSError) as exc:
-        print(f"counterpart track: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        saved = f"the frames done so far are in {args.out}" if os.path.exists(args.out) else "nothing written"
-        print(f"counterpart track: interrupted; {saved}", file=sys.stderr)
-        return 130
-    print(json.dumps(summary))
-    return 0
+        return track_video(args.video, args.out, people=args.people, camera=camera, prior=resolve_prior(args.prior),
+                           layers=args.layers, particles=args.particles, max_frames=args.max_frames,
+                           train_frames=args.train_frames, seed=args.seed, progress=FrameProgress("track"),
+                           backend=args.backend)
+
+    return run_offline("track", args.out, work)
 
 
 if __name__ == "__main__":

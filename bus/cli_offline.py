@@ -1,0 +1,61 @@
+"""What the long offline commands (``counterpart track``, ``counterpart silhouettes``) share: progress
+lines, argument checks, and one way to end (exit 0 and a JSON summary, 2 on bad input with the
+reason, 130 on Ctrl-C saying what was kept)."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from typing import Any, Callable
+
+
+class FrameProgress:
+    """A ``progress(done, declared)`` callback that prints ``[label] frame i/N, x fps`` on stderr at
+    most every ``every`` seconds (N left out when the file declares no frame count)."""
+
+    def __init__(self, label: str, every: float = 2.0) -> None:
+        self.label = label
+        self.every = every
+        self.t0: float | None = None
+        self.first = 0
+        self.last = 0.0
+
+    def __call__(self, done: int, declared: int) -> None:
+        now = time.monotonic()
+        if self.t0 is None:  # the rate counts from the first frame, not from the set-up before it
+            self.t0 = self.last = now
+            self.first = done
+            return
+        if now - self.last >= self.every:
+            self.last = now
+            of = f"/{declared}" if declared else ""
+            fps = (done - self.first) / (now - self.t0)
+            print(f"[{self.label}] frame {done}{of}, {fps:.1f} fps", file=sys.stderr, flush=True)
+
+
+def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> bool:
+    """True when every named option that is set is at least 1, else prints which is not."""
+    for name in names:
+        value = getattr(args, name)
+        if value is not None and value < 1:
+            print(f"counterpart {command}: --{name.replace('_', '-')} must be at least 1", file=sys.stderr)
+            return False
+    return True
+
+
+def run_offline(command: str, out: str, work: Callable[[], dict[str, Any]]) -> int:
+    """Run ``work`` (it writes ``out``): print its summary as JSON and return 0; 2 with the reason on
+    a ValueError or OSError; 130 on Ctrl-C, saying whether ``out`` holds the frames done."""
+    try:
+        summary = work()
+    except (ValueError, OSError) as exc:
+        print(f"counterpart {command}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        saved = f"the frames done so far are in {out}" if os.path.exists(out) else "nothing written"
+        print(f"counterpart {command}: interrupted; {saved}", file=sys.stderr)
+        return 130
+    print(json.dumps(summary))
+    return 0
