@@ -56,9 +56,11 @@ class TrackerNode(Node):
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
-        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right", check=people_problem),
+        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right",
+                        check=people_problem),
         "camera": Param(dict, {}, "calibration: {fx, fy, cx, cy, width, height, R, t} or {eye, target, fov_deg, "
-                        "width, height}; empty: the simulator's default camera at the frame size", check=camera_param_problem),
+                        "width, height}; empty: the simulator's default camera at the frame size",
+                        check=camera_param_problem),
         "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "
                        "'none' (random walk), or a .npz path", check=_check_prior),
         "seed": Param(int, 0, "seed of the particle filters"),

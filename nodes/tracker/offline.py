@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
@@ -18,6 +18,9 @@ from body.pose import DOF
 
 from .prior import MotionPrior
 from .tracker import SIDES, Tracker, people_problem
+
+if TYPE_CHECKING:
+    from nodes.silhouette.pipeline import FrameResult
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]
@@ -104,7 +107,8 @@ def _empty_row(P: int) -> dict[str, np.ndarray]:
             "lost": np.zeros(P, bool), "ids": np.full(P, -1, np.int32)}
 
 
-def _track_frame(frame: np.ndarray, result: Any, sides: list[str], trackers: dict[str, Tracker]) -> dict[str, np.ndarray]:
+def _track_frame(frame: np.ndarray, result: FrameResult, sides: list[str],
+                 trackers: dict[str, Tracker]) -> dict[str, np.ndarray]:
     """One frame's row: every side's estimate from its person's pixels of the label mask."""
     row = _empty_row(len(sides))
     for k, side in enumerate(sides):
