@@ -154,20 +154,12 @@ def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
     return cap
 
 
-def video_fps(path: str | os.PathLike[str]) -> float:
-    """The frame rate a video file declares (0.0 when it declares none)."""
+def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
+    """(frame rate, frame count) a video file declares (0 where it declares none; the count is a
+    guide for progress, not a promise)."""
     cap = _open_video(path)
     try:
-        return float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
-    finally:
-        cap.release()
-
-
-def video_frame_count(path: str | os.PathLike[str]) -> int:
-    """The frame count a video file declares (0 when unknown; a guide for progress, not a promise)."""
-    cap = _open_video(path)
-    try:
-        return max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
+        return float(cap.get(cv2.CAP_PROP_FPS) or 0.0), max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
     finally:
         cap.release()
 
@@ -267,7 +259,7 @@ def extract_video(
     n_frames = 0
     max_people = 0
     size: tuple[int, int] | None = None
-    fps, declared = video_fps(path), video_frame_count(path)
+    fps, declared = video_info(path)
     complete = False
     try:
         for frame, result in iter_video(path, extractor, max_frames, train_frames):

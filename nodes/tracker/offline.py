@@ -56,14 +56,14 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
     Raises FileNotFoundError / ValueError (a missing or undecodable video, bad people, a camera
     calibrated for another frame size) before anything is written.
     """
-    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_fps, video_frame_count
+    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
 
     problem = people_problem(list(people))
     if problem:
         raise ValueError(f"people={problem}")
     sides = list(people)
     extractor = SilhouetteExtractor(**silhouette_params)
-    fps, declared = video_fps(path), video_frame_count(path)
+    fps, declared = video_info(path)
     trackers: dict[str, Tracker] = {}
     rows: list[dict[str, np.ndarray]] = []
     size: tuple[int, int] | None = None
