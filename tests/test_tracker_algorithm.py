@@ -185,3 +185,5 @@ def test_several_cameras_need_one_mask_per_camera() -> None:
     # the person out of the reference view: no estimate, no error
     assert trk.update(None, [np.zeros_like(mask), mask]) is None
     assert trk.update(None, [mask, mask]) is not None
+    # one camera takes a mask, or a list of one
+    assert Tracker([CAM], n_layers=2, n_particles=16).update(None, [mask]) is not None

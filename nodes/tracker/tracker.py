@@ -186,9 +186,9 @@ class Tracker:
     def _observations(self, image: np.ndarray | None | Sequence[np.ndarray | None],
                       mask: np.ndarray | Sequence[np.ndarray]) -> list[Observation]:
         """One Observation per camera from one frame and mask (one camera) or sequences of them."""
-        if len(self.cameras) == 1:
-            return [make_observation(image, mask, rng=self.rng)]
         n = len(self.cameras)
+        if n == 1 and not _per_camera(mask, 1):
+            return [make_observation(image, mask, rng=self.rng)]
         if not _per_camera(mask, n):
             raise ValueError(f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
                              f"(got {type(mask).__name__} of shape {np.shape(mask)})")
@@ -209,7 +209,7 @@ class Tracker:
             return None
         start = not self.tracking
         if start:
-            ref_mask = mask if len(self.cameras) == 1 else mask[0]
+            ref_mask = mask[0] if _per_camera(mask, len(self.cameras)) else mask
             bbox = bbox_from_mask(np.asarray(ref_mask, bool))
             P0, dims = initial_particles(bbox, self.side, self.camera, self.filter.n_particles,
                                          self.rng, spread=self.init_spread)
