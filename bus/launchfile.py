@@ -326,6 +326,11 @@ def endpoints_for(graph: Graph, run_dir: Path) -> dict[str, TopicEndpoints]:
     return out
 
 
+def stats_dir(run_dir: Path) -> Path:
+    """The folder of a run where each node keeps its newest statistics (``NODE.json``)."""
+    return Path(run_dir) / "stats"
+
+
 def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
     """The JSON spec each node process is started with."""
     eps = endpoints_for(graph, run_dir)
@@ -334,6 +339,7 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
         spec: dict[str, Any] = {
             "name": name, "module": decl.run, "params": copy.deepcopy(decl.params), "supervised": True,
             "barrier_timeout": graph.barrier_timeout, "inputs": {}, "outputs": {},
+            "stats_file": str(stats_dir(run_dir) / f"{name}.json"),
         }
         for port, inp in graph.ports_in[name].items():
             topic = graph.input_topic(name, port)
@@ -341,10 +347,15 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
             spec["inputs"][port] = {"topic": topic, "endpoints": eps[topic].to_dict(), "policy": policy}
         for port in list(graph.ports_out[name]) + [STATS_PORT]:
             topic = graph.output_topic(name, port)
-            reliable = sum(1 for _, _, pol in graph.topics[topic]["subscribers"] if pol == "reliable")
+            subs = graph.topics[topic]["subscribers"]
+            reliable = sum(1 for _, _, pol in subs if pol == "reliable")
+            # lossy subscribers that wait for the end of stream: the startup barrier waits for them
+            # too, or a short stream ends before a slow-starting one has connected and it never ends
+            latest = sum(1 for n, p, pol in subs if pol == "latest" and graph.ports_in[n][p].awaits_end)
             spec["outputs"][port] = {
                 "topic": topic, "endpoints": eps[topic].to_dict(),
                 "reliable_subscribers": reliable + decl.wait_subscribers.get(port, 0),
+                "latest_subscribers": latest,
             }
         specs[name] = spec
     return specs

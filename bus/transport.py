@@ -49,8 +49,10 @@ def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags:
 
 
 class Publisher:
-    """Both sockets of one topic. ``expected`` reliable subscribers are awaited before the first send
-    (the startup barrier), for at most ``barrier_timeout`` seconds.
+    """Both sockets of one topic. ``expected`` reliable subscribers, and ``expected_latest`` lossy ones
+    that wait for the end of stream, are awaited before the first send (the startup barrier), for
+    at most ``barrier_timeout`` seconds: a short stream could otherwise end before a slow-starting
+    lossy subscriber connects, and that one would wait for an end of stream it never gets.
 
     ``latched``: the last message sent is sent again to every ``latest`` subscriber that joins later
     (ROS's latched topics), once :meth:`poll_subscriptions` or a send sees it join. A lossy subscriber
@@ -64,6 +66,7 @@ class Publisher:
         topic: str,
         endpoints: TopicEndpoints,
         expected: int = 0,
+        expected_latest: int = 0,
         hwm: int = 16,
         latest_hwm: int = 2,
         barrier_timeout: float = 30.0,
@@ -74,13 +77,15 @@ class Publisher:
         self.topic_b = topic.encode()
         self.endpoints = endpoints
         self.expected = expected
+        self.expected_latest = expected_latest
         self.barrier_timeout = barrier_timeout
         self.should_stop = should_stop
         self.count = 0
         self.subscribers = 0
         self.eos_listeners = 0
         self._last_sub_read = 0.0
-        self._barrier_done = expected <= 0
+        self._barrier_done = expected <= 0 and expected_latest <= 0
+        self._barrier_passed = False  # every expected subscriber has been seen (wait_for_subscribers)
         self.latched = latched
         self._latched_parts: Sequence[Any] | None = None
         self.reliable = ctx.socket(zmq.XPUB)
@@ -107,14 +112,26 @@ class Publisher:
                 self.subscribers += step
             elif ev[1:] == EOS_PREFIX:  # latest subscribers listening for end of stream here
                 self.eos_listeners += step
+            self._check_barrier()
             timeout_ms = 0
         joined = False
         while self.latest.poll(0, zmq.POLLIN):
             ev = self.latest.recv()
             joined |= ev[:1] == b"\x01"
             self.latest_subscribers += 1 if ev[:1] == b"\x01" else -1
+            self._check_barrier()
         if joined and self._latched_parts is not None:
             self._send_latest(self._latched_parts)
+
+    def _check_barrier(self) -> None:
+        """Once every expected subscriber has been here the barrier is passed, even if one has left
+        since (a node that ended before this one's first message: a latched topic's first send)."""
+        if not self._barrier_done and self._barrier_met():
+            self._barrier_done = self._barrier_passed = True
+
+    def _barrier_met(self) -> bool:
+        return (self.subscribers >= self.expected and self.eos_listeners >= self.expected_latest
+                and self.latest_subscribers >= self.expected_latest)
 
     def poll_subscriptions(self) -> None:
         """Read who joined or left now (a latched publisher's node loop calls this between sends)."""
@@ -122,9 +139,10 @@ class Publisher:
         self._read_subscriptions()
 
     def wait_for_subscribers(self) -> bool:
-        """Block until ``expected`` reliable subscribers are connected (or timeout/stop)."""
+        """Block until ``expected`` reliable and ``expected_latest`` lossy subscribers are connected
+        (or timeout/stop)."""
         deadline = time.monotonic() + self.barrier_timeout
-        while self.subscribers < self.expected:
+        while not self._barrier_passed and not self._barrier_met():
             if self.should_stop() or time.monotonic() > deadline:
                 return False
             self._read_subscriptions(50)
@@ -359,12 +377,13 @@ class Subscriber:
         msg = self._decode(frames)
         if msg is None:
             return None
-        self.count += 1
-        if isinstance(msg, EndOfStream):
+        if isinstance(msg, EndOfStream):  # not counted: ``count`` is the data messages received
             self._pending_eos = None
             if self.ended:
                 return None
             self._finish()
+            return msg
+        self.count += 1
         return msg
 
     def _finish(self) -> None:
