@@ -36,7 +36,7 @@ def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path
     assert n == stats["frames_in"] == stats["frames_out"] > 200  # the whole scene, every frame (lockstep)
     sheet = cv2.imread(str(tmp_path / "out" / "demo_contact_sheet.png"))
     assert sheet is not None and sheet.shape[0] >= 240 and sheet.shape[1] >= 4 * 320
-    assert set(stats["nodes"]) == {"camera", "silhouette", "tracker", "labeller", "responder", "renderer"}
+    assert set(stats["nodes"]) == {"camera", "calibration", "silhouette", "tracker", "labeller", "responder", "renderer"}
     assert all(sum(t["count"] for t in st["inputs"] + st["outputs"]) > 0 for st in stats["nodes"].values())
     assert stats["fps_in"] == stats["fps_out"] == 25.0
     # the built-in scene's partner is drawn on most frames (0.81; 0.91 after the first second)
