@@ -55,7 +55,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
     assert set(load(find_launch_file("lockstep.yaml")).nodes) == set(demo.nodes)
     # the lockstep/queue/pairing keys may differ; every other parameter is the same
     own = {("camera", "pacing"), ("renderer", "video"), ("renderer", "pair_timeout"), ("renderer", "adaptive_wait"),
-           ("silhouette", "replay_training")}
+           ("silhouette", "replay_training"), ("tracker", "people")}
     for name, decl in demo.nodes.items():
         other = replay.nodes[name]
         assert other.run == decl.run, name
