@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
+from .people import fit_around_people
 
 BACKEND_NAMES: tuple[str, ...] = ("horprasert", "mog2", "knn", "cnt", "gsoc")
 
@@ -49,7 +50,8 @@ class HorprasertSubtractor:
     name = "horprasert"
     provides_shadows = True
 
-    def __init__(self, train_frames: int = 30, robust: bool = True, **model_params: Any) -> None:
+    def __init__(self, train_frames: int = 30, robust: bool = True, people_aware: bool = True,
+                 **model_params: Any) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
@@ -58,6 +60,7 @@ class HorprasertSubtractor:
             raise ValueError(f"horprasert: unknown parameter ({exc})") from None
         self.train_frames = train_frames
         self.robust = robust
+        self.people_aware = people_aware
         self.labels: np.ndarray | None = None
         self._buffer: list[np.ndarray] = []
 
@@ -66,7 +69,15 @@ class HorprasertSubtractor:
         return self.model.is_fitted
 
     def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> "HorprasertSubtractor":
-        self.model.fit(as_frame_stack(frames), robust=self.robust if robust is None else robust)
+        """Fit the model on training frames (N, H, W, 3) uint8 BGR. Robust (people may be in view)
+        and ``people_aware``: the people are detected and the room around them learnt
+        (``people.fit_around_people``); robust alone: the per-pixel median."""
+        stack = as_frame_stack(frames)
+        robust = self.robust if robust is None else robust
+        if robust and self.people_aware:
+            fit_around_people(self.model, stack)
+        else:
+            self.model.fit(stack, robust=robust)
         self._buffer = []
         return self
 
