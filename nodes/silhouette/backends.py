@@ -41,8 +41,11 @@ class HorprasertSubtractor:
     """Online wrapper of ``HorprasertBackground``.
 
     The first ``train_frames`` frames are collected (no foreground is reported for them) and the
-    model is fitted on them, robustly by default because people may already be in view; after
-    that each frame is classified and then blended into the model (``update``).
+    model is fitted on them, robustly by default because people may already be in view, and with
+    ``people_aware`` (default) around the people that ``detector`` (default
+    ``people.PeopleDetector()``, OpenCV's HOG people detector) finds in them, so that people who
+    stand still through training are not learnt as the room (``people.fit_around_people``);
+    after that each frame is classified and then blended into the model (``update``).
     ``fit(frames)`` instead trains at once, e.g. from a recording of the empty scene.
     Other keyword parameters go to ``HorprasertBackground``.
     """
@@ -51,7 +54,7 @@ class HorprasertSubtractor:
     provides_shadows = True
 
     def __init__(self, train_frames: int = 30, robust: bool = True, people_aware: bool = True,
-                 **model_params: Any) -> None:
+                 detector: Any = None, **model_params: Any) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
@@ -61,6 +64,7 @@ class HorprasertSubtractor:
         self.train_frames = train_frames
         self.robust = robust
         self.people_aware = people_aware
+        self.detector = detector
         self.labels: np.ndarray | None = None
         self._buffer: list[np.ndarray] = []
 
@@ -75,7 +79,7 @@ class HorprasertSubtractor:
         stack = as_frame_stack(frames)
         robust = self.robust if robust is None else robust
         if robust and self.people_aware:
-            fit_around_people(self.model, stack)
+            fit_around_people(self.model, stack, detector=self.detector)
         else:
             self.model.fit(stack, robust=robust)
         self._buffer = []

@@ -147,8 +147,10 @@ class HorprasertBackground:
         empty frames, whose model is trusted. A still person is absorbed this way too; that is
         the price of learning with people in view.
     absorb_k : tolerance of the still test, in spreads s per channel (noise, slow drift).
-    min_free_samples : in ``fit(exclude=...)``, a pixel with fewer training samples left than
-        this was never seen: its E and s are filled in from the pixels around it.
+    min_free_frac : in ``fit(exclude=...)``, a pixel with fewer training samples left than this
+        fraction of the frames (and at least 3) is taken as not seen: its E and s are filled in
+        from the pixels around it. A person the detector missed in some frames is in the
+        samples left there; over half of the frames they would be the median.
     unseen_spread_gain : those pixels' filled-in spread is widened by this factor (a guess from
         the surroundings is less certain than a measurement).
     max_threshold_samples : number of normalised distortion samples drawn to set the thresholds.
@@ -178,7 +180,7 @@ class HorprasertBackground:
         robust_inlier_k: float = 3.5,
         absorb_frames: int | None = None,
         absorb_k: float = 4.0,
-        min_free_samples: int = 3,
+        min_free_frac: float = 0.5,
         unseen_spread_gain: float = 2.0,
         max_threshold_samples: int = 2_000_000,
         random_state: int | None = 0,
@@ -219,12 +221,12 @@ class HorprasertBackground:
             raise ValueError(f"absorb_frames must be >= 0 frames (0: never) or None (auto), got {absorb_frames}")
         if absorb_k <= 0:
             raise ValueError(f"absorb_k must be > 0 spreads, got {absorb_k}")
-        if min_free_samples < 1:
-            raise ValueError(f"min_free_samples must be >= 1 frame, got {min_free_samples}")
+        if not 0.0 <= min_free_frac <= 1.0:
+            raise ValueError(f"min_free_frac must be in [0, 1], got {min_free_frac}")
         if unseen_spread_gain < 1.0:
             raise ValueError(f"unseen_spread_gain must be >= 1, got {unseen_spread_gain}")
         self.robust_inlier_k = robust_inlier_k
-        self.min_free_samples = min_free_samples
+        self.min_free_frac = min_free_frac
         self.unseen_spread_gain = unseen_spread_gain
         self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
         self._unseen_u8: np.ndarray | None = None
@@ -279,7 +281,7 @@ class HorprasertBackground:
 
         ``exclude``: (N, H, W) bool, True where a sample is known not to show the background
         (a detected person, see ``people.fit_around_people``). Every statistic then uses only
-        the other samples; a pixel with fewer than ``min_free_samples`` of them was never seen
+        the other samples; a pixel with fewer than ``min_free_frac`` of the frames left was not seen
         (someone stood on it throughout) and its E and s are filled in from the pixels around it
         (``cv2.inpaint``), s widened by ``unseen_spread_gain``; ``unseen_`` marks those pixels.
         """
@@ -297,7 +299,7 @@ class HorprasertBackground:
             mean, spread, n_free = _median_mad(stack, free)
         else:
             mean, spread, n_free = _mean_std(stack, free)
-        unseen = n_free < min(self.min_free_samples, n)
+        unseen = n_free < min(max(3.0, self.min_free_frac * n), n)
         if unseen.all():
             raise ValueError("exclude leaves no pixel with enough background samples to learn from")
         if unseen.any():
@@ -593,7 +595,7 @@ class HorprasertBackground:
                 "detection_rate", "learning_rate", "spread_learning_rate", "shadow_learning_rate",
                 "min_spread",
                 "min_shadow_brightness", "max_highlight_brightness", "unseen_min_shadow_brightness", "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
-                "robust_inlier_k", "absorb_frames", "absorb_k", "min_free_samples", "unseen_spread_gain",
+                "robust_inlier_k", "absorb_frames", "absorb_k", "min_free_frac", "unseen_spread_gain",
                 "max_threshold_samples", "random_state",
             )
         }

@@ -38,6 +38,12 @@ _PERSON_BRIGHTNESS = 0.2
 _SURE_SCORE = 1.0
 _MOVED_GREY = 30
 _MOVED_FRAC = 0.01
+#: a box found in one frame holds the same still person in another frame when fewer than this
+#: fraction of its pixels changed between the two (a person fills about half of their box: a
+#: walker who has left it changes far more)
+_SAME_FRAC = 0.2
+#: the score a still person (``_still_person``) reaches at least once
+_STILL_SCORE = 0.75
 
 
 class PeopleDetector:
@@ -115,11 +121,55 @@ def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
     return float(np.mean(dev > _MOVED_GREY))
 
 
-def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> np.ndarray:
-    """The boxes (K, 4) whose detection is sure or that hold movement (``_SURE_SCORE``)."""
+def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes (K, 4) and scores (K,) of the detections that are sure or hold movement
+    (``_SURE_SCORE``, ``_MOVED_FRAC``)."""
     keep = [k for k in range(len(boxes))
             if scores[k] >= _SURE_SCORE or moving_fraction(frames, boxes[k]) >= _MOVED_FRAC]
-    return boxes[keep]
+    return boxes[keep], scores[keep]
+
+
+def _boxes_for(frames: np.ndarray, j: int, found: dict[int, tuple[np.ndarray, np.ndarray]],
+               step: int) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes (K, 4) in which frame j is searched for people, and whether each holds a person
+    standing still (K,) bool. They are the boxes detected within ``step`` frames of j, and the
+    boxes of a still person (``_still_person``) detected further away whose content frame j
+    still shows (fewer than ``_SAME_FRAC`` of the box's pixels changed by more than
+    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,))."""
+    out, still = [], []
+    for k, (boxes, scores) in found.items():
+        for b, s in zip(boxes, scores):
+            stays = _still_person(found, k, b, s) and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
+            if abs(j - k) <= step or stays:
+                out.append(b)
+                still.append(stays)
+    return np.array(out, np.int32).reshape(-1, 4), np.array(still, bool)
+
+
+def _still_person(found: dict[int, tuple[np.ndarray, np.ndarray]], k: int, box: np.ndarray, score: float) -> bool:
+    """Whether a box found in frame k is found again (IoU >= 0.5) in another frame, and surely
+    (score >= ``_STILL_SCORE``) in at least one of them: someone standing still is found again
+    and again; a weak detection on the room's clutter, which would be carried to every frame
+    and learnt as a hole in the room, may be found twice too, but not surely."""
+    again = [s for j, (boxes, scores) in found.items() if j != k
+             for other, s in zip(boxes, scores) if _iou(box, other) >= 0.5]
+    return bool(again) and max(again + [score]) >= _STILL_SCORE
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two boxes (x, y, w, h)."""
+    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
+    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
+    inter = max(0, x1 - x0) * max(0, y1 - y0)
+    return float(inter) / float(a[2] * a[3] + b[2] * b[3] - inter)
+
+
+def _changed_fraction(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> float:
+    """Fraction of box (x, y, w, h) pixels whose colour (any channel) differs by more than
+    ``_MOVED_GREY`` grey levels between frames a and b (H, W, 3) uint8."""
+    x, y, w, h = (int(v) for v in box)
+    d = cv2.absdiff(a[y : y + h, x : x + w], b[y : y + h, x : x + w])
+    return float(np.mean(d.max(axis=2) > _MOVED_GREY)) if d.size else 1.0
 
 
 def box_mask(shape: tuple[int, int], boxes: np.ndarray, grow: float = 0.0) -> np.ndarray:
@@ -145,56 +195,67 @@ def fit_around_people(model: HorprasertBackground, frames: np.ndarray | list[np.
     model : the background model to fit (its parameters are kept).
     frames : (N, H, W, 3) uint8 BGR training frames, N >= 2.
     detector : people detector (default ``PeopleDetector()``).
-    detect_every : the detector runs on every this many-th frame (and the last); a frame is
-        searched for people in the boxes found within this many frames of it (people in the
-        training frames move a little, not across the image).
+    detect_every : the detector runs on every this many-th frame (and the last). A frame is
+        searched for people in the boxes found within this many frames of it, and in any other
+        box whose content it shares (someone standing there still: the detector misses people
+        now and then, in a turn or with an arm across the body), but not where a walker was.
     box_grow : the first fit leaves out each box grown by this fraction of its height.
     person_grow : the second fit leaves out each person's pixels grown by this fraction of their
         box height (the model's outline of a person misses a blurred rim).
 
     Returns
     -------
-    (N, H, W) bool, the samples left out of the second fit (the people found). With no one
-    detected it is all False and the fit is the plain robust one.
+    (N, H, W) bool, the samples left out of the final fit (the people found; their boxes when
+    no one stood still long enough to need the second fit). With no one detected it is all False
+    and the fit is the plain robust one.
     """
     stack = as_frame_stack(frames)
     n, h, w = stack.shape[:3]
     det = detector or PeopleDetector()
     step = max(1, int(detect_every))
     at = sorted(set(range(0, n, step)) | {n - 1})
-    found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}
-    near = [np.concatenate([found[j] for j in at if abs(j - k) <= step] or [np.zeros((0, 4), np.int32)])
-            for k in range(n)]
-    if not any(len(b) for b in near):
+    found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores)
+    near = [_boxes_for(stack, j, found, step) for j in range(n)]
+    if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)
         return np.zeros((n, h, w), bool)
-    boxes = np.stack([box_mask((h, w), b, box_grow) for b in near])
+    boxes = np.stack([box_mask((h, w), b, box_grow) for b, _ in near])
     model.fit(stack, robust=True, exclude=boxes)
-    people = np.stack([_person_pixels(model, stack[k], boxes[k], near[k], person_grow) for k in range(n)])
+    if not model.unseen_.any():
+        # everyone found moved enough for the room behind them to be seen in most frames (the
+        # robust median copes with them): the fit without their boxes is the answer
+        return boxes
+    people = np.stack([_person_pixels(model, stack[j], boxes[j], box_mask((h, w), b[still], box_grow), b, person_grow)
+                       for j, (b, still) in enumerate(near)])
     model.fit(stack, robust=True, exclude=people)
     return people
 
 
-def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.ndarray,
+def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.ndarray, still: np.ndarray,
                    box_list: np.ndarray, grow: float) -> np.ndarray:
     """(H, W) bool: the pixels of one training frame, inside the people's (grown) boxes, that the
     first fit does not explain as the room, as solid regions grown by ``grow`` times the typical
-    box height.
+    box height. ``boxes``, ``still``: (H, W) bool masks of all boxes and of those of people
+    standing still; ``box_list`` (K, 4) the boxes.
 
-    The room inside the boxes is a guess (filled in from around them), so a pixel counts when it
-    is foreground or differs in brightness by more than ``_PERSON_BRIGHTNESS``: a darker or
-    lighter shade of the floor's colour there is more likely a grey shirt than the room."""
+    Where the first fit saw the room, it is right, and what differs from it is a person. Where it
+    saw no room (the boxes filled in from around them), a thing the fill does not continue (a
+    sign, a bin) differs too: there only a person standing still, who has to be left out, is
+    taken. And as the fill is a guess, a pixel counts there when it is foreground or differs in
+    brightness by more than ``_PERSON_BRIGHTNESS``: a darker or lighter shade of the floor's
+    colour is more likely a grey shirt than the room."""
     if not boxes.any():
         return boxes
     alpha_hat, _ = model.distortions(frame)
     alpha = 1.0 + alpha_hat * model.a_
     changed = (model.apply(frame) == FOREGROUND) | (np.abs(alpha - 1.0) > _PERSON_BRIGHTNESS)
-    m = (changed & boxes).view(np.uint8)
+    allowed = boxes & (~model.unseen_ | still)
+    m = (changed & allowed).view(np.uint8)
     m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     r = max(1, int(round(grow * float(np.median(box_list[:, 3])))))
-    m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk)
     contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     m = np.zeros_like(m)
     cv2.drawContours(m, contours, -1, 1, thickness=cv2.FILLED)
-    m = cv2.dilate(m, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1)))
-    return m.astype(bool) & boxes
+    return cv2.dilate(m, disk).astype(bool) & boxes
