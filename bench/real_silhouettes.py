@@ -53,7 +53,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
-from nodes.silhouette.pipeline import SilhouetteExtractor
+from nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
 DATA = Path(os.environ.get("COUNTERPART_SHARED_DATA")
             or Path(__file__).resolve().parents[2] / "shared" / "data") / "ut_interaction"
@@ -76,19 +76,6 @@ def clip_paths(split: str) -> list[Path]:
         return paths
     parity = 0 if split == "tune" else 1
     return [p for p in paths if int(p.stem.split("_")[0]) % 2 == parity]
-
-
-def read_clip(path: Path) -> np.ndarray:
-    """All frames that decode, (T, H, W, 3) uint8 BGR."""
-    cap = cv2.VideoCapture(str(path))
-    frames = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    cap.release()
-    return np.stack(frames)
 
 
 def reference_collapsed(kp: np.ndarray, vis: np.ndarray) -> bool:
@@ -148,7 +135,7 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
 
 def run_clip(path: Path, people_aware: bool, train_frames: int) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings."""
-    frames = read_clip(path)
+    frames = read_frames(path)
     ref = np.load(DATA / "keypoints" / f"{path.stem}.npz")
     kp, vis = ref["kp"], ref["vis"]
     n = min(len(frames), len(kp))

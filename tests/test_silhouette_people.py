@@ -8,7 +8,6 @@ the detector there is a stand-in that returns the person's box. Real footage: UT
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
 
@@ -20,7 +19,7 @@ from nodes.silhouette.background import (
     _median_mad,
 )
 from nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
-from nodes.silhouette.pipeline import SilhouetteExtractor
+from nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
 from tests.shared_data import DATA
 
@@ -177,16 +176,8 @@ CLIP = UT / "set1" / "0_1_4.avi"
 def ut_clip() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if not CLIP.is_file():
         pytest.skip(f"real clip {CLIP} not present (../shared/data)")
-    cap = cv2.VideoCapture(str(CLIP))
-    frames = []
-    while len(frames) < 40:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    cap.release()
     ref = np.load(UT / "keypoints" / "0_1_4.npz")
-    return np.stack(frames), ref["kp"], ref["vis"]
+    return read_frames(CLIP, 40), ref["kp"], ref["vis"]
 
 
 def test_hog_detector_finds_both_standing_people_on_real_footage(ut_clip):

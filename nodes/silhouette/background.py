@@ -29,6 +29,20 @@ pixel darker than ``min_shadow_brightness`` times its background is foreground: 
 value on alpha_hat (the paper's form, used when tau_alpha_lo is given) would put that limit at
 very different brightnesses in bright, low-noise pixels (small a_i) and dark, noisy ones.
 
+Bounds on the shadow and highlight classes: a pixel more than ``max_highlight_brightness`` times
+brighter than its background is foreground, not a highlight (a change of light brightens a
+surface by tens of percent; a white shirt on a grey floor, which has the floor's chromaticity
+too, by far more), just as one darker than ``min_shadow_brightness`` is not a shadow.
+
+People in view while learning (``fit(..., exclude=...)``, driven by ``people.fit_around_people``):
+the samples known to show a person are left out of every statistic. A pixel with too few samples
+left (someone stood on it through most of the training frames) has never been seen: its E and s
+are filled in from the room around it (``cv2.inpaint``), s widened, and it is marked in
+``unseen_``. There a darker shade of the floor is more likely the grey shirt of the person who
+still stands there than a shadow: shadows must be brighter than ``unseen_min_shadow_brightness``,
+shadow and highlight pixels are not learnt, and a ghost is absorbed only when it matches the room
+around it closely.
+
 Adaptation (``update``). Background pixels blend the frame into E at ``learning_rate``, shadow and
 highlight pixels at ``shadow_learning_rate``; foreground pixels are never blended in but follow the
 scene-wide lighting drift (the mean brightness distortion of the background pixels), so the room
@@ -132,7 +146,9 @@ class HorprasertBackground:
         too, and is far brighter.
     unseen_min_shadow_brightness : ``min_shadow_brightness`` at the ``unseen_`` pixels: where
         someone stood through the training frames they most likely still stand, and a grey
-        shirt there is a darker shade of the grey floor filled in around them, not a shadow.
+        shirt there is a darker shade of the grey floor filled in around them, not a shadow
+        (``people.fit_around_people`` keeps their cast shadow, on the ground at their feet, out
+        of those pixels).
     min_shadow_brightness : darkest shadow accepted, as a fraction of the background brightness
         (raw alpha); darker pixels are foreground. Sets the automatic tau_alpha_lo per pixel.
     tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo : fixed thresholds; None (default) chooses them
@@ -172,7 +188,7 @@ class HorprasertBackground:
         min_spread: float = 1.5,
         min_shadow_brightness: float = 0.4,
         max_highlight_brightness: float = 1.4,
-        unseen_min_shadow_brightness: float = 0.7,
+        unseen_min_shadow_brightness: float = 0.6,
         tau_cd: float | None = None,
         tau_alpha1: float | None = None,
         tau_alpha2: float | None = None,
@@ -331,7 +347,10 @@ class HorprasertBackground:
             alpha, cd2, _ = self._distortions(f)
             inl = self._inlier_mask(f) if robust else None
             if free is not None:
-                inl = free[k] if inl is None else inl & free[k]
+                # an unseen pixel's few samples are compared with a filled-in E: they would
+                # inflate its a and b; it takes the typical ones instead
+                ok = free[k] & ~unseen
+                inl = ok if inl is None else inl & ok
             wgt = np.ones((h, w), np.float32) if inl is None else inl.astype(np.float32)
             inliers.append(inl)
             sum_a += wgt * (alpha - 1.0) ** 2

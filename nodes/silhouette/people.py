@@ -42,6 +42,8 @@ _MOVED_FRAC = 0.01
 #: fraction of its pixels changed between the two (a person fills about half of their box: a
 #: walker who has left it changes far more)
 _SAME_FRAC = 0.2
+#: the bottom fraction of a person's box that holds their feet, and their shadow on the ground
+_FEET_BAND = 0.25
 #: the score a still person (``_still_person``) reaches at least once
 _STILL_SCORE = 0.75
 
@@ -172,6 +174,13 @@ def _changed_fraction(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> float:
     return float(np.mean(d.max(axis=2) > _MOVED_GREY)) if d.size else 1.0
 
 
+def _feet_bands(boxes: np.ndarray) -> np.ndarray:
+    """The bottom ``_FEET_BAND`` of each box (K, 4) (x, y, w, h), grown down by the same, (K, 4)."""
+    b = np.asarray(boxes, np.float64).reshape(-1, 4)
+    band = _FEET_BAND * b[:, 3]
+    return np.stack([b[:, 0], b[:, 1] + b[:, 3] - band, b[:, 2], 2.0 * band], axis=1)
+
+
 def box_mask(shape: tuple[int, int], boxes: np.ndarray, grow: float = 0.0) -> np.ndarray:
     """(H, W) bool, True inside any of the boxes (K, 4) (x, y, w, h), each grown on every side by
     ``grow`` times its height (pixels, clipped to the image)."""
@@ -246,13 +255,23 @@ def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.nda
     colour is more likely a grey shirt than the room."""
     if not boxes.any():
         return boxes
-    alpha_hat, _ = model.distortions(frame)
+    alpha_hat, cd_hat = model.distortions(frame)
     alpha = 1.0 + alpha_hat * model.a_
-    changed = (model.apply(frame) == FOREGROUND) | (np.abs(alpha - 1.0) > _PERSON_BRIGHTNESS)
+    fg = model.apply(frame) == FOREGROUND
+    changed = fg | (np.abs(alpha - 1.0) > _PERSON_BRIGHTNESS)
+    # At the feet, a darker shade of the floor (its chromaticity, no darker than a shadow can be)
+    # is the person's cast shadow: it is not left out, so that it stays a shadow there. The room
+    # under it is learnt shadowed; when it is uncovered the model absorbs the ghost.
+    feet = box_mask(frame.shape[:2], _feet_bands(box_list), 0.0)
+    shade = feet & (alpha < 1.0) & (alpha >= model.min_shadow_brightness) & (cd_hat <= model.thresholds_["tau_cd"])
+    changed &= ~shade
     allowed = boxes & (~model.unseen_ | still)
     m = (changed & allowed).view(np.uint8)
     m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     r = max(1, int(round(grow * float(np.median(box_list[:, 3])))))
+    # thin horizontal runs are the edges of the room that the fill did not continue (a skirting
+    # board, a kerb), not a standing person: an opening with a vertical line removes them
+    m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((2 * r + 1, 1), np.uint8))
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk)
     contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
