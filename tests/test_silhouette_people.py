@@ -1,7 +1,7 @@
 """People in view while the background is learnt: the masked fit, the detector, the whole extractor.
 
-Synthetic scene: a smoothly shaded room (a floor's light falls off over tens of pixels) with sensor noise (sigma 2.5 grey levels) and a
-person-like ellipse of a colour the room never has, standing still through every training frame;
+Synthetic scene: a smoothly shaded room (a floor's light falls off over tens of pixels) with
+sensor noise (sigma 2.5 grey levels) and a person-like ellipse of a colour the room never has, standing still through every training frame;
 the detector there is a stand-in that returns the person's box. Real footage: UT-Interaction clip
 0_1_4 (two people standing from the first frame) with its reference keypoints, when present.
 """

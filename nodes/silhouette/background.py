@@ -187,7 +187,7 @@ class HorprasertBackground:
         shadow_learning_rate: float = 0.01,
         min_spread: float = 1.5,
         min_shadow_brightness: float = 0.4,
-        max_highlight_brightness: float = 1.4,
+        max_highlight_brightness: float = 1.5,
         unseen_min_shadow_brightness: float = 0.6,
         tau_cd: float | None = None,
         tau_alpha1: float | None = None,
@@ -613,7 +613,8 @@ class HorprasertBackground:
             for k in (
                 "detection_rate", "learning_rate", "spread_learning_rate", "shadow_learning_rate",
                 "min_spread",
-                "min_shadow_brightness", "max_highlight_brightness", "unseen_min_shadow_brightness", "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
+                "min_shadow_brightness", "max_highlight_brightness", "unseen_min_shadow_brightness",
+                "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
                 "robust_inlier_k", "absorb_frames", "absorb_k", "min_free_frac", "unseen_spread_gain",
                 "max_threshold_samples", "random_state",
             )

@@ -8,10 +8,14 @@ room where they stood as ghosts. Here they are found first and kept out of the s
    SVM; no downloaded weights) on a few of the training frames. The frame is padded with its
    median colour first, so that people whose head or feet touch the image border, the usual case
    for an elevated camera close to the people, still fit the detector's window with its margins.
-2. ``fit_around_people``: a first fit leaves the people's boxes out (``HorprasertBackground.fit``
-   with ``exclude``; the room never seen behind them is filled in from around it); the model
-   then separates each person from the rest of their box, frame by frame, and a second fit leaves
-   out only the people themselves (dilated), so the room beside them is learnt from its own pixels.
+2. ``fit_around_people``: a first fit leaves the people's boxes out of the frames near those they
+   were found in, and out of every frame that still shows a person who stands still
+   (``HorprasertBackground.fit`` with ``exclude``; the room seen behind them in too few frames is
+   filled in from around it). The model then separates each person from the rest of their box,
+   frame by frame, and a second fit leaves out only the people themselves (grown by a rim), so
+   the room beside them is learnt from its own pixels. Walkers need none of this (the median
+   copes with them); a detection on the still room is not trusted without a sure score or
+   movement in its box.
 
 Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h) int.
 """
@@ -265,16 +269,20 @@ def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.nda
     feet = box_mask(frame.shape[:2], _feet_bands(box_list), 0.0)
     shade = feet & (alpha < 1.0) & (alpha >= model.min_shadow_brightness) & (cd_hat <= model.thresholds_["tau_cd"])
     changed &= ~shade
-    allowed = boxes & (~model.unseen_ | still)
-    m = (changed & allowed).view(np.uint8)
-    m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     r = max(1, int(round(grow * float(np.median(box_list[:, 3])))))
-    # thin horizontal runs are the edges of the room that the fill did not continue (a skirting
-    # board, a kerb), not a standing person: an opening with a vertical line removes them
+    return _solid_regions(changed & boxes & (~model.unseen_ | still), r) & boxes
+
+
+def _solid_regions(mask: np.ndarray, r: int) -> np.ndarray:
+    """A person's (H, W) bool pixels made solid: speckle opened away, thin horizontal runs removed
+    (the edges of the room the fill did not continue, a skirting board or a kerb, not a standing
+    person: an opening with a vertical line of 2r + 1 pixels), gaps closed and holes filled (disk
+    of radius r), and the result grown by r pixels."""
+    m = cv2.morphologyEx(mask.view(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((2 * r + 1, 1), np.uint8))
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk)
     contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     m = np.zeros_like(m)
     cv2.drawContours(m, contours, -1, 1, thickness=cv2.FILLED)
-    return cv2.dilate(m, disk).astype(bool) & boxes
+    return cv2.dilate(m, disk).astype(bool)
