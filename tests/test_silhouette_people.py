@@ -22,9 +22,9 @@ from nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
 from nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
 from tests.shared_data import DATA
+from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W
+from tests.test_silhouette_background import person_mask as ellipse
 
-H, W = 120, 160
-YY, XX = np.mgrid[0:H, 0:W]
 ROOM = np.stack(
     [
         90 + 30 * np.sin(XX / 40.0) + 10 * np.cos(YY / 30.0),
@@ -33,11 +33,11 @@ ROOM = np.stack(
     ],
     axis=-1,
 ).astype(np.float32)
-PERSON_BGR = (200.0, 60.0, 40.0)
 
 
-def person_mask(cx: float, cy: float = 60.0, rx: float = 12.0, ry: float = 35.0) -> np.ndarray:
-    return ((XX - cx) / rx) ** 2 + ((YY - cy) / ry) ** 2 < 1.0
+def person_mask(cx: float, rx: float = 12.0, ry: float = 35.0) -> np.ndarray:
+    """(H, W) bool: the standing person, an upright ellipse centred at (cx, 60)."""
+    return ellipse(cx, rx=rx, ry=ry)
 
 
 def render(rng: np.random.Generator, person_x: float | None = None, sway: float = 0.0) -> np.ndarray:
