@@ -1,7 +1,7 @@
 """Silhouettes on real two-person video: are both people found whole, on the right side?
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
-           [--max-clips N] [--out FILE]
+           [--max-clips N] [--only STEM,...] [--no-baseline] [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
 mostly still from the first frame, static elevated camera), with reference 2D keypoints of both
@@ -33,6 +33,9 @@ least ``MIN_VISIBLE`` reference keypoints of visibility >= 0.5 on that frame:
   scored person (ghosts, fragments, passers-by: the clips have other people walking at their edges
   now and then, so it is not 0 even for a perfect method);
 * ``fit_s``: seconds per ``fit_background`` call; ``fps``: frames per second of ``process``.
+
+The reference can also swap the two people when they touch (hugs, pushes) without collapsing;
+such frames count as misses (clips 14_3_1 and 32_6_1, hugs, lose most of their misses this way).
 
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
