@@ -35,7 +35,7 @@ least ``MIN_VISIBLE`` reference keypoints of visibility >= 0.5 on that frame:
 * ``fit_s``: seconds per ``fit_background`` call; ``fps``: frames per second of ``process``.
 
 The reference can also swap the two people when they touch (hugs, pushes) without collapsing;
-such frames count as misses (clips 14_3_1 and 32_6_1, hugs, lose most of their misses this way).
+such frames count as misses (seen by eye on the hug clips 14_3_1 and 32_6_1, not counted).
 
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
