@@ -347,11 +347,12 @@ def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
 
 
 def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head() -> None:
-    """One row per tracked person with the signals that are on, above the head's box; an untracked
+    """One row per tracked person with the signals that are on, above the head's box (beside it at the
+    top of the picture); an untracked
     region (a fragment, a ghost) and a person with no signal on get no badge."""
     names = ["nod", "shake", "gaze", "act", "talk", "laugh"]
     people = [PersonShape(id=0, side="left", bbox=(40, 100, 50, 120)),     # tracked, nodding and talking
-              PersonShape(id=1, side="right", bbox=(200, 100, 50, 120)),   # a region nobody tracks
+              PersonShape(id=1, side="right", bbox=(240, 100, 50, 120)),   # a region nobody tracks
               PersonShape(id=2, side="right", bbox=(120, 2, 40, 100))]     # tracked, head at the top
     signals = [PersonSignals(id=i, side=p.side, names=names, labels=np.array(lab, np.int8),
                              scores=np.full(6, 0.5, np.float32))
@@ -362,14 +363,14 @@ def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head(
                pose=pose, signals=SocialSignals(people=signals))
     got = changed(comp.render(b))
     bright = (comp.render(b) == (0, 200, 255)).all(-1)
-    ys, xs = np.nonzero(bright[:100])
+    ys, xs = np.nonzero(bright[:100, :120])
     # person 0: its two badges in one row just above its box (y 100), none over it
     assert ys.size and ys.max() < 100 and ys.min() > 100 - 30 and 20 <= xs.min() and xs.max() < 120
     assert not bright[100:220, 40:90].any()
     # person 1 is not tracked: nothing drawn over or above its region
-    assert not got[:, 190:260].any()
-    # person 2's head is at the top of the picture: its badge goes below its feet, not over its face
-    assert bright[103:130, 100:180].any() and not bright[2:102, 120:160].any()
+    assert not got[:, 230:300].any()
+    # person 2's head is at the top of the picture: its badge goes beside the head, not over its face
+    assert bright[2:30, 163:200].any() and not bright[2:102, 120:160].any()
     # a person with nothing on gets no badge at all
     off = Bundle(frame=Frame(image=blank()), silhouettes=b.silhouettes, pose=pose,
                  signals=SocialSignals(people=[replace(signals[0], labels=np.zeros(6, np.int8))]))

@@ -327,14 +327,28 @@ class Compositor:
             names = [person.names[k] for k in on]
             x0, y0, x1, y1 = draw.signal_badges_rect(img, (0, 0), names)
             w, h = x1 - x0, y1 - y0
-            x = int(np.clip(box[0] + box[2] / 2 - w / 2, 0, max(img.shape[1] - w, 0)))
-            y = box[1] - h - 3 if box[1] - h - 3 >= 0 else min(box[1] + box[3] + 3, img.shape[0] - h)
+            x, y = _badge_place(box, w, h, img.shape)
             scores = np.asarray(person.scores).reshape(-1)
             rows.append(((x, y), names, scores[on] if scores.size == len(person.names) else None))
             rects.append((x, y, x + w, y + h))
         # people standing close (a handshake) would have their rows drawn over each other
         for ((x, y), names, scores), dy in zip(rows, draw.place_apart(rects, img.shape[0])):
             draw.draw_signal_badges(img, (x, y + dy), names, np.ones(len(names), np.int8), scores)
+
+
+def _badge_place(box: tuple[int, int, int, int], w: int, h: int, shape: tuple[int, ...]) -> tuple[int, int]:
+    """Top-left (x, y) of a ``w`` x ``h`` row of badges for a person in ``box`` (x, y, w, h): centred
+    just above the head; where the head touches the top of the picture, beside the head (right,
+    else left); else below the feet. Never over the person's face."""
+    H, W = shape[:2]
+    bx, by, bw, bh = box
+    if by - h - 3 >= 0:
+        return int(np.clip(bx + bw / 2 - w / 2, 0, max(W - w, 0))), by - h - 3
+    if bx + bw + 3 + w <= W:
+        return bx + bw + 3, max(by, 0)
+    if bx - 3 - w >= 0:
+        return bx - 3 - w, max(by, 0)
+    return int(np.clip(bx + bw / 2 - w / 2, 0, max(W - w, 0))), min(by + bh + 3, H - h)
 
 
 def _projected_box(joints: Any, cam: Camera) -> tuple[int, int, int, int] | None:
