@@ -148,6 +148,10 @@ class Responder(Node):
             body = self._pick(list(driver.people))
             if body is None or body.lost or np.asarray(body.joints).shape != (14, 3):
                 return nobody()
+            if self.last is not None and self.last.observed_id != body.id:
+                # another person than the one answered so far: the model's state belongs to that one
+                m.reset()
+                self.tally("observed_switches")
             joints = m.step(body.joints)
             out.update(joints=self.style(joints, self.emotion, self.strength), observed_id=body.id,
                        behaviour="respond", confidence=float(np.max(m.posterior_)))
