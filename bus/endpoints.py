@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import stat
 import tempfile
 import time
 from dataclasses import dataclass
@@ -18,8 +19,39 @@ from pathlib import Path
 _IPC_MAX = 100  # sun_path is 108 bytes on Linux, keep a margin
 
 
+class RunDirError(ValueError):
+    """A folder for sockets and run directories that is not safely the user's own; the message says
+    why and what to do. (A ValueError, as the other set-up errors that commands report.)"""
+
+
+def private_dir(path: Path) -> Path:
+    """``path`` as a folder of mode 0700 owned by this user: created so, or checked.
+
+    Anyone who can write into the folder can replace a node's socket or the ``latest`` link that
+    ``topic``, ``node`` and ``bag`` follow, so a folder owned by another user, a symbolic link, or a
+    folder others may write to is refused (RunDirError); read and search bits for others on a
+    folder of one's own are only taken away.
+    """
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    st = os.lstat(path)
+    fix = "remove it, or set COUNTERPART_HOME to a folder of your own (e.g. mkdir -m 700 ~/.counterpart)"
+    if stat.S_ISLNK(st.st_mode) or not stat.S_ISDIR(st.st_mode):
+        raise RunDirError(f"{path} is {'a symbolic link' if stat.S_ISLNK(st.st_mode) else 'not a folder'}, "
+                          f"not a folder of your own for the graph's sockets: {fix}")
+    if st.st_uid != os.getuid():
+        raise RunDirError(f"{path} belongs to user id {st.st_uid}, not to you ({os.getuid()}): whoever owns it can "
+                          f"read and replace the graph's sockets; {fix}")
+    if st.st_mode & 0o022:
+        raise RunDirError(f"{path} is writable by others (mode {stat.S_IMODE(st.st_mode):04o}): anyone could plant "
+                          f"sockets or a 'latest' link there; check what it holds and chmod 700 it, or {fix}")
+    if stat.S_IMODE(st.st_mode) != 0o700:
+        os.chmod(path, 0o700)
+    return path
+
+
 def base_dir() -> Path:
-    """Per-user folder holding run directories (``$XDG_RUNTIME_DIR/counterpart`` or ``/tmp/counterpart-UID``)."""
+    """Per-user folder holding run directories (``$COUNTERPART_HOME``, ``$XDG_RUNTIME_DIR/counterpart``
+    or ``/tmp/counterpart-UID``), mode 0700 and the user's own (:func:`private_dir`)."""
     env = os.environ.get("COUNTERPART_HOME")
     if env:
         root = Path(env)
@@ -27,8 +59,7 @@ def base_dir() -> Path:
         root = Path(os.environ["XDG_RUNTIME_DIR"]) / "counterpart"
     else:
         root = Path(tempfile.gettempdir()) / f"counterpart-{os.getuid()}"
-    root.mkdir(mode=0o700, parents=True, exist_ok=True)
-    return root
+    return private_dir(root)
 
 
 def new_run_dir() -> Path:
@@ -41,9 +72,7 @@ def new_run_dir() -> Path:
 
 def standalone_dir() -> Path:
     """Shared folder for nodes started alone (``counterpart run``) so they find each other by topic."""
-    path = base_dir() / "standalone"
-    path.mkdir(mode=0o700, exist_ok=True)
-    return path
+    return private_dir(base_dir() / "standalone")
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,10 @@
   count resets after 30 s of healthy running) up to ``max_restarts``.
 - A ``required`` node's exit stops the graph with its exit code (after a clean 0 exit, the rest of
   the graph gets ``DRAIN_S`` to finish on end of stream).
+- A node that fails before its first message (published or handled: the node then writes the
+  marker ``nodes/NAME.running``) stops the graph with its exit code, whatever its restart policy:
+  a node that cannot start (an unreadable video, a missing camera or model, a crash in setup) would
+  fail the same way again, and the nodes waiting for its messages would wait forever.
 - The graph ends by itself when every node has exited; the exit code is 0 when all exited 0.
 - The run directory holds ``registry.json`` (nodes, pids, topics, endpoints, types) for the
   introspection commands, and ``base_dir()/latest`` points at it.
@@ -65,6 +69,12 @@ class Proc:
     next_start: float | None = 0.0
     exit_code: int | None = None
     history: list[int] = field(default_factory=list)
+    running_file: Path | None = None
+
+    @property
+    def ever_ran(self) -> bool:
+        """Whether the node has published or handled a message (in any of its runs)."""
+        return self.running_file is not None and self.running_file.exists()
 
 
 class Launcher:
@@ -80,12 +90,14 @@ class Launcher:
         spec_dir = self.run_dir / "nodes"
         spec_dir.mkdir(mode=0o700, exist_ok=True)
         for name, spec in self.specs.items():
+            spec["running_file"] = str(spec_dir / f"{name}.running")
             path = spec_dir / f"{name}.json"
             path.write_text(json.dumps(spec, indent=1))
             decl = graph.nodes[name]
             self.procs[name] = Proc(
                 name=name, cmd=[sys.executable, "-m", "bus.runner", str(path)],
                 restart=decl.restart, max_restarts=decl.max_restarts, required=decl.required,
+                running_file=Path(spec["running_file"]),
             )
 
     # ------------------------------------------------------------------------------ registry
@@ -110,6 +122,7 @@ class Launcher:
                 topic: {
                     "type": info["type"],
                     "publisher": info["publisher"],
+                    "node": info.get("node"),
                     "subscribers": [f"{n}.{p} ({pol})" for n, p, pol in info["subscribers"]],
                     "endpoints": next(
                         (s["outputs"][port]["endpoints"] for s in self.specs.values() for port in s["outputs"]
@@ -216,6 +229,10 @@ class Launcher:
                     if now - p.started > HEALTHY_S:
                         p.restarts = 0
                     failed = p.exit_code != 0
+                    if failed and not p.ever_ran:
+                        log.error("%s failed before its first message (exit code %d): stopping the graph",
+                                  p.name, p.exit_code)
+                        return p.exit_code
                     wants = p.restart == "always" or (p.restart == "on-failure" and failed)
                     if wants and p.restarts < p.max_restarts and required_code is None and drain_deadline is None:
                         delay = min(BACKOFF_MAX_S, BACKOFF_START_S * 2 ** p.restarts)
@@ -227,7 +244,8 @@ class Launcher:
                         (log.warning if failed else log.info)("%s exited with %d", p.name, p.exit_code)
                         if p.required:
                             if failed:
-                                log.error("required node %s failed: stopping the graph", p.name)
+                                log.error("required node %s failed (exit code %d): stopping the graph",
+                                          p.name, p.exit_code)
                                 return p.exit_code
                             required_code = 0
                             drain_deadline = now + DRAIN_S
@@ -268,13 +286,30 @@ def _external_endpoints(specs: dict[str, dict[str, Any]], topic: str) -> dict[st
 
 
 def prune_run_dirs(keep: int = 10) -> None:
-    """Delete run directories of launchers that are gone, keeping the newest ``keep``."""
-    runs = sorted(base_dir().glob("run-*"), key=lambda p: p.stat().st_mtime)
-    for d in runs[:-keep] if keep else runs:
-        try:
-            os.kill(int(d.name.rsplit("-", 1)[1]), 0)
-            continue  # its launcher still runs
-        except PermissionError:
-            continue
-        except (ValueError, ProcessLookupError):
+    """Clean up after launchers that are gone (a SIGKILL leaves their run directories behind):
+    delete their run directories but the newest ``keep``, the sockets of those kept (their
+    registries stay for ``counterpart node list --run``), and their temporary ``latest`` links."""
+    base = base_dir()
+    runs = sorted(base.glob("run-*"), key=lambda p: p.stat().st_mtime)
+    gone = [d for d in runs if not _launcher_alive(d.name)]
+    for i, d in enumerate(gone):
+        if i < len(gone) - keep:
             shutil.rmtree(d, ignore_errors=True)
+        else:
+            for f in d.iterdir():
+                if f.is_socket():
+                    f.unlink(missing_ok=True)
+    for link in base.glob(".latest-*"):
+        if not _launcher_alive(link.name):
+            link.unlink(missing_ok=True)
+
+
+def _launcher_alive(name: str) -> bool:
+    """Whether the launcher whose pid ends ``name`` (``run-DATE-TIME-PID``, ``.latest-PID``) runs."""
+    try:
+        os.kill(int(name.rsplit("-", 1)[1]), 0)
+    except PermissionError:
+        return True  # someone's process: leave it
+    except (ValueError, IndexError, ProcessLookupError):
+        return False
+    return True
