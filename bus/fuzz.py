@@ -19,15 +19,17 @@ from __future__ import annotations
 import dataclasses
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 import types
 import typing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import msgpack
 import numpy as np
@@ -196,17 +198,17 @@ class HostilePublisher:
         self.sock.bind("tcp://127.0.0.1:*")
         self.endpoint: str = self.sock.getsockopt_string(zmq.LAST_ENDPOINT)
 
-    def wait_subscriber(self, timeout: float) -> bool:
-        """True once a subscriber has joined (within ``timeout`` seconds)."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+    def wait_subscriber(self, deadline: float, alive: Callable[[], bool]) -> bool:
+        """True once a subscriber has joined (before ``time.monotonic()`` reaches ``deadline``,
+        and while ``alive()``)."""
+        while time.monotonic() < deadline and alive():
             if self.sock.poll(100) and self.sock.recv()[:1] == b"\x01":
                 return True
         return False
 
-    def send(self, frames: list[bytes], timeout: float = 30.0) -> None:
-        """Send one multipart message, waiting while the subscriber's queue is full."""
-        deadline = time.monotonic() + timeout
+    def send(self, frames: list[bytes], deadline: float) -> None:
+        """Send one multipart message, waiting while the subscriber's queue is full (until
+        ``deadline``, on the ``time.monotonic()`` clock: TimeoutError)."""
         while True:
             try:
                 self.sock.send_multipart(frames, zmq.NOBLOCK)
@@ -228,6 +230,7 @@ class FuzzTarget:
     port: str
     topic: str
     type_name: str
+    min_dim: int = 0  # the smallest side of arrays in well-formed messages (see OddValues)
     sent: int = 0
     valid: int = 0
     received: int = 0  # decoded and handed to the node, from its stats
@@ -238,86 +241,87 @@ class FuzzTarget:
         return self.sent - self.received - self.bad
 
 
-def _exited(workdir: Path, nodes: Any) -> bool:
-    """Whether any of ``nodes`` has exited, by the launch's registry."""
-    from .registry import RegistryError
-    from .registry import read as read_registry
-
-    try:
-        reg = read_registry(str(workdir / "home" / "latest"))
-    except RegistryError:
-        return True
-    return not reg["alive"] or any(reg["nodes"][n]["pid"] is None for n in nodes)
-
-
 def run_fuzz(nodes: dict[str, dict[str, Any]], targets: list[FuzzTarget], n: int, workdir: Path,
-             seed: int = 0, timeout: float = 120.0, min_dim: int = 0) -> tuple[int, str]:
+             seed: int = 0, timeout: float = 120.0) -> tuple[int | None, str]:
     """Launch ``nodes`` (launch-file declarations, the targets' inputs remapped to their topics),
     send ``n`` hostile messages to each target (interleaved), wait until every target's stats have
-    counted them all (or ``timeout``), then end the topics cleanly and wait for the graph to end.
-    Fills each target's counts; returns the launcher's exit code and its output."""
+    counted them all (or ``timeout``, or a node exits), then end the topics as their publisher would
+    and wait for the graph to end. Fills each target's counts; returns the launcher's exit code
+    (None when it had to be killed) and its output."""
     import yaml
 
-    from messages import NodeStats, by_name
-
-    from .registry import read as read_registry
-    from .registry import topic_endpoints
-    from .transport import LATEST, Subscriber
-
+    home = Path(tempfile.mkdtemp(prefix="cpz", dir="/tmp"))  # short: unix socket paths are limited
     ctx = zmq.Context()
     pubs = {t.topic: HostilePublisher(ctx) for t in targets}
     doc = {"external": {t.topic: {"type": t.type_name, "endpoint": pubs[t.topic].endpoint, "publisher": "fuzzer"}
                         for t in targets}, "nodes": nodes}
     (workdir / "fuzz.yaml").write_text(yaml.safe_dump(doc, sort_keys=False))
-    env = {**os.environ, "COUNTERPART_HOME": str(workdir / "home")}
     log = open(workdir / "fuzz.log", "w+")
-    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", "launch", str(workdir / "fuzz.yaml")], env=env,
-                            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-    stats: dict[str, Subscriber] = {}
+    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", "launch", str(workdir / "fuzz.yaml")],
+                            env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    deadline = time.monotonic() + timeout
+    code: int | None = None
     try:
-        deadline = time.monotonic() + timeout
-        for pub in pubs.values():
-            if not pub.wait_subscriber(max(0.0, deadline - time.monotonic())):
-                raise TimeoutError("a fuzzed node never subscribed")
-        reg = read_registry(str(workdir / "home" / "latest"))
-        for node in {t.node for t in targets}:
-            stats[node] = Subscriber(ctx, f"{node}/stats", topic_endpoints(reg, f"{node}/stats"), LATEST, msg_type=NodeStats)
-        streams = {t.topic: hostile_messages(t.topic, by_name(t.type_name), n, "fuzzer", seed + i, min_dim)
-                   for i, t in enumerate(targets)}
-        for _ in range(n):
-            for t in targets:
-                item = next(streams[t.topic])
-                pubs[t.topic].send(item.frames, max(1.0, deadline - time.monotonic()))
-                t.sent += 1
-                t.valid += item.valid
-        while time.monotonic() < deadline and any(t.uncounted for t in targets) and not _exited(workdir, stats):
-            for node, sub in stats.items():
-                if sub.socket.poll(100):
-                    msg = sub.receive()
-                    for t in targets:
-                        if isinstance(msg, NodeStats) and t.node == node:
-                            for port in msg.inputs:
-                                if port.port == t.port:
-                                    t.received, t.bad = port.count, port.bad
-        for sub in stats.values():  # a reader that stops reading would hold the node's end back
-            sub.close()
-        stats.clear()
-        for t in targets:  # the end of the stream, from its publisher
-            pubs[t.topic].send([t.topic.encode(), *encode(EndOfStream(node="fuzzer", reason="end"))])
+        if all(p.wait_subscriber(deadline, lambda: proc.poll() is None) for p in pubs.values()):
+            _send_and_count(ctx, pubs, targets, n, seed, home / "latest", deadline)
+            for t in targets:  # the end of the stream, from its publisher
+                pubs[t.topic].send([t.topic.encode(), *encode(EndOfStream(node="fuzzer", reason="end"))], deadline)
         code = proc.wait(max(5.0, deadline - time.monotonic()))
+    except (subprocess.TimeoutExpired, TimeoutError):
+        pass
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-        for sub in stats.values():
-            sub.close()
         for pub in pubs.values():
             pub.close()
         ctx.term()
+        shutil.rmtree(home, ignore_errors=True)
     log.seek(0)
     out = log.read()
     log.close()
     return code, out
+
+
+def _send_and_count(ctx: zmq.Context, pubs: dict[str, HostilePublisher], targets: list[FuzzTarget], n: int,
+                    seed: int, run: Path, deadline: float) -> None:
+    """Send the hostile messages, then read the nodes' stats until every one is counted."""
+    from messages import NodeStats, by_name
+
+    from .registry import RegistryError
+    from .registry import read as read_registry
+    from .registry import topic_endpoints
+    from .transport import LATEST, Subscriber
+
+    streams = {t.topic: hostile_messages(t.topic, by_name(t.type_name), n, "fuzzer", seed + i, t.min_dim)
+               for i, t in enumerate(targets)}
+    for _ in range(n):
+        for t in targets:
+            item = next(streams[t.topic])
+            pubs[t.topic].send(item.frames, deadline)
+            t.sent += 1
+            t.valid += item.valid
+    reg = read_registry(str(run))
+    stats = {node: Subscriber(ctx, f"{node}/stats", topic_endpoints(reg, f"{node}/stats"), LATEST, msg_type=NodeStats)
+             for node in {t.node for t in targets}}
+    try:
+        while time.monotonic() < deadline and any(t.uncounted for t in targets):
+            for node, sub in stats.items():
+                msg = sub.receive() if sub.socket.poll(100) else None
+                for t in targets:
+                    for port in msg.inputs if isinstance(msg, NodeStats) and t.node == node else ():
+                        if port.port == t.port:
+                            t.received, t.bad = port.count, port.bad
+            try:
+                reg = read_registry(str(run))
+            except RegistryError:
+                return
+            if not reg["alive"] or any(reg["nodes"][t.node]["pid"] is None for t in targets):
+                return  # a node exited: what it had not counted stays uncounted
+    finally:
+        for sub in stats.values():  # a reader that stops reading would hold the node's end back
+            sub.close()
 
 
 __all__ = ["FuzzTarget", "Hostile", "HostilePublisher", "KINDS", "OddValues", "hostile_messages", "run_fuzz"]

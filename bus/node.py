@@ -326,9 +326,11 @@ class Node:
         # for the other to confirm an end of stream that neither reads any longer.
         for sub in self._in.values():
             sub.close()
+        timeout = self._eos_timeout()
         for pub in self._out.values():
+            pub.barrier_timeout = min(pub.barrier_timeout, timeout)  # nor for readers still starting
             pub.send_eos(self.name, self._last_seq, reason)
-        deadline = time.monotonic() + self._eos_timeout()
+        deadline = time.monotonic() + timeout
         for pub in self._out.values():
             if not pub.wait_delivered(max(0.0, deadline - time.monotonic())) and not self.stopping:
                 self.log.warning("%s: %d reliable subscriber(s) did not confirm end of stream", pub.topic, pub.subscribers)
