@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import shutil
-import signal
 import socket
 import stat
 import subprocess
@@ -17,20 +17,19 @@ import time
 from pathlib import Path
 from typing import Iterator
 
-import cv2
 import numpy as np
 import psutil
 import pytest
 import zmq
 
-from bus.bag import BagReader
 from bus.bag_nodes import Recorder
 from bus.endpoints import RunDirError, ipc_endpoints, private_dir
 from bus.fuzz import FuzzTarget, run_fuzz
-from bus.logs import RepeatFilter
+from bus.logs import BURST, WINDOW_S, RepeatFilter
 from bus.supervisor import prune_run_dirs
 from bus.transport import LATEST, RELIABLE, Publisher, Subscriber
-from messages import (EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode, encode_frames)
+from messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
+from tests.faulting import recorder_stalls_camera
 from tests.graph_nodes import Number
 from tests.launching import REPO, descendants, kill_tree, read_jsonl, start_launch, wait_for, write_launch
 
@@ -46,11 +45,6 @@ def home() -> Iterator[Path]:
         yield d
     finally:
         shutil.rmtree(d, ignore_errors=True)
-
-
-def _cli(*args: str, home: Path, **kw) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "bus.cli", *args], cwd=REPO, start_new_session=True,
-                            env={**os.environ, "COUNTERPART_HOME": str(home)}, **kw)
 
 
 def _all_gone(procs: list[psutil.Process]) -> bool:
@@ -151,16 +145,20 @@ def test_fuzzed_input_to_real_nodes_is_counted_and_never_fatal(tmp_path: Path) -
         "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False},
                      "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
     }
+    t0 = time.monotonic()
     code, out = run_fuzz(nodes, targets, 5000, tmp_path, timeout=150)
+    took = time.monotonic() - t0
     assert code == 0 and "crashed" not in out, out[-5000:]
     for t in targets:
         assert t.sent == 5000 and t.uncounted == 0, t
         assert t.received == t.valid > 500, t  # each well-formed one reached the node, the rest were bad
     # the forged end-of-stream messages did not end the nodes (they ended on the real one, above)
     assert "end of stream from 'fuzzer-not'; the topic's publisher is 'fuzzer'" in out
-    # the labeller saw its stream "restart" hundreds of times: a few lines, then a count
-    assert 1 <= out.count("seq went back to") <= 12, out.count("seq went back to")
-    assert "more lines like 'seq went back to %d" in out or "more like this" in out
+    # the labeller saw its stream "restart" hundreds of times: a few lines per 10 s, then a count
+    restarts = int(re.search(r"(\d+) restarts", out).group(1))
+    lines = out.count("seq went back to")
+    assert restarts > 200 and 1 <= lines <= BURST * (took // WINDOW_S + 2), (restarts, lines)
+    assert "more lines like 'seq went back to %d: the stream restarted" in out
 
 
 def _pair(root: Path, topic: str, policy: str = RELIABLE, **kw) -> tuple[zmq.Context, zmq.Socket, Subscriber]:
@@ -214,13 +212,14 @@ def test_a_queued_latest_input_keeps_order_and_counts_what_overflowed(home: Path
     sub = Subscriber(ctx, "q", ipc_endpoints(home, "q"), LATEST, queue=8)
     try:
         assert wait_for(lambda: pub.poll_subscriptions() or pub.latest_subscribers == 1, 5)
-        for i in range(400):  # the reader is not reading: far more than its queue and the socket hold
+        for i in range(400):  # a camera at 1 kHz; the reader is not reading: its queue and the socket fill
             pub.send(Number(seq=i, payload=np.zeros(20_000, np.uint8)))
-        time.sleep(0.2)
+            time.sleep(0.001)
         pub.send_eos("q", 399)
         got = _drain(sub, 1000)
         seqs = [m.seq for m in got if isinstance(m, Number)]
-        assert seqs == sorted(seqs) and seqs[0] == 0 and 8 <= len(seqs) < 400
+        # the first ones in order, as many as the queue holds (a latest input would keep one), the rest counted
+        assert seqs == sorted(seqs) and seqs[:8] == list(range(8)) and len(seqs) < 400
         assert len(seqs) + sub.drops == 400 and isinstance(got[-1], EndOfStream)
     finally:
         sub.close()
@@ -250,79 +249,12 @@ def test_a_message_with_22_people_decodes_and_array_limits_follow_the_type() -> 
 # ----------------------------------------------------------------- a paused recorder holds nothing back
 
 
-def _video(path: Path, frames: int = 50) -> Path:
-    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 25, (160, 120))
-    for i in range(frames):
-        w.write(np.full((120, 160, 3), (i * 5) % 255, np.uint8))
-    w.release()
-    return path
-
-
-def _last_count(sub: Subscriber, seconds: float) -> int | None:
-    """The camera's published frame count in the newest of its stats over ``seconds`` (None when
-    none came: a camera blocked in a send publishes no stats either)."""
-    count, deadline = None, time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        if sub.socket.poll(50):
-            msg = sub.receive()
-            if isinstance(msg, NodeStats):
-                count = msg.outputs[0].count
-    return count
-
-
-def _stalls_while_recorder_stopped(tmp_path: Path, home: Path, lossless: bool) -> tuple[bool, str]:
-    """Run a looping camera at 50 fps, record its frames, SIGSTOP the recorder for a few seconds:
-    did the camera stall? Returns that and the recorder's output."""
-    from bus import registry
-
-    doc = {"policy": "latest", "nodes": {"camera": {"run": "nodes.camera", "params": {
-        "source": str(_video(tmp_path / "v.avi")), "loop": True, "pacing": "rate", "rate": 2.0}}}}
-    home = home / str(int(lossless))  # this launch's own 'latest'
-    launch = start_launch(write_launch(tmp_path / "g.yaml", doc), env={"COUNTERPART_HOME": str(home)})
-    bag = tmp_path / f"rec{int(lossless)}.mcap"
-    rec, ctx, stats = None, zmq.Context(), None
-    try:
-        assert wait_for(lambda: (home / "latest" / "registry.json").is_file(), 30)
-        reg = registry.read(str(home / "latest"))
-        stats = Subscriber(ctx, "camera/stats", registry.topic_endpoints(reg, "camera/stats"), LATEST, msg_type=NodeStats)
-        assert wait_for(lambda: (_last_count(stats, 1.2) or 0) > 10, 60)
-        rec = _cli("bag", "record", "-t", "frame", "-o", str(bag), *(["--lossless"] if lossless else []), home=home,
-                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        recorded = lambda: sum(1 for _ in BagReader(bag).records()) if bag.exists() else 0  # noqa: E731
-        assert wait_for(lambda: recorded() > 5, 30)
-        os.kill(rec.pid, signal.SIGSTOP)
-        _last_count(stats, 1.0)  # what was in flight fills the queues meanwhile
-        before = _last_count(stats, 1.5)
-        after = _last_count(stats, 3.0)
-        at_stop = recorded()
-        os.kill(rec.pid, signal.SIGCONT)
-        # recording goes on past what the queues held (the recorder sees the gap only then)
-        assert wait_for(lambda: recorded() > at_stop + 100, 30)
-        rec.send_signal(signal.SIGINT)
-        out, _ = rec.communicate(timeout=30)
-        assert rec.returncode == 0, out
-        return before is None or after is None or after - before < 10, out  # 3 s at 50 fps: 150 frames
-    finally:
-        if stats is not None:
-            stats.close()
-        ctx.term()
-        if rec is not None:
-            if rec.poll() is None:
-                os.kill(rec.pid, signal.SIGCONT)
-            kill_tree(rec)
-        launch.send_signal(signal.SIGINT)
-        try:
-            launch.wait(15)
-        finally:
-            kill_tree(launch)
-
-
-def test_a_stopped_recorder_does_not_hold_the_camera_back(tmp_path: Path, home: Path) -> None:
-    stalled, out = _stalls_while_recorder_stopped(tmp_path, home, lossless=False)
+def test_a_stopped_recorder_does_not_hold_the_camera_back(tmp_path: Path) -> None:
+    stalled, out = recorder_stalls_camera(tmp_path, lossless=False)
     assert not stalled, out
     assert "could not be kept" in out  # what it lost while stopped is counted
     # the reference: a reliable (lossless) recorder does stall the camera, which is why it is opt-in
-    stalled, out = _stalls_while_recorder_stopped(tmp_path, home, lossless=True)
+    stalled, out = recorder_stalls_camera(tmp_path, lossless=True)
     assert stalled, out
 
 
