@@ -206,6 +206,34 @@ def test_an_input_drops_wrong_types_forged_ends_and_absurd_counters(home: Path) 
         ctx.term()
 
 
+@pytest.mark.parametrize("policy", [RELIABLE, LATEST])
+def test_a_subscriber_joining_after_end_of_stream_gets_it_and_confirms(home: Path, policy: str) -> None:
+    """A node still starting when its source ended at once joins while the source waits for the
+    others to confirm the end: the end of stream is sent again to it, so neither waits for the
+    other (the camera used to wait 120 s for such a node, and that node forever)."""
+    import threading
+
+    ctx = zmq.Context()
+    pub = Publisher(ctx, "e", ipc_endpoints(home, "e"))
+    subs = [Subscriber(ctx, "e", ipc_endpoints(home, "e"), policy, msg_type=Number, publisher="camera")]
+    assert wait_for(lambda: pub.poll_subscriptions() or pub.subscribers + pub.eos_listeners == 1, 5)
+    pub.send_eos("camera", -1, "error")
+    subs.append(Subscriber(ctx, "e", ipc_endpoints(home, "e"), policy, msg_type=Number, publisher="camera"))
+    delivered: list[bool] = []
+    waiter = threading.Thread(target=lambda: delivered.append(pub.wait_delivered(20.0)))
+    waiter.start()
+    try:
+        got = [_drain(s, 1, timeout=20.0) for s in subs]
+        waiter.join(25.0)
+        assert all([type(m).__name__ for m in g] == ["EndOfStream"] and g[0].reason == "error" for g in got), got
+        assert delivered == [True] and all(s.ended for s in subs)
+    finally:
+        for s in subs:
+            s.close()
+        pub.close(0)
+        ctx.term()
+
+
 def test_a_queued_latest_input_keeps_order_and_counts_what_overflowed(home: Path) -> None:
     ctx = zmq.Context()
     pub = Publisher(ctx, "q", ipc_endpoints(home, "q"), latest_hwm=2)
