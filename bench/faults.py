@@ -42,8 +42,7 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bus.fuzz import FuzzTarget, run_fuzz  # noqa: E402
-from tests.faulting import recorder_stalls_camera  # noqa: E402
+from tests.faulting import fuzz_silhouette_and_labeller, recorder_stalls_camera  # noqa: E402
 from tests.launching import REPO, descendants, kill_tree, start_launch, wait_for, write_launch  # noqa: E402
 
 N = "tests.graph_nodes:"
@@ -168,19 +167,7 @@ def early_failures(work: Path, timeout: float) -> dict[str, object]:
 
 
 def fuzz(n: int, work: Path) -> dict[str, object]:
-    targets = [
-        # zero-sized images make the silhouette node raise (nodes/silhouette as_bgr): sides >= 1 there
-        FuzzTarget("silhouette", "frame", "frame", "camera.Frame", min_dim=1),
-        FuzzTarget("labeller", "silhouettes", "fuzzed_silhouettes", "silhouette.Silhouettes"),
-    ]
-    nodes = {
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 2}},
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False},
-                     "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
-    }
-    t0 = time.monotonic()
-    code, out = run_fuzz(nodes, targets, n, work, timeout=60 + n / 50)
-    took = time.monotonic() - t0
+    targets, code, out, took = fuzz_silhouette_and_labeller(work, n, timeout=60 + n / 50)
     failed = [m for m in re.findall(r"\] \w+ (\w+) exited with (\d+)", out) if m[1] != "0"]
     for t in targets:
         progress(f"  {t.node}: sent {t.sent} ({t.valid} well-formed), received {t.received}, bad {t.bad}")

@@ -1,5 +1,6 @@
-"""Fault experiments shared by tests/test_faults.py and bench/faults.py: a camera whose frames a
-recorder takes, then the recorder stopped with SIGSTOP (does the camera stall?)."""
+"""Fault experiments shared by tests/test_faults.py and bench/faults.py: hostile input to the
+silhouette node and the labeller, and a camera whose frames a recorder takes, then the recorder
+stopped with SIGSTOP (does the camera stall?)."""
 from __future__ import annotations
 
 import os
@@ -17,12 +18,33 @@ import zmq
 
 from bus import registry
 from bus.bag import BagReader
+from bus.fuzz import FuzzTarget, run_fuzz
 from bus.transport import LATEST, Subscriber
 from messages import NodeStats
 from tests.launching import REPO, kill_tree, start_launch, wait_for, write_launch
 
 #: frames per second of the camera under test (a 25 fps clip played twice as fast)
 CAMERA_FPS = 50
+
+
+def fuzz_silhouette_and_labeller(workdir: Path, n: int, timeout: float) -> tuple[list[FuzzTarget], int | None, str, float]:
+    """``n`` hostile messages each to the silhouette node's frames and the labeller's silhouettes
+    (bus.fuzz.run_fuzz). Returns the targets with their counts, the launcher's exit code, its
+    output and the seconds it all took."""
+    targets = [
+        # zero-sized images make the silhouette node's cv2.cvtColor raise (nodes/silhouette as_bgr):
+        # its well-formed frames have sides of at least 1
+        FuzzTarget("silhouette", "frame", "frame", "camera.Frame", min_dim=1),
+        FuzzTarget("labeller", "silhouettes", "fuzzed_silhouettes", "silhouette.Silhouettes"),
+    ]
+    nodes = {
+        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 2}},
+        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False},
+                     "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
+    }
+    t0 = time.monotonic()
+    code, out = run_fuzz(nodes, targets, n, workdir, timeout=timeout)
+    return targets, code, out, time.monotonic() - t0
 
 
 def video(path: Path, frames: int = 50) -> Path:

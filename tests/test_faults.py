@@ -24,12 +24,11 @@ import zmq
 
 from bus.bag_nodes import Recorder
 from bus.endpoints import RunDirError, ipc_endpoints, private_dir
-from bus.fuzz import FuzzTarget, run_fuzz
 from bus.logs import BURST, WINDOW_S, RepeatFilter
 from bus.supervisor import prune_run_dirs
 from bus.transport import LATEST, RELIABLE, Publisher, Subscriber
 from messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
-from tests.faulting import recorder_stalls_camera
+from tests.faulting import fuzz_silhouette_and_labeller, recorder_stalls_camera
 from tests.graph_nodes import Number
 from tests.launching import REPO, descendants, kill_tree, read_jsonl, start_launch, wait_for, write_launch
 
@@ -134,20 +133,7 @@ def test_fuzzed_input_to_real_nodes_is_counted_and_never_fatal(tmp_path: Path) -
     """10,000 hostile messages (random bytes, truncated and nested msgpack, bad arrays, oversize,
     wrong field types, every other registered type, forged end of stream and counters, odd but
     well-formed messages) to the silhouette node and the labeller over real sockets."""
-    targets = [
-        # zero-sized images make the silhouette node's cv2.cvtColor raise (nodes/silhouette as_bgr):
-        # its well-formed frames have sides of at least 1
-        FuzzTarget("silhouette", "frame", "frame", "camera.Frame", min_dim=1),
-        FuzzTarget("labeller", "silhouettes", "fuzzed_silhouettes", "silhouette.Silhouettes"),
-    ]
-    nodes = {
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 2}},
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False},
-                     "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
-    }
-    t0 = time.monotonic()
-    code, out = run_fuzz(nodes, targets, 5000, tmp_path, timeout=150)
-    took = time.monotonic() - t0
+    targets, code, out, took = fuzz_silhouette_and_labeller(tmp_path, 5000, timeout=150)
     assert code == 0 and "crashed" not in out, out[-5000:]
     for t in targets:
         assert t.sent == 5000 and t.uncounted == 0, t
