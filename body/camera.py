@@ -172,6 +172,27 @@ def default_camera(width: int = 320, height: int = 240) -> Camera:
     return Camera.look_at((0.0, 1.6, 4.0), (0.0, 0.9, 0.0), 55.0, width, height)
 
 
+def camera_for_size(calibration: Camera | None, width: int, height: int) -> Camera:
+    """The one camera every node uses for frames of ``width`` x ``height`` pixels.
+
+    None: :func:`default_camera` at that size (square pixels, the same 55 degrees across the
+    width for every aspect ratio). A calibration for that size is used as it is; one for another
+    size of the same aspect ratio (within 1%) is scaled uniformly (the same camera at another
+    resolution). Raises ValueError for another aspect ratio, which no scaling makes right.
+    """
+    if calibration is None:
+        return default_camera(width, height)
+    cw, ch = calibration.width, calibration.height
+    if (cw, ch) == (width, height):
+        return calibration
+    if abs((width / height) / (cw / ch) - 1.0) > 0.01:
+        raise ValueError(f"camera calibrated for {cw}x{ch} but the frames are {width}x{height} (another aspect "
+                         "ratio); calibrate for the frames' size")
+    s = width / cw
+    return Camera(calibration.fx * s, calibration.fy * s, (calibration.cx + 0.5) * s - 0.5,
+                  (calibration.cy + 0.5) * s - 0.5, width, height, calibration.R, calibration.t)
+
+
 def camera_param_problem(value: dict[str, Any]) -> str | None:
     """For node parameters: None when ``value`` is empty (use the default camera) or a valid
     calibration for :meth:`Camera.from_dict`, else the error naming the bad key."""

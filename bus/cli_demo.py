@@ -1,10 +1,16 @@
 """``counterpart demo``: the whole graph end to end on the built-in scene (or your video, or a camera).
 
 1. builds the default models if they are not cached yet (progress on stderr);
-2. launches ``launch/demo.yaml`` (the camera replaying the simulator's handshake in real time
-   through all six nodes), or ``launch/live.yaml`` with ``--live``, or the demo graph on ``--input``;
-3. writes ``OUT/demo.mp4`` (or ``.avi`` where OpenCV cannot write H.264) and
-   ``OUT/demo_contact_sheet.png``, and prints where they are and the per-node statistics.
+2. launches ``launch/lockstep.yaml`` on the simulator's handshake or on ``--input FILE`` (a recording:
+   every frame through all six nodes, however slow the machine), ``launch/demo.yaml`` with
+   ``--realtime`` or ``--serve`` (real time: a node that cannot keep up drops frames), or
+   ``launch/live.yaml`` with ``--live``;
+3. writes ``OUT/demo.mp4`` (or ``.avi`` where OpenCV cannot write H.264) at the input's frame rate,
+   ``OUT/demo_contact_sheet.png`` and ``OUT/demo_stats.json``, and prints a summary (frames in, with
+   people, with a partner; nodes that could not keep up) and the per-node statistics.
+
+Exit codes: 0; 1 when the graph ran but drew no partner on any frame (the reason is printed); the
+launcher's code when a node failed; 2 for bad options; 130 on Ctrl-C.
 """
 from __future__ import annotations
 
@@ -14,6 +20,8 @@ import logging
 import sys
 from pathlib import Path
 
+from .run_summary import RunSummary, read_stats, stats_json, stats_table, summarise
+
 #: the responder's models offered on the live page, built before the graph starts
 RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
 
@@ -22,6 +30,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--input", metavar="FILE", help="run on your own video file instead of the built-in scene")
     src.add_argument("--live", action="store_true", help="use the V4L2 camera (launch/live.yaml)")
+    p.add_argument("--realtime", action="store_true",
+                   help="play the file or the built-in scene in real time through the live graph, where a node "
+                        "that cannot keep up drops frames (default: every frame is processed, in lockstep)")
     p.add_argument("--device", default="/dev/video0", help="camera device for --live")
     p.add_argument("--serve", action="store_true",
                    help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C")
@@ -71,35 +82,55 @@ def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:
     return bool(cv2.imwrite(str(out), np.vstack(rows)))
 
 
+def _graph_file(args: argparse.Namespace) -> tuple[str, list[str]]:
+    """The launch file and the ``--set`` overrides of the source for the chosen input: a camera is
+    live (the real-time graph); a file or the built-in scene is a recording, processed frame by
+    frame in lockstep unless ``--realtime`` (or ``--serve``, whose page loops the scene live) asks
+    for real time."""
+    if args.live:
+        return "live.yaml", [f"camera.source={args.device}"]
+    source = Path(args.input).resolve() if args.input else f"sim:{args.scenario}?seed={args.seed}"
+    return ("demo.yaml" if args.realtime or args.serve else "lockstep.yaml"), [f"camera.source={source}"]
+
+
+def report(run_dir: Path, out: Path) -> RunSummary:
+    """Print the run's summary and per-node statistics; write them to ``OUT/demo_stats.json``."""
+    stats = read_stats(run_dir)
+    summary = summarise(stats)
+    print("\n".join(summary.lines()))
+    for line in summary.warnings():
+        print(line, file=sys.stderr)
+    path = out / "demo_stats.json"
+    path.write_text(json.dumps({**summary.to_json(), "nodes": stats_json(stats)}, indent=1))
+    print(f"per-node statistics ({path}):")
+    print(stats_table(stats))
+    return summary
+
+
 def main(args: argparse.Namespace) -> int:
     from .launchfile import LaunchError
     from .cli_launch import load_checked
     from .params import ParamError
     from .runner import setup_logging
-    from .stats_watch import StatsWatcher, stats_json, stats_table
     from .supervisor import Launcher, prune_run_dirs
 
     setup_logging("demo")
     log = logging.getLogger("demo")
+    if args.realtime and args.live:
+        print("counterpart demo: --live is real time already; --realtime is for a file or the built-in scene",
+              file=sys.stderr)
+        return 2
+    if args.input and not Path(args.input).is_file():
+        print(f"counterpart demo: --input {args.input}: no such file", file=sys.stderr)
+        return 2
     out = Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     print("counterpart demo: preparing the default models (cached after the first run)", file=sys.stderr)
     ensure_models()
     video = out / "demo.mp4"
-    sets = [f"renderer.video={video}", f"renderer.serve={'true' if args.serve else 'false'}",
-            f"renderer.port={args.port}"]
-    if args.live:
-        file = "live.yaml"
-        sets.append(f"camera.source={args.device}")
-    else:
-        file = "demo.yaml"
-        if args.input:
-            if not Path(args.input).is_file():
-                print(f"counterpart demo: --input {args.input}: no such file", file=sys.stderr)
-                return 2
-            sets.append(f"camera.source={Path(args.input).resolve()}")
-        else:
-            sets.append(f"camera.source=sim:{args.scenario}?seed={args.seed}")
+    file, sets = _graph_file(args)
+    sets += [f"renderer.video={video}", f"renderer.serve={'true' if args.serve else 'false'}",
+             f"renderer.port={args.port}"]
     if args.frames:
         sets.append(f"camera.max_frames={args.frames}")
     if args.serve and not args.live:
@@ -111,17 +142,16 @@ def main(args: argparse.Namespace) -> int:
         print(f"counterpart demo: {exc}", file=sys.stderr)
         return 2
     prune_run_dirs()
+    for stale in out.glob("demo.*"):  # a video of an earlier run must not pass for this one's
+        if stale.suffix in (".mp4", ".avi"):
+            stale.unlink()
     launcher = Launcher(graph)
-    watcher = StatsWatcher(launcher.run_dir)
-    watcher.start()
     log.info("running %s (Ctrl-C to stop)%s", graph.file,
              (f"; live page on http://127.0.0.1:{args.port}" if args.port else "; the renderer logs the page's address")
              if args.serve else "")
     code = launcher.run()
-    watcher.stop()
     launcher.cleanup()
-    written = sorted(out.glob("demo.*"))
-    videos = [p for p in written if p.suffix in (".mp4", ".avi")]
+    videos = [p for p in sorted(out.glob("demo.*")) if p.suffix in (".mp4", ".avi")]
     sheet = out / "demo_contact_sheet.png"
     if videos and contact_sheet(videos[0], sheet):
         print(f"video:         {videos[0]}")
@@ -129,8 +159,11 @@ def main(args: argparse.Namespace) -> int:
     else:
         print("counterpart demo: no video was written", file=sys.stderr)
         code = code or 1
-    if watcher.latest:
-        (out / "demo_stats.json").write_text(json.dumps(stats_json(watcher.latest), indent=1))
-        print(f"per-node statistics ({out / 'demo_stats.json'}):")
-        print(stats_table(watcher.latest))
+    summary = report(launcher.run_dir, out)
+    problem = summary.problem()
+    if code:
+        print(f"counterpart demo: the graph ended with exit code {code}", file=sys.stderr)
+    elif problem:
+        print(f"counterpart demo: {problem}", file=sys.stderr)
+        code = 1
     return code

@@ -1,9 +1,11 @@
 """Where topics live: run directories and the two endpoints of every topic.
 
-Each topic is published on two sockets: a *reliable* one (XPUB with ZMQ_XPUB_NODROP: the publisher
-waits when a reliable subscriber lags) and a *latest* one (a lossy PUB for live subscribers that only
-want the newest message). With ``ipc://`` both live in a per-run directory of mode 0700; with
-``tcp://host:port`` the reliable socket takes ``port`` and the latest one ``port + 1``.
+Each topic is published on three sockets: a *reliable* one (XPUB with ZMQ_XPUB_NODROP: the publisher
+waits when a reliable subscriber lags), a *latest* one (lossy, a queue of two, for live subscribers
+that only want the newest message) and a *queued* one (lossy with a deep queue, for recorders that
+must never hold the publisher back but should lose nothing while they keep up). With ``ipc://`` they
+live in a per-run directory of mode 0700; with ``tcp://host:port`` they take ``port``, ``port + 1``
+and ``port + 2``.
 """
 from __future__ import annotations
 
@@ -77,17 +79,19 @@ def standalone_dir() -> Path:
 
 @dataclass(frozen=True)
 class TopicEndpoints:
-    """The reliable and latest endpoints of one topic (what publishers bind and subscribers connect)."""
+    """The endpoints of one topic (what publishers bind and subscribers connect); ``queued`` is
+    empty in the registry of a launcher older than it."""
 
     reliable: str
     latest: str
+    queued: str = ""
 
     def to_dict(self) -> dict[str, str]:
-        return {"reliable": self.reliable, "latest": self.latest}
+        return {"reliable": self.reliable, "latest": self.latest, "queued": self.queued}
 
     @staticmethod
     def from_dict(d: dict[str, str]) -> "TopicEndpoints":
-        return TopicEndpoints(d["reliable"], d["latest"])
+        return TopicEndpoints(d["reliable"], d["latest"], d.get("queued", ""))
 
 
 def _file_stem(topic: str) -> str:
@@ -104,18 +108,18 @@ def ipc_endpoints(run_dir: Path, topic: str) -> TopicEndpoints:
         raise ValueError(
             f"ipc path {rel} is too long for a unix socket; set COUNTERPART_HOME to a shorter folder"
         )
-    return TopicEndpoints(f"ipc://{rel}", f"ipc://{lat}")
+    return TopicEndpoints(f"ipc://{rel}", f"ipc://{lat}", f"ipc://{run_dir / f'{stem}.q'}")
 
 
 def tcp_endpoints(address: str) -> TopicEndpoints:
-    """``tcp://host:port`` -> reliable on port, latest on port + 1."""
+    """``tcp://host:port`` -> reliable on port, latest on port + 1, queued on port + 2."""
     m = re.fullmatch(r"tcp://([^:/]+):(\d+)", address)
     if not m:
         raise ValueError(f"tcp endpoint {address!r}: expected tcp://HOST:PORT")
     host, port = m.group(1), int(m.group(2))
-    if not 0 < port < 65535:
-        raise ValueError(f"tcp endpoint {address!r}: port out of range")
-    return TopicEndpoints(f"tcp://{host}:{port}", f"tcp://{host}:{port + 1}")
+    if not 0 < port < 65534:
+        raise ValueError(f"tcp endpoint {address!r}: port out of range (it takes port to port + 2)")
+    return TopicEndpoints(f"tcp://{host}:{port}", f"tcp://{host}:{port + 1}", f"tcp://{host}:{port + 2}")
 
 
 def bind_address(endpoint: str) -> str:

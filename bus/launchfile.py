@@ -9,7 +9,7 @@ Format (every key but ``nodes`` optional)::
                                    # that does not set its own
     transport: ipc                 # ipc (default: a 0700 run directory) or tcp
     host: 127.0.0.1                # tcp: the host to bind (loopback unless named)
-    port_base: 7300                # tcp: first port; each topic takes two (reliable, latest)
+    port_base: 7300                # tcp: first port; each topic takes three (reliable, latest, queued)
     endpoints:                     # fixed tcp endpoints for chosen topics (to span launchers)
       numbers: tcp://127.0.0.1:7400
     external:                      # topics published by another launcher (publisher: its node's
@@ -326,10 +326,15 @@ def endpoints_for(graph: Graph, run_dir: Path) -> dict[str, TopicEndpoints]:
             out[topic] = tcp_endpoints(graph.fixed_endpoints[topic])
         elif graph.transport == "tcp":
             out[topic] = tcp_endpoints(f"tcp://{graph.host}:{port}")
-            port += 2
+            port += 3
         else:
             out[topic] = ipc_endpoints(run_dir, topic)
     return out
+
+
+def stats_dir(run_dir: Path) -> Path:
+    """The folder of a run where each node keeps its newest statistics (``NODE.json``)."""
+    return Path(run_dir) / "stats"
 
 
 def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
@@ -340,6 +345,7 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
         spec: dict[str, Any] = {
             "name": name, "module": decl.run, "params": copy.deepcopy(decl.params), "supervised": True,
             "barrier_timeout": graph.barrier_timeout, "inputs": {}, "outputs": {},
+            "stats_file": str(stats_dir(run_dir) / f"{name}.json"),
         }
         for port, inp in graph.ports_in[name].items():
             topic = graph.input_topic(name, port)
@@ -349,10 +355,15 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
                                     "publisher": graph.topics[topic]["node"]}
         for port in list(graph.ports_out[name]) + [STATS_PORT]:
             topic = graph.output_topic(name, port)
-            reliable = sum(1 for _, _, pol in graph.topics[topic]["subscribers"] if pol == "reliable")
+            subs = graph.topics[topic]["subscribers"]
+            reliable = sum(1 for _, _, pol in subs if pol == "reliable")
+            # lossy subscribers that wait for the end of stream: the startup barrier waits for them
+            # too, or a short stream ends before a slow-starting one has connected and it never ends
+            latest = sum(1 for n, p, pol in subs if pol == "latest" and graph.ports_in[n][p].awaits_end)
             spec["outputs"][port] = {
                 "topic": topic, "endpoints": eps[topic].to_dict(),
                 "reliable_subscribers": reliable + decl.wait_subscribers.get(port, 0),
+                "latest_subscribers": latest,
             }
         specs[name] = spec
     return specs

@@ -20,6 +20,7 @@ nodes started by hand with ``counterpart run`` find each other by topic name.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import os
@@ -134,6 +135,8 @@ class Node:
         #: the process exit code; set it non-zero on a failure after which the node still ends cleanly
         #: (end of stream goes out with reason "error")
         self.exit_code = 0
+        #: the node's own figures, published in its stats (NodeStats.figures): see :meth:`tally`
+        self.figures: dict[str, float] = {}
 
     def setup(self) -> None:
         """Called once after the sockets are up, before any message. Load models here."""
@@ -175,6 +178,11 @@ class Node:
             raise KeyError(f"node {self.name!r} has no output port {port!r}; ports: {', '.join(self._out)}")
         pub.send_parts(parts)
         self._count_out(port, seq)
+
+    def tally(self, name: str, n: float = 1) -> None:
+        """Add ``n`` to the figure ``name`` (frames with people, regions not placed, ...), published
+        with the node's stats so that a run's summary can say what the node's work gave."""
+        self.figures[name] = self.figures.get(name, 0) + n
 
     def _count_out(self, port: str, seq: Any) -> None:
         st = self._out_stats[port]
@@ -226,6 +234,7 @@ class Node:
             self._out[port] = Publisher(
                 self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]),
                 expected=int(w.get("reliable_subscribers", 0)),
+                expected_latest=int(w.get("latest_subscribers", 0)),
                 barrier_timeout=float(self.spec.get("barrier_timeout", 30.0)),
                 should_stop=lambda: self.stopping,
                 latched=port in outputs and outputs[port].latched,
@@ -267,10 +276,25 @@ class Node:
             stamp=time.monotonic_ns(), seq=self._stats_seq, node=self.name, pid=os.getpid(),
             uptime_s=now - self._started, inputs=ins, outputs=outs,
             proc_ms_mean=float(np.mean(proc)) if proc else 0.0, proc_ms_max=float(np.max(proc)) if proc else 0.0,
-            decode_errors=errors,
+            decode_errors=errors, figures=dict(self.figures),
         )
         self._stats_seq += 1
         self._out[STATS_PORT].send(msg)
+        self._write_stats_file(msg)
+
+    def _write_stats_file(self, msg: NodeStats) -> None:
+        """The newest stats also go to the file the launcher names (``stats_file``), replaced whole,
+        so that a run's summary has every node's last word even where a lossy subscriber missed it."""
+        path = self.spec.get("stats_file")
+        if not path:
+            return
+        tmp = f"{path}.tmp"
+        try:
+            with open(tmp, "w") as f:
+                json.dump(dataclasses.asdict(msg), f)
+            os.replace(tmp, path)
+        except OSError as exc:
+            self.log.debug("cannot write %s: %s", path, exc)
 
     def _parent_gone(self) -> bool:
         return self.spec.get("supervised", False) and os.getppid() != self._ppid

@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from .endpoints import base_dir, new_run_dir
-from .launchfile import Graph, node_specs
+from .launchfile import Graph, node_specs, stats_dir
 
 log = logging.getLogger("launch")
 
@@ -96,6 +96,7 @@ class Launcher:
         self.specs = node_specs(graph, self.run_dir)
         spec_dir = self.run_dir / "nodes"
         spec_dir.mkdir(mode=0o700, exist_ok=True)
+        stats_dir(self.run_dir).mkdir(mode=0o700, exist_ok=True)
         for name, spec in self.specs.items():
             spec["running_file"] = str(spec_dir / f"{name}.running")
             path = spec_dir / f"{name}.json"

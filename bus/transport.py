@@ -1,14 +1,15 @@
 """Publish/subscribe over ZeroMQ with the two queue policies of Counterpart.
 
-A :class:`Publisher` owns a topic's two sockets (see :mod:`bus.endpoints`). Messages are encoded once
-and sent on both; on the reliable socket the send waits (checking ``should_stop``) while a reliable
-subscriber lags, on the latest socket it never waits. End of stream is also sent on the reliable
+A :class:`Publisher` owns a topic's sockets (see :mod:`bus.endpoints`). Messages are encoded once
+and sent on each socket that has subscribers; on the reliable socket the send waits (checking
+``should_stop``) while a reliable subscriber lags, on the latest and queued sockets it never waits. End of stream is also sent on the reliable
 socket under the topic prefix ``EOS_PREFIX`` so that latest subscribers, which listen for that prefix
 alone there, can never miss it.
 
 A :class:`Subscriber` is one input: ``reliable`` reads every message in order; ``latest`` drains what
 is queued and keeps the newest, counting what it dropped (both in its own queue and, from gaps in the
-publisher's send counter, in ZeroMQ's).
+publisher's send counter, in ZeroMQ's); ``latest`` with a ``queue`` (recorders) reads the queued
+socket in order and counts the gaps.
 """
 from __future__ import annotations
 
@@ -55,8 +56,10 @@ def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags:
 
 
 class Publisher:
-    """Both sockets of one topic. ``expected`` reliable subscribers are awaited before the first send
-    (the startup barrier), for at most ``barrier_timeout`` seconds.
+    """Both sockets of one topic. ``expected`` reliable subscribers, and ``expected_latest`` lossy ones
+    that wait for the end of stream, are awaited before the first send (the startup barrier), for
+    at most ``barrier_timeout`` seconds: a short stream could otherwise end before a slow-starting
+    lossy subscriber connects, and that one would wait for an end of stream it never gets.
 
     ``latched``: the last message sent is sent again to every ``latest`` subscriber that joins later
     (ROS's latched topics), once :meth:`poll_subscriptions` or a send sees it join. A lossy subscriber
@@ -70,8 +73,10 @@ class Publisher:
         topic: str,
         endpoints: TopicEndpoints,
         expected: int = 0,
+        expected_latest: int = 0,
         hwm: int = 16,
         latest_hwm: int = 2,
+        queued_hwm: int = 64,
         barrier_timeout: float = 30.0,
         should_stop: Callable[[], bool] = lambda: False,
         latched: bool = False,
@@ -80,13 +85,15 @@ class Publisher:
         self.topic_b = topic.encode()
         self.endpoints = endpoints
         self.expected = expected
+        self.expected_latest = expected_latest
         self.barrier_timeout = barrier_timeout
         self.should_stop = should_stop
         self.count = 0
         self.subscribers = 0
         self.eos_listeners = 0
         self._last_sub_read = 0.0
-        self._barrier_done = expected <= 0
+        self._barrier_done = expected <= 0 and expected_latest <= 0
+        self._barrier_passed = False  # every expected subscriber has been seen (wait_for_subscribers)
         self.latched = latched
         self._latched_parts: Sequence[Any] | None = None
         self._eos_parts: Sequence[Any] | None = None
@@ -104,6 +111,15 @@ class Publisher:
         self.latest.setsockopt(zmq.LINGER, 0)
         self.latest.copy_threshold = ZERO_COPY_MIN
         self.latest.bind(bind_address(endpoints.latest))
+        self.queued_subscribers = 0
+        self.queued: zmq.Socket | None = None
+        if endpoints.queued:  # lossy with a deep queue: recorders (see Subscriber's ``queue``)
+            self.queued = ctx.socket(zmq.XPUB)
+            self.queued.setsockopt(zmq.XPUB_VERBOSER, 1)
+            self.queued.setsockopt(zmq.SNDHWM, queued_hwm)
+            self.queued.setsockopt(zmq.LINGER, 0)
+            self.queued.copy_threshold = ZERO_COPY_MIN
+            self.queued.bind(bind_address(endpoints.queued))
 
     # XPUB sockets tell who subscribed: b"\x01" + prefix, and b"\x00" + prefix on leave.
     def _read_subscriptions(self, timeout_ms: int = 0) -> bool:
@@ -117,15 +133,29 @@ class Publisher:
             elif ev[1:] == EOS_PREFIX:  # latest subscribers listening for end of stream here
                 self.eos_listeners += step
             joined_reliable |= step > 0
+            self._check_barrier()
             timeout_ms = 0
         joined = False
         while self.latest.poll(0, zmq.POLLIN):
             ev = self.latest.recv()
             joined |= ev[:1] == b"\x01"
             self.latest_subscribers += 1 if ev[:1] == b"\x01" else -1
+            self._check_barrier()
+        while self.queued is not None and self.queued.poll(0, zmq.POLLIN):
+            self.queued_subscribers += 1 if self.queued.recv()[:1] == b"\x01" else -1
         if joined and self._latched_parts is not None:
             self._send_latest(self._latched_parts)
         return joined_reliable
+
+    def _check_barrier(self) -> None:
+        """Once every expected subscriber has been here the barrier is passed, even if one has left
+        since (a node that ended before this one's first message: a latched topic's first send)."""
+        if not self._barrier_done and self._barrier_met():
+            self._barrier_done = self._barrier_passed = True
+
+    def _barrier_met(self) -> bool:
+        return (self.subscribers >= self.expected and self.eos_listeners >= self.expected_latest
+                and self.latest_subscribers >= self.expected_latest)
 
     def poll_subscriptions(self) -> None:
         """Read who joined or left now (a latched publisher's node loop calls this between sends)."""
@@ -133,9 +163,10 @@ class Publisher:
         self._read_subscriptions()
 
     def wait_for_subscribers(self) -> bool:
-        """Block until ``expected`` reliable subscribers are connected (or timeout/stop)."""
+        """Block until ``expected`` reliable and ``expected_latest`` lossy subscribers are connected
+        (or timeout/stop)."""
         deadline = time.monotonic() + self.barrier_timeout
-        while self.subscribers < self.expected:
+        while not self._barrier_passed and not self._barrier_met():
             if self.should_stop() or time.monotonic() > deadline:
                 return False
             self._read_subscriptions(50)
@@ -166,11 +197,13 @@ class Publisher:
             self._latched_parts = parts
         if self.latest_subscribers > 0 or eos:
             self._send_latest(parts)
+        if self.queued is not None and (self.queued_subscribers > 0 or eos):
+            self._send_latest(parts, self.queued)
 
-    def _send_latest(self, parts: Sequence[Any]) -> None:
+    def _send_latest(self, parts: Sequence[Any], sock: zmq.Socket | None = None) -> None:
         try:
-            _send_multipart(self.latest, self.topic_b, parts, zmq.NOBLOCK)
-        except zmq.Again:  # the lossy socket: a full queue drops (the subscriber counts the gap)
+            _send_multipart(self.latest if sock is None else sock, self.topic_b, parts, zmq.NOBLOCK)
+        except zmq.Again:  # a lossy socket: a full queue drops (the subscriber counts the gap)
             pass
 
     def _send_reliable(self, topic: bytes, parts: Sequence[Any]) -> None:
@@ -222,6 +255,8 @@ class Publisher:
         Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers."""
         self.reliable.close(linger=linger_ms)
         self.latest.close(linger=0)
+        if self.queued is not None:
+            self.queued.close(linger=0)
 
 
 @dataclass(frozen=True)
@@ -295,9 +330,9 @@ class Subscriber:
         header checked but arrays left undecoded (recorders). ``msg_type``: the only message class
         accepted (None: any); ``publisher``: the node name an end of stream must carry (None: any,
         for topics whose publisher is not known here). ``queue`` (latest policy only): keep up to
-        this many messages in order instead of only the newest (recorders that must never hold a
-        publisher back but should lose nothing while they keep up); what overflows is counted in
-        ``drops``."""
+        this many messages in order instead of only the newest, read from the publisher's queued
+        socket (recorders that must never hold a publisher back but should lose nothing while they
+        keep up); what overflows is counted in ``drops``."""
         if policy not in POLICIES:
             raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
         self.topic = topic
@@ -321,7 +356,10 @@ class Subscriber:
         self.socket.setsockopt(zmq.LINGER, 0)
         self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else queue if self.queued else 2)
         self.socket.setsockopt(zmq.SUBSCRIBE, b"")
-        self.socket.connect(endpoints.reliable if policy == RELIABLE else endpoints.latest)
+        if policy == RELIABLE:
+            self.socket.connect(endpoints.reliable)
+        else:  # a launcher older than the queued socket offers the latest one only
+            self.socket.connect(endpoints.queued if self.queued and endpoints.queued else endpoints.latest)
         self.eos_socket: zmq.Socket | None = None
         if policy == LATEST:
             self.eos_socket = ctx.socket(zmq.SUB)
@@ -442,12 +480,13 @@ class Subscriber:
         msg = self._decode(frames)
         if msg is None:
             return None
-        self.count += 1
-        if isinstance(msg, EndOfStream):
+        if isinstance(msg, EndOfStream):  # not counted: ``count`` is the data messages received
             self._pending_eos = None
             if self.ended:
                 return None
             self._finish()
+            return msg
+        self.count += 1
         return msg
 
     def _finish(self) -> None:

@@ -11,10 +11,13 @@ class Frame:
     """One video frame. ``image`` is (H, W, 3) uint8 BGR (encoding ``bgr8``) or (H, W) uint8 (``mono8``).
 
     ``stamp`` is CLOCK_MONOTONIC ns at capture (for a file: at read); ``seq`` counts from 0;
-    ``source_time`` is the position in the source in seconds (file time, or 0 for live devices).
+    ``source_time`` is the position in the source in seconds (file time, or 0 for live devices);
+    ``fps`` the source's frame rate in frames per second (0: unknown), so that consumers (the video
+    the renderer writes, the labeller's analysis windows) follow the input rather than a default.
     """
 
     image: np.ndarray = EMPTY
     encoding: str = "bgr8"
     source: str = ""
     source_time: float = 0.0
+    fps: float = 0.0

@@ -31,7 +31,9 @@ class NodeStats:
     """Published by every node on ``<node>/stats`` about once per second.
 
     ``proc_ms_*`` is the handler time per message over the last period; ``latency_ms`` of an input is
-    the median of (receive time - stamp) over the period, meaningful on one host.
+    the median of (receive time - stamp) over the period, meaningful on one host. ``figures`` are
+    the node's own totals since it started, by name (``frames_with_people``, ``partner_drawn``,
+    ``source_fps``, ...): what its work gave, beyond the traffic of its ports.
     """
 
     node: str = ""
@@ -42,3 +44,4 @@ class NodeStats:
     proc_ms_mean: float = 0.0
     proc_ms_max: float = 0.0
     decode_errors: dict[str, int] = {}  # kind -> count
+    figures: dict[str, float] = {}

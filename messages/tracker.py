@@ -10,7 +10,8 @@ from .core import EMPTY, message, struct
 class TrackedBody:
     """One tracked person: ``joints`` (14, 3) float32 metres in the world frame (body.skeleton.JOINTS
     order, Y up), ``pose`` and ``best_pose`` (DOF,) float64 pose vectors (body.pose), the weighted
-    mean and the best particle; ``ess`` effective sample size of the last layer; ``log_likelihood``
+    mean and the best particle; ``ess`` effective sample size of the final weighted particle set
+    (un-annealed weights, before resampling: 1 to the particle count); ``log_likelihood``
     of the mean pose; ``lost`` when the track collapsed and is re-initialising."""
 
     id: int = 0

@@ -83,3 +83,20 @@ def test_dict_round_trip_and_errors():
         Camera.from_dict({**d, "R": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]})
     with pytest.raises(ValueError, match="width"):
         Camera.from_dict({**d, "width": 0})
+
+
+def test_one_camera_for_a_frame_size_default_scaled_or_refused():
+    from body.camera import camera_for_size
+
+    # no calibration: the default camera at that size, square pixels at any aspect ratio
+    wide = camera_for_size(None, 612, 288)
+    assert wide.to_dict() == default_camera(612, 288).to_dict() and wide.fx == wide.fy
+    # a calibration for that size is used as it is; one for another size of the same aspect is scaled
+    cal = Camera.look_at((0.3, 2.5, 5.0), (0.0, 0.9, 0.0), 50.0, 640, 480)
+    assert camera_for_size(cal, 640, 480) is cal
+    half = camera_for_size(cal, 320, 240)
+    X = np.array([[0.2, 1.0, 0.1], [-0.5, 0.0, 1.0]])
+    np.testing.assert_allclose((half.project(X) + 0.5) * 2, cal.project(X) + 0.5, atol=1e-9)
+    # another aspect ratio cannot be scaled right: refused with what to do
+    with pytest.raises(ValueError, match="calibrated for 640x480 but the frames are 640x360"):
+        camera_for_size(cal, 640, 360)

@@ -1,5 +1,6 @@
 """`counterpart demo` end to end on a fresh model cache: trains the defaults, runs all six nodes on
-the built-in scene, writes the video, the contact sheet and the per-node statistics."""
+every frame of the built-in scene, writes the video, the contact sheet, the summary and the per-node
+statistics."""
 from __future__ import annotations
 
 import json
@@ -20,7 +21,7 @@ from tests.launching import REPO
 def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path) -> None:
     env = {**os.environ, "COUNTERPART_MODELS": str(tmp_path / "models"),
            "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpd-", dir="/tmp")}
-    res = subprocess.run([sys.executable, "-m", "bus.cli", "demo", "--out", str(tmp_path / "out"), "--frames", "40"],
+    res = subprocess.run([sys.executable, "-m", "bus.cli", "demo", "--out", str(tmp_path / "out")],
                          cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-3000:]
     models = sorted(p.name for p in (tmp_path / "models").iterdir())
@@ -31,13 +32,16 @@ def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path
     n = 0
     while cap.read()[0]:
         n += 1
-    assert n == 40
+    stats = json.loads((tmp_path / "out" / "demo_stats.json").read_text())
+    assert n == stats["frames_in"] == stats["frames_out"] > 200  # the whole scene, every frame (lockstep)
     sheet = cv2.imread(str(tmp_path / "out" / "demo_contact_sheet.png"))
     assert sheet is not None and sheet.shape[0] >= 240 and sheet.shape[1] >= 4 * 320
-    stats = json.loads((tmp_path / "out" / "demo_stats.json").read_text())
-    assert set(stats) == {"camera", "silhouette", "tracker", "labeller", "responder", "renderer"}
-    assert all(sum(t["count"] for t in st["inputs"] + st["outputs"]) > 0 for st in stats.values())
-    assert str(videos[0]) in res.stdout and "contact sheet" in res.stdout
+    assert set(stats["nodes"]) == {"camera", "silhouette", "tracker", "labeller", "responder", "renderer"}
+    assert all(sum(t["count"] for t in st["inputs"] + st["outputs"]) > 0 for st in stats["nodes"].values())
+    assert stats["fps_in"] == stats["fps_out"] == 25.0
+    # the built-in scene's partner is drawn on most frames (0.81; 0.91 after the first second)
+    assert stats["partner_present"] > 0.7 and stats["partner_present_after_1s"] > 0.85, stats
+    assert str(videos[0]) in res.stdout and "contact sheet" in res.stdout and "partner drawn on" in res.stdout
 
 
 def _subscriptions(file: str) -> dict[tuple[str, str], str]:
@@ -48,8 +52,10 @@ def _subscriptions(file: str) -> dict[tuple[str, str], str]:
 def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_other_queues() -> None:
     demo, replay = load(find_launch_file("demo.yaml")), load(find_launch_file("replay.yaml"))
     assert set(replay.nodes) == set(demo.nodes) | {"recorder"}
+    assert set(load(find_launch_file("lockstep.yaml")).nodes) == set(demo.nodes)
     # the lockstep/queue/pairing keys may differ; every other parameter is the same
-    own = {("camera", "pacing"), ("renderer", "video"), ("renderer", "pair_timeout"), ("renderer", "adaptive_wait")}
+    own = {("camera", "pacing"), ("renderer", "video"), ("renderer", "pair_timeout"), ("renderer", "adaptive_wait"),
+           ("silhouette", "replay_training")}
     for name, decl in demo.nodes.items():
         other = replay.nodes[name]
         assert other.run == decl.run, name
@@ -61,4 +67,5 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
     live = _subscriptions("demo.yaml")
     assert live.pop(("renderer", "frame")) == "reliable" and set(live.values()) == {"latest"}
     assert set(_subscriptions("replay.yaml").values()) == {"reliable"}
+    assert set(_subscriptions("lockstep.yaml").values()) == {"reliable"}
     assert set(_subscriptions("live.yaml").items()) == set(_subscriptions("demo.yaml").items())

@@ -1,6 +1,8 @@
 """Renderer building blocks on real pixels: cones, silhouettes, overlays, pairing, video, controls."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
@@ -8,8 +10,10 @@ import pytest
 from body.camera import Camera, default_camera
 from body.raster import rasterise_cones
 from messages import Control, Frame, NodeStats, Partner, TopicStats
+from body.camera import camera_for_size
+from messages import PersonShape, PersonSignals, Pose3D, Silhouettes, SocialSignals, TrackedBody
 from nodes.renderer import draw
-from nodes.renderer.compositor import Compositor, scaled_camera
+from nodes.renderer.compositor import Bundle, Compositor
 from nodes.renderer.controls import parse_control
 from nodes.renderer.video import VideoWriter, choose_codec, count_frames
 from tests.renderer_nodes import partner_joints, scene_frame
@@ -205,7 +209,8 @@ def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
     assert [(b.frame.seq, b.partner.seq, b.partner_exact) for b in got] == [(2, 1, False), (3, 3, True)]
     assert comp.ready(now=0.2) == []  # frame 4 still waits
     assert [b.frame.seq for b in comp.ready(now=0.6)] == [4]
-    assert comp.counts == {"rendered": 0, "partner_exact": 3, "partner_held": 2, "partner_missing": 0, "forced": 0}
+    assert comp.counts == {"rendered": 0, "partner_exact": 3, "partner_held": 2, "partner_missing": 0, "forced": 0,
+                           "partner_drawn": 0}
 
 
 def test_adaptive_wait_renders_at_once_while_partners_are_late_and_waits_again_when_they_keep_up() -> None:
@@ -272,7 +277,7 @@ def test_render_draws_partner_at_the_scaled_camera_and_follows_strength() -> Non
     comp.add_partner(_partner(0, strength=0.0))
     img0 = comp.render(comp.ready()[0])
     mask = (img0 != scene_frame(0, 160, 120)).any(-1)
-    small = scaled_camera(CAM, 160, 120)
+    small = camera_for_size(CAM, 160, 120)
     ref = changed(draw.draw_partner_3d(blank(120, 160), partner_joints(0), small))
     assert (mask == ref).mean() > 0.99  # drawn with the calibration scaled to the 160x120 frame
     comp.add_frame(_frame(1))
@@ -303,7 +308,7 @@ def test_control_overlay_shows_the_control_values() -> None:
 
 def test_scaled_camera_projects_proportionally() -> None:
     X = np.array([[0.3, 1.2, 0.1], [-0.5, 0.2, -0.4]])
-    half = scaled_camera(CAM, 160, 120)
+    half = camera_for_size(CAM, 160, 120)
     np.testing.assert_allclose((CAM.project(X) + 0.5) / 2, half.project(X) + 0.5, atol=1e-9)
 
 
@@ -339,3 +344,33 @@ def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
                      ({"overlays": {"fog": True}}, "overlays"), ({"model": "c"}, "model"), ([1], "JSON object")]:
         with pytest.raises(ValueError, match=msg):
             parse_control(bad, models=["a", "b"])
+
+
+def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head() -> None:
+    """One row per tracked person with the signals that are on, above the head's box; an untracked
+    region (a fragment, a ghost) and a person with no signal on get no badge."""
+    names = ["nod", "shake", "gaze", "act", "talk", "laugh"]
+    people = [PersonShape(id=0, side="left", bbox=(40, 100, 50, 120)),     # tracked, nodding and talking
+              PersonShape(id=1, side="right", bbox=(200, 100, 50, 120)),   # a region nobody tracks
+              PersonShape(id=2, side="right", bbox=(120, 2, 40, 100))]     # tracked, head at the top
+    signals = [PersonSignals(id=i, side=p.side, names=names, labels=np.array(lab, np.int8),
+                             scores=np.full(6, 0.5, np.float32))
+               for i, (p, lab) in enumerate(zip(people, [[1, 0, 0, 0, 1, 0], [1, 1, 1, 1, 1, 1], [0, 0, 1, 0, 0, 0]]))]
+    pose = Pose3D(people=[TrackedBody(id=0, side="left"), TrackedBody(id=2, side="right")])
+    comp = Compositor(CAM, overlays={"signals": True})
+    b = Bundle(frame=Frame(image=blank()), silhouettes=Silhouettes(people=people, width=320, height=240),
+               pose=pose, signals=SocialSignals(people=signals))
+    got = changed(comp.render(b))
+    bright = (comp.render(b) == (0, 200, 255)).all(-1)
+    ys, xs = np.nonzero(bright[:100])
+    # person 0: its two badges in one row just above its box (y 100), none over it
+    assert ys.size and ys.max() < 100 and ys.min() > 100 - 30 and 20 <= xs.min() and xs.max() < 120
+    assert not bright[100:220, 40:90].any()
+    # person 1 is not tracked: nothing drawn over or above its region
+    assert not got[:, 190:260].any()
+    # person 2's head is at the top of the picture: its badge goes below its feet, not over its face
+    assert bright[103:130, 100:180].any() and not bright[2:102, 120:160].any()
+    # a person with nothing on gets no badge at all
+    off = Bundle(frame=Frame(image=blank()), silhouettes=b.silhouettes, pose=pose,
+                 signals=SocialSignals(people=[replace(signals[0], labels=np.zeros(6, np.int8))]))
+    assert not changed(comp.render(off)).any()

@@ -13,7 +13,7 @@ from body.camera import default_camera
 from bus.launchfile import LaunchError, check, load
 from messages import Frame, Partner
 from nodes.renderer import draw
-from nodes.renderer.compositor import Compositor, scaled_camera
+from nodes.renderer.compositor import Compositor
 from nodes.renderer.video import count_frames
 from tests.camera_sink import cv2_frames
 from tests.launching import read_jsonl, run_launch, start_launch, stop_launch, wait_for, write_launch
@@ -45,7 +45,7 @@ def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path:
     assert "partner exact 24, held 0, missing 0" in text
     frames = cv2_frames(written[0])
     assert len(frames) == n == count_frames(written[0])
-    cam = scaled_camera(default_camera(), W, H)
+    cam = default_camera(W, H)  # the renderer's camera by default: the tracker's at the frame size
     for seq in (0, n - 1):
         mask = (draw.draw_partner_3d(np.zeros((H, W, 3), np.uint8), partner_joints(seq), cam) > 0).any(-1)
         core = cv2.erode(mask.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)

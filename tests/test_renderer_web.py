@@ -20,7 +20,6 @@ import pytest
 
 from body.camera import default_camera
 from nodes.renderer import draw
-from nodes.renderer.compositor import scaled_camera
 from tests.launching import descendants, read_jsonl, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints
 
@@ -103,7 +102,7 @@ def read_parts(port: int, n: int) -> list[tuple[int, bytes]]:
 
 def partner_core() -> np.ndarray:
     """(H, W) bool: pixels inside the partner in every frame (its arm moves; its body does not)."""
-    cam = scaled_camera(default_camera(), W, H)
+    cam = default_camera(W, H)  # the renderer's camera by default: the tracker's at the frame size
     core = np.ones((H, W), bool)
     for seq in range(0, 40, 3):
         m = (draw.draw_partner_3d(np.zeros((H, W, 3), np.uint8), partner_joints(seq), cam) > 0).any(-1)

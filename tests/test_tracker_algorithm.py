@@ -187,3 +187,19 @@ def test_several_cameras_need_one_mask_per_camera() -> None:
     assert trk.update(None, [mask, mask]) is not None
     # one camera takes a mask, or a list of one
     assert Tracker([CAM], n_layers=2, n_particles=16).update(None, [mask]) is not None
+
+
+def test_ess_is_that_of_the_final_weighted_set_not_fixed_by_the_annealing() -> None:
+    """The annealed weights have ESS = survival x N by construction; the published ESS weighs the
+    final set by the un-annealed density: N for a flat one, about 1 for one peaked on a particle."""
+    rng = np.random.default_rng(0)
+    start = neutral_pose()[None] + rng.normal(scale=0.05, size=(64, DOF))
+    flat = AnnealedParticleFilter(n_layers=2, n_particles=64, seed=0)
+    flat.initialise(start)
+    assert flat.step(lambda X: np.zeros(len(X))).ess == pytest.approx(64.0)
+    peaked = AnnealedParticleFilter(n_layers=2, n_particles=64, seed=0)
+    peaked.initialise(start)
+    target = neutral_pose()
+    est = peaked.step(lambda X: -1e4 * np.sum((X - target) ** 2, axis=1))
+    assert 1.0 <= est.ess < 3.0                                 # one particle holds nearly all the mass
+    assert est.survival[-1] * 64 == pytest.approx(32.0, rel=0.05)  # while annealing kept half alive

@@ -75,9 +75,9 @@ def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarr
     r = _track(str(video), "--out", str(out), "--camera", str(cam), "--prior", "none")
     assert r.returncode == 2 and "fov" in r.stderr and "cam.yaml" in r.stderr
     cam.write_text(json.dumps({"eye": [0, 1.6, 4], "target": [0, 0.9, 0], "fov_deg": 55, "width": 640,
-                               "height": 480}))
+                               "height": 360}))  # another aspect ratio than the video's 4:3
     r = _track(str(video), "--out", str(out), "--camera", str(cam), "--prior", "none", "--train-frames", "5")
-    assert r.returncode == 2 and "calibrated for 640x480" in r.stderr
+    assert r.returncode == 2 and "calibrated for 640x360" in r.stderr
     r = _track(str(video), "--out", str(out), "--people", "left", "left", "--prior", "none")
     assert r.returncode == 2 and "distinct sides" in r.stderr
     assert not out.exists()                                          # nothing half-written

@@ -96,6 +96,7 @@ class Camera(Node):
         if p["pacing"] == "lockstep" and not int(self.spec["outputs"]["frame"].get("reliable_subscribers", 0)):
             self.log.warning("pacing 'lockstep' but no reliable subscriber on topic %r: consumers with the "
                              "'latest' policy drop frames when they lag", self.spec["outputs"]["frame"]["topic"])
+        self.figures["source_fps"] = float(src.fps)
         self.log.info("%s: %dx%d at %.3g fps (%s frames) -> %dx%d %s, pacing %s", src.uri, *src.size, src.fps,
                       src.frame_count if src.frame_count is not None else "?", *size,
                       "mono8" if p["gray"] else "bgr8", mode)
@@ -116,12 +117,16 @@ class Camera(Node):
                     break
                 image, encoding, source_time = item
                 self.publish("frame", Frame(stamp=time.monotonic_ns(), seq=seq, image=image, encoding=encoding,
-                                            source=src.uri, source_time=source_time))
+                                            source=src.uri, source_time=source_time, fps=float(src.fps)))
                 seq += 1
         except (SourceError, ValueError) as exc:
             return self._fail(f"source {src.uri} failed at frame {seq}: {exc}")
         finally:
             self.published = seq
+        bad = getattr(src, "undecodable", 0)
+        self.figures["frames_undecodable"] = bad
+        if bad:
+            self.log.warning("%s: %d frame(s) did not decode and were skipped", src.uri, bad)
         if pacer.reanchors:
             self.log.warning("fell behind real time %d time(s); the schedule restarted each time", pacer.reanchors)
         self.log.info("%s: published %d frames", src.uri, seq)

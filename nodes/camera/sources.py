@@ -75,6 +75,8 @@ class VideoFileSource:
         self._cap: cv2.VideoCapture | None = None
         self._pending: np.ndarray | None = None
         self._index = 0
+        #: frames that failed to decode and were skipped
+        self.undecodable = 0
 
     def open(self) -> None:
         p = self.path
@@ -127,14 +129,29 @@ class VideoFileSource:
         else:
             ok, frame = self._cap.read()
             if not ok or frame is None:
-                if self.frame_count is not None and self._index < self.frame_count - 1:
-                    # Headers may overstate the count by a frame; a larger shortfall is damage.
-                    log.warning("video '%s' ended at frame %d of the %d its header announces; "
-                                "the file may be truncated", self.path, self._index, self.frame_count)
-                return False, None, 0.0
+                frame = self._past_damage()
+                if frame is None:
+                    return False, None, 0.0
         t = self._index / self.fps if self.fps > 0 else 0.0
         self._index += 1
         return True, frame, t
+
+    def _past_damage(self) -> np.ndarray | None:
+        """After a frame failed to decode before the end the header announces: the next frame that
+        decodes (each one skipped is counted in ``undecodable`` and keeps its place in time), or
+        None at the real end. Headers may overstate the count by a frame or two; that is no damage."""
+        n = self.frame_count
+        while n is not None and self._index < n - 2 and self._cap.grab():
+            self.undecodable += 1
+            self._index += 1
+            ok, frame = self._cap.retrieve()
+            if ok and frame is not None:
+                log.warning("video '%s': frame %d did not decode; skipped", self.path, self._index - 1)
+                return frame
+        if n is not None and self._index < n - 1:
+            log.warning("video '%s' ended at frame %d of the %d its header announces; the file may be truncated",
+                        self.path, self._index, n)
+        return None
 
     def skip(self, n: int) -> int:
         """Drop ``n`` frames by decoding them (exact whatever the codec's keyframes); returns how many."""
@@ -179,6 +196,8 @@ class ImageFolderSource:
         self.frame_count: int | None = None
         self.files: list[Path] = []
         self._index = 0
+        #: images that failed to decode (or had another size) and were skipped
+        self.undecodable = 0
 
     def open(self) -> None:
         if not self.folder.is_dir():
@@ -203,17 +222,27 @@ class ImageFolderSource:
         return img
 
     def read(self) -> tuple[bool, np.ndarray | None, float]:
-        if self._index >= len(self.files):
-            return False, None, 0.0
-        img = self._load(self._index)
-        if (img.shape[1], img.shape[0]) != self.size:
-            raise SourceError(
-                f"image '{self.files[self._index]}' is {img.shape[1]}x{img.shape[0]} but the folder's first image is "
-                f"{self.size[0]}x{self.size[1]}; every image of a folder source must have one size"
-            )
-        t = self._index / self.fps if self.fps > 0 else 0.0
-        self._index += 1
-        return True, img, t
+        """The next image; one that does not decode, or has another size than the first, is one bad
+        frame: logged, counted in ``undecodable``, skipped (it keeps its place in time)."""
+        while self._index < len(self.files):
+            i = self._index
+            self._index += 1
+            try:
+                img = self._load(i)
+            except SourceError as exc:
+                self._skip_bad(f"{exc}")
+                continue
+            if (img.shape[1], img.shape[0]) != self.size:
+                self._skip_bad(f"image '{self.files[i]}' is {img.shape[1]}x{img.shape[0]} but the folder's first "
+                               f"image is {self.size[0]}x{self.size[1]}; every image of a folder source must have "
+                               "one size")
+                continue
+            return True, img, (i / self.fps if self.fps > 0 else 0.0)
+        return False, None, 0.0
+
+    def _skip_bad(self, why: str) -> None:
+        self.undecodable += 1
+        log.warning("%s: skipped%s", why, "" if self.undecodable == 1 else f" ({self.undecodable} so far)")
 
     def skip(self, n: int) -> int:
         done = min(n, len(self.files) - self._index)

@@ -25,7 +25,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera
+from body.camera import Camera, camera_for_size
 
 from . import draw
 
@@ -98,22 +98,13 @@ def _first(a: Any, b: Any) -> Any:
     return a if a is not None else b
 
 
-def scaled_camera(camera: Camera, width: int, height: int) -> Camera:
-    """The calibration for images of ``width`` x ``height`` pixels: intrinsics scaled by the size
-    ratio (a resized video), extrinsics unchanged."""
-    if (width, height) == (camera.width, camera.height):
-        return camera
-    sx, sy = width / camera.width, height / camera.height
-    return Camera(camera.fx * sx, camera.fy * sy, (camera.cx + 0.5) * sx - 0.5, (camera.cy + 0.5) * sy - 0.5,
-                  width, height, camera.R, camera.t)
-
-
 @dataclass
 class Compositor:
     """Pairs frames with partner, silhouettes, pose and signals by seq and draws them.
 
     Args:
-        camera: calibration of the 3D partner and skeleton projection (scaled to the frame size).
+        camera: calibration of the 3D partner and skeleton projection (``body.camera.camera_for_size``
+            makes it the frame size's; None: the default camera at the frame size, as the tracker's).
         want_partner: whether a partner topic is subscribed (else frames render at once).
         style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl) or ``auto`` (what the
             partner message carries, cones first).
@@ -125,7 +116,7 @@ class Compositor:
         delay_window: partners whose delays decide ``adaptive`` waiting.
     """
 
-    camera: Camera
+    camera: Camera | None = None
     want_partner: bool = True
     style: str = "auto"
     overlays: dict[str, bool] = field(default_factory=lambda: {k: True for k in OVERLAYS})
@@ -146,7 +137,9 @@ class Compositor:
         self.side = {k: _History(self.history) for k in ("silhouettes", "pose", "signals")}
         self.stats: dict[str, Any] = {}
         self.controls = ControlState()
-        self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0}
+        #: partner_drawn: frames on which a partner was drawn with part of it inside the picture
+        self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0,
+                       "partner_drawn": 0}
         self._cams: dict[tuple[int, int], Camera] = {}
         self._unresolved: OrderedDict[int, float] = OrderedDict()  # seq -> arrival, partner delay unknown yet
         self.delays: deque[float] = deque(maxlen=self.delay_window)  # seconds; inf: the partner never came
@@ -240,7 +233,7 @@ class Compositor:
     def camera_for(self, width: int, height: int) -> Camera:
         cam = self._cams.get((width, height))
         if cam is None:
-            cam = self._cams[(width, height)] = scaled_camera(self.camera, width, height)
+            cam = self._cams[(width, height)] = camera_for_size(self.camera, width, height)
         return cam
 
     def render(self, b: Bundle) -> np.ndarray:
@@ -260,7 +253,7 @@ class Compositor:
                     draw.draw_spline_outline(img, person.ctrl, draw.person_colour(person.id), 1,
                                              person.ref_point, f"{person.id}")
         if b.partner is not None:
-            self._draw_partner(img, b.partner, cam)
+            self.counts["partner_drawn"] += self._draw_partner(img, b.partner, cam)
         if ov.get("skeleton") and b.pose is not None:
             for body in b.pose.people:
                 if np.shape(body.joints) == (14, 3) and np.isfinite(body.joints).all():
@@ -285,35 +278,58 @@ class Compositor:
                 shown["strength"] = partner.strength
         return shown
 
-    def _draw_partner(self, img: np.ndarray, partner: Any, cam: Camera) -> None:
+    def _draw_partner(self, img: np.ndarray, partner: Any, cam: Camera) -> bool:
+        """Draw the partner; whether any of it falls inside the picture."""
         colour = draw.partner_colour(partner.emotion, partner.strength)
         has_joints = np.shape(partner.joints) == (14, 3) and np.isfinite(partner.joints).all()
         has_ctrl = np.ndim(partner.ctrl) == 2 and len(partner.ctrl) >= 4 and np.isfinite(partner.ctrl).all()
         if self.style in ("auto", "cones") and has_joints:
             draw.draw_partner_3d(img, partner.joints, cam, colour)
-        elif self.style in ("auto", "silhouette") and has_ctrl:
+            return bool(cam.in_image(cam.project(np.asarray(partner.joints, np.float64))).any())
+        if self.style in ("auto", "silhouette") and has_ctrl:
             draw.draw_silhouette(img, partner.ctrl, colour)
+            return bool(cam.in_image(np.asarray(partner.ctrl, np.float64)).any())
+        return False
 
     def _draw_signals(self, img: np.ndarray, b: Bundle, cam: Camera) -> None:
+        """One compact row of badges per tracked person with the signals that are on, just above the
+        head (below the feet where the head is at the top of the picture), never over the face.
+        With a pose input only the tracked people are labelled: other regions (fragments, ghosts)
+        are not people to label."""
+        tracked = None if b.pose is None else {body.id: body for body in b.pose.people if not body.lost}
         boxes = {p.id: p.bbox for p in (b.silhouettes.people if b.silhouettes is not None else [])}
-        heads = {}
-        if b.pose is not None:
-            for body in b.pose.people:
-                if np.shape(body.joints) == (14, 3):
-                    heads[body.id] = cam.project(np.asarray(body.joints[0], np.float64))
-        anchors = []
-        for i, person in enumerate(b.signals.people):
-            if person.id in boxes and boxes[person.id][2] > 0:
-                x, y = boxes[person.id][0], max(boxes[person.id][1] - 18, 0)
-            elif person.id in heads and np.isfinite(heads[person.id]).all():
-                x, y = heads[person.id][0] - 30, max(heads[person.id][1] - 40, 0)
-            else:  # nowhere to anchor it: stack in the top-right corner
-                x, y = img.shape[1] * 0.55, 4 + 18 * i
-            anchors.append((max(x, 0), y))
-        # people standing close (a handshake) would have their rows of badges drawn over each other
-        rects = [draw.signal_badges_rect(img, a, list(p.names)) for a, p in zip(anchors, b.signals.people)]
-        for (x, y), dy, person in zip(anchors, draw.place_apart(rects, img.shape[0]), b.signals.people):
-            draw.draw_signal_badges(img, (x, y + dy), list(person.names), person.labels, person.scores)
+        rows, rects = [], []
+        for person in b.signals.people:
+            if tracked is not None and person.id not in tracked:
+                continue
+            on = [k for k, lab in enumerate(np.asarray(person.labels).reshape(-1)) if lab == 1]
+            if not on or max(on) >= len(person.names):  # nothing on, or a malformed message
+                continue
+            box = boxes.get(person.id)
+            if box is None and tracked is not None:
+                box = _projected_box(tracked[person.id].joints, cam)
+            if box is None or box[2] <= 0:
+                continue
+            names = [person.names[k] for k in on]
+            x0, y0, x1, y1 = draw.signal_badges_rect(img, (0, 0), names)
+            w, h = x1 - x0, y1 - y0
+            x = int(np.clip(box[0] + box[2] / 2 - w / 2, 0, max(img.shape[1] - w, 0)))
+            y = box[1] - h - 3 if box[1] - h - 3 >= 0 else min(box[1] + box[3] + 3, img.shape[0] - h)
+            scores = np.asarray(person.scores).reshape(-1)
+            rows.append(((x, y), names, scores[on] if scores.size == len(person.names) else None))
+            rects.append((x, y, x + w, y + h))
+        # people standing close (a handshake) would have their rows drawn over each other
+        for ((x, y), names, scores), dy in zip(rows, draw.place_apart(rects, img.shape[0])):
+            draw.draw_signal_badges(img, (x, y + dy), names, np.ones(len(names), np.int8), scores)
 
 
-__all__ = ["Compositor", "Bundle", "ControlState", "scaled_camera", "STYLES", "OVERLAYS"]
+def _projected_box(joints: Any, cam: Camera) -> tuple[int, int, int, int] | None:
+    """(x, y, w, h) pixels around a body's projected joints, or None where none projects."""
+    uv = cam.project(np.asarray(joints, np.float64))
+    uv = uv[np.isfinite(uv).all(axis=1)]
+    if not len(uv):
+        return None
+    (u0, v0), (u1, v1) = uv.min(axis=0), uv.max(axis=0)
+    return int(u0), int(v0), int(u1 - u0) + 1, int(v1 - v0) + 1
+
+__all__ = ["Compositor", "Bundle", "ControlState", "STYLES", "OVERLAYS"]

@@ -24,7 +24,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from body.camera import Camera, camera_param_problem, default_camera
+from body.camera import Camera, camera_param_problem
 from bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
 from messages import Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
 
@@ -36,6 +36,8 @@ from .web import LiveServer, is_loopback
 #: the responder's model names (nodes.responder.models.MODEL_NAMES; a node does not import another node)
 DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
+#: seconds of the stream at its start that the ``*_after_1s`` figures leave out
+SETTLE_S = 1.0
 
 
 def _check_video(value: str) -> str | None:
@@ -71,7 +73,8 @@ class Renderer(Node):
                               check=_check_topics),
         "video": Param(str, "", "output video: .mp4 (H.264, else written as .avi) or .avi (Motion-JPEG); '' none",
                        check=_check_video),
-        "fps": Param(float, 25.0, "frame rate written into the video file", min=0.1, max=1000.0),
+        "fps": Param(float, 0.0, "frame rate written into the video file (0: the input's, from the camera's "
+                     "frames; 25 when they do not say)", min=0.0, max=1000.0),
         "serve": Param(bool, False, "serve the live web page"),
         "host": Param(str, "127.0.0.1", "address of the web page; anything but loopback exposes the controls "
                       "to the network"),
@@ -84,8 +87,9 @@ class Renderer(Node):
         "overlay_signals": Param(bool, True, "draw social-signal badges"),
         "overlay_stats": Param(bool, True, "draw per-node statistics"),
         "overlay_controls": Param(bool, True, "draw the controls in force (model, speaker, interest, emotion bar)"),
-        "camera": Param(dict, default_camera().to_dict(), "camera calibration (body.camera.Camera.to_dict or "
-                        "look-at form); scaled to the frame size", check=camera_param_problem),
+        "camera": Param(dict, {}, "camera calibration (body.camera.Camera.to_dict or look-at form), scaled to a "
+                        "frame size of the same aspect ratio; empty: the default camera at the frame size (the "
+                        "tracker's)", check=camera_param_problem),
         "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), auto", choices=STYLES),
         "pair_timeout": Param(float, 0.1, "seconds a frame waits for its partner at most (lockstep replay: long, "
                               "so that every frame gets its own partner)", min=0.0),
@@ -125,7 +129,7 @@ class Renderer(Node):
     def setup(self) -> None:
         p = self.p
         overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
-        self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else default_camera(), want_partner=p["partner"], style=p["style"],
+        self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else None, want_partner=p["partner"], style=p["style"],
                                overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"],
                                adaptive=p["adaptive_wait"])
         self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
@@ -186,15 +190,23 @@ class Renderer(Node):
 
     def _render_ready(self, flush: bool = False, publish: bool = True) -> None:
         for b in self.comp.ready(time.monotonic(), flush=flush):
-            self._output(b, self.comp.render(b), publish)
+            drawn = self.comp.counts["partner_drawn"]
+            self._output(b, self.comp.render(b), publish, drawn)
 
-    def _output(self, b: Bundle, image: Any, publish: bool) -> None:
+    def _output(self, b: Bundle, image: Any, publish: bool, drawn_before: int) -> None:
         f = b.frame
         if publish:
             self.publish("rendered", Frame(stamp=f.stamp, seq=f.seq, image=image, encoding="bgr8",
                                            source=f.source, source_time=f.source_time))
         if self.video is not None:
-            self.video.write(image)
+            self.video.write(image, f.fps)
+            self.figures["video_fps"] = self.video.fps
+        self.figures.update({k: float(v) for k, v in self.comp.counts.items()})
+        # the first second (background learnt, tracks started) is left out of the settled figures
+        t = f.seq / f.fps if f.fps > 0 else f.source_time
+        if t >= SETTLE_S:
+            self.tally("rendered_after_1s")
+            self.tally("partner_drawn_after_1s", self.comp.counts["partner_drawn"] > drawn_before)
         if self.server is not None:
             self.server.push(image, f.seq)
         n = self.p["snapshot_every"]

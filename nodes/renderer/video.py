@@ -21,6 +21,8 @@ log = logging.getLogger(__name__)
 H264_CANDIDATES: tuple[tuple[str, str], ...] = (("avc1", ".mp4"), ("H264", ".mp4"))
 FALLBACK: tuple[str, str] = ("MJPG", ".avi")
 _PROBED: dict[str, bool] = {}
+#: frames per second of a video whose stream says nothing of its rate
+DEFAULT_FPS = 25.0
 
 
 def _quiet_opencv() -> int:
@@ -101,8 +103,10 @@ class VideoWriter:
     """
 
     def __init__(self, path: str | os.PathLike, fps: float = 25.0) -> None:
-        if not fps > 0:
-            raise ValueError(f"video fps={fps!r}: must be > 0 frames per second")
+        """``fps``: frames per second written into the file; 0 takes the rate the first
+        :meth:`write` gives (the stream's), or ``DEFAULT_FPS`` when that is unknown too."""
+        if not fps >= 0:
+            raise ValueError(f"video fps={fps!r}: must be > 0 frames per second, or 0 for the stream's")
         self.requested = Path(path)
         self.fourcc, self.path = choose_codec(path)
         self.fps = float(fps)
@@ -111,9 +115,10 @@ class VideoWriter:
         self._writer: cv2.VideoWriter | None = None
         self._closed = False
 
-    def write(self, image: np.ndarray) -> None:
+    def write(self, image: np.ndarray, stream_fps: float = 0.0) -> None:
         """Append one (H, W, 3) uint8 BGR image (mono8 is converted). Every image must have the
-        size of the first."""
+        size of the first. ``stream_fps``: the input's frame rate (0: unknown), used by a writer
+        made with ``fps=0`` when the file is opened on the first frame."""
         if self._closed:
             raise ValueError(f"video {self.path} is closed; no more frames can be written")
         if image.ndim == 2:
@@ -121,6 +126,8 @@ class VideoWriter:
         h, w = image.shape[:2]
         if self._writer is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+            if not self.fps:
+                self.fps = float(stream_fps) if stream_fps > 0 else DEFAULT_FPS
             self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (w, h))
             if not self._writer.isOpened():
                 raise OSError(f"cannot open video {self.path} for writing ({self.fourcc}, {w}x{h})")

@@ -85,13 +85,20 @@ class Silhouette(Node):
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
         "fill_holes": Param(bool, True, "fill holes inside each region"),
+        "replay_training": Param(bool, False, "horprasert: hold the training frames back, and once the background "
+                                 "is learnt (or the stream ends first: from the frames there are) find the people "
+                                 "in them too; for recordings in lockstep, where a delay costs nothing"),
     }
 
     def setup(self) -> None:
         self.extractor: SilhouetteExtractor | None = None
         self.key: tuple[tuple[int, ...], bool] | None = None  # (frame size, mono) of the model
         self.found = 0
+        self.frames = 0
         self._warned: set[str] = set()
+        #: frames held back while the background is learnt (replay_training), with their images
+        self.held: list[tuple[Frame, np.ndarray, bool]] = []
+        self.replay = self.p["replay_training"] and self.p["backend"] == "horprasert"
 
     def _warn_once(self, kind: str, text: str, *args: Any) -> None:
         if kind not in self._warned:
@@ -112,9 +119,12 @@ class Silhouette(Node):
                                    open_px=p["open_px"], close_px=p["close_px"], fill_holes=p["fill_holes"],
                                    shadows=not mono, backend_params=backend_params)
 
+    def _key_changed(self, image: np.ndarray, mono: bool) -> bool:
+        return self.extractor is None or (image.shape[:2], mono) != self.key
+
     def _extract(self, image: np.ndarray, mono: bool) -> FrameResult:
         key = (image.shape[:2], mono)
-        if self.extractor is None or key != self.key:
+        if self._key_changed(image, mono):
             if self.key is not None:
                 self.log.warning("frames changed from %dx%d %s to %dx%d %s: learning the background again",
                                  self.key[0][1], self.key[0][0], "mono8" if self.key[1] else "bgr8",
@@ -128,15 +138,48 @@ class Silhouette(Node):
         return ex.process(image)
 
     def on_frame(self, msg: Frame) -> None:
+        self.frames += 1
         h, w = msg.image.shape[:2] if msg.image.ndim >= 2 else (0, 0)
         try:
             image = as_bgr(msg.image)
         except ValueError as exc:
             # one output per input all the same, so that downstream stays in step
             self._warn_once("image", "frame %d: %s; publishing no people for such frames", msg.seq, exc)
+            self._release_held()
             self.publish("silhouettes", Silhouettes(stamp=msg.stamp, seq=msg.seq, width=w, height=h))
             return
-        result = self._extract(image, mono=image.shape != msg.image.shape)
+        mono = image.shape != msg.image.shape
+        if self.replay and (self.held or self._key_changed(image, mono) or not self.extractor.subtractor.ready):
+            if self.held and (image.shape[:2], mono) != (self.held[0][1].shape[:2], self.held[0][2]):
+                self._release_held()  # the camera changed its frames: what was held is a stream of its own
+            self.held.append((msg, image, mono))
+            if len(self.held) >= self.p["train_frames"]:
+                self._release_held()
+            return
+        self._publish(msg, self._extract(image, mono))
+
+    def _release_held(self) -> None:
+        """Learn the background from the held frames (all of them, however few the stream gave),
+        then find the people in each and publish them in order."""
+        if not self.held:
+            return
+        held, self.held = self.held, []
+        mono = held[0][2]
+        self.extractor, self.key = self._new_extractor(mono), (held[0][1].shape[:2], mono)
+        if len(held) >= 2:
+            self.extractor.fit_background([img for _, img, _ in held], robust=self.p["robust"])
+            self.log.info("background learnt from %d frames", len(held))
+        else:
+            self._warn_once("short", "the stream gave %d frame(s) before it ended or changed; a background "
+                            "needs 2: no people in them", len(held))
+        for msg, image, _ in held:
+            if self.extractor.subtractor.ready:
+                self._publish(msg, self.extractor.process(image))
+            else:
+                self._publish(msg, self.extractor.learn(image))
+
+    def _publish(self, msg: Frame, result: FrameResult) -> None:
+        h, w = msg.image.shape[:2]
         every = self.p["mask_every"]
         labels = np.zeros(0, np.uint8)
         if every and msg.seq % every == 0:
@@ -146,11 +189,13 @@ class Silhouette(Node):
                                 MAX_LABEL - 1, MAX_LABEL)
         people = [person_shape(p) for p in result.people]
         self.found += bool(people)
+        self.tally("frames_with_people", bool(people))
         self.publish("silhouettes", Silhouettes(stamp=msg.stamp, seq=msg.seq, people=people, labels=labels,
                                                 width=w, height=h))
 
     def on_end(self) -> None:
-        self.log.info("people found in %d frames", self.found)
+        self._release_held()
+        self.log.info("people found in %d of %d frames", self.found, self.frames)
 
 
 NODE = Silhouette

@@ -42,7 +42,9 @@ class Estimate:
     Attributes:
         mean: (DOF,) weighted mean pose of the last layer (yaw: circular mean).
         best: (DOF,) highest-likelihood particle of the last layer.
-        ess: effective sample size 1 / sum(pi^2) of the last layer's weights.
+        ess: effective sample size 1 / sum(pi^2) of the last layer's particles weighted by the
+            un-annealed log-likelihood (beta = 1), before resampling: between 1 (one particle holds
+            all the posterior mass) and N.
         log_likelihood: log-likelihood of the best particle.
         particles: (N, DOF) the resampled set carried to the next frame.
         betas: (M,) chosen exponents per layer.
@@ -202,7 +204,11 @@ class AnnealedParticleFilter:
             if m == M - 1:
                 mean = weighted_mean_pose(P, w)
                 b = int(np.argmax(ll))
-                est_best, est_ll, ess = P[b].copy(), float(ll[b]), float(1.0 / np.dot(w, w))
+                # the annealed weights have ESS = survival x N by construction (beta is chosen so);
+                # the ESS that says how well the set covers the posterior is that of the final set
+                # weighted by the un-annealed density (beta = 1), before resampling
+                w1 = _normalised(ll, 1.0)
+                est_best, est_ll, ess = P[b].copy(), float(ll[b]), float(1.0 / np.dot(w1, w1))
             idx = systematic_resample(w, self.rng)
             P = P[idx]
             if m < M - 1:

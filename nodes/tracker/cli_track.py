@@ -64,7 +64,10 @@ def main(args: argparse.Namespace) -> int:
         return 2
 
     def work() -> dict:
+        from nodes.silhouette.pipeline import video_info
+
         camera = load_camera(args.camera) if args.camera else None
+        video_info(args.video)  # a missing or undecodable video is said before a minute of building a prior
         if args.prior == "default":
             print("[track] loading the default motion prior (built from the simulator on first use, "
                   "about a minute)", file=sys.stderr, flush=True)

@@ -20,6 +20,11 @@ SIDE_YAW = {"left": np.pi / 2, "right": -np.pi / 2, "centre": 0.0}
 INIT_STD = np.r_[[0.08, 0.03, 0.15], [0.6, 0.05, 0.05], [0.1] * 6, [0.25] * 16]
 
 
+class PlacementError(ValueError):
+    """A person's region that no ground point of this camera can stand under: one bad region,
+    counted and skipped by the tracker node and ``counterpart track``, never the end of a run."""
+
+
 def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     """(H, W) bool -> (x, y, w, h) pixels of the foreground, or None when it is empty."""
     ys, xs = np.nonzero(mask)
@@ -32,12 +37,12 @@ def place_from_bbox(bbox: tuple[int, int, int, int], camera: Camera,
                     base: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, float]:
     """Ground position (3,) metres and stature (metres, clamped to 1.4-2.1) from a bbox (x, y, w, h).
 
-    Raises ValueError when the bbox bottom lies above the horizon (no ground point)."""
+    Raises PlacementError when the bbox bottom lies above the horizon (no ground point)."""
     x, y, w, h = bbox
     u = x + 0.5 * (w - 1)
     g = camera.ground_point(np.float64(u), np.float64(y + h - 1))
     if not np.isfinite(g).all():
-        raise ValueError(f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person")
+        raise PlacementError(f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person")
     # Height H at ground point g whose top (g + H up) projects to row y: solve v(H) = y on the ray.
     d = camera.rays(np.float64(u), np.float64(y))
     c = camera.centre

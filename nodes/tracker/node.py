@@ -17,7 +17,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, camera_param_problem, default_camera
+from body.camera import Camera, camera_for_size, camera_param_problem
 from bus import Input, Node, Output, Param
 from messages import Frame, Pose3D, Silhouettes, TrackedBody
 
@@ -59,7 +59,8 @@ class TrackerNode(Node):
         "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right",
                         check=people_problem),
         "camera": Param(dict, {}, "calibration: {fx, fy, cx, cy, width, height, R, t} or {eye, target, fov_deg, "
-                        "width, height}; empty: the simulator's default camera at the frame size",
+                        "width, height}, scaled to a frame size of the same aspect ratio; empty: the default camera at the frame "
+                        "size (the renderer's)",
                         check=camera_param_problem),
         "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "
                        "'none' (random walk), or a .npz path", check=_check_prior),
@@ -71,18 +72,20 @@ class TrackerNode(Node):
         if self.p["prior"] == "default":
             self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
         self.prior = resolve_prior(self.p["prior"])
-        self.camera: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
+        self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
+        self.camera: Camera | None = None  # the calibration at the frames' size (body.camera.camera_for_size)
         self.trackers: dict[str, Tracker] = {}
         self.frames: dict[int, Frame] = {}
         self.sils: dict[int, Silhouettes] = {}
         self.warned: set[str] = set()
 
     def _tracker(self, side: str, size: tuple[int, int]) -> Tracker:
-        if self.camera is None:
-            self.camera = default_camera(*size)
-        elif (self.camera.width, self.camera.height) != size:
-            raise ValueError(f"parameter 'camera': calibrated for {self.camera.width}x{self.camera.height} but "
-                             f"frames are {size[0]}x{size[1]}")
+        if self.camera is None or (self.camera.width, self.camera.height) != size:
+            try:
+                self.camera = camera_for_size(self.calibration, *size)
+            except ValueError as exc:
+                raise ValueError(f"parameter 'camera': {exc}") from None
+            self.trackers = {}
         if side not in self.trackers:
             self.trackers[side] = Tracker(self.camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
                                           seed=self.p["seed"] + SIDES.index(side))
@@ -106,7 +109,7 @@ class TrackerNode(Node):
     def _warn_once(self, key: str, text: str) -> None:
         if key not in self.warned:
             self.warned.add(key)
-            self.log.warning("%s (further ones are not logged)", text)
+            self.log.warning("%s (further ones are only counted in the stats)", text)
 
     def _process(self, frame: Frame, sil: Silhouettes) -> None:
         image = frame.image if frame.image.size else None
@@ -124,7 +127,8 @@ class TrackerNode(Node):
                     self._warn_once("merged", f"frame {frame.seq}: {side} person merged with another; "
                                     "tracking the part the silhouette node assigned to it")
                 r = tr.update(image, mask)
-            except ValueError as exc:
+            except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
+                self.tally("regions_not_tracked")
                 self._warn_once(f"error:{side}", f"frame {frame.seq}: {side} person not tracked: {exc}")
                 continue
             if r is None:

@@ -13,9 +13,10 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
-from body.camera import Camera, default_camera
+from body.camera import Camera, camera_for_size
 from body.pose import DOF
 
+from .init import PlacementError
 from .prior import MotionPrior
 from .tracker import SIDES, Tracker, people_problem
 
@@ -45,12 +46,14 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
         progress: called after every frame with (frames done, frames the file declares or 0).
         silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
     Returns:
-        A summary: n_frames, tracked (frames with an estimate, per side), fps, frame_size, out_npz.
+        A summary: n_frames, tracked (frames with an estimate, per side), not_placed (frames whose
+        region could not be placed, per side), fps, frame_size, out_npz.
 
     The file holds T frames x P sides: ``sides`` (P,) str, ``joints`` (T, P, 14, 3) float32 metres
     (NaN where the side is not tracked), ``poses`` and ``best_poses`` (T, P, 28), ``ess``,
     ``log_likelihood`` (T, P) float64, ``lost`` (T, P) bool, ``ids`` (T, P) int32 (the silhouette
-    node's person id, -1 when absent), ``n_frames``, ``frame_size`` (2,) [H, W], ``fps``,
+    node's person id, -1 when absent), ``not_placed`` (T, P) bool (the person's region could not be
+    placed in the scene: bottom above the horizon; that frame is skipped for that side), ``n_frames``, ``frame_size`` (2,) [H, W], ``fps``,
     ``complete`` (bool), ``camera`` and ``params`` (JSON strings).
 
     Raises FileNotFoundError / ValueError (a missing or undecodable video, bad people, a camera
@@ -71,7 +74,7 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
     try:
         for frame, result in iter_video(path, extractor, max_frames, train_frames):
             if size is None:
-                camera = _camera_for(camera, frame.shape[:2])
+                camera = camera_for_size(camera, frame.shape[1], frame.shape[0])
                 size = frame.shape[:2]
                 trackers = {s: Tracker(camera, s, layers, particles, prior=prior, seed=seed + SIDES.index(s))
                             for s in sides}
@@ -86,25 +89,16 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
                    "train_frames": train_frames, "max_frames": max_frames, "prior": prior is not None,
                    **silhouette_params})
     tracked = {s: int(sum(np.isfinite(r["joints"][k, 0, 0]) for r in rows)) for k, s in enumerate(sides)}
-    return {"n_frames": len(rows), "tracked": tracked, "fps": fps, "frame_size": list(size or (0, 0)),
-            "out_npz": os.fspath(out_npz)}
-
-
-def _camera_for(camera: Camera | None, size: tuple[int, int]) -> Camera:
-    """The calibration for frames of ``size`` (H, W): the default camera when None, else checked."""
-    if camera is None:
-        return default_camera(size[1], size[0])
-    if (camera.width, camera.height) != (size[1], size[0]):
-        raise ValueError(f"camera calibrated for {camera.width}x{camera.height} but the video's frames are "
-                         f"{size[1]}x{size[0]}; calibrate for the video's size")
-    return camera
+    not_placed = {s: int(sum(r["not_placed"][k] for r in rows)) for k, s in enumerate(sides)}
+    return {"n_frames": len(rows), "tracked": tracked, "not_placed": not_placed, "fps": fps,
+            "frame_size": list(size or (0, 0)), "out_npz": os.fspath(out_npz)}
 
 
 def _empty_row(P: int) -> dict[str, np.ndarray]:
     """One frame's arrays for P sides, as if nobody were tracked."""
     return {"joints": np.full((P, 14, 3), np.nan, np.float32), "poses": np.full((P, DOF), np.nan),
             "best_poses": np.full((P, DOF), np.nan), "ess": np.zeros(P), "log_likelihood": np.full(P, -np.inf),
-            "lost": np.zeros(P, bool), "ids": np.full(P, -1, np.int32)}
+            "lost": np.zeros(P, bool), "ids": np.full(P, -1, np.int32), "not_placed": np.zeros(P, bool)}
 
 
 def _track_frame(frame: np.ndarray, result: FrameResult, sides: list[str],
@@ -115,8 +109,12 @@ def _track_frame(frame: np.ndarray, result: FrameResult, sides: list[str],
         person = next((p for p in result.people if p.side == side), None)
         if person is None:
             continue
-        r = trackers[side].update(frame, result.labels == person.id + 1)
         row["ids"][k] = person.id
+        try:
+            r = trackers[side].update(frame, result.labels == person.id + 1)
+        except PlacementError:  # one bad region is one bad frame: counted in the file, the run goes on
+            row["not_placed"][k] = True
+            continue
         if r is None:
             continue
         row["joints"][k], row["poses"][k], row["best_poses"][k] = r.joints, r.pose, r.best

@@ -1,0 +1,91 @@
+"""`counterpart demo --input FILE` on recordings: every frame processed, the output at the input's
+frame rate, a summary that says what the run gave, and an end after any input however short."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import cv2
+import pytest
+
+from tests.launching import REPO
+
+FPS = 10.0
+N_FRAMES = 30
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    """One model cache for the module (the first demo builds the default models into it)."""
+    return {**os.environ, "COUNTERPART_MODELS": str(tmp_path_factory.mktemp("models")),
+            "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpi-", dir="/tmp")}
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory, env: dict[str, str]) -> Path:
+    """A handshake recorded from the simulator at 10 fps (its video file, MJPG)."""
+    out = tmp_path_factory.mktemp("clip")
+    subprocess.run([sys.executable, "-m", "bus.cli", "sim", "--scenario", "handshake", "--seed", "3", "--fps",
+                    str(FPS), "--frames", str(N_FRAMES), "--out", str(out)], cwd=REPO, env=env, check=True,
+                   capture_output=True, timeout=300)
+    videos = [p for p in out.iterdir() if p.suffix in (".avi", ".mp4")]
+    assert len(videos) == 1, sorted(p.name for p in out.iterdir())
+    return videos[0]
+
+
+def _demo(env: dict[str, str], out: Path, *args: str, timeout: float = 300) -> tuple[subprocess.CompletedProcess, dict]:
+    res = subprocess.run([sys.executable, "-m", "bus.cli", "demo", "--out", str(out), *args], cwd=REPO, env=env,
+                         capture_output=True, text=True, timeout=timeout)
+    stats = json.loads((out / "demo_stats.json").read_text()) if (out / "demo_stats.json").exists() else {}
+    return res, stats
+
+
+def _video_frames_and_fps(out: Path) -> tuple[int, float]:
+    (video,) = [p for p in out.glob("demo.*") if p.suffix in (".mp4", ".avi")]
+    cap = cv2.VideoCapture(str(video))
+    fps = cap.get(cv2.CAP_PROP_FPS)
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n, fps
+
+
+@pytest.mark.timeout(600)  # the first demo of the module trains the default models: about 30 s
+def test_a_file_is_processed_frame_by_frame_and_written_at_its_own_rate(clip: Path, env: dict[str, str],
+                                                                        tmp_path: Path) -> None:
+    res, stats = _demo(env, tmp_path, "--input", str(clip), timeout=600)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert (stats["frames_in"], stats["frames_out"]) == (N_FRAMES, N_FRAMES)
+    assert stats["fps_in"] == stats["fps_out"] == FPS
+    assert _video_frames_and_fps(tmp_path) == (N_FRAMES, FPS)
+    # lockstep: every node handled every frame offered to it, and none was dropped
+    assert all(v["handled"] == v["offered"] == N_FRAMES for v in stats["handled"].values()), stats["handled"]
+    # the training frames (20) are held back and their people found once the background is learnt:
+    # people in more frames than the 11 after training (the two stand still for the first second,
+    # which a background fitted on those frames partly absorbs)
+    assert stats["frames_with_people"] >= 20, stats
+    assert stats["partner_drawn"] >= 10, stats
+    assert f"partner drawn on:   {stats['partner_drawn']}" in res.stdout
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("frames", [0, 1, 5])
+def test_every_short_input_ends_by_itself_and_says_why_it_drew_no_partner(clip: Path, env: dict[str, str],
+                                                                        tmp_path: Path, frames: int) -> None:
+    # 0 frames: the replay starts past the end of the file, a source that fails before its first frame
+    args = ["--frames", str(frames)] if frames else ["--set", f"camera.start_frame={N_FRAMES + 10}"]
+    res, stats = _demo(env, tmp_path, "--input", str(clip), *args, timeout=120)
+    assert stats["frames_in"] == stats["frames_out"] == frames, res.stderr[-3000:]
+    if frames == 0:  # the camera's error and exit code (3: its source failed) end the demo
+        assert res.returncode == 3 and "is past the end of" in res.stderr, res.stderr[-3000:]
+    elif frames == 1:  # nothing to learn a background from: no people, no partner, and the run says so
+        assert res.returncode == 1 and stats["partner_present"] == 0.0
+        assert "no partner was drawn on any of the 1 frames" in res.stderr, res.stderr[-3000:]
+    else:  # the background is learnt from the 5 frames there are (the people stand still in them)
+        assert "background learnt from 5 frames" in res.stderr, res.stderr[-3000:]
+        assert res.returncode == (0 if stats["partner_drawn"] else 1)
