@@ -165,6 +165,43 @@ class Camera:
         return cls(**{k: d[k] for k in keys})
 
 
+def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "") -> Any:
+    """The ``messages.CameraInfo`` of a camera (the calibration node publishes it)."""
+    from messages import CameraInfo
+
+    return CameraInfo(stamp=stamp, seq=seq, width=camera.width, height=camera.height, fx=camera.fx, fy=camera.fy,
+                      cx=camera.cx, cy=camera.cy, R=np.asarray(camera.R, np.float64),
+                      t=np.asarray(camera.t, np.float64), source=source)
+
+
+def camera_from_info(info: Any) -> Camera:
+    """The Camera of a ``messages.CameraInfo``; ValueError naming what is wrong in it."""
+    if np.size(info.R) != 9 or np.size(info.t) != 3:
+        raise ValueError(f"camera info: R must hold 9 values and t 3, got {np.size(info.R)} and {np.size(info.t)}")
+    return Camera(info.fx, info.fy, info.cx, info.cy, info.width, info.height,
+                  np.asarray(info.R, np.float64).reshape(3, 3), np.asarray(info.t, np.float64).reshape(3))
+
+
+def load_camera_file(path: str) -> Camera:
+    """A Camera from a JSON or YAML calibration file (``Camera.to_dict`` or the look-at form);
+    ValueError naming the file and the bad key."""
+    import yaml
+
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = yaml.safe_load(f)
+    except OSError as exc:
+        raise ValueError(f"calibration file {path!r}: cannot read it ({exc.strerror})") from None
+    except yaml.YAMLError as exc:
+        raise ValueError(f"calibration file {path!r}: not JSON or YAML ({exc})") from None
+    if not isinstance(data, dict) or not data:
+        raise ValueError(f"calibration file {path!r}: expected a mapping of calibration keys")
+    problem = camera_param_problem(data)
+    if problem:
+        raise ValueError(f"calibration file {path!r}: {problem}")
+    return Camera.from_dict(data)
+
+
 def default_camera(width: int = 320, height: int = 240) -> Camera:
     """The simulator's default view: camera 1.6 m high, 4 m in front of the origin (+Z),
     looking at (0, 0.9, 0), 55 degrees horizontal field of view. Two people of 1.75 m standing

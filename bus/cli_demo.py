@@ -34,6 +34,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="play the file or the built-in scene in real time through the live graph, where a node "
                         "that cannot keep up drops frames (default: every frame is processed, in lockstep)")
     p.add_argument("--device", default="/dev/video0", help="camera device for --live")
+    p.add_argument("--camera", metavar="FILE", default="",
+                   help="calibration file (JSON/YAML) for the calibration node; default: the default camera at the "
+                        "frames' size")
     p.add_argument("--serve", action="store_true",
                    help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C")
     p.add_argument("--port", type=int, default=8080, help="port of the live page")
@@ -131,6 +134,8 @@ def main(args: argparse.Namespace) -> int:
     file, sets = _graph_file(args)
     sets += [f"renderer.video={video}", f"renderer.serve={'true' if args.serve else 'false'}",
              f"renderer.port={args.port}"]
+    if args.camera:
+        sets.append(f"calibration.file={Path(args.camera).resolve()}")
     if args.frames:
         sets.append(f"camera.max_frames={args.frames}")
     if args.serve and not args.live:

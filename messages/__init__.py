@@ -2,7 +2,7 @@
 from .core import EMPTY, REGISTRY, by_name, describe, lookup, message, schema_id, struct
 from .codec import DEFAULT_LIMITS, DecodeError, Limits, UntypedMessage, decode, decode_any, decode_frames, encode, encode_frames
 from .system import EndOfStream, NodeStats, TopicStats
-from .camera import Frame
+from .camera import CameraInfo, Frame
 from .silhouette import PersonShape, Silhouettes
 from .tracker import Pose3D, TrackedBody
 from .labeller import PersonSignals, SocialSignals
@@ -11,6 +11,6 @@ from .responder import Control, Partner
 __all__ = [
     "EMPTY", "REGISTRY", "by_name", "describe", "lookup", "message", "schema_id", "struct",
     "DEFAULT_LIMITS", "DecodeError", "Limits", "UntypedMessage", "decode_any", "decode", "decode_frames", "encode", "encode_frames",
-    "EndOfStream", "NodeStats", "TopicStats", "Frame", "PersonShape", "Silhouettes", "Pose3D", "TrackedBody",
+    "EndOfStream", "NodeStats", "TopicStats", "CameraInfo", "Frame", "PersonShape", "Silhouettes", "Pose3D", "TrackedBody",
     "PersonSignals", "SocialSignals", "Control", "Partner",
 ]

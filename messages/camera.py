@@ -21,3 +21,24 @@ class Frame:
     source: str = ""
     source_time: float = 0.0
     fps: float = 0.0
+
+
+@message("camera.CameraInfo", 1)
+class CameraInfo:
+    """The calibration of the camera for frames of ``width`` x ``height`` pixels (as ROS's
+    CameraInfo), published once (latched) by the calibration node so that every node projects
+    with the same camera. Pinhole, OpenCV convention, no distortion: ``fx, fy, cx, cy`` pixels;
+    ``R`` (3, 3) float64 world-to-camera rotation and ``t`` (3,) float64 translation in metres
+    (``X_c = R X_w + t``; world Y up, the ground plane y = 0). ``source``: where it comes from
+    (``default``, ``file:PATH``, ``estimated``); ``seq`` the frame it was made for.
+    """
+
+    width: int = 0
+    height: int = 0
+    fx: float = 0.0
+    fy: float = 0.0
+    cx: float = 0.0
+    cy: float = 0.0
+    R: np.ndarray = EMPTY
+    t: np.ndarray = EMPTY
+    source: str = ""

@@ -16,7 +16,9 @@ class PoseSource(Node):
 
     outputs = {"pose": Output(Pose3D), "control": Output(Control)}
     params = {"frames": Param(int, 60, "frames", min=1), "control_at": Param(int, 30, "frame of the control", min=0),
-              "switch": Param(str, "", "model to switch to ('' keeps it)")}
+              "switch": Param(str, "", "model to switch to ('' keeps it)"),
+              "gap_at": Param(int, -1, "first frame without the person (-1: none)"),
+              "gap": Param(int, 0, "frames without the person from gap_at", min=0)}
 
     def generate(self) -> None:
         tr = planted_pair(7, T=self.p["frames"])
@@ -30,8 +32,9 @@ class PoseSource(Node):
                 self.publish("control", Control(stamp=time.monotonic_ns(), seq=t, emotion="angry", strength=1.0,
                                                 model=self.p["switch"] or None, interest=1))
                 time.sleep(0.5)
+            gone = 0 <= t - self.p["gap_at"] < self.p["gap"]
             self.publish("pose", Pose3D(stamp=time.monotonic_ns(), seq=t,
-                                        people=[TrackedBody(id=1, side="left", joints=tr.a[t])]))
+                                        people=[] if gone else [TrackedBody(id=1, side="left", joints=tr.a[t])]))
             time.sleep(0.005)
 
 

@@ -36,7 +36,7 @@ def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path
     assert n == stats["frames_in"] == stats["frames_out"] > 200  # the whole scene, every frame (lockstep)
     sheet = cv2.imread(str(tmp_path / "out" / "demo_contact_sheet.png"))
     assert sheet is not None and sheet.shape[0] >= 240 and sheet.shape[1] >= 4 * 320
-    assert set(stats["nodes"]) == {"camera", "silhouette", "tracker", "labeller", "responder", "renderer"}
+    assert set(stats["nodes"]) == {"camera", "calibration", "silhouette", "tracker", "labeller", "responder", "renderer"}
     assert all(sum(t["count"] for t in st["inputs"] + st["outputs"]) > 0 for st in stats["nodes"].values())
     assert stats["fps_in"] == stats["fps_out"] == 25.0
     # the built-in scene's partner is drawn on most frames (0.81; 0.91 after the first second)
@@ -55,7 +55,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
     assert set(load(find_launch_file("lockstep.yaml")).nodes) == set(demo.nodes)
     # the lockstep/queue/pairing keys may differ; every other parameter is the same
     own = {("camera", "pacing"), ("renderer", "video"), ("renderer", "pair_timeout"), ("renderer", "adaptive_wait"),
-           ("silhouette", "replay_training")}
+           ("silhouette", "replay_training"), ("tracker", "people")}
     for name, decl in demo.nodes.items():
         other = replay.nodes[name]
         assert other.run == decl.run, name

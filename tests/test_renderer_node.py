@@ -25,6 +25,7 @@ W, H = 160, 120
 def graph(tmp_path: Path, source: dict, renderer: dict) -> Path:
     return write_launch(tmp_path / "graph.yaml", {"nodes": {
         "source": {"run": "tests.renderer_nodes:SceneSource", "params": source},
+        "calibration": {"run": "nodes.calibration", "policy": "reliable"},
         "renderer": {"run": "nodes.renderer", "params": renderer, "policy": "reliable"},
         "sink": {"run": "tests.camera_sink", "params": {"path": str(tmp_path / "rendered.jsonl")},
                  "remap": {"frame": "rendered"}, "policy": "reliable"},

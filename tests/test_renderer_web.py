@@ -33,6 +33,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     file = write_launch(tmp / "graph.yaml", {"nodes": {
         "source": {"run": "tests.renderer_nodes:SceneSource",
                    "params": {"count": 100000, "rate": 20.0, "width": W, "height": H, "partner": False}},
+        "calibration": {"run": "nodes.calibration"},
         "responder": {"run": "tests.renderer_nodes:ControlledResponder", "params": {"path": str(tmp / "controls.jsonl")},
                       "restart": "on-failure"},
         "renderer": {"run": "nodes.renderer", "params": {

@@ -29,10 +29,11 @@ def models_dir(tmp_path_factory) -> Path:
     return d
 
 
-def graph(tmp: Path, switch: str = "") -> Path:
+def graph(tmp: Path, switch: str = "", **source: int) -> Path:
     return write_launch(tmp / "g.yaml", {"nodes": {
-        "source": {"run": "tests.responder_nodes:PoseSource", "params": {"frames": 60, "control_at": 30, "switch": switch}},
-        "responder": {"run": "nodes.responder", "params": {"model": "dual-hmm"}},
+        "source": {"run": "tests.responder_nodes:PoseSource",
+                   "params": {"frames": 60, "control_at": 30, "switch": switch, **source}},
+        "responder": {"run": "nodes.responder", "params": {"model": "dual-hmm", "hold_frames": 5}},
         "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp / "out.jsonl")}},
     }})
 
@@ -49,6 +50,17 @@ def test_partner_per_pose_and_control_takes_effect(tmp_path: Path, models_dir: P
     truth = planted_pair(7, T=60)
     pred = np.array([r["joints"] for r in rows])
     assert np.corrcoef(pred[:30, 4, 1], truth.b[:30, 4, 1])[0, 1] > 0.8
+
+
+def test_the_partner_holds_through_a_short_dropout_of_the_observed_person(tmp_path: Path, models_dir: Path) -> None:
+    # the person is missing on frames 10-17: the partner stays for 5 frames (hold_frames), then goes
+    code, out = run_launch(graph(tmp_path, gap_at=10, gap=8), timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
+    assert code == 0, out
+    rows = read_jsonl(tmp_path / "out.jsonl")
+    assert [r["seq"] for r in rows] == list(range(60))
+    assert all(r["shape"] == [14, 3] and r["joints"] == rows[9]["joints"] for r in rows[10:15])  # held
+    assert all(r["shape"] != [14, 3] for r in rows[15:18])                                       # gone
+    assert all(r["shape"] == [14, 3] for r in rows[18:])                                         # back
 
 
 def test_control_switches_the_model(tmp_path: Path, models_dir: Path) -> None:

@@ -48,6 +48,7 @@ def _graph(tmp_path: Path, source: dict, tracker: dict) -> tuple[Path, Path]:
     out = tmp_path / "pose.jsonl"
     doc = {"nodes": {
         "source": {"run": "tests.test_tracker_node:SimPeople", "params": source},
+        "calibration": {"run": "nodes.calibration", "policy": "reliable"},
         "tracker": {"run": "nodes.tracker", "policy": "reliable",
                     "params": {"layers": 3, "particles": 48, "prior": "none", **tracker}},
         "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},

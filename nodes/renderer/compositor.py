@@ -94,6 +94,11 @@ class _History:
         return best
 
 
+def _size(frame: Any) -> tuple[int, int]:
+    shape = np.shape(frame.image)
+    return (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
+
+
 def _first(a: Any, b: Any) -> Any:
     return a if a is not None else b
 
@@ -113,6 +118,8 @@ class Compositor:
         max_pending: frames held at most; beyond it the oldest renders without waiting.
         history: messages kept per side topic.
         adaptive: skip the wait while the recent partners came later than ``timeout`` (module doc).
+        wait_camera: hold frames until :meth:`set_camera` gives the graph's camera for their size
+            (the calibration node's camera_info), so that nothing is drawn with another one.
         delay_window: partners whose delays decide ``adaptive`` waiting.
     """
 
@@ -125,6 +132,7 @@ class Compositor:
     history: int = 64
     adaptive: bool = False
     delay_window: int = 25
+    wait_camera: bool = False
 
     def __post_init__(self) -> None:
         if self.style not in STYLES:
@@ -192,6 +200,10 @@ class Compositor:
         """Keep the newest ``messages.NodeStats`` per node."""
         self.stats[msg.node] = msg
 
+    def set_camera(self, camera: Camera) -> None:
+        """The graph's camera for frames of its size (from camera_info): every drawing uses it."""
+        self._cams[(camera.width, camera.height)] = camera
+
     def set_control(self, msg: Any) -> None:
         """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches)."""
         self.controls.update(msg)
@@ -208,6 +220,8 @@ class Compositor:
         out = []
         while self.pending:
             seq, (frame, t) = next(iter(self.pending.items()))
+            if self.wait_camera and not flush and _size(frame) not in self._cams:
+                break
             partner = self.partners.exact(seq) if self.want_partner else None
             done = (not self.want_partner or partner is not None or self.partners.max_seq > seq or flush
                     or now - t >= self.timeout or (self.adaptive and self.partners_late))

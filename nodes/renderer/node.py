@@ -7,7 +7,8 @@ Run in a graph (``run: nodes.renderer``)::
       params: {video: out.mp4, serve: true, port: 8080, pose: true, stats_topics: [camera/stats]}
 
 Inputs: ``frame`` (camera.Frame) always; ``partner`` (responder.Partner) unless ``partner: false``;
-``silhouettes``, ``pose``, ``signals`` when their params are true; one input per entry of
+``silhouettes``, ``pose``, ``signals`` when their params are true; ``camera_info`` (camera.CameraInfo,
+the calibration node's, latched; frames wait for it) unless ``camera_info: false``; one input per entry of
 ``stats_topics`` (system.NodeStats, port named like the topic, policy latest, not awaited at end).
 Outputs: ``rendered`` (camera.Frame, the composited image, same stamp and seq as the frame) and
 ``control`` (control.Control, the controls in force as set on the web page; latched).
@@ -24,9 +25,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from body.camera import Camera, camera_param_problem
+from body.camera import Camera, camera_from_info, camera_param_problem
 from bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
-from messages import Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
+from messages import CameraInfo, Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .compositor import OVERLAYS, STYLES, Bundle, Compositor
 from .controls import EMOTIONS, INTEREST_LEVELS, SPEAKERS, control_to_json, parse_control
@@ -87,9 +88,11 @@ class Renderer(Node):
         "overlay_signals": Param(bool, True, "draw social-signal badges"),
         "overlay_stats": Param(bool, True, "draw per-node statistics"),
         "overlay_controls": Param(bool, True, "draw the controls in force (model, speaker, interest, emotion bar)"),
-        "camera": Param(dict, {}, "camera calibration (body.camera.Camera.to_dict or look-at form), scaled to a "
-                        "frame size of the same aspect ratio; empty: the default camera at the frame size (the "
-                        "tracker's)", check=camera_param_problem),
+        "camera_info": Param(bool, True, "take the camera from topic camera_info (the calibration node, so that "
+                             "every node projects with the same one; frames wait for it); false: from 'camera'"),
+        "camera": Param(dict, {}, "without camera_info only: calibration (body.camera.Camera.to_dict or look-at "
+                        "form), scaled to a frame size of the same aspect ratio; empty: the default camera at the "
+                        "frame size", check=camera_param_problem),
         "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), auto", choices=STYLES),
         "pair_timeout": Param(float, 0.1, "seconds a frame waits for its partner at most (lockstep replay: long, "
                               "so that every frame gets its own partner)", min=0.0),
@@ -109,6 +112,9 @@ class Renderer(Node):
         prefix = f"{where}: " if where else ""
         if p["snapshot_every"] and not p["snapshot_dir"]:
             raise ParamError(f"{prefix}parameter 'snapshot_dir': needed when snapshot_every > 0")
+        if p["camera_info"] and p["camera"]:
+            raise ParamError(f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
+                             "calibration file to the calibration node (calibration.file), or set camera_info: false")
         if not all(isinstance(m, str) and m for m in p["models"]):
             raise ParamError(f"{prefix}parameter 'models': expected a list of model names, got {p['models']!r}")
         return p
@@ -121,6 +127,8 @@ class Renderer(Node):
         for name, tp in SIDE_INPUTS.items():
             if params[name]:
                 ins[name] = Input(tp, RELIABLE, f"{name} overlay (paired by seq)")
+        if params["camera_info"]:
+            ins["camera_info"] = Input(CameraInfo, RELIABLE, "the graph's camera (latched)", awaits_end=False)
         for topic in params["stats_topics"]:
             ins[topic] = Input(NodeStats, LATEST, "statistics of a node", awaits_end=False)
         return ins, dict(cls.outputs)
@@ -131,7 +139,7 @@ class Renderer(Node):
         overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
         self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else None, want_partner=p["partner"], style=p["style"],
                                overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"],
-                               adaptive=p["adaptive_wait"])
+                               adaptive=p["adaptive_wait"], wait_camera=p["camera_info"])
         self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
         self.controls: queue.Queue[Control] = queue.Queue()
         self.stats_ports = set(p["stats_topics"])
@@ -155,6 +163,11 @@ class Renderer(Node):
             self.comp.add_partner(msg)
         elif port in SIDE_INPUTS:
             self.comp.add_side(port, msg)
+        elif port == "camera_info":
+            try:
+                self.comp.set_camera(camera_from_info(msg))
+            except ValueError as exc:
+                self.log.warning("camera_info dropped: %s", exc)
         elif port in self.stats_ports:
             self.comp.add_stats(msg)
             return

@@ -12,6 +12,7 @@ emotion and strength at run time; ``None`` fields leave a setting unchanged.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -49,6 +50,9 @@ class Responder(Node):
         "emotion": Param(str, "neutral", "partner emotion", choices=EMOTIONS),
         "strength": Param(float, 0.0, "emotion strength", min=0.0, max=1.0),
         "observed": Param(str, "left", "which person the partner responds to", choices=("left", "right")),
+        "hold_frames": Param(int, 15, "frames the partner stays where it was while the observed person is lost "
+                             "or missing (a tracker's dropout is not the person leaving); 0: it vanishes at once",
+                             min=0),
     }
 
     @classmethod
@@ -67,6 +71,7 @@ class Responder(Node):
         self.style = StyleFilter(self._model("emotion"))
         self.latest: dict[str, Any] = {}
         self.count = 0
+        self.last: Partner | None = None  # the last partner that responded to someone
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -131,6 +136,12 @@ class Responder(Node):
         out = dict(model=self.model, emotion=self.emotion, strength=self.strength)
 
         def nobody() -> None:
+            last = self.last
+            if last is not None and 0 < driver.seq - last.seq <= self.p["hold_frames"] and last.model == self.model:
+                self.tally("partner_held")  # counted: the partner holds through the observed person's dropout
+                self.publish("partner", replace(last, stamp=driver.stamp, seq=driver.seq, behaviour="hold"))
+                return
+            self.tally("partner_none")
             self.publish("partner", Partner(stamp=driver.stamp, seq=driver.seq, behaviour="none", **out))
 
         m = self._model(self.model)
@@ -160,5 +171,6 @@ class Responder(Node):
                 return nobody()
             ctrl = m.step(shape.ctrl, shape.height, shape.centroid, mirrored=shape.side == "right")
             out.update(ctrl=ctrl, observed_id=shape.id, behaviour=f"b{m.mode_}", confidence=m.confidence_)
-        self.publish("partner", Partner(stamp=driver.stamp, seq=driver.seq, **out))
+        self.last = Partner(stamp=driver.stamp, seq=driver.seq, **out)
+        self.publish("partner", self.last)
         self.count += 1

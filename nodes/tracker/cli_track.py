@@ -10,9 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-import yaml
-
-from body.camera import Camera, camera_param_problem
+from body.camera import Camera, load_camera_file
 from bus.cli_offline import FrameProgress, positive, run_offline
 from nodes.silhouette.backends import BACKEND_NAMES
 
@@ -41,20 +39,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def load_camera(path: str) -> Camera:
-    """A Camera from a JSON or YAML calibration file; ValueError naming the file and the bad key."""
+    """A Camera from the ``--camera`` file; ValueError naming the option, the file and the bad key."""
     try:
-        with open(path, encoding="utf-8") as f:
-            data = yaml.safe_load(f)
-    except OSError as exc:
-        raise ValueError(f"--camera {path!r}: cannot read it ({exc.strerror})") from None
-    except yaml.YAMLError as exc:
-        raise ValueError(f"--camera {path!r}: not JSON or YAML ({exc})") from None
-    if not isinstance(data, dict) or not data:
-        raise ValueError(f"--camera {path!r}: expected a mapping of calibration keys")
-    problem = camera_param_problem(data)
-    if problem:
-        raise ValueError(f"--camera {path!r}: {problem}")
-    return Camera.from_dict(data)
+        return load_camera_file(path)
+    except ValueError as exc:
+        raise ValueError(f"--camera {str(exc).removeprefix('calibration file ')}") from None
 
 
 def main(args: argparse.Namespace) -> int:

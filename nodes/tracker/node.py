@@ -17,9 +17,9 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, camera_for_size, camera_param_problem
-from bus import Input, Node, Output, Param
-from messages import Frame, Pose3D, Silhouettes, TrackedBody
+from body.camera import Camera, camera_for_size, camera_from_info, camera_param_problem
+from bus import Input, Node, Output, Param, ParamError
+from messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .prior import resolve_prior
 from .tracker import SIDES, Tracker, people_problem
@@ -51,45 +51,79 @@ class TrackerNode(Node):
     """3D poses of the people of each frame (annealed particle filter, Deutscher et al. 2000)."""
 
     inputs = {"frame": Input(Frame, doc="the video frames (edge term)"),
-              "silhouettes": Input(Silhouettes, doc="the people's masks (silhouette term)")}
+              "silhouettes": Input(Silhouettes, doc="the people's masks (silhouette term)"),
+              "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)",
+                                   awaits_end=False)}
     outputs = {"pose": Output(Pose3D, "one per frame: the tracked people (empty when nobody is in view)")}
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
         "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right",
                         check=people_problem),
-        "camera": Param(dict, {}, "calibration: {fx, fy, cx, cy, width, height, R, t} or {eye, target, fov_deg, "
-                        "width, height}, scaled to a frame size of the same aspect ratio; empty: the default camera at the frame "
-                        "size (the renderer's)",
-                        check=camera_param_problem),
+        "camera_info": Param(bool, True, "take the camera from topic camera_info (the calibration node, so that "
+                             "every node projects with the same one); false: from 'camera'"),
+        "camera": Param(dict, {}, "without camera_info only: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
+                        "fov_deg, width, height}, scaled to a frame size of the same aspect ratio; empty: the default "
+                        "camera at the frame size", check=camera_param_problem),
         "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "
                        "'none' (random walk), or a .npz path", check=_check_prior),
         "seed": Param(int, 0, "seed of the particle filters"),
         "max_pending": Param(int, 50, "frames kept while waiting for the other input", min=1),
     }
 
+    @classmethod
+    def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        p = super().validate_params(given, where)
+        if p["camera_info"] and p["camera"]:
+            prefix = f"{where}: " if where else ""
+            raise ParamError(f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
+                             "calibration file to the calibration node (calibration.file), or set camera_info: false")
+        return p
+
+    @classmethod
+    def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        ins = {k: v for k, v in cls.inputs.items() if k != "camera_info" or params["camera_info"]}
+        return ins, dict(cls.outputs)
+
     def setup(self) -> None:
         if self.p["prior"] == "default":
             self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
         self.prior = resolve_prior(self.p["prior"])
         self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
-        self.camera: Camera | None = None  # the calibration at the frames' size (body.camera.camera_for_size)
+        #: frame size (w, h) -> the camera of the graph (camera_info) for it
+        self.cameras: dict[tuple[int, int], Camera] = {}
+        self.camera: Camera | None = None  # the one the trackers use
         self.trackers: dict[str, Tracker] = {}
         self.frames: dict[int, Frame] = {}
         self.sils: dict[int, Silhouettes] = {}
+        self.paired: dict[int, tuple[Frame, Silhouettes]] = {}  # waiting for the camera of their size
         self.warned: set[str] = set()
 
-    def _tracker(self, side: str, size: tuple[int, int]) -> Tracker:
-        if self.camera is None or (self.camera.width, self.camera.height) != size:
-            try:
-                self.camera = camera_for_size(self.calibration, *size)
-            except ValueError as exc:
-                raise ValueError(f"parameter 'camera': {exc}") from None
-            self.trackers = {}
+    def _camera(self, size: tuple[int, int]) -> Camera | None:
+        """The camera for frames of ``size``; None while the graph's camera_info has not come."""
+        if self.p["camera_info"]:
+            return self.cameras.get(size)
+        try:
+            return camera_for_size(self.calibration, *size)
+        except ValueError as exc:
+            raise ValueError(f"parameter 'camera': {exc}") from None
+
+    def _tracker(self, side: str, camera: Camera) -> Tracker:
+        if camera is not self.camera:
+            self.camera, self.trackers = camera, {}
         if side not in self.trackers:
-            self.trackers[side] = Tracker(self.camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
+            self.trackers[side] = Tracker(camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
                                           seed=self.p["seed"] + SIDES.index(side))
         return self.trackers[side]
+
+    def on_camera_info(self, msg: CameraInfo) -> None:
+        try:
+            camera = camera_from_info(msg)
+        except ValueError as exc:
+            self._warn_once("info", f"camera_info dropped: {exc}")
+            return
+        self.cameras[(camera.width, camera.height)] = camera
+        self._drain()
 
     def on_frame(self, msg: Frame) -> None:
         self.frames[msg.seq] = msg
@@ -99,29 +133,61 @@ class TrackerNode(Node):
         self.sils[msg.seq] = msg
         self._pair(msg.seq)
 
+    def on_end(self) -> None:
+        if self.paired:  # the camera never came: one empty pose per frame keeps downstream in step
+            self.log.error("no camera_info came for %d frame(s); published them without people (is a calibration "
+                           "node in the graph?)", len(self.paired))
+            for seq in sorted(self.paired):
+                frame, _ = self.paired.pop(seq)
+                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq))
+        n = self.figures.get("regions_not_tracked", 0)
+        if n:
+            self.log.warning("%d person region(s) could not be tracked (see the first warning)", n)
+
     def _pair(self, seq: int) -> None:
         if seq in self.frames and seq in self.sils:
-            self._process(self.frames.pop(seq), self.sils.pop(seq))
+            self.paired[seq] = (self.frames.pop(seq), self.sils.pop(seq))
+            self._drain()
         for pending in (self.frames, self.sils):
             for old in [s for s in pending if s < seq - self.p["max_pending"]]:
                 del pending[old]
+
+    def _drain(self) -> None:
+        """Track the paired frames in seq order, as far as the camera of their size is known; beyond
+        ``max_pending`` waiting frames the oldest go out without people."""
+        for seq in sorted(self.paired):
+            frame, sil = self.paired[seq]
+            image = frame.image if frame.image.size else None
+            size = (sil.width or (image.shape[1] if image is not None else 0),
+                    sil.height or (image.shape[0] if image is not None else 0))
+            try:
+                camera = self._camera(size)
+                give_up = len(self.paired) > self.p["max_pending"]
+            except ValueError as exc:  # a calibration for frames of another shape: nobody can be placed
+                self._warn_once("camera", f"frame {seq}: {exc}")
+                camera, give_up = None, True
+            if camera is None and not give_up:
+                return
+            del self.paired[seq]
+            if camera is None:
+                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq))
+            else:
+                self._process(frame, sil, image, camera)
 
     def _warn_once(self, key: str, text: str) -> None:
         if key not in self.warned:
             self.warned.add(key)
             self.log.warning("%s (further ones are only counted in the stats)", text)
 
-    def _process(self, frame: Frame, sil: Silhouettes) -> None:
-        image = frame.image if frame.image.size else None
-        size = (sil.width or (image.shape[1] if image is not None else 0),
-                sil.height or (image.shape[0] if image is not None else 0))
+    def _process(self, frame: Frame, sil: Silhouettes, image: np.ndarray | None, camera: Camera) -> None:
+        size = (camera.width, camera.height)
         people: list[TrackedBody] = []
         for side in self.p["people"]:
             shape = next((s for s in sil.people if s.side == side), None)
             if shape is None:
                 continue
             try:
-                tr = self._tracker(side, size)
+                tr = self._tracker(side, camera)
                 mask = person_mask(shape, sil.labels, size)
                 if shape.merged:
                     self._warn_once("merged", f"frame {frame.seq}: {side} person merged with another; "

@@ -1,0 +1,65 @@
+"""The calibration node in a real graph: one camera for the frames' size, published once (latched)
+on camera_info; a calibration file scaled to the frames, or refused by name when it cannot be."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from body.camera import Camera, camera_for_size, default_camera
+from tests.launching import read_jsonl, run_launch, write_launch
+
+W, H = 200, 150  # the simulator rendered at another size than its own 320x240
+
+
+def _graph(tmp_path: Path, file: str = "") -> tuple[Path, Path]:
+    out = tmp_path / "info.jsonl"
+    doc = {"nodes": {
+        "camera": {"run": "nodes.camera", "params": {"source": "sim:handshake", "pacing": "lockstep",
+                                                     "max_frames": 4, "width": W, "height": H}},
+        "calibration": {"run": "nodes.calibration", "policy": "reliable", "params": {"file": file}},
+        "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "camera_info", "path": str(out)}},
+    }}
+    return write_launch(tmp_path / "graph.yaml", doc), out
+
+
+def _infos(out: Path) -> list[dict]:
+    return [r for r in read_jsonl(out) if r.get("type") == "camera.CameraInfo/1"]
+
+
+def _camera(info: dict) -> Camera:
+    return Camera(info["fx"], info["fy"], info["cx"], info["cy"], info["width"], info["height"],
+                  np.array(info["R"], float), np.array(info["t"], float))
+
+
+def test_the_default_camera_for_the_frames_size_is_published_once(tmp_path: Path) -> None:
+    f, out = _graph(tmp_path)
+    rc, log = run_launch(f, timeout=60)
+    assert rc == 0, log
+    infos = _infos(out)
+    assert len(infos) == 1 and infos[0]["seq"] == 0 and infos[0]["source"] == "default"  # 4 frames, one camera
+    cam, ref = _camera(infos[0]), default_camera(W, H)
+    X = np.array([[0.0, 0.0, 0.0], [0.5, 1.7, -0.5]])
+    np.testing.assert_allclose(cam.project(X), ref.project(X), atol=1e-6)
+
+
+def test_a_calibration_file_is_scaled_to_the_frames_or_refused_by_name(tmp_path: Path) -> None:
+    cal = Camera.look_at((0.5, 2.2, 5.0), (0.0, 1.0, 0.0), 48.0, 400, 300)  # the frames' 4:3 at another size
+    path = tmp_path / "cam.json"
+    path.write_text(json.dumps(cal.to_dict()))
+    f, out = _graph(tmp_path, str(path))
+    rc, log = run_launch(f, timeout=60)
+    assert rc == 0, log
+    (info,) = _infos(out)
+    assert info["source"] == f"file:{path}"
+    X = np.array([[0.3, 1.2, 0.4]])
+    np.testing.assert_allclose(_camera(info).project(X), camera_for_size(cal, W, H).project(X), atol=1e-6)
+    # another aspect ratio: the node says which file and why, and ends with an error
+    wide = tmp_path / "wide.json"
+    wide.write_text(json.dumps(Camera.look_at((0.5, 2.2, 5.0), (0.0, 1.0, 0.0), 48.0, 640, 360).to_dict()))
+    (tmp_path / "wide").mkdir()
+    f, out = _graph(tmp_path / "wide", str(wide))
+    rc, log = run_launch(f, timeout=60)
+    assert rc != 0 and "calibrated for 640x360 but the frames are 200x150" in log, log
+    assert not _infos(out)
