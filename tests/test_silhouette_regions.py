@@ -249,3 +249,22 @@ def test_a_stale_track_does_not_take_a_person_who_then_takes_a_stray_fragment():
     person = [p for p in people if abs(p.centroid[0] - 150) < 10]
     assert len(person) == 1 and person[0].id == 1
     assert 0 not in [p.id for p in people]
+
+
+def test_a_wide_region_is_not_a_new_person_an_upright_one_is():
+    """A car or a barrier (wider than tall) never starts a person; a standing figure does, and
+    one who stretches an arm out later stays who they are."""
+    tr = PersonTracker(min_area=50)
+    m = np.zeros((H, W), np.uint8)
+    cv2.rectangle(m, (20, 150), (140, 190), 1, -1)  # a car: 121 x 41 pixels
+    draw_person(m, 230, 120)
+    _, people = tr.update(m.astype(bool))
+    assert len(people) == 1 and people[0].centroid[0] > 200
+    m = np.zeros((H, W), np.uint8)
+    cv2.rectangle(m, (30, 150), (150, 190), 1, -1)
+    draw_person(m, 230, 120, arm=-90)  # now wider than tall
+    _, people = tr.update(m.astype(bool))
+    assert [p.id for p in people] == [0]
+    assert PersonTracker(min_upright=0.0).update(m.astype(bool))[1][0].bbox[2] > 100  # off: any region
+    with pytest.raises(ValueError, match="min_upright"):
+        PersonTracker(min_upright=-1.0)

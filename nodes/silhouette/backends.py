@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
+from .people import fit_around_people
 
 BACKEND_NAMES: tuple[str, ...] = ("horprasert", "mog2", "knn", "cnt", "gsoc")
 
@@ -40,8 +41,11 @@ class HorprasertSubtractor:
     """Online wrapper of ``HorprasertBackground``.
 
     The first ``train_frames`` frames are collected (no foreground is reported for them) and the
-    model is fitted on them, robustly by default because people may already be in view; after
-    that each frame is classified and then blended into the model (``update``).
+    model is fitted on them, robustly by default because people may already be in view, and with
+    ``people_aware`` (default) around the people that ``detector`` (default
+    ``people.PeopleDetector()``, OpenCV's HOG people detector) finds in them, so that people who
+    stand still through training are not learnt as the room (``people.fit_around_people``);
+    after that each frame is classified and then blended into the model (``update``).
     ``fit(frames)`` instead trains at once, e.g. from a recording of the empty scene.
     Other keyword parameters go to ``HorprasertBackground``.
     """
@@ -49,7 +53,8 @@ class HorprasertSubtractor:
     name = "horprasert"
     provides_shadows = True
 
-    def __init__(self, train_frames: int = 30, robust: bool = True, **model_params: Any) -> None:
+    def __init__(self, train_frames: int = 30, robust: bool = True, people_aware: bool = True,
+                 detector: Any = None, **model_params: Any) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
@@ -58,6 +63,8 @@ class HorprasertSubtractor:
             raise ValueError(f"horprasert: unknown parameter ({exc})") from None
         self.train_frames = train_frames
         self.robust = robust
+        self.people_aware = people_aware
+        self.detector = detector
         self.labels: np.ndarray | None = None
         self._buffer: list[np.ndarray] = []
 
@@ -66,7 +73,15 @@ class HorprasertSubtractor:
         return self.model.is_fitted
 
     def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> "HorprasertSubtractor":
-        self.model.fit(as_frame_stack(frames), robust=self.robust if robust is None else robust)
+        """Fit the model on training frames (N, H, W, 3) uint8 BGR. Robust (people may be in view)
+        and ``people_aware``: the people are detected and the room around them learnt
+        (``people.fit_around_people``); robust alone: the per-pixel median."""
+        stack = as_frame_stack(frames)
+        robust = self.robust if robust is None else robust
+        if robust and self.people_aware:
+            fit_around_people(self.model, stack, detector=self.detector)
+        else:
+            self.model.fit(stack, robust=robust)
         self._buffer = []
         return self
 

@@ -29,6 +29,20 @@ pixel darker than ``min_shadow_brightness`` times its background is foreground: 
 value on alpha_hat (the paper's form, used when tau_alpha_lo is given) would put that limit at
 very different brightnesses in bright, low-noise pixels (small a_i) and dark, noisy ones.
 
+Bounds on the shadow and highlight classes: a pixel more than ``max_highlight_brightness`` times
+brighter than its background is foreground, not a highlight (a change of light brightens a
+surface by tens of percent; a white shirt on a grey floor, which has the floor's chromaticity
+too, by far more), just as one darker than ``min_shadow_brightness`` is not a shadow.
+
+People in view while learning (``fit(..., exclude=...)``, driven by ``people.fit_around_people``):
+the samples known to show a person are left out of every statistic. A pixel with too few samples
+left (someone stood on it through most of the training frames) has never been seen: its E and s
+are filled in from the room around it (``cv2.inpaint``), s widened, and it is marked in
+``unseen_``. There a darker shade of the floor is more likely the grey shirt of the person who
+still stands there than a shadow: shadows must be brighter than ``unseen_min_shadow_brightness``,
+shadow and highlight pixels are not learnt, and a ghost is absorbed only when it matches the room
+around it closely.
+
 Adaptation (``update``). Background pixels blend the frame into E at ``learning_rate``, shadow and
 highlight pixels at ``shadow_learning_rate``; foreground pixels are never blended in but follow the
 scene-wide lighting drift (the mean brightness distortion of the background pixels), so the room
@@ -66,6 +80,10 @@ _AUTO_ABSORB_FRAMES = 10
 # between a still run and the surrounding background for it to be taken as uncovered background.
 _GHOST_CHROMA = 0.06
 _GHOST_BRIGHTNESS = (0.7, 1.4)
+# The same where the room was filled in around someone who stood there (``unseen_``): the guess
+# is good to a few percent, while a grey shirt on a grey floor is within the wide limits above.
+_UNSEEN_GHOST_CHROMA = 0.03
+_UNSEEN_GHOST_BRIGHTNESS = (0.88, 1.12)
 # Bytes of float32 work memory per row block in the robust median pass.
 _BLOCK_BYTES = 64 * 1024 * 1024
 
@@ -122,6 +140,15 @@ class HorprasertBackground:
     shadow_learning_rate : rate for pixels labelled shadow or highlight (foreground: never).
     min_spread : lower bound on each channel's spread s_c, grey levels; keeps the normalisation
         finite for pixels that were constant in training (saturated, black, codec-flattened).
+    max_highlight_brightness : brightest highlight accepted, as a multiple of the background
+        brightness (raw alpha); brighter pixels are foreground. A change of light brightens a
+        surface by tens of percent; a white shirt on a grey floor has the floor's chromaticity
+        too, and is far brighter.
+    unseen_min_shadow_brightness : ``min_shadow_brightness`` at the ``unseen_`` pixels: where
+        someone stood through the training frames they most likely still stand, and a grey
+        shirt there is a darker shade of the grey floor filled in around them, not a shadow
+        (``people.fit_around_people`` keeps their cast shadow, on the ground at their feet, out
+        of those pixels).
     min_shadow_brightness : darkest shadow accepted, as a fraction of the background brightness
         (raw alpha); darker pixels are foreground. Sets the automatic tau_alpha_lo per pixel.
     tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo : fixed thresholds; None (default) chooses them
@@ -136,6 +163,12 @@ class HorprasertBackground:
         empty frames, whose model is trusted. A still person is absorbed this way too; that is
         the price of learning with people in view.
     absorb_k : tolerance of the still test, in spreads s per channel (noise, slow drift).
+    min_free_frac : in ``fit(exclude=...)``, a pixel with fewer training samples left than this
+        fraction of the frames (and at least 3) is taken as not seen: its E and s are filled in
+        from the pixels around it. A person the detector missed in some frames is in the
+        samples left there; over half of the frames they would be the median.
+    unseen_spread_gain : those pixels' filled-in spread is widened by this factor (a guess from
+        the surroundings is less certain than a measurement).
     max_threshold_samples : number of normalised distortion samples drawn to set the thresholds.
     random_state : seed of that subsample.
 
@@ -143,6 +176,7 @@ class HorprasertBackground:
     -----------------
     mean_ : (H, W, 3) float32 expected colour E, grey levels.  spread_ : (H, W, 3) float32 s.
     a_, b_ : (H, W) float32 RMS brightness / chromaticity distortion.  thresholds_ : dict.
+    unseen_ : (H, W) bool, pixels no training sample showed (``fit(exclude=...)``), filled in.
     """
 
     def __init__(
@@ -153,6 +187,8 @@ class HorprasertBackground:
         shadow_learning_rate: float = 0.01,
         min_spread: float = 1.5,
         min_shadow_brightness: float = 0.4,
+        max_highlight_brightness: float = 1.5,
+        unseen_min_shadow_brightness: float = 0.6,
         tau_cd: float | None = None,
         tau_alpha1: float | None = None,
         tau_alpha2: float | None = None,
@@ -160,6 +196,8 @@ class HorprasertBackground:
         robust_inlier_k: float = 3.5,
         absorb_frames: int | None = None,
         absorb_k: float = 4.0,
+        min_free_frac: float = 0.5,
+        unseen_spread_gain: float = 2.0,
         max_threshold_samples: int = 2_000_000,
         random_state: int | None = 0,
     ) -> None:
@@ -184,6 +222,13 @@ class HorprasertBackground:
         self.shadow_learning_rate = shadow_learning_rate
         self.min_spread = min_spread
         self.min_shadow_brightness = min_shadow_brightness
+        if max_highlight_brightness <= 1.0:
+            raise ValueError(f"max_highlight_brightness must be > 1, got {max_highlight_brightness}")
+        if not min_shadow_brightness <= unseen_min_shadow_brightness < 1.0:
+            raise ValueError("unseen_min_shadow_brightness must be in [min_shadow_brightness, 1), got "
+                             f"{unseen_min_shadow_brightness}")
+        self.max_highlight_brightness = max_highlight_brightness
+        self.unseen_min_shadow_brightness = unseen_min_shadow_brightness
         self.tau_cd = tau_cd
         self.tau_alpha1 = tau_alpha1
         self.tau_alpha2 = tau_alpha2
@@ -192,7 +237,15 @@ class HorprasertBackground:
             raise ValueError(f"absorb_frames must be >= 0 frames (0: never) or None (auto), got {absorb_frames}")
         if absorb_k <= 0:
             raise ValueError(f"absorb_k must be > 0 spreads, got {absorb_k}")
+        if not 0.0 <= min_free_frac <= 1.0:
+            raise ValueError(f"min_free_frac must be in [0, 1], got {min_free_frac}")
+        if unseen_spread_gain < 1.0:
+            raise ValueError(f"unseen_spread_gain must be >= 1, got {unseen_spread_gain}")
         self.robust_inlier_k = robust_inlier_k
+        self.min_free_frac = min_free_frac
+        self.unseen_spread_gain = unseen_spread_gain
+        self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
+        self._unseen_u8: np.ndarray | None = None
         self.absorb_frames = absorb_frames
         self.absorb_k = absorb_k
         self.absorb_frames_: int = 0
@@ -232,31 +285,44 @@ class HorprasertBackground:
         self._require_fitted()
         return self._mu.shape[1:]
 
-    def fit(self, frames: np.ndarray | Iterable[np.ndarray], robust: bool = False) -> "HorprasertBackground":
+    def fit(self, frames: np.ndarray | Iterable[np.ndarray], robust: bool = False,
+            exclude: np.ndarray | None = None) -> "HorprasertBackground":
         """Learn the background from training frames (N, H, W, 3) uint8 BGR, N >= 2.
 
         ``robust=False``: frames are empty of people; E and s are the sample mean and standard
         deviation (Horprasert eqs. 1-4). ``robust=True``: people may be present; E is the
         per-pixel temporal median and s = 1.4826 * MAD, and a, b and the thresholds use only the
         samples within ``robust_inlier_k`` spreads of the median. Pixels covered by a person in
-        more than half of the frames cannot be recovered this way.
+        more than half of the frames cannot be recovered this way: pass ``exclude``.
+
+        ``exclude``: (N, H, W) bool, True where a sample is known not to show the background
+        (a detected person, see ``people.fit_around_people``). Every statistic then uses only
+        the other samples; a pixel with fewer than ``min_free_frac`` of the frames left was not seen
+        (someone stood on it throughout) and its E and s are filled in from the pixels around it
+        (``cv2.inpaint``), s widened by ``unseen_spread_gain``; ``unseen_`` marks those pixels.
         """
         stack = as_frame_stack(frames)
         n = stack.shape[0]
         if n < 2:
             raise ValueError(f"fit needs at least 2 frames, got {n}")
+        free = None
+        if exclude is not None:
+            exclude = np.asarray(exclude, bool)
+            if exclude.shape != stack.shape[:3]:
+                raise ValueError(f"exclude must be (N, H, W) bool of shape {stack.shape[:3]}, got {exclude.shape}")
+            free = ~exclude
         if robust:
-            mean, spread = _median_mad(stack)
+            mean, spread, n_free = _median_mad(stack, free)
         else:
-            acc = np.zeros(stack.shape[1:], np.float64)
-            acc2 = np.zeros(stack.shape[1:], np.float64)
-            for f in stack:
-                ff = f.astype(np.float64)
-                acc += ff
-                acc2 += ff * ff
-            m = acc / n
-            mean = m.astype(np.float32)
-            spread = np.sqrt(np.maximum(acc2 / n - m * m, 0.0) * n / (n - 1)).astype(np.float32)
+            mean, spread, n_free = _mean_std(stack, free)
+        unseen = n_free < min(max(3.0, self.min_free_frac * n), n)
+        if unseen.all():
+            raise ValueError("exclude leaves no pixel with enough background samples to learn from")
+        if unseen.any():
+            mean, spread = _fill_unseen(mean, spread, unseen, self.unseen_spread_gain)
+        self.unseen_ = unseen
+        # 255 where seen, 0 where filled in: the mask of the shadow-learning step (None: all seen)
+        self._unseen_u8 = np.where(unseen, 0, 255).astype(np.uint8) if unseen.any() else None
         self._mu = np.ascontiguousarray(np.moveaxis(mean, -1, 0), np.float32)
         s2 = np.maximum(np.moveaxis(spread, -1, 0), self.min_spread).astype(np.float32) ** 2
         self._var = np.ascontiguousarray(s2)
@@ -277,9 +343,14 @@ class HorprasertBackground:
         sum_b = np.zeros((h, w), np.float64)
         count = np.zeros((h, w), np.float64)
         inliers = []
-        for f in stack:
+        for k, f in enumerate(stack):
             alpha, cd2, _ = self._distortions(f)
             inl = self._inlier_mask(f) if robust else None
+            if free is not None:
+                # an unseen pixel's few samples are compared with a filled-in E: they would
+                # inflate its a and b; it takes the typical ones instead
+                ok = free[k] & ~unseen
+                inl = ok if inl is None else inl & ok
             wgt = np.ones((h, w), np.float32) if inl is None else inl.astype(np.float32)
             inliers.append(inl)
             sum_a += wgt * (alpha - 1.0) ** 2
@@ -379,6 +450,7 @@ class HorprasertBackground:
         cv2.bitwise_and(labels, cv2.bitwise_not(band), dst=labels)
         fg = cv2.bitwise_or(cv2.compare(cd2, self._cd2_max, cv2.CMP_GT),
                             cv2.compare(alpha, self._alpha_min, cv2.CMP_LT))
+        cv2.bitwise_or(fg, cv2.compare(alpha, self._alpha_max, cv2.CMP_GT), dst=fg)
         cv2.bitwise_or(labels, cv2.bitwise_and(fg, FOREGROUND), dst=labels)
         return labels
 
@@ -412,6 +484,10 @@ class HorprasertBackground:
             return
         bg = cv2.compare(labels, BACKGROUND, cv2.CMP_EQ)  # 0 / 255 masks
         sh = cv2.inRange(labels, SHADOW, HIGHLIGHT)
+        if self._unseen_u8 is not None:
+            # where someone stood through training, a shade of the filled-in floor is more likely
+            # their clothing than a shadow: learn only what is plainly background there
+            cv2.bitwise_and(sh, self._unseen_u8, dst=sh)
         k = self.shadow_learning_rate / lr if lr > 0.0 else 0.0
         # cv2.accumulateWeighted is dst <- (1 - r) dst + r src under a mask, in place.
         last = self._last_alpha
@@ -513,6 +589,10 @@ class HorprasertBackground:
         ratio = s_run / s_near
         sel = ((cnt >= 0.1) & (chroma <= _GHOST_CHROMA)
                & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1]))
+        if self.unseen_ is not None:
+            tight = self.unseen_[ys, xs]
+            sel &= ~tight | ((chroma <= _UNSEEN_GHOST_CHROMA) & (ratio > _UNSEEN_GHOST_BRIGHTNESS[0])
+                             & (ratio < _UNSEEN_GHOST_BRIGHTNESS[1]))
         if not sel.any():
             return False
         ys, xs = ys[sel], xs[sel]
@@ -533,8 +613,10 @@ class HorprasertBackground:
             for k in (
                 "detection_rate", "learning_rate", "spread_learning_rate", "shadow_learning_rate",
                 "min_spread",
-                "min_shadow_brightness", "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
-                "robust_inlier_k", "absorb_frames", "absorb_k", "max_threshold_samples", "random_state",
+                "min_shadow_brightness", "max_highlight_brightness", "unseen_min_shadow_brightness",
+                "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
+                "robust_inlier_k", "absorb_frames", "absorb_k", "min_free_frac", "unseen_spread_gain",
+                "max_threshold_samples", "random_state",
             )
         }
 
@@ -571,10 +653,14 @@ class HorprasertBackground:
         self._alpha_hi = (1.0 + t["tau_alpha1"] * self.a_).astype(np.float32)
         self._alpha_lo = (1.0 + t["tau_alpha2"] * self.a_).astype(np.float32)
         if self.tau_alpha_lo is None:
-            self._alpha_min = np.minimum(np.float32(self.min_shadow_brightness), self._alpha_lo)
+            floor = np.full(self.a_.shape, np.float32(self.min_shadow_brightness))
+            if self.unseen_ is not None:
+                floor[self.unseen_] = self.unseen_min_shadow_brightness
+            self._alpha_min = np.minimum(floor, self._alpha_lo)
         else:
             self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
         self._cd2_max = ((t["tau_cd"] * self.b_) ** 2).astype(np.float32)
+        self._alpha_max = np.maximum(np.float32(self.max_highlight_brightness), self._alpha_hi)
 
     def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32, and the frame's three float32
@@ -610,15 +696,90 @@ def _float_planes(frame: np.ndarray) -> list[np.ndarray]:
     return [p.astype(np.float32) for p in cv2.split(frame)]
 
 
-def _median_mad(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per-pixel temporal median and 1.4826 * MAD of (N, H, W, 3) uint8, row block by row block."""
+def _median_mad(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-pixel temporal median and 1.4826 * MAD of (N, H, W, 3) uint8, row block by row block.
+
+    ``free`` (N, H, W) bool: only those samples count (None: all). Returns median (H, W, 3) and
+    spread (H, W, 3) float32, and the number of samples used (H, W) int (0: both are 0 there).
+    """
     n, h, w, _ = stack.shape
-    rows = max(1, int(_BLOCK_BYTES // (n * w * 3 * 4)))
-    med = np.empty((h, w, 3), np.float32)
-    mad = np.empty((h, w, 3), np.float32)
+    if free is None:
+        rows = max(1, int(_BLOCK_BYTES // (n * w * 3 * 4)))
+        med = np.empty((h, w, 3), np.float32)
+        mad = np.empty((h, w, 3), np.float32)
+        for y0 in range(0, h, rows):
+            blk = stack[:, y0 : y0 + rows].astype(np.float32)
+            m = np.median(blk, axis=0)
+            med[y0 : y0 + rows] = m
+            mad[y0 : y0 + rows] = np.median(np.abs(blk - m), axis=0) * _MAD_TO_SIGMA
+        return med, mad, np.full((h, w), n, np.int64)
+    count = free.sum(axis=0)
+    # Excluded samples become +inf and sort last: the median of the c free ones is then the mean
+    # of the sorted values at (c - 1) // 2 and c // 2, gathered per pixel (no Python loop).
+    rows = max(1, int(_BLOCK_BYTES // (3 * n * w * 3 * 4)))
+    med = np.zeros((h, w, 3), np.float32)
+    mad = np.zeros((h, w, 3), np.float32)
     for y0 in range(0, h, rows):
-        blk = stack[:, y0 : y0 + rows].astype(np.float32)
-        m = np.median(blk, axis=0)
-        med[y0 : y0 + rows] = m
-        mad[y0 : y0 + rows] = np.median(np.abs(blk - m), axis=0) * _MAD_TO_SIGMA
-    return med, mad
+        sl = slice(y0, y0 + rows)
+        blk = stack[:, sl].astype(np.float32)
+        out = ~free[:, sl, :, None]
+        c = np.broadcast_to(count[None, sl, :, None], (1, *blk.shape[1:]))
+        m = _masked_median(np.where(out, np.inf, blk), c)
+        dev = np.where(out, np.inf, np.abs(blk - m[None]))
+        med[sl] = m
+        mad[sl] = _masked_median(dev, c) * _MAD_TO_SIGMA
+    seen = count > 0
+    med[~seen] = 0.0
+    mad[~seen] = 0.0
+    return med, mad, count
+
+
+def _masked_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """Median along axis 0 of (N, ...) values whose excluded entries are +inf; ``count`` (1, ...)
+    the finite entries per position (>= 1 where the result is used)."""
+    srt = np.sort(values, axis=0)
+    last = values.shape[0] - 1
+    lo = np.take_along_axis(srt, np.clip((count - 1) // 2, 0, last), axis=0)[0]
+    hi = np.take_along_axis(srt, np.clip(count // 2, 0, last), axis=0)[0]
+    with np.errstate(invalid="ignore"):
+        out = 0.5 * (lo + hi)
+    return np.where(np.isfinite(out), out, 0.0).astype(np.float32)
+
+
+def _mean_std(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-pixel sample mean and standard deviation of (N, H, W, 3) uint8 over the ``free``
+    (N, H, W) bool samples (None: all); returns mean, std (H, W, 3) float32 and counts (H, W)."""
+    n = stack.shape[0]
+    acc = np.zeros(stack.shape[1:], np.float64)
+    acc2 = np.zeros(stack.shape[1:], np.float64)
+    for k, f in enumerate(stack):
+        ff = f.astype(np.float64)
+        if free is not None:
+            ff *= free[k][..., None]
+        acc += ff
+        acc2 += ff * ff
+    count = np.full(stack.shape[1:3], n, np.int64) if free is None else free.sum(axis=0)
+    c = np.maximum(count, 1)[..., None].astype(np.float64)
+    m = acc / c
+    var = np.maximum(acc2 / c - m * m, 0.0) * c / np.maximum(c - 1.0, 1.0)
+    return m.astype(np.float32), np.sqrt(var).astype(np.float32), count
+
+
+def _fill_unseen(mean: np.ndarray, spread: np.ndarray, unseen: np.ndarray,
+                 spread_gain: float) -> tuple[np.ndarray, np.ndarray]:
+    """E and s (H, W, 3) float32 with the ``unseen`` (H, W) pixels filled in from around them.
+
+    Telea inpainting (``cv2.inpaint``) continues the colours of the surrounding room into the
+    hole, channel by channel; the spread likewise, times ``spread_gain``: a guess is less certain
+    than a measurement, and the floor's texture is not continued.
+    """
+    hole = unseen.astype(np.uint8)
+    # radius: a few pixels of support around each point of the hole's front
+    radius = 5
+    mean = mean.copy()
+    spread = spread.copy()
+    for c in range(3):
+        mean[..., c] = cv2.inpaint(mean[..., c], hole, radius, cv2.INPAINT_TELEA)
+        s = cv2.inpaint(spread[..., c], hole, radius, cv2.INPAINT_TELEA)
+        spread[..., c] = np.where(unseen, s * np.float32(spread_gain), spread[..., c])
+    return mean, spread

@@ -78,6 +78,9 @@ class Silhouette(Node):
         "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people",
                               min=2, max=100_000),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
+        "people_aware": Param(bool, True, "horprasert: find the people in the training frames (OpenCV's HOG people "
+                              "detector) and learn the room around them, so that people standing still "
+                              "from the first frame are not learnt as background"),
         "absorb_frames": Param(int, -1, "horprasert: still frames before a ghost (room uncovered by someone who "
                                "stood in the training frames) is absorbed; -1: 10 after a robust fit, "
                                "never after a plain one; 0: never", min=-1, max=100_000),
@@ -110,6 +113,7 @@ class Silhouette(Node):
         backend_params: dict[str, Any] = {}
         if p["backend"] == "horprasert":
             backend_params = {"train_frames": p["train_frames"], "robust": p["robust"],
+                              "people_aware": p["people_aware"],
                               "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"]}
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}

@@ -154,6 +154,24 @@ def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
     return cap
 
 
+def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> np.ndarray:
+    """The first ``max_frames`` (None: all) frames of a video that decode, (N, H, W, 3) uint8 BGR.
+    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode."""
+    cap = _open_video(path)
+    frames = []
+    try:
+        while max_frames is None or len(frames) < max_frames:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            frames.append(frame)
+    finally:
+        cap.release()
+    if not frames:
+        raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
+    return np.stack(frames)
+
+
 def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
     """(frame rate, frame count) a video file declares (0 where it declares none; the count is a
     guide for progress, not a promise)."""

@@ -165,6 +165,9 @@ class PersonTracker:
         area, is split off as a new person. Their template is not updated from a region grown past
         ``NEWCOMER_FREEZE`` times the usual area, so that it keeps their own shape while the
         newcomer emerges (0 disables all of this).
+    min_upright : a region that no one claims starts a new person only when its height is at
+        least this many times its width (after ``group_stacked`` has joined the parts of one
+        person): people stand upright, cars, barriers and ghost strips lie wide (0: any region).
     """
 
     def __init__(
@@ -178,6 +181,7 @@ class PersonTracker:
         newcomer_growth: float = 1.6,
         newcomer_margin: float = 0.1,
         newcomer_min_frac: float = 0.4,
+        min_upright: float = 1.0,
     ) -> None:
         if min_area < 1:
             raise ValueError(f"min_area must be >= 1 pixel, got {min_area}")
@@ -201,6 +205,9 @@ class PersonTracker:
         self.newcomer_growth = newcomer_growth
         self.newcomer_margin = newcomer_margin
         self.newcomer_min_frac = newcomer_min_frac
+        if min_upright < 0:
+            raise ValueError(f"min_upright must be >= 0 (height / width), got {min_upright}")
+        self.min_upright = min_upright
         self.reset()
 
     def reset(self) -> None:
@@ -308,7 +315,9 @@ class PersonTracker:
                 assigned[owner] = (*_union(assigned[owner][:3], (crop, x0, y0)), assigned[owner][3])
             else:
                 unowned.append((crop, x0, y0))
-        fresh += group_stacked(unowned)
+        # a new person must look like one: a standing person, or two side by side, is taller than
+        # wide; a car, a barrier, the strip of a ghost along a skirting board or a kerb is not
+        fresh += [g for g in group_stacked(unowned) if g[0].shape[0] >= self.min_upright * g[0].shape[1]]
 
         # 4. Update tracks, start new ones, retire the long unseen.
         labels = np.zeros((h_img, w_img), np.int32)

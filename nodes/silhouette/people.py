@@ -1,0 +1,288 @@
+"""People in view while the background is learnt: find them, and learn the room around them.
+
+A robust (median) fit learns whatever stays put for most of the training frames, so two people
+standing and talking become part of the background: later they come out as fragments and the
+room where they stood as ghosts. Here they are found first and kept out of the statistics:
+
+1. ``PeopleDetector``: OpenCV's shipped HOG people detector (Dalal & Triggs 2005, the default
+   SVM; no downloaded weights) on a few of the training frames. The frame is padded with its
+   median colour first, so that people whose head or feet touch the image border, the usual case
+   for an elevated camera close to the people, still fit the detector's window with its margins.
+2. ``fit_around_people``: a first fit leaves the people's boxes out of the frames near those they
+   were found in, and out of every frame that still shows a person who stands still
+   (``HorprasertBackground.fit`` with ``exclude``; the room seen behind them in too few frames is
+   filled in from around it). The model then separates each person from the rest of their box,
+   frame by frame, and a second fit leaves out only the people themselves (grown by a rim), so
+   the room beside them is learnt from its own pixels. Walkers need none of this (the median
+   copes with them); a detection on the still room is not trusted without a sure score or
+   movement in its box.
+
+Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h) int.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .background import FOREGROUND, HorprasertBackground, as_frame_stack
+
+#: the person inside a detection window of OpenCV's HOG people detector (trained on 64 x 128
+#: INRIA windows, the person about 96 pixels tall in the middle): (x0, y0, x1, y1) as fractions
+#: of the window, generous in x for arms held out
+_PERSON_IN_WINDOW = (0.1, 0.0, 0.9, 0.95)
+#: in a box whose room was filled in from around it, a pixel this much darker or brighter than
+#: the filled-in room (raw brightness distortion) is taken for the person: the guess is good to
+#: a few percent on a plain floor, a person is rarely that close to it in brightness and colour
+_PERSON_BRIGHTNESS = 0.2
+#: a detection is taken for a person when the detector is sure of it (score) or something in its
+#: box moves during the training frames: a fraction of its pixels change by more than the grey
+#: levels below from their median at least once (a standing person sways, breathes, turns their
+#: head; a false detection on the room, a parked car or a barrier does none of that)
+_SURE_SCORE = 1.0
+_MOVED_GREY = 30
+_MOVED_FRAC = 0.01
+#: a box found in one frame holds the same still person in another frame when fewer than this
+#: fraction of its pixels changed between the two (a person fills about half of their box: a
+#: walker who has left it changes far more)
+_SAME_FRAC = 0.2
+#: the bottom fraction of a person's box that holds their feet, and their shadow on the ground
+_FEET_BAND = 0.25
+#: the score a still person (``_still_person``) reaches at least once
+_STILL_SCORE = 0.75
+
+
+class PeopleDetector:
+    """OpenCV's HOG people detector (``cv2.HOGDescriptor_getDefaultPeopleDetector``).
+
+    Parameters
+    ----------
+    hit_threshold : SVM margin a window must pass (``detectMultiScale``'s hitThreshold); lower
+        finds more people and more clutter.
+    min_score : smallest grouped detection weight kept.
+    scale : step between the pyramid's scales.
+    stride : window step, pixels (multiple of 8, the HOG cell).
+    pad_frac : padding added on every side, as a fraction of the frame height, with the frame's
+        median colour (a replicated or mirrored border draws false edges).
+    """
+
+    def __init__(self, hit_threshold: float = 0.0, min_score: float = 0.3, scale: float = 1.05,
+                 stride: int = 8, pad_frac: float = 0.15) -> None:
+        if scale <= 1.0:
+            raise ValueError(f"scale must be > 1, got {scale}")
+        if stride < 1 or stride % 8:
+            raise ValueError(f"stride must be a positive multiple of 8 pixels, got {stride}")
+        if not 0.0 <= pad_frac <= 1.0:
+            raise ValueError(f"pad_frac must be in [0, 1], got {pad_frac}")
+        self.hit_threshold = hit_threshold
+        self.min_score = min_score
+        self.scale = scale
+        self.stride = stride
+        self.pad_frac = pad_frac
+        self._hog = cv2.HOGDescriptor()
+        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+
+    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """People in a uint8 BGR frame (H, W, 3).
+
+        Returns (boxes (K, 4) int32 (x, y, w, h) of each person, clipped to the frame, and their
+        detector scores (K,) float32). A box is the person's part of the detection window.
+        """
+        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
+            raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
+        h, w = frame.shape[:2]
+        pad = int(round(self.pad_frac * h))
+        colour = [float(v) for v in np.median(frame[::4, ::4].reshape(-1, 3), axis=0)]
+        padded = cv2.copyMakeBorder(frame, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=colour)
+        if min(padded.shape[:2]) < 128 or padded.shape[1] < 64:
+            return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
+        rects, weights = self._hog.detectMultiScale(
+            padded, hitThreshold=self.hit_threshold, winStride=(self.stride, self.stride),
+            padding=(0, 0), scale=self.scale)
+        rects = np.asarray(rects, np.float64).reshape(-1, 4)
+        scores = np.asarray(weights, np.float32).reshape(-1)
+        keep = scores >= self.min_score
+        rects, scores = rects[keep], scores[keep]
+        fx0, fy0, fx1, fy1 = _PERSON_IN_WINDOW
+        x0 = rects[:, 0] + fx0 * rects[:, 2] - pad
+        y0 = rects[:, 1] + fy0 * rects[:, 3] - pad
+        x1 = rects[:, 0] + fx1 * rects[:, 2] - pad
+        y1 = rects[:, 1] + fy1 * rects[:, 3] - pad
+        x0, x1 = np.clip(x0, 0, w), np.clip(x1, 0, w)
+        y0, y1 = np.clip(y0, 0, h), np.clip(y1, 0, h)
+        boxes = np.stack([x0, y0, x1 - x0, y1 - y0], axis=1).round().astype(np.int32)
+        ok = (boxes[:, 2] > 0) & (boxes[:, 3] > 0)
+        return boxes[ok], scores[ok]
+
+
+def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
+    """Fraction of the pixels of box (x, y, w, h) in frames (N, H, W, 3) uint8 whose colour (any
+    channel) differs by more than ``_MOVED_GREY`` grey levels from its temporal median in at least
+    one frame."""
+    x, y, w, h = (int(v) for v in box)
+    blk = frames[:, y : y + h, x : x + w].astype(np.int16)
+    if blk.size == 0:
+        return 0.0
+    dev = np.abs(blk - np.median(blk, axis=0).astype(np.int16)).max(axis=(0, 3))
+    return float(np.mean(dev > _MOVED_GREY))
+
+
+def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes (K, 4) and scores (K,) of the detections that are sure or hold movement
+    (``_SURE_SCORE``, ``_MOVED_FRAC``)."""
+    keep = [k for k in range(len(boxes))
+            if scores[k] >= _SURE_SCORE or moving_fraction(frames, boxes[k]) >= _MOVED_FRAC]
+    return boxes[keep], scores[keep]
+
+
+def _boxes_for(frames: np.ndarray, j: int, found: dict[int, tuple[np.ndarray, np.ndarray]],
+               step: int) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes (K, 4) in which frame j is searched for people, and whether each holds a person
+    standing still (K,) bool. They are the boxes detected within ``step`` frames of j, and the
+    boxes of a still person (``_still_person``) detected further away whose content frame j
+    still shows (fewer than ``_SAME_FRAC`` of the box's pixels changed by more than
+    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,))."""
+    out, still = [], []
+    for k, (boxes, scores) in found.items():
+        for b, s in zip(boxes, scores):
+            stays = _still_person(found, k, b, s) and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
+            if abs(j - k) <= step or stays:
+                out.append(b)
+                still.append(stays)
+    return np.array(out, np.int32).reshape(-1, 4), np.array(still, bool)
+
+
+def _still_person(found: dict[int, tuple[np.ndarray, np.ndarray]], k: int, box: np.ndarray, score: float) -> bool:
+    """Whether a box found in frame k is found again (IoU >= 0.5) in another frame, and surely
+    (score >= ``_STILL_SCORE``) in at least one of them: someone standing still is found again
+    and again; a weak detection on the room's clutter, which would be carried to every frame
+    and learnt as a hole in the room, may be found twice too, but not surely."""
+    again = [s for j, (boxes, scores) in found.items() if j != k
+             for other, s in zip(boxes, scores) if _iou(box, other) >= 0.5]
+    return bool(again) and max(again + [score]) >= _STILL_SCORE
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two boxes (x, y, w, h)."""
+    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
+    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
+    inter = max(0, x1 - x0) * max(0, y1 - y0)
+    return float(inter) / float(a[2] * a[3] + b[2] * b[3] - inter)
+
+
+def _changed_fraction(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> float:
+    """Fraction of box (x, y, w, h) pixels whose colour (any channel) differs by more than
+    ``_MOVED_GREY`` grey levels between frames a and b (H, W, 3) uint8."""
+    x, y, w, h = (int(v) for v in box)
+    d = cv2.absdiff(a[y : y + h, x : x + w], b[y : y + h, x : x + w])
+    return float(np.mean(d.max(axis=2) > _MOVED_GREY)) if d.size else 1.0
+
+
+def _feet_bands(boxes: np.ndarray) -> np.ndarray:
+    """The bottom ``_FEET_BAND`` of each box (K, 4) (x, y, w, h), grown down by the same, (K, 4)."""
+    b = np.asarray(boxes, np.float64).reshape(-1, 4)
+    band = _FEET_BAND * b[:, 3]
+    return np.stack([b[:, 0], b[:, 1] + b[:, 3] - band, b[:, 2], 2.0 * band], axis=1)
+
+
+def box_mask(shape: tuple[int, int], boxes: np.ndarray, grow: float = 0.0) -> np.ndarray:
+    """(H, W) bool, True inside any of the boxes (K, 4) (x, y, w, h), each grown on every side by
+    ``grow`` times its height (pixels, clipped to the image)."""
+    h, w = shape
+    out = np.zeros((h, w), bool)
+    for x, y, bw, bh in np.asarray(boxes).reshape(-1, 4):
+        g = grow * bh
+        xa, ya = int(max(0, np.floor(x - g))), int(max(0, np.floor(y - g)))
+        xb, yb = int(min(w, np.ceil(x + bw + g))), int(min(h, np.ceil(y + bh + g)))
+        out[ya:yb, xa:xb] = True
+    return out
+
+
+def fit_around_people(model: HorprasertBackground, frames: np.ndarray | list[np.ndarray],
+                      detector: PeopleDetector | None = None, detect_every: int = 5,
+                      box_grow: float = 0.05, person_grow: float = 0.03) -> np.ndarray:
+    """Fit ``model`` (robustly) on training frames in which people may stand still.
+
+    Parameters
+    ----------
+    model : the background model to fit (its parameters are kept).
+    frames : (N, H, W, 3) uint8 BGR training frames, N >= 2.
+    detector : people detector (default ``PeopleDetector()``).
+    detect_every : the detector runs on every this many-th frame (and the last). A frame is
+        searched for people in the boxes found within this many frames of it, and in any other
+        box whose content it shares (someone standing there still: the detector misses people
+        now and then, in a turn or with an arm across the body), but not where a walker was.
+    box_grow : the first fit leaves out each box grown by this fraction of its height.
+    person_grow : the second fit leaves out each person's pixels grown by this fraction of their
+        box height (the model's outline of a person misses a blurred rim).
+
+    Returns
+    -------
+    (N, H, W) bool, the samples left out of the final fit (the people found; their boxes when
+    no one stood still long enough to need the second fit). With no one detected it is all False
+    and the fit is the plain robust one.
+    """
+    stack = as_frame_stack(frames)
+    n, h, w = stack.shape[:3]
+    det = detector or PeopleDetector()
+    step = max(1, int(detect_every))
+    at = sorted(set(range(0, n, step)) | {n - 1})
+    found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores)
+    near = [_boxes_for(stack, j, found, step) for j in range(n)]
+    if not any(len(b) for b, _ in near):
+        model.fit(stack, robust=True)
+        return np.zeros((n, h, w), bool)
+    boxes = np.stack([box_mask((h, w), b, box_grow) for b, _ in near])
+    model.fit(stack, robust=True, exclude=boxes)
+    if not model.unseen_.any():
+        # everyone found moved enough for the room behind them to be seen in most frames (the
+        # robust median copes with them): the fit without their boxes is the answer
+        return boxes
+    people = np.stack([_person_pixels(model, stack[j], boxes[j], box_mask((h, w), b[still], box_grow), b, person_grow)
+                       for j, (b, still) in enumerate(near)])
+    model.fit(stack, robust=True, exclude=people)
+    return people
+
+
+def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.ndarray, still: np.ndarray,
+                   box_list: np.ndarray, grow: float) -> np.ndarray:
+    """(H, W) bool: the pixels of one training frame, inside the people's (grown) boxes, that the
+    first fit does not explain as the room, as solid regions grown by ``grow`` times the typical
+    box height. ``boxes``, ``still``: (H, W) bool masks of all boxes and of those of people
+    standing still; ``box_list`` (K, 4) the boxes.
+
+    Where the first fit saw the room, it is right, and what differs from it is a person. Where it
+    saw no room (the boxes filled in from around them), a thing the fill does not continue (a
+    sign, a bin) differs too: there only a person standing still, who has to be left out, is
+    taken. And as the fill is a guess, a pixel counts there when it is foreground or differs in
+    brightness by more than ``_PERSON_BRIGHTNESS``: a darker or lighter shade of the floor's
+    colour is more likely a grey shirt than the room."""
+    if not boxes.any():
+        return boxes
+    alpha_hat, cd_hat = model.distortions(frame)
+    alpha = 1.0 + alpha_hat * model.a_
+    fg = model.apply(frame) == FOREGROUND
+    changed = fg | (np.abs(alpha - 1.0) > _PERSON_BRIGHTNESS)
+    # At the feet, a darker shade of the floor (its chromaticity, no darker than a shadow can be)
+    # is the person's cast shadow: it is not left out, so that it stays a shadow there. The room
+    # under it is learnt shadowed; when it is uncovered the model absorbs the ghost.
+    feet = box_mask(frame.shape[:2], _feet_bands(box_list), 0.0)
+    shade = feet & (alpha < 1.0) & (alpha >= model.min_shadow_brightness) & (cd_hat <= model.thresholds_["tau_cd"])
+    changed &= ~shade
+    r = max(1, int(round(grow * float(np.median(box_list[:, 3])))))
+    return _solid_regions(changed & boxes & (~model.unseen_ | still), r) & boxes
+
+
+def _solid_regions(mask: np.ndarray, r: int) -> np.ndarray:
+    """A person's (H, W) bool pixels made solid: speckle opened away, thin horizontal runs removed
+    (the edges of the room the fill did not continue, a skirting board or a kerb, not a standing
+    person: an opening with a vertical line of 2r + 1 pixels), gaps closed and holes filled (disk
+    of radius r), and the result grown by r pixels."""
+    m = cv2.morphologyEx(mask.view(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((2 * r + 1, 1), np.uint8))
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk)
+    contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    m = np.zeros_like(m)
+    cv2.drawContours(m, contours, -1, 1, thickness=cv2.FILLED)
+    return cv2.dilate(m, disk).astype(bool)

@@ -1,0 +1,213 @@
+"""People in view while the background is learnt: the masked fit, the detector, the whole extractor.
+
+Synthetic scene: a smoothly shaded room (a floor's light falls off over tens of pixels) with
+sensor noise (sigma 2.5 grey levels) and a person-like ellipse of a colour the room never has, standing still through every training frame;
+the detector there is a stand-in that returns the person's box. Real footage: UT-Interaction clip
+0_1_4 (two people standing from the first frame) with its reference keypoints, when present.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.silhouette.background import (
+    BACKGROUND,
+    FOREGROUND,
+    HIGHLIGHT,
+    HorprasertBackground,
+    _median_mad,
+)
+from nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
+from nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+
+from tests.shared_data import DATA
+from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W
+from tests.test_silhouette_background import person_mask as ellipse
+
+ROOM = np.stack(
+    [
+        90 + 30 * np.sin(XX / 40.0) + 10 * np.cos(YY / 30.0),
+        130 + 30 * np.cos(YY / 45.0 + XX / 60.0),
+        110 + 25 * np.sin((XX + YY) / 50.0),
+    ],
+    axis=-1,
+).astype(np.float32)
+
+
+def person_mask(cx: float, rx: float = 12.0, ry: float = 35.0) -> np.ndarray:
+    """(H, W) bool: the standing person, an upright ellipse centred at (cx, 60)."""
+    return ellipse(cx, rx=rx, ry=ry)
+
+
+def render(rng: np.random.Generator, person_x: float | None = None, sway: float = 0.0) -> np.ndarray:
+    f = ROOM + rng.normal(0.0, 2.5, ROOM.shape)
+    if person_x is not None:
+        f[person_mask(person_x + sway)] = PERSON_BGR
+    return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+
+class BoxDetector:
+    """Stand-in for ``PeopleDetector``: the same boxes and scores on every frame."""
+
+    def __init__(self, boxes: list[tuple[int, int, int, int]], score: float = 2.0) -> None:
+        self.boxes = np.array(boxes, np.int32).reshape(-1, 4)
+        self.score = score
+
+    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.boxes, np.full(len(self.boxes), self.score, np.float32)
+
+
+@pytest.fixture(scope="module")
+def standing() -> np.ndarray:
+    """30 training frames: the person stands at x = 50 throughout, swaying by a pixel."""
+    rng = np.random.default_rng(0)
+    return np.stack([render(rng, 50.0, sway=float(k % 3 - 1)) for k in range(30)])
+
+
+def test_masked_median_and_mad_use_only_the_free_samples():
+    rng = np.random.default_rng(1)
+    stack = rng.integers(0, 256, (9, 4, 5, 3)).astype(np.uint8)
+    free = rng.random((9, 4, 5)) > 0.4
+    free[:, 0, 0] = False
+    med, mad, count = _median_mad(stack, free)
+    assert count[0, 0] == 0 and np.all(med[0, 0] == 0)
+    for y, x in [(1, 1), (2, 3), (3, 4)]:
+        v = stack[free[:, y, x], y, x].astype(np.float64)
+        assert count[y, x] == len(v)
+        m = np.median(v, axis=0)
+        np.testing.assert_allclose(med[y, x], m)
+        np.testing.assert_allclose(mad[y, x], 1.4826 * np.median(np.abs(v - m), axis=0), rtol=1e-5)
+    # With every sample free it is the plain median.
+    m_all, s_all, _ = _median_mad(stack, np.ones((9, 4, 5), bool))
+    m_ref, s_ref, _ = _median_mad(stack)
+    np.testing.assert_allclose(m_all, m_ref)
+    np.testing.assert_allclose(s_all, s_ref, rtol=1e-5)
+
+
+def test_fit_with_the_person_left_out_fills_in_the_room_behind_them(standing):
+    excl = np.broadcast_to(person_mask(50.0, rx=15.0, ry=38.0), standing.shape[:3])
+    model = HorprasertBackground().fit(standing, robust=True, exclude=excl)
+    plain = HorprasertBackground().fit(standing, robust=True)
+    blob = person_mask(50.0)
+    assert model.unseen_[blob].all() and not model.unseen_[~person_mask(50.0, rx=16.0, ry=39.0)].any()
+    # The room behind the person is continued from around them, to a few grey levels on this
+    # smooth room; the plain median learnt the person there.
+    err = np.abs(model.mean_ - ROOM).max(axis=2)
+    assert np.percentile(err[blob], 90) < 8.0
+    assert np.abs(plain.mean_ - ROOM).max(axis=2)[blob].mean() > 50.0
+    rng = np.random.default_rng(2)
+    labels = model.apply(render(rng, 50.0))
+    assert np.mean(labels[blob] == FOREGROUND) > 0.99
+    assert np.mean(plain.apply(render(rng, 50.0))[blob] == FOREGROUND) < 0.05
+    # Once the person has gone, the room where they stood is background or a shade of it.
+    gone = model.apply(render(rng))
+    assert np.mean(gone[blob] == FOREGROUND) < 0.05
+    assert np.mean(gone[~blob] == BACKGROUND) > 0.98
+
+
+def test_fit_rejects_an_exclusion_of_the_wrong_shape_or_of_everything(standing):
+    with pytest.raises(ValueError, match="exclude"):
+        HorprasertBackground().fit(standing, robust=True, exclude=np.zeros((3, H, W), bool))
+    with pytest.raises(ValueError, match="no pixel"):
+        HorprasertBackground().fit(standing, robust=True, exclude=np.ones(standing.shape[:3], bool))
+
+
+def test_person_standing_through_training_is_found_whole_by_the_extractor(standing):
+    """The node's start on people in view: fit on frames where someone stands still, then the
+    same person must be one region covering them, from the first frame on, and no ghost when they
+    walk away."""
+    ys, xs = np.nonzero(person_mask(50.0))
+    box = (xs.min() - 6, ys.min() - 6, xs.max() - xs.min() + 12, ys.max() - ys.min() + 12)
+    ex = SilhouetteExtractor(min_area=100, backend_params={"train_frames": 30, "detector": BoxDetector([box])})
+    ex.fit_background(list(standing), robust=True)
+    rng = np.random.default_rng(3)
+    for k in range(40):
+        x = 50.0 if k < 20 else 50.0 + 3.0 * (k - 19)  # still, then walking to the right
+        r = ex.process(render(rng, x))
+        assert len(r.people) == 1, f"frame {k}: {len(r.people)} people"
+        truth = person_mask(x)
+        mine = r.labels == r.people[0].id + 1
+        assert (mine & truth).sum() / truth.sum() > 0.95, f"frame {k}"
+        assert (mine & ~truth).sum() / truth.sum() < 0.15, f"frame {k}"
+    # Without the detector the robust median learns the still person as the room.
+    base = SilhouetteExtractor(min_area=100, backend_params={"train_frames": 30, "people_aware": False})
+    base.fit_background(list(standing), robust=True)
+    assert base.process(render(rng, 50.0)).people == []
+
+
+def test_a_detection_on_the_still_room_is_not_taken_for_a_person():
+    """A weak detection where nothing moves (clutter, a parked car) is dropped: the fit is the
+    plain robust one and nothing is filled in."""
+    rng = np.random.default_rng(4)
+    room = np.stack([render(rng) for _ in range(20)])
+    model = HorprasertBackground()
+    left_out = fit_around_people(model, room, detector=BoxDetector([(60, 20, 30, 80)], score=0.5))
+    assert not left_out.any() and not model.unseen_.any()
+    assert np.mean(model.apply(render(rng)) == FOREGROUND) < 0.01
+
+
+def test_far_brighter_than_the_room_is_foreground_not_highlight():
+    """A white shirt on a grey floor has the floor's chromaticity; only a modest brightening is a
+    highlight (``max_highlight_brightness``)."""
+    rng = np.random.default_rng(5)
+    grey = np.full((40, 40, 3), 100.0, np.float32)
+    frames = np.stack([np.clip(np.rint(grey + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8)
+                       for _ in range(20)])
+    model = HorprasertBackground().fit(frames)
+    brighter = np.clip(np.rint(grey * 1.2 + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8)
+    white = np.clip(np.rint(grey * 1.8 + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8)
+    assert np.mean(model.apply(brighter) == HIGHLIGHT) > 0.95
+    assert np.mean(model.apply(white) == FOREGROUND) > 0.99
+
+
+def test_box_mask_grows_and_clips_boxes():
+    m = box_mask((50, 60), np.array([[10, 10, 10, 20], [55, 40, 20, 20]]), grow=0.1)
+    assert m[8:32, 8:22].all() and not m[7, 15] and not m[33, 15]
+    assert m[38:50, 53:60].all()
+
+
+# ---------------------------------------------------------------------------- real footage
+UT = DATA / "ut_interaction"
+CLIP = UT / "set1" / "0_1_4.avi"
+
+
+@pytest.fixture(scope="module")
+def ut_clip() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if not CLIP.is_file():
+        pytest.skip(f"real clip {CLIP} not present (../shared/data)")
+    ref = np.load(UT / "keypoints" / "0_1_4.npz")
+    return read_frames(CLIP, 40), ref["kp"], ref["vis"]
+
+
+def test_hog_detector_finds_both_standing_people_on_real_footage(ut_clip):
+    frames, kp, vis = ut_clip
+    boxes, scores = PeopleDetector().detect(frames[0])
+    for k in range(2):
+        c = kp[0, k][vis[0, k] >= 0.5].mean(axis=0)
+        inside = [(x <= c[0] <= x + w and y <= c[1] <= y + h) for x, y, w, h in boxes]
+        assert any(inside), f"person {k} at {c} not in {boxes.tolist()}"
+
+
+def test_real_people_standing_from_the_first_frame_are_found_whole(ut_clip):
+    """Both people of a real clip, still in the training frames: one region each, on their side,
+    holding their reference keypoints, where the plain robust fit finds nobody."""
+    frames, kp, vis = ut_clip
+    ex = SilhouetteExtractor(backend_params={"train_frames": 30})
+    ex.fit_background(list(frames[:30]), robust=True)
+    base = SilhouetteExtractor(backend_params={"train_frames": 30, "people_aware": False})
+    base.fit_background(list(frames[:30]), robust=True)
+    inside = total = 0
+    for t in range(len(frames)):
+        r = ex.process(frames[t])
+        rb = base.process(frames[t])
+        if t < 10:
+            continue
+        assert [p.side for p in r.people] == ["left", "right"], f"frame {t}"
+        for k, p in enumerate(r.people):
+            sel = vis[t, k] >= 0.5
+            xy = np.rint(kp[t, k][sel]).astype(int)
+            inside += int(np.sum(r.labels[xy[:, 1], xy[:, 0]] == p.id + 1))
+            total += len(xy)
+        assert len(rb.people) != 2 or t > 15  # the baseline finds no one at first
+    assert inside / total > 0.9
