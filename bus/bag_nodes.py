@@ -46,7 +46,12 @@ def import_modules(modules: list[str], param: str = "modules") -> None:
 
 class Recorder(Node):
     """Writes every message of ``topics`` to the bag ``path`` (one input port per topic, named like
-    the topic, of any type, reliable unless the launch file says ``policy: latest``).
+    the topic, of any type).
+
+    Its inputs are reliable unless the launch file says ``policy: latest``: in a lockstep replay the
+    recorder keeps every message (and the publishers wait for it); in a live graph (``latest``) it
+    never holds a publisher back: it keeps up to ``queue`` messages per topic in order while the
+    disk lags, and drops and counts (``drops`` in its stats) what does not fit.
 
     The bag is finished (summary and footer written) on end of stream and on every stop; a crash
     leaves it readable up to the last flush (at most ``flush_period`` seconds lost)."""
@@ -59,6 +64,8 @@ class Recorder(Node):
         "flush_period": Param(float, 0.5, "seconds between flushes (bounds what a crash loses)", min=0.01),
         "overwrite": Param(bool, False, "replace an existing file"),
         "modules": Param(list, [], "modules to import so that schemas are described from their classes"),
+        "queue": Param(int, 64, "latest policy: messages per topic kept while the recorder lags; the rest are "
+                       "dropped and counted", min=1, max=100_000),
     }
     timer_period = 0.1
 
@@ -71,7 +78,7 @@ class Recorder(Node):
             raise ParamError(f"parameter 'topics': expected a list of topic names, got {topics!r}")
         if STATS_PORT in topics:
             raise ParamError(f"parameter 'topics': {STATS_PORT!r} is reserved; record a node's stats as NODE/stats")
-        return {t: Input(None, RELIABLE, f"recorded topic {t}", raw=True) for t in topics}, {}
+        return {t: Input(None, RELIABLE, f"recorded topic {t}", raw=True, queue=params["queue"]) for t in topics}, {}
 
     def setup(self) -> None:
         import_modules(self.p["modules"])
@@ -94,6 +101,10 @@ class Recorder(Node):
             writer.close()
             self.log.info("wrote %d messages (%.1f MiB) to %s: %s", writer.count, writer.bytes / 2**20, writer.path,
                           ", ".join(f"{t} {n}" for t, n in writer.counts.items()) or "-")
+            dropped = {t: sub.drops for t, sub in self._in.items() if sub.drops}
+            if dropped:
+                self.log.warning("could not keep %s message(s) while lagging (raise 'queue' to keep more)",
+                                 ", ".join(f"{t} {n}" for t, n in dropped.items()))
 
 
 def _rate_ok(v: float) -> str | None:

@@ -1,8 +1,12 @@
 """``counterpart bag record|play|info|export``.
 
-- ``record`` subscribes (reliable) to topics of a running launch, found through its registry, and
-  writes them to a bag until Ctrl-C, ``--duration``, end of stream on every recorded topic, or the
-  launch going away; the bag is always finished (a SIGKILL leaves it readable up to the last flush).
+- ``record`` subscribes to topics of a running launch, found through its registry, and writes them
+  to a bag until Ctrl-C, ``--duration``, end of stream on every recorded topic, or the launch going
+  away; the bag is always finished (a SIGKILL leaves it readable up to the last flush). It never
+  holds a publisher back: it reads each topic's lossy socket with a queue of ``--queue`` messages,
+  so it loses nothing while it keeps up and counts what it could not keep when it lags (a slow
+  disk, Ctrl-Z). ``--lossless`` subscribes reliably instead (lockstep replays: every message, the
+  publishers wait for the recorder).
 - ``play`` publishes a bag on the *standalone* endpoints (the folder ``counterpart run`` uses), so
   nodes started with ``counterpart run`` find the topics by name. It does not inject into a running
   launch: there every topic already has its publisher bound; to replay inside a graph, put
@@ -26,9 +30,12 @@ from typing import Any
 import numpy as np
 
 from . import registry
+from .cli_introspect import quiet_broken_pipe
 from .params import ParamError
 
 MIN_IMAGE_SIDE = 8
+#: messages per topic a recorder keeps while it lags (live graphs), before it drops and counts them
+RECORD_QUEUE = 64
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -39,6 +46,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     r.add_argument("-o", "--output", required=True, metavar="FILE", help="bag file to write (.mcap)")
     r.add_argument("--run", default=None, help="run directory of the launch (default: the newest)")
     r.add_argument("--duration", type=float, default=0.0, metavar="S", help="stop after S seconds (0: no limit)")
+    r.add_argument("--queue", type=int, default=RECORD_QUEUE, metavar="N",
+                   help=f"messages kept per topic while the recorder lags; beyond it they are dropped and counted "
+                        f"(default {RECORD_QUEUE})")
+    r.add_argument("--lossless", action="store_true",
+                   help="subscribe reliably: nothing is lost, but a lagging or paused recorder holds the publishers "
+                        "back (for lockstep replays)")
     r.add_argument("--compression", default="zstd", choices=("zstd", "lz4", "none"))
     r.add_argument("--overwrite", action="store_true", help="replace an existing bag file")
     r.add_argument("--module", action="append", default=[], metavar="MODULE",
@@ -67,6 +80,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     e.add_argument("--topics", nargs="+", default=[], metavar="TOPIC", help="topics to export (default: all)")
 
 
+@quiet_broken_pipe
 def main(args: argparse.Namespace) -> int:
     return {"record": record, "play": play, "info": info, "export": export}[args.action](args)
 
@@ -86,7 +100,7 @@ def record(args: argparse.Namespace) -> int:
 
     from .bag import BagWriter
     from .bag_nodes import import_modules
-    from .transport import RELIABLE, Subscriber
+    from .transport import LATEST, RELIABLE, Subscriber
 
     try:
         import_modules(args.module, "--module")
@@ -117,7 +131,11 @@ def record(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     ctx = zmq.Context.instance()
-    subs = {t: Subscriber(ctx, t, ep, RELIABLE, raw=True) for t, ep in endpoints.items()}
+    if args.queue < 1:
+        return _err(f"--queue {args.queue}: keep at least 1 message")
+    policy = RELIABLE if args.lossless else LATEST
+    subs = {t: Subscriber(ctx, t, ep, policy, raw=True, queue=args.queue, publisher=reg["topics"][t].get("node"))
+            for t, ep in endpoints.items()}
     poller = zmq.Poller()
     owner = {}
     for t, s in subs.items():
@@ -147,7 +165,7 @@ def record(args: argparse.Namespace) -> int:
                 break
             if now - last_report >= 1.0:
                 last_report = now
-                _progress(writer, now - start)
+                _progress(writer, now - start, subs)
                 try:
                     gone = not registry.read(args.run)["alive"]
                 except registry.RegistryError:
@@ -165,14 +183,17 @@ def record(args: argparse.Namespace) -> int:
         writer.close()
         for s, h in old.items():
             signal.signal(s, h)
-    _progress(writer, time.monotonic() - start)
-    print(f"done ({reason}): {writer.count} messages in {writer.path}", file=sys.stderr)
+    _progress(writer, time.monotonic() - start, subs)
+    dropped = sum(s.drops for s in subs.values())
+    lost = f"; {dropped} could not be kept (the recorder lagged; --lossless keeps all)" if dropped else ""
+    print(f"done ({reason}): {writer.count} messages in {writer.path}{lost}", file=sys.stderr)
     return 0
 
 
-def _progress(writer: Any, elapsed: float) -> None:
+def _progress(writer: Any, elapsed: float, subs: dict[str, Any]) -> None:
     per_topic = "  ".join(f"{t} {n}" for t, n in writer.counts.items()) or "-"
-    print(f"[{elapsed:6.1f} s] {writer.count} messages, {writer.bytes / 2**20:.1f} MiB  {per_topic}",
+    dropped = sum(s.drops for s in subs.values())
+    print(f"[{elapsed:6.1f} s] {writer.count} messages, {writer.bytes / 2**20:.1f} MiB, {dropped} dropped  {per_topic}",
           file=sys.stderr, flush=True)
 
 

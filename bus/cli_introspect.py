@@ -3,14 +3,34 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import json
+import os
 import sys
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from . import registry
+
+
+def quiet_broken_pipe(main: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+    """``main`` ending quietly when its reader goes away (``counterpart topic list | head``), as
+    command-line tools do, instead of with a BrokenPipeError traceback."""
+
+    @functools.wraps(main)
+    def wrapper(args: argparse.Namespace) -> int:
+        try:
+            return main(args)
+        except BrokenPipeError:
+            # what is still buffered would raise again when Python flushes stdout at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
+            return 1
+
+    return wrapper
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -37,6 +57,7 @@ def add_arguments_topic(p: argparse.ArgumentParser) -> None:
     h.add_argument("-n", "--reports", type=int, default=0, help="stop after N reports (0: until Ctrl-C)")
 
 
+@quiet_broken_pipe
 def main_node(args: argparse.Namespace) -> int:
     try:
         reg = registry.read(args.run)
@@ -84,6 +105,7 @@ def _subscriber(args: argparse.Namespace):
                       untyped=True)
 
 
+@quiet_broken_pipe
 def main_topic(args: argparse.Namespace) -> int:
     try:
         if args.action == "list":

@@ -5,7 +5,8 @@ import argparse
 import logging
 import sys
 
-from .launchfile import LaunchError, check, load
+from .endpoints import RunDirError, base_dir
+from .launchfile import Graph, LaunchError, check, load
 from .params import ParamError, parse_assignments
 from .runner import setup_logging
 
@@ -17,8 +18,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--check", action="store_true", help="check the graph and exit without starting it")
 
 
-def load_checked(file: str, sets: list[str] | None, replace: list[str] | None):
-    return check(load(file, parse_assignments(sets, "--set"), parse_assignments(replace, "--replace")))
+def load_checked(file: str, sets: list[str] | None, replace: list[str] | None) -> Graph:
+    """The checked graph of launch file ``file`` with ``--set`` and ``--replace`` applied; also
+    checks that the folder for run directories is safe to use (LaunchError naming the problem)."""
+    graph = check(load(file, parse_assignments(sets, "--set"), parse_assignments(replace, "--replace")))
+    try:
+        base_dir()
+    except RunDirError as exc:
+        raise LaunchError(f"{graph.file}: cannot run it here: {exc}") from None
+    return graph
 
 
 def main(args: argparse.Namespace) -> int:

@@ -9,11 +9,11 @@ Format (every key but ``nodes`` optional)::
                                    # that does not set its own
     transport: ipc                 # ipc (default: a 0700 run directory) or tcp
     host: 127.0.0.1                # tcp: the host to bind (loopback unless named)
-    port_base: 7300                # tcp: first port; each topic takes two (reliable, latest)
+    port_base: 7300                # tcp: first port; each topic takes three (reliable, latest, queued)
     endpoints:                     # fixed tcp endpoints for chosen topics (to span launchers)
       numbers: tcp://127.0.0.1:7400
-    external:                      # topics published by another launcher
-      numbers: {type: test.Number, endpoint: tcp://127.0.0.1:7400}
+    external:                      # topics published by another launcher (publisher: its node's
+      numbers: {type: test.Number, endpoint: tcp://127.0.0.1:7400, publisher: source}  # name, optional)
     nodes:
       relay:
         run: tests.graph_nodes.relay      # module (or module:Class) holding the node
@@ -175,11 +175,15 @@ def load(path: str | Path, sets: dict[str, Any] | None = None, replace: dict[str
         ext = _mapping(ext, file, None, f"external.{topic}")
         if "type" not in ext or "endpoint" not in ext:
             raise _err(file, None, f"external.{topic}", "needs 'type' and 'endpoint'")
+        extra = sorted(set(ext) - {"type", "endpoint", "publisher"})
+        if extra:
+            raise _err(file, None, f"external.{topic}.{extra[0]}", "unknown key; expected type, endpoint, publisher")
         try:
             tcp_endpoints(str(ext["endpoint"]))
         except ValueError as exc:
             raise _err(file, None, f"external.{topic}.endpoint", str(exc)) from None
-        graph.external[topic] = {"type": str(ext["type"]), "endpoint": str(ext["endpoint"]), "file": file}
+        graph.external[topic] = {"type": str(ext["type"]), "endpoint": str(ext["endpoint"]), "file": file,
+                                 "publisher": None if ext.get("publisher") is None else str(ext["publisher"])}
     nodes = doc.get("nodes")
     if not isinstance(nodes, dict) or (not nodes and not graph.nodes):
         if nodes is None and graph.nodes:
@@ -288,6 +292,7 @@ def check(graph: Graph) -> Graph:
         except KeyError as exc:
             raise _err(ext["file"], None, f"external.{topic}.type", str(exc).strip('"')) from None
         publishers[topic] = ("(external)", topic, ext_type)
+    publisher_nodes = {t: graph.external[t]["publisher"] if t in graph.external else n for t, (n, _, _) in publishers.items()}
     subscribers: dict[str, list[tuple[str, str, str]]] = {t: [] for t in publishers}
     for name, decl in graph.nodes.items():
         for port, inp in graph.ports_in[name].items():
@@ -303,7 +308,8 @@ def check(graph: Graph) -> Graph:
             policy = decl.input_policies.get(port) or decl.policy or inp.policy
             subscribers[topic].append((name, port, policy))
     graph.topics = {
-        topic: {"type": schema_id(t), "publisher": f"{n}.{p}", "subscribers": subscribers[topic]}
+        topic: {"type": schema_id(t), "publisher": f"{n}.{p}", "subscribers": subscribers[topic],
+                "node": publisher_nodes[topic]}
         for topic, (n, p, t) in publishers.items()
     }
     return graph
@@ -320,7 +326,7 @@ def endpoints_for(graph: Graph, run_dir: Path) -> dict[str, TopicEndpoints]:
             out[topic] = tcp_endpoints(graph.fixed_endpoints[topic])
         elif graph.transport == "tcp":
             out[topic] = tcp_endpoints(f"tcp://{graph.host}:{port}")
-            port += 2
+            port += 3
         else:
             out[topic] = ipc_endpoints(run_dir, topic)
     return out
@@ -344,7 +350,9 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
         for port, inp in graph.ports_in[name].items():
             topic = graph.input_topic(name, port)
             policy = decl.input_policies.get(port) or decl.policy or inp.policy
-            spec["inputs"][port] = {"topic": topic, "endpoints": eps[topic].to_dict(), "policy": policy}
+            # the publisher's name authenticates its end of stream (None: an external one not named)
+            spec["inputs"][port] = {"topic": topic, "endpoints": eps[topic].to_dict(), "policy": policy,
+                                    "publisher": graph.topics[topic]["node"]}
         for port in list(graph.ports_out[name]) + [STATS_PORT]:
             topic = graph.output_topic(name, port)
             subs = graph.topics[topic]["subscribers"]

@@ -43,6 +43,8 @@ from .transport import LATEST, POLICIES, RELIABLE, Publisher, Subscriber
 
 STATS_PORT = "stats"
 STATS_PERIOD_S = 1.0
+#: seconds a supervised node that failed before its first message waits for end-of-stream confirmations
+EARLY_FAILURE_EOS_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -56,6 +58,9 @@ class Input:
     #: whether the node waits for this input's end of stream before it ends; False for side inputs
     #: such as run-time controls, which would otherwise deadlock a graph with a feedback loop
     awaits_end: bool = True
+    #: with the ``latest`` policy, keep up to this many messages in order instead of the newest only
+    #: (recorders: never hold the publisher back, lose nothing while keeping up, count the rest)
+    queue: int = 0
 
 
 @dataclass(frozen=True)
@@ -126,6 +131,7 @@ class Node:
         self._last_stats = time.monotonic()
         self._stats_seq = 0
         self._ppid = os.getppid()
+        self._running = False  # set by the first message published or handled
         #: the process exit code; set it non-zero on a failure after which the node still ends cleanly
         #: (end of stream goes out with reason "error")
         self.exit_code = 0
@@ -182,9 +188,30 @@ class Node:
         st = self._out_stats[port]
         st.count += 1
         st.period_count += 1
+        if not self._running:
+            self._mark_running()
         if type(seq) is int and seq > self._last_seq:
             self._last_seq = seq
         self._maybe_stats()
+
+    def _mark_running(self) -> None:
+        """The first message is out or handled: from now on a failure is not a failure to start.
+        The launcher reads the marker file when the node exits (see bus.supervisor)."""
+        self._running = True
+        marker = self.spec.get("running_file")
+        if marker:
+            try:
+                Path(marker).touch()
+            except OSError as exc:
+                self.log.warning("cannot write %s: %s", marker, exc)
+
+    def _eos_timeout(self) -> float:
+        """How long end of stream waits for its readers. A node that failed before its first
+        message waits briefly: its launcher stops the whole graph once it exits."""
+        timeout = float(self.spec.get("eos_timeout", 120.0))
+        if self.exit_code and not self._running and self.spec.get("supervised", False):
+            timeout = min(timeout, EARLY_FAILURE_EOS_S)
+        return timeout
 
     # ------------------------------------------------------------------------------- internals
     def _open(self) -> None:
@@ -199,6 +226,7 @@ class Node:
                 on_bad=lambda kind, detail, port=port: self.log.warning(
                     "dropped a bad message on %s (%s); further ones of this kind are only counted", port, detail
                 ),
+                msg_type=inputs[port].type, publisher=w.get("publisher"), queue=inputs[port].queue,
             )
             self._in_stats[port] = _PortStats()
         for port in list(outputs) + [STATS_PORT]:
@@ -304,6 +332,8 @@ class Node:
                 t0 = time.perf_counter()
                 self.on_message(port, msg)
                 self._proc_ms.append((time.perf_counter() - t0) * 1e3)
+                if not self._running:
+                    self._mark_running()
             if self.timer_period is not None and time.monotonic() >= next_timer:
                 self.on_timer()
                 next_timer = time.monotonic() + self.timer_period
@@ -320,9 +350,11 @@ class Node:
         # for the other to confirm an end of stream that neither reads any longer.
         for sub in self._in.values():
             sub.close()
+        timeout = self._eos_timeout()
         for pub in self._out.values():
+            pub.barrier_timeout = min(pub.barrier_timeout, timeout)  # nor for readers still starting
             pub.send_eos(self.name, self._last_seq, reason)
-        deadline = time.monotonic() + float(self.spec.get("eos_timeout", 120.0))
+        deadline = time.monotonic() + timeout
         for pub in self._out.values():
             if not pub.wait_delivered(max(0.0, deadline - time.monotonic())) and not self.stopping:
                 self.log.warning("%s: %d reliable subscriber(s) did not confirm end of stream", pub.topic, pub.subscribers)

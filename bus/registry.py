@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from .endpoints import TopicEndpoints, base_dir
+from .endpoints import RunDirError, TopicEndpoints, base_dir
 
 
 class RegistryError(RuntimeError):
@@ -15,7 +15,10 @@ class RegistryError(RuntimeError):
 
 def find_run(run: str | None = None) -> Path:
     """The run directory given, or the newest launch's (``base_dir()/latest``)."""
-    path = Path(run) if run else base_dir() / "latest"
+    try:
+        path = Path(run) if run else base_dir() / "latest"
+    except RunDirError as exc:
+        raise RegistryError(str(exc)) from None
     if not (path / "registry.json").is_file():
         raise RegistryError(
             f"no running launch found at {path}: start one with 'counterpart launch FILE' or pass --run RUN_DIR"

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import inspect
 import logging
@@ -10,6 +11,7 @@ import sys
 import traceback
 from typing import Any
 
+from .logs import RepeatFilter
 from .node import Node, load_spec, standalone_spec
 from .params import ParamError, parse_assignments
 
@@ -59,6 +61,8 @@ def find_node_class(module_name: str) -> type[Node]:
 
 
 def setup_logging(name: str) -> None:
+    """Log lines on stderr, prefixed with the time and ``name``; a line that repeats is rate-limited
+    (:class:`bus.logs.RepeatFilter`: a few per kind and 10 s, then a count)."""
     level = os.environ.get("COUNTERPART_LOG", "INFO").upper()
     logging.basicConfig(
         level=getattr(logging, level, logging.INFO),
@@ -66,6 +70,11 @@ def setup_logging(name: str) -> None:
         datefmt="%H:%M:%S",
         stream=sys.stderr,
     )
+    for handler in logging.getLogger().handlers:
+        if not any(isinstance(f, RepeatFilter) for f in handler.filters):
+            repeats = RepeatFilter()
+            handler.addFilter(repeats)
+            atexit.register(repeats.flush_held)
 
 
 def run_spec(spec: dict[str, Any]) -> int:

@@ -9,6 +9,11 @@
   count resets after 30 s of healthy running) up to ``max_restarts``.
 - A ``required`` node's exit stops the graph with its exit code (after a clean 0 exit, the rest of
   the graph gets ``DRAIN_S`` to finish on end of stream).
+- A node that fails before its first message (published or handled: the node then writes the
+  marker ``nodes/NAME.running``) stops the graph with its exit code, whatever its restart policy:
+  a node that cannot start (an unreadable video, a missing camera or model, a crash in setup) would
+  fail the same way again, and the nodes waiting for its messages would wait forever. The nodes that
+  took its end of stream get ``EARLY_GRACE_S`` to end by themselves; all are gone within 5 s.
 - The graph ends by itself when every node has exited; the exit code is 0 when all exited 0.
 - The run directory holds ``registry.json`` (nodes, pids, topics, endpoints, types) for the
   introspection commands, and ``base_dir()/latest`` points at it.
@@ -36,6 +41,11 @@ log = logging.getLogger("launch")
 INT_GRACE_S = 2.0
 TERM_GRACE_S = 1.5
 DRAIN_S = 10.0
+#: after a node failed before its first message: how long the others get to end by themselves (on
+#: its end of stream), then how long they get to stop on SIGINT; with the failed node's own wait for
+#: end-of-stream confirmations (bus.node.EARLY_FAILURE_EOS_S) and TERM_GRACE_S, all within 5 s
+EARLY_GRACE_S = 0.7
+EARLY_INT_GRACE_S = 1.0
 BACKOFF_START_S = 0.5
 BACKOFF_MAX_S = 10.0
 HEALTHY_S = 30.0
@@ -65,6 +75,12 @@ class Proc:
     next_start: float | None = 0.0
     exit_code: int | None = None
     history: list[int] = field(default_factory=list)
+    running_file: Path | None = None
+
+    @property
+    def ever_ran(self) -> bool:
+        """Whether the node has published or handled a message (in any of its runs)."""
+        return self.running_file is not None and self.running_file.exists()
 
 
 class Launcher:
@@ -76,17 +92,20 @@ class Launcher:
         self.env = dict(os.environ if env is None else env)
         self.procs: dict[str, Proc] = {}
         self._stop_signal: int | None = None
+        self._int_grace = INT_GRACE_S
         self.specs = node_specs(graph, self.run_dir)
         spec_dir = self.run_dir / "nodes"
         spec_dir.mkdir(mode=0o700, exist_ok=True)
         stats_dir(self.run_dir).mkdir(mode=0o700, exist_ok=True)
         for name, spec in self.specs.items():
+            spec["running_file"] = str(spec_dir / f"{name}.running")
             path = spec_dir / f"{name}.json"
             path.write_text(json.dumps(spec, indent=1))
             decl = graph.nodes[name]
             self.procs[name] = Proc(
                 name=name, cmd=[sys.executable, "-m", "bus.runner", str(path)],
                 restart=decl.restart, max_restarts=decl.max_restarts, required=decl.required,
+                running_file=Path(spec["running_file"]),
             )
 
     # ------------------------------------------------------------------------------ registry
@@ -111,6 +130,7 @@ class Launcher:
                 topic: {
                     "type": info["type"],
                     "publisher": info["publisher"],
+                    "node": info.get("node"),
                     "subscribers": [f"{n}.{p} ({pol})" for n, p, pol in info["subscribers"]],
                     "endpoints": next(
                         (s["outputs"][port]["endpoints"] for s in self.specs.values() for port in s["outputs"]
@@ -156,8 +176,10 @@ class Launcher:
         return [p for p in self.procs.values() if p.popen is not None and p.popen.poll() is None]
 
     def stop_all(self) -> None:
-        """SIGINT, then SIGTERM, then SIGKILL to every process group; returns when all are reaped."""
-        for sig, grace in ((signal.SIGINT, INT_GRACE_S), (signal.SIGTERM, TERM_GRACE_S), (signal.SIGKILL, 1.0)):
+        """SIGINT, then SIGTERM, then SIGKILL to every process group; returns when all are reaped,
+        having logged how each node still running ended."""
+        stopped = {p.name for p in self._alive()}
+        for sig, grace in ((signal.SIGINT, self._int_grace), (signal.SIGTERM, TERM_GRACE_S), (signal.SIGKILL, 1.0)):
             if not self._alive():
                 break
             self._signal_all(sig)
@@ -172,6 +194,9 @@ class Launcher:
                     log.error("%s (pid %d) did not die", p.name, p.popen.pid)
                 if p.exit_code is None:
                     p.exit_code = p.popen.returncode
+            if p.name in stopped and p.popen.returncode is not None:
+                (log.info if p.popen.returncode == 0 else log.warning)("%s stopped: exited with %d", p.name,
+                                                                       p.popen.returncode)
             # a node's own children live in its process group: make sure none is left
             if p.popen is not None:
                 try:
@@ -200,8 +225,11 @@ class Launcher:
         return code
 
     def _supervise(self) -> int:
-        drain_deadline: float | None = None
-        required_code: int | None = None
+        # once the graph is ending (a required node ended, a node failed to start): its exit code,
+        # how long the others get to end by themselves on end of stream, and what to say after that
+        end_code: int | None = None
+        end_deadline: float | None = None
+        end_why = ""
         while True:
             if self._stop_signal is not None:
                 log.info("stopping on signal %d", self._stop_signal)
@@ -217,22 +245,29 @@ class Launcher:
                     if now - p.started > HEALTHY_S:
                         p.restarts = 0
                     failed = p.exit_code != 0
+                    early = failed and not p.ever_ran
                     wants = p.restart == "always" or (p.restart == "on-failure" and failed)
-                    if wants and p.restarts < p.max_restarts and required_code is None and drain_deadline is None:
+                    if wants and not early and p.restarts < p.max_restarts and end_code is None:
                         delay = min(BACKOFF_MAX_S, BACKOFF_START_S * 2 ** p.restarts)
                         p.restarts += 1
                         p.next_start = now + delay
                         log.warning("%s exited with %d; restart %d/%d in %.1f s", p.name, p.exit_code,
                                     p.restarts, p.max_restarts, delay)
-                    else:
-                        (log.warning if failed else log.info)("%s exited with %d", p.name, p.exit_code)
-                        if p.required:
-                            if failed:
-                                log.error("required node %s failed: stopping the graph", p.name)
-                                return p.exit_code
-                            required_code = 0
-                            drain_deadline = now + DRAIN_S
-                if p.next_start is not None and p.popen is not None and now >= p.next_start and self._stop_signal is None:
+                        continue
+                    (log.warning if failed else log.info)("%s exited with %d", p.name, p.exit_code)
+                    if p.required and failed:
+                        log.error("required node %s failed (exit code %d): stopping the graph", p.name, p.exit_code)
+                        return p.exit_code
+                    if early and not end_code:
+                        # the nodes that took its end of stream end by themselves meanwhile
+                        log.error("%s failed before its first message (exit code %d): stopping the graph",
+                                  p.name, p.exit_code)
+                        end_code, end_deadline, end_why = p.exit_code, now + EARLY_GRACE_S, ""
+                        self._int_grace = EARLY_INT_GRACE_S
+                    elif p.required and end_code is None:
+                        end_code, end_deadline = 0, now + DRAIN_S
+                        end_why = f"required node ended; the rest did not finish within {DRAIN_S:.0f} s: stopping them"
+                if p.next_start is not None and p.popen is not None and now >= p.next_start and end_code is None:
                     self._start(p)
                     changed = True
             if changed:
@@ -240,17 +275,18 @@ class Launcher:
             pending = [p for p in self.procs.values() if p.next_start is not None and p.popen is not None]
             # a process may exit between the scan above and this check: its code is read on the next pass
             unread = [p for p in self.procs.values() if p.popen is not None and p.exit_code is None]
-            if not self._alive() and not pending and not unread:
-                codes = {p.name: p.exit_code for p in self.procs.values()}
-                failed = {n: c for n, c in codes.items() if c}
-                if failed:
-                    log.warning("graph ended; failed nodes: %s", ", ".join(f"{n} ({c})" for n, c in failed.items()))
-                    return next(iter(failed.values())) if required_code is None else required_code
+            if not self._alive() and (not pending or end_code is not None) and not unread:
+                failed_nodes = {p.name: p.exit_code for p in self.procs.values() if p.exit_code}
+                if failed_nodes:
+                    log.warning("graph ended; failed nodes: %s",
+                                ", ".join(f"{n} ({c})" for n, c in failed_nodes.items()))
+                    return next(iter(failed_nodes.values())) if end_code is None else end_code
                 log.info("graph ended")
                 return 0
-            if drain_deadline is not None and now > drain_deadline:
-                log.warning("required node ended; the rest did not finish within %.0f s: stopping them", DRAIN_S)
-                return required_code or 0
+            if end_deadline is not None and now > end_deadline:
+                if end_why:
+                    log.warning("%s", end_why)
+                return end_code or 0
             time.sleep(0.02)
 
     def cleanup(self) -> None:
@@ -269,13 +305,40 @@ def _external_endpoints(specs: dict[str, dict[str, Any]], topic: str) -> dict[st
 
 
 def prune_run_dirs(keep: int = 10) -> None:
-    """Delete run directories of launchers that are gone, keeping the newest ``keep``."""
-    runs = sorted(base_dir().glob("run-*"), key=lambda p: p.stat().st_mtime)
-    for d in runs[:-keep] if keep else runs:
-        try:
-            os.kill(int(d.name.rsplit("-", 1)[1]), 0)
-            continue  # its launcher still runs
-        except PermissionError:
-            continue
-        except (ValueError, ProcessLookupError):
+    """Clean up after launchers that are gone (a SIGKILL leaves their run directories behind):
+    delete their run directories but the newest ``keep``, the sockets of those kept (their
+    registries stay for ``counterpart node list --run``), and their temporary ``latest`` links."""
+    base = base_dir()
+    # another launcher may be pruning at the same time: what it removed first is simply gone
+    gone = sorted(((_mtime(d), d) for d in base.glob("run-*") if not _launcher_alive(d.name)), key=lambda x: x[0])
+    for i, (_, d) in enumerate(gone):
+        if i < len(gone) - keep:
             shutil.rmtree(d, ignore_errors=True)
+            continue
+        for f in d.glob("*"):
+            try:
+                if f.is_socket():
+                    f.unlink()
+            except FileNotFoundError:
+                pass
+    for link in base.glob(".latest-*"):
+        if not _launcher_alive(link.name):
+            link.unlink(missing_ok=True)
+
+
+def _mtime(path: Path) -> float:
+    try:
+        return path.stat().st_mtime
+    except FileNotFoundError:
+        return 0.0
+
+
+def _launcher_alive(name: str) -> bool:
+    """Whether the launcher whose pid ends ``name`` (``run-DATE-TIME-PID``, ``.latest-PID``) runs."""
+    try:
+        os.kill(int(name.rsplit("-", 1)[1]), 0)
+    except PermissionError:
+        return True  # someone's process: leave it
+    except (ValueError, IndexError, ProcessLookupError):
+        return False
+    return True

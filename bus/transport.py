@@ -1,14 +1,15 @@
 """Publish/subscribe over ZeroMQ with the two queue policies of Counterpart.
 
-A :class:`Publisher` owns a topic's two sockets (see :mod:`bus.endpoints`). Messages are encoded once
-and sent on both; on the reliable socket the send waits (checking ``should_stop``) while a reliable
-subscriber lags, on the latest socket it never waits. End of stream is also sent on the reliable
+A :class:`Publisher` owns a topic's sockets (see :mod:`bus.endpoints`). Messages are encoded once
+and sent on each socket that has subscribers; on the reliable socket the send waits (checking
+``should_stop``) while a reliable subscriber lags, on the latest and queued sockets it never waits. End of stream is also sent on the reliable
 socket under the topic prefix ``EOS_PREFIX`` so that latest subscribers, which listen for that prefix
 alone there, can never miss it.
 
 A :class:`Subscriber` is one input: ``reliable`` reads every message in order; ``latest`` drains what
 is queued and keeps the newest, counting what it dropped (both in its own queue and, from gaps in the
-publisher's send counter, in ZeroMQ's).
+publisher's send counter, in ZeroMQ's); ``latest`` with a ``queue`` (recorders) reads the queued
+socket in order and counts the gaps.
 """
 from __future__ import annotations
 
@@ -19,8 +20,9 @@ from typing import Any, Callable, Sequence
 
 import zmq
 
-from messages import EndOfStream, encode
-from messages.codec import DEFAULT_LIMITS, DecodeError, Limits, decode_any, decode_counted, read_header
+from messages import REGISTRY, EndOfStream, encode, schema_id
+from messages.codec import (DEFAULT_LIMITS, DecodeError, Limits, check_array_count, decode_any, decode_counted,
+                            read_header)
 
 from .endpoints import TopicEndpoints, bind_address
 
@@ -28,6 +30,11 @@ EOS_PREFIX = b"\x00eos:"
 RELIABLE = "reliable"
 LATEST = "latest"
 POLICIES = (RELIABLE, LATEST)
+#: a publisher's send counter cannot run ahead of the last one seen by more than this many messages
+#: plus MAX_SEND_RATE per second since then (far above what a Python publisher sends); a larger jump
+#: is a forged or corrupt counter, not a loss
+COUNTER_SLACK = 10_000
+MAX_SEND_RATE = 1_000_000
 #: bytes: frames below this are copied into ZeroMQ, larger ones go out zero-copy. A zero-copy frame
 #: costs pyzmq a wake-up of its garbage-collector thread (which takes the GIL) once ZeroMQ has sent
 #: it; that outweighs copying a 320x240 gray image (76,800 B) but not a 640x480 BGR one (921,600 B).
@@ -69,6 +76,7 @@ class Publisher:
         expected_latest: int = 0,
         hwm: int = 16,
         latest_hwm: int = 2,
+        queued_hwm: int = 64,
         barrier_timeout: float = 30.0,
         should_stop: Callable[[], bool] = lambda: False,
         latched: bool = False,
@@ -88,6 +96,7 @@ class Publisher:
         self._barrier_passed = False  # every expected subscriber has been seen (wait_for_subscribers)
         self.latched = latched
         self._latched_parts: Sequence[Any] | None = None
+        self._eos_parts: Sequence[Any] | None = None
         self.reliable = ctx.socket(zmq.XPUB)
         self.reliable.setsockopt(zmq.SNDHWM, hwm)
         self.reliable.setsockopt(zmq.XPUB_NODROP, 1)
@@ -102,9 +111,20 @@ class Publisher:
         self.latest.setsockopt(zmq.LINGER, 0)
         self.latest.copy_threshold = ZERO_COPY_MIN
         self.latest.bind(bind_address(endpoints.latest))
+        self.queued_subscribers = 0
+        self.queued: zmq.Socket | None = None
+        if endpoints.queued:  # lossy with a deep queue: recorders (see Subscriber's ``queue``)
+            self.queued = ctx.socket(zmq.XPUB)
+            self.queued.setsockopt(zmq.XPUB_VERBOSER, 1)
+            self.queued.setsockopt(zmq.SNDHWM, queued_hwm)
+            self.queued.setsockopt(zmq.LINGER, 0)
+            self.queued.copy_threshold = ZERO_COPY_MIN
+            self.queued.bind(bind_address(endpoints.queued))
 
     # XPUB sockets tell who subscribed: b"\x01" + prefix, and b"\x00" + prefix on leave.
-    def _read_subscriptions(self, timeout_ms: int = 0) -> None:
+    def _read_subscriptions(self, timeout_ms: int = 0) -> bool:
+        """Count who joined or left; True when a subscriber joined the reliable socket."""
+        joined_reliable = False
         while self.reliable.poll(timeout_ms, zmq.POLLIN):
             ev = self.reliable.recv()
             step = 1 if ev[:1] == b"\x01" else -1
@@ -112,6 +132,7 @@ class Publisher:
                 self.subscribers += step
             elif ev[1:] == EOS_PREFIX:  # latest subscribers listening for end of stream here
                 self.eos_listeners += step
+            joined_reliable |= step > 0
             self._check_barrier()
             timeout_ms = 0
         joined = False
@@ -120,8 +141,11 @@ class Publisher:
             joined |= ev[:1] == b"\x01"
             self.latest_subscribers += 1 if ev[:1] == b"\x01" else -1
             self._check_barrier()
+        while self.queued is not None and self.queued.poll(0, zmq.POLLIN):
+            self.queued_subscribers += 1 if self.queued.recv()[:1] == b"\x01" else -1
         if joined and self._latched_parts is not None:
             self._send_latest(self._latched_parts)
+        return joined_reliable
 
     def _check_barrier(self) -> None:
         """Once every expected subscriber has been here the barrier is passed, even if one has left
@@ -173,11 +197,13 @@ class Publisher:
             self._latched_parts = parts
         if self.latest_subscribers > 0 or eos:
             self._send_latest(parts)
+        if self.queued is not None and (self.queued_subscribers > 0 or eos):
+            self._send_latest(parts, self.queued)
 
-    def _send_latest(self, parts: Sequence[Any]) -> None:
+    def _send_latest(self, parts: Sequence[Any], sock: zmq.Socket | None = None) -> None:
         try:
-            _send_multipart(self.latest, self.topic_b, parts, zmq.NOBLOCK)
-        except zmq.Again:  # the lossy socket: a full queue drops (the subscriber counts the gap)
+            _send_multipart(self.latest if sock is None else sock, self.topic_b, parts, zmq.NOBLOCK)
+        except zmq.Again:  # a lossy socket: a full queue drops (the subscriber counts the gap)
             pass
 
     def _send_reliable(self, topic: bytes, parts: Sequence[Any]) -> None:
@@ -193,18 +219,35 @@ class Publisher:
     def send_eos(self, node: str, seq: int, reason: str = "end") -> None:
         parts = encode(EndOfStream(stamp=time.monotonic_ns(), seq=seq, node=node, reason=reason), counter=self.count)
         self.count += 1
+        self._eos_parts = parts
         self.send_parts(parts, eos=True)
 
     def wait_delivered(self, timeout: float) -> bool:
         """After end of stream: wait until every reliable subscriber has left (they unsubscribe on
         end of stream). ZeroMQ loses what is still in flight when a publisher closes its socket, so
-        a finite stream is complete only once its readers say they have read to the end."""
+        a finite stream is complete only once its readers say they have read to the end.
+
+        A subscriber that connects after end of stream went out (a node still starting when its
+        source failed at once) gets it again: it would otherwise wait for an end that never comes,
+        and this publisher for its confirmation."""
         deadline = time.monotonic() + timeout
-        self._read_subscriptions()
+        resend = self._read_subscriptions()
         while self.subscribers > 0 or self.eos_listeners > 0:
             if self.should_stop() or time.monotonic() > deadline:
                 return False
-            self._read_subscriptions(50)
+            if resend and self._eos_parts is not None:
+                resend = not self._try_send_eos_again()
+            resend |= self._read_subscriptions(50)
+        return True
+
+    def _try_send_eos_again(self) -> bool:
+        """End of stream once more on the reliable socket, without waiting (a lagging subscriber's
+        full queue makes it fail: try again later). Subscribers that have it already ignore it."""
+        try:
+            for topic in (self.topic_b, EOS_PREFIX + self.topic_b):
+                _send_multipart(self.reliable, topic, self._eos_parts, zmq.NOBLOCK)
+        except zmq.Again:
+            return False
         return True
 
     def close(self, linger_ms: int = -1) -> None:
@@ -212,6 +255,8 @@ class Publisher:
         Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers."""
         self.reliable.close(linger=linger_ms)
         self.latest.close(linger=0)
+        if self.queued is not None:
+            self.queued.close(linger=0)
 
 
 @dataclass(frozen=True)
@@ -246,6 +291,7 @@ def decode_raw(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[A
     header = read_header(parts[0], limits)
     if header["s"] == _EOS_SCHEMA:
         return decode_counted(parts, limits)
+    check_array_count(len(header.get("a", [])), REGISTRY.get(header["s"]), limits)
     if len(header.get("a", [])) != len(parts) - 1:
         raise DecodeError("bad_array", f"header names {len(header.get('a', []))} arrays, {len(parts) - 1} buffers arrived")
     counter = header.get("n")
@@ -255,7 +301,14 @@ def decode_raw(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[A
 class Subscriber:
     """One input. ``receive()`` returns the next message (reliable) or the newest one (latest), or
     None when nothing is ready. Decode failures are counted per kind in ``bad`` and reported through
-    ``on_bad(kind, detail)`` the first time each kind occurs."""
+    ``on_bad(kind, detail)`` the first time each kind occurs.
+
+    Besides what the codec refuses, a subscriber drops (and counts as bad) a message of another type
+    than ``msg_type`` (``wrong_type``), an end of stream that does not name ``publisher``, the node
+    publishing the topic (``forged_eos``), and a send counter that jumps further ahead than the
+    publisher can have sent since the last message (``bad_counter``: a forged counter must not turn
+    into billions of drops). A counter that goes back is a restarted publisher: counting starts again.
+    """
 
     def __init__(
         self,
@@ -268,10 +321,18 @@ class Subscriber:
         on_bad: Callable[[str, str], None] | None = None,
         untyped: bool = False,
         raw: bool = False,
+        msg_type: type | None = None,
+        publisher: str | None = None,
+        queue: int = 0,
     ) -> None:
         """``untyped``: messages of schemas not registered here arrive as UntypedMessage instead of
         being dropped (tools that show any topic); ``raw``: messages arrive as :class:`RawMessage`,
-        header checked but arrays left undecoded (recorders)."""
+        header checked but arrays left undecoded (recorders). ``msg_type``: the only message class
+        accepted (None: any); ``publisher``: the node name an end of stream must carry (None: any,
+        for topics whose publisher is not known here). ``queue`` (latest policy only): keep up to
+        this many messages in order instead of only the newest, read from the publisher's queued
+        socket (recorders that must never hold a publisher back but should lose nothing while they
+        keep up); what overflows is counted in ``drops``."""
         if policy not in POLICIES:
             raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
         self.topic = topic
@@ -279,6 +340,10 @@ class Subscriber:
         self.limits = limits
         self.on_bad = on_bad
         self._decoder = decode_raw if raw else decode_any if untyped else decode_counted
+        self._type_id = None if msg_type is None else schema_id(msg_type)
+        self._schemas = None if msg_type is None else frozenset((self._type_id, _EOS_SCHEMA))
+        self.publisher = publisher
+        self.queued = policy == LATEST and queue > 0
         self.count = 0
         self.drops = 0
         self.bad: dict[str, int] = {}
@@ -286,11 +351,15 @@ class Subscriber:
         self._pending_eos: EndOfStream | None = None
         self._eos_counter: int | None = None
         self._last_counter: int | None = None
+        self._last_counter_time = self._eos_time = 0.0
         self.socket = ctx.socket(zmq.SUB)
         self.socket.setsockopt(zmq.LINGER, 0)
-        self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else 2)
+        self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else queue if self.queued else 2)
         self.socket.setsockopt(zmq.SUBSCRIBE, b"")
-        self.socket.connect(endpoints.reliable if policy == RELIABLE else endpoints.latest)
+        if policy == RELIABLE:
+            self.socket.connect(endpoints.reliable)
+        else:  # a launcher older than the queued socket offers the latest one only
+            self.socket.connect(endpoints.queued if self.queued and endpoints.queued else endpoints.latest)
         self.eos_socket: zmq.Socket | None = None
         if policy == LATEST:
             self.eos_socket = ctx.socket(zmq.SUB)
@@ -318,12 +387,44 @@ class Subscriber:
         except DecodeError as exc:
             self._bad(exc.kind, exc.detail)
             return None
+        except Exception as exc:  # noqa: BLE001 - anything can connect to a socket; no input may kill the node
+            self._bad("malformed", f"{type(exc).__name__}: {exc}")
+            return None
+        if not self._accepted(msg):
+            return None
         if counter is not None and track:
-            last = self._last_counter
-            if last is not None and counter > last + 1:
-                self.drops += counter - last - 1
-            self._last_counter = counter
+            gap = self._counter_gap(counter)
+            if gap is None:
+                return None
+            self.drops += gap
         return msg
+
+    def _accepted(self, msg: Any) -> bool:
+        """The declared type, and an end of stream only from the topic's publisher."""
+        if self._schemas is not None:
+            sid = msg.schema if isinstance(msg, RawMessage) else getattr(type(msg), "__schema_id__", None)
+            if sid not in self._schemas:
+                self._bad("wrong_type", f"a {sid} message on a topic of {self._type_id}")
+                return False
+        if self.publisher is not None and isinstance(msg, EndOfStream) and msg.node != self.publisher:
+            self._bad("forged_eos", f"end of stream from {msg.node!r}; the topic's publisher is {self.publisher!r}")
+            return False
+        return True
+
+    def _counter_gap(self, counter: int) -> int | None:
+        """Messages lost before this one by the publisher's send counter; None for an impossible
+        jump (more than the publisher can have sent since the last message), which is dropped."""
+        now = _monotonic()
+        last = self._last_counter
+        gap = 0
+        if last is not None and counter > last:
+            gap = counter - last - 1
+            if gap > COUNTER_SLACK + (now - self._last_counter_time) * MAX_SEND_RATE:
+                self._bad("bad_counter", f"send counter jumped from {last} to {counter}")
+                return None
+        # a counter that goes back (or the first one) starts counting again: the publisher restarted
+        self._last_counter, self._last_counter_time = counter, now
+        return gap
 
     def _recv(self, flags: int) -> list[Any]:
         """One multipart message as zmq.Frame objects (array buffers are viewed by ``np.frombuffer``
@@ -351,18 +452,20 @@ class Subscriber:
                 # end of stream overtook the lossy socket: deliver what is still in flight there first
                 self._pending_eos = msg
                 self._eos_counter = read_header(frames[1], self.limits).get("n")
+                self._eos_time = _monotonic()
         try:
             frames = self._recv(zmq.NOBLOCK)
         except zmq.Again:
             if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
                 msg, self._pending_eos = self._pending_eos, None
                 last, n = self._last_counter, self._eos_counter
-                if type(n) is int and last is not None and n > last + 1:
+                if type(n) is int and last is not None and n > last + 1 and \
+                        n - last - 1 <= COUNTER_SLACK + (self._eos_time - self._last_counter_time) * MAX_SEND_RATE:
                     self.drops += n - last - 1  # lost on the lossy socket after the last one received
                 self._finish()
                 return msg
             return None
-        if self.policy == LATEST:
+        if self.policy == LATEST and not self.queued:
             stale = 0
             while True:  # keep the newest; every older message still queued is a drop
                 try:

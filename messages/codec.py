@@ -43,7 +43,10 @@ class Limits:
     """Upper bounds enforced while decoding (bytes unless stated)."""
 
     max_header: int = 1 << 20
-    max_arrays: int = 64
+    #: arrays of a message whose class is not known here (or holds ``Any`` fields); a known class
+    #: allows what its fields can hold, counting ``max_items`` items per list (people per frame)
+    max_arrays: int = 4096
+    max_items: int = 256
     max_ndim: int = 8
     max_array_bytes: int = 256 << 20
     max_total_bytes: int = 512 << 20
@@ -187,11 +190,58 @@ _NO_ARRAYS: list[Any] = []
 _DTYPES = {d: np.dtype(d) for d in ALLOWED_DTYPES}
 
 
-def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits) -> list[np.ndarray]:
+def array_capacity(cls: type | None, limits: Limits = DEFAULT_LIMITS) -> int:
+    """How many arrays a message of class ``cls`` can hold: its array fields, nested structs
+    included, with ``limits.max_items`` items per list or dict (e.g. 1 + 256 people x 3 arrays for
+    ``silhouette.Silhouettes``); ``limits.max_arrays`` for an unknown class or ``Any`` fields."""
+    if cls is None:
+        return limits.max_arrays
+    key = (cls, limits.max_items, limits.max_arrays)
+    cap = _CAPACITY.get(key)
+    if cap is None:
+        n = _capacity(cls, limits.max_items, 0)
+        cap = _CAPACITY[key] = limits.max_arrays if n is None else n
+    return cap
+
+
+def check_array_count(n: int, cls: type | None, limits: Limits = DEFAULT_LIMITS) -> None:
+    """DecodeError ``oversized`` when a header names more arrays than a ``cls`` message can hold."""
+    cap = array_capacity(cls, limits)
+    if n > cap:
+        what = getattr(cls, "__schema_id__", "a message of an unknown type")
+        raise DecodeError("oversized", f"{n} arrays exceed the {cap} that {what} can hold")
+
+
+#: (class, max_items, max_arrays) -> array capacity
+_CAPACITY: dict[tuple[type, int, int], int] = {}
+
+
+def _capacity(tp: Any, items: int, depth: int) -> int | None:
+    """Arrays a value of declared type ``tp`` can hold; None when unbounded (``Any``)."""
+    if tp is np.ndarray:
+        return 1
+    if tp is Any or depth > 16:
+        return None
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin in (typing.Union, types.UnionType):
+        caps = [_capacity(a, items, depth + 1) for a in args]
+        return None if None in caps else max(caps)
+    if origin is tuple and args and args[-1] is not Ellipsis:
+        caps = [_capacity(a, items, depth + 1) for a in args]
+        return None if None in caps else sum(caps)
+    if origin in (list, tuple, typing.Sequence, dict):
+        caps = [_capacity(a, items, depth + 1) for a in (args or (Any,))]
+        return None if None in caps else items * sum(caps)
+    if dataclasses.is_dataclass(tp):
+        caps = [_capacity(t, items, depth + 1) for t in field_types(tp).values()]
+        return None if None in caps else sum(caps)
+    return 0
+
+
+def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits, cls: type | None = None) -> list[np.ndarray]:
     if not specs and not parts:
         return []
-    if len(specs) > limits.max_arrays:
-        raise DecodeError("oversized", f"{len(specs)} arrays exceed the limit of {limits.max_arrays}")
+    check_array_count(len(specs), cls, limits)
     if len(specs) != len(parts):
         raise DecodeError("bad_array", f"header names {len(specs)} arrays but {len(parts)} buffers arrived")
     out = []
@@ -245,7 +295,7 @@ def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
     dec = _DECODERS.get(cls)
     if dec is None:
         dec = _DECODERS[cls] = compile_decoder(cls)
-    arrays = _arrays(header.get("a", _NO_ARRAYS), parts[1:], limits)
+    arrays = _arrays(header.get("a", _NO_ARRAYS), parts[1:], limits, cls)
     counter = header.get("n")
     return dec(header["f"], arrays), counter if type(counter) is int else None
 

@@ -11,6 +11,7 @@ emotion and strength at run time; ``None`` fields leave a setting unchanged.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from typing import Any
 
@@ -37,7 +38,9 @@ class Responder(Node):
     params = {
         "model": Param(str, "dual-hmm", "interaction model", choices=MODELS),
         "model_file": Param(str, "default", "model file for the selected model, or 'default' (built from the "
-                            "simulator into ~/.cache/counterpart/models when missing)"),
+                            "simulator into ~/.cache/counterpart/models when missing)",
+                            check=lambda v: None if v == "default" or os.path.isfile(v) else
+                            f"no model file {v!r}; make one with 'counterpart learn responder' or use 'default'"),
         "use_pose": Param(bool, True, "subscribe to 'pose'"),
         "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
         "use_signals": Param(bool, False, "subscribe to 'signals'"),
