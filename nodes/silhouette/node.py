@@ -31,6 +31,8 @@ from .regions import Person
 
 _NO_CTRL = np.zeros((0, 2), np.float32)
 _NO_POINT = np.full(2, np.nan, np.float32)
+#: the smallest side (pixels) of a frame the background model can take
+MIN_SIDE = 2
 #: the largest person label a uint8 mask can hold (id + 1)
 MAX_LABEL = 255
 
@@ -39,6 +41,8 @@ def as_bgr(image: np.ndarray) -> np.ndarray:
     """uint8 (H, W, 3) BGR from a bgr8 (H, W, 3) or mono8 (H, W) / (H, W, 1) image."""
     if image.dtype != np.uint8:
         raise ValueError(f"frame image must be uint8, got {image.dtype}")
+    if image.ndim < 2 or min(image.shape[:2]) < MIN_SIDE:
+        raise ValueError(f"frame image of shape {image.shape} is too small: at least {MIN_SIDE}x{MIN_SIDE} pixels")
     if image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 1):
         return cv2.cvtColor(image.reshape(image.shape[:2]), cv2.COLOR_GRAY2BGR)
     if image.ndim == 3 and image.shape[2] == 3:
