@@ -2,7 +2,9 @@
 
 Frame (bgr8 or mono8) in, Silhouettes out, exactly one per frame with the frame's ``seq`` and
 ``stamp`` (lockstep replays and the labeller pair topics by seq). While the background model learns
-from the first ``train_frames`` frames the output has no people. The algorithm is
+from the first ``train_frames`` frames the output has no people; with ``replay_training`` (lockstep
+replays) those frames are held back instead and their people found once the background is learnt,
+from however many frames there are when a short stream ends first. The algorithm is
 :class:`nodes.silhouette.pipeline.SilhouetteExtractor`; this module only converts messages.
 
 Run in a graph (``run: nodes.silhouette``) or alone::
@@ -79,8 +81,8 @@ class Silhouette(Node):
         "n_ctrl": Param(int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)",
                         min=4, max=1024),
         "min_area": Param(int, 300, "smallest person region (pixels)", min=1),
-        "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people",
-                              min=2, max=100_000),
+        "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people unless "
+                              "replay_training", min=2, max=100_000),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
         "people_aware": Param(bool, True, "horprasert: find the people in the training frames (OpenCV's HOG people "
                               "detector) and learn the room around them, so that people standing still "
