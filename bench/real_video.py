@@ -16,10 +16,38 @@ Each clip goes through the real command (six node processes, the lockstep graph
 - reference in the same run: the real-time graph (``--realtime``) on the first ``--reference``
   clips, where the nodes that cannot keep up on this machine drop frames (``partner_present_realtime``).
 
+Tracking accuracy (``--pck-clips``, default the same clips; ``--no-pck`` skips it): each clip is
+tracked offline without the bus, configured as the lockstep graph configures its nodes
+(``nodes.tracker.offline.track_video``: both sides, the default motion prior, 10 layers x 256
+particles, the background fitted on the first 20 frames, the camera the calibration node publishes
+when given no file), and its joints projected with the camera the run recorded. They are compared
+with the reference keypoints ``../shared/data/ut_interaction/keypoints/<stem>.npz`` (MediaPipe,
+person 0 the left one at frame 0) on every frame the video decodes:
+
+- ``pck10``, ``pck20``: PCK@0.1h and PCK@0.2h, the share of the reference joints of visibility
+  >= 0.5 whose tracked joint lies within 0.1 h (0.2 h) pixels, h the reference person's height on
+  that frame (head to the midpoint of the two ankles); the tracked side "left" is person 0 and
+  "right" person 1; a frame on which a side is missing or lost counts all its joints as misses;
+- ``pck10_box``, ``pck20_box``: the same for the box-template baseline, no tracking: one fixed 2D
+  template for both people, the mean of the reference joints (vis >= 0.5) normalised to their
+  person's silhouette box on the "tune" clips of the run (all clips when it has none; on the tune
+  split it is therefore measured on the clips it was learnt from), scaled into the box of the
+  silhouette the tracker is fed on that frame (the first person the silhouette node reports on
+  that side), from a second pass of the same silhouette extractor (``iter_video``; it is
+  deterministic, and ``pck_details.silhouette_ids_agree`` checks that the ids match the tracker's);
+- ``pck_excluded``: share of frames left out because the reference itself is broken there (both
+  reference skeletons on one person, ``real_silhouettes.reference_collapsed``);
+- split: clips whose first number is even are "tune", odd "report" (as ``bench/real_silhouettes.py``);
+  the top-level figures are the report split's, ``tune`` holds the same for the tune split;
+  ``pck_details`` per split also gives the figures with the two sides matched to the reference
+  people per frame by the smaller mean pixel distance (people and the reference's crops can swap
+  when they touch), per clip figures, the template, and the seconds per clip of the tracking and
+  of the silhouette pass (``track_s``, ``box_s``).
+
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
-runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]``.
-Last stdout line: one JSON object.
+runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
+[--pck-clips all|N] [--no-pck]``. Last stdout line: one JSON object.
 """
 from __future__ import annotations
 
@@ -30,13 +58,26 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
+from real_silhouettes import VIS, reference_collapsed  # bench/ is on sys.path when run as a script
+
+from body.camera import Camera
+from body.skeleton import JOINT_INDEX
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
+KEYPOINTS = CLIPS.parent / "keypoints"
+#: tracked side k is reference person k (person 0 is the one on the left at frame 0)
+SIDES = ("left", "right")
+#: as the lockstep graph (launch/lockstep.yaml) configures the silhouette and tracker nodes
+TRAIN_FRAMES, LAYERS, PARTICLES = 20, 10, 256
+HEAD, ANKLES = JOINT_INDEX["head"], [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
+ALPHAS = (0.1, 0.2)
 
 
 def clip_list(which: str) -> list[Path]:
@@ -77,11 +118,193 @@ def video_fps(out: Path) -> float:
     return fps
 
 
+def split_of(clip: Path) -> str:
+    """"tune" for the clips whose first number is even, "report" for the odd ones (as real_silhouettes)."""
+    return "tune" if int(clip.stem.split("_")[0]) % 2 == 0 else "report"
+
+
+def tracked_pixels(track_npz: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The tracked joints of a ``track_video`` file projected with the camera it recorded.
+
+    Returns est (T, 2, 14, 2) pixels, NaN where the side was not tracked, lost, or the joint is
+    behind the camera, and ids (T, 2) the silhouette node's person id per side (-1: none).
+    """
+    d = np.load(track_npz)
+    camera = Camera.from_dict(json.loads(str(d["camera"])))
+    est = camera.project(d["joints"].astype(np.float64))
+    est[d["lost"]] = np.nan  # a lost track is a miss, whatever joints it left behind
+    return est, d["ids"]
+
+
+def silhouette_boxes(clip: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The silhouette box of each side per frame, as the offline tracker's extractor finds them.
+
+    The same extractor and training as ``track_video`` (``iter_video``, default parameters,
+    ``TRAIN_FRAMES``), and the same choice of person per side (the first one reported with that
+    side). Returns boxes (T, 2, 4) float (x, y, w, h) pixels, NaN where the side has nobody, and
+    ids (T, 2) person ids (-1: none).
+    """
+    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
+
+    boxes, ids = [], []
+    for _, result in iter_video(clip, SilhouetteExtractor(), None, TRAIN_FRAMES):
+        row, row_ids = np.full((2, 4), np.nan), np.full(2, -1)
+        for k, side in enumerate(SIDES):
+            person = next((p for p in result.people if p.side == side), None)
+            if person is not None:
+                row[k], row_ids[k] = person.bbox, person.id
+        boxes.append(row)
+        ids.append(row_ids)
+    return np.array(boxes), np.array(ids)
+
+
+def reference_height(kp: np.ndarray) -> np.ndarray:
+    """kp (T, 2, 14, 2) pixels -> (T, 2) each person's height in pixels: head to mid-ankle."""
+    return np.linalg.norm(kp[:, :, HEAD] - kp[:, :, ANKLES].mean(axis=2), axis=-1)
+
+
+def pck_counts(est: np.ndarray, kp: np.ndarray, scored: np.ndarray, h: np.ndarray) -> dict[str, int]:
+    """Joints within each ``ALPHAS`` x h of the reference.
+
+    est, kp (T, 2, 14, 2) pixels (est NaN: missing, a miss); scored (T, 2, 14) bool, the joints
+    that count; h (T, 2) reference heights, pixels. Returns {"n": joints scored, "hit10": ...,
+    "hit20": ...} (pooled over clips by summing, so PCK weighs every joint alike).
+    """
+    d = np.linalg.norm(est - kp, axis=-1)  # NaN where est is missing: NaN < x is False, a miss
+    out = {"n": int(scored.sum())}
+    for a in ALPHAS:
+        out[f"hit{round(a * 100)}"] = int((scored & (d < a * h[..., None])).sum())
+    return out
+
+
+def match_per_frame(est: np.ndarray, kp: np.ndarray, scored: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """est (T, 2, 14, 2) with its two sides swapped on the frames where the swap brings them closer
+    to the reference people kp (T, 2, 14, 2) (mean pixel distance over the scored joints, NaN
+    ignored; both assignments must have one). Returns (est matched, swapped (T,) bool)."""
+    def cost(e: np.ndarray) -> np.ndarray:
+        d = np.where(scored, np.linalg.norm(e - kp, axis=-1), np.nan)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN frames: no cost, no swap
+            return np.nanmean(d.reshape(len(d), -1), axis=1)
+
+    keep, swap = cost(est), cost(est[:, ::-1])
+    swapped = swap < keep  # False where either is NaN
+    return np.where(swapped[:, None, None, None], est[:, ::-1], est), swapped
+
+
+def box_template(boxes: np.ndarray, kp: np.ndarray, scored: np.ndarray) -> np.ndarray:
+    """The mean reference skeleton in box coordinates: (14, 2), x and y as fractions of the box's
+    width and height from its top-left corner. boxes (T, 2, 4) (x, y, w, h) pixels, NaN: none;
+    kp (T, 2, 14, 2) pixels; scored (T, 2, 14) the joints to learn from (frames of several clips
+    may be stacked on the first axis)."""
+    rel = (kp - boxes[:, :, None, :2]) / np.maximum(boxes[:, :, None, 2:], 1.0)
+    use = scored & np.isfinite(rel).all(axis=-1)
+    return np.where(use[..., None], rel, 0.0).sum(axis=(0, 1)) / np.maximum(use.sum(axis=(0, 1)), 1)[:, None]
+
+
+def template_pixels(template: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """template (14, 2) box fractions scaled into boxes (T, 2, 4) -> (T, 2, 14, 2) pixels (NaN: no box)."""
+    return boxes[:, :, None, :2] + template * boxes[:, :, None, 2:]
+
+
+def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
+    """Track one clip offline and gather what the PCK needs: the projected estimates, the boxes,
+    the reference and which of its joints count; plus timings and the excluded frames."""
+    from nodes.tracker.offline import track_video
+    from nodes.tracker.prior import resolve_prior
+
+    t0 = time.monotonic()
+    track_video(clip, work / f"{clip.stem}-track.npz", people=SIDES, camera=None, prior=resolve_prior("default"),
+                layers=LAYERS, particles=PARTICLES, train_frames=TRAIN_FRAMES)
+    t1 = time.monotonic()
+    boxes, box_ids = silhouette_boxes(clip)
+    t2 = time.monotonic()
+    est, ids = tracked_pixels(work / f"{clip.stem}-track.npz")
+    ref = np.load(KEYPOINTS / f"{clip.stem}.npz")
+    # OpenCV decodes a frame or two fewer than the reference has: score the frames both have
+    n = min(len(est), len(boxes), len(ref["kp"]))
+    kp, vis = ref["kp"][:n].astype(np.float64), ref["vis"][:n]
+    collapsed = np.array([reference_collapsed(kp[t], vis[t]) for t in range(n)], dtype=bool)
+    scored = (vis >= VIS) & ~collapsed[:, None, None]
+    return {"est": est[:n], "boxes": boxes[:n], "kp": kp, "scored": scored, "h": reference_height(kp),
+            "collapsed": int(collapsed.sum()), "frames": n, "track_s": t1 - t0, "box_s": t2 - t1,
+            "ids_agree": int((ids[:n] == box_ids[:n]).all(axis=1).sum())}
+
+
+def pck_figures(rows: list[dict[str, Any]], template: np.ndarray, per_frame: bool) -> dict[str, Any]:
+    """PCK of the tracker and of the box template pooled over the clips' rows (``pck_clip``);
+    ``per_frame``: match the sides to the reference people per frame (``match_per_frame``)."""
+    tot: dict[str, int] = {}
+    swapped = 0
+    for r in rows:
+        est, box = r["est"], template_pixels(template, r["boxes"])
+        if per_frame:
+            est, sw = match_per_frame(est, r["kp"], r["scored"])
+            box, _ = match_per_frame(box, r["kp"], r["scored"])
+            swapped += int(sw.sum())
+        for name, e in (("", est), ("_box", box)):
+            for k, v in pck_counts(e, r["kp"], r["scored"], r["h"]).items():
+                tot[k + name] = tot.get(k + name, 0) + v
+    frames = sum(r["frames"] for r in rows)
+    out: dict[str, Any] = {}
+    for name in ("", "_box"):
+        for a in ALPHAS:
+            out[f"pck{round(a * 100)}{name}"] = round(tot[f"hit{round(a * 100)}{name}"] / max(tot["n" + name], 1), 4)
+    if per_frame:
+        out["swapped_frames"] = round(swapped / max(frames, 1), 4)
+    else:
+        out["pck_excluded"] = round(sum(r["collapsed"] for r in rows) / max(frames, 1), 4)
+        out["pck_joints"] = tot["n"]
+    return out
+
+
+def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
+    """The tracking-accuracy part: the top-level figures (report split), ``tune`` and ``pck_details``."""
+    rows: dict[str, dict[str, Any]] = {}
+    for clip in clips:
+        rows[clip.stem] = pck_clip(clip, work)
+        r = rows[clip.stem]
+        print(f"pck {clip.stem}: track {r['track_s']:.1f} s, boxes {r['box_s']:.1f} s, "
+              f"{r['collapsed']}/{r['frames']} frames excluded", file=sys.stderr, flush=True)
+    splits = {s: [rows[c.stem] for c in clips if split_of(c) == s] for s in ("tune", "report")}
+    # learnt on the tune clips only, so that the report split's baseline has not seen its clips
+    learn = splits["tune"] or list(rows.values())
+    template = box_template(np.concatenate([r["boxes"] for r in learn]), np.concatenate([r["kp"] for r in learn]),
+                            np.concatenate([r["scored"] for r in learn]))
+    result: dict[str, Any] = {"pck10": None, "pck20": None, "pck10_box": None, "pck20_box": None, "pck_excluded": None}
+    details: dict[str, Any] = {
+        "split": "tune: clips whose first number is even; report: odd (top-level figures)",
+        "template": "mean reference joints (vis >= 0.5) in silhouette-box fractions (x, y), learnt on "
+                    + ("the tune clips of this run" if splits["tune"] else "all its clips (no tune clip in the run)"),
+        "template_xy": np.round(template, 3).tolist(),
+        "silhouette_ids_agree": round(sum(r["ids_agree"] for r in rows.values())
+                                      / max(sum(r["frames"] for r in rows.values()), 1), 4),
+        "track_s_per_clip": round(float(np.mean([r["track_s"] for r in rows.values()])), 1) if rows else None,
+        "box_s_per_clip": round(float(np.mean([r["box_s"] for r in rows.values()])), 1) if rows else None,
+        "per_clip": {stem: {"split": split_of(CLIPS / f"{stem}.avi"), **pck_figures([r], template, False)}
+                     for stem, r in rows.items()},
+    }
+    for split, split_rows in splits.items():
+        if not split_rows:
+            continue
+        figs = {**pck_figures(split_rows, template, False), "pck_clips": len(split_rows)}
+        details[split] = {"per_frame_matching": pck_figures(split_rows, template, True)}
+        if split == "report":
+            result.update(figs)
+        else:
+            result["tune"] = figs
+    result["pck_details"] = details
+    return result
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--clips", default="12", help="'all' or how many clips, spread over the set (default 12)")
     ap.add_argument("--timeout", type=float, default=300.0, help="seconds a run may take before it counts as hung")
     ap.add_argument("--reference", type=int, default=3, help="clips also run through the real-time graph")
+    ap.add_argument("--pck-clips", default=None,
+                    help="'all' or how many clips to track offline for the PCK figures (default: as --clips)")
+    ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
     args = ap.parse_args()
     if not CLIPS.is_dir():
         sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")
@@ -129,6 +352,8 @@ def main() -> None:
                                                "frames_with_people", "fps_in", "fps_video")}
                      for k, r in per_clip.items()},
     }
+    if not args.no_pck:
+        result.update(run_pck(clip_list(args.pck_clips or args.clips), work))
     print(json.dumps(result))
 
 
