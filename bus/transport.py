@@ -459,8 +459,10 @@ class Subscriber:
             if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
                 msg, self._pending_eos = self._pending_eos, None
                 last, n = self._last_counter, self._eos_counter
-                if type(n) is int and last is not None and n > last + 1 and \
-                        n - last - 1 <= COUNTER_SLACK + (self._eos_time - self._last_counter_time) * MAX_SEND_RATE:
+                # the end may have been read before the messages still queued ahead of it: no time
+                # between them then, and the gap is bounded by the slack alone (never by a negative time)
+                if type(n) is int and last is not None and n > last + 1 and n - last - 1 <= \
+                        COUNTER_SLACK + max(0.0, self._eos_time - self._last_counter_time) * MAX_SEND_RATE:
                     self.drops += n - last - 1  # lost on the lossy socket after the last one received
                 self._finish()
                 return msg

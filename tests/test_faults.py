@@ -226,7 +226,9 @@ def test_a_queued_latest_input_keeps_order_and_counts_what_overflowed(home: Path
     pub = Publisher(ctx, "q", ipc_endpoints(home, "q"), latest_hwm=2)
     sub = Subscriber(ctx, "q", ipc_endpoints(home, "q"), LATEST, queue=8)
     try:
-        assert wait_for(lambda: pub.poll_subscriptions() or pub.queued_subscribers == 1, 5)
+        # both of its sockets connected: the queued one, and the one its end of stream comes on when
+        # the full queue drops it there (without waiting for that one the end was lost once under load)
+        assert wait_for(lambda: pub.poll_subscriptions() or (pub.queued_subscribers == 1 and pub.eos_listeners == 1), 5)
         for i in range(400):  # a camera at 1 kHz; the reader is not reading: its queue and the socket fill
             pub.send(Number(seq=i, payload=np.zeros(20_000, np.uint8)))
             time.sleep(0.001)
