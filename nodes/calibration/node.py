@@ -47,11 +47,12 @@ class Calibration(Node):
             return
         try:
             camera = camera_for_size(self.calibration, *size)
-        except ValueError as exc:  # a file for frames of another shape: no camera to agree on; the graph ends
+        except ValueError as exc:
+            # a file for frames of another shape: no camera to agree on, so nothing can go on. Leaving
+            # before this first message is handled makes it a failure to start: the launcher ends the
+            # whole graph at once with this exit code (ending cleanly, its subscribers would wait)
             self.log.error("parameter 'file': %s", exc)
-            self.exit_code = 2
-            self.stopping = True
-            return
+            raise SystemExit(2) from None
         self.size = size
         source = f"file:{self.p['file']}" if self.p["file"] else "default"
         self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq, source))
