@@ -99,7 +99,7 @@ class RunSummary:
         for p in self.loads:
             if p.handled < p.offered:
                 out.append(f"warning: {p.node} handled {p.handled} of {p.offered} frames offered on {p.port} "
-                           "(it could not keep up; `counterpart demo --input FILE` processes every frame)")
+                           "(it could not keep up in real time; without --realtime every frame is processed)")
         return out
 
     def lines(self) -> list[str]:

@@ -153,6 +153,7 @@ class Compositor:
         self.delays: deque[float] = deque(maxlen=self.delay_window)  # seconds; inf: the partner never came
         self.partners_late = False
         self._max_frame_seq = -1
+        self.partner_drawn = False
 
     # ---------------------------------------------------------------------------------- input
     def add_frame(self, msg: Any, now: float | None = None) -> None:
@@ -266,8 +267,9 @@ class Compositor:
                 if np.size(person.ctrl) >= 8:
                     draw.draw_spline_outline(img, person.ctrl, draw.person_colour(person.id), 1,
                                              person.ref_point, f"{person.id}")
-        if b.partner is not None:
-            self.counts["partner_drawn"] += self._draw_partner(img, b.partner, cam)
+        #: whether the last rendered frame shows a partner (inside the picture)
+        self.partner_drawn = b.partner is not None and self._draw_partner(img, b.partner, cam)
+        self.counts["partner_drawn"] += self.partner_drawn
         if ov.get("skeleton") and b.pose is not None:
             for body in b.pose.people:
                 if np.shape(body.joints) == (14, 3) and np.isfinite(body.joints).all():

@@ -203,10 +203,9 @@ class Renderer(Node):
 
     def _render_ready(self, flush: bool = False, publish: bool = True) -> None:
         for b in self.comp.ready(time.monotonic(), flush=flush):
-            drawn = self.comp.counts["partner_drawn"]
-            self._output(b, self.comp.render(b), publish, drawn)
+            self._output(b, self.comp.render(b), publish)
 
-    def _output(self, b: Bundle, image: Any, publish: bool, drawn_before: int) -> None:
+    def _output(self, b: Bundle, image: Any, publish: bool) -> None:
         f = b.frame
         if publish:
             self.publish("rendered", Frame(stamp=f.stamp, seq=f.seq, image=image, encoding="bgr8",
@@ -219,7 +218,7 @@ class Renderer(Node):
         t = f.seq / f.fps if f.fps > 0 else f.source_time
         if t >= SETTLE_S:
             self.tally("rendered_after_1s")
-            self.tally("partner_drawn_after_1s", self.comp.counts["partner_drawn"] > drawn_before)
+            self.tally("partner_drawn_after_1s", self.comp.partner_drawn)
         if self.server is not None:
             self.server.push(image, f.seq)
         n = self.p["snapshot_every"]

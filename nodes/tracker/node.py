@@ -90,7 +90,7 @@ class TrackerNode(Node):
             self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
         self.prior = resolve_prior(self.p["prior"])
         self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
-        #: frame size (w, h) -> the camera of the graph (camera_info) for it
+        #: frame size (w, h) -> the camera for it (camera_info, or the "camera" parameter's)
         self.cameras: dict[tuple[int, int], Camera] = {}
         self.camera: Camera | None = None  # the one the trackers use
         self.trackers: dict[str, Tracker] = {}
@@ -101,12 +101,12 @@ class TrackerNode(Node):
 
     def _camera(self, size: tuple[int, int]) -> Camera | None:
         """The camera for frames of ``size``; None while the graph's camera_info has not come."""
-        if self.p["camera_info"]:
-            return self.cameras.get(size)
-        try:
-            return camera_for_size(self.calibration, *size)
-        except ValueError as exc:
-            raise ValueError(f"parameter 'camera': {exc}") from None
+        if not self.p["camera_info"] and size not in self.cameras:
+            try:  # made once per size: the trackers start again only when the camera changes
+                self.cameras[size] = camera_for_size(self.calibration, *size)
+            except ValueError as exc:
+                raise ValueError(f"parameter 'camera': {exc}") from None
+        return self.cameras.get(size)
 
     def _tracker(self, side: str, camera: Camera) -> Tracker:
         if camera is not self.camera:
