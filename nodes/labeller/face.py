@@ -123,13 +123,37 @@ def mouth_patch(gray: np.ndarray, face: Box, patch_size: tuple[int, int] = (32, 
     return patch / max(float(patch.mean()), 1.0)
 
 
+#: the mouth patch of a tracked face, in face widths from its head point (the box centre): centre
+#: below it by MOUTH_DY, size MOUTH_W x MOUTH_H; the upper-face reference patch (eyes, brows) the
+#: same with UPPER_*
+MOUTH_DY, MOUTH_W, MOUTH_H = 0.28, 0.5, 0.28
+UPPER_DY, UPPER_W, UPPER_H = -0.1, 0.6, 0.22
+
+
+def subpix_patch(gray: np.ndarray, center: tuple[float, float], size: tuple[float, float],
+                 patch_size: tuple[int, int]) -> np.ndarray | None:
+    """The region of ``size`` (w, h) px centred at the sub-pixel ``center`` (x, y) px of gray
+    (H,W) uint8, resampled to ``patch_size`` (w, h) and divided by its mean: (h, w) float32, or
+    None when the region leaves the image."""
+    w, h = size
+    cx, cy = center
+    if cx - w / 2 < 0 or cy - h / 2 < 0 or cx + w / 2 > gray.shape[1] or cy + h / 2 > gray.shape[0]:
+        return None
+    iw, ih = max(2, int(round(w))), max(2, int(round(h)))
+    patch = cv2.getRectSubPix(gray, (iw, ih), (float(cx), float(cy)), patchType=cv2.CV_32F)
+    patch = cv2.resize(patch, patch_size, interpolation=cv2.INTER_AREA)
+    return patch / max(float(patch.mean()), 1.0)
+
+
 @dataclass(frozen=True)
 class FaceParams:
     """fps: Hz. window_s: averaging window (s). min_face_px: smallest face width accepted (px).
     talk_energy, laugh_energy: motion energies (mean |diff| of mean-normalised patches) of the
     talking and laughing thresholds. laugh_extent: vertical extent fraction for laughing.
     min_valid: fraction of the window that must hold measurements. detect_every: run the cascade
-    every n frames and reuse the last box in between."""
+    every n frames and reuse the last box in between. talk_energy_tracked, laugh_energy_tracked:
+    the thresholds of a tracked face's stabilised mouth energy above its upper face's
+    (:meth:`FaceSignalDetector.update_track`), in the same unit (laughing from the energy alone)."""
 
     fps: float
     window_s: float = 1.0
@@ -140,12 +164,18 @@ class FaceParams:
     min_valid: float = 0.5
     detect_every: int = 1
     patch_size: tuple[int, int] = (32, 16)
+    talk_energy_tracked: float = 0.008
+    laugh_energy_tracked: float = 0.05
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
             raise ValueError(f"fps must be > 0, got {self.fps}")
         if self.min_face_px < 12:
             raise ValueError(f"min_face_px must be >= 12 pixels, got {self.min_face_px}")
+        for name in ("talk_energy", "laugh_energy", "talk_energy_tracked", "laugh_energy_tracked", "laugh_extent"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0 (a mean absolute difference of mean-normalised "
+                                 f"patches), got {getattr(self, name)}")
         if self.detect_every < 1:
             raise ValueError(f"detect_every must be >= 1, got {self.detect_every}")
 
@@ -171,6 +201,7 @@ class FaceSignalDetector:
         self._extent = np.full(self.params.w, np.nan)
         self._i = 0
         self._prev: np.ndarray | None = None
+        self._prev_ref: np.ndarray | None = None
         self._box: Box | None = None
         self._frame = 0
 
@@ -193,6 +224,7 @@ class FaceSignalDetector:
         self._energy.fill(np.nan)
         self._extent.fill(np.nan)
         self._prev = None
+        self._prev_ref = None
         self._box = None
 
     def _record(self, energy: float, extent: float) -> None:
@@ -203,7 +235,10 @@ class FaceSignalDetector:
     def update(self, image: np.ndarray, roi: Box | None = None,
                face_box: Box | None = None) -> tuple[float, int, float, int]:
         """image: (H,W) uint8 gray or (H,W,3) uint8 BGR. Returns
-        (talk_score, talking, laugh_score, laughing); scores nan where labels are UNKNOWN."""
+        (talk_score, talking, laugh_score, laughing); scores nan where labels are UNKNOWN.
+
+        The mouth patch comes from the detected (or given) box as it is: no stabilisation, no
+        reference patch. :meth:`update_track` is the stabilised form for a tracked face."""
         p = self.params
         gray = to_gray(image)
         if face_box is None:
@@ -216,24 +251,57 @@ class FaceSignalDetector:
         patch = None
         if box is not None and box[2] >= p.min_face_px and box[3] >= p.min_face_px:
             patch = mouth_patch(gray, box, p.patch_size)
+        return self._step(patch, None)
+
+    def update_track(self, gray: np.ndarray, center: np.ndarray, size: float) -> tuple[float, int, float, int]:
+        """Talking/laughing of a tracked face (:class:`nodes.labeller.face_track.FaceTrack`):
+        gray (H,W) uint8; center (2,) its head point (px); size its smoothed width (px).
+
+        The mouth patch is cut at the sub-pixel position of the tracked point, which follows the
+        face's features (so it does not slide with the detector's jitter), and its motion energy
+        is taken *above* that of a patch of the upper face (eyes and brows) cut the same way: head
+        motion, residual misalignment, lighting flicker and sensor noise move both; speech moves
+        the mouth only. A still, silent face scores about 0."""
+        self._box = (int(center[0] - size / 2), int(center[1] - size / 2), int(size), int(size))
+        if size < self.params.min_face_px:
+            return self._step(None, None)
+        mouth = subpix_patch(gray, (center[0], center[1] + MOUTH_DY * size),
+                             (MOUTH_W * size, MOUTH_H * size), self.params.patch_size)
+        upper = subpix_patch(gray, (center[0], center[1] + UPPER_DY * size),
+                             (UPPER_W * size, UPPER_H * size), self.params.patch_size)
+        if mouth is None or upper is None:
+            return self._step(None, None)
+        return self._step(mouth, upper)
+
+    def _step(self, patch: np.ndarray | None, ref: np.ndarray | None) -> tuple[float, int, float, int]:
+        p = self.params
         if patch is None:
             self._prev = None
+            self._prev_ref = None
             self._record(np.nan, np.nan)
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
         if self._prev is None:
             self._record(np.nan, np.nan)
         else:
             diff = np.abs(patch - self._prev)
+            energy = float(diff.mean())
+            if ref is not None and self._prev_ref is not None:
+                energy = max(0.0, energy - float(np.abs(ref - self._prev_ref).mean()))
             rows = diff.mean(axis=1)
             peak = float(rows.max())
             extent = float(np.mean(rows > 0.5 * peak)) if peak > 1e-6 else 0.0
-            self._record(float(diff.mean()), extent)
+            self._record(energy, extent)
         self._prev = patch
+        self._prev_ref = ref
         valid = ~np.isnan(self._energy)
         if valid.mean() < p.min_valid:
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
         energy = float(self._energy[valid].mean())
         extent = float(self._extent[valid].mean())
-        talk = energy / p.talk_energy
-        laugh = min(energy / p.laugh_energy, extent / p.laugh_extent)
+        tracked = ref is not None
+        talk = energy / (p.talk_energy_tracked if tracked else p.talk_energy)
+        if tracked:   # the stabilised energy alone: a laugh opens the mouth wide and fast
+            laugh = energy / p.laugh_energy_tracked
+        else:
+            laugh = min(energy / p.laugh_energy, extent / p.laugh_extent)
         return talk, int(talk >= 1.0), laugh, int(laugh >= 1.0)

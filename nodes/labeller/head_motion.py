@@ -62,6 +62,8 @@ from nodes.labeller.signals import UNKNOWN, threshold_labels
 #: head_radius * yaw)
 _NOD_CHANNELS = (0, 1)
 _SHAKE_CHANNELS = (2, 3)
+#: the channel kind of a tracked face's head point (its floors are in face widths)
+FACE = 2
 
 
 @dataclass(frozen=True)
@@ -78,7 +80,10 @@ class HeadMotionParams:
     the neck joint (m; the neck-to-head distance), so angle and head-point nods share a scale.
     nod_median_s / shake_median_s: width (s) of the running median whose residual is analysed, on
     the nod / shake channels (0: no median stage); movements that go one way and stay are removed,
-    back-and-forth ones up to about this long kept.
+    back-and-forth ones up to about this long kept. face_nod_floor / face_shake_floor: the
+    amplitude floors of a tracked face's head point (:class:`HeadMotionDetectorFace`), in units
+    of the face's own width (a 10 degree nod moves the eyes about 0.1 face widths; detector
+    jitter left after tracking is about 0.005).
     """
 
     fps: float
@@ -93,6 +98,8 @@ class HeadMotionParams:
     pitch_radius_m: float = 0.18
     nod_median_s: float = 1.0
     shake_median_s: float = 0.44
+    face_nod_floor: float = 0.04
+    face_shake_floor: float = 0.04
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -110,9 +117,13 @@ class HeadMotionParams:
             raise ValueError(
                 f"band_hz {self.band_hz} holds no FFT bin for a {n}-frame window at {self.fps} fps "
                 f"(bins are {freqs[1]:.3g} Hz apart): widen the band or lengthen window_s")
-        floors = {k: getattr(self, k) for k in ("nod_floor_m", "shake_floor_m", "pitch_floor_m", "yaw_floor_m")}
-        if min(floors.values()) <= 0:
-            raise ValueError(f"the amplitude floors must be > 0 (metres), got {floors}")
+        floors = {k: getattr(self, k) for k in ("nod_floor_m", "shake_floor_m", "pitch_floor_m", "yaw_floor_m",
+                                               "face_nod_floor", "face_shake_floor")}
+        for k, v in floors.items():
+            if not v > 0:
+                raise ValueError(f"{k} must be > 0 ({'face widths' if k.startswith('face') else 'metres'}), got {v}")
+        if not 0 < self.threshold <= 1:
+            raise ValueError(f"threshold must be in (0, 1] (a fraction of the head's oscillating motion), got {self.threshold}")
         for name in ("nod_median_s", "shake_median_s"):
             v = getattr(self, name)
             if not v >= 0 or self.median_k(v) > n:
@@ -148,14 +159,15 @@ class _Spectral:
         lo, hi = p.band_hz
         self.band = wt * ((freqs >= lo) & (freqs <= hi))
         sw2 = float(np.sum(self.w ** 2))
-        # floors: [nod, shake] x [head point, angle]
-        self.e_floor = np.array([[p.nod_floor_m, p.pitch_floor_m],
-                                 [p.shake_floor_m, p.yaw_floor_m]]) ** 2 / 2.0 * sw2
+        # floors: [nod, shake] x [head point (m), angle arc (m), tracked face (face widths)]
+        self.e_floor = np.array([[p.nod_floor_m, p.pitch_floor_m, p.face_nod_floor],
+                                 [p.shake_floor_m, p.yaw_floor_m, p.face_shake_floor]]) ** 2 / 2.0 * sw2
 
-    def scores(self, win: np.ndarray, angles: tuple[bool, bool] = (False, False),
+    def scores(self, win: np.ndarray, angles: tuple[int, int] = (False, False),
                ) -> tuple[np.ndarray, np.ndarray]:
         """win: (..., 4, N) channel windows (m) -> (nod_score, shake_score), each (...,).
-        angles: (nod channels from the pitch, shake channels from the yaw), which picks the floors."""
+        angles: the kind of the (nod, shake) channels, which picks the floors: 0 (False) a head
+        point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths)."""
         bad = np.isnan(win).any(axis=(-2, -1))
         if bad.any():
             win = np.where(np.isnan(win), 0.0, win)
@@ -488,4 +500,35 @@ class HeadMotionDetector2D(_StreamingChannels):
             raise ValueError(f"head_px and ref_px must be (2,) pixels, got {h.shape}, {r.shape}")
         sc = self.person_height_m / height_px if height_px > 0 else float("nan")
         self.push(np.array([-(h[1] - r[1]) * sc, 0.0, (h[0] - r[0]) * sc, 0.0]))
+        return self.score()
+
+
+class HeadMotionDetectorFace(_StreamingChannels):
+    """Streaming nod/shake from a tracked face's head point (:mod:`nodes.labeller.face_track`),
+    in units of the face's own width: the channels integrate the point's frame-to-frame motion
+    divided by the face width of that frame (so a face that slowly grows as the person leans in
+    adds no motion), image up for nods, image x for shakes. Floors: ``face_nod_floor`` /
+    ``face_shake_floor`` (face widths)."""
+
+    def __init__(self, fps: float, window_s: float = 1.6, **params: object) -> None:
+        super().__init__(HeadMotionParams(fps=fps, window_s=window_s, **params))  # type: ignore[arg-type]
+        self._angles = (FACE, FACE)
+        self._last: np.ndarray | None = None
+        self._pos = np.zeros(2)
+
+    def reset(self) -> None:
+        super().reset()
+        self._last = None
+        self._pos = np.zeros(2)
+
+    def update(self, center_px: np.ndarray, size_px: float) -> tuple[float, int, float, int]:
+        """center_px: (2,) head point (px, y down); size_px: face width (px) > 0.
+        Returns (nod_score, nod, shake_score, shake)."""
+        c = np.asarray(center_px, dtype=np.float64)
+        if c.shape != (2,) or not size_px > 0:
+            raise ValueError(f"center_px must be (2,) pixels and size_px > 0, got {c.shape}, {size_px}")
+        if self._last is not None:
+            self._pos += (c - self._last) / size_px
+        self._last = c
+        self.push(np.array([-self._pos[1], 0.0, self._pos[0], 0.0]))
         return self.score()

@@ -1,20 +1,31 @@
 """The social-signal labeller: every signal of :data:`SIGNALS` per person and frame.
 
-Inputs are chosen per person and frame, best first:
+Inputs are chosen per person and frame, best first, and the choice for nod/shake is recorded
+(:attr:`SocialLabeller.sources`: ``face``, ``3d``, ``2d`` or ``""``):
 
-1. the tracker's 3D joints (14,3) -> nod/shake relative to the neck (facing from the shoulders, plus
-   the tracker's head yaw when given), activity from shoulders and hips, gaze from the shoulder
+1. **a tracked face** (:mod:`nodes.labeller.face_track`, when a camera image is given and a frontal
+   face of at least ``min_face_px`` is found): nod/shake from the face's head point in units of
+   its own width (:class:`~nodes.labeller.head_motion.HeadMotionDetectorFace`), talking/laughing
+   from its stabilised mouth patch (:meth:`~nodes.labeller.face.FaceSignalDetector.update_track`);
+2. the tracker's 3D joints (14,3) -> nod/shake relative to the neck (facing from the shoulders, plus
+   the tracker's head angles when given), activity from shoulders and hips, gaze from the shoulder
    normal (+ head yaw) against the direction to the other person;
-2. else the silhouette: head reference point relative to the silhouette centroid (2D nod/shake,
-   scaled by the height in pixels), activity from the upper-body spline points; gaze UNKNOWN;
-3. talking/laughing from the camera image where a frontal face of enough size is found (searched
-   in the person's box; without a box only when the person is alone in the frame, since the face
-   could not be attributed otherwise); UNKNOWN otherwise, and UNKNOWN (with one RuntimeWarning) when
-   no Haar cascade file is installed (see :func:`nodes.labeller.face.find_face_cascade`).
+3. else the silhouette: head reference point relative to the silhouette centroid (2D nod/shake,
+   scaled by the height in pixels), activity from the upper-body spline points; gaze UNKNOWN.
 
-A person switching between 3D and 2D input, or missing from a frame, restarts the windows of the
-affected detectors (so a window never mixes the two or spans a gap): those signals are UNKNOWN
-until a window has filled again.
+Activity and gaze come from 3D, else 2D, whatever the nod/shake source. A face belongs to the
+person whose box holds its centre and is at least 1.5 face widths tall (a body below a head); a
+person given without a box takes the largest face only when alone. A face that belongs to
+nobody (a close-up, where the silhouettes are only fragments of motion) is a person of its own,
+id ``FACE_ID_BASE + slot``; the silhouette people that overlap its body region (the face box
+widened by one face width to each side and down to the bottom of the frame), and are not
+bodies holding another face, are then parts of it and not reported (:attr:`SocialLabeller.absorbed`).
+Talking/laughing are UNKNOWN without a face, and UNKNOWN (with one RuntimeWarning) when no Haar
+cascade file is installed (see :func:`nodes.labeller.face.find_face_cascade`).
+
+A person switching between sources, a face track restarting, or a person missing from a frame,
+restarts the windows of the affected detectors (so a window never mixes two sources or spans a
+gap): those signals are UNKNOWN until a window has filled again.
 """
 from __future__ import annotations
 
@@ -26,15 +37,22 @@ import cv2
 import numpy as np
 
 from nodes.labeller.activity import ActivityDetector, activity_3d
-from nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade
+from nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade, to_gray
+from nodes.labeller.face_track import FaceTrack, FaceTracker, FaceTrackParams
 from nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_at_other
-from nodes.labeller.head_motion import HeadMotionDetector, HeadMotionDetector2D, head_motion
+from nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionDetectorFace,
+                                        head_motion)
 from nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN, UNKNOWN_VALUE
 
 _H, _N = JOINT_INDEX["head"], JOINT_INDEX["neck"]
 _LS, _RS = JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]
 
 Labels = dict[str, tuple[float, int]]
+
+#: person id of a face that belongs to no given person: FACE_ID_BASE + its track's slot
+FACE_ID_BASE = 1000
+#: a person's box holds a face as a body only when at least this many face widths tall
+BODY_FACES = 1.5
 
 
 @dataclass(frozen=True)
@@ -73,13 +91,18 @@ class _PersonState:
         self.head2 = HeadMotionDetector2D(lab.fps, lab.head_window_s, **lab.head_params)
         self.act3 = ActivityDetector(lab.fps, **lab.activity_params)
         self.act2 = ActivityDetector(lab.fps, **lab.activity_params)
+        self.headf = HeadMotionDetectorFace(lab.fps, lab.head_window_s, **lab.head_params)
         self.face = FaceSignalDetector(lab.fps, cascade=lab._cascade, **lab.face_params)
         self.mode = ""
+        self.act_mode = ""
+        self.track_id: int | None = None
         self.last_frame = -2
 
     def reset(self) -> None:
-        for d in (self.head3, self.head2, self.act3, self.act2, self.face):
+        for d in (self.head3, self.head2, self.headf, self.act3, self.act2, self.face):
             d.reset()
+        self.mode = self.act_mode = ""
+        self.track_id = None
 
 
 class SocialLabeller:
@@ -87,25 +110,34 @@ class SocialLabeller:
 
     fps: frame rate (Hz). head_window_s: FFT window of nod/shake (s). gaze_threshold: largest
     angle (rad) between gaze and the direction to the other still counted as "at the other".
-    head_params / activity_params / face_params: extra keyword parameters of
-    :class:`~nodes.labeller.head_motion.HeadMotionParams`, :class:`~nodes.labeller.activity.ActivityDetector`
-    and :class:`~nodes.labeller.face.FaceParams`.
+    head_params / activity_params / face_params / track_params: extra keyword parameters of
+    :class:`~nodes.labeller.head_motion.HeadMotionParams`, :class:`~nodes.labeller.activity.ActivityDetector`,
+    :class:`~nodes.labeller.face.FaceParams` and :class:`~nodes.labeller.face_track.FaceTrackParams`.
 
     ``update(people, image=None, targets=None)`` -> ``{person_id: {signal: (score, label)}}`` with
-    every signal of :data:`SIGNALS`.
+    every signal of :data:`SIGNALS`; after it, :attr:`sources` says per person which input gave
+    nod/shake (``face``, ``3d``, ``2d``, ``""`` for none), :attr:`faces` holds the face tracked
+    for each person that has one, and :attr:`absorbed` the ids of given people that were parts of
+    a face's person.
     """
 
     def __init__(self, fps: float, head_window_s: float = 1.6,
                  gaze_threshold: float = float(np.radians(30.0)),
                  head_params: Mapping[str, object] | None = None,
                  activity_params: Mapping[str, object] | None = None,
-                 face_params: Mapping[str, object] | None = None) -> None:
+                 face_params: Mapping[str, object] | None = None,
+                 track_params: Mapping[str, object] | None = None) -> None:
         self.fps = float(fps)
         self.head_window_s = head_window_s
         self.gaze_threshold = gaze_threshold
         self.head_params = dict(head_params or {})
         self.activity_params = dict(activity_params or {})
         self.face_params = dict(face_params or {})
+        self.track_params = FaceTrackParams(fps=self.fps, **dict(track_params or {}))  # type: ignore[arg-type]
+        self._tracker: FaceTracker | None = None
+        self.sources: dict[Hashable, str] = {}
+        self.faces: dict[Hashable, FaceTrack] = {}
+        self.absorbed: list[Hashable] = []
         self._cascade: cv2.CascadeClassifier | None = None
         self._cascade_missing = False
         self._people: dict[Hashable, _PersonState] = {}
@@ -124,8 +156,10 @@ class SocialLabeller:
         return self._cascade
 
     def reset(self) -> None:
-        """Forget every person."""
+        """Forget every person and face."""
         self._people.clear()
+        if self._tracker is not None:
+            self._tracker.reset()
 
     def skip(self, n_frames: int = 1) -> None:
         """``n_frames`` frames are missing from the stream (dropped upstream): every person's
@@ -133,6 +167,8 @@ class SocialLabeller:
         if n_frames < 0:
             raise ValueError(f"n_frames must be >= 0, got {n_frames}")
         self._frame += int(n_frames)
+        if n_frames and self._tracker is not None:
+            self._tracker.reset()   # the flow cannot bridge a gap in the stream
 
     def _state(self, pid: Hashable) -> _PersonState:
         st = self._people.get(pid)
@@ -151,22 +187,51 @@ class SocialLabeller:
         BGR) for talking/laughing, or None. targets: person id -> (3,) world point the person's gaze
         is judged against (e.g. the virtual partner); by default the nearest other person's head.
         """
+        gray = None
+        tracks: list[FaceTrack] = []
+        if image is not None and self._face_cascade() is not None:
+            gray = to_gray(image)
+            if self._tracker is None:
+                self._tracker = FaceTracker(self.track_params, self._cascade)  # type: ignore[arg-type]
+            tracks = self._tracker.update(gray)
+        people, faces = self._attribute(people, tracks)
+        self.faces = faces
         heads = {pid: np.asarray(o.joints, dtype=np.float64)[_H]
                  for pid, o in people.items() if o.has_3d()}
         out: dict[Hashable, Labels] = {}
+        self.sources = {}
         for pid, obs in people.items():
             st = self._state(pid)
             res: Labels = {s: UNKNOWN_VALUE for s in SIGNALS}
-            if obs.has_3d():
-                j = np.asarray(obs.joints, dtype=np.float64)
-                if st.mode != "3d":
-                    st.head3.reset()
-                    st.act3.reset()
-                st.mode = "3d"
+            face = faces.get(pid)
+            mode = "face" if face is not None else "3d" if obs.has_3d() else "2d" if obs.has_2d_head() else ""
+            if mode != st.mode:
+                for d in (st.head3, st.head2, st.headf):
+                    d.reset()
+                st.mode = mode
+            act_mode = "3d" if obs.has_3d() else "2d" if obs.has_2d_head() else ""
+            if act_mode != st.act_mode:
+                st.act3.reset()
+                st.act2.reset()
+                st.act_mode = act_mode
+            j = np.asarray(obs.joints, dtype=np.float64) if obs.has_3d() else None
+            if face is not None:
+                if st.track_id != face.track_id:   # another face (or the same one found again)
+                    st.headf.reset()
+                    st.face.reset()
+                    st.track_id = face.track_id
+                ns, n, ss, s = st.headf.update(face.center, face.size)
+                res["nod"], res["shake"] = (ns, n), (ss, s)
+            elif j is not None:
                 yaw = float(facing_yaw_from_shoulders(j[_LS], j[_RS]))
                 yaw = yaw if yaw == yaw else None
                 ns, n, ss, s = st.head3.update(j[_H], j[_N], yaw, obs.head_yaw, obs.head_pitch)
                 res["nod"], res["shake"] = (ns, n), (ss, s)
+            elif mode == "2d":
+                ns, n, ss, s = st.head2.update(np.asarray(obs.head_px), np.asarray(obs.ref_px),
+                                               float(obs.height_px))  # type: ignore[arg-type]
+                res["nod"], res["shake"] = (ns, n), (ss, s)
+            if j is not None:
                 res["activity"] = st.act3.update_3d(j)
                 target = None if targets is None else targets.get(pid)
                 if target is None:
@@ -175,31 +240,61 @@ class SocialLabeller:
                     g = gaze_at_other(j[_H], j[_LS], j[_RS], np.asarray(target, dtype=np.float64),
                                       obs.head_yaw, self.gaze_threshold)
                     res["gaze_at_other"] = (float(g.score[0]), int(g.label[0]))
-            elif obs.has_2d_head():
-                if st.mode != "2d":
-                    st.head2.reset()
-                    st.act2.reset()
-                st.mode = "2d"
-                ns, n, ss, s = st.head2.update(np.asarray(obs.head_px), np.asarray(obs.ref_px),
-                                               float(obs.height_px))  # type: ignore[arg-type]
-                res["nod"], res["shake"] = (ns, n), (ss, s)
+            elif act_mode == "2d":
                 if obs.control_points is not None:
                     res["activity"] = st.act2.update_2d(obs.control_points, float(obs.height_px))  # type: ignore[arg-type]
                 else:
                     st.act2.reset()   # a window must not span the gap
-            else:
-                st.mode = ""
-            # with several people, a face can only be attributed through the person's box
-            attributable = obs.box is not None or len(people) == 1
-            if image is not None and attributable and self._face_cascade() is not None:
-                st.face.cascade = self._cascade
-                ts, t, ls, lg = st.face.update(image, roi=obs.box)
+            if face is not None and gray is not None:
+                ts, t, ls, lg = st.face.update_track(gray, face.center, face.size)
                 res["talking"], res["laughing"] = (ts, t), (ls, lg)
             else:
                 st.face.reset()
+                st.track_id = None
             out[pid] = res
+            self.sources[pid] = mode
         self._frame += 1
         return out
+
+    def _attribute(self, people: Mapping[Hashable, PersonObservation], tracks: list[FaceTrack],
+                   ) -> tuple[dict[Hashable, PersonObservation], dict[Hashable, FaceTrack]]:
+        """Give each tracked face to a person (see the module docstring): returns the people to
+        label (the given ones less those absorbed, plus faces of their own) and person id -> face."""
+        people = dict(people)
+        faces: dict[Hashable, FaceTrack] = {}
+        self.absorbed = []
+        if not tracks:
+            return people, faces
+        for tr in sorted(tracks, key=lambda t: -t.size):
+            cx, cy = tr.center
+            best, best_top = None, np.inf
+            for pid, o in people.items():
+                if pid in faces or o.box is None:
+                    continue
+                x, y, w, h = o.box
+                if x <= cx <= x + w and y <= cy <= y + h and h >= BODY_FACES * tr.size and y < best_top:
+                    best, best_top = pid, y
+            if best is None and len(people) == 1:
+                only = next(iter(people))
+                if people[only].box is None and only not in faces:
+                    best = only
+            if best is not None:
+                faces[best] = tr
+                continue
+            # a face of its own: the silhouette regions over its body are parts of it
+            w = tr.size
+            x0, x1, y0 = cx - 1.5 * w, cx + 1.5 * w, cy - w
+            for pid, o in list(people.items()):
+                if pid in faces or o.box is None:
+                    continue
+                x, y, bw, bh = o.box
+                if x < x1 and x + bw > x0 and y + bh > y0:
+                    del people[pid]
+                    self.absorbed.append(pid)
+            pid = FACE_ID_BASE + tr.slot
+            people[pid] = PersonObservation()
+            faces[pid] = tr
+        return people, faces
 
 
 def _nearest_other(pid: Hashable, heads: Mapping[Hashable, np.ndarray]) -> np.ndarray | None:

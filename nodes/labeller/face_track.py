@@ -1,0 +1,257 @@
+"""Faces tracked from frame to frame: a head point that is still when the face is still.
+
+A Haar cascade box (:func:`nodes.labeller.face.detect_face`) jumps by several per cent of its size
+from frame to frame on real video, even on a face that does not move, which is as large as a
+small nod. So the box is not the head point. Each tracked face instead carries:
+
+- **motion from optical flow**: corners of the upper face (eyes, brows, nose: the mouth is left out
+  so that speech does not move the point) followed by pyramidal Lucas-Kanade with a
+  forward-backward check (Bouguet 2000); the point moves by the median displacement of the points
+  that pass. A still face gives a still point (sub-pixel noise), a nod or shake moves it by the
+  motion of the features;
+- **a slow pull towards the detections**: every detected box pulls the point by
+  ``1 - exp(-1 / (anchor_s * fps))`` of the difference, so the flow's drift is corrected over about
+  ``anchor_s`` seconds while the box's frame-to-frame jitter is attenuated by about
+  ``sqrt(1 / (2 anchor_s fps))``; the face size (the box width) is smoothed the same way with
+  ``size_s``;
+- **bridging**: a detection missed for up to ``max_miss_s`` seconds (a blink of the detector,
+  a quick turn) is carried by the flow alone; only a longer miss ends the track.
+
+While a face is tracked it is searched for only around its last position (one face width
+around it, at the scale of its size: cheap); the whole frame is searched, at the scale that makes
+``min_face_px`` the cascade's 24 px window, when no face is tracked and every ``search_every_s``
+seconds otherwise (new faces). Tracks are numbered by slot (0 .. ``max_faces`` - 1): a face that is
+lost and found again takes the lowest free slot, with a new ``track_id``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from itertools import count
+
+import cv2
+import numpy as np
+
+#: the cascade's detection window (px): a face is found at scale s when its width is >= 24 / s
+HAAR_WINDOW_PX = 24
+#: face width (px) the search region around a tracked face is scaled to
+ROI_FACE_PX = 48
+
+
+@dataclass(frozen=True)
+class FaceTrackParams:
+    """Parameters of face tracking.
+
+    fps: frame rate (Hz). min_face_px: smallest face width tracked (px). max_miss_s: longest run
+    of missed detections bridged by the flow (s). anchor_s: time constant of the pull of the head
+    point towards the detected box (s). size_s: time constant of the face size smoothing (s).
+    search_every_s: period of the whole-frame search for new faces while one is tracked (s).
+    max_faces: most faces tracked at once. n_points: optical-flow points per face. max_jump:
+    largest distance (face widths) from the tracked point at which a detection is taken as this
+    face (beyond it the track is ended and restarted there).
+    """
+
+    fps: float
+    min_face_px: int = 40
+    max_miss_s: float = 0.5
+    anchor_s: float = 1.0
+    size_s: float = 1.0
+    search_every_s: float = 0.5
+    max_faces: int = 2
+    n_points: int = 40
+    max_jump: float = 0.5
+
+    def __post_init__(self) -> None:
+        checks = {
+            "fps": (self.fps > 0, "must be > 0 Hz"),
+            "min_face_px": (self.min_face_px >= HAAR_WINDOW_PX, f"must be >= {HAAR_WINDOW_PX} px (the cascade's window)"),
+            "max_miss_s": (self.max_miss_s >= 0, "must be >= 0 s"),
+            "anchor_s": (self.anchor_s > 0, "must be > 0 s"),
+            "size_s": (self.size_s > 0, "must be > 0 s"),
+            "search_every_s": (self.search_every_s > 0, "must be > 0 s"),
+            "max_faces": (self.max_faces >= 1, "must be >= 1"),
+            "n_points": (self.n_points >= 8, "must be >= 8"),
+            "max_jump": (self.max_jump > 0, "must be > 0 face widths"),
+        }
+        for name, (ok, why) in checks.items():
+            if not ok:
+                raise ValueError(f"{name}={getattr(self, name)!r}: {why}")
+
+    def alpha(self, seconds: float) -> float:
+        """Per-frame gain of a first-order smoother of time constant ``seconds``."""
+        return float(1.0 - np.exp(-1.0 / (seconds * self.fps)))
+
+    @property
+    def max_miss(self) -> int:
+        """Missed detections bridged, in frames."""
+        return int(round(self.max_miss_s * self.fps))
+
+
+_ids = count()
+
+
+@dataclass
+class FaceTrack:
+    """One tracked face. center: (2,) head point (px, x right, y down); size: smoothed face width
+    (px); box: the smoothed box (x, y, w, h) px, floats; detected: a detection supported this frame;
+    missed: consecutive frames without one; age: frames since the track started; slot: its place
+    among the tracked faces; track_id: unique over the run."""
+
+    center: np.ndarray
+    size: float
+    slot: int
+    track_id: int = field(default_factory=lambda: next(_ids))
+    detected: bool = True
+    missed: int = 0
+    age: int = 0
+    flow_ok: bool = False
+    points: np.ndarray = field(default_factory=lambda: np.empty((0, 1, 2), np.float32))
+
+    @property
+    def box(self) -> tuple[float, float, float, float]:
+        w = self.size
+        return (float(self.center[0] - w / 2), float(self.center[1] - w / 2), float(w), float(w))
+
+
+def _detect(gray: np.ndarray, cascade: cv2.CascadeClassifier, scale: float, min_px: float,
+            max_px: float | None, min_neighbors: int, x0: int = 0, y0: int = 0,
+            scale_factor: float = 1.1) -> np.ndarray:
+    """Faces (K, 4) float (x, y, w, h) in full-image px of ``gray`` searched at ``scale``."""
+    if scale < 1.0:
+        gray = cv2.resize(gray, (max(1, int(round(gray.shape[1] * scale))), max(1, int(round(gray.shape[0] * scale)))),
+                          interpolation=cv2.INTER_AREA)
+    else:
+        scale = 1.0
+    mn = max(HAAR_WINDOW_PX, int(min_px * scale))
+    if gray.shape[0] < mn or gray.shape[1] < mn:
+        return np.empty((0, 4))
+    kw = {"maxSize": (int(max_px * scale), int(max_px * scale))} if max_px else {}
+    f = cascade.detectMultiScale(gray, scaleFactor=scale_factor, minNeighbors=min_neighbors,
+                                 minSize=(mn, mn), **kw)
+    if len(f) == 0:
+        return np.empty((0, 4))
+    f = np.asarray(f, dtype=np.float64) / scale
+    f[:, 0] += x0
+    f[:, 1] += y0
+    return f
+
+
+class FaceTracker:
+    """Tracks up to ``max_faces`` frontal faces through a video (see the module docstring).
+
+    ``update(gray) -> list[FaceTrack]`` per frame, gray (H, W) uint8; the tracks alive on this
+    frame, in slot order.
+    """
+
+    def __init__(self, params: FaceTrackParams, cascade: cv2.CascadeClassifier) -> None:
+        self.params = params
+        self.cascade = cascade
+        self.tracks: list[FaceTrack] = []
+        self._prev: np.ndarray | None = None
+        self._frame = 0
+        self._a_pos = params.alpha(params.anchor_s)
+        self._a_size = params.alpha(params.size_s)
+        self._search_every = max(1, int(round(params.search_every_s * params.fps)))
+        self._lk = dict(winSize=(15, 15), maxLevel=2,
+                        criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
+
+    def reset(self) -> None:
+        """Forget every face (a cut, a gap in the stream)."""
+        self.tracks = []
+        self._prev = None
+
+    def _seed(self, gray: np.ndarray, tr: FaceTrack) -> None:
+        """Corners of the upper face (eyes, brows, nose; not the mouth) for the flow."""
+        w = tr.size
+        x0, x1 = int(tr.center[0] - 0.35 * w), int(tr.center[0] + 0.35 * w)
+        y0, y1 = int(tr.center[1] - 0.35 * w), int(tr.center[1] + 0.12 * w)
+        x0, y0 = max(0, x0), max(0, y0)
+        x1, y1 = min(gray.shape[1], x1), min(gray.shape[0], y1)
+        if x1 - x0 < 8 or y1 - y0 < 8:
+            tr.points = np.empty((0, 1, 2), np.float32)
+            return
+        pts = cv2.goodFeaturesToTrack(gray[y0:y1, x0:x1], self.params.n_points, 0.01, max(2.0, w / 40))
+        if pts is None:
+            tr.points = np.empty((0, 1, 2), np.float32)
+            return
+        tr.points = (pts.reshape(-1, 1, 2) + np.array([x0, y0], np.float32)).astype(np.float32)
+
+    def _flow(self, gray: np.ndarray, tr: FaceTrack) -> np.ndarray | None:
+        """Median displacement (2,) px of the face's points from the last frame, or None."""
+        if self._prev is None or len(tr.points) < 4:
+            return None
+        nxt, st, _ = cv2.calcOpticalFlowPyrLK(self._prev, gray, tr.points, None, **self._lk)
+        back, st2, _ = cv2.calcOpticalFlowPyrLK(gray, self._prev, nxt, None, **self._lk)
+        ok = (st.ravel() == 1) & (st2.ravel() == 1) & (np.linalg.norm((back - tr.points).reshape(-1, 2), axis=1) < 0.5)
+        if ok.sum() < 4:
+            tr.points = np.empty((0, 1, 2), np.float32)
+            return None
+        d = (nxt - tr.points).reshape(-1, 2)[ok]
+        tr.points = nxt[ok]
+        return np.median(d, axis=0)
+
+    def _around(self, gray: np.ndarray, tr: FaceTrack) -> np.ndarray | None:
+        """The detection nearest the tracked point within ``max_jump`` face widths, or None."""
+        w = tr.size
+        m = 0.75 * w
+        x0, y0 = max(0, int(tr.center[0] - w / 2 - m)), max(0, int(tr.center[1] - w / 2 - m))
+        x1 = min(gray.shape[1], int(tr.center[0] + w / 2 + m))
+        y1 = min(gray.shape[0], int(tr.center[1] + w / 2 + m))
+        if x1 - x0 < HAAR_WINDOW_PX or y1 - y0 < HAAR_WINDOW_PX:
+            return None
+        f = _detect(gray[y0:y1, x0:x1], self.cascade, min(1.0, ROI_FACE_PX / w),
+                    max(self.params.min_face_px, 0.7 * w), 1.45 * w, 3, x0, y0, 1.1)
+        if len(f) == 0:
+            return None
+        c = f[:, :2] + f[:, 2:] / 2
+        d = np.linalg.norm(c - tr.center, axis=1)
+        i = int(np.argmin(d))
+        return f[i] if d[i] <= self.params.max_jump * w else None
+
+    def update(self, gray: np.ndarray) -> list[FaceTrack]:
+        """Track the faces into frame ``gray`` (H, W) uint8; returns the live tracks."""
+        p = self.params
+        alive: list[FaceTrack] = []
+        for tr in self.tracks:
+            d = self._flow(gray, tr)
+            tr.flow_ok = d is not None
+            if d is not None:
+                tr.center = tr.center + d
+            det = self._around(gray, tr)
+            tr.age += 1
+            if det is None:
+                tr.detected = False
+                tr.missed += 1
+                if tr.missed > p.max_miss:
+                    continue
+            else:
+                tr.detected, tr.missed = True, 0
+                dc = det[:2] + det[2:] / 2
+                # without the flow (no points) the detections alone must carry the point: a
+                # faster pull, still smoothing their jitter over a few frames
+                a = self._a_pos if d is not None else max(self._a_pos, p.alpha(0.1))
+                tr.center = tr.center + a * (dc - tr.center)
+                tr.size += self._a_size * (float(det[2]) - tr.size)
+            if len(tr.points) < p.n_points // 2 or tr.age % self._search_every == 0:
+                self._seed(gray, tr)
+            alive.append(tr)
+        self.tracks = alive
+        if len(self.tracks) < p.max_faces and self._frame % self._search_every == 0:
+            self._search(gray)
+        self._prev = gray
+        self._frame += 1
+        return sorted(self.tracks, key=lambda t: t.slot)
+
+    def _search(self, gray: np.ndarray) -> None:
+        """Whole-frame search; faces away from every track start new tracks (largest first)."""
+        p = self.params
+        found = _detect(gray, self.cascade, min(1.0, HAAR_WINDOW_PX / p.min_face_px), p.min_face_px, None, 5)
+        for f in sorted(found, key=lambda f: -f[2]):
+            if len(self.tracks) >= p.max_faces:
+                break
+            c = f[:2] + f[2:] / 2
+            if any(np.linalg.norm(c - t.center) < max(t.size, f[2]) for t in self.tracks):
+                continue
+            used = {t.slot for t in self.tracks}
+            tr = FaceTrack(center=c.astype(np.float64), size=float(f[2]), slot=min(set(range(p.max_faces)) - used))
+            self._seed(gray, tr)
+            self.tracks.append(tr)
