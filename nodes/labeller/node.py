@@ -7,11 +7,18 @@ Inputs, paired by ``seq`` (:class:`~nodes.labeller.pairing.SeqPairer`):
 * ``pose`` when ``use_tracker`` (default): the tracker's 3D joints, used for a person whenever they
   are present and not lost; a frame whose pose never comes (the pose topic went past it) is
   labelled from its silhouettes;
-* ``frame`` when ``use_face``: the camera image for talking/laughing.
+* ``frame`` when ``use_face`` or ``fps`` is 0 (the default): the camera image, for the face path
+  (faces tracked, nods/shakes and talking/laughing from them) and for the stream's frame rate
+  (``Frame.fps``), which sets every window in frames unless ``fps`` is given.
 
 Every released frame gives one SocialSignals with the seq and stamp of its silhouettes, one
-PersonSignals per person (``source`` ``3d`` or ``2d``); what the input cannot support is UNKNOWN
-(-1), never guessed. Run in a graph (``run: nodes.labeller``) or alone::
+PersonSignals per person (``source``: the input nod/shake came from, ``face``, ``3d`` or ``2d``;
+a face that belongs to no silhouette is a person of its own, id 1000 + slot); what the input cannot
+support is UNKNOWN (-1), never guessed. The node's stats count the sources (``source_face``,
+``source_3d``, ``source_2d``), the person-frames labelled from 2D although the tracker is
+subscribed (``fallback_3d_to_2d``, logged once with its reason) and the silhouette regions taken
+as parts of a face's person (``regions_absorbed``). Run in a graph (``run: nodes.labeller``) or
+alone::
 
     python -m nodes.labeller --param use_tracker=false
 """
@@ -27,7 +34,7 @@ from bus import Input, Node, Output, Param, ParamError
 from messages import Frame, Pose3D, Silhouettes, SocialSignals
 from messages.labeller import PersonSignals
 
-from .labeller import PersonObservation, SocialLabeller
+from .labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
 from .pairing import Paired, SeqPairer
 from .signals import SIGNALS
 
@@ -86,18 +93,64 @@ def observations(sil: Silhouettes, pose: Pose3D | None) -> tuple[dict[int, Perso
 
 
 def signals_message(seq: int, stamp: int, labels: dict[Any, dict[str, tuple[float, int]]],
-                    obs: dict[int, PersonObservation], sides: dict[int, str]) -> SocialSignals:
-    """One SocialSignals from ``SocialLabeller.update`` output, people in id order."""
+                    obs: dict[int, PersonObservation], sides: dict[int, str],
+                    sources: dict[Any, str] | None = None) -> SocialSignals:
+    """One SocialSignals from ``SocialLabeller.update`` output, people in id order. sources:
+    ``SocialLabeller.sources`` (default: ``3d`` where the observation has joints, else ``2d``)."""
     people = []
     for pid in sorted(labels):
         res = labels[pid]
+        o = obs.get(pid)
+        src = (sources or {}).get(pid) or ("3d" if o is not None and o.has_3d() else "2d")
         people.append(PersonSignals(
             id=int(pid), side=sides.get(pid, "left"), names=list(SIGNALS),
             scores=np.array([res[s][0] for s in SIGNALS], np.float32),
             labels=np.array([res[s][1] for s in SIGNALS], np.int8),
-            source="3d" if obs[pid].has_3d() else "2d",
+            source=src,
         ))
     return SocialSignals(stamp=stamp, seq=seq, people=people)
+
+
+#: node parameter -> (keyword of SocialLabeller's parameter group, field name there)
+_GROUPED: dict[str, tuple[str, str]] = {
+    "nod_median_s": ("head_params", "nod_median_s"),
+    "shake_median_s": ("head_params", "shake_median_s"),
+    "head_threshold": ("head_params", "threshold"),
+    "nod_floor_m": ("head_params", "nod_floor_m"),
+    "shake_floor_m": ("head_params", "shake_floor_m"),
+    "face_nod_floor": ("head_params", "face_nod_floor"),
+    "face_shake_floor": ("head_params", "face_shake_floor"),
+    "min_face_px": ("track_params", "min_face_px"),
+    "max_miss_s": ("track_params", "max_miss_s"),
+    "anchor_s": ("track_params", "anchor_s"),
+    "search_every_s": ("track_params", "search_every_s"),
+    "max_faces": ("track_params", "max_faces"),
+    "talk_window_s": ("face_params", "window_s"),
+    "talk_energy": ("face_params", "talk_energy_tracked"),
+    "laugh_energy": ("face_params", "laugh_energy_tracked"),
+}
+#: what the algorithm's messages call a node parameter that has another name in the node
+_FIELD_NAMES = {"threshold": "head_threshold", "band_hz": "band_low_hz/band_high_hz", "window_s": "head_window_s",
+                "talk_energy_tracked": "talk_energy", "laugh_energy_tracked": "laugh_energy"}
+
+
+def make_labeller(p: dict[str, Any], fps: float) -> SocialLabeller:
+    """The SocialLabeller of the node's parameters ``p`` at ``fps`` (Hz). Raises ParamError naming
+    the node parameters (and the frame rate) that do not fit together."""
+    groups: dict[str, dict[str, Any]] = {"head_params": {"band_hz": (p["band_low_hz"], p["band_high_hz"])},
+                                         "track_params": {}, "face_params": {}}
+    for name, (group, field) in _GROUPED.items():
+        groups[group][field] = p[name]
+    groups["face_params"]["min_face_px"] = p["min_face_px"]
+    try:
+        return SocialLabeller(fps, p["head_window_s"], math.radians(p["gaze_threshold_deg"]), **groups)
+    except ValueError as exc:
+        text = str(exc)
+        for field, name in _FIELD_NAMES.items():
+            text = text.replace(f"{field}=", f"{name}=").replace(f"{field} ", f"{name} ")
+        src = "the parameter 'fps'" if p["fps"] else "the camera's Frame messages ('fps' 0: from the stream)"
+        raise ParamError(f"at {fps:g} fps (from {src}), with head_window_s={p['head_window_s']}: {text}; "
+                         "set the parameter named (labeller.NAME=...) or 'fps'") from None
 
 
 class Labeller(Node):
@@ -110,13 +163,39 @@ class Labeller(Node):
     }
     outputs = {"signals": Output(SocialSignals, "one per frame with silhouettes; seq and stamp of that frame")}
     params = {
-        "fps": Param(float, 25.0, "frame rate of the stream (Hz): sets every window in frames", min=1e-3, max=1e4),
+        "fps": Param(float, 0.0, "frame rate of the stream (Hz): sets every window in frames; 0: from the "
+                     "camera's Frame messages (subscribes to frame)", min=0.0, max=1e4),
         "head_window_s": Param(float, 1.6, "FFT window of nod/shake (s)", min=0.05, max=60.0),
+        "nod_median_s": Param(float, 1.0, "running median removed from the nod channels before the FFT (s; "
+                              "0: none): movements that go one way and stay are not nods", min=0.0, max=60.0),
+        "shake_median_s": Param(float, 0.44, "the same for the shake channels (s)", min=0.0, max=60.0),
+        "band_low_hz": Param(float, 1.0, "lowest frequency of nods and shakes (Hz)", min=0.0),
+        "band_high_hz": Param(float, 4.0, "highest frequency of nods and shakes (Hz)", min=0.0),
+        "head_threshold": Param(float, 0.5, "nod/shake score threshold (fraction of the head's oscillating "
+                                "motion in the band)", min=0.0, max=1.0),
+        "face_nod_floor": Param(float, 0.04, "amplitude floor of a face's nod motion (face widths): smaller "
+                                "motion scores lower", min=0.0),
+        "face_shake_floor": Param(float, 0.04, "amplitude floor of a face's shake motion (face widths)", min=0.0),
+        "nod_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point nod motion (m)", min=0.0),
+        "shake_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point shake motion (m)", min=0.0),
+        "min_face_px": Param(int, 40, "smallest face width used (px); smaller faces are not tracked", min=24, max=4096),
+        "max_miss_s": Param(float, 0.5, "longest run of missed face detections bridged by optical flow (s)",
+                            min=0.0, max=10.0),
+        "anchor_s": Param(float, 1.0, "time constant of the pull of a face's tracked point towards its "
+                          "detections (s): longer is stiller, shorter follows the detector", min=0.01, max=60.0),
+        "search_every_s": Param(float, 0.5, "period of the whole-frame search for new faces (s)", min=0.01, max=60.0),
+        "max_faces": Param(int, 2, "most faces tracked at once", min=1, max=16),
+        "talk_window_s": Param(float, 1.0, "averaging window of mouth motion for talking/laughing (s)",
+                               min=0.05, max=60.0),
+        "talk_energy": Param(float, 0.008, "talking threshold of a face's mouth motion above its upper face's "
+                             "(mean absolute difference of mean-normalised patches per frame)", min=0.0),
+        "laugh_energy": Param(float, 0.05, "laughing threshold of the same mouth motion", min=0.0),
         "gaze_threshold_deg": Param(float, 30.0, "largest angle between gaze and the direction to the other "
                                     "still counted as looking at them (degrees)",
                                     check=lambda v: None if 0.0 < v < 180.0 else "must be in (0, 180) degrees"),
         "use_tracker": Param(bool, True, "subscribe to pose (Pose3D) and use 3D joints where tracked"),
-        "use_face": Param(bool, False, "subscribe to frame (Frame) for talking/laughing from faces"),
+        "use_face": Param(bool, True, "track faces in the camera frames (subscribes to frame): nods, shakes, "
+                          "talking and laughing from faces where they are big enough"),
         "max_pending": Param(int, 8, "frames with silhouettes held back waiting for a slow pose or frame "
                              "before going on without it", min=1, max=1000),
         "max_ahead": Param(int, 64, "frames of pose/camera messages kept while their silhouettes are still "
@@ -126,12 +205,14 @@ class Labeller(Node):
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
         p = super().validate_params(given, where)
-        try:  # the windows in frames must be long enough for their detectors
-            SocialLabeller(p["fps"], p["head_window_s"], math.radians(p["gaze_threshold_deg"]))
-        except ValueError as exc:
-            prefix = f"{where}: " if where else ""
-            raise ParamError(f"{prefix}parameters 'fps' and 'head_window_s' (fps {p['fps']}, head_window_s "
-                             f"{p['head_window_s']}): {exc}") from None
+        # the windows in frames must be long enough for their detectors, at the given rate or, when
+        # it comes from the stream, at the common ones
+        for fps in ([p["fps"]] if p["fps"] else [25.0, 29.97]):
+            try:
+                make_labeller(p, fps)
+            except ParamError as exc:
+                prefix = f"{where}: " if where else ""
+                raise ParamError(f"{prefix}{exc}") from None
         return p
 
     @classmethod
@@ -139,17 +220,39 @@ class Labeller(Node):
         ins = {"silhouettes": cls.inputs["silhouettes"]}
         if params["use_tracker"]:
             ins["pose"] = cls.inputs["pose"]
-        if params["use_face"]:
+        if params["use_face"] or not params["fps"]:
             ins["frame"] = cls.inputs["frame"]
         return ins, dict(cls.outputs)
 
     def setup(self) -> None:
         p = self.p
-        self.labeller = SocialLabeller(p["fps"], p["head_window_s"], math.radians(p["gaze_threshold_deg"]))
+        self.labeller: SocialLabeller | None = None
+        self.fps = p["fps"] or 25.0   # until the stream says
         self.pairer = SeqPairer(list(self.ports(p)[0]), "silhouettes", p["max_pending"], p["max_ahead"])
         self.last_seq = -1
-        self.sources = {"3d": 0, "2d": 0}
+        self.sources = {"face": 0, "3d": 0, "2d": 0}
         self._warned_ctrl = False
+        self._warned_rate = False
+        self._warned_fallback: set[str] = set()
+
+    def _rate(self, frame: Frame | None) -> SocialLabeller:
+        """The labeller at the stream's frame rate (``fps`` 0) or the given one; rebuilt (windows
+        restart) when the stream's rate changes."""
+        p = self.p
+        fps = self.fps
+        if not p["fps"] and frame is not None:
+            if frame.fps > 0:
+                fps = float(frame.fps)
+            elif not self._warned_rate:
+                self._warned_rate = True
+                self.log.warning("the camera's frames do not say their frame rate (Frame.fps 0); labelling at "
+                                 "%g fps: set labeller.fps to the video's rate", fps)
+        if self.labeller is None or fps != self.fps:
+            if self.labeller is not None:
+                self.log.info("frame rate %g fps from the stream (was %g): the analysis windows restart", fps, self.fps)
+            self.labeller = make_labeller(p, fps)
+            self.fps = fps
+        return self.labeller
 
     def on_message(self, port: str, msg: Any) -> None:
         for item in self.pairer.add(port, msg.seq, msg):
@@ -161,11 +264,13 @@ class Labeller(Node):
                     self._label(item)
 
     def _label(self, item: Paired) -> None:
+        frame: Frame | None = item.msgs.get("frame")
+        lab = self._rate(frame)
         if item.restart:
             self.log.info("seq went back to %d: the stream restarted; forgetting every person", item.seq)
-            self.labeller.reset()
+            lab.reset()
         elif self.last_seq >= 0 and item.seq > self.last_seq + 1:
-            self.labeller.skip(item.seq - self.last_seq - 1)
+            lab.skip(item.seq - self.last_seq - 1)
         self.last_seq = item.seq
         sil: Silhouettes = item.msgs["silhouettes"]
         obs, sides = observations(sil, item.msgs.get("pose"))
@@ -174,21 +279,50 @@ class Labeller(Node):
             self._warned_ctrl = True
             self.log.warning("silhouettes carry splines of shape %s; 2D activity needs (%d, 2) and stays UNKNOWN "
                              "(set the silhouette node's n_ctrl to %d)", odd[0], ACTIVITY_CTRL, ACTIVITY_CTRL)
-        frame: Frame | None = item.msgs.get("frame")
-        labels = self.labeller.update(obs, image=None if frame is None else frame.image)
-        out = signals_message(item.seq, sil.stamp, labels, obs, sides)
+        image = frame.image if frame is not None and self.p["use_face"] else None
+        labels = lab.update(obs, image=image)
+        if lab.absorbed:
+            self.tally("regions_absorbed", len(lab.absorbed))
+        width = sil.width or (frame.image.shape[1] if frame is not None and np.ndim(frame.image) >= 2 else 0)
+        for pid, face in lab.faces.items():
+            if pid >= FACE_ID_BASE:
+                sides[pid] = "left" if width and face.center[0] < width / 2 else "right"
+        out = signals_message(item.seq, sil.stamp, labels, obs, sides, lab.sources)
         for ps in out.people:
-            self.sources[ps.source] += 1
+            if ps.source in self.sources:
+                self.sources[ps.source] += 1
+                self.tally(f"source_{ps.source}")
+            if "pose" in self._in and ps.source == "2d":
+                self._fallback(item, ps.id)
         self.publish("signals", out)
+
+    def _fallback(self, item: Paired, pid: int) -> None:
+        """A person labelled from their silhouette although the tracker is subscribed: counted, and
+        said once per reason."""
+        self.tally("fallback_3d_to_2d")
+        pose = item.msgs.get("pose")
+        if pose is None:
+            why = ("no pose message for this frame (it came late or was dropped; labeller.max_pending sets how "
+                   "long a frame waits for it)")
+        elif not any(b.id == pid for b in pose.people):
+            why = "the tracker has no body for this person"
+        else:
+            why = "the tracker lost this person's body (or its joints were not finite)"
+        if why not in self._warned_fallback:
+            self._warned_fallback.add(why)
+            self.log.warning("person %d labelled from the silhouette (2D) instead of the tracker (3D) from frame %d: "
+                             "%s; counted in the stats as fallback_3d_to_2d", pid, item.seq, why)
 
     def on_end(self) -> None:
         for item in self.pairer.flush():
             self._label(item)
         st = self.pairer.stats
         missing = ", ".join(f"{n} without {p}" for p, n in st.missing.items() if n)
-        self.log.info("labelled %d frames (%s; people: %d from 3D, %d from 2D); %d dropped without silhouettes, "
-                      "%d released early, %d side messages over max_ahead, %d late messages, %d restarts",
-                      st.released, missing or "every input present", self.sources["3d"], self.sources["2d"],
+        self.log.info("labelled %d frames at %g fps (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back "
+                      "from 3D to 2D); %d dropped without silhouettes, %d released early, %d side messages over "
+                      "max_ahead, %d late messages, %d restarts",
+                      st.released, self.fps, missing or "every input present", self.sources["3d"], self.sources["2d"],
+                      self.sources["face"], int(self.figures.get("fallback_3d_to_2d", 0)),
                       st.unpaired, st.forced, st.overflow, st.late, st.restarts)
 
 

@@ -1,0 +1,183 @@
+"""The labeller's face path on short rendered face clips (``sim.face``): tracking, nods, shakes,
+talking and laughing from faces at 25 and 29.97 fps, the node's parameters, and the node in a real
+graph reading a face video file."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from bus import ParamError
+from nodes.labeller.face import find_face_cascade, load_face_cascade
+from nodes.labeller.face_track import FaceTracker, FaceTrackParams
+from nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
+from nodes.labeller.node import Labeller, make_labeller
+from nodes.labeller.signals import SIGNALS, UNKNOWN
+from sim.face import FaceClip, gesture_face_clip
+from tests.launching import read_jsonl, run_launch, write_launch
+
+pytestmark = pytest.mark.skipif(
+    find_face_cascade() is None,
+    reason="no haarcascade_frontalface_default.xml installed (OpenCV 5 wheels ship none); set "
+           "COUNTERPART_FACE_CASCADE or install opencv-contrib-python-headless<5")
+
+
+def _gray(clip: FaceClip, i: int) -> np.ndarray:
+    return cv2.cvtColor(clip.render(i), cv2.COLOR_BGR2GRAY)
+
+
+def _label(clip: FaceClip, people: dict | None = None) -> tuple[np.ndarray, list[str]]:
+    """(T, 6) labels of the face's person (UNKNOWN where none) and its per-frame source."""
+    lab = SocialLabeller(clip.fps)
+    out = np.full((clip.n_frames, len(SIGNALS)), UNKNOWN, np.int8)
+    src = []
+    for i in range(clip.n_frames):
+        res = lab.update(dict(people or {}), image=clip.render(i))
+        pid = min(res, default=None)
+        if pid is not None:
+            out[i] = [res[pid][s][1] for s in SIGNALS]
+        src.append(lab.sources.get(pid, ""))
+    return out, src
+
+
+# ------------------------------------------------------------------------------------ tracking
+def test_still_face_gives_a_still_point_although_the_detector_jitters() -> None:
+    clip = gesture_face_clip("still", fps=25.0, duration=3.0, seed=1)
+    cc = load_face_cascade()
+    tr = FaceTracker(FaceTrackParams(25.0), cc)
+    centers, boxes = [], []
+    for i in range(clip.n_frames):
+        g = _gray(clip, i)
+        t = tr.update(g)
+        assert len(t) == 1, i
+        centers.append(t[0].center.copy())
+        f = cc.detectMultiScale(g, 1.1, 5, minSize=(40, 40))
+        if len(f):
+            boxes.append(f[0][:2] + f[0][2:] / 2)
+    c = np.array(centers[25:])
+    size = t[0].size
+    raw = np.array(boxes)
+    # the tracked point moves less than 1% of the face width; the raw boxes move more
+    assert c.std(axis=0).max() < 0.01 * size, c.std(axis=0)
+    assert np.abs(np.diff(c, axis=0)).max() < 0.01 * size
+    assert np.abs(np.diff(raw, axis=0)).max() > np.abs(np.diff(c, axis=0)).max()
+
+
+def test_missed_detections_bridged_then_a_long_miss_ends_the_track() -> None:
+    fps = 25.0
+    clip = gesture_face_clip("still", fps=fps, duration=3.0, seed=2)
+    tr = FaceTracker(FaceTrackParams(fps, max_miss_s=0.4), load_face_cascade())
+    for i in range(20):
+        ts = tr.update(_gray(clip, i))
+    assert len(ts) == 1 and ts[0].detected
+    first = ts[0].track_id
+    for i in range(20, 27):   # 7 frames (0.28 s) without a detection: a hand over the eyes
+        g = _gray(clip, i)
+        x, y, w, _ = (int(v) for v in ts[0].box)
+        g[y + w // 5:y + w // 2, x:x + w] = 128
+        ts = tr.update(g)
+        assert len(ts) == 1 and not ts[0].detected and ts[0].track_id == first, i
+    for i in range(27, 40):   # the face is back: same track, detections again
+        ts = tr.update(_gray(clip, i))
+        assert len(ts) == 1 and ts[0].track_id == first
+    assert ts[0].detected
+    blank = np.full_like(_gray(clip, 0), 128)
+    for _ in range(int(0.4 * fps)):
+        assert tr.update(blank), "bridged up to max_miss_s"
+    assert tr.update(blank) == []
+
+
+# ---------------------------------------------------------------------------- labels from faces
+@pytest.mark.parametrize("kind,fps", [("still", 29.97), ("nod", 25.0), ("nod", 29.97), ("shake", 25.0),
+                                      ("shake", 29.97), ("talk", 29.97), ("laugh", 25.0)])
+def test_face_clip_labelled_from_the_face(kind: str, fps: float) -> None:
+    clip = gesture_face_clip(kind, fps=fps, duration=4.0, seed=3)
+    lab, src = _label(clip)
+    assert set(src) == {"face"}
+    tail = lab[int(2.7 * fps):]          # windows filled inside the behaviour
+    on = {s: float((tail[:, SIGNALS.index(s)] == 1).mean()) for s in ("nod", "shake", "talking", "laughing")}
+    want = {"still": set(), "nod": {"nod"}, "shake": {"shake"}, "talk": {"talking"},
+            "laugh": {"talking", "laughing"}}[kind]
+    for s, share in on.items():
+        if s in want:
+            assert share > 0.9, (s, on)
+        else:
+            assert share == 0.0, (s, on)
+    assert (lab[:, SIGNALS.index("gaze_at_other")] == UNKNOWN).all()   # a face alone: no 3D body
+
+
+def test_face_goes_to_the_body_below_it_and_absorbs_fragments_otherwise() -> None:
+    clip = gesture_face_clip("nod", fps=25.0, duration=0.4, seed=4)
+    lab = SocialLabeller(25.0)
+    img = clip.render(0)
+    body = PersonObservation(head_px=np.array([320.0, 60.0]), ref_px=np.array([320.0, 250.0]),
+                             height_px=340.0, box=(200, 10, 240, 350))
+    lab.update({7: body}, image=img)
+    assert set(lab.faces) == {7} and lab.sources[7] == "face"
+    # fragments of motion around the face (a close-up): not bodies, so the face is its own person
+    frag = PersonObservation(head_px=np.array([300.0, 150.0]), ref_px=np.array([300.0, 160.0]),
+                             height_px=30.0, box=(280, 140, 40, 30))
+    far = PersonObservation(head_px=np.array([20.0, 20.0]), ref_px=np.array([20.0, 40.0]),
+                            height_px=40.0, box=(5, 5, 30, 40))
+    out = SocialLabeller(25.0).update({3: frag, 4: far}, image=img)
+    assert set(out) == {4, FACE_ID_BASE}
+
+
+# ------------------------------------------------------------------------------ node parameters
+def _params(**kw: object) -> dict:
+    return Labeller.validate_params(dict(kw))
+
+
+def test_node_parameters_follow_the_stream_rate_and_errors_name_settable_parameters() -> None:
+    p = _params()
+    assert p["fps"] == 0.0 and p["use_face"]
+    assert "frame" in Labeller.ports(p)[0]          # the rate comes from the camera's frames
+    assert make_labeller(p, 29.97).fps == 29.97
+    assert make_labeller(_params(fps=29.97, use_face=False), 29.97).fps == 29.97
+    with pytest.raises(ParamError) as e:
+        _params(fps=29.97, nod_median_s=2.0)
+    assert "nod_median_s" in str(e.value) and "29.97" in str(e.value)
+    with pytest.raises(ParamError) as e:
+        _params(band_low_hz=5.0, band_high_hz=4.0)
+    assert "band_low_hz/band_high_hz" in str(e.value)
+    with pytest.raises(ParamError) as e:
+        _params(face_nod_floor=0.0)
+    assert "face_nod_floor" in str(e.value)
+    with pytest.raises(ParamError) as e:
+        _params(head_window_s=0.2)
+    assert "head_window_s" in str(e.value)
+
+
+# ------------------------------------------------------------------------------------ real graph
+def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
+    """A 29.97 fps nodding face in an AVI: camera -> silhouette -> labeller with the defaults of
+    labeller_file.yaml (frame rate from the stream, faces on)."""
+    fps = 29.97
+    clip = gesture_face_clip("nod", fps=fps, duration=4.0, seed=5, width=320, height=240, face_px=100)
+    path = tmp_path / "nod.avi"
+    wr = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), fps, (320, 240))
+    for i in range(clip.n_frames):
+        wr.write(clip.render(i))
+    wr.release()
+    nodes = {
+        "camera": {"run": "nodes.camera", "params": {"source": str(path), "pacing": "lockstep"}},
+        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 10, "mask_every": 0},
+                       "policy": "reliable"},
+        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False}, "policy": "reliable"},
+        "signals": {"run": "tests.topic_sink", "params": {"topic": "signals", "path": str(tmp_path / "s.jsonl")},
+                    "policy": "reliable"},
+    }
+    code, text = run_launch(write_launch(tmp_path / "graph.yaml", {"nodes": nodes}), timeout=90)
+    assert code == 0, text
+    assert "at 29.97 fps" in text, text
+    sigs = read_jsonl(tmp_path / "s.jsonl")[:-1]
+    assert len(sigs) == clip.n_frames
+    nod = SIGNALS.index("nod")
+    faces = [p for r in sigs[int(2.7 * fps):] for p in r["people"] if p["id"] == FACE_ID_BASE]
+    assert len(faces) == clip.n_frames - int(2.7 * fps)
+    assert all(p["source"] == "face" for p in faces)
+    assert np.mean([p["labels"][nod] == 1 for p in faces]) > 0.9
+    # no region of motion around the face is reported as a person of its own
+    assert all(p["id"] == FACE_ID_BASE for r in sigs[int(2.7 * fps):] for p in r["people"])
