@@ -171,7 +171,7 @@ def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
     }
     code, text = run_launch(write_launch(tmp_path / "graph.yaml", {"nodes": nodes}), timeout=90)
     assert code == 0, text
-    assert "at 29.97 fps" in text, text
+    assert "frame rate 29.97 fps" in text, text
     sigs = read_jsonl(tmp_path / "s.jsonl")[:-1]
     assert len(sigs) == clip.n_frames
     nod = SIGNALS.index("nod")
@@ -181,3 +181,32 @@ def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
     assert np.mean([p["labels"][nod] == 1 for p in faces]) > 0.9
     # no region of motion around the face is reported as a person of its own
     assert all(p["id"] == FACE_ID_BASE for r in sigs[int(2.7 * fps):] for p in r["people"])
+
+
+def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
+    """A stand-in tracker that publishes every other frame's pose: the frames between are labelled
+    from the silhouettes, which the node says once and counts."""
+    from tests.test_labeller_node import EMPTY, N, TRAIN, sink
+    from nodes.silhouette.synthetic import two_person_sequence
+
+    seq = two_person_sequence(n_frames=N - EMPTY, size=(120, 160), empty_frames=EMPTY)
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    for i, f in enumerate(seq.frames):
+        cv2.imwrite(str(folder / f"f{i:03d}.png"), f)
+    nodes = {
+        "camera": {"run": "nodes.camera", "params": {"source": f"folder:{folder}", "pacing": "lockstep", "fps": 25.0}},
+        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
+                       "policy": "reliable"},
+        "tracker": {"run": "tests.pose_source", "params": {"every": 2}, "policy": "reliable"},
+        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": True, "use_face": False, "max_pending": 1000},
+                     "policy": "reliable"},
+        "signals": sink("signals", tmp_path / "signals.jsonl"),
+    }
+    code, text = run_launch(write_launch(tmp_path / "graph.yaml", {"nodes": nodes}), timeout=60)
+    assert code == 0, text
+    sigs = read_jsonl(tmp_path / "signals.jsonl")[:-1]
+    n2d = sum(p["source"] == "2d" for r in sigs for p in r["people"])
+    assert n2d > 0
+    assert text.count("instead of the tracker (3D)") == 1, text
+    assert f"{n2d} fell back from 3D to 2D" in text and "frame rate 25 fps" in text, text

@@ -25,6 +25,7 @@ alone::
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import numpy as np
@@ -147,10 +148,14 @@ def make_labeller(p: dict[str, Any], fps: float) -> SocialLabeller:
     except ValueError as exc:
         text = str(exc)
         for field, name in _FIELD_NAMES.items():
-            text = text.replace(f"{field}=", f"{name}=").replace(f"{field} ", f"{name} ")
+            text = re.sub(rf"(?<![a-z_]){field}(?![a-z_])", name, text)
+        named = [n for n in Labeller.params if re.search(rf"(?<![a-z_]){n}(?![a-z_])", text)]
+        if "band_low_hz/band_high_hz" in text:
+            named += ["band_low_hz", "band_high_hz"]
+        named = list(dict.fromkeys(named + ["fps"]))
         src = "the parameter 'fps'" if p["fps"] else "the camera's Frame messages ('fps' 0: from the stream)"
-        raise ParamError(f"at {fps:g} fps (from {src}), with head_window_s={p['head_window_s']}: {text}; "
-                         "set the parameter named (labeller.NAME=...) or 'fps'") from None
+        raise ParamError(f"parameters {', '.join(map(repr, named))} do not fit together at {fps:g} fps (from "
+                         f"{src}), head_window_s={p['head_window_s']}: {text}") from None
 
 
 class Labeller(Node):
@@ -318,12 +323,12 @@ class Labeller(Node):
             self._label(item)
         st = self.pairer.stats
         missing = ", ".join(f"{n} without {p}" for p, n in st.missing.items() if n)
-        self.log.info("labelled %d frames at %g fps (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back "
-                      "from 3D to 2D); %d dropped without silhouettes, %d released early, %d side messages over "
-                      "max_ahead, %d late messages, %d restarts",
-                      st.released, self.fps, missing or "every input present", self.sources["3d"], self.sources["2d"],
+        self.log.info("labelled %d frames (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back from 3D "
+                      "to 2D); %d dropped without silhouettes, %d released early, %d side messages over max_ahead, "
+                      "%d late messages, %d restarts; frame rate %g fps",
+                      st.released, missing or "every input present", self.sources["3d"], self.sources["2d"],
                       self.sources["face"], int(self.figures.get("fallback_3d_to_2d", 0)),
-                      st.unpaired, st.forced, st.overflow, st.late, st.restarts)
+                      st.unpaired, st.forced, st.overflow, st.late, st.restarts, self.fps)
 
 
 NODE = Labeller
