@@ -59,7 +59,9 @@ Figures (last stdout line, one JSON object):
                        counts as not talking; latency half the talk window removed; the lower of
                        the two frame rates); ``fps``: frames per second of ``SocialLabeller.update``
                        on the 640x360 frames with face detection and tracking, OpenCV on two
-                       threads (rendering excluded). ``per_fps`` has every figure per frame rate,
+                       threads (rendering excluded), next to ``fps_reference_haar_every_frame``
+                       (the plain cascade over each whole frame, the same frames) and the machine's
+                       load average. ``per_fps`` has every figure per frame rate,
                        with nod/shake frame recall and precision, ``still_nodshake_rate`` (the share
                        of frames more than 1 s from any true nod or shake that are labelled nod or
                        shake) and ``face_known`` (the share of frames with a tracked face).
@@ -76,6 +78,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -86,6 +89,7 @@ import numpy as np
 import pandas as pd
 
 from body.pose import DOF_INDEX
+from nodes.labeller.face import load_face_cascade
 from nodes.labeller.gaze import gaze_accuracy
 from nodes.labeller.head_motion import HeadMotionParams
 from nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller, label_pair_3d
@@ -335,6 +339,12 @@ def face_part(seeds: list[int], duration_s: float) -> dict[str, object]:
     for img in imgs:
         lab.update({}, image=img)
     fps_lab = len(imgs) / (time.perf_counter() - t0)
+    # reference, same frames and threads: the plain cascade over the whole frame, every frame
+    cascade = load_face_cascade()
+    t0 = time.perf_counter()
+    for img in imgs[:100]:
+        cascade.detectMultiScale(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), 1.1, 5, minSize=(40, 40))
+    fps_haar = min(len(imgs), 100) / (time.perf_counter() - t0)
     verdicts = []
     for fps in FACE_FPS:
         for kind in ("still", "nod", "shake"):
@@ -347,7 +357,8 @@ def face_part(seeds: list[int], duration_s: float) -> dict[str, object]:
                 verdicts.append({"kind": kind, "fps": fps, "seed": seed, "verdict": got,
                                  "nod_share": round(share["nod"], 3), "shake_share": round(share["shake"], 3)})
     worst = {k: min(per[f"{f:g}"][k] for f in FACE_FPS) for k in ("nod_f1", "shake_f1", "talk_acc")}  # type: ignore[type-var]
-    return {**worst, "fps": round(fps_lab, 1), "frame_size": [640, 360], "opencv_threads": 2,
+    return {**worst, "fps": round(fps_lab, 1), "fps_reference_haar_every_frame": round(fps_haar, 1),
+            "load_avg_1min": round(os.getloadavg()[0], 2), "frame_size": [640, 360], "opencv_threads": 2,
             "seeds": seeds, "duration_s": duration_s, "per_fps": per,
             "verdicts_right": sum(v["kind"] == v["verdict"] for v in verdicts), "verdicts_total": len(verdicts),
             "verdicts": verdicts}

@@ -21,7 +21,9 @@ While a face is tracked it is searched for only around its last position (one fa
 around it, at the scale of its size: cheap); the whole frame is searched, at the scale that makes
 ``min_face_px`` the cascade's 24 px window, when no face is tracked and every ``search_every_s``
 seconds otherwise (new faces). Tracks are numbered by slot (0 .. ``max_faces`` - 1): a face that is
-lost and found again takes the lowest free slot, with a new ``track_id``.
+lost and found again takes the lowest free slot, with a new ``track_id``. A new face must be
+detected again on each of its next ``CONFIRM`` frames, or it is dropped (most false detections
+on a textured background are not found twice running).
 """
 from __future__ import annotations
 
@@ -34,7 +36,9 @@ import numpy as np
 #: the cascade's detection window (px): a face is found at scale s when its width is >= 24 / s
 HAAR_WINDOW_PX = 24
 #: face width (px) the search region around a tracked face is scaled to
-ROI_FACE_PX = 48
+ROI_FACE_PX = 64
+#: frames after its first detection on which a new face must be detected again to be kept
+CONFIRM = 2
 
 
 @dataclass(frozen=True)
@@ -92,8 +96,9 @@ _ids = count()
 @dataclass
 class FaceTrack:
     """One tracked face. center: (2,) head point (px, x right, y down); size: smoothed face width
-    (px); box: the smoothed box (x, y, w, h) px, floats; detected: a detection supported this frame;
-    missed: consecutive frames without one; age: frames since the track started; slot: its place
+    (px); box: the smoothed box (x, y, w, h) px, floats; detected: the last search found it;
+    missed: frames since the last detection (the search runs on every other frame while the flow
+    follows a confirmed face, so ``detected`` is that of the last search); age: frames since the track started; slot: its place
     among the tracked faces; track_id: unique over the run."""
 
     center: np.ndarray
@@ -105,6 +110,11 @@ class FaceTrack:
     age: int = 0
     flow_ok: bool = False
     points: np.ndarray = field(default_factory=lambda: np.empty((0, 1, 2), np.float32))
+
+    @property
+    def confirmed(self) -> bool:
+        """Detected on its first frame and the ``CONFIRM`` after it (see the module docstring)."""
+        return self.age >= CONFIRM
 
     @property
     def box(self) -> tuple[float, float, float, float]:
@@ -216,12 +226,19 @@ class FaceTracker:
             tr.flow_ok = d is not None
             if d is not None:
                 tr.center = tr.center + d
-            det = self._around(gray, tr)
+            # the pull towards the detections is slow, so a confirmed face that the flow follows is
+            # searched for on every other frame only (half the cost); a miss counts its frames
+            attempt = d is None or tr.age < CONFIRM or tr.missed > 0 or tr.age % 2 == 1
+            det = self._around(gray, tr) if attempt else None
             tr.age += 1
-            if det is None:
+            if not attempt:
+                pass
+            elif det is None:
                 tr.detected = False
                 tr.missed += 1
-                if tr.missed > p.max_miss:
+                # a new face must be found again on its next CONFIRM frames: the cascade's false
+                # positives on a textured background rarely are
+                if tr.missed > p.max_miss or tr.age <= CONFIRM:
                     continue
             else:
                 tr.detected, tr.missed = True, 0

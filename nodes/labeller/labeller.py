@@ -193,7 +193,7 @@ class SocialLabeller:
             gray = to_gray(image)
             if self._tracker is None:
                 self._tracker = FaceTracker(self.track_params, self._cascade)  # type: ignore[arg-type]
-            tracks = self._tracker.update(gray)
+            tracks = [t for t in self._tracker.update(gray) if t.confirmed]
         people, faces = self._attribute(people, tracks)
         self.faces = faces
         heads = {pid: np.asarray(o.joints, dtype=np.float64)[_H]
