@@ -38,7 +38,9 @@ def fuzz_silhouette_and_labeller(workdir: Path, n: int, timeout: float) -> tuple
     ]
     nodes = {
         "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 2}},
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False},
+        # the labeller takes silhouettes only here (a given rate, no faces): the fuzzed frames are the
+        # silhouette node's
+        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False, "use_face": False, "fps": 25.0},
                      "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
     }
     t0 = time.monotonic()

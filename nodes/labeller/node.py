@@ -39,6 +39,8 @@ from .labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
 from .pairing import Paired, SeqPairer
 from .signals import SIGNALS
 
+#: the highest frame rate taken from a stream's Frame messages (Hz); above it the message is not believed
+MAX_STREAM_FPS = 1000.0
 #: the spline size the 2D activity detector reads (upper-body control points of 32)
 ACTIVITY_CTRL = 32
 
@@ -238,6 +240,8 @@ class Labeller(Node):
         self.sources = {"face": 0, "3d": 0, "2d": 0}
         self._warned_ctrl = False
         self._warned_rate = False
+        self._warned_image = False
+        self._refused: set[float] = set()
         self._warned_fallback: set[str] = set()
 
     def _rate(self, frame: Frame | None) -> SocialLabeller:
@@ -246,18 +250,51 @@ class Labeller(Node):
         p = self.p
         fps = self.fps
         if not p["fps"] and frame is not None:
-            if frame.fps > 0:
-                fps = float(frame.fps)
+            rate = frame.fps if isinstance(frame.fps, (int, float)) else 0.0
+            if math.isfinite(rate) and 0 < rate <= MAX_STREAM_FPS:
+                fps = float(rate)
+            elif rate and not self._warned_rate:
+                self._warned_rate = True
+                self.log.warning("a frame says the stream runs at %r fps; ignored (labelling at %g fps): set labeller.fps "
+                                 "to the video's rate", frame.fps, fps)
             elif not self._warned_rate:
                 self._warned_rate = True
                 self.log.warning("the camera's frames do not say their frame rate (Frame.fps 0); labelling at "
                                  "%g fps: set labeller.fps to the video's rate", fps)
         if self.labeller is None or fps != self.fps:
+            try:
+                lab = make_labeller(p, fps)
+            except ParamError as exc:
+                if self.labeller is None:
+                    raise
+                if fps not in self._refused:
+                    self._refused.add(fps)
+                    self.log.error("the stream's frame rate changed to %g fps, which the parameters do not allow; "
+                                   "labelling at %g fps: %s", fps, self.fps, exc)
+                return self.labeller
             if self.labeller is not None:
                 self.log.info("frame rate %g fps from the stream (was %g): the analysis windows restart", fps, self.fps)
-            self.labeller = make_labeller(p, fps)
+            self.labeller = lab
             self.fps = fps
         return self.labeller
+
+    def _image(self, frame: Frame | None) -> np.ndarray | None:
+        """The frame's image when faces can be searched in it: uint8, (H, W) or (H, W, 3), at least
+        min_face_px a side; otherwise None (counted as ``frames_unusable``, said once)."""
+        if frame is None or not self.p["use_face"]:
+            return None
+        img = frame.image
+        ok = (isinstance(img, np.ndarray) and img.dtype == np.uint8 and (img.ndim == 2 or (img.ndim == 3 and img.shape[2] == 3))
+              and min(img.shape[:2]) >= self.p["min_face_px"])
+        if ok:
+            return img
+        self.tally("frames_unusable")
+        if not self._warned_image:
+            self._warned_image = True
+            self.log.warning("frame %d: image %s %s cannot hold a face of min_face_px=%d (need uint8 gray or BGR); "
+                             "such frames are labelled without faces", frame.seq, getattr(img, "dtype", type(img).__name__),
+                             getattr(img, "shape", ""), self.p["min_face_px"])
+        return None
 
     def on_message(self, port: str, msg: Any) -> None:
         for item in self.pairer.add(port, msg.seq, msg):
@@ -284,11 +321,10 @@ class Labeller(Node):
             self._warned_ctrl = True
             self.log.warning("silhouettes carry splines of shape %s; 2D activity needs (%d, 2) and stays UNKNOWN "
                              "(set the silhouette node's n_ctrl to %d)", odd[0], ACTIVITY_CTRL, ACTIVITY_CTRL)
-        image = frame.image if frame is not None and self.p["use_face"] else None
-        labels = lab.update(obs, image=image)
+        labels = lab.update(obs, image=self._image(frame))
         if lab.absorbed:
             self.tally("regions_absorbed", len(lab.absorbed))
-        width = sil.width or (frame.image.shape[1] if frame is not None and np.ndim(frame.image) >= 2 else 0)
+        width = sil.width or (np.shape(frame.image)[1] if frame is not None and np.ndim(frame.image) >= 2 else 0)
         for pid, face in lab.faces.items():
             if pid >= FACE_ID_BASE:
                 sides[pid] = "left" if width and face.center[0] < width / 2 else "right"
