@@ -97,7 +97,7 @@ from nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabel
 from nodes.labeller.mining import mine_rules, mine_transactions, turn_transactions
 from nodes.labeller.signals import SIGNALS
 from nodes.labeller import synthetic
-from sim.face import conversation_face_clip, gesture_face_clip
+from sim.face import FaceClip, conversation_face_clip, gesture_face_clip
 from sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, conversation
 
 FPS = 25.0
@@ -267,7 +267,7 @@ FACE_FPS = (25.0, 29.97)
 FACE_TUNING_SEEDS = (301,)
 
 
-def face_labels(clip, lab: SocialLabeller | None = None) -> tuple[np.ndarray, list[str], float]:  # noqa: ANN001
+def face_labels(clip: FaceClip, lab: SocialLabeller | None = None) -> tuple[np.ndarray, list[str], float]:
     """Label a face clip from its images alone: (T, 6) labels of the face's person (UNKNOWN where
     no face is tracked), the per-frame source, and the labeller's frames per second."""
     lab = lab or SocialLabeller(clip.fps)
