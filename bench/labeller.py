@@ -66,7 +66,7 @@ Figures (last stdout line, one JSON object):
                        of frames more than 1 s from any true nod or shake that are labelled nod or
                        shake) and ``face_known`` (the share of frames with a tracked face).
                        ``verdicts``: short clips of one behaviour (``sim.face.gesture_face_clip``
-                       still / nod / shake, seeds 0-2, both frame rates), each judged by which of
+                       still / nod / shake, ``--face-verdict-seeds`` 0-2, both frame rates), each judged by which of
                        nod and shake is labelled on at least 30% of its frames after the first
                        2.6 s (neither: still); ``verdicts_right`` counts the right ones. The face
                        floors and talk thresholds were set by hand on the gesture clips and
@@ -290,7 +290,7 @@ def _frame_pr(pred: np.ndarray, truth: np.ndarray) -> tuple[int, int, int]:
     return int((pred & truth).sum()), int(pred.sum()), int(truth.sum())
 
 
-def face_part(seeds: list[int], duration_s: float) -> dict[str, object]:
+def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | None = None) -> dict[str, object]:
     """The face-video figures (see the module docstring)."""
     cv2.setNumThreads(2)
     per: dict[str, dict[str, object]] = {}
@@ -349,7 +349,7 @@ def face_part(seeds: list[int], duration_s: float) -> dict[str, object]:
     verdicts = []
     for fps in FACE_FPS:
         for kind in ("still", "nod", "shake"):
-            for seed in range(3):
+            for seed in (verdict_seeds if verdict_seeds is not None else range(3)):
                 g = gesture_face_clip(kind, fps=fps, duration=6.0, seed=seed)
                 lab_g, _, _ = face_labels(g)
                 tail = lab_g[int(2.6 * fps):]
@@ -452,6 +452,7 @@ def main() -> int:
     ap.add_argument("--no-face", action="store_true", help="skip the face-video part")
     ap.add_argument("--face-seeds", default="20-22", help="conversation seeds of the face part (not 301: tuning)")
     ap.add_argument("--face-duration", type=float, default=60.0, help="seconds per face clip")
+    ap.add_argument("--face-verdict-seeds", default="0-2", help="seeds of the one-behaviour verdict clips")
     ap.add_argument("--dense", action="store_true",
                     help="also time mining on dense labels (mean rate ~0.27, min_support 0.01)")
     a = ap.parse_args()
@@ -525,7 +526,7 @@ def main() -> int:
         res["mine_s_dense"] = round(d["mine_s"], 3)
         res["mine_label_rate_dense"] = round(d["mine_label_rate"], 3)
     if not a.no_face:
-        res["face"] = face_part(_seeds(a.face_seeds), a.face_duration)
+        res["face"] = face_part(_seeds(a.face_seeds), a.face_duration, _seeds(a.face_verdict_seeds))
     print(json.dumps(res))
     return 0
 
