@@ -18,7 +18,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "node": ("bus.cli_introspect", "list the nodes of a running launch"),
     "topic": ("bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
     "mine": ("nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
-    "learn": ("bus.cli_learn", "train a model file (tracker-prior, responder)"),
+    "learn": ("bus.cli_learn", "train a model file (tracker-prior, responder, avatar)"),
     "respond": ("nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
     "silhouettes": ("nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
     "track": ("nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),

@@ -24,6 +24,8 @@ from .run_summary import RunSummary, read_stats, stats_json, stats_table, summar
 
 #: the responder's models offered on the live page, built before the graph starts
 RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
+#: offered on the live page only (``--serve``): the default video-texture avatar is built then
+SERVE_MODELS = ("video-texture",)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -47,15 +49,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
 
 
-def ensure_models() -> None:
-    """Build the default model files the graph loads, when they are not cached yet."""
+def ensure_models(serve: bool = False) -> None:
+    """Build the default model files the graph loads (and, with ``serve``, those the live page
+    offers), when they are not cached yet."""
     from nodes.responder.models import load_default
     from nodes.tracker.prior import default_prior_path, load_default_prior
 
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
     load_default_prior(progress=True)
-    for name in RESPONDER_MODELS:
+    for name in RESPONDER_MODELS + (SERVE_MODELS if serve else ()):
         load_default(name, progress=lambda m, name=name: print(f"  responder {name}: {m}", file=sys.stderr))
 
 
@@ -129,7 +132,7 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     print("counterpart demo: preparing the default models (cached after the first run)", file=sys.stderr)
-    ensure_models()
+    ensure_models(serve=args.serve)
     video = out / "demo.mp4"
     file, sets = _graph_file(args)
     sets += [f"renderer.video={video}", f"renderer.serve={'true' if args.serve else 'false'}",

@@ -28,8 +28,9 @@ import numpy as np
 from body.camera import Camera, camera_for_size
 
 from . import draw
+from .avatar import AvatarPainter
 
-STYLES = ("auto", "cones", "silhouette")
+STYLES = ("auto", "cones", "silhouette", "avatar")
 OVERLAYS = ("skeleton", "splines", "signals", "stats", "controls")
 
 
@@ -111,8 +112,9 @@ class Compositor:
         camera: calibration of the 3D partner and skeleton projection (``body.camera.camera_for_size``
             makes it the frame size's; None: the default camera at the frame size, as the tracker's).
         want_partner: whether a partner topic is subscribed (else frames render at once).
-        style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl) or ``auto`` (what the
-            partner message carries, cones first).
+        style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl), ``avatar`` (the video-texture
+            avatar's frames, :mod:`.avatar`) or ``auto`` (what the partner message carries: avatar
+            frames first, then cones).
         overlays: overlay name (:data:`OVERLAYS`) -> on/off.
         timeout: seconds a frame waits for its partner at most (from the frame's arrival).
         max_pending: frames held at most; beyond it the oldest renders without waiting.
@@ -121,6 +123,8 @@ class Compositor:
         wait_camera: hold frames until :meth:`set_camera` gives the graph's camera for their size
             (the calibration node's camera_info), so that nothing is drawn with another one.
         delay_window: partners whose delays decide ``adaptive`` waiting.
+        avatar_file: the avatar file whose frames the video-texture partner shows ('': the one the
+            partner message names).
     """
 
     camera: Camera | None = None
@@ -133,6 +137,7 @@ class Compositor:
     adaptive: bool = False
     delay_window: int = 25
     wait_camera: bool = False
+    avatar_file: str = ""
 
     def __post_init__(self) -> None:
         if self.style not in STYLES:
@@ -154,6 +159,7 @@ class Compositor:
         self.partners_late = False
         self._max_frame_seq = -1
         self.partner_drawn = False
+        self.avatar = AvatarPainter(self.avatar_file)
 
     # ---------------------------------------------------------------------------------- input
     def add_frame(self, msg: Any, now: float | None = None) -> None:
@@ -299,6 +305,10 @@ class Compositor:
         colour = draw.partner_colour(partner.emotion, partner.strength)
         has_joints = np.shape(partner.joints) == (14, 3) and np.isfinite(partner.joints).all()
         has_ctrl = np.ndim(partner.ctrl) == 2 and len(partner.ctrl) >= 4 and np.isfinite(partner.ctrl).all()
+        if self.style in ("auto", "avatar") and np.size(partner.avatar_frames):
+            drawn = self.avatar.draw(img, partner, cam)
+            if drawn is not None:  # else no frames to show: the partner falls back to cones
+                return drawn
         if self.style in ("auto", "cones") and has_joints:
             draw.draw_partner_3d(img, partner.joints, cam, colour)
             return bool(cam.in_image(cam.project(np.asarray(partner.joints, np.float64))).any())

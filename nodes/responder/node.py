@@ -4,8 +4,9 @@ Inputs (each optional by parameter, so a graph without a tracker still validates
 (tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
 ``signals`` (labeller.SocialSignals, ``use_signals``) and ``control`` (control.Control, latest
 policy, a side input that does not hold the node open). The model in force decides which input
-drives the output: dual-hmm and listener produce one Partner per ``pose`` (listener: per
-``signals`` when there is no pose input), joint-shape one per ``silhouettes``; the others are
+drives the output: dual-hmm, listener and video-texture produce one Partner per ``pose``
+(listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
+``silhouettes``; the others are
 paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
 emotion and strength at run time; ``None`` fields leave a setting unchanged.
 """
@@ -22,7 +23,7 @@ from messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .emotion import EMOTIONS, StyleFilter
 
-MODELS = ("dual-hmm", "joint-shape", "listener")
+MODELS = ("dual-hmm", "joint-shape", "listener", "video-texture")
 
 
 class Responder(Node):
@@ -108,6 +109,22 @@ class Responder(Node):
         self.log.info("control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
                       self.model, self.speaker, self.interest, self.emotion, self.strength)
 
+    def _avatar(self, texture: Any, listener: Any) -> dict[str, Any]:
+        """The video-texture avatar's Partner fields, driven by the listener rules
+        (:func:`nodes.responder.avatar_driver.avatar_partner`)."""
+        from .avatar_driver import avatar_partner
+        from .models import default_model_path
+
+        body = self._pick(list(self.latest["pose"].people)) if "pose" in self.latest else None
+        signals = self.latest.get("signals")
+        who = self._pick(list(signals.people)) if signals is not None else None
+        heard = {} if who is None else {n: bool(v == 1) for n, v in zip(who.names, np.asarray(who.labels))}
+        file = self.p["model_file"] if self.p["model"] == "video-texture" and self.p["model_file"] != "default" \
+            else default_model_path("video-texture")
+        fields = avatar_partner(texture, listener, heard, None if body is None else body.joints, self.speaker,
+                                self.interest, file)
+        return dict(fields, observed_id=-1 if body is None else body.id)
+
     def _pick(self, people: list[Any]) -> Any:
         if not people:
             return None
@@ -116,7 +133,7 @@ class Responder(Node):
 
     def on_pose(self, msg: Pose3D) -> None:
         self.latest["pose"] = msg
-        if self.model == "dual-hmm" or (self.model == "listener"):
+        if self.model in ("dual-hmm", "listener", "video-texture"):
             self._emit(msg)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
@@ -126,7 +143,7 @@ class Responder(Node):
 
     def on_signals(self, msg: SocialSignals) -> None:
         self.latest["signals"] = msg
-        if self.model == "listener" and "pose" not in self._in:
+        if self.model in ("listener", "video-texture") and "pose" not in self._in:
             self._emit(msg)
 
     # ------------------------------------------------------------------ output
@@ -169,6 +186,11 @@ class Responder(Node):
             joints = m.step(speaking, None if body is None else body.joints)
             out.update(joints=self.style(joints, self.emotion, self.strength),
                        observed_id=-1 if body is None else body.id, behaviour=m.behaviour_ or "listen", confidence=1.0)
+        elif self.model == "video-texture":
+            lm = self._model("listener")
+            if lm is None:
+                return nobody()
+            out.update(self._avatar(m, lm))
         else:  # joint-shape
             shape = self._pick(list(driver.people))
             if shape is None or shape.height <= 0:

@@ -1,0 +1,236 @@
+"""A recording of one person for the video-texture avatar: masked, cropped frames and social labels.
+
+From a video file (``counterpart learn avatar``): the silhouette node's algorithm
+(``nodes.silhouette.pipeline``: the background fitted on the first frames, which must show the
+empty room, then the person's region on every frame; the largest region is the person) gives the
+mask; the labeller (``nodes.labeller``, from the silhouette: nod, shake, activity; from a frontal face:
+talking, laughing) gives the per-frame labels unless a label file is given. From the simulator
+(:func:`sim_recording`): a conversation's listener rendered alone, with the simulator's exact masks
+and labels, for the default avatar, the tests and the benchmark.
+
+Alignment (the paper is silent): one fixed crop box for the whole recording
+(:func:`crop_box`), the person's own sway kept, so jumps between frames of the
+graph join frames in the same image coordinates and the composited avatar stands still where the
+person stood still.
+"""
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+
+Progress = Callable[[str], None] | None
+
+
+@dataclass
+class Recording:
+    """A person's recording ready to learn from.
+
+    crops: (T, h, w, 3) uint8 BGR in one fixed box; masks: (T, h, w) bool; valid: (T,) frames with
+    the person found; labels: (T, K) int8 (1/0/-1) named ``names``; fps: frames per second;
+    box: (x, y, w, h) px of the crop in the original frames; facing: +1 the person faces the image's
+    right, -1 its left.
+    """
+
+    crops: np.ndarray
+    masks: np.ndarray
+    valid: np.ndarray
+    labels: np.ndarray
+    names: tuple[str, ...]
+    fps: float
+    box: tuple[int, int, int, int]
+    facing: float = -1.0
+
+
+def crop_box(boxes: np.ndarray, size: tuple[int, int], margin: int = 4) -> tuple[int, int, int, int]:
+    """One box (x, y, w, h) px holding the person on (almost) every frame: the 2nd and 98th
+    percentiles of the per-frame boxes' edges (a few frames of a bad mask do not blow it up), widened
+    by ``margin`` px and clipped to the frame of ``size`` (W, H).
+
+    boxes: (n, 4) per-frame boxes (x, y, w, h) px of the frames with the person.
+    """
+    b = np.asarray(boxes, np.float64)
+    W, H = size
+    x0 = max(int(np.percentile(b[:, 0], 2)) - margin, 0)
+    y0 = max(int(np.percentile(b[:, 1], 2)) - margin, 0)
+    x1 = min(int(np.ceil(np.percentile(b[:, 0] + b[:, 2], 98))) + margin, W)
+    y1 = min(int(np.ceil(np.percentile(b[:, 1] + b[:, 3], 98))) + margin, H)
+    return x0, y0, x1 - x0, y1 - y0
+
+
+def crop_recording(pieces: Sequence[tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]] | None],
+                   size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+    """Crops in one box from per-frame pieces.
+
+    pieces: per frame None (nobody found) or (image (bh, bw, 3) uint8, mask (bh, bw) bool, bbox (x, y,
+    bw, bh) px) cut at the person's own box; size: (W, H) of the frames. Returns (crops (T, h, w, 3),
+    masks (T, h, w), valid (T,), box (x, y, w, h)).
+    """
+    T = len(pieces)
+    W, H = size
+    boxes = np.array([p[2] if p is not None else (0, 0, 0, 0) for p in pieces], np.int64).reshape(T, 4)
+    have = np.array([p is not None for p in pieces])
+    if not have.any():
+        raise ValueError("the person is found on no frame")
+    x0, y0, ww, hh = crop_box(boxes[have], size)
+    crops = np.zeros((T, hh, ww, 3), np.uint8)
+    masks = np.zeros((T, hh, ww), bool)
+    for t, p in enumerate(pieces):
+        if p is None:
+            continue
+        img, m, (x, y, w, h) = p
+        # the piece's overlap with the common box
+        ax0, ay0 = max(x, x0), max(y, y0)
+        ax1, ay1 = min(x + w, x0 + ww), min(y + h, y0 + hh)
+        if ax1 <= ax0 or ay1 <= ay0:
+            continue
+        crops[t, ay0 - y0:ay1 - y0, ax0 - x0:ax1 - x0] = img[ay0 - y:ay1 - y, ax0 - x:ax1 - x]
+        masks[t, ay0 - y0:ay1 - y0, ax0 - x0:ax1 - x0] = m[ay0 - y:ay1 - y, ax0 - x:ax1 - x]
+    valid = masks.reshape(T, -1).sum(1) >= 0.25 * np.median(masks[have].reshape(int(have.sum()), -1).sum(1))
+    return crops, masks, valid, (x0, y0, ww, hh)
+
+
+def _piece(frame: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]] | None:
+    ys, xs = np.nonzero(mask.any(axis=1)), np.nonzero(mask.any(axis=0))
+    if not len(ys[0]):
+        return None
+    y0, y1, x0, x1 = ys[0][0], ys[0][-1] + 1, xs[0][0], xs[0][-1] + 1
+    return frame[y0:y1, x0:x1].copy(), mask[y0:y1, x0:x1].copy(), (int(x0), int(y0), int(x1 - x0), int(y1 - y0))
+
+
+def read_label_file(path: str | os.PathLike[str], person: str, n_frames: int) -> tuple[np.ndarray, tuple[str, ...]]:
+    """(labels (T, K) int8, names) of ``person`` from a label file (``nodes.labeller.mining.read_labels``:
+    ``.npz`` with signals_a/_b, or ``.csv``); the frame count must match the video's."""
+    from nodes.labeller.mining import read_labels
+
+    streams = read_labels(path)
+    if person not in streams.people:
+        raise ValueError(f"{os.fspath(path)}: no person {person!r} (it has {', '.join(streams.people)}); "
+                         "choose one with --person")
+    lab = np.asarray(streams.people[person], np.int8)
+    if len(lab) != n_frames:
+        raise ValueError(f"{os.fspath(path)}: {len(lab)} frames of labels for a video of {n_frames} frames; "
+                         "the labels must have one row per video frame")
+    return lab, tuple(streams.names)
+
+
+def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str] | None = None, person: str = "a",
+                    facing: float = -1.0, train_frames: int = 30, max_frames: int | None = None,
+                    progress: Callable[[int, int], None] | None = None, say: Progress = None) -> Recording:
+    """The recording of the one person in a video file (module docstring).
+
+    labels: a label file (else the labeller labels every frame); person: its person id; facing: the
+    way the person faces in the video (+1 right, -1 left); train_frames: first frames (the empty
+    room) the background is learnt from; progress(done, declared frames).
+    """
+    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+
+    say = say or (lambda s: None)
+    fps, declared = video_info(path)
+    fps = fps or 25.0
+    labelling = labels is None
+    ex = SilhouetteExtractor(outlines=labelling)
+    lab_rows: list[np.ndarray] = []
+    names: tuple[str, ...] = ()
+    if labelling:
+        from nodes.labeller.labeller import PersonObservation, SocialLabeller
+        from nodes.labeller.signals import SIGNALS, UNKNOWN
+
+        labeller = SocialLabeller(fps)
+        names = SIGNALS
+        say("no label file: the labeller labels every frame (nod, shake, activity from the silhouette; "
+            "talking, laughing from a frontal face)")
+    pieces: list = []
+    size = (0, 0)
+    for t, (frame, res) in enumerate(iter_video(path, ex, max_frames=max_frames, train_frames=train_frames)):
+        size = (frame.shape[1], frame.shape[0])
+        p = max(res.people, key=lambda q: q.area) if res.people else None
+        pieces.append(_piece(frame, res.labels == p.id + 1) if p is not None else None)
+        if labelling:
+            row = np.full(len(SIGNALS), UNKNOWN, np.int8)
+            if p is not None and p.ref_point is not None:
+                obs = PersonObservation(head_px=np.asarray(p.ref_point), ref_px=np.asarray(p.centroid),
+                                        height_px=float(p.height), control_points=p.ctrl, box=p.bbox)
+                out = labeller.update({0: obs}, image=frame)[0]
+                row = np.array([out[s][1] for s in SIGNALS], np.int8)
+            else:
+                labeller.skip()
+            lab_rows.append(row)
+        if progress is not None:
+            progress(t + 1, declared)
+    if not pieces:
+        raise ValueError(f"{os.fspath(path)}: no frame decodes")
+    if labelling:
+        lab = np.stack(lab_rows)
+    else:
+        lab, names = read_label_file(labels, person, len(pieces))
+    found = sum(p is not None for p in pieces)
+    say(f"the person is found on {found} of {len(pieces)} frames")
+    if found == 0:
+        raise ValueError(f"{os.fspath(path)}: nobody found on any frame; the video must start with about "
+                         f"{train_frames / fps:.1f} s of the empty room (the background), then the person in view")
+    crops, masks, valid, box = crop_recording(pieces, size)
+    return Recording(crops, masks, valid, lab, names, fps, box, facing)
+
+
+def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True, empty_s: float = 1.6,
+                  say: Progress = None) -> tuple[Recording, list[np.ndarray], np.ndarray]:
+    """A recorded person with known labels from the simulator: the right person of a ``conversation``
+    (who listens and nods half of the time and talks the other half), rendered alone (the other
+    person out of view; the labels are those of the conversation), after ``empty_s`` seconds of the
+    empty room.
+
+    Returns (the recording with the simulator's exact masks and labels, the rendered frames
+    (H, W, 3) uint8 of the whole video including the empty start, the labels (T_video, K) of the
+    video's frames: -1 during the empty start).
+    """
+    from body.pose import DOF_INDEX
+    from sim.render import Renderer
+    from sim.scenarios import make_scenario
+
+    say = say or (lambda s: None)
+    sc = make_scenario("conversation", seed=seed, duration=seconds, emotion="neutral", strength=0.0,
+                       interested=interested)
+    fps = sc.fps
+    n_empty = int(round(empty_s * fps))
+    away = sc.poses_a.copy()
+    away[:, DOF_INDEX["root_x"]] -= 40.0   # far out of view: the listener alone in the picture
+    poses_b = sc.poses_b.copy()
+    gone = np.repeat(poses_b[:1], n_empty, axis=0)
+    gone[:, DOF_INDEX["root_x"]] += 40.0
+    sc.poses_a = np.concatenate([np.repeat(away[:1], n_empty, axis=0), away])
+    sc.poses_b = np.concatenate([gone, poses_b])
+    labels = np.concatenate([np.full((n_empty, len(sc.signal_names)), -1, np.int8), sc.signals_b])
+    sc.signals_a = np.concatenate([np.full((n_empty, len(sc.signal_names)), -1, np.int8), sc.signals_a])
+    sc.signals_b = labels
+    sc.phase = np.concatenate([np.zeros(n_empty, np.int32), sc.phase])
+    r = Renderer(sc, seed=seed)
+    T = sc.poses_a.shape[0]
+    say(f"simulator: rendering {T} frames ({T / fps:.0f} s) of a listener")
+    frames, pieces = [], []
+    for i in range(T):
+        img, truth = r.render(i)
+        frames.append(img)
+        pieces.append(_piece(img, truth.masks[1]) if i >= n_empty else None)
+    crops, masks, valid, box = crop_recording(pieces, r.size)
+    # the listener faces -X: the image's left with the default camera
+    rec = Recording(crops, masks, valid, labels, tuple(sc.signal_names), fps, box, facing=-1.0)
+    return rec, frames, labels
+
+
+def write_video(path: str | os.PathLike[str], frames: Iterable[np.ndarray], fps: float) -> str:
+    """Write frames to a Motion-JPEG ``.avi`` (what every OpenCV build can write); returns the path."""
+    import cv2
+
+    frames = list(frames)
+    h, w = frames[0].shape[:2]
+    vw = cv2.VideoWriter(os.fspath(path), cv2.VideoWriter_fourcc(*"MJPG"), float(fps), (w, h))
+    if not vw.isOpened():
+        raise ValueError(f"cannot write video {os.fspath(path)!r}")
+    for f in frames:
+        vw.write(f)
+    vw.release()
+    return os.fspath(path)
