@@ -18,7 +18,7 @@ def build_default_avatar(progress: Callable[[str], None] | None = None, seconds:
 
     say = progress or (lambda s: None)
     t0 = time.perf_counter()
-    rec, _, _ = sim_recording(seconds, seed=seed, say=say)
+    rec, _ = sim_recording(seconds, seed=seed, say=say)
     model = fit_recording(rec, required=("nod",), progress=say)
     return model, {"source": f"sim (default): conversation listener, seed {seed}", "frames": int(len(rec.crops)),
                    "fps": rec.fps, "seconds": round(time.perf_counter() - t0, 2)}

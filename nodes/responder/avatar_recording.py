@@ -16,7 +16,7 @@ person stood still.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -117,35 +117,26 @@ def read_label_file(path: str | os.PathLike[str], person: str, n_frames: int) ->
     return lab, tuple(streams.names)
 
 
-def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str] | None = None, person: str = "a",
-                    facing: float = -1.0, train_frames: int = 30, max_frames: int | None = None,
-                    progress: Callable[[int, int], None] | None = None, say: Progress = None) -> Recording:
-    """The recording of the one person in a video file (module docstring).
+def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labelling: bool,
+                part: str) -> tuple[list, list[np.ndarray], tuple[int, int]]:
+    """Frames [start, stop) of a video: per frame the person's piece (``_piece``) and, when
+    ``labelling``, the labeller's row of labels (SIGNALS order); and the frame size."""
+    from bus.cli_offline import FrameProgress
+    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
 
-    labels: a label file (else the labeller labels every frame); person: its person id; facing: the
-    way the person faces in the video (+1 right, -1 left); train_frames: first frames (the empty
-    room) the background is learnt from; progress(done, declared frames).
-    """
-    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
-
-    say = say or (lambda s: None)
-    fps, declared = video_info(path)
-    fps = fps or 25.0
-    labelling = labels is None
     ex = SilhouetteExtractor(outlines=labelling)
-    lab_rows: list[np.ndarray] = []
-    names: tuple[str, ...] = ()
     if labelling:
         from nodes.labeller.labeller import PersonObservation, SocialLabeller
         from nodes.labeller.signals import SIGNALS, UNKNOWN
+        from nodes.silhouette.pipeline import video_info
 
-        labeller = SocialLabeller(fps)
-        names = SIGNALS
-        say("no label file: the labeller labels every frame (nod, shake, activity from the silhouette; "
-            "talking, laughing from a frontal face)")
+        labeller = SocialLabeller(video_info(path)[0] or 25.0)
+    progress = FrameProgress(f"learn avatar{part}")
     pieces: list = []
+    rows: list[np.ndarray] = []
     size = (0, 0)
-    for t, (frame, res) in enumerate(iter_video(path, ex, max_frames=max_frames, train_frames=train_frames)):
+    count = None if stop is None else stop - start
+    for frame, res in iter_video(path, ex, max_frames=count, train_frames=train_frames, start=start):
         size = (frame.shape[1], frame.shape[0])
         p = max(res.people, key=lambda q: q.area) if res.people else None
         pieces.append(_piece(frame, res.labels == p.id + 1) if p is not None else None)
@@ -158,35 +149,75 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
                 row = np.array([out[s][1] for s in SIGNALS], np.int8)
             else:
                 labeller.skip()
-            lab_rows.append(row)
-        if progress is not None:
-            progress(t + 1, declared)
-    if not pieces:
-        raise ValueError(f"{os.fspath(path)}: no frame decodes")
+            rows.append(row)
+        progress(start + len(pieces), 0 if stop is None else stop)
+    return pieces, rows, size
+
+
+def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str] | None = None, person: str = "a",
+                    facing: float = -1.0, train_frames: int = 30, workers: int = 2, say: Progress = None) -> Recording:
+    """The recording of the one person in a video file (module docstring).
+
+    labels: a label file (else the labeller labels every frame); person: its person id; facing: the
+    way the person faces in the video (+1 right, -1 left); train_frames: first frames (the empty
+    room) the background is learnt from; workers: processes that cut the masks out, each from its
+    part of the video with its own copy of the background model (one when the labeller labels: its
+    windows run over the whole video).
+    """
+    from nodes.labeller.signals import SIGNALS
+    from nodes.silhouette.pipeline import video_info
+
+    say = say or (lambda s: None)
+    p = os.fspath(path)
+    fps, declared = video_info(p)
+    fps = fps or 25.0
+    labelling = labels is None
     if labelling:
-        lab = np.stack(lab_rows)
+        say("no label file: the labeller labels every frame (nod, shake, activity from the silhouette; "
+            "talking, laughing from a frontal face)")
+    n = 1 if labelling or declared < 4 * train_frames else max(1, min(int(workers), os.cpu_count() or 1))
+    bounds = [declared * k // n for k in range(n)] + [None]
+    if n == 1:
+        parts = [_masks_part(p, 0, None, train_frames, labelling, "")]
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        say(f"cutting the masks out in {n} processes, one part of the video each")
+        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
+            futures = [pool.submit(_masks_part, p, bounds[k], bounds[k + 1], train_frames, False, f" part {k + 1}/{n}")
+                       for k in range(n)]
+            parts = [f.result() for f in futures]
+    pieces = [q for part in parts for q in part[0]]
+    size = next((part[2] for part in parts if part[2] != (0, 0)), (0, 0))
+    if not pieces:
+        raise ValueError(f"{p}: no frame decodes")
+    if labelling:
+        lab, names = np.stack(parts[0][1]), SIGNALS
     else:
         lab, names = read_label_file(labels, person, len(pieces))
-    found = sum(p is not None for p in pieces)
+    found = sum(q is not None for q in pieces)
     say(f"the person is found on {found} of {len(pieces)} frames")
     if found == 0:
-        raise ValueError(f"{os.fspath(path)}: nobody found on any frame; the video must start with about "
+        raise ValueError(f"{p}: nobody found on any frame; the video must start with about "
                          f"{train_frames / fps:.1f} s of the empty room (the background), then the person in view")
     crops, masks, valid, box = crop_recording(pieces, size)
-    return Recording(crops, masks, valid, lab, names, fps, box, facing)
+    return Recording(crops, masks, valid, lab, tuple(names), fps, box, facing)
 
 
 def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True, empty_s: float = 1.6,
-                  say: Progress = None) -> tuple[Recording, list[np.ndarray], np.ndarray]:
+                  video: str | os.PathLike[str] | None = None, say: Progress = None) -> tuple[Recording, np.ndarray]:
     """A recorded person with known labels from the simulator: the right person of a ``conversation``
     (who listens and nods half of the time and talks the other half), rendered alone (the other
     person out of view; the labels are those of the conversation), after ``empty_s`` seconds of the
     empty room.
 
-    Returns (the recording with the simulator's exact masks and labels, the rendered frames
-    (H, W, 3) uint8 of the whole video including the empty start, the labels (T_video, K) of the
-    video's frames: -1 during the empty start).
+    Returns (the recording with the simulator's exact masks and labels, the labels (T_video, K) of
+    every video frame: -1 during the empty start). ``video``: also write the frames there (Motion-JPEG
+    ``.avi``), as a camera would have recorded them.
     """
+    import cv2
+
     from body.pose import DOF_INDEX
     from sim.render import Renderer
     from sim.scenarios import make_scenario
@@ -198,39 +229,32 @@ def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True,
     n_empty = int(round(empty_s * fps))
     away = sc.poses_a.copy()
     away[:, DOF_INDEX["root_x"]] -= 40.0   # far out of view: the listener alone in the picture
-    poses_b = sc.poses_b.copy()
-    gone = np.repeat(poses_b[:1], n_empty, axis=0)
+    gone = np.repeat(sc.poses_b[:1], n_empty, axis=0)
     gone[:, DOF_INDEX["root_x"]] += 40.0
+    unknown = np.full((n_empty, len(sc.signal_names)), -1, np.int8)
+    labels = np.concatenate([unknown, sc.signals_b])
     sc.poses_a = np.concatenate([np.repeat(away[:1], n_empty, axis=0), away])
-    sc.poses_b = np.concatenate([gone, poses_b])
-    labels = np.concatenate([np.full((n_empty, len(sc.signal_names)), -1, np.int8), sc.signals_b])
-    sc.signals_a = np.concatenate([np.full((n_empty, len(sc.signal_names)), -1, np.int8), sc.signals_a])
-    sc.signals_b = labels
+    sc.poses_b = np.concatenate([gone, sc.poses_b])
+    sc.signals_a, sc.signals_b = np.concatenate([unknown, sc.signals_a]), labels
     sc.phase = np.concatenate([np.zeros(n_empty, np.int32), sc.phase])
     r = Renderer(sc, seed=seed)
     T = sc.poses_a.shape[0]
     say(f"simulator: rendering {T} frames ({T / fps:.0f} s) of a listener")
-    frames, pieces = [], []
-    for i in range(T):
-        img, truth = r.render(i)
-        frames.append(img)
-        pieces.append(_piece(img, truth.masks[1]) if i >= n_empty else None)
+    writer = None
+    if video is not None:
+        writer = cv2.VideoWriter(os.fspath(video), cv2.VideoWriter_fourcc(*"MJPG"), float(fps), r.size)
+        if not writer.isOpened():
+            raise ValueError(f"cannot write video {os.fspath(video)!r}")
+    pieces = []
+    try:
+        for i in range(T):
+            img, truth = r.render(i)
+            if writer is not None:
+                writer.write(img)
+            pieces.append(_piece(img, truth.masks[1]) if i >= n_empty else None)
+    finally:
+        if writer is not None:
+            writer.release()
     crops, masks, valid, box = crop_recording(pieces, r.size)
     # the listener faces -X: the image's left with the default camera
-    rec = Recording(crops, masks, valid, labels, tuple(sc.signal_names), fps, box, facing=-1.0)
-    return rec, frames, labels
-
-
-def write_video(path: str | os.PathLike[str], frames: Iterable[np.ndarray], fps: float) -> str:
-    """Write frames to a Motion-JPEG ``.avi`` (what every OpenCV build can write); returns the path."""
-    import cv2
-
-    frames = list(frames)
-    h, w = frames[0].shape[:2]
-    vw = cv2.VideoWriter(os.fspath(path), cv2.VideoWriter_fourcc(*"MJPG"), float(fps), (w, h))
-    if not vw.isOpened():
-        raise ValueError(f"cannot write video {os.fspath(path)!r}")
-    for f in frames:
-        vw.write(f)
-    vw.release()
-    return os.fspath(path)
+    return Recording(crops, masks, valid, labels, tuple(sc.signal_names), fps, box, facing=-1.0), labels

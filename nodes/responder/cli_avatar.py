@@ -14,7 +14,7 @@ import sys
 import time
 from typing import Any
 
-from bus.cli_offline import FrameProgress, run_offline
+from bus.cli_offline import run_offline
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -31,6 +31,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "of the picture, where the partner's counterpart stands in the demo)")
     p.add_argument("--train-frames", type=int, default=30,
                    help="first frames, showing the empty room, that the background is learnt from (default 30)")
+    p.add_argument("--workers", type=int, default=2,
+                   help="processes cutting the masks out of the video, each a part of it (default 2)")
     p.add_argument("--clusters", type=int, default=0, help="k of the k-medoids (default: one per second, 4-200)")
     p.add_argument("--out", required=True, help="avatar file to write (.npz)")
 
@@ -44,13 +46,13 @@ def main(args: argparse.Namespace) -> int:
         from .models import save_model
         from .video_texture import VideoTextureConfig, fit_recording
 
-        if args.train_frames < 2:
-            raise ValueError("--train-frames must be at least 2")
+        if args.train_frames < 2 or args.workers < 1:
+            raise ValueError("--train-frames must be at least 2 and --workers at least 1")
         t0 = time.perf_counter()
         required = tuple(s.strip() for s in args.signals.split(",") if s.strip())
         say(f"reading {args.video}: the person's mask on every frame")
         rec = video_recording(args.video, args.labels, args.person, 1.0 if args.facing == "right" else -1.0,
-                              args.train_frames, progress=FrameProgress("learn avatar"), say=say)
+                              args.train_frames, args.workers, say=say)
         model = fit_recording(rec, VideoTextureConfig(n_clusters=args.clusters), required, say)
         info = {"video": args.video, "labels": args.labels or "labeller", "frames": int(len(rec.crops)),
                 "frames_in_graph": int(model.alive_.sum()), "fps": rec.fps, "crop": list(rec.box),

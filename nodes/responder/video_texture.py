@@ -164,7 +164,8 @@ class VideoTexture:
     def fit(self, features: np.ndarray, labels: np.ndarray, names: Sequence[str], fps: float,
             valid: np.ndarray | None = None, required: Sequence[str] = (), frames: AvatarFrames | None = None,
             progress: Progress = None) -> "VideoTexture":
-        """Learn the graph.
+        """Learn the graph (on one BLAS thread: the matrices are small, and a second thread on a
+        busy machine makes the eigendecomposition ten times slower, not faster).
 
         features: (T, D) appearance features (:func:`appearance_features`); labels: (T, K) int8 social
         labels (1 present, 0 absent, -1 unknown) named ``names``; fps: frames per second; valid:
@@ -172,6 +173,14 @@ class VideoTexture:
         able to show (RecordingError naming the missing one otherwise); frames: the recording's
         masked frames, stored with the model.
         """
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1):
+            return self._fit(features, labels, names, fps, valid, required, frames, progress)
+
+    def _fit(self, features: np.ndarray, labels: np.ndarray, names: Sequence[str], fps: float,
+             valid: np.ndarray | None, required: Sequence[str], frames: AvatarFrames | None,
+             progress: Progress) -> "VideoTexture":
         say = progress or (lambda s: None)
         c = self.config
         X = np.asarray(features, np.float32)
@@ -258,7 +267,7 @@ class VideoTexture:
             far = np.abs(j_ - i_) >= W
             if not far.any():
                 continue
-            dd = np.linalg.norm(x[i_[far]] - x[s_[far]], axis=1)
+            dd = _pairwise(x[m], x[land[ok]])[far]
             src.append(i_[far]), dst.append(s_[far]), seam.append(dd)
         src = np.concatenate(src) if src else np.zeros(0, np.int64)
         dst = np.concatenate(dst) if dst else np.zeros(0, np.int64)

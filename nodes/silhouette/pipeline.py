@@ -189,13 +189,16 @@ def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
 
 
 def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max_frames: int | None = None,
-               train_frames: int = 30) -> Iterator[tuple[np.ndarray, FrameResult]]:
+               train_frames: int = 30, start: int = 0) -> Iterator[tuple[np.ndarray, FrameResult]]:
     """Yield (frame (H, W, 3) uint8 BGR, ``extractor.process(frame)``) for every frame of a video.
 
     With the Horprasert backend the background is first fitted (robustly: people may be in view)
     on the first ``train_frames`` frames, then the video is read again from its first frame, so
-    every frame gets a result. Raises FileNotFoundError for a missing file and ValueError for one
-    OpenCV cannot decode (fewer than 2 training frames, or no frame at all).
+    every frame gets a result. ``start``: the frames before it are skipped (read, not decoded nor
+    processed; counted exactly as a sequential reader counts them, which seeking is not for every
+    codec), so several processes can each take a part of one video. Raises FileNotFoundError for a
+    missing file and ValueError for one OpenCV cannot decode (fewer than 2 training frames, or no
+    frame at all).
     """
     cap = _open_video(path)
     if isinstance(extractor.subtractor, HorprasertSubtractor):
@@ -213,6 +216,9 @@ def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max
         cap = _open_video(path)
     n = 0
     try:
+        for _ in range(start):
+            if not cap.grab():
+                return
         while max_frames is None or n < max_frames:
             ok, frame = cap.read()
             if not ok:
