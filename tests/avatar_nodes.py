@@ -22,7 +22,7 @@ class NoddingSpeaker(Node):
     params = {"frames": Param(int, 80, "frames", min=1), "nod_from": Param(int, 30, "first nodding frame", min=0)}
 
     def generate(self) -> None:
-        joints = forward_kinematics(neutral_pose(x=-0.8, z=0.0, yaw=np.pi / 2)).astype(np.float32)
+        joints = forward_kinematics(neutral_pose(x=-0.8, z=0.0, yaw=np.pi / 2))[0].astype(np.float32)
         names = ["nod", "shake", "gaze_at_other", "activity", "talking", "laughing"]
         for t in range(self.p["frames"]):
             if self.stopping:

@@ -101,20 +101,28 @@ def _piece(frame: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return frame[y0:y1, x0:x1].copy(), mask[y0:y1, x0:x1].copy(), (int(x0), int(y0), int(x1 - x0), int(y1 - y0))
 
 
-def read_label_file(path: str | os.PathLike[str], person: str, n_frames: int) -> tuple[np.ndarray, tuple[str, ...]]:
+def read_label_file(path: str | os.PathLike[str], person: str, required: Sequence[str] = ()) -> tuple[np.ndarray, tuple[str, ...]]:
     """(labels (T, K) int8, names) of ``person`` from a label file (``nodes.labeller.mining.read_labels``:
-    ``.npz`` with signals_a/_b, or ``.csv``); the frame count must match the video's."""
+    ``.npz`` with signals_a/_b, or ``.csv``); ValueError naming each ``required`` signal that the file
+    lacks or that never occurs in it."""
     from nodes.labeller.mining import read_labels
+
+    from .video_texture import RecordingError
 
     streams = read_labels(path)
     if person not in streams.people:
         raise ValueError(f"{os.fspath(path)}: no person {person!r} (it has {', '.join(streams.people)}); "
                          "choose one with --person")
     lab = np.asarray(streams.people[person], np.int8)
-    if len(lab) != n_frames:
-        raise ValueError(f"{os.fspath(path)}: {len(lab)} frames of labels for a video of {n_frames} frames; "
-                         "the labels must have one row per video frame")
-    return lab, tuple(streams.names)
+    names = tuple(streams.names)
+    for r in required:
+        if r not in names:
+            raise RecordingError(f"signal {r!r} is not among the labels of {os.fspath(path)} ({', '.join(names)}); "
+                                 "give labels that include it, or leave it out of --signals")
+        if not (lab[:, names.index(r)] == 1).any():
+            raise RecordingError(f"signal {r!r} never occurs in {os.fspath(path)} (0 of {len(lab)} frames of person "
+                                 f"{person} labelled {r}): record the person doing it, or leave it out of --signals")
+    return lab, names
 
 
 def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labelling: bool,
@@ -155,10 +163,12 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
 
 
 def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str] | None = None, person: str = "a",
-                    facing: float = -1.0, train_frames: int = 30, workers: int = 2, say: Progress = None) -> Recording:
+                    facing: float = -1.0, train_frames: int = 30, workers: int = 2, required: Sequence[str] = (),
+                    say: Progress = None) -> Recording:
     """The recording of the one person in a video file (module docstring).
 
-    labels: a label file (else the labeller labels every frame); person: its person id; facing: the
+    labels: a label file (else the labeller labels every frame); person: its person id; required:
+    signals that must occur (checked in the label file before the video is read); facing: the
     way the person faces in the video (+1 right, -1 left); train_frames: first frames (the empty
     room) the background is learnt from; workers: processes that cut the masks out, each from its
     part of the video with its own copy of the background model (one when the labeller labels: its
@@ -170,6 +180,8 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
     say = say or (lambda s: None)
     p = os.fspath(path)
     fps, declared = video_info(p)
+    if labels is not None:   # a bad label file fails now, not after minutes of masks
+        lab, names = read_label_file(labels, person, required)
     fps = fps or 25.0
     labelling = labels is None
     if labelling:
@@ -194,8 +206,9 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
         raise ValueError(f"{p}: no frame decodes")
     if labelling:
         lab, names = np.stack(parts[0][1]), SIGNALS
-    else:
-        lab, names = read_label_file(labels, person, len(pieces))
+    elif len(lab) != len(pieces):
+        raise ValueError(f"{os.fspath(labels)}: {len(lab)} frames of labels for a video of {len(pieces)} frames; "
+                         "the labels must have one row per video frame")
     found = sum(q is not None for q in pieces)
     say(f"the person is found on {found} of {len(pieces)} frames")
     if found == 0:

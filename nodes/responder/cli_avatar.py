@@ -52,7 +52,7 @@ def main(args: argparse.Namespace) -> int:
         required = tuple(s.strip() for s in args.signals.split(",") if s.strip())
         say(f"reading {args.video}: the person's mask on every frame")
         rec = video_recording(args.video, args.labels, args.person, 1.0 if args.facing == "right" else -1.0,
-                              args.train_frames, args.workers, say=say)
+                              args.train_frames, args.workers, required, say=say)
         model = fit_recording(rec, VideoTextureConfig(n_clusters=args.clusters), required, say)
         info = {"video": args.video, "labels": args.labels or "labeller", "frames": int(len(rec.crops)),
                 "frames_in_graph": int(model.alive_.sum()), "fps": rec.fps, "crop": list(rec.box),
