@@ -233,3 +233,21 @@ def test_the_renderer_composites_the_avatar_where_the_partner_stands(texture: Vi
     # a missing file: nothing drawn, the caller falls back
     assert painter.draw(bg.copy(), Partner(model="video-texture", joints=msg.joints, avatar_file=str(tmp_path / "none.npz"),
                                            avatar_frames=np.array([1], np.int32)), cam) is None
+
+
+def test_the_compositor_draws_the_avatar_in_auto_style_and_cones_when_asked(texture: VideoTexture, tmp_path: Path) -> None:
+    from messages import Frame
+    from nodes.renderer.compositor import Bundle, Compositor
+
+    path = save_model(tmp_path / "avatar.npz", texture)
+    joints = forward_kinematics(neutral_pose(x=0.5, z=0.0, yaw=-np.pi / 2))[0].astype(np.float32)
+    msg = Partner(model="video-texture", joints=joints, avatar_file=str(path),
+                  avatar_frames=np.array([120], np.int32), avatar_weights=np.ones(1, np.float32))
+    frame = Frame(image=np.full((240, 320, 3), 255, np.uint8))
+    off = {k: False for k in ("skeleton", "splines", "signals", "stats", "controls")}
+    avatar = Compositor(overlays=dict(off)).render(Bundle(frame=frame, partner=msg))
+    cones = Compositor(style="cones", overlays=dict(off)).render(Bundle(frame=frame, partner=msg))
+    painted = np.full((240, 320, 3), 255, np.uint8)
+    AvatarPainter().draw(painted, msg, default_camera(320, 240))
+    assert np.array_equal(avatar, painted)            # auto: the avatar's frames
+    assert not np.array_equal(cones, painted) and (cones != 255).any()
