@@ -3,7 +3,8 @@
 From a video file (``counterpart learn avatar``): the silhouette node's algorithm
 (``nodes.silhouette.pipeline``: the background fitted on the first frames, which must show the
 empty room, then the person's region on every frame; the largest region is the person) gives the
-mask; the labeller (``nodes.labeller``, from the silhouette: nod, shake, activity; from a frontal face:
+mask, refined into a matte without the fringe of bled colours around the person (:func:`refine_matte`);
+the labeller (``nodes.labeller``, from the silhouette: nod, shake, activity; from a frontal face:
 talking, laughing) gives the per-frame labels unless a label file is given. From the simulator
 (:func:`sim_recording`): a conversation's listener rendered alone, with the simulator's exact masks
 and labels, for the default avatar, the tests and the benchmark.
@@ -19,6 +20,7 @@ import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 
@@ -101,6 +103,27 @@ def _piece(frame: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return frame[y0:y1, x0:x1].copy(), mask[y0:y1, x0:x1].copy(), (int(x0), int(y0), int(x1 - x0), int(y1 - y0))
 
 
+#: grey levels (largest channel, 3x3 smoothed) a pixel of the person's region must differ from the
+#: background model by to be kept in the matte
+MATTE_TAU = 25.0
+
+
+def refine_matte(frame: np.ndarray, region: np.ndarray, background: np.ndarray, tau: float = MATTE_TAU) -> np.ndarray:
+    """The person's matte for the avatar: the region the silhouette algorithm found, less its fringe of
+    background pixels (the person's colours bled into them by the camera's and the video codec's
+    chroma subsampling, so the background model calls them foreground: composited, they would
+    surround the avatar with a halo of the recording room), with enclosed holes filled again.
+
+    frame: (H, W, 3) uint8; region: (H, W) bool; background: (H, W, 3) the background model's mean.
+    Returns (H, W) bool within ``region``.
+    """
+    from nodes.silhouette.regions import clean_mask
+
+    d = np.abs(frame.astype(np.float32) - background.reshape(frame.shape)).max(axis=-1)
+    d = cv2.GaussianBlur(d, (3, 3), 0)
+    return clean_mask(region & (d > tau), open_px=0, close_px=5, fill_holes=True) & region
+
+
 def read_label_file(path: str | os.PathLike[str], person: str, required: Sequence[str] = ()) -> tuple[np.ndarray, tuple[str, ...]]:
     """(labels (T, K) int8, names) of ``person`` from a label file (``nodes.labeller.mining.read_labels``:
     ``.npz`` with signals_a/_b, or ``.csv``); ValueError naming each ``required`` signal that the file
@@ -147,7 +170,9 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
     for frame, res in iter_video(path, ex, max_frames=count, train_frames=train_frames, start=start):
         size = (frame.shape[1], frame.shape[0])
         p = max(res.people, key=lambda q: q.area) if res.people else None
-        pieces.append(_piece(frame, res.labels == p.id + 1) if p is not None else None)
+        if p is not None:
+            matte = refine_matte(frame, res.labels == p.id + 1, ex.subtractor.model.mean_)
+        pieces.append(_piece(frame, matte) if p is not None else None)
         if labelling:
             row = np.full(len(SIGNALS), UNKNOWN, np.int8)
             if p is not None and p.ref_point is not None:
@@ -229,8 +254,6 @@ def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True,
     every video frame: -1 during the empty start). ``video``: also write the frames there (Motion-JPEG
     ``.avi``), as a camera would have recorded them.
     """
-    import cv2
-
     from body.pose import DOF_INDEX
     from sim.render import Renderer
     from sim.scenarios import make_scenario

@@ -51,6 +51,7 @@ from body.avatar_frames import AvatarFrames
 
 #: the labels that define a frame's social state (pruning and signal-set subgraphs)
 STATE_SIGNALS: tuple[str, ...] = ("gaze_at_other", "talking", "laughing")
+#: goal names of the signal-set subgraphs: the prefix, then the signals on joined by "+" ("state:none": none)
 STATE_PREFIX = "state:"
 
 Progress = Callable[[str], None] | None
@@ -363,7 +364,7 @@ class VideoTexture:
             best = int(np.argmax(sz))
             if sz[best] < 2 * W:
                 continue   # no loop of its own: the avatar could not stay in this state
-            goals.append(STATE_PREFIX + "+".join(n for i, n in enumerate(sub_names) if code >> i & 1))
+            goals.append(STATE_PREFIX + ("+".join(n for i, n in enumerate(sub_names) if code >> i & 1) or "none"))
             targets.append(inset & (cc == best))
         say(f"graph distances to {len(goals)} goals: {', '.join(goals)}")
         self.goals_ = goals
@@ -407,7 +408,7 @@ class VideoTexture:
         for g in self.goals_:
             if not g.startswith(STATE_PREFIX):
                 continue
-            on = set(filter(None, g[len(STATE_PREFIX):].split("+")))
+            on = set(g[len(STATE_PREFIX):].split("+")) - {"none"}
             s = sum((n in on) == bool(v) for n, v in wanted.items())
             if s > score:
                 best, score = g, s
