@@ -41,7 +41,8 @@ class Responder(Node):
         "model_file": Param(str, "default", "model file for the selected model, or 'default' (built from the "
                             "simulator into ~/.cache/counterpart/models when missing)",
                             check=lambda v: None if v == "default" or os.path.isfile(v) else
-                            f"no model file {v!r}; make one with 'counterpart learn responder' or use 'default'"),
+                            f"no model file {v!r}; make one with 'counterpart learn responder' (an avatar: 'counterpart "
+                            "learn avatar') or use 'default'"),
         "use_pose": Param(bool, True, "subscribe to 'pose'"),
         "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
         "use_signals": Param(bool, False, "subscribe to 'signals'"),
