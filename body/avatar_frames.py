@@ -6,7 +6,8 @@ the renderer (which reads them back by path to composite the partner), so it liv
 Storage (the choice, since the paper is silent): one fixed crop box around the person for the whole
 recording (the union of the person's boxes, 2nd to 98th percentile, plus a margin), so the person's
 own sway stays in the frames and a composited avatar does not jitter; each crop as a JPEG (quality
-90, about 5 kB at 60 x 130 px) and each mask as packed bits, in the same ``.npz`` as the model:
+90; the pixels outside the person filled with the person's own colours spread outwards, so the
+feathered edge has no dark fringe) and each mask as packed bits, in the same ``.npz`` as the model:
 
 ``frames_jpeg`` (N,) uint8, the JPEG streams one after another; ``frames_offsets`` (T + 1,) int64
 where frame t's stream starts and ends; ``frames_masks`` (T, h, ceil(w / 8)) uint8 (``np.packbits``
@@ -64,6 +65,17 @@ def foot_and_height(masks: np.ndarray) -> tuple[tuple[float, float], float]:
     return (float(np.median(fx)), float(np.median(bottom) + 1)), float(np.median(bottom - top + 1))
 
 
+def _fill_outside(img: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The crop with the pixels outside the person replaced by the person's own colours spread
+    outwards (normalised convolution, sigma 3 px): the feathered edge then blends towards the
+    person's colour instead of a dark fringe, and JPEG spends few bits on the smooth surround."""
+    m = mask.astype(np.float32)
+    num = cv2.GaussianBlur(img.astype(np.float32) * m[..., None], (0, 0), 3.0)
+    den = cv2.GaussianBlur(m, (0, 0), 3.0)[..., None]
+    spread = np.where(den > 1e-3, num / np.maximum(den, 1e-3), 0.0)
+    return np.where(mask[..., None], img, np.clip(spread, 0, 255)).astype(np.uint8)
+
+
 class AvatarFrames:
     """The masked, cropped frames of a recording (module docstring for the layout).
 
@@ -95,10 +107,7 @@ class AvatarFrames:
             raise ValueError(f"crops {crops.shape} and masks {masks.shape} must be (T, h, w, 3) and (T, h, w)")
         streams = []
         for img, m in zip(crops, masks):
-            # the background is blacked out before compression: it is never shown, and JPEG spends no
-            # bits on it
-            ok, buf = cv2.imencode(".jpg", np.where(m[..., None], img, 0).astype(np.uint8),
-                                   [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+            ok, buf = cv2.imencode(".jpg", _fill_outside(img, m), [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
             if not ok:
                 raise ValueError("JPEG encoding of an avatar frame failed")
             streams.append(buf.reshape(-1))
@@ -144,7 +153,7 @@ class AvatarFrames:
         return img, alpha
 
     def image(self, t: int) -> np.ndarray:
-        """(h, w, 3) uint8 BGR of frame ``t`` (background black)."""
+        """(h, w, 3) uint8 BGR of frame ``t`` (outside the person: the person's colours spread outwards)."""
         return self._decode(t)[0]
 
     def alpha(self, t: int) -> np.ndarray:

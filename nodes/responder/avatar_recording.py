@@ -170,9 +170,14 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
     for frame, res in iter_video(path, ex, max_frames=count, train_frames=train_frames, start=start):
         size = (frame.shape[1], frame.shape[0])
         p = max(res.people, key=lambda q: q.area) if res.people else None
+        piece = None
         if p is not None:
-            matte = refine_matte(frame, res.labels == p.id + 1, ex.subtractor.model.mean_)
-        pieces.append(_piece(frame, matte) if p is not None else None)
+            x, y, w, h = p.bbox   # the matte is refined inside the person's box only: a fraction of the frame
+            box = (slice(y, y + h), slice(x, x + w))
+            matte = np.zeros(frame.shape[:2], bool)
+            matte[box] = refine_matte(frame[box], res.labels[box] == p.id + 1, ex.subtractor.model.mean_[box])
+            piece = _piece(frame, matte)
+        pieces.append(piece)
         if labelling:
             row = np.full(len(SIGNALS), UNKNOWN, np.int8)
             if p is not None and p.ref_point is not None:
