@@ -160,7 +160,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2, help="simulator seed (default 2; the defaults were tuned on 1)")
     ap.add_argument("--synth-frames", type=int, default=6000)
     ap.add_argument("--requests", type=int, default=200)
-    ap.add_argument("--keep", default="", help="folder to keep the video, labels and avatar in")
+    ap.add_argument("--keep", default="", help="folder to keep the video, labels and avatar in; a video and labels "
+                    "already there (of the same --seconds and --seed) are used again instead of rendering")
     args = ap.parse_args()
 
     from nodes.responder.avatar_recording import sim_recording
@@ -171,11 +172,15 @@ def main() -> None:
     work.mkdir(parents=True, exist_ok=True)
     video, labels_file, out = work / "person.avi", work / "labels.npz", work / "avatar.npz"
     t0 = time.perf_counter()
-    rec, labels = sim_recording(args.seconds, seed=args.seed, video=video, say=log)
-    np.savez(labels_file, signals_a=labels, signals_b=np.full_like(labels, -1),
-             signal_names=np.array(rec.names), fps=rec.fps)
-    log(f"recording ready in {time.perf_counter() - t0:.1f} s: {len(labels)} frames")
-    del rec
+    tag = work / "recording.json"
+    same = tag.exists() and json.loads(tag.read_text()) == {"seconds": args.seconds, "seed": args.seed}
+    if not (same and video.exists() and labels_file.exists()):
+        rec, labels = sim_recording(args.seconds, seed=args.seed, video=video, say=log)
+        np.savez(labels_file, signals_a=labels, signals_b=np.full_like(labels, -1),
+                 signal_names=np.array(rec.names), fps=rec.fps)
+        tag.write_text(json.dumps({"seconds": args.seconds, "seed": args.seed}))
+        del rec
+    log(f"recording ready in {time.perf_counter() - t0:.1f} s")
 
     import cv2
     t0 = time.perf_counter()

@@ -164,7 +164,6 @@ def test_learn_avatar_from_a_video_file(recorded, tmp_path: Path, capsys) -> Non
     t = int(np.flatnonzero(rec.valid & m.alive_)[50])
     assert m.frames.geometry.h == pytest.approx(rec.masks.shape[1], abs=6)
     a, b = m.frames.mask(t), rec.masks[t]
-    h, w = min(a.shape[0], b.shape[0]), min(a.shape[1], b.shape[1])
     assert abs(int(a.sum()) - int(b.sum())) < 0.2 * b.sum()
     # a label that never occurs is named
     code = cli_avatar.main(ap.parse_args(["--video", str(video), "--labels", str(lab), "--person", "b",

@@ -123,7 +123,7 @@ class Responder(Node):
         file = self.p["model_file"] if self.p["model"] == "video-texture" and self.p["model_file"] != "default" \
             else default_model_path("video-texture")
         fields = avatar_partner(texture, listener, heard, None if body is None else body.joints, self.speaker,
-                                self.interest, file)
+                                self.interest, os.path.abspath(file))   # the renderer may run from another folder
         return dict(fields, observed_id=-1 if body is None else body.id)
 
     def _pick(self, people: list[Any]) -> Any:
