@@ -5,7 +5,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-#: seconds of simulated recording the default avatar learns from (about 20 s of building on two cores)
+#: seconds of simulated recording the default avatar learns from
 DEFAULT_SECONDS = 60.0
 
 
