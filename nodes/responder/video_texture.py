@@ -69,7 +69,9 @@ class VideoTextureConfig:
     window_s: similarity window, seconds; n_clusters: k of the k-medoids (0: one per
     ``seconds_per_cluster`` of recording, 4-200); max_cluster_frames: frames clustered at most
     (evenly spaced; all frames are then assigned); radius: quantile of the frames' distances to their
-    nearest medoid that is the cut-point radius of every cluster;
+    nearest medoid that is the cut-point radius of every cluster; max_members: cut points a cluster
+    keeps at most (its nearest; a person standing still would otherwise put thousands of frames in
+    one cluster and its jumps would cost the square of that);
     max_jumps: jumps kept per cut point; markov_lag_s: lag of the cluster Markov chain, seconds;
     kde_dims: eigenspace dimensions of the KDE; kde_frames: frames the KDE is fitted on at most;
     beta: steering per frame of goal distance (log-weight); goal_slack: frames of detour allowed
@@ -87,10 +89,11 @@ class VideoTextureConfig:
     seconds_per_cluster: float = 1.0
     max_cluster_frames: int = 2000
     radius: float = 0.75
+    max_members: int = 100
     max_jumps: int = 12
     markov_lag_s: float = 0.25
     kde_dims: int = 6
-    kde_frames: int = 1500
+    kde_frames: int = 1000
     beta: float = 1.0
     jump_cost: float = 6.0
     goal_slack: float = 0.0
@@ -238,7 +241,8 @@ class VideoTexture:
         import kmedoids
         pos = np.searchsorted(wf, sub)
         D = _pairwise(Y[pos], Y[pos])
-        res = kmedoids.fasterpam(D, k, max_iter=100, init="build", random_state=c.random_state, n_cpu=1)
+        # random initialisation: FasterPAM's swaps make up for it, and BUILD costs k n^2
+        res = kmedoids.fasterpam(D, k, max_iter=100, init="random", random_state=c.random_state, n_cpu=1)
         self.medoids_ = sub[np.asarray(res.medoids, np.int64)]
         Dm = _pairwise(Y, Y[np.searchsorted(wf, self.medoids_)]) / np.sqrt(W)   # (n windowed, k) per frame
         nearest = np.full(T, -1, np.int64)
@@ -250,6 +254,8 @@ class VideoTexture:
         # pruning: a cluster keeps the cut points with its medoid's social state
         same = (state[wf][:, None, :] == state[self.medoids_][None, :, :]).all(-1)
         member &= same
+        far_rank = np.argsort(np.argsort(np.where(member, Dm, np.inf), axis=0, kind="stable"), axis=0)
+        member &= far_rank < c.max_members
         self.members_ = [wf[member[:, j]] for j in range(k)]
         n_cut = int(member.any(1).sum())
         say(f"{n_cut} cut points in {sum(len(m) >= 2 for m in self.members_)} clusters after pruning by "
@@ -312,7 +318,7 @@ class VideoTexture:
         rng = np.random.default_rng(c.random_state)
         fit_rows = xa if len(xa) <= c.kde_frames else xa[rng.choice(len(xa), c.kde_frames, replace=False)]
         bw = float(len(fit_rows) ** (-1.0 / (q + 4)))   # Scott's rule on standardised coordinates
-        kde = KernelDensity(bandwidth=bw, rtol=1e-4).fit(fit_rows / sd)
+        kde = KernelDensity(bandwidth=bw, rtol=1e-2).fit(fit_rows / sd)   # 1%: a log-weight needs no more
         mid = 0.5 * (x[e_src, :q] + x[e_dst, :q]).astype(np.float64) / sd
         ll = kde.score_samples(mid)
         lag = max(int(round(c.markov_lag_s * fps)), 1)
