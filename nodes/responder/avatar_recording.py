@@ -149,10 +149,15 @@ def read_label_file(path: str | os.PathLike[str], person: str, required: Sequenc
 
 
 def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labelling: bool,
-                part: str) -> tuple[list, list[np.ndarray], tuple[int, int]]:
+                part: str, one_thread: bool = False) -> tuple[list, list[np.ndarray], tuple[int, int]]:
     """Frames [start, stop) of a video: per frame the person's piece (``_piece``) and, when
-    ``labelling``, the labeller's row of labels (SIGNALS order); and the frame size."""
+    ``labelling``, the labeller's row of labels (SIGNALS order); and the frame size. ``one_thread``:
+    OpenCV on one thread (in a worker process: the processes are the parallelism, and OpenCV's own
+    threads on top cost a fifth more CPU on a busy machine)."""
     from bus.cli_offline import FrameProgress
+
+    if one_thread:
+        cv2.setNumThreads(1)
     from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
 
     ex = SilhouetteExtractor(outlines=labelling)
@@ -227,8 +232,8 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
 
         say(f"cutting the masks out in {n} processes, one part of the video each")
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
-            futures = [pool.submit(_masks_part, p, bounds[k], bounds[k + 1], train_frames, False, f" part {k + 1}/{n}")
-                       for k in range(n)]
+            futures = [pool.submit(_masks_part, p, bounds[k], bounds[k + 1], train_frames, False, f" part {k + 1}/{n}",
+                                   True) for k in range(n)]
             parts = [f.result() for f in futures]
     pieces = [q for part in parts for q in part[0]]
     size = next((part[2] for part in parts if part[2] != (0, 0)), (0, 0))
