@@ -1,16 +1,14 @@
-"""Nodes for the avatar's launch test: a speaker who nods at set frames (Pose3D + SocialSignals), and a
-sink that writes each Partner's avatar fields."""
+"""A node for the avatar's launch test: a speaker who nods at set frames (Pose3D + SocialSignals)."""
 from __future__ import annotations
 
-import json
 import time
 
 import numpy as np
 
 from body.kinematics import forward_kinematics
 from body.pose import neutral_pose
-from bus import Input, Node, Output, Param
-from messages import Partner, Pose3D, SocialSignals
+from bus import Node, Output, Param
+from messages import Pose3D, SocialSignals
 from messages.labeller import PersonSignals
 from messages.tracker import TrackedBody
 
@@ -33,22 +31,3 @@ class NoddingSpeaker(Node):
                 id=1, names=names, scores=np.zeros(6, np.float32), labels=np.array([nod, 0, 1, 0, 1, 0], np.int8))]))
             self.publish("pose", Pose3D(stamp=stamp, seq=t, people=[TrackedBody(id=1, side="left", joints=joints)]))
             time.sleep(0.005)
-
-
-class AvatarSink(Node):
-    """Writes one JSON line per Partner with its avatar fields."""
-
-    inputs = {"partner": Input(Partner)}
-    params = {"path": Param(str, "", "output JSON lines")}
-
-    def setup(self) -> None:
-        self.f = open(self.p["path"], "w", buffering=1)
-
-    def on_partner(self, m: Partner) -> None:
-        self.f.write(json.dumps({"seq": m.seq, "model": m.model, "behaviour": m.behaviour, "file": m.avatar_file,
-                                 "frames": np.asarray(m.avatar_frames).tolist(),
-                                 "weights": np.asarray(m.avatar_weights).tolist(),
-                                 "joints": np.asarray(m.joints).tolist()}) + "\n")
-
-    def teardown(self) -> None:
-        self.f.close()

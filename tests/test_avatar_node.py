@@ -34,7 +34,7 @@ def test_the_avatar_answers_a_nodding_speaker(tmp_path: Path, models: tuple[Path
         "speaker": {"run": "tests.avatar_nodes:NoddingSpeaker", "params": {"frames": FRAMES, "nod_from": NOD_FROM}},
         "responder": {"run": "nodes.responder", "params": {"model": "video-texture", "model_file": str(avatar),
                                                            "use_signals": True, "use_control": False}},
-        "sink": {"run": "tests.avatar_nodes:AvatarSink", "params": {"path": str(tmp_path / "out.jsonl")}},
+        "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp_path / "out.jsonl")}},
     }})
     code, out = run_launch(g, timeout=120, env={"COUNTERPART_MODELS": str(folder)})
     assert code == 0, out
