@@ -8,6 +8,7 @@ import pytest
 
 from nodes.responder.dual_hmm import DualHMM
 from nodes.responder.emotion import EmotionModel
+from nodes.responder.frames import actor_frame
 from nodes.responder.listener import ListenerModel
 from nodes.responder.models import save_model
 from tests.launching import read_jsonl, run_launch, write_launch
@@ -50,6 +51,9 @@ def test_partner_per_pose_and_control_takes_effect(tmp_path: Path, models_dir: P
     truth = planted_pair(7, T=60)
     pred = np.array([r["joints"] for r in rows])
     assert np.corrcoef(pred[:30, 4, 1], truth.b[:30, 4, 1])[0, 1] > 0.8
+    # the pair stands 1.3 m apart: the partner is staged at most max_distance_m (1.2 m) from A
+    gap = np.linalg.norm((actor_frame(pred)[0] - actor_frame(truth.a)[0])[:, [0, 2]], axis=1)
+    assert np.all((gap > 0.5 - 1e-4) & (gap < 1.2 + 1e-4)) and gap.max() > 1.15
 
 
 def test_the_partner_holds_through_a_short_dropout_of_the_observed_person(tmp_path: Path, models_dir: Path) -> None:
