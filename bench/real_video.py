@@ -31,6 +31,8 @@ person 0 the left one at frame 0) on every frame the video decodes:
   >= 0.5 whose tracked joint lies within 0.1 h (0.2 h) pixels, h the reference person's height on
   that frame (head to the midpoint of the two ankles); the tracked side "left" is person 0 and
   "right" person 1; a frame on which a side is missing or lost counts all its joints as misses;
+  the reference's head is the nose, so the tracked head is compared as the nose of the body
+  model (``nose_points``: the front of its head along the body's facing);
 - ``pck10_box``, ``pck20_box``: the same for the box-template baseline, no tracking: one fixed 2D
   template for both people, the mean of the reference joints (vis >= 0.5) normalised to their
   person's silhouette box on the "tune" clips of the run (all clips when it has none; on the tune
@@ -75,7 +77,10 @@ from real_partner import (  # bench/ is on sys.path as a script
 from real_silhouettes import VIS, reference_collapsed
 
 from body.camera import Camera
-from body.skeleton import JOINT_INDEX
+from body.kinematics import forward_kinematics
+from body.pose import neutral_pose
+from body.skeleton import DEFAULT_DIMS, JOINT_INDEX
+from nodes.responder.frames import actor_frame
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -86,6 +91,9 @@ SIDES = ("left", "right")
 TRAIN_FRAMES, LAYERS, PARTICLES = 20, 10, 256
 HEAD, ANKLES = JOINT_INDEX["head"], [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
 ALPHAS = (0.1, 0.2)
+#: the default body's head centre above its mid-ankle, metres
+_NEUTRAL = forward_kinematics(neutral_pose(DEFAULT_DIMS)).reshape(14, 3)
+MODEL_HEAD_ANKLE = float(_NEUTRAL[HEAD, 1] - _NEUTRAL[ANKLES, 1].mean())
 
 
 #: visible reference joints per frame, on average, of a person who is in view in a clip
@@ -141,15 +149,31 @@ def split_of(clip: Path) -> str:
     return "tune" if int(clip.stem.split("_")[0]) % 2 == 0 else "report"
 
 
+def nose_points(joints: np.ndarray) -> np.ndarray:
+    """Where the nose of the body model is: (..., 14, 3) joints (metres) -> (..., 3).
+
+    The reference's "head" is the nose, the body model's the head centre at eye level: the nose
+    is taken on the front of the model's head, the head cone's radius at its centre (the mean of
+    ``r_chin`` and ``r_crown``, scaled with the body) along the body's facing (``actor_frame``)."""
+    _, theta = actor_frame(np.nan_to_num(joints))
+    facing = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
+    stature = joints[..., HEAD, 1] - joints[..., ANKLES, 1].mean(axis=-1)
+    radius = 0.5 * (DEFAULT_DIMS.r_chin + DEFAULT_DIMS.r_crown) * stature / MODEL_HEAD_ANKLE
+    return joints[..., HEAD, :] + facing * radius[..., None]
+
+
 def tracked_pixels(track_npz: Path) -> tuple[np.ndarray, np.ndarray]:
-    """The tracked joints of a ``track_video`` file projected with the camera it recorded.
+    """The tracked joints of a ``track_video`` file projected with the camera it recorded, the head
+    as the nose (``nose_points``: the reference's head is the nose).
 
     Returns est (T, 2, 14, 2) pixels, NaN where the side was not tracked, lost, or the joint is
     behind the camera, and ids (T, 2) the silhouette node's person id per side (-1: none).
     """
     d = np.load(track_npz)
     camera = Camera.from_dict(json.loads(str(d["camera"])))
-    est = camera.project(d["joints"].astype(np.float64))
+    joints = d["joints"].astype(np.float64)
+    joints[..., HEAD, :] = nose_points(joints)
+    est = camera.project(joints)
     est[d["lost"]] = np.nan  # a lost track is a miss, whatever joints it left behind
     return est, d["ids"]
 
