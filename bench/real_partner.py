@@ -3,7 +3,7 @@
 Used by ``bench/real_video.py`` (its tracking part writes one ``track_video`` file per clip). For each
 clip the observed side's tracked joints go through the default dual-HMM and the responder node's
 stage (``nodes.responder.staging.Stage``, the node's defaults) frame by frame as the responder node
-runs them (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
+runs them, and its hand contact (``nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
 partner is projected with the camera the tracking recorded. Figures:
 
 - ``partner_distance_ok``: share of frames with a partner whose ground distance from the observed
@@ -33,6 +33,7 @@ from body.camera import Camera
 from body.skeleton import JOINT_INDEX
 from nodes.responder.frames import actor_frame
 from nodes.responder.models import load_default
+from nodes.responder.reach import reach
 from nodes.responder.staging import Stage
 
 VIS = 0.5
@@ -55,7 +56,7 @@ def _nearest(a: np.ndarray, va: np.ndarray, b: np.ndarray, vb: np.ndarray) -> tu
     """Per frame the smallest distance between points a (T, A, 2) and b (T, B, 2) that are both
     visible (va (T, A), vb (T, B)), inf where none; and the index of a's point of that pair."""
     d = np.linalg.norm(a[:, :, None] - b[:, None], axis=-1)
-    d = np.where(va[:, :, None] & vb[:, None], d, np.inf)
+    d = np.where(va[:, :, None] & vb[:, None] & np.isfinite(d), d, np.inf)
     flat = d.reshape(len(d), -1)
     return flat.min(axis=1), flat.argmin(axis=1) // b.shape[1]
 
@@ -68,17 +69,18 @@ def contact(kp: np.ndarray, vis: np.ndarray, h: np.ndarray, label: int) -> tuple
     left one). Push: the frame where one person's wrist is nearest the other's torso; that person
     (the pusher) is observed. None when the reference never shows the joints needed.
     """
-    seen = vis >= VIS
-    scale = np.maximum(h.mean(axis=1), 1.0)
+    seen = (vis >= VIS) & np.isfinite(kp).all(axis=-1)
+    # frames without a reference height (a joint missing) cannot say how near the people are
+    scale = np.where(np.isfinite(h).all(axis=1), np.maximum(h.mean(axis=1), 1.0), np.nan)
     if label == HANDSHAKE:
         d, k = _nearest(kp[:, 0, WRISTS], seen[:, 0, WRISTS], kp[:, 1, WRISTS], seen[:, 1, WRISTS])
-        d = d / scale
+        d = np.nan_to_num(d / scale, nan=np.inf)
         t = int(np.argmin(d))
         return None if not np.isfinite(d[t]) else (t, 0, WRISTS[int(k[t])])
     best = None
     for p in (0, 1):
         d, k = _nearest(kp[:, p, WRISTS], seen[:, p, WRISTS], kp[:, 1 - p, TORSO], seen[:, 1 - p, TORSO])
-        d = d / scale
+        d = np.nan_to_num(d / scale, nan=np.inf)
         t = int(np.argmin(d))
         if np.isfinite(d[t]) and (best is None or d[t] < best[0]):
             best = (d[t], t, p, WRISTS[int(k[t])])
@@ -105,7 +107,8 @@ def staged_partner(track_npz: Path, side: int) -> tuple[np.ndarray, np.ndarray, 
             if t - last <= HOLD_FRAMES:
                 partner[t] = partner[last]
             continue
-        partner[t] = stage(joints[t], model.step(joints[t]), (t - last) / fps if last >= 0 else 1.0 / fps)
+        staged = stage(joints[t], model.step(joints[t]), (t - last) / fps if last >= 0 else 1.0 / fps)
+        partner[t] = reach(joints[t], staged)[0]
         last = t
     return partner, observed, camera, fps
 

@@ -1,5 +1,5 @@
-"""Where the generated partner stands: the stage's limits, and the dual HMM's pose on a person unlike
-any of training."""
+"""Where the generated partner stands (the stage's limits), its hand contact, and the dual HMM's pose
+on a person unlike any of training."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,6 +7,7 @@ import pytest
 
 from nodes.responder.dual_hmm import DualHMM
 from nodes.responder.frames import actor_frame
+from nodes.responder.reach import ReachConfig, reach, two_bone_ik
 from nodes.responder.staging import Stage, StageConfig
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
@@ -83,3 +84,30 @@ def test_the_dual_hmm_gives_a_body_for_a_person_unlike_any_of_training() -> None
     height = out[:, 1].max() - out[:, 1].min()
     span = np.ptp(out[:, [0, 2]], axis=0).max()
     assert 1.0 < height < 2.2 and span < 1.5
+
+
+def test_two_bone_ik_puts_the_wrist_on_a_reachable_target_and_keeps_the_bones() -> None:
+    s, e, w = np.array([0.0, 1.45, 0.0]), np.array([0.0, 1.2, 0.05]), np.array([0.0, 0.95, 0.1])
+    for target in (np.array([0.3, 1.2, 0.2]), np.array([0.0, 1.45, 0.4]), np.array([-0.2, 1.1, 0.25])):
+        e2, w2 = two_bone_ik(s, e, w, target)
+        np.testing.assert_allclose(w2, target, atol=1e-5)
+        assert np.linalg.norm(e2 - s) == pytest.approx(np.linalg.norm(e - s), abs=1e-6)
+        assert np.linalg.norm(w2 - e2) == pytest.approx(np.linalg.norm(w - e), abs=1e-6)
+    # out of reach: the arm stretches towards it from its shoulder
+    e2, w2 = two_bone_ik(s, e, w, np.array([2.0, 1.45, 0.0]))
+    assert np.linalg.norm(w2 - s) == pytest.approx(np.linalg.norm(e - s) + np.linalg.norm(w - e), abs=1e-4)
+    assert w2[0] > 0.49 and abs(w2[1] - 1.45) < 1e-3
+
+
+def test_the_partners_hand_meets_the_hand_it_comes_near_and_ignores_a_far_one() -> None:
+    obs, par = person(0.0, 2.0), person(0.8, 2.0, -np.pi / 2)
+    far, pull = reach(obs, par)
+    assert pull == 0.0 and np.array_equal(far, par)
+    offered = obs.copy()
+    offered[7] = par[4] + [-0.08, 0.05, 0.0]   # the observed right wrist 10 cm from the partner's left
+    met, pull = reach(offered, par)
+    assert pull == 1.0
+    np.testing.assert_allclose(met[4], offered[7], atol=1e-5)
+    np.testing.assert_array_equal(np.delete(met, [3, 4], axis=0), np.delete(par, [3, 4], axis=0))
+    half, pull = reach(offered, par, ReachConfig(r_engage=0.45, r_contact=0.0))
+    assert 0.0 < pull < 1.0 and np.linalg.norm(half[4] - offered[7]) < np.linalg.norm(par[4] - offered[7])

@@ -21,6 +21,7 @@ from bus import Input, Node, Output, Param
 from messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .emotion import EMOTIONS, StyleFilter
+from .reach import ReachConfig, reach
 from .staging import Stage, StageConfig
 
 MODELS = ("dual-hmm", "joint-shape", "listener")
@@ -63,6 +64,9 @@ class Responder(Node):
                                 "distance between the mid-hips)", min=0.0),
         "max_distance_m": Param(float, 1.2, "farthest the partner stands from the observed person (m)", min=0.0),
         "max_speed_m_s": Param(float, 2.5, "fastest the partner's placement moves (m/s)", min=0.01),
+        "reach_m": Param(float, 0.45, "the partner's hand that the model brings within this distance of the "
+                         "observed person's hand is pulled onto it (m; hand contact by inverse kinematics, "
+                         "complete at 0.1 m); 0: the model's hand as it is", min=0.0),
     }
 
     @classmethod
@@ -83,12 +87,15 @@ class Responder(Node):
         self.count = 0
         self.last: Partner | None = None  # the last partner that responded to someone
         self.stage: Stage | None = None
-        if self.p["stage"]:
-            try:
+        self.reach: ReachConfig | None = None
+        try:
+            if self.p["stage"]:
                 self.stage = Stage(StageConfig(self.p["min_distance_m"], self.p["max_distance_m"],
                                                self.p["max_speed_m_s"]))
-            except ValueError as e:
-                raise SystemExit(f"responder: {e}; set responder.min_distance_m and responder.max_distance_m")
+            if self.p["reach_m"] > 0:
+                self.reach = ReachConfig(r_engage=self.p["reach_m"])
+        except ValueError as e:
+            raise SystemExit(f"responder: {e}; set responder.min_distance_m, max_distance_m or reach_m")
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -131,16 +138,20 @@ class Responder(Node):
             self.stage.reset()
 
     def _staged(self, observed: np.ndarray, joints: np.ndarray, driver: Any) -> np.ndarray:
-        """The model's partner moved to where a partner stands (``stage``), counted when moved."""
-        if self.stage is None:
-            return joints
-        fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
-        gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
-        before = self.stage.corrected
-        staged = self.stage(observed, joints, gap / fps)
-        if self.stage.corrected > before:
-            self.tally("partner_placed")
-        return staged
+        """The model's partner moved to where a partner stands (``stage``) and its hand onto the
+        observed hand it comes near (``reach_m``); both counted when they act."""
+        if self.stage is not None:
+            fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
+            gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
+            before = self.stage.corrected
+            joints = self.stage(observed, joints, gap / fps)
+            if self.stage.corrected > before:
+                self.tally("partner_placed")
+        if self.reach is not None:
+            joints, pull = reach(observed, joints, self.reach)
+            if pull > 0:
+                self.tally("hand_reached")
+        return joints
 
     def _pick(self, people: list[Any]) -> Any:
         if not people:
