@@ -111,3 +111,20 @@ def test_the_partners_hand_meets_the_hand_it_comes_near_and_ignores_a_far_one() 
     np.testing.assert_array_equal(np.delete(met, [3, 4], axis=0), np.delete(par, [3, 4], axis=0))
     half, pull = reach(offered, par, ReachConfig(r_engage=0.45, r_contact=0.0))
     assert 0.0 < pull < 1.0 and np.linalg.norm(half[4] - offered[7]) < np.linalg.norm(par[4] - offered[7])
+
+
+def test_the_partner_steps_back_when_a_hand_pushes_its_chest_and_then_returns() -> None:
+    stage = Stage(StageConfig(recoil_m=0.3, recoil_s=0.8))
+    obs, par = person(0.0, 2.0), person(0.7, 2.0, -np.pi / 2)
+
+    def gap(X: np.ndarray, P: np.ndarray) -> float:
+        return float(np.hypot(*(ground(P) - ground(X))))
+
+    assert gap(obs, stage(obs, par, 0.04)) == pytest.approx(0.7)
+    pushing = obs.copy()
+    pushing[7] = [0.6, 1.3, 2.0]  # the right wrist on the partner's chest
+    gaps = [gap(pushing, stage(pushing, par, 0.04)) for _ in range(10)]
+    assert stage.pushes == 1                       # one push, however long the hand stays
+    assert max(gaps) > 0.9 and np.all(np.diff(gaps[:3]) > 0) and max(np.diff([0.7, *gaps])) <= 0.1 + 1e-9
+    later = [gap(obs, stage(obs, par, 0.04)) for _ in range(100)]
+    assert later[-1] == pytest.approx(0.7, abs=0.01)  # the push fades: back where the model puts it

@@ -64,6 +64,8 @@ class Responder(Node):
                                 "distance between the mid-hips)", min=0.0),
         "max_distance_m": Param(float, 1.2, "farthest the partner stands from the observed person (m)", min=0.0),
         "max_speed_m_s": Param(float, 2.5, "fastest the partner's placement moves (m/s)", min=0.01),
+        "recoil_m": Param(float, 0.3, "how far the partner steps back when a hand of the observed person touches "
+                          "its chest (m, fading over about a second; 0: it does not recoil)", min=0.0),
         "reach_m": Param(float, 0.45, "the partner's hand that the model brings within this distance of the "
                          "observed person's hand is pulled onto it (m; hand contact by inverse kinematics, "
                          "complete at 0.1 m); 0: the model's hand as it is", min=0.0),
@@ -91,7 +93,7 @@ class Responder(Node):
         try:
             if self.p["stage"]:
                 self.stage = Stage(StageConfig(self.p["min_distance_m"], self.p["max_distance_m"],
-                                               self.p["max_speed_m_s"]))
+                                               self.p["max_speed_m_s"], recoil_m=self.p["recoil_m"]))
             if self.p["reach_m"] > 0:
                 self.reach = ReachConfig(r_engage=self.p["reach_m"])
         except ValueError as e:
@@ -143,10 +145,12 @@ class Responder(Node):
         if self.stage is not None:
             fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
             gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
-            before = self.stage.corrected
+            before = self.stage.corrected, self.stage.pushes
             joints = self.stage(observed, joints, gap / fps)
-            if self.stage.corrected > before:
+            if self.stage.corrected > before[0]:
                 self.tally("partner_placed")
+            if self.stage.pushes > before[1]:
+                self.tally("pushes")
         if self.reach is not None:
             joints, pull = reach(observed, joints, self.reach)
             if pull > 0:

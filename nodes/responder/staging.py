@@ -14,7 +14,11 @@ model's posture and gestures are kept:
    coordinates about the person (the partner walks round them, never through them; it never
    jumps), so the distance holds on every frame. The offset is relative to the observed person: where the tracker's estimate of the
    person jumps, the partner stays beside them in the picture rather than walking after them;
-3. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
+3. the partner recoils when pushed: when a wrist of the observed person comes within
+   ``contact_m`` of the partner's torso axis (neck to mid-hip) the partner's distance grows by
+   ``recoil_m``, which then fades with time constant ``recoil_s`` (the step back, then the
+   return; still within the limits and the speed of 1 and 2);
+4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
 from __future__ import annotations
@@ -28,6 +32,8 @@ from body.skeleton import JOINT_INDEX
 from .frames import actor_frame
 
 _ANKLES = [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
+_WRISTS = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
+_NECK, _HIPS = JOINT_INDEX["neck"], [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
 
 
 @dataclass(frozen=True)
@@ -38,6 +44,9 @@ class StageConfig:
     max_distance_m: float = 1.2
     max_speed_m_s: float = 2.5
     max_ankle_m: float = 0.3
+    contact_m: float = 0.2
+    recoil_m: float = 0.3
+    recoil_s: float = 0.8
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -46,6 +55,16 @@ class StageConfig:
         if self.max_speed_m_s <= 0 or self.max_ankle_m < 0:
             raise ValueError(f"max_speed_m_s={self.max_speed_m_s} must be > 0 and max_ankle_m="
                              f"{self.max_ankle_m} >= 0")
+        if self.contact_m < 0 or self.recoil_m < 0 or self.recoil_s <= 0:
+            raise ValueError(f"contact_m={self.contact_m}, recoil_m={self.recoil_m} must be >= 0 and "
+                             f"recoil_s={self.recoil_s} > 0")
+
+
+def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distances (N,) of points (N, 3) from the segment a-b (3,) each, metres."""
+    ab = b - a
+    t = np.clip((points - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
 
 
 def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarray:
@@ -89,6 +108,9 @@ class Stage:
     def reset(self) -> None:
         """Forget the last placement (another person observed, or a new stream)."""
         self._last: np.ndarray | None = None  # the last ground offset from the observed person
+        self._recoil = 0.0   # metres added to the partner's distance by a push, fading
+        self._touching = False
+        self.pushes = 0      # pushes the partner recoiled from
 
     def __call__(self, observed: np.ndarray, partner: np.ndarray, dt: float) -> np.ndarray:
         """The partner's joints (14, 3), world metres, moved rigidly to a valid place.
@@ -103,7 +125,18 @@ class Stage:
         o3, facing = actor_frame(X)
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
-        offset = _clip_length(p - o, float(facing), c.min_distance_m, c.max_distance_m)
+        self._recoil *= float(np.exp(-max(float(dt), 0.0) / c.recoil_s))
+        torso = _segment_distance(X[_WRISTS], P[_NECK], P[_HIPS].mean(axis=0))
+        touching = bool((torso < c.contact_m).any())
+        if touching and not self._touching:
+            self._recoil += c.recoil_m
+            self.pushes += 1
+        self._touching = touching
+        d = p - o
+        r = float(np.hypot(*d))
+        if r > 1e-6:
+            d = d * (r + self._recoil) / r
+        offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
