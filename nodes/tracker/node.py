@@ -110,7 +110,13 @@ class TrackerNode(Node):
 
     def _tracker(self, side: str, camera: Camera) -> Tracker:
         if camera is not self.camera:
-            self.camera, self.trackers = camera, {}
+            same_view = self.camera is not None and (camera.width, camera.height) == (self.camera.width,
+                                                                                      self.camera.height)
+            # a refined camera of the same frames (the calibration's estimate, by small steps) keeps the
+            # tracks going; frames of another size are another view: the tracks start again
+            for tr in self.trackers.values() if same_view else ():
+                tr.set_camera(camera)
+            self.camera, self.trackers = camera, (self.trackers if same_view else {})
         if side not in self.trackers:
             self.trackers[side] = Tracker(camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
                                           seed=self.p["seed"] + SIDES.index(side))
