@@ -20,20 +20,23 @@ def _camera(height: float, tilt_deg: float, fov_deg: float, roll_deg: float = 0.
     return Camera(f, f, (W - 1) / 2, (H - 1) / 2, W, H, R, -R @ centre)
 
 
-def _walkers(cam: Camera, seed: int, n_people: int = 3, frames: int = 75, noise: float = 1.0):
-    """Heads, feet (pixels), person ids and times of people walking diagonally (in depth too)."""
+def _walkers(cam: Camera, seed: int, n_people: int = 6, frames: int = 100, fps: float = 10.0, noise: float = 1.0):
+    """Heads, feet (pixels), person ids and times of people walking in straight lines (in depth too),
+    each leaning a little (2% of the stature, to one side for the whole walk)."""
     rng = np.random.default_rng(seed)
     heads, feet, ids = [], [], []
     for p in range(n_people):
         stature = rng.normal(1.70, 0.07)
-        start = np.array([rng.uniform(-1.0, 1.0), 0.0, rng.uniform(-1.5, 1.0)])
+        start = np.array([rng.uniform(-1.5, 1.5), 0.0, rng.uniform(-2.0, 1.0)])
         heading = rng.uniform(0, 2 * np.pi)
+        step = 0.5 * np.array([np.cos(heading), 0.0, np.sin(heading)]) / fps   # 0.5 m/s, to and fro
+        lean = np.array([rng.normal(0, 0.02 * stature), 0.0, 0.0])
         for t in range(frames):
-            g = start + 1.2 * (t / 25.0) * np.array([np.cos(heading), 0.0, np.sin(heading)]) * 0.6
+            g = start + step * (t % 50 if t % 100 < 50 else 50 - t % 50)
             feet.append(cam.project(g) + rng.normal(0, noise, 2))
-            heads.append(cam.project(g + [0.0, stature, 0.0]) + rng.normal(0, noise, 2))
+            heads.append(cam.project(g + lean + [0.0, stature, 0.0]) + rng.normal(0, noise, 2))
             ids.append(p)
-    t = np.tile(np.arange(frames) / 25.0, n_people)
+    t = np.tile(np.arange(frames) / fps, n_people)
     return np.array(heads), np.array(feet), np.array(ids), t
 
 
@@ -44,13 +47,13 @@ def test_a_tilted_camera_is_recovered_within_its_uncertainty(height: float, tilt
     cam = _camera(height, tilt, fov, roll)
     heads, feet, ids, t = _walkers(cam, seed=int(tilt))
     est = estimate_camera(heads, feet, ids, (W, H), t)
-    assert est is not None and est.n_people == 3
+    assert est is not None and est.n_people == 6
     assert abs(est.tilt_deg - tilt) < 2.0 and abs(est.roll_deg - roll) < 1.0, est.describe()
-    assert abs(est.focal / cam.fx - 1) < 0.08 and abs(est.height / height - 1) < 0.10, est.describe()
+    assert abs(est.focal / cam.fx - 1) < 0.10 and abs(est.height / height - 1) < 0.10, est.describe()
     # the uncertainty says how far off it may be: each error within 3 std, none of them pretended exact
     assert abs(np.log(est.focal / cam.fx)) < 3 * est.focal_std and abs(est.tilt_deg - tilt) < 3 * est.tilt_std_deg
     assert abs(np.log(est.height / height)) < 3 * est.height_std
-    assert est.height_std > 0.02  # three people's statures are known only to the prior's 5% each
+    assert est.height_std > 0.015  # six people's statures are known only to the prior's 5% each
     # the estimated camera places a foot where the true one does (up to the world's origin and yaw)
     ref = est.camera()
     g_true = cam.ground_point(*feet[:2].T)

@@ -37,8 +37,11 @@ from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
+from threadpoolctl import threadpool_limits
 
 from body.camera import Camera
+
+from .lines import LineFamilies, segment_angles
 
 
 @dataclass(frozen=True)
@@ -50,10 +53,16 @@ class CalibrationConfig:
         fov_deg: centre of the weak prior on the horizontal field of view (the default camera's).
         focal_log_std: std of that prior on log f (0.35: 40-75 degrees within about one std).
         roll_std_deg: std of the prior on roll, degrees.
-        pixel_noise: std of a head point, as a share of the person's pixel height.
+        pixel_noise: std of a head point along the image vertical, as a share of the person's pixel
+            height (posture, the outline's top and bottom).
+        lateral_noise: its std across (people lean: walking, reaching to each other).
+        min_tilt_deg, max_tilt_deg: bounds of the tilt (a camera level or looking down; people
+            leaning towards each other otherwise read as a camera looking up).
         min_pixel_noise: the least std of a head point, pixels.
         correlation_s: seconds over which one person's observations are counted as one.
         min_observations: fewer usable observations give no estimate.
+        line_noise_px, min_line_noise_deg: std of a scene segment's direction: this many pixels
+            across its length, at least this many degrees.
         grid_tilt_deg, grid_fov_deg: start values tried (the best ``n_starts`` are refined).
         n_starts: refined starts.
     """
@@ -63,11 +72,16 @@ class CalibrationConfig:
     fov_deg: float = 55.0
     focal_log_std: float = 0.35
     roll_std_deg: float = 10.0
-    pixel_noise: float = 0.03
+    pixel_noise: float = 0.05
+    lateral_noise: float = 0.10
+    max_tilt_deg: float = 80.0
+    min_tilt_deg: float = -5.0
     min_pixel_noise: float = 1.0
-    correlation_s: float = 0.4
+    correlation_s: float = 1.0
     min_observations: int = 20
-    grid_tilt_deg: tuple[float, ...] = tuple(np.arange(-10.0, 50.1, 5.0).tolist())
+    line_noise_px: float = 1.5
+    min_line_noise_deg: float = 0.5
+    grid_tilt_deg: tuple[float, ...] = tuple(np.arange(-5.0, 50.1, 5.0).tolist())
     grid_fov_deg: tuple[float, ...] = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 95.0)
     n_starts: int = 3
 
@@ -88,6 +102,10 @@ class CameraEstimate:
         people_heights: (K,) estimated statures of the people, metres.
         n_observations, n_people: head/foot pairs and people used; ``inliers`` share of them
             within 3 std of the model.
+        depth_spread: how far the people moved in depth (:func:`depth_spread`: the spread of a
+            person's foot rows over its pixel height; 0 when everyone stays at one depth). People all at one depth show
+            the vertical vanishing point only, not the horizon: focal length and tilt are then
+            left to the priors and the lean of the people.
         width, height_px: the frame size it holds for.
     """
 
@@ -107,6 +125,7 @@ class CameraEstimate:
     inliers: float
     width: int
     height_px: int
+    depth_spread: float = 0.0
 
     @property
     def fov_deg(self) -> float:
@@ -134,7 +153,7 @@ class CameraEstimate:
                 f"tilt {self.tilt_deg:.1f} +- {self.tilt_std_deg:.1f} deg, roll {self.roll_deg:.1f} +- "
                 f"{self.roll_std_deg:.1f} deg, height {self.height:.2f} m +- {100 * self.height_std:.0f}% "
                 f"({self.n_observations} observations of {self.n_people} people, "
-                f"{100 * self.inliers:.0f}% inliers)")
+                f"{100 * self.inliers:.0f}% inliers, depth spread {100 * self.depth_spread:.0f}%)")
 
 
 def rotation(tilt: float, roll: float) -> np.ndarray:
@@ -193,12 +212,41 @@ def _project_heads(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.
     return f * Xc[:, :2] / z[:, None] + c
 
 
+def _vanishing_points(x: np.ndarray, n_people: int, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
+    """(N, 3) homogeneous vanishing point predicted for each scene segment: the image of the world
+    vertical for the vertical family, of the direction (cos phi_j, 0, sin phi_j) for horizontal
+    family j (phi_j = x[4 + n_people + j])."""
+    W, H = size
+    f = np.exp(x[0])
+    KR = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]]) @ rotation(x[1], x[2])
+    phi = x[4 + n_people:]
+    dirs = np.zeros((len(lines.vertical), 3))
+    dirs[lines.vertical, 1] = 1.0
+    dirs[~lines.vertical, 0], dirs[~lines.vertical, 2] = np.cos(phi), np.sin(phi)
+    return (dirs @ KR.T)[lines.family]
+
+
 def _residuals(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, scale: np.ndarray,
-               size: tuple[int, int], cfg: CalibrationConfig, f0: float) -> np.ndarray:
-    r = ((_project_heads(x, head, foot, track, size) - head) / scale[:, None]).ravel()
-    priors = np.concatenate([(x[4:] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height),
+               size: tuple[int, int], cfg: CalibrationConfig, f0: float, n_people: int,
+               lines: LineFamilies | None = None, line_scale: np.ndarray | None = None) -> np.ndarray:
+    r = ((_project_heads(x[: 4 + n_people], head, foot, track, size) - head) / scale).ravel()
+    priors = np.concatenate([(x[4:4 + n_people] - np.log(cfg.person_height))
+                             / (cfg.person_height_std / cfg.person_height),
                              [(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)]])
-    return np.concatenate([r, priors])
+    if lines is None or not len(lines.segments):
+        return np.concatenate([r, priors])
+    rl = segment_angles(lines.segments, _vanishing_points(x, n_people, lines, size)) / line_scale
+    return np.concatenate([r, priors, rl])
+
+
+def _directions(x: np.ndarray, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
+    """(Fh,) ground directions phi of the horizontal families' detected vanishing points under the
+    camera of ``x`` (their start values)."""
+    W, H = size
+    f = np.exp(x[0])
+    K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
+    d = np.linalg.solve(K, lines.vp[~lines.vertical].T).T @ rotation(x[1], x[2])
+    return np.arctan2(d[:, 2], d[:, 0])
 
 
 def _relative_heights(f: float, tilt: float, roll: float, head: np.ndarray, foot: np.ndarray,
@@ -217,9 +265,15 @@ def _relative_heights(f: float, tilt: float, roll: float, head: np.ndarray, foot
     return -(ta * tb).sum(axis=1) / np.maximum((tb * tb).sum(axis=1), 1e-12)
 
 
-def estimate_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int],
-                    time_s: np.ndarray | None = None, config: CalibrationConfig = CalibrationConfig()
-                    ) -> CameraEstimate | None:
+def estimate_camera(*args: Any, **kw: Any) -> CameraEstimate | None:
+    """:func:`fit_camera` on one BLAS thread (its matrices are small: more threads only contend)."""
+    with threadpool_limits(1):
+        return fit_camera(*args, **kw)
+
+
+def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int],
+                    time_s: np.ndarray | None = None, config: CalibrationConfig = CalibrationConfig(),
+                    lines: LineFamilies | None = None) -> CameraEstimate | None:
     """Estimate the camera from head and foot points of upright people.
 
     Args:
@@ -228,6 +282,8 @@ def estimate_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size:
         size: (width, height) of the frames, pixels.
         time_s: (N,) time of each observation, seconds (None: 25 frames per second in order).
         config: priors and noise model.
+        lines: families of straight scene lines (``nodes.calibration.lines``): the vertical ones
+            and the horizon of the horizontal ones join the fit (None: the people alone).
     Returns:
         The estimate, or None with fewer than ``config.min_observations`` observations.
     """
@@ -249,9 +305,18 @@ def estimate_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size:
     for j in range(len(ids)):
         tk = time_s[k == j]
         per[j] = max(1.0, len(tk) / max(1.0, (tk.max() - tk.min()) / config.correlation_s))
-    scale = np.maximum(config.pixel_noise * pix, config.min_pixel_noise) * np.sqrt(per[k])
+    scale = np.maximum(np.multiply.outer(pix, [config.lateral_noise, config.pixel_noise]),
+                       config.min_pixel_noise) * np.sqrt(per[k])[:, None]
     f0 = (W / 2.0) / np.tan(np.radians(config.fov_deg) / 2)
 
+    if lines is not None and not len(lines.segments):
+        lines = None
+    line_scale = None
+    if lines is not None:
+        length = np.hypot(*(lines.segments[:, 2:] - lines.segments[:, :2]).T)
+        line_scale = np.maximum(config.line_noise_px / length, np.sin(np.radians(config.min_line_noise_deg)))
+    nk = len(ids)
+    args = (head, foot, k, scale, (W, H), config, f0, nk, lines, line_scale)
     starts = []
     for tilt in np.radians(config.grid_tilt_deg):
         for fov in config.grid_fov_deg:
@@ -262,15 +327,21 @@ def estimate_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size:
                 continue
             hc = config.person_height / np.exp(np.mean(np.log(hk)))
             x0 = np.concatenate([[np.log(f), tilt, 0.0, np.log(hc)], np.log(hk * hc)])
-            r = _residuals(x0, head, foot, k, scale, (W, H), config, f0)
+            if lines is not None:
+                x0 = np.concatenate([x0, _directions(x0, lines, (W, H))])
+            r = _residuals(x0, *args)
             starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), x0))
     if not starts:
         return None
     starts.sort(key=lambda s: s[0])
     best = None
     for _, x0 in starts[: config.n_starts]:
-        res = least_squares(_residuals, x0, args=(head, foot, k, scale, (W, H), config, f0), loss="soft_l1",
-                            method="trf", x_scale="jac", max_nfev=200)
+        lo = np.full(len(x0), -np.inf)
+        hi = np.full(len(x0), np.inf)
+        lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
+        x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
+        res = least_squares(_residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf",
+                            x_scale="jac", max_nfev=200)
         if best is None or res.cost < best.cost:
             best = res
     x = best.x
@@ -292,8 +363,22 @@ def estimate_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size:
         focal=f, tilt_deg=float(np.degrees(tilt)), roll_deg=float(np.degrees(roll)), height=hc,
         focal_std=float(sd[0]), tilt_std_deg=float(np.degrees(sd[1])), roll_std_deg=float(np.degrees(sd[2])),
         height_std=float(sd[3]), distance=float(-np.median(g[inlier | ~inlier.any(), 2])),
-        offset_x=float(np.median(g[:, 0])), people_heights=tuple(float(v) for v in np.exp(x[4:])),
-        n_observations=int(len(head)), n_people=int(len(ids)), inliers=float(inlier.mean()), width=W, height_px=H)
+        offset_x=float(np.median(g[:, 0])), people_heights=tuple(float(v) for v in np.exp(x[4:4 + nk])),
+        n_observations=int(len(head)), n_people=int(len(ids)), inliers=float(inlier.mean()), width=W, height_px=H,
+        depth_spread=depth_spread(foot[:, 1], pix, k))
 
 
-__all__ = ["CalibrationConfig", "CameraEstimate", "estimate_camera", "head_foot", "rotation", "usable"]
+def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndarray, min_views: int = 10) -> float:
+    """How far the people moved in depth: for each person seen ``min_views`` times or more, the
+    interquartile range of its foot's image row over its median pixel height; the largest of them.
+    (N,) pixels, (N,) pixels, (N,) ints from 0."""
+    out = 0.0
+    for j in range(int(person.max()) + 1 if len(person) else 0):
+        m = person == j
+        if m.sum() >= min_views:
+            q25, q75 = np.percentile(foot_row[m], [25, 75])
+            out = max(out, float((q75 - q25) / np.median(pixel_height[m])))
+    return out
+
+
+__all__ = ["CalibrationConfig", "CameraEstimate", "estimate_camera", "fit_camera", "head_foot", "rotation", "usable"]

@@ -28,7 +28,7 @@ from body.camera import Camera, camera_for_size, camera_to_info, load_camera_fil
 from messages import CameraInfo, Frame, Silhouettes
 
 from .estimate import CameraEstimate
-from .observe import PeopleObservations
+from .observe import PeopleObservations, SceneFrames
 from .smooth import CameraSmoother, credible
 
 
@@ -63,7 +63,9 @@ class Calibration(Node):
               "max_height_std": Param(float, 0.2, "estimate: used only when the height's relative std is below",
                                       min=0.0),
               "max_focal_std": Param(float, 0.5, "estimate: ... and the focal length's relative std", min=0.0),
-              "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0)}
+              "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0),
+              "min_depth_spread": Param(float, 0.12, "estimate: ... and the people seen at depths this much apart "
+                                                     "(relative; at one depth the horizon does not show)", min=0.0)}
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
@@ -77,12 +79,19 @@ class Calibration(Node):
         self.smoother: CameraSmoother | None = None
         self.latest: CameraEstimate | None = None
         self.n_sil = 0
+        self.scene = SceneFrames()
+        #: frames kept for the scene's lines until their people come (seq -> image)
+        self.images: dict[int, np.ndarray] = {}
 
     def on_frame(self, msg: Frame) -> None:
         shape = msg.image.shape
         size = (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
         if size != self.size and min(size) > 0:
             self._new_size(size, msg.stamp, msg.seq)
+        if self.p["estimate"] and not self.p["file"] and self.scene.wants(msg.seq):
+            self.images[msg.seq] = msg.image
+            for old in sorted(self.images)[:-40]:
+                del self.images[old]
 
     def _new_size(self, size: tuple[int, int], stamp: int, seq: int) -> None:
         try:
@@ -95,6 +104,7 @@ class Calibration(Node):
             raise SystemExit(2) from None
         self.size = size
         self.observations = PeopleObservations(*size)
+        self.scene = SceneFrames()
         self.smoother = CameraSmoother(camera, self.p["max_step"])
         source = f"file:{self.p['file']}" if self.p["file"] else "default"
         self.publish("camera_info", camera_to_info(camera, stamp, seq, source))
@@ -109,13 +119,17 @@ class Calibration(Node):
             self._new_size(size, msg.stamp, msg.seq)
         assert self.observations is not None and self.smoother is not None
         self.tally("people_observed", self.observations.add(msg.people, msg.stamp * 1e-9))
+        image = self.images.pop(msg.seq, None)
+        if image is not None and image.shape[:2] == (size[1], size[0]):
+            self.scene.add(image, msg.people)
         self.n_sil += 1
         if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:
             return
-        est = self.observations.estimate()
+        est = self.observations.estimate(lines=self.scene.families())
         if est is None or not credible(est, self.p["max_height_std"], self.p["max_focal_std"],
-                                       self.p["max_tilt_std_deg"]):
+                                       self.p["max_tilt_std_deg"], self.p["min_depth_spread"]):
             self.tally("estimates_not_credible")
+            self.log.debug("estimate not credible yet: %s", est.describe() if est else f"{len(self.observations)} observations")
             return
         if self.latest is None:
             self.log.info("first estimate: %s", est.describe())

@@ -15,6 +15,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
+from .lines import LineFamilies, detect_segments, find_families
 
 
 class PeopleObservations:
@@ -59,10 +60,46 @@ class PeopleObservations:
         a = np.array(self._rows, np.float64).reshape(-1, 6)
         return a[:, 0:2], a[:, 2:4], a[:, 4].astype(np.int64), a[:, 5]
 
-    def estimate(self, config: CalibrationConfig = CalibrationConfig()) -> CameraEstimate | None:
-        """The camera from what was gathered so far; None with too few observations."""
+    def estimate(self, config: CalibrationConfig = CalibrationConfig(),
+                 lines: LineFamilies | None = None) -> CameraEstimate | None:
+        """The camera from what was gathered so far (and the scene's ``lines``); None with too few
+        observations."""
         head, foot, track, t = self.arrays()
-        return estimate_camera(head, foot, track, self.size, t, config)
+        return estimate_camera(head, foot, track, self.size, t, config, lines)
 
 
-__all__ = ["PeopleObservations"]
+class SceneFrames:
+    """A few frames of the scene for its straight lines: frames whose number is a multiple of
+    ``every``, up to ``keep`` of them, with the boxes of the people on them. :meth:`families` takes
+    the per-pixel median of the frames (people who move are gone from it) and leaves out the
+    segments on any person's box."""
+
+    def __init__(self, every: int = 8, keep: int = 9) -> None:
+        self.every, self.keep = int(every), int(keep)
+        self.frames: list[np.ndarray] = []
+        self.boxes: list[tuple[int, int, int, int]] = []
+        self._families: LineFamilies | None = None
+
+    def wants(self, index: int) -> bool:
+        """Whether frame number ``index`` is one to :meth:`add`."""
+        return len(self.frames) < self.keep and index % self.every == 0
+
+    def add(self, frame: np.ndarray, people: Iterable[Any]) -> None:
+        """Keep a frame (H, W[, 3]) uint8 and its people (anything with ``bbox``)."""
+        if len(self.frames) >= self.keep:
+            return
+        self.frames.append(np.asarray(frame))
+        self.boxes.extend(tuple(int(v) for v in p.bbox) for p in people)
+        self._families = None
+
+    def families(self) -> LineFamilies | None:
+        """The line families of the frames kept so far (None before the first frame)."""
+        if not self.frames:
+            return None
+        if self._families is None:
+            image = np.median(np.stack(self.frames), axis=0).astype(np.uint8)
+            self._families = find_families(detect_segments(image, self.boxes), (image.shape[0] - 1) / 2.0)
+        return self._families
+
+
+__all__ = ["PeopleObservations", "SceneFrames"]

@@ -14,7 +14,7 @@ from typing import Any, Callable
 from body.camera import Camera
 
 from .estimate import CalibrationConfig, CameraEstimate
-from .observe import PeopleObservations
+from .observe import PeopleObservations, SceneFrames
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]
@@ -42,6 +42,7 @@ def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None,
     fps, declared = video_info(path)
     extractor = SilhouetteExtractor(**silhouette_params)
     obs: PeopleObservations | None = None
+    scene = SceneFrames()
     n = 0
     shape = (0, 0)
     for frame, result in iter_video(path, extractor, max_frames, train_frames):
@@ -49,10 +50,12 @@ def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None,
             shape = frame.shape[:2]
             obs = PeopleObservations(frame.shape[1], frame.shape[0], max_observations=4000)
         obs.add(result.people, n / (fps or 25.0))
+        if scene.wants(n):
+            scene.add(frame, result.people)
         n += 1
         if progress is not None:
             progress(n, declared)
-    est = obs.estimate(config) if obs is not None else None
+    est = obs.estimate(config, scene.families()) if obs is not None else None
     if est is None:
         got = len(obs) if obs is not None else 0
         raise ValueError(f"{os.fspath(path)!r}: only {got} views of whole upright people in {n} frames, "

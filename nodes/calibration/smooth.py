@@ -32,10 +32,14 @@ def camera_from_parameters(p: np.ndarray, width: int, height: int) -> Camera:
     return Camera(f, f, (width - 1) / 2.0, (height - 1) / 2.0, width, height, R, -R @ centre)
 
 
-def credible(est: CameraEstimate, max_height_std: float, max_focal_std: float, max_tilt_std_deg: float) -> bool:
-    """Whether an estimate is sure enough to move the published camera."""
+def credible(est: CameraEstimate, max_height_std: float, max_focal_std: float, max_tilt_std_deg: float,
+             min_depth_spread: float) -> bool:
+    """Whether an estimate is sure enough to move the published camera: its uncertainties under the
+    bounds, and people seen at different depths (at one depth the horizon is not seen, and the lean
+    of people reaching to each other passes for tilt: ``CameraEstimate.depth_spread``)."""
     return (np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all() and est.height_std <= max_height_std
-            and est.focal_std <= max_focal_std and est.tilt_std_deg <= max_tilt_std_deg and est.distance > 0)
+            and est.focal_std <= max_focal_std and est.tilt_std_deg <= max_tilt_std_deg and est.distance > 0
+            and est.depth_spread >= min_depth_spread)
 
 
 class CameraSmoother:
