@@ -8,7 +8,8 @@ import pytest
 
 from body.camera import Camera
 from nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
-from nodes.calibration.smooth import CameraSmoother, camera_parameters
+from nodes.calibration.lines import find_families
+from nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
 
 W, H = 320, 240
 
@@ -102,3 +103,52 @@ def test_the_published_camera_moves_to_an_estimate_by_bounded_steps() -> None:
         assert np.all(np.abs(p[:5] - prev[:5]) <= 0.03 + 1e-9)
         prev = p
     np.testing.assert_allclose(prev, camera_parameters(est.camera()), atol=1e-6)
+
+
+def _across(cam: Camera, seed: int):
+    """Two people pacing across the view at one depth, leaning towards each other (3 cm)."""
+    rng = np.random.default_rng(seed)
+    heads, feet, ids = [], [], []
+    for p, (x0, stature) in enumerate([(-1.0, 1.65), (1.0, 1.78)]):
+        side = 1 if p else -1
+        for t in range(100):
+            g = np.array([x0 + 0.3 * side * np.sin(t / 20), 0.0, 0.0])
+            feet.append(cam.project(g) + rng.normal(0, 1, 2))
+            heads.append(cam.project(g + [-0.03 * side, stature, 0.0]) + rng.normal(0, 1, 2))
+            ids.append(p)
+    return np.array(heads), np.array(feet), np.array(ids), np.tile(np.arange(100) / 10.0, 2)
+
+
+def _floor(cam: Camera, seed: int) -> np.ndarray:
+    """(N, 4) segments of a floor of planks along the view with joints across it (0.5 px noise)."""
+    rng = np.random.default_rng(seed)
+    ends = [([x, 0, z], [x, 0, z + 0.4]) for x in np.arange(-2, 2.01, 0.4) for z in np.arange(-2, 1, 0.5)]
+    ends += [([-1.5, 0, z], [1.5, 0, z]) for z in np.arange(-2, 1, 0.5)]
+    s = np.array([np.r_[cam.project(np.array(a, float)), cam.project(np.array(b, float))] for a, b in ends])
+    s += rng.normal(0, 0.5, s.shape)
+    inside = (np.isfinite(s).all(1) & (s[:, [0, 2]].min(1) > 0) & (s[:, [0, 2]].max(1) < W)
+              & (s[:, [1, 3]].min(1) > 0) & (s[:, [1, 3]].max(1) < H))
+    return s[inside]
+
+
+@pytest.mark.parametrize("height,tilt,fov", [(2.5, 15.0, 50.0), (2.0, 8.0, 45.0)])
+def test_people_at_one_depth_need_the_scene_lines_for_the_horizon(height: float, tilt: float, fov: float) -> None:
+    cam = _camera(height, tilt, fov, distance=5.0)
+    heads, feet, ids, t = _across(cam, seed=1)
+    alone = estimate_camera(heads, feet, ids, (W, H), t)
+    assert alone.depth_spread < 0.05 and alone.horizon_segments == 0  # the node would not publish it
+    lines = find_families(_floor(cam, seed=2), (H - 1) / 2)
+    est = estimate_camera(heads, feet, ids, (W, H), t, lines=lines)
+    assert est.horizon_segments >= 12
+    assert abs(est.tilt_deg - tilt) < 2.0 and abs(est.height / height - 1) < 0.05, est.describe()
+    # the people's lean towards each other alone reads as a lower tilt and camera
+    assert abs(alone.tilt_deg - tilt) > abs(est.tilt_deg - tilt) and abs(alone.height / height - 1) > 0.1
+
+
+def test_people_walking_in_depth_show_the_horizon() -> None:
+    cam = _camera(2.5, 20.0, 50.0)
+    heads, feet, ids, t = _walkers(cam, seed=20)
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    assert est.depth_spread > 0.12 and credible(est, 0.2, 0.5, 8.0, 0.12)
+    assert not credible(estimate_camera(*_across(cam, seed=1)[:3], (W, H), _across(cam, seed=1)[3]),
+                        0.2, 0.5, 8.0, 0.12)

@@ -106,6 +106,9 @@ class CameraEstimate:
             person's foot rows over its pixel height; 0 when everyone stays at one depth). People all at one depth show
             the vertical vanishing point only, not the horizon: focal length and tilt are then
             left to the priors and the lean of the people.
+        horizon_segments: scene segments of horizontal families whose vanishing point is within
+            five image widths of the centre (they place the horizon; lines parallel to the image
+            show its direction only).
         width, height_px: the frame size it holds for.
     """
 
@@ -126,6 +129,7 @@ class CameraEstimate:
     width: int
     height_px: int
     depth_spread: float = 0.0
+    horizon_segments: int = 0
 
     @property
     def fov_deg(self) -> float:
@@ -365,7 +369,21 @@ def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tupl
         height_std=float(sd[3]), distance=float(-np.median(g[inlier | ~inlier.any(), 2])),
         offset_x=float(np.median(g[:, 0])), people_heights=tuple(float(v) for v in np.exp(x[4:4 + nk])),
         n_observations=int(len(head)), n_people=int(len(ids)), inliers=float(inlier.mean()), width=W, height_px=H,
-        depth_spread=depth_spread(foot[:, 1], pix, k))
+        depth_spread=depth_spread(foot[:, 1], pix, k), horizon_segments=horizon_segments(lines, (W, H)))
+
+
+def horizon_segments(lines: LineFamilies | None, size: tuple[int, int]) -> int:
+    """Segments of the horizontal families whose vanishing point lies within five image widths of
+    the image centre."""
+    if lines is None or not len(lines.vp):
+        return 0
+    W, H = size
+    vp = lines.vp
+    w = vp[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.hypot(vp[:, 0] / w - (W - 1) / 2, vp[:, 1] / w - (H - 1) / 2)
+    near = np.isfinite(d) & (d < 5 * W) & ~lines.vertical
+    return int(np.isin(lines.family, np.flatnonzero(near)).sum())
 
 
 def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndarray, min_views: int = 10) -> float:
@@ -381,4 +399,4 @@ def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndar
     return out
 
 
-__all__ = ["CalibrationConfig", "CameraEstimate", "estimate_camera", "fit_camera", "head_foot", "rotation", "usable"]
+__all__ = ["CalibrationConfig", "CameraEstimate", "depth_spread", "estimate_camera", "fit_camera", "horizon_segments", "head_foot", "rotation", "usable"]

@@ -65,7 +65,10 @@ class Calibration(Node):
               "max_focal_std": Param(float, 0.5, "estimate: ... and the focal length's relative std", min=0.0),
               "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0),
               "min_depth_spread": Param(float, 0.12, "estimate: ... and the people seen at depths this much apart "
-                                                     "(relative; at one depth the horizon does not show)", min=0.0)}
+                                                     "(relative; at one depth the horizon does not show), or",
+                                    min=0.0),
+              "min_horizon_segments": Param(int, 12, "estimate: ... this many scene segments converging on the "
+                                                     "horizon", min=0)}
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
@@ -127,7 +130,8 @@ class Calibration(Node):
             return
         est = self.observations.estimate(lines=self.scene.families())
         if est is None or not credible(est, self.p["max_height_std"], self.p["max_focal_std"],
-                                       self.p["max_tilt_std_deg"], self.p["min_depth_spread"]):
+                                       self.p["max_tilt_std_deg"], self.p["min_depth_spread"],
+                                       self.p["min_horizon_segments"]):
             self.tally("estimates_not_credible")
             self.log.debug("estimate not credible yet: %s", est.describe() if est else f"{len(self.observations)} observations")
             return

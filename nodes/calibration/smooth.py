@@ -33,13 +33,14 @@ def camera_from_parameters(p: np.ndarray, width: int, height: int) -> Camera:
 
 
 def credible(est: CameraEstimate, max_height_std: float, max_focal_std: float, max_tilt_std_deg: float,
-             min_depth_spread: float) -> bool:
+             min_depth_spread: float, min_horizon_segments: int = 12) -> bool:
     """Whether an estimate is sure enough to move the published camera: its uncertainties under the
-    bounds, and people seen at different depths (at one depth the horizon is not seen, and the lean
-    of people reaching to each other passes for tilt: ``CameraEstimate.depth_spread``)."""
+    bounds, and the horizon seen, by people at different depths (``CameraEstimate.depth_spread``)
+    or by scene lines converging on it (``horizon_segments``). Without it the lean of people
+    reaching to each other passes for tilt."""
     return (np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all() and est.height_std <= max_height_std
             and est.focal_std <= max_focal_std and est.tilt_std_deg <= max_tilt_std_deg and est.distance > 0
-            and est.depth_spread >= min_depth_spread)
+            and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments))
 
 
 class CameraSmoother:
