@@ -6,13 +6,17 @@ scaled to the frames' size where they have its aspect ratio, or, without a file,
 at the frames' size (``body.camera.camera_for_size``).
 
 With ``estimate: true`` and no file (the launch files set it) the node also takes the silhouette
-node's people and estimates the camera from them (``nodes.calibration.estimate``: focal length,
-tilt, roll and height from the heads and feet of upright people against a prior on human height).
-Until an estimate is credible (enough observations over ``min_seconds``, uncertainties under the
-``max_*_std`` bounds) the default camera stays; then the published camera moves towards the
-estimate, re-estimated every ``every`` frames, by bounded steps (``max_step``: never a jump), with
-``source: estimated``. The tracker and the renderer subscribe to it, so the skeleton, the partner
-and the tracked body are all projected with the same camera. Run in a graph (``run:
+node's people and estimates the camera from them and from the straight lines of the scene
+(``nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
+upright people against a prior on human height). Until an estimate is credible (people seen over
+``min_seconds``; uncertainties under the ``max_*_std`` bounds; the horizon seen, by people at
+different depths or by scene lines converging on it) the default camera stays; then the published
+camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
+(``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
+(``lead`` frames after the frame it was estimated on: every subscriber switches at that frame,
+however late the message reaches it, so a lockstep replay stays deterministic). The tracker and the
+renderer subscribe to it, so the skeleton, the partner and the tracked body are all projected with
+the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
 nodes.calibration``) or alone::
 
     python -m nodes.calibration --param file=camera.yaml
@@ -56,6 +60,8 @@ class Calibration(Node):
               "estimate": Param(bool, False, "without a file: estimate the camera from the people in view "
                                              "(subscribes to silhouettes) and refine it while the graph runs"),
               "every": Param(int, 10, "estimate: frames between two estimates", min=1),
+              "lead": Param(int, 25, "estimate: a refined camera holds from this many frames after the frame it "
+                                     "was estimated on (its seq), so every node switches at that same frame", min=0),
               "min_seconds": Param(float, 1.0, "estimate: seconds of people in view before the first estimate",
                                    min=0.0),
               "max_step": Param(float, 0.03, "estimate: largest change of focal length and height per update "
@@ -142,7 +148,7 @@ class Calibration(Node):
         camera = self.smoother.step(est)
         self.figures.update({"focal_px": camera.fx, "height_m": float(camera.centre[1]),
                              "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1])))})
-        self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq, "estimated"))
+        self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq + self.p["lead"], "estimated"))
 
     def on_end(self) -> None:
         if self.latest is not None:
