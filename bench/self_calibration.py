@@ -195,13 +195,6 @@ def real_figures(clips: list[Path]) -> dict[str, Any]:
             "real_per_clip": per}
 
 
-def clip_list(which: str) -> list[Path]:
-    if which == "0" or not CLIPS.is_dir():
-        return []
-    clips = sorted(CLIPS.glob("*.avi"), key=lambda p: int(p.stem.split("_")[0]))
-    return clips if which == "all" else clips[:: max(1, len(clips) // int(which))][: int(which)]
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, default=50, help="simulated scenes (default 50)")
@@ -210,7 +203,9 @@ def main() -> None:
     ap.add_argument("--clips", default="12", help="real clips: 'all', how many spread over set 1, or 0 (none)")
     args = ap.parse_args()
     out = sim_figures(args.seeds, args.seconds, args.first_seed)
-    clips = clip_list(args.clips)
+    from real_video import clip_list  # the same choice of clips as the demo bench
+
+    clips = clip_list(args.clips) if args.clips != "0" and CLIPS.is_dir() else []
     if clips:
         out.update(real_figures(clips))
     print(json.dumps(out))

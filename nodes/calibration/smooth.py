@@ -11,7 +11,7 @@ import numpy as np
 
 from body.camera import Camera
 
-from .estimate import CameraEstimate, rotation
+from .estimate import CalibrationConfig, CameraEstimate, rotation
 
 
 def camera_parameters(camera: Camera) -> np.ndarray:
@@ -37,10 +37,12 @@ def credible(est: CameraEstimate, max_height_std: float, max_focal_std: float, m
     """Whether an estimate is sure enough to move the published camera: its uncertainties under the
     bounds, and the horizon seen, by people at different depths (``CameraEstimate.depth_spread``)
     or by scene lines converging on it (``horizon_segments``). Without it the lean of people
-    reaching to each other passes for tilt."""
+    reaching to each other passes for tilt. A tilt on the fit's lower bound is not credible either
+    (a camera looking up: the sign of that lean)."""
     return (np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all() and est.height_std <= max_height_std
             and est.focal_std <= max_focal_std and est.tilt_std_deg <= max_tilt_std_deg and est.distance > 0
-            and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments))
+            and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments)
+            and est.tilt_deg > CalibrationConfig().min_tilt_deg + 0.5)  # on its bound: the fit wanted further
 
 
 class CameraSmoother:
