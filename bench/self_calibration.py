@@ -85,10 +85,12 @@ def within(e: dict[str, float]) -> bool:
 
 
 def summary(errs: list[dict[str, float]], prefix: str) -> dict[str, Any]:
-    return {f"{prefix}height_err": round(float(np.median([e["height"] for e in errs])), 4),
+    """Medians of the absolute errors (null when over half the seeds gave no estimate) and the share
+    within the limits."""
+    return _finite({f"{prefix}height_err": round(float(np.median([e["height"] for e in errs])), 4),
             f"{prefix}tilt_err_deg": round(float(np.median([e["tilt"] for e in errs])), 3),
             f"{prefix}focal_err": round(float(np.median([e["focal"] for e in errs])), 4),
-            f"{prefix}within": round(float(np.mean([within(e) for e in errs])), 4)}
+            f"{prefix}within": round(float(np.mean([within(e) for e in errs])), 4)})
 
 
 def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
