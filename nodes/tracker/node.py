@@ -145,7 +145,7 @@ class TrackerNode(Node):
                            "node in the graph?)", len(self.paired))
             for seq in sorted(self.paired):
                 frame, _ = self.paired.pop(seq)
-                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq))
+                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
         n = self.figures.get("regions_not_tracked", 0)
         if n:
             self.log.warning("%d person region(s) could not be tracked (see the first warning)", n)
@@ -176,7 +176,7 @@ class TrackerNode(Node):
                 return
             del self.paired[seq]
             if camera is None:
-                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq))
+                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
             else:
                 self._process(frame, sil, image, camera)
 
@@ -207,7 +207,7 @@ class TrackerNode(Node):
                 continue
             people.append(TrackedBody(id=shape.id, side=side, joints=r.joints, pose=r.pose, best_pose=r.best,
                                       ess=float(r.ess), log_likelihood=float(r.log_likelihood), lost=bool(r.lost)))
-        self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, people=people))
+        self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps, people=people))
 
 
 NODE = TrackerNode
