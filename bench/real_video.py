@@ -49,6 +49,13 @@ person 0 the left one at frame 0) on every frame the video decodes:
   when they touch), per clip figures, the template, and the seconds per clip of the tracking and
   of the silhouette pass (``track_s``, ``box_s``).
 
+Camera calibration from the people (``--calib-seeds``, default 50; 0 skips it): ``calib_height_err``,
+``calib_tilt_err_deg``, ``calib_focal_err`` (medians of the absolute errors) and ``calib_within``
+(share of seeds within 10% / 3 degrees / 10%) on the simulator with random cameras, from each
+scene's first 3 s, as ``bench/self_calibration.py`` defines them (with its reference figures: the
+default camera's, the true head/foot points', the share the calibration node would publish);
+``calib_details`` holds the per-seed rows and the estimates on these clips with their spread.
+
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
@@ -405,6 +412,8 @@ def main() -> None:
                     help="only clips of these interaction classes in the tracking part, e.g. '0,5' (handshake, push)")
     ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
     ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
+    ap.add_argument("--calib-seeds", type=int, default=50,
+                    help="simulated random cameras for the calibration figures (bench/self_calibration.py); 0 skips")
     args = ap.parse_args()
     if not CLIPS.is_dir():
         sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")
@@ -416,6 +425,12 @@ def main() -> None:
         if args.pck_classes:
             pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
         result.update(run_pck(pck, work))
+    if args.calib_seeds:  # the camera from the people: simulator truth, and the spread on these clips
+        from self_calibration import real_figures, sim_figures
+
+        calib = sim_figures(args.calib_seeds)
+        result.update({k: v for k, v in calib.items() if k != "calib_rows"})
+        result["calib_details"] = {"rows": calib["calib_rows"], **real_figures(clips)}
     print(json.dumps(result))
 
 

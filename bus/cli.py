@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "learn": ("bus.cli_learn", "train a model file (tracker-prior, responder, avatar)"),
     "respond": ("nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
     "silhouettes": ("nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
+    "calibrate": ("nodes.calibration.cli_calibrate", "offline: the camera of a video file, estimated from the people in it"),
     "track": ("nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),
     "sim": ("sim.cli", "render a simulated two-person scene with ground truth"),
     "bag": ("bus.cli_bag", "record, play, inspect and export bags"),

@@ -37,8 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "that cannot keep up drops frames (default: every frame is processed, in lockstep)")
     p.add_argument("--device", default="/dev/video0", help="camera device for --live")
     p.add_argument("--camera", metavar="FILE", default="",
-                   help="calibration file (JSON/YAML) for the calibration node; default: the default camera at the "
-                        "frames' size")
+                   help="calibration file (JSON/YAML, e.g. from counterpart calibrate) for the calibration node; "
+                        "default: estimated from the people in view (the default camera until then)")
     p.add_argument("--serve", action="store_true",
                    help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C")
     p.add_argument("--port", type=int, default=8080, help="port of the live page")

@@ -25,7 +25,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, camera_for_size
+from body.camera import Camera, CameraSchedule, camera_for_size
 
 from . import draw
 from .avatar import AvatarPainter
@@ -153,7 +153,7 @@ class Compositor:
         #: partner_drawn: frames on which a partner was drawn with part of it inside the picture
         self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0,
                        "partner_drawn": 0}
-        self._cams: dict[tuple[int, int], Camera] = {}
+        self._cams = CameraSchedule()
         self._unresolved: OrderedDict[int, float] = OrderedDict()  # seq -> arrival, partner delay unknown yet
         self.delays: deque[float] = deque(maxlen=self.delay_window)  # seconds; inf: the partner never came
         self.partners_late = False
@@ -207,9 +207,10 @@ class Compositor:
         """Keep the newest ``messages.NodeStats`` per node."""
         self.stats[msg.node] = msg
 
-    def set_camera(self, camera: Camera) -> None:
-        """The graph's camera for frames of its size (from camera_info): every drawing uses it."""
-        self._cams[(camera.width, camera.height)] = camera
+    def set_camera(self, camera: Camera, from_seq: int = 0) -> None:
+        """The graph's camera for frames of its size from ``from_seq`` on (camera_info, whose seq it
+        is): every drawing uses it."""
+        self._cams.add(camera, from_seq)
 
     def set_control(self, msg: Any) -> None:
         """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches)."""
@@ -251,10 +252,12 @@ class Compositor:
         return Bundle(frame=frame, partner=partner, partner_exact=exact, **sides)
 
     # ------------------------------------------------------------------------------- drawing
-    def camera_for(self, width: int, height: int) -> Camera:
-        cam = self._cams.get((width, height))
+    def camera_for(self, width: int, height: int, seq: int | None = None) -> Camera:
+        """The camera for frame ``seq`` (None: the newest) of that size."""
+        cam = self._cams.get((width, height), seq)
         if cam is None:
-            cam = self._cams[(width, height)] = camera_for_size(self.camera, width, height)
+            cam = camera_for_size(self.camera, width, height)
+            self._cams.add(cam)
         return cam
 
     def render(self, b: Bundle) -> np.ndarray:
@@ -266,7 +269,7 @@ class Compositor:
             raise ValueError(f"frame {b.frame.seq}: image {img.dtype} {img.shape} is not bgr8 or mono8")
         else:
             img = img.copy()
-        cam = self.camera_for(img.shape[1], img.shape[0])
+        cam = self.camera_for(img.shape[1], img.shape[0], b.frame.seq)
         ov = self.overlays
         if ov.get("splines") and b.silhouettes is not None:
             for person in b.silhouettes.people:

@@ -169,7 +169,7 @@ class Renderer(Node):
             self.comp.add_side(port, msg)
         elif port == "camera_info":
             try:
-                self.comp.set_camera(camera_from_info(msg))
+                self.comp.set_camera(camera_from_info(msg), msg.seq)
             except ValueError as exc:
                 self.log.warning("camera_info dropped: %s", exc)
         elif port in self.stats_ports:
