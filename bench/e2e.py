@@ -28,6 +28,12 @@ deterministic graph: every frame through every node.
 3. Lockstep (``replay.yaml``), twice with the same seeds: ``lockstep_identical`` when the partner
    messages of both runs carry the same arrays and fields (stamps aside).
 
+4. Real video (``--input CLIP ...``, e.g. UT-Interaction clips of ``../shared/data``): the same
+   real-time graph on each clip at its own frame rate, looped to ``--frames`` frames, with both
+   people tracked (``tracker.people=[left, right]``); per clip under ``real``, and
+   ``real_fps_sustained``, ``real_source_fps``, ``real_latency_p95_ms``, ``real_partner_frac`` (medians
+   over the clips) beside the simulator's figures of the same run.
+
 The machine is shared: ``load_avg_1min`` is the load when the bench started; run it a few times.
 
 Usage: python bench/e2e.py [--frames N] [--repeats R] [--no-reliable]. Last stdout line: one JSON object
@@ -133,8 +139,9 @@ def partner_outputs(bag: Path) -> list[tuple]:
     return out
 
 
-def realtime(work: Path, name: str, launch_file: str, frames: int, warmup: float) -> dict[str, float]:
-    sets: dict[str, object] = {"camera.pacing": "realtime", "camera.max_frames": frames}
+def realtime(work: Path, name: str, launch_file: str, frames: int, warmup: float,
+             extra: dict[str, object] | None = None) -> dict[str, float]:
+    sets: dict[str, object] = {"camera.pacing": "realtime", "camera.max_frames": frames, **(extra or {})}
     if launch_file == "replay.yaml":  # the demo renderer's pairing; only the queues differ
         sets.update({"renderer.pair_timeout": 0.1, "renderer.adaptive_wait": True})
     bag, wall, rss = run_graph(work, name, launch_file, sets, REALTIME_TOPICS)
@@ -149,6 +156,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=1, help="real-time runs of demo.yaml; figures are their medians")
     ap.add_argument("--warmup", type=float, default=2.0, help="seconds left out of the *_steady_ms latencies only")
     ap.add_argument("--no-reliable", action="store_true", help="skip the comparison run with reliable queues")
+    ap.add_argument("--input", nargs="*", default=[], metavar="CLIP",
+                    help="real video files, each also played in real time through the graph (two people tracked)")
     args = ap.parse_args()
     import nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
     from bus.cli_demo import ensure_models
@@ -166,6 +175,14 @@ def main() -> None:
         rel = realtime(work, "rt-reliable", "replay.yaml", args.frames, args.warmup)
         out.update({f"{k}_reliable": rel[k] for k in ("fps_sustained", "drop_frac", "latency_p50_ms", "latency_p95_ms",
                                                       "partner_age_p95_ms")})
+    if args.input:
+        real = {Path(c).stem: realtime(work, f"rt-real-{Path(c).stem}", "demo.yaml", args.frames, args.warmup,
+                                       {"camera.source": str(Path(c).resolve()), "camera.loop": True,
+                                        "tracker.people": ["left", "right"]})
+                for c in args.input}
+        out["real"] = real
+        for k in ("fps_sustained", "source_fps", "latency_p95_ms", "partner_frac"):
+            out[f"real_{k}"] = round(float(np.median([r[k] for r in real.values()])), 3)
     partners = []
     for i in range(2):
         bag, wall, _ = run_graph(work, f"lockstep-{i}", "replay.yaml", {"camera.max_frames": args.frames}, ["partner"])

@@ -31,6 +31,8 @@ person 0 the left one at frame 0) on every frame the video decodes:
   >= 0.5 whose tracked joint lies within 0.1 h (0.2 h) pixels, h the reference person's height on
   that frame (head to the midpoint of the two ankles); the tracked side "left" is person 0 and
   "right" person 1; a frame on which a side is missing or lost counts all its joints as misses;
+  the reference's head is the nose, so the tracked head is compared as the nose of the body
+  model (``nose_points``: the front of its head along the body's facing);
 - ``pck10_box``, ``pck20_box``: the same for the box-template baseline, no tracking: one fixed 2D
   template for both people, the mean of the reference joints (vis >= 0.5) normalised to their
   person's silhouette box on the "tune" clips of the run (all clips when it has none; on the tune
@@ -46,6 +48,13 @@ person 0 the left one at frame 0) on every frame the video decodes:
   people per frame by the smaller mean pixel distance (people and the reference's crops can swap
   when they touch), per clip figures, the template, and the seconds per clip of the tracking and
   of the silhouette pass (``track_s``, ``box_s``).
+
+Camera calibration from the people (``--calib-seeds``, default 50; 0 skips it): ``calib_height_err``,
+``calib_tilt_err_deg``, ``calib_focal_err`` (medians of the absolute errors) and ``calib_within``
+(share of seeds within 10% / 3 degrees / 10%) on the simulator with random cameras, from each
+scene's first 3 s, as ``bench/self_calibration.py`` defines them (with its reference figures: the
+default camera's, the true head/foot points', the share the calibration node would publish);
+``calib_details`` holds the per-seed rows and the estimates on these clips with their spread.
 
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
@@ -67,10 +76,18 @@ from typing import Any
 
 import cv2
 import numpy as np
-from real_silhouettes import VIS, reference_collapsed  # bench/ is on sys.path when run as a script
+from real_partner import (  # bench/ is on sys.path as a script
+    interaction_class,
+    partner_clip,
+    partner_figures,
+)
+from real_silhouettes import VIS, reference_collapsed
 
 from body.camera import Camera
-from body.skeleton import JOINT_INDEX
+from body.kinematics import forward_kinematics
+from body.pose import neutral_pose
+from body.skeleton import DEFAULT_DIMS, JOINT_INDEX
+from nodes.responder.frames import actor_frame
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -81,6 +98,9 @@ SIDES = ("left", "right")
 TRAIN_FRAMES, LAYERS, PARTICLES = 20, 10, 256
 HEAD, ANKLES = JOINT_INDEX["head"], [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
 ALPHAS = (0.1, 0.2)
+#: the default body's head centre above its mid-ankle, metres
+_NEUTRAL = forward_kinematics(neutral_pose(DEFAULT_DIMS)).reshape(14, 3)
+MODEL_HEAD_ANKLE = float(_NEUTRAL[HEAD, 1] - _NEUTRAL[ANKLES, 1].mean())
 
 
 #: visible reference joints per frame, on average, of a person who is in view in a clip
@@ -136,15 +156,31 @@ def split_of(clip: Path) -> str:
     return "tune" if int(clip.stem.split("_")[0]) % 2 == 0 else "report"
 
 
+def nose_points(joints: np.ndarray) -> np.ndarray:
+    """Where the nose of the body model is: (..., 14, 3) joints (metres) -> (..., 3).
+
+    The reference's "head" is the nose, the body model's the head centre at eye level: the nose
+    is taken on the front of the model's head, the head cone's radius at its centre (the mean of
+    ``r_chin`` and ``r_crown``, scaled with the body) along the body's facing (``actor_frame``)."""
+    _, theta = actor_frame(np.nan_to_num(joints))
+    facing = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
+    stature = joints[..., HEAD, 1] - joints[..., ANKLES, 1].mean(axis=-1)
+    radius = 0.5 * (DEFAULT_DIMS.r_chin + DEFAULT_DIMS.r_crown) * stature / MODEL_HEAD_ANKLE
+    return joints[..., HEAD, :] + facing * radius[..., None]
+
+
 def tracked_pixels(track_npz: Path) -> tuple[np.ndarray, np.ndarray]:
-    """The tracked joints of a ``track_video`` file projected with the camera it recorded.
+    """The tracked joints of a ``track_video`` file projected with the camera it recorded, the head
+    as the nose (``nose_points``: the reference's head is the nose).
 
     Returns est (T, 2, 14, 2) pixels, NaN where the side was not tracked, lost, or the joint is
     behind the camera, and ids (T, 2) the silhouette node's person id per side (-1: none).
     """
     d = np.load(track_npz)
     camera = Camera.from_dict(json.loads(str(d["camera"])))
-    est = camera.project(d["joints"].astype(np.float64))
+    joints = d["joints"].astype(np.float64)
+    joints[..., HEAD, :] = nose_points(joints)
+    est = camera.project(joints)
     est[d["lost"]] = np.nan  # a lost track is a miss, whatever joints it left behind
     return est, d["ids"]
 
@@ -239,9 +275,11 @@ def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     kp, vis = ref["kp"][:n].astype(np.float64), ref["vis"][:n]
     collapsed = np.array([reference_collapsed(kp[t], vis[t]) for t in range(n)], dtype=bool)
     scored = (vis >= VIS) & ~collapsed[:, None, None]
-    return {"est": est[:n], "boxes": boxes[:n], "kp": kp, "scored": scored, "h": reference_height(kp),
+    h = reference_height(kp)
+    return {"est": est[:n], "boxes": boxes[:n], "kp": kp, "scored": scored, "h": h,
             "collapsed": int(collapsed.sum()), "frames": n, "track_s": t1 - t0, "box_s": t2 - t1,
-            "ids_agree": int((ids[:n] == box_ids[:n]).all(axis=1).sum())}
+            "ids_agree": int((ids[:n] == box_ids[:n]).all(axis=1).sum()),
+            "partner": partner_clip(clip, work / f"{clip.stem}-track.npz", kp, vis, h)}
 
 
 def pck_figures(rows: list[dict[str, Any]], template: np.ndarray, per_frame: bool) -> dict[str, Any]:
@@ -294,13 +332,15 @@ def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
                                       / max(sum(r["frames"] for r in rows.values()), 1), 4),
         "track_s_per_clip": round(float(np.mean([r["track_s"] for r in rows.values()])), 1) if rows else None,
         "box_s_per_clip": round(float(np.mean([r["box_s"] for r in rows.values()])), 1) if rows else None,
-        "per_clip": {stem: {"split": split_of(CLIPS / f"{stem}.avi"), **pck_figures([r], template, False)}
+        "per_clip": {stem: {"split": split_of(CLIPS / f"{stem}.avi"), **pck_figures([r], template, False),
+                            **{k: r["partner"][k] for k in ("hand_h", "back_m") if k in r["partner"]}}
                      for stem, r in rows.items()},
     }
     for split, split_rows in splits.items():
         if not split_rows:
             continue
-        figs = {**pck_figures(split_rows, template, False), "pck_clips": len(split_rows)}
+        figs = {**pck_figures(split_rows, template, False), "pck_clips": len(split_rows),
+                **partner_figures([r["partner"] for r in split_rows])}
         details[split] = {"per_frame_matching": pck_figures(split_rows, template, True)}
         if split == "report":
             result.update(figs)
@@ -310,25 +350,15 @@ def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
     return result
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--clips", default="12", help="'all' or how many clips, spread over the set (default 12)")
-    ap.add_argument("--timeout", type=float, default=300.0, help="seconds a run may take before it counts as hung")
-    ap.add_argument("--reference", type=int, default=3, help="clips also run through the real-time graph")
-    ap.add_argument("--pck-clips", default=None,
-                    help="'all' or how many clips to track offline for the PCK figures (default: as --clips)")
-    ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
-    args = ap.parse_args()
-    if not CLIPS.is_dir():
-        sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")
-    clips = clip_list(args.clips)
-    work = Path(tempfile.mkdtemp(prefix="cp-real-"))
+def run_demos(clips: list[Path], work: Path, timeout: float, reference: int) -> dict[str, Any]:
+    """The demo part: every clip through ``counterpart demo --input``, the short inputs, the
+    real-time reference on the first ``reference`` clips."""
     per_clip, hangs = {}, 0
     for i, clip in enumerate(clips):
-        r = run_demo(clip, work / clip.stem, args.timeout)
+        r = run_demo(clip, work / clip.stem, timeout)
         r["fps_video"] = video_fps(work / clip.stem)
-        if i < args.reference:
-            rt = run_demo(clip, work / f"{clip.stem}-rt", args.timeout, "--realtime")
+        if i < reference:
+            rt = run_demo(clip, work / f"{clip.stem}-rt", timeout, "--realtime")
             r["partner_present_realtime"] = rt.get("partner_present", 0.0)
             hangs += rt["hung"]
         hangs += r["hung"]
@@ -337,7 +367,7 @@ def main() -> None:
     short = {}
     for name, extra in (("1_frame", ["--frames", "1"]), ("5_frames", ["--frames", "5"]),
                         ("past_end", ["--set", "camera.start_frame=100000"])):
-        r = run_demo(clips[0], work / f"short-{name}", min(args.timeout, 120.0), *extra)
+        r = run_demo(clips[0], work / f"short-{name}", min(timeout, 120.0), *extra)
         short[name] = {k: r.get(k) for k in ("code", "hung", "wall_s", "frames_in", "reason")}
         hangs += r["hung"]
         print(f"short {name}: {json.dumps(short[name])}", file=sys.stderr, flush=True)
@@ -368,8 +398,39 @@ def main() -> None:
                                                "frames_with_people", "fps_in", "fps_video")}
                      for k, r in per_clip.items()},
     }
+    return result
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--clips", default="12", help="'all' or how many clips, spread over the set (default 12)")
+    ap.add_argument("--timeout", type=float, default=300.0, help="seconds a run may take before it counts as hung")
+    ap.add_argument("--reference", type=int, default=3, help="clips also run through the real-time graph")
+    ap.add_argument("--pck-clips", default=None,
+                    help="'all' or how many clips to track offline for the PCK figures (default: as --clips)")
+    ap.add_argument("--pck-classes", default=None,
+                    help="only clips of these interaction classes in the tracking part, e.g. '0,5' (handshake, push)")
+    ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
+    ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
+    ap.add_argument("--calib-seeds", type=int, default=50,
+                    help="simulated random cameras for the calibration figures (bench/self_calibration.py); 0 skips")
+    args = ap.parse_args()
+    if not CLIPS.is_dir():
+        sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")
+    clips = clip_list(args.clips)
+    work = Path(tempfile.mkdtemp(prefix="cp-real-"))
+    result: dict[str, Any] = {} if args.no_demo else run_demos(clips, work, args.timeout, args.reference)
     if not args.no_pck:
-        result.update(run_pck(clip_list(args.pck_clips or args.clips), work))
+        pck = clip_list(args.pck_clips or args.clips)
+        if args.pck_classes:
+            pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
+        result.update(run_pck(pck, work))
+    if args.calib_seeds:  # the camera from the people: simulator truth, and the spread on these clips
+        from self_calibration import real_figures, sim_figures
+
+        calib = sim_figures(args.calib_seeds)
+        result.update({k: v for k, v in calib.items() if k != "calib_rows"})
+        result["calib_details"] = {"rows": calib["calib_rows"], **real_figures(clips)}
     print(json.dumps(result))
 
 

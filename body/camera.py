@@ -230,6 +230,39 @@ def camera_for_size(calibration: Camera | None, width: int, height: int) -> Came
                   (calibration.cy + 0.5) * s - 0.5, width, height, calibration.R, calibration.t)
 
 
+class CameraSchedule:
+    """The graph's cameras over time, per frame size: each ``camera_info`` holds from its ``seq`` on.
+
+    The calibration node publishes a refined camera for frames from a seq a little ahead of the one
+    it was estimated on, so every subscriber switches at the same frame however late the message
+    comes to it (a lockstep replay stays deterministic). A frame before the first camera of its
+    size gets that first camera.
+    """
+
+    def __init__(self) -> None:
+        self._by_size: dict[tuple[int, int], list[tuple[int, Camera]]] = {}
+
+    def add(self, camera: Camera, from_seq: int = 0) -> None:
+        """``camera`` for frames of its size from ``from_seq`` on (replaces one from the same seq)."""
+        entries = [e for e in self._by_size.get((camera.width, camera.height), []) if e[0] != from_seq]
+        entries.append((int(from_seq), camera))
+        entries.sort(key=lambda e: e[0])
+        self._by_size[(camera.width, camera.height)] = entries[-64:]
+
+    def __contains__(self, size: tuple[int, int]) -> bool:
+        return size in self._by_size
+
+    def get(self, size: tuple[int, int], seq: int | None = None) -> Camera | None:
+        """The camera for frame ``seq`` of ``size`` (None: the newest); None when none has come."""
+        entries = self._by_size.get(size)
+        if not entries:
+            return None
+        if seq is None:
+            return entries[-1][1]
+        held = [c for s, c in entries if s <= seq]
+        return held[-1] if held else entries[0][1]
+
+
 def camera_param_problem(value: dict[str, Any]) -> str | None:
     """For node parameters: None when ``value`` is empty (use the default camera) or a valid
     calibration for :meth:`Camera.from_dict`, else the error naming the bad key."""

@@ -24,6 +24,8 @@ from .run_summary import RunSummary, read_stats, stats_json, stats_table, summar
 
 #: the responder's models offered on the live page, built before the graph starts
 RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
+#: offered on the live page only (``--serve``): the default video-texture avatar is built then
+SERVE_MODELS = ("video-texture",)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -35,8 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "that cannot keep up drops frames (default: every frame is processed, in lockstep)")
     p.add_argument("--device", default="/dev/video0", help="camera device for --live")
     p.add_argument("--camera", metavar="FILE", default="",
-                   help="calibration file (JSON/YAML) for the calibration node; default: the default camera at the "
-                        "frames' size")
+                   help="calibration file (JSON/YAML, e.g. from counterpart calibrate) for the calibration node; "
+                        "default: estimated from the people in view (the default camera until then)")
     p.add_argument("--serve", action="store_true",
                    help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C")
     p.add_argument("--port", type=int, default=8080, help="port of the live page")
@@ -47,15 +49,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
 
 
-def ensure_models() -> None:
-    """Build the default model files the graph loads, when they are not cached yet."""
+def ensure_models(serve: bool = False) -> None:
+    """Build the default model files the graph loads (and, with ``serve``, those the live page
+    offers), when they are not cached yet."""
     from nodes.responder.models import load_default
     from nodes.tracker.prior import default_prior_path, load_default_prior
 
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
     load_default_prior(progress=True)
-    for name in RESPONDER_MODELS:
+    for name in RESPONDER_MODELS + (SERVE_MODELS if serve else ()):
         load_default(name, progress=lambda m, name=name: print(f"  responder {name}: {m}", file=sys.stderr))
 
 
@@ -129,7 +132,7 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     print("counterpart demo: preparing the default models (cached after the first run)", file=sys.stderr)
-    ensure_models()
+    ensure_models(serve=args.serve)
     video = out / "demo.mp4"
     file, sets = _graph_file(args)
     sets += [f"renderer.video={video}", f"renderer.serve={'true' if args.serve else 'false'}",

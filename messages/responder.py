@@ -15,6 +15,12 @@ class Partner:
     otherwise; ``observed_id`` the silhouette/tracker id of the person it responds to; ``behaviour``
     a short label of what it does (e.g. ``handshake``, ``nod``); ``emotion``/``strength`` the style
     in force; ``confidence`` in [0, 1].
+
+    The video-texture avatar (fields added with defaults, so senders and readers of the fields above
+    are unaffected): ``avatar_file`` the avatar file holding the recording's masked frames;
+    ``avatar_frames`` (n,) int32 indices of the recording frames to show, blended with
+    ``avatar_weights`` (n,) float32 summing to 1 (two frames during a cut's cross-fade); empty for
+    the other models. ``joints`` then says where the avatar stands (and so its scale).
     """
 
     model: str = ""
@@ -25,6 +31,9 @@ class Partner:
     emotion: str = "neutral"
     strength: float = 0.0
     confidence: float = 0.0
+    avatar_file: str = ""
+    avatar_frames: np.ndarray = EMPTY
+    avatar_weights: np.ndarray = EMPTY
 
 
 @message("control.Control", 1)

@@ -26,4 +26,8 @@ class TrackedBody:
 
 @message("tracker.Pose3D", 1)
 class Pose3D:
+    """The tracked people of one frame; ``fps`` the source's frame rate (the frame's, 0: unknown),
+    so that consumers of poses alone (the responder) know the time between frames."""
+
     people: list[TrackedBody] = ()
+    fps: float = 0.0

@@ -45,6 +45,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--noise", type=float, default=2.0, help="sensor noise sigma, grey levels")
     p.add_argument("--bvh-a", default=None, help="scenario cmu: person A's BVH (default: shared CMU 18_01)")
     p.add_argument("--bvh-b", default=None, help="scenario cmu: person B's BVH (default: shared CMU 19_01)")
+    p.add_argument("--camera", choices=("default", "random"), default="default",
+                   help="the simulator's default camera, or a random one drawn from the seed (height 1-3 m, tilt "
+                        "0-35 degrees, horizontal field of view 40-75 degrees) that keeps both people in view")
     p.add_argument("--list", action="store_true", help="list the scenarios and exit")
 
 
@@ -123,9 +126,10 @@ def main(args: argparse.Namespace) -> int:
         return 2
     from sim.stream import open_stream
     kw: dict[str, Any] = {"emotion": args.emotion, "strength": args.strength, "frames": args.frames,
-                          "noise": args.noise}
+                          "noise": args.noise, "camera": args.camera}
     if args.scenario == "cmu":
-        kw = {"frames": args.frames, "noise": args.noise, "bvh_a": args.bvh_a, "bvh_b": args.bvh_b}
+        kw = {"frames": args.frames, "noise": args.noise, "bvh_a": args.bvh_a, "bvh_b": args.bvh_b,
+              "camera": args.camera}
     try:
         stream = open_stream(args.scenario, seed=args.seed, width=args.width, height=args.height,
                              fps=args.fps, **kw)

@@ -8,7 +8,10 @@
 Options (keywords, strings accepted as they come from a URI query): ``emotion`` (neutral, happy,
 sad, angry), ``strength`` (0-1), ``initiator`` (a/b), ``interested`` (conversation: 1/0),
 ``duration`` (conversation, seconds), ``frames`` (cap the frame count), ``noise`` (sensor noise
-sigma, grey levels), ``bvh_a``/``bvh_b`` (scenario "cmu").
+sigma, grey levels), ``bvh_a``/``bvh_b`` (scenario "cmu"), ``camera`` (``default``: the camera of
+``body.camera.default_camera``; ``random``: a camera of random height 1-3 m, tilt 0-35 degrees and
+horizontal field of view 40-75 degrees drawn from the seed that keeps both people in view,
+``sim.camera.random_camera``; its drawn parameters are in ``stream.scenario.meta["camera"]``).
 """
 from __future__ import annotations
 
@@ -24,7 +27,8 @@ from sim.scenarios import Scenario, make_scenario
 _FLOAT = ("strength", "duration", "noise")
 _INT = ("frames",)
 _BOOL = ("interested",)
-_STR = ("emotion", "initiator", "bvh_a", "bvh_b")
+_STR = ("emotion", "initiator", "bvh_a", "bvh_b", "camera")
+CAMERAS = ("default", "random")
 
 
 def _parse_options(kw: dict[str, Any]) -> dict[str, Any]:
@@ -117,8 +121,17 @@ def open_stream(scenario: str = "handshake", seed: int = 0, width: int | None = 
     fps = float(fps or 25.0)
     frames = opts.pop("frames", None)
     noise = opts.pop("noise", 2.0)
+    camera = opts.pop("camera", "default")
+    if camera not in CAMERAS:
+        raise ValueError(f"option camera={camera!r}: use one of {', '.join(CAMERAS)}")
     sc = make_scenario(scenario, seed=int(seed), fps=fps, **opts)
-    return SimStream(sc, default_camera(width, height), seed=int(seed), noise_sigma=noise, n_frames=frames)
+    cam = default_camera(width, height)
+    if camera == "random":
+        from sim.camera import random_camera
+
+        cam, drawn = random_camera(sc.joints(), np.random.default_rng([int(seed), 7331]), width, height)
+        sc.meta["camera"] = drawn
+    return SimStream(sc, cam, seed=int(seed), noise_sigma=noise, n_frames=frames)
 
 
 def default_sequence() -> SimStream:

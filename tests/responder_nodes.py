@@ -50,7 +50,8 @@ class PartnerSink(Node):
     def on_partner(self, m: Partner) -> None:
         self.f.write(json.dumps({"seq": m.seq, "model": m.model, "emotion": m.emotion, "strength": m.strength,
                                  "shape": list(m.joints.shape), "joints": m.joints.tolist(),
-                                 "behaviour": m.behaviour}) + "\n")
+                                 "behaviour": m.behaviour, "file": m.avatar_file,
+                                 "frames": m.avatar_frames.tolist(), "weights": m.avatar_weights.tolist()}) + "\n")
 
     def teardown(self) -> None:
         self.f.close()

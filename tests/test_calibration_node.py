@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from body.camera import Camera, camera_for_size, default_camera
 from tests.launching import read_jsonl, run_launch, write_launch
@@ -63,3 +64,45 @@ def test_a_calibration_file_is_scaled_to_the_frames_or_refused_by_name(tmp_path:
     rc, log = run_launch(f, timeout=60)
     assert rc != 0 and "calibrated for 640x360 but the frames are 200x150" in log, log
     assert not _infos(out)
+
+
+def _estimating_graph(tmp_path: Path, **params: object) -> tuple[Path, Path]:
+    """A simulated scene from a random camera through the silhouette node to the calibration node,
+    estimating the camera from the people in view."""
+    out = tmp_path / "info.jsonl"
+    doc = {"policy": "reliable", "nodes": {
+        "camera": {"run": "nodes.camera", "params": {"source": "sim:high_five?seed=1&camera=random",
+                                                     "pacing": "lockstep", "max_frames": 75}},
+        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 20, "replay_training": True}},
+        "calibration": {"run": "nodes.calibration", "params": {"file": "", "estimate": True, "every": 5, **params}},
+        "sink": {"run": "tests.topic_sink", "params": {"topic": "camera_info", "path": str(out)}},
+    }}
+    return write_launch(tmp_path / "graph.yaml", doc), out
+
+
+@pytest.mark.slow
+def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(tmp_path: Path) -> None:
+    # the two stay at one depth: nothing shows the horizon, so with the default bounds the default
+    # camera stays (the lean of people reaching to each other would otherwise pass for tilt)
+    f, out = _estimating_graph(tmp_path)
+    rc, log = run_launch(f, timeout=120)
+    assert rc == 0, log
+    assert [i["source"] for i in _infos(out)] == ["default"], log
+    assert "no credible camera estimate" in log
+    # with every estimate taken as credible the published camera follows them, a bounded step at a time
+    (tmp_path / "all").mkdir()
+    f, out = _estimating_graph(tmp_path / "all", max_height_std=10.0, max_focal_std=10.0, max_tilt_std_deg=90.0,
+                               min_depth_spread=0.0, max_step=0.02)
+    rc, log = run_launch(f, timeout=120)
+    assert rc == 0, log
+    infos = _infos(out)
+    assert infos[0]["source"] == "default" and infos[0]["seq"] == 0
+    assert len(infos) >= 3 and all(i["source"] == "estimated" for i in infos[1:]), [i["source"] for i in infos]
+    assert all(a["seq"] < b["seq"] for a, b in zip(infos, infos[1:]))
+    cams = [_camera(i) for i in infos]
+    for a, b in zip(cams, cams[1:]):
+        assert abs(np.log(b.fx / a.fx)) <= 0.02 + 1e-9 and abs(np.log(b.centre[1] / a.centre[1])) <= 0.02 + 1e-9
+        tilt = [np.arcsin(-c.R[2, 1]) for c in (a, b)]
+        assert abs(tilt[1] - tilt[0]) <= 0.02 + 1e-9
+    assert not np.allclose(cams[-1].project(np.zeros(3)), cams[0].project(np.zeros(3)), atol=0.5)
+    assert "first estimate: focal" in log

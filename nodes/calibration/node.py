@@ -1,19 +1,39 @@
 """The calibration node: the one camera of the graph, on ``camera_info`` (camera.CameraInfo, latched).
 
-Frames in (their size), CameraInfo out: once for the first frame, and again only when
-the frames change size. The camera is the calibration ``file`` (JSON or YAML, ``Camera.to_dict`` or
-the look-at form), scaled to the frames' size where they have its aspect ratio, or, without a file,
-the default camera at the frames' size (``body.camera.camera_for_size``). The tracker and the
+Frames in (their size), CameraInfo out: once for the first frame, and again when the frames change
+size. The camera is the calibration ``file`` (JSON or YAML, ``Camera.to_dict`` or the look-at form),
+scaled to the frames' size where they have its aspect ratio, or, without a file, the default camera
+at the frames' size (``body.camera.camera_for_size``).
+
+With ``estimate: true`` and no file (the launch files set it) the node also takes the silhouette
+node's people and estimates the camera from them and from the straight lines of the scene
+(``nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
+upright people against a prior on human height). Until an estimate is credible (people seen over
+``min_seconds``; uncertainties under the ``max_*_std`` bounds; the horizon seen, by people at
+different depths or by scene lines converging on it) the default camera stays; then the published
+camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
+(``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
+(``lead`` frames after the frame it was estimated on: every subscriber switches at that frame,
+however late the message reaches it, so a lockstep replay stays deterministic). The tracker and the
 renderer subscribe to it, so the skeleton, the partner and the tracked body are all projected with
-the same camera. Run in a graph (``run: nodes.calibration``) or alone::
+the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
+nodes.calibration``) or alone::
 
     python -m nodes.calibration --param file=camera.yaml
 """
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
+
 from bus import Input, Node, Output, Param
 from body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
-from messages import CameraInfo, Frame
+from messages import CameraInfo, Frame, Silhouettes
+
+from .estimate import CameraEstimate
+from .observe import PeopleObservations, SceneFrames
+from .smooth import CameraSmoother, credible
 
 
 def _check_file(value: str) -> str | None:
@@ -27,24 +47,62 @@ def _check_file(value: str) -> str | None:
 
 
 class Calibration(Node):
-    """Publishes the camera of the frames' size, latched, so that nodes joining later get it too."""
+    """Publishes the camera of the frames' size, latched, so that nodes joining later get it too;
+    with ``estimate``, refines it from the people in view."""
 
-    inputs = {"frame": Input(Frame, doc="the camera's frames (their size)")}
+    inputs = {"frame": Input(Frame, doc="the camera's frames (their size)"),
+              "silhouettes": Input(Silhouettes, doc="the people in view (estimate: true, no file only)")}
     outputs = {"camera_info": Output(CameraInfo, "the camera for the frames' size, once (again when the size "
-                                                 "changes); latched", latched=True)}
+                                                 "changes or the estimate moves); latched", latched=True)}
     params = {"file": Param(str, "", "calibration file (JSON/YAML: fx, fy, cx, cy, width, height, R, t, or eye, "
                                      "target, fov_deg, width, height); '': the default camera at the frames' size",
-                            check=_check_file)}
+                            check=_check_file),
+              "estimate": Param(bool, False, "without a file: estimate the camera from the people in view "
+                                             "(subscribes to silhouettes) and refine it while the graph runs"),
+              "every": Param(int, 10, "estimate: frames between two estimates", min=1),
+              "lead": Param(int, 25, "estimate: a refined camera holds from this many frames after the frame it "
+                                     "was estimated on (its seq), so every node switches at that same frame", min=0),
+              "min_seconds": Param(float, 1.0, "estimate: seconds of people in view before the first estimate",
+                                   min=0.0),
+              "max_step": Param(float, 0.03, "estimate: largest change of focal length and height per update "
+                                             "(relative; tilt and roll: this many radians)", min=1e-4, max=1.0),
+              "max_height_std": Param(float, 0.2, "estimate: used only when the height's relative std is below",
+                                      min=0.0),
+              "max_focal_std": Param(float, 0.5, "estimate: ... and the focal length's relative std", min=0.0),
+              "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0),
+              "min_depth_spread": Param(float, 0.12, "estimate: ... and the people seen at depths this much apart "
+                                                     "(relative; at one depth the horizon does not show), or",
+                                    min=0.0),
+              "min_horizon_segments": Param(int, 12, "estimate: ... this many scene segments converging on the "
+                                                     "horizon", min=0)}
+
+    @classmethod
+    def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        estimating = params["estimate"] and not params["file"]
+        return {k: v for k, v in cls.inputs.items() if k != "silhouettes" or estimating}, dict(cls.outputs)
 
     def setup(self) -> None:
         self.calibration: Camera | None = load_camera_file(self.p["file"]) if self.p["file"] else None
         self.size: tuple[int, int] | None = None
+        self.observations: PeopleObservations | None = None
+        self.smoother: CameraSmoother | None = None
+        self.latest: CameraEstimate | None = None
+        self.n_sil = 0
+        self.scene = SceneFrames()
+        #: frames kept for the scene's lines until their people come (seq -> image)
+        self.images: dict[int, np.ndarray] = {}
 
     def on_frame(self, msg: Frame) -> None:
         shape = msg.image.shape
         size = (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
-        if size == self.size or min(size) <= 0:
-            return
+        if size != self.size and min(size) > 0:
+            self._new_size(size, msg.stamp, msg.seq)
+        if self.p["estimate"] and not self.p["file"] and self.scene.wants(msg.seq):
+            self.images[msg.seq] = msg.image
+            for old in sorted(self.images)[:-40]:
+                del self.images[old]
+
+    def _new_size(self, size: tuple[int, int], stamp: int, seq: int) -> None:
         try:
             camera = camera_for_size(self.calibration, *size)
         except ValueError as exc:
@@ -54,10 +112,49 @@ class Calibration(Node):
             self.log.error("parameter 'file': %s", exc)
             raise SystemExit(2) from None
         self.size = size
+        self.observations = PeopleObservations(*size)
+        self.scene = SceneFrames()
+        self.smoother = CameraSmoother(camera, self.p["max_step"])
         source = f"file:{self.p['file']}" if self.p["file"] else "default"
-        self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq, source))
+        self.publish("camera_info", camera_to_info(camera, stamp, seq, source))
         self.log.info("camera for %dx%d frames (%s): f %.1f px, centre %.1f m above the ground", *size, source,
                       camera.fx, camera.centre[1])
+
+    def on_silhouettes(self, msg: Silhouettes) -> None:
+        size = (int(msg.width), int(msg.height))
+        if min(size) <= 0:
+            return
+        if size != self.size:
+            self._new_size(size, msg.stamp, msg.seq)
+        assert self.observations is not None and self.smoother is not None
+        self.tally("people_observed", self.observations.add(msg.people, msg.stamp * 1e-9))
+        image = self.images.pop(msg.seq, None)
+        if image is not None and image.shape[:2] == (size[1], size[0]):
+            self.scene.add(image, msg.people)
+        self.n_sil += 1
+        if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:
+            return
+        est = self.observations.estimate(lines=self.scene.families())
+        if est is None or not credible(est, self.p["max_height_std"], self.p["max_focal_std"],
+                                       self.p["max_tilt_std_deg"], self.p["min_depth_spread"],
+                                       self.p["min_horizon_segments"]):
+            self.tally("estimates_not_credible")
+            self.log.debug("estimate not credible yet: %s", est.describe() if est else f"{len(self.observations)} observations")
+            return
+        if self.latest is None:
+            self.log.info("first estimate: %s", est.describe())
+        self.latest = est
+        self.tally("estimates")
+        camera = self.smoother.step(est)
+        self.figures.update({"focal_px": camera.fx, "height_m": float(camera.centre[1]),
+                             "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1])))})
+        self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq + self.p["lead"], "estimated"))
+
+    def on_end(self) -> None:
+        if self.latest is not None:
+            self.log.info("last estimate: %s", self.latest.describe())
+        elif self.p["estimate"] and not self.p["file"]:
+            self.log.warning("no credible camera estimate from the people in view; the default camera was used")
 
 
 NODE = Calibration

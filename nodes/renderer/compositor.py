@@ -25,11 +25,12 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, camera_for_size
+from body.camera import Camera, CameraSchedule, camera_for_size
 
 from . import draw
+from .avatar import AvatarPainter
 
-STYLES = ("auto", "cones", "silhouette")
+STYLES = ("auto", "cones", "silhouette", "avatar")
 OVERLAYS = ("skeleton", "splines", "signals", "stats", "controls")
 
 
@@ -111,8 +112,9 @@ class Compositor:
         camera: calibration of the 3D partner and skeleton projection (``body.camera.camera_for_size``
             makes it the frame size's; None: the default camera at the frame size, as the tracker's).
         want_partner: whether a partner topic is subscribed (else frames render at once).
-        style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl) or ``auto`` (what the
-            partner message carries, cones first).
+        style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl), ``avatar`` (the video-texture
+            avatar's frames, :mod:`.avatar`) or ``auto`` (what the partner message carries: avatar
+            frames first, then cones).
         overlays: overlay name (:data:`OVERLAYS`) -> on/off.
         timeout: seconds a frame waits for its partner at most (from the frame's arrival).
         max_pending: frames held at most; beyond it the oldest renders without waiting.
@@ -121,6 +123,8 @@ class Compositor:
         wait_camera: hold frames until :meth:`set_camera` gives the graph's camera for their size
             (the calibration node's camera_info), so that nothing is drawn with another one.
         delay_window: partners whose delays decide ``adaptive`` waiting.
+        avatar_file: the avatar file whose frames the video-texture partner shows ('': the one the
+            partner message names).
     """
 
     camera: Camera | None = None
@@ -133,6 +137,7 @@ class Compositor:
     adaptive: bool = False
     delay_window: int = 25
     wait_camera: bool = False
+    avatar_file: str = ""
 
     def __post_init__(self) -> None:
         if self.style not in STYLES:
@@ -148,12 +153,13 @@ class Compositor:
         #: partner_drawn: frames on which a partner was drawn with part of it inside the picture
         self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0,
                        "partner_drawn": 0}
-        self._cams: dict[tuple[int, int], Camera] = {}
+        self._cams = CameraSchedule()
         self._unresolved: OrderedDict[int, float] = OrderedDict()  # seq -> arrival, partner delay unknown yet
         self.delays: deque[float] = deque(maxlen=self.delay_window)  # seconds; inf: the partner never came
         self.partners_late = False
         self._max_frame_seq = -1
         self.partner_drawn = False
+        self.avatar = AvatarPainter(self.avatar_file)
 
     # ---------------------------------------------------------------------------------- input
     def add_frame(self, msg: Any, now: float | None = None) -> None:
@@ -201,9 +207,10 @@ class Compositor:
         """Keep the newest ``messages.NodeStats`` per node."""
         self.stats[msg.node] = msg
 
-    def set_camera(self, camera: Camera) -> None:
-        """The graph's camera for frames of its size (from camera_info): every drawing uses it."""
-        self._cams[(camera.width, camera.height)] = camera
+    def set_camera(self, camera: Camera, from_seq: int = 0) -> None:
+        """The graph's camera for frames of its size from ``from_seq`` on (camera_info, whose seq it
+        is): every drawing uses it."""
+        self._cams.add(camera, from_seq)
 
     def set_control(self, msg: Any) -> None:
         """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches)."""
@@ -245,10 +252,12 @@ class Compositor:
         return Bundle(frame=frame, partner=partner, partner_exact=exact, **sides)
 
     # ------------------------------------------------------------------------------- drawing
-    def camera_for(self, width: int, height: int) -> Camera:
-        cam = self._cams.get((width, height))
+    def camera_for(self, width: int, height: int, seq: int | None = None) -> Camera:
+        """The camera for frame ``seq`` (None: the newest) of that size."""
+        cam = self._cams.get((width, height), seq)
         if cam is None:
-            cam = self._cams[(width, height)] = camera_for_size(self.camera, width, height)
+            cam = camera_for_size(self.camera, width, height)
+            self._cams.add(cam)
         return cam
 
     def render(self, b: Bundle) -> np.ndarray:
@@ -260,7 +269,7 @@ class Compositor:
             raise ValueError(f"frame {b.frame.seq}: image {img.dtype} {img.shape} is not bgr8 or mono8")
         else:
             img = img.copy()
-        cam = self.camera_for(img.shape[1], img.shape[0])
+        cam = self.camera_for(img.shape[1], img.shape[0], b.frame.seq)
         ov = self.overlays
         if ov.get("splines") and b.silhouettes is not None:
             for person in b.silhouettes.people:
@@ -299,6 +308,10 @@ class Compositor:
         colour = draw.partner_colour(partner.emotion, partner.strength)
         has_joints = np.shape(partner.joints) == (14, 3) and np.isfinite(partner.joints).all()
         has_ctrl = np.ndim(partner.ctrl) == 2 and len(partner.ctrl) >= 4 and np.isfinite(partner.ctrl).all()
+        if self.style in ("auto", "avatar") and np.size(partner.avatar_frames):
+            drawn = self.avatar.draw(img, partner, cam)
+            if drawn is not None:  # else no frames to show: the partner falls back to cones
+                return drawn
         if self.style in ("auto", "cones") and has_joints:
             draw.draw_partner_3d(img, partner.joints, cam, colour)
             return bool(cam.in_image(cam.project(np.asarray(partner.joints, np.float64))).any())

@@ -35,7 +35,7 @@ from .video import VideoWriter, write_png
 from .web import LiveServer, is_loopback
 
 #: the responder's model names (nodes.responder.models.MODEL_NAMES; a node does not import another node)
-DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion"]
+DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion", "video-texture"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
 #: seconds of the stream at its start that the ``*_after_1s`` figures leave out
 SETTLE_S = 1.0
@@ -93,7 +93,10 @@ class Renderer(Node):
         "camera": Param(dict, {}, "without camera_info only: calibration (body.camera.Camera.to_dict or look-at "
                         "form), scaled to a frame size of the same aspect ratio; empty: the default camera at the "
                         "frame size", check=camera_param_problem),
-        "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), auto", choices=STYLES),
+        "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), avatar (the "
+                       "video-texture avatar's frames), auto", choices=STYLES),
+        "avatar_file": Param(str, "", "avatar file of the video-texture partner ('': the one the partner message "
+                             "names)"),
         "pair_timeout": Param(float, 0.1, "seconds a frame waits for its partner at most (lockstep replay: long, "
                               "so that every frame gets its own partner)", min=0.0),
         "adaptive_wait": Param(bool, True, "render at once, with the newest partner, while the recent partners "
@@ -139,7 +142,8 @@ class Renderer(Node):
         overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
         self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else None, want_partner=p["partner"], style=p["style"],
                                overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"],
-                               adaptive=p["adaptive_wait"], wait_camera=p["camera_info"])
+                               adaptive=p["adaptive_wait"], wait_camera=p["camera_info"],
+                               avatar_file=p["avatar_file"])
         self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
         self.controls: queue.Queue[Control] = queue.Queue()
         self.stats_ports = set(p["stats_topics"])
@@ -165,7 +169,7 @@ class Renderer(Node):
             self.comp.add_side(port, msg)
         elif port == "camera_info":
             try:
-                self.comp.set_camera(camera_from_info(msg))
+                self.comp.set_camera(camera_from_info(msg), msg.seq)
             except ValueError as exc:
                 self.log.warning("camera_info dropped: %s", exc)
         elif port in self.stats_ports:

@@ -14,7 +14,9 @@ from .models import MODEL_NAMES, save_model
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--model", required=True, choices=MODEL_NAMES, help="which interaction model")
+    # the video-texture avatar learns from a video of a person: 'counterpart learn avatar'
+    p.add_argument("--model", required=True, choices=[m for m in MODEL_NAMES if m != "video-texture"],
+                   help="which interaction model (the video-texture avatar: 'counterpart learn avatar')")
     p.add_argument("--data", nargs="+", default=["sim"], metavar="SPEC",
                    help="PATH.npz, A.bvh:B.bvh, sim, sim:NAME,NAME (listener: also RULES.json); default sim")
     p.add_argument("--seeds", type=int, default=6, help="simulator seeds per scenario (default 6)")

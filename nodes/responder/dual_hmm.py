@@ -140,6 +140,9 @@ def _ground_rot(theta: float) -> np.ndarray:
 
 
 PLACEMENTS = ("tracked", "relative")
+#: how far (standard deviations of a state's partner marginal) a state's conditional partner block
+#: may lie from the state's mean
+CLIP_SD = 3.0
 #: the observed person's motion summaries in the placement correction's features: seconds since the
 #: sequence started, mean ground speed over the last frames, its maximum so far (m/s), the ground path
 #: walked so far (m); capped where longer histories tell nothing more about the approach
@@ -476,6 +479,13 @@ class DualHMM:
         self._inv_oo = np.linalg.inv(S_oo)
         self._logdet_oo = np.linalg.slogdet(S_oo)[1]
         self._gain = S_po @ self._inv_oo                       # (N, d_p, d_o)
+        # the conditional mean is linear in the observed block, so an observed person unlike any
+        # of training (a tracker's bad frame, a pose no pair showed) extrapolates it without bound
+        # into poses no body takes: keep each state's conditional within CLIP_SD standard deviations
+        # of that state's own partner marginal
+        sd = np.sqrt(np.maximum(np.diagonal(self.covars_[:, do:, do:], axis1=1, axis2=2), 0.0))
+        self._cond_lo = self.means_[:, do:] - CLIP_SD * sd
+        self._cond_hi = self.means_[:, do:] + CLIP_SD * sd
         # conditional covariances S_pp - S_po S_oo^-1 S_op of the ground position and velocity, metres
         cond = self.covars_[:, do:, do:] - self._gain @ np.swapaxes(S_po, 1, 2)
         sc = self.place_scale_
@@ -511,9 +521,11 @@ class DualHMM:
         return -0.5 * (maha + self._logdet_oo + self.d_o_ * np.log(2 * np.pi))
 
     def _conditional(self, o: np.ndarray) -> np.ndarray:
-        """(d_o,) -> (N, d_p) E[p | o, s = k] for every state k."""
+        """(d_o,) -> (N, d_p) E[p | o, s = k] for every state k, each dimension kept within
+        ``CLIP_SD`` standard deviations of the state's partner marginal."""
         d = o[None, :] - self.means_[:, : self.d_o_]
-        return self.means_[:, self.d_o_ :] + np.einsum("npo,no->np", self._gain, d)
+        cond = self.means_[:, self.d_o_ :] + np.einsum("npo,no->np", self._gain, d)
+        return np.clip(cond, self._cond_lo, self._cond_hi)
 
     def step(self, observed: np.ndarray) -> np.ndarray:
         """One frame: the observed person's joints (14, 3) world metres -> the partner's (14, 3)."""

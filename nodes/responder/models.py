@@ -26,7 +26,7 @@ MODEL_FORMAT = "counterpart.responder.model"
 MODEL_VERSION = 4   # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
                     # 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation;
                     # 4: dual-hmm placement correction (cross-fitted forest arrays)
-MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion")
+MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion", "video-texture")
 
 
 class ModelVersionError(ValueError):
@@ -56,6 +56,9 @@ def model_class(name: str) -> type:
     if name == "emotion":
         from .emotion import EmotionModel
         return EmotionModel
+    if name == "video-texture":
+        from .video_texture import VideoTexture
+        return VideoTexture
     raise ValueError(f"unknown responder model {name!r}; choose one of {', '.join(MODEL_NAMES)}")
 
 
@@ -129,6 +132,9 @@ def build_default(name: str, progress: Callable[[str], None] | None = None) -> t
     from .training import default_training_data, train
 
     t0 = time.perf_counter()
+    if name == "video-texture":  # an avatar learns from a recording of a person, not trajectories
+        from .avatar_default import build_default_avatar
+        return build_default_avatar(progress)
     data = default_training_data(name, progress)
     model = train(name, data, progress)
     training = dict(summary(data), source="sim (default)", seconds=round(time.perf_counter() - t0, 2))

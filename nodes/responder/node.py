@@ -4,8 +4,9 @@ Inputs (each optional by parameter, so a graph without a tracker still validates
 (tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
 ``signals`` (labeller.SocialSignals, ``use_signals``) and ``control`` (control.Control, latest
 policy, a side input that does not hold the node open). The model in force decides which input
-drives the output: dual-hmm and listener produce one Partner per ``pose`` (listener: per
-``signals`` when there is no pose input), joint-shape one per ``silhouettes``; the others are
+drives the output: dual-hmm, listener and video-texture produce one Partner per ``pose``
+(listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
+``silhouettes``; the others are
 paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
 emotion and strength at run time; ``None`` fields leave a setting unchanged.
 """
@@ -21,8 +22,12 @@ from bus import Input, Node, Output, Param
 from messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .emotion import EMOTIONS, StyleFilter
+from .reach import ReachConfig, reach
+from .staging import Stage, StageConfig
 
-MODELS = ("dual-hmm", "joint-shape", "listener")
+MODELS = ("dual-hmm", "joint-shape", "listener", "video-texture")
+#: frames per second assumed for poses that do not carry their source's rate
+DEFAULT_FPS = 25.0
 
 
 class Responder(Node):
@@ -40,7 +45,8 @@ class Responder(Node):
         "model_file": Param(str, "default", "model file for the selected model, or 'default' (built from the "
                             "simulator into ~/.cache/counterpart/models when missing)",
                             check=lambda v: None if v == "default" or os.path.isfile(v) else
-                            f"no model file {v!r}; make one with 'counterpart learn responder' or use 'default'"),
+                            f"no model file {v!r}; make one with 'counterpart learn responder' (an avatar: 'counterpart "
+                            "learn avatar') or use 'default'"),
         "use_pose": Param(bool, True, "subscribe to 'pose'"),
         "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
         "use_signals": Param(bool, False, "subscribe to 'signals'"),
@@ -53,6 +59,18 @@ class Responder(Node):
         "hold_frames": Param(int, 15, "frames the partner stays where it was while the observed person is lost "
                              "or missing (a tracker's dropout is not the person leaving); 0: it vanishes at once",
                              min=0),
+        "stage": Param(bool, True, "keep the 3D partner standing where a partner would: on the ground, "
+                       "between min_distance_m and max_distance_m from the observed person, moving at most "
+                       "max_speed_m_s (false: where the model puts it)"),
+        "min_distance_m": Param(float, 0.5, "nearest the partner stands to the observed person (m, ground "
+                                "distance between the mid-hips)", min=0.0),
+        "max_distance_m": Param(float, 1.2, "farthest the partner stands from the observed person (m)", min=0.0),
+        "max_speed_m_s": Param(float, 2.5, "fastest the partner's placement moves (m/s)", min=0.01),
+        "recoil_m": Param(float, 0.3, "how far the partner steps back when a hand of the observed person touches "
+                          "its chest (m, fading over about a second; 0: it does not recoil)", min=0.0),
+        "reach_m": Param(float, 0.45, "the partner's hand that the model brings within this distance of the "
+                         "observed person's hand is pulled onto it (m; hand contact by inverse kinematics, "
+                         "complete at 0.1 m); 0: the model's hand as it is", min=0.0),
     }
 
     @classmethod
@@ -72,6 +90,16 @@ class Responder(Node):
         self.latest: dict[str, Any] = {}
         self.count = 0
         self.last: Partner | None = None  # the last partner that responded to someone
+        self.stage: Stage | None = None
+        self.reach: ReachConfig | None = None
+        try:
+            if self.p["stage"]:
+                self.stage = Stage(StageConfig(self.p["min_distance_m"], self.p["max_distance_m"],
+                                               self.p["max_speed_m_s"], recoil_m=self.p["recoil_m"]))
+            if self.p["reach_m"] > 0:
+                self.reach = ReachConfig(r_engage=self.p["reach_m"])
+        except ValueError as e:
+            raise SystemExit(f"responder: {e}; set responder.min_distance_m, max_distance_m or reach_m")
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -97,6 +125,7 @@ class Responder(Node):
             elif self._model(msg.model) is not None:
                 self.model = msg.model
                 self.models[msg.model].reset()
+                self._reset_stage()
         if msg.speaker is not None and msg.speaker in ("person", "partner"):
             self.speaker = msg.speaker
         if msg.interest is not None and msg.interest in (1, 2, 3):
@@ -108,6 +137,46 @@ class Responder(Node):
         self.log.info("control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
                       self.model, self.speaker, self.interest, self.emotion, self.strength)
 
+    def _reset_stage(self) -> None:
+        if self.stage is not None:
+            self.stage.reset()
+
+    def _staged(self, observed: np.ndarray, joints: np.ndarray, driver: Any) -> np.ndarray:
+        """The model's partner moved to where a partner stands (``stage``) and its hand onto the
+        observed hand it comes near (``reach_m``); both counted when they act."""
+        if self.stage is not None:
+            fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
+            gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
+            before = self.stage.corrected, self.stage.pushes
+            joints = self.stage(observed, joints, gap / fps)
+            if self.stage.corrected > before[0]:
+                self.tally("partner_placed")
+            if self.stage.pushes > before[1]:
+                self.tally("pushes")
+        if self.reach is not None:
+            joints, pull = reach(observed, joints, self.reach)
+            if pull > 0:
+                self.tally("hand_reached")
+        return joints
+
+    def _avatar(self, texture: Any, listener: Any) -> dict[str, Any]:
+        """The video-texture avatar's Partner fields, driven by the listener rules
+        (:func:`nodes.responder.avatar_driver.avatar_partner`)."""
+        from .avatar_driver import avatar_partner
+        from .models import default_model_path
+
+        body = self._pick(list(self.latest["pose"].people)) if "pose" in self.latest else None
+        signals = self.latest.get("signals")
+        who = self._pick(list(signals.people)) if signals is not None else None
+        heard = {} if who is None else {n: bool(v == 1) for n, v in zip(who.names, np.asarray(who.labels))}
+        file = self.p["model_file"] if self.p["model"] == "video-texture" and self.p["model_file"] != "default" \
+            else default_model_path("video-texture")
+        fields = avatar_partner(texture, listener, heard, None if body is None else body.joints, self.speaker,
+                                self.interest, os.path.abspath(file))   # the renderer may run from another folder
+        if body is not None:  # the avatar stands where a partner stands, as the listener's body does
+            fields["joints"] = self._staged(body.joints, fields["joints"], self.latest["pose"])
+        return dict(fields, observed_id=-1 if body is None else body.id)
+
     def _pick(self, people: list[Any]) -> Any:
         if not people:
             return None
@@ -116,7 +185,7 @@ class Responder(Node):
 
     def on_pose(self, msg: Pose3D) -> None:
         self.latest["pose"] = msg
-        if self.model == "dual-hmm" or (self.model == "listener"):
+        if self.model in ("dual-hmm", "listener", "video-texture"):
             self._emit(msg)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
@@ -126,7 +195,7 @@ class Responder(Node):
 
     def on_signals(self, msg: SocialSignals) -> None:
         self.latest["signals"] = msg
-        if self.model == "listener" and "pose" not in self._in:
+        if self.model in ("listener", "video-texture") and "pose" not in self._in:
             self._emit(msg)
 
     # ------------------------------------------------------------------ output
@@ -154,8 +223,9 @@ class Responder(Node):
             if self.last is not None and self.last.observed_id != body.id:
                 # another person than the one answered so far: the model's state belongs to that one
                 m.reset()
+                self._reset_stage()
                 self.tally("observed_switches")
-            joints = m.step(body.joints)
+            joints = self._staged(body.joints, m.step(body.joints), driver)
             out.update(joints=self.style(joints, self.emotion, self.strength), observed_id=body.id,
                        behaviour="respond", confidence=float(np.max(m.posterior_)))
         elif self.model == "listener":
@@ -167,8 +237,15 @@ class Responder(Node):
             if person is not None and self.speaker == "person":
                 speaking = {n: bool(v == 1) for n, v in zip(person.names, np.asarray(person.labels))}
             joints = m.step(speaking, None if body is None else body.joints)
+            if body is not None and np.shape(joints) == (14, 3):
+                joints = self._staged(body.joints, joints, self.latest["pose"])
             out.update(joints=self.style(joints, self.emotion, self.strength),
                        observed_id=-1 if body is None else body.id, behaviour=m.behaviour_ or "listen", confidence=1.0)
+        elif self.model == "video-texture":
+            lm = self._model("listener")
+            if lm is None:
+                return nobody()
+            out.update(self._avatar(m, lm))
         else:  # joint-shape
             shape = self._pick(list(driver.people))
             if shape is None or shape.height <= 0:

@@ -55,6 +55,8 @@ class SilhouetteExtractor:
         (False: for grey images, where chromaticity cannot tell a shadow from a darker person).
     backend_params : keyword parameters of the subtractor (e.g. train_frames, learning_rate).
     tracker_params : keyword parameters of ``PersonTracker`` other than min_area.
+    outlines : fit each person's B-spline outline (False: people without ``ctrl``/``ref_point``, for
+        callers that need the masks alone, such as learning an avatar; it saves most of the time).
     """
 
     def __init__(
@@ -68,6 +70,7 @@ class SilhouetteExtractor:
         shadows: bool = True,
         backend_params: dict[str, Any] | None = None,
         tracker_params: dict[str, Any] | None = None,
+        outlines: bool = True,
     ) -> None:
         if n_ctrl < 4:
             raise ValueError(f"n_ctrl must be >= 4 control points, got {n_ctrl}")
@@ -80,6 +83,7 @@ class SilhouetteExtractor:
         self.close_px = close_px
         self.fill_holes = fill_holes
         self.shadows = shadows
+        self.outlines = outlines
         self.backend_params = dict(backend_params or {})
         self.tracker_params = dict(tracker_params or {})
         if "min_area" in self.tracker_params:
@@ -128,7 +132,9 @@ class SilhouetteExtractor:
         # min_area 0: the tracker drops regions below min_area in its own labelling pass
         mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, 0)
         labels, people = self.tracker.update(mask)
-        return FrameResult(index, labels, [self._with_spline(labels, p) for p in people], classes, True)
+        if self.outlines:
+            people = [self._with_spline(labels, p) for p in people]
+        return FrameResult(index, labels, people, classes, True)
 
     def _with_spline(self, labels: np.ndarray, p: Person) -> Person:
         x, y, w, h = p.bbox
@@ -183,13 +189,16 @@ def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
 
 
 def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max_frames: int | None = None,
-               train_frames: int = 30) -> Iterator[tuple[np.ndarray, FrameResult]]:
+               train_frames: int = 30, start: int = 0) -> Iterator[tuple[np.ndarray, FrameResult]]:
     """Yield (frame (H, W, 3) uint8 BGR, ``extractor.process(frame)``) for every frame of a video.
 
     With the Horprasert backend the background is first fitted (robustly: people may be in view)
     on the first ``train_frames`` frames, then the video is read again from its first frame, so
-    every frame gets a result. Raises FileNotFoundError for a missing file and ValueError for one
-    OpenCV cannot decode (fewer than 2 training frames, or no frame at all).
+    every frame gets a result. ``start``: the frames before it are skipped (read, not decoded nor
+    processed; counted exactly as a sequential reader counts them, which seeking is not for every
+    codec), so several processes can each take a part of one video. Raises FileNotFoundError for a
+    missing file and ValueError for one OpenCV cannot decode (fewer than 2 training frames, or no
+    frame at all).
     """
     cap = _open_video(path)
     if isinstance(extractor.subtractor, HorprasertSubtractor):
@@ -207,6 +216,9 @@ def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max
         cap = _open_video(path)
     n = 0
     try:
+        for _ in range(start):
+            if not cap.grab():
+                return
         while max_frames is None or n < max_frames:
             ok, frame = cap.read()
             if not ok:

@@ -17,7 +17,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, camera_for_size, camera_from_info, camera_param_problem
+from body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
 from bus import Input, Node, Output, Param, ParamError
 from messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
@@ -90,8 +90,8 @@ class TrackerNode(Node):
             self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
         self.prior = resolve_prior(self.p["prior"])
         self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
-        #: frame size (w, h) -> the camera for it (camera_info, or the "camera" parameter's)
-        self.cameras: dict[tuple[int, int], Camera] = {}
+        #: frame size (w, h) and seq -> the camera for it (camera_info, or the "camera" parameter's)
+        self.cameras = CameraSchedule()
         self.camera: Camera | None = None  # the one the trackers use
         self.trackers: dict[str, Tracker] = {}
         self.frames: dict[int, Frame] = {}
@@ -99,18 +99,24 @@ class TrackerNode(Node):
         self.paired: dict[int, tuple[Frame, Silhouettes]] = {}  # waiting for the camera of their size
         self.warned: set[str] = set()
 
-    def _camera(self, size: tuple[int, int]) -> Camera | None:
-        """The camera for frames of ``size``; None while the graph's camera_info has not come."""
+    def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
+        """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not come."""
         if not self.p["camera_info"] and size not in self.cameras:
             try:  # made once per size: the trackers start again only when the camera changes
-                self.cameras[size] = camera_for_size(self.calibration, *size)
+                self.cameras.add(camera_for_size(self.calibration, *size))
             except ValueError as exc:
                 raise ValueError(f"parameter 'camera': {exc}") from None
-        return self.cameras.get(size)
+        return self.cameras.get(size, seq)
 
     def _tracker(self, side: str, camera: Camera) -> Tracker:
         if camera is not self.camera:
-            self.camera, self.trackers = camera, {}
+            same_view = self.camera is not None and (camera.width, camera.height) == (self.camera.width,
+                                                                                      self.camera.height)
+            # a refined camera of the same frames (the calibration's estimate, by small steps) keeps the
+            # tracks going; frames of another size are another view: the tracks start again
+            for tr in self.trackers.values() if same_view else ():
+                tr.set_camera(camera)
+            self.camera, self.trackers = camera, (self.trackers if same_view else {})
         if side not in self.trackers:
             self.trackers[side] = Tracker(camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
                                           seed=self.p["seed"] + SIDES.index(side))
@@ -122,7 +128,7 @@ class TrackerNode(Node):
         except ValueError as exc:
             self._warn_once("info", f"camera_info dropped: {exc}")
             return
-        self.cameras[(camera.width, camera.height)] = camera
+        self.cameras.add(camera, msg.seq)  # a refined camera holds from its seq on
         self._drain()
 
     def on_frame(self, msg: Frame) -> None:
@@ -139,7 +145,7 @@ class TrackerNode(Node):
                            "node in the graph?)", len(self.paired))
             for seq in sorted(self.paired):
                 frame, _ = self.paired.pop(seq)
-                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq))
+                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
         n = self.figures.get("regions_not_tracked", 0)
         if n:
             self.log.warning("%d person region(s) could not be tracked (see the first warning)", n)
@@ -161,7 +167,7 @@ class TrackerNode(Node):
             size = (sil.width or (image.shape[1] if image is not None else 0),
                     sil.height or (image.shape[0] if image is not None else 0))
             try:
-                camera = self._camera(size)
+                camera = self._camera(size, seq)
                 give_up = len(self.paired) > self.p["max_pending"]
             except ValueError as exc:  # a calibration for frames of another shape: nobody can be placed
                 self._warn_once("camera", f"frame {seq}: {exc}")
@@ -170,7 +176,7 @@ class TrackerNode(Node):
                 return
             del self.paired[seq]
             if camera is None:
-                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq))
+                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
             else:
                 self._process(frame, sil, image, camera)
 
@@ -201,7 +207,7 @@ class TrackerNode(Node):
                 continue
             people.append(TrackedBody(id=shape.id, side=side, joints=r.joints, pose=r.pose, best_pose=r.best,
                                       ess=float(r.ess), log_likelihood=float(r.log_likelihood), lost=bool(r.lost)))
-        self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, people=people))
+        self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps, people=people))
 
 
 NODE = TrackerNode

@@ -159,6 +159,12 @@ class Tracker:
     def tracking(self) -> bool:
         return self.prev is not None
 
+    def set_camera(self, camera: Camera) -> None:
+        """A refined calibration of the same single view (the calibration node's estimate moving by
+        small steps): the track goes on, projected with the new camera from the next frame."""
+        self.cameras, self.camera = [camera], camera
+        self.likelihood = MultiViewLikelihood(self.cameras, self.dims, **self.likelihood_kw)
+
     def reset(self) -> None:
         """Forget the track; the next frame with a person re-initialises it."""
         self.prev = None

@@ -1,0 +1,59 @@
+"""``counterpart calibrate VIDEO --out camera.yaml``: the camera of a video, estimated offline from
+the people in it.
+
+Focal length, tilt, roll and height above the ground from the heads and feet of the upright people
+(``nodes.calibration.offline.calibrate_video``), printed with their uncertainty (one standard
+deviation); the file is a calibration every node and command that takes a camera reads
+(``calibration.file``, ``counterpart demo --camera``, ``counterpart track --camera``). Progress goes
+to stderr; the last stdout line is a JSON summary. Exit code 0 on success, 2 on bad input (or too
+few people seen), 130 when interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from bus.cli_offline import FrameProgress, positive, run_offline
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("video", help="the video file (anything OpenCV decodes)")
+    p.add_argument("--out", required=True, help="output calibration file (.yaml or .json)")
+    p.add_argument("--max-frames", type=int, default=None, help="use at most this many frames (default: all)")
+    p.add_argument("--train-frames", type=int, default=30,
+                   help="first frames the background model is fitted on (people may be in view)")
+    p.add_argument("--person-height", type=float, default=1.70,
+                   help="mean stature of the people, metres (the prior that sets the scale)")
+    p.add_argument("--person-height-std", type=float, default=0.09, help="its standard deviation, metres")
+
+
+def main(args: argparse.Namespace) -> int:
+
+    from .estimate import CalibrationConfig
+    from .offline import calibrate_video, camera_file_text
+
+    if not positive(args, ("train_frames", "max_frames"), "calibrate"):
+        return 2
+    if not (0.5 < args.person_height < 2.5 and 0 < args.person_height_std < 0.5):
+        print("counterpart calibrate: --person-height must be in (0.5, 2.5) m and --person-height-std in (0, 0.5) m",
+              file=sys.stderr)
+        return 2
+
+    def work() -> dict:
+        config = CalibrationConfig(person_height=args.person_height, person_height_std=args.person_height_std)
+        est, summary = calibrate_video(args.video, args.max_frames, args.train_frames, config,
+                                       progress=FrameProgress("calibrate"))
+        camera = est.camera()
+        text = camera_file_text(camera, est, args.video)
+        with open(args.out, "w", encoding="utf-8") as f:
+            f.write(text)
+        print(f"[calibrate] {est.describe()}", file=sys.stderr, flush=True)
+        return {**summary, "estimate": est.summary(), "out": args.out}
+
+    return run_offline("calibrate", args.out, work)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(prog="counterpart calibrate", description=__doc__.split("\n")[0])
+    add_arguments(ap)
+    sys.exit(main(ap.parse_args()))

@@ -1,0 +1,402 @@
+"""Camera self-calibration from the people in view: focal length, tilt, roll and height above the
+ground from the head and foot image points of upright people, against a prior on human height.
+
+The model (Lv, Zhao & Nevatia 2006; Krahnstoever & Mendonca 2005, "Bayesian autocalibration for
+surveillance"): a pinhole camera with square pixels and its principal point at the image centre,
+at height ``h_c`` above the ground plane y = 0, pitched down by the tilt theta and rolled by rho
+about its optical axis (no yaw: the world is set up around the camera). Person k stands upright
+with stature H_k; an observation i of that person is a foot point b_i (the middle of the bottom of
+its region, on the ground) and a head point t_i (the top of its region, H_k above the foot). The
+foot's viewing ray meets the ground at G_i; the head predicted at G_i + H_k e_y projects to
+t_hat_i. Minimised over (log f, theta, rho, log h_c, log H_1..H_K)::
+
+    sum_i rho(|t_hat_i - t_i|^2 / (w_i sigma_i)^2)                              (head reprojection)
+    + sum_k ((log H_k - log H0) / s_H)^2 + ((log f - log f0) / s_f)^2 + (rho / s_rho)^2   (priors)
+
+rho is a robust loss (soft L1: raised arms, merged or cut regions are outliers), sigma_i a share of
+the person's pixel height, and w_i = sqrt(c_k) with c_k the observations of person k per
+correlation time (consecutive frames of one person are not independent views). The head residual
+holds both cues of the literature at once: its direction across the head-foot line is the vertical
+vanishing point (tilt, roll and focal together), its length along it the consistency of a person's
+height at different depths, which places the horizon (the vanishing line of the ground).
+
+At zero tilt the focal length is not observable from heads and feet at all (scaling f and every
+depth together gives the same image), so the weak prior on f (the default camera's 55 degrees)
+decides it there, and the reported uncertainty of f is wide. The scale of the scene (h_c) comes
+only from the human height prior: with K people it is known to about s_H / sqrt(K).
+
+Uncertainty: the covariance of the Gauss-Newton approximation at the solution, ``(J^T J)^-1`` of
+the normalised residuals (priors included), times the reduced chi-square when it exceeds 1.
+Starts: a grid over tilt and field of view (vectorised), the best few refined by
+``scipy.optimize.least_squares`` (trust region reflective).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import least_squares
+from threadpoolctl import threadpool_limits
+
+from body.camera import Camera
+
+from .lines import LineFamilies, segment_angles
+
+
+@dataclass(frozen=True)
+class CalibrationConfig:
+    """Priors and noise model of :func:`estimate_camera`.
+
+    Attributes:
+        person_height, person_height_std: prior on an adult's stature, metres (mean, std).
+        fov_deg: centre of the weak prior on the horizontal field of view (the default camera's).
+        focal_log_std: std of that prior on log f (0.35: 40-75 degrees within about one std).
+        roll_std_deg: std of the prior on roll, degrees.
+        pixel_noise: std of a head point along the image vertical, as a share of the person's pixel
+            height (posture, the outline's top and bottom).
+        lateral_noise: its std across (people lean: walking, reaching to each other).
+        min_tilt_deg, max_tilt_deg: bounds of the tilt (a camera level or looking down; people
+            leaning towards each other otherwise read as a camera looking up).
+        min_pixel_noise: the least std of a head point, pixels.
+        correlation_s: seconds over which one person's observations are counted as one.
+        min_observations: fewer usable observations give no estimate.
+        line_noise_px, min_line_noise_deg: std of a scene segment's direction: this many pixels
+            across its length, at least this many degrees.
+        grid_tilt_deg, grid_fov_deg: start values tried (the best ``n_starts`` are refined).
+        n_starts: refined starts.
+    """
+
+    person_height: float = 1.70
+    person_height_std: float = 0.09
+    fov_deg: float = 55.0
+    focal_log_std: float = 0.35
+    roll_std_deg: float = 10.0
+    pixel_noise: float = 0.05
+    lateral_noise: float = 0.10
+    max_tilt_deg: float = 80.0
+    min_tilt_deg: float = -5.0
+    min_pixel_noise: float = 1.0
+    correlation_s: float = 1.0
+    min_observations: int = 20
+    line_noise_px: float = 1.5
+    min_line_noise_deg: float = 0.5
+    grid_tilt_deg: tuple[float, ...] = tuple(np.arange(-5.0, 50.1, 5.0).tolist())
+    grid_fov_deg: tuple[float, ...] = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 95.0)
+    n_starts: int = 3
+
+
+@dataclass(frozen=True)
+class CameraEstimate:
+    """A camera estimated from people, with its uncertainty (one standard deviation).
+
+    Attributes:
+        focal: focal length, pixels (fx = fy), for frames of ``width`` x ``height``.
+        tilt_deg: downward pitch of the optical axis, degrees; ``roll_deg`` about it, degrees.
+        height: camera centre above the ground, metres.
+        focal_std: relative std of the focal length; ``tilt_std_deg``, ``roll_std_deg`` degrees;
+            ``height_std`` relative std of the height.
+        distance: horizontal distance from the camera to the median foot position, metres (the
+            world origin is put there, as in the simulator's scene).
+        offset_x: lateral position of the median foot position, metres (camera frame).
+        people_heights: (K,) estimated statures of the people, metres.
+        n_observations, n_people: head/foot pairs and people used; ``inliers`` share of them
+            within 3 std of the model.
+        depth_spread: how far the people moved in depth (:func:`depth_spread`: the spread of a
+            person's foot rows over its pixel height; 0 when everyone stays at one depth). People all at one depth show
+            the vertical vanishing point only, not the horizon: focal length and tilt are then
+            left to the priors and the lean of the people.
+        horizon_segments: scene segments of horizontal families whose vanishing point is within
+            five image widths of the centre (they place the horizon; lines parallel to the image
+            show its direction only).
+        width, height_px: the frame size it holds for.
+    """
+
+    focal: float
+    tilt_deg: float
+    roll_deg: float
+    height: float
+    focal_std: float
+    tilt_std_deg: float
+    roll_std_deg: float
+    height_std: float
+    distance: float
+    offset_x: float
+    people_heights: tuple[float, ...]
+    n_observations: int
+    n_people: int
+    inliers: float
+    width: int
+    height_px: int
+    depth_spread: float = 0.0
+    horizon_segments: int = 0
+
+    @property
+    def fov_deg(self) -> float:
+        """Horizontal field of view, degrees."""
+        return float(np.degrees(2 * np.arctan(self.width / (2 * self.focal))))
+
+    def camera(self) -> Camera:
+        """The estimate as a ``body.camera.Camera``: world Y up, the ground y = 0, the camera
+        looking along -Z at the people, the world origin under their median position."""
+        R = rotation(np.radians(self.tilt_deg), np.radians(self.roll_deg))
+        centre = np.array([-self.offset_x, self.height, self.distance])
+        return Camera(self.focal, self.focal, (self.width - 1) / 2.0, (self.height_px - 1) / 2.0, self.width,
+                      self.height_px, R, -R @ centre)
+
+    def summary(self) -> dict[str, Any]:
+        """Plain figures for printing and JSON (degrees, metres, pixels)."""
+        d = asdict(self)
+        d["people_heights"] = [round(h, 3) for h in self.people_heights]
+        d["fov_deg"] = self.fov_deg
+        return d
+
+    def describe(self) -> str:
+        """One line: each figure with its one-std uncertainty."""
+        return (f"focal {self.focal:.0f} px +- {100 * self.focal_std:.0f}% (horizontal view {self.fov_deg:.0f} deg), "
+                f"tilt {self.tilt_deg:.1f} +- {self.tilt_std_deg:.1f} deg, roll {self.roll_deg:.1f} +- "
+                f"{self.roll_std_deg:.1f} deg, height {self.height:.2f} m +- {100 * self.height_std:.0f}% "
+                f"({self.n_observations} observations of {self.n_people} people, "
+                f"{100 * self.inliers:.0f}% inliers, depth spread {100 * self.depth_spread:.0f}%)")
+
+
+def rotation(tilt: float, roll: float) -> np.ndarray:
+    """(3, 3) world-to-camera rotation of a camera looking along -Z, pitched down by ``tilt`` and
+    rolled by ``roll`` (radians) about its optical axis; as ``Camera.look_at`` for roll 0."""
+    s, c = np.sin(tilt), np.cos(tilt)
+    R0 = np.array([[1.0, 0.0, 0.0], [0.0, -c, s], [0.0, -s, -c]])
+    sr, cr = np.sin(roll), np.cos(roll)
+    Rz = np.array([[cr, -sr, 0.0], [sr, cr, 0.0], [0.0, 0.0, 1.0]])
+    return Rz @ R0
+
+
+def head_foot(bbox: Any, ctrl: np.ndarray | None, ref_point: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """A person region's head and foot image points, pixels.
+
+    Head: the reference point at the top of the head (``ref_point``; the middle of the bbox top
+    without it), on the region's upper edge. Foot: the region's lower edge, at the mean x of the
+    outline's control points in its lowest tenth (between the feet; the bbox middle without an
+    outline). Returns ((2,) head, (2,) foot).
+    """
+    x, y, w, h = (float(v) for v in bbox)
+    top, bottom = y - 0.5, y + h - 0.5
+    hx = float(ref_point[0]) if ref_point is not None and np.size(ref_point) == 2 else x + (w - 1) / 2
+    fx = x + (w - 1) / 2
+    if ctrl is not None and np.size(ctrl) >= 6:
+        c = np.asarray(ctrl, np.float64).reshape(-1, 2)
+        low = c[:, 1] >= c[:, 1].max() - 0.1 * h
+        fx = float(np.clip(c[low, 0].mean(), x, x + w - 1))
+    return np.array([hx, top]), np.array([fx, bottom])
+
+
+def usable(bbox: Any, width: int, height: int, merged: bool = False, min_height: float = 20.0,
+           min_aspect: float = 1.3) -> bool:
+    """Whether a region can serve as an upright person: whole (off the image borders), not shared
+    with another person, tall enough, and taller than ``min_aspect`` times its width."""
+    x, y, w, h = (int(v) for v in bbox)
+    return (not merged and h >= min_height and h >= min_aspect * w and x > 0 and y > 0
+            and x + w < width and y + h < height)
+
+
+def _project_heads(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int]
+                   ) -> np.ndarray:
+    """(N, 2) predicted head pixels for parameters ``x`` = (log f, tilt, roll, log h_c, log H_k...)."""
+    f, tilt, roll, hc = np.exp(x[0]), x[1], x[2], np.exp(x[3])
+    Hk = np.exp(x[4:])
+    W, H = size
+    c = np.array([(W - 1) / 2.0, (H - 1) / 2.0])
+    R = rotation(tilt, roll)
+    d = np.column_stack([(foot - c) / f, np.ones(len(foot))]) @ R      # world directions of the foot rays
+    down = np.maximum(-d[:, 1], 1e-4)                                  # at or above the horizon: far away
+    s = hc / down
+    rel = s[:, None] * d                                               # G - C
+    rel[:, 1] += Hk[track]                                             # head - C
+    Xc = rel @ R.T
+    z = np.maximum(Xc[:, 2], 1e-3)
+    return f * Xc[:, :2] / z[:, None] + c
+
+
+def _vanishing_points(x: np.ndarray, n_people: int, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
+    """(N, 3) homogeneous vanishing point predicted for each scene segment: the image of the world
+    vertical for the vertical family, of the direction (cos phi_j, 0, sin phi_j) for horizontal
+    family j (phi_j = x[4 + n_people + j])."""
+    W, H = size
+    f = np.exp(x[0])
+    KR = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]]) @ rotation(x[1], x[2])
+    phi = x[4 + n_people:]
+    dirs = np.zeros((len(lines.vertical), 3))
+    dirs[lines.vertical, 1] = 1.0
+    dirs[~lines.vertical, 0], dirs[~lines.vertical, 2] = np.cos(phi), np.sin(phi)
+    return (dirs @ KR.T)[lines.family]
+
+
+def _residuals(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, scale: np.ndarray,
+               size: tuple[int, int], cfg: CalibrationConfig, f0: float, n_people: int,
+               lines: LineFamilies | None = None, line_scale: np.ndarray | None = None) -> np.ndarray:
+    r = ((_project_heads(x[: 4 + n_people], head, foot, track, size) - head) / scale).ravel()
+    priors = np.concatenate([(x[4:4 + n_people] - np.log(cfg.person_height))
+                             / (cfg.person_height_std / cfg.person_height),
+                             [(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)]])
+    if lines is None or not len(lines.segments):
+        return np.concatenate([r, priors])
+    rl = segment_angles(lines.segments, _vanishing_points(x, n_people, lines, size)) / line_scale
+    return np.concatenate([r, priors, rl])
+
+
+def _directions(x: np.ndarray, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
+    """(Fh,) ground directions phi of the horizontal families' detected vanishing points under the
+    camera of ``x`` (their start values)."""
+    W, H = size
+    f = np.exp(x[0])
+    K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
+    d = np.linalg.solve(K, lines.vp[~lines.vertical].T).T @ rotation(x[1], x[2])
+    return np.arctan2(d[:, 2], d[:, 0])
+
+
+def _relative_heights(f: float, tilt: float, roll: float, head: np.ndarray, foot: np.ndarray,
+                      size: tuple[int, int]) -> np.ndarray:
+    """(N,) head heights over a camera of height 1: the point of the foot's vertical line nearest to
+    the head, in the algebraic sense ``t x (a + h b) = 0`` (a the foot's image, b the vertical's)."""
+    W, H = size
+    K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
+    R = rotation(tilt, roll)
+    d = np.column_stack([(foot - K[:2, 2]) / f, np.ones(len(foot))]) @ R
+    s = 1.0 / np.maximum(-d[:, 1], 1e-4)
+    a = (s[:, None] * d) @ (K @ R).T                                  # foot, homogeneous pixels
+    b = np.broadcast_to(K @ R @ np.array([0.0, 1.0, 0.0]), a.shape)  # the vertical direction's image
+    t = np.column_stack([head, np.ones(len(head))])
+    ta, tb = np.cross(t, a), np.cross(t, b)
+    return -(ta * tb).sum(axis=1) / np.maximum((tb * tb).sum(axis=1), 1e-12)
+
+
+def estimate_camera(*args: Any, **kw: Any) -> CameraEstimate | None:
+    """:func:`fit_camera` on one BLAS thread (its matrices are small: more threads only contend)."""
+    with threadpool_limits(1):
+        return fit_camera(*args, **kw)
+
+
+def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int],
+                    time_s: np.ndarray | None = None, config: CalibrationConfig = CalibrationConfig(),
+                    lines: LineFamilies | None = None) -> CameraEstimate | None:
+    """Estimate the camera from head and foot points of upright people.
+
+    Args:
+        head, foot: (N, 2) image points, pixels (top of the head, middle of the feet).
+        track: (N,) person identity of each observation (any integers).
+        size: (width, height) of the frames, pixels.
+        time_s: (N,) time of each observation, seconds (None: 25 frames per second in order).
+        config: priors and noise model.
+        lines: families of straight scene lines (``nodes.calibration.lines``): the vertical ones
+            and the horizon of the horizontal ones join the fit (None: the people alone).
+    Returns:
+        The estimate, or None with fewer than ``config.min_observations`` observations.
+    """
+    head = np.asarray(head, np.float64).reshape(-1, 2)
+    foot = np.asarray(foot, np.float64).reshape(-1, 2)
+    track = np.asarray(track).reshape(-1)
+    if not len(head) == len(foot) == len(track):
+        raise ValueError(f"head, foot and track must have the same length, got {len(head)}, {len(foot)}, {len(track)}")
+    ok = np.isfinite(head).all(1) & np.isfinite(foot).all(1) & (foot[:, 1] - head[:, 1] > 2)
+    head, foot, track = head[ok], foot[ok], track[ok]
+    time_s = (np.arange(len(ok)) / 25.0 if time_s is None else np.asarray(time_s, np.float64).reshape(-1))[ok]
+    if len(head) < config.min_observations:
+        return None
+    ids, k = np.unique(track, return_inverse=True)
+    W, H = int(size[0]), int(size[1])
+    pix = foot[:, 1] - head[:, 1]
+    # observations of one person within the correlation time count as about one
+    per = np.ones(len(ids))
+    for j in range(len(ids)):
+        tk = time_s[k == j]
+        per[j] = max(1.0, len(tk) / max(1.0, (tk.max() - tk.min()) / config.correlation_s))
+    scale = np.maximum(np.multiply.outer(pix, [config.lateral_noise, config.pixel_noise]),
+                       config.min_pixel_noise) * np.sqrt(per[k])[:, None]
+    f0 = (W / 2.0) / np.tan(np.radians(config.fov_deg) / 2)
+
+    if lines is not None and not len(lines.segments):
+        lines = None
+    line_scale = None
+    if lines is not None:
+        length = np.hypot(*(lines.segments[:, 2:] - lines.segments[:, :2]).T)
+        line_scale = np.maximum(config.line_noise_px / length, np.sin(np.radians(config.min_line_noise_deg)))
+    nk = len(ids)
+    args = (head, foot, k, scale, (W, H), config, f0, nk, lines, line_scale)
+    starts = []
+    for tilt in np.radians(config.grid_tilt_deg):
+        for fov in config.grid_fov_deg:
+            f = (W / 2.0) / np.tan(np.radians(fov) / 2)
+            h = _relative_heights(f, tilt, 0.0, head, foot, (W, H))
+            hk = np.array([np.median(h[k == j]) for j in range(len(ids))])
+            if not (hk > 0.05).all():
+                continue
+            hc = config.person_height / np.exp(np.mean(np.log(hk)))
+            x0 = np.concatenate([[np.log(f), tilt, 0.0, np.log(hc)], np.log(hk * hc)])
+            if lines is not None:
+                x0 = np.concatenate([x0, _directions(x0, lines, (W, H))])
+            r = _residuals(x0, *args)
+            starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), x0))
+    if not starts:
+        return None
+    starts.sort(key=lambda s: s[0])
+    best = None
+    for _, x0 in starts[: config.n_starts]:
+        lo = np.full(len(x0), -np.inf)
+        hi = np.full(len(x0), np.inf)
+        lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
+        x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
+        res = least_squares(_residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf",
+                            x_scale="jac", max_nfev=200)
+        if best is None or res.cost < best.cost:
+            best = res
+    x = best.x
+    J = best.jac
+    m, n = J.shape
+    r = best.fun[: 2 * len(head)].reshape(-1, 2) * np.sqrt(per[k])[:, None]  # per observation, in its own std
+    inlier = np.hypot(r[:, 0], r[:, 1]) < 3.0
+    chi2 = 2 * best.cost / max(1, m - n)
+    try:
+        cov = np.linalg.inv(J.T @ J) * max(1.0, chi2)
+    except np.linalg.LinAlgError:
+        cov = np.full((n, n), np.inf)
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    f, tilt, roll, hc = float(np.exp(x[0])), float(x[1]), float(x[2]), float(np.exp(x[3]))
+    # the world origin under the people's median foot position
+    d = np.column_stack([(foot - [(W - 1) / 2.0, (H - 1) / 2.0]) / f, np.ones(len(foot))]) @ rotation(tilt, roll)
+    g = (hc / np.maximum(-d[:, 1], 1e-4))[:, None] * d
+    return CameraEstimate(
+        focal=f, tilt_deg=float(np.degrees(tilt)), roll_deg=float(np.degrees(roll)), height=hc,
+        focal_std=float(sd[0]), tilt_std_deg=float(np.degrees(sd[1])), roll_std_deg=float(np.degrees(sd[2])),
+        height_std=float(sd[3]), distance=float(-np.median(g[inlier | ~inlier.any(), 2])),
+        offset_x=float(np.median(g[:, 0])), people_heights=tuple(float(v) for v in np.exp(x[4:4 + nk])),
+        n_observations=int(len(head)), n_people=int(len(ids)), inliers=float(inlier.mean()), width=W, height_px=H,
+        depth_spread=depth_spread(foot[:, 1], pix, k), horizon_segments=horizon_segments(lines, (W, H)))
+
+
+def horizon_segments(lines: LineFamilies | None, size: tuple[int, int]) -> int:
+    """Segments of the horizontal families whose vanishing point lies within five image widths of
+    the image centre."""
+    if lines is None or not len(lines.vp):
+        return 0
+    W, H = size
+    vp = lines.vp
+    w = vp[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = np.hypot(vp[:, 0] / w - (W - 1) / 2, vp[:, 1] / w - (H - 1) / 2)
+    near = np.isfinite(d) & (d < 5 * W) & ~lines.vertical
+    return int(np.isin(lines.family, np.flatnonzero(near)).sum())
+
+
+def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndarray, min_views: int = 10) -> float:
+    """How far the people moved in depth: for each person seen ``min_views`` times or more, the
+    interquartile range of its foot's image row over its median pixel height; the largest of them.
+    (N,) pixels, (N,) pixels, (N,) ints from 0."""
+    out = 0.0
+    for j in range(int(person.max()) + 1 if len(person) else 0):
+        m = person == j
+        if m.sum() >= min_views:
+            q25, q75 = np.percentile(foot_row[m], [25, 75])
+            out = max(out, float((q75 - q25) / np.median(pixel_height[m])))
+    return out
+
+
+__all__ = ["CalibrationConfig", "CameraEstimate", "depth_spread", "estimate_camera", "fit_camera", "horizon_segments", "head_foot", "rotation", "usable"]

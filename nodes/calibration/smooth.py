@@ -1,0 +1,74 @@
+"""A published camera that follows the estimates without jumps (the calibration node's).
+
+The camera is held as (log focal, tilt, roll, log height, distance, lateral offset); each update
+moves every parameter towards the new estimate by at most ``max_step`` (log units for the focal
+length, the height and the distance; radians for tilt and roll; ``max_step`` times the distance for
+the offset), so the projections every node makes change smoothly however the estimate moves.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from body.camera import Camera
+
+from .estimate import CalibrationConfig, CameraEstimate, rotation
+
+
+def camera_parameters(camera: Camera) -> np.ndarray:
+    """(6,) [log f, tilt, roll, log height, log distance, offset] of a camera looking roughly along -Z
+    with the ground y = 0 (the distance and offset are those of the world origin)."""
+    R = camera.R
+    tilt = float(np.arcsin(np.clip(-R[2, 1], -1, 1)))
+    roll = float(np.arctan2(R[0, 1], -R[1, 1])) if abs(np.cos(tilt)) > 1e-6 else 0.0
+    c = camera.centre
+    return np.array([np.log(camera.fx), tilt, roll, np.log(max(c[1], 1e-3)), np.log(max(c[2], 1e-3)), -c[0]])
+
+
+def camera_from_parameters(p: np.ndarray, width: int, height: int) -> Camera:
+    """Inverse of :func:`camera_parameters` (principal point at the image centre, no yaw)."""
+    R = rotation(p[1], p[2])
+    centre = np.array([-p[5], np.exp(p[3]), np.exp(p[4])])
+    f = float(np.exp(p[0]))
+    return Camera(f, f, (width - 1) / 2.0, (height - 1) / 2.0, width, height, R, -R @ centre)
+
+
+def credible(est: CameraEstimate, max_height_std: float, max_focal_std: float, max_tilt_std_deg: float,
+             min_depth_spread: float, min_horizon_segments: int = 12) -> bool:
+    """Whether an estimate is sure enough to move the published camera: its uncertainties under the
+    bounds, and the horizon seen, by people at different depths (``CameraEstimate.depth_spread``)
+    or by scene lines converging on it (``horizon_segments``). Without it the lean of people
+    reaching to each other passes for tilt. A tilt on the fit's lower bound is not credible either
+    (a camera looking up: the sign of that lean)."""
+    return (np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all() and est.height_std <= max_height_std
+            and est.focal_std <= max_focal_std and est.tilt_std_deg <= max_tilt_std_deg and est.distance > 0
+            and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments)
+            and est.tilt_deg > CalibrationConfig().min_tilt_deg + 0.5)  # on its bound: the fit wanted further
+
+
+class CameraSmoother:
+    """The published camera, moved towards each estimate by bounded steps.
+
+    Args:
+        start: the camera published before any estimate (the default or a file's).
+        max_step: the bound per update (see the module docstring).
+    """
+
+    def __init__(self, start: Camera, max_step: float = 0.03) -> None:
+        self.size = (start.width, start.height)
+        self.params = camera_parameters(start)
+        self.max_step = float(max_step)
+
+    @property
+    def camera(self) -> Camera:
+        return camera_from_parameters(self.params, *self.size)
+
+    def step(self, est: CameraEstimate) -> Camera:
+        """Move towards ``est``; returns the camera to publish."""
+        target = camera_parameters(est.camera())
+        bound = np.full(6, self.max_step)
+        bound[5] = self.max_step * np.exp(self.params[4])
+        self.params = self.params + np.clip(target - self.params, -bound, bound)
+        return self.camera
+
+
+__all__ = ["CameraSmoother", "camera_from_parameters", "camera_parameters", "credible"]

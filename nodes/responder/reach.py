@@ -1,0 +1,86 @@
+"""Hand contact: the partner's hand meets the observed person's hand where it is offered.
+
+A model learnt from pairs puts the partner's hand where the training pairs' hands met, relative to
+the observed person's body; on another person (another height, reach, or a tracker's estimate of
+them) the hands then miss each other by a few centimetres to decimetres. As animation systems do
+for contacts, the hand that the model already brings near the observed hand is pulled onto it by
+two-bone inverse kinematics of the partner's arm (shoulder fixed, bone lengths kept):
+
+    w = clip((r_engage - d) / (r_engage - r_contact), 0, 1),   target = W + w (H - W),
+
+d the distance between the model's wrist W and the nearest observed wrist H (metres). w grows
+smoothly from 0 at ``r_engage`` to 1 at ``r_contact``, so the hand is never thrown across; beyond
+reach of the shoulder the arm stretches towards the target without leaving its shoulder.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from body.skeleton import JOINT_INDEX
+
+#: (shoulder, elbow, wrist) joint indices of each arm
+ARMS = tuple((JOINT_INDEX[f"{s}_shoulder"], JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]) for s in ("l", "r"))
+_WRISTS = [w for _, _, w in ARMS]
+
+
+@dataclass(frozen=True)
+class ReachConfig:
+    """Distances (metres) between the model's wrist and the observed wrist: the pull starts at
+    ``r_engage`` and is complete at ``r_contact``."""
+
+    r_engage: float = 0.45
+    r_contact: float = 0.1
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.r_contact < self.r_engage:
+            raise ValueError(f"reach distances r_contact={self.r_contact}, r_engage={self.r_engage}: "
+                             "need 0 <= r_contact < r_engage")
+
+
+def two_bone_ik(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray,
+                target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """New (elbow, wrist) (3,) each, metres: the wrist on ``target`` (or as near as the arm
+    reaches), both bone lengths kept, the elbow bent in the plane of the shoulder, the target and
+    the old elbow (the law of cosines in that plane)."""
+    a = float(np.linalg.norm(elbow - shoulder))
+    b = float(np.linalg.norm(wrist - elbow))
+    to = target - shoulder
+    dist = float(np.linalg.norm(to))
+    if dist < 1e-9 or a < 1e-9 or b < 1e-9:
+        return elbow.copy(), wrist.copy()
+    dist_c = float(np.clip(dist, abs(a - b) + 1e-6, a + b - 1e-6))
+    axis = to / dist
+    # the bend direction: the old elbow's offset from the shoulder-target line
+    bend = (elbow - shoulder) - np.dot(elbow - shoulder, axis) * axis
+    n = float(np.linalg.norm(bend))
+    if n < 1e-9:  # a straight arm: bend it downwards, or sideways when it points straight down
+        for hint in (np.array([0.0, -1.0, 0.0]), np.array([1.0, 0.0, 0.0])):
+            bend = hint - np.dot(hint, axis) * axis
+            n = float(np.linalg.norm(bend))
+            if n > 1e-6:
+                break
+    bend = bend / n
+    along = (a * a - b * b + dist_c * dist_c) / (2 * dist_c)
+    up = np.sqrt(max(a * a - along * along, 0.0))
+    new_elbow = shoulder + along * axis + up * bend
+    new_wrist = shoulder + dist_c * axis
+    return new_elbow, new_wrist
+
+
+def reach(observed: np.ndarray, partner: np.ndarray, config: ReachConfig = ReachConfig()) -> tuple[np.ndarray, float]:
+    """The partner (14, 3) with the hand nearest an observed hand pulled onto it; and the pull w.
+
+    observed, partner: (14, 3) world joints, metres. Returns (a new (14, 3) array, w in [0, 1]).
+    """
+    X = np.asarray(observed, np.float64)
+    P = np.asarray(partner, np.float64).copy()
+    d = np.linalg.norm(P[_WRISTS][:, None] - X[_WRISTS][None], axis=-1)  # (partner arm, observed wrist)
+    arm, hand = np.unravel_index(int(np.argmin(d)), d.shape)
+    w = float(np.clip((config.r_engage - d[arm, hand]) / (config.r_engage - config.r_contact), 0.0, 1.0))
+    if w > 0.0:
+        s, e, wr = ARMS[arm]
+        goal = P[wr] + w * (X[_WRISTS[hand]] - P[wr])
+        P[e], P[wr] = two_bone_ik(P[s], P[e], P[wr], goal)
+    return P.astype(np.asarray(partner).dtype), w

@@ -1,0 +1,154 @@
+"""The camera estimate from people (nodes.calibration.estimate) on exact projections of known
+cameras: people of known statures walking on the ground at different depths, their head and foot
+points projected and perturbed by a pixel of noise."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from body.camera import Camera
+from nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
+from nodes.calibration.lines import find_families
+from nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
+
+W, H = 320, 240
+
+
+def _camera(height: float, tilt_deg: float, fov_deg: float, roll_deg: float = 0.0, distance: float = 6.0) -> Camera:
+    R = rotation(np.radians(tilt_deg), np.radians(roll_deg))
+    f = (W / 2) / np.tan(np.radians(fov_deg) / 2)
+    centre = np.array([0.0, height, distance])
+    return Camera(f, f, (W - 1) / 2, (H - 1) / 2, W, H, R, -R @ centre)
+
+
+def _walkers(cam: Camera, seed: int, n_people: int = 6, frames: int = 100, fps: float = 10.0, noise: float = 1.0):
+    """Heads, feet (pixels), person ids and times of people walking in straight lines (in depth too),
+    each leaning a little (2% of the stature, to one side for the whole walk)."""
+    rng = np.random.default_rng(seed)
+    heads, feet, ids = [], [], []
+    for p in range(n_people):
+        stature = rng.normal(1.70, 0.07)
+        start = np.array([rng.uniform(-1.5, 1.5), 0.0, rng.uniform(-2.0, 1.0)])
+        heading = rng.uniform(0, 2 * np.pi)
+        step = 0.5 * np.array([np.cos(heading), 0.0, np.sin(heading)]) / fps   # 0.5 m/s, to and fro
+        lean = np.array([rng.normal(0, 0.02 * stature), 0.0, 0.0])
+        for t in range(frames):
+            g = start + step * (t % 50 if t % 100 < 50 else 50 - t % 50)
+            feet.append(cam.project(g) + rng.normal(0, noise, 2))
+            heads.append(cam.project(g + lean + [0.0, stature, 0.0]) + rng.normal(0, noise, 2))
+            ids.append(p)
+    t = np.tile(np.arange(frames) / fps, n_people)
+    return np.array(heads), np.array(feet), np.array(ids), t
+
+
+@pytest.mark.parametrize("height,tilt,fov,roll", [(2.5, 20.0, 50.0, 0.0), (1.4, 12.0, 70.0, 3.0),
+                                                  (3.0, 30.0, 42.0, -2.0)])
+def test_a_tilted_camera_is_recovered_within_its_uncertainty(height: float, tilt: float, fov: float,
+                                                             roll: float) -> None:
+    cam = _camera(height, tilt, fov, roll)
+    heads, feet, ids, t = _walkers(cam, seed=int(tilt))
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    assert est is not None and est.n_people == 6
+    assert abs(est.tilt_deg - tilt) < 2.0 and abs(est.roll_deg - roll) < 1.0, est.describe()
+    assert abs(est.focal / cam.fx - 1) < 0.10 and abs(est.height / height - 1) < 0.10, est.describe()
+    # the uncertainty says how far off it may be: each error within 3 std, none of them pretended exact
+    assert abs(np.log(est.focal / cam.fx)) < 3 * est.focal_std and abs(est.tilt_deg - tilt) < 3 * est.tilt_std_deg
+    assert abs(np.log(est.height / height)) < 3 * est.height_std
+    assert est.height_std > 0.015  # six people's statures are known only to the prior's 5% each
+    # the estimated camera places a foot where the true one does (up to the world's origin and yaw)
+    ref = est.camera()
+    g_true = cam.ground_point(*feet[:2].T)
+    g_est = ref.ground_point(*feet[:2].T)
+    assert abs(np.linalg.norm(g_est[0] - g_est[1]) / np.linalg.norm(g_true[0] - g_true[1]) - 1) < 0.15
+
+
+def test_at_zero_tilt_the_focal_length_is_reported_unknown() -> None:
+    # scaling the focal length and every depth together gives the same image: only the prior decides it
+    cam = _camera(1.6, 0.0, 45.0)
+    heads, feet, ids, t = _walkers(cam, seed=5)
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    assert est is not None
+    assert abs(est.tilt_deg) < 1.0 and abs(est.height / 1.6 - 1) < 0.10, est.describe()
+    assert est.focal_std > 0.25, est.describe()  # the prior's width, not a made-up precision
+
+
+def test_too_few_observations_give_no_estimate_and_bad_shapes_are_named() -> None:
+    cam = _camera(2.0, 15.0, 55.0)
+    heads, feet, ids, t = _walkers(cam, seed=1, n_people=1, frames=10)
+    assert estimate_camera(heads, feet, ids, (W, H), t) is None
+    with pytest.raises(ValueError, match="same length"):
+        estimate_camera(heads, feet[:-1], ids, (W, H), t)
+
+
+def test_head_and_foot_of_a_region_and_which_regions_count() -> None:
+    ctrl = np.array([[50, 20], [60, 40], [58, 99], [52, 100], [42, 100], [40, 60]], float)
+    head, foot = head_foot((40, 20, 21, 81), ctrl, np.array([50.0, 20.0]))
+    np.testing.assert_allclose(head, [50.0, 19.5])
+    np.testing.assert_allclose(foot, [(58 + 52 + 42) / 3, 100.5])
+    assert usable((40, 20, 21, 81), W, H)
+    assert not usable((0, 20, 21, 81), W, H)           # cut by the image border
+    assert not usable((40, 20, 70, 81), W, H)          # not upright
+    assert not usable((40, 20, 21, 81), W, H, merged=True)
+
+
+def test_the_published_camera_moves_to_an_estimate_by_bounded_steps() -> None:
+    start = _camera(1.6, 10.0, 55.0, distance=4.0)
+    cam = _camera(2.8, 25.0, 45.0, roll_deg=2.0)
+    heads, feet, ids, t = _walkers(cam, seed=3)
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    sm = CameraSmoother(start, max_step=0.03)
+    prev = camera_parameters(start)
+    for _ in range(60):
+        p = camera_parameters(sm.step(est))
+        assert np.all(np.abs(p[:5] - prev[:5]) <= 0.03 + 1e-9)
+        prev = p
+    np.testing.assert_allclose(prev, camera_parameters(est.camera()), atol=1e-6)
+
+
+def _across(cam: Camera, seed: int):
+    """Two people pacing across the view at one depth, leaning towards each other (3 cm)."""
+    rng = np.random.default_rng(seed)
+    heads, feet, ids = [], [], []
+    for p, (x0, stature) in enumerate([(-1.0, 1.65), (1.0, 1.78)]):
+        side = 1 if p else -1
+        for t in range(100):
+            g = np.array([x0 + 0.3 * side * np.sin(t / 20), 0.0, 0.0])
+            feet.append(cam.project(g) + rng.normal(0, 1, 2))
+            heads.append(cam.project(g + [-0.03 * side, stature, 0.0]) + rng.normal(0, 1, 2))
+            ids.append(p)
+    return np.array(heads), np.array(feet), np.array(ids), np.tile(np.arange(100) / 10.0, 2)
+
+
+def _floor(cam: Camera, seed: int) -> np.ndarray:
+    """(N, 4) segments of a floor of planks along the view with joints across it (0.5 px noise)."""
+    rng = np.random.default_rng(seed)
+    ends = [([x, 0, z], [x, 0, z + 0.4]) for x in np.arange(-2, 2.01, 0.4) for z in np.arange(-2, 1, 0.5)]
+    ends += [([-1.5, 0, z], [1.5, 0, z]) for z in np.arange(-2, 1, 0.5)]
+    s = np.array([np.r_[cam.project(np.array(a, float)), cam.project(np.array(b, float))] for a, b in ends])
+    s += rng.normal(0, 0.5, s.shape)
+    inside = (np.isfinite(s).all(1) & (s[:, [0, 2]].min(1) > 0) & (s[:, [0, 2]].max(1) < W)
+              & (s[:, [1, 3]].min(1) > 0) & (s[:, [1, 3]].max(1) < H))
+    return s[inside]
+
+
+@pytest.mark.parametrize("height,tilt,fov", [(2.5, 15.0, 50.0), (2.0, 8.0, 45.0)])
+def test_people_at_one_depth_need_the_scene_lines_for_the_horizon(height: float, tilt: float, fov: float) -> None:
+    cam = _camera(height, tilt, fov, distance=5.0)
+    heads, feet, ids, t = _across(cam, seed=1)
+    alone = estimate_camera(heads, feet, ids, (W, H), t)
+    assert alone.depth_spread < 0.05 and alone.horizon_segments == 0  # the node would not publish it
+    lines = find_families(_floor(cam, seed=2), (H - 1) / 2)
+    est = estimate_camera(heads, feet, ids, (W, H), t, lines=lines)
+    assert est.horizon_segments >= 12
+    assert abs(est.tilt_deg - tilt) < 2.0 and abs(est.height / height - 1) < 0.05, est.describe()
+    # the people's lean towards each other alone reads as a lower tilt and camera
+    assert abs(alone.tilt_deg - tilt) > abs(est.tilt_deg - tilt) and abs(alone.height / height - 1) > 0.1
+
+
+def test_people_walking_in_depth_show_the_horizon() -> None:
+    cam = _camera(2.5, 20.0, 50.0)
+    heads, feet, ids, t = _walkers(cam, seed=20)
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    assert est.depth_spread > 0.12 and credible(est, 0.2, 0.5, 8.0, 0.12)
+    assert not credible(estimate_camera(*_across(cam, seed=1)[:3], (W, H), _across(cam, seed=1)[3]),
+                        0.2, 0.5, 8.0, 0.12)

@@ -1,0 +1,67 @@
+"""`counterpart calibrate VIDEO --out camera.yaml`: the camera estimated offline from the people in a
+video, printed with its uncertainty, written as a calibration file every camera-taking node and
+command reads; a video without people is refused with the reason."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from body.camera import camera_for_size, load_camera_file
+from tests.launching import REPO
+
+
+def _cli(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "bus.cli", *args], cwd=REPO, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A simulated handshake seen from a random camera (its video file)."""
+    out = tmp_path_factory.mktemp("clip")
+    res = _cli("sim", "--scenario", "handshake", "--seed", "2", "--camera", "random", "--frames", "60", "--out",
+               str(out))
+    assert res.returncode == 0, res.stderr[-2000:]
+    return out / "video.avi"
+
+
+@pytest.mark.slow
+def test_calibrate_writes_a_camera_file_with_the_estimate_and_its_uncertainty(clip: Path, tmp_path: Path) -> None:
+    out = tmp_path / "camera.yaml"
+    res = _cli("calibrate", str(clip), "--out", str(out))
+    assert res.returncode == 0, res.stderr[-2000:]
+    summary = json.loads(res.stdout.strip().splitlines()[-1])
+    est = summary["estimate"]
+    assert summary["n_frames"] == 60 and summary["observations"] >= 20
+    for key in ("focal", "tilt_deg", "roll_deg", "height", "focal_std", "tilt_std_deg", "height_std"):
+        assert np.isfinite(est[key]), key
+    assert "[calibrate] focal" in res.stderr and "+-" in res.stderr  # the estimate, with its uncertainty
+    # the file is a calibration: the same camera read back, for these frames and scaled to others
+    cam = load_camera_file(str(out))
+    assert (cam.width, cam.height) == (320, 240)
+    assert cam.fx == pytest.approx(est["focal"]) and cam.centre[1] == pytest.approx(est["height"])
+    assert camera_for_size(cam, 160, 120).fx == pytest.approx(est["focal"] / 2)
+    assert out.read_text().startswith("# camera estimated by `counterpart calibrate`")
+    truth = np.load(clip.parent / "truth.npz")
+    assert truth["camera_K"][0, 0] > 0  # the simulator's own camera is in its truth file, for comparison
+
+
+def test_a_video_without_people_is_refused_with_the_reason(tmp_path: Path) -> None:
+    video = tmp_path / "empty.avi"
+    w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))
+    rng = np.random.default_rng(0)
+    for _ in range(12):
+        w.write(np.clip(120 + rng.normal(0, 2, (120, 160, 3)), 0, 255).astype(np.uint8))
+    w.release()
+    out = tmp_path / "camera.yaml"
+    res = _cli("calibrate", str(video), "--out", str(out), "--train-frames", "5")
+    assert res.returncode == 2 and "views of whole upright people" in res.stderr, res.stderr[-2000:]
+    assert not out.exists()
+    res = _cli("calibrate", str(tmp_path / "missing.avi"), "--out", str(out))
+    assert res.returncode == 2 and "missing.avi" in res.stderr
