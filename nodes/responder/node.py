@@ -4,7 +4,7 @@ Inputs (each optional by parameter, so a graph without a tracker still validates
 (tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
 ``signals`` (labeller.SocialSignals, ``use_signals``) and ``control`` (control.Control, latest
 policy, a side input that does not hold the node open). The model in force decides which input
-drives the output: dual-hmm and listener produce one Partner per ``pose`` (listener: per
+drives the output: dual-hmm, gpdm and listener produce one Partner per ``pose`` (listener: per
 ``signals`` when there is no pose input), joint-shape one per ``silhouettes``; the others are
 paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
 emotion and strength at run time; ``None`` fields leave a setting unchanged.
@@ -22,7 +22,7 @@ from messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .emotion import EMOTIONS, StyleFilter
 
-MODELS = ("dual-hmm", "joint-shape", "listener")
+MODELS = ("dual-hmm", "joint-shape", "listener", "gpdm")
 
 
 class Responder(Node):
@@ -72,6 +72,7 @@ class Responder(Node):
         self.latest: dict[str, Any] = {}
         self.count = 0
         self.last: Partner | None = None  # the last partner that responded to someone
+        self._unseen: set[str] = set()    # styles the gpdm model never saw, already reported
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -108,6 +109,17 @@ class Responder(Node):
         self.log.info("control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
                       self.model, self.speaker, self.interest, self.emotion, self.strength)
 
+    def _gpdm_style(self, m: Any) -> None:
+        """Set the gpdm's style variables from the emotion and strength; a style the model never saw
+        is reported once and generated as neutral."""
+        try:
+            m.set_style(self.emotion, self.strength)
+        except ValueError as e:
+            if self.emotion not in self._unseen:
+                self._unseen.add(self.emotion)
+                self.log.warning("%s; generating neutral", e)
+            m.set_style("neutral", 0.0)
+
     def _pick(self, people: list[Any]) -> Any:
         if not people:
             return None
@@ -116,7 +128,7 @@ class Responder(Node):
 
     def on_pose(self, msg: Pose3D) -> None:
         self.latest["pose"] = msg
-        if self.model == "dual-hmm" or (self.model == "listener"):
+        if self.model in ("dual-hmm", "listener", "gpdm"):
             self._emit(msg)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
@@ -147,7 +159,7 @@ class Responder(Node):
         m = self._model(self.model)
         if m is None:
             return nobody()
-        if self.model == "dual-hmm":
+        if self.model in ("dual-hmm", "gpdm"):
             body = self._pick(list(driver.people))
             if body is None or body.lost or np.asarray(body.joints).shape != (14, 3):
                 return nobody()
@@ -155,8 +167,12 @@ class Responder(Node):
                 # another person than the one answered so far: the model's state belongs to that one
                 m.reset()
                 self.tally("observed_switches")
+            if self.model == "gpdm":   # the style is the model's own input (Taubert et al.), not a filter
+                self._gpdm_style(m)
             joints = m.step(body.joints)
-            out.update(joints=self.style(joints, self.emotion, self.strength), observed_id=body.id,
+            if self.model == "dual-hmm":
+                joints = self.style(joints, self.emotion, self.strength)
+            out.update(joints=joints, observed_id=body.id,
                        behaviour="respond", confidence=float(np.max(m.posterior_)))
         elif self.model == "listener":
             m.interest = self.interest
