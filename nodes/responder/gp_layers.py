@@ -78,13 +78,6 @@ class GPLayer:
         """Posterior mean of the data (N, D), data units, at latent points X (N, q) and styles S."""
         return self.kernel(X, S) @ self.woodbury * self.y_sd + self.y_mean
 
-    def mean_and_jacobian(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Mean (D,) and its Jacobian d mean / d x (D, q) at one latent point x (q,) (no style)."""
-        k = self.kernel(x[None])[0]                                   # (M,)
-        dk = -(k[:, None] * (x[None, :] - self.Z[:, : self.q]) / self.ls ** 2)   # (M, q)
-        m = k @ self.woodbury * self.y_sd + self.y_mean
-        return m, (self.woodbury.T @ dk) * self.y_sd[:, None]
-
     def arrays(self, prefix: str) -> dict[str, np.ndarray]:
         return {f"{prefix}_{k}": np.asarray(v, np.float64) for k, v in self.__dict__.items()}
 

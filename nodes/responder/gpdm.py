@@ -11,25 +11,30 @@ frame (42, metres) and a contact indicator (1 where the two right hands are with
 
 Hierarchy (each layer a back-constrained sparse GP-LVM, :mod:`nodes.responder.gp_layers`)::
 
-    h_t = f_h(x_h,t)                 human layer,       x_h (q_h,),  x_h = g_h(h) (back constraint)
-    p_t = f_p(x_p,t, s)              partner layer,     x_p (q_p,),  kernel k_RBF(x) (1 + s^T W s')
-    [x_h,t; x_p,t] = f_i(z_t)        interaction layer, z (q_z,)
+    h_t = f_h(x_h,t)                        human layer,       x_h (q_h,),  x_h = g_h(h) (back constraint)
+    y_t = f_p(x_p,t, s)                     partner layer,     the partner's own pose y (42,), x_p (q_p,),
+                                            kernel k_RBF(x) (1 + s^T W s')
+    [x_h,t; x_p,t; q_t; c_t] = f_i(z_t)     interaction layer, z (q_z,); q the placement (4,), c contact
     z_t = z_t-1 + f_d(z_t-1, z_t-1 - z_t-2) + e_t     second-order GPDM (Wang, Fleet & Hertzmann 2008)
 
-The style enters only the partner layer's kernel (the style factorisation): f_p(x, s) = g_0(x) +
-sum_e s_e g_e(x), so the emotion and its strength are continuous inputs set at run time, and
-the latent trajectory (the interaction's course) is shared by all styles. The dynamics f_d is a
-GP regression (scikit-learn, ARD RBF + white noise) on the interaction latents of the training
-sequences at the frame rate, which GPy has no model for.
+The interaction layer couples both actors' latents with what belongs to the pair (where the
+partner stands, whether the hands touch). The style enters only the partner layer's kernel (the
+style factorisation): f_p(x, s) = g_0(x) + sum_e s_e g_e(x), so the emotion and its strength are
+continuous inputs set at run time, and the latent trajectory (the interaction's course) is shared
+by all styles. The dynamics f_d is a GP regression (scikit-learn, ARD RBF + white noise) on the
+interaction latents of the training sequences at the frame rate, which GPy has no model for; its
+residual variance on transitions it was not fitted on is the process noise Q.
 
 Online (one frame, no optimisation): the observed hand is back-projected to x_h = g_h(h_t); the
-dynamics predict z_t with covariance P + Q; one extended-Kalman update with the interaction
-layer's human part (its mean and analytic Jacobian at the prediction) corrects z_t towards the
-observed x_h; x_p = f_i(z_t)[partner part] and the partner block p_t = f_p(x_p, s). The partner's
-joints are placed in the world from the placement, and the right arm is bent by two-bone inverse
-kinematics so that the hand meets the observed hand (plus the mean contact offset of the training
-trials) in proportion to the predicted contact indicator: the target is where the hand is
-offered, not where the training trials met.
+dynamics predict z_t with covariance P + ``process_gain`` Q; the latent point is then
+back-projected onto the training frames' interaction latents z_n, each weighted by
+N(x_h; x_h,n, R) N(z_n; z_pred, P) (R from ``bandwidth``): the posterior z_t is their weighted
+mean, P their weighted spread, so z_t stays on the training manifold and the dynamics settle
+which of the places that share this hand position (standing before or after) it is. Then
+[x_p, q, c] = f_i(z_t) and the pose f_p(x_p, s). The partner's joints are placed in the world from
+q, and the right arm is bent by two-bone inverse kinematics so that the hand meets the observed
+hand (plus the mean contact offset of the training trials) in proportion to the predicted contact
+c: the target is where the hand is offered, not where the training trials met.
 """
 from __future__ import annotations
 
@@ -42,7 +47,7 @@ import numpy as np
 from body.skeleton import JOINT_INDEX
 from body.trajectory import TwoPersonTrajectory
 
-from .dual_hmm import partner_placement, partner_velocity
+from .dual_hmm import DualHMM, partner_placement, partner_velocity
 from .emotion import EMOTIONS
 from .frames import actor_frame, to_local, to_world
 from .gp_layers import GPLayer, fit_layer, rbf
@@ -304,15 +309,8 @@ class GPDM:
         w = float(np.clip((self.contact_ - 0.2) / 0.5, 0.0, 1.0))
         return reach(joints, target, w).astype(np.float32)
 
-    def predict(self, observed: np.ndarray) -> np.ndarray:
-        """A whole sequence, frame by frame as online: (T, 14, 3) -> (T, 14, 3) partner, metres."""
-        X = np.asarray(observed, np.float64)
-        if X.ndim != 3 or X.shape[1:] != (14, 3):
-            raise ValueError(f"observed must be (T, 14, 3) metres, got shape {X.shape}")
-        self.reset()
-        out = np.stack([self.step(x) for x in X])
-        self.reset()
-        return out
+    #: a whole sequence, frame by frame as online: (T, 14, 3) -> (T, 14, 3): the dual HMM's loop over step()
+    predict = DualHMM.predict
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
