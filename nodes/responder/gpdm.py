@@ -28,11 +28,11 @@ residual variance on transitions it was not fitted on is the process noise Q.
 Online (one frame, no optimisation): the observed hand is back-projected to x_h = g_h(h_t); the
 dynamics predict z_t with covariance P + ``process_gain`` Q; the latent point is then
 back-projected onto the training frames' interaction latents z_n, each weighted by
-N(x_h; x_h,n, R) N(z_n; z_pred, P) (R from ``bandwidth``): the posterior z_t is their weighted
-mean, P their weighted spread, so z_t stays on the training manifold and the dynamics settle
+N(x_h; x_h,n, R) N(z_n; z_pred, P) (R from ``bandwidth``): z_t is their weighted mean, P their
+weighted spread, so z_t stays on the training manifold and the dynamics settle
 which of the places that share this hand position (standing before or after) it is. Then
 [x_p, q, c] = f_i(z_t) and the pose f_p(x_p, s). The partner's joints are placed in the world from
-q, and the right arm is bent by two-bone inverse kinematics so that the hand meets the observed
+q and low-passed (``smooth_s``), and the right arm is bent by two-bone inverse kinematics so that the hand meets the observed
 hand (plus the mean contact offset of the training trials) in proportion to the predicted contact
 c: the target is where the hand is offered, not where the training trials met.
 """
@@ -68,7 +68,10 @@ class GPDMConfig:
     back-projection weighs; bandwidth: its kernel width on the human latent, in standard
     deviations of the training latents; process_gain: multiplies the dynamics' held-out residual
     variance in the prediction's covariance, so that the hand can move the latent point off the
-    mean flow (bandwidth and gain chosen on simulator seeds 100-102, see bench/responder.py);
+    mean flow; smooth_s: time constant (s) of the low-pass of the partner's joints in
+    the world before the hand's reach (bandwidth, process_gain and smooth_s chosen on simulator
+    seeds 100-102, see
+    bench/responder.py);
     dyn_points: transitions the dynamics GP
     is fitted on; max_iters: L-BFGS iterations per layer; contact_m: hand distance (m) that counts
     as contact; both_roles: train on A observed / B partner and the reverse; seed: the draws.
@@ -81,11 +84,12 @@ class GPDMConfig:
     n_centres: int = 80
     points: int = 1000
     dyn_points: int = 700
-    max_iters: int = 250
+    max_iters: int = 200
     contact_m: float = 0.15
     support: int = 6000
     bandwidth: float = 0.08
     process_gain: float = 10.0
+    smooth_s: float = 1.0
     both_roles: bool = True
     seed: int = 0
 
@@ -127,11 +131,18 @@ def partner_world(q: np.ndarray, own: np.ndarray, origin: np.ndarray, theta: flo
 
 def reach(joints: np.ndarray, target: np.ndarray, weight: float) -> np.ndarray:
     """Two-bone inverse kinematics of the right arm towards ``target`` (3,) world metres, blended by
-    ``weight`` in [0, 1]. The shoulder stays, the bone lengths are kept, the elbow stays in its
-    bending plane; a target out of reach is met at full stretch. Returns new joints (14, 3)."""
+    ``weight`` in [0, 1]. The bone lengths are kept and the elbow stays in its bending plane; for a
+    target beyond 95% of the arm's length the whole body first steps towards it along the floor by
+    the shortfall (times ``weight``). Returns new joints (14, 3)."""
     if weight <= 0:
         return joints
     J = joints.copy()
+    arm = np.linalg.norm(J[_RE] - J[_RS]) + np.linalg.norm(J[_RW] - J[_RE])
+    v = (target - J[_RS]) * np.array([1.0, 0.0, 1.0])
+    excess = np.linalg.norm(target - J[_RS]) - 0.95 * arm
+    if excess > 0 and np.linalg.norm(v) > 1e-6:
+        # out of reach: the partner steps towards the offered hand (on the floor) by the shortfall
+        J = J + float(min(weight, 1.0)) * excess * v / np.linalg.norm(v)
     S, E, W = J[_RS], J[_RE], J[_RW]
     a, b = np.linalg.norm(E - S), np.linalg.norm(W - E)
     v = target - S
@@ -269,6 +280,9 @@ class GPDM:
         self._z_prev: np.ndarray | None = None
         self._P: np.ndarray | None = None
         self.contact_ = 0.0
+        self._out: np.ndarray | None = None       # the last partner joints before the reach
+        if hasattr(self, "R_"):
+            self._r_sd = np.sqrt(np.diag(self.R_))
 
     def step(self, observed: np.ndarray) -> np.ndarray:
         """One frame: the observed person's joints (14, 3) world metres -> the partner's (14, 3)."""
@@ -286,14 +300,14 @@ class GPDM:
             P = self._P + self.config.process_gain * self.Q_
         # back-projection onto the training latents: each support frame n weighs
         # N(x_h; x_h,n, R) N(z_n; z_pred, P); the posterior is their weighted mean and spread
-        dh = xh - self.support_h_
+        dh = (xh - self.support_h_) / self._r_sd
         dz = self.support_z_ - z
-        e = np.einsum("ni,ij,nj->n", dh, np.linalg.inv(self.R_), dh) + np.einsum("ni,ij,nj->n", dz, np.linalg.inv(P), dz)
+        e = (dh * dh).sum(1) + ((dz @ np.linalg.inv(P)) * dz).sum(1)
         w = np.exp(-0.5 * (e - e.min()))
         w /= w.sum()
         z_new = w @ self.support_z_
         d = self.support_z_ - z_new
-        self._P = np.einsum("n,ni,nj->ij", w, d, d) + self.Q_
+        self._P = (w[:, None] * d).T @ d + self.Q_
         self._z_prev = z_new if self._z is None else self._z
         self._z = z_new
         self.posterior_ = np.array([w.max()])
@@ -303,6 +317,12 @@ class GPDM:
         p = np.concatenate([u[qh + qp:qh + qp + _NQ], pose, u[-1:]])
         origin, theta = actor_frame(X)
         joints = partner_world(p[:_NQ], p[_NQ:-1].reshape(14, 3), origin, float(theta))
+        if self._out is not None and self.config.smooth_s > 0:
+            # one-pole low-pass in the world (time constant smooth_s): where the back-projection
+            # jumps between places of the training data the partner glides instead of hopping
+            a = 1.0 - np.exp(-1.0 / (self.config.smooth_s * self.fps_))
+            joints = self._out + a * (joints - self._out)
+        self._out = joints
         self.contact_ = float(np.clip(p[-1], 0.0, 1.0))
         target = X[_RW] + to_world(self.contact_offset_[None, None], np.zeros(3), float(theta))[0, 0]
         # the hand goes to the offered hand as the model expects contact (indicator 0.2 -> 0.7)
