@@ -140,3 +140,21 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     model.set_style("neutral", 0.0)
     neutral = model.predict(obs)
     assert np.abs(got[k:] - neutral[k:]).max() > 0.01
+
+
+def test_respond_cli_styles_the_gpdm_and_names_an_unseen_style(model: GPDM, tmp_path: Path) -> None:
+    from tests.test_cli import cli
+
+    path = save_model(tmp_path / "g.npz", model)
+    t = trials(range(55, 56), emotion="neutral")[0]
+    t.save(tmp_path / "in.npz")
+    ok = cli("respond", "--model", str(path), "--input", str(tmp_path / "in.npz"), "--out", str(tmp_path / "out.npz"),
+             "--emotion", "angry", "--strength", "1")
+    assert ok.returncode == 0, ok.stderr
+    from body.trajectory import TwoPersonTrajectory
+    out = TwoPersonTrajectory.load(tmp_path / "out.npz")
+    model.set_style("angry", 1.0)
+    np.testing.assert_allclose(out.b, model.predict(t.a), atol=1e-4)   # the model's own style, no filter after
+    bad = cli("respond", "--model", str(path), "--input", str(tmp_path / "in.npz"), "--out", str(tmp_path / "x.npz"),
+              "--emotion", "sad", "--strength", "0.5")
+    assert bad.returncode == 2 and "style 'sad' was never seen in training" in bad.stderr

@@ -64,17 +64,15 @@ class GPDMConfig:
 
     q_h, q_p, q_z: latent dimensions of the human, partner and interaction layers; num_inducing:
     inducing inputs per layer; n_centres: back-constraint centres; points: frames each GP-LVM is
-    fitted on (drawn at random from all training frames); support: training frames the online
-    back-projection weighs; bandwidth: its kernel width on the human latent, in standard
-    deviations of the training latents; process_gain: multiplies the dynamics' held-out residual
-    variance in the prediction's covariance, so that the hand can move the latent point off the
-    mean flow; smooth_s: time constant (s) of the low-pass of the partner's joints in
-    the world before the hand's reach (bandwidth, process_gain and smooth_s chosen on simulator
-    seeds 100-102, see
-    bench/responder.py);
-    dyn_points: transitions the dynamics GP
+    fitted on (drawn at random from all training frames); dyn_points: transitions the dynamics GP
     is fitted on; max_iters: L-BFGS iterations per layer; contact_m: hand distance (m) that counts
-    as contact; both_roles: train on A observed / B partner and the reverse; seed: the draws.
+    as contact; support: training frames the online back-projection weighs; bandwidth: its kernel
+    width on the human latent, in standard deviations of the training latents; process_gain:
+    multiplies the dynamics' held-out residual variance in the prediction's covariance, so that the
+    hand can move the latent point off the mean flow; smooth_s: time constant (s) of the low-pass
+    of the partner's joints in the world before the hand's reach (bandwidth, process_gain and
+    smooth_s chosen on simulator seeds 100-102, away from the training seeds 0-7 and the bench's
+    held-out 200-203); both_roles: train on A observed / B partner and the reverse; seed: the draws.
     """
 
     q_h: int = 2
