@@ -81,13 +81,13 @@ class GPDMConfig:
     num_inducing: int = 50
     n_centres: int = 80
     points: int = 1000
-    dyn_points: int = 700
-    max_iters: int = 200
+    dyn_points: int = 400
+    max_iters: int = 175
     contact_m: float = 0.15
-    support: int = 6000
+    support: int = 3000
     bandwidth: float = 0.08
     process_gain: float = 10.0
-    smooth_s: float = 1.0
+    smooth_s: float = 1.5
     both_roles: bool = True
     seed: int = 0
 
