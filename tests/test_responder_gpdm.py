@@ -147,6 +147,7 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     assert np.abs(got[k:] - neutral[k:]).max() > 0.01
 
 
+@pytest.mark.slow
 def test_respond_cli_styles_the_gpdm_and_names_an_unseen_style(model: GPDM, tmp_path: Path) -> None:
     from tests.test_cli import cli
 
