@@ -323,11 +323,13 @@ def _legs(c: _Ctx, P: np.ndarray, p: str, busy: np.ndarray | None = None) -> np.
 
 
 # ------------------------------------------------------------------------- meeting-hands scenarios
-def _hands_meet(c: _Ctx, high: bool) -> dict[str, Any]:
-    """Shared geometry of handshake / high five / pull: distances and the meeting point."""
+def _hands_meet(c: _Ctx, high: bool, hand_dy: float = 0.0) -> dict[str, Any]:
+    """Shared geometry of handshake / high five / pull: distances and the meeting point (raised by
+    ``hand_dy`` metres: the target height of the offered hand)."""
     hmin = min(c.dims["a"].height, c.dims["b"].height)
     lean = 0.0 if high else 0.08
     hand_y = 0.93 * hmin if high else _comfortable_hand_height(list(c.dims.values()), 0.025, lean, 0.96, 0.3)
+    hand_y += float(hand_dy)
     d = {p: _contact_distance(c.dims[p], hand_y, 0.025, lean, 0.96) for p in "ab"}
     mx = c.cx + 0.5 * (d["a"] - d["b"])
     return {"hand_y": hand_y, "lean": lean, "d": d, "mx": mx}
@@ -348,17 +350,19 @@ def _approach(c: _Ctx, tracks: dict[str, Track], x_end: dict[str, float], t_star
 
 
 def handshake(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-              strength: float | None = None, initiator: str | None = None) -> Scenario:
-    """Two people walk up to each other, shake right hands (pumping), let go and step back."""
+              strength: float | None = None, initiator: str | None = None, hand_dy: float = 0.0) -> Scenario:
+    """Two people walk up to each other, shake right hands (pumping), let go and step back.
+    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet."""
     c = _context("handshake", seed, fps, emotion, strength, initiator)
-    return _meeting(c, kind="handshake")
+    return _meeting(c, kind="handshake", hand_dy=hand_dy)
 
 
 def high_five(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-              strength: float | None = None, initiator: str | None = None) -> Scenario:
-    """Two people walk up, raise their right hands and slap them together above head height."""
+              strength: float | None = None, initiator: str | None = None, hand_dy: float = 0.0) -> Scenario:
+    """Two people walk up, raise their right hands and slap them together above head height.
+    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet."""
     c = _context("high_five", seed, fps, emotion, strength, initiator)
-    return _meeting(c, kind="high_five")
+    return _meeting(c, kind="high_five", hand_dy=hand_dy)
 
 
 def pull(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
@@ -369,8 +373,8 @@ def pull(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
     return _meeting(c, kind="pull")
 
 
-def _meeting(c: _Ctx, kind: str) -> Scenario:
-    geo = _hands_meet(c, high=(kind == "high_five"))
+def _meeting(c: _Ctx, kind: str, hand_dy: float = 0.0) -> Scenario:
+    geo = _hands_meet(c, high=(kind == "high_five"), hand_dy=hand_dy)
     x_end = {"a": geo["mx"] - geo["d"]["a"], "b": geo["mx"] + geo["d"]["b"]}
     tracks = {p: Track(_start_pose(c, p, x_end[p])) for p in "ab"}
     arrive = _approach(c, tracks, x_end, float(c.rng.uniform(0.3, 0.8)))
@@ -425,7 +429,7 @@ def _meeting(c: _Ctx, kind: str) -> Scenario:
             own = ready + k[:, None] * (own - ready)
         P[p] = apply_reach(base, c.dims[p], "r", own, w)
     phase = np.where(times < t_c, 0, np.where(times < t_r, 1, 2))
-    c.meta.update({"t_contact": [t_c, t_r]})
+    c.meta.update({"t_contact": [t_c, t_r], "hand_target": [geo["mx"], geo["hand_y"], c.cz]})
     return _finish(c, P, phase)
 
 

@@ -35,7 +35,7 @@ from .video import VideoWriter, write_png
 from .web import LiveServer, is_loopback
 
 #: the responder's model names (nodes.responder.models.MODEL_NAMES; a node does not import another node)
-DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion", "video-texture"]
+DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion", "video-texture", "gpdm"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
 #: seconds of the stream at its start that the ``*_after_1s`` figures leave out
 SETTLE_S = 1.0

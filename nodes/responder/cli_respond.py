@@ -4,7 +4,8 @@ The input is a two-person trajectory file; person ``--observed`` (a or b) is fed
 frame by frame (with its signals for the listener model) and the output file holds the same
 observed person and the generated partner in the other slot (label ``generated:<label>``).
 ``--model`` is a model file or ``default:NAME`` (dual-hmm, joint-shape... built when missing);
-``--emotion``/``--strength`` restyle the partner with the default emotion model.
+``--emotion``/``--strength`` restyle the partner with the default emotion model (the gpdm model
+takes them as its style variables instead).
 """
 from __future__ import annotations
 
@@ -27,10 +28,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", interest: int = 3) -> np.ndarray:
-    """The partner's joints (T, 14, 3) for one person of ``traj`` (3D models: dual-hmm, listener)."""
+    """The partner's joints (T, 14, 3) for one person of ``traj`` (3D models: dual-hmm, gpdm, listener)."""
     obs = traj.a if observed == "a" else traj.b
     name = getattr(model, "name", "")
-    if name == "dual-hmm":
+    if name in ("dual-hmm", "gpdm"):
         return model.predict(obs)
     if name == "listener":
         if traj.signals_a is None:
@@ -40,7 +41,7 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
         model.interest = interest
         return np.stack([model.step({n: bool(v == 1) for n, v in zip(traj.signal_names, row)}, x)
                          for row, x in zip(sig, obs)])
-    raise ValueError(f"model {name!r} does not generate 3D joints; use dual-hmm or listener")
+    raise ValueError(f"model {name!r} does not generate 3D joints; use dual-hmm, gpdm or listener")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -52,8 +53,11 @@ def main(args: argparse.Namespace) -> int:
         else:
             model = load_model(args.model)
         traj = TwoPersonTrajectory.load(args.input)
+        gpdm = getattr(model, "name", "") == "gpdm"
+        if gpdm:   # the gpdm's style is its own input, not a filter afterwards
+            model.set_style(args.emotion, args.strength)
         partner = generate(model, traj, args.observed, args.interest)
-        if args.emotion != "neutral" and args.strength > 0:
+        if args.emotion != "neutral" and args.strength > 0 and not gpdm:
             partner = load_default("emotion").modulate(partner, args.emotion, args.strength)
         obs = traj.a if args.observed == "a" else traj.b
         a, b = (obs, partner) if args.observed == "a" else (partner, obs)

@@ -26,7 +26,7 @@ MODEL_FORMAT = "counterpart.responder.model"
 MODEL_VERSION = 4   # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
                     # 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation;
                     # 4: dual-hmm placement correction (cross-fitted forest arrays)
-MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion", "video-texture")
+MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion", "video-texture", "gpdm")
 
 
 class ModelVersionError(ValueError):
@@ -59,6 +59,9 @@ def model_class(name: str) -> type:
     if name == "video-texture":
         from .video_texture import VideoTexture
         return VideoTexture
+    if name == "gpdm":
+        from .gpdm import GPDM
+        return GPDM
     raise ValueError(f"unknown responder model {name!r}; choose one of {', '.join(MODEL_NAMES)}")
 
 

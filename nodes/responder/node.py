@@ -4,7 +4,7 @@ Inputs (each optional by parameter, so a graph without a tracker still validates
 (tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
 ``signals`` (labeller.SocialSignals, ``use_signals``) and ``control`` (control.Control, latest
 policy, a side input that does not hold the node open). The model in force decides which input
-drives the output: dual-hmm, listener and video-texture produce one Partner per ``pose``
+drives the output: dual-hmm, gpdm, listener and video-texture produce one Partner per ``pose``
 (listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
 ``silhouettes``; the others are
 paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
@@ -25,7 +25,7 @@ from .emotion import EMOTIONS, StyleFilter
 from .reach import ReachConfig, reach
 from .staging import Stage, StageConfig
 
-MODELS = ("dual-hmm", "joint-shape", "listener", "video-texture")
+MODELS = ("dual-hmm", "joint-shape", "listener", "video-texture", "gpdm")
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
 
@@ -100,6 +100,7 @@ class Responder(Node):
                 self.reach = ReachConfig(r_engage=self.p["reach_m"])
         except ValueError as e:
             raise SystemExit(f"responder: {e}; set responder.min_distance_m, max_distance_m or reach_m")
+        self._unseen: set[str] = set()    # styles the gpdm model never saw, already reported
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -177,6 +178,17 @@ class Responder(Node):
             fields["joints"] = self._staged(body.joints, fields["joints"], self.latest["pose"])
         return dict(fields, observed_id=-1 if body is None else body.id)
 
+    def _gpdm_style(self, m: Any) -> None:
+        """Set the gpdm's style variables from the emotion and strength; a style the model never saw
+        is reported once and generated as neutral."""
+        try:
+            m.set_style(self.emotion, self.strength)
+        except ValueError as e:
+            if self.emotion not in self._unseen:
+                self._unseen.add(self.emotion)
+                self.log.warning("%s; generating neutral", e)
+            m.set_style("neutral", 0.0)
+
     def _pick(self, people: list[Any]) -> Any:
         if not people:
             return None
@@ -185,7 +197,7 @@ class Responder(Node):
 
     def on_pose(self, msg: Pose3D) -> None:
         self.latest["pose"] = msg
-        if self.model in ("dual-hmm", "listener", "video-texture"):
+        if self.model in ("dual-hmm", "listener", "video-texture", "gpdm"):
             self._emit(msg)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
@@ -216,7 +228,7 @@ class Responder(Node):
         m = self._model(self.model)
         if m is None:
             return nobody()
-        if self.model == "dual-hmm":
+        if self.model in ("dual-hmm", "gpdm"):
             body = self._pick(list(driver.people))
             if body is None or body.lost or np.asarray(body.joints).shape != (14, 3):
                 return nobody()
@@ -225,8 +237,12 @@ class Responder(Node):
                 m.reset()
                 self._reset_stage()
                 self.tally("observed_switches")
+            if self.model == "gpdm":   # the style is the model's own input (Taubert et al.), not a filter
+                self._gpdm_style(m)
             joints = self._staged(body.joints, m.step(body.joints), driver)
-            out.update(joints=self.style(joints, self.emotion, self.strength), observed_id=body.id,
+            if self.model == "dual-hmm":
+                joints = self.style(joints, self.emotion, self.strength)
+            out.update(joints=joints, observed_id=body.id,
                        behaviour="respond", confidence=float(np.max(m.posterior_)))
         elif self.model == "listener":
             m.interest = self.interest

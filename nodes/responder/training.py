@@ -29,7 +29,22 @@ def default_training_data(name: str, progress: Progress = None) -> list[TwoPerso
             for s in (0.2, 0.5, 0.8, 1.0):
                 out += sim_trajectories(SIM_SCENARIOS, range(2), max_frames=200, emotion=e, strength=s)
         return out
+    if name == "gpdm":
+        return gpdm_training_data()
     raise ValueError(f"unknown responder model {name!r}")
+
+
+def gpdm_training_data(seeds: int = 8, max_frames: int = 250) -> list[TwoPersonTrajectory]:
+    """The gpdm's default data: high fives and handshakes, neutral and each emotion at strengths 0.5
+    and 1, the hands meeting 0.1 m lower, at, and 0.1 m higher than the simulator's own height in
+    turn (2 x 7 x ``seeds`` trials, 112 by default)."""
+    out = []
+    for e in EMOTIONS:
+        for s in ((0.0,) if e == "neutral" else (0.5, 1.0)):
+            for seed in range(seeds):
+                out += sim_trajectories(("handshake", "high_five"), [seed], max_frames=max_frames, emotion=e,
+                                        strength=s, hand_dy=(-0.1, 0.0, 0.1)[seed % 3])
+    return out
 
 
 def speaker_listener(t: TwoPersonTrajectory) -> tuple[np.ndarray, np.ndarray]:
@@ -77,4 +92,7 @@ def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = N
         from .emotion import EmotionModel
         say(f"emotion: ranking functions from {len(data)} labelled sequences")
         return EmotionModel(**params).fit_trajectories(data)
+    if name == "gpdm":
+        from .gpdm import GPDM
+        return GPDM(**params).fit(data, say)
     raise ValueError(f"unknown responder model {name!r}")
