@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from nodes.responder.data import sim_trajectories
-from nodes.responder.emotion import motion_features
 from nodes.responder.gpdm import GPDM, reach
 from nodes.responder.models import load_model, save_model
 from tests.launching import read_jsonl, run_launch, write_launch
@@ -113,7 +112,9 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     save_model(d / "responder-gpdm.npz", model)
     launch = write_launch(tmp_path / "g.yaml", {"nodes": {
         "source": {"run": "tests.responder_nodes:PoseSource", "params": {"frames": 60, "control_at": 30}},
-        "responder": {"run": "nodes.responder", "params": {"model": "gpdm"}},
+        # a reliable control queue: the source waits for it to connect, so the control is never lost
+        "responder": {"run": "nodes.responder", "params": {"model": "gpdm"},
+                      "inputs": {"control": {"policy": "reliable"}}},
         "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp_path / "out.jsonl")}},
     }})
     # the emotion model the node loads up front: a fresh default would take a while to build
@@ -128,15 +129,19 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     # the control takes effect from some frame k on (when depends on the load; it is sent before 30)
     angry = [r["emotion"] == "angry" and r["strength"] == 1.0 for r in rows]
     k = angry.index(True)
-    assert 0 < k <= 30 and all(angry[k:])
-    # the node's output is the model's own for that observed sequence with the style switched at k
+    assert k <= 30 and all(angry[k:])
+    # the node's output is the model's own for that observed sequence with the style switched at k,
+    # staged and given the hand contact as the node does (poses without a rate: 25 fps)
     from tests.responder_fixtures import planted_pair
     obs = planted_pair(7, T=60).a.astype(np.float32)   # as Pose3D carries it
+    from nodes.responder.reach import reach
+    from nodes.responder.staging import Stage
+
     model.reset()
-    model.set_style("neutral", 0.0)
-    expect = [model.step(x) for x in obs[:k]]
-    model.set_style("angry", 1.0)
-    expect += [model.step(x) for x in obs[k:]]
+    stage, expect = Stage(), []
+    for t, x in enumerate(obs):
+        model.set_style("angry", 1.0) if t >= k else model.set_style("neutral", 0.0)
+        expect.append(reach(x, stage(x, model.step(x), 1 / 25))[0])
     model.reset()
     got = np.array([r["joints"] for r in rows])
     bad = np.flatnonzero(np.abs(got - np.array(expect)).max(axis=(1, 2)) > 1e-4)

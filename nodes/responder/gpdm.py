@@ -51,6 +51,7 @@ from .dual_hmm import DualHMM, partner_placement, partner_velocity
 from .emotion import EMOTIONS
 from .frames import actor_frame, to_local, to_world
 from .gp_layers import GPLayer, fit_layer, rbf
+from .reach import two_bone_ik
 
 _RS, _RE, _RW = JOINT_INDEX["r_shoulder"], JOINT_INDEX["r_elbow"], JOINT_INDEX["r_wrist"]
 #: the style columns: amounts of these emotions (neutral is no amount)
@@ -142,16 +143,7 @@ def reach(joints: np.ndarray, target: np.ndarray, weight: float) -> np.ndarray:
         # out of reach: the partner steps towards the offered hand (on the floor) by the shortfall
         J = J + float(min(weight, 1.0)) * excess * v / np.linalg.norm(v)
     S, E, W = J[_RS], J[_RE], J[_RW]
-    a, b = np.linalg.norm(E - S), np.linalg.norm(W - E)
-    v = target - S
-    d = float(np.clip(np.linalg.norm(v), abs(a - b) + 1e-4, a + b - 1e-4))
-    u = v / max(np.linalg.norm(v), 1e-9)
-    pole = (E - S) - ((E - S) @ u) * u
-    n = np.linalg.norm(pole)
-    pole = pole / n if n > 1e-6 else np.array([0.0, -1.0, 0.0])
-    x = (a * a - b * b + d * d) / (2 * d)
-    E2 = S + x * u + np.sqrt(max(a * a - x * x, 0.0)) * pole
-    W2 = S + d * u
+    E2, W2 = two_bone_ik(S, E, W, target)
     w = float(min(weight, 1.0))
     J[_RE], J[_RW] = (1 - w) * E + w * E2, (1 - w) * W + w * W2
     return J
@@ -169,7 +161,7 @@ class GPDM:
         self.reset()
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, trajectories: Sequence[TwoPersonTrajectory], progress: Callable[[str], None] | None = None) -> "GPDM":
+    def fit(self, trajectories: Sequence[TwoPersonTrajectory], progress: Callable[[str], None] | None = None) -> GPDM:
         """Learn the hierarchy from two-person trajectories (``meta['emotion']``, ``meta['strength']``
         label each trial's style; missing: neutral). Progress messages go to ``progress``."""
         from threadpoolctl import threadpool_limits
@@ -179,7 +171,7 @@ class GPDM:
         with threadpool_limits(1):  # small matrices: BLAS threads on busy cores only slow GPy down
             return self._fit(trajectories, progress or (lambda s: None))
 
-    def _fit(self, trajectories: Sequence[TwoPersonTrajectory], say: Callable[[str], None]) -> "GPDM":
+    def _fit(self, trajectories: Sequence[TwoPersonTrajectory], say: Callable[[str], None]) -> GPDM:
         c = self.config
         fps = float(np.median([t.fps for t in trajectories]))
         H, P, S, offsets, seen = [], [], [], [], set()
@@ -340,7 +332,7 @@ class GPDM:
         return arrays, config
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "GPDM":
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> GPDM:
         c = dict(config)
         fps, dyn_var, styles = float(c.pop("fps")), float(c.pop("dyn_var")), list(c.pop("styles"))
         m = cls(**c)
