@@ -45,6 +45,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
+from nodes.silhouette.background import SHADOW
 from nodes.silhouette.backends import make_subtractor
 from nodes.silhouette.pipeline import SilhouetteExtractor
 from nodes.silhouette.regions import clean_mask
@@ -52,7 +53,13 @@ from body.spline import oriented_boundary, spline_distance
 from nodes.silhouette.synthetic import two_person_sequence
 
 VTEST = os.environ.get("COUNTERPART_VTEST", "/work/shared/data/video/vtest.avi")
+SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "shared", "data")
+CDNET = os.path.join(SHARED, "cdnet")
 TRAIN_FRAMES = 30
+REAL_BACKENDS = ("horprasert", "mog2", "knn", "gsoc")
+#: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
+GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
 
 @dataclass
@@ -261,6 +268,110 @@ def sim_source(n_frames: int) -> Source | None:
 SOURCES = {"synthetic": synthetic_source, "vtest": vtest_source, "sim": sim_source}
 
 
+def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """A CDnet sequence: frames (N, H, W, 3) uint8 BGR and ground truth (N, H, W) uint8 of frames
+    1..N, N the last evaluated frame, and the first and last evaluated frame numbers (1-based,
+    ``temporalROI.txt``; the frames before the first are for learning)."""
+    with open(os.path.join(seq_dir, "temporalROI.txt")) as fh:
+        first, last = (int(v) for v in fh.read().split()[:2])
+    frames = np.stack([cv2.imread(os.path.join(seq_dir, "input", f"in{i:06d}.jpg")) for i in range(1, last + 1)])
+    gt = np.stack([cv2.imread(os.path.join(seq_dir, "groundtruth", f"gt{i:06d}.png"), cv2.IMREAD_GRAYSCALE)
+                   for i in range(1, last + 1)])
+    return frames, gt, first, last
+
+
+def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
+    """Run one backend through ``SilhouetteExtractor`` with the node's defaults (the same clean-up,
+    minimum area and tracking for every backend) over all frames from frame 1, and count CDnet's
+    way on the evaluated frames (``first`` on, 1-based): the published label mask against label 255
+    positive, 0 and 50 negative, 85 (outside the region of interest) and 170 (unknown) ignored.
+    Counts are kept apart for the first half of the evaluated frames ("tune") and the second
+    ("report"). Shadow counts: the model's SHADOW class against label 50, on the same pixels."""
+    ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": TRAIN_FRAMES}
+                             if backend == "horprasert" else {})
+    mid = first + (len(frames) - first + 1) // 2
+    keys = ("tp", "fp", "fn", "sh_tp", "sh_fp", "sh_fn")
+    out = {half: dict.fromkeys(keys, 0) for half in ("tune", "report")}
+    for k, frame in enumerate(frames):
+        n = k + 1
+        if backend != "horprasert" and ex.n_frames < TRAIN_FRAMES - 1:
+            ex.learn(frame)
+            continue
+        r = ex.process(frame)
+        if n < first:
+            continue
+        c = out["tune" if n < mid else "report"]
+        g = gt[k]
+        pos = g == GT_FG
+        neg = (g == GT_STATIC) | (g == GT_SHADOW)
+        fg = r.labels > 0
+        c["tp"] += int(np.count_nonzero(fg & pos))
+        c["fp"] += int(np.count_nonzero(fg & neg))
+        c["fn"] += int(np.count_nonzero(pos & ~fg))
+        if r.classes is not None:
+            sh = r.classes == SHADOW
+            gsh = g == GT_SHADOW
+            scored = pos | neg
+            c["sh_tp"] += int(np.count_nonzero(sh & gsh))
+            c["sh_fp"] += int(np.count_nonzero(sh & scored & ~gsh))
+            c["sh_fn"] += int(np.count_nonzero(gsh & ~sh))
+    return out
+
+
+def _f1_counts(tp: int, fp: int, fn: int) -> float:
+    return round(_f1(tp, tp + fp, tp + fn)[2], 4)
+
+
+def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None:
+    """CDnet-protocol F1 of ours, MOG2, KNN and GSOC on the sequences of ``CDNET`` (None when the
+    data is absent). Per sequence: ``f1_<backend>`` on the report half (the second half of the
+    evaluated frames, never used to tune), ``f1_<backend>_tune`` on the first half, and
+    ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn`` theirs) where the ground truth marks shadows."""
+    if not os.path.isdir(CDNET):
+        return None
+    names = seq_names or sorted(d for d in os.listdir(CDNET) if os.path.isfile(os.path.join(CDNET, d, "temporalROI.txt")))
+    out: dict[str, Any] = {}
+    for name in names:
+        frames, gt, first, last = load_cdnet(os.path.join(CDNET, name))
+        row: dict[str, Any] = {"frames": int(last), "evaluated": [first, last],
+                               "split": "tune: first half of the evaluated frames; figures: second half"}
+        has_shadow = bool(np.any(gt[first - 1:] == GT_SHADOW))
+        for b in REAL_BACKENDS:
+            t0 = time.perf_counter()
+            ev = evaluate_real(frames, gt, first, b)
+            tag = "ours" if b == "horprasert" else b
+            for half, suffix in (("report", ""), ("tune", "_tune")):
+                c = ev[half]
+                row[f"f1_{tag}{suffix}"] = _f1_counts(c["tp"], c["fp"], c["fn"])
+                if has_shadow and b in ("horprasert", "mog2", "knn"):
+                    key = "shadow_f1" if b == "horprasert" else f"shadow_f1_{b}"
+                    row[key + suffix] = _f1_counts(c["sh_tp"], c["sh_fp"], c["sh_fn"])
+            row[f"fps_{tag}"] = round(len(frames) / (time.perf_counter() - t0), 1)
+        out[name] = row
+        print(f"real {name}: {row}", flush=True)
+    return out
+
+
+def speed_two_cores(frames: np.ndarray) -> dict[str, float]:
+    """Frames per second of the whole extractor (background, clean-up, tracking, B-splines) with
+    two OpenCV threads, ours and with MOG2 as its backend, on the same frames in the same run."""
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        out = {}
+        for b in ("horprasert", "mog2"):
+            ex = SilhouetteExtractor(backend=b, backend_params={"train_frames": TRAIN_FRAMES} if b == "horprasert" else {})
+            times = []
+            for f in frames:
+                t0 = time.perf_counter()
+                ex.process(f)
+                times.append(time.perf_counter() - t0)
+            out["ours" if b == "horprasert" else b] = round(1.0 / float(np.median(times[TRAIN_FRAMES:])), 1)
+        return out
+    finally:
+        cv2.setNumThreads(threads)
+
+
 def _time_subtractor(name: str, frames: np.ndarray, truth: Source) -> dict[str, Any]:
     params = {"train_frames": TRAIN_FRAMES} if name == "horprasert" else {}
     sub = make_subtractor(name, **params)
@@ -320,7 +431,7 @@ def _time_extractor(frames: np.ndarray) -> dict[str, Any]:
 
 
 def run(source_names: list[str], n_frames: int, scenarios: list[str], seeds: list[int],
-        sim_frames: int) -> dict[str, Any]:
+        sim_frames: int, real: bool = True) -> dict[str, Any]:
     report: dict[str, Any] = {
         "bench": "silhouette",
         "cpu_threads": cv2.getNumThreads(),
@@ -363,6 +474,13 @@ def run(source_names: list[str], n_frames: int, scenarios: list[str], seeds: lis
         report["sim_sequences"] = len(ev["sequences"])
     if srcs.get("sim", {}).get("available"):
         report["fps_320x240"] = round(1e3 / srcs["sim"]["extractor_ms_per_frame"], 1)
+        two = speed_two_cores(sim_source(n_frames).frames)
+        report["fps_320x240_2cores"] = two["ours"]
+        report["fps_320x240_2cores_mog2"] = two["mog2"]
+    if real:
+        ev_real = real_evaluation()
+        if ev_real is not None:
+            report["real"] = ev_real
     if srcs.get("vtest", {}).get("available"):
         report["fps_768x576"] = round(1e3 / srcs["vtest"]["extractor_ms_per_frame"], 1)
     return report
@@ -377,6 +495,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", default="0,1,2", help="simulator seeds (comma-separated)")
     ap.add_argument("--sim-frames", type=int, default=250, help="cap on each simulator sequence's frames")
     ap.add_argument("--threads", type=int, default=1, help="OpenCV threads (1: the one-core figures)")
+    ap.add_argument("--no-real", action="store_true", help="skip the real-footage (CDnet) evaluation")
+    ap.add_argument("--real-only", action="store_true", help="only the real-footage (CDnet) evaluation")
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if args.frames <= TRAIN_FRAMES + 1:
@@ -385,7 +505,9 @@ def main(argv: list[str] | None = None) -> int:
     names = list(SOURCES) if args.source == "all" else [args.source]
     scenarios = [s for s in args.scenarios.split(",") if s]
     seeds = [int(s) for s in args.seeds.split(",") if s]
-    report = run(names, args.frames, scenarios, seeds, args.sim_frames)
+    if args.real_only:
+        names, scenarios = [], []
+    report = run(names, args.frames, scenarios, seeds, args.sim_frames, real=not args.no_real)
     line = json.dumps(report)
     if args.out:
         with open(args.out, "w") as fh:

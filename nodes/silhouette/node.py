@@ -23,6 +23,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from body.camera import Camera, camera_param_problem
 from bus import Input, Node, Output, Param
 from messages import Frame, Silhouettes
 from messages.silhouette import PersonShape
@@ -80,7 +81,12 @@ class Silhouette(Node):
         "backend": Param(str, "horprasert", "background subtractor", choices=BACKEND_NAMES),
         "n_ctrl": Param(int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)",
                         min=4, max=1024),
-        "min_area": Param(int, 300, "smallest person region (pixels)", min=1),
+        "min_area": Param(int, 0, "smallest person region (pixels); 0: a person 1.7 m tall at max_distance_m "
+                          "from the camera, so it scales with the frame size and the lens", min=0),
+        "max_distance_m": Param(float, 30.0, "with min_area 0: the farthest person to find (metres); 30: "
+                                "17 px tall at 320x240 with the default camera", min=0.1),
+        "camera": Param(dict, {}, "with min_area 0: {fx, fy, cx, cy, width, height, R, t} of the camera (scaled "
+                        "to the frame size); {}: the default camera", check=camera_param_problem),
         "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people unless "
                               "replay_training", min=2, max=100_000),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
@@ -125,7 +131,9 @@ class Silhouette(Node):
             backend_params = {"detectShadows": False}
         # without colour a shadow cannot be told from a darker person (Horprasert's test is on
         # chromaticity): on grey frames every change from the background is foreground
-        return SilhouetteExtractor(backend=p["backend"], n_ctrl=p["n_ctrl"], min_area=p["min_area"],
+        camera = Camera.from_dict(p["camera"]) if p["camera"] else None
+        return SilhouetteExtractor(backend=p["backend"], n_ctrl=p["n_ctrl"], min_area=p["min_area"] or None,
+                                   camera=camera, max_distance_m=p["max_distance_m"],
                                    open_px=p["open_px"], close_px=p["close_px"], fill_holes=p["fill_holes"],
                                    shadows=not mono, backend_params=backend_params)
 
