@@ -216,7 +216,7 @@ class HorprasertBackground:
         max_threshold_samples: int = 2_000_000,
         random_state: int | None = 0,
         shadow_ncc: float = 0.4,
-        shadow_texture_k: float = 2.0,
+        shadow_texture_k: float = 4.0,
         shadow_window: int = 7,
     ) -> None:
         if not 0.5 < detection_rate < 1.0:
@@ -489,29 +489,38 @@ class HorprasertBackground:
         sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
         if cv2.countNonZero(sh) == 0:
             return
+        # only the box around the shadow pixels (and half a window) is filtered: in most frames
+        # the shadows lie at people's feet
+        r = self.shadow_window // 2
+        x, y, bw, bh = cv2.boundingRect(sh)
+        h, w = sh.shape
+        x0, y0, x1, y1 = max(x - r, 0), max(y - r, 0), min(x + bw + r, w), min(y + bh + r, h)
+        win = (slice(y0, y1), slice(x0, x1))
         k = (self.shadow_window, self.shadow_window)
-        grey = planes[0] + planes[1]
-        grey += planes[2]
+        grey = planes[0][win] + planes[1][win]
+        grey += planes[2][win]
         mu = self._mu
-        e = mu[0] + mu[1]
-        e += mu[2]
+        e = mu[0][win] + mu[1][win]
+        e += mu[2][win]
         # Over the window's shadow pixels only: at a shadow's edge the lit pixels beside it would
         # make the ratio of frame to background a step, and the correlation low.
-        m = cv2.bitwise_and(sh, 1).astype(np.float32)
+        shw = sh[win]
+        m = cv2.bitwise_and(shw, 1).astype(np.float32)
         box = lambda a: cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)  # noqa: E731
-        n = np.maximum(box(m), 1.0)
+        inv_n = 1.0 / np.maximum(box(m), 1.0)
         gm, em = grey * m, e * m
-        mi, me = box(gm) / n, box(em) / n
-        vi = box(gm * grey) / n - mi * mi
-        ve = box(em * e) / n - me * me
-        cov = box(gm * e) / n - mi * me
+        mi, me = box(gm) * inv_n, box(em) * inv_n
+        vi = box(gm * grey) * inv_n - mi * mi
+        ve = box(em * e) * inv_n - me * me
+        cov = box(gm * e) * inv_n - mi * me
         # noise of the grey sum (3 channels): its variance is the sum of the channel variances
-        floor = self._var[0] + self._var[1]
-        floor += self._var[2]
+        var = self._var
+        floor = var[0][win] + var[1][win]
+        floor += var[2][win]
         floor *= np.float32(self.shadow_texture_k**2)
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        person = (sh > 0) & (ve > floor) & (ncc < self.shadow_ncc)
-        labels[person] = FOREGROUND
+        person = (shw > 0) & (ve > floor) & (ncc < self.shadow_ncc)
+        labels[win][person] = FOREGROUND
 
     def update(self, frame: np.ndarray, labels: np.ndarray) -> None:
         """Blend the frame into the model, never where ``labels == FOREGROUND``.

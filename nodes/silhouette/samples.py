@@ -211,7 +211,7 @@ class SampleConsensus:
                 continue
             k = rng.integers(0, self.n_samples, size=cand.size)
             if own:
-                self.samples_[:, k, cand] = px[cand].T
+                self._write(k * npx + cand, px[cand])
                 continue
             off = _NEIGHBOURS[rng.integers(0, 8, size=cand.size)]
             y = np.clip(cand // w + off[:, 0], 0, h - 1)
@@ -220,7 +220,13 @@ class SampleConsensus:
             # only into background neighbours: ViBe's diffusion into foreground eats a person
             # who stands still from their rim; uncovered room (ghosts) is the statistics' job
             ok = learn[nb]
-            self.samples_[:, k[ok], nb[ok]] = px[cand[ok]].T
+            self._write(k[ok] * npx + nb[ok], px[cand[ok]])
+
+    def _write(self, flat_idx: np.ndarray, colours: np.ndarray) -> None:
+        """Store colours (M, 3) uint8 at flat indices k * H * W + pixel of the sample planes
+        (1-D scatters: far cheaper than indexing the (3, N, H * W) array with two index arrays)."""
+        for c in range(3):
+            self.samples_[c].reshape(-1)[flat_idx] = colours[:, c]
 
     def _feedback(self, fg_idx: np.ndarray) -> None:
         """SuBSENSE's blink level: v(x) += blink_gain where the foreground label switched since
