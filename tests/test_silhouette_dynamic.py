@@ -99,6 +99,8 @@ def test_sample_consensus_validates_and_learns_only_background() -> None:
 def test_min_area_scales_with_the_frame_and_the_camera() -> None:
     small = person_min_area(320, 240)
     assert person_min_area(640, 480) == pytest.approx(4 * small, rel=0.05)
+    # the floor: 16 px tall whatever the frame
+    assert person_min_area(160, 120) == 64
     # a person 20 px tall (about 0.25 * 20^2 = 100 px of region) is above the threshold
     assert small < 100
     from body.camera import default_camera

@@ -26,6 +26,9 @@ from body.spline import silhouette_spline
 PERSON_HEIGHT_M = 1.7
 #: a person's region over the square of their height: about 0.4 h wide, filling 60% of that box
 PERSON_AREA_PER_HEIGHT2 = 0.25
+#: the shortest region taken for a person whatever the frame size, pixels: shorter blobs are
+#: noise and fragments as often as people, and too small for an outline of 32 control points
+MIN_PERSON_HEIGHT_PX = 16.0
 
 
 def person_min_area(width: int, height: int, camera: Camera | None = None, max_distance_m: float = 30.0) -> int:
@@ -35,11 +38,11 @@ def person_min_area(width: int, height: int, camera: Camera | None = None, max_d
     (pinhole) and covers about 0.25 h^2 pixels. With the default camera and 30 m a person is
     1/14 of the frame height tall, 17 px at 320x240 (76 px of area): people down to 20 px tall
     are kept with a margin, and the threshold follows the frame size and the lens rather than a
-    fixed pixel count."""
+    fixed pixel count. h is at least ``MIN_PERSON_HEIGHT_PX`` (64 px of area) in small frames."""
     if max_distance_m <= 0:
         raise ValueError(f"max_distance_m must be > 0 metres, got {max_distance_m}")
     cam = camera_for_size(camera, width, height)
-    h = cam.fy * PERSON_HEIGHT_M / max_distance_m
+    h = max(cam.fy * PERSON_HEIGHT_M / max_distance_m, MIN_PERSON_HEIGHT_PX)
     return max(1, int(round(PERSON_AREA_PER_HEIGHT2 * h * h)))
 
 
