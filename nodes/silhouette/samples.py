@@ -183,7 +183,7 @@ class SampleConsensus:
         # region, where a colour seen again and again is background whichever model missed it.
         # Elsewhere a person whose colour happens to match would be learnt, match better the
         # next time, and spread.
-        learn = (flat == BACKGROUND) | (self._blink >= self.learn_blink)
+        learn = _Learnable(flat, self._blink, self.learn_blink)
         if idx.size:
             ok = self.explained(frame, idx)
             out.reshape(-1)[idx[ok]] = BACKGROUND
@@ -194,8 +194,8 @@ class SampleConsensus:
         self._feedback(fg_idx)
         return out
 
-    def _update(self, frame: np.ndarray, learn: np.ndarray) -> None:
-        """ViBe's conservative update: each pixel to ``learn`` (H * W,) bool, with probability
+    def _update(self, frame: np.ndarray, learn: "_Learnable") -> None:
+        """ViBe's conservative update: each pixel to ``learn`` (read at flat indices), with probability
         1/phi, writes its colour over a random sample of its own and, independently, of a random
         8-neighbour that is learnt too."""
         h, w = self._shape
@@ -237,13 +237,30 @@ class SampleConsensus:
         all the time, and a radius grown there would eat them; leaves and flicker give speckle,
         which the opening removes."""
         h, w = self._shape
-        fg = np.zeros(h * w, np.uint8)
-        fg[fg_idx] = 1
-        blink = fg != self._prev_fg
-        solid = cv2.dilate(cv2.morphologyEx(self._prev_fg.reshape(h, w), cv2.MORPH_OPEN, _OPEN), _NEAR)
-        blink &= solid.reshape(-1) == 0
-        self._prev_fg = fg
-        v = self._blink
-        v -= np.float32(self.blink_decay)
-        v[blink] += np.float32(self.blink_gain + self.blink_decay)
-        np.clip(v, 0.0, np.float32(self.max_radius_gain - 1.0), out=v)
+        fg = np.zeros((h, w), np.uint8)
+        fg.reshape(-1)[fg_idx] = 1
+        prev = self._prev_fg.reshape(h, w)
+        # OpenCV's 0 / 255 masks and masked float ops: whole-frame passes, kept few and cheap
+        blink = cv2.compare(fg, prev, cv2.CMP_NE)
+        solid = cv2.dilate(cv2.morphologyEx(prev, cv2.MORPH_OPEN, _OPEN), _NEAR)
+        cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
+        self._prev_fg = fg.reshape(-1)
+        v = self._blink.reshape(h, w)
+        np.subtract(v, np.float32(self.blink_decay), out=v)
+        cv2.add(v, float(np.float32(self.blink_gain + self.blink_decay)), dst=v, mask=blink)
+        cv2.min(v, float(np.float32(self.max_radius_gain - 1.0)), dst=v)
+        cv2.max(v, 0.0, dst=v)
+
+
+class _Learnable:
+    """Which pixels the samples may learn, read only where the update looks (a few thousand
+    pixels a frame, not the whole frame): the statistics' BACKGROUND, and any pixel whose blink
+    level is at least ``level``. Indexed by flat pixel indices, returns bool."""
+
+    def __init__(self, flat_labels: np.ndarray, blink: np.ndarray, level: float) -> None:
+        self.flat_labels = flat_labels
+        self.blink = blink  # read before this frame's feedback changes it
+        self.level = level
+
+    def __getitem__(self, idx: np.ndarray) -> np.ndarray:
+        return (self.flat_labels[idx] == BACKGROUND) | (self.blink[idx] >= self.level)
