@@ -76,6 +76,7 @@ class HorprasertSubtractor:
         except TypeError as exc:
             raise ValueError(f"horprasert: unknown sample_params parameter ({exc})") from None
         self.labels: np.ndarray | None = None
+        self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
 
     @property
@@ -96,7 +97,14 @@ class HorprasertSubtractor:
             # only what the fitted model calls plain background enters the samples: people, and
             # the dark clothes it takes for shadows, stay out
             fg = np.stack([self.model.apply(f) != BACKGROUND for f in stack])
+            unseen = self.model.unseen_
+            if unseen is not None and unseen.any():
+                # where someone stood through training the room was filled in: no sample there
+                # shows it, and the person who most likely still stands there must not be learnt
+                fg |= unseen[None]
             self.samples.fit(stack, self.model.mean_, fg)
+            self._unseen_fg = (np.where(unseen, FOREGROUND, 0).astype(np.uint8)
+                               if unseen is not None and unseen.any() else None)
         self._buffer = []
         return self
 
@@ -111,7 +119,11 @@ class HorprasertSubtractor:
             self.fit(self._buffer)
         labels = self.model.apply(frame)
         if self.samples is not None:
-            labels = self.samples.apply(frame, labels)
+            vetoed = self.samples.apply(frame, labels)
+            if self._unseen_fg is not None:
+                # no veto where the room was filled in (see ``HorprasertBackground.unseen_``)
+                cv2.max(vetoed, cv2.bitwise_and(labels, self._unseen_fg), dst=vetoed)
+            labels = vetoed
         self.model.update(frame, labels)
         self.labels = labels
         return labels == FOREGROUND
