@@ -11,7 +11,8 @@ close 7, holes filled, minimum area from the frame size, tracking), and the publ
 is scored with the CDnet protocol: F1 pooled over the evaluated frames (``temporalROI.txt``),
 label 255 positive, 0 and 50 negative, 85 and 170 ignored. The first half of the evaluated frames
 was used to tune our model (``*_tune``); the figures (``f1_ours``, ``f1_mog2``, ``f1_knn``,
-``f1_gsoc``) are those of the second half. ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
+``f1_gsoc``) are those of the second half; ``f1_ours_dynamic``: ours with the sample-consensus
+model on and the minimum area from the frame size (``dynamic=True, min_area=None``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
 theirs): the SHADOW class of the raw pixels against label 50, where the ground truth marks shadows.
 Top-level key ``real``: one object per sequence.
 
@@ -72,6 +73,9 @@ SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(
 CDNET = os.path.join(SHARED, "cdnet")
 TRAIN_FRAMES = 30
 REAL_BACKENDS = ("horprasert", "mog2", "knn", "gsoc")
+#: ours for dynamic scenes and distant people: the sample-consensus model on, the minimum area
+#: from the frame size (``SilhouetteExtractor(min_area=None)``); reported as ``*_ours_dynamic``
+DYNAMIC = "horprasert-dynamic"
 #: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
 GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
@@ -295,20 +299,29 @@ def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
 
 
 def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
+    """See ``_evaluate_real``; ``backend`` DYNAMIC is ours with ``dynamic=True, min_area=None``."""
+    if backend == DYNAMIC:
+        ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True})
+    else:
+        ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": TRAIN_FRAMES}
+                                 if backend == "horprasert" else {})
+    return _evaluate_real(ex, frames, gt, first, backend.startswith("horprasert"))
+
+
+def _evaluate_real(ex: SilhouetteExtractor, frames: np.ndarray, gt: np.ndarray, first: int,
+                   ours: bool) -> dict[str, Any]:
     """Run one backend through ``SilhouetteExtractor`` with the node's defaults (the same clean-up,
     minimum area and tracking for every backend) over all frames from frame 1, and count CDnet's
     way on the evaluated frames (``first`` on, 1-based): the published label mask against label 255
     positive, 0 and 50 negative, 85 (outside the region of interest) and 170 (unknown) ignored.
     Counts are kept apart for the first half of the evaluated frames ("tune") and the second
     ("report"). Shadow counts: the model's SHADOW class against label 50, on the same pixels."""
-    ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": TRAIN_FRAMES}
-                             if backend == "horprasert" else {})
     mid = first + (len(frames) - first + 1) // 2
     keys = ("tp", "fp", "fn", "sh_tp", "sh_fp", "sh_fn")
     out = {half: dict.fromkeys(keys, 0) for half in ("tune", "report")}
     for k, frame in enumerate(frames):
         n = k + 1
-        if backend != "horprasert" and ex.n_frames < TRAIN_FRAMES - 1:
+        if not ours and ex.n_frames < TRAIN_FRAMES - 1:
             ex.learn(frame)
             continue
         r = ex.process(frame)
@@ -350,15 +363,15 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
         row: dict[str, Any] = {"frames": int(last), "evaluated": [first, last],
                                "split": "tune: first half of the evaluated frames; figures: second half"}
         has_shadow = bool(np.any(gt[first - 1:] == GT_SHADOW))
-        for b in REAL_BACKENDS:
+        for b in (*REAL_BACKENDS, DYNAMIC):
             t0 = time.perf_counter()
             ev = evaluate_real(frames, gt, first, b)
-            tag = "ours" if b == "horprasert" else b
+            tag = {"horprasert": "ours", DYNAMIC: "ours_dynamic"}.get(b, b)
             for half, suffix in (("report", ""), ("tune", "_tune")):
                 c = ev[half]
                 row[f"f1_{tag}{suffix}"] = _f1_counts(c["tp"], c["fp"], c["fn"])
-                if has_shadow and b in ("horprasert", "mog2", "knn"):
-                    key = "shadow_f1" if b == "horprasert" else f"shadow_f1_{b}"
+                if has_shadow and b in ("horprasert", DYNAMIC, "mog2", "knn"):
+                    key = {"horprasert": "shadow_f1", DYNAMIC: "shadow_f1_dynamic"}.get(b, f"shadow_f1_{b}")
                     row[key + suffix] = _f1_counts(c["sh_tp"], c["sh_fp"], c["sh_fn"])
             row[f"fps_{tag}"] = round(len(frames) / (time.perf_counter() - t0), 1)
         out[name] = row

@@ -67,7 +67,7 @@ def test_waving_leaves_are_background_with_the_sample_model() -> None:
 
 def test_sample_consensus_keeps_a_person_and_the_shadow_class() -> None:
     rng = np.random.default_rng(1)
-    sub = make_subtractor("horprasert", train_frames=30, robust=False)
+    sub = make_subtractor("horprasert", train_frames=30, robust=False, dynamic=True)
     for _ in range(30):
         sub.apply(frame(rng))
     person = (60, 120, 30, 80)
@@ -112,7 +112,7 @@ def test_min_area_scales_with_the_frame_and_the_camera() -> None:
 
 def test_a_person_20_px_tall_is_found_and_keeps_one_id() -> None:
     rng = np.random.default_rng(2)
-    ex = SilhouetteExtractor(backend_params={"train_frames": 30, "robust": False})
+    ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": 30, "robust": False, "dynamic": True})
     for _ in range(30):
         ex.process(frame(rng))
     ids, found = set(), 0
@@ -135,7 +135,8 @@ def cdnet_f1(seq: str, backend: str, first: int, last: int) -> float:
     import cv2
 
     d = CDNET / seq
-    ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": 30} if backend == "horprasert" else {})
+    ex = SilhouetteExtractor(backend=backend, min_area=None, backend_params={"train_frames": 30, "dynamic": True}
+                             if backend == "horprasert" else {})
     tp = fp = fn = 0
     for n in range(first - 30, last + 1):
         r = ex.process(cv2.imread(str(d / "input" / f"in{n:06d}.jpg")))

@@ -59,7 +59,7 @@ class HorprasertSubtractor:
     provides_shadows = True
 
     def __init__(self, train_frames: int = 30, robust: bool = True, people_aware: bool = True,
-                 detector: Any = None, dynamic: bool = True, sample_params: dict[str, Any] | None = None,
+                 detector: Any = None, dynamic: bool = False, sample_params: dict[str, Any] | None = None,
                  **model_params: Any) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")

@@ -23,7 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--train-frames", type=int, default=30,
                    help="first frames the background model is fitted on (people may be in view)")
     p.add_argument("--max-frames", type=int, default=None, help="process at most this many frames")
-    p.add_argument("--min-area", type=int, default=0,
+    p.add_argument("--min-area", type=int, default=300,
                    help="smallest person region, pixels (0: from the frame size, a person 1.7 m tall 30 m away)")
     p.add_argument("--n-ctrl", type=int, default=32, help="B-spline control points per outline")
 

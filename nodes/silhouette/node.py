@@ -81,7 +81,7 @@ class Silhouette(Node):
         "backend": Param(str, "horprasert", "background subtractor", choices=BACKEND_NAMES),
         "n_ctrl": Param(int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)",
                         min=4, max=1024),
-        "min_area": Param(int, 0, "smallest person region (pixels); 0: a person 1.7 m tall at max_distance_m "
+        "min_area": Param(int, 300, "smallest person region (pixels); 0: a person 1.7 m tall at max_distance_m "
                           "from the camera, so it scales with the frame size and the lens", min=0),
         "max_distance_m": Param(float, 30.0, "with min_area 0: the farthest person to find (metres); 30: "
                                 "17 px tall at 320x240 with the default camera", min=0.1),
@@ -96,6 +96,8 @@ class Silhouette(Node):
         "absorb_frames": Param(int, -1, "horprasert: still frames before a ghost (room uncovered by someone who "
                                "stood in the training frames) is absorbed; -1: 10 after a robust fit, "
                                "never after a plain one; 0: never", min=-1, max=100_000),
+        "dynamic": Param(bool, False, "horprasert: a sample-consensus model (ViBe-like) beside the statistics, so that "
+                         "leaves, water and flicker are background; false: the statistics alone"),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -126,7 +128,8 @@ class Silhouette(Node):
         if p["backend"] == "horprasert":
             backend_params = {"train_frames": p["train_frames"], "robust": p["robust"],
                               "people_aware": p["people_aware"],
-                              "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"]}
+                              "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
+                              "dynamic": p["dynamic"]}
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
         # without colour a shadow cannot be told from a darker person (Horprasert's test is on

@@ -73,9 +73,9 @@ class SilhouetteExtractor:
     ----------
     backend : background subtractor name (see ``backends.BACKEND_NAMES``).
     n_ctrl : control points per outline (>= 4).
-    min_area : smallest person region, pixels; None (default): ``person_min_area`` of the frame
-        size, ``camera`` and ``max_distance_m`` (a person 1.7 m tall that far away), set on the
-        first frame.
+    min_area : smallest person region, pixels; None: ``person_min_area`` of the frame size,
+        ``camera`` and ``max_distance_m`` (a person 1.7 m tall that far away), set on the first
+        frame (for small, distant people: 76 px at 320x240 with the defaults).
     camera : the camera (``body.camera.Camera``, scaled to the frame size) for ``min_area=None``;
         None: the default camera.
     max_distance_m : the farthest person to find, metres, for ``min_area=None``.
@@ -90,7 +90,7 @@ class SilhouetteExtractor:
         self,
         backend: str = "horprasert",
         n_ctrl: int = 32,
-        min_area: int | None = None,
+        min_area: int | None = 300,
         camera: Camera | None = None,
         max_distance_m: float = 30.0,
         open_px: int = 3,
