@@ -12,7 +12,8 @@ is scored with the CDnet protocol: F1 pooled over the evaluated frames (``tempor
 label 255 positive, 0 and 50 negative, 85 and 170 ignored. The first half of the evaluated frames
 was used to tune our model (``*_tune``); the figures (``f1_ours``, ``f1_mog2``, ``f1_knn``,
 ``f1_gsoc``) are those of the second half; ``f1_ours_dynamic``: ours with the sample-consensus
-model on and the minimum area from the frame size (``dynamic=True, min_area=None``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
+model on, the minimum area from the frame size and the shadow texture test on
+(``dynamic=True, min_area=None, shadow_ncc=0.4``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
 theirs): the SHADOW class of the raw pixels against label 50, where the ground truth marks shadows.
 Top-level key ``real``: one object per sequence.
 
@@ -76,6 +77,8 @@ REAL_BACKENDS = ("horprasert", "mog2", "knn", "gsoc")
 #: ours for dynamic scenes and distant people: the sample-consensus model on, the minimum area
 #: from the frame size (``SilhouetteExtractor(min_area=None)``); reported as ``*_ours_dynamic``
 DYNAMIC = "horprasert-dynamic"
+#: and with the shadow texture test on (``HorprasertBackground(shadow_ncc=...)``)
+DYNAMIC_SHADOW_NCC = 0.4
 #: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
 GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
@@ -301,7 +304,8 @@ def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
 def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
     """See ``_evaluate_real``; ``backend`` DYNAMIC is ours with ``dynamic=True, min_area=None``."""
     if backend == DYNAMIC:
-        ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True})
+        ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True,
+                                                                "shadow_ncc": DYNAMIC_SHADOW_NCC})
     else:
         ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": TRAIN_FRAMES}
                                  if backend == "horprasert" else {})

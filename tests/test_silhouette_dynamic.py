@@ -135,8 +135,8 @@ def cdnet_f1(seq: str, backend: str, first: int, last: int) -> float:
     import cv2
 
     d = CDNET / seq
-    ex = SilhouetteExtractor(backend=backend, min_area=None, backend_params={"train_frames": 30, "dynamic": True}
-                             if backend == "horprasert" else {})
+    ex = SilhouetteExtractor(backend=backend, min_area=None, backend_params={"train_frames": 30, "dynamic": True,
+                             "shadow_ncc": 0.4} if backend == "horprasert" else {})
     tp = fp = fn = 0
     for n in range(first - 30, last + 1):
         r = ex.process(cv2.imread(str(d / "input" / f"in{n:06d}.jpg")))
@@ -164,3 +164,27 @@ def test_cdnet_f1_beats_mog2(seq: str) -> None:
     # frames by the report half), so the floor is below the bench's 0.90
     assert ours >= 0.8, (ours, mog2)
     assert ours > mog2, (ours, mog2)
+
+
+def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
+    """On a textured floor a cast shadow keeps the floor's pattern (same colour, darker); a dark
+    shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow."""
+    from nodes.silhouette.background import HorprasertBackground
+
+    rng = np.random.default_rng(3)
+    floor = np.repeat(np.repeat(rng.uniform(80, 200, (30, 40)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])
+
+    def shot(patch: np.ndarray | None = None) -> np.ndarray:
+        f = floor + rng.normal(0.0, 2.0, floor.shape)
+        if patch is not None:
+            f[40:80, 40:100] = patch
+        return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+    train = [shot() for _ in range(20)]
+    shadow = floor[40:80, 40:100] * 0.6
+    shirt = np.full_like(shadow, 0.6 * floor[40:80, 40:100].mean(axis=(0, 1)))
+    inner = (slice(44, 76), slice(44, 96))
+    for ncc, want_shirt in ((0.4, FOREGROUND), (-1.0, SHADOW)):
+        model = HorprasertBackground(shadow_ncc=ncc).fit(train)
+        assert (model.apply(shot(shadow))[inner] == SHADOW).mean() > 0.9
+        assert (model.apply(shot(shirt))[inner] == want_shirt).mean() > 0.7

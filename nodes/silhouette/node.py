@@ -98,6 +98,9 @@ class Silhouette(Node):
                                "never after a plain one; 0: never", min=-1, max=100_000),
         "dynamic": Param(bool, False, "horprasert: a sample-consensus model (ViBe-like) beside the statistics, so that "
                          "leaves, water and flicker are background; false: the statistics alone"),
+        "shadow_ncc": Param(float, -1.0, "horprasert: shadow pixels on a textured floor that correlate less than "
+                            "this with its texture are foreground (a dark shirt, not a shadow); -1: off, 0.4: "
+                            "tuned on CDnet busStation", min=-1.0, max=1.0),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -129,7 +132,7 @@ class Silhouette(Node):
             backend_params = {"train_frames": p["train_frames"], "robust": p["robust"],
                               "people_aware": p["people_aware"],
                               "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
-                              "dynamic": p["dynamic"]}
+                              "dynamic": p["dynamic"], "shadow_ncc": p["shadow_ncc"]}
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
         # without colour a shadow cannot be told from a darker person (Horprasert's test is on
