@@ -2,7 +2,23 @@
 
 Usage: python bench/silhouette.py [--source synthetic|vtest|sim|all] [--frames N]
            [--scenarios handshake,push,wave,conversation] [--seeds 0,1,2] [--sim-frames 250]
-           [--threads 1] [--out FILE]
+           [--threads 1] [--no-real | --real-only] [--out FILE]
+
+Real footage (``../shared/data/cdnet``, skipped when absent; ``--real-only`` runs only this):
+each CDnet sequence (pedestrians, busStation) is fed from its first frame to ours, MOG2, KNN and
+GSOC, each through ``SilhouetteExtractor`` with the node's defaults (the same clean-up: open 3,
+close 7, holes filled, minimum area from the frame size, tracking), and the published label mask
+is scored with the CDnet protocol: F1 pooled over the evaluated frames (``temporalROI.txt``),
+label 255 positive, 0 and 50 negative, 85 and 170 ignored. The first half of the evaluated frames
+was used to tune our model (``*_tune``); the figures (``f1_ours``, ``f1_mog2``, ``f1_knn``,
+``f1_gsoc``) are those of the second half; ``f1_ours_dynamic``: ours with the sample-consensus
+model on, the minimum area from the frame size and the shadow texture test on
+(``dynamic=True, min_area=None, shadow_ncc=0.4``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
+theirs): the SHADOW class of the raw pixels against label 50, where the ground truth marks shadows.
+Top-level key ``real``: one object per sequence.
+
+Speed beside MOG2: ``fps_320x240_2cores`` (ours) and ``fps_320x240_2cores_mog2`` (the same
+extractor with MOG2 as its backend), whole extractor with splines, two OpenCV threads, sim frames.
 
 Simulator evaluation (``--source sim`` or ``all``): every scenario x seed, 320x240, with the
 renderer's cast shadows, lighting drift and sensor noise, in two starts: 30 frames of the empty
@@ -45,6 +61,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
+from nodes.silhouette.background import SHADOW
 from nodes.silhouette.backends import make_subtractor
 from nodes.silhouette.pipeline import SilhouetteExtractor
 from nodes.silhouette.regions import clean_mask
@@ -52,7 +69,18 @@ from body.spline import oriented_boundary, spline_distance
 from nodes.silhouette.synthetic import two_person_sequence
 
 VTEST = os.environ.get("COUNTERPART_VTEST", "/work/shared/data/video/vtest.avi")
+SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "shared", "data")
+CDNET = os.path.join(SHARED, "cdnet")
 TRAIN_FRAMES = 30
+REAL_BACKENDS = ("horprasert", "mog2", "knn", "gsoc")
+#: ours for dynamic scenes and distant people: the sample-consensus model on, the minimum area
+#: from the frame size (``SilhouetteExtractor(min_area=None)``); reported as ``*_ours_dynamic``
+DYNAMIC = "horprasert-dynamic"
+#: and with the shadow texture test on (``HorprasertBackground(shadow_ncc=...)``)
+DYNAMIC_SHADOW_NCC = 0.4
+#: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
+GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
 
 @dataclass
@@ -261,6 +289,120 @@ def sim_source(n_frames: int) -> Source | None:
 SOURCES = {"synthetic": synthetic_source, "vtest": vtest_source, "sim": sim_source}
 
 
+def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """A CDnet sequence: frames (N, H, W, 3) uint8 BGR and ground truth (N, H, W) uint8 of frames
+    1..N, N the last evaluated frame, and the first and last evaluated frame numbers (1-based,
+    ``temporalROI.txt``; the frames before the first are for learning)."""
+    with open(os.path.join(seq_dir, "temporalROI.txt")) as fh:
+        first, last = (int(v) for v in fh.read().split()[:2])
+    frames = np.stack([cv2.imread(os.path.join(seq_dir, "input", f"in{i:06d}.jpg")) for i in range(1, last + 1)])
+    gt = np.stack([cv2.imread(os.path.join(seq_dir, "groundtruth", f"gt{i:06d}.png"), cv2.IMREAD_GRAYSCALE)
+                   for i in range(1, last + 1)])
+    return frames, gt, first, last
+
+
+def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
+    """See ``_evaluate_real``; ``backend`` DYNAMIC is ours with ``dynamic=True, min_area=None``."""
+    if backend == DYNAMIC:
+        ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True,
+                                                                "shadow_ncc": DYNAMIC_SHADOW_NCC})
+    else:
+        ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": TRAIN_FRAMES}
+                                 if backend == "horprasert" else {})
+    return _evaluate_real(ex, frames, gt, first, backend.startswith("horprasert"))
+
+
+def _evaluate_real(ex: SilhouetteExtractor, frames: np.ndarray, gt: np.ndarray, first: int,
+                   ours: bool) -> dict[str, Any]:
+    """Run one backend through ``SilhouetteExtractor`` with the node's defaults (the same clean-up,
+    minimum area and tracking for every backend) over all frames from frame 1, and count CDnet's
+    way on the evaluated frames (``first`` on, 1-based): the published label mask against label 255
+    positive, 0 and 50 negative, 85 (outside the region of interest) and 170 (unknown) ignored.
+    Counts are kept apart for the first half of the evaluated frames ("tune") and the second
+    ("report"). Shadow counts: the model's SHADOW class against label 50, on the same pixels."""
+    mid = first + (len(frames) - first + 1) // 2
+    keys = ("tp", "fp", "fn", "sh_tp", "sh_fp", "sh_fn")
+    out = {half: dict.fromkeys(keys, 0) for half in ("tune", "report")}
+    for k, frame in enumerate(frames):
+        n = k + 1
+        if not ours and ex.n_frames < TRAIN_FRAMES - 1:
+            ex.learn(frame)
+            continue
+        r = ex.process(frame)
+        if n < first:
+            continue
+        c = out["tune" if n < mid else "report"]
+        g = gt[k]
+        pos = g == GT_FG
+        neg = (g == GT_STATIC) | (g == GT_SHADOW)
+        fg = r.labels > 0
+        c["tp"] += int(np.count_nonzero(fg & pos))
+        c["fp"] += int(np.count_nonzero(fg & neg))
+        c["fn"] += int(np.count_nonzero(pos & ~fg))
+        if r.classes is not None:
+            sh = r.classes == SHADOW
+            gsh = g == GT_SHADOW
+            scored = pos | neg
+            c["sh_tp"] += int(np.count_nonzero(sh & gsh))
+            c["sh_fp"] += int(np.count_nonzero(sh & scored & ~gsh))
+            c["sh_fn"] += int(np.count_nonzero(gsh & ~sh))
+    return out
+
+
+def _f1_counts(tp: int, fp: int, fn: int) -> float:
+    return round(_f1(tp, tp + fp, tp + fn)[2], 4)
+
+
+def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None:
+    """CDnet-protocol F1 of ours, MOG2, KNN and GSOC on the sequences of ``CDNET`` (None when the
+    data is absent). Per sequence: ``f1_<backend>`` on the report half (the second half of the
+    evaluated frames, never used to tune), ``f1_<backend>_tune`` on the first half, and
+    ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn`` theirs) where the ground truth marks shadows."""
+    if not os.path.isdir(CDNET):
+        return None
+    names = seq_names or sorted(d for d in os.listdir(CDNET) if os.path.isfile(os.path.join(CDNET, d, "temporalROI.txt")))
+    out: dict[str, Any] = {}
+    for name in names:
+        frames, gt, first, last = load_cdnet(os.path.join(CDNET, name))
+        row: dict[str, Any] = {"frames": int(last), "evaluated": [first, last],
+                               "split": "tune: first half of the evaluated frames; figures: second half"}
+        has_shadow = bool(np.any(gt[first - 1:] == GT_SHADOW))
+        for b in (*REAL_BACKENDS, DYNAMIC):
+            t0 = time.perf_counter()
+            ev = evaluate_real(frames, gt, first, b)
+            tag = {"horprasert": "ours", DYNAMIC: "ours_dynamic"}.get(b, b)
+            for half, suffix in (("report", ""), ("tune", "_tune")):
+                c = ev[half]
+                row[f"f1_{tag}{suffix}"] = _f1_counts(c["tp"], c["fp"], c["fn"])
+                if has_shadow and b in ("horprasert", DYNAMIC, "mog2", "knn"):
+                    key = {"horprasert": "shadow_f1", DYNAMIC: "shadow_f1_dynamic"}.get(b, f"shadow_f1_{b}")
+                    row[key + suffix] = _f1_counts(c["sh_tp"], c["sh_fp"], c["sh_fn"])
+            row[f"fps_{tag}"] = round(len(frames) / (time.perf_counter() - t0), 1)
+        out[name] = row
+        print(f"real {name}: {row}", flush=True)
+    return out
+
+
+def speed_two_cores(frames: np.ndarray) -> dict[str, float]:
+    """Frames per second of the whole extractor (background, clean-up, tracking, B-splines) with
+    two OpenCV threads, ours and with MOG2 as its backend, on the same frames in the same run."""
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        out = {}
+        for b in ("horprasert", "mog2"):
+            ex = SilhouetteExtractor(backend=b, backend_params={"train_frames": TRAIN_FRAMES} if b == "horprasert" else {})
+            times = []
+            for f in frames:
+                t0 = time.perf_counter()
+                ex.process(f)
+                times.append(time.perf_counter() - t0)
+            out["ours" if b == "horprasert" else b] = round(1.0 / float(np.median(times[TRAIN_FRAMES:])), 1)
+        return out
+    finally:
+        cv2.setNumThreads(threads)
+
+
 def _time_subtractor(name: str, frames: np.ndarray, truth: Source) -> dict[str, Any]:
     params = {"train_frames": TRAIN_FRAMES} if name == "horprasert" else {}
     sub = make_subtractor(name, **params)
@@ -320,7 +462,7 @@ def _time_extractor(frames: np.ndarray) -> dict[str, Any]:
 
 
 def run(source_names: list[str], n_frames: int, scenarios: list[str], seeds: list[int],
-        sim_frames: int) -> dict[str, Any]:
+        sim_frames: int, real: bool = True) -> dict[str, Any]:
     report: dict[str, Any] = {
         "bench": "silhouette",
         "cpu_threads": cv2.getNumThreads(),
@@ -363,6 +505,13 @@ def run(source_names: list[str], n_frames: int, scenarios: list[str], seeds: lis
         report["sim_sequences"] = len(ev["sequences"])
     if srcs.get("sim", {}).get("available"):
         report["fps_320x240"] = round(1e3 / srcs["sim"]["extractor_ms_per_frame"], 1)
+        two = speed_two_cores(sim_source(n_frames).frames)
+        report["fps_320x240_2cores"] = two["ours"]
+        report["fps_320x240_2cores_mog2"] = two["mog2"]
+    if real:
+        ev_real = real_evaluation()
+        if ev_real is not None:
+            report["real"] = ev_real
     if srcs.get("vtest", {}).get("available"):
         report["fps_768x576"] = round(1e3 / srcs["vtest"]["extractor_ms_per_frame"], 1)
     return report
@@ -377,6 +526,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", default="0,1,2", help="simulator seeds (comma-separated)")
     ap.add_argument("--sim-frames", type=int, default=250, help="cap on each simulator sequence's frames")
     ap.add_argument("--threads", type=int, default=1, help="OpenCV threads (1: the one-core figures)")
+    ap.add_argument("--no-real", action="store_true", help="skip the real-footage (CDnet) evaluation")
+    ap.add_argument("--real-only", action="store_true", help="only the real-footage (CDnet) evaluation")
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if args.frames <= TRAIN_FRAMES + 1:
@@ -385,7 +536,9 @@ def main(argv: list[str] | None = None) -> int:
     names = list(SOURCES) if args.source == "all" else [args.source]
     scenarios = [s for s in args.scenarios.split(",") if s]
     seeds = [int(s) for s in args.seeds.split(",") if s]
-    report = run(names, args.frames, scenarios, seeds, args.sim_frames)
+    if args.real_only:
+        names, scenarios = [], []
+    report = run(names, args.frames, scenarios, seeds, args.sim_frames, real=not args.no_real)
     line = json.dumps(report)
     if args.out:
         with open(args.out, "w") as fh:

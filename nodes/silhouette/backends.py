@@ -22,6 +22,7 @@ import numpy as np
 
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
 from .people import fit_around_people
+from .samples import SampleConsensus
 
 BACKEND_NAMES: tuple[str, ...] = ("horprasert", "mog2", "knn", "cnt", "gsoc")
 
@@ -47,6 +48,10 @@ class HorprasertSubtractor:
     stand still through training are not learnt as the room (``people.fit_around_people``);
     after that each frame is classified and then blended into the model (``update``).
     ``fit(frames)`` instead trains at once, e.g. from a recording of the empty scene.
+    ``dynamic`` (default True): a ``samples.SampleConsensus`` model (ViBe-like sample sets with a
+    blink-adapted radius, ``sample_params`` its parameters) sits beside the statistics, and a pixel
+    they call foreground is background when its colour is one the pixel has shown as background
+    before (leaves, water, flicker); the shadow and highlight classes are the statistics' own.
     Other keyword parameters go to ``HorprasertBackground``.
     """
 
@@ -54,7 +59,8 @@ class HorprasertSubtractor:
     provides_shadows = True
 
     def __init__(self, train_frames: int = 30, robust: bool = True, people_aware: bool = True,
-                 detector: Any = None, **model_params: Any) -> None:
+                 detector: Any = None, dynamic: bool = False, sample_params: dict[str, Any] | None = None,
+                 **model_params: Any) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
@@ -65,7 +71,12 @@ class HorprasertSubtractor:
         self.robust = robust
         self.people_aware = people_aware
         self.detector = detector
+        try:
+            self.samples = SampleConsensus(**(sample_params or {})) if dynamic else None
+        except TypeError as exc:
+            raise ValueError(f"horprasert: unknown sample_params parameter ({exc})") from None
         self.labels: np.ndarray | None = None
+        self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
 
     @property
@@ -82,6 +93,18 @@ class HorprasertSubtractor:
             fit_around_people(self.model, stack, detector=self.detector)
         else:
             self.model.fit(stack, robust=robust)
+        if self.samples is not None:
+            # only what the fitted model calls plain background enters the samples: people, and
+            # the dark clothes it takes for shadows, stay out
+            fg = np.stack([self.model.apply(f) != BACKGROUND for f in stack])
+            unseen = self.model.unseen_
+            if unseen is not None and unseen.any():
+                # where someone stood through training the room was filled in: no sample there
+                # shows it, and the person who most likely still stands there must not be learnt
+                fg |= unseen[None]
+            self.samples.fit(stack, self.model.mean_, fg)
+            self._unseen_fg = (np.where(unseen, FOREGROUND, 0).astype(np.uint8)
+                               if unseen is not None and unseen.any() else None)
         self._buffer = []
         return self
 
@@ -94,8 +117,16 @@ class HorprasertSubtractor:
                 self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
                 return np.zeros(frame.shape[:2], bool)
             self.fit(self._buffer)
-        self.labels = self.model.apply_update(frame)
-        return self.labels == FOREGROUND
+        labels = self.model.apply(frame)
+        if self.samples is not None:
+            vetoed = self.samples.apply(frame, labels)
+            if self._unseen_fg is not None:
+                # no veto where the room was filled in (see ``HorprasertBackground.unseen_``)
+                cv2.max(vetoed, cv2.bitwise_and(labels, self._unseen_fg), dst=vetoed)
+            labels = vetoed
+        self.model.update(frame, labels)
+        self.labels = labels
+        return labels == FOREGROUND
 
 
 class OpenCVSubtractor:

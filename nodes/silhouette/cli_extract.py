@@ -23,7 +23,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--train-frames", type=int, default=30,
                    help="first frames the background model is fitted on (people may be in view)")
     p.add_argument("--max-frames", type=int, default=None, help="process at most this many frames")
-    p.add_argument("--min-area", type=int, default=300, help="smallest person region, pixels")
+    p.add_argument("--min-area", type=int, default=300,
+                   help="smallest person region, pixels (0: from the frame size, a person 1.7 m tall 30 m away)")
     p.add_argument("--n-ctrl", type=int, default=32, help="B-spline control points per outline")
 
 
@@ -34,7 +35,7 @@ def main(args: argparse.Namespace) -> int:
         return 2
     return run_offline("silhouettes", args.out, lambda: extract_video(
         args.video, args.out, max_frames=args.max_frames, train_frames=args.train_frames,
-        progress=FrameProgress("silhouettes"), backend=args.backend, min_area=args.min_area, n_ctrl=args.n_ctrl))
+        progress=FrameProgress("silhouettes"), backend=args.backend, min_area=args.min_area or None, n_ctrl=args.n_ctrl))
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from body.camera import Camera, camera_param_problem
 from bus import Input, Node, Output, Param
 from messages import Frame, Silhouettes
 from messages.silhouette import PersonShape
@@ -80,7 +81,12 @@ class Silhouette(Node):
         "backend": Param(str, "horprasert", "background subtractor", choices=BACKEND_NAMES),
         "n_ctrl": Param(int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)",
                         min=4, max=1024),
-        "min_area": Param(int, 300, "smallest person region (pixels)", min=1),
+        "min_area": Param(int, 300, "smallest person region (pixels); 0: a person 1.7 m tall at max_distance_m "
+                          "from the camera, so it scales with the frame size and the lens", min=0),
+        "max_distance_m": Param(float, 30.0, "with min_area 0: the farthest person to find (metres); 30: "
+                                "17 px tall at 320x240 with the default camera", min=0.1),
+        "camera": Param(dict, {}, "with min_area 0: {fx, fy, cx, cy, width, height, R, t} of the camera (scaled "
+                        "to the frame size); {}: the default camera", check=camera_param_problem),
         "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people unless "
                               "replay_training", min=2, max=100_000),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
@@ -90,6 +96,11 @@ class Silhouette(Node):
         "absorb_frames": Param(int, -1, "horprasert: still frames before a ghost (room uncovered by someone who "
                                "stood in the training frames) is absorbed; -1: 10 after a robust fit, "
                                "never after a plain one; 0: never", min=-1, max=100_000),
+        "dynamic": Param(bool, False, "horprasert: a sample-consensus model (ViBe-like) beside the statistics, so that "
+                         "leaves, water and flicker are background; false: the statistics alone"),
+        "shadow_ncc": Param(float, -1.0, "horprasert: shadow pixels on a textured floor that correlate less than "
+                            "this with its texture are foreground (a dark shirt, not a shadow); -1: off, 0.4: "
+                            "tuned on CDnet busStation", min=-1.0, max=1.0),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -120,12 +131,15 @@ class Silhouette(Node):
         if p["backend"] == "horprasert":
             backend_params = {"train_frames": p["train_frames"], "robust": p["robust"],
                               "people_aware": p["people_aware"],
-                              "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"]}
+                              "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
+                              "dynamic": p["dynamic"], "shadow_ncc": p["shadow_ncc"]}
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
         # without colour a shadow cannot be told from a darker person (Horprasert's test is on
         # chromaticity): on grey frames every change from the background is foreground
-        return SilhouetteExtractor(backend=p["backend"], n_ctrl=p["n_ctrl"], min_area=p["min_area"],
+        camera = Camera.from_dict(p["camera"]) if p["camera"] else None
+        return SilhouetteExtractor(backend=p["backend"], n_ctrl=p["n_ctrl"], min_area=p["min_area"] or None,
+                                   camera=camera, max_distance_m=p["max_distance_m"],
                                    open_px=p["open_px"], close_px=p["close_px"], fill_holes=p["fill_holes"],
                                    shadows=not mono, backend_params=backend_params)
 

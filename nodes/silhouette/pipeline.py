@@ -19,7 +19,31 @@ import numpy as np
 from .background import BACKGROUND
 from .backends import HorprasertSubtractor, make_subtractor
 from .regions import Person, PersonTracker, clean_mask
+from body.camera import Camera, camera_for_size
 from body.spline import silhouette_spline
+
+#: a standing adult, metres: the smallest person is one this tall at ``max_distance_m``
+PERSON_HEIGHT_M = 1.7
+#: a person's region over the square of their height: about 0.4 h wide, filling 60% of that box
+PERSON_AREA_PER_HEIGHT2 = 0.25
+#: the shortest region taken for a person whatever the frame size, pixels: shorter blobs are
+#: noise and fragments as often as people, and too small for an outline of 32 control points
+MIN_PERSON_HEIGHT_PX = 16.0
+
+
+def person_min_area(width: int, height: int, camera: Camera | None = None, max_distance_m: float = 30.0) -> int:
+    """Smallest person region (pixels) in frames of ``width`` x ``height``: a person
+    ``PERSON_HEIGHT_M`` tall at ``max_distance_m`` from ``camera`` (None: the default camera of
+    ``body.camera.camera_for_size``, 55 degrees across the width) is h = fy * 1.7 / d pixels tall
+    (pinhole) and covers about 0.25 h^2 pixels. With the default camera and 30 m a person is
+    1/14 of the frame height tall, 17 px at 320x240 (76 px of area): people down to 20 px tall
+    are kept with a margin, and the threshold follows the frame size and the lens rather than a
+    fixed pixel count. h is at least ``MIN_PERSON_HEIGHT_PX`` (64 px of area) in small frames."""
+    if max_distance_m <= 0:
+        raise ValueError(f"max_distance_m must be > 0 metres, got {max_distance_m}")
+    cam = camera_for_size(camera, width, height)
+    h = max(cam.fy * PERSON_HEIGHT_M / max_distance_m, MIN_PERSON_HEIGHT_PX)
+    return max(1, int(round(PERSON_AREA_PER_HEIGHT2 * h * h)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,7 +73,12 @@ class SilhouetteExtractor:
     ----------
     backend : background subtractor name (see ``backends.BACKEND_NAMES``).
     n_ctrl : control points per outline (>= 4).
-    min_area : smallest person region, pixels.
+    min_area : smallest person region, pixels; None: ``person_min_area`` of the frame size,
+        ``camera`` and ``max_distance_m`` (a person 1.7 m tall that far away), set on the first
+        frame (for small, distant people: 76 px at 320x240 with the defaults).
+    camera : the camera (``body.camera.Camera``, scaled to the frame size) for ``min_area=None``;
+        None: the default camera.
+    max_distance_m : the farthest person to find, metres, for ``min_area=None``.
     open_px, close_px, fill_holes : mask clean-up (``regions.clean_mask``).
     shadows : shadow and highlight pixels count as background (True, the default) or as foreground
         (False: for grey images, where chromaticity cannot tell a shadow from a darker person).
@@ -63,7 +92,9 @@ class SilhouetteExtractor:
         self,
         backend: str = "horprasert",
         n_ctrl: int = 32,
-        min_area: int = 300,
+        min_area: int | None = 300,
+        camera: Camera | None = None,
+        max_distance_m: float = 30.0,
         open_px: int = 3,
         close_px: int = 7,
         fill_holes: bool = True,
@@ -74,8 +105,12 @@ class SilhouetteExtractor:
     ) -> None:
         if n_ctrl < 4:
             raise ValueError(f"n_ctrl must be >= 4 control points, got {n_ctrl}")
-        if min_area < 1:
-            raise ValueError(f"min_area must be >= 1 pixel, got {min_area}")
+        if min_area is not None and min_area < 1:
+            raise ValueError(f"min_area must be >= 1 pixel or None (from the frame size), got {min_area}")
+        if max_distance_m <= 0:
+            raise ValueError(f"max_distance_m must be > 0 metres, got {max_distance_m}")
+        self.camera = camera
+        self.max_distance_m = max_distance_m
         self.backend = backend
         self.n_ctrl = n_ctrl
         self.min_area = min_area
@@ -90,10 +125,12 @@ class SilhouetteExtractor:
             raise ValueError("set min_area on SilhouetteExtractor, not in tracker_params")
         self.subtractor = make_subtractor(backend, **self.backend_params)
         try:
-            self.tracker = PersonTracker(min_area=min_area, **self.tracker_params)
+            # with min_area None the tracker's is set from the first frame's size (process)
+            self.tracker = PersonTracker(min_area=min_area or 1, **self.tracker_params)
         except TypeError as exc:
             raise ValueError(f"tracker_params: unknown parameter ({exc})") from None
         self._index = 0
+        self._auto_size: tuple[int, int] | None = None
 
     def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> "SilhouetteExtractor":
         """Train the Horprasert model now (e.g. on the first seconds of a recording)."""
@@ -129,6 +166,10 @@ class SilhouetteExtractor:
         self._index += 1
         if not self.subtractor.ready:
             return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], classes, False)
+        if self.min_area is None and self._auto_size != frame.shape[:2]:
+            self._auto_size = frame.shape[:2]
+            self.tracker.min_area = person_min_area(frame.shape[1], frame.shape[0], self.camera,
+                                                    self.max_distance_m)
         # min_area 0: the tracker drops regions below min_area in its own labelling pass
         mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, 0)
         labels, people = self.tracker.update(mask)

@@ -1,0 +1,266 @@
+"""Sample-consensus background model for dynamic backgrounds, beside the Horprasert statistics.
+
+A single mean colour per pixel (Horprasert's E) cannot hold a background that takes several
+colours: leaves that wave in front of the sky, ripples on water, a flickering screen. Here each
+pixel also keeps ``n_samples`` colours it has shown as background (ViBe: Barnich & Van Droogenbroeck,
+"ViBe: a universal background subtraction algorithm for video sequences", IEEE TIP 2011), and a
+pixel the statistical model calls foreground is background after all when its colour lies within
+R(x) of at least ``min_matches`` of them (ViBe's consensus, eq. 1 of the paper:
+#{S_k : dist(I, S_k) < R} >= #min, distance L1 over the three channels here).
+
+Updates are ViBe's conservative, random and spatially diffused ones: a background pixel replaces
+one of its samples, chosen at random, with probability 1 / ``subsampling``, and with the same
+probability one sample of a random 8-neighbour (so a ghost at the edge of the background is eaten
+from its rim, and a sample set keeps memories of every age with an exponentially decaying
+chance). Foreground pixels never enter the samples.
+
+The radius adapts per pixel (SuBSENSE: St-Charles, Bilodeau & Bergevin, IEEE TIP 2015): a pixel
+whose foreground label keeps switching on and off ("blinking", eq. 5 of that paper) is in a
+dynamic region and its R(x) grows; everywhere else R(x) drifts back to ``radius``. The blink
+level v(x) rises by ``blink_gain`` on every switch and decays by ``blink_decay`` per frame.
+
+Only the pixels the statistical model calls foreground are tested (a few percent of a frame), so
+the cost per frame is small. Frames are uint8 BGR (H, W, 3).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .background import BACKGROUND, FOREGROUND
+
+# 8-neighbourhood offsets (dy, dx) of ViBe's spatial diffusion
+#: opening that keeps solid foreground (not speckle) and the dilation around it, for the blinks
+_OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
+_NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
+_NEIGHBOURS = np.array([(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)], np.int64)
+
+
+class SampleConsensus:
+    """Per-pixel sample sets with consensus matching (ViBe) and a blink-adapted radius (SuBSENSE).
+
+    Parameters
+    ----------
+    n_samples : colours kept per pixel (ViBe's N, 20 in the paper).
+    min_matches : samples that must lie within the radius for a match (#min, 2 in the paper).
+    radius, relative_radius : matching radius R = radius + relative_radius * |S_k|_1 for sample
+        S_k, L1 distance over B, G, R in grey levels (ViBe uses a fixed 20 on grey images; the
+        noise of a camera grows with brightness, so a dark pixel here gets a tighter radius).
+    max_radius_gain : largest R(x) / radius in blinking regions.
+    subsampling : 1 / probability of an update at each background pixel (phi, 16 in the paper).
+    blink_gain, blink_decay : rise of the blink level v(x) on a label switch and its decay per frame;
+        R(x) = radius * (1 + v(x)), v(x) in [0, max_radius_gain - 1].
+    learn_blink : a pixel the statistics call foreground is learnt (and receives its neighbours'
+        colours) only where the blink level v(x) is at least this: in a dynamic region. Elsewhere
+        a person whose colour happens to match would be learnt and match better the next time.
+    random_state : seed of the random updates.
+
+    Fitted attributes
+    -----------------
+    samples_ : (3, n_samples, H * W) uint8, channel planes B, G, R.  radius_ : (H, W) float32 radius gain 1 + v(x).
+    """
+
+    def __init__(self, n_samples: int = 20, min_matches: int = 2, radius: float = 10.0,
+                 relative_radius: float = 0.06,
+                 max_radius_gain: float = 2.5, subsampling: int = 16, blink_gain: float = 0.1,
+                 blink_decay: float = 0.005, learn_blink: float = 0.5, random_state: int | None = 0) -> None:
+        if n_samples < 1:
+            raise ValueError(f"n_samples must be >= 1, got {n_samples}")
+        if not 1 <= min_matches <= n_samples:
+            raise ValueError(f"min_matches must be in [1, n_samples={n_samples}], got {min_matches}")
+        if radius <= 0:
+            raise ValueError(f"radius must be > 0 grey levels (L1 over 3 channels), got {radius}")
+        if max_radius_gain < 1.0:
+            raise ValueError(f"max_radius_gain must be >= 1, got {max_radius_gain}")
+        if subsampling < 1:
+            raise ValueError(f"subsampling must be >= 1 (1 / update probability), got {subsampling}")
+        if blink_gain < 0 or blink_decay < 0:
+            raise ValueError(f"blink_gain and blink_decay must be >= 0, got {blink_gain}, {blink_decay}")
+        self.n_samples = n_samples
+        self.min_matches = min_matches
+        self.radius = radius
+        if relative_radius < 0:
+            raise ValueError(f"relative_radius must be >= 0, got {relative_radius}")
+        self.relative_radius = relative_radius
+        self.max_radius_gain = max_radius_gain
+        self.subsampling = subsampling
+        self.blink_gain = blink_gain
+        self.blink_decay = blink_decay
+        self.learn_blink = learn_blink
+        self.random_state = random_state
+        self.samples_: np.ndarray | None = None
+        self._shape: tuple[int, int] = (0, 0)
+
+    @property
+    def is_fitted(self) -> bool:
+        return self.samples_ is not None
+
+    @property
+    def radius_(self) -> np.ndarray:
+        """(H, W) float32 gain of the matching radius, R(x) / R (blink feedback)."""
+        if self.samples_ is None:
+            raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
+        return (1.0 + self._blink).reshape(self._shape)
+
+    def fit(self, frames: np.ndarray, background: np.ndarray, foreground: np.ndarray | None = None
+            ) -> "SampleConsensus":
+        """Fill the sample sets from training frames (N, H, W, 3) uint8 BGR.
+
+        Sample k comes from frame k mod N; where ``foreground`` (N, H, W) bool marks a pixel that
+        may not show the background in that frame (the statistical model's verdict), the
+        background colour ``background`` (H, W, 3) (e.g. Horprasert's E) is used instead, so no
+        one who walked through the training frames is remembered as background.
+        """
+        frames = np.asarray(frames)
+        if frames.ndim != 4 or frames.shape[-1] != 3 or frames.dtype != np.uint8:
+            raise ValueError(f"frames must be (N, H, W, 3) uint8 BGR, got {frames.shape} {frames.dtype}")
+        n, h, w, _ = frames.shape
+        bg = np.clip(np.rint(np.asarray(background, np.float32)), 0, 255).astype(np.uint8)
+        if bg.shape != (h, w, 3):
+            raise ValueError(f"background must be (H, W, 3) = {(h, w, 3)}, got {bg.shape}")
+        if foreground is not None and np.shape(foreground) != (n, h, w):
+            raise ValueError(f"foreground must be (N, H, W) bool = {(n, h, w)}, got {np.shape(foreground)}")
+        self._rng = np.random.default_rng(self.random_state)
+        self._shape = (h, w)
+        # channel planes (3, N, H * W): the test gathers K pixels as three (N, K) planes and adds
+        # them elementwise, far cheaper than reducing a (N, K, 3) array over its short last axis
+        samples = np.empty((3, self.n_samples, h * w), np.uint8)
+        flat_bg = bg.reshape(-1, 3)
+        for k in range(self.n_samples):
+            j = k % n
+            s = frames[j].reshape(-1, 3).copy()
+            if foreground is not None:
+                s[np.asarray(foreground[j]).reshape(-1)] = flat_bg[np.asarray(foreground[j]).reshape(-1)]
+            samples[:, k] = s.T
+        self.samples_ = samples
+        self._blink = np.zeros(h * w, np.float32)
+        self._prev_fg = np.zeros(h * w, np.uint8)
+        return self
+
+    def explained(self, frame: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """Whether each pixel of flat indices ``idx`` (K,) matches its sample set: (K,) bool.
+
+        ViBe's test: at least ``min_matches`` of the samples within L1 distance R(x) of the colour.
+        """
+        if self.samples_ is None:
+            raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
+        if idx.size == 0:
+            return np.zeros(0, bool)
+        px = np.take(frame.reshape(-1, 3), idx, axis=0).T.astype(np.int16)  # (3, K)
+        dist = np.zeros((self.n_samples, idx.size), np.int16)  # (N, K) L1 distance
+        total = np.zeros((self.n_samples, idx.size), np.int16)  # (N, K) |S_k|_1
+        for c in range(3):
+            sc = np.take(self.samples_[c], idx, axis=1).astype(np.int16)
+            total += sc
+            sc -= px[c]
+            dist += np.abs(sc)
+        # noise grows with brightness (shot noise, compression): R = R0 + rel * |S_k|_1, times
+        # the blink gain; a dark pixel keeps a tight radius, where a fixed one would take a dark
+        # shirt for a dark doorway. dist < R (1 + v) <=> dist / (1 + v) - rel |S_k| < R0.
+        lhs = dist * (1.0 / (1.0 + np.take(self._blink, idx)))[None]
+        lhs -= np.float32(self.relative_radius) * total
+        matches = np.count_nonzero(lhs < np.float32(self.radius), axis=0)
+        return matches >= self.min_matches
+
+    def apply(self, frame: np.ndarray, labels: np.ndarray) -> np.ndarray:
+        """Veto the statistical model's foreground where the samples explain the colour, and learn.
+
+        ``labels`` (H, W) uint8 Horprasert classes of ``frame`` (H, W, 3) uint8 BGR; returns them
+        with FOREGROUND pixels that match their sample set turned to BACKGROUND (a new array).
+        Then the samples of BACKGROUND pixels are updated (ViBe's random, diffused update) and
+        the blink levels (SuBSENSE feedback) follow the final foreground.
+        """
+        if self.samples_ is None:
+            raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
+        if frame.shape[:2] != self._shape or labels.shape != self._shape:
+            raise ValueError(f"frame and labels must be {self._shape} (the fitted size), got "
+                             f"{frame.shape[:2]} and {labels.shape}")
+        flat = labels.reshape(-1)
+        idx = np.flatnonzero(flat == FOREGROUND)
+        out = labels.copy()
+        # Learnt: what the statistics call background, and anything in a dynamic (blinking)
+        # region, where a colour seen again and again is background whichever model missed it.
+        # Elsewhere a person whose colour happens to match would be learnt, match better the
+        # next time, and spread.
+        learn = _Learnable(flat, self._blink, self.learn_blink)
+        if idx.size:
+            ok = self.explained(frame, idx)
+            out.reshape(-1)[idx[ok]] = BACKGROUND
+            fg_idx = idx[~ok]
+        else:
+            fg_idx = idx
+        self._update(frame, learn)
+        self._feedback(fg_idx)
+        return out
+
+    def _update(self, frame: np.ndarray, learn: "_Learnable") -> None:
+        """ViBe's conservative update: each pixel to ``learn`` (read at flat indices), with probability
+        1/phi, writes its colour over a random sample of its own and, independently, of a random
+        8-neighbour that is learnt too."""
+        h, w = self._shape
+        npx = h * w
+        m = max(1, npx // self.subsampling)
+        rng = self._rng
+        px = frame.reshape(-1, 3)
+        for own in (True, False):
+            # draw phi-subsampled candidates (with replacement: a pixel drawn twice is harmless)
+            cand = rng.integers(0, npx, size=m)
+            cand = cand[learn[cand]]
+            if cand.size == 0:
+                continue
+            k = rng.integers(0, self.n_samples, size=cand.size)
+            if own:
+                self._write(k * npx + cand, px[cand])
+                continue
+            off = _NEIGHBOURS[rng.integers(0, 8, size=cand.size)]
+            y = np.clip(cand // w + off[:, 0], 0, h - 1)
+            x = np.clip(cand % w + off[:, 1], 0, w - 1)
+            nb = y * w + x
+            # only into background neighbours: ViBe's diffusion into foreground eats a person
+            # who stands still from their rim; uncovered room (ghosts) is the statistics' job
+            ok = learn[nb]
+            self._write(k[ok] * npx + nb[ok], px[cand[ok]])
+
+    def _write(self, flat_idx: np.ndarray, colours: np.ndarray) -> None:
+        """Store colours (M, 3) uint8 at flat indices k * H * W + pixel of the sample planes
+        (1-D scatters: far cheaper than indexing the (3, N, H * W) array with two index arrays)."""
+        for c in range(3):
+            self.samples_[c].reshape(-1)[flat_idx] = colours[:, c]
+
+    def _feedback(self, fg_idx: np.ndarray) -> None:
+        """SuBSENSE's blink level: v(x) += blink_gain where the foreground label switched since
+        the last frame, v(x) -= blink_decay elsewhere, v in [0, max_radius_gain - 1].
+
+        As in SuBSENSE, switches in and around the solid foreground of the last frame (its
+        opening, dilated) do not count: the outline of a person who moves or fidgets switches
+        all the time, and a radius grown there would eat them; leaves and flicker give speckle,
+        which the opening removes."""
+        h, w = self._shape
+        fg = np.zeros((h, w), np.uint8)
+        fg.reshape(-1)[fg_idx] = 1
+        prev = self._prev_fg.reshape(h, w)
+        # OpenCV's 0 / 255 masks and masked float ops: whole-frame passes, kept few and cheap
+        blink = cv2.compare(fg, prev, cv2.CMP_NE)
+        solid = cv2.dilate(cv2.morphologyEx(prev, cv2.MORPH_OPEN, _OPEN), _NEAR)
+        cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
+        self._prev_fg = fg.reshape(-1)
+        v = self._blink.reshape(h, w)
+        np.subtract(v, np.float32(self.blink_decay), out=v)
+        cv2.add(v, float(np.float32(self.blink_gain + self.blink_decay)), dst=v, mask=blink)
+        cv2.min(v, float(np.float32(self.max_radius_gain - 1.0)), dst=v)
+        cv2.max(v, 0.0, dst=v)
+
+
+class _Learnable:
+    """Which pixels the samples may learn, read only where the update looks (a few thousand
+    pixels a frame, not the whole frame): the statistics' BACKGROUND, and any pixel whose blink
+    level is at least ``level``. Indexed by flat pixel indices, returns bool."""
+
+    def __init__(self, flat_labels: np.ndarray, blink: np.ndarray, level: float) -> None:
+        self.flat_labels = flat_labels
+        self.blink = blink  # read before this frame's feedback changes it
+        self.level = level
+
+    def __getitem__(self, idx: np.ndarray) -> np.ndarray:
+        return (self.flat_labels[idx] == BACKGROUND) | (self.blink[idx] >= self.level)

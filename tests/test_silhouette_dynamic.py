@@ -1,0 +1,190 @@
+"""Dynamic backgrounds and small people: the sample-consensus model beside the Horprasert
+statistics (``samples.SampleConsensus``) and the frame-scaled minimum person area, on synthetic
+frames; and on real CDnet footage with per-pixel ground truth when ``../shared/data`` has it.
+
+The dynamic scene: a static textured room with sensor noise, and a patch of "leaves": a texture
+of two very different colours (leaf green and sky blue) that shifts by up to 3 pixels at random
+every frame, so each of its pixels flips between the two colours.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from nodes.silhouette.background import FOREGROUND, SHADOW
+from nodes.silhouette.backends import make_subtractor
+from nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
+from nodes.silhouette.samples import SampleConsensus
+from nodes.silhouette.synthetic import textured_background
+from tests.shared_data import DATA
+
+H, W = 240, 320
+ROOM = textured_background(H, W)
+LEAVES = (slice(20, 100), slice(180, 300))
+_LEAF_RNG = np.random.default_rng(7)
+#: a leaf / sky texture larger than the patch, cut at a random shift each frame
+_LEAF_TEX = np.where((_LEAF_RNG.random((LEAVES[0].stop - LEAVES[0].start + 8, LEAVES[1].stop - LEAVES[1].start + 8))
+                      < 0.5)[..., None], np.float32([40, 150, 60]), np.float32([210, 170, 120]))
+
+
+def frame(rng: np.random.Generator, person: tuple[int, int, int, int] | None = None, wind: bool = True) -> np.ndarray:
+    """One frame: room + noise (sigma 2.5) + leaves, shifted at random when ``wind`` blows;
+    ``person`` (x, y, w, h) a flat magenta box (a small, distant person)."""
+    f = ROOM + rng.normal(0.0, 2.5, ROOM.shape).astype(np.float32)
+    dy, dx = rng.integers(0, 7, size=2) if wind else (3, 3)
+    ph, pw = LEAVES[0].stop - LEAVES[0].start, LEAVES[1].stop - LEAVES[1].start
+    f[LEAVES] = _LEAF_TEX[dy:dy + ph, dx:dx + pw]
+    if person is not None:
+        x, y, w, h = person
+        f[y:y + h, x:x + w] = (170.0, 40.0, 190.0)
+    return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+
+def leaves_foreground(dynamic: bool) -> float:
+    """Share of the leaf patch called foreground over the last 50 of 150 frames, the leaves still
+    in the 30 training frames (no wind) and waving after."""
+    rng = np.random.default_rng(0)
+    sub = make_subtractor("horprasert", train_frames=30, robust=False, dynamic=dynamic)
+    fg = []
+    for k in range(180):
+        m = sub.apply(frame(rng, wind=k >= 30))
+        if k >= 130:
+            fg.append(m[LEAVES].mean())
+    return float(np.mean(fg))
+
+
+def test_waving_leaves_are_background_with_the_sample_model() -> None:
+    with_samples = leaves_foreground(dynamic=True)
+    without = leaves_foreground(dynamic=False)
+    # the single-mode statistics learnt the still leaves and see the waving ones as foreground;
+    # the samples learn the second colour where the labels blink
+    assert with_samples < 0.06, with_samples
+    assert without > 5 * with_samples, (without, with_samples)
+
+
+def test_sample_consensus_keeps_a_person_and_the_shadow_class() -> None:
+    rng = np.random.default_rng(1)
+    sub = make_subtractor("horprasert", train_frames=30, robust=False, dynamic=True)
+    for _ in range(30):
+        sub.apply(frame(rng))
+    person = (60, 120, 30, 80)
+    f = frame(rng, person)
+    y0, x0 = 200, 20
+    f[y0:y0 + 20, x0:x0 + 100] = np.clip(ROOM[y0:y0 + 20, x0:x0 + 100] * 0.6, 0, 255).astype(np.uint8)
+    m = sub.apply(f)
+    x, y, w, h = person
+    assert m[y:y + h, x:x + w].mean() > 0.99
+    assert (sub.labels[y0 + 2:y0 + 18, x0 + 2:x0 + 98] == SHADOW).mean() > 0.95
+
+
+def test_sample_consensus_validates_and_learns_only_background() -> None:
+    with pytest.raises(ValueError, match="min_matches"):
+        SampleConsensus(n_samples=5, min_matches=6)
+    with pytest.raises(ValueError, match="radius"):
+        SampleConsensus(radius=0)
+    model = SampleConsensus(n_samples=4, min_matches=1, subsampling=1, random_state=0)
+    frames = np.full((4, 8, 8, 3), 100, np.uint8)
+    model.fit(frames, np.full((8, 8, 3), 100.0))
+    labels = np.full((8, 8), FOREGROUND, np.uint8)
+    new = np.full((8, 8, 3), 30, np.uint8)
+    out = model.apply(new, labels)
+    # a colour far from every sample stays foreground, and foreground is never learnt
+    assert (out == FOREGROUND).all()
+    assert (model.samples_ == 100).all()
+
+
+def test_min_area_scales_with_the_frame_and_the_camera() -> None:
+    small = person_min_area(320, 240)
+    assert person_min_area(640, 480) == pytest.approx(4 * small, rel=0.05)
+    # the floor: 16 px tall whatever the frame
+    assert person_min_area(160, 120) == 64
+    # a person 20 px tall (about 0.25 * 20^2 = 100 px of region) is above the threshold
+    assert small < 100
+    from body.camera import default_camera
+
+    cam = default_camera(320, 240)
+    tele = type(cam)(cam.fx * 2, cam.fy * 2, cam.cx, cam.cy, 320, 240, cam.R, cam.t)
+    assert person_min_area(320, 240, camera=tele) == pytest.approx(4 * small, rel=0.05)
+
+
+def test_a_person_20_px_tall_is_found_and_keeps_one_id() -> None:
+    rng = np.random.default_rng(2)
+    ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": 30, "robust": False, "dynamic": True})
+    for _ in range(30):
+        ex.process(frame(rng))
+    ids, found = set(), 0
+    for k in range(40):
+        r = ex.process(frame(rng, (30 + 4 * k, 150, 8, 20)))
+        found += len(r.people) == 1
+        ids.update(p.id for p in r.people)
+        for p in r.people:
+            assert p.height <= 22
+    assert found >= 38, found
+    assert len(ids) == 1, ids
+
+
+CDNET = DATA / "cdnet"
+
+
+def cdnet_f1(seq: str, backend: str, first: int, last: int) -> float:
+    """CDnet-protocol F1 of the extractor's published mask on frames ``first``..``last``, the
+    extractor fed from 30 frames before ``first`` (ours fits on those 30)."""
+    import cv2
+
+    d = CDNET / seq
+    ex = SilhouetteExtractor(backend=backend, min_area=None, backend_params={"train_frames": 30, "dynamic": True,
+                             "shadow_ncc": 0.4} if backend == "horprasert" else {})
+    tp = fp = fn = 0
+    for n in range(first - 30, last + 1):
+        r = ex.process(cv2.imread(str(d / "input" / f"in{n:06d}.jpg")))
+        if n < first:
+            continue
+        g = cv2.imread(str(d / "groundtruth" / f"gt{n:06d}.png"), cv2.IMREAD_GRAYSCALE)
+        m = r.labels > 0
+        pos, neg = g == 255, (g == 0) | (g == 50)
+        tp += int((m & pos).sum())
+        fp += int((m & neg).sum())
+        fn += int((pos & ~m).sum())
+    return 2 * tp / max(2 * tp + fp + fn, 1)
+
+
+@pytest.mark.skipif(not (CDNET / "pedestrians" / "input").is_dir() or not (CDNET / "busStation" / "input").is_dir(),
+                    reason=f"CDnet sequences not found under {CDNET} (see ../shared/data/README.md)")
+@pytest.mark.parametrize("seq", ["pedestrians", "busStation"])
+def test_cdnet_f1_beats_mog2(seq: str) -> None:
+    # 100 frames of the report half (the bench: the whole second half of the evaluated frames),
+    # both models fed from 30 frames before
+    first = {"pedestrians": 860, "busStation": 880}[seq]  # windows with people in every frame
+    ours = cdnet_f1(seq, "horprasert", first, first + 100)
+    mog2 = cdnet_f1(seq, "mog2", first, first + 100)
+    # 30 frames to learn from, with people in them (the bench's models have had hundreds of
+    # frames by the report half), so the floor is below the bench's 0.90
+    assert ours >= 0.8, (ours, mog2)
+    assert ours > mog2, (ours, mog2)
+
+
+def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
+    """On a textured floor a cast shadow keeps the floor's pattern (same colour, darker); a dark
+    shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow."""
+    from nodes.silhouette.background import HorprasertBackground
+
+    rng = np.random.default_rng(3)
+    floor = np.repeat(np.repeat(rng.uniform(80, 200, (30, 40)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])
+
+    def shot(patch: np.ndarray | None = None) -> np.ndarray:
+        f = floor + rng.normal(0.0, 2.0, floor.shape)
+        if patch is not None:
+            f[40:80, 40:100] = patch
+        return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+    train = [shot() for _ in range(20)]
+    shadow = floor[40:80, 40:100] * 0.6
+    shirt = np.full_like(shadow, 0.6 * floor[40:80, 40:100].mean(axis=(0, 1)))
+    inner = (slice(44, 76), slice(44, 96))
+    for ncc, want_shirt in ((0.4, FOREGROUND), (-1.0, SHADOW)):
+        model = HorprasertBackground(shadow_ncc=ncc).fit(train)
+        assert (model.apply(shot(shadow))[inner] == SHADOW).mean() > 0.9
+        assert (model.apply(shot(shirt))[inner] == want_shirt).mean() > 0.7
