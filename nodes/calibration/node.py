@@ -88,11 +88,13 @@ class Calibration(Node):
         self.smoother: CameraSmoother | None = None
         self.latest: CameraEstimate | None = None
         self.n_sil = 0
+        self.fps = 0.0  # the frames' rate (their fps field): the people's times are the stream's
         self.scene = SceneFrames()
         #: frames kept for the scene's lines until their people come (seq -> image)
         self.images: dict[int, np.ndarray] = {}
 
     def on_frame(self, msg: Frame) -> None:
+        self.fps = float(msg.fps or 0.0)
         shape = msg.image.shape
         size = (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
         if size != self.size and min(size) > 0:
@@ -127,7 +129,10 @@ class Calibration(Node):
         if size != self.size:
             self._new_size(size, msg.stamp, msg.seq)
         assert self.observations is not None and self.smoother is not None
-        self.tally("people_observed", self.observations.add(msg.people, msg.stamp * 1e-9))
+        # stream time, not the capture stamps: a file replayed in lockstep is read faster or slower
+        # than it was filmed, and "seconds of people in view" means seconds of the video
+        time_s = msg.seq / self.fps if self.fps > 0 else msg.stamp * 1e-9
+        self.tally("people_observed", self.observations.add(msg.people, time_s))
         image = self.images.pop(msg.seq, None)
         if image is not None and image.shape[:2] == (size[1], size[0]):
             self.scene.add(image, msg.people)

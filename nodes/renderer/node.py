@@ -131,7 +131,8 @@ class Renderer(Node):
             if params[name]:
                 ins[name] = Input(tp, RELIABLE, f"{name} overlay (paired by seq)")
         if params["camera_info"]:
-            ins["camera_info"] = Input(CameraInfo, RELIABLE, "the graph's camera (latched)", awaits_end=False)
+            # awaited to its end, as the tracker does: the frames' end can overtake the camera
+            ins["camera_info"] = Input(CameraInfo, RELIABLE, "the graph's camera (latched)")
         for topic in params["stats_topics"]:
             ins[topic] = Input(NodeStats, LATEST, "statistics of a node", awaits_end=False)
         return ins, dict(cls.outputs)

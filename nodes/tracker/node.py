@@ -52,8 +52,9 @@ class TrackerNode(Node):
 
     inputs = {"frame": Input(Frame, doc="the video frames (edge term)"),
               "silhouettes": Input(Silhouettes, doc="the people's masks (silhouette term)"),
-              "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)",
-                                   awaits_end=False)}
+              # awaited to its end: the calibration node publishes after it has seen a frame, so on a
+              # short stream the frames' end can overtake the camera their tracking waits for
+              "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)")}
     outputs = {"pose": Output(Pose3D, "one per frame: the tracked people (empty when nobody is in view)")}
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
