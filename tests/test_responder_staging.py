@@ -34,9 +34,13 @@ def test_the_partner_stands_between_the_limits_along_the_line_to_the_model_place
 
 def test_a_partner_on_top_of_the_person_steps_out_along_the_persons_facing() -> None:
     obs = person(1.0, 2.0, yaw=np.pi / 2)  # facing +X
-    out = Stage()(obs, obs.copy(), 0.04)
+    stage = Stage()
+    out = stage(obs, obs.copy(), 0.04)
     d = ground(out) - ground(obs)
     assert d[0] == pytest.approx(0.5, abs=1e-6) and abs(d[1]) < 1e-6
+    # the person's own hands are not a push on a partner the model put inside them: it stands apart
+    stage(obs, obs.copy(), 0.04)
+    assert stage.pushes == 0
 
 
 def test_the_partner_walks_round_the_person_instead_of_jumping() -> None:

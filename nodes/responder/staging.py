@@ -12,8 +12,9 @@ model's posture and gestures are kept:
    ``max_distance_m``] (along the observed person's facing when p lies on o);
 2. that offset changes by at most ``max_speed_m_s`` times the time between frames, in polar
    coordinates about the person (the partner walks round them, never through them; it never
-   jumps), so the distance holds on every frame. The offset is relative to the observed person: where the tracker's estimate of the
-   person jumps, the partner stays beside them in the picture rather than walking after them;
+   jumps), so the distance holds on every frame. The offset is relative to the observed person:
+   where the tracker's estimate of the person jumps, the partner stays beside them in the picture
+   rather than walking after them;
 3. the partner recoils when pushed: when a wrist of the observed person comes within
    ``contact_m`` of the partner's torso axis (neck to mid-hip) the partner's distance grows by
    ``recoil_m``, which then fades with time constant ``recoil_s`` (the step back, then the
@@ -126,8 +127,12 @@ class Stage:
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
         self._recoil *= float(np.exp(-max(float(dt), 0.0) / c.recoil_s))
-        torso = _segment_distance(X[_WRISTS], P[_NECK], P[_HIPS].mean(axis=0))
-        touching = bool((torso < c.contact_m).any())
+        touching = False
+        if self._last is not None:  # the hands against the partner where it stands (last frame's offset)
+            at = np.zeros(3)
+            at[[0, 2]] = o + self._last - p
+            touching = bool((_segment_distance(X[_WRISTS], P[_NECK] + at, P[_HIPS].mean(axis=0) + at)
+                             < c.contact_m).any())
         if touching and not self._touching:
             self._recoil += c.recoil_m
             self.pushes += 1
