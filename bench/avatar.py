@@ -8,7 +8,7 @@ Input: a recorded person with known labels from the simulator (``sim_recording``
 empty room), written to a Motion-JPEG video and a label file, then learnt exactly as a user would:
 ``counterpart learn avatar --video PERSON.avi --labels L.npz --out avatar.npz`` in a subprocess (the
 silhouette node's algorithm cuts the mask out of the video; the labels are the simulator's). The
-defaults of :class:`nodes.responder.video_texture.VideoTextureConfig` (radius, jumps per cut point,
+defaults of :class:`counterpart.nodes.responder.video_texture.VideoTextureConfig` (radius, jumps per cut point,
 jump cost, steering) were chosen on seed 1 (40 s recordings); this bench reports seed 2.
 
 Figures (last stdout line, one JSON object):
@@ -78,7 +78,7 @@ def dead_ends(model) -> int:
 
 def synthesis(model, listener, frames: int, requests: int, seed: int) -> dict:
     """Drive the graph as the responder does, with requests of each signal the graph has."""
-    from nodes.responder.avatar_driver import avatar_goals, avatar_partner
+    from counterpart.nodes.responder.avatar_driver import avatar_goals, avatar_partner
 
     fps = model.fps
     signals = [s for s in ("nod", "shake", "laughing") if model.goal_index(s) >= 0]
@@ -129,11 +129,11 @@ def synthesis(model, listener, frames: int, requests: int, seed: int) -> dict:
 
 
 def composite_ms(model, path: str, n: int = 300) -> float:
-    from body.camera import default_camera
-    from messages import Partner
-    from nodes.renderer.avatar import AvatarPainter
-    from nodes.responder.listener import ListenerModel
-    from sim import open_stream
+    from counterpart.body.camera import default_camera
+    from counterpart.messages import Partner
+    from counterpart.nodes.renderer.avatar import AvatarPainter
+    from counterpart.nodes.responder.listener import ListenerModel
+    from counterpart.sim import open_stream
 
     st = open_stream("handshake", seed=0)
     img, truth = st.render_with_truth(40)
@@ -164,9 +164,9 @@ def main() -> None:
                     "already there (of the same --seconds and --seed) are used again instead of rendering")
     args = ap.parse_args()
 
-    from nodes.responder.avatar_recording import sim_recording
-    from nodes.responder.listener import ListenerModel
-    from nodes.responder.models import load_model
+    from counterpart.nodes.responder.avatar_recording import sim_recording
+    from counterpart.nodes.responder.listener import ListenerModel
+    from counterpart.nodes.responder.models import load_model
 
     work = Path(args.keep or tempfile.mkdtemp(prefix="bench-avatar-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -192,7 +192,7 @@ def main() -> None:
 
     log("counterpart learn avatar ...")
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "bus.cli", "learn", "avatar", "--video", str(video), "--labels",
+    proc = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "learn", "avatar", "--video", str(video), "--labels",
                            str(labels_file), "--out", str(out)], cwd=ROOT, capture_output=True, text=True)
     learn_s = time.perf_counter() - t0
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -9,7 +9,7 @@ Each measurement runs a publisher and a subscriber in two processes over ipc:// 
   receiver, ours / raw (raw PUB may drop under load; it is counted at the receiver all the same);
 - reliable_drops: 10,000 messages through our reliable policy to a slower subscriber.
 The raw reference uses the same frames per message as ours (topic, a small header, the payload) and
-the same per-frame copy policy (pyzmq ``copy_threshold`` = ``bus.transport.ZERO_COPY_MIN``, sent with
+the same per-frame copy policy (pyzmq ``copy_threshold`` = ``counterpart.bus.transport.ZERO_COPY_MIN``, sent with
 ``copy=False``), so the ratio is what our codec and transport add, not a different copy choice.
 The publisher and the subscriber are pinned to two different CPUs, the same two for raw and ours
 (``--no-pin`` leaves placement to the scheduler, which on a 2-core machine puts the pair on one core
@@ -36,9 +36,9 @@ import zmq
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bus.endpoints import ipc_endpoints  # noqa: E402
-from bus.transport import RELIABLE, ZERO_COPY_MIN, Publisher, Subscriber  # noqa: E402
-from messages import message  # noqa: E402
+from counterpart.bus.endpoints import ipc_endpoints  # noqa: E402
+from counterpart.bus.transport import RELIABLE, ZERO_COPY_MIN, Publisher, Subscriber  # noqa: E402
+from counterpart.messages import message  # noqa: E402
 
 
 @message("bench.Blob", 1)

@@ -30,8 +30,8 @@ import cv2
 import numpy as np
 import yaml
 
-from bus import Input, Node, Param
-from messages import Frame
+from counterpart.bus import Input, Node, Param
+from counterpart.messages import Frame
 
 REPO = Path(__file__).resolve().parents[1]
 VTEST = REPO.parent / "shared" / "data" / "video" / "vtest.avi"
@@ -95,13 +95,13 @@ def camera_fps(video: Path, frames: int, pacing: str, work: Path, prefetch: int 
     out = work / f"count-{pacing}.json"
     out.unlink(missing_ok=True)
     doc = {"nodes": {
-        "camera": {"run": "nodes.camera", "params": {"source": f"file:{video}", "pacing": pacing, "max_frames": frames,
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": f"file:{video}", "pacing": pacing, "max_frames": frames,
                                                      "prefetch": prefetch}},
         "sink": {"run": "bench.camera:CountSink", "params": {"path": str(out)}, "policy": "reliable"},
     }}
     file = work / "graph.yaml"
     file.write_text(yaml.safe_dump(doc))
-    r = subprocess.run([sys.executable, "-m", "bus.cli", "launch", str(file)], cwd=REPO,
+    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", str(file)], cwd=REPO,
                        capture_output=True, text=True, timeout=300)
     if r.returncode != 0 or not out.exists():
         raise RuntimeError(f"camera graph failed ({r.returncode}):\n{r.stdout}{r.stderr}")
@@ -113,7 +113,7 @@ def camera_fps(video: Path, frames: int, pacing: str, work: Path, prefetch: int 
 def sim_fps(frames: int) -> float | None:
     """Rendering fps of the built-in simulator's default scenario, or None while ``sim`` has no
     ``open_stream`` (TODO(sim): this figure appears by itself once the simulator lands)."""
-    from nodes.camera.sources import SourceError, make_source
+    from counterpart.nodes.camera.sources import SourceError, make_source
 
     try:
         src = make_source("sim:handshake")

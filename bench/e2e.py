@@ -54,7 +54,7 @@ import numpy as np
 import psutil
 import yaml
 
-from bus.bag import BagReader
+from counterpart.bus.bag import BagReader
 
 REPO = Path(__file__).resolve().parents[1]
 REALTIME_TOPICS = ["rendered", "partner", "camera/stats"]
@@ -71,12 +71,12 @@ def run_graph(workdir: Path, name: str, launch_file: str, sets: dict[str, object
     if launch_file == "replay.yaml":  # it records already: point its recorder at our bag
         doc["include"][0]["set"].update({f"recorder.{k}": v for k, v in rec.items()})
     else:
-        doc["nodes"] = {"recorder": {"run": "bus.bag_nodes:Recorder", "policy": "reliable", "params": rec}}
+        doc["nodes"] = {"recorder": {"run": "counterpart.bus.bag_nodes:Recorder", "policy": "reliable", "params": rec}}
     launch = workdir / f"{name}.yaml"
     launch.write_text(yaml.safe_dump(doc))
     env = {**os.environ, "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpe-", dir="/tmp"), "OMP_NUM_THREADS": "1"}
     t0 = time.monotonic()
-    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", "launch", str(launch)], cwd=REPO, env=env,
+    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "launch", str(launch)], cwd=REPO, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     peak = 0.0
     me = psutil.Process(proc.pid)
@@ -159,8 +159,8 @@ def main() -> None:
     ap.add_argument("--input", nargs="*", default=[], metavar="CLIP",
                     help="real video files, each also played in real time through the graph (two people tracked)")
     args = ap.parse_args()
-    import nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
-    from bus.cli_demo import ensure_models
+    import counterpart.nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
+    from counterpart.bus.cli_demo import ensure_models
 
     ensure_models()
     work = Path(tempfile.mkdtemp(prefix="e2e-"))

@@ -54,7 +54,7 @@ def progress(msg: str) -> None:
 
 def _cli(*args: str, home: Path, timeout: float) -> tuple[int | None, str, float]:
     """Run ``counterpart ARGS``; (exit code or None on timeout, output, wall-clock end time)."""
-    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", *args], cwd=REPO, start_new_session=True,
+    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, start_new_session=True,
                             env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
     try:
@@ -188,7 +188,7 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="bench-faults-"))
     result: dict[str, object] = {"load_avg_1min": round(os.getloadavg()[0], 2)}
     try:
-        from bus.cli_demo import ensure_models
+        from counterpart.bus.cli_demo import ensure_models
 
         progress("default models (built once, cached)...")
         ensure_models()

@@ -4,12 +4,12 @@
                              [--noise-mm 0] [--noise-deg 0] [--dense]
 
 Input (``--source sim``, the default): the simulator's ``conversation`` scenario
-(``sim.scenarios.conversation``), fed to the labeller as the tracker would publish it: each
+(``counterpart.sim.scenarios.conversation``), fed to the labeller as the tracker would publish it: each
 person's 14 ground-truth joints (float32 metres, as in ``tracker.Pose3D``) and the head yaw and
-pitch of their ground-truth pose vector (``head_turn`` / ``head_nod`` of ``body.pose``, which the
+pitch of their ground-truth pose vector (``head_turn`` / ``head_nod`` of ``counterpart.body.pose``, which the
 labeller node reads from ``TrackedBody.pose``). ``--noise-mm`` adds white Gaussian noise of that
 standard deviation to every joint coordinate and ``--noise-deg`` to both head angles (default 0:
-a perfect tracker). ``--source constructed`` uses ``nodes.labeller.synthetic.conversation``
+a perfect tracker). ``--source constructed`` uses ``counterpart.nodes.labeller.synthetic.conversation``
 (geometry with planted nods, shakes, turns, sway; head yaw, no pitch). The JSON says which.
 
 Seeds: the reported sequences are ``--seeds`` (default 20-39, 120 s each). The detector's
@@ -50,7 +50,7 @@ Figures (last stdout line, one JSON object):
                        the same with silhouette (2D) input
   face                 the face-video part (``--face-seeds``, default 20-22, ``--face-duration`` 60 s;
                        ``--no-face`` skips it): person A of the simulator's conversations rendered
-                       face-on at 640x360 (``sim.face.conversation_face_clip``: nods, shakes,
+                       face-on at 640x360 (``counterpart.sim.face.conversation_face_clip``: nods, shakes,
                        look-aways and talking turns with the scenario's own labels) at 25 and
                        29.97 fps, labelled frame by frame by ``SocialLabeller.update`` from the
                        image alone (face path: Haar cascade + tracking). ``nod_f1``/``shake_f1``:
@@ -65,7 +65,7 @@ Figures (last stdout line, one JSON object):
                        with nod/shake frame recall and precision, ``still_nodshake_rate`` (the share
                        of frames more than 1 s from any true nod or shake that are labelled nod or
                        shake) and ``face_known`` (the share of frames with a tracked face).
-                       ``verdicts``: short clips of one behaviour (``sim.face.gesture_face_clip``
+                       ``verdicts``: short clips of one behaviour (``counterpart.sim.face.gesture_face_clip``
                        still / nod / shake, ``--face-verdict-seeds`` 0-2, both frame rates), each judged by which of
                        nod and shake is labelled on at least 30% of its frames after the first
                        2.6 s (neither: still); ``verdicts_right`` counts the right ones. The face
@@ -89,16 +89,16 @@ import cv2
 import numpy as np
 import pandas as pd
 
-from body.pose import DOF_INDEX
-from nodes.labeller.face import load_face_cascade
-from nodes.labeller.gaze import gaze_accuracy
-from nodes.labeller.head_motion import HeadMotionParams
-from nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller, label_pair_3d
-from nodes.labeller.mining import mine_rules, mine_transactions, turn_transactions
-from nodes.labeller.signals import SIGNALS
-from nodes.labeller import synthetic
-from sim.face import FaceClip, conversation_face_clip, gesture_face_clip
-from sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, conversation
+from counterpart.body.pose import DOF_INDEX
+from counterpart.nodes.labeller.face import load_face_cascade
+from counterpart.nodes.labeller.gaze import gaze_accuracy
+from counterpart.nodes.labeller.head_motion import HeadMotionParams
+from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller, label_pair_3d
+from counterpart.nodes.labeller.mining import mine_rules, mine_transactions, turn_transactions
+from counterpart.nodes.labeller.signals import SIGNALS
+from counterpart.nodes.labeller import synthetic
+from counterpart.sim.face import FaceClip, conversation_face_clip, gesture_face_clip
+from counterpart.sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, conversation
 
 FPS = 25.0
 TUNING_SEEDS = range(100, 120)
@@ -488,7 +488,7 @@ def main() -> int:
         "source": a.source,
         "input": ("simulator conversation, ground-truth joints (float32) + pose head_turn/head_nod"
                   f", noise {a.noise_mm:g} mm / {a.noise_deg:g} deg" if a.source == "sim"
-                  else "constructed geometry (nodes.labeller.synthetic), joints + head yaw"),
+                  else "constructed geometry (counterpart.nodes.labeller.synthetic), joints + head yaw"),
         "seeds": a.seeds, "duration_s": a.duration, "people_sequences": 2 * len(seqs),
     }
     for k in ("nod", "shake", "nod_stream", "shake_stream", "nod_joints", "shake_joints"):

@@ -2,8 +2,8 @@
 
 Used by ``bench/real_video.py`` (its tracking part writes one ``track_video`` file per clip). For each
 clip the observed side's tracked joints go through the default dual-HMM and the responder node's
-stage (``nodes.responder.staging.Stage``, the node's defaults) frame by frame as the responder node
-runs them, and its hand contact (``nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
+stage (``counterpart.nodes.responder.staging.Stage``, the node's defaults) frame by frame as the responder node
+runs them, and its hand contact (``counterpart.nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
 partner is projected with the camera the tracking recorded. Figures:
 
 - ``partner_distance_ok``: share of frames with a partner whose ground distance from the observed
@@ -29,12 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from body.camera import Camera
-from body.skeleton import JOINT_INDEX
-from nodes.responder.frames import actor_frame
-from nodes.responder.models import load_default
-from nodes.responder.reach import reach
-from nodes.responder.staging import Stage
+from counterpart.body.camera import Camera
+from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.nodes.responder.frames import actor_frame
+from counterpart.nodes.responder.models import load_default
+from counterpart.nodes.responder.reach import reach
+from counterpart.nodes.responder.staging import Stage
 
 VIS = 0.5
 HOLD_FRAMES = 15          # the responder node's default hold_frames

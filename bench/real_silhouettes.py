@@ -57,7 +57,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
-from nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
 DATA = Path(os.environ.get("COUNTERPART_SHARED_DATA")
             or Path(__file__).resolve().parents[2] / "shared" / "data") / "ut_interaction"

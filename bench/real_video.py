@@ -21,7 +21,7 @@ Each clip goes through the real command (six node processes, the lockstep graph
 
 Tracking accuracy (``--pck-clips``, default the same clips; ``--no-pck`` skips it): each clip is
 tracked offline without the bus, configured as the lockstep graph configures its nodes
-(``nodes.tracker.offline.track_video``: both sides, the default motion prior, 10 layers x 256
+(``counterpart.nodes.tracker.offline.track_video``: both sides, the default motion prior, 10 layers x 256
 particles, the background fitted on the first 20 frames, the camera the calibration node publishes
 when given no file), and its joints projected with the camera the run recorded. They are compared
 with the reference keypoints ``../shared/data/ut_interaction/keypoints/<stem>.npz`` (MediaPipe,
@@ -83,11 +83,11 @@ from real_partner import (  # bench/ is on sys.path as a script
 )
 from real_silhouettes import VIS, reference_collapsed
 
-from body.camera import Camera
-from body.kinematics import forward_kinematics
-from body.pose import neutral_pose
-from body.skeleton import DEFAULT_DIMS, JOINT_INDEX
-from nodes.responder.frames import actor_frame
+from counterpart.body.camera import Camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX
+from counterpart.nodes.responder.frames import actor_frame
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -124,7 +124,7 @@ def run_demo(clip: Path, out: Path, timeout: float, *extra: str) -> dict:
     """One ``counterpart demo --input clip``; its summary, exit code, wall time and whether it hung."""
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.monotonic()
-    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", "demo", "--input", str(clip), "--out", str(out), *extra],
+    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "demo", "--input", str(clip), "--out", str(out), *extra],
                             cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
@@ -193,7 +193,7 @@ def silhouette_boxes(clip: Path) -> tuple[np.ndarray, np.ndarray]:
     side). Returns boxes (T, 2, 4) float (x, y, w, h) pixels, NaN where the side has nobody, and
     ids (T, 2) person ids (-1: none).
     """
-    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
+    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
 
     boxes, ids = [], []
     for _, result in iter_video(clip, SilhouetteExtractor(), None, TRAIN_FRAMES):
@@ -259,8 +259,8 @@ def template_pixels(template: np.ndarray, boxes: np.ndarray) -> np.ndarray:
 def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     """Track one clip offline and gather what the PCK needs: the projected estimates, the boxes,
     the reference and which of its joints count; plus timings and the excluded frames."""
-    from nodes.tracker.offline import track_video
-    from nodes.tracker.prior import resolve_prior
+    from counterpart.nodes.tracker.offline import track_video
+    from counterpart.nodes.tracker.prior import resolve_prior
 
     t0 = time.monotonic()
     track_video(clip, work / f"{clip.stem}-track.npz", people=SIDES, camera=None, prior=resolve_prior("default"),

@@ -15,7 +15,7 @@ partner is generated and compared with the real one. Prints one JSON object as t
   rank_acc              emotion ranking, held-out pairs of the same interaction
   step_ms               dual-hmm online step; train_s   dual-hmm default training time
   partner_err_staged_mm the partner error after the responder node's stage and hand contact
-                        (nodes.responder.staging: 0.5-1.2 m from the observed person, at most 2.5 m/s;
+                        (counterpart.nodes.responder.staging: 0.5-1.2 m from the observed person, at most 2.5 m/s;
                         nodes.responder.reach), as the graph draws it;
                         the simulator's pairs walk up from further apart, where the stage holds
                         the partner nearer than the real one stood
@@ -48,13 +48,13 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from nodes.responder.data import SIM_SCENARIOS, sim_trajectories  # noqa: E402
-from nodes.responder.dual_hmm import partner_placement  # noqa: E402
-from nodes.responder.emotion import motion_features  # noqa: E402
-from nodes.responder.frames import actor_frame, relative_pair, to_local, to_world  # noqa: E402
-from nodes.responder.reach import reach  # noqa: E402
-from nodes.responder.staging import Stage  # noqa: E402
-from nodes.responder.training import default_training_data, train  # noqa: E402
+from counterpart.nodes.responder.data import SIM_SCENARIOS, sim_trajectories  # noqa: E402
+from counterpart.nodes.responder.dual_hmm import partner_placement  # noqa: E402
+from counterpart.nodes.responder.emotion import motion_features  # noqa: E402
+from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_local, to_world  # noqa: E402
+from counterpart.nodes.responder.reach import reach  # noqa: E402
+from counterpart.nodes.responder.staging import Stage  # noqa: E402
+from counterpart.nodes.responder.training import default_training_data, train  # noqa: E402
 
 
 def mpjpe(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -95,7 +95,7 @@ def gpdm_figures(test: list, hmm: object, em: object, quick: bool) -> dict[str, 
     """The gpdm block of the output (module docstring)."""
     from sklearn.ensemble import RandomForestClassifier
 
-    from nodes.responder.emotion import EMOTIONS
+    from counterpart.nodes.responder.emotion import EMOTIONS
 
     out: dict[str, float] = {}
     t0 = time.perf_counter()
@@ -214,7 +214,7 @@ def main() -> None:
     pred_lab = clf.predict([pair_features(o, p) for _, o, p in gen_pairs])
     out["action_acc"] = round(float(np.mean(pred_lab == [lab for lab, _, _ in gen_pairs])), 3)
     # joint shape
-    from nodes.responder.shapes import trajectory_shapes
+    from counterpart.nodes.responder.shapes import trajectory_shapes
     js = None if quick else train("joint-shape", default_training_data("joint-shape"))
     se, sm = [], []
     for t in test[::2] if js is not None else []:

@@ -1,4 +1,4 @@
-"""The camera estimated from the people in view (``nodes.calibration``), on the simulator with random
+"""The camera estimated from the people in view (``counterpart.nodes.calibration``), on the simulator with random
 cameras against its truth, and on real clips for plausibility.
 
 Simulator (``sim_figures``): per seed, the scenario ``SCENARIOS[seed % 6]`` seen from a random camera
@@ -12,7 +12,7 @@ the head and foot points of the upright people and the lines of the scene, one e
 - ``calib_within``: share of seeds with height within 10%, tilt within 3 degrees and focal length
   within 10%, all three;
 - ``calib_credible``: share of seeds whose estimate the calibration node would publish (the horizon
-  seen: ``nodes.calibration.smooth.credible`` with the node's default bounds);
+  seen: ``counterpart.nodes.calibration.smooth.credible`` with the node's default bounds);
   ``calib_within_published``: share within the limits of the camera the graph ends up with (the
   estimate where credible, the default camera elsewhere);
 - ``calib_truth_points``: the same figures from the true head and foot points (the crown and the
@@ -47,12 +47,12 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from body.camera import Camera, default_camera  # noqa: E402
-from body.skeleton import JOINT_INDEX  # noqa: E402
-from nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
-from nodes.calibration.observe import PeopleObservations, SceneFrames  # noqa: E402
-from nodes.calibration.smooth import credible  # noqa: E402
-from nodes.calibration.node import Calibration  # noqa: E402
+from counterpart.body.camera import Camera, default_camera  # noqa: E402
+from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
+from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
+from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames  # noqa: E402
+from counterpart.nodes.calibration.smooth import credible  # noqa: E402
+from counterpart.nodes.calibration.node import Calibration  # noqa: E402
 
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
 TRAIN_FRAMES = 20   # as launch/lockstep.yaml's silhouette node
@@ -96,9 +96,9 @@ def summary(errs: list[dict[str, float]], prefix: str) -> dict[str, Any]:
 def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
     """One simulated scene: the estimate from its silhouettes, from its true head/foot points, and
     the errors of each."""
-    from nodes.silhouette.pipeline import SilhouetteExtractor
-    from sim.scenarios import SCENARIOS
-    from sim.stream import open_stream
+    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
+    from counterpart.sim.scenarios import SCENARIOS
+    from counterpart.sim.stream import open_stream
 
     name = list(SCENARIOS)[seed % len(SCENARIOS)]
     stream = open_stream(name, seed=seed, camera="random", frames=int(round(seconds * 25.0)))
@@ -164,7 +164,7 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000) -
 
 def real_figures(clips: list[Path]) -> dict[str, Any]:
     """Per clip the estimate of ``counterpart calibrate``; the spread across the clips."""
-    from nodes.calibration.offline import calibrate_video
+    from counterpart.nodes.calibration.offline import calibrate_video
 
     per: dict[str, Any] = {}
     for clip in clips:

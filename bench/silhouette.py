@@ -61,12 +61,12 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
-from nodes.silhouette.background import SHADOW
-from nodes.silhouette.backends import make_subtractor
-from nodes.silhouette.pipeline import SilhouetteExtractor
-from nodes.silhouette.regions import clean_mask
-from body.spline import oriented_boundary, spline_distance
-from nodes.silhouette.synthetic import two_person_sequence
+from counterpart.nodes.silhouette.background import SHADOW
+from counterpart.nodes.silhouette.backends import make_subtractor
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
+from counterpart.nodes.silhouette.regions import clean_mask
+from counterpart.body.spline import oriented_boundary, spline_distance
+from counterpart.nodes.silhouette.synthetic import two_person_sequence
 
 VTEST = os.environ.get("COUNTERPART_VTEST", "/work/shared/data/video/vtest.avi")
 SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(
@@ -134,7 +134,7 @@ def render_sim(scenario: str, seed: int, empty_frames: int = 0, max_frames: int 
     with the renderer's sensor noise. ``max_frames`` caps the scene's frames (not counting the
     empty ones).
     """
-    from sim.stream import open_stream
+    from counterpart.sim.stream import open_stream
 
     st = open_stream(scenario, seed=seed, width=size[0], height=size[1], frames=max_frames)
     r = st.renderer

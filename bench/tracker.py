@@ -41,8 +41,8 @@ import numpy as np  # noqa: E402
 cv2.setNumThreads(1)
 
 if TYPE_CHECKING:
-    from nodes.tracker.tracker import Tracker
-    from sim.stream import SimStream
+    from counterpart.nodes.tracker.tracker import Tracker
+    from counterpart.sim.stream import SimStream
 
 #: camera positions (metres) of the extra views of ``--views``: left of the scene and behind-left,
 #: 2-2.2 m high, aimed at person A's place (-0.5, 0.9, 0); person B does not hide A from either
@@ -52,8 +52,8 @@ EXTRA_EYES = ((-3.8, 2.0, 1.2), (-2.5, 2.2, -3.2))
 def _render_views(stream: SimStream, seed: int, views: int) -> tuple[list, list, np.ndarray, np.ndarray, list]:
     """Frames and person A's masks (per frame: arrays with one view, lists of ``views`` with more),
     person A's true joints (T, 14, 3) metres and their projections (T, 14, 2) in the first view."""
-    from body.camera import Camera
-    from sim.render import Renderer
+    from counterpart.body.camera import Camera
+    from counterpart.sim.render import Renderer
 
     cams = [stream.camera] + [Camera.look_at(eye, (-0.5, 0.9, 0.0), 55.0, *stream.size)
                               for eye in EXTRA_EYES[:views - 1]]
@@ -91,10 +91,10 @@ def _track_timed(trk: Tracker, frames: list, masks: list) -> tuple[np.ndarray, f
 
 
 def main() -> int:
-    from nodes.tracker.likelihood import ConeLikelihood, make_observation
-    from nodes.tracker.prior import MotionPrior, load_default_prior
-    from nodes.tracker.tracker import Tracker
-    from sim.stream import open_stream
+    from counterpart.nodes.tracker.likelihood import ConeLikelihood, make_observation
+    from counterpart.nodes.tracker.prior import MotionPrior, load_default_prior
+    from counterpart.nodes.tracker.tracker import Tracker
+    from counterpart.sim.stream import open_stream
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--frames", type=int, default=200, help="frames per scenario at most")
@@ -142,7 +142,7 @@ def main() -> int:
     frame0, mask0 = (frames[0], masks[0]) if args.views == 1 else (frames[0][0], masks[0][0])
     obs = make_observation(frame0, mask0)                       # one view's cost
     L = ConeLikelihood(cam)
-    from body.pose import neutral_pose
+    from counterpart.body.pose import neutral_pose
     P = neutral_pose()[None] + np.random.default_rng(0).normal(size=(args.particles, 28)) * 0.05
     L(P, obs)
     t0 = time.perf_counter()

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from body.skeleton import JOINTS
+from counterpart.body.skeleton import JOINTS
 
 CMU_SCALE: float = 0.0254 / 0.45
 
@@ -332,7 +332,7 @@ def bvh_to_joints14(bvh: BVH, drop_first: bool = True,
         drop_first: drop frame 0 (the T-pose calibration frame of CMU takes).
         mapping: our joint name -> BVH joint name, for all 14 (default ``CMU_TO_JOINTS14``).
     Returns:
-        (T', 14, 3) float64 metres in ``body.skeleton.JOINTS`` order.
+        (T', 14, 3) float64 metres in ``counterpart.body.skeleton.JOINTS`` order.
     """
     mapping = CMU_TO_JOINTS14 if mapping is None else mapping
     missing = [j for j in JOINTS if j not in mapping]

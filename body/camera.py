@@ -167,7 +167,7 @@ class Camera:
 
 def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "") -> Any:
     """The ``messages.CameraInfo`` of a camera (the calibration node publishes it)."""
-    from messages import CameraInfo
+    from counterpart.messages import CameraInfo
 
     return CameraInfo(stamp=stamp, seq=seq, width=camera.width, height=camera.height, fx=camera.fx, fy=camera.fy,
                       cx=camera.cx, cy=camera.cy, R=np.asarray(camera.R, np.float64),

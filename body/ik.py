@@ -1,7 +1,7 @@
 """Inverse kinematics: 14 joint positions -> pose vectors, and body dimensions from joints.
 
-Closed-form, vectorised over N frames. Used to turn motion capture (``body.bvh``) or any
-``TwoPersonTrajectory`` into pose vectors (``body.pose``) for learning dynamics priors and for
+Closed-form, vectorised over N frames. Used to turn motion capture (``counterpart.body.bvh``) or any
+``TwoPersonTrajectory`` into pose vectors (``counterpart.body.pose``) for learning dynamics priors and for
 re-rendering captured motion with the cone model.
 
 The 14 joints do not determine every DOF, so the solver fixes what it cannot see:
@@ -15,7 +15,7 @@ The 14 joints do not determine every DOF, so the solver fixes what it cannot see
   of real people move relative to the neck (clavicles), ours do not, so arm positions are
   matched in direction, not exactly in place.
 
-The decompositions invert the chain in ``body.kinematics``:
+The decompositions invert the chain in ``counterpart.body.kinematics``:
 ``Ry(a) Rx(b) Rz(c)``: b = asin(-R12), a = atan2(R02, R22), c = atan2(R10, R11);
 limb direction ``Rx(-f) Rz(p) (0,-1,0) = (sin p, -cos p cos f, cos p sin f)``.
 """
@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.kinematics import rot_x, rot_z
-from body.pose import DOF, DOF_INDEX
-from body.skeleton import DEFAULT_DIMS, JOINT_INDEX, BodyDims
+from counterpart.body.kinematics import rot_x, rot_z
+from counterpart.body.pose import DOF, DOF_INDEX
+from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, BodyDims
 
 J = JOINT_INDEX
 

@@ -1,11 +1,11 @@
 """Forward kinematics of the 14-joint body, vectorised over N poses.
 
-Conventions (see also ``body.pose``): world frame in metres, Y up, ground y = 0. The body frame
+Conventions (see also ``counterpart.body.pose``): world frame in metres, Y up, ground y = 0. The body frame
 has x = the person's own left, y = up, z = forward; at yaw 0 it coincides with the world frame,
 so the body faces +Z (towards a camera at +Z looking towards -Z) and its left is +X.
 
 With ``Rx, Ry, Rz`` the usual right-handed rotations about the frame axes (column vectors), the
-chain is (P = pose vector, names from ``body.pose.DOF_NAMES``)::
+chain is (P = pose vector, names from ``counterpart.body.pose.DOF_NAMES``)::
 
     R_pelvis   = Ry(root_yaw) Rx(root_pitch) Rz(-root_roll)
     R_torso    = R_pelvis Ry(torso_twist) Rx(torso_flex) Rz(-torso_lateral)
@@ -37,8 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.pose import DOF, DOF_INDEX
-from body.skeleton import (
+from counterpart.body.pose import DOF, DOF_INDEX
+from counterpart.body.skeleton import (
     ANCHOR_INDEX, ANCHORS, DEFAULT_DIMS, N_JOINTS, SEGMENT_ANCHORS, BodyDims,
 )
 
@@ -189,7 +189,7 @@ def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarr
         P: (N, DOF) poses (a single (DOF,) pose is treated as N = 1).
         dims: body dimensions.
     Returns:
-        (N, 14, 3) float64 world positions in metres, in ``body.skeleton.JOINTS`` order.
+        (N, 14, 3) float64 world positions in metres, in ``counterpart.body.skeleton.JOINTS`` order.
     """
     return frames(P, dims)[0][:, :N_JOINTS]
 

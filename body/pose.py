@@ -30,14 +30,14 @@ Layout of a pose vector ``P`` (angles in radians; "left" is always the person's 
     24-27 r_hip_flex, r_hip_abd, r_hip_rot, r_knee_flex                    (mirror of the left)
 
 All angles zero is standing straight with arms hanging down along the body. The exact rotation
-matrices are in ``body.kinematics``.
+matrices are in ``counterpart.body.kinematics``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from body.skeleton import DEFAULT_DIMS, BodyDims
+from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 DOF_NAMES: tuple[str, ...] = (
     "root_x", "root_y", "root_z", "root_yaw", "root_pitch", "root_roll",

@@ -21,9 +21,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from body.camera import Camera
-from body.kinematics import cone_endpoints
-from body.skeleton import N_SEGMENTS, BodyDims
+from counterpart.body.camera import Camera
+from counterpart.body.kinematics import cone_endpoints
+from counterpart.body.skeleton import N_SEGMENTS, BodyDims
 
 _SHIFT = 4  # fixed-point bits for sub-pixel accurate OpenCV drawing
 

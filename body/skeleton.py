@@ -18,7 +18,7 @@ Joints (index: name)::
 
 Segments are true truncated cones (flat circular ends, no caps) between two *anchor points*.
 Anchors are the 14 joints plus a few points at a fixed offset from a joint in that joint's
-frame (``ANCHORS``, see ``body.kinematics``): the pelvis root, the chest and the bottom of the
+frame (``ANCHORS``, see ``counterpart.body.kinematics``): the pelvis root, the chest and the bottom of the
 torso, the chin and crown of the head, the ends of the hands and the toes.
 
 All lengths are metres.

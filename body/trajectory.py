@@ -11,12 +11,12 @@ Keys (format_version 1)::
     format_version  int scalar             1
     a, b            float32 (T, 14, 3)     joint positions of person A and B, metres, world frame:
                                            Y up, ground plane y = 0, right-handed; joints in
-                                           ``body.skeleton.JOINTS`` order (head, neck, l_shoulder,
+                                           ``counterpart.body.skeleton.JOINTS`` order (head, neck, l_shoulder,
                                            l_elbow, l_wrist, r_shoulder, r_elbow, r_wrist, l_hip,
                                            l_knee, l_ankle, r_hip, r_knee, r_ankle; l_ = the
                                            person's own left). T >= 1. NaN is not allowed.
     fps             float scalar           frames per second (> 0); frame t is at t / fps seconds
-    joint_names     str (14,)              must equal ``body.skeleton.JOINTS``
+    joint_names     str (14,)              must equal ``counterpart.body.skeleton.JOINTS``
     label           str scalar             interaction name, e.g. "handshake"
   optional:
     signals_a/_b    uint8 or float32 (T, K) per-frame social-signal labels of A / B (both or
@@ -40,8 +40,8 @@ from typing import Any
 
 import numpy as np
 
-from body.bvh import CMU_SCALE, bvh_to_joints14, read_bvh
-from body.skeleton import JOINTS, N_JOINTS
+from counterpart.body.bvh import CMU_SCALE, bvh_to_joints14, read_bvh
+from counterpart.body.skeleton import JOINTS, N_JOINTS
 
 FORMAT_VERSION = 1
 _REQUIRED = ("format_version", "a", "b", "fps", "joint_names", "label")
@@ -237,7 +237,7 @@ class TwoPersonTrajectory:
             label: interaction name.
             scale: metres per BVH unit (CMU default).
             drop_first: drop frame 0 (CMU T-pose).
-            mapping: BVH joint names for our 14 (default ``body.bvh.CMU_TO_JOINTS14``).
+            mapping: BVH joint names for our 14 (default ``counterpart.body.bvh.CMU_TO_JOINTS14``).
         """
         ba, bb = read_bvh(path_a, scale), read_bvh(path_b, scale)
         if abs(ba.frame_time - bb.frame_time) > 1e-6:

@@ -3,7 +3,7 @@
 Layout of a bag (an ordinary MCAP file, profile ``counterpart``):
 
 - one MCAP *schema* per message schema id: ``name`` = the schema id (``camera.Frame/1``), ``encoding``
-  = ``counterpart-msgpack``, ``data`` = JSON of :func:`messages.describe` of the class (or, when the
+  = ``counterpart-msgpack``, ``data`` = JSON of :func:`counterpart.messages.describe` of the class (or, when the
   recording process does not know the class, a description inferred from the wire header, marked
   ``"inferred": true``), so a bag can be understood without the code that wrote it;
 - one MCAP *channel* per (topic, schema id), message encoding ``counterpart-msgpack``;
@@ -44,8 +44,8 @@ from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
-from messages import REGISTRY, decode, describe, encode
-from messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
+from counterpart.messages import REGISTRY, decode, describe, encode
+from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
 
 ENCODING = "counterpart-msgpack"
 PROFILE = "counterpart"
@@ -104,7 +104,7 @@ def _infer_type(value: Any, arrays: list[list[Any]]) -> str:
 
 
 def schema_description(sid: str, header: dict[str, Any] | None = None) -> dict[str, Any]:
-    """What a bag stores about schema ``sid``: :func:`messages.describe` of the registered class, or a
+    """What a bag stores about schema ``sid``: :func:`counterpart.messages.describe` of the registered class, or a
     description inferred from one wire ``header`` (``"inferred": true``) when the class is unknown."""
     cls = REGISTRY.get(sid)
     if cls is not None:

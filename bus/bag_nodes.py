@@ -4,10 +4,10 @@ In a launch file::
 
     nodes:
       record:
-        run: bus.bag_nodes:Recorder
+        run: counterpart.bus.bag_nodes:Recorder
         params: {path: run.mcap, topics: [camera/frames, tracker/pose]}
       play:
-        run: bus.bag_nodes:Player
+        run: counterpart.bus.bag_nodes:Player
         params: {path: run.mcap, lockstep: true, modules: [tests.graph_nodes]}
 
 The recorder stores the wire parts exactly as received, without decoding arrays and without needing
@@ -21,8 +21,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from messages import REGISTRY
-from messages.codec import DEFAULT_LIMITS, DecodeError, read_header
+from counterpart.messages import REGISTRY
+from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, read_header
 
 from .bag import COMPRESSIONS, DEFAULT_CHUNK_SIZE, BagReader, BagWriter
 from .node import STATS_PORT, Input, Node, Output

@@ -12,19 +12,19 @@ import sys
 
 #: command -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("bus.cli_demo", "the whole graph end to end on the built-in scene, your video or a camera"),
-    "launch": ("bus.cli_launch", "run a graph from a launch file"),
-    "run": ("bus.cli_run", "run one node alone"),
-    "node": ("bus.cli_introspect", "list the nodes of a running launch"),
-    "topic": ("bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
-    "mine": ("nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
-    "learn": ("bus.cli_learn", "train a model file (tracker-prior, responder, avatar)"),
-    "respond": ("nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
-    "silhouettes": ("nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
-    "calibrate": ("nodes.calibration.cli_calibrate", "offline: the camera of a video file, estimated from the people in it"),
-    "track": ("nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),
-    "sim": ("sim.cli", "render a simulated two-person scene with ground truth"),
-    "bag": ("bus.cli_bag", "record, play, inspect and export bags"),
+    "demo": ("counterpart.bus.cli_demo", "the whole graph end to end on the built-in scene, your video or a camera"),
+    "launch": ("counterpart.bus.cli_launch", "run a graph from a launch file"),
+    "run": ("counterpart.bus.cli_run", "run one node alone"),
+    "node": ("counterpart.bus.cli_introspect", "list the nodes of a running launch"),
+    "topic": ("counterpart.bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
+    "mine": ("counterpart.nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
+    "learn": ("counterpart.bus.cli_learn", "train a model file (tracker-prior, responder, avatar)"),
+    "respond": ("counterpart.nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
+    "silhouettes": ("counterpart.nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
+    "calibrate": ("counterpart.nodes.calibration.cli_calibrate", "offline: the camera of a video file, estimated from the people in it"),
+    "track": ("counterpart.nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),
+    "sim": ("counterpart.sim.cli", "render a simulated two-person scene with ground truth"),
+    "bag": ("counterpart.bus.cli_bag", "record, play, inspect and export bags"),
 }
 
 

@@ -10,7 +10,7 @@
 - ``play`` publishes a bag on the *standalone* endpoints (the folder ``counterpart run`` uses), so
   nodes started with ``counterpart run`` find the topics by name. It does not inject into a running
   launch: there every topic already has its publisher bound; to replay inside a graph, put
-  ``bus.bag_nodes:Player`` in the launch file instead.
+  ``counterpart.bus.bag_nodes:Player`` in the launch file instead.
 - ``info`` prints topics, types, counts, time range and schemas (``--json`` for the raw dict).
 - ``export`` writes ``DIR/<topic>.jsonl`` (one line per message: its scalar fields, ``_log_time``
   and ``_type``) and each array as ``DIR/<topic>/<index>_<field>.npy``, or ``.png`` for uint8 images
@@ -96,7 +96,7 @@ def _err(msg: str) -> int:
 def record(args: argparse.Namespace) -> int:
     import zmq
 
-    from messages import EndOfStream
+    from counterpart.messages import EndOfStream
 
     from .bag import BagWriter
     from .bag_nodes import import_modules
@@ -216,7 +216,7 @@ def play(args: argparse.Namespace) -> int:
         spec = standalone_spec("bag_play", Player, params, {}, {})
     except (ParamError, ValueError) as exc:
         return _err(str(exc))
-    spec["module"] = "bus.bag_nodes:Player"
+    spec["module"] = "counterpart.bus.bag_nodes:Player"
     outs = [f"{t}" for t in spec["outputs"] if t != "stats"]
     print(f"playing {args.file} on {', '.join(outs)} (standalone endpoints)", file=sys.stderr)
     return Player(spec).run()

@@ -52,8 +52,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def ensure_models(serve: bool = False) -> None:
     """Build the default model files the graph loads (and, with ``serve``, those the live page
     offers), when they are not cached yet."""
-    from nodes.responder.models import load_default
-    from nodes.tracker.prior import default_prior_path, load_default_prior
+    from counterpart.nodes.responder.models import load_default
+    from counterpart.nodes.tracker.prior import default_prior_path, load_default_prior
 
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)

@@ -119,8 +119,8 @@ def main_topic(args: argparse.Namespace) -> int:
     except registry.RegistryError as exc:
         print(f"counterpart topic: {exc}", file=sys.stderr)
         return 1
-    from messages import EndOfStream, schema_id
-    from messages.codec import UntypedMessage
+    from counterpart.messages import EndOfStream, schema_id
+    from counterpart.messages.codec import UntypedMessage
 
     start = last = time.monotonic()
     n = 0

@@ -6,9 +6,9 @@ import importlib
 
 #: target -> (module with add_arguments/main, help)
 TARGETS: dict[str, tuple[str, str]] = {
-    "tracker-prior": ("nodes.tracker.cli_learn", "the tracker's motion prior (PCA + HMM of poses)"),
-    "responder": ("nodes.responder.cli_learn", "an interaction model of the responder"),
-    "avatar": ("nodes.responder.cli_avatar", "a video-texture avatar from a recording of a person"),
+    "tracker-prior": ("counterpart.nodes.tracker.cli_learn", "the tracker's motion prior (PCA + HMM of poses)"),
+    "responder": ("counterpart.nodes.responder.cli_learn", "an interaction model of the responder"),
+    "avatar": ("counterpart.nodes.responder.cli_avatar", "a video-texture avatar from a recording of a person"),
 }
 
 

@@ -35,9 +35,9 @@ import msgpack
 import numpy as np
 import zmq
 
-from messages import REGISTRY, EndOfStream, encode
-from messages.codec import ALLOWED_DTYPES
-from messages.core import field_types
+from counterpart.messages import REGISTRY, EndOfStream, encode
+from counterpart.messages.codec import ALLOWED_DTYPES
+from counterpart.messages.core import field_types
 
 #: kinds of damage, in the order they are cycled through; "valid" ones are delivered to the node
 KINDS = ("random_bytes", "valid", "no_header", "truncated", "nested", "valid", "bad_array", "oversize",
@@ -257,7 +257,7 @@ def run_fuzz(nodes: dict[str, dict[str, Any]], targets: list[FuzzTarget], n: int
                         for t in targets}, "nodes": nodes}
     (workdir / "fuzz.yaml").write_text(yaml.safe_dump(doc, sort_keys=False))
     log = open(workdir / "fuzz.log", "w+")
-    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", "launch", str(workdir / "fuzz.yaml")],
+    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "launch", str(workdir / "fuzz.yaml")],
                             env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=log, stderr=subprocess.STDOUT,
                             start_new_session=True)
     deadline = time.monotonic() + timeout
@@ -286,7 +286,7 @@ def run_fuzz(nodes: dict[str, dict[str, Any]], targets: list[FuzzTarget], n: int
 
 
 def _send(pubs: dict[str, HostilePublisher], targets: list[FuzzTarget], n: int, seed: int, deadline: float) -> None:
-    from messages import by_name
+    from counterpart.messages import by_name
 
     streams = {t.topic: hostile_messages(t.topic, by_name(t.type_name), n, "fuzzer", seed + i, t.min_dim)
                for i, t in enumerate(targets)}

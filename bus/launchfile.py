@@ -38,7 +38,7 @@ from typing import Any
 
 import yaml
 
-from messages import by_name, schema_id
+from counterpart.messages import by_name, schema_id
 
 from .endpoints import TopicEndpoints, ipc_endpoints, tcp_endpoints
 from .node import STATS_PORT, Input, Node, Output, stats_topic
@@ -105,7 +105,7 @@ def find_launch_file(name: str | Path, relative_to: Path | None = None) -> Path:
     for t in tries:
         if t.is_file():
             return t.resolve()
-    packaged = resources.files("launch") / str(name)
+    packaged = resources.files("counterpart.launch") / str(name)
     if packaged.is_file():
         return Path(str(packaged))
     raise LaunchError(f"launch file {name!s} not found (looked in {', '.join(str(t) for t in tries)} and the launch package)")
@@ -209,7 +209,7 @@ def _node_decl(file: str, name: str, body: dict[str, Any]) -> NodeDecl:
     if unknown:
         raise _err(file, name, unknown[0], f"unknown key; expected one of {', '.join(sorted(NODE_KEYS))}")
     if not isinstance(body.get("run"), str):
-        raise _err(file, name, "run", "missing: name the module that holds the node (e.g. nodes.camera)")
+        raise _err(file, name, "run", "missing: name the module that holds the node (e.g. counterpart.nodes.camera)")
     decl = NodeDecl(name=name, run=body["run"], file=file)
     decl.params = dict(_mapping(body.get("params"), file, name, "params"))
     decl.remap = {str(k): str(v) for k, v in _mapping(body.get("remap"), file, name, "remap").items()}

@@ -35,7 +35,7 @@ from typing import Any, ClassVar
 import numpy as np
 import zmq
 
-from messages import EndOfStream, NodeStats, TopicStats
+from counterpart.messages import EndOfStream, NodeStats, TopicStats
 
 from .endpoints import TopicEndpoints, ipc_endpoints, standalone_dir
 from .params import Param, resolve_params
@@ -383,7 +383,7 @@ class Node:
     # ------------------------------------------------------------------------------- entry points
     @classmethod
     def main(cls, argv: list[str] | None = None) -> None:
-        """Run this node alone from the command line (``python -m nodes.x --param k=v``)."""
+        """Run this node alone from the command line (``python -m counterpart.nodes.x --param k=v``)."""
         from .runner import run_standalone
 
         sys.exit(run_standalone(cls, argv))

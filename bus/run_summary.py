@@ -2,7 +2,7 @@
 reads at the end of ``counterpart demo`` and the figures of ``OUT/demo_stats.json``.
 
 Each node of a launch keeps its newest ``NodeStats`` in ``RUN_DIR/stats/NODE.json`` (written by
-:class:`bus.node.Node` with every stats message and once more as it ends), so the summary reads
+:class:`counterpart.bus.node.Node` with every stats message and once more as it ends), so the summary reads
 files rather than a lossy subscription that can miss a node's last word.
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from messages import NodeStats, TopicStats
+from counterpart.messages import NodeStats, TopicStats
 
 from .launchfile import stats_dir
 

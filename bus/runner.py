@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import atexit
 import importlib
+import importlib.util
 import inspect
 import logging
 import os
@@ -20,12 +21,37 @@ class NodeLookupError(ImportError):
     """The ``run:`` module of a node cannot be imported or holds no node class."""
 
 
+# The top-level names the project's packages had before they moved under ``counterpart``.
+_OLD_TOP_LEVEL = ("messages", "bus", "body", "sim", "nodes", "launch", "apps")
+
+
+def moved_module(module_name: str) -> str | None:
+    """The ``counterpart.`` path of a module named by its old top-level path, else None.
+
+    ``nodes.tracker`` is ``counterpart.nodes.tracker`` now; importing the old name from a source
+    checkout would load a second copy of the project whose message classes are not the bus's.
+    """
+    mod_name = module_name.partition(":")[0]
+    if mod_name.split(".")[0] not in _OLD_TOP_LEVEL:
+        return None
+    new = f"counterpart.{module_name}"
+    try:
+        found = importlib.util.find_spec(f"counterpart.{mod_name}") is not None
+    except ModuleNotFoundError:
+        found = False
+    return new if found else None
+
+
 def find_node_class(module_name: str) -> type[Node]:
     """The Node subclass of ``module_name`` (or of ``module_name.node``).
 
     A module names its node with ``NODE = TheClass``, or defines exactly one Node subclass.
     A ``module:Class`` form picks a class explicitly.
     """
+    new = moved_module(module_name)
+    if new is not None:
+        raise NodeLookupError(f"{module_name!r} is the old module path: the project's modules are under "
+                              f"'counterpart' now; write {new!r}")
     mod_name, _, cls_name = module_name.partition(":")
     candidates = [mod_name, f"{mod_name}.node"]
     errors = []
@@ -62,7 +88,7 @@ def find_node_class(module_name: str) -> type[Node]:
 
 def setup_logging(name: str) -> None:
     """Log lines on stderr, prefixed with the time and ``name``; a line that repeats is rate-limited
-    (:class:`bus.logs.RepeatFilter`: a few per kind and 10 s, then a count)."""
+    (:class:`counterpart.bus.logs.RepeatFilter`: a few per kind and 10 s, then a count)."""
     level = os.environ.get("COUNTERPART_LOG", "INFO").upper()
     logging.basicConfig(
         level=getattr(logging, level, logging.INFO),
@@ -125,9 +151,9 @@ def run_standalone(cls: type[Node] | str, argv: list[str] | None = None) -> int:
 
 
 def main() -> None:
-    """``python -m bus.runner SPEC.json`` (what the launcher starts)."""
+    """``python -m counterpart.bus.runner SPEC.json`` (what the launcher starts)."""
     if len(sys.argv) != 2:
-        print("usage: python -m bus.runner SPEC.json", file=sys.stderr)
+        print("usage: python -m counterpart.bus.runner SPEC.json", file=sys.stderr)
         sys.exit(2)
     sys.exit(run_spec(load_spec(sys.argv[1])))
 

@@ -1,6 +1,6 @@
 """The launcher: start every node of a checked graph as its own process group and supervise it.
 
-- Each node runs ``python -m bus.runner SPEC`` in a new session (its own process group) with
+- Each node runs ``python -m counterpart.bus.runner SPEC`` in a new session (its own process group) with
   PR_SET_PDEATHSIG, so it dies with the launcher even when the launcher is SIGKILLed; nodes also
   watch their parent pid as a second guard.
 - Ctrl-C / SIGTERM: SIGINT to every group, then SIGTERM after ``INT_GRACE_S``, then SIGKILL after
@@ -43,7 +43,7 @@ TERM_GRACE_S = 1.5
 DRAIN_S = 10.0
 #: after a node failed before its first message: how long the others get to end by themselves (on
 #: its end of stream), then how long they get to stop on SIGINT; with the failed node's own wait for
-#: end-of-stream confirmations (bus.node.EARLY_FAILURE_EOS_S) and TERM_GRACE_S, all within 5 s
+#: end-of-stream confirmations (counterpart.bus.node.EARLY_FAILURE_EOS_S) and TERM_GRACE_S, all within 5 s
 EARLY_GRACE_S = 0.7
 EARLY_INT_GRACE_S = 1.0
 BACKOFF_START_S = 0.5
@@ -103,7 +103,7 @@ class Launcher:
             path.write_text(json.dumps(spec, indent=1))
             decl = graph.nodes[name]
             self.procs[name] = Proc(
-                name=name, cmd=[sys.executable, "-m", "bus.runner", str(path)],
+                name=name, cmd=[sys.executable, "-m", "counterpart.bus.runner", str(path)],
                 restart=decl.restart, max_restarts=decl.max_restarts, required=decl.required,
                 running_file=Path(spec["running_file"]),
             )

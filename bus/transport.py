@@ -1,6 +1,6 @@
 """Publish/subscribe over ZeroMQ with the two queue policies of Counterpart.
 
-A :class:`Publisher` owns a topic's sockets (see :mod:`bus.endpoints`). Messages are encoded once
+A :class:`Publisher` owns a topic's sockets (see :mod:`counterpart.bus.endpoints`). Messages are encoded once
 and sent on each socket that has subscribers; on the reliable socket the send waits (checking
 ``should_stop``) while a reliable subscriber lags, on the latest and queued sockets it never waits. End of stream is also sent on the reliable
 socket under the topic prefix ``EOS_PREFIX`` so that latest subscribers, which listen for that prefix
@@ -20,8 +20,8 @@ from typing import Any, Callable, Sequence
 
 import zmq
 
-from messages import REGISTRY, EndOfStream, encode, schema_id
-from messages.codec import (DEFAULT_LIMITS, DecodeError, Limits, check_array_count, decode_any, decode_counted,
+from counterpart.messages import REGISTRY, EndOfStream, encode, schema_id
+from counterpart.messages.codec import (DEFAULT_LIMITS, DecodeError, Limits, check_array_count, decode_any, decode_counted,
                             read_header)
 
 from .endpoints import TopicEndpoints, bind_address

@@ -109,7 +109,7 @@ def encode(msg: Any, counter: int | None = None) -> list[Any]:
 
 
 def encode_generic(msg: Any, counter: int | None = None) -> list[Any]:
-    """The field-by-field reference encoder that :mod:`messages.compiled` unrolls (same bytes)."""
+    """The field-by-field reference encoder that :mod:`counterpart.messages.compiled` unrolls (same bytes)."""
     arrays: list[np.ndarray] = []
     fields = {n: _to_wire(getattr(msg, n), arrays) for n in _field_names(type(msg))}
     contiguous = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]

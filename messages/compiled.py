@@ -1,6 +1,6 @@
 """Per-class encoders and decoders, written out once per message class.
 
-The generic codec (:mod:`messages.codec`) walks a class's fields with a loop of lookups and calls
+The generic codec (:mod:`counterpart.messages.codec`) walks a class's fields with a loop of lookups and calls
 per field. For the small messages that make up most of a graph's traffic that walk cost more than the
 socket send itself, and it runs cold (the process has just woken up for the message), where every
 extra bytecode shows. So, the way :mod:`dataclasses` writes ``__init__``, each class gets two
@@ -12,7 +12,7 @@ functions with one straight-line block per field:
   ``encode_generic``; the header is the same msgpack map, byte for byte, either way;
 - the decoder accepts a value of exactly the declared scalar type inline and hands every other value
   to the generic checker, which converts it (``int`` to ``float``) or raises the same
-  :class:`~messages.codec.DecodeError` with the same ``where``.
+  :class:`~counterpart.messages.codec.DecodeError` with the same ``where``.
 
 Nothing here changes what is accepted or refused; ``tests/test_messages.py`` checks both paths agree.
 """
@@ -90,7 +90,7 @@ def compile_encoder(cls: type) -> Encoder:
 
 def compile_decoder(cls: type) -> Decoder:
     """``decode(fields, arrays) -> instance`` of message class ``cls`` from a header's field map and
-    the already checked arrays; raises DecodeError like :func:`messages.codec._build`."""
+    the already checked arrays; raises DecodeError like :func:`counterpart.messages.codec._build`."""
     from .codec import DecodeError, _array, _check
 
     hints = field_types(cls)

@@ -8,7 +8,7 @@ from .core import EMPTY, message, struct
 
 @struct
 class TrackedBody:
-    """One tracked person: ``joints`` (14, 3) float32 metres in the world frame (body.skeleton.JOINTS
+    """One tracked person: ``joints`` (14, 3) float32 metres in the world frame (counterpart.body.skeleton.JOINTS
     order, Y up), ``pose`` and ``best_pose`` (DOF,) float64 pose vectors (body.pose), the weighted
     mean and the best particle; ``ess`` effective sample size of the final weighted particle set
     (un-annealed weights, before resampling: 1 to the particle count); ``log_likelihood``

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from body.kinematics import frames
-from body.skeleton import ANCHOR_INDEX, BodyDims
+from counterpart.body.kinematics import frames
+from counterpart.body.skeleton import ANCHOR_INDEX, BodyDims
 
 N_POINTS: int = 40   # surface points per part (clouds are padded to this size)
 _RING = 8            # points per ring around a tube or ellipsoid

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from body.camera import Camera
+from counterpart.body.camera import Camera
 
 #: metres above the head joint (the head's centre) that the image must include: the crown and hair
 HEAD_TOP = 0.16

@@ -1,14 +1,14 @@
 """Motion capture as a scenario: a BVH pair (two people of one take) driving the renderer.
 
-``scenario_from_bvh(path_a, path_b, fps=25)``: read both files (``body.trajectory``), turn the
+``scenario_from_bvh(path_a, path_b, fps=25)``: read both files (``counterpart.body.trajectory``), turn the
 pair about the vertical so that the line between the two people at their closest approach runs
 along +X with A on the left (the camera looks along -Z), recentre the pair at the origin, fit each
-person's body (``body.ik.dims_from_joints``) and poses (``body.ik.inverse_kinematics``), and lift
+person's body (``counterpart.body.ik.dims_from_joints``) and poses (``counterpart.body.ik.inverse_kinematics``), and lift
 each person by one constant so that the body's lowest point over the take sits on the floor (the
 5th percentile of the per-frame lowest points: feet on y = 0, any jump kept).
 
 Labels: phase 0 before the closest approach window (pelvis distance within 5 cm of its
-minimum), 1 inside it, 2 after; gaze and activity measured as in ``sim.scenarios``; nod, shake
+minimum), 1 inside it, 2 after; gaze and activity measured as in ``counterpart.sim.scenarios``; nod, shake
 and talking unknown (-1): the capture does not say.
 """
 from __future__ import annotations
@@ -17,11 +17,11 @@ import os
 
 import numpy as np
 
-from body.ik import dims_from_joints, inverse_kinematics
-from body.kinematics import lowest_point
-from body.pose import DOF_INDEX
-from body.trajectory import TwoPersonTrajectory
-from sim.scenarios import SIGNAL_INDEX, SIGNAL_NAMES, Scenario, _gaze_and_activity
+from counterpart.body.ik import dims_from_joints, inverse_kinematics
+from counterpart.body.kinematics import lowest_point
+from counterpart.body.pose import DOF_INDEX
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.sim.scenarios import SIGNAL_INDEX, SIGNAL_NAMES, Scenario, _gaze_and_activity
 
 #: where the project's development data keeps the CMU handshake (subjects 18 and 19, trial 1)
 CMU_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "..", "shared", "data", "cmu")
@@ -44,7 +44,7 @@ def _rot_y(points: np.ndarray, angle: float) -> np.ndarray:
 
 def scenario_from_bvh(path_a: str | os.PathLike, path_b: str | os.PathLike, fps: float = 25.0,
                       label: str = "handshake", seed: int = 0) -> Scenario:
-    """A :class:`sim.scenarios.Scenario` from two BVH files of one take (see the module docstring)."""
+    """A :class:`counterpart.sim.scenarios.Scenario` from two BVH files of one take (see the module docstring)."""
     traj = TwoPersonTrajectory.from_bvh_pair(path_a, path_b, fps=fps, label=label)
     A, B = traj.a.astype(np.float64), traj.b.astype(np.float64)
     pa = 0.5 * (A[:, 8] + A[:, 11])

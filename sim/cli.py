@@ -13,7 +13,7 @@ Writes into ``--out``:
   (visible pixels of A, B), ``shadow`` (T,H,W) bool, ``signals`` (T,2,K) int8 with
   ``signal_names``, ``phase`` (T,) int32, ``label``, ``fps``, ``times`` (T,) s, ``poses`` (T,2,28),
   ``camera_K`` (3,3), ``camera_R`` (3,3), ``camera_t`` (3,), ``codec``, ``meta`` (JSON string).
-* ``trajectory.npz``: ``body.trajectory`` format with signals and phase.
+* ``trajectory.npz``: ``counterpart.body.trajectory`` format with signals and phase.
 * ``contact_sheet.png``: 12 frames in a 4x3 grid, each stamped with its frame number.
 
 The same arguments give the same bytes (all randomness comes from seeded numpy generators).
@@ -29,7 +29,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from sim.scenarios import EMOTIONS, SCENARIOS
+from counterpart.sim.scenarios import EMOTIONS, SCENARIOS
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -75,7 +75,7 @@ def contact_sheet(frames: list[np.ndarray], numbers: list[int], cols: int = 4) -
 
 
 def render_to_folder(stream: Any, out: str, progress: bool = True) -> dict[str, str]:
-    """Render every frame of ``stream`` (a ``sim.stream.SimStream``) into ``out``; returns paths."""
+    """Render every frame of ``stream`` (a ``counterpart.sim.stream.SimStream``) into ``out``; returns paths."""
     os.makedirs(out, exist_ok=True)
     T = stream.n_frames
     W, H = stream.size
@@ -124,7 +124,7 @@ def main(args: argparse.Namespace) -> int:
     if not args.out:
         print("counterpart sim: --out DIR is required (or --list)", file=sys.stderr)
         return 2
-    from sim.stream import open_stream
+    from counterpart.sim.stream import open_stream
     kw: dict[str, Any] = {"emotion": args.emotion, "strength": args.strength, "frames": args.frames,
                           "noise": args.noise, "camera": args.camera}
     if args.scenario == "cmu":
@@ -142,6 +142,6 @@ def main(args: argparse.Namespace) -> int:
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(prog="python -m sim.cli")
+    ap = argparse.ArgumentParser(prog="python -m counterpart.sim.cli")
     add_arguments(ap)
     sys.exit(main(ap.parse_args()))

@@ -3,16 +3,16 @@ from __future__ import annotations
 
 from typing import Any, Iterable
 
-from body.trajectory import TwoPersonTrajectory
-from sim.scenarios import SCENARIOS, make_scenario
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.sim.scenarios import SCENARIOS, make_scenario
 
 
 def generate_dataset(scenarios: Iterable[str] | None = None, seeds: Iterable[int] = range(10),
                      fps: float = 25.0, **kw: Any) -> list[TwoPersonTrajectory]:
-    """One ``body.trajectory.TwoPersonTrajectory`` per (scenario, seed), poses only (no images).
+    """One ``counterpart.body.trajectory.TwoPersonTrajectory`` per (scenario, seed), poses only (no images).
 
     Args:
-        scenarios: names from ``sim.scenarios.SCENARIOS`` (default: all of them).
+        scenarios: names from ``counterpart.sim.scenarios.SCENARIOS`` (default: all of them).
         seeds: integer seeds.
         fps: frames per second.
         **kw: passed to every generator (e.g. ``emotion="angry"``, ``strength=0.8``;

@@ -12,7 +12,7 @@ supersampled twice, blurred, and with sensor noise and a slight brightness flick
     clip.truth["nod"], clip.truth["shake"], clip.truth["talking"]   # (T,) bool per frame
 
 ``conversation_face_clip`` films person A of the simulator's ``conversation`` scenario
-(``sim.scenarios.conversation``) face-on: head yaw and pitch are the scenario's ``head_turn`` and
+(``counterpart.sim.scenarios.conversation``) face-on: head yaw and pitch are the scenario's ``head_turn`` and
 ``head_nod`` (relative to the torso, so nods, shakes and look-aways), the head's sway its joint's
 motion, and the mouth moves through each of the person's talking turns in syllables (3-6 per
 second, with short pauses). The labels are the scenario's own.
@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from body.pose import DOF_INDEX
-from sim.scenarios import SIGNAL_INDEX, conversation
+from counterpart.body.pose import DOF_INDEX
+from counterpart.sim.scenarios import SIGNAL_INDEX, conversation
 
 #: half-axes of the head ellipsoid (m): x across the face, y up, z towards the camera at yaw 0
 HEAD_RADII = (0.08, 0.102, 0.095)
@@ -253,7 +253,7 @@ class FaceClip:
 def conversation_face_clip(seed: int = 0, fps: float = 25.0, duration: float = 60.0,
                            width: int = 640, height: int = 360, face_px: float | None = None,
                            person: str = "a") -> FaceClip:
-    """Person ``person`` of ``sim.scenarios.conversation(seed, fps, duration=duration)`` filmed
+    """Person ``person`` of ``counterpart.sim.scenarios.conversation(seed, fps, duration=duration)`` filmed
     face-on (see the module docstring). face_px: face width (px), default seeded 100-170 at
     640x360 (scaled with the frame height)."""
     if person not in ("a", "b"):

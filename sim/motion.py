@@ -1,6 +1,6 @@
 """Motion building blocks for the scenarios: keyframe tracks, overlays, arm reaching, ground contact.
 
-Everything works on pose arrays ``P`` of shape (T, 28) (``body.pose`` layout, radians and metres)
+Everything works on pose arrays ``P`` of shape (T, 28) (``counterpart.body.pose`` layout, radians and metres)
 sampled at ``fps`` frames per second.
 
 * :class:`Track` holds keyframes of one person and samples them with minimum-jerk interpolation
@@ -10,7 +10,7 @@ sampled at ``fps`` frames per second.
 * :func:`bump` / :func:`oscillation` add windowed movements (nods, shakes, waving, pumping).
 * :func:`reach` solves the arm (shoulder flex/abd/rot, elbow flex) so that the wrist lies on a
   world target, vectorised over frames: a two-bone analytic solution for the elbow position,
-  then ``body.ik.inverse_kinematics`` for the angles; :func:`apply_reach` blends it in by a
+  then ``counterpart.body.ik.inverse_kinematics`` for the angles; :func:`apply_reach` blends it in by a
   per-frame weight.
 * :func:`ground` shifts ``root_y`` so that the lowest point of the body touches y = 0.
 """
@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.ik import inverse_kinematics
-from body.kinematics import forward_kinematics, lowest_point
-from body.pose import DOF, DOF_INDEX, clip_to_limits
-from body.skeleton import JOINT_INDEX, BodyDims
+from counterpart.body.ik import inverse_kinematics
+from counterpart.body.kinematics import forward_kinematics, lowest_point
+from counterpart.body.pose import DOF, DOF_INDEX, clip_to_limits
+from counterpart.body.skeleton import JOINT_INDEX, BodyDims
 
 ARM_DOFS: dict[str, list[int]] = {
     s: [DOF_INDEX[f"{s}_{n}"] for n in ("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex")]
@@ -51,7 +51,7 @@ class Track:
     """Keyframes of one person's pose; sampled with minimum-jerk interpolation.
 
     Keys must be added in increasing time. ``set(t, name=value, ...)`` copies the previous key
-    and changes the named DOFs (``body.pose.DOF_NAMES``), so a key only says what moves.
+    and changes the named DOFs (``counterpart.body.pose.DOF_NAMES``), so a key only says what moves.
     """
 
     def __init__(self, P0: np.ndarray) -> None:
@@ -80,7 +80,7 @@ class Track:
         P = self.last
         for name, v in dofs.items():
             if name not in DOF_INDEX:
-                raise ValueError(f"Track.set: unknown DOF {name!r}; see body.pose.DOF_NAMES")
+                raise ValueError(f"Track.set: unknown DOF {name!r}; see counterpart.body.pose.DOF_NAMES")
             P[DOF_INDEX[name]] = v
         return self.key(t, P)
 

@@ -1,4 +1,4 @@
-"""Rendering a :class:`sim.scenarios.Scenario` to video frames with exact ground truth.
+"""Rendering a :class:`counterpart.sim.scenarios.Scenario` to video frames with exact ground truth.
 
 Image formation, per frame ``i`` at time ``t = i / fps``::
 
@@ -32,9 +32,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from body.camera import Camera, default_camera
-from sim.appearance import Appearance, PartTable, body_clouds, part_table, random_appearance
-from sim.scenarios import Scenario
+from counterpart.body.camera import Camera, default_camera
+from counterpart.sim.appearance import Appearance, PartTable, body_clouds, part_table, random_appearance
+from counterpart.sim.scenarios import Scenario
 
 _SHIFT = 4
 _CHUNK = 32
@@ -135,7 +135,7 @@ class FrameTruth:
         masks: (2, H, W) bool, visible pixels of A and B.
         shadow: (H, W) bool, cast-shadow pixels on the floor not covered by a person.
         signals: (2, K) int8 social signals (``Scenario.signal_names``).
-        phase: phase code (``sim.scenarios.PHASES``).
+        phase: phase code (``counterpart.sim.scenarios.PHASES``).
         label: interaction label.
         time_s: scene time, seconds.
     """
@@ -155,7 +155,7 @@ class Renderer:
 
     Args:
         scenario: the motion.
-        camera: the camera (default ``body.camera.default_camera(width, height)``).
+        camera: the camera (default ``counterpart.body.camera.default_camera(width, height)``).
         seed: seeds the room, lighting, clothing and sensor noise.
         noise_sigma: sensor noise standard deviation, grey levels.
         appearances: the two people's looks (default: drawn from ``seed``).

@@ -1,17 +1,17 @@
 """Seeded two-person scenarios: pose trajectories, per-frame labels and planted listener rules.
 
 Every generator ``NAME(seed=0, fps=25.0, emotion=None, strength=None, initiator=None, **kw)``
-returns a :class:`Scenario`: two people's pose trajectories (``body.pose`` vectors, T x 28), their
+returns a :class:`Scenario`: two people's pose trajectories (``counterpart.body.pose`` vectors, T x 28), their
 body sizes, an interaction label, a per-frame phase and per-frame social-signal labels.
 
-Scene layout: world metres, Y up, floor y = 0, camera of ``body.camera.default_camera`` at
+Scene layout: world metres, Y up, floor y = 0, camera of ``counterpart.body.camera.default_camera`` at
 z = +4 m. Person A stands on the left (x < 0) facing +X (``root_yaw`` = +pi/2), person B on the
 right (x > 0) facing -X (``root_yaw`` = -pi/2), both around z = 0 (jittered by the seed).
 
-Motion is keyframed (``sim.motion.Track``, minimum-jerk between keys) with overlays for gait,
+Motion is keyframed (``counterpart.sim.motion.Track``, minimum-jerk between keys) with overlays for gait,
 nods, shakes, gestures and emotional style, then grounded (lowest body point on y = 0 every
 frame); hands that must meet a target (handshake, high five, pull, push) are solved per frame
-with a two-bone arm inverse kinematics (``sim.motion.reach``), so contacts are exact.
+with a two-bone arm inverse kinematics (``counterpart.sim.motion.reach``), so contacts are exact.
 
 Seeded variation (``numpy.random.default_rng(seed)`` only): timing, positions, body heights
 (``BodyDims.scaled``, 1.55-1.92 m), who initiates, emotion and its strength, and the listener's
@@ -41,11 +41,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from body.kinematics import forward_kinematics, frames
-from body.pose import DOF_INDEX, clip_to_limits, neutral_pose
-from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, JOINT_INDEX, BodyDims
-from body.trajectory import TwoPersonTrajectory
-from sim.motion import Track, add_gait, apply_reach, ground, oscillation, ramp, smooth_noise, window
+from counterpart.body.kinematics import forward_kinematics, frames
+from counterpart.body.pose import DOF_INDEX, clip_to_limits, neutral_pose
+from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, JOINT_INDEX, BodyDims
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.sim.motion import Track, add_gait, apply_reach, ground, oscillation, ramp, smooth_noise, window
 
 SIGNAL_NAMES: tuple[str, ...] = ("nod", "shake", "gaze_at_other", "talking", "activity")
 SIGNAL_INDEX: dict[str, int] = {n: i for i, n in enumerate(SIGNAL_NAMES)}
@@ -102,7 +102,7 @@ class Scenario:
     """Two people's motion with labels.
 
     Attributes:
-        poses_a, poses_b: (T, 28) float64 pose vectors (``body.pose``), radians and metres.
+        poses_a, poses_b: (T, 28) float64 pose vectors (``counterpart.body.pose``), radians and metres.
         dims_a, dims_b: body dimensions.
         fps: frames per second; frame t is at t / fps seconds.
         label: interaction name ("handshake", ...).
@@ -148,7 +148,7 @@ class Scenario:
                         self.signal_names, dict(self.meta))
 
     def to_trajectory(self) -> TwoPersonTrajectory:
-        """The ``body.trajectory`` form (joints, signals as float32 with -1 unknown, phase)."""
+        """The ``counterpart.body.trajectory`` form (joints, signals as float32 with -1 unknown, phase)."""
         X = self.joints()
         meta = dict(self.meta)
         meta["dims_a"] = _dims_dict(self.dims_a)
@@ -653,7 +653,7 @@ def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Sce
     if name == "cmu":
         a, b = kw.pop("bvh_a", None), kw.pop("bvh_b", None)
         if a is None or b is None:
-            from sim.capture import default_cmu_pair
+            from counterpart.sim.capture import default_cmu_pair
             a, b = default_cmu_pair()
         return scenario_from_bvh(a, b, fps=fps, **kw)
     if name not in SCENARIOS:
@@ -663,6 +663,6 @@ def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Sce
 
 def scenario_from_bvh(path_a: str, path_b: str, fps: float = 25.0, label: str = "handshake",
                       seed: int = 0) -> Scenario:
-    """A BVH pair as a scenario; see ``sim.capture.scenario_from_bvh``."""
-    from sim.capture import scenario_from_bvh as _from_bvh
+    """A BVH pair as a scenario; see ``counterpart.sim.capture.scenario_from_bvh``."""
+    from counterpart.sim.capture import scenario_from_bvh as _from_bvh
     return _from_bvh(path_a, path_b, fps=fps, label=label, seed=seed)

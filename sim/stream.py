@@ -2,16 +2,16 @@
 
     stream = open_stream("handshake", seed=3, width=320, height=240, fps=25)
     frame, t = stream.render(i)        # (H, W, 3) uint8 BGR, scene time in seconds
-    truth = stream.truth(i)            # sim.render.FrameTruth: joints, masks, shadow, labels
+    truth = stream.truth(i)            # counterpart.sim.render.FrameTruth: joints, masks, shadow, labels
     stream.n_frames, stream.fps, stream.size   # size = (width, height)
 
 Options (keywords, strings accepted as they come from a URI query): ``emotion`` (neutral, happy,
 sad, angry), ``strength`` (0-1), ``initiator`` (a/b), ``interested`` (conversation: 1/0),
 ``duration`` (conversation, seconds), ``frames`` (cap the frame count), ``noise`` (sensor noise
 sigma, grey levels), ``bvh_a``/``bvh_b`` (scenario "cmu"), ``camera`` (``default``: the camera of
-``body.camera.default_camera``; ``random``: a camera of random height 1-3 m, tilt 0-35 degrees and
+``counterpart.body.camera.default_camera``; ``random``: a camera of random height 1-3 m, tilt 0-35 degrees and
 horizontal field of view 40-75 degrees drawn from the seed that keeps both people in view,
-``sim.camera.random_camera``; its drawn parameters are in ``stream.scenario.meta["camera"]``).
+``counterpart.sim.camera.random_camera``; its drawn parameters are in ``stream.scenario.meta["camera"]``).
 """
 from __future__ import annotations
 
@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from body.camera import Camera, default_camera
-from body.trajectory import TwoPersonTrajectory
-from sim.render import FrameTruth, Renderer
-from sim.scenarios import Scenario, make_scenario
+from counterpart.body.camera import Camera, default_camera
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.sim.render import FrameTruth, Renderer
+from counterpart.sim.scenarios import Scenario, make_scenario
 
 _FLOAT = ("strength", "duration", "noise")
 _INT = ("frames",)
@@ -58,7 +58,7 @@ class SimStream:
 
     Attributes:
         scenario: the motion and labels.
-        renderer: the ``sim.render.Renderer``.
+        renderer: the ``counterpart.sim.render.Renderer``.
         camera: the camera.
         n_frames, fps, size ((width, height) pixels).
     """
@@ -127,7 +127,7 @@ def open_stream(scenario: str = "handshake", seed: int = 0, width: int | None = 
     sc = make_scenario(scenario, seed=int(seed), fps=fps, **opts)
     cam = default_camera(width, height)
     if camera == "random":
-        from sim.camera import random_camera
+        from counterpart.sim.camera import random_camera
 
         cam, drawn = random_camera(sc.joints(), np.random.default_rng([int(seed), 7331]), width, height)
         sc.meta["camera"] = drawn

@@ -5,12 +5,12 @@ import time
 
 import numpy as np
 
-from body.kinematics import forward_kinematics
-from body.pose import neutral_pose
-from bus import Node, Output, Param
-from messages import Pose3D, SocialSignals
-from messages.labeller import PersonSignals
-from messages.tracker import TrackedBody
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.bus import Node, Output, Param
+from counterpart.messages import Pose3D, SocialSignals
+from counterpart.messages.labeller import PersonSignals
+from counterpart.messages.tracker import TrackedBody
 
 
 class NoddingSpeaker(Node):

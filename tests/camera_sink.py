@@ -9,8 +9,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bus import Input, Node, Param
-from messages import Frame
+from counterpart.bus import Input, Node, Param
+from counterpart.messages import Frame
 
 
 class FrameSink(Node):

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import time
 
-from bus import Input, Node, Output, Param
+from counterpart.bus import Input, Node, Output, Param
 from tests.graph_nodes import Number
 
 

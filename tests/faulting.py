@@ -16,11 +16,11 @@ import cv2
 import numpy as np
 import zmq
 
-from bus import registry
-from bus.bag import BagReader
-from bus.fuzz import FuzzTarget, run_fuzz
-from bus.transport import LATEST, Subscriber
-from messages import NodeStats
+from counterpart.bus import registry
+from counterpart.bus.bag import BagReader
+from counterpart.bus.fuzz import FuzzTarget, run_fuzz
+from counterpart.bus.transport import LATEST, Subscriber
+from counterpart.messages import NodeStats
 from tests.launching import REPO, kill_tree, start_launch, wait_for, write_launch
 
 #: frames per second of the camera under test (a 25 fps clip played twice as fast)
@@ -29,7 +29,7 @@ CAMERA_FPS = 50
 
 def fuzz_silhouette_and_labeller(workdir: Path, n: int, timeout: float) -> tuple[list[FuzzTarget], int | None, str, float]:
     """``n`` hostile messages each to the silhouette node's frames and the labeller's silhouettes
-    (bus.fuzz.run_fuzz). Returns the targets with their counts, the launcher's exit code, its
+    (counterpart.bus.fuzz.run_fuzz). Returns the targets with their counts, the launcher's exit code, its
     output and the seconds it all took."""
     targets = [
         # frames of every size down to 0 pixels a side: the silhouette node refuses those below 2x2
@@ -37,10 +37,10 @@ def fuzz_silhouette_and_labeller(workdir: Path, n: int, timeout: float) -> tuple
         FuzzTarget("labeller", "silhouettes", "fuzzed_silhouettes", "silhouette.Silhouettes"),
     ]
     nodes = {
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 2}},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": 2}},
         # the labeller takes silhouettes only here (a given rate, no faces): the fuzzed frames are the
         # silhouette node's
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False, "use_face": False, "fps": 25.0},
+        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": False, "use_face": False, "fps": 25.0},
                      "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
     }
     t0 = time.monotonic()
@@ -82,7 +82,7 @@ def recorder_stalls_camera(workdir: Path, lossless: bool, stopped_s: float = 3.0
     Returns whether the camera stalled while the recorder was stopped (fewer than 10 frames out)
     and the recorder's output."""
     home = Path(tempfile.mkdtemp(prefix="cpr", dir="/tmp"))  # short: unix socket paths are limited
-    doc = {"policy": "latest", "nodes": {"camera": {"run": "nodes.camera", "params": {
+    doc = {"policy": "latest", "nodes": {"camera": {"run": "counterpart.nodes.camera", "params": {
         "source": str(video(workdir / "v.avi")), "loop": True, "pacing": "rate", "rate": CAMERA_FPS / 25}}}}
     launch = start_launch(write_launch(workdir / "recorded.yaml", doc), env={"COUNTERPART_HOME": str(home)})
     bag = workdir / f"recorded{'_lossless' if lossless else ''}.mcap"
@@ -95,7 +95,7 @@ def recorder_stalls_camera(workdir: Path, lossless: bool, stopped_s: float = 3.0
         reg = registry.read(str(home / "latest"))
         stats = Subscriber(ctx, "camera/stats", registry.topic_endpoints(reg, "camera/stats"), LATEST, msg_type=NodeStats)
         _require(wait_for(lambda: (_last_count(stats, 1.2) or 0) > 10, 60), "the camera published nothing")
-        rec = subprocess.Popen([sys.executable, "-m", "bus.cli", "bag", "record", "-t", "frame", "-o", str(bag),
+        rec = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "bag", "record", "-t", "frame", "-o", str(bag),
                                 *(["--lossless"] if lossless else [])], cwd=REPO, start_new_session=True,
                                env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)

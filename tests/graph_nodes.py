@@ -8,8 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from bus import Input, Node, Output, Param
-from messages import message
+from counterpart.bus import Input, Node, Output, Param
+from counterpart.messages import message
 
 
 @message("test.Number", 1)
@@ -91,7 +91,7 @@ class Sink(Node):
 class FrameSink(Node):
     """Takes camera frames (used to provoke a type mismatch in launch checks)."""
 
-    from messages import Frame as _Frame
+    from counterpart.messages import Frame as _Frame
 
     inputs = {"in": Input(_Frame)}
 

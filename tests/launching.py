@@ -21,11 +21,11 @@ def write_launch(path: Path, doc: dict[str, Any]) -> Path:
 
 
 def start_launch(file: Path, *extra: str, env: dict[str, str] | None = None) -> subprocess.Popen:
-    """``python -m bus.cli launch FILE`` in its own session, from the repository root."""
+    """``python -m counterpart.bus.cli launch FILE`` in its own session, from the repository root."""
     e = dict(os.environ)
     e.update(env or {})
     return subprocess.Popen(
-        [sys.executable, "-m", "bus.cli", "launch", str(file), *extra],
+        [sys.executable, "-m", "counterpart.bus.cli", "launch", str(file), *extra],
         cwd=REPO, env=e, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True,
     )
 

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from bus import Input, Node, Output, Param
-from messages import Pose3D, Silhouettes
-from messages.tracker import TrackedBody
+from counterpart.bus import Input, Node, Output, Param
+from counterpart.messages import Pose3D, Silhouettes
+from counterpart.messages.tracker import TrackedBody
 
 #: a standing person facing +Z (left shoulder at +X), project joint order, metres, Y up
 STANDING = np.array([

@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from body.kinematics import forward_kinematics
-from body.pose import DOF_INDEX, neutral_pose
-from bus import LATEST, RELIABLE, Input, Node, Output, Param
-from messages import Control, Frame, Partner
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF_INDEX, neutral_pose
+from counterpart.bus import LATEST, RELIABLE, Input, Node, Output, Param
+from counterpart.messages import Control, Frame, Partner
 
 
 def scene_frame(seq: int, width: int = 160, height: int = 120) -> np.ndarray:

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.kinematics import forward_kinematics
-from body.pose import DOF_INDEX, neutral_pose
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF_INDEX, neutral_pose
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 
 def smooth(rng: np.random.Generator, T: int, lo: float, hi: float, knots: int = 6) -> np.ndarray:

@@ -4,9 +4,9 @@ from __future__ import annotations
 import json
 import time
 
-from bus import Input, Node, Output, Param
-from messages import Control, Partner, Pose3D
-from messages.tracker import TrackedBody
+from counterpart.bus import Input, Node, Output, Param
+from counterpart.messages import Control, Partner, Pose3D
+from counterpart.messages.tracker import TrackedBody
 from tests.responder_fixtures import planted_pair
 
 

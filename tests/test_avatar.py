@@ -11,16 +11,16 @@ import pytest
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
-from body.camera import default_camera
-from body.kinematics import forward_kinematics
-from body.pose import neutral_pose
-from messages import Partner, decode, encode
-from nodes.renderer.avatar import AvatarPainter
-from nodes.responder.avatar_driver import avatar_goals, avatar_partner
-from nodes.responder.avatar_recording import sim_recording
-from nodes.responder.listener import ListenerModel
-from nodes.responder.models import load_model, save_model
-from nodes.responder.video_texture import STATE_SIGNALS, RecordingError, VideoTexture, fit_recording
+from counterpart.body.camera import default_camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.messages import Partner, decode, encode
+from counterpart.nodes.renderer.avatar import AvatarPainter
+from counterpart.nodes.responder.avatar_driver import avatar_goals, avatar_partner
+from counterpart.nodes.responder.avatar_recording import sim_recording
+from counterpart.nodes.responder.listener import ListenerModel
+from counterpart.nodes.responder.models import load_model, save_model
+from counterpart.nodes.responder.video_texture import STATE_SIGNALS, RecordingError, VideoTexture, fit_recording
 
 SECONDS = 14.0
 
@@ -127,7 +127,7 @@ def test_the_avatar_file_round_trips_with_its_frames(texture: VideoTexture, reco
 
 def test_too_short_a_recording_and_a_signal_that_never_occurs_say_what_is_missing(recorded) -> None:
     rec = recorded[0]
-    from nodes.responder.video_texture import appearance_features
+    from counterpart.nodes.responder.video_texture import appearance_features
 
     feats = appearance_features(rec.crops, rec.masks)
     short = np.zeros(len(feats), bool)
@@ -144,7 +144,7 @@ def test_too_short_a_recording_and_a_signal_that_never_occurs_say_what_is_missin
 
 @pytest.mark.slow  # the masks are cut out in two worker processes
 def test_learn_avatar_from_a_video_file(recorded, tmp_path: Path, capsys) -> None:
-    from nodes.responder import cli_avatar
+    from counterpart.nodes.responder import cli_avatar
 
     rec, labels, video = recorded
     lab = tmp_path / "labels.npz"
@@ -235,8 +235,8 @@ def test_the_renderer_composites_the_avatar_where_the_partner_stands(texture: Vi
 
 
 def test_the_compositor_draws_the_avatar_in_auto_style_and_cones_when_asked(texture: VideoTexture, tmp_path: Path) -> None:
-    from messages import Frame
-    from nodes.renderer.compositor import Bundle, Compositor
+    from counterpart.messages import Frame
+    from counterpart.nodes.renderer.compositor import Bundle, Compositor
 
     path = save_model(tmp_path / "avatar.npz", texture)
     joints = forward_kinematics(neutral_pose(x=0.5, z=0.0, yaw=-np.pi / 2))[0].astype(np.float32)

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.responder.avatar_recording import sim_recording
-from nodes.responder.listener import ListenerModel
-from nodes.responder.models import load_model, save_model
-from nodes.responder.video_texture import fit_recording
+from counterpart.nodes.responder.avatar_recording import sim_recording
+from counterpart.nodes.responder.listener import ListenerModel
+from counterpart.nodes.responder.models import load_model, save_model
+from counterpart.nodes.responder.video_texture import fit_recording
 from tests.launching import read_jsonl, run_launch, write_launch
 
 FRAMES, NOD_FROM = 90, 30
@@ -32,7 +32,7 @@ def test_the_avatar_answers_a_nodding_speaker(tmp_path: Path, models: tuple[Path
     folder, avatar = models
     g = write_launch(tmp_path / "g.yaml", {"nodes": {
         "speaker": {"run": "tests.avatar_nodes:NoddingSpeaker", "params": {"frames": FRAMES, "nod_from": NOD_FROM}},
-        "responder": {"run": "nodes.responder", "params": {"model": "video-texture", "model_file": str(avatar),
+        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "video-texture", "model_file": str(avatar),
                                                            "use_signals": True, "use_control": False}},
         "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp_path / "out.jsonl")}},
     }})

@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 import yaml
 
-from bus.bag import BagReader, BagWriter, decode_fields, pack_parts, unpack_parts
-from bus.bag_nodes import Player, Recorder
-from bus.cli_bag import export_bag
-from bus.params import ParamError
-from messages import Frame, encode
+from counterpart.bus.bag import BagReader, BagWriter, decode_fields, pack_parts, unpack_parts
+from counterpart.bus.bag_nodes import Player, Recorder
+from counterpart.bus.cli_bag import export_bag
+from counterpart.bus.params import ParamError
+from counterpart.messages import Frame, encode
 from tests.graph_nodes import Number
 
 REPO = Path(__file__).resolve().parents[1]
@@ -48,7 +48,7 @@ def _env(home: Path) -> dict[str, str]:
 
 
 def _start(args: list[str], home: Path, **kw: Any) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "bus.cli", *args], cwd=REPO, env=_env(home),
+    return subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, env=_env(home),
                             start_new_session=True, **kw)
 
 
@@ -228,7 +228,7 @@ def test_launched_recorder_then_player_replays_bit_exact(tmp_path: Path, home: P
     bag1, bag2 = tmp_path / "one.mcap", tmp_path / "two.mcap"
     _launch({"nodes": {
         "source": {"run": N + "Counter", "params": {"count": count, "payload_bytes": size}, "remap": {"out": "numbers"}},
-        "rec": {"run": "bus.bag_nodes:Recorder", "params": {"path": str(bag1), "topics": ["numbers"], "flush_period": 0.05}},
+        "rec": {"run": "counterpart.bus.bag_nodes:Recorder", "params": {"path": str(bag1), "topics": ["numbers"], "flush_period": 0.05}},
     }}, tmp_path, home, "record.yaml")
     r1 = BagReader(bag1)
     first = list(r1.records())
@@ -241,11 +241,11 @@ def test_launched_recorder_then_player_replays_bit_exact(tmp_path: Path, home: P
 
     sink = tmp_path / "sink.jsonl"
     _launch({"nodes": {
-        "play": {"run": "bus.bag_nodes:Player",
+        "play": {"run": "counterpart.bus.bag_nodes:Player",
                  "params": {"path": str(bag1), "lockstep": True, "modules": ["tests.graph_nodes"],
                             "remap": {"numbers": "replayed"}}},
         "sink": {"run": N + "Sink", "params": {"path": str(sink)}, "remap": {"in": "replayed"}},
-        "rec": {"run": "bus.bag_nodes:Recorder", "params": {"path": str(bag2), "topics": ["replayed"]}},
+        "rec": {"run": "counterpart.bus.bag_nodes:Recorder", "params": {"path": str(bag2), "topics": ["replayed"]}},
     }}, tmp_path, home, "replay.yaml")
     rows = [json.loads(line) for line in sink.read_text().splitlines()]
     got = [r for r in rows if "seq" in r]
@@ -325,7 +325,7 @@ def test_cli_record_until_end_of_stream_then_info_and_play(tmp_path: Path, home:
     seqs = [decode_fields(x.parts)[1]["seq"] for x in r.records()]
     assert r.complete and seqs and seqs == list(range(seqs[0], count))  # joined late, then every message
 
-    info = subprocess.run([sys.executable, "-m", "bus.cli", "bag", "info", str(bag), "--json"], cwd=REPO,
+    info = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "bag", "info", str(bag), "--json"], cwd=REPO,
                           capture_output=True, text=True, timeout=30)
     assert info.returncode == 0, info.stderr
     data = json.loads(info.stdout)
@@ -358,9 +358,9 @@ def test_player_paces_loops_and_resends_exact_parts(tmp_path: Path, home: Path, 
 
     import zmq
 
-    from bus.transport import Subscriber
-    from bus.endpoints import TopicEndpoints
-    from bus.node import standalone_spec
+    from counterpart.bus.transport import Subscriber
+    from counterpart.bus.endpoints import TopicEndpoints
+    from counterpart.bus.node import standalone_spec
 
     monkeypatch.setenv("COUNTERPART_HOME", str(home))
     bag = tmp_path / "b.mcap"

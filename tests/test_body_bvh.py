@@ -4,8 +4,8 @@
 import numpy as np
 import pytest
 
-from body.bvh import CMU_SCALE, CMU_TO_JOINTS14, bvh_to_joints14, read_bvh
-from body.skeleton import JOINT_INDEX, JOINTS
+from counterpart.body.bvh import CMU_SCALE, CMU_TO_JOINTS14, bvh_to_joints14, read_bvh
+from counterpart.body.skeleton import JOINT_INDEX, JOINTS
 
 from tests.shared_data import CMU as DATA
 CMU_A, CMU_B = DATA / "18_01.bvh", DATA / "19_01.bvh"
@@ -162,9 +162,9 @@ def test_cmu_left_is_own_left(cmu):
 def test_cmu_inverse_kinematics(cmu):
     # Mocap -> pose vectors -> our cone body with fitted dimensions: joints come back within
     # a few cm (measured max 4.9 cm, at the shoulders, which are rigid in our model).
-    from body.ik import dims_from_joints, inverse_kinematics
-    from body.kinematics import forward_kinematics, lowest_point
-    from body.pose import within_limits
+    from counterpart.body.ik import dims_from_joints, inverse_kinematics
+    from counterpart.body.kinematics import forward_kinematics, lowest_point
+    from counterpart.body.pose import within_limits
     for b in cmu:
         X = bvh_to_joints14(b)
         dims = dims_from_joints(X)

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from body.camera import Camera, default_camera
-from body.kinematics import forward_kinematics
-from body.pose import neutral_pose
-from body.skeleton import DEFAULT_DIMS
-from body.raster import rasterise_silhouettes
+from counterpart.body.camera import Camera, default_camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS
+from counterpart.body.raster import rasterise_silhouettes
 
 
 def test_project_hand_computed():
@@ -86,7 +86,7 @@ def test_dict_round_trip_and_errors():
 
 
 def test_one_camera_for_a_frame_size_default_scaled_or_refused():
-    from body.camera import camera_for_size
+    from counterpart.body.camera import camera_for_size
 
     # no calibration: the default camera at that size, square pixels at any aspect ratio
     wide = camera_for_size(None, 612, 288)

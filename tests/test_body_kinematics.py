@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from body.camera import default_camera
-from body.kinematics import anchor_points, cone_endpoints, forward_kinematics, frames, lowest_point, rot_x, rot_y, rot_z
-from body.pose import DOF, DOF_INDEX, DOF_NAMES, LOWER, UPPER, clip_to_limits, neutral_pose, within_limits
-from body.raster import (
+from counterpart.body.camera import default_camera
+from counterpart.body.kinematics import anchor_points, cone_endpoints, forward_kinematics, frames, lowest_point, rot_x, rot_y, rot_z
+from counterpart.body.pose import DOF, DOF_INDEX, DOF_NAMES, LOWER, UPPER, clip_to_limits, neutral_pose, within_limits
+from counterpart.body.raster import (
     cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps,
 )
-from body.skeleton import ANCHOR_INDEX, BONES, DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_SEGMENTS, PARENT, SEGMENTS, BodyDims
+from counterpart.body.skeleton import ANCHOR_INDEX, BONES, DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_SEGMENTS, PARENT, SEGMENTS, BodyDims
 
 J = JOINT_INDEX
 D = DEFAULT_DIMS
@@ -106,7 +106,7 @@ def test_yaw_rotates_body_about_vertical():
     np.testing.assert_allclose(Y - root, np.stack([rel[:, 2], rel[:, 1], -rel[:, 0]], axis=1), atol=1e-12)
     # The toes point along +Z at yaw 0 and along +X at yaw +90 degrees.
     pts = frames(np.stack([P, Q]))[0]
-    from body.skeleton import ANCHOR_INDEX
+    from counterpart.body.skeleton import ANCHOR_INDEX
     toe = pts[:, ANCHOR_INDEX["l_toe"]] - pts[:, J["l_ankle"]]
     assert toe[0, 2] > 0.1 and abs(toe[0, 0]) < 1e-9
     assert toe[1, 0] > 0.1 and abs(toe[1, 2]) < 1e-9
@@ -202,7 +202,7 @@ def test_vectorised_samplers_match_per_pose():
 
 
 def test_inverse_kinematics_round_trip():
-    from body.ik import dims_from_joints, inverse_kinematics
+    from counterpart.body.ik import dims_from_joints, inverse_kinematics
     P = random_poses(300, 11)
     # What 14 joints cannot show is fixed by the solver: pelvis pitch and head turn.
     P[:, DOF_INDEX["root_pitch"]] = 0.0

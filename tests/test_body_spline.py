@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from body.spline import (
+from counterpart.body.spline import (
     combined_shape_vector,
     design_matrix,
     evaluate_closed_bspline,

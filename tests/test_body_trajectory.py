@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from body.kinematics import forward_kinematics
-from body.pose import neutral_pose
-from body.skeleton import JOINTS
-from body.trajectory import FORMAT_VERSION, TwoPersonTrajectory
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.body.skeleton import JOINTS
+from counterpart.body.trajectory import FORMAT_VERSION, TwoPersonTrajectory
 
 from tests.shared_data import CMU as DATA
 

@@ -17,8 +17,8 @@ import psutil
 import pytest
 import zmq
 
-from bus.endpoints import tcp_endpoints
-from messages import EndOfStream, encode_frames
+from counterpart.bus.endpoints import tcp_endpoints
+from counterpart.messages import EndOfStream, encode_frames
 from tests.graph_nodes import Number
 from tests.launching import (REPO, descendants, free_port_pair, kill_tree, read_jsonl, run_launch, start_launch, stop_launch,
                              wait_for, write_launch)
@@ -200,7 +200,7 @@ def test_introspection_lists_nodes_and_topics_and_echoes(tmp_path: Path) -> None
     home = tempfile.mkdtemp(prefix="cp-", dir="/tmp")  # short: unix socket paths are limited to 107 bytes
     env = {"COUNTERPART_HOME": home}
     proc = start_launch(f, env=env)
-    cli = lambda *a: subprocess.run([sys.executable, "-m", "bus.cli", *a], cwd=REPO, capture_output=True,  # noqa: E731
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "counterpart.bus.cli", *a], cwd=REPO, capture_output=True,  # noqa: E731
                                     text=True, timeout=30, env={**os.environ, **env})
     try:
         assert wait_for(lambda: len(received(tmp_path / "sink.jsonl")) > 5, 20)

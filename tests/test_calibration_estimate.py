@@ -1,4 +1,4 @@
-"""The camera estimate from people (nodes.calibration.estimate) on exact projections of known
+"""The camera estimate from people (counterpart.nodes.calibration.estimate) on exact projections of known
 cameras: people of known statures walking on the ground at different depths, their head and foot
 points projected and perturbed by a pixel of noise."""
 from __future__ import annotations
@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from body.camera import Camera
-from nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
-from nodes.calibration.lines import find_families
-from nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
+from counterpart.body.camera import Camera
+from counterpart.nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
+from counterpart.nodes.calibration.lines import find_families
+from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
 
 W, H = 320, 240
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from body.camera import Camera, camera_for_size, default_camera
+from counterpart.body.camera import Camera, camera_for_size, default_camera
 from tests.launching import read_jsonl, run_launch, write_launch
 
 W, H = 200, 150  # the simulator rendered at another size than its own 320x240
@@ -17,9 +17,9 @@ W, H = 200, 150  # the simulator rendered at another size than its own 320x240
 def _graph(tmp_path: Path, file: str = "") -> tuple[Path, Path]:
     out = tmp_path / "info.jsonl"
     doc = {"nodes": {
-        "camera": {"run": "nodes.camera", "params": {"source": "sim:handshake", "pacing": "lockstep",
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": "sim:handshake", "pacing": "lockstep",
                                                      "max_frames": 4, "width": W, "height": H}},
-        "calibration": {"run": "nodes.calibration", "policy": "reliable", "params": {"file": file}},
+        "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable", "params": {"file": file}},
         "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "camera_info", "path": str(out)}},
     }}
     return write_launch(tmp_path / "graph.yaml", doc), out
@@ -71,10 +71,10 @@ def _estimating_graph(tmp_path: Path, **params: object) -> tuple[Path, Path]:
     estimating the camera from the people in view."""
     out = tmp_path / "info.jsonl"
     doc = {"policy": "reliable", "nodes": {
-        "camera": {"run": "nodes.camera", "params": {"source": "sim:high_five?seed=1&camera=random",
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": "sim:high_five?seed=1&camera=random",
                                                      "pacing": "lockstep", "max_frames": 75}},
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 20, "replay_training": True}},
-        "calibration": {"run": "nodes.calibration", "params": {"file": "", "estimate": True, "every": 5, **params}},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": 20, "replay_training": True}},
+        "calibration": {"run": "counterpart.nodes.calibration", "params": {"file": "", "estimate": True, "every": 5, **params}},
         "sink": {"run": "tests.topic_sink", "params": {"topic": "camera_info", "path": str(out)}},
     }}
     return write_launch(tmp_path / "graph.yaml", doc), out

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 import yaml
 
-from nodes.camera.node import EXIT_SOURCE_ERROR
-from nodes.camera.sources import video_devices
+from counterpart.nodes.camera.node import EXIT_SOURCE_ERROR
+from counterpart.nodes.camera.sources import video_devices
 from tests.camera_sink import VTEST, cv2_frames, write_video
 
 REPO = Path(__file__).resolve().parents[1]
@@ -27,12 +27,12 @@ def launch(tmp_path: Path, camera: dict[str, Any], timeout: float = 60) -> tuple
     out = tmp_path / "sink.jsonl"
     out.unlink(missing_ok=True)
     doc = {"nodes": {
-        "camera": {"run": "nodes.camera", "params": camera},
+        "camera": {"run": "counterpart.nodes.camera", "params": camera},
         "sink": {"run": "tests.camera_sink", "params": {"path": str(out)}, "policy": "reliable"},
     }}
     file = tmp_path / "graph.yaml"
     file.write_text(yaml.safe_dump(doc, sort_keys=False))
-    proc = subprocess.Popen([sys.executable, "-m", "bus.cli", "launch", str(file)], cwd=REPO,
+    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "launch", str(file)], cwd=REPO,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
     try:
         text, _ = proc.communicate(timeout=timeout)
@@ -142,14 +142,14 @@ def test_bad_parameter_is_refused_before_start(tmp_path: Path) -> None:
 
 
 def test_module_runs_alone(tmp_path: Path) -> None:
-    """``python -m nodes.camera`` (no launcher): a missing file ends with exit code 3 and the reason."""
-    r = subprocess.run([sys.executable, "-m", "nodes.camera", "--param", f"source={tmp_path / 'gone.mp4'}"],
+    """``python -m counterpart.nodes.camera`` (no launcher): a missing file ends with exit code 3 and the reason."""
+    r = subprocess.run([sys.executable, "-m", "counterpart.nodes.camera", "--param", f"source={tmp_path / 'gone.mp4'}"],
                        cwd=REPO, capture_output=True, text=True, timeout=30)
     assert r.returncode == EXIT_SOURCE_ERROR and "gone.mp4' does not exist" in r.stderr
 
 
 def test_example_launch_file_checks() -> None:
-    r = subprocess.run([sys.executable, "-m", "bus.cli", "launch", "camera_file.yaml", "--check",
+    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", "camera_file.yaml", "--check",
                         "--set", "camera.source=folder:frames", "--set", "camera.pacing=lockstep"],
                        cwd=REPO, capture_output=True, text=True, timeout=30)
     assert r.returncode == 0 and "1 nodes, 2 topics: OK" in r.stdout, r.stderr

@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from bus import ParamError
-from nodes.camera.node import Camera
-from nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size
-from nodes.camera.sources import (
+from counterpart.bus import ParamError
+from counterpart.nodes.camera.node import Camera
+from counterpart.nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size
+from counterpart.nodes.camera.sources import (
     ImageFolderSource, SimulatorSource, SourceError, V4L2Source, VideoFileSource, make_source, parse_uri,
     read_with_retry, video_devices,
 )

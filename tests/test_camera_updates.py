@@ -1,13 +1,13 @@
 """A refined camera while the graph runs: each camera_info holds from its seq on for every
-subscriber (body.camera.CameraSchedule), and the tracker's tracks go on through it."""
+subscriber (counterpart.body.camera.CameraSchedule), and the tracker's tracks go on through it."""
 from __future__ import annotations
 
 import numpy as np
 
-from body.camera import Camera, CameraSchedule, default_camera
-from body.raster import rasterise_silhouettes
-from nodes.tracker.tracker import Tracker
-from sim.scenarios import make_scenario
+from counterpart.body.camera import Camera, CameraSchedule, default_camera
+from counterpart.body.raster import rasterise_silhouettes
+from counterpart.nodes.tracker.tracker import Tracker
+from counterpart.sim.scenarios import make_scenario
 
 
 def test_each_camera_holds_from_its_seq_whatever_order_it_came_in() -> None:

@@ -12,12 +12,12 @@ import cv2
 import numpy as np
 import pytest
 
-from body.camera import camera_for_size, load_camera_file
+from counterpart.body.camera import camera_for_size, load_camera_file
 from tests.launching import REPO
 
 
 def _cli(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "bus.cli", *args], cwd=REPO, capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, capture_output=True, text=True,
                           timeout=timeout)
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import cv2
 import pytest
 
-from bus.launchfile import check, find_launch_file, load
+from counterpart.bus.launchfile import check, find_launch_file, load
 from tests.launching import REPO
 
 
@@ -21,7 +21,7 @@ from tests.launching import REPO
 def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path) -> None:
     env = {**os.environ, "COUNTERPART_MODELS": str(tmp_path / "models"),
            "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpd-", dir="/tmp")}
-    res = subprocess.run([sys.executable, "-m", "bus.cli", "demo", "--out", str(tmp_path / "out")],
+    res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(tmp_path / "out")],
                          cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-3000:]
     models = sorted(p.name for p in (tmp_path / "models").iterdir())

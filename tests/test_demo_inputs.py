@@ -29,7 +29,7 @@ def env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
 def clip(tmp_path_factory: pytest.TempPathFactory, env: dict[str, str]) -> Path:
     """A handshake recorded from the simulator at 10 fps (its video file, MJPG)."""
     out = tmp_path_factory.mktemp("clip")
-    subprocess.run([sys.executable, "-m", "bus.cli", "sim", "--scenario", "handshake", "--seed", "3", "--fps",
+    subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "sim", "--scenario", "handshake", "--seed", "3", "--fps",
                     str(FPS), "--frames", str(N_FRAMES), "--out", str(out)], cwd=REPO, env=env, check=True,
                    capture_output=True, timeout=300)
     videos = [p for p in out.iterdir() if p.suffix in (".avi", ".mp4")]
@@ -38,7 +38,7 @@ def clip(tmp_path_factory: pytest.TempPathFactory, env: dict[str, str]) -> Path:
 
 
 def _demo(env: dict[str, str], out: Path, *args: str, timeout: float = 300) -> tuple[subprocess.CompletedProcess, dict]:
-    res = subprocess.run([sys.executable, "-m", "bus.cli", "demo", "--out", str(out), *args], cwd=REPO, env=env,
+    res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(out), *args], cwd=REPO, env=env,
                          capture_output=True, text=True, timeout=timeout)
     stats = json.loads((out / "demo_stats.json").read_text()) if (out / "demo_stats.json").exists() else {}
     return res, stats

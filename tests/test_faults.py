@@ -22,12 +22,12 @@ import psutil
 import pytest
 import zmq
 
-from bus.bag_nodes import Recorder
-from bus.endpoints import RunDirError, ipc_endpoints, private_dir
-from bus.logs import BURST, WINDOW_S, RepeatFilter
-from bus.supervisor import prune_run_dirs
-from bus.transport import LATEST, RELIABLE, Publisher, Subscriber
-from messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
+from counterpart.bus.bag_nodes import Recorder
+from counterpart.bus.endpoints import RunDirError, ipc_endpoints, private_dir
+from counterpart.bus.logs import BURST, WINDOW_S, RepeatFilter
+from counterpart.bus.supervisor import prune_run_dirs
+from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
+from counterpart.messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
 from tests.faulting import fuzz_silhouette_and_labeller, recorder_stalls_camera
 from tests.graph_nodes import Number
 from tests.launching import REPO, descendants, kill_tree, read_jsonl, start_launch, wait_for, write_launch
@@ -85,8 +85,8 @@ def test_a_camera_that_cannot_decode_its_file_ends_the_graph(tmp_path: Path, hom
     video = tmp_path / "r.avi"
     video.write_bytes(np.random.default_rng(0).integers(0, 256, 100_000, dtype=np.uint8).tobytes())
     doc = {"policy": "latest", "nodes": {
-        "camera": {"run": "nodes.camera", "params": {"source": str(video)}},
-        "silhouette": {"run": "nodes.silhouette"},
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": str(video)}},
+        "silhouette": {"run": "counterpart.nodes.silhouette"},
     }}
     proc = start_launch(write_launch(tmp_path / "g.yaml", doc), env={"COUNTERPART_HOME": str(home)})
     try:
@@ -118,7 +118,7 @@ def test_a_required_node_exit_ends_the_graph_within_5_s(tmp_path: Path, home: Pa
 
 
 def test_a_missing_model_file_is_found_when_the_launch_is_checked(home: Path) -> None:
-    res = subprocess.run([sys.executable, "-m", "bus.cli", "launch", "demo.yaml", "--check", "--set",
+    res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", "demo.yaml", "--check", "--set",
                           "responder.model_file=/nonexistent/model.npz"], cwd=REPO, capture_output=True, text=True,
                          timeout=120, env={**os.environ, "COUNTERPART_HOME": str(home)})
     assert res.returncode == 2
@@ -250,8 +250,8 @@ def test_a_message_with_22_people_decodes_and_array_limits_follow_the_type() -> 
     msg = Silhouettes(seq=3, people=people, labels=np.zeros((4, 5), np.uint8))
     parts = encode(msg)
     assert len(parts) == 1 + 67 and len(decode(parts).people) == 22
-    from bus.transport import decode_raw
-    from messages import DecodeError
+    from counterpart.bus.transport import decode_raw
+    from counterpart.messages import DecodeError
 
     assert decode_raw(parts)[0].header["s"] == "silhouette.Silhouettes/1"
     frame = encode(Frame(image=np.zeros((2, 2), np.uint8)))
@@ -312,7 +312,7 @@ def test_launch_refuses_a_base_folder_others_can_write(tmp_path: Path) -> None:
     try:
         os.chmod(base, 0o777)
         f = write_launch(tmp_path / "g.yaml", {"nodes": {"source": {"run": N + "Counter", "params": {"count": 1}}}})
-        res = subprocess.run([sys.executable, "-m", "bus.cli", "launch", str(f)], cwd=REPO, capture_output=True,
+        res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", str(f)], cwd=REPO, capture_output=True,
                              text=True, timeout=60, env={**os.environ, "COUNTERPART_HOME": str(base)})
         assert res.returncode == 2 and "writable by others" in res.stderr and "Traceback" not in res.stderr
         assert not list(base.iterdir())
@@ -391,7 +391,7 @@ def test_topic_list_into_head_ends_without_a_traceback(home: Path) -> None:
     topics = {f"t{i:04d}": {"type": "test.Number/1", "publisher": "a.out", "subscribers": []} for i in range(5000)}
     (run / "registry.json").write_text(json.dumps({"launch_file": "g.yaml", "launcher_pid": os.getpid(),
                                                    "run_dir": str(run), "nodes": {}, "topics": topics}))
-    res = subprocess.run(f"{sys.executable} -m bus.cli topic list --run {run} | head -n 2", shell=True, cwd=REPO,
+    res = subprocess.run(f"{sys.executable} -m counterpart.bus.cli topic list --run {run} | head -n 2", shell=True, cwd=REPO,
                          capture_output=True, text=True, timeout=60)
     assert len(res.stdout.splitlines()) == 2
     assert "Traceback" not in res.stderr and "BrokenPipe" not in res.stderr, res.stderr

@@ -1,4 +1,4 @@
-"""The labeller's face path on short rendered face clips (``sim.face``): tracking, nods, shakes,
+"""The labeller's face path on short rendered face clips (``counterpart.sim.face``): tracking, nods, shakes,
 talking and laughing from faces at 25 and 29.97 fps, the node's parameters, and the node in a real
 graph reading a face video file."""
 from __future__ import annotations
@@ -9,13 +9,13 @@ import cv2
 import numpy as np
 import pytest
 
-from bus import ParamError
-from nodes.labeller.face import find_face_cascade, load_face_cascade
-from nodes.labeller.face_track import FaceTracker, FaceTrackParams
-from nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
-from nodes.labeller.node import Labeller, make_labeller
-from nodes.labeller.signals import SIGNALS, UNKNOWN
-from sim.face import FaceClip, gesture_face_clip
+from counterpart.bus import ParamError
+from counterpart.nodes.labeller.face import find_face_cascade, load_face_cascade
+from counterpart.nodes.labeller.face_track import FaceTracker, FaceTrackParams
+from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
+from counterpart.nodes.labeller.node import Labeller, make_labeller
+from counterpart.nodes.labeller.signals import SIGNALS, UNKNOWN
+from counterpart.sim.face import FaceClip, gesture_face_clip
 from tests.launching import read_jsonl, run_launch, write_launch
 
 pytestmark = pytest.mark.skipif(
@@ -165,10 +165,10 @@ def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
         wr.write(clip.render(i))
     wr.release()
     nodes = {
-        "camera": {"run": "nodes.camera", "params": {"source": str(path), "pacing": "lockstep"}},
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": 10, "mask_every": 0},
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": str(path), "pacing": "lockstep"}},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": 10, "mask_every": 0},
                        "policy": "reliable"},
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False}, "policy": "reliable"},
+        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": False}, "policy": "reliable"},
         "signals": {"run": "tests.topic_sink", "params": {"topic": "signals", "path": str(tmp_path / "s.jsonl")},
                     "policy": "reliable"},
     }
@@ -190,7 +190,7 @@ def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
     """A stand-in tracker that publishes every other frame's pose: the frames between are labelled
     from the silhouettes, which the node says once and counts."""
     from tests.test_labeller_node import EMPTY, N, TRAIN, sink
-    from nodes.silhouette.synthetic import two_person_sequence
+    from counterpart.nodes.silhouette.synthetic import two_person_sequence
 
     seq = two_person_sequence(n_frames=N - EMPTY, size=(120, 160), empty_frames=EMPTY)
     folder = tmp_path / "scene"
@@ -198,11 +198,11 @@ def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
     for i, f in enumerate(seq.frames):
         cv2.imwrite(str(folder / f"f{i:03d}.png"), f)
     nodes = {
-        "camera": {"run": "nodes.camera", "params": {"source": f"folder:{folder}", "pacing": "lockstep", "fps": 25.0}},
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": f"folder:{folder}", "pacing": "lockstep", "fps": 25.0}},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
                        "policy": "reliable"},
         "tracker": {"run": "tests.pose_source", "params": {"every": 2}, "policy": "reliable"},
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": True, "use_face": False, "max_pending": 1000},
+        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": True, "use_face": False, "max_pending": 1000},
                      "policy": "reliable"},
         "signals": sink("signals", tmp_path / "signals.jsonl"),
     }

@@ -9,12 +9,12 @@ import pytest
 
 from tests.shared_data import VTEST
 
-from nodes.labeller.activity import ActivityDetector, activity_2d, activity_3d
-from nodes.labeller.face import FaceSignalDetector, find_face_cascade, load_face_cascade
-from nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_accuracy, gaze_at_other
-from nodes.labeller.labeller import PersonObservation, SocialLabeller, label_pair_3d
-from nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN
-from nodes.labeller.synthetic import conversation, standing_pose
+from counterpart.nodes.labeller.activity import ActivityDetector, activity_2d, activity_3d
+from counterpart.nodes.labeller.face import FaceSignalDetector, find_face_cascade, load_face_cascade
+from counterpart.nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_accuracy, gaze_at_other
+from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller, label_pair_3d
+from counterpart.nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN
+from counterpart.nodes.labeller.synthetic import conversation, standing_pose
 
 FPS = 25.0
 H, LS, RS = JOINT_INDEX["head"], JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]

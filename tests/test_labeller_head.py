@@ -1,12 +1,12 @@
-"""Head nod / shake by FFT of head motion relative to the neck (nodes.labeller.head_motion)."""
+"""Head nod / shake by FFT of head motion relative to the neck (counterpart.nodes.labeller.head_motion)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionParams,
+from counterpart.nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionParams,
                                         head_motion, head_motion_2d)
-from nodes.labeller.signals import UNKNOWN
+from counterpart.nodes.labeller.signals import UNKNOWN
 
 FPS = 25.0
 

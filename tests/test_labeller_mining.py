@@ -1,4 +1,4 @@
-"""Association-rule mining with temporal bagging (nodes.labeller.mining, cli_mine)."""
+"""Association-rule mining with temporal bagging (counterpart.nodes.labeller.mining, cli_mine)."""
 from __future__ import annotations
 
 import argparse
@@ -11,12 +11,12 @@ import pytest
 from mlxtend.frequent_patterns import apriori, association_rules
 from mlxtend.preprocessing import TransactionEncoder
 
-from nodes.labeller import cli_mine
-from nodes.labeller.mining import (LabelStreams, Rule, build_transactions, compare_scenarios,
+from counterpart.nodes.labeller import cli_mine
+from counterpart.nodes.labeller.mining import (LabelStreams, Rule, build_transactions, compare_scenarios,
                                    mine_rules, mine_rules_sessions, read_labels, read_labels_csv,
                                    read_labels_npz, read_rules, write_labels_csv, write_rules)
-from nodes.labeller.signals import UNKNOWN
-from nodes.labeller.synthetic import planted_label_streams
+from counterpart.nodes.labeller.signals import UNKNOWN
+from counterpart.nodes.labeller.synthetic import planted_label_streams
 
 
 def _events(rng: np.random.Generator, t: int, n: int, length: int) -> np.ndarray:

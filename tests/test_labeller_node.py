@@ -8,14 +8,14 @@ from typing import Any
 import numpy as np
 import pytest
 
-from messages import Pose3D, Silhouettes
-from messages.silhouette import PersonShape
-from messages.tracker import TrackedBody
-from nodes.labeller.labeller import SocialLabeller
-from nodes.labeller.node import observations, signals_message
-from nodes.labeller.pairing import SeqPairer
-from nodes.labeller.signals import SIGNALS
-from nodes.silhouette.synthetic import two_person_sequence
+from counterpart.messages import Pose3D, Silhouettes
+from counterpart.messages.silhouette import PersonShape
+from counterpart.messages.tracker import TrackedBody
+from counterpart.nodes.labeller.labeller import SocialLabeller
+from counterpart.nodes.labeller.node import observations, signals_message
+from counterpart.nodes.labeller.pairing import SeqPairer
+from counterpart.nodes.labeller.signals import SIGNALS
+from counterpart.nodes.silhouette.synthetic import two_person_sequence
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 from tests.pose_source import facing
 
@@ -177,10 +177,10 @@ def sink(topic: str, path: Path) -> dict[str, Any]:
 
 def run_graph(tmp_path: Path, source: str, labeller: dict[str, Any], pose_every: int = 0) -> tuple[list, list]:
     nodes: dict[str, Any] = {
-        "camera": {"run": "nodes.camera", "params": {"source": source, "pacing": "lockstep", "fps": 25.0}},
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": source, "pacing": "lockstep", "fps": 25.0}},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
                        "policy": "reliable"},
-        "labeller": {"run": "nodes.labeller", "params": labeller, "policy": "reliable"},
+        "labeller": {"run": "counterpart.nodes.labeller", "params": labeller, "policy": "reliable"},
         "frames": sink("frame", tmp_path / "frames.jsonl"),
         "signals": sink("signals", tmp_path / "signals.jsonl"),
     }
@@ -229,9 +229,9 @@ def test_pose_every_other_frame_3d_there_silhouette_fallback_between(tmp_path: P
 
 def test_face_input_paired_although_frames_arrive_long_before_silhouettes(tmp_path: Path, scene: str) -> None:
     nodes = {
-        "camera": {"run": "nodes.camera", "params": {"source": scene, "pacing": "lockstep", "fps": 25.0}},
-        "silhouette": {"run": "nodes.silhouette", "params": {"train_frames": TRAIN}, "policy": "reliable"},
-        "labeller": {"run": "nodes.labeller", "params": {"use_tracker": False, "use_face": True},
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": scene, "pacing": "lockstep", "fps": 25.0}},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": TRAIN}, "policy": "reliable"},
+        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": False, "use_face": True},
                      "policy": "reliable"},
         "signals": sink("signals", tmp_path / "signals.jsonl"),
     }

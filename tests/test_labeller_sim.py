@@ -9,16 +9,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from body.pose import DOF, DOF_INDEX
-from messages import Pose3D, Silhouettes
-from messages.tracker import TrackedBody
-from nodes.labeller import cli_mine
-from nodes.labeller.head_motion import HeadMotionParams, head_motion
-from nodes.labeller.labeller import PersonObservation, SocialLabeller
-from nodes.labeller.mining import mine_transactions, read_rules, turn_transactions
-from nodes.labeller.node import head_angles, observations
-from nodes.labeller.signals import SIGNALS
-from sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, Scenario, conversation
+from counterpart.body.pose import DOF, DOF_INDEX
+from counterpart.messages import Pose3D, Silhouettes
+from counterpart.messages.tracker import TrackedBody
+from counterpart.nodes.labeller import cli_mine
+from counterpart.nodes.labeller.head_motion import HeadMotionParams, head_motion
+from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller
+from counterpart.nodes.labeller.mining import mine_transactions, read_rules, turn_transactions
+from counterpart.nodes.labeller.node import head_angles, observations
+from counterpart.nodes.labeller.signals import SIGNALS
+from counterpart.sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, Scenario, conversation
 
 FPS = 25.0
 NOD, SHAKE = SIGNALS.index("nod"), SIGNALS.index("shake")

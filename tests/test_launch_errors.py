@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from bus.launchfile import LaunchError, check, load
+from counterpart.bus.launchfile import LaunchError, check, load
 from tests.launching import run_launch, write_launch
 
 N = "tests.graph_nodes:"
@@ -24,6 +24,9 @@ def with_node(name: str, **changes) -> dict:
 CASES = [
     ("missing run", with_node("sink", run=None), "node 'sink': run: missing"),
     ("unknown module", with_node("sink", run="no.such.module"), "node 'sink': run: cannot find a node in 'no.such.module'"),
+    ("old module path", with_node("sink", run="nodes.tracker"),
+     "node 'sink': run: 'nodes.tracker' is the old module path: the project's modules are under 'counterpart' now; "
+     "write 'counterpart.nodes.tracker'"),
     ("unknown class", with_node("sink", run="tests.graph_nodes:Nope"), "node 'sink': run: 'tests.graph_nodes' has no Node class 'Nope'"),
     ("unknown param", with_node("source", params={"cuont": 3}), "node 'source': params: unknown parameter(s) 'cuont'"),
     ("wrong type", with_node("source", params={"count": "many"}), "parameter 'count': expected int"),
@@ -94,3 +97,9 @@ def test_cli_reports_the_error_and_starts_nothing(tmp_path: Path) -> None:
     f = write_launch(tmp_path / "bad.yaml", with_node("source", params={"count": "many"}))
     code, out = run_launch(f, timeout=30)
     assert code == 2 and "parameter 'count': expected int" in out and "started" not in out
+
+
+def test_replace_with_an_old_module_path_names_the_new_one(tmp_path: Path) -> None:
+    f = write_launch(tmp_path / "g.yaml", {"nodes": GOOD})
+    with pytest.raises(LaunchError, match="write 'counterpart.nodes.camera'"):
+        check(load(f, replace={"sink": "nodes.camera"}))

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import zmq
 
-from messages import (DecodeError, EndOfStream, Frame, Limits, NodeStats, TopicStats, by_name, decode,
+from counterpart.messages import (DecodeError, EndOfStream, Frame, Limits, NodeStats, TopicStats, by_name, decode,
                       decode_frames, describe, encode, encode_frames, message)
-from messages.codec import ARRAY_EXT
+from counterpart.messages.codec import ARRAY_EXT
 
 
 @message("test.Evolved", 2)
@@ -128,7 +128,7 @@ def _samples() -> list:
 
 @pytest.mark.parametrize("msg", _samples(), ids=lambda m: type(m).__name__)
 def test_compiled_encoder_writes_the_generic_encoders_bytes(msg) -> None:
-    from messages.codec import encode_generic
+    from counterpart.messages.codec import encode_generic
 
     fast, ref = encode(msg, counter=9), encode_generic(msg, counter=9)
     assert [bytes(p) for p in fast] == [bytes(p) for p in ref]

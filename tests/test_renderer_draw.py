@@ -7,15 +7,15 @@ import cv2
 import numpy as np
 import pytest
 
-from body.camera import Camera, default_camera
-from body.raster import rasterise_cones
-from messages import Control, Frame, NodeStats, Partner, TopicStats
-from body.camera import camera_for_size
-from messages import PersonShape, PersonSignals, Pose3D, Silhouettes, SocialSignals, TrackedBody
-from nodes.renderer import draw
-from nodes.renderer.compositor import Bundle, Compositor
-from nodes.renderer.controls import parse_control
-from nodes.renderer.video import VideoWriter, choose_codec, count_frames
+from counterpart.body.camera import Camera, default_camera
+from counterpart.body.raster import rasterise_cones
+from counterpart.messages import Control, Frame, NodeStats, Partner, TopicStats
+from counterpart.body.camera import camera_for_size
+from counterpart.messages import PersonShape, PersonSignals, Pose3D, Silhouettes, SocialSignals, TrackedBody
+from counterpart.nodes.renderer import draw
+from counterpart.nodes.renderer.compositor import Bundle, Compositor
+from counterpart.nodes.renderer.controls import parse_control
+from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames
 from tests.renderer_nodes import partner_joints, scene_frame
 
 CAM = default_camera(320, 240)

@@ -9,12 +9,12 @@ import cv2
 import numpy as np
 import pytest
 
-from body.camera import default_camera
-from bus.launchfile import LaunchError, check, load
-from messages import Frame, Partner
-from nodes.renderer import draw
-from nodes.renderer.compositor import Compositor
-from nodes.renderer.video import count_frames
+from counterpart.body.camera import default_camera
+from counterpart.bus.launchfile import LaunchError, check, load
+from counterpart.messages import Frame, Partner
+from counterpart.nodes.renderer import draw
+from counterpart.nodes.renderer.compositor import Compositor
+from counterpart.nodes.renderer.video import count_frames
 from tests.camera_sink import cv2_frames
 from tests.launching import read_jsonl, run_launch, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints, scene_frame
@@ -25,8 +25,8 @@ W, H = 160, 120
 def graph(tmp_path: Path, source: dict, renderer: dict) -> Path:
     return write_launch(tmp_path / "graph.yaml", {"nodes": {
         "source": {"run": "tests.renderer_nodes:SceneSource", "params": source},
-        "calibration": {"run": "nodes.calibration", "policy": "reliable"},
-        "renderer": {"run": "nodes.renderer", "params": renderer, "policy": "reliable"},
+        "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
+        "renderer": {"run": "counterpart.nodes.renderer", "params": renderer, "policy": "reliable"},
         "sink": {"run": "tests.camera_sink", "params": {"path": str(tmp_path / "rendered.jsonl")},
                  "remap": {"frame": "rendered"}, "policy": "reliable"},
     }})

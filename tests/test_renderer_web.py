@@ -18,8 +18,8 @@ import cv2
 import numpy as np
 import pytest
 
-from body.camera import default_camera
-from nodes.renderer import draw
+from counterpart.body.camera import default_camera
+from counterpart.nodes.renderer import draw
 from tests.launching import descendants, read_jsonl, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints
 
@@ -33,10 +33,10 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     file = write_launch(tmp / "graph.yaml", {"nodes": {
         "source": {"run": "tests.renderer_nodes:SceneSource",
                    "params": {"count": 100000, "rate": 20.0, "width": W, "height": H, "partner": False}},
-        "calibration": {"run": "nodes.calibration"},
+        "calibration": {"run": "counterpart.nodes.calibration"},
         "responder": {"run": "tests.renderer_nodes:ControlledResponder", "params": {"path": str(tmp / "controls.jsonl")},
                       "restart": "on-failure"},
-        "renderer": {"run": "nodes.renderer", "params": {
+        "renderer": {"run": "counterpart.nodes.renderer", "params": {
             "serve": True, "port": 0, "port_file": str(port_file), "stats_topics": ["source/stats", "responder/stats"],
             "models": ["dual-hmm", "listener"]}},
     }})

@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.responder.dual_hmm import DualHMM
-from nodes.responder.frames import actor_frame, relative_pair, to_world
-from nodes.responder.models import MODEL_VERSION, ModelVersionError, load_model, save_model
+from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_world
+from counterpart.nodes.responder.models import MODEL_VERSION, ModelVersionError, load_model, save_model
 from tests.responder_fixtures import mpjpe_mm, planted_pair
 
 
@@ -51,7 +51,7 @@ def test_viterbi_trellis_decoding_is_also_faithful(model: DualHMM) -> None:
 def test_placement_correction_forest_arrays_predict_as_scikit_learn() -> None:
     from sklearn.ensemble import ExtraTreesRegressor
 
-    from nodes.responder.dual_hmm import _Forest
+    from counterpart.nodes.responder.dual_hmm import _Forest
     rng = np.random.default_rng(0)
     X = rng.normal(size=(2000, 5))
     Y = np.c_[np.sin(X[:, 0]) + X[:, 1] ** 2, X[:, 2] * (X[:, 3] > 0)]

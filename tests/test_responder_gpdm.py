@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.responder.data import sim_trajectories
-from nodes.responder.gpdm import GPDM, reach
-from nodes.responder.models import load_model, save_model
+from counterpart.nodes.responder.data import sim_trajectories
+from counterpart.nodes.responder.gpdm import GPDM, reach
+from counterpart.nodes.responder.models import load_model, save_model
 from tests.launching import read_jsonl, run_launch, write_launch
 
 SMALL = dict(points=300, num_inducing=15, n_centres=30, max_iters=40, dyn_points=200, support=1500)
@@ -113,12 +113,12 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     launch = write_launch(tmp_path / "g.yaml", {"nodes": {
         "source": {"run": "tests.responder_nodes:PoseSource", "params": {"frames": 60, "control_at": 30}},
         # a reliable control queue: the source waits for it to connect, so the control is never lost
-        "responder": {"run": "nodes.responder", "params": {"model": "gpdm"},
+        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "gpdm"},
                       "inputs": {"control": {"policy": "reliable"}}},
         "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp_path / "out.jsonl")}},
     }})
     # the emotion model the node loads up front: a fresh default would take a while to build
-    from nodes.responder.emotion import EmotionModel
+    from counterpart.nodes.responder.emotion import EmotionModel
     save_model(d / "responder-emotion.npz", EmotionModel().fit(np.random.default_rng(0).normal(size=(8, 7)),
                                                                  ["neutral", "angry"] * 4, [0, 1] * 4, ["g"] * 8))
     code, out = run_launch(launch, timeout=90, env={"COUNTERPART_MODELS": str(d)})
@@ -134,8 +134,8 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     # staged and given the hand contact as the node does (poses without a rate: 25 fps)
     from tests.responder_fixtures import planted_pair
     obs = planted_pair(7, T=60).a.astype(np.float32)   # as Pose3D carries it
-    from nodes.responder.reach import reach
-    from nodes.responder.staging import Stage
+    from counterpart.nodes.responder.reach import reach
+    from counterpart.nodes.responder.staging import Stage
 
     model.reset()
     stage, expect = Stage(), []
@@ -162,7 +162,7 @@ def test_respond_cli_styles_the_gpdm_and_names_an_unseen_style(model: GPDM, tmp_
     ok = cli("respond", "--model", str(path), "--input", str(tmp_path / "in.npz"), "--out", str(tmp_path / "out.npz"),
              "--emotion", "angry", "--strength", "1")
     assert ok.returncode == 0, ok.stderr
-    from body.trajectory import TwoPersonTrajectory
+    from counterpart.body.trajectory import TwoPersonTrajectory
     out = TwoPersonTrajectory.load(tmp_path / "out.npz")
     model.set_style("angry", 1.0)
     np.testing.assert_allclose(out.b, model.predict(t.a), atol=1e-4)   # the model's own style, no filter after

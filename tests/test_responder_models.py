@@ -6,14 +6,14 @@ import itertools
 import numpy as np
 import pytest
 
-from body.camera import default_camera
-from body.kinematics import forward_kinematics
-from body.pose import DOF_INDEX, neutral_pose
-from body.trajectory import TwoPersonTrajectory
-from nodes.responder.emotion import EmotionModel, rank_svm
-from nodes.responder.joint_shape import JointShapeModel
-from nodes.responder.listener import ListenerModel
-from nodes.responder.shapes import trajectory_shapes
+from counterpart.body.camera import default_camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF_INDEX, neutral_pose
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.nodes.responder.emotion import EmotionModel, rank_svm
+from counterpart.nodes.responder.joint_shape import JointShapeModel
+from counterpart.nodes.responder.listener import ListenerModel
+from counterpart.nodes.responder.shapes import trajectory_shapes
 
 
 def branch_pair(branch: int, T: int = 60) -> TwoPersonTrajectory:

@@ -6,11 +6,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.responder.dual_hmm import DualHMM
-from nodes.responder.emotion import EmotionModel
-from nodes.responder.frames import actor_frame
-from nodes.responder.listener import ListenerModel
-from nodes.responder.models import save_model
+from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.emotion import EmotionModel
+from counterpart.nodes.responder.frames import actor_frame
+from counterpart.nodes.responder.listener import ListenerModel
+from counterpart.nodes.responder.models import save_model
 from tests.launching import read_jsonl, run_launch, write_launch
 from tests.responder_fixtures import planted_pair
 
@@ -35,7 +35,7 @@ def graph(tmp: Path, switch: str = "", **source: int) -> Path:
         "source": {"run": "tests.responder_nodes:PoseSource",
                    "params": {"frames": 60, "control_at": 30, "switch": switch, **source}},
         # a reliable control queue: the source waits for it to connect, so the control is never lost
-        "responder": {"run": "nodes.responder", "params": {"model": "dual-hmm", "hold_frames": 5},
+        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "dual-hmm", "hold_frames": 5},
                       "inputs": {"control": {"policy": "reliable"}}},
         "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp / "out.jsonl")}},
     }})
@@ -91,19 +91,19 @@ def test_control_switches_the_model(tmp_path: Path, models_dir: Path) -> None:
 
 
 def test_inputs_follow_the_use_params(tmp_path: Path) -> None:
-    from bus.launchfile import LaunchError, check, load
-    from nodes.responder.node import Responder
+    from counterpart.bus.launchfile import LaunchError, check, load
+    from counterpart.nodes.responder.node import Responder
 
     p = Responder.validate_params({"use_pose": False, "use_silhouettes": True, "use_control": False})
     assert set(Responder.ports(p)[0]) == {"silhouettes"}
     # a graph without a tracker: the pose input is switched off and the graph validates
     f = write_launch(tmp_path / "g2.yaml", {"nodes": {
         "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
-        "responder": {"run": "nodes.responder", "params": {"model": "listener", "use_pose": False}}}})
+        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "listener", "use_pose": False}}}})
     assert "responder" in check(load(f)).nodes
     # with the pose input on, the missing publisher is named
     f = write_launch(tmp_path / "g3.yaml", {"nodes": {
         "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
-        "responder": {"run": "nodes.responder"}}})
+        "responder": {"run": "counterpart.nodes.responder"}}})
     with pytest.raises(LaunchError, match="inputs.pose"):
         check(load(f))

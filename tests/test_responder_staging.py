@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.responder.dual_hmm import DualHMM
-from nodes.responder.frames import actor_frame
-from nodes.responder.reach import ReachConfig, reach, two_bone_ik
-from nodes.responder.staging import Stage, StageConfig
+from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.frames import actor_frame
+from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
+from counterpart.nodes.responder.staging import Stage, StageConfig
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 

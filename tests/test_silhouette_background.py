@@ -10,14 +10,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.silhouette.background import (
+from counterpart.nodes.silhouette.background import (
     BACKGROUND,
     FOREGROUND,
     HIGHLIGHT,
     SHADOW,
     HorprasertBackground,
 )
-from nodes.silhouette.backends import BACKEND_NAMES, make_subtractor
+from counterpart.nodes.silhouette.backends import BACKEND_NAMES, make_subtractor
 
 H, W = 120, 160
 YY, XX = np.mgrid[0:H, 0:W]

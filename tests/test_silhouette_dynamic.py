@@ -14,11 +14,11 @@ import os
 import numpy as np
 import pytest
 
-from nodes.silhouette.background import FOREGROUND, SHADOW
-from nodes.silhouette.backends import make_subtractor
-from nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
-from nodes.silhouette.samples import SampleConsensus
-from nodes.silhouette.synthetic import textured_background
+from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
+from counterpart.nodes.silhouette.backends import make_subtractor
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
+from counterpart.nodes.silhouette.samples import SampleConsensus
+from counterpart.nodes.silhouette.synthetic import textured_background
 from tests.shared_data import DATA
 
 H, W = 240, 320
@@ -103,7 +103,7 @@ def test_min_area_scales_with_the_frame_and_the_camera() -> None:
     assert person_min_area(160, 120) == 64
     # a person 20 px tall (about 0.25 * 20^2 = 100 px of region) is above the threshold
     assert small < 100
-    from body.camera import default_camera
+    from counterpart.body.camera import default_camera
 
     cam = default_camera(320, 240)
     tele = type(cam)(cam.fx * 2, cam.fy * 2, cam.cx, cam.cy, 320, 240, cam.R, cam.t)
@@ -169,7 +169,7 @@ def test_cdnet_f1_beats_mog2(seq: str) -> None:
 def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
     """On a textured floor a cast shadow keeps the floor's pattern (same colour, darker); a dark
     shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow."""
-    from nodes.silhouette.background import HorprasertBackground
+    from counterpart.nodes.silhouette.background import HorprasertBackground
 
     rng = np.random.default_rng(3)
     floor = np.repeat(np.repeat(rng.uniform(80, 200, (30, 40)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])

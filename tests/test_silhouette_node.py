@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from nodes.silhouette.synthetic import SyntheticSequence, two_person_sequence
+from counterpart.nodes.silhouette.synthetic import SyntheticSequence, two_person_sequence
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 
 EMPTY_FRAMES = 15
@@ -45,9 +45,9 @@ def scene(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, SyntheticSeque
 
 def graph(tmp_path: Path, source: str, silhouette: dict[str, Any], camera: dict[str, Any] | None = None) -> Path:
     return write_launch(tmp_path / "graph.yaml", {"nodes": {
-        "camera": {"run": "nodes.camera", "params": {"source": source, "pacing": "lockstep", "fps": 25.0,
+        "camera": {"run": "counterpart.nodes.camera", "params": {"source": source, "pacing": "lockstep", "fps": 25.0,
                                                      **(camera or {})}},
-        "silhouette": {"run": "nodes.silhouette", "params": silhouette, "policy": "reliable"},
+        "silhouette": {"run": "counterpart.nodes.silhouette", "params": silhouette, "policy": "reliable"},
         "frames": {"run": "tests.topic_sink", "params": {"topic": "frame", "path": str(tmp_path / "frames.jsonl")},
                    "policy": "reliable"},
         "out": {"run": "tests.topic_sink", "params": {"topic": "silhouettes", "path": str(tmp_path / "sil.jsonl")},

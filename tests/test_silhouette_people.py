@@ -11,15 +11,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.silhouette.background import (
+from counterpart.nodes.silhouette.background import (
     BACKGROUND,
     FOREGROUND,
     HIGHLIGHT,
     HorprasertBackground,
     _median_mad,
 )
-from nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
-from nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
 from tests.shared_data import DATA
 from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W

@@ -7,10 +7,10 @@ import os
 import numpy as np
 import pytest
 
-from nodes.silhouette.background import FOREGROUND, SHADOW
-from nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_video
-from body.spline import evaluate_closed_bspline
-from nodes.silhouette.synthetic import two_person_sequence
+from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
+from counterpart.nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_video
+from counterpart.body.spline import evaluate_closed_bspline
+from counterpart.nodes.silhouette.synthetic import two_person_sequence
 
 from tests.shared_data import VTEST
 
@@ -110,7 +110,7 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
     import subprocess
     import sys
 
-    from sim.cli import open_writer
+    from counterpart.sim.cli import open_writer
 
     video = tmp_path / "handshake.avi"
     writer, _ = open_writer(str(video), 25.0, (handshake.frames.shape[2], handshake.frames.shape[1]))
@@ -118,7 +118,7 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
         writer.write(frame)
     writer.release()
     out = tmp_path / "people.npz"
-    r = subprocess.run([sys.executable, "-m", "bus.cli", "silhouettes", str(video), "--out", str(out),
+    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "silhouettes", str(video), "--out", str(out),
                         "--train-frames", "20"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout.strip().splitlines()[-1])
@@ -128,7 +128,7 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
     assert bool(d["complete"]) and int(d["n_frames"]) == n
     per_frame = np.bincount(d["frame"], minlength=n)
     assert (per_frame[:20] == 0).all() and np.mean(per_frame[20:] == 2) > 0.9   # the empty room, then two
-    r = subprocess.run([sys.executable, "-m", "bus.cli", "silhouettes", str(video), "--out", str(out),
+    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "silhouettes", str(video), "--out", str(out),
                         "--train-frames", "0"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "--train-frames must be at least 1" in r.stderr
 

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from nodes.silhouette.regions import Person, PersonTracker, clean_mask
+from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask
 
 H, W = 200, 320
 

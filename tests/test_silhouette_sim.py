@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.silhouette.background import FOREGROUND, HorprasertBackground
-from nodes.silhouette.pipeline import SilhouetteExtractor
-from sim.stream import open_stream
+from counterpart.nodes.silhouette.background import FOREGROUND, HorprasertBackground
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
+from counterpart.sim.stream import open_stream
 
 TRAIN = 30
 

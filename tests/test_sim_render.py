@@ -1,4 +1,4 @@
-"""sim.render / sim.stream / sim.cli: pixels agree with the ground truth, shadows, determinism,
+"""counterpart.sim.render / sim.stream / sim.cli: pixels agree with the ground truth, shadows, determinism,
 the people are not the cone model, the camera-node URI, the CLI's files, the CMU pair."""
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from body.raster import rasterise_silhouettes
-from body.trajectory import TwoPersonTrajectory
-from sim import cli
-from sim.stream import default_sequence, open_stream
+from counterpart.body.raster import rasterise_silhouettes
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.sim import cli
+from counterpart.sim.stream import default_sequence, open_stream
 
 CMU = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "cmu")
 
@@ -87,7 +87,7 @@ def test_people_are_not_the_cone_model(hs) -> None:
 
 
 def test_camera_node_opens_the_simulator() -> None:
-    from nodes.camera.sources import SourceError, make_source
+    from counterpart.nodes.camera.sources import SourceError, make_source
     src = make_source("sim:push?seed=3&emotion=angry&strength=0.7&frames=12", width=160, height=120)
     src.open()
     n = 0

@@ -1,4 +1,4 @@
-"""sim.scenarios: physics, contacts, determinism, emotion, planted listener rules, CMU pairs."""
+"""counterpart.sim.scenarios: physics, contacts, determinism, emotion, planted listener rules, CMU pairs."""
 from __future__ import annotations
 
 import os
@@ -6,12 +6,12 @@ import os
 import numpy as np
 import pytest
 
-from body.kinematics import forward_kinematics, lowest_point
-from body.pose import DOF_INDEX, within_limits
-from body.skeleton import JOINT_INDEX as J
-from body.trajectory import TwoPersonTrajectory
-from sim.dataset import generate_dataset
-from sim.scenarios import PLANTED_RULES, SCENARIOS, SIGNAL_INDEX, make_scenario
+from counterpart.body.kinematics import forward_kinematics, lowest_point
+from counterpart.body.pose import DOF_INDEX, within_limits
+from counterpart.body.skeleton import JOINT_INDEX as J
+from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.sim.dataset import generate_dataset
+from counterpart.sim.scenarios import PLANTED_RULES, SCENARIOS, SIGNAL_INDEX, make_scenario
 
 CMU = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "cmu")
 TORSO = [J[n] for n in ("head", "neck", "l_shoulder", "r_shoulder", "l_hip", "r_hip")]
@@ -178,7 +178,7 @@ def test_cmu_pair_as_scenario() -> None:
     a, b = os.path.join(CMU, "18_01.bvh"), os.path.join(CMU, "19_01.bvh")
     if not (os.path.exists(a) and os.path.exists(b)):
         pytest.skip(f"CMU BVH files not found in {CMU} (shared development data)")
-    from sim.capture import scenario_from_bvh
+    from counterpart.sim.capture import scenario_from_bvh
     sc = scenario_from_bvh(a, b, fps=25)
     X = sc.joints()
     k = int(np.flatnonzero(sc.phase == 1)[0])

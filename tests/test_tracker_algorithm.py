@@ -4,16 +4,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from body.camera import Camera, default_camera
-from body.kinematics import forward_kinematics
-from body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
-from body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
-from body.skeleton import DEFAULT_DIMS
-from nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
-from nodes.tracker.init import bbox_from_mask, place_from_bbox
-from nodes.tracker.likelihood import ConeLikelihood, MultiViewLikelihood, make_observation
-from nodes.tracker.tracker import Tracker, track_sequence
-from sim.scenarios import make_scenario
+from counterpart.body.camera import Camera, default_camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
+from counterpart.body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
+from counterpart.body.skeleton import DEFAULT_DIMS
+from counterpart.nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
+from counterpart.nodes.tracker.init import bbox_from_mask, place_from_bbox
+from counterpart.nodes.tracker.likelihood import ConeLikelihood, MultiViewLikelihood, make_observation
+from counterpart.nodes.tracker.tracker import Tracker, track_sequence
+from counterpart.sim.scenarios import make_scenario
 
 CAM = default_camera()
 

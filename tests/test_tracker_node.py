@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bus import Node, Output, Param
-from messages import Frame, PersonShape, Silhouettes
+from counterpart.bus import Node, Output, Param
+from counterpart.messages import Frame, PersonShape, Silhouettes
 from tests.launching import read_jsonl, run_launch, write_launch
 
 
@@ -24,7 +24,7 @@ class SimPeople(Node):
               "merged": Param(bool, False, "flag the people as merged")}
 
     def generate(self) -> None:
-        from sim.stream import open_stream
+        from counterpart.sim.stream import open_stream
         stream = open_stream("handshake", seed=2, frames=self.p["frames"])
         for i in range(stream.n_frames):
             image, truth = stream.render_with_truth(i)
@@ -48,8 +48,8 @@ def _graph(tmp_path: Path, source: dict, tracker: dict) -> tuple[Path, Path]:
     out = tmp_path / "pose.jsonl"
     doc = {"nodes": {
         "source": {"run": "tests.test_tracker_node:SimPeople", "params": source},
-        "calibration": {"run": "nodes.calibration", "policy": "reliable"},
-        "tracker": {"run": "nodes.tracker", "policy": "reliable",
+        "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
+        "tracker": {"run": "counterpart.nodes.tracker", "policy": "reliable",
                     "params": {"layers": 3, "particles": 48, "prior": "none", **tracker}},
         "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},
     }}

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.tracker.offline import track_video
-from nodes.tracker.prior import MotionPrior, train_prior
-from sim.cli import open_writer
-from sim.stream import open_stream
+from counterpart.nodes.tracker.offline import track_video
+from counterpart.nodes.tracker.prior import MotionPrior, train_prior
+from counterpart.sim.cli import open_writer
+from counterpart.sim.stream import open_stream
 
 EMPTY = 20          # frames of the empty room the background model is fitted on
 SCENE = 40
@@ -39,7 +39,7 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarra
 
 
 def _track(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "bus.cli", "track", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "track", *args], capture_output=True, text=True,
                           timeout=300)
 
 

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from body.pose import DOF, LOWER, UPPER, YAW
-from nodes.tracker import cli_learn
-from nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
+from counterpart.body.pose import DOF, LOWER, UPPER, YAW
+from counterpart.nodes.tracker import cli_learn
+from counterpart.nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
 
 from tests.shared_data import DATA
 

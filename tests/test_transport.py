@@ -7,9 +7,9 @@ from pathlib import Path
 
 import zmq
 
-from bus.endpoints import ipc_endpoints
-from bus.transport import LATEST, RELIABLE, Publisher, Subscriber
-from messages import EndOfStream
+from counterpart.bus.endpoints import ipc_endpoints
+from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
+from counterpart.messages import EndOfStream
 from tests.graph_nodes import Number
 
 

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from bus import Input, Node, Param
-from messages import schema_id
+from counterpart.bus import Input, Node, Param
+from counterpart.messages import schema_id
 
 #: arrays up to this many elements are written out in full, larger ones as a summary
 SMALL_ARRAY = 256

@@ -1,5 +1,5 @@
 """The calibration node's package: the camera every node of a graph projects with, published
-(latched) on ``camera_info``. :class:`nodes.calibration.node.Calibration` (``run: nodes.calibration``).
+(latched) on ``camera_info``. :class:`counterpart.nodes.calibration.node.Calibration` (``run: counterpart.nodes.calibration``).
 
 The camera from the people in view, without the bus: ``estimate`` (focal length, tilt, roll and
 height from heads and feet against a prior on human height, with scene lines), ``lines`` (scene

@@ -1,7 +1,7 @@
-"""``python -m nodes.calibration --param file=camera.yaml``: run the calibration node alone."""
+"""``python -m counterpart.nodes.calibration --param file=camera.yaml``: run the calibration node alone."""
 import sys
 
-from bus.runner import run_standalone
+from counterpart.bus.runner import run_standalone
 
 if __name__ == "__main__":
-    sys.exit(run_standalone("nodes.calibration.node:Calibration"))
+    sys.exit(run_standalone("counterpart.nodes.calibration.node:Calibration"))

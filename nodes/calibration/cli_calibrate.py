@@ -2,7 +2,7 @@
 the people in it.
 
 Focal length, tilt, roll and height above the ground from the heads and feet of the upright people
-(``nodes.calibration.offline.calibrate_video``), printed with their uncertainty (one standard
+(``counterpart.nodes.calibration.offline.calibrate_video``), printed with their uncertainty (one standard
 deviation); the file is a calibration every node and command that takes a camera reads
 (``calibration.file``, ``counterpart demo --camera``, ``counterpart track --camera``). Progress goes
 to stderr; the last stdout line is a JSON summary. Exit code 0 on success, 2 on bad input (or too
@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bus.cli_offline import FrameProgress, positive, run_offline
+from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -39,7 +39,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
-from body.camera import Camera
+from counterpart.body.camera import Camera
 
 from .lines import LineFamilies, segment_angles
 
@@ -137,7 +137,7 @@ class CameraEstimate:
         return float(np.degrees(2 * np.arctan(self.width / (2 * self.focal))))
 
     def camera(self) -> Camera:
-        """The estimate as a ``body.camera.Camera``: world Y up, the ground y = 0, the camera
+        """The estimate as a ``counterpart.body.camera.Camera``: world Y up, the ground y = 0, the camera
         looking along -Z at the people, the world origin under their median position."""
         R = rotation(np.radians(self.tilt_deg), np.radians(self.roll_deg))
         centre = np.array([-self.offset_x, self.height, self.distance])
@@ -286,7 +286,7 @@ def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tupl
         size: (width, height) of the frames, pixels.
         time_s: (N,) time of each observation, seconds (None: 25 frames per second in order).
         config: priors and noise model.
-        lines: families of straight scene lines (``nodes.calibration.lines``): the vertical ones
+        lines: families of straight scene lines (``counterpart.nodes.calibration.lines``): the vertical ones
             and the horizon of the horizontal ones join the fit (None: the people alone).
     Returns:
         The estimate, or None with fewer than ``config.min_observations`` observations.

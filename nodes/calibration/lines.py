@@ -7,7 +7,7 @@ vectorised; a segment agrees with a vanishing point when the line from its midpo
 is within ``angle_deg`` of its own direction). A family whose segments are mostly steep (within
 ``vertical_deg`` of the image vertical) is taken as the world's vertical; the others as horizontal
 directions, whose vanishing points lie on the horizon (the vanishing line of the ground plane).
-``nodes.calibration.estimate`` fits the camera to them together with the people: each horizontal
+``counterpart.nodes.calibration.estimate`` fits the camera to them together with the people: each horizontal
 family adds only its unknown direction on the ground, so it says where the horizon is (tilt and
 roll) without any assumption about the angles between the families.
 """

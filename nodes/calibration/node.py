@@ -3,11 +3,11 @@
 Frames in (their size), CameraInfo out: once for the first frame, and again when the frames change
 size. The camera is the calibration ``file`` (JSON or YAML, ``Camera.to_dict`` or the look-at form),
 scaled to the frames' size where they have its aspect ratio, or, without a file, the default camera
-at the frames' size (``body.camera.camera_for_size``).
+at the frames' size (``counterpart.body.camera.camera_for_size``).
 
 With ``estimate: true`` and no file (the launch files set it) the node also takes the silhouette
 node's people and estimates the camera from them and from the straight lines of the scene
-(``nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
+(``counterpart.nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
 upright people against a prior on human height). Until an estimate is credible (people seen over
 ``min_seconds``; uncertainties under the ``max_*_std`` bounds; the horizon seen, by people at
 different depths or by scene lines converging on it) the default camera stays; then the published
@@ -17,9 +17,9 @@ camera moves towards the estimate, re-estimated every ``every`` frames, by bound
 however late the message reaches it, so a lockstep replay stays deterministic). The tracker and the
 renderer subscribe to it, so the skeleton, the partner and the tracked body are all projected with
 the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
-nodes.calibration``) or alone::
+counterpart.nodes.calibration``) or alone::
 
-    python -m nodes.calibration --param file=camera.yaml
+    python -m counterpart.nodes.calibration --param file=camera.yaml
 """
 from __future__ import annotations
 
@@ -27,9 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from bus import Input, Node, Output, Param
-from body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
-from messages import CameraInfo, Frame, Silhouettes
+from counterpart.bus import Input, Node, Output, Param
+from counterpart.body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
+from counterpart.messages import CameraInfo, Frame, Silhouettes
 
 from .estimate import CameraEstimate
 from .observe import PeopleObservations, SceneFrames

@@ -1,8 +1,8 @@
 """Head and foot points of the people in view, gathered over frames for the camera estimate
-(``nodes.calibration.estimate``): what the calibration node, ``counterpart calibrate`` and the
+(``counterpart.nodes.calibration.estimate``): what the calibration node, ``counterpart calibrate`` and the
 bench share.
 
-A person region (the silhouette node's ``PersonShape``, or ``nodes.silhouette.regions.Person``:
+A person region (the silhouette node's ``PersonShape``, or ``counterpart.nodes.silhouette.regions.Person``:
 anything with ``id``, ``bbox``, ``ctrl``, ``ref_point``, ``merged``) gives one observation when it
 can be an upright person (``estimate.usable``). The store is bounded: past ``max_observations`` it
 keeps every second observation of the older half, so a long run keeps its whole span at a lower

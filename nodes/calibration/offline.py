@@ -1,17 +1,17 @@
 """Offline camera calibration of a video file from the people in it (``counterpart calibrate``).
 
 The same algorithms as the graph ``camera -> silhouette -> calibration``: the silhouette node's
-extractor (``nodes.silhouette.pipeline.iter_video``: background fitted on the first frames, people
+extractor (``counterpart.nodes.silhouette.pipeline.iter_video``: background fitted on the first frames, people
 with ids and outlines), the head and foot points of the upright people
-(``nodes.calibration.observe``) and the estimate from all of them at once
-(``nodes.calibration.estimate``), without the bus.
+(``counterpart.nodes.calibration.observe``) and the estimate from all of them at once
+(``counterpart.nodes.calibration.estimate``), without the bus.
 """
 from __future__ import annotations
 
 import os
 from typing import Any, Callable
 
-from body.camera import Camera
+from counterpart.body.camera import Camera
 
 from .estimate import CalibrationConfig, CameraEstimate
 from .observe import PeopleObservations, SceneFrames
@@ -37,7 +37,7 @@ def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None,
     Raises FileNotFoundError / ValueError for a missing or undecodable video, and ValueError when
     too few upright people were seen to estimate anything (the message says how many).
     """
-    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
 
     fps, declared = video_info(path)
     extractor = SilhouetteExtractor(**silhouette_params)
@@ -65,7 +65,7 @@ def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None,
 
 
 def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
-    """A calibration file (YAML, ``Camera.to_dict``, which ``body.camera.load_camera_file`` reads),
+    """A calibration file (YAML, ``Camera.to_dict``, which ``counterpart.body.camera.load_camera_file`` reads),
     with the estimate and its uncertainty as comments."""
     import yaml
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.camera import Camera
+from counterpart.body.camera import Camera
 
 from .estimate import CalibrationConfig, CameraEstimate, rotation
 

@@ -1,5 +1,5 @@
 """The camera node's package: frame sources (:mod:`.sources`), pacing and frame conversion
-(:mod:`.pacing`), and the thin process wrapper :class:`nodes.camera.node.Camera` (``run: nodes.camera``).
+(:mod:`.pacing`), and the thin process wrapper :class:`counterpart.nodes.camera.node.Camera` (``run: counterpart.nodes.camera``).
 
 The modules other than ``node`` need no bus: ``make_source("clip.avi")`` works in a notebook.
 """

@@ -1,7 +1,7 @@
-"""``python -m nodes.camera --param source=clip.avi ...``: run the camera node alone."""
+"""``python -m counterpart.nodes.camera --param source=clip.avi ...``: run the camera node alone."""
 import sys
 
-from bus.runner import run_standalone
+from counterpart.bus.runner import run_standalone
 
 if __name__ == "__main__":
-    sys.exit(run_standalone("nodes.camera.node:Camera"))
+    sys.exit(run_standalone("counterpart.nodes.camera.node:Camera"))

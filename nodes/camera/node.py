@@ -1,8 +1,8 @@
 """The camera node: a frame source (file, folder, V4L2 device, simulator), paced, on topic ``frame``.
 
-Run in a graph (``run: nodes.camera``) or alone::
+Run in a graph (``run: counterpart.nodes.camera``) or alone::
 
-    python -m nodes.camera --param source=clip.avi --param pacing=realtime
+    python -m counterpart.nodes.camera --param source=clip.avi --param pacing=realtime
 
 Exit codes: 0 after the source ends (end of stream sent); 3 when the source cannot be opened or
 read (the error is logged and end of stream is sent first, so the rest of the graph ends cleanly);
@@ -19,8 +19,8 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from bus import Node, Output, Param, ParamError
-from messages import Frame
+from counterpart.bus import Node, Output, Param, ParamError
+from counterpart.messages import Frame
 
 from .pacing import PACING_MODES, Pacer, Prefetch, convert, frames, output_size
 from .sources import SourceError, make_source, parse_uri

@@ -436,9 +436,9 @@ def open_simulator(scenario: str, options: dict[str, str], fps: float | None, wi
     """
     uri = f"sim:{scenario}"
     try:
-        sim = importlib.import_module("sim")
+        sim = importlib.import_module("counterpart.sim")
     except ImportError as exc:
-        raise SourceError(f"source '{uri}': the simulator package 'sim' cannot be imported ({exc})") from None
+        raise SourceError(f"source '{uri}': the simulator package 'counterpart.sim' cannot be imported ({exc})") from None
     open_stream = getattr(sim, "open_stream", None)
     if not callable(open_stream):
         raise SourceError(

@@ -1,7 +1,7 @@
-"""``python -m nodes.labeller --param use_tracker=false ...``: run the labeller node alone."""
+"""``python -m counterpart.nodes.labeller --param use_tracker=false ...``: run the labeller node alone."""
 import sys
 
-from bus.runner import run_standalone
+from counterpart.bus.runner import run_standalone
 
 if __name__ == "__main__":
-    sys.exit(run_standalone("nodes.labeller.node:Labeller"))
+    sys.exit(run_standalone("counterpart.nodes.labeller.node:Labeller"))

@@ -3,13 +3,13 @@
     counterpart mine --interested A.npz [B.npz ...] [--not-interested C.npz ...] \\
                      --offset 10 [--bag 0] [--turns talking] --out rules.json
 
-Each input is a label file read by :func:`nodes.labeller.mining.read_labels` (``.npz`` with
+Each input is a label file read by :func:`counterpart.nodes.labeller.mining.read_labels` (``.npz`` with
 ``signals_a``/``signals_b``/``signal_names``/``fps``, or the documented ``.csv``); ``--speaker``
 and ``--listener`` name the two people in it (default ``a`` speaks, ``b`` listens). In a
 conversation where the two take turns (the simulator's ``conversation`` trajectory files),
 ``--turns talking`` makes the speaker of each frame whichever of the two has ``talking`` = 1 there
-and the other the listener, both roles pooled (:func:`nodes.labeller.mining.turn_transactions`).
-The output is a rules file (:func:`nodes.labeller.mining.write_rules`) with the rules of each scenario, the
+and the other the listener, both roles pooled (:func:`counterpart.nodes.labeller.mining.turn_transactions`).
+The output is a rules file (:func:`counterpart.nodes.labeller.mining.write_rules`) with the rules of each scenario, the
 interested / not-interested confidence ratios of rules found in both, and the parameters used.
 Progress goes to stderr. The project's CLI dispatcher calls :func:`add_arguments` and :func:`main`.
 """
@@ -22,7 +22,7 @@ import time
 import mlxtend
 import pandas as pd
 
-from nodes.labeller.mining import (build_transactions, compare_scenarios, mine_transactions,
+from counterpart.nodes.labeller.mining import (build_transactions, compare_scenarios, mine_transactions,
                                    read_labels, turn_transactions, write_rules)
 
 SCENARIOS = ("interested", "not_interested")

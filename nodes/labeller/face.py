@@ -30,7 +30,7 @@ import os
 import cv2
 import numpy as np
 
-from nodes.labeller.signals import UNKNOWN
+from counterpart.nodes.labeller.signals import UNKNOWN
 
 Box = tuple[int, int, int, int]  # x, y, w, h in pixels
 
@@ -254,7 +254,7 @@ class FaceSignalDetector:
         return self._step(patch, None)
 
     def update_track(self, gray: np.ndarray, center: np.ndarray, size: float) -> tuple[float, int, float, int]:
-        """Talking/laughing of a tracked face (:class:`nodes.labeller.face_track.FaceTrack`):
+        """Talking/laughing of a tracked face (:class:`counterpart.nodes.labeller.face_track.FaceTrack`):
         gray (H,W) uint8; center (2,) its head point (px); size its smoothed width (px).
 
         The mouth patch is cut at the sub-pixel position of the tracked point, which follows the

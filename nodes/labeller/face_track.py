@@ -1,6 +1,6 @@
 """Faces tracked from frame to frame: a head point that is still when the face is still.
 
-A Haar cascade box (:func:`nodes.labeller.face.detect_face`) jumps by several per cent of its size
+A Haar cascade box (:func:`counterpart.nodes.labeller.face.detect_face`) jumps by several per cent of its size
 from frame to frame on real video, even on a face that does not move, which is as large as a
 small nod. So the box is not the head point. Each tracked face instead carries:
 

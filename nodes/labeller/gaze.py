@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.labeller.signals import UNKNOWN
+from counterpart.nodes.labeller.signals import UNKNOWN
 
 
 def facing_yaw_from_shoulders(l_shoulder: np.ndarray, r_shoulder: np.ndarray) -> np.ndarray:

@@ -4,7 +4,7 @@ and shake": FFT of the head's vertical and horizontal motion over a short slidin
 Where the head's motion comes from, best first (chosen per call by what is given):
 
 - **the tracker's head angles** (``head_pitch`` / ``head_yaw``: the ``head_nod`` / ``head_turn``
-  degrees of freedom of the pose vector, ``body.pose``, relative to the torso): the nod channel is
+  degrees of freedom of the pose vector, ``counterpart.body.pose``, relative to the torso): the nod channel is
   ``pitch_radius * pitch`` (the arc the head centre travels about the neck joint, in metres, the
   same motion the head point shows) and the shake channel ``head_radius * yaw`` (the arc the face
   travels about the neck's vertical axis). A head shake is a rotation about the neck's vertical axis that hardly moves the head
@@ -55,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from nodes.labeller.signals import UNKNOWN, threshold_labels
+from counterpart.nodes.labeller.signals import UNKNOWN, threshold_labels
 
 #: channel order inside the detectors: (nod_a, nod_b, shake_a, shake_b); from positions these are
 #: (up, forward, lateral, 0), from the tracker's angles (pitch_radius * pitch, 0, 0,
@@ -240,7 +240,7 @@ def head_channels_3d(
     """Head motion channels (T,4), metres: (nod_a, nod_b, shake_a, shake_b).
 
     From positions: (up, forward, lateral, 0) of the head relative to the neck in the body frame.
-    With the tracker's head angles (relative to the torso, ``body.pose`` ``head_turn`` and
+    With the tracker's head angles (relative to the torso, ``counterpart.body.pose`` ``head_turn`` and
     ``head_nod``): ``head_yaw`` makes the shake channels (0, head_radius_m * yaw) and
     ``head_pitch`` the nod channels (pitch_radius_m * pitch, 0); a given angle replaces the position channels of its
     kind (see the module docstring).
@@ -353,7 +353,7 @@ def head_motion(
     """Nod and shake over a whole 3D trajectory.
 
     head, neck: (T,3) metres, world Y up. fps: Hz. window_s: FFT window (s). facing_yaw: body yaw
-    (T,) or scalar, rad (e.g. from :func:`nodes.labeller.gaze.facing_yaw_from_shoulders`); None = 0.
+    (T,) or scalar, rad (e.g. from :func:`counterpart.nodes.labeller.gaze.facing_yaw_from_shoulders`); None = 0.
     head_yaw, head_pitch: optional (T,) head yaw / pitch relative to the torso (rad) from the
     tracker's pose (:func:`head_channels_3d`). center: centred (offline) windows instead of causal
     ones. Other keyword parameters go to :class:`HeadMotionParams`.
@@ -504,7 +504,7 @@ class HeadMotionDetector2D(_StreamingChannels):
 
 
 class HeadMotionDetectorFace(_StreamingChannels):
-    """Streaming nod/shake from a tracked face's head point (:mod:`nodes.labeller.face_track`),
+    """Streaming nod/shake from a tracked face's head point (:mod:`counterpart.nodes.labeller.face_track`),
     in units of the face's own width: the channels integrate the point's frame-to-frame motion
     divided by the face width of that frame (so a face that slowly grows as the person leans in
     adds no motion), image up for nods, image x for shakes. Floors: ``face_nod_floor`` /

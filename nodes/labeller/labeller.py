@@ -3,10 +3,10 @@
 Inputs are chosen per person and frame, best first, and the choice for nod/shake is recorded
 (:attr:`SocialLabeller.sources`: ``face``, ``3d``, ``2d`` or ``""``):
 
-1. **a tracked face** (:mod:`nodes.labeller.face_track`, when a camera image is given and a frontal
+1. **a tracked face** (:mod:`counterpart.nodes.labeller.face_track`, when a camera image is given and a frontal
    face of at least ``min_face_px`` is found): nod/shake from the face's head point in units of
-   its own width (:class:`~nodes.labeller.head_motion.HeadMotionDetectorFace`), talking/laughing
-   from its stabilised mouth patch (:meth:`~nodes.labeller.face.FaceSignalDetector.update_track`);
+   its own width (:class:`~counterpart.nodes.labeller.head_motion.HeadMotionDetectorFace`), talking/laughing
+   from its stabilised mouth patch (:meth:`~counterpart.nodes.labeller.face.FaceSignalDetector.update_track`);
 2. the tracker's 3D joints (14,3) -> nod/shake relative to the neck (facing from the shoulders, plus
    the tracker's head angles when given), activity from shoulders and hips, gaze from the shoulder
    normal (+ head yaw) against the direction to the other person;
@@ -21,7 +21,7 @@ id ``FACE_ID_BASE + slot``; the silhouette people that overlap its body region (
 widened by one face width to each side and down to the bottom of the frame), and are not
 bodies holding another face, are then parts of it and not reported (:attr:`SocialLabeller.absorbed`).
 Talking/laughing are UNKNOWN without a face, and UNKNOWN (with one RuntimeWarning) when no Haar
-cascade file is installed (see :func:`nodes.labeller.face.find_face_cascade`).
+cascade file is installed (see :func:`counterpart.nodes.labeller.face.find_face_cascade`).
 
 A person switching between sources, a face track restarting, or a person missing from a frame,
 restarts the windows of the affected detectors (so a window never mixes two sources or spans a
@@ -36,13 +36,13 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from nodes.labeller.activity import ActivityDetector, activity_3d
-from nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade, to_gray
-from nodes.labeller.face_track import FaceTrack, FaceTracker, FaceTrackParams
-from nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_at_other
-from nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionDetectorFace,
+from counterpart.nodes.labeller.activity import ActivityDetector, activity_3d
+from counterpart.nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade, to_gray
+from counterpart.nodes.labeller.face_track import FaceTrack, FaceTracker, FaceTrackParams
+from counterpart.nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_at_other
+from counterpart.nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionDetectorFace,
                                         head_motion)
-from nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN, UNKNOWN_VALUE
+from counterpart.nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN, UNKNOWN_VALUE
 
 _H, _N = JOINT_INDEX["head"], JOINT_INDEX["neck"]
 _LS, _RS = JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]
@@ -62,7 +62,7 @@ class PersonObservation:
     joints: (14,3) metres, project joint order, world Y up (tracker). head_yaw / head_pitch: head
     yaw (rad, positive to the person's left) and pitch (rad, positive chin down) relative to the
     torso, the ``head_turn`` / ``head_nod`` of the tracker's pose vector when it publishes one (see
-    :mod:`nodes.labeller.head_motion`: they replace the head point for shakes / nods). head_px: silhouette
+    :mod:`counterpart.nodes.labeller.head_motion`: they replace the head point for shakes / nods). head_px: silhouette
     head reference point (2,) px; ref_px: body reference point (2,) px, e.g. the silhouette
     centroid; height_px: silhouette height (px); control_points: (32,2) px spline from the top of
     the head; box: (x, y, w, h) px region of the person in the image (face search region).
@@ -111,8 +111,8 @@ class SocialLabeller:
     fps: frame rate (Hz). head_window_s: FFT window of nod/shake (s). gaze_threshold: largest
     angle (rad) between gaze and the direction to the other still counted as "at the other".
     head_params / activity_params / face_params / track_params: extra keyword parameters of
-    :class:`~nodes.labeller.head_motion.HeadMotionParams`, :class:`~nodes.labeller.activity.ActivityDetector`,
-    :class:`~nodes.labeller.face.FaceParams` and :class:`~nodes.labeller.face_track.FaceTrackParams`.
+    :class:`~counterpart.nodes.labeller.head_motion.HeadMotionParams`, :class:`~counterpart.nodes.labeller.activity.ActivityDetector`,
+    :class:`~counterpart.nodes.labeller.face.FaceParams` and :class:`~counterpart.nodes.labeller.face_track.FaceTrackParams`.
 
     ``update(people, image=None, targets=None)`` -> ``{person_id: {signal: (score, label)}}`` with
     every signal of :data:`SIGNALS`; after it, :attr:`sources` says per person which input gave

@@ -12,7 +12,7 @@ response that comes a little earlier or later than ``s`` still count. Frames ``t
 leaves the recording are dropped, so a recording of ``T`` frames gives ``T - s - b`` transactions
 (fewer if ``b > s``); recordings are bagged separately and then pooled, so no bag spans two files.
 Frames with no signal at all stay in as empty transactions: they are part of the support's
-denominator. UNKNOWN labels count as "not present" (see :func:`~nodes.labeller.signals.labels_to_bool`).
+denominator. UNKNOWN labels count as "not present" (see :func:`~counterpart.nodes.labeller.signals.labels_to_bool`).
 
 Frequent itemsets come from mlxtend's ``apriori`` and rules from ``association_rules``; only rules
 whose antecedent is all speaker items and whose consequent is all listener items are kept, with::
@@ -37,7 +37,7 @@ import pandas as pd
 from mlxtend.frequent_patterns import apriori, association_rules, fpgrowth
 from numpy.lib.stride_tricks import sliding_window_view
 
-from nodes.labeller.signals import UNKNOWN, labels_to_bool
+from counterpart.nodes.labeller.signals import UNKNOWN, labels_to_bool
 
 SPEAKER_PREFIX = "S:"
 LISTENER_PREFIX = "L:"
@@ -391,7 +391,7 @@ def _check_labels(a: np.ndarray, what: str) -> np.ndarray:
 def read_labels_npz(path: str | os.PathLike[str]) -> LabelStreams:
     """Label streams from an NPZ with keys ``signals_a`` (T,K), ``signals_b`` (T,K) (bool, or
     1/0/-1 integers, or float 1/0/-1 with nan for UNKNOWN), ``signal_names`` (K,) str and ``fps``
-    (scalar) -- the keys of the project's two-person trajectory file (``body.trajectory``); other
+    (scalar) -- the keys of the project's two-person trajectory file (``counterpart.body.trajectory``); other
     keys are ignored."""
     with np.load(path, allow_pickle=False) as z:
         missing = [k for k in ("signals_a", "signals_b", "signal_names") if k not in z.files]

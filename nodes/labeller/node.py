@@ -1,6 +1,6 @@
 """The labeller node: social signals per person and frame (Okwechime et al.) on topic ``signals``.
 
-Inputs, paired by ``seq`` (:class:`~nodes.labeller.pairing.SeqPairer`):
+Inputs, paired by ``seq`` (:class:`~counterpart.nodes.labeller.pairing.SeqPairer`):
 
 * ``silhouettes`` (required): the 2D fallback (head reference point, centroid, height, spline) and
   each person's box for the face search;
@@ -17,10 +17,10 @@ a face that belongs to no silhouette is a person of its own, id 1000 + slot); wh
 support is UNKNOWN (-1), never guessed. The node's stats count the sources (``source_face``,
 ``source_3d``, ``source_2d``), the person-frames labelled from 2D although the tracker is
 subscribed (``fallback_3d_to_2d``, logged once with its reason) and the silhouette regions taken
-as parts of a face's person (``regions_absorbed``). Run in a graph (``run: nodes.labeller``) or
+as parts of a face's person (``regions_absorbed``). Run in a graph (``run: counterpart.nodes.labeller``) or
 alone::
 
-    python -m nodes.labeller --param use_tracker=false
+    python -m counterpart.nodes.labeller --param use_tracker=false
 """
 from __future__ import annotations
 
@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from body.pose import DOF, DOF_INDEX
-from bus import Input, Node, Output, Param, ParamError
-from messages import Frame, Pose3D, Silhouettes, SocialSignals
-from messages.labeller import PersonSignals
+from counterpart.body.pose import DOF, DOF_INDEX
+from counterpart.bus import Input, Node, Output, Param, ParamError
+from counterpart.messages import Frame, Pose3D, Silhouettes, SocialSignals
+from counterpart.messages.labeller import PersonSignals
 
 from .labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
 from .pairing import Paired, SeqPairer
@@ -49,7 +49,7 @@ _HEAD_TURN, _HEAD_NOD = DOF_INDEX["head_turn"], DOF_INDEX["head_nod"]
 
 def head_angles(pose: np.ndarray) -> tuple[float | None, float | None]:
     """(head_yaw, head_pitch) relative to the torso (rad) from a tracker's pose vector
-    (``body.pose``: ``head_turn``, ``head_nod``); (None, None) when the pose is not a finite
+    (``counterpart.body.pose``: ``head_turn``, ``head_nod``); (None, None) when the pose is not a finite
     (DOF,) vector (a tracker that publishes joints only)."""
     p = np.asarray(pose, dtype=np.float64)
     if p.shape != (DOF,) or not np.isfinite(p[[_HEAD_TURN, _HEAD_NOD]]).all():

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.labeller.signals import JOINT_INDEX, JOINTS
+from counterpart.nodes.labeller.signals import JOINT_INDEX, JOINTS
 
 _STAND = np.array([
     [0.00, 1.62, 0.02],   # head (centre)

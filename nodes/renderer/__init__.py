@@ -1,6 +1,6 @@
 """The renderer node's package: drawing (:mod:`.draw`), pairing and compositing (:mod:`.compositor`),
 video files (:mod:`.video`), run-time controls (:mod:`.controls`), the live web page (:mod:`.web`,
-``page.html``) and the thin process wrapper :class:`nodes.renderer.node.Renderer` (``run: nodes.renderer``).
+``page.html``) and the thin process wrapper :class:`counterpart.nodes.renderer.node.Renderer` (``run: counterpart.nodes.renderer``).
 
 Everything but ``node`` and ``web`` works without a bus or a server: ``draw.draw_partner_3d(img,
 joints, camera)`` in a notebook.

@@ -1,7 +1,7 @@
-"""``python -m nodes.renderer --param video=out.mp4 ...``: run the renderer node alone."""
+"""``python -m counterpart.nodes.renderer --param video=out.mp4 ...``: run the renderer node alone."""
 import sys
 
-from bus.runner import run_standalone
+from counterpart.bus.runner import run_standalone
 
 if __name__ == "__main__":
-    sys.exit(run_standalone("nodes.renderer.node:Renderer"))
+    sys.exit(run_standalone("counterpart.nodes.renderer.node:Renderer"))

@@ -18,8 +18,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.avatar_frames import AvatarFrames, load_avatar_frames
-from body.camera import Camera
+from counterpart.body.avatar_frames import AvatarFrames, load_avatar_frames
+from counterpart.body.camera import Camera
 
 log = logging.getLogger(__name__)
 

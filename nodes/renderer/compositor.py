@@ -25,7 +25,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, CameraSchedule, camera_for_size
+from counterpart.body.camera import Camera, CameraSchedule, camera_for_size
 
 from . import draw
 from .avatar import AvatarPainter
@@ -109,7 +109,7 @@ class Compositor:
     """Pairs frames with partner, silhouettes, pose and signals by seq and draws them.
 
     Args:
-        camera: calibration of the 3D partner and skeleton projection (``body.camera.camera_for_size``
+        camera: calibration of the 3D partner and skeleton projection (``counterpart.body.camera.camera_for_size``
             makes it the frame size's; None: the default camera at the frame size, as the tracker's).
         want_partner: whether a partner topic is subscribed (else frames render at once).
         style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl), ``avatar`` (the video-texture

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from typing import Any, Sequence
 
-from messages import Control
+from counterpart.messages import Control
 
 from .compositor import OVERLAYS
 

@@ -1,7 +1,7 @@
 """Drawing the partner and the overlays into BGR images: plain functions over numpy arrays.
 
 The 3D partner is drawn as in Zheng et al. 2006 ("Virtual friend"): the 16 truncated cones of
-``body.skeleton`` are projected with the camera calibration and shaded. Each cone is cut into
+``counterpart.body.skeleton`` are projected with the camera calibration and shaded. Each cone is cut into
 ``n_rim`` side facets (quads between its two rim circles) plus its two flat ends; facets facing
 away from the camera are culled, the rest are shaded by Lambert's law
 
@@ -23,12 +23,12 @@ from typing import Any, Iterable, Mapping, Sequence
 import cv2
 import numpy as np
 
-from body.spline import evaluate_closed_bspline
-from body.camera import Camera
-from body.ik import dims_from_joints, inverse_kinematics
-from body.kinematics import cone_endpoints
-from body.raster import cone_rims
-from body.skeleton import BONES, JOINT_INDEX, N_JOINTS
+from counterpart.body.spline import evaluate_closed_bspline
+from counterpart.body.camera import Camera
+from counterpart.body.ik import dims_from_joints, inverse_kinematics
+from counterpart.body.kinematics import cone_endpoints
+from counterpart.body.raster import cone_rims
+from counterpart.body.skeleton import BONES, JOINT_INDEX, N_JOINTS
 
 _SHIFT = 4  # fixed-point bits: sub-pixel accurate polygon edges in OpenCV
 _SCALE = float(1 << _SHIFT)
@@ -66,12 +66,12 @@ def partner_colour(emotion: str = "neutral", strength: float = 0.0) -> Colour:
 def partner_cones(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The 16 truncated cones of a body given by its 14 joints.
 
-    The joints are turned into a pose vector by ``body.ik.inverse_kinematics`` and into body
-    dimensions by ``body.ik.dims_from_joints``; forward kinematics of both gives cones whose limb
+    The joints are turned into a pose vector by ``counterpart.body.ik.inverse_kinematics`` and into body
+    dimensions by ``counterpart.body.ik.dims_from_joints``; forward kinematics of both gives cones whose limb
     directions follow the joints, with head, hands and feet added.
 
     Args:
-        joints: (14, 3) metres, world frame, ``body.skeleton.JOINTS`` order.
+        joints: (14, 3) metres, world frame, ``counterpart.body.skeleton.JOINTS`` order.
     Returns:
         ends (16, 2, 3) metres (start and end centre of each cone), radii (16, 2) metres.
     """

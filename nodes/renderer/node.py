@@ -1,9 +1,9 @@
 """The renderer node: draws the partner into each camera frame, writes a video, serves a live page.
 
-Run in a graph (``run: nodes.renderer``)::
+Run in a graph (``run: counterpart.nodes.renderer``)::
 
     renderer:
-      run: nodes.renderer
+      run: counterpart.nodes.renderer
       params: {video: out.mp4, serve: true, port: 8080, pose: true, stats_topics: [camera/stats]}
 
 Inputs: ``frame`` (camera.Frame) always; ``partner`` (responder.Partner) unless ``partner: false``;
@@ -25,16 +25,16 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from body.camera import Camera, camera_from_info, camera_param_problem
-from bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
-from messages import CameraInfo, Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
+from counterpart.body.camera import Camera, camera_from_info, camera_param_problem
+from counterpart.bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
+from counterpart.messages import CameraInfo, Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .compositor import OVERLAYS, STYLES, Bundle, Compositor
 from .controls import EMOTIONS, INTEREST_LEVELS, SPEAKERS, control_to_json, parse_control
 from .video import VideoWriter, write_png
 from .web import LiveServer, is_loopback
 
-#: the responder's model names (nodes.responder.models.MODEL_NAMES; a node does not import another node)
+#: the responder's model names (counterpart.nodes.responder.models.MODEL_NAMES; a node does not import another node)
 DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion", "video-texture", "gpdm"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
 #: seconds of the stream at its start that the ``*_after_1s`` figures leave out
@@ -90,7 +90,7 @@ class Renderer(Node):
         "overlay_controls": Param(bool, True, "draw the controls in force (model, speaker, interest, emotion bar)"),
         "camera_info": Param(bool, True, "take the camera from topic camera_info (the calibration node, so that "
                              "every node projects with the same one; frames wait for it); false: from 'camera'"),
-        "camera": Param(dict, {}, "without camera_info only: calibration (body.camera.Camera.to_dict or look-at "
+        "camera": Param(dict, {}, "without camera_info only: calibration (counterpart.body.camera.Camera.to_dict or look-at "
                         "form), scaled to a frame size of the same aspect ratio; empty: the default camera at the "
                         "frame size", check=camera_param_problem),
         "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), avatar (the "

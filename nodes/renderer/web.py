@@ -8,7 +8,7 @@ Routes::
     GET  /snapshot.png  the newest frame as PNG
     GET  /stats         JSON: the newest NodeStats of every node, by node name
     GET  /state         JSON: controls and overlays in force, choices for the page, newest frame seq
-    POST /control       JSON object of controls (``nodes.renderer.controls.parse_control``);
+    POST /control       JSON object of controls (``counterpart.nodes.renderer.controls.parse_control``);
                         answers the accepted control, or 400 with {"error": ...}
 
 The server binds ``127.0.0.1`` unless told otherwise. Bound to loopback it also refuses requests

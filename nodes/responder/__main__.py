@@ -1,7 +1,7 @@
-"""``python -m nodes.responder --param model=dual-hmm ...``: run the responder node alone."""
+"""``python -m counterpart.nodes.responder --param model=dual-hmm ...``: run the responder node alone."""
 import sys
 
-from bus.runner import run_standalone
+from counterpart.bus.runner import run_standalone
 
 if __name__ == "__main__":
-    sys.exit(run_standalone("nodes.responder.node:Responder"))
+    sys.exit(run_standalone("counterpart.nodes.responder.node:Responder"))

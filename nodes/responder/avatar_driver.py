@@ -1,6 +1,6 @@
 """Driving the video-texture avatar with the listener rules (Okwechime et al.).
 
-The listener model (:class:`~nodes.responder.listener.ListenerModel`) decides, from the speaker's
+The listener model (:class:`~counterpart.nodes.responder.listener.ListenerModel`) decides, from the speaker's
 signals and the mined rules' confidences at the user's interest level, which listener behaviours
 are on (``nod``, ``shake``, ``gaze_at_other``, ...) and where the listener stands (facing the
 speaker). The texture motion graph is then asked for them: each behaviour the graph has is a

@@ -1,10 +1,10 @@
 """A recording of one person for the video-texture avatar: masked, cropped frames and social labels.
 
 From a video file (``counterpart learn avatar``): the silhouette node's algorithm
-(``nodes.silhouette.pipeline``: the background fitted on the first frames, which must show the
+(``counterpart.nodes.silhouette.pipeline``: the background fitted on the first frames, which must show the
 empty room, then the person's region on every frame; the largest region is the person) gives the
 mask, refined into a matte without the fringe of bled colours around the person (:func:`refine_matte`);
-the labeller (``nodes.labeller``, from the silhouette: nod, shake, activity; from a frontal face:
+the labeller (``counterpart.nodes.labeller``, from the silhouette: nod, shake, activity; from a frontal face:
 talking, laughing) gives the per-frame labels unless a label file is given. From the simulator
 (:func:`sim_recording`): a conversation's listener rendered alone, with the simulator's exact masks
 and labels, for the default avatar, the tests and the benchmark.
@@ -117,7 +117,7 @@ def refine_matte(frame: np.ndarray, region: np.ndarray, background: np.ndarray, 
     frame: (H, W, 3) uint8; region: (H, W) bool; background: (H, W, 3) the background model's mean.
     Returns (H, W) bool within ``region``.
     """
-    from nodes.silhouette.regions import clean_mask
+    from counterpart.nodes.silhouette.regions import clean_mask
 
     d = np.abs(frame.astype(np.float32) - background.reshape(frame.shape)).max(axis=-1)
     d = cv2.GaussianBlur(d, (3, 3), 0)
@@ -125,10 +125,10 @@ def refine_matte(frame: np.ndarray, region: np.ndarray, background: np.ndarray, 
 
 
 def read_label_file(path: str | os.PathLike[str], person: str, required: Sequence[str] = ()) -> tuple[np.ndarray, tuple[str, ...]]:
-    """(labels (T, K) int8, names) of ``person`` from a label file (``nodes.labeller.mining.read_labels``:
+    """(labels (T, K) int8, names) of ``person`` from a label file (``counterpart.nodes.labeller.mining.read_labels``:
     ``.npz`` with signals_a/_b, or ``.csv``); ValueError naming each ``required`` signal that the file
     lacks or that never occurs in it."""
-    from nodes.labeller.mining import read_labels
+    from counterpart.nodes.labeller.mining import read_labels
 
     from .video_texture import RecordingError
 
@@ -154,17 +154,17 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
     ``labelling``, the labeller's row of labels (SIGNALS order); and the frame size. ``one_thread``:
     OpenCV on one thread (in a worker process: the processes are the parallelism, and OpenCV's own
     threads on top cost a fifth more CPU on a busy machine)."""
-    from bus.cli_offline import FrameProgress
+    from counterpart.bus.cli_offline import FrameProgress
 
     if one_thread:
         cv2.setNumThreads(1)
-    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
+    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
 
     ex = SilhouetteExtractor(outlines=labelling)
     if labelling:
-        from nodes.labeller.labeller import PersonObservation, SocialLabeller
-        from nodes.labeller.signals import SIGNALS, UNKNOWN
-        from nodes.silhouette.pipeline import video_info
+        from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller
+        from counterpart.nodes.labeller.signals import SIGNALS, UNKNOWN
+        from counterpart.nodes.silhouette.pipeline import video_info
 
         labeller = SocialLabeller(video_info(path)[0] or 25.0)
     progress = FrameProgress(f"learn avatar{part}")
@@ -209,8 +209,8 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
     part of the video with its own copy of the background model (one when the labeller labels: its
     windows run over the whole video).
     """
-    from nodes.labeller.signals import SIGNALS
-    from nodes.silhouette.pipeline import video_info
+    from counterpart.nodes.labeller.signals import SIGNALS
+    from counterpart.nodes.silhouette.pipeline import video_info
 
     say = say or (lambda s: None)
     p = os.fspath(path)
@@ -264,9 +264,9 @@ def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True,
     every video frame: -1 during the empty start). ``video``: also write the frames there (Motion-JPEG
     ``.avi``), as a camera would have recorded them.
     """
-    from body.pose import DOF_INDEX
-    from sim.render import Renderer
-    from sim.scenarios import make_scenario
+    from counterpart.body.pose import DOF_INDEX
+    from counterpart.sim.render import Renderer
+    from counterpart.sim.scenarios import make_scenario
 
     say = say or (lambda s: None)
     sc = make_scenario("conversation", seed=seed, duration=seconds, emotion="neutral", strength=0.0,

@@ -1,5 +1,5 @@
 """``counterpart learn avatar --video PERSON.avi [--labels L.npz] --out avatar.npz``: a video-texture
-avatar from a recording of one person (:mod:`nodes.responder.video_texture`).
+avatar from a recording of one person (:mod:`counterpart.nodes.responder.video_texture`).
 
 The video must start with about a second of the empty room (the background the person's mask is
 cut against), then show the person alone, facing the way the partner will face (``--facing``).
@@ -14,7 +14,7 @@ import sys
 import time
 from typing import Any
 
-from bus.cli_offline import run_offline
+from counterpart.bus.cli_offline import run_offline
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -1,7 +1,7 @@
 """``counterpart learn responder --model M --data SPEC... --out FILE``: train a responder model.
 
 Data specs: trajectory files (``.npz``), BVH pairs ``a.bvh:b.bvh``, ``sim`` or ``sim:handshake,push``
-(see :mod:`nodes.responder.data`); for ``--model listener`` also a labeller rules file (``.json``).
+(see :mod:`counterpart.nodes.responder.data`); for ``--model listener`` also a labeller rules file (``.json``).
 Progress goes to stderr; exit 0 on success, 2 on bad input.
 """
 from __future__ import annotations

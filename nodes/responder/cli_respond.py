@@ -14,7 +14,7 @@ import sys
 
 import numpy as np
 
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

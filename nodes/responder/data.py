@@ -14,9 +14,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.trajectory import TwoPersonTrajectory
 
-#: the simulator's interaction types (sim.scenarios.SCENARIOS), in a fixed order
+#: the simulator's interaction types (counterpart.sim.scenarios.SCENARIOS), in a fixed order
 SIM_SCENARIOS: tuple[str, ...] = ("handshake", "high_five", "push", "pull", "wave", "conversation")
 EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
 
@@ -31,7 +31,7 @@ def sim_trajectories(scenarios: Sequence[str] = SIM_SCENARIOS, seeds: Sequence[i
     ``max_frames`` crops long scenarios (conversations run 30 s) to keep training fast; extra keyword
     arguments (``emotion``, ``strength``, ``initiator``) go to the scenario generators.
     """
-    from sim.scenarios import make_scenario  # the simulator is only needed to build training data
+    from counterpart.sim.scenarios import make_scenario  # the simulator is only needed to build training data
 
     out = []
     for name in scenarios:

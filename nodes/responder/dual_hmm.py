@@ -1,7 +1,7 @@
 """Dual HMM interaction model (Zheng et al. 2006 "Virtual friend"; Cosker et al. 2004).
 
 Training. Both people are expressed in the observed person's actor-centred frame
-(:mod:`nodes.responder.frames`), so the model does not depend on where the pair stands. Each
+(:mod:`counterpart.nodes.responder.frames`), so the model does not depend on where the pair stands. Each
 person's own pose (14 joints x 3 = 42 numbers, in their own actor frame) is reduced by its own PCA
 keeping 95% of the energy (whitened). The observed block o_t is the observed person's PCA pose plus
 their ground velocity in their own frame (3 numbers, m/s, scaled by ``velocity_weight``), which
@@ -82,7 +82,7 @@ import numpy as np
 from scipy.special import logsumexp
 from sklearn.decomposition import PCA
 
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .frames import actor_frame, to_local, to_world
 

@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import minimize
 
-from body.skeleton import JOINT_INDEX
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .frames import actor_frame, to_local, to_world
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.skeleton import JOINT_INDEX
+from counterpart.body.skeleton import JOINT_INDEX
 
 _LH, _RH = JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]
 _LS, _RS = JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]

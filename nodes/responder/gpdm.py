@@ -1,7 +1,7 @@
 """Hierarchical Gaussian-process dynamical model with style and target (Taubert et al. 2013).
 
 Data. Both people of a trial are expressed in the observed person's actor frame
-(:mod:`nodes.responder.frames`). The human block h_t (8,) is the observed person's right hand
+(:mod:`counterpart.nodes.responder.frames`). The human block h_t (8,) is the observed person's right hand
 (wrist position, metres, and velocity, m/s, in their own frame) and their ground velocity (x, z,
 m/s, own frame). The partner block p_t (47,) is the partner's placement in the observed frame
 (ground x, z in metres; cos, sin of the relative heading), the partner's 14 joints in their own
@@ -9,7 +9,7 @@ frame (42, metres) and a contact indicator (1 where the two right hands are with
 ``contact_m``). Each trial carries a style vector s (3,): the amounts of happy, sad and angry
 (the trial's emotion strength in its column, 0 elsewhere; neutral is s = 0).
 
-Hierarchy (each layer a back-constrained sparse GP-LVM, :mod:`nodes.responder.gp_layers`)::
+Hierarchy (each layer a back-constrained sparse GP-LVM, :mod:`counterpart.nodes.responder.gp_layers`)::
 
     h_t = f_h(x_h,t)                        human layer,       x_h (q_h,),  x_h = g_h(h) (back constraint)
     y_t = f_p(x_p,t, s)                     partner layer,     the partner's own pose y (42,), x_p (q_p,),
@@ -44,8 +44,8 @@ from typing import Any
 
 import numpy as np
 
-from body.skeleton import JOINT_INDEX
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .dual_hmm import DualHMM, partner_placement, partner_velocity
 from .emotion import EMOTIONS

@@ -2,11 +2,11 @@
 interaction behaviour models").
 
 Shapes. Each frame's joint shape is the combined shape vector of the observed person (first half)
-and the partner (second half), ``body.spline.combined_shape_vector``: both B-spline
+and the partner (second half), ``counterpart.body.spline.combined_shape_vector``: both B-spline
 silhouettes (n control points) actor-centred and height-normalised, their relative separation and
 log relative scale, x_t (4n + 3,). A PCA keeping ``energy`` of the variance gives y_t (m,). The
 observed person is always the first half; a right-hand observed person is mirrored left-right
-(:func:`~nodes.responder.shapes.mirror_ctrl`), so with ``both_roles`` each pair trains both ways.
+(:func:`~counterpart.nodes.responder.shapes.mirror_ctrl`), so with ``both_roles`` each pair trains both ways.
 
 Prototypes. The state is v_t = [y_t, w dy_t] with the first derivative dy_t = y_t - y_{t-1}
 (per frame, weighted by ``deriv_weight``); K state prototypes by vector quantisation (k-means),

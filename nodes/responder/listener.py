@@ -15,7 +15,7 @@ is chosen with probability p(y) = 1 - prod_r (1 - c(r, I)) over the matching rul
 then performed from frame t + s for ``response_s`` seconds (s = the rules' offset). Behaviour
 names are the labeller's signals: ``nod``, ``shake``, ``gaze_at_other``, ``activity``.
 
-The partner's body: a neutral standing person (``body.pose.neutral_pose``) facing the speaker
+The partner's body: a neutral standing person (``counterpart.body.pose.neutral_pose``) facing the speaker
 ``distance`` metres in front of them; a nod is an oscillation of ``head_nod`` (2.5 Hz, 0.25 rad), a
 shake one of ``head_turn`` with a little ``head_tilt`` so the head centre moves sideways (3 Hz),
 ``gaze_at_other`` turns the head to the speaker (otherwise it looks 0.5 rad aside), ``activity``
@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from body.kinematics import forward_kinematics
-from body.pose import DOF_INDEX, neutral_pose
-from body.skeleton import DEFAULT_DIMS, BodyDims
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF_INDEX, neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 from .frames import actor_frame
 

@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from bus import Input, Node, Output, Param
-from messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
+from counterpart.bus import Input, Node, Output, Param
+from counterpart.messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
 
 from .emotion import EMOTIONS, StyleFilter
 from .reach import ReachConfig, reach
@@ -162,7 +162,7 @@ class Responder(Node):
 
     def _avatar(self, texture: Any, listener: Any) -> dict[str, Any]:
         """The video-texture avatar's Partner fields, driven by the listener rules
-        (:func:`nodes.responder.avatar_driver.avatar_partner`)."""
+        (:func:`counterpart.nodes.responder.avatar_driver.avatar_partner`)."""
         from .avatar_driver import avatar_partner
         from .models import default_model_path
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from body.skeleton import JOINT_INDEX
+from counterpart.body.skeleton import JOINT_INDEX
 
 #: (shoulder, elbow, wrist) joint indices of each arm
 ARMS = tuple((JOINT_INDEX[f"{s}_shoulder"], JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]) for s in ("l", "r"))

@@ -1,9 +1,9 @@
 """Silhouette B-spline shapes of two-person trajectories, for the joint-shape model.
 
-Each person is turned into cone-model poses (``body.ik``), rasterised alone through the camera
-(``body.raster.rasterise_silhouettes``: one mask per person, as the silhouette node separates
+Each person is turned into cone-model poses (``counterpart.body.ik``), rasterised alone through the camera
+(``counterpart.body.raster.rasterise_silhouettes``: one mask per person, as the silhouette node separates
 people) and fitted with a closed B-spline of ``n`` control points
-(``body.spline.silhouette_spline``), giving per frame the control points (n, 2)
+(``counterpart.body.spline.silhouette_spline``), giving per frame the control points (n, 2)
 pixels, the region centroid (2,) pixels and the height (pixels, bounding box).
 """
 from __future__ import annotations
@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from body.camera import Camera, default_camera
-from body.ik import dims_from_joints, inverse_kinematics
-from body.raster import rasterise_silhouettes
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.camera import Camera, default_camera
+from counterpart.body.ik import dims_from_joints, inverse_kinematics
+from counterpart.body.raster import rasterise_silhouettes
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 
 @dataclass
@@ -31,7 +31,7 @@ class ShapeTrack:
 
 def silhouette_track(joints: np.ndarray, camera: Camera, n: int = 32) -> ShapeTrack:
     """(T, 14, 3) joints (metres, world) -> the person's silhouette splines through ``camera``."""
-    from body.spline import silhouette_spline  # the spline convention shared with the silhouette node
+    from counterpart.body.spline import silhouette_spline  # the spline convention shared with the silhouette node
 
     X = np.asarray(joints, np.float64)
     P = inverse_kinematics(X)

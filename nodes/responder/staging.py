@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from body.skeleton import JOINT_INDEX
+from counterpart.body.skeleton import JOINT_INDEX
 
 from .frames import actor_frame
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from body.trajectory import TwoPersonTrajectory
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .data import EMOTIONS, SIM_SCENARIOS, sim_trajectories
 

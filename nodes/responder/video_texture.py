@@ -47,7 +47,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from body.avatar_frames import AvatarFrames
+from counterpart.body.avatar_frames import AvatarFrames
 
 #: the labels that define a frame's social state (pruning and signal-set subgraphs)
 STATE_SIGNALS: tuple[str, ...] = ("gaze_at_other", "talking", "laughing")
@@ -153,7 +153,7 @@ class VideoTexture:
     CSR form with their log-weights, ``goals_`` goal names and ``dist_`` (G, T) float32 graph
     distances in frames to each goal (inf: unreachable), ``labels_`` (T, K) int8, ``names_``,
     ``step_q95_`` (the recording's 95th percentile frame-to-frame distance in eigenspace),
-    ``frames`` the :class:`~body.avatar_frames.AvatarFrames` when given.
+    ``frames`` the :class:`~counterpart.body.avatar_frames.AvatarFrames` when given.
     """
 
     name = "video-texture"
@@ -505,7 +505,7 @@ class VideoTexture:
 
 def fit_recording(rec: Any, config: VideoTextureConfig | None = None, required: Sequence[str] = (),
                   progress: Progress = None) -> VideoTexture:
-    """Learn an avatar from a :class:`~nodes.responder.avatar_recording.Recording`: appearance
+    """Learn an avatar from a :class:`~counterpart.nodes.responder.avatar_recording.Recording`: appearance
     features, the compressed masked frames and the texture motion graph."""
     say = progress or (lambda s: None)
     model = VideoTexture(config)

@@ -2,7 +2,7 @@
 
 Background model (fitted on the first ``--train-frames`` frames; people may be in view), clean-up,
 people with sides, ids and B-spline outlines, one row per person and frame
-(``nodes.silhouette.pipeline.extract_video`` gives the file's layout). For batch labelling of a
+(``counterpart.nodes.silhouette.pipeline.extract_video`` gives the file's layout). For batch labelling of a
 corpus. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
 Exit code 0 on success, 2 on bad input, 130 when interrupted.
 """
@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bus.cli_offline import FrameProgress, positive, run_offline
+from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
 
 from .backends import BACKEND_NAMES
 

@@ -5,11 +5,11 @@ Frame (bgr8 or mono8) in, Silhouettes out, exactly one per frame with the frame'
 from the first ``train_frames`` frames the output has no people; with ``replay_training`` (lockstep
 replays) those frames are held back instead and their people found once the background is learnt,
 from however many frames there are when a short stream ends first. The algorithm is
-:class:`nodes.silhouette.pipeline.SilhouetteExtractor`; this module only converts messages.
+:class:`counterpart.nodes.silhouette.pipeline.SilhouetteExtractor`; this module only converts messages.
 
-Run in a graph (``run: nodes.silhouette``) or alone::
+Run in a graph (``run: counterpart.nodes.silhouette``) or alone::
 
-    python -m nodes.silhouette --param backend=mog2 --param train_frames=50
+    python -m counterpart.nodes.silhouette --param backend=mog2 --param train_frames=50
 
 Grey (mono8) frames are converted to three equal channels; as chromaticity cannot tell a shadow
 from a darker person there, shadow detection is off for them (every change from the background is
@@ -23,10 +23,10 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, camera_param_problem
-from bus import Input, Node, Output, Param
-from messages import Frame, Silhouettes
-from messages.silhouette import PersonShape
+from counterpart.body.camera import Camera, camera_param_problem
+from counterpart.bus import Input, Node, Output, Param
+from counterpart.messages import Frame, Silhouettes
+from counterpart.messages.silhouette import PersonShape
 
 from .backends import BACKEND_NAMES
 from .pipeline import FrameResult, SilhouetteExtractor

@@ -19,8 +19,8 @@ import numpy as np
 from .background import BACKGROUND
 from .backends import HorprasertSubtractor, make_subtractor
 from .regions import Person, PersonTracker, clean_mask
-from body.camera import Camera, camera_for_size
-from body.spline import silhouette_spline
+from counterpart.body.camera import Camera, camera_for_size
+from counterpart.body.spline import silhouette_spline
 
 #: a standing adult, metres: the smallest person is one this tall at ``max_distance_m``
 PERSON_HEIGHT_M = 1.7
@@ -34,7 +34,7 @@ MIN_PERSON_HEIGHT_PX = 16.0
 def person_min_area(width: int, height: int, camera: Camera | None = None, max_distance_m: float = 30.0) -> int:
     """Smallest person region (pixels) in frames of ``width`` x ``height``: a person
     ``PERSON_HEIGHT_M`` tall at ``max_distance_m`` from ``camera`` (None: the default camera of
-    ``body.camera.camera_for_size``, 55 degrees across the width) is h = fy * 1.7 / d pixels tall
+    ``counterpart.body.camera.camera_for_size``, 55 degrees across the width) is h = fy * 1.7 / d pixels tall
     (pinhole) and covers about 0.25 h^2 pixels. With the default camera and 30 m a person is
     1/14 of the frame height tall, 17 px at 320x240 (76 px of area): people down to 20 px tall
     are kept with a margin, and the threshold follows the frame size and the lens rather than a
@@ -76,7 +76,7 @@ class SilhouetteExtractor:
     min_area : smallest person region, pixels; None: ``person_min_area`` of the frame size,
         ``camera`` and ``max_distance_m`` (a person 1.7 m tall that far away), set on the first
         frame (for small, distant people: 76 px at 320x240 with the defaults).
-    camera : the camera (``body.camera.Camera``, scaled to the frame size) for ``min_area=None``;
+    camera : the camera (``counterpart.body.camera.Camera``, scaled to the frame size) for ``min_area=None``;
         None: the default camera.
     max_distance_m : the farthest person to find, metres, for ``min_area=None``.
     open_px, close_px, fill_holes : mask clean-up (``regions.clean_mask``).

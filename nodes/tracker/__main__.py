@@ -1,7 +1,7 @@
-"""``python -m nodes.tracker --param people='[left]' ...``: run the tracker node alone."""
+"""``python -m counterpart.nodes.tracker --param people='[left]' ...``: run the tracker node alone."""
 import sys
 
-from bus.runner import run_standalone
+from counterpart.bus.runner import run_standalone
 
 if __name__ == "__main__":
-    sys.exit(run_standalone("nodes.tracker.node:TrackerNode"))
+    sys.exit(run_standalone("counterpart.nodes.tracker.node:TrackerNode"))

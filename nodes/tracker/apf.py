@@ -17,7 +17,7 @@ With the diffusion proportional to the set's spread (Deutscher & Reid 2005), the
 itself along the DOFs the observation pins down and stays broad along those it cannot see (depth
 and heading from one camera), so the weighted mean averages over them instead of following noise.
 
-Angles in radians, positions in metres (``body.pose``). The yaw is averaged on the circle.
+Angles in radians, positions in metres (``counterpart.body.pose``). The yaw is averaged on the circle.
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from typing import Callable
 
 import numpy as np
 
-from body.pose import DOF, YAW, clip_to_limits, wrap_angle
+from counterpart.body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 LogLikelihood = Callable[[np.ndarray], np.ndarray]
 PredictFn = Callable[[np.ndarray, np.random.Generator], np.ndarray]

@@ -1,7 +1,7 @@
 """``counterpart learn tracker-prior --data SOURCE... --out FILE``: train the tracker's motion prior.
 
 SOURCE: ``sim:NAME[?seed=S]`` (a simulator scenario), a ``.bvh`` file, a two-person trajectory or
-simulator ``truth.npz``, or a folder of those (see ``nodes.tracker.prior.load_sequences``).
+simulator ``truth.npz``, or a folder of those (see ``counterpart.nodes.tracker.prior.load_sequences``).
 Progress goes to stderr; the exit code is 0 on success, 2 on bad input.
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """``counterpart track VIDEO --out poses.npz``: offline 3D tracking of a video file.
 
 The silhouette node's background model and the tracker's annealed particle filter, frame by frame,
-without the bus (``nodes.tracker.offline.track_video``); the layout of the output file is in its
+without the bus (``counterpart.nodes.tracker.offline.track_video``); the layout of the output file is in its
 docstring. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
 Exit code 0 on success, 2 on bad input, 130 when interrupted.
 """
@@ -10,9 +10,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from body.camera import Camera, load_camera_file
-from bus.cli_offline import FrameProgress, positive, run_offline
-from nodes.silhouette.backends import BACKEND_NAMES
+from counterpart.body.camera import Camera, load_camera_file
+from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
+from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 
 from .prior import resolve_prior
 from .tracker import SIDES
@@ -53,7 +53,7 @@ def main(args: argparse.Namespace) -> int:
         return 2
 
     def work() -> dict:
-        from nodes.silhouette.pipeline import video_info
+        from counterpart.nodes.silhouette.pipeline import video_info
 
         camera = load_camera(args.camera) if args.camera else None
         video_info(args.video)  # a missing or undecodable video is said before a minute of building a prior

@@ -1,6 +1,6 @@
 """Initialisation of a track from a silhouette, and lost-track detection.
 
-Placement (pinhole geometry, ``body.camera``): the feet stand where the ray through the bottom
+Placement (pinhole geometry, ``counterpart.body.camera``): the feet stand where the ray through the bottom
 centre of the person's bounding box meets the ground (``Camera.ground_point``); the stature is
 the height at that place whose top projects onto the bbox's top row; the heading comes from the
 side of the frame the person stands on (the simulator's and a face-to-face interaction's layout:
@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from body.camera import Camera
-from body.pose import DOF, clip_to_limits, neutral_pose
-from body.skeleton import DEFAULT_DIMS, BodyDims
+from counterpart.body.camera import Camera
+from counterpart.body.pose import DOF, clip_to_limits, neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 #: heading (root_yaw, radians) assumed for a person on each side of the frame
 SIDE_YAW = {"left": np.pi / 2, "right": -np.pi / 2, "centre": 0.0}

@@ -18,7 +18,7 @@ the calibrated camera ties the depth to the image row of the feet. The log-likel
 Several calibrated cameras (Deutscher et al. use three) combine in ``MultiViewLikelihood``: the
 image costs of every view are summed over one forward kinematics.
 
-Everything is vectorised over N particles x points: one forward kinematics call (``body.kinematics.anchor_points``), one
+Everything is vectorised over N particles x points: one forward kinematics call (``counterpart.body.kinematics.anchor_points``), one
 projection of the 23 anchor points, the sample points of all cones as one small matmul in float32,
 one flat gather from the frame's per-pixel cost map (``Observation.cost``) and the coverage test
 as a matmul plus in-place array arithmetic. Pixel units throughout; out-of-image points read 0
@@ -32,9 +32,9 @@ from typing import Sequence
 import cv2
 import numpy as np
 
-from body.camera import Camera
-from body.kinematics import anchor_points
-from body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
+from counterpart.body.camera import Camera
+from counterpart.body.kinematics import anchor_points
+from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
@@ -154,7 +154,7 @@ class ConeLikelihood:
     Args:
         camera: the calibrated camera.
         dims: body dimensions of the tracked person.
-        n_along, n_across: interior grid per cone (as ``body.raster.cone_interior_points``).
+        n_along, n_across: interior grid per cone (as ``counterpart.body.raster.cone_interior_points``).
         per_side: outline points per long side of each cone (``cone_outline_points``).
         w_sil, w_edge, w_cover: weights of S_r, S_e, S_c.
         gain: overall scale of the cost (sharpness before annealing; the APF's beta rescales it).
@@ -215,7 +215,7 @@ class ConeLikelihood:
     def sample_points(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, 28) -> interior points (N, S*K_in, 2), outline points (N, S*K_out, 2) px, ok (N,).
 
-        Same points as ``body.raster.cone_interior_points`` / ``cone_outline_points`` (trapezoid
+        Same points as ``counterpart.body.raster.cone_interior_points`` / ``cone_outline_points`` (trapezoid
         approximation of each projected cone), computed in one broadcast."""
         c, rho, ok = self.project(P)
         u, v = self._points_uv(c, rho)

@@ -1,11 +1,11 @@
 """The tracker node: Frame + Silhouettes (paired by seq) -> Pose3D, one message per frame.
 
-Run in a graph (``run: nodes.tracker``) or alone::
+Run in a graph (``run: counterpart.nodes.tracker``) or alone::
 
-    python -m nodes.tracker --param people='[left, right]' --param prior=none
+    python -m counterpart.nodes.tracker --param people='[left, right]' --param prior=none
 
 Each person named in ``people`` (a side of the frame, as the silhouette node labels them) has its
-own :class:`nodes.tracker.tracker.Tracker`. A frame with nobody in view gives a Pose3D with no
+own :class:`counterpart.nodes.tracker.tracker.Tracker`. A frame with nobody in view gives a Pose3D with no
 people (the tracks wait); a merged region is still tracked, with the mask the silhouette node
 split by its labels. A frame whose partner message never comes is dropped once it is
 ``max_pending`` frames old.
@@ -17,9 +17,9 @@ from typing import Any
 import cv2
 import numpy as np
 
-from body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
-from bus import Input, Node, Output, Param, ParamError
-from messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
+from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
+from counterpart.bus import Input, Node, Output, Param, ParamError
+from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .prior import resolve_prior
 from .tracker import SIDES, Tracker, people_problem

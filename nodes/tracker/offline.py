@@ -1,8 +1,8 @@
 """Offline 3D tracking of a video file, without the bus (``counterpart track``).
 
 The same algorithms as the graph ``camera -> silhouette -> tracker``: the silhouette node's
-extractor (``nodes.silhouette.pipeline.iter_video``: background fitted on the first seconds, people
-with sides and ids) and one :class:`nodes.tracker.tracker.Tracker` per tracked side, each fed the
+extractor (``counterpart.nodes.silhouette.pipeline.iter_video``: background fitted on the first seconds, people
+with sides and ids) and one :class:`counterpart.nodes.tracker.tracker.Tracker` per tracked side, each fed the
 frame and its person's pixels of the label mask, frame by frame. For batch work on a corpus.
 """
 from __future__ import annotations
@@ -13,15 +13,15 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
-from body.camera import Camera, camera_for_size
-from body.pose import DOF
+from counterpart.body.camera import Camera, camera_for_size
+from counterpart.body.pose import DOF
 
 from .init import PlacementError
 from .prior import MotionPrior
 from .tracker import SIDES, Tracker, people_problem
 
 if TYPE_CHECKING:
-    from nodes.silhouette.pipeline import FrameResult
+    from counterpart.nodes.silhouette.pipeline import FrameResult
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]
@@ -59,7 +59,7 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
     Raises FileNotFoundError / ValueError (a missing or undecodable video, bad people, a camera
     calibrated for another frame size) before anything is written.
     """
-    from nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
 
     problem = people_problem(list(people))
     if problem:

@@ -1,6 +1,6 @@
 """The learned motion prior of the tracker (Zheng et al. 2006, "Virtual friend", sect. 3).
 
-Training: pose vectors (``body.pose``, T x 28) of motion capture are reduced to their joint angles
+Training: pose vectors (``counterpart.body.pose``, T x 28) of motion capture are reduced to their joint angles
 (``ANGLE_DOFS``: everything but the root position and heading), projected by PCA onto the
 components that keep ``energy`` (95%) of the variance, and a Gaussian HMM with ``n_states``
 states (hmmlearn ``GaussianHMM``, full covariances) is fitted to the PCA coefficient sequences.
@@ -27,7 +27,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from body.pose import DOF, YAW, clip_to_limits, wrap_angle
+from counterpart.body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 VERSION = 1
 #: joint angles modelled by PCA + HMM: root pitch and roll, torso, head, arms, legs
@@ -275,8 +275,8 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
     """Pose sequences (T, 28) at ``fps`` from training sources.
 
     A source is ``sim:NAME[?seed=S]`` (both people of a simulator scenario), a ``.bvh`` file (one
-    person), a ``.npz`` two-person trajectory (``body.trajectory``; both people through
-    ``body.ik.inverse_kinematics``) or a simulator ``truth.npz`` holding ``poses_a``/``poses_b``,
+    person), a ``.npz`` two-person trajectory (``counterpart.body.trajectory``; both people through
+    ``counterpart.body.ik.inverse_kinematics``) or a simulator ``truth.npz`` holding ``poses_a``/``poses_b``,
     or a folder of such files. Returns the sequences and one name per sequence.
     """
     seqs: list[np.ndarray] = []
@@ -284,7 +284,7 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
     for src in sources:
         src = str(src)
         if src.startswith("sim:"):
-            from sim.scenarios import make_scenario
+            from counterpart.sim.scenarios import make_scenario
             name, _, query = src[4:].partition("?")
             seed = int(query.split("=", 1)[1]) if query.startswith("seed=") else 0
             sc = make_scenario(name, seed=seed, fps=fps)
@@ -302,8 +302,8 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
         elif not p.exists():
             raise FileNotFoundError(f"training data {p} does not exist (give sim:NAME, a .bvh, a .npz or a folder)")
         elif p.suffix.lower() == ".bvh":
-            from body.bvh import bvh_to_joints14, read_bvh
-            from body.ik import inverse_kinematics
+            from counterpart.body.bvh import bvh_to_joints14, read_bvh
+            from counterpart.body.ik import inverse_kinematics
             b = read_bvh(p)
             seqs.append(_resample(inverse_kinematics(bvh_to_joints14(b)), b.fps, fps))
             names.append(str(p))
@@ -316,8 +316,8 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
                         seqs.append(_resample(np.asarray(z[f"poses_{who}"], np.float64), f_in, fps))
                         names.append(f"{p}#{who}")
                     continue
-            from body.ik import inverse_kinematics
-            from body.trajectory import TwoPersonTrajectory
+            from counterpart.body.ik import inverse_kinematics
+            from counterpart.body.trajectory import TwoPersonTrajectory
             tr = TwoPersonTrajectory.load(p)
             for who, X in (("a", tr.a), ("b", tr.b)):
                 seqs.append(_resample(inverse_kinematics(X), tr.fps, fps))

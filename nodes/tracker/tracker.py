@@ -25,10 +25,10 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from body.camera import Camera
-from body.kinematics import forward_kinematics
-from body.pose import DOF, YAW, wrap_angle
-from body.skeleton import DEFAULT_DIMS, BodyDims
+from counterpart.body.camera import Camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF, YAW, wrap_angle
+from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 from .apf import AnnealedParticleFilter, ParticleFilter
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
