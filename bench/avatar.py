@@ -37,6 +37,7 @@ Figures (last stdout line, one JSON object):
                      inflate as it does the wall time; ``cores`` the CPUs this process may use and
                      ``load_avg`` the machine's load when it ended
 """
+
 from __future__ import annotations
 
 import argparse
@@ -62,7 +63,8 @@ def log(msg: str) -> None:
 def dead_ends(model) -> int:
     """Frames of the graph that cannot reach every goal subgraph, recomputed from the saved edges
     (shortest paths backwards from each goal's frames; the goal's frames are where the model's
-    distance is 0)."""
+    distance is 0).
+    """
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import dijkstra
 
@@ -91,7 +93,7 @@ def synthesis(model, listener, frames: int, requests: int, seed: int) -> dict:
         if pending is None and t >= t_next:
             name = str(rng.choice(signals))
             if model.labels_[shown, model.names_.index(name)] == 1:
-                t_next = t + 1   # already showing it: not a request to measure
+                t_next = t + 1  # already showing it: not a request to measure
             else:
                 pending = (name, t)
         beh = {pending[0]} if pending else set()
@@ -120,12 +122,16 @@ def synthesis(model, listener, frames: int, requests: int, seed: int) -> dict:
     for t in range(n):
         listener.step({"nod": (t // 50) % 2 == 1}, None)
     ref = (time.perf_counter() - t0) / n * 1e3
-    return {"signal_within_1s": float(np.mean(lat <= fps)) if len(lat) else None,
-            "latency_s_median": float(np.median(lat) / fps) if len(lat) else None,
-            "latency_s_p90": float(np.percentile(lat, 90) / fps) if len(lat) else None,
-            "requests": {s: asked.count(s) for s in signals}, "cuts_taken": int(len(cuts)),
-            "seam_ok_taken": float(np.mean(seams <= model.step_q95_)) if len(seams) else None,
-            "synth_ms": round(synth, 4), "listener_ms": round(ref, 4)}
+    return {
+        "signal_within_1s": float(np.mean(lat <= fps)) if len(lat) else None,
+        "latency_s_median": float(np.median(lat) / fps) if len(lat) else None,
+        "latency_s_p90": float(np.percentile(lat, 90) / fps) if len(lat) else None,
+        "requests": {s: asked.count(s) for s in signals},
+        "cuts_taken": int(len(cuts)),
+        "seam_ok_taken": float(np.mean(seams <= model.step_q95_)) if len(seams) else None,
+        "synth_ms": round(synth, 4),
+        "listener_ms": round(ref, 4),
+    }
 
 
 def composite_ms(model, path: str, n: int = 300) -> float:
@@ -147,7 +153,7 @@ def composite_ms(model, path: str, n: int = 300) -> float:
     for _ in range(n):
         f, w = model.step({})
         msgs.append(Partner(model="video-texture", joints=joints, avatar_frames=f, avatar_weights=w, avatar_file=path))
-    painter.draw(img.copy(), msgs[0], cam)   # loading the file is not per frame
+    painter.draw(img.copy(), msgs[0], cam)  # loading the file is not per frame
     t0 = time.perf_counter()
     for m in msgs:
         painter.draw(img.copy(), m, cam)
@@ -160,8 +166,12 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2, help="simulator seed (default 2; the defaults were tuned on 1)")
     ap.add_argument("--synth-frames", type=int, default=6000)
     ap.add_argument("--requests", type=int, default=200)
-    ap.add_argument("--keep", default="", help="folder to keep the video, labels and avatar in; a video and labels "
-                    "already there (of the same --seconds and --seed) are used again instead of rendering")
+    ap.add_argument(
+        "--keep",
+        default="",
+        help="folder to keep the video, labels and avatar in; a video and labels "
+        "already there (of the same --seconds and --seed) are used again instead of rendering",
+    )
     args = ap.parse_args()
 
     from counterpart.nodes.responder.avatar_recording import sim_recording
@@ -176,13 +186,19 @@ def main() -> None:
     same = tag.exists() and json.loads(tag.read_text()) == {"seconds": args.seconds, "seed": args.seed}
     if not (same and video.exists() and labels_file.exists()):
         rec, labels = sim_recording(args.seconds, seed=args.seed, video=video, say=log)
-        np.savez(labels_file, signals_a=labels, signals_b=np.full_like(labels, -1),
-                 signal_names=np.array(rec.names), fps=rec.fps)
+        np.savez(
+            labels_file,
+            signals_a=labels,
+            signals_b=np.full_like(labels, -1),
+            signal_names=np.array(rec.names),
+            fps=rec.fps,
+        )
         tag.write_text(json.dumps({"seconds": args.seconds, "seed": args.seed}))
         del rec
     log(f"recording ready in {time.perf_counter() - t0:.1f} s")
 
     import cv2
+
     t0 = time.perf_counter()
     cap = cv2.VideoCapture(str(video))
     while cap.read()[0]:
@@ -192,8 +208,24 @@ def main() -> None:
 
     log("counterpart learn avatar ...")
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "learn", "avatar", "--video", str(video), "--labels",
-                           str(labels_file), "--out", str(out)], cwd=ROOT, capture_output=True, text=True)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "learn",
+            "avatar",
+            "--video",
+            str(video),
+            "--labels",
+            str(labels_file),
+            "--out",
+            str(out),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
     learn_s = time.perf_counter() - t0
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     learn_cpu_s = usage.ru_utime + usage.ru_stime
@@ -213,15 +245,25 @@ def main() -> None:
     syn = synthesis(model, listener, args.synth_frames, args.requests, args.seed)
     comp = composite_ms(model, str(out))
     result = {
-        "seam_ok": round(float(np.mean(seam <= model.step_q95_)), 4), "seam_ok_taken": syn.pop("seam_ok_taken"),
-        "seam_limit": round(model.step_q95_, 4), "jumps": int(jumps.sum()),
-        "dead_ends": de, "goals": model.goals_, "frames_in_graph": int(model.alive_.sum()),
+        "seam_ok": round(float(np.mean(seam <= model.step_q95_)), 4),
+        "seam_ok_taken": syn.pop("seam_ok_taken"),
+        "seam_limit": round(model.step_q95_, 4),
+        "jumps": int(jumps.sum()),
+        "dead_ends": de,
+        "goals": model.goals_,
+        "frames_in_graph": int(model.alive_.sum()),
         "frames": int(len(model.alive_)),
-        "signal_within_1s": syn.pop("signal_within_1s"), **syn,
+        "signal_within_1s": syn.pop("signal_within_1s"),
+        **syn,
         "composite_ms": round(comp, 3),
-        "learn_s": round(learn_s, 2), "learn_cpu_s": round(learn_cpu_s, 2), "decode_s": round(decode_s, 2),
-        "load_avg": round(os.getloadavg()[0], 1), "recording_s": args.seconds,
-        "cores": len(os.sched_getaffinity(0)), "seed": args.seed, "tuned_on_seed": 1,
+        "learn_s": round(learn_s, 2),
+        "learn_cpu_s": round(learn_cpu_s, 2),
+        "decode_s": round(decode_s, 2),
+        "load_avg": round(os.getloadavg()[0], 1),
+        "recording_s": args.seconds,
+        "cores": len(os.sched_getaffinity(0)),
+        "seed": args.seed,
+        "tuned_on_seed": 1,
         "avatar_mb": round(out.stat().st_size / 1e6, 2),
     }
     print(json.dumps(result))

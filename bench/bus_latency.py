@@ -19,6 +19,7 @@ median over repeats of each run's median. ``*_ratio_*`` = median(ours) / median(
 fields give the per-repeat paired ratios (ours / raw of the same repeat) as [min, median, max].
 Last stdout line: one JSON object.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -62,7 +63,9 @@ def _raw_pub(ep: str, n: int, size: int, gap: float, ready) -> None:
     time.sleep(0.3)  # PUB has no barrier: give the subscription time to arrive
     payload = np.zeros(size, np.uint8)
     for i in range(n):
-        s.send_multipart([b"blob", time.monotonic_ns().to_bytes(8, "little") + i.to_bytes(4, "little"), payload], copy=False)
+        s.send_multipart(
+            [b"blob", time.monotonic_ns().to_bytes(8, "little") + i.to_bytes(4, "little"), payload], copy=False
+        )
         if gap:
             time.sleep(gap)
     s.send_multipart([b"blob", b"\0" * 8 + b"\xff\xff\xff\xff", b""])
@@ -151,7 +154,8 @@ def _placement() -> tuple[int | None, int | None]:
     """CPUs for the publisher and the subscriber: two different ones where there are two, so that
     every run, raw and ours, has the same placement (the scheduler otherwise puts the pair on one
     core in some runs and on two in others, which changes the wake-up time more than anything
-    measured here)."""
+    measured here).
+    """
     cpus = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
     return (cpus[0], cpus[1]) if len(cpus) >= 2 and PIN else (None, None)
 
@@ -194,7 +198,7 @@ def main() -> None:
     for size in SIZES:
         res: dict[str, list[float]] = {"raw": [], "ours": []}
         for r in range(args.repeats):
-            for kind in (("raw", "ours") if r % 2 == 0 else ("ours", "raw")):
+            for kind in ("raw", "ours") if r % 2 == 0 else ("ours", "raw"):
                 lat = run_pair(kind, n_lat, size, 0.002)[0][WARMUP:]
                 res[kind].append(statistics.median(lat) / 1e3)
         ours, raw = statistics.median(res["ours"]), statistics.median(res["raw"])
@@ -202,11 +206,14 @@ def main() -> None:
         out[f"latency_us_ours_{size}B"] = round(ours, 1)
         out[f"latency_ratio_{size}B"] = round(ours / raw, 3)
         out[f"latency_ratio_{size}B_spread"] = _spread(res["ours"], res["raw"])
-        print(f"{size:>7} B  one-way median: raw {raw:.1f} us, ours {ours:.1f} us; per repeat raw "
-              f"{[round(x) for x in res['raw']]}, ours {[round(x) for x in res['ours']]}", file=sys.stderr)
+        print(
+            f"{size:>7} B  one-way median: raw {raw:.1f} us, ours {ours:.1f} us; per repeat raw "
+            f"{[round(x) for x in res['raw']]}, ours {[round(x) for x in res['ours']]}",
+            file=sys.stderr,
+        )
     thr: dict[str, list[float]] = {"raw": [], "ours": []}
     for r in range(args.repeats):
-        for kind in (("raw", "ours") if r % 2 == 0 else ("ours", "raw")):
+        for kind in ("raw", "ours") if r % 2 == 0 else ("ours", "raw"):
             _, n, dt, _ = run_pair(kind, n_thr, 76800, 0.0)
             thr[kind].append(n / dt)
     out["throughput_msgs_raw_76800B"] = round(statistics.median(thr["raw"]))

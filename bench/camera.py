@@ -15,6 +15,7 @@ when present, else a generated 640x480 MJPG clip. Last stdout line: one JSON obj
 ``camera_fps`` (lockstep), ``fast_fps``, ``no_prefetch_fps``, ``raw_fps``, ``throughput_ratio`` (camera / raw; target
 >= 0.8), ``sim_fps`` (null until the simulator exists).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -29,7 +30,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 import yaml
-
 from counterpart.bus import Input, Node, Param
 from counterpart.messages import Frame
 
@@ -57,10 +57,17 @@ class CountSink(Node):
         self.bytes += msg.image.nbytes
 
     def on_end(self) -> None:
-        Path(self.p["path"]).write_text(json.dumps({
-            "count": self.count, "first_ns": self.first_ns, "last_ns": self.last_ns,
-            "drops": self._in["frame"].drops, "bytes": self.bytes,
-        }))
+        Path(self.p["path"]).write_text(
+            json.dumps(
+                {
+                    "count": self.count,
+                    "first_ns": self.first_ns,
+                    "last_ns": self.last_ns,
+                    "drops": self._in["frame"].drops,
+                    "bytes": self.bytes,
+                }
+            )
+        )
 
 
 def generated_video(folder: Path, n: int = 400, size: tuple[int, int] = (640, 480), fps: float = 25.0) -> Path:
@@ -71,7 +78,7 @@ def generated_video(folder: Path, n: int = 400, size: tuple[int, int] = (640, 48
     rng = np.random.default_rng(0)
     base = cv2.GaussianBlur(rng.integers(0, 256, (h * 2, w * 2, 3), dtype=np.uint8), (0, 0), 3)
     for i in range(n):
-        wr.write(np.ascontiguousarray(base[i % h: i % h + h, (2 * i) % w: (2 * i) % w + w]))
+        wr.write(np.ascontiguousarray(base[i % h : i % h + h, (2 * i) % w : (2 * i) % w + w]))
     wr.release()
     return path
 
@@ -94,15 +101,24 @@ def raw_fps(video: Path, frames: int) -> tuple[float, int]:
 def camera_fps(video: Path, frames: int, pacing: str, work: Path, prefetch: int = 4) -> tuple[float, dict]:
     out = work / f"count-{pacing}.json"
     out.unlink(missing_ok=True)
-    doc = {"nodes": {
-        "camera": {"run": "counterpart.nodes.camera", "params": {"source": f"file:{video}", "pacing": pacing, "max_frames": frames,
-                                                     "prefetch": prefetch}},
-        "sink": {"run": "bench.camera:CountSink", "params": {"path": str(out)}, "policy": "reliable"},
-    }}
+    doc = {
+        "nodes": {
+            "camera": {
+                "run": "counterpart.nodes.camera",
+                "params": {"source": f"file:{video}", "pacing": pacing, "max_frames": frames, "prefetch": prefetch},
+            },
+            "sink": {"run": "bench.camera:CountSink", "params": {"path": str(out)}, "policy": "reliable"},
+        }
+    }
     file = work / "graph.yaml"
     file.write_text(yaml.safe_dump(doc))
-    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", str(file)], cwd=REPO,
-                       capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", "launch", str(file)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     if r.returncode != 0 or not out.exists():
         raise RuntimeError(f"camera graph failed ({r.returncode}):\n{r.stdout}{r.stderr}")
     res = json.loads(out.read_text())
@@ -112,7 +128,8 @@ def camera_fps(video: Path, frames: int, pacing: str, work: Path, prefetch: int 
 
 def sim_fps(frames: int) -> float | None:
     """Rendering fps of the built-in simulator's default scenario, or None while ``sim`` has no
-    ``open_stream`` (TODO(sim): this figure appears by itself once the simulator lands)."""
+    ``open_stream`` (TODO(sim): this figure appears by itself once the simulator lands).
+    """
     from counterpart.nodes.camera.sources import SourceError, make_source
 
     try:
@@ -156,11 +173,17 @@ def main() -> None:
                 if res["count"] != n or res["drops"]:
                     raise RuntimeError(f"sink got {res['count']} frames ({res['drops']} drops), raw read {n}")
             raw.append(r), lock.append(c), fast.append(f), inline.append(c0)
-            print(f"round {i + 1}/{args.runs}: raw {r:.0f} fps, camera lockstep {c:.0f} fps, fast {f:.0f} fps, "
-                  f"lockstep without prefetch {c0:.0f} fps", file=sys.stderr)
+            print(
+                f"round {i + 1}/{args.runs}: raw {r:.0f} fps, camera lockstep {c:.0f} fps, fast {f:.0f} fps, "
+                f"lockstep without prefetch {c0:.0f} fps",
+                file=sys.stderr,
+            )
     result = {
         "video": str(video) if video == VTEST or args.video else "generated MJPG",
-        "size": list(size), "frames": frames, "runs": args.runs, "cpus": os.cpu_count(),
+        "size": list(size),
+        "frames": frames,
+        "runs": args.runs,
+        "cpus": os.cpu_count(),
         "raw_fps": round(float(np.median(raw)), 1),
         "camera_fps": round(float(np.median(lock)), 1),
         "fast_fps": round(float(np.median(fast)), 1),

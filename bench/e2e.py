@@ -39,6 +39,7 @@ The machine is shared: ``load_avg_1min`` is the load when the bench started; run
 Usage: python bench/e2e.py [--frames N] [--repeats R] [--no-reliable]. Last stdout line: one JSON object
 (with ``--repeats`` > 1 the real-time figures are medians over the repeats, each run's in ``runs``).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -53,21 +54,28 @@ from pathlib import Path
 import numpy as np
 import psutil
 import yaml
-
 from counterpart.bus.bag import BagReader
 
 REPO = Path(__file__).resolve().parents[1]
 REALTIME_TOPICS = ["rendered", "partner", "camera/stats"]
 
 
-def run_graph(workdir: Path, name: str, launch_file: str, sets: dict[str, object],
-              topics: list[str]) -> tuple[Path, float, float]:
+def run_graph(
+    workdir: Path, name: str, launch_file: str, sets: dict[str, object], topics: list[str]
+) -> tuple[Path, float, float]:
     """Launch ``launch/<launch_file>`` (plus a recorder of ``topics`` unless the file has one);
-    returns (bag, wall seconds, peak RSS MB of the nodes)."""
+    returns (bag, wall seconds, peak RSS MB of the nodes).
+    """
     bag = workdir / f"{name}.mcap"
     rec = {"path": str(bag), "topics": topics, "overwrite": True}
-    doc: dict[str, object] = {"include": [{"file": str(REPO / "launch" / launch_file), "set": {
-        **sets, "renderer.video": str(workdir / f"{name}.avi")}}]}
+    doc: dict[str, object] = {
+        "include": [
+            {
+                "file": str(REPO / "launch" / launch_file),
+                "set": {**sets, "renderer.video": str(workdir / f"{name}.avi")},
+            }
+        ]
+    }
     if launch_file == "replay.yaml":  # it records already: point its recorder at our bag
         doc["include"][0]["set"].update({f"recorder.{k}": v for k, v in rec.items()})
     else:
@@ -76,8 +84,14 @@ def run_graph(workdir: Path, name: str, launch_file: str, sets: dict[str, object
     launch.write_text(yaml.safe_dump(doc))
     env = {**os.environ, "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpe-", dir="/tmp"), "OMP_NUM_THREADS": "1"}
     t0 = time.monotonic()
-    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "launch", str(launch)], cwd=REPO, env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", "launch", str(launch)],
+        cwd=REPO,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
     peak = 0.0
     me = psutil.Process(proc.pid)
     while proc.poll() is None:
@@ -135,12 +149,15 @@ def realtime_figures(bag: Path, warmup_s: float) -> dict[str, float]:
 def partner_outputs(bag: Path) -> list[tuple]:
     out = []
     for _, _, msg in BagReader(bag).messages(["partner"], decode_messages=True):
-        out.append((msg.seq, msg.model, msg.behaviour, msg.joints.tobytes(), msg.ctrl.tobytes(), round(msg.strength, 9)))
+        out.append(
+            (msg.seq, msg.model, msg.behaviour, msg.joints.tobytes(), msg.ctrl.tobytes(), round(msg.strength, 9))
+        )
     return out
 
 
-def realtime(work: Path, name: str, launch_file: str, frames: int, warmup: float,
-             extra: dict[str, object] | None = None) -> dict[str, float]:
+def realtime(
+    work: Path, name: str, launch_file: str, frames: int, warmup: float, extra: dict[str, object] | None = None
+) -> dict[str, float]:
     sets: dict[str, object] = {"camera.pacing": "realtime", "camera.max_frames": frames, **(extra or {})}
     if launch_file == "replay.yaml":  # the demo renderer's pairing; only the queues differ
         sets.update({"renderer.pair_timeout": 0.1, "renderer.adaptive_wait": True})
@@ -156,16 +173,25 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=1, help="real-time runs of demo.yaml; figures are their medians")
     ap.add_argument("--warmup", type=float, default=2.0, help="seconds left out of the *_steady_ms latencies only")
     ap.add_argument("--no-reliable", action="store_true", help="skip the comparison run with reliable queues")
-    ap.add_argument("--input", nargs="*", default=[], metavar="CLIP",
-                    help="real video files, each also played in real time through the graph (two people tracked)")
+    ap.add_argument(
+        "--input",
+        nargs="*",
+        default=[],
+        metavar="CLIP",
+        help="real video files, each also played in real time through the graph (two people tracked)",
+    )
     args = ap.parse_args()
     import counterpart.nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
     from counterpart.bus.cli_demo import ensure_models
 
     ensure_models()
     work = Path(tempfile.mkdtemp(prefix="e2e-"))
-    out: dict[str, object] = {"frames": args.frames, "load_avg_1min": round(os.getloadavg()[0], 2),
-                              "realtime_graph": "launch/demo.yaml", "lockstep_graph": "launch/replay.yaml"}
+    out: dict[str, object] = {
+        "frames": args.frames,
+        "load_avg_1min": round(os.getloadavg()[0], 2),
+        "realtime_graph": "launch/demo.yaml",
+        "lockstep_graph": "launch/replay.yaml",
+    }
     runs = [realtime(work, f"rt-demo-{i}", "demo.yaml", args.frames, args.warmup) for i in range(args.repeats)]
     for k in runs[0]:
         out[k] = runs[0][k] if len(runs) == 1 else round(float(np.median([r[k] for r in runs])), 4)
@@ -173,13 +199,24 @@ def main() -> None:
         out["runs"] = runs
     if not args.no_reliable:
         rel = realtime(work, "rt-reliable", "replay.yaml", args.frames, args.warmup)
-        out.update({f"{k}_reliable": rel[k] for k in ("fps_sustained", "drop_frac", "latency_p50_ms", "latency_p95_ms",
-                                                      "partner_age_p95_ms")})
+        out.update(
+            {
+                f"{k}_reliable": rel[k]
+                for k in ("fps_sustained", "drop_frac", "latency_p50_ms", "latency_p95_ms", "partner_age_p95_ms")
+            }
+        )
     if args.input:
-        real = {Path(c).stem: realtime(work, f"rt-real-{Path(c).stem}", "demo.yaml", args.frames, args.warmup,
-                                       {"camera.source": str(Path(c).resolve()), "camera.loop": True,
-                                        "tracker.people": ["left", "right"]})
-                for c in args.input}
+        real = {
+            Path(c).stem: realtime(
+                work,
+                f"rt-real-{Path(c).stem}",
+                "demo.yaml",
+                args.frames,
+                args.warmup,
+                {"camera.source": str(Path(c).resolve()), "camera.loop": True, "tracker.people": ["left", "right"]},
+            )
+            for c in args.input
+        }
         out["real"] = real
         for k in ("fps_sustained", "source_fps", "latency_p95_ms", "partner_frac"):
             out[f"real_{k}"] = round(float(np.median([r[k] for r in real.values()])), 3)

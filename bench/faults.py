@@ -22,6 +22,7 @@
 
 Usage: python bench/faults.py [--cycles N] [--fuzz N] [--quick]. Last stdout line: one JSON object.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -54,9 +55,15 @@ def progress(msg: str) -> None:
 
 def _cli(*args: str, home: Path, timeout: float) -> tuple[int | None, str, float]:
     """Run ``counterpart ARGS``; (exit code or None on timeout, output, wall-clock end time)."""
-    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, start_new_session=True,
-                            env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", *args],
+        cwd=REPO,
+        start_new_session=True,
+        env={**os.environ, "COUNTERPART_HOME": str(home)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         out, _ = proc.communicate(timeout=timeout)
         return proc.returncode, out, time.time()
@@ -71,11 +78,13 @@ def _cli(*args: str, home: Path, timeout: float) -> tuple[int | None, str, float
 def kill_cycles(cycles: int, work: Path) -> dict[str, int]:
     home = Path(tempfile.mkdtemp(prefix="cpk", dir="/tmp"))
     sink = work / "sink.jsonl"
-    doc = {"nodes": {
-        "source": {"run": N + "Counter", "params": {"count": 10**9, "rate": 100.0}, "remap": {"out": "numbers"}},
-        "relay": {"run": N + "Relay", "remap": {"in": "numbers", "out": "doubled"}},
-        "sink": {"run": N + "Sink", "params": {"path": str(sink)}, "remap": {"in": "doubled"}},
-    }}
+    doc = {
+        "nodes": {
+            "source": {"run": N + "Counter", "params": {"count": 10**9, "rate": 100.0}, "remap": {"out": "numbers"}},
+            "relay": {"run": N + "Relay", "remap": {"in": "numbers", "out": "doubled"}},
+            "sink": {"run": N + "Sink", "params": {"path": str(sink)}, "remap": {"in": "doubled"}},
+        }
+    }
     f = write_launch(work / "cycle.yaml", doc)
     orphans = 0
     try:
@@ -86,19 +95,24 @@ def kill_cycles(cycles: int, work: Path) -> dict[str, int]:
             kids = descendants(proc.pid)
             os.kill(proc.pid, signal.SIGKILL)
             proc.wait()
-            wait_for(lambda: not [k for k in kids if _alive(k)], 5)
+            wait_for(lambda kids=kids: not [k for k in kids if _alive(k)], 5)
             left = [k for k in kids if _alive(k)]
             orphans += len(left)
             for k in left:
                 k.kill()
-            progress(f"  kill -9 cycle {i + 1}/{cycles}: {len(kids)} nodes{'' if ok else ' (no messages)'}, "
-                     f"{len(left)} left")
+            progress(
+                f"  kill -9 cycle {i + 1}/{cycles}: {len(kids)} nodes{'' if ok else ' (no messages)'}, {len(left)} left"
+            )
         stale = _sockets(home)
         # the next launch cleans up first (and its own sockets when it ends)
         one = write_launch(work / "one.yaml", {"nodes": {"source": {"run": N + "Counter", "params": {"count": 1}}}})
         _cli("launch", str(one), home=home, timeout=60)
-        return {"cycles": cycles, "orphans": orphans, "stale_sockets": stale,
-                "stale_sockets_after_next_launch": _sockets(home)}
+        return {
+            "cycles": cycles,
+            "orphans": orphans,
+            "stale_sockets": stale,
+            "stale_sockets_after_next_launch": _sockets(home),
+        }
     finally:
         shutil.rmtree(home, ignore_errors=True)
 
@@ -153,14 +167,25 @@ def early_failures(work: Path, timeout: float) -> dict[str, object]:
             results[name] = {"code": code, "end_after_failure_s": took}
             progress(f"  {name}: exit {code} {took} s after the node's error")
         t0 = time.monotonic()
-        code, out, _ = _cli("launch", "demo.yaml", "--check", "--set", "responder.model_file=/nonexistent/model.npz",
-                            home=home, timeout=timeout)
+        code, out, _ = _cli(
+            "launch",
+            "demo.yaml",
+            "--check",
+            "--set",
+            "responder.model_file=/nonexistent/model.npz",
+            home=home,
+            timeout=timeout,
+        )
         check_s = round(time.monotonic() - t0, 2)
         progress(f"  missing model file: exit {code} after {check_s} s: {out.strip()[-120:]}")
     finally:
         shutil.rmtree(home, ignore_errors=True)
-    return {"end_after_failure_s": max(r["end_after_failure_s"] for r in results.values()),  # type: ignore[type-var]
-            "early_failures": results, "missing_model_check_s": check_s, "missing_model_check_code": code}
+    return {
+        "end_after_failure_s": max(r["end_after_failure_s"] for r in results.values()),  # type: ignore[type-var]
+        "early_failures": results,
+        "missing_model_check_s": check_s,
+        "missing_model_check_code": code,
+    }
 
 
 # ------------------------------------------------------------------------------------------ fuzz
@@ -171,9 +196,13 @@ def fuzz(n: int, work: Path) -> dict[str, object]:
     failed = [m for m in re.findall(r"\] \w+ (\w+) exited with (\d+)", out) if m[1] != "0"]
     for t in targets:
         progress(f"  {t.node}: sent {t.sent} ({t.valid} well-formed), received {t.received}, bad {t.bad}")
-    return {"fuzz_sent": sum(t.sent for t in targets), "fuzz_uncounted": sum(t.uncounted for t in targets),
-            "crashes": len(failed) + (code is None), "fuzz_rate_hz": round(sum(t.sent for t in targets) / took, 1),
-            "fuzz_exit_code": code}
+    return {
+        "fuzz_sent": sum(t.sent for t in targets),
+        "fuzz_uncounted": sum(t.uncounted for t in targets),
+        "crashes": len(failed) + (code is None),
+        "fuzz_rate_hz": round(sum(t.sent for t in targets) / took, 1),
+        "fuzz_exit_code": code,
+    }
 
 
 def main() -> None:

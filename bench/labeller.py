@@ -75,6 +75,7 @@ Figures (last stdout line, one JSON object):
                        planted streams, rates 0.02-0.3, min_support 0.005, max_len 4);
                        mine_synthetic_recovered its planted rules found; --dense adds mine_s_dense
 """
+
 from __future__ import annotations
 
 import argparse
@@ -88,15 +89,14 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 import pandas as pd
-
 from counterpart.body.pose import DOF_INDEX
+from counterpart.nodes.labeller import synthetic
 from counterpart.nodes.labeller.face import load_face_cascade
 from counterpart.nodes.labeller.gaze import gaze_accuracy
 from counterpart.nodes.labeller.head_motion import HeadMotionParams
 from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller, label_pair_3d
 from counterpart.nodes.labeller.mining import mine_rules, mine_transactions, turn_transactions
 from counterpart.nodes.labeller.signals import SIGNALS
-from counterpart.nodes.labeller import synthetic
 from counterpart.sim.face import FaceClip, conversation_face_clip, gesture_face_clip
 from counterpart.sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, conversation
 
@@ -115,7 +115,8 @@ MINE_DURATION_S = 120.0
 class Sequence:
     """Two people's tracker-like input with per-frame truth. joints_*: (T,14,3) m; head_yaw_*,
     head_pitch_*: (T,) rad relative to the torso, or None; truth_*: name -> (T,) bool for "nod",
-    "shake", "gaze_at_other"."""
+    "shake", "gaze_at_other".
+    """
 
     fps: float
     joints_a: np.ndarray
@@ -128,10 +129,12 @@ class Sequence:
     truth_b: dict[str, np.ndarray]
 
 
-def sim_sequence(seed: int, duration_s: float, noise_mm: float = 0.0, noise_deg: float = 0.0,
-                 **kw: object) -> tuple[Sequence, object]:
+def sim_sequence(
+    seed: int, duration_s: float, noise_mm: float = 0.0, noise_deg: float = 0.0, **kw: object
+) -> tuple[Sequence, object]:
     """One simulator conversation as the tracker would publish it (see the module docstring);
-    returns (sequence, scenario)."""
+    returns (sequence, scenario).
+    """
     sc = conversation(seed=seed, fps=FPS, duration=duration_s, **kw)  # type: ignore[arg-type]
     rng = np.random.default_rng([seed, 6])
     joints = sc.joints().astype(np.float32).astype(np.float64)
@@ -144,10 +147,13 @@ def sim_sequence(seed: int, duration_s: float, noise_mm: float = 0.0, noise_deg:
             if noise_deg > 0:
                 a += rng.normal(0.0, np.radians(noise_deg), a.shape)
             ang[name + p] = a
-    truth = {p: {k: s[:, SIGNAL_INDEX[k]] == 1 for k in ("nod", "shake", "gaze_at_other")}
-             for p, s in (("a", sc.signals_a), ("b", sc.signals_b))}
-    seq = Sequence(FPS, joints[:, 0], joints[:, 1], ang["yawa"], ang["yawb"], ang["pitcha"],
-                   ang["pitchb"], truth["a"], truth["b"])
+    truth = {
+        p: {k: s[:, SIGNAL_INDEX[k]] == 1 for k in ("nod", "shake", "gaze_at_other")}
+        for p, s in (("a", sc.signals_a), ("b", sc.signals_b))
+    }
+    seq = Sequence(
+        FPS, joints[:, 0], joints[:, 1], ang["yawa"], ang["yawb"], ang["pitcha"], ang["pitchb"], truth["a"], truth["b"]
+    )
     return seq, sc
 
 
@@ -159,8 +165,7 @@ def sim_source(seeds: list[int], duration_s: float, noise_mm: float, noise_deg: 
 def constructed_source(seeds: list[int], duration_s: float, noise_mm: float, noise_deg: float) -> Iterator[Sequence]:
     for s in seeds:
         c = synthetic.conversation(duration_s, FPS, seed=s)
-        yield Sequence(c.fps, c.joints_a, c.joints_b, c.head_yaw_a, c.head_yaw_b, None, None,
-                       c.truth_a, c.truth_b)
+        yield Sequence(c.fps, c.joints_a, c.joints_b, c.head_yaw_a, c.head_yaw_b, None, None, c.truth_a, c.truth_b)
 
 
 SOURCES: dict[str, Callable[[list[int], float, float, float], Iterator[Sequence]]] = {
@@ -178,11 +183,12 @@ def events(mask: np.ndarray) -> np.ndarray:
 
 def match_events(pred: np.ndarray, truth: np.ndarray) -> tuple[int, int, int]:
     """(matched, predicted, true) event counts: one-to-one matching of overlapping intervals,
-    greedy by largest overlap. pred, truth: (T,) bool masks."""
+    greedy by largest overlap. pred, truth: (T,) bool masks.
+    """
     p, t = events(pred), events(truth)
     if len(p) == 0 or len(t) == 0:
         return 0, len(p), len(t)
-    ov = (np.minimum(p[:, None, 1], t[None, :, 1]) - np.maximum(p[:, None, 0], t[None, :, 0]))
+    ov = np.minimum(p[:, None, 1], t[None, :, 1]) - np.maximum(p[:, None, 0], t[None, :, 0])
     pairs = np.argwhere(ov > 0)
     pairs = pairs[np.argsort(-ov[pairs[:, 0], pairs[:, 1]], kind="stable")]
     used_p, used_t = set(), set()
@@ -216,38 +222,67 @@ def streaming_labels(c: Sequence, lab: SocialLabeller | None = None) -> tuple[np
 def _observations(c: Sequence) -> list[dict[str, PersonObservation]]:
     def val(a: np.ndarray | None, i: int) -> float | None:
         return None if a is None else float(a[i])
-    return [{"a": PersonObservation(joints=c.joints_a[i], head_yaw=val(c.head_yaw_a, i),
-                                    head_pitch=val(c.head_pitch_a, i)),
-             "b": PersonObservation(joints=c.joints_b[i], head_yaw=val(c.head_yaw_b, i),
-                                    head_pitch=val(c.head_pitch_b, i))}
-            for i in range(c.joints_a.shape[0])]
+
+    return [
+        {
+            "a": PersonObservation(
+                joints=c.joints_a[i], head_yaw=val(c.head_yaw_a, i), head_pitch=val(c.head_pitch_a, i)
+            ),
+            "b": PersonObservation(
+                joints=c.joints_b[i], head_yaw=val(c.head_yaw_b, i), head_pitch=val(c.head_pitch_b, i)
+            ),
+        }
+        for i in range(c.joints_a.shape[0])
+    ]
 
 
-def offline_labels(c: Sequence, angles: bool = True, gaze_threshold: float = float(np.radians(30.0)),
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def offline_labels(
+    c: Sequence,
+    angles: bool = True,
+    gaze_threshold: float = float(np.radians(30.0)),
+) -> tuple[np.ndarray, np.ndarray]:
     """label_pair_3d (centred windows): (labels_a, labels_b), each (T,6)."""
-    kw = dict(head_yaw_a=c.head_yaw_a, head_yaw_b=c.head_yaw_b, head_pitch_a=c.head_pitch_a,
-              head_pitch_b=c.head_pitch_b) if angles else {}
-    _, la, _, lb = label_pair_3d(c.joints_a, c.joints_b, c.fps, center=True,  # type: ignore[arg-type]
-                                 gaze_threshold=gaze_threshold, **kw)
+    kw = (
+        dict(head_yaw_a=c.head_yaw_a, head_yaw_b=c.head_yaw_b, head_pitch_a=c.head_pitch_a, head_pitch_b=c.head_pitch_b)
+        if angles
+        else {}
+    )
+    _, la, _, lb = label_pair_3d(
+        c.joints_a,
+        c.joints_b,
+        c.fps,
+        center=True,  # type: ignore[arg-type]
+        gaze_threshold=gaze_threshold,
+        **kw,
+    )
     return la, lb
 
 
 def bench_fps(c: Sequence, repeats: int = 3) -> tuple[float, float]:
     """Per-person frames per second of the streaming labeller, 3D (with head angles) and 2D input
-    (medians of ``repeats`` runs)."""
+    (medians of ``repeats`` runs).
+    """
     t = c.joints_a.shape[0]
     obs = _observations(c)
-    k = 300 / 1.7   # silhouette-like input: x/y of the joints in pixels, 300 px per 1.7 m
-    cp = np.stack([40 * np.sin(np.linspace(0, 2 * np.pi, 32, endpoint=False)),
-                   -150 * np.cos(np.linspace(0, 2 * np.pi, 32, endpoint=False))], -1)
+    k = 300 / 1.7  # silhouette-like input: x/y of the joints in pixels, 300 px per 1.7 m
+    cp = np.stack(
+        [
+            40 * np.sin(np.linspace(0, 2 * np.pi, 32, endpoint=False)),
+            -150 * np.cos(np.linspace(0, 2 * np.pi, 32, endpoint=False)),
+        ],
+        -1,
+    )
     obs2 = []
     for i in range(t):
         d = {}
         for p, j in (("a", c.joints_a[i]), ("b", c.joints_b[i])):
             ref = np.array([320 + k * j[1, 0], 480 - k * 0.9])
-            d[p] = PersonObservation(head_px=np.array([320 + k * j[0, 0], 480 - k * j[0, 1]]),
-                                     ref_px=ref, height_px=300.0, control_points=cp + ref)
+            d[p] = PersonObservation(
+                head_px=np.array([320 + k * j[0, 0], 480 - k * j[0, 1]]),
+                ref_px=ref,
+                height_px=300.0,
+                control_points=cp + ref,
+            )
         obs2.append(d)
     out = []
     for o_all in (obs, obs2):
@@ -269,7 +304,8 @@ FACE_TUNING_SEEDS = (301,)
 
 def face_labels(clip: FaceClip, lab: SocialLabeller | None = None) -> tuple[np.ndarray, list[str], float]:
     """Label a face clip from its images alone: (T, 6) labels of the face's person (UNKNOWN where
-    no face is tracked), the per-frame source, and the labeller's frames per second."""
+    no face is tracked), the per-frame source, and the labeller's frames per second.
+    """
     lab = lab or SocialLabeller(clip.fps)
     out = np.full((clip.n_frames, len(SIGNALS)), -1, np.int8)
     src = []
@@ -296,7 +332,7 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
     per: dict[str, dict[str, object]] = {}
     for fps in FACE_FPS:
         lat = HeadMotionParams(fps).n // 2
-        talk_lat = int(round(0.5 * fps))   # the talk window is 1 s, labelled at its end
+        talk_lat = int(round(0.5 * fps))  # the talk window is 1 s, labelled at its end
         cnt: dict[str, list[tuple[int, int, int]]] = {"nod": [], "shake": [], "nod_fr": [], "shake_fr": []}
         talk_ok = talk_n = still_fp = still_n = known = frames = 0
         for seed in seeds:
@@ -304,18 +340,18 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
             lab, _, _ = face_labels(clip)
             for k in ("nod", "shake"):
                 pred = lab[lat:, SIGNALS.index(k)] == 1
-                tr = clip.truth[k][:len(pred)]
+                tr = clip.truth[k][: len(pred)]
                 cnt[k].append(match_events(pred, tr))
                 cnt[k + "_fr"].append(_frame_pr(pred, tr))
             ev = (clip.truth["nod"] | clip.truth["shake"]).astype(float)
             near = np.convolve(ev, np.ones(2 * int(fps) + 1), mode="same") > 0
             shifted = lab[lat:]
-            calm = ~near[:len(shifted)]
+            calm = ~near[: len(shifted)]
             fp = (shifted[:, SIGNALS.index("nod")] == 1) | (shifted[:, SIGNALS.index("shake")] == 1)
             still_fp += int((fp & calm).sum())
             still_n += int(calm.sum())
             talk = lab[talk_lat:, SIGNALS.index("talking")] == 1
-            talk_ok += int((talk == clip.truth["talking"][:len(talk)]).sum())
+            talk_ok += int((talk == clip.truth["talking"][: len(talk)]).sum())
             talk_n += len(talk)
             known += int((lab[:, 0] != -1).sum())
             frames += clip.n_frames
@@ -349,27 +385,45 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
     verdicts = []
     for fps in FACE_FPS:
         for kind in ("still", "nod", "shake"):
-            for seed in (verdict_seeds if verdict_seeds is not None else range(3)):
+            for seed in verdict_seeds if verdict_seeds is not None else range(3):
                 g = gesture_face_clip(kind, fps=fps, duration=6.0, seed=seed)
                 lab_g, _, _ = face_labels(g)
-                tail = lab_g[int(2.6 * fps):]
+                tail = lab_g[int(2.6 * fps) :]
                 share = {k: float((tail[:, SIGNALS.index(k)] == 1).mean()) for k in ("nod", "shake")}
                 got = max(share, key=share.get) if max(share.values()) >= 0.3 else "still"
-                verdicts.append({"kind": kind, "fps": fps, "seed": seed, "verdict": got,
-                                 "nod_share": round(share["nod"], 3), "shake_share": round(share["shake"], 3)})
+                verdicts.append(
+                    {
+                        "kind": kind,
+                        "fps": fps,
+                        "seed": seed,
+                        "verdict": got,
+                        "nod_share": round(share["nod"], 3),
+                        "shake_share": round(share["shake"], 3),
+                    }
+                )
     worst = {k: min(per[f"{f:g}"][k] for f in FACE_FPS) for k in ("nod_f1", "shake_f1", "talk_acc")}  # type: ignore[type-var]
-    return {**worst, "fps": round(fps_lab, 1), "fps_reference_haar_every_frame": round(fps_haar, 1),
-            "load_avg_1min": round(os.getloadavg()[0], 2), "frame_size": [640, 360], "opencv_threads": 2,
-            "seeds": seeds, "duration_s": duration_s, "per_fps": per,
-            "verdicts_right": sum(v["kind"] == v["verdict"] for v in verdicts), "verdicts_total": len(verdicts),
-            "verdicts": verdicts}
+    return {
+        **worst,
+        "fps": round(fps_lab, 1),
+        "fps_reference_haar_every_frame": round(fps_haar, 1),
+        "load_avg_1min": round(os.getloadavg()[0], 2),
+        "frame_size": [640, 360],
+        "opencv_threads": 2,
+        "seeds": seeds,
+        "duration_s": duration_s,
+        "per_fps": per,
+        "verdicts_right": sum(v["kind"] == v["verdict"] for v in verdicts),
+        "verdicts_total": len(verdicts),
+        "verdicts": verdicts,
+    }
 
 
 # ------------------------------------------------------------------------------ rule mining
 def planted_rule_recovery() -> dict[str, dict[str, object]]:
     """Mine the simulator's conversations (MINE_SEEDS, MINE_DURATION_S each) per scenario, from the
     ground-truth labels ("truth") and from the labeller's ("labelled"), and compare the planted
-    rules' confidences with their planted probabilities."""
+    rules' confidences with their planted probabilities.
+    """
     offset = int(round(PLANTED_RULES[0]["offset_s"] * FPS))
     names = list(SIGNAL_NAMES)
     tx: dict[str, dict[str, list[pd.DataFrame]]] = {"truth": {}, "labelled": {}}
@@ -394,8 +448,9 @@ def planted_rule_recovery() -> dict[str, dict[str, object]]:
         t_mine = 0.0
         for scen, parts in per_scen.items():
             t0 = time.perf_counter()
-            rules = mine_transactions(pd.concat(parts, ignore_index=True), min_support=0.005,
-                                      min_confidence=0.1, max_len=4)
+            rules = mine_transactions(
+                pd.concat(parts, ignore_index=True), min_support=0.005, min_confidence=0.1, max_len=4
+            )
             t_mine += time.perf_counter() - t0
             by_key = {r.key: r for r in rules}
             conf[scen] = {}
@@ -407,30 +462,49 @@ def planted_rule_recovery() -> dict[str, dict[str, object]]:
                     found += 1
                     errs.append(abs(hit.confidence - p))
                     conf[scen][f"{r['antecedent']}->{r['consequent']}"] = round(hit.confidence, 4)
-        ratios = {k: round(conf["interested"][k] / conf["not_interested"][k], 3)
-                  for k in conf["interested"] if conf["not_interested"].get(k)}
+        ratios = {
+            k: round(conf["interested"][k] / conf["not_interested"][k], 3)
+            for k in conf["interested"]
+            if conf["not_interested"].get(k)
+        }
         total = len(PLANTED_RULES) * len(MINE_SEEDS)
-        out[source] = {"recovered": found / total, "planted": total,
-                       "conf_abs_err_max": max(errs) if errs else float("nan"),
-                       "confidences": conf, "ratio": ratios, "frames": frames, "mine_s": t_mine}
+        out[source] = {
+            "recovered": found / total,
+            "planted": total,
+            "conf_abs_err_max": max(errs) if errs else float("nan"),
+            "confidences": conf,
+            "ratio": ratios,
+            "frames": frames,
+            "mine_s": t_mine,
+        }
     return out
 
 
-def bench_mining(n_frames: int = 45000, n_signals: int = 27, seed: int = 0,
-                 base_rate: tuple[float, float] = (0.02, 0.3), min_support: float = 0.005,
-                 ) -> dict[str, float]:
+def bench_mining(
+    n_frames: int = 45000,
+    n_signals: int = 27,
+    seed: int = 0,
+    base_rate: tuple[float, float] = (0.02, 0.3),
+    min_support: float = 0.005,
+) -> dict[str, float]:
     """Mining speed on planted synthetic streams: n_signals speaker + n_signals listener labels,
-    each on at a rate drawn from base_rate (mean ~0.16), default max_len 4."""
+    each on at a rate drawn from base_rate (mean ~0.16), default max_len 4.
+    """
     planted = [(0, 0, 0.9), (1, 2, 0.6), (3, 5, 0.3), (8, 8, 0.75), (13, 20, 0.5), (26, 26, 0.4)]
-    sp, li, names = synthetic.planted_label_streams(n_frames, n_signals, planted, offset=10, seed=seed,
-                                                    base_rate=base_rate)
+    sp, li, names = synthetic.planted_label_streams(
+        n_frames, n_signals, planted, offset=10, seed=seed, base_rate=base_rate
+    )
     t0 = time.perf_counter()
     rules = mine_rules(sp, li, names, offset=10, min_support=min_support, min_confidence=0.2)
     mine_s = time.perf_counter() - t0
     by_key = {r.key: r for r in rules}
     found = sum(((f"S:{names[x]}",), (f"L:{names[y]}",)) in by_key for x, y, _ in planted)
-    return {"mine_s": mine_s, "mine_rules": len(rules), "mine_label_rate": float(sp.mean()),
-            "mine_synthetic_recovered": found / len(planted)}
+    return {
+        "mine_s": mine_s,
+        "mine_rules": len(rules),
+        "mine_label_rate": float(sp.mean()),
+        "mine_synthetic_recovered": found / len(planted),
+    }
 
 
 def _seeds(text: str) -> list[int]:
@@ -453,8 +527,9 @@ def main() -> int:
     ap.add_argument("--face-seeds", default="20-22", help="conversation seeds of the face part (not 301: tuning)")
     ap.add_argument("--face-duration", type=float, default=60.0, help="seconds per face clip")
     ap.add_argument("--face-verdict-seeds", default="0-2", help="seeds of the one-behaviour verdict clips")
-    ap.add_argument("--dense", action="store_true",
-                    help="also time mining on dense labels (mean rate ~0.27, min_support 0.01)")
+    ap.add_argument(
+        "--dense", action="store_true", help="also time mining on dense labels (mean rate ~0.27, min_support 0.01)"
+    )
     a = ap.parse_args()
     seeds = _seeds(a.seeds)
     tuned = sorted(set(seeds) & set(TUNING_SEEDS))
@@ -475,8 +550,8 @@ def main() -> int:
                 col = SIGNALS.index(k)
                 cnt.setdefault(k, []).append(match_events(off[p][:, col] == 1, tr[k]))
                 cnt.setdefault(k + "_joints", []).append(match_events(joints_only[p][:, col] == 1, tr[k]))
-                s = stream[p][lat:, col] == 1   # frame t + lat is labelled from the window centred at t
-                cnt.setdefault(k + "_stream", []).append(match_events(s, tr[k][:len(s)]))
+                s = stream[p][lat:, col] == 1  # frame t + lat is labelled from the window centred at t
+                cnt.setdefault(k + "_stream", []).append(match_events(s, tr[k][: len(s)]))
             g = SIGNALS.index("gaze_at_other")
             gz["off"].append(off[p][:, g])
             gz["stream"].append(stream[p][:, g])
@@ -486,10 +561,15 @@ def main() -> int:
     truth_g = np.concatenate(gz["truth"])
     res: dict[str, object] = {
         "source": a.source,
-        "input": ("simulator conversation, ground-truth joints (float32) + pose head_turn/head_nod"
-                  f", noise {a.noise_mm:g} mm / {a.noise_deg:g} deg" if a.source == "sim"
-                  else "constructed geometry (counterpart.nodes.labeller.synthetic), joints + head yaw"),
-        "seeds": a.seeds, "duration_s": a.duration, "people_sequences": 2 * len(seqs),
+        "input": (
+            "simulator conversation, ground-truth joints (float32) + pose head_turn/head_nod"
+            f", noise {a.noise_mm:g} mm / {a.noise_deg:g} deg"
+            if a.source == "sim"
+            else "constructed geometry (counterpart.nodes.labeller.synthetic), joints + head yaw"
+        ),
+        "seeds": a.seeds,
+        "duration_s": a.duration,
+        "people_sequences": 2 * len(seqs),
     }
     for k in ("nod", "shake", "nod_stream", "shake_stream", "nod_joints", "shake_joints"):
         f1, c = event_f1(cnt[k])
@@ -510,9 +590,10 @@ def main() -> int:
             res[f"rule_ratio{tag}"] = r["ratio"]
             if not tag:
                 res["planted_rules"] = r["planted"]
-                res["rule_ratio_planted"] = {f"{p['antecedent']}->{p['consequent']}":
-                                             round(p["p_interested"] / p["p_uninterested"], 3)
-                                             for p in PLANTED_RULES}
+                res["rule_ratio_planted"] = {
+                    f"{p['antecedent']}->{p['consequent']}": round(p["p_interested"] / p["p_uninterested"], 3)
+                    for p in PLANTED_RULES
+                }
                 res["rule_frames"] = r["frames"]
                 res["rule_mine_s"] = round(float(r["mine_s"]), 3)  # type: ignore[arg-type]
     fps3, fps2 = bench_fps(seqs[0])

@@ -21,6 +21,7 @@ partner is projected with the camera the tracking recorded. Figures:
   value in the second after that moment minus its value then (metres): ``push_back_m`` (median) and
   ``push_moves_back`` (share of clips where it grows by at least ``BACK_M``).
 """
+
 from __future__ import annotations
 
 import json
@@ -28,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
@@ -37,7 +37,7 @@ from counterpart.nodes.responder.reach import reach
 from counterpart.nodes.responder.staging import Stage
 
 VIS = 0.5
-HOLD_FRAMES = 15          # the responder node's default hold_frames
+HOLD_FRAMES = 15  # the responder node's default hold_frames
 OVERLAP_IOU = 0.25
 HAND_H = 0.15
 BACK_M = 0.1
@@ -54,7 +54,8 @@ def interaction_class(clip: Path) -> int:
 
 def _nearest(a: np.ndarray, va: np.ndarray, b: np.ndarray, vb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per frame the smallest distance between points a (T, A, 2) and b (T, B, 2) that are both
-    visible (va (T, A), vb (T, B)), inf where none; and the index of a's point of that pair."""
+    visible (va (T, A), vb (T, B)), inf where none; and the index of a's point of that pair.
+    """
     d = np.linalg.norm(a[:, :, None] - b[:, None], axis=-1)
     d = np.where(va[:, :, None] & vb[:, None] & np.isfinite(d), d, np.inf)
     flat = d.reshape(len(d), -1)
@@ -101,7 +102,7 @@ def staged_partner(track_npz: Path, side: int) -> tuple[np.ndarray, np.ndarray, 
     model.reset()
     partner = np.full_like(joints, np.nan)
     observed = np.where(lost[:, None, None], np.nan, joints)
-    last = -(10 ** 9)
+    last = -(10**9)
     for t in range(len(joints)):
         if lost[t] or not np.isfinite(joints[t]).all():
             if t - last <= HOLD_FRAMES:
@@ -149,9 +150,14 @@ def partner_clip(clip: Path, track_npz: Path, kp: np.ndarray, vis: np.ndarray, h
         ref = _box(np.where((vis[t, side] >= VIS)[:, None], kp[t, side], np.nan))
         mine = _box(uv[t])
         overlap += ref is not None and mine is not None and _iou(ref, mine) > OVERLAP_IOU
-    out: dict[str, Any] = {"frames": int(has.sum()), "gap_n": int(both.sum()),
-                           "gap_ok": int(((gap >= MIN_M - 1e-6) & (gap <= MAX_M + 1e-6)).sum()),
-                           "overlap": int(overlap), "in_picture": int(in_picture), "label": label}
+    out: dict[str, Any] = {
+        "frames": int(has.sum()),
+        "gap_n": int(both.sum()),
+        "gap_ok": int(((gap >= MIN_M - 1e-6) & (gap <= MAX_M + 1e-6)).sum()),
+        "overlap": int(overlap),
+        "in_picture": int(in_picture),
+        "label": label,
+    }
     if moment is not None and moment[0] < n:
         t, p, wrist = moment
         if label == HANDSHAKE and has[t]:
@@ -159,9 +165,10 @@ def partner_clip(clip: Path, track_npz: Path, kp: np.ndarray, vis: np.ndarray, h
         elif label == HANDSHAKE:
             out["hand_h"] = float("inf")  # no partner at the moment of the handshake: a miss
         if label == PUSH:
-            after = gap[t: t + round(fps) + 1]
-            out["back_m"] = float(np.nanmax(after) - gap[t]) if np.isfinite(gap[t]) and np.isfinite(after).any() \
-                else float("nan")
+            after = gap[t : t + round(fps) + 1]
+            out["back_m"] = (
+                float(np.nanmax(after) - gap[t]) if np.isfinite(gap[t]) and np.isfinite(after).any() else float("nan")
+            )
     return out
 
 

@@ -1,4 +1,4 @@
-"""Silhouettes on real two-person video: are both people found whole, on the right side?
+"""Silhouettes on real two-person video: are both people found whole, on the right side.
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
            [--max-clips N] [--only STEM,...] [--no-baseline] [--threads 1] [--out FILE]
@@ -56,11 +56,12 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 
 import cv2
 import numpy as np
-
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
-DATA = Path(os.environ.get("COUNTERPART_SHARED_DATA")
-            or Path(__file__).resolve().parents[2] / "shared" / "data") / "ut_interaction"
+DATA = (
+    Path(os.environ.get("COUNTERPART_SHARED_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data")
+    / "ut_interaction"
+)
 #: first scored frame: the node reports people from the first frame, but the people found on the
 #: very first frames matter less than a stable answer afterwards (the issue's measure)
 FIRST_SCORED = 10
@@ -72,8 +73,10 @@ VIS = 0.5
 COLLAPSE_FRAC = 0.1
 SIDES = ("left", "right")
 #: extractor parameters that give back the algorithm as it was before people-aware fitting
-BASELINE = {"backend_params": {"people_aware": False, "max_highlight_brightness": 1e9},
-            "tracker_params": {"min_upright": 0.0}}
+BASELINE = {
+    "backend_params": {"people_aware": False, "max_highlight_brightness": 1e9},
+    "tracker_params": {"min_upright": 0.0},
+}
 
 
 def clip_paths(split: str) -> list[Path]:
@@ -90,7 +93,8 @@ def reference_collapsed(kp: np.ndarray, vis: np.ndarray) -> bool:
     on the same person: the median distance of their joints visible in both is under
     ``COLLAPSE_FRAC`` of the person's height (nose to mid-ankle). The reference detector follows
     each person with a crop; when the people come close both crops can end on one of them, and
-    the reference then says nothing about the other."""
+    the reference then says nothing about the other.
+    """
     both = (vis[0] >= VIS) & (vis[1] >= VIS)
     if both.sum() < MIN_VISIBLE:
         return False
@@ -147,8 +151,10 @@ def run_clip(path: Path, ours: bool, train_frames: int) -> dict[str, Any]:
     kp, vis = ref["kp"], ref["vis"]
     n = min(len(frames), len(kp))
     base = {} if ours else BASELINE
-    ex = SilhouetteExtractor(backend_params={"train_frames": train_frames, **base.get("backend_params", {})},
-                             tracker_params=base.get("tracker_params"))
+    ex = SilhouetteExtractor(
+        backend_params={"train_frames": train_frames, **base.get("backend_params", {})},
+        tracker_params=base.get("tracker_params"),
+    )
     t0 = time.perf_counter()
     ex.fit_background(list(frames[:train_frames]), robust=True)
     fit_s = time.perf_counter() - t0
@@ -202,9 +208,13 @@ def main(argv: list[str] | None = None) -> int:
     cv2.setNumThreads(args.threads)
     splits = ("tune", "report") if args.clips == "all" else (args.clips,)
     methods = {"ours": True} if args.no_baseline else {"ours": True, "baseline": False}
-    report: dict[str, Any] = {"bench": "real_silhouettes", "train_frames": args.train_frames,
-                              "first_scored_frame": FIRST_SCORED,
-                              "split": "tune: clips whose first number is even; report: odd", "clips": {}}
+    report: dict[str, Any] = {
+        "bench": "real_silhouettes",
+        "train_frames": args.train_frames,
+        "first_scored_frame": FIRST_SCORED,
+        "split": "tune: clips whose first number is even; report: odd",
+        "clips": {},
+    }
     for split in splits:
         paths = clip_paths(split)[:: args.every][: args.max_clips]
         if args.only:
@@ -216,8 +226,9 @@ def main(argv: list[str] | None = None) -> int:
                 r = run_clip(p, is_ours, args.train_frames)
                 rows[m].append(r)
                 line[m] = summarise([r])
-            report["clips"][p.stem] = {m: {k: line[m][k] for k in ("people_found", "keypoint_coverage", "extra_people")}
-                                       for m in methods}
+            report["clips"][p.stem] = {
+                m: {k: line[m][k] for k in ("people_found", "keypoint_coverage", "extra_people")} for m in methods
+            }
             print(p.stem, json.dumps(report["clips"][p.stem]), flush=True)
         report[split] = {m: summarise(rows[m]) for m in methods}
     main_split = "report" if "report" in splits else splits[0]

@@ -61,6 +61,7 @@ default picks every fifth clip of the 60 (12 clips, all six interaction classes)
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
 [--pck-clips all|N] [--no-pck]``. Last stdout line: one JSON object.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -76,18 +77,17 @@ from typing import Any
 
 import cv2
 import numpy as np
+from counterpart.body.camera import Camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX
+from counterpart.nodes.responder.frames import actor_frame
 from real_partner import (  # bench/ is on sys.path as a script
     interaction_class,
     partner_clip,
     partner_figures,
 )
 from real_silhouettes import VIS, reference_collapsed
-
-from counterpart.body.camera import Camera
-from counterpart.body.kinematics import forward_kinematics
-from counterpart.body.pose import neutral_pose
-from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX
-from counterpart.nodes.responder.frames import actor_frame
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -124,9 +124,14 @@ def run_demo(clip: Path, out: Path, timeout: float, *extra: str) -> dict:
     """One ``counterpart demo --input clip``; its summary, exit code, wall time and whether it hung."""
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.monotonic()
-    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "demo", "--input", str(clip), "--out", str(out), *extra],
-                            cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", "demo", "--input", str(clip), "--out", str(out), *extra],
+        cwd=REPO,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     try:
         _, err = proc.communicate(timeout=timeout)
         hung = False
@@ -137,8 +142,13 @@ def run_demo(clip: Path, out: Path, timeout: float, *extra: str) -> dict:
     stats_file = out / "demo_stats.json"
     stats = json.loads(stats_file.read_text()) if stats_file.exists() and not hung else {}
     stats.pop("nodes", None)
-    return {"code": proc.returncode, "hung": hung, "wall_s": round(time.monotonic() - t0, 1),
-            "reason": err.strip().splitlines()[-1] if err.strip() else "", **stats}
+    return {
+        "code": proc.returncode,
+        "hung": hung,
+        "wall_s": round(time.monotonic() - t0, 1),
+        "reason": err.strip().splitlines()[-1] if err.strip() else "",
+        **stats,
+    }
 
 
 def video_fps(out: Path) -> float:
@@ -152,7 +162,7 @@ def video_fps(out: Path) -> float:
 
 
 def split_of(clip: Path) -> str:
-    """"tune" for the clips whose first number is even, "report" for the odd ones (as real_silhouettes)."""
+    """Return "tune" for the clips whose first number is even, "report" for the odd ones (as real_silhouettes)."""
     return "tune" if int(clip.stem.split("_")[0]) % 2 == 0 else "report"
 
 
@@ -161,7 +171,8 @@ def nose_points(joints: np.ndarray) -> np.ndarray:
 
     The reference's "head" is the nose, the body model's the head centre at eye level: the nose
     is taken on the front of the model's head, the head cone's radius at its centre (the mean of
-    ``r_chin`` and ``r_crown``, scaled with the body) along the body's facing (``actor_frame``)."""
+    ``r_chin`` and ``r_crown``, scaled with the body) along the body's facing (``actor_frame``).
+    """
     _, theta = actor_frame(np.nan_to_num(joints))
     facing = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=-1)
     stature = joints[..., HEAD, 1] - joints[..., ANKLES, 1].mean(axis=-1)
@@ -208,7 +219,7 @@ def silhouette_boxes(clip: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def reference_height(kp: np.ndarray) -> np.ndarray:
-    """kp (T, 2, 14, 2) pixels -> (T, 2) each person's height in pixels: head to mid-ankle."""
+    """Kp (T, 2, 14, 2) pixels -> (T, 2) each person's height in pixels: head to mid-ankle."""
     return np.linalg.norm(kp[:, :, HEAD] - kp[:, :, ANKLES].mean(axis=2), axis=-1)
 
 
@@ -227,9 +238,11 @@ def pck_counts(est: np.ndarray, kp: np.ndarray, scored: np.ndarray, h: np.ndarra
 
 
 def match_per_frame(est: np.ndarray, kp: np.ndarray, scored: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """est (T, 2, 14, 2) with its two sides swapped on the frames where the swap brings them closer
+    """Est (T, 2, 14, 2) with its two sides swapped on the frames where the swap brings them closer
     to the reference people kp (T, 2, 14, 2) (mean pixel distance over the scored joints, NaN
-    ignored; both assignments must have one). Returns (est matched, swapped (T,) bool)."""
+    ignored; both assignments must have one). Returns (est matched, swapped (T,) bool).
+    """
+
     def cost(e: np.ndarray) -> np.ndarray:
         d = np.where(scored, np.linalg.norm(e - kp, axis=-1), np.nan)
         with warnings.catch_warnings():
@@ -245,26 +258,36 @@ def box_template(boxes: np.ndarray, kp: np.ndarray, scored: np.ndarray) -> np.nd
     """The mean reference skeleton in box coordinates: (14, 2), x and y as fractions of the box's
     width and height from its top-left corner. boxes (T, 2, 4) (x, y, w, h) pixels, NaN: none;
     kp (T, 2, 14, 2) pixels; scored (T, 2, 14) the joints to learn from (frames of several clips
-    may be stacked on the first axis)."""
+    may be stacked on the first axis).
+    """
     rel = (kp - boxes[:, :, None, :2]) / np.maximum(boxes[:, :, None, 2:], 1.0)
     use = scored & np.isfinite(rel).all(axis=-1)
     return np.where(use[..., None], rel, 0.0).sum(axis=(0, 1)) / np.maximum(use.sum(axis=(0, 1)), 1)[:, None]
 
 
 def template_pixels(template: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-    """template (14, 2) box fractions scaled into boxes (T, 2, 4) -> (T, 2, 14, 2) pixels (NaN: no box)."""
+    """Template (14, 2) box fractions scaled into boxes (T, 2, 4) -> (T, 2, 14, 2) pixels (NaN: no box)."""
     return boxes[:, :, None, :2] + template * boxes[:, :, None, 2:]
 
 
 def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     """Track one clip offline and gather what the PCK needs: the projected estimates, the boxes,
-    the reference and which of its joints count; plus timings and the excluded frames."""
+    the reference and which of its joints count; plus timings and the excluded frames.
+    """
     from counterpart.nodes.tracker.offline import track_video
     from counterpart.nodes.tracker.prior import resolve_prior
 
     t0 = time.monotonic()
-    track_video(clip, work / f"{clip.stem}-track.npz", people=SIDES, camera=None, prior=resolve_prior("default"),
-                layers=LAYERS, particles=PARTICLES, train_frames=TRAIN_FRAMES)
+    track_video(
+        clip,
+        work / f"{clip.stem}-track.npz",
+        people=SIDES,
+        camera=None,
+        prior=resolve_prior("default"),
+        layers=LAYERS,
+        particles=PARTICLES,
+        train_frames=TRAIN_FRAMES,
+    )
     t1 = time.monotonic()
     boxes, box_ids = silhouette_boxes(clip)
     t2 = time.monotonic()
@@ -276,15 +299,25 @@ def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     collapsed = np.array([reference_collapsed(kp[t], vis[t]) for t in range(n)], dtype=bool)
     scored = (vis >= VIS) & ~collapsed[:, None, None]
     h = reference_height(kp)
-    return {"est": est[:n], "boxes": boxes[:n], "kp": kp, "scored": scored, "h": h,
-            "collapsed": int(collapsed.sum()), "frames": n, "track_s": t1 - t0, "box_s": t2 - t1,
-            "ids_agree": int((ids[:n] == box_ids[:n]).all(axis=1).sum()),
-            "partner": partner_clip(clip, work / f"{clip.stem}-track.npz", kp, vis, h)}
+    return {
+        "est": est[:n],
+        "boxes": boxes[:n],
+        "kp": kp,
+        "scored": scored,
+        "h": h,
+        "collapsed": int(collapsed.sum()),
+        "frames": n,
+        "track_s": t1 - t0,
+        "box_s": t2 - t1,
+        "ids_agree": int((ids[:n] == box_ids[:n]).all(axis=1).sum()),
+        "partner": partner_clip(clip, work / f"{clip.stem}-track.npz", kp, vis, h),
+    }
 
 
 def pck_figures(rows: list[dict[str, Any]], template: np.ndarray, per_frame: bool) -> dict[str, Any]:
     """PCK of the tracker and of the box template pooled over the clips' rows (``pck_clip``);
-    ``per_frame``: match the sides to the reference people per frame (``match_per_frame``)."""
+    ``per_frame``: match the sides to the reference people per frame (``match_per_frame``).
+    """
     tot: dict[str, int] = {}
     swapped = 0
     for r in rows:
@@ -315,32 +348,48 @@ def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
     for clip in clips:
         rows[clip.stem] = pck_clip(clip, work)
         r = rows[clip.stem]
-        print(f"pck {clip.stem}: track {r['track_s']:.1f} s, boxes {r['box_s']:.1f} s, "
-              f"{r['collapsed']}/{r['frames']} frames excluded", file=sys.stderr, flush=True)
+        print(
+            f"pck {clip.stem}: track {r['track_s']:.1f} s, boxes {r['box_s']:.1f} s, "
+            f"{r['collapsed']}/{r['frames']} frames excluded",
+            file=sys.stderr,
+            flush=True,
+        )
     splits = {s: [rows[c.stem] for c in clips if split_of(c) == s] for s in ("tune", "report")}
     # learnt on the tune clips only, so that the report split's baseline has not seen its clips
     learn = splits["tune"] or list(rows.values())
-    template = box_template(np.concatenate([r["boxes"] for r in learn]), np.concatenate([r["kp"] for r in learn]),
-                            np.concatenate([r["scored"] for r in learn]))
+    template = box_template(
+        np.concatenate([r["boxes"] for r in learn]),
+        np.concatenate([r["kp"] for r in learn]),
+        np.concatenate([r["scored"] for r in learn]),
+    )
     result: dict[str, Any] = {"pck10": None, "pck20": None, "pck10_box": None, "pck20_box": None, "pck_excluded": None}
     details: dict[str, Any] = {
         "split": "tune: clips whose first number is even; report: odd (top-level figures)",
         "template": "mean reference joints (vis >= 0.5) in silhouette-box fractions (x, y), learnt on "
-                    + ("the tune clips of this run" if splits["tune"] else "all its clips (no tune clip in the run)"),
+        + ("the tune clips of this run" if splits["tune"] else "all its clips (no tune clip in the run)"),
         "template_xy": np.round(template, 3).tolist(),
-        "silhouette_ids_agree": round(sum(r["ids_agree"] for r in rows.values())
-                                      / max(sum(r["frames"] for r in rows.values()), 1), 4),
+        "silhouette_ids_agree": round(
+            sum(r["ids_agree"] for r in rows.values()) / max(sum(r["frames"] for r in rows.values()), 1), 4
+        ),
         "track_s_per_clip": round(float(np.mean([r["track_s"] for r in rows.values()])), 1) if rows else None,
         "box_s_per_clip": round(float(np.mean([r["box_s"] for r in rows.values()])), 1) if rows else None,
-        "per_clip": {stem: {"split": split_of(CLIPS / f"{stem}.avi"), **pck_figures([r], template, False),
-                            **{k: r["partner"][k] for k in ("hand_h", "back_m") if k in r["partner"]}}
-                     for stem, r in rows.items()},
+        "per_clip": {
+            stem: {
+                "split": split_of(CLIPS / f"{stem}.avi"),
+                **pck_figures([r], template, False),
+                **{k: r["partner"][k] for k in ("hand_h", "back_m") if k in r["partner"]},
+            }
+            for stem, r in rows.items()
+        },
     }
     for split, split_rows in splits.items():
         if not split_rows:
             continue
-        figs = {**pck_figures(split_rows, template, False), "pck_clips": len(split_rows),
-                **partner_figures([r["partner"] for r in split_rows])}
+        figs = {
+            **pck_figures(split_rows, template, False),
+            "pck_clips": len(split_rows),
+            **partner_figures([r["partner"] for r in split_rows]),
+        }
         details[split] = {"per_frame_matching": pck_figures(split_rows, template, True)}
         if split == "report":
             result.update(figs)
@@ -352,7 +401,8 @@ def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
 
 def run_demos(clips: list[Path], work: Path, timeout: float, reference: int) -> dict[str, Any]:
     """The demo part: every clip through ``counterpart demo --input``, the short inputs, the
-    real-time reference on the first ``reference`` clips."""
+    real-time reference on the first ``reference`` clips.
+    """
     per_clip, hangs = {}, 0
     for i, clip in enumerate(clips):
         r = run_demo(clip, work / clip.stem, timeout)
@@ -365,8 +415,11 @@ def run_demos(clips: list[Path], work: Path, timeout: float, reference: int) -> 
         per_clip[clip.stem] = r
         print(f"{clip.stem}: {json.dumps(r)}", file=sys.stderr, flush=True)
     short = {}
-    for name, extra in (("1_frame", ["--frames", "1"]), ("5_frames", ["--frames", "5"]),
-                        ("past_end", ["--set", "camera.start_frame=100000"])):
+    for name, extra in (
+        ("1_frame", ["--frames", "1"]),
+        ("5_frames", ["--frames", "5"]),
+        ("past_end", ["--set", "camera.start_frame=100000"]),
+    ):
         r = run_demo(clips[0], work / f"short-{name}", min(timeout, 120.0), *extra)
         short[name] = {k: r.get(k) for k in ("code", "hung", "wall_s", "frames_in", "reason")}
         hangs += r["hung"]
@@ -382,21 +435,40 @@ def run_demos(clips: list[Path], work: Path, timeout: float, reference: int) -> 
         "partner_present_after_1s_min": round(float(min(after)), 4) if after else 0.0,
         "clips_partner_95": sum(a >= 0.95 for a in after),
         "clips_two_people": sum(two_people(c) for c in clips),
-        "clips_two_people_partner_95": sum(two_people(c) and per_clip[c.stem].get("partner_present_after_1s", 0.0)
-                                           >= 0.95 for c in clips),
+        "clips_two_people_partner_95": sum(
+            two_people(c) and per_clip[c.stem].get("partner_present_after_1s", 0.0) >= 0.95 for c in clips
+        ),
         "partner_present_realtime": round(float(np.mean(ref)), 4) if ref else None,
-        "partner_present_lockstep_same_clips": round(float(np.mean(
-            [r.get("partner_present", 0.0) for r in list(per_clip.values())[: len(ref)]])), 4) if ref else None,
+        "partner_present_lockstep_same_clips": round(
+            float(np.mean([r.get("partner_present", 0.0) for r in list(per_clip.values())[: len(ref)]])), 4
+        )
+        if ref
+        else None,
         "hangs": hangs,
-        "fps_match": sum(abs(r.get("fps_in", -1) - r["fps_video"]) < 0.01 and r.get("fps_in") == r.get("fps_out")
-                         for r in per_clip.values()),
-        "frames_with_people_share": round(sum(r.get("frames_with_people", 0) for r in done)
-                                          / max(1, sum(r["frames_in"] for r in done)), 4),
+        "fps_match": sum(
+            abs(r.get("fps_in", -1) - r["fps_video"]) < 0.01 and r.get("fps_in") == r.get("fps_out")
+            for r in per_clip.values()
+        ),
+        "frames_with_people_share": round(
+            sum(r.get("frames_with_people", 0) for r in done) / max(1, sum(r["frames_in"] for r in done)), 4
+        ),
         "wall_s_median": float(np.median([r["wall_s"] for r in per_clip.values()])),
         "short_inputs": short,
-        "per_clip": {k: {f: r.get(f) for f in ("code", "frames_in", "partner_present", "partner_present_after_1s",
-                                               "frames_with_people", "fps_in", "fps_video")}
-                     for k, r in per_clip.items()},
+        "per_clip": {
+            k: {
+                f: r.get(f)
+                for f in (
+                    "code",
+                    "frames_in",
+                    "partner_present",
+                    "partner_present_after_1s",
+                    "frames_with_people",
+                    "fps_in",
+                    "fps_video",
+                )
+            }
+            for k, r in per_clip.items()
+        },
     }
     return result
 
@@ -406,14 +478,24 @@ def main() -> None:
     ap.add_argument("--clips", default="12", help="'all' or how many clips, spread over the set (default 12)")
     ap.add_argument("--timeout", type=float, default=300.0, help="seconds a run may take before it counts as hung")
     ap.add_argument("--reference", type=int, default=3, help="clips also run through the real-time graph")
-    ap.add_argument("--pck-clips", default=None,
-                    help="'all' or how many clips to track offline for the PCK figures (default: as --clips)")
-    ap.add_argument("--pck-classes", default=None,
-                    help="only clips of these interaction classes in the tracking part, e.g. '0,5' (handshake, push)")
+    ap.add_argument(
+        "--pck-clips",
+        default=None,
+        help="'all' or how many clips to track offline for the PCK figures (default: as --clips)",
+    )
+    ap.add_argument(
+        "--pck-classes",
+        default=None,
+        help="only clips of these interaction classes in the tracking part, e.g. '0,5' (handshake, push)",
+    )
     ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
     ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
-    ap.add_argument("--calib-seeds", type=int, default=50,
-                    help="simulated random cameras for the calibration figures (bench/self_calibration.py); 0 skips")
+    ap.add_argument(
+        "--calib-seeds",
+        type=int,
+        default=50,
+        help="simulated random cameras for the calibration figures (bench/self_calibration.py); 0 skips",
+    )
     args = ap.parse_args()
     if not CLIPS.is_dir():
         sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")

@@ -35,6 +35,7 @@ partner is generated and compared with the real one. Prints one JSON object as t
 
 ``--quick``: two held-out seeds, no joint-shape, fewer style draws (for development).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -65,8 +66,15 @@ def pair_features(obs: np.ndarray, par: np.ndarray) -> np.ndarray:
     o, th = actor_frame(obs)
     q, own = partner_placement(par, o, th)
     lo = to_local(obs, o, th)
-    f = [q[:, :2].mean(0), q[:, :2].min(0), lo.reshape(len(lo), -1).std(0), own.reshape(len(own), -1).std(0),
-         lo[:, [4, 7], 1].max(0), own[:, [4, 7], 1].max(0), [len(obs) / 100.0]]
+    f = [
+        q[:, :2].mean(0),
+        q[:, :2].min(0),
+        lo.reshape(len(lo), -1).std(0),
+        own.reshape(len(own), -1).std(0),
+        lo[:, [4, 7], 1].max(0),
+        own[:, [4, 7], 1].max(0),
+        [len(obs) / 100.0],
+    ]
     return np.concatenate([np.ravel(x) for x in f])
 
 
@@ -93,9 +101,8 @@ def timing_error(obs: np.ndarray, par: np.ndarray, pred: np.ndarray, fps: float)
 
 def gpdm_figures(test: list, hmm: object, em: object, quick: bool) -> dict[str, float]:
     """The gpdm block of the output (module docstring)."""
-    from sklearn.ensemble import RandomForestClassifier
-
     from counterpart.nodes.responder.emotion import EMOTIONS
+    from sklearn.ensemble import RandomForestClassifier
 
     out: dict[str, float] = {}
     t0 = time.perf_counter()
@@ -116,10 +123,14 @@ def gpdm_figures(test: list, hmm: object, em: object, quick: bool) -> dict[str, 
             ce.append(contact_error(par, pred, t.phase))
             tm.append(timing_error(obs, par, pred, t.fps))
             h_tm.append(timing_error(obs, par, hp, t.fps))
-    out.update(partner_err_mm=round(float(np.mean(pe)), 1), contact_err_mm=round(float(np.mean(ce)), 1),
-               contact_timing_s=round(float(np.median(tm)), 3), step_ms=round(float(np.median(steps)), 3),
-               dual_hmm_partner_err_mm=round(float(np.mean(h_pe)), 1),
-               dual_hmm_contact_timing_s=round(float(np.median(h_tm)), 3))
+    out.update(
+        partner_err_mm=round(float(np.mean(pe)), 1),
+        contact_err_mm=round(float(np.mean(ce)), 1),
+        contact_timing_s=round(float(np.median(tm)), 3),
+        step_ms=round(float(np.median(steps)), 3),
+        dual_hmm_partner_err_mm=round(float(np.mean(h_pe)), 1),
+        dual_hmm_contact_timing_s=round(float(np.median(h_tm)), 3),
+    )
     # the offered hand higher or lower than any training trial's
     seeds = sorted({t.meta["seed"] for t in meet})[:2]
     off, h_off = [], []
@@ -132,11 +143,16 @@ def gpdm_figures(test: list, hmm: object, em: object, quick: bool) -> dict[str, 
     out["dual_hmm_contact_err_offset_mm"] = round(float(np.mean(h_off)), 1)
     # style: a forest trained on the simulator's styled partners (strength >= 0.5) labels generated ones
     clf = RandomForestClassifier(300, random_state=0).fit(
-        [motion_features(t.b, t.fps) for t in data], [t.meta["emotion"] for t in data])
-    real = [t for e in EMOTIONS for t in sim_trajectories(MEETINGS, range(300, 301 if quick else 302), max_frames=300,
-                                                          emotion=e, strength=1.0)]
-    out["style_acc_real"] = round(float(np.mean(clf.predict([motion_features(t.b, t.fps) for t in real])
-                                                == [t.meta["emotion"] for t in real])), 3)
+        [motion_features(t.b, t.fps) for t in data], [t.meta["emotion"] for t in data]
+    )
+    real = [
+        t
+        for e in EMOTIONS
+        for t in sim_trajectories(MEETINGS, range(300, 301 if quick else 302), max_frames=300, emotion=e, strength=1.0)
+    ]
+    out["style_acc_real"] = round(
+        float(np.mean(clf.predict([motion_features(t.b, t.fps) for t in real]) == [t.meta["emotion"] for t in real])), 3
+    )
     hits = []
     for t in meet:
         for e in EMOTIONS:
@@ -181,13 +197,14 @@ def main() -> None:
             e = mpjpe(pred, par)
             errs.append(e)
             stage = Stage()
-            staged.append(mpjpe(np.stack([reach(o_t, stage(o_t, p_t, 1.0 / t.fps))[0] for o_t, p_t in zip(obs, pred)]),
-                                par))
+            staged.append(
+                mpjpe(np.stack([reach(o_t, stage(o_t, p_t, 1.0 / t.fps))[0] for o_t, p_t in zip(obs, pred)]), par)
+            )
             errs_c.append(e[t.phase == 1])
             o, th = actor_frame(obs)
             lo = to_local(obs, o, th)
             m_loc = lo.copy()
-            m_loc[..., 2] = sep - m_loc[..., 2]     # reflection through the mid-plane z = sep / 2
+            m_loc[..., 2] = sep - m_loc[..., 2]  # reflection through the mid-plane z = sep / 2
             mir.append(mpjpe(to_world(m_loc, o, th), par))
             mean.append(mpjpe(to_world(np.broadcast_to(mean_par, obs.shape), o, th), par))
             gen_pairs.append((t.label, obs, pred))
@@ -205,6 +222,7 @@ def main() -> None:
     out["contact_err_mm"] = round(float(np.mean(contact)), 1)
     # action recognition: trained on real pairs, tested on generated ones
     from sklearn.ensemble import RandomForestClassifier
+
     Xr, yr = [], []
     for t in data:
         for obs, par in ((t.a, t.b), (t.b, t.a)):
@@ -215,6 +233,7 @@ def main() -> None:
     out["action_acc"] = round(float(np.mean(pred_lab == [lab for lab, _, _ in gen_pairs])), 3)
     # joint shape
     from counterpart.nodes.responder.shapes import trajectory_shapes
+
     js = None if quick else train("joint-shape", default_training_data("joint-shape"))
     se, sm = [], []
     for t in test[::2] if js is not None else []:
@@ -232,7 +251,7 @@ def main() -> None:
     em = train("emotion", default_training_data("emotion"))
     held = []
     for e in ("neutral", "happy", "sad", "angry"):
-        for s in ((0.0,) if e == "neutral" else (0.15, 0.45, 0.75, 0.95)):
+        for s in (0.0,) if e == "neutral" else (0.15, 0.45, 0.75, 0.95):
             held += sim_trajectories(SIM_SCENARIOS, range(300, 301), max_frames=200, emotion=e, strength=s)
     ok = tot = 0
     for e in ("happy", "sad", "angry"):

@@ -33,6 +33,7 @@ estimate; across the clips, the median and interquartile range of height, tilt a
 Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--clips 12|all|0]``; last stdout
 line: one JSON object. ``bench/real_video.py`` reports the simulator figures under the same names.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -50,16 +51,18 @@ sys.path.insert(0, str(REPO))
 from counterpart.body.camera import Camera, default_camera  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
 from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
+from counterpart.nodes.calibration.node import Calibration  # noqa: E402
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames  # noqa: E402
 from counterpart.nodes.calibration.smooth import credible  # noqa: E402
-from counterpart.nodes.calibration.node import Calibration  # noqa: E402
 
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
-TRAIN_FRAMES = 20   # as launch/lockstep.yaml's silhouette node
+TRAIN_FRAMES = 20  # as launch/lockstep.yaml's silhouette node
 LIMITS = {"height": 0.10, "tilt": 3.0, "focal": 0.10}
 #: the calibration node's default bounds of a credible estimate
-BOUNDS = {k: Calibration.params[k].default for k in ("max_height_std", "max_focal_std", "max_tilt_std_deg",
-                                                      "min_depth_spread", "min_horizon_segments")}
+BOUNDS = {
+    k: Calibration.params[k].default
+    for k in ("max_height_std", "max_focal_std", "max_tilt_std_deg", "min_depth_spread", "min_horizon_segments")
+}
 
 
 def tilt_deg(camera: Camera) -> float:
@@ -69,8 +72,11 @@ def tilt_deg(camera: Camera) -> float:
 
 def errors(height: float, tilt: float, focal: float, truth: Camera) -> dict[str, float]:
     """Absolute errors of (height m, tilt deg, focal px) against a true camera."""
-    return {"height": abs(height / truth.centre[1] - 1), "tilt": abs(tilt - tilt_deg(truth)),
-            "focal": abs(focal / truth.fx - 1)}
+    return {
+        "height": abs(height / truth.centre[1] - 1),
+        "tilt": abs(tilt - tilt_deg(truth)),
+        "focal": abs(focal / truth.fx - 1),
+    }
 
 
 def estimate_errors(est: CameraEstimate | None, truth: Camera) -> dict[str, float]:
@@ -86,16 +92,22 @@ def within(e: dict[str, float]) -> bool:
 
 def summary(errs: list[dict[str, float]], prefix: str) -> dict[str, Any]:
     """Medians of the absolute errors (null when over half the seeds gave no estimate) and the share
-    within the limits."""
-    return _finite({f"{prefix}height_err": round(float(np.median([e["height"] for e in errs])), 4),
+    within the limits.
+    """
+    return _finite(
+        {
+            f"{prefix}height_err": round(float(np.median([e["height"] for e in errs])), 4),
             f"{prefix}tilt_err_deg": round(float(np.median([e["tilt"] for e in errs])), 3),
             f"{prefix}focal_err": round(float(np.median([e["focal"] for e in errs])), 4),
-            f"{prefix}within": round(float(np.mean([within(e) for e in errs])), 4)})
+            f"{prefix}within": round(float(np.mean([within(e) for e in errs])), 4),
+        }
+    )
 
 
 def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
     """One simulated scene: the estimate from its silhouettes, from its true head/foot points, and
-    the errors of each."""
+    the errors of each.
+    """
     from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
     from counterpart.sim.scenarios import SCENARIOS
     from counterpart.sim.stream import open_stream
@@ -118,18 +130,37 @@ def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
     head = J[:, :, JOINT_INDEX["head"]] + [0.0, 0.11, 0.0]
     foot = 0.5 * (J[:, :, JOINT_INDEX["l_ankle"]] + J[:, :, JOINT_INDEX["r_ankle"]]) * [1.0, 0.0, 1.0]
     T = len(J)
-    oracle = estimate_camera(truth.project(head).reshape(-1, 2), truth.project(foot).reshape(-1, 2),
-                             np.tile([0, 1], T), stream.size, np.repeat(np.arange(T) / stream.fps, 2))
+    oracle = estimate_camera(
+        truth.project(head).reshape(-1, 2),
+        truth.project(foot).reshape(-1, 2),
+        np.tile([0, 1], T),
+        stream.size,
+        np.repeat(np.arange(T) / stream.fps, 2),
+    )
     ok = est is not None and credible(est, *BOUNDS.values())
-    published = estimate_errors(est, truth) if ok else errors(
-        default_camera(*stream.size).centre[1], tilt_deg(default_camera(*stream.size)),
-        default_camera(*stream.size).fx, truth)
+    published = (
+        estimate_errors(est, truth)
+        if ok
+        else errors(
+            default_camera(*stream.size).centre[1],
+            tilt_deg(default_camera(*stream.size)),
+            default_camera(*stream.size).fx,
+            truth,
+        )
+    )
     default = default_camera(*stream.size)
-    return {"seed": seed, "scenario": name, "camera": stream.scenario.meta["camera"],
-            "observations": len(obs), "estimate": est.summary() if est is not None else None,
-            "errors": estimate_errors(est, truth), "credible": bool(ok), "published": published,
-            "truth_points": estimate_errors(oracle, truth),
-            "default": errors(default.centre[1], tilt_deg(default), default.fx, truth)}
+    return {
+        "seed": seed,
+        "scenario": name,
+        "camera": stream.scenario.meta["camera"],
+        "observations": len(obs),
+        "estimate": est.summary() if est is not None else None,
+        "errors": estimate_errors(est, truth),
+        "credible": bool(ok),
+        "published": published,
+        "truth_points": estimate_errors(oracle, truth),
+        "default": errors(default.centre[1], tilt_deg(default), default.fx, truth),
+    }
 
 
 def _finite(v: Any) -> Any:
@@ -146,19 +177,28 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000) -
         r = sim_seed(seed, seconds)
         rows.append(r)
         e = r["errors"]
-        print(f"[calib] seed {seed} {r['scenario']}: height {e['height']:.3f} tilt {e['tilt']:.2f} deg focal "
-              f"{e['focal']:.3f} (credible {r['credible']}, {r['observations']} obs, "
-              f"{time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
-    out = {**summary([r["errors"] for r in rows], "calib_"),
-           "calib_credible": round(float(np.mean([r["credible"] for r in rows])), 4),
-           "calib_within_published": summary([r["published"] for r in rows], "")["within"],
-           "calib_truth_points": summary([r["truth_points"] for r in rows], ""),
-           **summary([r["default"] for r in rows], "calib_default_"),
-           "calib_seeds": seeds, "calib_first_seed": first_seed, "calib_seconds": seconds}
+        print(
+            f"[calib] seed {seed} {r['scenario']}: height {e['height']:.3f} tilt {e['tilt']:.2f} deg focal "
+            f"{e['focal']:.3f} (credible {r['credible']}, {r['observations']} obs, "
+            f"{time.monotonic() - t0:.1f} s)",
+            file=sys.stderr,
+            flush=True,
+        )
+    out = {
+        **summary([r["errors"] for r in rows], "calib_"),
+        "calib_credible": round(float(np.mean([r["credible"] for r in rows])), 4),
+        "calib_within_published": summary([r["published"] for r in rows], "")["within"],
+        "calib_truth_points": summary([r["truth_points"] for r in rows], ""),
+        **summary([r["default"] for r in rows], "calib_default_"),
+        "calib_seeds": seeds,
+        "calib_first_seed": first_seed,
+        "calib_seconds": seconds,
+    }
     low = [r for r in rows if r["camera"]["tilt_deg"] < 10.0]
     out["calib_within_tilt_under_10"] = summary([r["errors"] for r in low], "")["within"] if low else None
-    out["calib_rows"] = [{k: _finite(r[k]) for k in ("seed", "scenario", "camera", "errors", "credible",
-                                                     "truth_points")} for r in rows]
+    out["calib_rows"] = [
+        {k: _finite(r[k]) for k in ("seed", "scenario", "camera", "errors", "credible", "truth_points")} for r in rows
+    ]
     return out
 
 
@@ -174,12 +214,19 @@ def real_figures(clips: list[Path]) -> dict[str, Any]:
         except ValueError as exc:
             per[clip.stem] = {"error": str(exc)}
             continue
-        per[clip.stem] = {"height": round(est.height, 3), "tilt_deg": round(est.tilt_deg, 2),
-                          "focal": round(est.focal, 1), "roll_deg": round(est.roll_deg, 2),
-                          "height_std": round(est.height_std, 3), "tilt_std_deg": round(est.tilt_std_deg, 2),
-                          "focal_std": round(est.focal_std, 3), "depth_spread": round(est.depth_spread, 3),
-                          "horizon_segments": est.horizon_segments, "credible": bool(credible(est, *BOUNDS.values())),
-                          "size": [est.width, est.height_px]}
+        per[clip.stem] = {
+            "height": round(est.height, 3),
+            "tilt_deg": round(est.tilt_deg, 2),
+            "focal": round(est.focal, 1),
+            "roll_deg": round(est.roll_deg, 2),
+            "height_std": round(est.height_std, 3),
+            "tilt_std_deg": round(est.tilt_std_deg, 2),
+            "focal_std": round(est.focal_std, 3),
+            "depth_spread": round(est.depth_spread, 3),
+            "horizon_segments": est.horizon_segments,
+            "credible": bool(credible(est, *BOUNDS.values())),
+            "size": [est.width, est.height_px],
+        }
         print(f"[calib] {clip.stem}: {est.describe()} ({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
     ok = [v for v in per.values() if "error" not in v]
 
@@ -188,13 +235,22 @@ def real_figures(clips: list[Path]) -> dict[str, Any]:
         if not len(v):
             return None
         q25, q50, q75 = np.percentile(v, [25, 50, 75])
-        return {"median": round(float(q50), 3), "iqr": round(float(q75 - q25), 3), "min": round(float(v.min()), 3),
-                "max": round(float(v.max()), 3)}
+        return {
+            "median": round(float(q50), 3),
+            "iqr": round(float(q75 - q25), 3),
+            "min": round(float(v.min()), 3),
+            "max": round(float(v.max()), 3),
+        }
 
-    return {"real_clips": len(clips), "real_estimated": len(ok),
-            "real_credible": sum(r["credible"] for r in ok),
-            "real_height": spread("height"), "real_tilt_deg": spread("tilt_deg"), "real_focal": spread("focal"),
-            "real_per_clip": per}
+    return {
+        "real_clips": len(clips),
+        "real_estimated": len(ok),
+        "real_credible": sum(r["credible"] for r in ok),
+        "real_height": spread("height"),
+        "real_tilt_deg": spread("tilt_deg"),
+        "real_focal": spread("focal"),
+        "real_per_clip": per,
+    }
 
 
 def main() -> None:

@@ -60,17 +60,17 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 
 import cv2
 import numpy as np
-
-from counterpart.nodes.silhouette.background import SHADOW
+from counterpart.body.spline import oriented_boundary, spline_distance
 from counterpart.nodes.silhouette.backends import make_subtractor
+from counterpart.nodes.silhouette.background import SHADOW
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.nodes.silhouette.regions import clean_mask
-from counterpart.body.spline import oriented_boundary, spline_distance
 from counterpart.nodes.silhouette.synthetic import two_person_sequence
 
 VTEST = os.environ.get("COUNTERPART_VTEST", "/work/shared/data/video/vtest.avi")
 SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(
-    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "shared", "data")
+    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "shared", "data"
+)
 CDNET = os.path.join(SHARED, "cdnet")
 TRAIN_FRAMES = 30
 REAL_BACKENDS = ("horprasert", "mog2", "knn", "gsoc")
@@ -116,7 +116,8 @@ def vtest_source(n_frames: int) -> Source | None:
 class SimSequence:
     """A rendered simulator sequence: frames (N, H, W, 3) uint8 BGR, people (N, 2, H, W) bool
     (A, B visible pixels), shadows (N, H, W) bool (cast shadow on the floor), and the number of
-    leading frames that are empty (room only, lit and noised like the rest)."""
+    leading frames that are empty (room only, lit and noised like the rest).
+    """
 
     name: str
     frames: np.ndarray
@@ -125,8 +126,9 @@ class SimSequence:
     empty_frames: int
 
 
-def render_sim(scenario: str, seed: int, empty_frames: int = 0, max_frames: int | None = None,
-               size: tuple[int, int] = (320, 240)) -> SimSequence:
+def render_sim(
+    scenario: str, seed: int, empty_frames: int = 0, max_frames: int | None = None, size: tuple[int, int] = (320, 240)
+) -> SimSequence:
     """Render a simulator scenario with ground truth.
 
     ``empty_frames`` > 0 puts that many frames of the empty room before the scene, at the scene
@@ -161,7 +163,8 @@ def render_sim(scenario: str, seed: int, empty_frames: int = 0, max_frames: int 
 
 def _assign_truth(labels: np.ndarray, people: list, truth: np.ndarray, min_frac: float = 0.3) -> dict[int, int]:
     """Published person id -> 0 (A) / 1 (B): the truth mask holding most of the person's pixels,
-    when it holds at least ``min_frac`` of them (else the person is not mapped this frame)."""
+    when it holds at least ``min_frac`` of them (else the person is not mapped this frame).
+    """
     out: dict[int, int] = {}
     for p in people:
         mine = labels == p.id + 1
@@ -181,8 +184,9 @@ def _f1(tp: float, n_pred: float, n_gt: float) -> tuple[float, float, float]:
     return prec, rec, 2 * prec * rec / max(prec + rec, 1e-12)
 
 
-def evaluate_sequence(seq: SimSequence, backend: str, train_frames: int = TRAIN_FRAMES,
-                      splines: bool = False) -> dict[str, Any]:
+def evaluate_sequence(
+    seq: SimSequence, backend: str, train_frames: int = TRAIN_FRAMES, splines: bool = False
+) -> dict[str, Any]:
     """Run one backend through ``SilhouetteExtractor`` as the node does and score what it publishes.
 
     Scored frames: from ``max(empty_frames, train_frames)`` on (every backend has had
@@ -225,15 +229,24 @@ def evaluate_sequence(seq: SimSequence, backend: str, train_frames: int = TRAIN_
                 if p.ctrl is not None:
                     contour, _ = oriented_boundary(r.labels == p.id + 1)
                     dists.append(spline_distance(contour, p.ctrl))
-    return {"tp": tp, "pred": n_pred, "gt": n_gt, "shadow_fg": sh_fg, "shadow": sh_n,
-            "id_swaps": swaps, "frames": len(seq.frames) - start, "spline_px": dists}
+    return {
+        "tp": tp,
+        "pred": n_pred,
+        "gt": n_gt,
+        "shadow_fg": sh_fg,
+        "shadow": sh_n,
+        "id_swaps": swaps,
+        "frames": len(seq.frames) - start,
+        "spline_px": dists,
+    }
 
 
 SIM_BACKENDS = ("horprasert", "mog2", "knn", "cnt")
 
 
-def sim_evaluation(scenarios: list[str], seeds: list[int], max_frames: int,
-                   backends: tuple[str, ...] = SIM_BACKENDS) -> dict[str, Any]:
+def sim_evaluation(
+    scenarios: list[str], seeds: list[int], max_frames: int, backends: tuple[str, ...] = SIM_BACKENDS
+) -> dict[str, Any]:
     """Every scenario x seed x start (empty room first / people from frame 0) x backend."""
     per_seq: dict[str, Any] = {}
     keys = ("tp", "pred", "gt", "shadow_fg", "shadow")
@@ -261,6 +274,7 @@ def sim_evaluation(scenarios: list[str], seeds: list[int], max_frames: int,
                         dists.extend(ev["spline_px"])
                 per_seq[seq.name] = row
                 print(f"sim {seq.name}: {row}", flush=True)
+
     def summary(t: dict[str, float]) -> dict[str, float]:
         prec, rec, f1 = _f1(t["tp"], t["pred"], t["gt"])
         return {"precision": prec, "recall": rec, "f1": f1, "shadow_as_fg": t["shadow_fg"] / max(t["shadow"], 1)}
@@ -292,34 +306,44 @@ SOURCES = {"synthetic": synthetic_source, "vtest": vtest_source, "sim": sim_sour
 def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
     """A CDnet sequence: frames (N, H, W, 3) uint8 BGR and ground truth (N, H, W) uint8 of frames
     1..N, N the last evaluated frame, and the first and last evaluated frame numbers (1-based,
-    ``temporalROI.txt``; the frames before the first are for learning)."""
+    ``temporalROI.txt``; the frames before the first are for learning).
+    """
     with open(os.path.join(seq_dir, "temporalROI.txt")) as fh:
         first, last = (int(v) for v in fh.read().split()[:2])
     frames = np.stack([cv2.imread(os.path.join(seq_dir, "input", f"in{i:06d}.jpg")) for i in range(1, last + 1)])
-    gt = np.stack([cv2.imread(os.path.join(seq_dir, "groundtruth", f"gt{i:06d}.png"), cv2.IMREAD_GRAYSCALE)
-                   for i in range(1, last + 1)])
+    gt = np.stack(
+        [
+            cv2.imread(os.path.join(seq_dir, "groundtruth", f"gt{i:06d}.png"), cv2.IMREAD_GRAYSCALE)
+            for i in range(1, last + 1)
+        ]
+    )
     return frames, gt, first, last
 
 
 def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
     """See ``_evaluate_real``; ``backend`` DYNAMIC is ours with ``dynamic=True, min_area=None``."""
     if backend == DYNAMIC:
-        ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True,
-                                                                "shadow_ncc": DYNAMIC_SHADOW_NCC})
+        ex = SilhouetteExtractor(
+            min_area=None,
+            backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True, "shadow_ncc": DYNAMIC_SHADOW_NCC},
+        )
     else:
-        ex = SilhouetteExtractor(backend=backend, backend_params={"train_frames": TRAIN_FRAMES}
-                                 if backend == "horprasert" else {})
+        ex = SilhouetteExtractor(
+            backend=backend, backend_params={"train_frames": TRAIN_FRAMES} if backend == "horprasert" else {}
+        )
     return _evaluate_real(ex, frames, gt, first, backend.startswith("horprasert"))
 
 
-def _evaluate_real(ex: SilhouetteExtractor, frames: np.ndarray, gt: np.ndarray, first: int,
-                   ours: bool) -> dict[str, Any]:
+def _evaluate_real(
+    ex: SilhouetteExtractor, frames: np.ndarray, gt: np.ndarray, first: int, ours: bool
+) -> dict[str, Any]:
     """Run one backend through ``SilhouetteExtractor`` with the node's defaults (the same clean-up,
     minimum area and tracking for every backend) over all frames from frame 1, and count CDnet's
     way on the evaluated frames (``first`` on, 1-based): the published label mask against label 255
     positive, 0 and 50 negative, 85 (outside the region of interest) and 170 (unknown) ignored.
     Counts are kept apart for the first half of the evaluated frames ("tune") and the second
-    ("report"). Shadow counts: the model's SHADOW class against label 50, on the same pixels."""
+    ("report"). Shadow counts: the model's SHADOW class against label 50, on the same pixels.
+    """
     mid = first + (len(frames) - first + 1) // 2
     keys = ("tp", "fp", "fn", "sh_tp", "sh_fp", "sh_fn")
     out = {half: dict.fromkeys(keys, 0) for half in ("tune", "report")}
@@ -357,16 +381,22 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
     """CDnet-protocol F1 of ours, MOG2, KNN and GSOC on the sequences of ``CDNET`` (None when the
     data is absent). Per sequence: ``f1_<backend>`` on the report half (the second half of the
     evaluated frames, never used to tune), ``f1_<backend>_tune`` on the first half, and
-    ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn`` theirs) where the ground truth marks shadows."""
+    ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn`` theirs) where the ground truth marks shadows.
+    """
     if not os.path.isdir(CDNET):
         return None
-    names = seq_names or sorted(d for d in os.listdir(CDNET) if os.path.isfile(os.path.join(CDNET, d, "temporalROI.txt")))
+    names = seq_names or sorted(
+        d for d in os.listdir(CDNET) if os.path.isfile(os.path.join(CDNET, d, "temporalROI.txt"))
+    )
     out: dict[str, Any] = {}
     for name in names:
         frames, gt, first, last = load_cdnet(os.path.join(CDNET, name))
-        row: dict[str, Any] = {"frames": int(last), "evaluated": [first, last],
-                               "split": "tune: first half of the evaluated frames; figures: second half"}
-        has_shadow = bool(np.any(gt[first - 1:] == GT_SHADOW))
+        row: dict[str, Any] = {
+            "frames": int(last),
+            "evaluated": [first, last],
+            "split": "tune: first half of the evaluated frames; figures: second half",
+        }
+        has_shadow = bool(np.any(gt[first - 1 :] == GT_SHADOW))
         for b in (*REAL_BACKENDS, DYNAMIC):
             t0 = time.perf_counter()
             ev = evaluate_real(frames, gt, first, b)
@@ -385,13 +415,16 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
 
 def speed_two_cores(frames: np.ndarray) -> dict[str, float]:
     """Frames per second of the whole extractor (background, clean-up, tracking, B-splines) with
-    two OpenCV threads, ours and with MOG2 as its backend, on the same frames in the same run."""
+    two OpenCV threads, ours and with MOG2 as its backend, on the same frames in the same run.
+    """
     threads = cv2.getNumThreads()
     cv2.setNumThreads(2)
     try:
         out = {}
         for b in ("horprasert", "mog2"):
-            ex = SilhouetteExtractor(backend=b, backend_params={"train_frames": TRAIN_FRAMES} if b == "horprasert" else {})
+            ex = SilhouetteExtractor(
+                backend=b, backend_params={"train_frames": TRAIN_FRAMES} if b == "horprasert" else {}
+            )
             times = []
             for f in frames:
                 t0 = time.perf_counter()
@@ -435,7 +468,8 @@ def _time_subtractor(name: str, frames: np.ndarray, truth: Source) -> dict[str, 
 def _time_extractor(frames: np.ndarray) -> dict[str, Any]:
     """Time the extractor in a loop of its own, then check its splines on a second run over the same
     frames (the algorithm is deterministic): measuring the splines between timed frames evicted the
-    extractor's arrays from the caches and added about a fifth to its time, for work a node never does."""
+    extractor's arrays from the caches and added about a fifth to its time, for work a node never does.
+    """
     ex = SilhouetteExtractor(backend="horprasert", backend_params={"train_frames": TRAIN_FRAMES})
     times = []
     for f in frames:
@@ -461,8 +495,9 @@ def _time_extractor(frames: np.ndarray) -> dict[str, Any]:
     }
 
 
-def run(source_names: list[str], n_frames: int, scenarios: list[str], seeds: list[int],
-        sim_frames: int, real: bool = True) -> dict[str, Any]:
+def run(
+    source_names: list[str], n_frames: int, scenarios: list[str], seeds: list[int], sim_frames: int, real: bool = True
+) -> dict[str, Any]:
     report: dict[str, Any] = {
         "bench": "silhouette",
         "cpu_threads": cv2.getNumThreads(),
@@ -521,8 +556,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--source", choices=[*SOURCES, "all"], default="all")
     ap.add_argument("--frames", type=int, default=150, help="frames per source, including 30 for training")
-    ap.add_argument("--scenarios", default="handshake,push,wave,conversation",
-                    help="simulator scenarios of the quality evaluation (comma-separated)")
+    ap.add_argument(
+        "--scenarios",
+        default="handshake,push,wave,conversation",
+        help="simulator scenarios of the quality evaluation (comma-separated)",
+    )
     ap.add_argument("--seeds", default="0,1,2", help="simulator seeds (comma-separated)")
     ap.add_argument("--sim-frames", type=int, default=250, help="cap on each simulator sequence's frames")
     ap.add_argument("--threads", type=int, default=1, help="OpenCV threads (1: the one-core figures)")

@@ -22,6 +22,7 @@ three-camera set-up. The figures stay those of person A against the truth; repro
 first (the default) camera. It shows what the one camera's ambiguities (depth, heading, limbs
 towards the camera) cost each filter.
 """
+
 from __future__ import annotations
 
 import os
@@ -51,12 +52,14 @@ EXTRA_EYES = ((-3.8, 2.0, 1.2), (-2.5, 2.2, -3.2))
 
 def _render_views(stream: SimStream, seed: int, views: int) -> tuple[list, list, np.ndarray, np.ndarray, list]:
     """Frames and person A's masks (per frame: arrays with one view, lists of ``views`` with more),
-    person A's true joints (T, 14, 3) metres and their projections (T, 14, 2) in the first view."""
+    person A's true joints (T, 14, 3) metres and their projections (T, 14, 2) in the first view.
+    """
     from counterpart.body.camera import Camera
     from counterpart.sim.render import Renderer
 
-    cams = [stream.camera] + [Camera.look_at(eye, (-0.5, 0.9, 0.0), 55.0, *stream.size)
-                              for eye in EXTRA_EYES[:views - 1]]
+    cams = [stream.camera] + [
+        Camera.look_at(eye, (-0.5, 0.9, 0.0), 55.0, *stream.size) for eye in EXTRA_EYES[: views - 1]
+    ]
     extra = [Renderer(stream.scenario, cam, seed=seed) for cam in cams[1:]]
     frames, masks, truth3, truth2 = [], [], [], []
     for i in range(stream.n_frames):
@@ -75,7 +78,8 @@ def _render_views(stream: SimStream, seed: int, views: int) -> tuple[list, list,
 
 def _track_timed(trk: Tracker, frames: list, masks: list) -> tuple[np.ndarray, float, int]:
     """Track a sequence -> joints (T, 14, 3) (NaN where nobody was in view), seconds spent on the
-    frames after the first (the first is the track's longer initial search) and their count."""
+    frames after the first (the first is the track's longer initial search) and their count.
+    """
     est = np.full((len(frames), 14, 3), np.nan)
     t_sum, n = 0.0, 0
     for i, (img, m) in enumerate(zip(frames, masks)):
@@ -103,13 +107,22 @@ def main() -> int:
     ap.add_argument("--layers", type=int, default=10)
     ap.add_argument("--particles", type=int, default=256)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="tracker seeds (runs per filter)")
-    ap.add_argument("--scene-seeds", type=int, nargs="+", default=[0],
-                    help="simulator seeds of the sequences")
-    ap.add_argument("--views", type=int, default=1, choices=range(1, len(EXTRA_EYES) + 2),
-                    help="cameras: 1 (monocular, the issue's figures) or more (see EXTRA_EYES)")
+    ap.add_argument("--scene-seeds", type=int, nargs="+", default=[0], help="simulator seeds of the sequences")
+    ap.add_argument(
+        "--views",
+        type=int,
+        default=1,
+        choices=range(1, len(EXTRA_EYES) + 2),
+        help="cameras: 1 (monocular, the issue's figures) or more (see EXTRA_EYES)",
+    )
     args = ap.parse_args()
-    prior = None if args.prior == "none" else load_default_prior(progress=True) if args.prior == "default" \
+    prior = (
+        None
+        if args.prior == "none"
+        else load_default_prior(progress=True)
+        if args.prior == "default"
         else MotionPrior.load(args.prior)
+    )
 
     errs: dict[tuple[str, int], list[np.ndarray]] = {}
     reproj, last100, times = [], [], {}
@@ -124,8 +137,7 @@ def main() -> int:
         cam = cams[0]
         for seed in args.seeds:
             for kind in ("apf", "pf"):
-                trk = Tracker(cams, "left", args.layers, args.particles, prior=prior, plain=kind == "pf",
-                              seed=seed)
+                trk = Tracker(cams, "left", args.layers, args.particles, prior=prior, plain=kind == "pf", seed=seed)
                 est, t_sum, n = _track_timed(trk, frames, masks)
                 e = np.linalg.norm(est - truth3, axis=-1).mean(axis=1)
                 errs.setdefault((kind, seed), []).append(e)
@@ -134,15 +146,18 @@ def main() -> int:
                     times[seed] = (t + t_sum, k + n)
                     reproj.append(np.linalg.norm(cam.project(est) - truth2, axis=-1).mean(axis=1))
                     last100.append(np.nanmax(e[-100:]))
-                print(f"{name}:{scene_seed} seed {seed} {kind}: {len(e)} frames, "
-                      f"mpjpe {np.nanmean(e) * 1e3:.1f} mm", file=sys.stderr)
+                print(
+                    f"{name}:{scene_seed} seed {seed} {kind}: {len(e)} frames, mpjpe {np.nanmean(e) * 1e3:.1f} mm",
+                    file=sys.stderr,
+                )
         n_total += len(frames)
 
     # likelihood cost per particle evaluation
     frame0, mask0 = (frames[0], masks[0]) if args.views == 1 else (frames[0][0], masks[0][0])
-    obs = make_observation(frame0, mask0)                       # one view's cost
+    obs = make_observation(frame0, mask0)  # one view's cost
     L = ConeLikelihood(cam)
     from counterpart.body.pose import neutral_pose
+
     P = neutral_pose()[None] + np.random.default_rng(0).normal(size=(args.particles, 28)) * 0.05
     L(P, obs)
     t0 = time.perf_counter()
@@ -150,8 +165,10 @@ def main() -> int:
         L(P, obs)
     us_per_eval = (time.perf_counter() - t0) / (50 * args.particles) * 1e6
 
-    per_seed = {kind: [float(np.nanmean(np.concatenate(errs[kind, seed]))) * 1e3 for seed in args.seeds]
-                for kind in ("apf", "pf")}
+    per_seed = {
+        kind: [float(np.nanmean(np.concatenate(errs[kind, seed]))) * 1e3 for seed in args.seeds]
+        for kind in ("apf", "pf")
+    }
     apf, pf = float(np.mean(per_seed["apf"])), float(np.mean(per_seed["pf"]))
     res = {
         "mpjpe_mm": round(apf, 1),
@@ -164,9 +181,13 @@ def main() -> int:
         "us_per_eval": round(us_per_eval, 2),
         "max_err_mm_last100": round(float(np.max(last100)) * 1e3, 1),
         "frames": n_total,
-        "layers": args.layers, "particles": args.particles, "seeds": args.seeds,
-        "scene_seeds": args.scene_seeds, "views": args.views,
-        "scenarios": args.scenarios, "prior": args.prior,
+        "layers": args.layers,
+        "particles": args.particles,
+        "seeds": args.seeds,
+        "scene_seeds": args.scene_seeds,
+        "views": args.views,
+        "scenarios": args.scenarios,
+        "prior": args.prior,
         "load_average": round(os.getloadavg()[0], 2),
     }
     print(json.dumps(res))

@@ -19,6 +19,7 @@ Decoding one frame costs a JPEG decode of the small crop (well under a milliseco
 :class:`AvatarFrames` keeps the last decoded frames in a small cache, since consecutive output frames
 mostly show consecutive recording frames.
 """
+
 from __future__ import annotations
 
 import os
@@ -35,7 +36,8 @@ JPEG_QUALITY = 90
 @dataclass(frozen=True)
 class CropGeometry:
     """Where the person stands inside the crop: ``foot`` (x, y) px, ``height_px``, ``facing`` (+1 right,
-    -1 left), crop size ``h`` x ``w`` px."""
+    -1 left), crop size ``h`` x ``w`` px.
+    """
 
     h: int
     w: int
@@ -46,7 +48,8 @@ class CropGeometry:
 
 def foot_and_height(masks: np.ndarray) -> tuple[tuple[float, float], float]:
     """Median foot point (x, y) px (bottom row of the mask, centre of its pixels there) and median
-    height px of the person in (T, h, w) bool crops (frames with an empty mask left out)."""
+    height px of the person in (T, h, w) bool crops (frames with an empty mask left out).
+    """
     masks = np.asarray(masks, bool)
     rows = masks.any(axis=2)
     have = rows.any(axis=1)
@@ -68,7 +71,8 @@ def foot_and_height(masks: np.ndarray) -> tuple[tuple[float, float], float]:
 def _fill_outside(img: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """The crop with the pixels outside the person replaced by the person's own colours spread
     outwards (normalised convolution, sigma 3 px): the feathered edge then blends towards the
-    person's colour instead of a dark fringe, and JPEG spends few bits on the smooth surround."""
+    person's colour instead of a dark fringe, and JPEG spends few bits on the smooth surround.
+    """
     m = mask.astype(np.float32)
     num = cv2.GaussianBlur(img.astype(np.float32) * m[..., None], (0, 0), 3.0)
     den = cv2.GaussianBlur(m, (0, 0), 3.0)[..., None]
@@ -83,8 +87,9 @@ class AvatarFrames:
     from a file. :meth:`image` and :meth:`alpha` decode frame ``t``.
     """
 
-    def __init__(self, jpeg: np.ndarray, offsets: np.ndarray, masks: np.ndarray, geometry: CropGeometry,
-                 cache: int = 16) -> None:
+    def __init__(
+        self, jpeg: np.ndarray, offsets: np.ndarray, masks: np.ndarray, geometry: CropGeometry, cache: int = 16
+    ) -> None:
         self.jpeg = np.asarray(jpeg, np.uint8)
         self.offsets = np.asarray(offsets, np.int64)
         self.masks = np.asarray(masks, np.uint8)
@@ -98,10 +103,12 @@ class AvatarFrames:
         return len(self.masks)
 
     @classmethod
-    def encode(cls, crops: np.ndarray, masks: np.ndarray, facing: float = -1.0,
-               quality: int = JPEG_QUALITY) -> "AvatarFrames":
+    def encode(
+        cls, crops: np.ndarray, masks: np.ndarray, facing: float = -1.0, quality: int = JPEG_QUALITY
+    ) -> AvatarFrames:
         """crops: (T, h, w, 3) uint8 BGR; masks: (T, h, w) bool; facing: +1 the person faces the
-        image's right, -1 its left."""
+        image's right, -1 its left.
+        """
         crops, masks = np.asarray(crops), np.asarray(masks, bool)
         if crops.ndim != 4 or crops.shape[:3] != masks.shape:
             raise ValueError(f"crops {crops.shape} and masks {masks.shape} must be (T, h, w, 3) and (T, h, w)")
@@ -115,21 +122,30 @@ class AvatarFrames:
         offsets[1:] = np.cumsum([len(s) for s in streams])
         foot, height = foot_and_height(masks)
         geo = CropGeometry(int(masks.shape[1]), int(masks.shape[2]), foot, height, float(np.sign(facing) or -1.0))
-        return cls(np.concatenate(streams) if streams else np.zeros(0, np.uint8), offsets,
-                   np.packbits(masks, axis=2), geo)
+        return cls(
+            np.concatenate(streams) if streams else np.zeros(0, np.uint8), offsets, np.packbits(masks, axis=2), geo
+        )
 
     # ----------------------------------------------------------------------------- persistence
     def arrays(self) -> dict[str, np.ndarray]:
         g = self.geometry
-        return {PREFIX + "jpeg": self.jpeg, PREFIX + "offsets": self.offsets, PREFIX + "masks": self.masks,
-                PREFIX + "geometry": np.array([g.h, g.w, g.foot[0], g.foot[1], g.height_px, g.facing], np.float64)}
+        return {
+            PREFIX + "jpeg": self.jpeg,
+            PREFIX + "offsets": self.offsets,
+            PREFIX + "masks": self.masks,
+            PREFIX + "geometry": np.array([g.h, g.w, g.foot[0], g.foot[1], g.height_px, g.facing], np.float64),
+        }
 
     @classmethod
-    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> "AvatarFrames":
+    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> AvatarFrames:
         try:
             h, w, fx, fy, hp, facing = (float(v) for v in arrays[PREFIX + "geometry"])
-            return cls(arrays[PREFIX + "jpeg"], arrays[PREFIX + "offsets"], arrays[PREFIX + "masks"],
-                       CropGeometry(int(h), int(w), (fx, fy), hp, facing))
+            return cls(
+                arrays[PREFIX + "jpeg"],
+                arrays[PREFIX + "offsets"],
+                arrays[PREFIX + "masks"],
+                CropGeometry(int(h), int(w), (fx, fy), hp, facing),
+            )
         except KeyError as exc:
             raise ValueError(f"not an avatar file: no {exc.args[0]!r} array") from None
 
@@ -143,7 +159,7 @@ class AvatarFrames:
         if not 0 <= t < len(self):
             raise IndexError(f"avatar frame {t} out of range 0..{len(self) - 1}")
         g = self.geometry
-        img = cv2.imdecode(self.jpeg[self.offsets[t]:self.offsets[t + 1]], cv2.IMREAD_COLOR)
+        img = cv2.imdecode(self.jpeg[self.offsets[t] : self.offsets[t + 1]], cv2.IMREAD_COLOR)
         mask = np.unpackbits(self.masks[t], axis=1, count=g.w).astype(np.float32)
         # a one-pixel feather: a hard binary edge shimmers when the crop is scaled
         alpha = cv2.GaussianBlur(mask, (3, 3), 0)
@@ -167,7 +183,8 @@ class AvatarFrames:
 
 def load_avatar_frames(path: str | os.PathLike[str]) -> AvatarFrames:
     """The frames of an avatar file (a video-texture model ``.npz``); ValueError naming the file when it
-    holds none."""
+    holds none.
+    """
     p = os.fspath(path)
     if not os.path.isfile(p):
         raise FileNotFoundError(f"{p}: no such avatar file (make one with 'counterpart learn avatar')")

@@ -35,17 +35,25 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
-
 from counterpart.body.skeleton import JOINTS
 
 CMU_SCALE: float = 0.0254 / 0.45
 
 CMU_TO_JOINTS14: dict[str, str] = {
-    "head": "Head", "neck": "Neck1",
-    "l_shoulder": "LeftArm", "l_elbow": "LeftForeArm", "l_wrist": "LeftHand",
-    "r_shoulder": "RightArm", "r_elbow": "RightForeArm", "r_wrist": "RightHand",
-    "l_hip": "LeftUpLeg", "l_knee": "LeftLeg", "l_ankle": "LeftFoot",
-    "r_hip": "RightUpLeg", "r_knee": "RightLeg", "r_ankle": "RightFoot",
+    "head": "Head",
+    "neck": "Neck1",
+    "l_shoulder": "LeftArm",
+    "l_elbow": "LeftForeArm",
+    "l_wrist": "LeftHand",
+    "r_shoulder": "RightArm",
+    "r_elbow": "RightForeArm",
+    "r_wrist": "RightHand",
+    "l_hip": "LeftUpLeg",
+    "l_knee": "LeftLeg",
+    "l_ankle": "LeftFoot",
+    "r_hip": "RightUpLeg",
+    "r_knee": "RightLeg",
+    "r_ankle": "RightFoot",
 }
 
 _ROT_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
@@ -56,7 +64,8 @@ _POS_CHANNELS = ("Xposition", "Yposition", "Zposition")
 class BVH:
     """A parsed BVH file.
 
-    Attributes:
+    Attributes
+    ----------
         joint_names: J joint names in file order (End Sites excluded).
         parents: (J,) int parent index, -1 for the root.
         offsets: (J, 3) OFFSETs in file units.
@@ -141,11 +150,13 @@ class BVH:
 
     def world_positions(self, include_end_sites: bool = False) -> np.ndarray:
         """(T, J, 3) world joint positions in metres (``* scale``); with ``include_end_sites``
-        (T, J + E, 3) with columns named by ``all_names``."""
+        (T, J + E, 3) with columns named by ``all_names``.
+        """
         rot, pos = self.global_transforms()
         if include_end_sites and len(self.end_site_names):
             ends = pos[:, self.end_site_parents] + np.einsum(
-                "teij,ej->tei", rot[:, self.end_site_parents], self.end_site_offsets)
+                "teij,ej->tei", rot[:, self.end_site_parents], self.end_site_offsets
+            )
             pos = np.concatenate([pos, ends], axis=1)
         return pos * self.scale
 
@@ -207,9 +218,13 @@ def read_bvh(path: str | os.PathLike, scale: float = CMU_SCALE) -> BVH:
     Args:
         path: the .bvh file.
         scale: metres per file unit (default: CMU MotionBuilder-friendly, 0.0254 / 0.45).
-    Returns:
+
+    Returns
+    -------
         BVH with J joints, E end sites and T frames.
-    Raises:
+
+    Raises
+    ------
         ValueError naming the file and line for anything that is not a well-formed BVH.
         FileNotFoundError if the file is missing.
     """
@@ -256,8 +271,9 @@ def read_bvh(path: str | os.PathLike, scale: float = CMU_SCALE) -> BVH:
         for _ in range(int(tok)):
             c, cl = toks.next("channel name")
             if c not in _ROT_CHANNELS + _POS_CHANNELS:
-                raise toks.error(f"unknown channel {c!r} of joint {name!r}; expected one of "
-                                 f"{_POS_CHANNELS + _ROT_CHANNELS}", cl)
+                raise toks.error(
+                    f"unknown channel {c!r} of joint {name!r}; expected one of {_POS_CHANNELS + _ROT_CHANNELS}", cl
+                )
             chans.append(c)
         channels.append(tuple(chans))
         while True:
@@ -314,24 +330,30 @@ def read_bvh(path: str | os.PathLike, scale: float = CMU_SCALE) -> BVH:
         raise ValueError(f"{path}: line {rows[bad][0]}: non-finite channel value")
 
     return BVH(
-        joint_names=names, parents=np.array(parents, dtype=np.intp),
-        offsets=np.array(offsets, dtype=np.float64).reshape(-1, 3), channels=channels,
-        frame_time=float(frame_time), motion=motion, end_site_names=es_names,
+        joint_names=names,
+        parents=np.array(parents, dtype=np.intp),
+        offsets=np.array(offsets, dtype=np.float64).reshape(-1, 3),
+        channels=channels,
+        frame_time=float(frame_time),
+        motion=motion,
+        end_site_names=es_names,
         end_site_parents=np.array(es_parents, dtype=np.intp),
         end_site_offsets=np.array(es_offsets, dtype=np.float64).reshape(-1, 3),
-        scale=float(scale), path=path,
+        scale=float(scale),
+        path=path,
     )
 
 
-def bvh_to_joints14(bvh: BVH, drop_first: bool = True,
-                    mapping: dict[str, str] | None = None) -> np.ndarray:
+def bvh_to_joints14(bvh: BVH, drop_first: bool = True, mapping: dict[str, str] | None = None) -> np.ndarray:
     """Our 14 joints from a BVH.
 
     Args:
         bvh: a parsed BVH.
         drop_first: drop frame 0 (the T-pose calibration frame of CMU takes).
         mapping: our joint name -> BVH joint name, for all 14 (default ``CMU_TO_JOINTS14``).
-    Returns:
+
+    Returns
+    -------
         (T', 14, 3) float64 metres in ``counterpart.body.skeleton.JOINTS`` order.
     """
     mapping = CMU_TO_JOINTS14 if mapping is None else mapping
@@ -340,8 +362,10 @@ def bvh_to_joints14(bvh: BVH, drop_first: bool = True,
         raise ValueError(f"bvh_to_joints14: mapping lacks our joints {missing}")
     absent = [mapping[j] for j in JOINTS if mapping[j] not in bvh.all_names]
     if absent:
-        raise ValueError(f"{bvh.path or 'BVH'}: has no joint(s) {absent} needed by the mapping; "
-                         f"its joints are {bvh.all_names}; pass mapping= for other skeletons")
+        raise ValueError(
+            f"{bvh.path or 'BVH'}: has no joint(s) {absent} needed by the mapping; "
+            f"its joints are {bvh.all_names}; pass mapping= for other skeletons"
+        )
     pos = bvh.world_positions(include_end_sites=True)
     cols = [bvh.index(mapping[j]) for j in JOINTS]
     out = pos[:, cols]

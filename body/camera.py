@@ -23,7 +23,8 @@ _LOOKAT_KEYS = ("eye", "target", "fov_deg", "width", "height")
 class Camera:
     """Pinhole camera.
 
-    Attributes:
+    Attributes
+    ----------
         fx, fy: focal lengths in pixels.
         cx, cy: principal point in pixels.
         width, height: image size in pixels.
@@ -65,9 +66,10 @@ class Camera:
 
     # -- construction -------------------------------------------------------------------------
     @classmethod
-    def look_at(cls, eye: Any, target: Any, fov_deg: float, width: int, height: int) -> "Camera":
+    def look_at(cls, eye: Any, target: Any, fov_deg: float, width: int, height: int) -> Camera:
         """Camera at ``eye`` (metres) looking at ``target``, horizontal field of view ``fov_deg``,
-        square pixels, principal point at the image centre, world +Y up in the image."""
+        square pixels, principal point at the image centre, world +Y up in the image.
+        """
         eye = np.asarray(eye, dtype=np.float64)
         target = np.asarray(target, dtype=np.float64)
         if not 0 < fov_deg < 180:
@@ -137,20 +139,32 @@ class Camera:
     def in_image(self, uv: np.ndarray) -> np.ndarray:
         """(..., 2) pixels -> (...) bool, inside the image bounds (NaN is outside)."""
         uv = np.asarray(uv)
-        return ((uv[..., 0] >= -0.5) & (uv[..., 0] < self.width - 0.5)
-                & (uv[..., 1] >= -0.5) & (uv[..., 1] < self.height - 0.5))
+        return (
+            (uv[..., 0] >= -0.5)
+            & (uv[..., 0] < self.width - 0.5)
+            & (uv[..., 1] >= -0.5)
+            & (uv[..., 1] < self.height - 0.5)
+        )
 
     # -- parameters ---------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """Plain dict (floats, ints, nested lists) for launch files and message metadata."""
-        return {"fx": self.fx, "fy": self.fy, "cx": self.cx, "cy": self.cy,
-                "width": self.width, "height": self.height,
-                "R": self.R.tolist(), "t": self.t.tolist()}
+        return {
+            "fx": self.fx,
+            "fy": self.fy,
+            "cx": self.cx,
+            "cy": self.cy,
+            "width": self.width,
+            "height": self.height,
+            "R": self.R.tolist(),
+            "t": self.t.tolist(),
+        }
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Camera":
+    def from_dict(cls, d: dict[str, Any]) -> Camera:
         """Inverse of ``to_dict``. Also accepts the look-at form
-        ``{eye: [x, y, z], target: [x, y, z], fov_deg, width, height}``."""
+        ``{eye: [x, y, z], target: [x, y, z], fov_deg, width, height}``.
+        """
         if not isinstance(d, dict):
             raise ValueError(f"camera parameters must be a mapping, got {type(d).__name__}")
         keys = _LOOKAT_KEYS if "eye" in d else _DICT_KEYS
@@ -169,22 +183,41 @@ def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "
     """The ``messages.CameraInfo`` of a camera (the calibration node publishes it)."""
     from counterpart.messages import CameraInfo
 
-    return CameraInfo(stamp=stamp, seq=seq, width=camera.width, height=camera.height, fx=camera.fx, fy=camera.fy,
-                      cx=camera.cx, cy=camera.cy, R=np.asarray(camera.R, np.float64),
-                      t=np.asarray(camera.t, np.float64), source=source)
+    return CameraInfo(
+        stamp=stamp,
+        seq=seq,
+        width=camera.width,
+        height=camera.height,
+        fx=camera.fx,
+        fy=camera.fy,
+        cx=camera.cx,
+        cy=camera.cy,
+        R=np.asarray(camera.R, np.float64),
+        t=np.asarray(camera.t, np.float64),
+        source=source,
+    )
 
 
 def camera_from_info(info: Any) -> Camera:
     """The Camera of a ``messages.CameraInfo``; ValueError naming what is wrong in it."""
     if np.size(info.R) != 9 or np.size(info.t) != 3:
         raise ValueError(f"camera info: R must hold 9 values and t 3, got {np.size(info.R)} and {np.size(info.t)}")
-    return Camera(info.fx, info.fy, info.cx, info.cy, info.width, info.height,
-                  np.asarray(info.R, np.float64).reshape(3, 3), np.asarray(info.t, np.float64).reshape(3))
+    return Camera(
+        info.fx,
+        info.fy,
+        info.cx,
+        info.cy,
+        info.width,
+        info.height,
+        np.asarray(info.R, np.float64).reshape(3, 3),
+        np.asarray(info.t, np.float64).reshape(3),
+    )
 
 
 def load_camera_file(path: str) -> Camera:
     """A Camera from a JSON or YAML calibration file (``Camera.to_dict`` or the look-at form);
-    ValueError naming the file and the bad key."""
+    ValueError naming the file and the bad key.
+    """
     import yaml
 
     try:
@@ -205,7 +238,8 @@ def load_camera_file(path: str) -> Camera:
 def default_camera(width: int = 320, height: int = 240) -> Camera:
     """The simulator's default view: camera 1.6 m high, 4 m in front of the origin (+Z),
     looking at (0, 0.9, 0), 55 degrees horizontal field of view. Two people of 1.75 m standing
-    1 m apart around the origin (and up to about 3 m apart, from z = -1 to +1) are fully in view."""
+    1 m apart around the origin (and up to about 3 m apart, from z = -1 to +1) are fully in view.
+    """
     return Camera.look_at((0.0, 1.6, 4.0), (0.0, 0.9, 0.0), 55.0, width, height)
 
 
@@ -223,11 +257,21 @@ def camera_for_size(calibration: Camera | None, width: int, height: int) -> Came
     if (cw, ch) == (width, height):
         return calibration
     if abs((width / height) / (cw / ch) - 1.0) > 0.01:
-        raise ValueError(f"camera calibrated for {cw}x{ch} but the frames are {width}x{height} (another aspect "
-                         "ratio); calibrate for the frames' size")
+        raise ValueError(
+            f"camera calibrated for {cw}x{ch} but the frames are {width}x{height} (another aspect "
+            "ratio); calibrate for the frames' size"
+        )
     s = width / cw
-    return Camera(calibration.fx * s, calibration.fy * s, (calibration.cx + 0.5) * s - 0.5,
-                  (calibration.cy + 0.5) * s - 0.5, width, height, calibration.R, calibration.t)
+    return Camera(
+        calibration.fx * s,
+        calibration.fy * s,
+        (calibration.cx + 0.5) * s - 0.5,
+        (calibration.cy + 0.5) * s - 0.5,
+        width,
+        height,
+        calibration.R,
+        calibration.t,
+    )
 
 
 class CameraSchedule:
@@ -265,7 +309,8 @@ class CameraSchedule:
 
 def camera_param_problem(value: dict[str, Any]) -> str | None:
     """For node parameters: None when ``value`` is empty (use the default camera) or a valid
-    calibration for :meth:`Camera.from_dict`, else the error naming the bad key."""
+    calibration for :meth:`Camera.from_dict`, else the error naming the bad key.
+    """
     if not value:
         return None
     try:
@@ -273,4 +318,3 @@ def camera_param_problem(value: dict[str, Any]) -> str | None:
     except (ValueError, TypeError) as exc:
         return str(exc)
     return None
-

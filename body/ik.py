@@ -23,7 +23,6 @@ limb direction ``Rx(-f) Rz(p) (0,-1,0) = (sin p, -cos p cos f, cos p sin f)``.
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.kinematics import rot_x, rot_z
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, BodyDims
@@ -52,10 +51,11 @@ def _yxz(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, b, c
 
 
-def _limb(R_parent: np.ndarray, top: np.ndarray, mid: np.ndarray, end: np.ndarray,
-          sign: float, knee: bool) -> tuple[np.ndarray, ...]:
+def _limb(
+    R_parent: np.ndarray, top: np.ndarray, mid: np.ndarray, end: np.ndarray, sign: float, knee: bool
+) -> tuple[np.ndarray, ...]:
     """flex, abd, rot, bend of a limb top->mid->end under parent rotation (N,3,3)."""
-    u = np.einsum("nji,nj->ni", R_parent, _unit(mid - top))   # parent frame
+    u = np.einsum("nji,nj->ni", R_parent, _unit(mid - top))  # parent frame
     p = np.arcsin(np.clip(u[:, 0], -1.0, 1.0))
     f = np.arctan2(u[:, 2], -u[:, 1])
     R_a = R_parent @ rot_x(-f) @ rot_z(p)
@@ -74,7 +74,9 @@ def inverse_kinematics(X: np.ndarray) -> np.ndarray:
 
     Args:
         X: (N, 14, 3) or (14, 3) joint positions, metres, ``JOINTS`` order.
-    Returns:
+
+    Returns
+    -------
         (N, DOF) poses; ``forward_kinematics(P, dims_from_joints(X))`` reproduces the limb
         directions of X (see the module docstring for what is fixed).
     """
@@ -108,12 +110,14 @@ def inverse_kinematics(X: np.ndarray) -> np.ndarray:
     P[:, g["head_nod"]] = np.arctan2(d[:, 2], d[:, 1])
 
     for side, sign in (("l", 1.0), ("r", -1.0)):
-        vals = _limb(R_torso, X[:, J[f"{side}_shoulder"]], X[:, J[f"{side}_elbow"]],
-                     X[:, J[f"{side}_wrist"]], sign, knee=False)
+        vals = _limb(
+            R_torso, X[:, J[f"{side}_shoulder"]], X[:, J[f"{side}_elbow"]], X[:, J[f"{side}_wrist"]], sign, knee=False
+        )
         for name, v in zip(("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex"), vals):
             P[:, g[f"{side}_{name}"]] = v
-        vals = _limb(R_pelvis, X[:, J[f"{side}_hip"]], X[:, J[f"{side}_knee"]],
-                     X[:, J[f"{side}_ankle"]], sign, knee=True)
+        vals = _limb(
+            R_pelvis, X[:, J[f"{side}_hip"]], X[:, J[f"{side}_knee"]], X[:, J[f"{side}_ankle"]], sign, knee=True
+        )
         for name, v in zip(("hip_flex", "hip_abd", "hip_rot", "knee_flex"), vals):
             P[:, g[f"{side}_{name}"]] = v
     return P
@@ -126,7 +130,9 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
         X: (N, 14, 3) metres.
         base: proportions for what the joints do not show (radii, hand, foot, head size),
             scaled by the ratio of the fitted leg length to the base leg length.
-    Returns:
+
+    Returns
+    -------
         BodyDims whose ``height`` is the implied stature (ankle height + legs + torso + neck to
         head + half the head).
     """
@@ -145,8 +151,12 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     ankle = float(np.percentile(X[:, [J["l_ankle"], J["r_ankle"]], 1], 5))
     ankle = max(ankle, 0.5 * out.ankle_height)
     vals = dict(
-        thigh=thigh, shin=shin, hip_width=length("l_hip", "r_hip"), torso_length=torso,
-        shoulder_width=length("l_shoulder", "r_shoulder"), neck_to_head=length("neck", "head"),
+        thigh=thigh,
+        shin=shin,
+        hip_width=length("l_hip", "r_hip"),
+        torso_length=torso,
+        shoulder_width=length("l_shoulder", "r_shoulder"),
+        neck_to_head=length("neck", "head"),
         upper_arm=0.5 * (length("l_shoulder", "l_elbow") + length("r_shoulder", "r_elbow")),
         forearm=0.5 * (length("l_elbow", "l_wrist") + length("r_elbow", "r_wrist")),
         ankle_height=ankle,
@@ -155,6 +165,7 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     drop = float(np.median(np.einsum("ni,ni->n", X[:, J["neck"]] - sh, _unit(X[:, J["neck"]] - pelvis))))
     vals["shoulder_drop"] = max(drop, 0.0)
     vals["chest_drop"] = 0.5 * torso
-    vals["height"] = (ankle + shin + thigh + torso + vals["neck_to_head"] + out.head_half_height)
+    vals["height"] = ankle + shin + thigh + torso + vals["neck_to_head"] + out.head_half_height
     from dataclasses import replace
+
     return replace(out, **vals)

@@ -36,10 +36,14 @@ Every function is vectorised over the leading N axis (no Python loop over poses)
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.body.skeleton import (
-    ANCHOR_INDEX, ANCHORS, DEFAULT_DIMS, N_JOINTS, SEGMENT_ANCHORS, BodyDims,
+    ANCHOR_INDEX,
+    ANCHORS,
+    DEFAULT_DIMS,
+    N_JOINTS,
+    SEGMENT_ANCHORS,
+    BodyDims,
 )
 
 
@@ -100,9 +104,10 @@ def _rz(R: Columns, c: np.ndarray, s: np.ndarray) -> Columns:
 
 def _chain(P: np.ndarray, dims: BodyDims) -> tuple[np.ndarray, dict[str, Columns]]:
     """The chain of the module docstring: anchor points (N, len(ANCHORS), 3) and the columns of
-    every body part's rotation."""
+    every body part's rotation.
+    """
     d = dims
-    C = np.cos(P)[:, :, None]                                     # (N, DOF, 1)
+    C = np.cos(P)[:, :, None]  # (N, DOF, 1)
     S = np.sin(P)[:, :, None]
     cs = {n: (C[:, i], S[:, i]) for n, i in DOF_INDEX.items()}
 
@@ -114,8 +119,17 @@ def _chain(P: np.ndarray, dims: BodyDims) -> tuple[np.ndarray, dict[str, Columns
     z = np.zeros((N, 1))
     c, s = cs["root_yaw"]
     R: dict[str, Columns] = {}
-    R["pelvis"] = _rz(_rx((np.concatenate([c, z, -s], 1), np.broadcast_to(np.array([0.0, 1.0, 0.0]), (N, 3)),
-                           np.concatenate([s, z, c], 1)), *cs["root_pitch"]), *neg("root_roll"))
+    R["pelvis"] = _rz(
+        _rx(
+            (
+                np.concatenate([c, z, -s], 1),
+                np.broadcast_to(np.array([0.0, 1.0, 0.0]), (N, 3)),
+                np.concatenate([s, z, c], 1),
+            ),
+            *cs["root_pitch"],
+        ),
+        *neg("root_roll"),
+    )
     pel = R["pelvis"]
     tor = R["torso"] = _rz(_rx(_ry(pel, *cs["torso_twist"]), *cs["torso_flex"]), *neg("torso_lateral"))
     hed = R["head"] = _rz(_rx(_ry(tor, *cs["head_turn"]), *cs["head_nod"]), *neg("head_tilt"))
@@ -162,7 +176,8 @@ def _chain(P: np.ndarray, dims: BodyDims) -> tuple[np.ndarray, dict[str, Columns
 
 def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
     """(N, DOF) or (DOF,) poses -> (N, len(ANCHORS), 3) anchor points, metres: ``frames``
-    without building the rotation matrices (the tracker's likelihood needs the points alone)."""
+    without building the rotation matrices (the tracker's likelihood needs the points alone).
+    """
     return _chain(_as_poses(P), dims)[0]
 
 
@@ -172,7 +187,9 @@ def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, di
     Args:
         P: (N, DOF) or (DOF,) poses.
         dims: body dimensions.
-    Returns:
+
+    Returns
+    -------
         points: (N, len(ANCHORS), 3) metres, the 14 joints then ``EXTRA_ANCHORS``.
         rotations: name -> (N, 3, 3) world rotation of each body part's frame
             ("pelvis", "torso", "head", "l_upper_arm", "l_forearm", "r_...", "l_thigh",
@@ -188,7 +205,9 @@ def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarr
     Args:
         P: (N, DOF) poses (a single (DOF,) pose is treated as N = 1).
         dims: body dimensions.
-    Returns:
+
+    Returns
+    -------
         (N, 14, 3) float64 world positions in metres, in ``counterpart.body.skeleton.JOINTS`` order.
     """
     return frames(P, dims)[0][:, :N_JOINTS]
@@ -197,7 +216,8 @@ def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarr
 def cone_endpoints(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, np.ndarray]:
     """The 16 truncated cones of N poses.
 
-    Returns:
+    Returns
+    -------
         ends: (N, 16, 2, 3) metres, start and end centre of each cone in ``SEGMENTS`` order.
         radii: (16, 2) metres, the matching radii (same for every pose).
     """

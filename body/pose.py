@@ -36,17 +36,37 @@ matrices are in ``counterpart.body.kinematics``.
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 DOF_NAMES: tuple[str, ...] = (
-    "root_x", "root_y", "root_z", "root_yaw", "root_pitch", "root_roll",
-    "torso_flex", "torso_lateral", "torso_twist",
-    "head_nod", "head_tilt", "head_turn",
-    "l_shoulder_flex", "l_shoulder_abd", "l_shoulder_rot", "l_elbow_flex",
-    "r_shoulder_flex", "r_shoulder_abd", "r_shoulder_rot", "r_elbow_flex",
-    "l_hip_flex", "l_hip_abd", "l_hip_rot", "l_knee_flex",
-    "r_hip_flex", "r_hip_abd", "r_hip_rot", "r_knee_flex",
+    "root_x",
+    "root_y",
+    "root_z",
+    "root_yaw",
+    "root_pitch",
+    "root_roll",
+    "torso_flex",
+    "torso_lateral",
+    "torso_twist",
+    "head_nod",
+    "head_tilt",
+    "head_turn",
+    "l_shoulder_flex",
+    "l_shoulder_abd",
+    "l_shoulder_rot",
+    "l_elbow_flex",
+    "r_shoulder_flex",
+    "r_shoulder_abd",
+    "r_shoulder_rot",
+    "r_elbow_flex",
+    "l_hip_flex",
+    "l_hip_abd",
+    "l_hip_rot",
+    "l_knee_flex",
+    "r_hip_flex",
+    "r_hip_abd",
+    "r_hip_rot",
+    "r_knee_flex",
 )
 DOF: int = len(DOF_NAMES)
 DOF_INDEX: dict[str, int] = {n: i for i, n in enumerate(DOF_NAMES)}
@@ -58,12 +78,21 @@ JOINT_ANGLES = slice(6, DOF)
 YAW = DOF_INDEX["root_yaw"]
 
 _LIMITS_DEG: dict[str, tuple[float, float]] = {
-    "root_pitch": (-30, 80), "root_roll": (-30, 30),
-    "torso_flex": (-30, 90), "torso_lateral": (-40, 40), "torso_twist": (-50, 50),
-    "head_nod": (-50, 60), "head_tilt": (-40, 40), "head_turn": (-80, 80),
-    "shoulder_flex": (-60, 180), "shoulder_abd": (-20, 180), "shoulder_rot": (-90, 90),
+    "root_pitch": (-30, 80),
+    "root_roll": (-30, 30),
+    "torso_flex": (-30, 90),
+    "torso_lateral": (-40, 40),
+    "torso_twist": (-50, 50),
+    "head_nod": (-50, 60),
+    "head_tilt": (-40, 40),
+    "head_turn": (-80, 80),
+    "shoulder_flex": (-60, 180),
+    "shoulder_abd": (-20, 180),
+    "shoulder_rot": (-90, 90),
     "elbow_flex": (0, 150),
-    "hip_flex": (-30, 120), "hip_abd": (-25, 60), "hip_rot": (-40, 40),
+    "hip_flex": (-30, 120),
+    "hip_abd": (-25, 60),
+    "hip_rot": (-40, 40),
     "knee_flex": (0, 150),
 }
 
@@ -118,10 +147,10 @@ def within_limits(P: np.ndarray) -> np.ndarray:
     return ok.all(axis=-1)
 
 
-def neutral_pose(dims: BodyDims = DEFAULT_DIMS, x: float = 0.0, z: float = 0.0,
-                 yaw: float = 0.0) -> np.ndarray:
+def neutral_pose(dims: BodyDims = DEFAULT_DIMS, x: float = 0.0, z: float = 0.0, yaw: float = 0.0) -> np.ndarray:
     """(DOF,) relaxed standing pose: feet on y = 0, arms slightly away from the body, elbows
-    slightly bent, facing +Z rotated by ``yaw`` (radians), pelvis above (x, z) metres."""
+    slightly bent, facing +Z rotated by ``yaw`` (radians), pelvis above (x, z) metres.
+    """
     P = np.zeros(DOF)
     P[DOF_INDEX["root_x"]] = x
     P[DOF_INDEX["root_y"]] = dims.hip_height

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import cone_endpoints
 from counterpart.body.skeleton import N_SEGMENTS, BodyDims
@@ -35,7 +34,9 @@ def project_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera) -> tuple[
         ends: (N, S, 2, 3) cone end centres, metres (from ``cone_endpoints``).
         radii: (S, 2) or (N, S, 2) end radii, metres.
         camera: the camera.
-    Returns:
+
+    Returns
+    -------
         centres: (N, S, 2, 2) pixel positions of the two end centres.
         half_widths: (N, S, 2) projected radii in pixels (NaN behind the camera).
     """
@@ -56,20 +57,22 @@ def _image_normals(centres: np.ndarray) -> np.ndarray:
     return np.where(ok, n / np.where(ok, length, 1.0), np.array([1.0, 0.0]))
 
 
-def cone_outline_points_from_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera,
-                                   per_side: int = 4) -> np.ndarray:
+def cone_outline_points_from_cones(
+    ends: np.ndarray, radii: np.ndarray, camera: Camera, per_side: int = 4
+) -> np.ndarray:
     """Points along the two long sides of every projected cone.
 
-    Returns:
+    Returns
+    -------
         (N, S * 2 * per_side, 2) pixels, ordered cone-major, then side (+normal, -normal), then
         position along the axis at fractions (k + 0.5) / per_side.
     """
     centres, rho = project_cones(ends, radii, camera)
-    n = _image_normals(centres)                                   # (N,S,2)
-    s = (np.arange(per_side) + 0.5) / per_side                    # (K,)
+    n = _image_normals(centres)  # (N,S,2)
+    s = (np.arange(per_side) + 0.5) / per_side  # (K,)
     p = centres[..., 0, None, :] + s[:, None] * (centres[..., 1, None, :] - centres[..., 0, None, :])
-    r = rho[..., 0, None] + s * (rho[..., 1, None] - rho[..., 0, None])   # (N,S,K)
-    side = np.array([1.0, -1.0])[:, None, None]                   # (2,1,1)
+    r = rho[..., 0, None] + s * (rho[..., 1, None] - rho[..., 0, None])  # (N,S,K)
+    side = np.array([1.0, -1.0])[:, None, None]  # (2,1,1)
     pts = p[:, :, None] + side * r[:, :, None, :, None] * n[:, :, None, None, :]
     return pts.reshape(pts.shape[0], -1, 2)
 
@@ -83,11 +86,13 @@ def cone_outline_points(P: np.ndarray, dims: BodyDims, camera: Camera, per_side:
     return cone_outline_points_from_cones(ends, radii, camera, per_side)
 
 
-def cone_interior_points_from_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera,
-                                    n_along: int = 4, n_across: int = 3) -> np.ndarray:
+def cone_interior_points_from_cones(
+    ends: np.ndarray, radii: np.ndarray, camera: Camera, n_along: int = 4, n_across: int = 3
+) -> np.ndarray:
     """Grid of points inside every projected cone.
 
-    Returns:
+    Returns
+    -------
         (N, S * n_along * n_across, 2) pixels, ordered cone-major, then along the axis at
         fractions (k + 0.5) / n_along, then across at (2 j + 1) / n_across - 1 of the half-width.
     """
@@ -96,13 +101,14 @@ def cone_interior_points_from_cones(ends: np.ndarray, radii: np.ndarray, camera:
     s = (np.arange(n_along) + 0.5) / n_along
     t = (2 * np.arange(n_across) + 1) / n_across - 1.0
     p = centres[..., 0, None, :] + s[:, None] * (centres[..., 1, None, :] - centres[..., 0, None, :])
-    r = rho[..., 0, None] + s * (rho[..., 1, None] - rho[..., 0, None])   # (N,S,A)
+    r = rho[..., 0, None] + s * (rho[..., 1, None] - rho[..., 0, None])  # (N,S,A)
     pts = p[:, :, :, None] + (r[..., None] * t)[..., None] * n[:, :, None, None, :]
     return pts.reshape(pts.shape[0], -1, 2)
 
 
-def cone_interior_points(P: np.ndarray, dims: BodyDims, camera: Camera,
-                         n_along: int = 4, n_across: int = 3) -> np.ndarray:
+def cone_interior_points(
+    P: np.ndarray, dims: BodyDims, camera: Camera, n_along: int = 4, n_across: int = 3
+) -> np.ndarray:
     """(N, DOF) poses -> (N, 16 * n_along * n_across, 2) pixel samples inside the cones."""
     ends, radii = cone_endpoints(P, dims)
     return cone_interior_points_from_cones(ends, radii, camera, n_along, n_across)
@@ -113,7 +119,9 @@ def cone_rims(ends: np.ndarray, radii: np.ndarray, n_rim: int = 12) -> np.ndarra
 
     Args:
         ends: (N, S, 2, 3) metres; radii: (S, 2) or (N, S, 2) metres.
-    Returns:
+
+    Returns
+    -------
         (N, S, 2, n_rim, 3) metres.
     """
     axis = ends[..., 1, :] - ends[..., 0, :]
@@ -127,7 +135,7 @@ def cone_rims(ends: np.ndarray, radii: np.ndarray, n_rim: int = 12) -> np.ndarra
     ang = np.linspace(0.0, 2 * np.pi, n_rim, endpoint=False)
     # (N, S, n_rim, 3) unit circle in each cone's rim plane
     circle = np.cos(ang)[None, None, :, None] * u[:, :, None, :] + np.sin(ang)[None, None, :, None] * v[:, :, None, :]
-    r = np.broadcast_to(np.asarray(radii, dtype=np.float64), ends.shape[:-1])   # (N,S,2)
+    r = np.broadcast_to(np.asarray(radii, dtype=np.float64), ends.shape[:-1])  # (N,S,2)
     return ends[..., None, :] + r[..., None, None] * circle[:, :, None]
 
 
@@ -140,7 +148,8 @@ def _hull_polygons(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: i
 
 def rasterise_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: int = 12) -> np.ndarray:
     """(N, S, 2, 3) cones -> (N, H, W) bool silhouettes (union of the convex hulls of each
-    cone's projected rims). Cones with any point behind the camera are skipped."""
+    cone's projected rims). Cones with any point behind the camera are skipped.
+    """
     uv = _hull_polygons(ends, radii, camera, n_rim)
     out = np.zeros((uv.shape[0], camera.height, camera.width), dtype=np.uint8)
     valid = np.isfinite(uv).all(axis=(-1, -2))
@@ -154,13 +163,15 @@ def rasterise_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: 
 
 def rasterise_silhouettes(P: np.ndarray, dims: BodyDims, camera: Camera) -> np.ndarray:
     """(N, DOF) poses -> (N, H, W) bool silhouettes of the 16 cones. For a few poses
-    (a Python loop over poses and cones draws with OpenCV)."""
+    (a Python loop over poses and cones draws with OpenCV).
+    """
     ends, radii = cone_endpoints(P, dims)
     return rasterise_cones(ends, radii, camera)
 
 
-def render_edge_maps(P: np.ndarray, dims: BodyDims, camera: Camera,
-                     mode: str = "silhouette", thickness: int = 1) -> np.ndarray:
+def render_edge_maps(
+    P: np.ndarray, dims: BodyDims, camera: Camera, mode: str = "silhouette", thickness: int = 1
+) -> np.ndarray:
     """(N, DOF) poses -> (N, H, W) bool edge maps.
 
     mode "silhouette": the outer boundary of the union silhouette (what an edge detector sees
@@ -169,8 +180,11 @@ def render_edge_maps(P: np.ndarray, dims: BodyDims, camera: Camera,
     if mode == "silhouette":
         sil = rasterise_silhouettes(P, dims, camera).astype(np.uint8)
         kernel = np.ones((2 * thickness + 1, 2 * thickness + 1), np.uint8)
-        eroded = np.stack([cv2.erode(s, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
-                           for s in sil]) if len(sil) else sil
+        eroded = (
+            np.stack([cv2.erode(s, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0) for s in sil])
+            if len(sil)
+            else sil
+        )
         return (sil > 0) & (eroded == 0)
     if mode != "cones":
         raise ValueError(f"render_edge_maps: mode={mode!r}; use 'silhouette' or 'cones'")
@@ -187,7 +201,14 @@ def render_edge_maps(P: np.ndarray, dims: BodyDims, camera: Camera,
 
 
 __all__ = [
-    "project_cones", "cone_outline_points", "cone_outline_points_from_cones",
-    "cone_interior_points", "cone_interior_points_from_cones", "cone_rims",
-    "rasterise_cones", "rasterise_silhouettes", "render_edge_maps", "N_SEGMENTS",
+    "project_cones",
+    "cone_outline_points",
+    "cone_outline_points_from_cones",
+    "cone_interior_points",
+    "cone_interior_points_from_cones",
+    "cone_rims",
+    "rasterise_cones",
+    "rasterise_silhouettes",
+    "render_edge_maps",
+    "N_SEGMENTS",
 ]

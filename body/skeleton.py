@@ -32,11 +32,20 @@ from typing import NamedTuple
 import numpy as np
 
 JOINTS: tuple[str, ...] = (
-    "head", "neck",
-    "l_shoulder", "l_elbow", "l_wrist",
-    "r_shoulder", "r_elbow", "r_wrist",
-    "l_hip", "l_knee", "l_ankle",
-    "r_hip", "r_knee", "r_ankle",
+    "head",
+    "neck",
+    "l_shoulder",
+    "l_elbow",
+    "l_wrist",
+    "r_shoulder",
+    "r_elbow",
+    "r_wrist",
+    "l_hip",
+    "l_knee",
+    "l_ankle",
+    "r_hip",
+    "r_knee",
+    "r_ankle",
 )
 JOINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(JOINTS)}
 N_JOINTS: int = len(JOINTS)
@@ -49,13 +58,15 @@ BONES: tuple[tuple[int, int], ...] = tuple((j, p) for j, p in enumerate(PARENT) 
 
 # Extra anchor points used by the cones, after the 14 joints in the FK point array.
 EXTRA_ANCHORS: tuple[str, ...] = (
-    "pelvis",       # root: mid-point of the hip joints
-    "chest",        # on the torso axis, `chest_drop` below the neck
-    "torso_bottom", # on the torso axis, `torso_bottom_drop` below the pelvis
-    "chin",         # head axis, `head_half_height` below the head centre
-    "crown",        # head axis, `head_half_height` above the head centre
-    "l_hand_end", "r_hand_end",  # along the forearm, `hand_length` beyond the wrist
-    "l_toe", "r_toe",            # foot tip, in the shin frame
+    "pelvis",  # root: mid-point of the hip joints
+    "chest",  # on the torso axis, `chest_drop` below the neck
+    "torso_bottom",  # on the torso axis, `torso_bottom_drop` below the pelvis
+    "chin",  # head axis, `head_half_height` below the head centre
+    "crown",  # head axis, `head_half_height` above the head centre
+    "l_hand_end",
+    "r_hand_end",  # along the forearm, `hand_length` beyond the wrist
+    "l_toe",
+    "r_toe",  # foot tip, in the shin frame
 )
 ANCHORS: tuple[str, ...] = JOINTS + EXTRA_ANCHORS
 ANCHOR_INDEX: dict[str, int] = {name: i for i, name in enumerate(ANCHORS)}
@@ -95,9 +106,7 @@ SEGMENTS: tuple[Segment, ...] = (
 SEGMENT_NAMES: tuple[str, ...] = tuple(s.name for s in SEGMENTS)
 N_SEGMENTS: int = len(SEGMENTS)
 # (16, 2) anchor indices of each cone's two ends.
-SEGMENT_ANCHORS: np.ndarray = np.array(
-    [[ANCHOR_INDEX[s.start], ANCHOR_INDEX[s.end]] for s in SEGMENTS], dtype=np.intp
-)
+SEGMENT_ANCHORS: np.ndarray = np.array([[ANCHOR_INDEX[s.start], ANCHOR_INDEX[s.end]] for s in SEGMENTS], dtype=np.intp)
 
 
 @dataclass(frozen=True)
@@ -113,21 +122,21 @@ class BodyDims:
 
     height: float = 1.75
     # lengths
-    ankle_height: float = 0.07        # sole to ankle joint
-    shin: float = 0.43                # knee to ankle
-    thigh: float = 0.43               # hip to knee
-    hip_width: float = 0.18           # between the two hip joint centres
-    torso_length: float = 0.52        # pelvis (mid-hip) to neck
-    shoulder_width: float = 0.36      # between the two shoulder joint centres
-    shoulder_drop: float = 0.02       # shoulders below the neck joint
-    neck_to_head: float = 0.19        # neck joint to head centre
-    head_half_height: float = 0.11    # head centre to crown (and to chin)
-    upper_arm: float = 0.30           # shoulder to elbow
-    forearm: float = 0.25             # elbow to wrist
-    hand_length: float = 0.12         # wrist to end of the hand cone
-    foot_length: float = 0.16         # ankle to toe end, forward
-    chest_drop: float = 0.26          # neck to the chest anchor (upper/lower torso boundary)
-    torso_bottom_drop: float = 0.08   # pelvis to the bottom of the lower torso
+    ankle_height: float = 0.07  # sole to ankle joint
+    shin: float = 0.43  # knee to ankle
+    thigh: float = 0.43  # hip to knee
+    hip_width: float = 0.18  # between the two hip joint centres
+    torso_length: float = 0.52  # pelvis (mid-hip) to neck
+    shoulder_width: float = 0.36  # between the two shoulder joint centres
+    shoulder_drop: float = 0.02  # shoulders below the neck joint
+    neck_to_head: float = 0.19  # neck joint to head centre
+    head_half_height: float = 0.11  # head centre to crown (and to chin)
+    upper_arm: float = 0.30  # shoulder to elbow
+    forearm: float = 0.25  # elbow to wrist
+    hand_length: float = 0.12  # wrist to end of the hand cone
+    foot_length: float = 0.16  # ankle to toe end, forward
+    chest_drop: float = 0.26  # neck to the chest anchor (upper/lower torso boundary)
+    torso_bottom_drop: float = 0.08  # pelvis to the bottom of the lower torso
     # radii
     r_chin: float = 0.075
     r_crown: float = 0.09
@@ -153,7 +162,7 @@ class BodyDims:
         if self.height <= 0:
             raise ValueError(f"BodyDims.height={self.height!r}: must be > 0 metres")
 
-    def scaled(self, height: float) -> "BodyDims":
+    def scaled(self, height: float) -> BodyDims:
         """The same proportions scaled uniformly to stature ``height`` (metres)."""
         if not np.isfinite(height) or height <= 0:
             raise ValueError(f"height={height!r}: must be a positive number of metres")

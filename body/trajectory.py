@@ -39,7 +39,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.bvh import CMU_SCALE, bvh_to_joints14, read_bvh
 from counterpart.body.skeleton import JOINTS, N_JOINTS
 
@@ -51,7 +50,8 @@ _REQUIRED = ("format_version", "a", "b", "fps", "joint_names", "label")
 class TwoPersonTrajectory:
     """Two people's 14-joint trajectories, frame-aligned. See the module docstring for units.
 
-    Attributes:
+    Attributes
+    ----------
         a, b: (T, 14, 3) float32 metres.
         fps: frames per second.
         label: interaction name.
@@ -77,6 +77,7 @@ class TwoPersonTrajectory:
     # -- checks -------------------------------------------------------------------------------
     def validate(self, source: str = "TwoPersonTrajectory") -> None:
         """Coerce dtypes and check shapes; ValueError naming ``source`` and the field."""
+
         def err(key: str, msg: str) -> ValueError:
             return ValueError(f"{source}: key {key!r}: {msg}")
 
@@ -102,8 +103,9 @@ class TwoPersonTrajectory:
         self.label = str(self.label)
         self.signal_names = tuple(str(s) for s in self.signal_names)
         if (self.signals_a is None) != (self.signals_b is None):
-            raise err("signals_a" if self.signals_a is None else "signals_b",
-                      "give signals for both people or for neither")
+            raise err(
+                "signals_a" if self.signals_a is None else "signals_b", "give signals for both people or for neither"
+            )
         if self.signals_a is not None:
             K = len(self.signal_names)
             for key in ("signals_a", "signals_b"):
@@ -144,19 +146,24 @@ class TwoPersonTrajectory:
     def save(self, path: str | os.PathLike) -> None:
         """Write a compressed ``.npz`` in the documented format (numpy adds ``.npz`` if absent)."""
         arrays: dict[str, Any] = {
-            "format_version": np.int64(FORMAT_VERSION), "a": self.a, "b": self.b,
-            "fps": np.float64(self.fps), "joint_names": np.array(JOINTS),
-            "label": np.array(self.label), "meta": np.array(json.dumps(self.meta)),
+            "format_version": np.int64(FORMAT_VERSION),
+            "a": self.a,
+            "b": self.b,
+            "fps": np.float64(self.fps),
+            "joint_names": np.array(JOINTS),
+            "label": np.array(self.label),
+            "meta": np.array(json.dumps(self.meta)),
         }
         if self.signals_a is not None:
-            arrays.update(signals_a=self.signals_a, signals_b=self.signals_b,
-                          signal_names=np.array(self.signal_names, dtype=str))
+            arrays.update(
+                signals_a=self.signals_a, signals_b=self.signals_b, signal_names=np.array(self.signal_names, dtype=str)
+            )
         if self.phase is not None:
             arrays["phase"] = self.phase
         np.savez_compressed(path, **arrays)
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "TwoPersonTrajectory":
+    def load(cls, path: str | os.PathLike) -> TwoPersonTrajectory:
         """Read a file written by ``save`` or by hand in the documented format.
 
         Raises ValueError naming the file and key for anything missing or malformed.
@@ -172,16 +179,15 @@ class TwoPersonTrajectory:
             keys = set(z.files)
             missing = [k for k in _REQUIRED if k not in keys]
             if missing:
-                raise ValueError(f"{path}: missing key(s) {missing}; a trajectory file needs "
-                                 f"{list(_REQUIRED)} (see body.trajectory)")
+                raise ValueError(
+                    f"{path}: missing key(s) {missing}; a trajectory file needs {list(_REQUIRED)} (see body.trajectory)"
+                )
             version = int(z["format_version"])
             if version != FORMAT_VERSION:
-                raise ValueError(f"{path}: key 'format_version': {version}; this reader reads "
-                                 f"version {FORMAT_VERSION}")
+                raise ValueError(f"{path}: key 'format_version': {version}; this reader reads version {FORMAT_VERSION}")
             names = tuple(str(n) for n in np.atleast_1d(z["joint_names"]))
             if names != JOINTS:
-                raise ValueError(f"{path}: key 'joint_names': {list(names)}; expected {list(JOINTS)} "
-                                 "in that order")
+                raise ValueError(f"{path}: key 'joint_names': {list(names)}; expected {list(JOINTS)} in that order")
             if ("signals_a" in keys or "signals_b" in keys) and "signal_names" not in keys:
                 raise ValueError(f"{path}: missing key 'signal_names' needed with signals_a/signals_b")
             for k in ("fps", "label", "format_version", "meta"):
@@ -201,9 +207,10 @@ class TwoPersonTrajectory:
         return traj
 
     # -- transforms ---------------------------------------------------------------------------
-    def resample(self, fps: float) -> "TwoPersonTrajectory":
+    def resample(self, fps: float) -> TwoPersonTrajectory:
         """Resample to ``fps`` over the same time span: joints by linear interpolation, signals
-        and phase by nearest earlier-or-equal frame (labels must not be blended)."""
+        and phase by nearest earlier-or-equal frame (labels must not be blended).
+        """
         if not (np.isfinite(fps) and fps > 0):
             raise ValueError(f"resample: fps={fps!r}; expected frames per second > 0")
         t_old = self.times
@@ -216,7 +223,10 @@ class TwoPersonTrajectory:
         interp = lambda x: (1 - w) * x[lo] + w * x[hi]  # noqa: E731
         nearest = np.minimum(np.floor(pos + 1e-6).astype(np.intp), self.n_frames - 1)
         return TwoPersonTrajectory(
-            a=interp(self.a), b=interp(self.b), fps=float(fps), label=self.label,
+            a=interp(self.a),
+            b=interp(self.b),
+            fps=float(fps),
+            label=self.label,
             signals_a=None if self.signals_a is None else self.signals_a[nearest],
             signals_b=None if self.signals_b is None else self.signals_b[nearest],
             signal_names=self.signal_names,
@@ -225,10 +235,16 @@ class TwoPersonTrajectory:
         )
 
     @classmethod
-    def from_bvh_pair(cls, path_a: str | os.PathLike, path_b: str | os.PathLike,
-                      fps: float | None = None, label: str = "", scale: float = CMU_SCALE,
-                      drop_first: bool = True, mapping: dict[str, str] | None = None
-                      ) -> "TwoPersonTrajectory":
+    def from_bvh_pair(
+        cls,
+        path_a: str | os.PathLike,
+        path_b: str | os.PathLike,
+        fps: float | None = None,
+        label: str = "",
+        scale: float = CMU_SCALE,
+        drop_first: bool = True,
+        mapping: dict[str, str] | None = None,
+    ) -> TwoPersonTrajectory:
         """Two BVH files of one take (same world frame and clock) -> trajectory.
 
         Args:
@@ -241,12 +257,17 @@ class TwoPersonTrajectory:
         """
         ba, bb = read_bvh(path_a, scale), read_bvh(path_b, scale)
         if abs(ba.frame_time - bb.frame_time) > 1e-6:
-            raise ValueError(f"{os.fspath(path_b)}: Frame Time {bb.frame_time} differs from "
-                             f"{os.fspath(path_a)}'s {ba.frame_time}; the two people need one clock")
+            raise ValueError(
+                f"{os.fspath(path_b)}: Frame Time {bb.frame_time} differs from "
+                f"{os.fspath(path_a)}'s {ba.frame_time}; the two people need one clock"
+            )
         ja = bvh_to_joints14(ba, drop_first, mapping)
         jb = bvh_to_joints14(bb, drop_first, mapping)
         T = min(len(ja), len(jb))
-        meta = {"source": [os.path.basename(os.fspath(path_a)), os.path.basename(os.fspath(path_b))],
-                "scale": scale, "dropped_first_frame": bool(drop_first)}
+        meta = {
+            "source": [os.path.basename(os.fspath(path_a)), os.path.basename(os.fspath(path_b))],
+            "scale": scale,
+            "dropped_first_frame": bool(drop_first),
+        }
         traj = cls(a=ja[:T], b=jb[:T], fps=ba.fps, label=label, meta=meta)
         return traj if fps is None else traj.resample(fps)

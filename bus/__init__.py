@@ -1,4 +1,5 @@
 """The runtime: nodes, publish/subscribe, launch files, supervisor, bags and the CLI."""
+
 from .node import LATEST, RELIABLE, Input, Node, Output, stats_topic
 from .params import Param, ParamError
 

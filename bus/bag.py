@@ -26,6 +26,7 @@ complete up to the last flush; :class:`BagReader` reads such a file sequentially
 the truncation (``complete`` False, ``recovered`` = messages read). Nothing is fsync'ed: a crash of
 the process loses at most the last ``flush_period``, a power cut may lose more.
 """
+
 from __future__ import annotations
 
 import json
@@ -33,19 +34,19 @@ import os
 import socket
 import struct
 import time
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any, Iterator, NamedTuple, Sequence
+from typing import IO, Any, NamedTuple
 
 import numpy as np
+from counterpart.messages import REGISTRY, decode, describe, encode
+from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
 from mcap.exceptions import EndOfFile, McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
-
-from counterpart.messages import REGISTRY, decode, describe, encode
-from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
 
 ENCODING = "counterpart-msgpack"
 PROFILE = "counterpart"
@@ -82,7 +83,7 @@ def unpack_parts(data: bytes | memoryview) -> list[memoryview]:
         raise ValueError(f"packed message: parts of {sum(lengths)} bytes + {offset} header bytes != {buf.nbytes}")
     out = []
     for length in lengths:
-        out.append(buf[offset:offset + length])
+        out.append(buf[offset : offset + length])
         offset += length
     return out
 
@@ -105,7 +106,8 @@ def _infer_type(value: Any, arrays: list[list[Any]]) -> str:
 
 def schema_description(sid: str, header: dict[str, Any] | None = None) -> dict[str, Any]:
     """What a bag stores about schema ``sid``: :func:`counterpart.messages.describe` of the registered class, or a
-    description inferred from one wire ``header`` (``"inferred": true``) when the class is unknown."""
+    description inferred from one wire ``header`` (``"inferred": true``) when the class is unknown.
+    """
     cls = REGISTRY.get(sid)
     if cls is not None:
         return describe(cls)
@@ -187,11 +189,13 @@ class BagWriter:
             cid = self._channels[key] = self._writer.register_channel(topic, ENCODING, schema)
         return cid
 
-    def write(self, topic: str, parts: Sequence[Any], log_time: int | None = None,
-              header: dict[str, Any] | None = None) -> None:
+    def write(
+        self, topic: str, parts: Sequence[Any], log_time: int | None = None, header: dict[str, Any] | None = None
+    ) -> None:
         """Record the wire parts ``[header, buffers...]`` of one message on ``topic``. ``log_time``:
         receive time in ns (default: now, CLOCK_MONOTONIC). ``header``: the already unpacked header,
-        to save unpacking it again. Raises :class:`messages.DecodeError` for a malformed header."""
+        to save unpacking it again. Raises :class:`messages.DecodeError` for a malformed header.
+        """
         if self.closed:
             raise ValueError(f"bag {self.path} is closed")
         if header is None:
@@ -201,7 +205,10 @@ class BagWriter:
         counter = header.get("n")
         data = pack_parts(parts)
         self._writer.add_message(
-            cid, log_time=now, data=data, publish_time=_header_stamp(header) or now,
+            cid,
+            log_time=now,
+            data=data,
+            publish_time=_header_stamp(header) or now,
             sequence=counter % (1 << 32) if type(counter) is int and counter >= 0 else 0,
         )
         self.counts[topic] = self.counts.get(topic, 0) + 1
@@ -237,7 +244,7 @@ class BagWriter:
         finally:
             self._file.close()
 
-    def __enter__(self) -> "BagWriter":
+    def __enter__(self) -> BagWriter:
         return self
 
     def __exit__(self, *exc: Any) -> None:
@@ -260,7 +267,8 @@ class BagRecord(NamedTuple):
 
 class _StrictFile:
     """A file whose short reads raise :class:`EndOfFile`, so that a truncated last record reads as
-    the end of the file instead of as garbage."""
+    the end of the file instead of as garbage.
+    """
 
     def __init__(self, f: IO[bytes]) -> None:
         self._f = f
@@ -305,8 +313,7 @@ class BagReader:
         self.complete = False
         self.error = ""
         try:
-            for record in reader.records:
-                yield record
+            yield from reader.records
             self.complete = True
         except EndOfFile:
             self.error = "the file ends inside a record (the recorder did not finish it)"
@@ -329,23 +336,32 @@ class BagReader:
                     if wanted is not None and ch.topic not in wanted:
                         continue
                     sch = schemas.get(ch.schema_id)
-                    yield BagRecord(ch.topic, record.log_time, record.publish_time, record.sequence,
-                                    sch.name if sch else "", unpack_parts(record.data))
+                    yield BagRecord(
+                        ch.topic,
+                        record.log_time,
+                        record.publish_time,
+                        record.sequence,
+                        sch.name if sch else "",
+                        unpack_parts(record.data),
+                    )
                 elif isinstance(record, Channel):
                     channels[record.id] = record
                 elif isinstance(record, Schema):
                     schemas[record.id] = record
 
-    def messages(self, topics: Sequence[str] | None = None, decode_messages: bool = False
-                 ) -> Iterator[tuple[str, int, Any]]:
+    def messages(
+        self, topics: Sequence[str] | None = None, decode_messages: bool = False
+    ) -> Iterator[tuple[str, int, Any]]:
         """``(topic, log_time, parts)`` per message, or ``(topic, log_time, message)`` with
-        ``decode_messages`` (the message classes must be registered: import their modules)."""
+        ``decode_messages`` (the message classes must be registered: import their modules).
+        """
         for r in self.records(topics):
             yield r.topic, r.log_time, (decode(r.parts) if decode_messages else r.parts)
 
     def _summary(self) -> tuple[_Scan, dict[int, int], int, int] | None:
         """Channels, schemas, metadata, counts and time range from the summary section of a complete
-        file (no need to read the data); None when the file has no usable summary."""
+        file (no need to read the data); None when the file has no usable summary.
+        """
         try:
             with open(self.path, "rb") as f:
                 reader = SeekingReader(f)
@@ -360,12 +376,17 @@ class BagReader:
             return None
         stats = summary.statistics
         self.complete, self.recovered, self.error = True, stats.message_count, ""
-        return (_Scan(dict(summary.channels), dict(summary.schemas), metadata), dict(stats.channel_message_counts),
-                stats.message_start_time, stats.message_end_time)
+        return (
+            _Scan(dict(summary.channels), dict(summary.schemas), metadata),
+            dict(stats.channel_message_counts),
+            stats.message_start_time,
+            stats.message_end_time,
+        )
 
     def _scan(self) -> tuple[_Scan, dict[int, int], int, int]:
         """Channels, schemas, metadata, counts and the time range: from the summary of a complete
-        file, else from one pass over the data (a truncated file)."""
+        file, else from one pass over the data (a truncated file).
+        """
         fast = self._summary()
         if fast is not None:
             return fast
@@ -392,8 +413,9 @@ class BagReader:
         return _Scan(channels, schemas, metadata), counts, start, end
 
     def topics(self) -> dict[str, str]:
-        """topic -> schema id of every channel in the bag. A topic recorded with several schemas
-        raises ValueError (a player could not give it one type)."""
+        """Topic -> schema id of every channel in the bag. A topic recorded with several schemas
+        raises ValueError (a player could not give it one type).
+        """
         scan, _, _, _ = self._scan()
         out: dict[str, str] = {}
         for ch in scan.channels.values():
@@ -406,7 +428,8 @@ class BagReader:
     def info(self) -> dict[str, Any]:
         """Topics (type, count), schemas (their stored descriptions), message count, start and end
         time (ns, CLOCK_MONOTONIC of the recording host), duration (s), size, compression,
-        recording metadata, and whether the file is complete."""
+        recording metadata, and whether the file is complete.
+        """
         scan, counts, start, end = self._scan()
         topics: dict[str, dict[str, Any]] = {}
         for cid, ch in sorted(scan.channels.items()):
@@ -442,7 +465,8 @@ class BagReader:
 
 def decode_fields(parts: Sequence[Any]) -> tuple[str, dict[str, Any]]:
     """Decode wire parts without the message class: ``(schema id, fields)`` with arrays in place
-    (read-only views). Works for any bag, whatever was importable when it is read."""
+    (read-only views). Works for any bag, whatever was importable when it is read.
+    """
     header = read_header(parts[0], DEFAULT_LIMITS)
     specs = header.get("a", [])
     if len(specs) != len(parts) - 1:
@@ -469,6 +493,13 @@ def decode_fields(parts: Sequence[Any]) -> tuple[str, dict[str, Any]]:
 
 
 __all__ = [
-    "BagWriter", "BagReader", "BagRecord", "pack_parts", "unpack_parts", "decode_fields",
-    "schema_description", "ENCODING", "COMPRESSIONS",
+    "BagWriter",
+    "BagReader",
+    "BagRecord",
+    "pack_parts",
+    "unpack_parts",
+    "decode_fields",
+    "schema_description",
+    "ENCODING",
+    "COMPRESSIONS",
 ]

@@ -14,6 +14,7 @@ The recorder stores the wire parts exactly as received, without decoding arrays 
 the message classes (a schema it does not know is described from the wire header). The player
 re-sends those parts byte for byte, then end of stream on every output.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -28,7 +29,6 @@ from .bag import COMPRESSIONS, DEFAULT_CHUNK_SIZE, BagReader, BagWriter
 from .node import STATS_PORT, Input, Node, Output
 from .params import Param, ParamError
 from .transport import RELIABLE, RawMessage
-
 
 
 def _nonempty(v: Any) -> str | None:
@@ -54,7 +54,8 @@ class Recorder(Node):
     disk lags, and drops and counts (``drops`` in its stats) what does not fit.
 
     The bag is finished (summary and footer written) on end of stream and on every stop; a crash
-    leaves it readable up to the last flush (at most ``flush_period`` seconds lost)."""
+    leaves it readable up to the last flush (at most ``flush_period`` seconds lost).
+    """
 
     params = {
         "path": Param(str, "", "bag file to write (.mcap)", check=_nonempty),
@@ -64,8 +65,13 @@ class Recorder(Node):
         "flush_period": Param(float, 0.5, "seconds between flushes (bounds what a crash loses)", min=0.01),
         "overwrite": Param(bool, False, "replace an existing file"),
         "modules": Param(list, [], "modules to import so that schemas are described from their classes"),
-        "queue": Param(int, 64, "latest policy: messages per topic kept while the recorder lags; the rest are "
-                       "dropped and counted", min=1, max=100_000),
+        "queue": Param(
+            int,
+            64,
+            "latest policy: messages per topic kept while the recorder lags; the rest are dropped and counted",
+            min=1,
+            max=100_000,
+        ),
     }
     timer_period = 0.1
 
@@ -83,8 +89,11 @@ class Recorder(Node):
     def setup(self) -> None:
         import_modules(self.p["modules"])
         self.writer = BagWriter(
-            self.p["path"], compression=self.p["compression"], chunk_size=self.p["chunk_size"],
-            flush_period=self.p["flush_period"], overwrite=self.p["overwrite"],
+            self.p["path"],
+            compression=self.p["compression"],
+            chunk_size=self.p["chunk_size"],
+            flush_period=self.p["flush_period"],
+            overwrite=self.p["overwrite"],
             metadata={"recorder": self.name, "topics": ",".join(self.p["topics"])},
         )
         self.log.info("recording %s to %s", ", ".join(self.p["topics"]), self.writer.path)
@@ -99,12 +108,19 @@ class Recorder(Node):
         writer = getattr(self, "writer", None)
         if writer is not None:
             writer.close()
-            self.log.info("wrote %d messages (%.1f MiB) to %s: %s", writer.count, writer.bytes / 2**20, writer.path,
-                          ", ".join(f"{t} {n}" for t, n in writer.counts.items()) or "-")
+            self.log.info(
+                "wrote %d messages (%.1f MiB) to %s: %s",
+                writer.count,
+                writer.bytes / 2**20,
+                writer.path,
+                ", ".join(f"{t} {n}" for t, n in writer.counts.items()) or "-",
+            )
             dropped = {t: sub.drops for t, sub in self._in.items() if sub.drops}
             if dropped:
-                self.log.warning("could not keep %s message(s) while lagging (raise 'queue' to keep more)",
-                                 ", ".join(f"{t} {n}" for t, n in dropped.items()))
+                self.log.warning(
+                    "could not keep %s message(s) while lagging (raise 'queue' to keep more)",
+                    ", ".join(f"{t} {n}" for t, n in dropped.items()),
+                )
 
 
 def _rate_ok(v: float) -> str | None:
@@ -119,7 +135,8 @@ class Player(Node):
     ``rate``: 1 real time, N for N times faster, 0 as fast as possible. ``lockstep``: ignore timing
     and send as fast as the reliable subscribers take messages; run alone (not launched), it also
     waits for one reliable subscriber per output before the first message. ``loop``: start again at
-    the end (until stopped). End of stream goes out at the end."""
+    the end (until stopped). End of stream goes out at the end.
+    """
 
     params = {
         "path": Param(str, "", "bag file to play", check=_nonempty),
@@ -133,7 +150,7 @@ class Player(Node):
 
     @classmethod
     def selection(cls, params: dict[str, Any]) -> dict[str, tuple[str, str]]:
-        """recorded topic -> (published topic, schema id) for the given parameters."""
+        """Recorded topic -> (published topic, schema id) for the given parameters."""
         path = Path(params["path"])
         if not path.is_file():
             raise ParamError(f"parameter 'path': bag {path} does not exist")
@@ -144,11 +161,15 @@ class Player(Node):
         wanted = params.get("topics") or list(recorded)
         missing = [t for t in wanted if t not in recorded]
         if missing:
-            raise ParamError(f"parameter 'topics': {', '.join(missing)} not in bag {path}; it holds {', '.join(recorded) or 'nothing'}")
+            raise ParamError(
+                f"parameter 'topics': {', '.join(missing)} not in bag {path}; it holds {', '.join(recorded) or 'nothing'}"
+            )
         remap = {str(k): str(v) for k, v in (params.get("remap") or {}).items()}
         unknown = sorted(set(remap) - set(recorded))
         if unknown:
-            raise ParamError(f"parameter 'remap': {', '.join(unknown)} not in bag {path}; it holds {', '.join(recorded)}")
+            raise ParamError(
+                f"parameter 'remap': {', '.join(unknown)} not in bag {path}; it holds {', '.join(recorded)}"
+            )
         out = {t: (remap.get(t, t), recorded[t]) for t in wanted}
         published = [p for p, _ in out.values()]
         if len(set(published)) != len(published) or STATS_PORT in published:
@@ -186,7 +207,9 @@ class Player(Node):
                 continue
             pub.expected = max(pub.expected, 1)
             if not pub.wait_for_subscribers() and not self.stopping:
-                self.log.warning("no reliable subscriber on %s after %.0f s; playing anyway", pub.topic, pub.barrier_timeout)
+                self.log.warning(
+                    "no reliable subscriber on %s after %.0f s; playing anyway", pub.topic, pub.barrier_timeout
+                )
 
     def _sleep_until(self, t: float) -> None:
         while not self.stopping:
@@ -219,8 +242,12 @@ class Player(Node):
                 sent += 1
             passes += 1
             if reader.truncated:
-                self.log.warning("bag %s is truncated (%s); played the %d messages before the cut",
-                                 reader.path, reader.error, reader.recovered)
+                self.log.warning(
+                    "bag %s is truncated (%s); played the %d messages before the cut",
+                    reader.path,
+                    reader.error,
+                    reader.recovered,
+                )
             self.log.info("played %d messages (pass %d)", sent, passes)
             if not self.p["loop"] or sent == 0:
                 return

@@ -3,6 +3,7 @@
 Each subcommand module exposes ``add_arguments(parser)`` and ``main(args) -> int``; it is imported
 only when its command runs, so ``counterpart topic list`` does not pay for OpenCV or scikit-learn.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -21,7 +22,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "learn": ("counterpart.bus.cli_learn", "train a model file (tracker-prior, responder, avatar)"),
     "respond": ("counterpart.nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
     "silhouettes": ("counterpart.nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
-    "calibrate": ("counterpart.nodes.calibration.cli_calibrate", "offline: the camera of a video file, estimated from the people in it"),
+    "calibrate": (
+        "counterpart.nodes.calibration.cli_calibrate",
+        "offline: the camera of a video file, estimated from the people in it",
+    ),
     "track": ("counterpart.nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),
     "sim": ("counterpart.sim.cli", "render a simulated two-person scene with ground truth"),
     "bag": ("counterpart.bus.cli_bag", "record, play, inspect and export bags"),
@@ -30,7 +34,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; only ``command``'s module is imported (all of them with None, for --help)."""
-    ap = argparse.ArgumentParser(prog="counterpart", description="Counterpart: virtual interaction partners on a node graph.")
+    ap = argparse.ArgumentParser(
+        prog="counterpart", description="Counterpart: virtual interaction partners on a node graph."
+    )
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in COMMANDS.items():
         p = sub.add_parser(name, help=help_, description=help_)
@@ -52,9 +58,12 @@ def main(argv: list[str] | None = None) -> None:
 
         if len(argv) < 2 or argv[1].startswith("-"):
             asked = len(argv) > 1 and argv[1] in ("-h", "--help")
-            print("usage: counterpart run MODULE [--name NAME] [--param K=V ...] [--remap PORT=TOPIC ...] "
-                  "[--policy PORT=latest]\n\nRun one node alone; MODULE is a module holding one Node, or "
-                  "module:Class.", file=sys.stdout if asked else sys.stderr)
+            print(
+                "usage: counterpart run MODULE [--name NAME] [--param K=V ...] [--remap PORT=TOPIC ...] "
+                "[--policy PORT=latest]\n\nRun one node alone; MODULE is a module holding one Node, or "
+                "module:Class.",
+                file=sys.stdout if asked else sys.stderr,
+            )
             sys.exit(0 if asked else 2)
         sys.exit(run_standalone(argv[1], argv[2:]))
     command = argv[0] if argv and argv[0] in COMMANDS else ""

@@ -16,6 +16,7 @@
   and ``_type``) and each array as ``DIR/<topic>/<index>_<field>.npy``, or ``.png`` for uint8 images
   (H x W or H x W x 3, both sides >= 8 pixels), referenced by file name relative to DIR.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,29 +47,50 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     r.add_argument("-o", "--output", required=True, metavar="FILE", help="bag file to write (.mcap)")
     r.add_argument("--run", default=None, help="run directory of the launch (default: the newest)")
     r.add_argument("--duration", type=float, default=0.0, metavar="S", help="stop after S seconds (0: no limit)")
-    r.add_argument("--queue", type=int, default=RECORD_QUEUE, metavar="N",
-                   help=f"messages kept per topic while the recorder lags; beyond it they are dropped and counted "
-                        f"(default {RECORD_QUEUE})")
-    r.add_argument("--lossless", action="store_true",
-                   help="subscribe reliably: nothing is lost, but a lagging or paused recorder holds the publishers "
-                        "back (for lockstep replays)")
+    r.add_argument(
+        "--queue",
+        type=int,
+        default=RECORD_QUEUE,
+        metavar="N",
+        help=f"messages kept per topic while the recorder lags; beyond it they are dropped and counted "
+        f"(default {RECORD_QUEUE})",
+    )
+    r.add_argument(
+        "--lossless",
+        action="store_true",
+        help="subscribe reliably: nothing is lost, but a lagging or paused recorder holds the publishers "
+        "back (for lockstep replays)",
+    )
     r.add_argument("--compression", default="zstd", choices=("zstd", "lz4", "none"))
     r.add_argument("--overwrite", action="store_true", help="replace an existing bag file")
-    r.add_argument("--module", action="append", default=[], metavar="MODULE",
-                   help="import MODULE so its message schemas are described from their classes")
+    r.add_argument(
+        "--module",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help="import MODULE so its message schemas are described from their classes",
+    )
 
     pl = sub.add_parser("play", help="publish a bag on the standalone endpoints (see counterpart run)")
     pl.add_argument("file")
     speed = pl.add_mutually_exclusive_group()
     speed.add_argument("--rate", type=float, default=1.0, metavar="R", help="playback speed (1: real time)")
     speed.add_argument("--fast", action="store_true", help="as fast as possible")
-    speed.add_argument("--lockstep", action="store_true",
-                       help="wait for a reliable subscriber per topic, then go as fast as they consume")
+    speed.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="wait for a reliable subscriber per topic, then go as fast as they consume",
+    )
     pl.add_argument("--loop", action="store_true", help="play again from the start at the end")
     pl.add_argument("--remap", action="append", default=[], metavar="A=B", help="publish recorded topic A as B")
     pl.add_argument("--topics", nargs="+", default=[], metavar="TOPIC", help="recorded topics to play (default: all)")
-    pl.add_argument("--module", action="append", default=[], metavar="MODULE",
-                    help="import MODULE so the bag's message classes are registered")
+    pl.add_argument(
+        "--module",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help="import MODULE so the bag's message classes are registered",
+    )
 
     i = sub.add_parser("info", help="topics, types, counts, duration and schemas of a bag")
     i.add_argument("file")
@@ -95,7 +117,6 @@ def _err(msg: str) -> int:
 
 def record(args: argparse.Namespace) -> int:
     import zmq
-
     from counterpart.messages import EndOfStream
 
     from .bag import BagWriter
@@ -111,14 +132,23 @@ def record(args: argparse.Namespace) -> int:
         return _err(f"the launch in {reg['run_dir']} is not running")
     topics = list(dict.fromkeys(args.topic))
     if args.all:
-        topics += [t for t in sorted(reg["topics"]) if t not in topics and reg["topics"][t]["type"] != "system.NodeStats/1"]
+        topics += [
+            t for t in sorted(reg["topics"]) if t not in topics and reg["topics"][t]["type"] != "system.NodeStats/1"
+        ]
     if not topics:
         return _err("name topics with -t TOPIC or pass --all; topics: " + ", ".join(sorted(reg["topics"])))
     try:
         endpoints = {t: registry.topic_endpoints(reg, t) for t in topics}
-        writer = BagWriter(args.output, compression=args.compression, overwrite=args.overwrite,
-                           metadata={"recorder": "counterpart bag record", "launch": str(reg.get("launch_file", "")),
-                                     "topics": ",".join(topics)})
+        writer = BagWriter(
+            args.output,
+            compression=args.compression,
+            overwrite=args.overwrite,
+            metadata={
+                "recorder": "counterpart bag record",
+                "launch": str(reg.get("launch_file", "")),
+                "topics": ",".join(topics),
+            },
+        )
     except (registry.RegistryError, FileExistsError, OSError) as exc:
         return _err(str(exc))
 
@@ -134,8 +164,10 @@ def record(args: argparse.Namespace) -> int:
     if args.queue < 1:
         return _err(f"--queue {args.queue}: keep at least 1 message")
     policy = RELIABLE if args.lossless else LATEST
-    subs = {t: Subscriber(ctx, t, ep, policy, raw=True, queue=args.queue, publisher=reg["topics"][t].get("node"))
-            for t, ep in endpoints.items()}
+    subs = {
+        t: Subscriber(ctx, t, ep, policy, raw=True, queue=args.queue, publisher=reg["topics"][t].get("node"))
+        for t, ep in endpoints.items()
+    }
     poller = zmq.Poller()
     owner = {}
     for t, s in subs.items():
@@ -193,8 +225,11 @@ def record(args: argparse.Namespace) -> int:
 def _progress(writer: Any, elapsed: float, subs: dict[str, Any]) -> None:
     per_topic = "  ".join(f"{t} {n}" for t, n in writer.counts.items()) or "-"
     dropped = sum(s.drops for s in subs.values())
-    print(f"[{elapsed:6.1f} s] {writer.count} messages, {writer.bytes / 2**20:.1f} MiB, {dropped} dropped  {per_topic}",
-          file=sys.stderr, flush=True)
+    print(
+        f"[{elapsed:6.1f} s] {writer.count} messages, {writer.bytes / 2**20:.1f} MiB, {dropped} dropped  {per_topic}",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 # ------------------------------------------------------------------------------------------ play
@@ -210,8 +245,13 @@ def play(args: argparse.Namespace) -> int:
     try:
         remap = parse_assignments(args.remap, "--remap")
         params = {
-            "path": args.file, "rate": 0.0 if args.fast or args.lockstep else args.rate, "lockstep": args.lockstep,
-            "loop": args.loop, "topics": args.topics, "remap": remap, "modules": args.module,
+            "path": args.file,
+            "rate": 0.0 if args.fast or args.lockstep else args.rate,
+            "lockstep": args.lockstep,
+            "loop": args.loop,
+            "topics": args.topics,
+            "remap": remap,
+            "modules": args.module,
         }
         spec = standalone_spec("bag_play", Player, params, {}, {})
     except (ParamError, ValueError) as exc:
@@ -265,8 +305,11 @@ def safe_name(topic: str) -> str:
 
 def is_image(a: np.ndarray) -> bool:
     """uint8 H x W or H x W x 3 with both sides at least ``MIN_IMAGE_SIDE`` pixels."""
-    return (a.dtype == np.uint8 and (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 3))
-            and min(a.shape[:2]) >= MIN_IMAGE_SIDE)
+    return (
+        a.dtype == np.uint8
+        and (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 3))
+        and min(a.shape[:2]) >= MIN_IMAGE_SIDE
+    )
 
 
 def _jsonable(value: Any, out_dir: Path, rel: str, stem: str, written: list[int]) -> Any:
@@ -299,7 +342,8 @@ def _jsonable(value: Any, out_dir: Path, rel: str, stem: str, written: list[int]
 
 def export_bag(path: str | Path, out_dir: str | Path, topics: list[str] | None = None) -> dict[str, int]:
     """Export a bag (see the module docstring); returns messages written per topic. Needs no message
-    class: fields are decoded from the self-describing wire header."""
+    class: fields are decoded from the self-describing wire header.
+    """
     from .bag import BagReader, decode_fields
 
     out = Path(out_dir)

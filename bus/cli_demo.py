@@ -12,6 +12,7 @@
 Exit codes: 0; 1 when the graph ran but drew no partner on any frame (the reason is printed); the
 launcher's code when a node failed; 2 for bad options; 130 on Ctrl-C.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,15 +33,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--input", metavar="FILE", help="run on your own video file instead of the built-in scene")
     src.add_argument("--live", action="store_true", help="use the V4L2 camera (launch/live.yaml)")
-    p.add_argument("--realtime", action="store_true",
-                   help="play the file or the built-in scene in real time through the live graph, where a node "
-                        "that cannot keep up drops frames (default: every frame is processed, in lockstep)")
+    p.add_argument(
+        "--realtime",
+        action="store_true",
+        help="play the file or the built-in scene in real time through the live graph, where a node "
+        "that cannot keep up drops frames (default: every frame is processed, in lockstep)",
+    )
     p.add_argument("--device", default="/dev/video0", help="camera device for --live")
-    p.add_argument("--camera", metavar="FILE", default="",
-                   help="calibration file (JSON/YAML, e.g. from counterpart calibrate) for the calibration node; "
-                        "default: estimated from the people in view (the default camera until then)")
-    p.add_argument("--serve", action="store_true",
-                   help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C")
+    p.add_argument(
+        "--camera",
+        metavar="FILE",
+        default="",
+        help="calibration file (JSON/YAML, e.g. from counterpart calibrate) for the calibration node; "
+        "default: estimated from the people in view (the default camera until then)",
+    )
+    p.add_argument(
+        "--serve",
+        action="store_true",
+        help="serve the live page (http://127.0.0.1:PORT); the scene or file loops until Ctrl-C",
+    )
     p.add_argument("--port", type=int, default=8080, help="port of the live page")
     p.add_argument("--out", default="out", help="output folder (default: out)")
     p.add_argument("--scenario", default="handshake", help="built-in scene when no --input/--live")
@@ -51,7 +62,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def ensure_models(serve: bool = False) -> None:
     """Build the default model files the graph loads (and, with ``serve``, those the live page
-    offers), when they are not cached yet."""
+    offers), when they are not cached yet.
+    """
     from counterpart.nodes.responder.models import load_default
     from counterpart.nodes.tracker.prior import default_prior_path, load_default_prior
 
@@ -84,7 +96,7 @@ def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:
         tiles.append(tile)
     while len(tiles) % cols:
         tiles.append(np.zeros_like(tiles[0]))
-    rows = [np.hstack(tiles[r:r + cols]) for r in range(0, len(tiles), cols)]
+    rows = [np.hstack(tiles[r : r + cols]) for r in range(0, len(tiles), cols)]
     return bool(cv2.imwrite(str(out), np.vstack(rows)))
 
 
@@ -92,7 +104,8 @@ def _graph_file(args: argparse.Namespace) -> tuple[str, list[str]]:
     """The launch file and the ``--set`` overrides of the source for the chosen input: a camera is
     live (the real-time graph); a file or the built-in scene is a recording, processed frame by
     frame in lockstep unless ``--realtime`` (or ``--serve``, whose page loops the scene live) asks
-    for real time."""
+    for real time.
+    """
     if args.live:
         return "live.yaml", [f"camera.source={args.device}"]
     source = Path(args.input).resolve() if args.input else f"sim:{args.scenario}?seed={args.seed}"
@@ -114,8 +127,8 @@ def report(run_dir: Path, out: Path) -> RunSummary:
 
 
 def main(args: argparse.Namespace) -> int:
-    from .launchfile import LaunchError
     from .cli_launch import load_checked
+    from .launchfile import LaunchError
     from .params import ParamError
     from .runner import setup_logging
     from .supervisor import Launcher, prune_run_dirs
@@ -123,8 +136,10 @@ def main(args: argparse.Namespace) -> int:
     setup_logging("demo")
     log = logging.getLogger("demo")
     if args.realtime and args.live:
-        print("counterpart demo: --live is real time already; --realtime is for a file or the built-in scene",
-              file=sys.stderr)
+        print(
+            "counterpart demo: --live is real time already; --realtime is for a file or the built-in scene",
+            file=sys.stderr,
+        )
         return 2
     if args.input and not Path(args.input).is_file():
         print(f"counterpart demo: --input {args.input}: no such file", file=sys.stderr)
@@ -135,8 +150,11 @@ def main(args: argparse.Namespace) -> int:
     ensure_models(serve=args.serve)
     video = out / "demo.mp4"
     file, sets = _graph_file(args)
-    sets += [f"renderer.video={video}", f"renderer.serve={'true' if args.serve else 'false'}",
-             f"renderer.port={args.port}"]
+    sets += [
+        f"renderer.video={video}",
+        f"renderer.serve={'true' if args.serve else 'false'}",
+        f"renderer.port={args.port}",
+    ]
     if args.camera:
         sets.append(f"calibration.file={Path(args.camera).resolve()}")
     if args.frames:
@@ -154,9 +172,13 @@ def main(args: argparse.Namespace) -> int:
         if stale.suffix in (".mp4", ".avi"):
             stale.unlink()
     launcher = Launcher(graph)
-    log.info("running %s (Ctrl-C to stop)%s", graph.file,
-             (f"; live page on http://127.0.0.1:{args.port}" if args.port else "; the renderer logs the page's address")
-             if args.serve else "")
+    log.info(
+        "running %s (Ctrl-C to stop)%s",
+        graph.file,
+        (f"; live page on http://127.0.0.1:{args.port}" if args.port else "; the renderer logs the page's address")
+        if args.serve
+        else "",
+    )
     code = launcher.run()
     launcher.cleanup()
     videos = [p for p in sorted(out.glob("demo.*")) if p.suffix in (".mp4", ".avi")]

@@ -1,4 +1,5 @@
 """``counterpart node list`` and ``counterpart topic list|echo|hz`` against a running launch."""
+
 from __future__ import annotations
 
 import argparse
@@ -8,7 +9,8 @@ import json
 import os
 import sys
 import time
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +19,8 @@ from . import registry
 
 def quiet_broken_pipe(main: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
     """``main`` ending quietly when its reader goes away (``counterpart topic list | head``), as
-    command-line tools do, instead of with a BrokenPipeError traceback."""
+    command-line tools do, instead of with a BrokenPipeError traceback.
+    """
 
     @functools.wraps(main)
     def wrapper(args: argparse.Namespace) -> int:
@@ -101,8 +104,9 @@ def _subscriber(args: argparse.Namespace):
     reg = registry.read(args.run)
     if not reg["alive"]:
         raise registry.RegistryError(f"the launch in {reg['run_dir']} is not running")
-    return Subscriber(zmq.Context.instance(), args.topic, registry.topic_endpoints(reg, args.topic), LATEST,
-                      untyped=True)
+    return Subscriber(
+        zmq.Context.instance(), args.topic, registry.topic_endpoints(reg, args.topic), LATEST, untyped=True
+    )
 
 
 @quiet_broken_pipe
@@ -153,8 +157,11 @@ def main_topic(args: argparse.Namespace) -> int:
         if args.action == "hz" and now - start >= args.window:
             if len(window) >= 2:
                 dt = np.diff(window)
-                print(f"{args.topic}: {1.0 / np.mean(dt):.2f} Hz  min {dt.min() * 1e3:.1f} ms  max {dt.max() * 1e3:.1f} ms  "
-                      f"n={len(window)} drops={sub.drops}", flush=True)
+                print(
+                    f"{args.topic}: {1.0 / np.mean(dt):.2f} Hz  min {dt.min() * 1e3:.1f} ms  max {dt.max() * 1e3:.1f} ms  "
+                    f"n={len(window)} drops={sub.drops}",
+                    flush=True,
+                )
             else:
                 print(f"{args.topic}: no messages in {args.window:.1f} s", flush=True)
             window, start = [], now

@@ -1,4 +1,5 @@
 """``counterpart launch FILE [--set node.param=value ...] [--replace node=module] [--check]``."""
+
 from __future__ import annotations
 
 import argparse
@@ -20,7 +21,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def load_checked(file: str, sets: list[str] | None, replace: list[str] | None) -> Graph:
     """The checked graph of launch file ``file`` with ``--set`` and ``--replace`` applied; also
-    checks that the folder for run directories is safe to use (LaunchError naming the problem)."""
+    checks that the folder for run directories is safe to use (LaunchError naming the problem).
+    """
     graph = check(load(file, parse_assignments(sets, "--set"), parse_assignments(replace, "--replace")))
     try:
         base_dir()

@@ -1,4 +1,5 @@
 """``counterpart learn TARGET ...``: train a model file; each target's trainer lives with its node."""
+
 from __future__ import annotations
 
 import argparse

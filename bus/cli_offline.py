@@ -1,6 +1,8 @@
 """What the long offline commands (``counterpart track``, ``counterpart silhouettes``) share: progress
 lines, argument checks, and one way to end (exit 0 and a JSON summary, 2 on bad input with the
-reason, 130 on Ctrl-C saying what was kept)."""
+reason, 130 on Ctrl-C saying what was kept).
+"""
+
 from __future__ import annotations
 
 import argparse
@@ -8,12 +10,14 @@ import json
 import os
 import sys
 import time
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 
 class FrameProgress:
     """A ``progress(done, declared)`` callback that prints ``[label] frame i/N, x fps`` on stderr at
-    most every ``every`` seconds (N left out when the file declares no frame count)."""
+    most every ``every`` seconds (N left out when the file declares no frame count).
+    """
 
     def __init__(self, label: str, every: float = 2.0) -> None:
         self.label = label
@@ -47,7 +51,8 @@ def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> 
 
 def run_offline(command: str, out: str, work: Callable[[], dict[str, Any]]) -> int:
     """Run ``work`` (it writes ``out``): print its summary as JSON and return 0; 2 with the reason on
-    a ValueError or OSError; 130 on Ctrl-C, saying whether ``out`` holds the frames done."""
+    a ValueError or OSError; 130 on Ctrl-C, saying whether ``out`` holds the frames done.
+    """
     try:
         summary = work()
     except (ValueError, OSError) as exc:

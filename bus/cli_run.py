@@ -1,4 +1,5 @@
 """``counterpart run MODULE``: handled by :func:`counterpart.bus.runner.run_standalone` (see counterpart.bus.cli.main)."""
+
 from __future__ import annotations
 
 import argparse

@@ -7,6 +7,7 @@ must never hold the publisher back but should lose nothing while they keep up). 
 live in a per-run directory of mode 0700; with ``tcp://host:port`` they take ``port``, ``port + 1``
 and ``port + 2``.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -23,7 +24,8 @@ _IPC_MAX = 100  # sun_path is 108 bytes on Linux, keep a margin
 
 class RunDirError(ValueError):
     """A folder for sockets and run directories that is not safely the user's own; the message says
-    why and what to do. (A ValueError, as the other set-up errors that commands report.)"""
+    why and what to do (a ValueError, as the other set-up errors that commands report).
+    """
 
 
 def private_dir(path: Path) -> Path:
@@ -38,14 +40,20 @@ def private_dir(path: Path) -> Path:
     st = os.lstat(path)
     fix = "remove it, or set COUNTERPART_HOME to a folder of your own (e.g. mkdir -m 700 ~/.counterpart)"
     if stat.S_ISLNK(st.st_mode) or not stat.S_ISDIR(st.st_mode):
-        raise RunDirError(f"{path} is {'a symbolic link' if stat.S_ISLNK(st.st_mode) else 'not a folder'}, "
-                          f"not a folder of your own for the graph's sockets: {fix}")
+        raise RunDirError(
+            f"{path} is {'a symbolic link' if stat.S_ISLNK(st.st_mode) else 'not a folder'}, "
+            f"not a folder of your own for the graph's sockets: {fix}"
+        )
     if st.st_uid != os.getuid():
-        raise RunDirError(f"{path} belongs to user id {st.st_uid}, not to you ({os.getuid()}): whoever owns it can "
-                          f"read and replace the graph's sockets; {fix}")
+        raise RunDirError(
+            f"{path} belongs to user id {st.st_uid}, not to you ({os.getuid()}): whoever owns it can "
+            f"read and replace the graph's sockets; {fix}"
+        )
     if st.st_mode & 0o022:
-        raise RunDirError(f"{path} is writable by others (mode {stat.S_IMODE(st.st_mode):04o}): anyone could plant "
-                          f"sockets or a 'latest' link there; check what it holds and chmod 700 it, or {fix}")
+        raise RunDirError(
+            f"{path} is writable by others (mode {stat.S_IMODE(st.st_mode):04o}): anyone could plant "
+            f"sockets or a 'latest' link there; check what it holds and chmod 700 it, or {fix}"
+        )
     if stat.S_IMODE(st.st_mode) != 0o700:
         os.chmod(path, 0o700)
     return path
@@ -53,7 +61,8 @@ def private_dir(path: Path) -> Path:
 
 def base_dir() -> Path:
     """Per-user folder holding run directories (``$COUNTERPART_HOME``, ``$XDG_RUNTIME_DIR/counterpart``
-    or ``/tmp/counterpart-UID``), mode 0700 and the user's own (:func:`private_dir`)."""
+    or ``/tmp/counterpart-UID``), mode 0700 and the user's own (:func:`private_dir`).
+    """
     env = os.environ.get("COUNTERPART_HOME")
     if env:
         root = Path(env)
@@ -80,7 +89,8 @@ def standalone_dir() -> Path:
 @dataclass(frozen=True)
 class TopicEndpoints:
     """The endpoints of one topic (what publishers bind and subscribers connect); ``queued`` is
-    empty in the registry of a launcher older than it."""
+    empty in the registry of a launcher older than it.
+    """
 
     reliable: str
     latest: str
@@ -90,7 +100,7 @@ class TopicEndpoints:
         return {"reliable": self.reliable, "latest": self.latest, "queued": self.queued}
 
     @staticmethod
-    def from_dict(d: dict[str, str]) -> "TopicEndpoints":
+    def from_dict(d: dict[str, str]) -> TopicEndpoints:
         return TopicEndpoints(d["reliable"], d["latest"], d.get("queued", ""))
 
 
@@ -105,9 +115,7 @@ def ipc_endpoints(run_dir: Path, topic: str) -> TopicEndpoints:
     stem = _file_stem(topic)
     rel, lat = run_dir / f"{stem}.r", run_dir / f"{stem}.l"
     if len(str(rel)) > _IPC_MAX:
-        raise ValueError(
-            f"ipc path {rel} is too long for a unix socket; set COUNTERPART_HOME to a shorter folder"
-        )
+        raise ValueError(f"ipc path {rel} is too long for a unix socket; set COUNTERPART_HOME to a shorter folder")
     return TopicEndpoints(f"ipc://{rel}", f"ipc://{lat}", f"ipc://{run_dir / f'{stem}.q'}")
 
 
@@ -124,7 +132,8 @@ def tcp_endpoints(address: str) -> TopicEndpoints:
 
 def bind_address(endpoint: str) -> str:
     """What a publisher binds for ``endpoint``: a named host is bound as given, ``*`` is refused
-    unless spelled out as ``0.0.0.0`` (so nothing listens beyond loopback by accident)."""
+    unless spelled out as ``0.0.0.0`` (so nothing listens beyond loopback by accident).
+    """
     if endpoint.startswith("tcp://*"):
         raise ValueError(f"endpoint {endpoint}: bind to an explicit host (127.0.0.1, or 0.0.0.0 to listen everywhere)")
     return endpoint

@@ -14,6 +14,7 @@ through :class:`HostilePublisher`, an XPUB socket bound where the node expects t
 (an ``external`` topic of its launch file, declared with ``publisher:`` so that end of stream is
 authenticated).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -27,21 +28,34 @@ import tempfile
 import time
 import types
 import typing
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any
 
 import msgpack
 import numpy as np
 import zmq
-
 from counterpart.messages import REGISTRY, EndOfStream, encode
 from counterpart.messages.codec import ALLOWED_DTYPES
 from counterpart.messages.core import field_types
 
 #: kinds of damage, in the order they are cycled through; "valid" ones are delivered to the node
-KINDS = ("random_bytes", "valid", "no_header", "truncated", "nested", "valid", "bad_array", "oversize",
-         "bad_field", "valid", "other_type", "forged_eos", "bad_counter")
+KINDS = (
+    "random_bytes",
+    "valid",
+    "no_header",
+    "truncated",
+    "nested",
+    "valid",
+    "bad_array",
+    "oversize",
+    "bad_field",
+    "valid",
+    "other_type",
+    "forged_eos",
+    "bad_counter",
+)
 _INTS = (0, 1, -1, 7, 2**31, -(2**31), 2**63 - 1, -(2**63))
 _FLOATS = (0.0, -0.0, 1.5, float("nan"), float("inf"), float("-inf"), 1e308, -1e-308)
 _DTYPES = sorted(ALLOWED_DTYPES)
@@ -59,7 +73,8 @@ class Hostile:
 class OddValues:
     """Values of declared field types that are well-formed on the wire but odd: extreme numbers,
     NaN, random strings, arrays of random dtype and shape (each side ``min_dim`` to 5), up to 30
-    list items (people in a frame)."""
+    list items (people in a frame).
+    """
 
     def __init__(self, rng: random.Random, min_dim: int = 0) -> None:
         self.rng = rng
@@ -108,16 +123,29 @@ def _pack(head: dict[str, Any]) -> bytes:
 
 def _nested(depth: int) -> bytes:
     """A header whose ``seq`` is a list nested ``depth`` deep (msgpack's own packer refuses to
-    write that deep, which is the point)."""
-    return (b"\x83" + _pack("s") + _pack("x") + _pack("f") + b"\x81" + _pack("seq") + b"\x91" * depth + b"\xc0"
-            + _pack("a") + b"\x90")
+    write that deep, which is the point).
+    """
+    return (
+        b"\x83"
+        + _pack("s")
+        + _pack("x")
+        + _pack("f")
+        + b"\x81"
+        + _pack("seq")
+        + b"\x91" * depth
+        + b"\xc0"
+        + _pack("a")
+        + b"\x90"
+    )
 
 
-def hostile_messages(topic: str, msg_type: type, n: int, publisher: str, seed: int = 0,
-                     min_dim: int = 0) -> Iterator[Hostile]:
+def hostile_messages(
+    topic: str, msg_type: type, n: int, publisher: str, seed: int = 0, min_dim: int = 0
+) -> Iterator[Hostile]:
     """``n`` messages for ``topic`` (of ``msg_type``, published by node ``publisher``), cycling
     through :data:`KINDS`; the valid ones carry the send counter a real publisher would. Arrays of
-    well-formed messages have sides of ``min_dim`` to 5."""
+    well-formed messages have sides of ``min_dim`` to 5.
+    """
     rng = random.Random(seed)
     odd = OddValues(rng, min_dim)
     t = topic.encode()
@@ -189,7 +217,8 @@ def _oversize(t: bytes, head: dict[str, Any], rng: random.Random, big: bool) -> 
 
 class HostilePublisher:
     """An XPUB socket bound on a free loopback port (``endpoint``: where the node under test
-    connects for its topic), sending without loss: every message sent reaches the subscriber."""
+    connects for its topic), sending without loss: every message sent reaches the subscriber.
+    """
 
     def __init__(self, ctx: zmq.Context) -> None:
         self.sock = ctx.socket(zmq.XPUB)
@@ -200,7 +229,8 @@ class HostilePublisher:
 
     def wait_subscriber(self, deadline: float, alive: Callable[[], bool]) -> bool:
         """True once a subscriber has joined (before ``time.monotonic()`` reaches ``deadline``,
-        and while ``alive()``)."""
+        and while ``alive()``).
+        """
         while time.monotonic() < deadline and alive():
             if self.sock.poll(100) and self.sock.recv()[:1] == b"\x01":
                 return True
@@ -208,7 +238,8 @@ class HostilePublisher:
 
     def send(self, frames: list[bytes], deadline: float) -> None:
         """Send one multipart message, waiting while the subscriber's queue is full (until
-        ``deadline``, on the ``time.monotonic()`` clock: TimeoutError)."""
+        ``deadline``, on the ``time.monotonic()`` clock: TimeoutError).
+        """
         while True:
             try:
                 self.sock.send_multipart(frames, zmq.NOBLOCK)
@@ -241,25 +272,40 @@ class FuzzTarget:
         return self.sent - self.received - self.bad
 
 
-def run_fuzz(nodes: dict[str, dict[str, Any]], targets: list[FuzzTarget], n: int, workdir: Path,
-             seed: int = 0, timeout: float = 120.0) -> tuple[int | None, str]:
+def run_fuzz(
+    nodes: dict[str, dict[str, Any]],
+    targets: list[FuzzTarget],
+    n: int,
+    workdir: Path,
+    seed: int = 0,
+    timeout: float = 120.0,
+) -> tuple[int | None, str]:
     """Launch ``nodes`` (launch-file declarations, the targets' inputs remapped to their topics),
     send ``n`` hostile messages to each target (interleaved), then end the topics as their publisher
     would and wait for the graph to end (or ``timeout``). Fills each target's counts from its node's
     last statistics (a node that crashed counted what it had until about a second before);
-    returns the launcher's exit code (None when it had to be killed) and its output."""
+    returns the launcher's exit code (None when it had to be killed) and its output.
+    """
     import yaml
 
     home = Path(tempfile.mkdtemp(prefix="cpz", dir="/tmp"))  # short: unix socket paths are limited
     ctx = zmq.Context()
     pubs = {t.topic: HostilePublisher(ctx) for t in targets}
-    doc = {"external": {t.topic: {"type": t.type_name, "endpoint": pubs[t.topic].endpoint, "publisher": "fuzzer"}
-                        for t in targets}, "nodes": nodes}
+    doc = {
+        "external": {
+            t.topic: {"type": t.type_name, "endpoint": pubs[t.topic].endpoint, "publisher": "fuzzer"} for t in targets
+        },
+        "nodes": nodes,
+    }
     (workdir / "fuzz.yaml").write_text(yaml.safe_dump(doc, sort_keys=False))
     log = open(workdir / "fuzz.log", "w+")
-    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "launch", str(workdir / "fuzz.yaml")],
-                            env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", "launch", str(workdir / "fuzz.yaml")],
+        env={**os.environ, "COUNTERPART_HOME": str(home)},
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
     deadline = time.monotonic() + timeout
     code: int | None = None
     try:
@@ -288,8 +334,10 @@ def run_fuzz(nodes: dict[str, dict[str, Any]], targets: list[FuzzTarget], n: int
 def _send(pubs: dict[str, HostilePublisher], targets: list[FuzzTarget], n: int, seed: int, deadline: float) -> None:
     from counterpart.messages import by_name
 
-    streams = {t.topic: hostile_messages(t.topic, by_name(t.type_name), n, "fuzzer", seed + i, t.min_dim)
-               for i, t in enumerate(targets)}
+    streams = {
+        t.topic: hostile_messages(t.topic, by_name(t.type_name), n, "fuzzer", seed + i, t.min_dim)
+        for i, t in enumerate(targets)
+    }
     for _ in range(n):
         for t in targets:
             item = next(streams[t.topic])
@@ -300,7 +348,8 @@ def _send(pubs: dict[str, HostilePublisher], targets: list[FuzzTarget], n: int, 
 
 def _read_counts(targets: list[FuzzTarget], run: Path) -> None:
     """Each target's input counts from its node's statistics file (its last stats, written on
-    every publish and at the end)."""
+    every publish and at the end).
+    """
     import json
 
     from .launchfile import stats_dir

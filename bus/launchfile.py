@@ -28,6 +28,7 @@ Format (every key but ``nodes`` optional)::
 
 Every error is a :class:`LaunchError` naming the file, the node and the key.
 """
+
 from __future__ import annotations
 
 import copy
@@ -37,7 +38,6 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-
 from counterpart.messages import by_name, schema_id
 
 from .endpoints import TopicEndpoints, ipc_endpoints, tcp_endpoints
@@ -108,7 +108,9 @@ def find_launch_file(name: str | Path, relative_to: Path | None = None) -> Path:
     packaged = resources.files("counterpart.launch") / str(name)
     if packaged.is_file():
         return Path(str(packaged))
-    raise LaunchError(f"launch file {name!s} not found (looked in {', '.join(str(t) for t in tries)} and the launch package)")
+    raise LaunchError(
+        f"launch file {name!s} not found (looked in {', '.join(str(t) for t in tries)} and the launch package)"
+    )
 
 
 def _err(file: str, node: str | None, key: str, msg: str) -> LaunchError:
@@ -124,10 +126,15 @@ def _mapping(value: Any, file: str, node: str | None, key: str) -> dict[str, Any
     return value
 
 
-def load(path: str | Path, sets: dict[str, Any] | None = None, replace: dict[str, str] | None = None,
-         _seen: tuple[Path, ...] = ()) -> Graph:
+def load(
+    path: str | Path,
+    sets: dict[str, Any] | None = None,
+    replace: dict[str, str] | None = None,
+    _seen: tuple[Path, ...] = (),
+) -> Graph:
     """Read a launch file (and its includes), apply ``--set node.param=value`` and
-    ``--replace node=module``. The result still needs :func:`check`."""
+    ``--replace node=module``. The result still needs :func:`check`.
+    """
     file_path = find_launch_file(path)
     file = str(file_path)
     if file_path in _seen:
@@ -182,8 +189,12 @@ def load(path: str | Path, sets: dict[str, Any] | None = None, replace: dict[str
             tcp_endpoints(str(ext["endpoint"]))
         except ValueError as exc:
             raise _err(file, None, f"external.{topic}.endpoint", str(exc)) from None
-        graph.external[topic] = {"type": str(ext["type"]), "endpoint": str(ext["endpoint"]), "file": file,
-                                 "publisher": None if ext.get("publisher") is None else str(ext["publisher"])}
+        graph.external[topic] = {
+            "type": str(ext["type"]),
+            "endpoint": str(ext["endpoint"]),
+            "file": file,
+            "publisher": None if ext.get("publisher") is None else str(ext["publisher"]),
+        }
     nodes = doc.get("nodes")
     if not isinstance(nodes, dict) or (not nodes and not graph.nodes):
         if nodes is None and graph.nodes:
@@ -226,7 +237,9 @@ def _node_decl(file: str, name: str, body: dict[str, Any]) -> NodeDecl:
         raise _err(file, name, "restart", f"{decl.restart!r} is not one of {', '.join(RESTART_POLICIES)}")
     decl.max_restarts = int(body.get("max_restarts", 5))
     decl.required = bool(body.get("required", False))
-    decl.wait_subscribers = {str(k): int(v) for k, v in _mapping(body.get("wait_subscribers"), file, name, "wait_subscribers").items()}
+    decl.wait_subscribers = {
+        str(k): int(v) for k, v in _mapping(body.get("wait_subscribers"), file, name, "wait_subscribers").items()
+    }
     return decl
 
 
@@ -245,13 +258,16 @@ def _apply_overrides(graph: Graph, sets: dict[str, Any], replace: dict[str, str]
         graph.nodes[node].params[param] = value
     for node, module in replace.items():
         if node not in graph.nodes:
-            raise LaunchError(f"--replace {node}={module}: no node {node!r} in {graph.file}; nodes: {', '.join(graph.nodes)}")
+            raise LaunchError(
+                f"--replace {node}={module}: no node {node!r} in {graph.file}; nodes: {', '.join(graph.nodes)}"
+            )
         graph.nodes[node].run = module
 
 
 def check(graph: Graph) -> Graph:
     """Resolve every node class, validate parameters, and check that every input has a publisher
-    of the same message type. Raises LaunchError naming file, node and key."""
+    of the same message type. Raises LaunchError naming file, node and key.
+    """
     publishers: dict[str, tuple[str, str, type]] = {}
     for name, decl in graph.nodes.items():
         try:
@@ -268,11 +284,20 @@ def check(graph: Graph) -> Graph:
             raise _err(decl.file, name, "params", str(exc)) from None
         for port in decl.remap:
             if port not in ins and port not in outs and port != STATS_PORT:
-                raise _err(decl.file, name, f"remap.{port}",
-                           f"{cls.__name__} has no port {port!r}; inputs: {', '.join(ins) or '-'}; outputs: {', '.join(outs) or '-'}")
+                raise _err(
+                    decl.file,
+                    name,
+                    f"remap.{port}",
+                    f"{cls.__name__} has no port {port!r}; inputs: {', '.join(ins) or '-'}; outputs: {', '.join(outs) or '-'}",
+                )
         for port in decl.input_policies:
             if port not in ins:
-                raise _err(decl.file, name, f"inputs.{port}", f"{cls.__name__} has no input {port!r}; inputs: {', '.join(ins) or '-'}")
+                raise _err(
+                    decl.file,
+                    name,
+                    f"inputs.{port}",
+                    f"{cls.__name__} has no input {port!r}; inputs: {', '.join(ins) or '-'}",
+                )
         for port in decl.wait_subscribers:
             if port not in outs:
                 raise _err(decl.file, name, f"wait_subscribers.{port}", f"{cls.__name__} has no output {port!r}")
@@ -282,7 +307,9 @@ def check(graph: Graph) -> Graph:
             topic = graph.output_topic(name, port)
             if topic in publishers:
                 other = publishers[topic]
-                raise _err(decl.file, name, f"outputs.{port}", f"topic {topic!r} is already published by node {other[0]!r}")
+                raise _err(
+                    decl.file, name, f"outputs.{port}", f"topic {topic!r} is already published by node {other[0]!r}"
+                )
             if topic in graph.external:
                 raise _err(decl.file, name, f"outputs.{port}", f"topic {topic!r} is declared external in this graph")
             publishers[topic] = (name, port, out.type)
@@ -292,24 +319,38 @@ def check(graph: Graph) -> Graph:
         except KeyError as exc:
             raise _err(ext["file"], None, f"external.{topic}.type", str(exc).strip('"')) from None
         publishers[topic] = ("(external)", topic, ext_type)
-    publisher_nodes = {t: graph.external[t]["publisher"] if t in graph.external else n for t, (n, _, _) in publishers.items()}
+    publisher_nodes = {
+        t: graph.external[t]["publisher"] if t in graph.external else n for t, (n, _, _) in publishers.items()
+    }
     subscribers: dict[str, list[tuple[str, str, str]]] = {t: [] for t in publishers}
     for name, decl in graph.nodes.items():
         for port, inp in graph.ports_in[name].items():
             topic = graph.input_topic(name, port)
             if topic not in publishers:
-                raise _err(decl.file, name, f"inputs.{port}",
-                           f"no node publishes topic {topic!r}; published topics: {', '.join(sorted(publishers)) or '-'}")
+                raise _err(
+                    decl.file,
+                    name,
+                    f"inputs.{port}",
+                    f"no node publishes topic {topic!r}; published topics: {', '.join(sorted(publishers)) or '-'}",
+                )
             pub_node, pub_port, pub_type = publishers[topic]
             if inp.type is not None and pub_type is not inp.type:
-                raise _err(decl.file, name, f"inputs.{port}",
-                           f"type mismatch on topic {topic!r}: {pub_node}.{pub_port} publishes {schema_id(pub_type)}, "
-                           f"this input takes {schema_id(inp.type)}")
+                raise _err(
+                    decl.file,
+                    name,
+                    f"inputs.{port}",
+                    f"type mismatch on topic {topic!r}: {pub_node}.{pub_port} publishes {schema_id(pub_type)}, "
+                    f"this input takes {schema_id(inp.type)}",
+                )
             policy = decl.input_policies.get(port) or decl.policy or inp.policy
             subscribers[topic].append((name, port, policy))
     graph.topics = {
-        topic: {"type": schema_id(t), "publisher": f"{n}.{p}", "subscribers": subscribers[topic],
-                "node": publisher_nodes[topic]}
+        topic: {
+            "type": schema_id(t),
+            "publisher": f"{n}.{p}",
+            "subscribers": subscribers[topic],
+            "node": publisher_nodes[topic],
+        }
         for topic, (n, p, t) in publishers.items()
     }
     return graph
@@ -343,16 +384,25 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
     specs = {}
     for name, decl in graph.nodes.items():
         spec: dict[str, Any] = {
-            "name": name, "module": decl.run, "params": copy.deepcopy(decl.params), "supervised": True,
-            "barrier_timeout": graph.barrier_timeout, "inputs": {}, "outputs": {},
+            "name": name,
+            "module": decl.run,
+            "params": copy.deepcopy(decl.params),
+            "supervised": True,
+            "barrier_timeout": graph.barrier_timeout,
+            "inputs": {},
+            "outputs": {},
             "stats_file": str(stats_dir(run_dir) / f"{name}.json"),
         }
         for port, inp in graph.ports_in[name].items():
             topic = graph.input_topic(name, port)
             policy = decl.input_policies.get(port) or decl.policy or inp.policy
             # the publisher's name authenticates its end of stream (None: an external one not named)
-            spec["inputs"][port] = {"topic": topic, "endpoints": eps[topic].to_dict(), "policy": policy,
-                                    "publisher": graph.topics[topic]["node"]}
+            spec["inputs"][port] = {
+                "topic": topic,
+                "endpoints": eps[topic].to_dict(),
+                "policy": policy,
+                "publisher": graph.topics[topic]["node"],
+            }
         for port in list(graph.ports_out[name]) + [STATS_PORT]:
             topic = graph.output_topic(name, port)
             subs = graph.topics[topic]["subscribers"]
@@ -361,7 +411,8 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
             # too, or a short stream ends before a slow-starting one has connected and it never ends
             latest = sum(1 for n, p, pol in subs if pol == "latest" and graph.ports_in[n][p].awaits_end)
             spec["outputs"][port] = {
-                "topic": topic, "endpoints": eps[topic].to_dict(),
+                "topic": topic,
+                "endpoints": eps[topic].to_dict(),
                 "reliable_subscribers": reliable + decl.wait_subscribers.get(port, 0),
                 "latest_subscribers": latest,
             }

@@ -7,6 +7,7 @@ lets through the first ``burst`` records of each kind (logger, level and message
 the next record of that kind after the window says how many were held back, and so does a last
 line when the process exits.
 """
+
 from __future__ import annotations
 
 import logging

@@ -18,6 +18,7 @@ A node is one process. It gets its wiring from the launcher (a JSON spec in the 
 run alone, from :func:`standalone_spec`: there every topic lives in a shared per-user folder, so
 nodes started by hand with ``counterpart run`` find each other by topic name.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -34,7 +35,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 import zmq
-
 from counterpart.messages import EndOfStream, NodeStats, TopicStats
 
 from .endpoints import TopicEndpoints, ipc_endpoints, standalone_dir
@@ -96,7 +96,8 @@ class _PortStats:
 
 class Node:
     """Base class of every node process. Subclasses set ``inputs``, ``outputs``, ``params`` and
-    override :meth:`setup`, :meth:`on_message` (or ``on_<port>``), :meth:`on_end`, :meth:`generate`."""
+    override :meth:`setup`, :meth:`on_message` (or ``on_<port>``), :meth:`on_end`, :meth:`generate`.
+    """
 
     inputs: ClassVar[dict[str, Input]] = {}
     outputs: ClassVar[dict[str, Output]] = {}
@@ -181,7 +182,8 @@ class Node:
 
     def tally(self, name: str, n: float = 1) -> None:
         """Add ``n`` to the figure ``name`` (frames with people, regions not placed, ...), published
-        with the node's stats so that a run's summary can say what the node's work gave."""
+        with the node's stats so that a run's summary can say what the node's work gave.
+        """
         self.figures[name] = self.figures.get(name, 0) + n
 
     def _count_out(self, port: str, seq: Any) -> None:
@@ -196,7 +198,8 @@ class Node:
 
     def _mark_running(self) -> None:
         """The first message is out or handled: from now on a failure is not a failure to start.
-        The launcher reads the marker file when the node exits (see bus.supervisor)."""
+        The launcher reads the marker file when the node exits (see bus.supervisor).
+        """
         self._running = True
         marker = self.spec.get("running_file")
         if marker:
@@ -207,7 +210,8 @@ class Node:
 
     def _eos_timeout(self) -> float:
         """How long end of stream waits for its readers. A node that failed before its first
-        message waits briefly: its launcher stops the whole graph once it exits."""
+        message waits briefly: its launcher stops the whole graph once it exits.
+        """
         timeout = float(self.spec.get("eos_timeout", 120.0))
         if self.exit_code and not self._running and self.spec.get("supervised", False):
             timeout = min(timeout, EARLY_FAILURE_EOS_S)
@@ -222,17 +226,25 @@ class Node:
             w = wiring_in[port]
             policy = w.get("policy", inputs[port].policy)
             self._in[port] = Subscriber(
-                self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]), policy, raw=inputs[port].raw,
+                self.ctx,
+                w["topic"],
+                TopicEndpoints.from_dict(w["endpoints"]),
+                policy,
+                raw=inputs[port].raw,
                 on_bad=lambda kind, detail, port=port: self.log.warning(
                     "dropped a bad message on %s (%s); further ones of this kind are only counted", port, detail
                 ),
-                msg_type=inputs[port].type, publisher=w.get("publisher"), queue=inputs[port].queue,
+                msg_type=inputs[port].type,
+                publisher=w.get("publisher"),
+                queue=inputs[port].queue,
             )
             self._in_stats[port] = _PortStats()
         for port in list(outputs) + [STATS_PORT]:
             w = wiring_out[port]
             self._out[port] = Publisher(
-                self.ctx, w["topic"], TopicEndpoints.from_dict(w["endpoints"]),
+                self.ctx,
+                w["topic"],
+                TopicEndpoints.from_dict(w["endpoints"]),
                 expected=int(w.get("reliable_subscribers", 0)),
                 expected_latest=int(w.get("latest_subscribers", 0)),
                 barrier_timeout=float(self.spec.get("barrier_timeout", 30.0)),
@@ -259,8 +271,17 @@ class Node:
         ins, outs = [], []
         for port, sub in self._in.items():
             rate, lat = self._in_stats[port].snapshot(period)
-            ins.append(TopicStats(topic=sub.topic, port=port, count=sub.count, rate_hz=rate, drops=sub.drops,
-                                  bad=sum(sub.bad.values()), latency_ms=lat))
+            ins.append(
+                TopicStats(
+                    topic=sub.topic,
+                    port=port,
+                    count=sub.count,
+                    rate_hz=rate,
+                    drops=sub.drops,
+                    bad=sum(sub.bad.values()),
+                    latency_ms=lat,
+                )
+            )
         for port, pub in self._out.items():
             if port == STATS_PORT:
                 continue
@@ -273,10 +294,17 @@ class Node:
         proc = self._proc_ms
         self._proc_ms = []
         msg = NodeStats(
-            stamp=time.monotonic_ns(), seq=self._stats_seq, node=self.name, pid=os.getpid(),
-            uptime_s=now - self._started, inputs=ins, outputs=outs,
-            proc_ms_mean=float(np.mean(proc)) if proc else 0.0, proc_ms_max=float(np.max(proc)) if proc else 0.0,
-            decode_errors=errors, figures=dict(self.figures),
+            stamp=time.monotonic_ns(),
+            seq=self._stats_seq,
+            node=self.name,
+            pid=os.getpid(),
+            uptime_s=now - self._started,
+            inputs=ins,
+            outputs=outs,
+            proc_ms_mean=float(np.mean(proc)) if proc else 0.0,
+            proc_ms_max=float(np.max(proc)) if proc else 0.0,
+            decode_errors=errors,
+            figures=dict(self.figures),
         )
         self._stats_seq += 1
         self._out[STATS_PORT].send(msg)
@@ -284,7 +312,8 @@ class Node:
 
     def _write_stats_file(self, msg: NodeStats) -> None:
         """The newest stats also go to the file the launcher names (``stats_file``), replaced whole,
-        so that a run's summary has every node's last word even where a lossy subscriber missed it."""
+        so that a run's summary has every node's last word even where a lossy subscriber missed it.
+        """
         path = self.spec.get("stats_file")
         if not path:
             return
@@ -357,7 +386,9 @@ class Node:
         deadline = time.monotonic() + timeout
         for pub in self._out.values():
             if not pub.wait_delivered(max(0.0, deadline - time.monotonic())) and not self.stopping:
-                self.log.warning("%s: %d reliable subscriber(s) did not confirm end of stream", pub.topic, pub.subscribers)
+                self.log.warning(
+                    "%s: %d reliable subscriber(s) did not confirm end of stream", pub.topic, pub.subscribers
+                )
 
     def run(self) -> int:
         """Open sockets, set up, loop until end of stream or stop, send end of stream, clean up."""
@@ -411,7 +442,9 @@ def standalone_spec(
     root = standalone_dir()
     unknown = sorted(set(remap) - set(inputs) - set(outputs) - {STATS_PORT})
     if unknown:
-        raise ValueError(f"--remap: node {name!r} has no port {', '.join(unknown)}; ports: {', '.join([*inputs, *outputs])}")
+        raise ValueError(
+            f"--remap: node {name!r} has no port {', '.join(unknown)}; ports: {', '.join([*inputs, *outputs])}"
+        )
     spec: dict[str, Any] = {"name": name, "params": params, "inputs": {}, "outputs": {}}
     for port, inp in inputs.items():
         topic = remap.get(port, port)

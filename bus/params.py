@@ -1,8 +1,10 @@
 """Node parameters: declared with types, defaults and checks; validated before anything starts."""
+
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping
+from typing import Any
 
 import yaml
 
@@ -17,7 +19,8 @@ _TYPE_NAMES = {int: "int", float: "float", str: "str", bool: "bool", list: "list
 @dataclass(frozen=True)
 class Param:
     """A typed parameter. ``choices``, ``min`` and ``max`` are checked; ``check`` may raise or return
-    an error string (falsy for OK). ``default`` None with ``type`` set means optional."""
+    an error string (falsy for OK). ``default`` None with ``type`` set means optional.
+    """
 
     type: type
     default: Any = None
@@ -61,7 +64,8 @@ class Param:
 
 def resolve_params(specs: Mapping[str, Param], given: Mapping[str, Any], where: str = "") -> dict[str, Any]:
     """Defaults overlaid with ``given``; every value coerced and checked. Raises ParamError naming
-    ``where`` (e.g. ``demo.yaml: node 'tracker'``) and the parameter."""
+    ``where`` (e.g. ``demo.yaml: node 'tracker'``) and the parameter.
+    """
     prefix = f"{where}: " if where else ""
     unknown = sorted(set(given) - set(specs))
     if unknown:

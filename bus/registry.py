@@ -1,4 +1,5 @@
 """Finding a running launch and reading its registry (what ``node`` and ``topic`` commands use)."""
+
 from __future__ import annotations
 
 import json

@@ -5,6 +5,7 @@ Each node of a launch keeps its newest ``NodeStats`` in ``RUN_DIR/stats/NODE.jso
 :class:`counterpart.bus.node.Node` with every stats message and once more as it ends), so the summary reads
 files rather than a lossy subscription that can miss a node's last word.
 """
+
 from __future__ import annotations
 
 import json
@@ -66,15 +67,22 @@ class RunSummary:
     @property
     def partner_present_after_1s(self) -> float:
         """The same share over the frames after the first second of the stream (while the
-        background is learnt and the tracks start, a partner may still be missing)."""
+        background is learnt and the tracks start, a partner may still be missing).
+        """
         return self.partner_drawn_after_1s / self.frames_out_after_1s if self.frames_out_after_1s else 0.0
 
     def to_json(self) -> dict[str, Any]:
-        return {"frames_in": self.frames_in, "frames_with_people": self.frames_with_people,
-                "frames_out": self.frames_out, "partner_drawn": self.partner_drawn,
-                "partner_present": round(self.partner_present, 4),
-                "partner_present_after_1s": round(self.partner_present_after_1s, 4), "fps_in": self.fps_in, "fps_out": self.fps_out,
-                "handled": {f"{p.node}.{p.port}": {"handled": p.handled, "offered": p.offered} for p in self.loads}}
+        return {
+            "frames_in": self.frames_in,
+            "frames_with_people": self.frames_with_people,
+            "frames_out": self.frames_out,
+            "partner_drawn": self.partner_drawn,
+            "partner_present": round(self.partner_present, 4),
+            "partner_present_after_1s": round(self.partner_present_after_1s, 4),
+            "fps_in": self.fps_in,
+            "fps_out": self.fps_out,
+            "handled": {f"{p.node}.{p.port}": {"handled": p.handled, "offered": p.offered} for p in self.loads},
+        }
 
     def problem(self) -> str | None:
         """Why the run failed its purpose (no partner at all), or None."""
@@ -83,8 +91,11 @@ class RunSummary:
         if self.frames_out == 0:
             return f"the renderer wrote none of the {self.frames_in} frames"
         if self.partner_drawn == 0:
-            people = (f"people were found in {self.frames_with_people} of {self.frames_in} frames"
-                      if self.frames_with_people else "no person was found in any frame")
+            people = (
+                f"people were found in {self.frames_with_people} of {self.frames_in} frames"
+                if self.frames_with_people
+                else "no person was found in any frame"
+            )
             return f"no partner was drawn on any of the {self.frames_out} frames ({people})"
         return None
 
@@ -93,32 +104,45 @@ class RunSummary:
         out = []
         missing = self.frames_out - self.partner_drawn
         if self.frames_out and missing > MISSING_WARN * self.frames_out:
-            out.append(f"warning: no partner on {missing} of {self.frames_out} frames "
-                       f"({100 * missing / self.frames_out:.0f}%; people found in {self.frames_with_people} "
-                       f"of {self.frames_in})")
+            out.append(
+                f"warning: no partner on {missing} of {self.frames_out} frames "
+                f"({100 * missing / self.frames_out:.0f}%; people found in {self.frames_with_people} "
+                f"of {self.frames_in})"
+            )
         for p in self.loads:
             if p.handled < p.offered:
-                out.append(f"warning: {p.node} handled {p.handled} of {p.offered} frames offered on {p.port} "
-                           "(it could not keep up in real time; without --realtime every frame is processed)")
+                out.append(
+                    f"warning: {p.node} handled {p.handled} of {p.offered} frames offered on {p.port} "
+                    "(it could not keep up in real time; without --realtime every frame is processed)"
+                )
         return out
 
     def lines(self) -> list[str]:
         """The summary as a person reads it."""
-        return [f"frames in:          {self.frames_in}" + (f" at {self.fps_in:.3g} fps" if self.fps_in else ""),
-                f"frames with people: {self.frames_with_people}",
-                f"frames out:         {self.frames_out}" + (f" at {self.fps_out:.3g} fps" if self.fps_out else ""),
-                f"partner drawn on:   {self.partner_drawn} ({100 * self.partner_present:.0f}%; "
-                f"{100 * self.partner_present_after_1s:.0f}% after the first second)"]
+        return [
+            f"frames in:          {self.frames_in}" + (f" at {self.fps_in:.3g} fps" if self.fps_in else ""),
+            f"frames with people: {self.frames_with_people}",
+            f"frames out:         {self.frames_out}" + (f" at {self.fps_out:.3g} fps" if self.fps_out else ""),
+            f"partner drawn on:   {self.partner_drawn} ({100 * self.partner_present:.0f}%; "
+            f"{100 * self.partner_present_after_1s:.0f}% after the first second)",
+        ]
 
 
 #: the input of each node whose load the summary reports (its frame clock)
-CLOCK_PORTS = {"silhouette": "frame", "tracker": "silhouettes", "labeller": "pose", "responder": "pose",
-               "renderer": "frame"}
+CLOCK_PORTS = {
+    "silhouette": "frame",
+    "tracker": "silhouettes",
+    "labeller": "pose",
+    "responder": "pose",
+    "renderer": "frame",
+}
 
 
-def summarise(stats: dict[str, NodeStats], camera: str = "camera", silhouette: str = "silhouette",
-              renderer: str = "renderer") -> RunSummary:
+def summarise(
+    stats: dict[str, NodeStats], camera: str = "camera", silhouette: str = "silhouette", renderer: str = "renderer"
+) -> RunSummary:
     """The run's figures from the nodes' last statistics (nodes named as in the demo's graphs)."""
+
     def fig(node: str, name: str) -> float:
         st = stats.get(node)
         return float(st.figures.get(name, 0)) if st is not None else 0.0
@@ -131,24 +155,34 @@ def summarise(stats: dict[str, NodeStats], camera: str = "camera", silhouette: s
         for t in st.inputs if st is not None else []:
             if t.port == port:
                 loads.append(PortLoad(node, port, t.count, t.count + t.drops))
-    return RunSummary(frames_in=frames_in, frames_with_people=int(fig(silhouette, "frames_with_people")),
-                      frames_out=int(fig(renderer, "rendered")), partner_drawn=int(fig(renderer, "partner_drawn")),
-                      frames_out_after_1s=int(fig(renderer, "rendered_after_1s")),
-                      partner_drawn_after_1s=int(fig(renderer, "partner_drawn_after_1s")),
-                      fps_in=fig(camera, "source_fps"), fps_out=fig(renderer, "video_fps"), loads=loads)
+    return RunSummary(
+        frames_in=frames_in,
+        frames_with_people=int(fig(silhouette, "frames_with_people")),
+        frames_out=int(fig(renderer, "rendered")),
+        partner_drawn=int(fig(renderer, "partner_drawn")),
+        frames_out_after_1s=int(fig(renderer, "rendered_after_1s")),
+        partner_drawn_after_1s=int(fig(renderer, "partner_drawn_after_1s")),
+        fps_in=fig(camera, "source_fps"),
+        fps_out=fig(renderer, "video_fps"),
+        loads=loads,
+    )
 
 
 def stats_table(stats: dict[str, NodeStats]) -> str:
     """A plain-text table: per node, messages in/out, rates, drops, latency and handler time."""
-    rows = [f"{'node':12s} {'in':>7s} {'out':>7s} {'in Hz':>7s} {'drops':>6s} {'lat ms':>7s} {'proc ms':>8s} {'bad':>4s}"]
+    rows = [
+        f"{'node':12s} {'in':>7s} {'out':>7s} {'in Hz':>7s} {'drops':>6s} {'lat ms':>7s} {'proc ms':>8s} {'bad':>4s}"
+    ]
     for name, st in sorted(stats.items()):
         n_in = sum(t.count for t in st.inputs)
         n_out = sum(t.count for t in st.outputs)
         hz = max((t.rate_hz for t in st.inputs), default=0.0)
         drops = sum(t.drops for t in st.inputs)
         lat = max((t.latency_ms for t in st.inputs), default=0.0)
-        rows.append(f"{name:12s} {n_in:7d} {n_out:7d} {hz:7.1f} {drops:6d} {lat:7.1f} {st.proc_ms_mean:8.2f} "
-                    f"{sum(st.decode_errors.values()):4d}")
+        rows.append(
+            f"{name:12s} {n_in:7d} {n_out:7d} {hz:7.1f} {drops:6d} {lat:7.1f} {st.proc_ms_mean:8.2f} "
+            f"{sum(st.decode_errors.values()):4d}"
+        )
     return "\n".join(rows)
 
 

@@ -1,4 +1,5 @@
 """Process entry points: find a node class by module name and run it (under the launcher or alone)."""
+
 from __future__ import annotations
 
 import argparse
@@ -50,8 +51,9 @@ def find_node_class(module_name: str) -> type[Node]:
     """
     new = moved_module(module_name)
     if new is not None:
-        raise NodeLookupError(f"{module_name!r} is the old module path: the project's modules are under "
-                              f"'counterpart' now; write {new!r}")
+        raise NodeLookupError(
+            f"{module_name!r} is the old module path: the project's modules are under 'counterpart' now; write {new!r}"
+        )
     mod_name, _, cls_name = module_name.partition(":")
     candidates = [mod_name, f"{mod_name}.node"]
     errors = []
@@ -72,7 +74,8 @@ def find_node_class(module_name: str) -> type[Node]:
         if inspect.isclass(explicit) and issubclass(explicit, Node):
             return explicit
         found = [
-            c for c in vars(mod).values()
+            c
+            for c in vars(mod).values()
             if inspect.isclass(c) and issubclass(c, Node) and c is not Node and c.__module__ == mod.__name__
         ]
         if len(found) == 1:
@@ -88,7 +91,8 @@ def find_node_class(module_name: str) -> type[Node]:
 
 def setup_logging(name: str) -> None:
     """Log lines on stderr, prefixed with the time and ``name``; a line that repeats is rate-limited
-    (:class:`counterpart.bus.logs.RepeatFilter`: a few per kind and 10 s, then a count)."""
+    (:class:`counterpart.bus.logs.RepeatFilter`: a few per kind and 10 s, then a count).
+    """
     level = os.environ.get("COUNTERPART_LOG", "INFO").upper()
     logging.basicConfig(
         level=getattr(logging, level, logging.INFO),
@@ -105,7 +109,8 @@ def setup_logging(name: str) -> None:
 
 def run_spec(spec: dict[str, Any]) -> int:
     """Run a node from a launcher spec. Exit code: 0 after a clean end, 2 for bad parameters,
-    1 for an exception."""
+    1 for an exception.
+    """
     setup_logging(spec["name"])
     log = logging.getLogger(spec["name"])
     try:
@@ -140,7 +145,10 @@ def run_standalone(cls: type[Node] | str, argv: list[str] | None = None) -> int:
         parts = [p for p in module.split(":")[0].split(".") if p not in ("node", "__main__")]
         name = args.name or (parts[-1] if parts else node_cls.__name__.lower())
         spec = standalone_spec(
-            name, node_cls, parse_assignments(args.param), parse_assignments(args.remap, "--remap"),
+            name,
+            node_cls,
+            parse_assignments(args.param),
+            parse_assignments(args.remap, "--remap"),
             parse_assignments(args.policy, "--policy"),
         )
     except (ParamError, NodeLookupError, ValueError) as exc:

@@ -18,6 +18,7 @@
 - The run directory holds ``registry.json`` (nodes, pids, topics, endpoints, types) for the
   introspection commands, and ``base_dir()/latest`` points at it.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -103,8 +104,11 @@ class Launcher:
             path.write_text(json.dumps(spec, indent=1))
             decl = graph.nodes[name]
             self.procs[name] = Proc(
-                name=name, cmd=[sys.executable, "-m", "counterpart.bus.runner", str(path)],
-                restart=decl.restart, max_restarts=decl.max_restarts, required=decl.required,
+                name=name,
+                cmd=[sys.executable, "-m", "counterpart.bus.runner", str(path)],
+                restart=decl.restart,
+                max_restarts=decl.max_restarts,
+                required=decl.required,
                 running_file=Path(spec["running_file"]),
             )
 
@@ -121,7 +125,9 @@ class Launcher:
                     "restarts": p.restarts,
                     "exit_code": p.exit_code,
                     "params": self.graph.params.get(name, {}),
-                    "inputs": {k: {"topic": v["topic"], "policy": v["policy"]} for k, v in self.specs[name]["inputs"].items()},
+                    "inputs": {
+                        k: {"topic": v["topic"], "policy": v["policy"]} for k, v in self.specs[name]["inputs"].items()
+                    },
                     "outputs": {k: {"topic": v["topic"]} for k, v in self.specs[name]["outputs"].items()},
                 }
                 for name, p in self.procs.items()
@@ -133,10 +139,15 @@ class Launcher:
                     "node": info.get("node"),
                     "subscribers": [f"{n}.{p} ({pol})" for n, p, pol in info["subscribers"]],
                     "endpoints": next(
-                        (s["outputs"][port]["endpoints"] for s in self.specs.values() for port in s["outputs"]
-                         if s["outputs"][port]["topic"] == topic),
+                        (
+                            s["outputs"][port]["endpoints"]
+                            for s in self.specs.values()
+                            for port in s["outputs"]
+                            if s["outputs"][port]["topic"] == topic
+                        ),
                         None,
-                    ) or _external_endpoints(self.specs, topic),
+                    )
+                    or _external_endpoints(self.specs, topic),
                 }
                 for topic, info in self.graph.topics.items()
             },
@@ -177,7 +188,8 @@ class Launcher:
 
     def stop_all(self) -> None:
         """SIGINT, then SIGTERM, then SIGKILL to every process group; returns when all are reaped,
-        having logged how each node still running ended."""
+        having logged how each node still running ended.
+        """
         stopped = {p.name for p in self._alive()}
         for sig, grace in ((signal.SIGINT, self._int_grace), (signal.SIGTERM, TERM_GRACE_S), (signal.SIGKILL, 1.0)):
             if not self._alive():
@@ -195,8 +207,9 @@ class Launcher:
                 if p.exit_code is None:
                     p.exit_code = p.popen.returncode
             if p.name in stopped and p.popen.returncode is not None:
-                (log.info if p.popen.returncode == 0 else log.warning)("%s stopped: exited with %d", p.name,
-                                                                       p.popen.returncode)
+                (log.info if p.popen.returncode == 0 else log.warning)(
+                    "%s stopped: exited with %d", p.name, p.popen.returncode
+                )
             # a node's own children live in its process group: make sure none is left
             if p.popen is not None:
                 try:
@@ -248,11 +261,17 @@ class Launcher:
                     early = failed and not p.ever_ran
                     wants = p.restart == "always" or (p.restart == "on-failure" and failed)
                     if wants and not early and p.restarts < p.max_restarts and end_code is None:
-                        delay = min(BACKOFF_MAX_S, BACKOFF_START_S * 2 ** p.restarts)
+                        delay = min(BACKOFF_MAX_S, BACKOFF_START_S * 2**p.restarts)
                         p.restarts += 1
                         p.next_start = now + delay
-                        log.warning("%s exited with %d; restart %d/%d in %.1f s", p.name, p.exit_code,
-                                    p.restarts, p.max_restarts, delay)
+                        log.warning(
+                            "%s exited with %d; restart %d/%d in %.1f s",
+                            p.name,
+                            p.exit_code,
+                            p.restarts,
+                            p.max_restarts,
+                            delay,
+                        )
                         continue
                     (log.warning if failed else log.info)("%s exited with %d", p.name, p.exit_code)
                     if p.required and failed:
@@ -260,8 +279,9 @@ class Launcher:
                         return p.exit_code
                     if early and not end_code:
                         # the nodes that took its end of stream end by themselves meanwhile
-                        log.error("%s failed before its first message (exit code %d): stopping the graph",
-                                  p.name, p.exit_code)
+                        log.error(
+                            "%s failed before its first message (exit code %d): stopping the graph", p.name, p.exit_code
+                        )
                         end_code, end_deadline, end_why = p.exit_code, now + EARLY_GRACE_S, ""
                         self._int_grace = EARLY_INT_GRACE_S
                     elif p.required and end_code is None:
@@ -278,8 +298,9 @@ class Launcher:
             if not self._alive() and (not pending or end_code is not None) and not unread:
                 failed_nodes = {p.name: p.exit_code for p in self.procs.values() if p.exit_code}
                 if failed_nodes:
-                    log.warning("graph ended; failed nodes: %s",
-                                ", ".join(f"{n} ({c})" for n, c in failed_nodes.items()))
+                    log.warning(
+                        "graph ended; failed nodes: %s", ", ".join(f"{n} ({c})" for n, c in failed_nodes.items())
+                    )
                     return next(iter(failed_nodes.values())) if end_code is None else end_code
                 log.info("graph ended")
                 return 0
@@ -307,7 +328,8 @@ def _external_endpoints(specs: dict[str, dict[str, Any]], topic: str) -> dict[st
 def prune_run_dirs(keep: int = 10) -> None:
     """Clean up after launchers that are gone (a SIGKILL leaves their run directories behind):
     delete their run directories but the newest ``keep``, the sockets of those kept (their
-    registries stay for ``counterpart node list --run``), and their temporary ``latest`` links."""
+    registries stay for ``counterpart node list --run``), and their temporary ``latest`` links.
+    """
     base = base_dir()
     # another launcher may be pruning at the same time: what it removed first is simply gone
     gone = sorted(((_mtime(d), d) for d in base.glob("run-*") if not _launcher_alive(d.name)), key=lambda x: x[0])

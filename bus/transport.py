@@ -11,18 +11,26 @@ is queued and keeps the newest, counting what it dropped (both in its own queue 
 publisher's send counter, in ZeroMQ's); ``latest`` with a ``queue`` (recorders) reads the queued
 socket in order and counts the gaps.
 """
+
 from __future__ import annotations
 
 import time
-from time import monotonic as _monotonic
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from time import monotonic as _monotonic
+from typing import Any
 
 import zmq
-
 from counterpart.messages import REGISTRY, EndOfStream, encode, schema_id
-from counterpart.messages.codec import (DEFAULT_LIMITS, DecodeError, Limits, check_array_count, decode_any, decode_counted,
-                            read_header)
+from counterpart.messages.codec import (
+    DEFAULT_LIMITS,
+    DecodeError,
+    Limits,
+    check_array_count,
+    decode_any,
+    decode_counted,
+    read_header,
+)
 
 from .endpoints import TopicEndpoints, bind_address
 
@@ -48,7 +56,8 @@ _socket_send = zmq.backend.Socket.send  # pyzmq's frame send, without the Python
 def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags: int) -> None:
     """``[topic, *parts]`` as one multipart message, like ``send_multipart(copy=False)``: pyzmq
     copies each part below the socket's ``copy_threshold`` and sends larger ones zero-copy. ZeroMQ
-    queues a multipart message whole or not at all (zmq.Again comes from the first part)."""
+    queues a multipart message whole or not at all (zmq.Again comes from the first part).
+    """
     _socket_send(sock, topic, flags | _SNDMORE, False)
     last = len(parts) - 1
     for i, part in enumerate(parts):
@@ -65,7 +74,8 @@ class Publisher:
     (ROS's latched topics), once :meth:`poll_subscriptions` or a send sees it join. A lossy subscriber
     that connects after a rare message (a run-time control), or restarts, still gets the one in force;
     the subscribers already there get it twice. Reliable subscribers are not sent it again: the
-    startup barrier gives them every message once. The parts are kept by reference."""
+    startup barrier gives them every message once. The parts are kept by reference.
+    """
 
     def __init__(
         self,
@@ -149,13 +159,17 @@ class Publisher:
 
     def _check_barrier(self) -> None:
         """Once every expected subscriber has been here the barrier is passed, even if one has left
-        since (a node that ended before this one's first message: a latched topic's first send)."""
+        since (a node that ended before this one's first message: a latched topic's first send).
+        """
         if not self._barrier_done and self._barrier_met():
             self._barrier_done = self._barrier_passed = True
 
     def _barrier_met(self) -> bool:
-        return (self.subscribers >= self.expected and self.eos_listeners >= self.expected_latest
-                and self.latest_subscribers >= self.expected_latest)
+        return (
+            self.subscribers >= self.expected
+            and self.eos_listeners >= self.expected_latest
+            and self.latest_subscribers >= self.expected_latest
+        )
 
     def poll_subscriptions(self) -> None:
         """Read who joined or left now (a latched publisher's node loop calls this between sends)."""
@@ -164,7 +178,8 @@ class Publisher:
 
     def wait_for_subscribers(self) -> bool:
         """Block until ``expected`` reliable and ``expected_latest`` lossy subscribers are connected
-        (or timeout/stop)."""
+        (or timeout/stop).
+        """
         deadline = time.monotonic() + self.barrier_timeout
         while not self._barrier_passed and not self._barrier_met():
             if self.should_stop() or time.monotonic() > deadline:
@@ -229,7 +244,8 @@ class Publisher:
 
         A subscriber that connects after end of stream went out (a node still starting when its
         source failed at once) gets it again: it would otherwise wait for an end that never comes,
-        and this publisher for its confirmation."""
+        and this publisher for its confirmation.
+        """
         deadline = time.monotonic() + timeout
         resend = self._read_subscriptions()
         while self.subscribers > 0 or self.eos_listeners > 0:
@@ -242,7 +258,8 @@ class Publisher:
 
     def _try_send_eos_again(self) -> bool:
         """End of stream once more on the reliable socket, without waiting (a lagging subscriber's
-        full queue makes it fail: try again later). Subscribers that have it already ignore it."""
+        full queue makes it fail: try again later). Subscribers that have it already ignore it.
+        """
         try:
             for topic in (self.topic_b, EOS_PREFIX + self.topic_b):
                 _send_multipart(self.reliable, topic, self._eos_parts, zmq.NOBLOCK)
@@ -252,7 +269,8 @@ class Publisher:
 
     def close(self, linger_ms: int = -1) -> None:
         """Close; by default wait (in ``Context.term``) until reliable subscribers got everything.
-        Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers."""
+        Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers.
+        """
         self.reliable.close(linger=linger_ms)
         self.latest.close(linger=0)
         if self.queued is not None:
@@ -287,13 +305,16 @@ _EOS_SCHEMA = EndOfStream.__schema_id__
 
 def decode_raw(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
     """Check the header and the number of buffers, leave the arrays encoded; the schema need not be
-    registered. End of stream is decoded as usual so that subscribers see the end."""
+    registered. End of stream is decoded as usual so that subscribers see the end.
+    """
     header = read_header(parts[0], limits)
     if header["s"] == _EOS_SCHEMA:
         return decode_counted(parts, limits)
     check_array_count(len(header.get("a", [])), REGISTRY.get(header["s"]), limits)
     if len(header.get("a", [])) != len(parts) - 1:
-        raise DecodeError("bad_array", f"header names {len(header.get('a', []))} arrays, {len(parts) - 1} buffers arrived")
+        raise DecodeError(
+            "bad_array", f"header names {len(header.get('a', []))} arrays, {len(parts) - 1} buffers arrived"
+        )
     counter = header.get("n")
     return RawMessage("", list(parts), header), counter if type(counter) is int else None
 
@@ -332,7 +353,8 @@ class Subscriber:
         for topics whose publisher is not known here). ``queue`` (latest policy only): keep up to
         this many messages in order instead of only the newest, read from the publisher's queued
         socket (recorders that must never hold a publisher back but should lose nothing while they
-        keep up); what overflows is counted in ``drops``."""
+        keep up); what overflows is counted in ``drops``.
+        """
         if policy not in POLICIES:
             raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
         self.topic = topic
@@ -413,7 +435,8 @@ class Subscriber:
 
     def _counter_gap(self, counter: int) -> int | None:
         """Messages lost before this one by the publisher's send counter; None for an impossible
-        jump (more than the publisher can have sent since the last message), which is dropped."""
+        jump (more than the publisher can have sent since the last message), which is dropped.
+        """
         now = _monotonic()
         last = self._last_counter
         gap = 0
@@ -429,7 +452,8 @@ class Subscriber:
     def _recv(self, flags: int) -> list[Any]:
         """One multipart message as zmq.Frame objects (array buffers are viewed by ``np.frombuffer``
         without a copy). A frame's ``more`` flag is read from the message itself, where asking the
-        socket for RCVMORE after each part cost 0.7 us per part."""
+        socket for RCVMORE after each part cost 0.7 us per part.
+        """
         sock = self.socket
         frame = sock.recv(flags, copy=False)
         frames = [frame]
@@ -441,7 +465,8 @@ class Subscriber:
     @property
     def pending(self) -> bool:
         """End of stream has arrived and will be returned once nothing more is in flight: call
-        :meth:`receive` again even when no socket is readable."""
+        :meth:`receive` again even when no socket is readable.
+        """
         return self._pending_eos is not None
 
     def receive(self) -> Any | None:
@@ -461,8 +486,13 @@ class Subscriber:
                 last, n = self._last_counter, self._eos_counter
                 # the end may have been read before the messages still queued ahead of it: no time
                 # between them then, and the gap is bounded by the slack alone (never by a negative time)
-                if type(n) is int and last is not None and n > last + 1 and n - last - 1 <= \
-                        COUNTER_SLACK + max(0.0, self._eos_time - self._last_counter_time) * MAX_SEND_RATE:
+                if (
+                    type(n) is int
+                    and last is not None
+                    and n > last + 1
+                    and n - last - 1
+                    <= COUNTER_SLACK + max(0.0, self._eos_time - self._last_counter_time) * MAX_SEND_RATE
+                ):
                     self.drops += n - last - 1  # lost on the lossy socket after the last one received
                 self._finish()
                 return msg

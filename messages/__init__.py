@@ -1,16 +1,53 @@
 """The message contract: typed message classes, schema ids and the msgpack/raw-buffer codec."""
-from .core import EMPTY, REGISTRY, by_name, describe, lookup, message, schema_id, struct
-from .codec import DEFAULT_LIMITS, DecodeError, Limits, UntypedMessage, decode, decode_any, decode_frames, encode, encode_frames
-from .system import EndOfStream, NodeStats, TopicStats
+
 from .camera import CameraInfo, Frame
-from .silhouette import PersonShape, Silhouettes
-from .tracker import Pose3D, TrackedBody
+from .codec import (
+    DEFAULT_LIMITS,
+    DecodeError,
+    Limits,
+    UntypedMessage,
+    decode,
+    decode_any,
+    decode_frames,
+    encode,
+    encode_frames,
+)
+from .core import EMPTY, REGISTRY, by_name, describe, lookup, message, schema_id, struct
 from .labeller import PersonSignals, SocialSignals
 from .responder import Control, Partner
+from .silhouette import PersonShape, Silhouettes
+from .system import EndOfStream, NodeStats, TopicStats
+from .tracker import Pose3D, TrackedBody
 
 __all__ = [
-    "EMPTY", "REGISTRY", "by_name", "describe", "lookup", "message", "schema_id", "struct",
-    "DEFAULT_LIMITS", "DecodeError", "Limits", "UntypedMessage", "decode_any", "decode", "decode_frames", "encode", "encode_frames",
-    "EndOfStream", "NodeStats", "TopicStats", "CameraInfo", "Frame", "PersonShape", "Silhouettes", "Pose3D", "TrackedBody",
-    "PersonSignals", "SocialSignals", "Control", "Partner",
+    "EMPTY",
+    "REGISTRY",
+    "by_name",
+    "describe",
+    "lookup",
+    "message",
+    "schema_id",
+    "struct",
+    "DEFAULT_LIMITS",
+    "DecodeError",
+    "Limits",
+    "UntypedMessage",
+    "decode_any",
+    "decode",
+    "decode_frames",
+    "encode",
+    "encode_frames",
+    "EndOfStream",
+    "NodeStats",
+    "TopicStats",
+    "CameraInfo",
+    "Frame",
+    "PersonShape",
+    "Silhouettes",
+    "Pose3D",
+    "TrackedBody",
+    "PersonSignals",
+    "SocialSignals",
+    "Control",
+    "Partner",
 ]

@@ -1,4 +1,5 @@
 """Messages of the camera node."""
+
 from __future__ import annotations
 
 import numpy as np

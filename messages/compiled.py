@@ -16,10 +16,12 @@ functions with one straight-line block per field:
 
 Nothing here changes what is accepted or refused; ``tests/test_messages.py`` checks both paths agree.
 """
+
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import msgpack
 import numpy as np
@@ -54,13 +56,18 @@ def compile_encoder(cls: type) -> Encoder:
 
     The written-out path covers a message whose scalar fields hold Python scalars and whose
     ``np.ndarray`` fields hold C-contiguous arrays; any other value (a numpy scalar, a list, a
-    nested struct, a strided view) sends the whole message through ``encode_generic``."""
+    nested struct, a strided view) sends the whole message through ``encode_generic``.
+    """
     from .codec import _SCALARS, encode_generic, pack_header
 
     hints = field_types(cls)
     ns: dict[str, Any] = {
-        "_SCALARS": _SCALARS, "_generic": encode_generic, "_ndarray": np.ndarray, "_dstr": _dtype_str,
-        "_pack": pack_header, "_SID": cls.__schema_id__,
+        "_SCALARS": _SCALARS,
+        "_generic": encode_generic,
+        "_ndarray": np.ndarray,
+        "_dstr": _dtype_str,
+        "_pack": pack_header,
+        "_SID": cls.__schema_id__,
     }
     lines = ["def encode(msg, counter):"]
     wire, arrays = [], []
@@ -70,7 +77,9 @@ def compile_encoder(cls: type) -> Encoder:
         if tp is np.ndarray:
             k = len(arrays)
             ns[f"_R{k}"] = msgpack.ExtType(1, k.to_bytes(4, "little"))
-            lines.append(f"    if type({v}) is not _ndarray or not {v}.flags.c_contiguous: return _generic(msg, counter)")
+            lines.append(
+                f"    if type({v}) is not _ndarray or not {v}.flags.c_contiguous: return _generic(msg, counter)"
+            )
             wire.append(f"{f.name!r}: _R{k}")
             arrays.append(v)
         elif tp in _INLINE_SCALARS:
@@ -90,14 +99,19 @@ def compile_encoder(cls: type) -> Encoder:
 
 def compile_decoder(cls: type) -> Decoder:
     """``decode(fields, arrays) -> instance`` of message class ``cls`` from a header's field map and
-    the already checked arrays; raises DecodeError like :func:`counterpart.messages.codec._build`."""
+    the already checked arrays; raises DecodeError like :func:`counterpart.messages.codec._build`.
+    """
     from .codec import DecodeError, _array, _check
 
     hints = field_types(cls)
     prefix = cls.__schema_id__
     ns: dict[str, Any] = {
-        "_MISSING": dataclasses.MISSING, "_array": _array, "_check": _check, "DecodeError": DecodeError,
-        "_new": object.__new__, "_cls": cls,
+        "_MISSING": dataclasses.MISSING,
+        "_array": _array,
+        "_check": _check,
+        "DecodeError": DecodeError,
+        "_new": object.__new__,
+        "_cls": cls,
     }
     lines = ["def decode(f, arrays):"]
     names = []
@@ -113,7 +127,9 @@ def compile_decoder(cls: type) -> Decoder:
             ns[f"_f{i}"] = fld.default_factory
             lines.append(f"    if {v} is _MISSING: {v} = _f{i}()")
         else:
-            lines.append(f"    if {v} is _MISSING: raise DecodeError('bad_field', {f'{prefix}: required field {fld.name!r} is missing'!r})")
+            lines.append(
+                f"    if {v} is _MISSING: raise DecodeError('bad_field', {f'{prefix}: required field {fld.name!r} is missing'!r})"
+            )
         if tp is np.ndarray:
             lines.append(f"    else: {v} = _array({v}, arrays, {where!r})")
         elif tp in _INLINE_SCALARS:

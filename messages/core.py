@@ -14,13 +14,16 @@ does not declare them. Field types are plain Python types, ``np.ndarray``, lists
 ``X | None`` and nested :func:`struct` dataclasses (which may hold arrays themselves). Fields added in
 a later version must have defaults, so that messages from older senders still decode.
 """
+
 from __future__ import annotations
 
 import dataclasses
+import functools
 import sys
 import types
 import typing
-from typing import Any, Callable, TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -31,6 +34,10 @@ REGISTRY: dict[str, type] = {}
 
 EMPTY = np.zeros(0, dtype=np.float32)
 EMPTY.setflags(write=False)
+
+
+def _same(value: Any) -> Any:
+    return value
 
 
 def empty_array() -> np.ndarray:
@@ -62,17 +69,18 @@ def _add_stamp_seq(cls: type) -> None:
 
 def _array_defaults(cls: type) -> None:
     """Mutable defaults (arrays, lists, dicts) become default factories; ``list`` fields default to
-    lists even when written as ``= ()``, so that a decoded message equals a constructed one."""
+    lists even when written as ``= ()``, so that a decoded message equals a constructed one.
+    """
     ann = cls.__dict__.get("__annotations__", {})
     for name, default in list(cls.__dict__.items()):
         if name not in ann:
             continue
         if isinstance(default, np.ndarray):
-            factory = (lambda a=default: a)
+            factory = functools.partial(_same, default)
         elif isinstance(default, (list, tuple)) and str(ann[name]).startswith(("list", "typing.List")):
-            factory = (lambda d=tuple(default): list(d))
+            factory = functools.partial(list, tuple(default))
         elif isinstance(default, dict):
-            factory = (lambda d=dict(default): dict(d))
+            factory = functools.partial(dict, dict(default))
         else:
             continue
         setattr(cls, name, dataclasses.field(default_factory=factory))
@@ -138,7 +146,7 @@ def field_types(cls: type) -> dict[str, Any]:
         ns.setdefault("np", np)
         cached = typing.get_type_hints(cls, globalns=ns)
         cached = {f.name: cached[f.name] for f in dataclasses.fields(cls)}
-        setattr(cls, "__cp_hints__", cached)
+        cls.__cp_hints__ = cached
     return cached
 
 

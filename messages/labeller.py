@@ -1,4 +1,5 @@
 """Messages of the social-signal labeller (Okwechime et al.)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -10,7 +11,8 @@ from .core import EMPTY, message, struct
 class PersonSignals:
     """Per-signal ``scores`` (K,) float32 and ``labels`` (K,) int8: 1, 0, or -1 for unknown (the
     input cannot support the signal); ``names`` (K,) gives the order; ``source`` is where nod/shake came
-    from: ``face`` (a tracked face), ``3d`` (tracker) or ``2d`` (silhouette)."""
+    from: ``face`` (a tracked face), ``3d`` (tracker) or ``2d`` (silhouette).
+    """
 
     id: int = 0
     side: str = "left"

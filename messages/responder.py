@@ -1,4 +1,5 @@
 """Messages of the responder (the partner) and the run-time controls."""
+
 from __future__ import annotations
 
 import numpy as np

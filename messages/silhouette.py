@@ -1,4 +1,5 @@
 """Messages of the silhouette node (Johnson, Galata & Hogg 1998; Baumberg & Hogg)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -30,7 +31,8 @@ class PersonShape:
 @message("silhouette.Silhouettes", 1)
 class Silhouettes:
     """The people of one frame. ``labels`` (H, W) uint8: 0 background, id + 1 per person (empty
-    when the node thins the mask out); ``width``/``height`` are the frame's size."""
+    when the node thins the mask out); ``width``/``height`` are the frame's size.
+    """
 
     people: list[PersonShape] = ()
     labels: np.ndarray = EMPTY

@@ -1,4 +1,5 @@
 """System messages every node understands: end of stream, per-node statistics, log lines."""
+
 from __future__ import annotations
 
 from .core import message, struct

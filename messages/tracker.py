@@ -1,4 +1,5 @@
 """Messages of the tracker node (Deutscher, Blake & Reid 2000; Zheng et al. 2006)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -12,7 +13,8 @@ class TrackedBody:
     order, Y up), ``pose`` and ``best_pose`` (DOF,) float64 pose vectors (body.pose), the weighted
     mean and the best particle; ``ess`` effective sample size of the final weighted particle set
     (un-annealed weights, before resampling: 1 to the particle count); ``log_likelihood``
-    of the mean pose; ``lost`` when the track collapsed and is re-initialising."""
+    of the mean pose; ``lost`` when the track collapsed and is re-initialising.
+    """
 
     id: int = 0
     side: str = "left"
@@ -27,7 +29,8 @@ class TrackedBody:
 @message("tracker.Pose3D", 1)
 class Pose3D:
     """The tracked people of one frame; ``fps`` the source's frame rate (the frame's, 0: unknown),
-    so that consumers of poses alone (the responder) know the time between frames."""
+    so that consumers of poses alone (the responder) know the time between frames.
+    """
 
     people: list[TrackedBody] = ()
     fps: float = 0.0

@@ -5,13 +5,21 @@ Modules: ``counterpart.sim.scenarios`` (seeded motion and labels), ``counterpart
 ground truth), ``counterpart.sim.stream`` (``open_stream``, what the camera node opens for ``sim:NAME``),
 ``counterpart.sim.dataset`` (trajectories for training, no rendering), ``counterpart.sim.cli`` (``counterpart sim``).
 """
+
 from __future__ import annotations
 
 from typing import Any
 
 
-def open_stream(scenario: str = "handshake", seed: int = 0, width: int | None = 320,
-                height: int | None = 240, fps: float | None = 25.0, **kw: Any):  # noqa: ANN201
+def open_stream(
+    scenario: str = "handshake",
+    seed: int = 0,
+    width: int | None = 320,
+    height: int | None = 240,
+    fps: float | None = 25.0,
+    **kw: Any,
+):  # noqa: ANN201
     """See ``counterpart.sim.stream.open_stream`` (imported lazily: ``import sim`` stays cheap)."""
     from counterpart.sim.stream import open_stream as _open
+
     return _open(scenario, seed=seed, width=width, height=height, fps=fps, **kw)

@@ -12,29 +12,42 @@ the light and the camera, drawn in a lighter colour (a cheap stand-in for diffus
 
 Colours are BGR floats in [0, 255] (OpenCV order).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.body.kinematics import frames
 from counterpart.body.skeleton import ANCHOR_INDEX, BodyDims
 
-N_POINTS: int = 40   # surface points per part (clouds are padded to this size)
-_RING = 8            # points per ring around a tube or ellipsoid
+N_POINTS: int = 40  # surface points per part (clouds are padded to this size)
+_RING = 8  # points per ring around a tube or ellipsoid
 
 SKIN_TONES: tuple[tuple[float, float, float], ...] = (
-    (185, 205, 240), (150, 180, 225), (110, 150, 200), (80, 115, 165), (55, 80, 120), (170, 195, 235))
+    (185, 205, 240),
+    (150, 180, 225),
+    (110, 150, 200),
+    (80, 115, 165),
+    (55, 80, 120),
+    (170, 195, 235),
+)
 HAIR_COLOURS: tuple[tuple[float, float, float], ...] = (
-    (20, 25, 30), (30, 50, 80), (60, 100, 150), (130, 170, 200), (150, 150, 150), (25, 30, 60))
+    (20, 25, 30),
+    (30, 50, 80),
+    (60, 100, 150),
+    (130, 170, 200),
+    (150, 150, 150),
+    (25, 30, 60),
+)
 
 
 @dataclass(frozen=True)
 class Appearance:
     """One person's look.
 
-    Attributes:
+    Attributes
+    ----------
         skin, hair, shirt, trousers, shoes: BGR colours in [0, 255].
         hair_style: "short", "long" or "none".
         long_sleeves: shirt sleeves down to the wrists (else forearms show skin).
@@ -54,6 +67,7 @@ class Appearance:
 def _vivid(rng: np.random.Generator) -> tuple[float, float, float]:
     hsv = np.array([[[rng.uniform(0, 180), rng.uniform(90, 230), rng.uniform(90, 230)]]], np.float32)
     import cv2
+
     bgr = cv2.cvtColor(hsv.astype(np.uint8), cv2.COLOR_HSV2BGR)[0, 0]
     return tuple(float(v) for v in bgr)
 
@@ -67,9 +81,16 @@ def random_appearance(rng: np.random.Generator) -> Appearance:
     trousers = tuple(float(np.clip(dark + v, 15, 200)) for v in rng.uniform(-25, 40, 3))
     shoes = tuple(float(v) for v in rng.uniform(20, 70, 3))
     style = ("short", "long", "none")[int(rng.choice(3, p=[0.55, 0.35, 0.10]))]
-    return Appearance(skin=tuple(float(v) for v in skin), hair=tuple(float(v) for v in hair),
-                      shirt=shirt, trousers=trousers, shoes=shoes, hair_style=style,
-                      long_sleeves=bool(rng.random() < 0.6), girth=float(rng.uniform(0.9, 1.3)))
+    return Appearance(
+        skin=tuple(float(v) for v in skin),
+        hair=tuple(float(v) for v in hair),
+        shirt=shirt,
+        trousers=trousers,
+        shoes=shoes,
+        hair_style=style,
+        long_sleeves=bool(rng.random() < 0.6),
+        girth=float(rng.uniform(0.9, 1.3)),
+    )
 
 
 # Tube parts: name, start anchor, end anchor, r_start, r_end, bulge (metres for a 1.75 m adult), colour key
@@ -101,7 +122,8 @@ _PELVIS_LOFT = ((0.08, 0.15, 0.1), (0.0, 0.165, 0.11), (-0.1, 0.15, 0.1))
 class PartTable:
     """The parts of one person, in drawing-tie order.
 
-    Attributes:
+    Attributes
+    ----------
         names: M part names (highlights end in "+lit").
         colours: (M, 3) BGR.
         base: (M,) index of the part a highlight belongs to (its own index for base parts).
@@ -126,8 +148,15 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
 
 
-def _tube(a0: np.ndarray, a1: np.ndarray, r0: float, r1: float, bulge: float,
-          shift: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
+def _tube(
+    a0: np.ndarray,
+    a1: np.ndarray,
+    r0: float,
+    r1: float,
+    bulge: float,
+    shift: np.ndarray | None = None,
+    scale: float = 1.0,
+) -> np.ndarray:
     """(N,3) ends -> (N, N_POINTS, 3) surface points: 4 rings of 8 plus the two tips."""
     ax = a1 - a0
     a = _unit(ax)
@@ -135,10 +164,10 @@ def _tube(a0: np.ndarray, a1: np.ndarray, r0: float, r1: float, bulge: float,
     u = _unit(np.cross(a, helper))
     v = np.cross(a, u)
     s = np.linspace(0.0, 1.0, 4)
-    r = (r0 + (r1 - r0) * s + bulge * np.sin(np.pi * s)) * scale          # (4,)
+    r = (r0 + (r1 - r0) * s + bulge * np.sin(np.pi * s)) * scale  # (4,)
     ang = np.linspace(0, 2 * np.pi, _RING, endpoint=False)
     circ = np.cos(ang)[:, None, None] * u + np.sin(ang)[:, None, None] * v  # (8, N, 3)
-    centres = a0[:, None] + s[None, :, None] * ax[:, None]                # (N, 4, 3)
+    centres = a0[:, None] + s[None, :, None] * ax[:, None]  # (N, 4, 3)
     if shift is not None:
         centres = centres + shift[:, None] * r[None, :, None] / scale
     pts = centres[:, :, None] + r[None, :, None, None] * np.moveaxis(circ, 0, 1)[:, None]
@@ -169,8 +198,14 @@ def _loft(origin: np.ndarray, R: np.ndarray, levels: list[tuple[float, float, fl
 def part_table(app: Appearance) -> PartTable:
     """The part names and colours of a person with appearance ``app`` (see ``body_clouds``)."""
     names, cols, base, shadow = [], [], [], []
-    colour = {"skin": app.skin, "shirt": app.shirt, "trousers": app.trousers, "shoes": app.shoes,
-              "sleeve": app.shirt if app.long_sleeves else app.skin, "hair": app.hair}
+    colour = {
+        "skin": app.skin,
+        "shirt": app.shirt,
+        "trousers": app.trousers,
+        "shoes": app.shoes,
+        "sleeve": app.shirt if app.long_sleeves else app.skin,
+        "hair": app.hair,
+    }
 
     def add(name: str, col: tuple[float, ...], lit: bool) -> None:
         i = len(names)
@@ -194,8 +229,7 @@ def part_table(app: Appearance) -> PartTable:
     return PartTable(tuple(names), np.array(cols, dtype=np.float32), np.array(base), np.array(shadow))
 
 
-def body_clouds(P: np.ndarray, dims: BodyDims, app: Appearance,
-                lit_dir: np.ndarray | None = None) -> np.ndarray:
+def body_clouds(P: np.ndarray, dims: BodyDims, app: Appearance, lit_dir: np.ndarray | None = None) -> np.ndarray:
     """Surface point clouds of every part of ``part_table(app)``.
 
     Args:
@@ -204,7 +238,9 @@ def body_clouds(P: np.ndarray, dims: BodyDims, app: Appearance,
         app: appearance.
         lit_dir: (N, 3) or (3,) unit direction from the body towards where highlights go (light
             and camera); default straight up.
-    Returns:
+
+    Returns
+    -------
         (N, M, N_POINTS, 3) metres, parts in ``part_table(app).names`` order.
     """
     pts, R = frames(P, dims)
@@ -238,12 +274,23 @@ def body_clouds(P: np.ndarray, dims: BodyDims, app: Appearance,
             out.append(_tube(a0, a1, r0 * k * gg, r1 * k * gg, b * k * gg, shift=0.5 * side, scale=0.42))
     hc = pts[:, ix["head"]]
     Rh = R["head"]
-    out.append(_ellipsoid(hc + np.einsum("nij,j->ni", Rh, np.array([0, -0.005, 0.012]) * k), Rh,
-                          np.array([0.074, 0.112, 0.094]) * k))
+    out.append(
+        _ellipsoid(
+            hc + np.einsum("nij,j->ni", Rh, np.array([0, -0.005, 0.012]) * k), Rh, np.array([0.074, 0.112, 0.094]) * k
+        )
+    )
     if app.hair_style == "short":
-        out.append(_ellipsoid(hc + np.einsum("nij,j->ni", Rh, np.array([0, 0.028, -0.02]) * k), Rh,
-                              np.array([0.08, 0.095, 0.092]) * k))
+        out.append(
+            _ellipsoid(
+                hc + np.einsum("nij,j->ni", Rh, np.array([0, 0.028, -0.02]) * k), Rh, np.array([0.08, 0.095, 0.092]) * k
+            )
+        )
     elif app.hair_style == "long":
-        out.append(_ellipsoid(hc + np.einsum("nij,j->ni", Rh, np.array([0, -0.01, -0.035]) * k), Rh,
-                              np.array([0.085, 0.14, 0.085]) * k))
+        out.append(
+            _ellipsoid(
+                hc + np.einsum("nij,j->ni", Rh, np.array([0, -0.01, -0.035]) * k),
+                Rh,
+                np.array([0.085, 0.14, 0.085]) * k,
+            )
+        )
     return np.stack(out, axis=1)

@@ -10,12 +10,12 @@ image with a margin. A draw for which no distance up to ``max_distance`` keeps t
 (a camera low and steeply tilted with a narrow view sees no heads) is drawn again: the accepted
 cameras are uniform over the feasible part of the ranges.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.body.camera import Camera
 
 #: metres above the head joint (the head's centre) that the image must include: the crown and hair
@@ -26,7 +26,8 @@ HEAD_TOP = 0.16
 class RandomCameraConfig:
     """Ranges of the random camera (metres, degrees) and the framing.
 
-    Attributes:
+    Attributes
+    ----------
         height: camera centre above the floor, metres (low, high).
         tilt_deg: downward pitch of the optical axis, degrees (low, high).
         fov_deg: horizontal field of view, degrees (low, high).
@@ -48,8 +49,16 @@ def _camera_at(eye: np.ndarray, tilt: float, fov_deg: float, width: int, height:
     return Camera.look_at(eye, eye + direction, fov_deg, width, height)
 
 
-def frame_people(points: np.ndarray, cam_height: float, tilt_deg: float, fov_deg: float, width: int,
-                 height: int, margin: float = 0.03, max_distance: float = 25.0) -> Camera | None:
+def frame_people(
+    points: np.ndarray,
+    cam_height: float,
+    tilt_deg: float,
+    fov_deg: float,
+    width: int,
+    height: int,
+    margin: float = 0.03,
+    max_distance: float = 25.0,
+) -> Camera | None:
     """The nearest camera of this height, tilt and field of view (no roll, looking along -Z) that
     keeps ``points`` in view; None when none within ``max_distance`` does.
 
@@ -73,15 +82,21 @@ def frame_people(points: np.ndarray, cam_height: float, tilt_deg: float, fov_deg
 
 def scene_points(joints: np.ndarray) -> np.ndarray:
     """(T, P, J, 3) joints (metres) -> (N, 3) points to keep in view: every joint, the head tops
-    (``HEAD_TOP`` above each joint) and the floor under each joint."""
+    (``HEAD_TOP`` above each joint) and the floor under each joint.
+    """
     J = np.asarray(joints, np.float64).reshape(-1, 3)
     top = J + np.array([0.0, HEAD_TOP, 0.0])
     floor = J * np.array([1.0, 0.0, 1.0])
     return np.concatenate([J, top, floor])
 
 
-def random_camera(joints: np.ndarray, rng: np.random.Generator, width: int, height: int,
-                  config: RandomCameraConfig = RandomCameraConfig()) -> tuple[Camera, dict[str, float]]:
+def random_camera(
+    joints: np.ndarray,
+    rng: np.random.Generator,
+    width: int,
+    height: int,
+    config: RandomCameraConfig = RandomCameraConfig(),
+) -> tuple[Camera, dict[str, float]]:
     """A random camera that sees the people of ``joints`` ((T, P, J, 3) metres) fully.
 
     Returns the camera and its drawn parameters: ``height`` (m), ``tilt_deg``, ``fov_deg``,

@@ -11,12 +11,12 @@ Labels: phase 0 before the closest approach window (pelvis distance within 5 cm 
 minimum), 1 inside it, 2 after; gaze and activity measured as in ``counterpart.sim.scenarios``; nod, shake
 and talking unknown (-1): the capture does not say.
 """
+
 from __future__ import annotations
 
 import os
 
 import numpy as np
-
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
 from counterpart.body.kinematics import lowest_point
 from counterpart.body.pose import DOF_INDEX
@@ -42,8 +42,9 @@ def _rot_y(points: np.ndarray, angle: float) -> np.ndarray:
     return points @ R.T
 
 
-def scenario_from_bvh(path_a: str | os.PathLike, path_b: str | os.PathLike, fps: float = 25.0,
-                      label: str = "handshake", seed: int = 0) -> Scenario:
+def scenario_from_bvh(
+    path_a: str | os.PathLike, path_b: str | os.PathLike, fps: float = 25.0, label: str = "handshake", seed: int = 0
+) -> Scenario:
     """A :class:`counterpart.sim.scenarios.Scenario` from two BVH files of one take (see the module docstring)."""
     traj = TwoPersonTrajectory.from_bvh_pair(path_a, path_b, fps=fps, label=label)
     A, B = traj.a.astype(np.float64), traj.b.astype(np.float64)
@@ -52,7 +53,7 @@ def scenario_from_bvh(path_a: str | os.PathLike, path_b: str | os.PathLike, fps:
     dist = np.linalg.norm((pb - pa)[:, [0, 2]], axis=1)
     k = int(np.argmin(dist))
     d = (pb - pa)[k]
-    angle = np.arctan2(d[0], d[2]) - np.pi / 2   # rotate d onto +X
+    angle = np.arctan2(d[0], d[2]) - np.pi / 2  # rotate d onto +X
     A, B = _rot_y(A, -angle), _rot_y(B, -angle)
     pa, pb = 0.5 * (A[:, 8] + A[:, 11]), 0.5 * (B[:, 8] + B[:, 11])
     centre = 0.5 * (pa[k] + pb[k])
@@ -76,8 +77,15 @@ def scenario_from_bvh(path_a: str | os.PathLike, path_b: str | os.PathLike, fps:
         s[:, SIGNAL_INDEX["gaze_at_other"]] = gaze[:, p]
         s[:, SIGNAL_INDEX["activity"]] = act[:, p]
         sig.append(s)
-    meta = {"scenario": "cmu", "seed": int(seed), "emotion": None, "strength": None, "initiator": None,
-            "interested": None, "source": traj.meta.get("source"), "rotation_rad": float(angle),
-            "licence": "CMU Graphics Lab Motion Capture Database (mocap.cs.cmu.edu), NSF EIA-0196217"}
-    return Scenario(poses[0], poses[1], dims[0], dims[1], float(fps), label, phase, sig[0], sig[1],
-                    SIGNAL_NAMES, meta)
+    meta = {
+        "scenario": "cmu",
+        "seed": int(seed),
+        "emotion": None,
+        "strength": None,
+        "initiator": None,
+        "interested": None,
+        "source": traj.meta.get("source"),
+        "rotation_rad": float(angle),
+        "licence": "CMU Graphics Lab Motion Capture Database (mocap.cs.cmu.edu), NSF EIA-0196217",
+    }
+    return Scenario(poses[0], poses[1], dims[0], dims[1], float(fps), label, phase, sig[0], sig[1], SIGNAL_NAMES, meta)

@@ -18,6 +18,7 @@ Writes into ``--out``:
 
 The same arguments give the same bytes (all randomness comes from seeded numpy generators).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,7 +29,6 @@ from typing import Any
 
 import cv2
 import numpy as np
-
 from counterpart.sim.scenarios import EMOTIONS, SCENARIOS
 
 
@@ -45,9 +45,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--noise", type=float, default=2.0, help="sensor noise sigma, grey levels")
     p.add_argument("--bvh-a", default=None, help="scenario cmu: person A's BVH (default: shared CMU 18_01)")
     p.add_argument("--bvh-b", default=None, help="scenario cmu: person B's BVH (default: shared CMU 19_01)")
-    p.add_argument("--camera", choices=("default", "random"), default="default",
-                   help="the simulator's default camera, or a random one drawn from the seed (height 1-3 m, tilt "
-                        "0-35 degrees, horizontal field of view 40-75 degrees) that keeps both people in view")
+    p.add_argument(
+        "--camera",
+        choices=("default", "random"),
+        default="default",
+        help="the simulator's default camera, or a random one drawn from the seed (height 1-3 m, tilt "
+        "0-35 degrees, horizontal field of view 40-75 degrees) that keeps both people in view",
+    )
     p.add_argument("--list", action="store_true", help="list the scenarios and exit")
 
 
@@ -71,7 +75,7 @@ def contact_sheet(frames: list[np.ndarray], numbers: list[int], cols: int = 4) -
         tiles.append(t)
     while len(tiles) % cols:
         tiles.append(np.zeros_like(tiles[0]))
-    return np.vstack([np.hstack(tiles[r:r + cols]) for r in range(0, len(tiles), cols)])
+    return np.vstack([np.hstack(tiles[r : r + cols]) for r in range(0, len(tiles), cols)])
 
 
 def render_to_folder(stream: Any, out: str, progress: bool = True) -> dict[str, str]:
@@ -79,9 +83,15 @@ def render_to_folder(stream: Any, out: str, progress: bool = True) -> dict[str, 
     os.makedirs(out, exist_ok=True)
     T = stream.n_frames
     W, H = stream.size
-    paths = {k: os.path.join(out, f) for k, f in (("video", "video.avi"), ("truth", "truth.npz"),
-                                                   ("trajectory", "trajectory.npz"),
-                                                   ("sheet", "contact_sheet.png"))}
+    paths = {
+        k: os.path.join(out, f)
+        for k, f in (
+            ("video", "video.avi"),
+            ("truth", "truth.npz"),
+            ("trajectory", "trajectory.npz"),
+            ("sheet", "contact_sheet.png"),
+        )
+    }
     writer, codec = open_writer(paths["video"], stream.fps, (W, H))
     sheet_idx = sorted(set(np.linspace(0, T - 1, min(12, T)).round().astype(int).tolist()))
     sheet: list[np.ndarray] = []
@@ -105,11 +115,24 @@ def render_to_folder(stream: Any, out: str, progress: bool = True) -> dict[str, 
     cam = stream.camera
     meta = json.loads(json.dumps(sc.meta, default=str))
     np.savez_compressed(
-        paths["truth"], joints3d=j3, joints2d=j2, masks=masks, shadow=shadow, signals=signals,
-        signal_names=np.array(sc.signal_names), phase=sc.phase, label=np.array(sc.label),
-        fps=np.float64(sc.fps), times=sc.times, poses=np.stack([sc.poses_a, sc.poses_b], axis=1),
-        camera_K=cam.K, camera_R=cam.R, camera_t=cam.t, codec=np.array(codec),
-        meta=np.array(json.dumps(meta, sort_keys=True)))
+        paths["truth"],
+        joints3d=j3,
+        joints2d=j2,
+        masks=masks,
+        shadow=shadow,
+        signals=signals,
+        signal_names=np.array(sc.signal_names),
+        phase=sc.phase,
+        label=np.array(sc.label),
+        fps=np.float64(sc.fps),
+        times=sc.times,
+        poses=np.stack([sc.poses_a, sc.poses_b], axis=1),
+        camera_K=cam.K,
+        camera_R=cam.R,
+        camera_t=cam.t,
+        codec=np.array(codec),
+        meta=np.array(json.dumps(meta, sort_keys=True)),
+    )
     stream.trajectory.save(paths["trajectory"])
     cv2.imwrite(paths["sheet"], contact_sheet(sheet, sheet_idx))
     return paths
@@ -125,14 +148,24 @@ def main(args: argparse.Namespace) -> int:
         print("counterpart sim: --out DIR is required (or --list)", file=sys.stderr)
         return 2
     from counterpart.sim.stream import open_stream
-    kw: dict[str, Any] = {"emotion": args.emotion, "strength": args.strength, "frames": args.frames,
-                          "noise": args.noise, "camera": args.camera}
+
+    kw: dict[str, Any] = {
+        "emotion": args.emotion,
+        "strength": args.strength,
+        "frames": args.frames,
+        "noise": args.noise,
+        "camera": args.camera,
+    }
     if args.scenario == "cmu":
-        kw = {"frames": args.frames, "noise": args.noise, "bvh_a": args.bvh_a, "bvh_b": args.bvh_b,
-              "camera": args.camera}
+        kw = {
+            "frames": args.frames,
+            "noise": args.noise,
+            "bvh_a": args.bvh_a,
+            "bvh_b": args.bvh_b,
+            "camera": args.camera,
+        }
     try:
-        stream = open_stream(args.scenario, seed=args.seed, width=args.width, height=args.height,
-                             fps=args.fps, **kw)
+        stream = open_stream(args.scenario, seed=args.seed, width=args.width, height=args.height, fps=args.fps, **kw)
     except (ValueError, FileNotFoundError) as e:
         print(f"counterpart sim: {e}", file=sys.stderr)
         return 2

@@ -1,14 +1,17 @@
 """Training data without rendering: scenario trajectories over seeds (the fast path)."""
+
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.sim.scenarios import SCENARIOS, make_scenario
 
 
-def generate_dataset(scenarios: Iterable[str] | None = None, seeds: Iterable[int] = range(10),
-                     fps: float = 25.0, **kw: Any) -> list[TwoPersonTrajectory]:
+def generate_dataset(
+    scenarios: Iterable[str] | None = None, seeds: Iterable[int] = range(10), fps: float = 25.0, **kw: Any
+) -> list[TwoPersonTrajectory]:
     """One ``counterpart.body.trajectory.TwoPersonTrajectory`` per (scenario, seed), poses only (no images).
 
     Args:
@@ -17,7 +20,9 @@ def generate_dataset(scenarios: Iterable[str] | None = None, seeds: Iterable[int
         fps: frames per second.
         **kw: passed to every generator (e.g. ``emotion="angry"``, ``strength=0.8``;
             ``interested``/``duration`` reach only ``conversation``).
-    Returns:
+
+    Returns
+    -------
         trajectories in scenario-major order; each one's ``meta`` holds the seed, emotion,
         strength, initiator, interest and body sizes.
     """

@@ -20,13 +20,13 @@ second, with short pauses). The labels are the scenario's own.
 Not a face model: a frontal Haar cascade finds this face (mostly; it loses it during look-aways
 beyond about 30 degrees, as it does on real faces), which is what it is for.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-
 from counterpart.body.pose import DOF_INDEX
 from counterpart.sim.scenarios import SIGNAL_INDEX, conversation
 
@@ -47,13 +47,15 @@ def _ring(c: tuple[float, float, float], rx: float, ry: float, n: int = 24) -> n
 def _sphere(radii: tuple[float, float, float], n: int = 24) -> np.ndarray:
     """(n*n, 3) points on an ellipsoid surface (m)."""
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, n, endpoint=False), np.linspace(0.02, np.pi - 0.02, n))
-    return np.stack([radii[0] * np.sin(v) * np.cos(u), radii[1] * np.cos(v),
-                     radii[2] * np.sin(v) * np.sin(u)], axis=-1).reshape(-1, 3)
+    return np.stack(
+        [radii[0] * np.sin(v) * np.cos(u), radii[1] * np.cos(v), radii[2] * np.sin(v) * np.sin(u)], axis=-1
+    ).reshape(-1, 3)
 
 
 def rotation(yaw: float, pitch: float) -> np.ndarray:
     """(3,3) head rotation: ``pitch`` (rad, positive chin down) about x, then ``yaw`` (rad,
-    positive turns the face to the image's left) about y."""
+    positive turns the face to the image's left) about y.
+    """
     cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
     ry = np.array([[cy, 0.0, -sy], [0.0, 1.0, 0.0], [sy, 0.0, cy]])
     rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, sp], [0.0, -sp, cp]])
@@ -89,15 +91,21 @@ class FaceRenderer:
     centre a little above the middle.
     """
 
-    def __init__(self, width: int = 640, height: int = 360, face_px: float = 130.0,
-                 look: FaceLook | None = None, noise: float = 2.5,
-                 center: tuple[float, float] | None = None) -> None:
+    def __init__(
+        self,
+        width: int = 640,
+        height: int = 360,
+        face_px: float = 130.0,
+        look: FaceLook | None = None,
+        noise: float = 2.5,
+        center: tuple[float, float] | None = None,
+    ) -> None:
         if width < 64 or height < 64:
             raise ValueError(f"frame size {width}x{height}: need at least 64x64 pixels")
         if not 16 <= face_px <= min(width, height):
             raise ValueError(f"face_px={face_px}: must be between 16 and the frame's smaller side")
         self.width, self.height = int(width), int(height)
-        self.scale = 2.0 * face_px / FACE_WIDTH_M   # supersampled px per metre
+        self.scale = 2.0 * face_px / FACE_WIDTH_M  # supersampled px per metre
         self.look = look or FaceLook()
         self.noise = float(noise)
         self.center = center or (width / 2.0, height * 0.45)
@@ -120,9 +128,15 @@ class FaceRenderer:
         uv = np.stack([origin[0] + self.scale * w[:, 0], origin[1] - self.scale * w[:, 1]], axis=1)
         return uv, w[:, 2]
 
-    def render(self, yaw: float = 0.0, pitch: float = 0.0, mouth: float = 0.0,
-               offset_px: tuple[float, float] = (0.0, 0.0), smile: float = 0.0,
-               rng: np.random.Generator | None = None) -> np.ndarray:
+    def render(
+        self,
+        yaw: float = 0.0,
+        pitch: float = 0.0,
+        mouth: float = 0.0,
+        offset_px: tuple[float, float] = (0.0, 0.0),
+        smile: float = 0.0,
+        rng: np.random.Generator | None = None,
+    ) -> np.ndarray:
         """One frame, (H, W, 3) uint8 BGR.
 
         yaw, pitch: head rotation (rad; see :func:`rotation`). mouth: jaw opening in [0, 1]
@@ -144,13 +158,23 @@ class FaceRenderer:
         s = self.scale
         # shoulders and neck: fixed below the head, they do not turn with it
         neck_top = origin + np.array([0.0, s * 0.06])
-        cv2.rectangle(img, (int(neck_top[0] - s * 0.05), int(neck_top[1])),
-                      (int(neck_top[0] + s * 0.05), int(origin[1] + s * 0.2)),
-                      tuple(0.7 * c for c in lk.skin), -1)
-        cv2.ellipse(img, (int(origin[0]), int(origin[1] + s * 0.21)), (int(s * 0.24), int(s * 0.09)),
-                    0, 0, 360, lk.shirt, -1)
-        cv2.rectangle(img, (int(origin[0] - s * 0.24), int(origin[1] + s * 0.21)),
-                      (int(origin[0] + s * 0.24), 2 * self.height + 1), lk.shirt, -1)
+        cv2.rectangle(
+            img,
+            (int(neck_top[0] - s * 0.05), int(neck_top[1])),
+            (int(neck_top[0] + s * 0.05), int(origin[1] + s * 0.2)),
+            tuple(0.7 * c for c in lk.skin),
+            -1,
+        )
+        cv2.ellipse(
+            img, (int(origin[0]), int(origin[1] + s * 0.21)), (int(s * 0.24), int(s * 0.09)), 0, 0, 360, lk.shirt, -1
+        )
+        cv2.rectangle(
+            img,
+            (int(origin[0] - s * 0.24), int(origin[1] + s * 0.21)),
+            (int(origin[0] + s * 0.24), 2 * self.height + 1),
+            lk.shirt,
+            -1,
+        )
         poly(self._project(self._hair, R, origin)[0], lk.hair, hull=True)
         skull = self._skull.copy()
         drop = 0.02 * float(np.clip(mouth, 0, 1.5))
@@ -168,24 +192,25 @@ class FaceRenderer:
         feats: list[tuple[np.ndarray, tuple[float, ...]]] = []
         for sx in (-1.0, 1.0):
             feats += [
-                (_ring((sx * 0.033, 0.030, 0.072), 0.024, 0.019), tuple(0.62 * skin)),       # socket
-                (_ring((sx * 0.034, 0.046, 0.080), 0.020, 0.0055), lk.hair),                 # brow
-                (_ring((sx * 0.033, 0.022, 0.079), 0.013, 0.0055), (215.0, 215.0, 220.0)),   # eye white
-                (_ring((sx * 0.033, 0.022, 0.080), 0.0055, 0.0055), (40.0, 35.0, 30.0)),     # iris
-                (_ring((sx * 0.012, -0.012, 0.095), 0.006, 0.014), tuple(0.85 * skin)),      # nose side
-                (_ring((sx * 0.008, -0.030, 0.098), 0.0045, 0.0025), tuple(0.35 * skin)),    # nostril
+                (_ring((sx * 0.033, 0.030, 0.072), 0.024, 0.019), tuple(0.62 * skin)),  # socket
+                (_ring((sx * 0.034, 0.046, 0.080), 0.020, 0.0055), lk.hair),  # brow
+                (_ring((sx * 0.033, 0.022, 0.079), 0.013, 0.0055), (215.0, 215.0, 220.0)),  # eye white
+                (_ring((sx * 0.033, 0.022, 0.080), 0.0055, 0.0055), (40.0, 35.0, 30.0)),  # iris
+                (_ring((sx * 0.012, -0.012, 0.095), 0.006, 0.014), tuple(0.85 * skin)),  # nose side
+                (_ring((sx * 0.008, -0.030, 0.098), 0.0045, 0.0025), tuple(0.35 * skin)),  # nostril
             ]
         feats += [
             (_ring((0.0, -0.005, 0.100), 0.007, 0.022), tuple(np.minimum(1.12 * skin, 255))),  # bridge
             (_ring((0.0, my, 0.083), mw, 0.007 + 0.5 * drop), lk.lips),
-            (_ring((0.0, my, 0.085), 0.85 * mw, 0.0015 + 0.45 * drop), (35.0, 30.0, 60.0)),   # opening
+            (_ring((0.0, my, 0.085), 0.85 * mw, 0.0015 + 0.45 * drop), (35.0, 30.0, 60.0)),  # opening
         ]
         if drop > 0.004:
             feats.append((_ring((0.0, my + 0.3 * drop, 0.086), 0.6 * mw, 0.12 * drop), (225.0, 225.0, 230.0)))
         for pts, colour in feats:
             uv, z = self._project(pts, R, origin)
-            normal = (R @ np.array([pts[0, 0] / HEAD_RADII[0] ** 2, pts[0, 1] / HEAD_RADII[1] ** 2,
-                                    0.5 / HEAD_RADII[2]]))[2]
+            normal = (
+                R @ np.array([pts[0, 0] / HEAD_RADII[0] ** 2, pts[0, 1] / HEAD_RADII[1] ** 2, 0.5 / HEAD_RADII[2]])
+            )[2]
             if normal > 0.15:
                 poly(uv, colour)
         out = img.astype(np.float32) * self._light
@@ -197,11 +222,16 @@ class FaceRenderer:
         return np.clip(out, 0, 255).astype(np.uint8)
 
 
-def syllables(talking: np.ndarray, fps: float, rng: np.random.Generator, rate_hz: tuple[float, float] = (3.0, 6.0),
-              ) -> np.ndarray:
+def syllables(
+    talking: np.ndarray,
+    fps: float,
+    rng: np.random.Generator,
+    rate_hz: tuple[float, float] = (3.0, 6.0),
+) -> np.ndarray:
     """(T,) jaw opening in [0, 1] of speech during the True frames of ``talking`` (T,) bool: raised-
     cosine syllables of 0.1-0.25 s at ``rate_hz`` per second, amplitudes 0.35-1, a pause of
-    0.2-0.4 s now and then (between words); closed elsewhere."""
+    0.2-0.4 s now and then (between words); closed elsewhere.
+    """
     t_n = talking.shape[0]
     out = np.zeros(t_n)
     t = 0.0
@@ -225,7 +255,8 @@ def syllables(talking: np.ndarray, fps: float, rng: np.random.Generator, rate_hz
 @dataclass
 class FaceClip:
     """A face video with per-frame truth. yaw, pitch: (T,) rad; mouth: (T,) jaw opening; offset:
-    (T, 2) px; truth: name -> (T,) bool ("nod", "shake", "talking", "laughing")."""
+    (T, 2) px; truth: name -> (T,) bool ("nod", "shake", "talking", "laughing").
+    """
 
     renderer: FaceRenderer
     fps: float
@@ -246,16 +277,29 @@ class FaceClip:
         """Frame ``i`` (H, W, 3) uint8 BGR; the sensor noise of a frame depends on (seed, i) only."""
         rng = np.random.default_rng([self.seed, 77, i])
         sm = 0.0 if self.smile is None else float(self.smile[i])
-        return self.renderer.render(float(self.yaw[i]), float(self.pitch[i]), float(self.mouth[i]),
-                                    (float(self.offset[i, 0]), float(self.offset[i, 1])), sm, rng)
+        return self.renderer.render(
+            float(self.yaw[i]),
+            float(self.pitch[i]),
+            float(self.mouth[i]),
+            (float(self.offset[i, 0]), float(self.offset[i, 1])),
+            sm,
+            rng,
+        )
 
 
-def conversation_face_clip(seed: int = 0, fps: float = 25.0, duration: float = 60.0,
-                           width: int = 640, height: int = 360, face_px: float | None = None,
-                           person: str = "a") -> FaceClip:
+def conversation_face_clip(
+    seed: int = 0,
+    fps: float = 25.0,
+    duration: float = 60.0,
+    width: int = 640,
+    height: int = 360,
+    face_px: float | None = None,
+    person: str = "a",
+) -> FaceClip:
     """Person ``person`` of ``counterpart.sim.scenarios.conversation(seed, fps, duration=duration)`` filmed
     face-on (see the module docstring). face_px: face width (px), default seeded 100-170 at
-    640x360 (scaled with the frame height)."""
+    640x360 (scaled with the frame height).
+    """
     if person not in ("a", "b"):
         raise ValueError(f"person={person!r}: use 'a' or 'b'")
     sc = conversation(seed=seed, fps=fps, duration=duration)
@@ -271,19 +315,45 @@ def conversation_face_clip(seed: int = 0, fps: float = 25.0, duration: float = 6
     off = np.stack([(head[:, 2] - head[:, 2].mean()), -(head[:, 1] - head[:, 1].mean())], axis=1) * px_per_m
     talking = sig[:, SIGNAL_INDEX["talking"]] == 1
     mouth = syllables(talking, fps, rng)
-    truth = {"nod": sig[:, SIGNAL_INDEX["nod"]] == 1, "shake": sig[:, SIGNAL_INDEX["shake"]] == 1,
-             "talking": talking, "laughing": np.zeros_like(talking)}
-    r = FaceRenderer(width, height, face_px, random_look(rng),
-                     center=(width / 2 + float(rng.uniform(-0.15, 0.15)) * width, height * 0.45))
-    return FaceClip(r, float(fps), yaw, pitch, mouth, off, truth, seed=seed,
-                    meta={"scenario": "conversation", "seed": seed, "person": person, "face_px": face_px})
+    truth = {
+        "nod": sig[:, SIGNAL_INDEX["nod"]] == 1,
+        "shake": sig[:, SIGNAL_INDEX["shake"]] == 1,
+        "talking": talking,
+        "laughing": np.zeros_like(talking),
+    }
+    r = FaceRenderer(
+        width,
+        height,
+        face_px,
+        random_look(rng),
+        center=(width / 2 + float(rng.uniform(-0.15, 0.15)) * width, height * 0.45),
+    )
+    return FaceClip(
+        r,
+        float(fps),
+        yaw,
+        pitch,
+        mouth,
+        off,
+        truth,
+        seed=seed,
+        meta={"scenario": "conversation", "seed": seed, "person": person, "face_px": face_px},
+    )
 
 
-def gesture_face_clip(kind: str, fps: float = 25.0, duration: float = 6.0, seed: int = 0,
-                      width: int = 640, height: int = 360, face_px: float = 130.0) -> FaceClip:
+def gesture_face_clip(
+    kind: str,
+    fps: float = 25.0,
+    duration: float = 6.0,
+    seed: int = 0,
+    width: int = 640,
+    height: int = 360,
+    face_px: float = 130.0,
+) -> FaceClip:
     """A short clip of one behaviour throughout (after 1 s of rest): ``still``, ``nod`` (2 Hz,
     8 degrees), ``shake`` (2.5 Hz, 15 degrees), ``talk`` or ``laugh`` (mouth wide open at about
-    5 per second, with a smile), for tests. Truth is True from the behaviour's start to its end."""
+    5 per second, with a smile), for tests. Truth is True from the behaviour's start to its end.
+    """
     kinds = ("still", "nod", "shake", "talk", "laugh")
     if kind not in kinds:
         raise ValueError(f"kind={kind!r}: use one of {kinds}")
@@ -310,5 +380,4 @@ def gesture_face_clip(kind: str, fps: float = 25.0, duration: float = 6.0, seed:
     if key:
         truth[key] = on.copy()
     r = FaceRenderer(width, height, face_px, random_look(rng))
-    return FaceClip(r, float(fps), yaw, pitch, mouth, np.zeros((n, 2)), truth, smile, seed=seed,
-                    meta={"kind": kind})
+    return FaceClip(r, float(fps), yaw, pitch, mouth, np.zeros((n, 2)), truth, smile, seed=seed, meta={"kind": kind})

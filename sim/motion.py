@@ -14,10 +14,10 @@ sampled at ``fps`` frames per second.
   per-frame weight.
 * :func:`ground` shifts ``root_y`` so that the lowest point of the body touches y = 0.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.ik import inverse_kinematics
 from counterpart.body.kinematics import forward_kinematics, lowest_point
 from counterpart.body.pose import DOF, DOF_INDEX, clip_to_limits
@@ -69,14 +69,14 @@ class Track:
     def end(self) -> float:
         return self.times[-1]
 
-    def key(self, t: float, P: np.ndarray) -> "Track":
+    def key(self, t: float, P: np.ndarray) -> Track:
         if t < self.times[-1] - 1e-9:
             raise ValueError(f"Track.key: time {t:.3f} s is before the last key at {self.times[-1]:.3f} s")
         self.times.append(float(t))
         self.poses.append(np.asarray(P, dtype=np.float64).copy())
         return self
 
-    def set(self, t: float, **dofs: float) -> "Track":
+    def set(self, t: float, **dofs: float) -> Track:
         P = self.last
         for name, v in dofs.items():
             if name not in DOF_INDEX:
@@ -84,7 +84,7 @@ class Track:
             P[DOF_INDEX[name]] = v
         return self.key(t, P)
 
-    def hold(self, t: float) -> "Track":
+    def hold(self, t: float) -> Track:
         return self.key(t, self.last)
 
     def sample(self, times: np.ndarray) -> np.ndarray:
@@ -99,8 +99,7 @@ class Track:
         return kp[i] + s * (kp[j] - kp[i])
 
 
-def smooth_noise(rng: np.random.Generator, n: int, fps: float, cutoff_hz: float,
-                 k: int = 1) -> np.ndarray:
+def smooth_noise(rng: np.random.Generator, n: int, fps: float, cutoff_hz: float, k: int = 1) -> np.ndarray:
     """(n, k) low-pass Gaussian noise of unit standard deviation (Gaussian-kernel smoothed)."""
     sigma = max(fps / (2 * np.pi * cutoff_hz), 1e-3)
     half = int(np.ceil(3 * sigma))
@@ -114,15 +113,15 @@ def smooth_noise(rng: np.random.Generator, n: int, fps: float, cutoff_hz: float,
 
 def oscillation(times: np.ndarray, t0: float, t1: float, freq_hz: float, phase: float = 0.0) -> np.ndarray:
     """(T,) ``sin(2 pi f (t - t0) + phase)`` under a Hann window on [t0, t1] (0 outside), so the
-    movement starts and ends at rest."""
+    movement starts and ends at rest.
+    """
     inside = (times >= t0) & (times <= t1)
     d = max(t1 - t0, 1e-9)
     w = 0.5 - 0.5 * np.cos(2 * np.pi * (times - t0) / d)
     return np.where(inside, w * np.sin(2 * np.pi * freq_hz * (times - t0) + phase), 0.0)
 
 
-def add_gait(P: np.ndarray, fps: float, dims: BodyDims, amp: float = 1.0,
-             arms: np.ndarray | None = None) -> np.ndarray:
+def add_gait(P: np.ndarray, fps: float, dims: BodyDims, amp: float = 1.0, arms: np.ndarray | None = None) -> np.ndarray:
     """Add walking leg swing to poses whose pelvis moves horizontally.
 
     The gait phase advances with the distance walked (one cycle per stride of ``0.75 * height``
@@ -160,8 +159,7 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
 
 
-def reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray,
-          reach_frac: float = 0.985) -> np.ndarray:
+def reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray, reach_frac: float = 0.985) -> np.ndarray:
     """Arm angles that put the ``side`` ("l"/"r") wrist on ``target``.
 
     Args:
@@ -171,7 +169,9 @@ def reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray,
         target: (T, 3) or (3,) wrist targets, metres, world frame.
         reach_frac: targets farther than this fraction of the arm length are pulled in along the
             shoulder-target line (the arm then points at them, nearly straight).
-    Returns:
+
+    Returns
+    -------
         (T, 4) shoulder_flex, shoulder_abd, shoulder_rot, elbow_flex (radians). The elbow is
         placed in the plane of the shoulder-target line and a "down and outwards" pole, the way
         people hold their elbows when they reach.
@@ -202,8 +202,7 @@ def reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray,
     return inverse_kinematics(X2)[:, ARM_DOFS[side]]
 
 
-def apply_reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray,
-                weight: np.ndarray) -> np.ndarray:
+def apply_reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray, weight: np.ndarray) -> np.ndarray:
     """Blend the ``reach`` solution into the ``side`` arm by ``weight`` (T,) in [0, 1]."""
     P = P.copy()
     w = np.asarray(weight, dtype=np.float64)

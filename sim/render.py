@@ -25,13 +25,13 @@ Drawing is vectorised: one numpy pass per chunk of frames builds every part's 3D
 projections; per frame a loop over the ~40 parts calls ``cv2.convexHull`` and
 ``cv2.fillConvexPoly`` (no per-pixel Python).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 from counterpart.body.camera import Camera, default_camera
 from counterpart.sim.appearance import Appearance, PartTable, body_clouds, part_table, random_appearance
 from counterpart.sim.scenarios import Scenario
@@ -57,9 +57,13 @@ class Lighting:
 def random_lighting(rng: np.random.Generator) -> Lighting:
     d = np.array([rng.uniform(0.2, 0.5) * rng.choice([-1, 1]), -1.0, -rng.uniform(0.3, 0.6)])
     d /= np.linalg.norm(d)
-    return Lighting(tuple(float(v) for v in d), float(rng.uniform(0.02, 0.04)),
-                    float(rng.uniform(15.0, 40.0)), float(rng.uniform(0, 2 * np.pi)),
-                    float(rng.uniform(0.55, 0.7)))
+    return Lighting(
+        tuple(float(v) for v in d),
+        float(rng.uniform(0.02, 0.04)),
+        float(rng.uniform(15.0, 40.0)),
+        float(rng.uniform(0, 2 * np.pi)),
+        float(rng.uniform(0.55, 0.7)),
+    )
 
 
 def _noise_texture(rng: np.random.Generator, n: int, blur: float) -> np.ndarray:
@@ -69,11 +73,11 @@ def _noise_texture(rng: np.random.Generator, n: int, blur: float) -> np.ndarray:
     return t / max(float(t.std()), 1e-6)
 
 
-def make_background(camera: Camera, rng: np.random.Generator,
-                    wall_z: float = -2.5) -> tuple[np.ndarray, np.ndarray]:
+def make_background(camera: Camera, rng: np.random.Generator, wall_z: float = -2.5) -> tuple[np.ndarray, np.ndarray]:
     """Procedural room seen by ``camera``.
 
-    Returns:
+    Returns
+    -------
         bg: (H, W, 3) float32 BGR in [35, 235].
         floor: (H, W) bool, pixels that see the floor (where shadows can fall).
     """
@@ -129,7 +133,8 @@ def make_background(camera: Camera, rng: np.random.Generator,
 class FrameTruth:
     """Ground truth of one frame.
 
-    Attributes:
+    Attributes
+    ----------
         joints3d: (2, 14, 3) metres, A then B.
         joints2d: (2, 14, 2) pixels (u, v).
         masks: (2, H, W) bool, visible pixels of A and B.
@@ -161,9 +166,16 @@ class Renderer:
         appearances: the two people's looks (default: drawn from ``seed``).
     """
 
-    def __init__(self, scenario: Scenario, camera: Camera | None = None, seed: int = 0,
-                 noise_sigma: float = 2.0, appearances: tuple[Appearance, Appearance] | None = None,
-                 width: int = 320, height: int = 240) -> None:
+    def __init__(
+        self,
+        scenario: Scenario,
+        camera: Camera | None = None,
+        seed: int = 0,
+        noise_sigma: float = 2.0,
+        appearances: tuple[Appearance, Appearance] | None = None,
+        width: int = 320,
+        height: int = 240,
+    ) -> None:
         if not noise_sigma >= 0:
             raise ValueError(f"noise_sigma={noise_sigma!r}: must be >= 0 grey levels")
         self.scenario = scenario
@@ -182,8 +194,8 @@ class Renderer:
         if self.n_parts > 254:
             raise ValueError("too many parts for a uint8 id image")
         self.owner = np.zeros(self.n_parts + 1, np.uint8)
-        self.owner[1:Ma + 1] = 1
-        self.owner[Ma + 1:] = 2
+        self.owner[1 : Ma + 1] = 1
+        self.owner[Ma + 1 :] = 2
         self.colours = np.concatenate([self.tables[0].colours, self.tables[1].colours])
         self.base = np.concatenate([self.tables[0].base, self.tables[1].base + Ma])
         self.casts = np.concatenate([self.tables[0].casts_shadow, self.tables[1].casts_shadow])
@@ -212,14 +224,18 @@ class Renderer:
                 self._cache.clear()
             sl = slice(c * _CHUNK, min((c + 1) * _CHUNK, self.n_frames))
             sc = self.scenario
-            clouds = np.concatenate([
-                body_clouds(sc.poses_a[sl], sc.dims_a, self.appearances[0], self._lit),
-                body_clouds(sc.poses_b[sl], sc.dims_b, self.appearances[1], self._lit)], axis=1)
-            uv = self.camera.project(clouds)                                   # (n, M, K, 2)
-            depth = self.camera.depth(clouds).mean(axis=-1)                    # (n, M)
+            clouds = np.concatenate(
+                [
+                    body_clouds(sc.poses_a[sl], sc.dims_a, self.appearances[0], self._lit),
+                    body_clouds(sc.poses_b[sl], sc.dims_b, self.appearances[1], self._lit),
+                ],
+                axis=1,
+            )
+            uv = self.camera.project(clouds)  # (n, M, K, 2)
+            depth = self.camera.depth(clouds).mean(axis=-1)  # (n, M)
             L = np.array(self.lighting.direction)
             caster = clouds[:, self.casts]
-            on_ground = caster - (caster[..., 1:2] / L[1]) * L                 # along the light to y = 0
+            on_ground = caster - (caster[..., 1:2] / L[1]) * L  # along the light to y = 0
             suv = self.camera.project(on_ground)
             fix = lambda a: np.round(np.nan_to_num(a, nan=-1e4) * (1 << _SHIFT)).astype(np.int32)  # noqa: E731
             ok = np.isfinite(uv).all(axis=(-1, -2))
@@ -253,7 +269,9 @@ class Renderer:
     def _check(self, i: int) -> int:
         i = int(i)
         if not 0 <= i < self.n_frames:
-            raise IndexError(f"frame {i} out of range: the scenario has {self.n_frames} frames (0..{self.n_frames - 1})")
+            raise IndexError(
+                f"frame {i} out of range: the scenario has {self.n_frames} frames (0..{self.n_frames - 1})"
+            )
         return i
 
     def background(self, i: int) -> np.ndarray:
@@ -281,7 +299,13 @@ class Renderer:
         sc = self.scenario
         J = self.joints[i]
         truth = FrameTruth(
-            joints3d=J, joints2d=self.camera.project(J), masks=np.stack([own == 1, own == 2]),
-            shadow=shadow, signals=np.stack([sc.signals_a[i], sc.signals_b[i]]),
-            phase=int(sc.phase[i]), label=sc.label, time_s=self.time(i))
+            joints3d=J,
+            joints2d=self.camera.project(J),
+            masks=np.stack([own == 1, own == 2]),
+            shadow=shadow,
+            signals=np.stack([sc.signals_a[i], sc.signals_b[i]]),
+            phase=int(sc.phase[i]),
+            label=sc.label,
+            time_s=self.time(i),
+        )
         return frame, truth

@@ -33,14 +33,15 @@ Emotion (``EMOTIONS``) with ``strength`` s in [0, 1] changes both people's style
 (x(1 - 0.4 s)), smaller (x(1 - 0.45 s)), head down (+0.35 s rad) and slumped; happy faster
 (x(1 + 0.25 s)), larger (x(1 + 0.3 s)) and bouncy (knee bounce at 2.2 Hz); neutral ignores s.
 """
+
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
-
 from counterpart.body.kinematics import forward_kinematics, frames
 from counterpart.body.pose import DOF_INDEX, clip_to_limits, neutral_pose
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, JOINT_INDEX, BodyDims
@@ -61,10 +62,22 @@ EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
 #: spontaneous listener events never fall where a response could, so per frame
 #: P(listener consequent at t + offset | speaker antecedent at t) equals the probability.
 PLANTED_RULES: tuple[dict[str, Any], ...] = (
-    {"antecedent": "nod", "consequent": "nod", "offset_s": 0.4, "offset_frames_at_25fps": 10,
-     "p_interested": 0.8, "p_uninterested": 0.3},
-    {"antecedent": "shake", "consequent": "shake", "offset_s": 0.4, "offset_frames_at_25fps": 10,
-     "p_interested": 0.6, "p_uninterested": 0.2},
+    {
+        "antecedent": "nod",
+        "consequent": "nod",
+        "offset_s": 0.4,
+        "offset_frames_at_25fps": 10,
+        "p_interested": 0.8,
+        "p_uninterested": 0.3,
+    },
+    {
+        "antecedent": "shake",
+        "consequent": "shake",
+        "offset_s": 0.4,
+        "offset_frames_at_25fps": 10,
+        "p_interested": 0.6,
+        "p_uninterested": 0.2,
+    },
 )
 
 
@@ -101,7 +114,8 @@ def style(emotion: str, strength: float) -> Style:
 class Scenario:
     """Two people's motion with labels.
 
-    Attributes:
+    Attributes
+    ----------
         poses_a, poses_b: (T, 28) float64 pose vectors (``counterpart.body.pose``), radians and metres.
         dims_a, dims_b: body dimensions.
         fps: frames per second; frame t is at t / fps seconds.
@@ -135,17 +149,28 @@ class Scenario:
 
     def joints(self) -> np.ndarray:
         """(T, 2, 14, 3) joint positions of A and B, metres."""
-        return np.stack([forward_kinematics(self.poses_a, self.dims_a),
-                         forward_kinematics(self.poses_b, self.dims_b)], axis=1)
+        return np.stack(
+            [forward_kinematics(self.poses_a, self.dims_a), forward_kinematics(self.poses_b, self.dims_b)], axis=1
+        )
 
-    def crop(self, n: int) -> "Scenario":
+    def crop(self, n: int) -> Scenario:
         """The first ``n`` frames."""
         n = int(n)
         if n < 1:
             raise ValueError(f"crop: n={n}; need at least one frame")
-        return Scenario(self.poses_a[:n], self.poses_b[:n], self.dims_a, self.dims_b, self.fps,
-                        self.label, self.phase[:n], self.signals_a[:n], self.signals_b[:n],
-                        self.signal_names, dict(self.meta))
+        return Scenario(
+            self.poses_a[:n],
+            self.poses_b[:n],
+            self.dims_a,
+            self.dims_b,
+            self.fps,
+            self.label,
+            self.phase[:n],
+            self.signals_a[:n],
+            self.signals_b[:n],
+            self.signal_names,
+            dict(self.meta),
+        )
 
     def to_trajectory(self) -> TwoPersonTrajectory:
         """The ``counterpart.body.trajectory`` form (joints, signals as float32 with -1 unknown, phase)."""
@@ -154,9 +179,16 @@ class Scenario:
         meta["dims_a"] = _dims_dict(self.dims_a)
         meta["dims_b"] = _dims_dict(self.dims_b)
         return TwoPersonTrajectory(
-            a=X[:, 0], b=X[:, 1], fps=self.fps, label=self.label,
-            signals_a=self.signals_a.astype(np.float32), signals_b=self.signals_b.astype(np.float32),
-            signal_names=self.signal_names, phase=self.phase, meta=json.loads(json.dumps(meta)))
+            a=X[:, 0],
+            b=X[:, 1],
+            fps=self.fps,
+            label=self.label,
+            signals_a=self.signals_a.astype(np.float32),
+            signals_b=self.signals_b.astype(np.float32),
+            signal_names=self.signal_names,
+            phase=self.phase,
+            meta=json.loads(json.dumps(meta)),
+        )
 
 
 def _dims_dict(d: BodyDims) -> dict[str, float]:
@@ -189,8 +221,9 @@ class _Ctx:
         return seconds / self.st.speed
 
 
-def _context(name: str, seed: int, fps: float, emotion: str | None, strength: float | None,
-             initiator: str | None) -> _Ctx:
+def _context(
+    name: str, seed: int, fps: float, emotion: str | None, strength: float | None, initiator: str | None
+) -> _Ctx:
     if not (np.isfinite(fps) and fps > 0):
         raise ValueError(f"fps={fps!r}: frames per second must be > 0")
     seed = int(seed)
@@ -203,8 +236,15 @@ def _context(name: str, seed: int, fps: float, emotion: str | None, strength: fl
     if init not in ("a", "b"):
         raise ValueError(f"initiator={initiator!r}: use 'a' (left person) or 'b' (right person)")
     cx, cz = float(rng.uniform(-0.2, 0.2)), float(rng.uniform(-0.4, 0.3))
-    meta = {"scenario": name, "seed": seed, "emotion": emo, "strength": s, "initiator": init,
-            "interested": None, "heights": [dims["a"].height, dims["b"].height]}
+    meta = {
+        "scenario": name,
+        "seed": seed,
+        "emotion": emo,
+        "strength": s,
+        "initiator": init,
+        "interested": None,
+        "heights": [dims["a"].height, dims["b"].height],
+    }
     return _Ctx(name, rng, float(fps), st, dims, init, cx, cz, meta)
 
 
@@ -221,29 +261,29 @@ def _shoulder(dims: BodyDims, lean: float) -> np.ndarray:
     P = neutral_pose(dims)
     P[DOF_INDEX["torso_flex"]] = lean
     P = ground(P[None], dims)
-    return forward_kinematics(P, dims)[0, JOINT_INDEX["r_shoulder"]]   # right is -X here
+    return forward_kinematics(P, dims)[0, JOINT_INDEX["r_shoulder"]]  # right is -X here
 
 
-def _contact_distance(dims: BodyDims, hand_y: float, lateral: float, lean: float,
-                      frac: float = 0.9) -> float:
+def _contact_distance(dims: BodyDims, hand_y: float, lateral: float, lean: float, frac: float = 0.9) -> float:
     """Horizontal distance (m) from the pelvis to a right-hand target at height ``hand_y`` and
     ``lateral`` metres towards the person's right, when leaning ``lean`` rad, such that the
-    shoulder-target distance is ``frac`` of the arm length."""
+    shoulder-target distance is ``frac`` of the arm length.
+    """
     S = _shoulder(dims, lean)
     L = frac * (dims.upper_arm + dims.forearm)
     rest = L * L - (hand_y - S[1]) ** 2 - (-lateral - S[0]) ** 2
     return float(S[2] + np.sqrt(max(rest, 0.01)))
 
 
-def _comfortable_hand_height(dims: list[BodyDims], lateral: float, lean: float, frac: float,
-                             forward: float) -> float:
+def _comfortable_hand_height(dims: list[BodyDims], lateral: float, lean: float, frac: float, forward: float) -> float:
     """The lowest hand height (m) that every person reaches with the hand at least ``forward``
-    metres in front of the shoulder (tall people set it: they would otherwise stand too close)."""
+    metres in front of the shoulder (tall people set it: they would otherwise stand too close).
+    """
     ys = []
     for d in dims:
         S = _shoulder(d, lean)
         L = frac * (d.upper_arm + d.forearm)
-        ys.append(S[1] - np.sqrt(max(L * L - (-lateral - S[0]) ** 2 - forward ** 2, 0.0)))
+        ys.append(S[1] - np.sqrt(max(L * L - (-lateral - S[0]) ** 2 - forward**2, 0.0)))
     return float(max(ys))
 
 
@@ -268,8 +308,9 @@ def _idle(c: _Ctx, P: np.ndarray, times: np.ndarray, p: str) -> np.ndarray:
     return P
 
 
-def _gaze_and_activity(Pa: np.ndarray, Pb: np.ndarray, da: BodyDims, db: BodyDims,
-                       fps: float) -> tuple[np.ndarray, np.ndarray]:
+def _gaze_and_activity(
+    Pa: np.ndarray, Pb: np.ndarray, da: BodyDims, db: BodyDims, fps: float
+) -> tuple[np.ndarray, np.ndarray]:
     """(T, 2) gaze_at_other and activity labels of A and B measured on the poses."""
     pts_a, Ra = frames(Pa, da)
     pts_b, Rb = frames(Pb, db)
@@ -288,8 +329,9 @@ def _gaze_and_activity(Pa: np.ndarray, Pb: np.ndarray, da: BodyDims, db: BodyDim
     return np.stack(gaze, 1), np.stack(act, 1)
 
 
-def _finish(c: _Ctx, P: dict[str, np.ndarray], phase: np.ndarray,
-            events: dict[str, dict[str, np.ndarray]] | None = None) -> Scenario:
+def _finish(
+    c: _Ctx, P: dict[str, np.ndarray], phase: np.ndarray, events: dict[str, dict[str, np.ndarray]] | None = None
+) -> Scenario:
     Pa, Pb = clip_to_limits(P["a"]), clip_to_limits(P["b"])
     T = len(Pa)
     gaze, act = _gaze_and_activity(Pa, Pb, c.dims["a"], c.dims["b"], c.fps)
@@ -304,8 +346,9 @@ def _finish(c: _Ctx, P: dict[str, np.ndarray], phase: np.ndarray,
         sig[p] = s
     meta = dict(c.meta)
     meta["style"] = {"speed": c.st.speed, "amp": c.st.amp}
-    return Scenario(Pa, Pb, c.dims["a"], c.dims["b"], c.fps, c.name, phase.astype(np.int32),
-                    sig["a"], sig["b"], SIGNAL_NAMES, meta)
+    return Scenario(
+        Pa, Pb, c.dims["a"], c.dims["b"], c.fps, c.name, phase.astype(np.int32), sig["a"], sig["b"], SIGNAL_NAMES, meta
+    )
 
 
 def _times(c: _Ctx, end: float) -> np.ndarray:
@@ -325,7 +368,8 @@ def _legs(c: _Ctx, P: np.ndarray, p: str, busy: np.ndarray | None = None) -> np.
 # ------------------------------------------------------------------------- meeting-hands scenarios
 def _hands_meet(c: _Ctx, high: bool, hand_dy: float = 0.0) -> dict[str, Any]:
     """Shared geometry of handshake / high five / pull: distances and the meeting point (raised by
-    ``hand_dy`` metres: the target height of the offered hand)."""
+    ``hand_dy`` metres: the target height of the offered hand).
+    """
     hmin = min(c.dims["a"].height, c.dims["b"].height)
     lean = 0.0 if high else 0.08
     hand_y = 0.93 * hmin if high else _comfortable_hand_height(list(c.dims.values()), 0.025, lean, 0.96, 0.3)
@@ -337,7 +381,8 @@ def _hands_meet(c: _Ctx, high: bool, hand_dy: float = 0.0) -> dict[str, Any]:
 
 def _approach(c: _Ctx, tracks: dict[str, Track], x_end: dict[str, float], t_start: float) -> dict[str, float]:
     """Initiator walks 0.6-1.1 m to ``x_end``, the other 0.1-0.5 m, a little later. Returns
-    each person's arrival time."""
+    each person's arrival time.
+    """
     arrive = {}
     for p in (c.init, c.other):
         dist = c.rng.uniform(0.6, 1.1) if p == c.init else c.rng.uniform(0.1, 0.5)
@@ -349,26 +394,46 @@ def _approach(c: _Ctx, tracks: dict[str, Track], x_end: dict[str, float], t_star
     return arrive
 
 
-def handshake(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-              strength: float | None = None, initiator: str | None = None, hand_dy: float = 0.0) -> Scenario:
+def handshake(
+    seed: int = 0,
+    fps: float = 25.0,
+    emotion: str | None = None,
+    strength: float | None = None,
+    initiator: str | None = None,
+    hand_dy: float = 0.0,
+) -> Scenario:
     """Two people walk up to each other, shake right hands (pumping), let go and step back.
-    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet."""
+    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet.
+    """
     c = _context("handshake", seed, fps, emotion, strength, initiator)
     return _meeting(c, kind="handshake", hand_dy=hand_dy)
 
 
-def high_five(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-              strength: float | None = None, initiator: str | None = None, hand_dy: float = 0.0) -> Scenario:
+def high_five(
+    seed: int = 0,
+    fps: float = 25.0,
+    emotion: str | None = None,
+    strength: float | None = None,
+    initiator: str | None = None,
+    hand_dy: float = 0.0,
+) -> Scenario:
     """Two people walk up, raise their right hands and slap them together above head height.
-    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet."""
+    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet.
+    """
     c = _context("high_five", seed, fps, emotion, strength, initiator)
     return _meeting(c, kind="high_five", hand_dy=hand_dy)
 
 
-def pull(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-         strength: float | None = None, initiator: str | None = None) -> Scenario:
+def pull(
+    seed: int = 0,
+    fps: float = 25.0,
+    emotion: str | None = None,
+    strength: float | None = None,
+    initiator: str | None = None,
+) -> Scenario:
     """The initiator takes the other's right hand and pulls: steps back leaning back, the other is
-    drawn forward a step, leaning in; then they let go."""
+    drawn forward a step, leaning in; then they let go.
+    """
     c = _context("pull", seed, fps, emotion, strength, initiator)
     return _meeting(c, kind="pull")
 
@@ -382,8 +447,11 @@ def _meeting(c: _Ctx, kind: str, hand_dy: float = 0.0) -> Scenario:
     reach_d = c.dur(0.7 if kind != "high_five" else 0.5)
     r0 = {c.init: t_arr - c.dur(0.35), c.other: t_arr - c.dur(0.35) + c.dur(float(c.rng.uniform(0.1, 0.3)))}
     t_c = max(r0.values()) + reach_d
-    hold = {"handshake": c.dur(float(c.rng.uniform(1.2, 2.0))), "high_five": c.dur(0.2),
-            "pull": c.dur(float(c.rng.uniform(0.9, 1.2)))}[kind]
+    hold = {
+        "handshake": c.dur(float(c.rng.uniform(1.2, 2.0))),
+        "high_five": c.dur(0.2),
+        "pull": c.dur(float(c.rng.uniform(0.9, 1.2))),
+    }[kind]
     t_r = t_c + hold
     rel_d = c.dur(0.6)
     pull_d = 0.3 * c.st.amp
@@ -394,9 +462,9 @@ def _meeting(c: _Ctx, kind: str, hand_dy: float = 0.0) -> Scenario:
         if kind == "pull":
             x = tr.last[0]
             tr.hold(t_c + 0.1)
-            if p == c.init:   # step back, leaning back
+            if p == c.init:  # step back, leaning back
                 tr.set(t_r, root_x=x - c.fwd(p) * pull_d, torso_flex=-0.15 * c.st.amp)
-            else:             # drawn forward, leaning in
+            else:  # drawn forward, leaning in
                 tr.set(t_r, root_x=x + c.fwd(p) * pull_d * 1.15, torso_flex=0.3 * c.st.amp)
         tr.hold(max(tr.end, t_r))
         tr.set(t_r + rel_d, torso_flex=0.0)
@@ -414,7 +482,7 @@ def _meeting(c: _Ctx, kind: str, hand_dy: float = 0.0) -> Scenario:
     if kind == "handshake":
         M[:, 1] += 0.035 * c.st.amp * oscillation(times, t_c - 0.1, t_r, 2.0 * c.st.speed)
     if kind == "pull":
-        toward = c.fwd(c.init) * -1.0   # towards the puller's back
+        toward = c.fwd(c.init) * -1.0  # towards the puller's back
         M[:, 0] += toward * pull_d * ramp(times, t_c + 0.1, t_r)
     P = {}
     for p in "ab":
@@ -433,10 +501,16 @@ def _meeting(c: _Ctx, kind: str, hand_dy: float = 0.0) -> Scenario:
     return _finish(c, P, phase)
 
 
-def push(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-         strength: float | None = None, initiator: str | None = None) -> Scenario:
+def push(
+    seed: int = 0,
+    fps: float = 25.0,
+    emotion: str | None = None,
+    strength: float | None = None,
+    initiator: str | None = None,
+) -> Scenario:
     """The initiator walks up and pushes the other on the chest with both hands; the pushed person
-    recoils: leans back, arms flung out, head snapping back, stumbling backwards a few steps."""
+    recoils: leans back, arms flung out, head snapping back, stumbling backwards a few steps.
+    """
     c = _context("push", seed, fps, emotion, strength, initiator)
     I, O = c.init, c.other
     dO = c.dims[O]
@@ -465,13 +539,28 @@ def push(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
     tO = tracks[O]
     tO.hold(t_c)
     push_in = 0.12 * a
-    tO.set(t_r, root_x=x[O] + c.fwd(I) * push_in, torso_flex=-0.25 * a, head_nod=-0.3 * a,
-           l_shoulder_abd=0.5 * a, r_shoulder_abd=0.5 * a, l_elbow_flex=0.6, r_elbow_flex=0.6)
+    tO.set(
+        t_r,
+        root_x=x[O] + c.fwd(I) * push_in,
+        torso_flex=-0.25 * a,
+        head_nod=-0.3 * a,
+        l_shoulder_abd=0.5 * a,
+        r_shoulder_abd=0.5 * a,
+        l_elbow_flex=0.6,
+        r_elbow_flex=0.6,
+    )
     back = float(c.rng.uniform(0.3, 0.45)) * a
-    tO.set(t_r + c.dur(0.7), root_x=x[O] + c.fwd(I) * (push_in + back), torso_flex=-0.1 * a,
-           head_nod=0.0, l_shoulder_abd=0.9 * a, r_shoulder_abd=0.9 * a)
-    tO.set(t_r + c.dur(1.4), torso_flex=0.0, l_shoulder_abd=0.17, r_shoulder_abd=0.17,
-           l_elbow_flex=0.17, r_elbow_flex=0.17)
+    tO.set(
+        t_r + c.dur(0.7),
+        root_x=x[O] + c.fwd(I) * (push_in + back),
+        torso_flex=-0.1 * a,
+        head_nod=0.0,
+        l_shoulder_abd=0.9 * a,
+        r_shoulder_abd=0.9 * a,
+    )
+    tO.set(
+        t_r + c.dur(1.4), torso_flex=0.0, l_shoulder_abd=0.17, r_shoulder_abd=0.17, l_elbow_flex=0.17, r_elbow_flex=0.17
+    )
     end = max(tI.end, tO.end) + 0.6
     times = _times(c, end)
     P = {O: ground(_legs(c, _idle(c, tO.sample(times), times, O), O), dO)}
@@ -490,8 +579,13 @@ def push(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
     return _finish(c, P, phase)
 
 
-def wave(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-         strength: float | None = None, initiator: str | None = None) -> Scenario:
+def wave(
+    seed: int = 0,
+    fps: float = 25.0,
+    emotion: str | None = None,
+    strength: float | None = None,
+    initiator: str | None = None,
+) -> Scenario:
     """The initiator takes a step, raises the right hand and waves; the other waves back."""
     c = _context("wave", seed, fps, emotion, strength, initiator)
     g = DOF_INDEX
@@ -511,11 +605,21 @@ def wave(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
     for p in (I, O):
         tr = tracks[p]
         tr.hold(max(tr.end, start[p]))
-        tr.set(start[p] + up, r_shoulder_abd=min(2.0 + 0.3 * (a - 1), 2.6), r_shoulder_flex=0.3,
-               r_shoulder_rot=-1.2, r_elbow_flex=0.9)
+        tr.set(
+            start[p] + up,
+            r_shoulder_abd=min(2.0 + 0.3 * (a - 1), 2.6),
+            r_shoulder_flex=0.3,
+            r_shoulder_rot=-1.2,
+            r_elbow_flex=0.9,
+        )
         tr.hold(start[p] + up + length[p])
-        tr.set(start[p] + 2 * up + length[p], r_shoulder_abd=0.17, r_shoulder_flex=0.0,
-               r_shoulder_rot=0.0, r_elbow_flex=0.17)
+        tr.set(
+            start[p] + 2 * up + length[p],
+            r_shoulder_abd=0.17,
+            r_shoulder_flex=0.0,
+            r_shoulder_rot=0.0,
+            r_elbow_flex=0.17,
+        )
         osc[p] = (start[p] + up * 0.5, start[p] + up * 1.5 + length[p])
     end = max(tr.end for tr in tracks.values()) + 0.6
     times = _times(c, end)
@@ -531,25 +635,33 @@ def wave(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
 
 
 # ---------------------------------------------------------------------------------- conversation
-def _place_events(rng: np.random.Generator, lo: int, hi: int, rate_per_frame: float,
-                  dur: tuple[int, int], gap: int, busy: np.ndarray) -> list[tuple[int, int]]:
+def _place_events(
+    rng: np.random.Generator, lo: int, hi: int, rate_per_frame: float, dur: tuple[int, int], gap: int, busy: np.ndarray
+) -> list[tuple[int, int]]:
     """Non-overlapping events (start, length) in [lo, hi) at a Poisson rate, avoiding ``busy``
-    frames (and marking theirs, with ``gap`` frames of margin)."""
+    frames (and marking theirs, with ``gap`` frames of margin).
+    """
     out = []
     t = lo + int(rng.exponential(1 / rate_per_frame))
     while t < hi:
         d = int(rng.integers(dur[0], dur[1] + 1))
-        if t + d + gap <= hi and not busy[max(t - gap, 0):t + d + gap].any():
+        if t + d + gap <= hi and not busy[max(t - gap, 0) : t + d + gap].any():
             out.append((t, d))
-            busy[max(t - gap, 0):t + d + gap] = True
+            busy[max(t - gap, 0) : t + d + gap] = True
             t += d + gap
         t += 1 + int(rng.exponential(1 / rate_per_frame))
     return out
 
 
-def conversation(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
-                 strength: float | None = None, initiator: str | None = None,
-                 interested: bool | None = None, duration: float = 30.0) -> Scenario:
+def conversation(
+    seed: int = 0,
+    fps: float = 25.0,
+    emotion: str | None = None,
+    strength: float | None = None,
+    initiator: str | None = None,
+    interested: bool | None = None,
+    duration: float = 30.0,
+) -> Scenario:
     """Two people standing face to face take turns talking (``duration`` seconds).
 
     The speaker gestures with both arms, looks away now and then (mostly at the start of a turn)
@@ -583,7 +695,7 @@ def conversation(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
         t += d + int(rng.uniform(0.3, 0.8) * fps)
         spk = "b" if spk == "a" else "a"
     ev = {p: {n: np.zeros(T, np.int8) for n in ("nod", "shake", "talking")} for p in "ab"}
-    look_away = {p: np.zeros(T) for p in "ab"}   # signed look-away angle target (rad)
+    look_away = {p: np.zeros(T) for p in "ab"}  # signed look-away angle target (rad)
     busy = {p: np.zeros(T + 1, bool) for p in "ab"}
     nod_dur = (int(0.6 * fps / st.speed), int(1.0 * fps / st.speed))
     for spk, t0, t1 in turns:
@@ -592,26 +704,26 @@ def conversation(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
         # the speaker looks away at the start of a turn (thinking) half of the time
         if rng.random() < 0.5:
             d = int(rng.uniform(0.8, 1.5) * fps)
-            look_away[spk][t0:min(t0 + d, t1)] = rng.choice([-1, 1]) * rng.uniform(0.5, 0.8)
+            look_away[spk][t0 : min(t0 + d, t1)] = rng.choice([-1, 1]) * rng.uniform(0.5, 0.8)
         mx = max(off.values())
         for sig, rate in (("nod", 0.35), ("shake", 0.2)):
             # events end before the turn's end minus the offset, so responses stay in the turn
             for s0, d in _place_events(rng, t0, t1 - mx, rate / fps, nod_dur, int(0.4 * fps), busy[spk]):
-                ev[spk][sig][s0:s0 + d] = 1
+                ev[spk][sig][s0 : s0 + d] = 1
                 r0 = s0 + off[sig]
-                busy[lis][r0:r0 + d] = True   # reserve the listener's response slot either way
+                busy[lis][r0 : r0 + d] = True  # reserve the listener's response slot either way
                 if rng.random() < prob[sig]:
-                    ev[lis][sig][r0:r0 + d] = 1
+                    ev[lis][sig][r0 : r0 + d] = 1
     # spontaneous listener nods, away from reserved slots, and listener look-aways
     for spk, t0, t1 in turns:
         lis = "b" if spk == "a" else "a"
         for s0, d in _place_events(rng, t0, t1, 0.03 / fps, nod_dur, int(0.4 * fps), busy[lis]):
-            ev[lis]["nod"][s0:s0 + d] = 1
+            ev[lis]["nod"][s0 : s0 + d] = 1
         rate = 0.04 if interested else 0.15
         t = t0 + int(rng.exponential(fps / rate))
         while t < t1:
             d = int(rng.uniform(0.6, 1.6) * fps)
-            look_away[lis][t:min(t + d, t1)] = rng.choice([-1, 1]) * rng.uniform(0.5, 0.9)
+            look_away[lis][t : min(t + d, t1)] = rng.choice([-1, 1]) * rng.uniform(0.5, 0.9)
             t += d + int(rng.exponential(fps / rate))
     P = {}
     k = np.ones(int(0.25 * fps) | 1) / (int(0.25 * fps) | 1)
@@ -636,15 +748,18 @@ def conversation(seed: int = 0, fps: float = 25.0, emotion: str | None = None,
         P[p] = ground(Q, c.dims[p])
     phase = np.ones(T, np.int32)
     events = {p: {n: ev[p][n] for n in ("nod", "shake", "talking")} for p in "ab"}
-    c.meta.update({"turns": [[s, int(a), int(b)] for s, a, b in turns],
-                   "planted_offsets_frames": off})
+    c.meta.update({"turns": [[s, int(a), int(b)] for s, a, b in turns], "planted_offsets_frames": off})
     return _finish(c, P, phase, events)
 
 
 # ------------------------------------------------------------------------------------- registry
 SCENARIOS: dict[str, Callable[..., Scenario]] = {
-    "handshake": handshake, "high_five": high_five, "push": push, "pull": pull,
-    "wave": wave, "conversation": conversation,
+    "handshake": handshake,
+    "high_five": high_five,
+    "push": push,
+    "pull": pull,
+    "wave": wave,
+    "conversation": conversation,
 }
 
 
@@ -654,6 +769,7 @@ def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Sce
         a, b = kw.pop("bvh_a", None), kw.pop("bvh_b", None)
         if a is None or b is None:
             from counterpart.sim.capture import default_cmu_pair
+
             a, b = default_cmu_pair()
         return scenario_from_bvh(a, b, fps=fps, **kw)
     if name not in SCENARIOS:
@@ -661,8 +777,8 @@ def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Sce
     return SCENARIOS[name](seed=seed, fps=fps, **kw)
 
 
-def scenario_from_bvh(path_a: str, path_b: str, fps: float = 25.0, label: str = "handshake",
-                      seed: int = 0) -> Scenario:
+def scenario_from_bvh(path_a: str, path_b: str, fps: float = 25.0, label: str = "handshake", seed: int = 0) -> Scenario:
     """A BVH pair as a scenario; see ``counterpart.sim.capture.scenario_from_bvh``."""
     from counterpart.sim.capture import scenario_from_bvh as _from_bvh
+
     return _from_bvh(path_a, path_b, fps=fps, label=label, seed=seed)

@@ -13,12 +13,12 @@ sigma, grey levels), ``bvh_a``/``bvh_b`` (scenario "cmu"), ``camera`` (``default
 horizontal field of view 40-75 degrees drawn from the seed that keeps both people in view,
 ``counterpart.sim.camera.random_camera``; its drawn parameters are in ``stream.scenario.meta["camera"]``).
 """
+
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.sim.render import FrameTruth, Renderer
@@ -56,15 +56,17 @@ def _parse_options(kw: dict[str, Any]) -> dict[str, Any]:
 class SimStream:
     """A rendered scenario, frame by frame (see the module docstring).
 
-    Attributes:
+    Attributes
+    ----------
         scenario: the motion and labels.
         renderer: the ``counterpart.sim.render.Renderer``.
         camera: the camera.
         n_frames, fps, size ((width, height) pixels).
     """
 
-    def __init__(self, scenario: Scenario, camera: Camera, seed: int = 0, noise_sigma: float = 2.0,
-                 n_frames: int | None = None) -> None:
+    def __init__(
+        self, scenario: Scenario, camera: Camera, seed: int = 0, noise_sigma: float = 2.0, n_frames: int | None = None
+    ) -> None:
         if n_frames is not None:
             if n_frames < 1:
                 raise ValueError(f"frames={n_frames}: need at least 1")
@@ -109,8 +111,14 @@ class SimStream:
         self.renderer._cache.clear()
 
 
-def open_stream(scenario: str = "handshake", seed: int = 0, width: int | None = 320,
-                height: int | None = 240, fps: float | None = 25.0, **kw: Any) -> SimStream:
+def open_stream(
+    scenario: str = "handshake",
+    seed: int = 0,
+    width: int | None = 320,
+    height: int | None = 240,
+    fps: float | None = 25.0,
+    **kw: Any,
+) -> SimStream:
     """Open a simulated scene. ``width``/``height``/``fps`` of None mean 320/240/25.
 
     Raises ValueError for an unknown scenario or option (the message lists the known ones).

@@ -1,10 +1,10 @@
 """A node for the avatar's launch test: a speaker who nods at set frames (Pose3D + SocialSignals)."""
+
 from __future__ import annotations
 
 import time
 
 import numpy as np
-
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
 from counterpart.bus import Node, Output, Param
@@ -27,7 +27,20 @@ class NoddingSpeaker(Node):
                 return
             stamp = time.monotonic_ns()
             nod = int(t >= self.p["nod_from"])
-            self.publish("signals", SocialSignals(stamp=stamp, seq=t, people=[PersonSignals(
-                id=1, names=names, scores=np.zeros(6, np.float32), labels=np.array([nod, 0, 1, 0, 1, 0], np.int8))]))
+            self.publish(
+                "signals",
+                SocialSignals(
+                    stamp=stamp,
+                    seq=t,
+                    people=[
+                        PersonSignals(
+                            id=1,
+                            names=names,
+                            scores=np.zeros(6, np.float32),
+                            labels=np.array([nod, 0, 1, 0, 1, 0], np.int8),
+                        )
+                    ],
+                ),
+            )
             self.publish("pose", Pose3D(stamp=stamp, seq=t, people=[TrackedBody(id=1, side="left", joints=joints)]))
             time.sleep(0.005)

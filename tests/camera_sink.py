@@ -1,4 +1,5 @@
 """Helpers of the camera tests: a recording sink node (one JSON line per received frame) and test videos."""
+
 from __future__ import annotations
 
 import hashlib
@@ -8,14 +9,14 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-
 from counterpart.bus import Input, Node, Param
 from counterpart.messages import Frame
 
 
 class FrameSink(Node):
     """Appends ``{"seq", "sha1", "shape", "encoding", "stamp", "source_time", "source"}`` per frame
-    to ``path`` (``sha1`` of the image bytes), then ``{"event": "end", "drops"}`` at end of stream."""
+    to ``path`` (``sha1`` of the image bytes), then ``{"event": "end", "drops"}`` at end of stream.
+    """
 
     inputs = {"frame": Input(Frame)}
     params = {"path": Param(str, "", "output file (JSON lines)", check=lambda v: None if v else "must name a file")}
@@ -24,11 +25,21 @@ class FrameSink(Node):
         self.f = open(self.p["path"], "a", buffering=1)
 
     def on_frame(self, msg: Frame) -> None:
-        self.f.write(json.dumps({
-            "seq": msg.seq, "sha1": hashlib.sha1(msg.image.tobytes()).hexdigest(), "shape": list(msg.image.shape),
-            "encoding": msg.encoding, "stamp": msg.stamp, "source_time": msg.source_time, "source": msg.source,
-            "received": time.monotonic_ns(),
-        }) + "\n")
+        self.f.write(
+            json.dumps(
+                {
+                    "seq": msg.seq,
+                    "sha1": hashlib.sha1(msg.image.tobytes()).hexdigest(),
+                    "shape": list(msg.image.shape),
+                    "encoding": msg.encoding,
+                    "stamp": msg.stamp,
+                    "source_time": msg.source_time,
+                    "source": msg.source,
+                    "received": time.monotonic_ns(),
+                }
+            )
+            + "\n"
+        )
 
     def on_end(self) -> None:
         self.f.write(json.dumps({"event": "end", "drops": self._in["frame"].drops}) + "\n")

@@ -1,16 +1,19 @@
 """Nodes that fail on purpose, for the fault tests: one that cannot start, one slow to set up."""
+
 from __future__ import annotations
 
 import time
 
 from counterpart.bus import Input, Node, Output, Param
+
 from tests.graph_nodes import Number
 
 
 class FailAtStart(Node):
     """A source that fails before its first message, as a camera that cannot open its device:
     ``how`` ``exit`` ends with ``code`` (after logging why), ``raise`` crashes in setup. Appends the
-    wall-clock time of the failure to ``mark`` first, one line per start."""
+    wall-clock time of the failure to ``mark`` first, one line per start.
+    """
 
     outputs = {"out": Output(Number)}
     params = {
@@ -39,7 +42,8 @@ class FailAtStart(Node):
 
 class SlowSetup(Node):
     """A node whose setup takes ``seconds`` (a model loading) and ignores the first stop signal
-    meanwhile, as a node busy in a long library call would."""
+    meanwhile, as a node busy in a long library call would.
+    """
 
     inputs = {"in": Input(Number)}
     params = {"seconds": Param(float, 60.0, "setup time", min=0)}

@@ -1,6 +1,8 @@
 """Fault experiments shared by tests/test_faults.py and bench/faults.py: hostile input to the
 silhouette node and the labeller, and a camera whose frames a recorder takes, then the recorder
-stopped with SIGSTOP (does the camera stall?)."""
+stopped with SIGSTOP (does the camera stall?).
+"""
+
 from __future__ import annotations
 
 import os
@@ -15,22 +17,25 @@ from pathlib import Path
 import cv2
 import numpy as np
 import zmq
-
 from counterpart.bus import registry
 from counterpart.bus.bag import BagReader
 from counterpart.bus.fuzz import FuzzTarget, run_fuzz
 from counterpart.bus.transport import LATEST, Subscriber
 from counterpart.messages import NodeStats
+
 from tests.launching import REPO, kill_tree, start_launch, wait_for, write_launch
 
 #: frames per second of the camera under test (a 25 fps clip played twice as fast)
 CAMERA_FPS = 50
 
 
-def fuzz_silhouette_and_labeller(workdir: Path, n: int, timeout: float) -> tuple[list[FuzzTarget], int | None, str, float]:
+def fuzz_silhouette_and_labeller(
+    workdir: Path, n: int, timeout: float
+) -> tuple[list[FuzzTarget], int | None, str, float]:
     """``n`` hostile messages each to the silhouette node's frames and the labeller's silhouettes
     (counterpart.bus.fuzz.run_fuzz). Returns the targets with their counts, the launcher's exit code, its
-    output and the seconds it all took."""
+    output and the seconds it all took.
+    """
     targets = [
         # frames of every size down to 0 pixels a side: the silhouette node refuses those below 2x2
         FuzzTarget("silhouette", "frame", "frame", "camera.Frame"),
@@ -40,8 +45,11 @@ def fuzz_silhouette_and_labeller(workdir: Path, n: int, timeout: float) -> tuple
         "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": 2}},
         # the labeller takes silhouettes only here (a given rate, no faces): the fuzzed frames are the
         # silhouette node's
-        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": False, "use_face": False, "fps": 25.0},
-                     "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"}},
+        "labeller": {
+            "run": "counterpart.nodes.labeller",
+            "params": {"use_tracker": False, "use_face": False, "fps": 25.0},
+            "remap": {"silhouettes": "fuzzed_silhouettes", "signals": "signals"},
+        },
     }
     t0 = time.monotonic()
     code, out = run_fuzz(nodes, targets, n, workdir, timeout=timeout)
@@ -64,7 +72,8 @@ def _require(ok: bool, what: str) -> None:
 
 def _last_count(sub: Subscriber, seconds: float) -> int | None:
     """The camera's published frame count in the newest of its stats over ``seconds`` (None when
-    none came: a camera blocked in a send publishes no stats either)."""
+    none came: a camera blocked in a send publishes no stats either).
+    """
     count, deadline = None, time.monotonic() + seconds
     while time.monotonic() < deadline:
         if sub.socket.poll(50):
@@ -80,10 +89,23 @@ def recorder_stalls_camera(workdir: Path, lossless: bool, stopped_s: float = 3.0
     SIGSTOP for ``stopped_s`` seconds, then let it go on and stop it with Ctrl-C.
 
     Returns whether the camera stalled while the recorder was stopped (fewer than 10 frames out)
-    and the recorder's output."""
+    and the recorder's output.
+    """
     home = Path(tempfile.mkdtemp(prefix="cpr", dir="/tmp"))  # short: unix socket paths are limited
-    doc = {"policy": "latest", "nodes": {"camera": {"run": "counterpart.nodes.camera", "params": {
-        "source": str(video(workdir / "v.avi")), "loop": True, "pacing": "rate", "rate": CAMERA_FPS / 25}}}}
+    doc = {
+        "policy": "latest",
+        "nodes": {
+            "camera": {
+                "run": "counterpart.nodes.camera",
+                "params": {
+                    "source": str(video(workdir / "v.avi")),
+                    "loop": True,
+                    "pacing": "rate",
+                    "rate": CAMERA_FPS / 25,
+                },
+            }
+        },
+    }
     launch = start_launch(write_launch(workdir / "recorded.yaml", doc), env={"COUNTERPART_HOME": str(home)})
     bag = workdir / f"recorded{'_lossless' if lossless else ''}.mcap"
     rec: subprocess.Popen | None = None
@@ -93,12 +115,30 @@ def recorder_stalls_camera(workdir: Path, lossless: bool, stopped_s: float = 3.0
     try:
         _require(wait_for(lambda: (home / "latest" / "registry.json").is_file(), 30), "the launch did not start")
         reg = registry.read(str(home / "latest"))
-        stats = Subscriber(ctx, "camera/stats", registry.topic_endpoints(reg, "camera/stats"), LATEST, msg_type=NodeStats)
+        stats = Subscriber(
+            ctx, "camera/stats", registry.topic_endpoints(reg, "camera/stats"), LATEST, msg_type=NodeStats
+        )
         _require(wait_for(lambda: (_last_count(stats, 1.2) or 0) > 10, 60), "the camera published nothing")
-        rec = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "bag", "record", "-t", "frame", "-o", str(bag),
-                                *(["--lossless"] if lossless else [])], cwd=REPO, start_new_session=True,
-                               env={**os.environ, "COUNTERPART_HOME": str(home)}, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
+        rec = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "counterpart.bus.cli",
+                "bag",
+                "record",
+                "-t",
+                "frame",
+                "-o",
+                str(bag),
+                *(["--lossless"] if lossless else []),
+            ],
+            cwd=REPO,
+            start_new_session=True,
+            env={**os.environ, "COUNTERPART_HOME": str(home)},
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         _require(wait_for(lambda: recorded() > 5, 30), "the recorder wrote nothing")
         os.kill(rec.pid, signal.SIGSTOP)
         _last_count(stats, 1.0)  # what was in flight fills the queues meanwhile

@@ -1,4 +1,5 @@
 """Small nodes for the runtime's multi-process tests: a counter source, a relay and a recording sink."""
+
 from __future__ import annotations
 
 import json
@@ -7,7 +8,6 @@ import time
 from dataclasses import replace
 
 import numpy as np
-
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import message
 

@@ -1,4 +1,5 @@
 """Helpers for multi-process tests: run the real launcher on a YAML graph and clean up after it."""
+
 from __future__ import annotations
 
 import os
@@ -26,7 +27,12 @@ def start_launch(file: Path, *extra: str, env: dict[str, str] | None = None) -> 
     e.update(env or {})
     return subprocess.Popen(
         [sys.executable, "-m", "counterpart.bus.cli", "launch", str(file), *extra],
-        cwd=REPO, env=e, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True,
+        cwd=REPO,
+        env=e,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
     )
 
 

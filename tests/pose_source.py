@@ -5,22 +5,33 @@ depth, placed left to right like the silhouettes and facing the other person (+X
 so that 3D-only signals (gaze) become known. Only frames with ``seq % every == 0`` get a pose, so a
 consumer sees the pose topic skip frames, as a tracker that gives up on a frame does.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Pose3D, Silhouettes
 from counterpart.messages.tracker import TrackedBody
 
 #: a standing person facing +Z (left shoulder at +X), project joint order, metres, Y up
-STANDING = np.array([
-    [0.0, 1.70, 0.0], [0.0, 1.50, 0.0],
-    [0.20, 1.45, 0.0], [0.25, 1.20, 0.0], [0.25, 0.95, 0.0],
-    [-0.20, 1.45, 0.0], [-0.25, 1.20, 0.0], [-0.25, 0.95, 0.0],
-    [0.10, 0.95, 0.0], [0.10, 0.50, 0.0], [0.10, 0.05, 0.0],
-    [-0.10, 0.95, 0.0], [-0.10, 0.50, 0.0], [-0.10, 0.05, 0.0],
-])
+STANDING = np.array(
+    [
+        [0.0, 1.70, 0.0],
+        [0.0, 1.50, 0.0],
+        [0.20, 1.45, 0.0],
+        [0.25, 1.20, 0.0],
+        [0.25, 0.95, 0.0],
+        [-0.20, 1.45, 0.0],
+        [-0.25, 1.20, 0.0],
+        [-0.25, 0.95, 0.0],
+        [0.10, 0.95, 0.0],
+        [0.10, 0.50, 0.0],
+        [0.10, 0.05, 0.0],
+        [-0.10, 0.95, 0.0],
+        [-0.10, 0.50, 0.0],
+        [-0.10, 0.05, 0.0],
+    ]
+)
 
 
 def facing(yaw: float) -> np.ndarray:

@@ -1,5 +1,7 @@
 """Helpers of the renderer tests: a frame + partner source, a control-following responder, and the
-synthetic scene they draw (shared with the tests so that expected pixels can be computed)."""
+synthetic scene they draw (shared with the tests so that expected pixels can be computed).
+"""
+
 from __future__ import annotations
 
 import json
@@ -7,7 +9,6 @@ import time
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
 from counterpart.bus import LATEST, RELIABLE, Input, Node, Output, Param
@@ -18,7 +19,7 @@ def scene_frame(seq: int, width: int = 160, height: int = 120) -> np.ndarray:
     """A dark grey frame with a bright bar that moves along the top rows (every frame differs)."""
     img = np.full((height, width, 3), 60, np.uint8)
     x = (seq * 3) % max(width - 8, 1)
-    img[2:8, x:x + 8] = 255
+    img[2:8, x : x + 8] = 255
     return img
 
 
@@ -31,7 +32,8 @@ def partner_joints(seq: int = 0) -> np.ndarray:
 
 class SceneSource(Node):
     """Publishes ``count`` frames of :func:`scene_frame` at ``rate`` Hz (0: unpaced) and, when
-    ``partner`` is true, a Partner of the same seq with :func:`partner_joints`."""
+    ``partner`` is true, a Partner of the same seq with :func:`partner_joints`.
+    """
 
     params = {
         "count": Param(int, 30, "frames", min=1),
@@ -57,11 +59,28 @@ class SceneSource(Node):
             if self.stopping:
                 return
             stamp = time.monotonic_ns()
-            self.publish("frame", Frame(stamp=stamp, seq=seq, image=scene_frame(seq, p["width"], p["height"]),
-                                        source="test:scene", source_time=seq / 25.0))
+            self.publish(
+                "frame",
+                Frame(
+                    stamp=stamp,
+                    seq=seq,
+                    image=scene_frame(seq, p["width"], p["height"]),
+                    source="test:scene",
+                    source_time=seq / 25.0,
+                ),
+            )
             if p["partner"]:
-                self.publish("partner", Partner(stamp=stamp, seq=seq, model="test", joints=partner_joints(seq),
-                                                emotion=p["emotion"], strength=p["strength"]))
+                self.publish(
+                    "partner",
+                    Partner(
+                        stamp=stamp,
+                        seq=seq,
+                        model="test",
+                        joints=partner_joints(seq),
+                        emotion=p["emotion"],
+                        strength=p["strength"],
+                    ),
+                )
             if p["rate"]:
                 t_next += 1.0 / p["rate"]
                 time.sleep(max(0.0, t_next - time.monotonic()))
@@ -69,7 +88,8 @@ class SceneSource(Node):
 
 class ControlledResponder(Node):
     """A stand-in responder: a Partner for every frame whose emotion and strength follow the
-    Control messages received; each Control is appended to ``path`` as a JSON line."""
+    Control messages received; each Control is appended to ``path`` as a JSON line.
+    """
 
     inputs = {"frame": Input(Frame, RELIABLE), "control": Input(Control, LATEST, awaits_end=False)}
     outputs = {"partner": Output(Partner)}
@@ -80,14 +100,27 @@ class ControlledResponder(Node):
         self.emotion, self.strength = "neutral", 0.0
 
     def on_control(self, msg: Control) -> None:
-        self.f.write(json.dumps({k: getattr(msg, k) for k in ("model", "speaker", "interest", "emotion",
-                                                               "strength", "overlays")}) + "\n")
+        self.f.write(
+            json.dumps(
+                {k: getattr(msg, k) for k in ("model", "speaker", "interest", "emotion", "strength", "overlays")}
+            )
+            + "\n"
+        )
         self.emotion = msg.emotion or self.emotion
         self.strength = msg.strength if msg.strength is not None else self.strength
 
     def on_frame(self, msg: Frame) -> None:
-        self.publish("partner", Partner(stamp=msg.stamp, seq=msg.seq, model="test", joints=partner_joints(msg.seq),
-                                        emotion=self.emotion, strength=self.strength))
+        self.publish(
+            "partner",
+            Partner(
+                stamp=msg.stamp,
+                seq=msg.seq,
+                model="test",
+                joints=partner_joints(msg.seq),
+                emotion=self.emotion,
+                strength=self.strength,
+            ),
+        )
 
     def teardown(self) -> None:
         if hasattr(self, "f"):

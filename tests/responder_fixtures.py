@@ -1,8 +1,8 @@
 """Planted two-person interactions for the responder tests (built with the real body model)."""
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
 from counterpart.body.trajectory import TwoPersonTrajectory
@@ -17,7 +17,8 @@ def smooth(rng: np.random.Generator, T: int, lo: float, hi: float, knots: int = 
 def planted_pair(seed: int, T: int = 120, fps: float = 25.0) -> TwoPersonTrajectory:
     """A raises the right arm along a random smooth curve a(t); B, facing A 1.3 m away, answers by
     raising the LEFT arm by a(t) and bending forward by a(t)/4. The pair stands at a random place
-    with a random heading, so only an actor-centred model can generalise across seeds."""
+    with a random heading, so only an actor-centred model can generalise across seeds.
+    """
     rng = np.random.default_rng(seed)
     a = smooth(rng, T, 0.0, 2.2)
     x0, z0, yaw = rng.uniform(-1.5, 1.5), rng.uniform(-1.5, 1.0), rng.uniform(-np.pi, np.pi)

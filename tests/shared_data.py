@@ -1,5 +1,7 @@
 """Where the third-party data of ``../shared/data`` lives; tests that need it skip when it is absent.
-``COUNTERPART_SHARED_DATA`` points elsewhere."""
+``COUNTERPART_SHARED_DATA`` points elsewhere.
+"""
+
 from __future__ import annotations
 
 import os

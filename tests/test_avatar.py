@@ -1,5 +1,7 @@
 """The video-texture avatar on a short simulated recording: the graph, its synthesis, the avatar file, the
-``counterpart learn avatar`` command on a real video file, and the renderer's compositing."""
+``counterpart learn avatar`` command on a real video file, and the renderer's compositing.
+"""
+
 from __future__ import annotations
 
 import argparse
@@ -8,9 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
-
 from counterpart.body.camera import default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
@@ -21,6 +20,8 @@ from counterpart.nodes.responder.avatar_recording import sim_recording
 from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import load_model, save_model
 from counterpart.nodes.responder.video_texture import STATE_SIGNALS, RecordingError, VideoTexture, fit_recording
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
 SECONDS = 14.0
 
@@ -46,7 +47,7 @@ def edges(m: VideoTexture) -> csr_matrix:
 def test_the_graph_is_one_strongly_connected_component_without_dead_ends(texture: VideoTexture) -> None:
     m = texture
     G = edges(m)
-    assert m.alive_.sum() > 0.7 * np.isfinite(m.x_[:, 0]).sum()   # of the frames with the person
+    assert m.alive_.sum() > 0.7 * np.isfinite(m.x_[:, 0]).sum()  # of the frames with the person
     # no edge leaves the graph and every frame of it reaches every other one (and so every goal)
     assert m.alive_[m.e_src_].all() and m.alive_[m.indices_].all()
     n, comp = connected_components(G, directed=True, connection="strong")
@@ -82,7 +83,7 @@ def test_a_requested_nod_comes_along_a_shortest_way_of_the_graph(texture: VideoT
     d = m.dist_[m.goal_index("nod")]
     start = int(np.flatnonzero(m.alive_ & (d >= 10))[0])
     m.reset(start)
-    for k in range(1, 200):
+    for k in range(1, 200):  # noqa: B007 (k is the step the request took effect at)
         f, _ = m.step({"nod": 1.0})
         if m.labels_[f[0], nod] == 1:
             break
@@ -100,7 +101,7 @@ def test_cuts_cross_fade_and_playback_runs_on(texture: VideoTexture) -> None:
     for _ in range(1500):
         f, w = m.step({"nod": 1.0} if len(fades) % 2 else {})
         assert abs(float(w.sum()) - 1.0) < 1e-6 and m.alive_[f[0]]
-        if f[0] != prev + 1:   # a cut: the frame that would have come fades out
+        if f[0] != prev + 1:  # a cut: the frame that would have come fades out
             assert len(f) == 2 and f[1] == prev + 1 and w[0] < 1
             fades.append([])
         elif len(f) == 2:
@@ -121,7 +122,7 @@ def test_the_avatar_file_round_trips_with_its_frames(texture: VideoTexture, reco
     assert np.array_equal(m.frames.mask(t), rec.masks[t])
     inside = rec.masks[t]
     err = np.abs(m.frames.image(t).astype(int) - rec.crops[t].astype(int))[inside].mean()
-    assert err < 6   # JPEG at quality 90
+    assert err < 6  # JPEG at quality 90
     assert m.frames.geometry.facing == -1.0 and 0.6 * rec.crops.shape[1] < m.frames.geometry.height_px
 
 
@@ -152,13 +153,14 @@ def test_learn_avatar_from_a_video_file(recorded, tmp_path: Path, capsys) -> Non
     ap = argparse.ArgumentParser()
     cli_avatar.add_arguments(ap)
     out = tmp_path / "me.npz"
-    code = cli_avatar.main(ap.parse_args(["--video", str(video), "--labels", str(lab), "--person", "b",
-                                          "--out", str(out)]))
+    code = cli_avatar.main(
+        ap.parse_args(["--video", str(video), "--labels", str(lab), "--person", "b", "--out", str(out)])
+    )
     cap = capsys.readouterr()
     assert code == 0, cap.err
     summary = json.loads(cap.out.strip().splitlines()[-1])
     assert summary["frames"] == len(labels) and summary["frames_in_graph"] > 0.7 * len(labels)
-    assert "cutting the masks out in 2 processes" in cap.err and "Tarjan" in cap.err   # progress shown
+    assert "cutting the masks out in 2 processes" in cap.err and "Tarjan" in cap.err  # progress shown
     m = load_model(out, expected="video-texture")
     # the masks the silhouette algorithm cut out of the video agree with the simulator's
     t = int(np.flatnonzero(rec.valid & m.alive_)[50])
@@ -166,12 +168,27 @@ def test_learn_avatar_from_a_video_file(recorded, tmp_path: Path, capsys) -> Non
     a, b = m.frames.mask(t), rec.masks[t]
     assert abs(int(a.sum()) - int(b.sum())) < 0.2 * b.sum()
     # a label that never occurs is named
-    code = cli_avatar.main(ap.parse_args(["--video", str(video), "--labels", str(lab), "--person", "b",
-                                          "--signals", "nod,activity", "--out", str(tmp_path / "x.npz")]))
+    code = cli_avatar.main(
+        ap.parse_args(
+            [
+                "--video",
+                str(video),
+                "--labels",
+                str(lab),
+                "--person",
+                "b",
+                "--signals",
+                "nod,activity",
+                "--out",
+                str(tmp_path / "x.npz"),
+            ]
+        )
+    )
     assert code == 2 and "signal 'activity' never occurs" in capsys.readouterr().err
     # a missing person in the label file
-    code = cli_avatar.main(ap.parse_args(["--video", str(video), "--labels", str(lab), "--person", "c",
-                                          "--out", str(tmp_path / "y.npz")]))
+    code = cli_avatar.main(
+        ap.parse_args(["--video", str(video), "--labels", str(lab), "--person", "c", "--out", str(tmp_path / "y.npz")])
+    )
     assert code == 2 and "no person 'c' (it has a, b); choose one with --person" in capsys.readouterr().err
 
 
@@ -186,7 +203,7 @@ def test_the_driver_nods_when_the_rules_say_a_listener_nods(texture: VideoTextur
         shown.append(m.labels_[f["avatar_frames"][0], nod] == 1)
         assert f["joints"].shape == (14, 3) and f["avatar_file"] == "avatar.npz"
     # the rule fires at 40, the response starts 5 frames later and the avatar nods within a second
-    assert any(shown[45:45 + 25])
+    assert any(shown[45 : 45 + 25])
     # the goals: the nod firmly, the listening state softly
     goals = avatar_goals(m, {"nod"}, "person", 3)
     assert goals["nod"] == 1.0 and any(k.startswith("state:") and v < 1 for k, v in goals.items())
@@ -198,9 +215,14 @@ def test_the_renderer_composites_the_avatar_where_the_partner_stands(texture: Vi
 
     def partner(x: float, yaw: float, frames=(100,), weights=(1.0,)) -> Partner:
         joints = forward_kinematics(neutral_pose(x=x, z=0.0, yaw=yaw))[0]
-        msg = Partner(model="video-texture", joints=joints.astype(np.float32), avatar_file=str(path),
-                      avatar_frames=np.array(frames, np.int32), avatar_weights=np.array(weights, np.float32))
-        back = decode(encode(msg))   # as it travels on the bus
+        msg = Partner(
+            model="video-texture",
+            joints=joints.astype(np.float32),
+            avatar_file=str(path),
+            avatar_frames=np.array(frames, np.int32),
+            avatar_weights=np.array(weights, np.float32),
+        )
+        back = decode(encode(msg))  # as it travels on the bus
         assert np.array_equal(back.avatar_frames, msg.avatar_frames) and back.avatar_file == msg.avatar_file
         return back
 
@@ -226,27 +248,45 @@ def test_the_renderer_composites_the_avatar_where_the_partner_stands(texture: Vi
     mix = bg.copy()
     painter.draw(mix, partner(0.5, -np.pi / 2, (100, 160), (0.5, 0.5)), cam)
     both = (a != 255).all(axis=2) & (b != 255).all(axis=2)
-    both[1:-1, 1:-1] &= both[:-2, 1:-1] & both[2:, 1:-1] & both[1:-1, :-2] & both[1:-1, 2:]   # away from edges
+    both[1:-1, 1:-1] &= both[:-2, 1:-1] & both[2:, 1:-1] & both[1:-1, :-2] & both[1:-1, 2:]  # away from edges
     expect = (a.astype(int) + b.astype(int)) / 2
     assert both.sum() > 200 and np.abs(mix[both] - expect[both]).mean() < 3
     # a missing file: nothing drawn, the caller falls back
-    assert painter.draw(bg.copy(), Partner(model="video-texture", joints=msg.joints, avatar_file=str(tmp_path / "none.npz"),
-                                           avatar_frames=np.array([1], np.int32)), cam) is None
+    assert (
+        painter.draw(
+            bg.copy(),
+            Partner(
+                model="video-texture",
+                joints=msg.joints,
+                avatar_file=str(tmp_path / "none.npz"),
+                avatar_frames=np.array([1], np.int32),
+            ),
+            cam,
+        )
+        is None
+    )
 
 
-def test_the_compositor_draws_the_avatar_in_auto_style_and_cones_when_asked(texture: VideoTexture, tmp_path: Path) -> None:
+def test_the_compositor_draws_the_avatar_in_auto_style_and_cones_when_asked(
+    texture: VideoTexture, tmp_path: Path
+) -> None:
     from counterpart.messages import Frame
     from counterpart.nodes.renderer.compositor import Bundle, Compositor
 
     path = save_model(tmp_path / "avatar.npz", texture)
     joints = forward_kinematics(neutral_pose(x=0.5, z=0.0, yaw=-np.pi / 2))[0].astype(np.float32)
-    msg = Partner(model="video-texture", joints=joints, avatar_file=str(path),
-                  avatar_frames=np.array([120], np.int32), avatar_weights=np.ones(1, np.float32))
+    msg = Partner(
+        model="video-texture",
+        joints=joints,
+        avatar_file=str(path),
+        avatar_frames=np.array([120], np.int32),
+        avatar_weights=np.ones(1, np.float32),
+    )
     frame = Frame(image=np.full((240, 320, 3), 255, np.uint8))
     off = {k: False for k in ("skeleton", "splines", "signals", "stats", "controls")}
     avatar = Compositor(overlays=dict(off)).render(Bundle(frame=frame, partner=msg))
     cones = Compositor(style="cones", overlays=dict(off)).render(Bundle(frame=frame, partner=msg))
     painted = np.full((240, 320, 3), 255, np.uint8)
     AvatarPainter().draw(painted, msg, default_camera(320, 240))
-    assert np.array_equal(avatar, painted)            # auto: the avatar's frames
+    assert np.array_equal(avatar, painted)  # auto: the avatar's frames
     assert not np.array_equal(cones, painted) and (cones != 255).any()

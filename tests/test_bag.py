@@ -1,5 +1,7 @@
 """Bags: MCAP round trips, crash recovery after a real SIGKILL, record and replay in real launched
-graphs (compared byte for byte), and the ``counterpart bag`` commands."""
+graphs (compared byte for byte), and the ``counterpart bag`` commands.
+"""
+
 from __future__ import annotations
 
 import json
@@ -10,19 +12,20 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import cv2
 import numpy as np
 import pytest
 import yaml
-
 from counterpart.bus.bag import BagReader, BagWriter, decode_fields, pack_parts, unpack_parts
 from counterpart.bus.bag_nodes import Player, Recorder
 from counterpart.bus.cli_bag import export_bag
 from counterpart.bus.params import ParamError
 from counterpart.messages import Frame, encode
+
 from tests.graph_nodes import Number
 
 REPO = Path(__file__).resolve().parents[1]
@@ -35,7 +38,8 @@ N = "tests.graph_nodes:"
 @pytest.fixture
 def home() -> Iterator[Path]:
     """A private COUNTERPART_HOME (short, for ipc paths) so that 'latest' and the standalone folder
-    are this test's own, whatever else runs on the machine."""
+    are this test's own, whatever else runs on the machine.
+    """
     d = Path(tempfile.mkdtemp(prefix="cpbag"))
     try:
         yield d
@@ -48,8 +52,9 @@ def _env(home: Path) -> dict[str, str]:
 
 
 def _start(args: list[str], home: Path, **kw: Any) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, env=_env(home),
-                            start_new_session=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, env=_env(home), start_new_session=True, **kw
+    )
 
 
 def _kill(proc: subprocess.Popen) -> None:
@@ -93,8 +98,15 @@ def _wait(pred: Any, timeout: float = 30.0) -> bool:
 
 def _numbers(n: int, size: int = 37) -> list[Number]:
     rng = np.random.default_rng(0)
-    return [Number(stamp=1_000_000 + 1000 * i, seq=i, value=float(i) * 0.5,
-                   payload=rng.integers(0, 256, size + i, dtype=np.uint8)) for i in range(n)]
+    return [
+        Number(
+            stamp=1_000_000 + 1000 * i,
+            seq=i,
+            value=float(i) * 0.5,
+            payload=rng.integers(0, 256, size + i, dtype=np.uint8),
+        )
+        for i in range(n)
+    ]
 
 
 def _payload(i: int, size: int) -> np.ndarray:
@@ -119,8 +131,10 @@ def test_pack_parts_round_trip_and_rejects_damage() -> None:
 @pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
 def test_write_read_round_trip_is_bit_exact(tmp_path: Path, compression: str) -> None:
     nums = _numbers(60)
-    frames = [Frame(stamp=5_000 + i, seq=i, image=np.random.default_rng(i).integers(0, 256, (24, 32, 3), np.uint8))
-              for i in range(20)]
+    frames = [
+        Frame(stamp=5_000 + i, seq=i, image=np.random.default_rng(i).integers(0, 256, (24, 32, 3), np.uint8))
+        for i in range(20)
+    ]
     wire: list[tuple[str, list[bytes]]] = []
     with BagWriter(tmp_path / "b.mcap", compression=compression, chunk_size=4096) as w:
         for i, m in enumerate(nums):
@@ -146,8 +160,10 @@ def test_write_read_round_trip_is_bit_exact(tmp_path: Path, compression: str) ->
 
     info = r.info()
     assert info["complete"] and info["messages"] == 80
-    assert info["topics"] == {"numbers": {"type": "test.Number/1", "count": 60},
-                              "cam/frames": {"type": "camera.Frame/1", "count": 20}}
+    assert info["topics"] == {
+        "numbers": {"type": "test.Number/1", "count": 60},
+        "cam/frames": {"type": "camera.Frame/1", "count": 20},
+    }
     assert (info["start_ns"], info["end_ns"]) == (10_000, 10_059)
     assert info["schemas"]["camera.Frame/1"]["fields"]["image"] == "ndarray"
     assert r.topics() == {"numbers": "test.Number/1", "cam/frames": "camera.Frame/1"}
@@ -208,7 +224,9 @@ def test_player_names_an_unregistered_schema(tmp_path: Path) -> None:
         w.write("things", [msgpack.packb(head, use_bin_type=True), *parts[1:]])
     with pytest.raises(ParamError, match=r"nowhere\.Thing/3.*modules"):
         Player.ports(Player.validate_params({"path": str(tmp_path / "b.mcap")}))
-    params = Player.validate_params({"path": str(tmp_path / "b.mcap"), "topics": ["numbers"], "remap": {"numbers": "n2"}})
+    params = Player.validate_params(
+        {"path": str(tmp_path / "b.mcap"), "topics": ["numbers"], "remap": {"numbers": "n2"}}
+    )
     _, outs = Player.ports(params)
     assert list(outs) == ["n2"] and outs["n2"].type is Number
     with pytest.raises(ParamError, match=r"'topics': nothing not in bag"):
@@ -226,27 +244,59 @@ def test_player_names_an_unregistered_schema(tmp_path: Path) -> None:
 def test_launched_recorder_then_player_replays_bit_exact(tmp_path: Path, home: Path) -> None:
     count, size = 250, 300
     bag1, bag2 = tmp_path / "one.mcap", tmp_path / "two.mcap"
-    _launch({"nodes": {
-        "source": {"run": N + "Counter", "params": {"count": count, "payload_bytes": size}, "remap": {"out": "numbers"}},
-        "rec": {"run": "counterpart.bus.bag_nodes:Recorder", "params": {"path": str(bag1), "topics": ["numbers"], "flush_period": 0.05}},
-    }}, tmp_path, home, "record.yaml")
+    _launch(
+        {
+            "nodes": {
+                "source": {
+                    "run": N + "Counter",
+                    "params": {"count": count, "payload_bytes": size},
+                    "remap": {"out": "numbers"},
+                },
+                "rec": {
+                    "run": "counterpart.bus.bag_nodes:Recorder",
+                    "params": {"path": str(bag1), "topics": ["numbers"], "flush_period": 0.05},
+                },
+            }
+        },
+        tmp_path,
+        home,
+        "record.yaml",
+    )
     r1 = BagReader(bag1)
     first = list(r1.records())
     assert r1.complete and len(first) == count
     values = [decode_fields(x.parts)[1] for x in first]
-    assert [v["seq"] for v in values] == list(range(count)) and [v["value"] for v in values] == [float(i) for i in range(count)]
+    assert [v["seq"] for v in values] == list(range(count)) and [v["value"] for v in values] == [
+        float(i) for i in range(count)
+    ]
     assert all(np.array_equal(v["payload"], _payload(i, size)) for i, v in enumerate(values))
     # the recorder does not import tests.graph_nodes: the schema was described from the wire
     assert BagReader(bag1).info()["schemas"]["test.Number/1"]["inferred"] is True
 
     sink = tmp_path / "sink.jsonl"
-    _launch({"nodes": {
-        "play": {"run": "counterpart.bus.bag_nodes:Player",
-                 "params": {"path": str(bag1), "lockstep": True, "modules": ["tests.graph_nodes"],
-                            "remap": {"numbers": "replayed"}}},
-        "sink": {"run": N + "Sink", "params": {"path": str(sink)}, "remap": {"in": "replayed"}},
-        "rec": {"run": "counterpart.bus.bag_nodes:Recorder", "params": {"path": str(bag2), "topics": ["replayed"]}},
-    }}, tmp_path, home, "replay.yaml")
+    _launch(
+        {
+            "nodes": {
+                "play": {
+                    "run": "counterpart.bus.bag_nodes:Player",
+                    "params": {
+                        "path": str(bag1),
+                        "lockstep": True,
+                        "modules": ["tests.graph_nodes"],
+                        "remap": {"numbers": "replayed"},
+                    },
+                },
+                "sink": {"run": N + "Sink", "params": {"path": str(sink)}, "remap": {"in": "replayed"}},
+                "rec": {
+                    "run": "counterpart.bus.bag_nodes:Recorder",
+                    "params": {"path": str(bag2), "topics": ["replayed"]},
+                },
+            }
+        },
+        tmp_path,
+        home,
+        "replay.yaml",
+    )
     rows = [json.loads(line) for line in sink.read_text().splitlines()]
     got = [r for r in rows if "seq" in r]
     expected_sum = int(_payload(0, size).sum())
@@ -260,8 +310,19 @@ def test_launched_recorder_then_player_replays_bit_exact(tmp_path: Path, home: P
 def test_sigkilled_recorder_leaves_a_readable_bag(tmp_path: Path, home: Path) -> None:
     size = 2000
     f = tmp_path / "g.yaml"
-    f.write_text(yaml.safe_dump({"nodes": {"source": {
-        "run": N + "Counter", "params": {"count": 100000, "rate": 200.0, "payload_bytes": size}, "remap": {"out": "numbers"}}}}))
+    f.write_text(
+        yaml.safe_dump(
+            {
+                "nodes": {
+                    "source": {
+                        "run": N + "Counter",
+                        "params": {"count": 100000, "rate": 200.0, "payload_bytes": size},
+                        "remap": {"out": "numbers"},
+                    }
+                }
+            }
+        )
+    )
     launch = _start(["launch", str(f)], home, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     bag = tmp_path / "killed.mcap"
     rec = None
@@ -304,15 +365,31 @@ def test_sigkilled_recorder_leaves_a_readable_bag(tmp_path: Path, home: Path) ->
 def test_cli_record_until_end_of_stream_then_info_and_play(tmp_path: Path, home: Path) -> None:
     count = 500
     f = tmp_path / "g.yaml"
-    f.write_text(yaml.safe_dump({"nodes": {"source": {
-        "run": N + "Counter", "params": {"count": count, "rate": 100.0, "payload_bytes": 16}, "remap": {"out": "numbers"}}}}))
+    f.write_text(
+        yaml.safe_dump(
+            {
+                "nodes": {
+                    "source": {
+                        "run": N + "Counter",
+                        "params": {"count": count, "rate": 100.0, "payload_bytes": 16},
+                        "remap": {"out": "numbers"},
+                    }
+                }
+            }
+        )
+    )
     launch = _start(["launch", str(f)], home, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     bag = tmp_path / "cli.mcap"
     rec = None
     try:
         assert _wait(lambda: (home / "latest" / "registry.json").is_file()), "the launch did not start"
-        rec = _start(["bag", "record", "--all", "-o", str(bag)], home, stdout=subprocess.PIPE,
-                     stderr=subprocess.STDOUT, text=True)
+        rec = _start(
+            ["bag", "record", "--all", "-o", str(bag)],
+            home,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         out, _ = rec.communicate(timeout=30)
         assert rec.returncode == 0, out
         assert "end of stream on every topic" in out
@@ -325,8 +402,13 @@ def test_cli_record_until_end_of_stream_then_info_and_play(tmp_path: Path, home:
     seqs = [decode_fields(x.parts)[1]["seq"] for x in r.records()]
     assert r.complete and seqs and seqs == list(range(seqs[0], count))  # joined late, then every message
 
-    info = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "bag", "info", str(bag), "--json"], cwd=REPO,
-                          capture_output=True, text=True, timeout=30)
+    info = subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", "bag", "info", str(bag), "--json"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert info.returncode == 0, info.stderr
     data = json.loads(info.stdout)
     assert data["topics"] == {"numbers": {"type": "test.Number/1", "count": len(seqs)}}  # --all skips stats
@@ -334,12 +416,21 @@ def test_cli_record_until_end_of_stream_then_info_and_play(tmp_path: Path, home:
 
     # play on the standalone endpoints, lockstep, into a node started with `counterpart run`
     sink = tmp_path / "sink.jsonl"
-    node = _start(["run", "tests.graph_nodes:Sink", "--param", f"path={sink}", "--remap", "in=again"], home,
-                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    node = _start(
+        ["run", "tests.graph_nodes:Sink", "--param", f"path={sink}", "--remap", "in=again"],
+        home,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     player = None
     try:
-        player = _start(["bag", "play", str(bag), "--lockstep", "--remap", "numbers=again", "--module", "tests.graph_nodes"],
-                        home, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        player = _start(
+            ["bag", "play", str(bag), "--lockstep", "--remap", "numbers=again", "--module", "tests.graph_nodes"],
+            home,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         out, _ = player.communicate(timeout=40)
         assert player.returncode == 0, out
         node.wait(timeout=20)
@@ -353,14 +444,15 @@ def test_cli_record_until_end_of_stream_then_info_and_play(tmp_path: Path, home:
     assert rows[-1]["event"] == "end"
 
 
-def test_player_paces_loops_and_resends_exact_parts(tmp_path: Path, home: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_player_paces_loops_and_resends_exact_parts(
+    tmp_path: Path, home: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     import threading
 
     import zmq
-
-    from counterpart.bus.transport import Subscriber
     from counterpart.bus.endpoints import TopicEndpoints
     from counterpart.bus.node import standalone_spec
+    from counterpart.bus.transport import Subscriber
 
     monkeypatch.setenv("COUNTERPART_HOME", str(home))
     bag = tmp_path / "b.mcap"

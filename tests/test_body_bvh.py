@@ -1,13 +1,12 @@
 """BVH reader: a hand-written file with a known answer, error messages, and the CMU handshake."""
 
-
 import numpy as np
 import pytest
-
 from counterpart.body.bvh import CMU_SCALE, CMU_TO_JOINTS14, bvh_to_joints14, read_bvh
 from counterpart.body.skeleton import JOINT_INDEX, JOINTS
 
 from tests.shared_data import CMU as DATA
+
 CMU_A, CMU_B = DATA / "18_01.bvh", DATA / "19_01.bvh"
 
 TINY = """HIERARCHY
@@ -60,14 +59,17 @@ def test_tiny_known_answer(tiny):
     np.testing.assert_allclose(read_bvh(tiny).world_positions()[0, 1], np.array([2, 2, 3]) * CMU_SCALE)
 
 
-@pytest.mark.parametrize("broken, line, what", [
-    (TINY.replace("OFFSET 1 0 0", "OFFSET 1 zero 0"), 8, "number"),
-    (TINY.replace("Xrotation Zrotation", "Xrotation Wrotation"), 9, "unknown channel"),
-    (TINY.replace("1 2 3  90 0 0  0 0 0", "1 2 3  90 0 0  0 0"), 20, "8 values"),
-    (TINY.replace("Frames: 3", "Frames: 4"), 21, "4 frames"),
-    (TINY.replace("HIERARCHY", "HIERACHY"), 1, "not a BVH"),
-    (TINY.split("MOTION")[0].rstrip().rstrip("}"), 14, "end of file"),
-])
+@pytest.mark.parametrize(
+    "broken, line, what",
+    [
+        (TINY.replace("OFFSET 1 0 0", "OFFSET 1 zero 0"), 8, "number"),
+        (TINY.replace("Xrotation Zrotation", "Xrotation Wrotation"), 9, "unknown channel"),
+        (TINY.replace("1 2 3  90 0 0  0 0 0", "1 2 3  90 0 0  0 0"), 20, "8 values"),
+        (TINY.replace("Frames: 3", "Frames: 4"), 21, "4 frames"),
+        (TINY.replace("HIERARCHY", "HIERACHY"), 1, "not a BVH"),
+        (TINY.split("MOTION")[0].rstrip().rstrip("}"), 14, "end of file"),
+    ],
+)
 def test_corrupt_file_names_file_and_line(tmp_path, broken, line, what):
     p = tmp_path / "broken.bvh"
     p.write_text(broken)
@@ -87,8 +89,9 @@ def test_mapping_errors(tiny):
         bvh_to_joints14(read_bvh(tiny))
 
 
-needs_cmu = pytest.mark.skipif(not (CMU_A.exists() and CMU_B.exists()),
-                               reason=f"CMU handshake BVH files not found under {DATA}")
+needs_cmu = pytest.mark.skipif(
+    not (CMU_A.exists() and CMU_B.exists()), reason=f"CMU handshake BVH files not found under {DATA}"
+)
 
 
 @pytest.fixture(scope="module")
@@ -111,14 +114,16 @@ def test_cmu_handshake_facts(cmu):
     pa, pb = a.world_positions(True)[1:], b.world_positions(True)[1:]  # drop the T-pose
     hips = a.index("Hips")
     d = np.linalg.norm(pa[:, hips] - pb[:, hips], axis=-1)
-    assert d[0] == pytest.approx(1.98, abs=0.1)          # measured 1.980 m
-    assert d.min() == pytest.approx(0.74, abs=0.1)        # measured 0.738 m
+    assert d[0] == pytest.approx(1.98, abs=0.1)  # measured 1.980 m
+    assert d.min() == pytest.approx(0.74, abs=0.1)  # measured 0.738 m
     tips = [a.index(n) for n in ("LeftHandIndex1_End", "LThumb_End", "RightHandIndex1_End", "RThumb_End")]
     gap = np.linalg.norm(pa[:, tips, None] - pb[:, None, tips], axis=-1).min(axis=(1, 2))
-    assert gap.min() == pytest.approx(0.23, abs=0.05)     # measured 0.227 m
-    assert abs(int(gap.argmin()) + 1 - 124) <= 10         # measured at file frame 124
-    feet = [a.index(n) for n in ("LeftFoot", "RightFoot", "LeftToeBase", "RightToeBase",
-                                 "LeftToeBase_End", "RightToeBase_End")]
+    assert gap.min() == pytest.approx(0.23, abs=0.05)  # measured 0.227 m
+    assert abs(int(gap.argmin()) + 1 - 124) <= 10  # measured at file frame 124
+    feet = [
+        a.index(n)
+        for n in ("LeftFoot", "RightFoot", "LeftToeBase", "RightToeBase", "LeftToeBase_End", "RightToeBase_End")
+    ]
     for p in (pa, pb):
         lowest = p[:, feet, 1].min(axis=1)
         # Typical lowest foot point: measured 3.0 cm (18_01) and 2.2 cm (19_01).
@@ -165,6 +170,7 @@ def test_cmu_inverse_kinematics(cmu):
     from counterpart.body.ik import dims_from_joints, inverse_kinematics
     from counterpart.body.kinematics import forward_kinematics, lowest_point
     from counterpart.body.pose import within_limits
+
     for b in cmu:
         X = bvh_to_joints14(b)
         dims = dims_from_joints(X)

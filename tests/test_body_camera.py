@@ -2,21 +2,20 @@
 
 import numpy as np
 import pytest
-
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
-from counterpart.body.skeleton import DEFAULT_DIMS
 from counterpart.body.raster import rasterise_silhouettes
+from counterpart.body.skeleton import DEFAULT_DIMS
 
 
 def test_project_hand_computed():
-    cam = Camera(fx=100.0, fy=200.0, cx=50.0, cy=40.0, width=100, height=80,
-                 R=np.eye(3), t=np.array([0.0, 0.0, 2.0]))
+    cam = Camera(fx=100.0, fy=200.0, cx=50.0, cy=40.0, width=100, height=80, R=np.eye(3), t=np.array([0.0, 0.0, 2.0]))
     X = np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 2.0], [-0.2, -0.1, 0.0]])
     uv = cam.project(X)
-    np.testing.assert_allclose(uv, [[50.0, 40.0], [50 + 100 * 1 / 4, 40 + 200 * 0.5 / 4],
-                                    [50 - 100 * 0.1, 40 - 200 * 0.05]])
+    np.testing.assert_allclose(
+        uv, [[50.0, 40.0], [50 + 100 * 1 / 4, 40 + 200 * 0.5 / 4], [50 - 100 * 0.1, 40 - 200 * 0.05]]
+    )
     np.testing.assert_allclose(cam.depth(X), [2.0, 4.0, 2.0])
     # Broadcasting over leading axes; behind the camera is NaN.
     assert cam.project(np.zeros((4, 5, 3))).shape == (4, 5, 2)
@@ -70,8 +69,7 @@ def test_dict_round_trip_and_errors():
     assert again.to_dict() == d
     X = np.array([[0.3, 1.2, -0.4]])
     np.testing.assert_allclose(again.project(X), cam.project(X))
-    la = Camera.from_dict({"eye": [0, 1.6, 4.0], "target": [0, 0.9, 0], "fov_deg": 55,
-                           "width": 640, "height": 480})
+    la = Camera.from_dict({"eye": [0, 1.6, 4.0], "target": [0, 0.9, 0], "fov_deg": 55, "width": 640, "height": 480})
     np.testing.assert_allclose(la.project(X), cam.project(X))
     with pytest.raises(ValueError, match="unknown key.*focal"):
         Camera.from_dict({**d, "focal": 3})

@@ -2,14 +2,35 @@
 
 import numpy as np
 import pytest
-
 from counterpart.body.camera import default_camera
-from counterpart.body.kinematics import anchor_points, cone_endpoints, forward_kinematics, frames, lowest_point, rot_x, rot_y, rot_z
+from counterpart.body.kinematics import (
+    anchor_points,
+    cone_endpoints,
+    forward_kinematics,
+    frames,
+    lowest_point,
+    rot_x,
+    rot_y,
+    rot_z,
+)
 from counterpart.body.pose import DOF, DOF_INDEX, DOF_NAMES, LOWER, UPPER, clip_to_limits, neutral_pose, within_limits
 from counterpart.body.raster import (
-    cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps,
+    cone_interior_points,
+    cone_outline_points,
+    rasterise_silhouettes,
+    render_edge_maps,
 )
-from counterpart.body.skeleton import ANCHOR_INDEX, BONES, DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_SEGMENTS, PARENT, SEGMENTS, BodyDims
+from counterpart.body.skeleton import (
+    ANCHOR_INDEX,
+    BONES,
+    DEFAULT_DIMS,
+    JOINT_INDEX,
+    JOINTS,
+    N_SEGMENTS,
+    PARENT,
+    SEGMENTS,
+    BodyDims,
+)
 
 J = JOINT_INDEX
 D = DEFAULT_DIMS
@@ -29,8 +50,22 @@ def random_poses(n: int, seed: int = 0) -> np.ndarray:
 
 
 def test_skeleton_tables():
-    assert JOINTS == ("head", "neck", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow",
-                      "r_wrist", "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle")
+    assert JOINTS == (
+        "head",
+        "neck",
+        "l_shoulder",
+        "l_elbow",
+        "l_wrist",
+        "r_shoulder",
+        "r_elbow",
+        "r_wrist",
+        "l_hip",
+        "l_knee",
+        "l_ankle",
+        "r_hip",
+        "r_knee",
+        "r_ankle",
+    )
     assert len(PARENT) == 14 and len(SEGMENTS) == N_SEGMENTS == 16
     assert all(p < j for j, p in enumerate(PARENT) if p >= 0 and j != 0) and PARENT[0] == 1
     assert len(DOF_NAMES) == DOF == 28 and LOWER.shape == UPPER.shape == (DOF,)
@@ -59,8 +94,9 @@ def test_elbow_bend_90_puts_wrist_forward():
     P[DOF_INDEX["l_elbow_flex"]] = np.pi / 2
     X = forward_kinematics(P)[0]
     np.testing.assert_allclose(X[J["l_wrist"]] - X[J["l_elbow"]], (0, 0, D.forearm), atol=1e-12)
-    np.testing.assert_allclose(X[J["l_elbow"]], (D.shoulder_width / 2, 1.0 + D.torso_length
-                                                 - D.shoulder_drop - D.upper_arm, 0), atol=1e-12)
+    np.testing.assert_allclose(
+        X[J["l_elbow"]], (D.shoulder_width / 2, 1.0 + D.torso_length - D.shoulder_drop - D.upper_arm, 0), atol=1e-12
+    )
     # Shoulder abduction 90 degrees: the left arm points to +X (its own left), horizontally.
     P = zero_pose()
     P[DOF_INDEX["l_shoulder_abd"]] = np.pi / 2
@@ -107,6 +143,7 @@ def test_yaw_rotates_body_about_vertical():
     # The toes point along +Z at yaw 0 and along +X at yaw +90 degrees.
     pts = frames(np.stack([P, Q]))[0]
     from counterpart.body.skeleton import ANCHOR_INDEX
+
     toe = pts[:, ANCHOR_INDEX["l_toe"]] - pts[:, J["l_ankle"]]
     assert toe[0, 2] > 0.1 and abs(toe[0, 0]) < 1e-9
     assert toe[1, 0] > 0.1 and abs(toe[1, 2]) < 1e-9
@@ -182,6 +219,7 @@ def test_silhouettes_contain_projected_joints_and_sample_points():
     assert out.shape == (3, 16 * 2 * 4, 2)
     E = render_edge_maps(P, D, cam, mode="cones")
     import cv2
+
     dist = cv2.distanceTransform((~E[0]).astype(np.uint8), cv2.DIST_L2, 3)
     o = np.round(out[0]).astype(int)
     assert np.median(dist[o[:, 1], o[:, 0]]) <= 1.5
@@ -203,6 +241,7 @@ def test_vectorised_samplers_match_per_pose():
 
 def test_inverse_kinematics_round_trip():
     from counterpart.body.ik import dims_from_joints, inverse_kinematics
+
     P = random_poses(300, 11)
     # What 14 joints cannot show is fixed by the solver: pelvis pitch and head turn.
     P[:, DOF_INDEX["root_pitch"]] = 0.0
@@ -226,7 +265,8 @@ def test_inverse_kinematics_round_trip():
 
 def test_frames_follow_the_documented_matrix_chain() -> None:
     """The column-wise chain equals the module docstring's products of rot_x/rot_y/rot_z
-    matrices, and anchor_points equals frames' points."""
+    matrices, and anchor_points equals frames' points.
+    """
     P = random_poses(40, seed=7)
     dims = D.scaled(1.7)
     pts, R = frames(P, dims)
@@ -236,10 +276,21 @@ def test_frames_follow_the_documented_matrix_chain() -> None:
     head = tor @ rot_y(g["head_turn"]) @ rot_x(g["head_nod"]) @ rot_z(-g["head_tilt"])
     expect = {"pelvis": pel, "torso": tor, "head": head}
     for s, sign in (("l", 1.0), ("r", -1.0)):
-        ua = tor @ rot_x(-g[f"{s}_shoulder_flex"]) @ rot_z(sign * g[f"{s}_shoulder_abd"]) @ rot_y(-sign * g[f"{s}_shoulder_rot"])
+        ua = (
+            tor
+            @ rot_x(-g[f"{s}_shoulder_flex"])
+            @ rot_z(sign * g[f"{s}_shoulder_abd"])
+            @ rot_y(-sign * g[f"{s}_shoulder_rot"])
+        )
         th = pel @ rot_x(-g[f"{s}_hip_flex"]) @ rot_z(sign * g[f"{s}_hip_abd"]) @ rot_y(-sign * g[f"{s}_hip_rot"])
-        expect.update({f"{s}_upper_arm": ua, f"{s}_forearm": ua @ rot_x(-g[f"{s}_elbow_flex"]),
-                       f"{s}_thigh": th, f"{s}_shin": th @ rot_x(g[f"{s}_knee_flex"])})
+        expect.update(
+            {
+                f"{s}_upper_arm": ua,
+                f"{s}_forearm": ua @ rot_x(-g[f"{s}_elbow_flex"]),
+                f"{s}_thigh": th,
+                f"{s}_shin": th @ rot_x(g[f"{s}_knee_flex"]),
+            }
+        )
     assert sorted(R) == sorted(expect)
     for name, M in expect.items():
         np.testing.assert_allclose(R[name], M, atol=1e-12, err_msg=name)

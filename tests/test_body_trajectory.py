@@ -4,7 +4,6 @@ import json
 
 import numpy as np
 import pytest
-
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import JOINTS
@@ -20,9 +19,12 @@ def make(T: int = 50, fps: float = 25.0, signals: bool = True) -> TwoPersonTraje
     a[:, :, 0] += 0.2 * t[:, None]  # A walks towards B at 0.2 m/s
     kw = {}
     if signals:
-        kw = dict(signals_a=(np.arange(T)[:, None] % np.array([2, 5]) == 0).astype(np.uint8),
-                  signals_b=np.zeros((T, 2), np.uint8), signal_names=("nod", "shake"),
-                  phase=(np.arange(T) >= T // 2).astype(np.int32))
+        kw = dict(
+            signals_a=(np.arange(T)[:, None] % np.array([2, 5]) == 0).astype(np.uint8),
+            signals_b=np.zeros((T, 2), np.uint8),
+            signal_names=("nod", "shake"),
+            phase=(np.arange(T) >= T // 2).astype(np.int32),
+        )
     return TwoPersonTrajectory(a=a, b=b, fps=fps, label="approach", meta={"source": "test"}, **kw)
 
 
@@ -51,8 +53,16 @@ def test_save_load_round_trip(tmp_path):
 
 def test_hand_written_file_loads(tmp_path):
     a = np.zeros((3, 14, 3), np.float32)
-    np.savez(tmp_path / "mine.npz", format_version=1, a=a, b=a + 1, fps=30.0,
-             joint_names=np.array(JOINTS), label="wave", extra_future_key=np.arange(3))
+    np.savez(
+        tmp_path / "mine.npz",
+        format_version=1,
+        a=a,
+        b=a + 1,
+        fps=30.0,
+        joint_names=np.array(JOINTS),
+        label="wave",
+        extra_future_key=np.arange(3),
+    )
     tr = TwoPersonTrajectory.load(tmp_path / "mine.npz")
     assert tr.n_frames == 3 and tr.label == "wave" and tr.meta == {}
 
@@ -66,19 +76,24 @@ def _write(path, **over):
     return path
 
 
-@pytest.mark.parametrize("over, match", [
-    (dict(b=None), r"missing key\(s\) \['b'\]"),
-    (dict(a=np.zeros((4, 13, 3), np.float32)), r"key 'a': shape \(4, 13, 3\)"),
-    (dict(b=np.zeros((5, 14, 3), np.float32)), r"key 'b': 5 frames"),
-    (dict(fps=-1.0), r"key 'fps'"),
-    (dict(joint_names=np.array(JOINTS[::-1])), r"key 'joint_names'"),
-    (dict(format_version=7), r"key 'format_version': 7"),
-    (dict(signals_a=np.zeros((4, 2)), signals_b=np.zeros((4, 2))), r"signal_names"),
-    (dict(signals_a=np.zeros((4, 2)), signals_b=np.zeros((3, 2)), signal_names=np.array(["n", "s"])),
-     r"key 'signals_b': shape \(3, 2\)"),
-    (dict(phase=np.zeros(9, int)), r"key 'phase'"),
-    (dict(a=np.full((4, 14, 3), np.nan, np.float32)), r"key 'a': contains NaN"),
-])
+@pytest.mark.parametrize(
+    "over, match",
+    [
+        (dict(b=None), r"missing key\(s\) \['b'\]"),
+        (dict(a=np.zeros((4, 13, 3), np.float32)), r"key 'a': shape \(4, 13, 3\)"),
+        (dict(b=np.zeros((5, 14, 3), np.float32)), r"key 'b': 5 frames"),
+        (dict(fps=-1.0), r"key 'fps'"),
+        (dict(joint_names=np.array(JOINTS[::-1])), r"key 'joint_names'"),
+        (dict(format_version=7), r"key 'format_version': 7"),
+        (dict(signals_a=np.zeros((4, 2)), signals_b=np.zeros((4, 2))), r"signal_names"),
+        (
+            dict(signals_a=np.zeros((4, 2)), signals_b=np.zeros((3, 2)), signal_names=np.array(["n", "s"])),
+            r"key 'signals_b': shape \(3, 2\)",
+        ),
+        (dict(phase=np.zeros(9, int)), r"key 'phase'"),
+        (dict(a=np.full((4, 14, 3), np.nan, np.float32)), r"key 'a': contains NaN"),
+    ],
+)
 def test_load_errors_name_file_and_key(tmp_path, over, match):
     path = _write(tmp_path / "bad.npz", **over)
     with pytest.raises(ValueError, match=rf"bad\.npz.*{match}"):
@@ -122,8 +137,7 @@ def test_constructor_checks():
 def test_from_bvh_pair(tmp_path):
     tr = TwoPersonTrajectory.from_bvh_pair(DATA / "18_01.bvh", DATA / "19_01.bvh", label="handshake")
     assert tr.n_frames == 303 and tr.fps == pytest.approx(120.0, rel=1e-4)
-    low = TwoPersonTrajectory.from_bvh_pair(DATA / "18_01.bvh", DATA / "19_01.bvh", fps=25.0,
-                                            label="handshake")
+    low = TwoPersonTrajectory.from_bvh_pair(DATA / "18_01.bvh", DATA / "19_01.bvh", fps=25.0, label="handshake")
     assert low.fps == 25.0 and low.n_frames == int(302 / 120.0 * 25.0) + 1
     # Wrists approach in the handshake (measured 0.38 m at 25 fps), from 1.68 m apart.
     w = [JOINTS.index("l_wrist"), JOINTS.index("r_wrist")]

@@ -1,10 +1,11 @@
 """The runtime with real processes and sockets: the real launcher, real nodes, real signals."""
+
 from __future__ import annotations
 
 import json
 import os
-import signal
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -16,22 +17,42 @@ import numpy as np
 import psutil
 import pytest
 import zmq
-
 from counterpart.bus.endpoints import tcp_endpoints
 from counterpart.messages import EndOfStream, encode_frames
+
 from tests.graph_nodes import Number
-from tests.launching import (REPO, descendants, free_port_pair, kill_tree, read_jsonl, run_launch, start_launch, stop_launch,
-                             wait_for, write_launch)
+from tests.launching import (
+    REPO,
+    descendants,
+    free_port_pair,
+    kill_tree,
+    read_jsonl,
+    run_launch,
+    start_launch,
+    stop_launch,
+    wait_for,
+    write_launch,
+)
 
 N = "tests.graph_nodes:"
 
 
 def chain(tmp: Path, count: int = 300, **sink_params) -> dict:
-    return {"nodes": {
-        "source": {"run": N + "Counter", "params": {"count": count, "payload_bytes": 64}, "remap": {"out": "numbers"}},
-        "relay": {"run": N + "Relay", "params": {"gain": 2.0}, "remap": {"in": "numbers", "out": "doubled"}},
-        "sink": {"run": N + "Sink", "params": {"path": str(tmp / "sink.jsonl"), **sink_params}, "remap": {"in": "doubled"}},
-    }}
+    return {
+        "nodes": {
+            "source": {
+                "run": N + "Counter",
+                "params": {"count": count, "payload_bytes": 64},
+                "remap": {"out": "numbers"},
+            },
+            "relay": {"run": N + "Relay", "params": {"gain": 2.0}, "remap": {"in": "numbers", "out": "doubled"}},
+            "sink": {
+                "run": N + "Sink",
+                "params": {"path": str(tmp / "sink.jsonl"), **sink_params},
+                "remap": {"in": "doubled"},
+            },
+        }
+    }
 
 
 def received(path: Path) -> list[dict]:
@@ -78,7 +99,9 @@ def test_killed_node_with_restart_policy_comes_back(tmp_path: Path) -> None:
         assert wait_for(lambda: len(received(tmp_path / "sink.jsonl")) > 20, 20)
         starts = [r for r in read_jsonl(tmp_path / "sink.jsonl") if r.get("event") == "start"]
         os.kill(starts[0]["pid"], signal.SIGKILL)
-        assert wait_for(lambda: len([r for r in read_jsonl(tmp_path / "sink.jsonl") if r.get("event") == "start"]) == 2, 20)
+        assert wait_for(
+            lambda: len([r for r in read_jsonl(tmp_path / "sink.jsonl") if r.get("event") == "start"]) == 2, 20
+        )
         n = len(received(tmp_path / "sink.jsonl"))
         assert wait_for(lambda: len(received(tmp_path / "sink.jsonl")) > n + 20, 20)  # it receives again
     finally:
@@ -108,7 +131,9 @@ def test_stopping_the_launcher_leaves_no_process(tmp_path: Path, sig: int) -> No
 def test_required_node_exit_stops_the_graph_with_its_code(tmp_path: Path) -> None:
     doc = chain(tmp_path, count=100000)
     doc["nodes"]["source"]["params"]["rate"] = 100.0
-    doc["nodes"]["sink"].update(required=True, params={**doc["nodes"]["sink"]["params"], "exit_after": 20, "exit_code": 7})
+    doc["nodes"]["sink"].update(
+        required=True, params={**doc["nodes"]["sink"]["params"], "exit_after": 20, "exit_code": 7}
+    )
     doc["nodes"]["relay"]["restart"] = "always"  # a required node's exit wins over restart policies
     f = write_launch(tmp_path / "g.yaml", doc)
     proc = start_launch(f)
@@ -124,11 +149,14 @@ def test_required_node_exit_stops_the_graph_with_its_code(tmp_path: Path) -> Non
 
 def test_rogue_publisher_does_not_stop_the_sink(tmp_path: Path) -> None:
     """Garbage, an unknown schema, a wrong field type and an oversized header reach a sink over tcp;
-    it drops and counts them, keeps the good messages and ends normally."""
+    it drops and counts them, keeps the good messages and ends normally.
+    """
     port = free_port_pair()
     doc = {
         "external": {"numbers": {"type": "test.Number", "endpoint": f"tcp://127.0.0.1:{port}"}},
-        "nodes": {"sink": {"run": N + "Sink", "params": {"path": str(tmp_path / "sink.jsonl")}, "remap": {"in": "numbers"}}},
+        "nodes": {
+            "sink": {"run": N + "Sink", "params": {"path": str(tmp_path / "sink.jsonl")}, "remap": {"in": "numbers"}}
+        },
     }
     f = write_launch(tmp_path / "g.yaml", doc)
     ctx = zmq.Context()
@@ -168,25 +196,43 @@ def test_rogue_publisher_does_not_stop_the_sink(tmp_path: Path) -> None:
 
 def test_graph_split_over_two_launchers_delivers_over_tcp(tmp_path: Path) -> None:
     port = free_port_pair()
-    a = write_launch(tmp_path / "a.yaml", {
-        "endpoints": {"numbers": f"tcp://127.0.0.1:{port}"},
-        "nodes": {"source": {"run": N + "Counter", "params": {"count": 200}, "remap": {"out": "numbers"},
-                             "wait_subscribers": {"out": 1}}},
-    })
-    b = write_launch(tmp_path / "b.yaml", {
-        "external": {"numbers": {"type": "test.Number", "endpoint": f"tcp://127.0.0.1:{port}"}},
-        "nodes": {
-            "relay": {"run": N + "Relay", "params": {"gain": 3.0}, "remap": {"in": "numbers", "out": "tripled"}},
-            "sink": {"run": N + "Sink", "params": {"path": str(tmp_path / "sink.jsonl")}, "remap": {"in": "tripled"}},
+    a = write_launch(
+        tmp_path / "a.yaml",
+        {
+            "endpoints": {"numbers": f"tcp://127.0.0.1:{port}"},
+            "nodes": {
+                "source": {
+                    "run": N + "Counter",
+                    "params": {"count": 200},
+                    "remap": {"out": "numbers"},
+                    "wait_subscribers": {"out": 1},
+                }
+            },
         },
-    })
+    )
+    b = write_launch(
+        tmp_path / "b.yaml",
+        {
+            "external": {"numbers": {"type": "test.Number", "endpoint": f"tcp://127.0.0.1:{port}"}},
+            "nodes": {
+                "relay": {"run": N + "Relay", "params": {"gain": 3.0}, "remap": {"in": "numbers", "out": "tripled"}},
+                "sink": {
+                    "run": N + "Sink",
+                    "params": {"path": str(tmp_path / "sink.jsonl")},
+                    "remap": {"in": "tripled"},
+                },
+            },
+        },
+    )
     pa, pb = start_launch(a), start_launch(b)
     try:
         assert pa.wait(40) == 0, pa.stdout.read()
         assert pb.wait(40) == 0, pb.stdout.read()
         rows = received(tmp_path / "sink.jsonl")
         assert [r["value"] for r in rows] == [3.0 * i for i in range(200)]
-        listening = [c for c in psutil.net_connections("tcp") if c.status == "LISTEN" and c.laddr.port in (port, port + 1)]
+        listening = [
+            c for c in psutil.net_connections("tcp") if c.status == "LISTEN" and c.laddr.port in (port, port + 1)
+        ]
         assert all(c.laddr.ip == "127.0.0.1" for c in listening)
     finally:
         kill_tree(pa)
@@ -200,8 +246,17 @@ def test_introspection_lists_nodes_and_topics_and_echoes(tmp_path: Path) -> None
     home = tempfile.mkdtemp(prefix="cp-", dir="/tmp")  # short: unix socket paths are limited to 107 bytes
     env = {"COUNTERPART_HOME": home}
     proc = start_launch(f, env=env)
-    cli = lambda *a: subprocess.run([sys.executable, "-m", "counterpart.bus.cli", *a], cwd=REPO, capture_output=True,  # noqa: E731
-                                    text=True, timeout=30, env={**os.environ, **env})
+
+    def cli(*a: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-m", "counterpart.bus.cli", *a],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=30,
+            env={**os.environ, **env},
+        )
+
     try:
         assert wait_for(lambda: len(received(tmp_path / "sink.jsonl")) > 5, 20)
         nodes = cli("node", "list")

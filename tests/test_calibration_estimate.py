@@ -1,11 +1,12 @@
 """The camera estimate from people (counterpart.nodes.calibration.estimate) on exact projections of known
 cameras: people of known statures walking on the ground at different depths, their head and foot
-points projected and perturbed by a pixel of noise."""
+points projected and perturbed by a pixel of noise.
+"""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
 from counterpart.nodes.calibration.lines import find_families
@@ -23,14 +24,15 @@ def _camera(height: float, tilt_deg: float, fov_deg: float, roll_deg: float = 0.
 
 def _walkers(cam: Camera, seed: int, n_people: int = 6, frames: int = 100, fps: float = 10.0, noise: float = 1.0):
     """Heads, feet (pixels), person ids and times of people walking in straight lines (in depth too),
-    each leaning a little (2% of the stature, to one side for the whole walk)."""
+    each leaning a little (2% of the stature, to one side for the whole walk).
+    """
     rng = np.random.default_rng(seed)
     heads, feet, ids = [], [], []
     for p in range(n_people):
         stature = rng.normal(1.70, 0.07)
         start = np.array([rng.uniform(-1.5, 1.5), 0.0, rng.uniform(-2.0, 1.0)])
         heading = rng.uniform(0, 2 * np.pi)
-        step = 0.5 * np.array([np.cos(heading), 0.0, np.sin(heading)]) / fps   # 0.5 m/s, to and fro
+        step = 0.5 * np.array([np.cos(heading), 0.0, np.sin(heading)]) / fps  # 0.5 m/s, to and fro
         lean = np.array([rng.normal(0, 0.02 * stature), 0.0, 0.0])
         for t in range(frames):
             g = start + step * (t % 50 if t % 100 < 50 else 50 - t % 50)
@@ -41,10 +43,12 @@ def _walkers(cam: Camera, seed: int, n_people: int = 6, frames: int = 100, fps: 
     return np.array(heads), np.array(feet), np.array(ids), t
 
 
-@pytest.mark.parametrize("height,tilt,fov,roll", [(2.5, 20.0, 50.0, 0.0), (1.4, 12.0, 70.0, 3.0),
-                                                  (3.0, 30.0, 42.0, -2.0)])
-def test_a_tilted_camera_is_recovered_within_its_uncertainty(height: float, tilt: float, fov: float,
-                                                             roll: float) -> None:
+@pytest.mark.parametrize(
+    "height,tilt,fov,roll", [(2.5, 20.0, 50.0, 0.0), (1.4, 12.0, 70.0, 3.0), (3.0, 30.0, 42.0, -2.0)]
+)
+def test_a_tilted_camera_is_recovered_within_its_uncertainty(
+    height: float, tilt: float, fov: float, roll: float
+) -> None:
     cam = _camera(height, tilt, fov, roll)
     heads, feet, ids, t = _walkers(cam, seed=int(tilt))
     est = estimate_camera(heads, feet, ids, (W, H), t)
@@ -86,8 +90,8 @@ def test_head_and_foot_of_a_region_and_which_regions_count() -> None:
     np.testing.assert_allclose(head, [50.0, 19.5])
     np.testing.assert_allclose(foot, [(58 + 52 + 42) / 3, 100.5])
     assert usable((40, 20, 21, 81), W, H)
-    assert not usable((0, 20, 21, 81), W, H)           # cut by the image border
-    assert not usable((40, 20, 70, 81), W, H)          # not upright
+    assert not usable((0, 20, 21, 81), W, H)  # cut by the image border
+    assert not usable((40, 20, 70, 81), W, H)  # not upright
     assert not usable((40, 20, 21, 81), W, H, merged=True)
 
 
@@ -126,8 +130,13 @@ def _floor(cam: Camera, seed: int) -> np.ndarray:
     ends += [([-1.5, 0, z], [1.5, 0, z]) for z in np.arange(-2, 1, 0.5)]
     s = np.array([np.r_[cam.project(np.array(a, float)), cam.project(np.array(b, float))] for a, b in ends])
     s += rng.normal(0, 0.5, s.shape)
-    inside = (np.isfinite(s).all(1) & (s[:, [0, 2]].min(1) > 0) & (s[:, [0, 2]].max(1) < W)
-              & (s[:, [1, 3]].min(1) > 0) & (s[:, [1, 3]].max(1) < H))
+    inside = (
+        np.isfinite(s).all(1)
+        & (s[:, [0, 2]].min(1) > 0)
+        & (s[:, [0, 2]].max(1) < W)
+        & (s[:, [1, 3]].min(1) > 0)
+        & (s[:, [1, 3]].max(1) < H)
+    )
     return s[inside]
 
 
@@ -150,5 +159,6 @@ def test_people_walking_in_depth_show_the_horizon() -> None:
     heads, feet, ids, t = _walkers(cam, seed=20)
     est = estimate_camera(heads, feet, ids, (W, H), t)
     assert est.depth_spread > 0.12 and credible(est, 0.2, 0.5, 8.0, 0.12)
-    assert not credible(estimate_camera(*_across(cam, seed=1)[:3], (W, H), _across(cam, seed=1)[3]),
-                        0.2, 0.5, 8.0, 0.12)
+    assert not credible(
+        estimate_camera(*_across(cam, seed=1)[:3], (W, H), _across(cam, seed=1)[3]), 0.2, 0.5, 8.0, 0.12
+    )

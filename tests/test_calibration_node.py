@@ -1,5 +1,7 @@
 """The calibration node in a real graph: one camera for the frames' size, published once (latched)
-on camera_info; a calibration file scaled to the frames, or refused by name when it cannot be."""
+on camera_info; a calibration file scaled to the frames, or refused by name when it cannot be.
+"""
+
 from __future__ import annotations
 
 import json
@@ -7,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from counterpart.body.camera import Camera, camera_for_size, default_camera
+
 from tests.launching import read_jsonl, run_launch, write_launch
 
 W, H = 200, 150  # the simulator rendered at another size than its own 320x240
@@ -16,12 +18,20 @@ W, H = 200, 150  # the simulator rendered at another size than its own 320x240
 
 def _graph(tmp_path: Path, file: str = "") -> tuple[Path, Path]:
     out = tmp_path / "info.jsonl"
-    doc = {"nodes": {
-        "camera": {"run": "counterpart.nodes.camera", "params": {"source": "sim:handshake", "pacing": "lockstep",
-                                                     "max_frames": 4, "width": W, "height": H}},
-        "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable", "params": {"file": file}},
-        "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "camera_info", "path": str(out)}},
-    }}
+    doc = {
+        "nodes": {
+            "camera": {
+                "run": "counterpart.nodes.camera",
+                "params": {"source": "sim:handshake", "pacing": "lockstep", "max_frames": 4, "width": W, "height": H},
+            },
+            "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable", "params": {"file": file}},
+            "sink": {
+                "run": "tests.topic_sink",
+                "policy": "reliable",
+                "params": {"topic": "camera_info", "path": str(out)},
+            },
+        }
+    }
     return write_launch(tmp_path / "graph.yaml", doc), out
 
 
@@ -30,8 +40,16 @@ def _infos(out: Path) -> list[dict]:
 
 
 def _camera(info: dict) -> Camera:
-    return Camera(info["fx"], info["fy"], info["cx"], info["cy"], info["width"], info["height"],
-                  np.array(info["R"], float), np.array(info["t"], float))
+    return Camera(
+        info["fx"],
+        info["fy"],
+        info["cx"],
+        info["cy"],
+        info["width"],
+        info["height"],
+        np.array(info["R"], float),
+        np.array(info["t"], float),
+    )
 
 
 def test_the_default_camera_for_the_frames_size_is_published_once(tmp_path: Path) -> None:
@@ -68,15 +86,27 @@ def test_a_calibration_file_is_scaled_to_the_frames_or_refused_by_name(tmp_path:
 
 def _estimating_graph(tmp_path: Path, **params: object) -> tuple[Path, Path]:
     """A simulated scene from a random camera through the silhouette node to the calibration node,
-    estimating the camera from the people in view."""
+    estimating the camera from the people in view.
+    """
     out = tmp_path / "info.jsonl"
-    doc = {"policy": "reliable", "nodes": {
-        "camera": {"run": "counterpart.nodes.camera", "params": {"source": "sim:high_five?seed=1&camera=random",
-                                                     "pacing": "lockstep", "max_frames": 75}},
-        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": 20, "replay_training": True}},
-        "calibration": {"run": "counterpart.nodes.calibration", "params": {"file": "", "estimate": True, "every": 5, **params}},
-        "sink": {"run": "tests.topic_sink", "params": {"topic": "camera_info", "path": str(out)}},
-    }}
+    doc = {
+        "policy": "reliable",
+        "nodes": {
+            "camera": {
+                "run": "counterpart.nodes.camera",
+                "params": {"source": "sim:high_five?seed=1&camera=random", "pacing": "lockstep", "max_frames": 75},
+            },
+            "silhouette": {
+                "run": "counterpart.nodes.silhouette",
+                "params": {"train_frames": 20, "replay_training": True},
+            },
+            "calibration": {
+                "run": "counterpart.nodes.calibration",
+                "params": {"file": "", "estimate": True, "every": 5, **params},
+            },
+            "sink": {"run": "tests.topic_sink", "params": {"topic": "camera_info", "path": str(out)}},
+        },
+    }
     return write_launch(tmp_path / "graph.yaml", doc), out
 
 
@@ -91,8 +121,14 @@ def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(tmp_path
     assert "no credible camera estimate" in log
     # with every estimate taken as credible the published camera follows them, a bounded step at a time
     (tmp_path / "all").mkdir()
-    f, out = _estimating_graph(tmp_path / "all", max_height_std=10.0, max_focal_std=10.0, max_tilt_std_deg=90.0,
-                               min_depth_spread=0.0, max_step=0.02)
+    f, out = _estimating_graph(
+        tmp_path / "all",
+        max_height_std=10.0,
+        max_focal_std=10.0,
+        max_tilt_std_deg=90.0,
+        min_depth_spread=0.0,
+        max_step=0.02,
+    )
     rc, log = run_launch(f, timeout=120)
     assert rc == 0, log
     infos = _infos(out)

@@ -1,4 +1,5 @@
 """The camera node in real graphs: ``counterpart launch`` (bus.cli) of a camera and a recording sink."""
+
 from __future__ import annotations
 
 import hashlib
@@ -14,9 +15,9 @@ import cv2
 import numpy as np
 import pytest
 import yaml
-
 from counterpart.nodes.camera.node import EXIT_SOURCE_ERROR
 from counterpart.nodes.camera.sources import video_devices
+
 from tests.camera_sink import VTEST, cv2_frames, write_video
 
 REPO = Path(__file__).resolve().parents[1]
@@ -26,14 +27,22 @@ def launch(tmp_path: Path, camera: dict[str, Any], timeout: float = 60) -> tuple
     """Run camera -> sink to its end; return (launcher exit code, its output, the sink's records)."""
     out = tmp_path / "sink.jsonl"
     out.unlink(missing_ok=True)
-    doc = {"nodes": {
-        "camera": {"run": "counterpart.nodes.camera", "params": camera},
-        "sink": {"run": "tests.camera_sink", "params": {"path": str(out)}, "policy": "reliable"},
-    }}
+    doc = {
+        "nodes": {
+            "camera": {"run": "counterpart.nodes.camera", "params": camera},
+            "sink": {"run": "tests.camera_sink", "params": {"path": str(out)}, "policy": "reliable"},
+        }
+    }
     file = tmp_path / "graph.yaml"
     file.write_text(yaml.safe_dump(doc, sort_keys=False))
-    proc = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "launch", str(file)], cwd=REPO,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", "launch", str(file)],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
     try:
         text, _ = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -87,14 +96,25 @@ def test_image_folder_gray_resized_with_start_and_loop(tmp_path: Path) -> None:
     imgs = [rng.integers(0, 256, (48, 64, 3), dtype=np.uint8) for _ in range(4)]
     for i, img in enumerate(imgs):
         cv2.imwrite(str(folder / f"f{i:03d}.png"), img)
-    code, text, records = launch(tmp_path, {
-        "source": f"folder:{folder}", "pacing": "fast", "gray": True, "width": 32,
-        "start_frame": 1, "loop": True, "max_frames": 7,
-    })
+    code, text, records = launch(
+        tmp_path,
+        {
+            "source": f"folder:{folder}",
+            "pacing": "fast",
+            "gray": True,
+            "width": 32,
+            "start_frame": 1,
+            "loop": True,
+            "max_frames": 7,
+        },
+    )
     assert code == 0, text
     got = frame_records(records)
     order = [1, 2, 3, 1, 2, 3, 1]
-    want = [sha(cv2.cvtColor(cv2.resize(imgs[i], (32, 24), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY)) for i in order]
+    want = [
+        sha(cv2.cvtColor(cv2.resize(imgs[i], (32, 24), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY))
+        for i in order
+    ]
     assert [r["sha1"] for r in got] == want
     assert [r["seq"] for r in got] == list(range(7))
     assert all(r["shape"] == [24, 32] and r["encoding"] == "mono8" for r in got)
@@ -143,13 +163,33 @@ def test_bad_parameter_is_refused_before_start(tmp_path: Path) -> None:
 
 def test_module_runs_alone(tmp_path: Path) -> None:
     """``python -m counterpart.nodes.camera`` (no launcher): a missing file ends with exit code 3 and the reason."""
-    r = subprocess.run([sys.executable, "-m", "counterpart.nodes.camera", "--param", f"source={tmp_path / 'gone.mp4'}"],
-                       cwd=REPO, capture_output=True, text=True, timeout=30)
+    r = subprocess.run(
+        [sys.executable, "-m", "counterpart.nodes.camera", "--param", f"source={tmp_path / 'gone.mp4'}"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert r.returncode == EXIT_SOURCE_ERROR and "gone.mp4' does not exist" in r.stderr
 
 
 def test_example_launch_file_checks() -> None:
-    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", "camera_file.yaml", "--check",
-                        "--set", "camera.source=folder:frames", "--set", "camera.pacing=lockstep"],
-                       cwd=REPO, capture_output=True, text=True, timeout=30)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "launch",
+            "camera_file.yaml",
+            "--check",
+            "--set",
+            "camera.source=folder:frames",
+            "--set",
+            "camera.pacing=lockstep",
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert r.returncode == 0 and "1 nodes, 2 topics: OK" in r.stdout, r.stderr

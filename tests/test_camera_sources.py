@@ -1,4 +1,5 @@
 """Camera sources, pacing and conversion on real files, without any process running."""
+
 from __future__ import annotations
 
 import hashlib
@@ -8,14 +9,21 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.bus import ParamError
 from counterpart.nodes.camera.node import Camera
 from counterpart.nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size
 from counterpart.nodes.camera.sources import (
-    ImageFolderSource, SimulatorSource, SourceError, V4L2Source, VideoFileSource, make_source, parse_uri,
-    read_with_retry, video_devices,
+    ImageFolderSource,
+    SimulatorSource,
+    SourceError,
+    V4L2Source,
+    VideoFileSource,
+    make_source,
+    parse_uri,
+    read_with_retry,
+    video_devices,
 )
+
 from tests.camera_sink import VTEST, cv2_frames, write_video
 
 
@@ -264,7 +272,9 @@ def test_convert_resize_and_gray() -> None:
     assert output_size((80, 60), 33, 17) == (33, 17)
     out, enc = convert(img, (40, 30), gray=True)
     assert enc == "mono8" and out.shape == (30, 40) and out.dtype == np.uint8
-    assert np.array_equal(out, cv2.cvtColor(cv2.resize(img, (40, 30), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY))
+    assert np.array_equal(
+        out, cv2.cvtColor(cv2.resize(img, (40, 30), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2GRAY)
+    )
     same, enc = convert(img, (80, 60))
     assert enc == "bgr8" and same is img
 

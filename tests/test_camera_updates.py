@@ -1,9 +1,10 @@
 """A refined camera while the graph runs: each camera_info holds from its seq on for every
-subscriber (counterpart.body.camera.CameraSchedule), and the tracker's tracks go on through it."""
+subscriber (counterpart.body.camera.CameraSchedule), and the tracker's tracks go on through it.
+"""
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.camera import Camera, CameraSchedule, default_camera
 from counterpart.body.raster import rasterise_silhouettes
 from counterpart.nodes.tracker.tracker import Tracker
@@ -15,7 +16,7 @@ def test_each_camera_holds_from_its_seq_whatever_order_it_came_in() -> None:
     s = CameraSchedule()
     assert s.get((320, 240), 0) is None and (320, 240) not in s
     s.add(a, 0)
-    s.add(c, 60)   # a later refinement that reached this node first
+    s.add(c, 60)  # a later refinement that reached this node first
     s.add(b, 30)
     assert [s.get((320, 240), q) for q in (0, 29, 30, 59, 60, 500)] == [a, a, b, b, c, c]
     assert s.get((320, 240)) is c and s.get((160, 120), 10) is None
@@ -33,8 +34,16 @@ def test_the_tracker_keeps_its_track_through_a_refined_camera() -> None:
     for m in masks[:4]:
         tr.update(None, m)
     # the calibration moved by one bounded step: 2% longer focal length, 2 cm higher
-    nudged = Camera(cam.fx * 1.02, cam.fy * 1.02, cam.cx, cam.cy, cam.width, cam.height, cam.R,
-                    cam.t - cam.R @ np.array([0.0, 0.02, 0.0]))
+    nudged = Camera(
+        cam.fx * 1.02,
+        cam.fy * 1.02,
+        cam.cx,
+        cam.cy,
+        cam.width,
+        cam.height,
+        cam.R,
+        cam.t - cam.R @ np.array([0.0, 0.02, 0.0]),
+    )
     tr.set_camera(nudged)
     results = [tr.update(None, m) for m in masks[4:]]
     assert tr.camera is nudged and tr.likelihood.views[0].camera is nudged

@@ -1,4 +1,5 @@
 """The ``counterpart`` command: every subcommand answers --help; nodes run alone find each other."""
+
 from __future__ import annotations
 
 import os
@@ -8,14 +9,20 @@ import tempfile
 from pathlib import Path
 
 import pytest
-
 from counterpart.bus.cli import COMMANDS
+
 from tests.launching import REPO, kill_tree, read_jsonl, wait_for
 
 
 def cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, capture_output=True, text=True,
-                          timeout=timeout, env={**os.environ, **(env or {})})
+    return subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", *args],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, **(env or {})},
+    )
 
 
 @pytest.mark.parametrize("command", sorted(COMMANDS))
@@ -40,12 +47,42 @@ def test_nodes_run_alone_find_each_other_by_topic(tmp_path: Path) -> None:
     home = tempfile.mkdtemp(prefix="cp-", dir="/tmp")
     env = {**os.environ, "COUNTERPART_HOME": home}
     out = tmp_path / "sink.jsonl"
-    sink = subprocess.Popen([sys.executable, "-m", "counterpart.bus.cli", "run", "tests.graph_nodes:Sink", "--param", f"path={out}",
-                             "--remap", "in=numbers"], cwd=REPO, env=env, start_new_session=True)
+    sink = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "run",
+            "tests.graph_nodes:Sink",
+            "--param",
+            f"path={out}",
+            "--remap",
+            "in=numbers",
+        ],
+        cwd=REPO,
+        env=env,
+        start_new_session=True,
+    )
     try:
         assert wait_for(lambda: out.exists(), 20)
-        src = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "run", "tests.graph_nodes:Counter", "--param", "count=50",
-                              "--param", "rate=100", "--remap", "out=numbers"], cwd=REPO, env=env, timeout=60)
+        src = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "counterpart.bus.cli",
+                "run",
+                "tests.graph_nodes:Counter",
+                "--param",
+                "count=50",
+                "--param",
+                "rate=100",
+                "--remap",
+                "out=numbers",
+            ],
+            cwd=REPO,
+            env=env,
+            timeout=60,
+        )
         assert src.returncode == 0
         assert sink.wait(20) == 0  # end of stream ended the sink too
         rows = [r for r in read_jsonl(out) if "seq" in r]

@@ -1,6 +1,8 @@
 """`counterpart calibrate VIDEO --out camera.yaml`: the camera estimated offline from the people in a
 video, printed with its uncertainty, written as a calibration file every camera-taking node and
-command reads; a video without people is refused with the reason."""
+command reads; a video without people is refused with the reason.
+"""
+
 from __future__ import annotations
 
 import json
@@ -11,22 +13,24 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.body.camera import camera_for_size, load_camera_file
+
 from tests.launching import REPO
 
 
 def _cli(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, capture_output=True, text=True, timeout=timeout
+    )
 
 
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A simulated handshake seen from a random camera (its video file)."""
     out = tmp_path_factory.mktemp("clip")
-    res = _cli("sim", "--scenario", "handshake", "--seed", "2", "--camera", "random", "--frames", "60", "--out",
-               str(out))
+    res = _cli(
+        "sim", "--scenario", "handshake", "--seed", "2", "--camera", "random", "--frames", "60", "--out", str(out)
+    )
     assert res.returncode == 0, res.stderr[-2000:]
     return out / "video.avi"
 

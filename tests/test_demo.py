@@ -1,6 +1,8 @@
 """`counterpart demo` end to end on a fresh model cache: trains the defaults, runs all six nodes on
 every frame of the built-in scene, writes the video, the contact sheet, the summary and the per-node
-statistics."""
+statistics.
+"""
+
 from __future__ import annotations
 
 import json
@@ -12,17 +14,26 @@ from pathlib import Path
 
 import cv2
 import pytest
-
 from counterpart.bus.launchfile import check, find_launch_file, load
+
 from tests.launching import REPO
 
 
 @pytest.mark.timeout(600)  # trains every default model first: about 30 s on two idle cores
 def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path) -> None:
-    env = {**os.environ, "COUNTERPART_MODELS": str(tmp_path / "models"),
-           "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpd-", dir="/tmp")}
-    res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(tmp_path / "out")],
-                         cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
+    env = {
+        **os.environ,
+        "COUNTERPART_MODELS": str(tmp_path / "models"),
+        "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpd-", dir="/tmp"),
+    }
+    res = subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(tmp_path / "out")],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert res.returncode == 0, res.stderr[-3000:]
     models = sorted(p.name for p in (tmp_path / "models").iterdir())
     assert "tracker_prior.npz" in models and "responder-dual-hmm.npz" in models
@@ -36,7 +47,15 @@ def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path
     assert n == stats["frames_in"] == stats["frames_out"] > 200  # the whole scene, every frame (lockstep)
     sheet = cv2.imread(str(tmp_path / "out" / "demo_contact_sheet.png"))
     assert sheet is not None and sheet.shape[0] >= 240 and sheet.shape[1] >= 4 * 320
-    assert set(stats["nodes"]) == {"camera", "calibration", "silhouette", "tracker", "labeller", "responder", "renderer"}
+    assert set(stats["nodes"]) == {
+        "camera",
+        "calibration",
+        "silhouette",
+        "tracker",
+        "labeller",
+        "responder",
+        "renderer",
+    }
     assert all(sum(t["count"] for t in st["inputs"] + st["outputs"]) > 0 for st in stats["nodes"].values())
     assert stats["fps_in"] == stats["fps_out"] == 25.0
     # the built-in scene's partner is drawn on most frames (0.81; 0.91 after the first second)
@@ -54,14 +73,21 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
     assert set(replay.nodes) == set(demo.nodes) | {"recorder"}
     assert set(load(find_launch_file("lockstep.yaml")).nodes) == set(demo.nodes)
     # the lockstep/queue/pairing keys may differ; every other parameter is the same
-    own = {("camera", "pacing"), ("renderer", "video"), ("renderer", "pair_timeout"), ("renderer", "adaptive_wait"),
-           ("silhouette", "replay_training"), ("tracker", "people")}
+    own = {
+        ("camera", "pacing"),
+        ("renderer", "video"),
+        ("renderer", "pair_timeout"),
+        ("renderer", "adaptive_wait"),
+        ("silhouette", "replay_training"),
+        ("tracker", "people"),
+    }
     for name, decl in demo.nodes.items():
         other = replay.nodes[name]
         assert other.run == decl.run, name
         keys = set(decl.params) | set(other.params)
-        assert {k: decl.params.get(k) for k in keys if (name, k) not in own} == \
-               {k: other.params.get(k) for k in keys if (name, k) not in own}, name
+        assert {k: decl.params.get(k) for k in keys if (name, k) not in own} == {
+            k: other.params.get(k) for k in keys if (name, k) not in own
+        }, name
     assert (demo.nodes["camera"].params["pacing"], replay.nodes["camera"].params["pacing"]) == ("realtime", "lockstep")
     # real time: every input keeps the newest message except the renderer's frames; lockstep: nothing dropped
     live = _subscriptions("demo.yaml")

@@ -1,5 +1,7 @@
 """`counterpart demo --input FILE` on recordings: every frame processed, the output at the input's
-frame rate, a summary that says what the run gave, and an end after any input however short."""
+frame rate, a summary that says what the run gave, and an end after any input however short.
+"""
+
 from __future__ import annotations
 
 import json
@@ -21,25 +23,54 @@ N_FRAMES = 30
 @pytest.fixture(scope="module")
 def env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     """One model cache for the module (the first demo builds the default models into it)."""
-    return {**os.environ, "COUNTERPART_MODELS": str(tmp_path_factory.mktemp("models")),
-            "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpi-", dir="/tmp")}
+    return {
+        **os.environ,
+        "COUNTERPART_MODELS": str(tmp_path_factory.mktemp("models")),
+        "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpi-", dir="/tmp"),
+    }
 
 
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory: pytest.TempPathFactory, env: dict[str, str]) -> Path:
     """A handshake recorded from the simulator at 10 fps (its video file, MJPG)."""
     out = tmp_path_factory.mktemp("clip")
-    subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "sim", "--scenario", "handshake", "--seed", "3", "--fps",
-                    str(FPS), "--frames", str(N_FRAMES), "--out", str(out)], cwd=REPO, env=env, check=True,
-                   capture_output=True, timeout=300)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "sim",
+            "--scenario",
+            "handshake",
+            "--seed",
+            "3",
+            "--fps",
+            str(FPS),
+            "--frames",
+            str(N_FRAMES),
+            "--out",
+            str(out),
+        ],
+        cwd=REPO,
+        env=env,
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     videos = [p for p in out.iterdir() if p.suffix in (".avi", ".mp4")]
     assert len(videos) == 1, sorted(p.name for p in out.iterdir())
     return videos[0]
 
 
 def _demo(env: dict[str, str], out: Path, *args: str, timeout: float = 300) -> tuple[subprocess.CompletedProcess, dict]:
-    res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(out), *args], cwd=REPO, env=env,
-                         capture_output=True, text=True, timeout=timeout)
+    res = subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(out), *args],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
     stats = json.loads((out / "demo_stats.json").read_text()) if (out / "demo_stats.json").exists() else {}
     return res, stats
 
@@ -56,8 +87,9 @@ def _video_frames_and_fps(out: Path) -> tuple[int, float]:
 
 
 @pytest.mark.timeout(600)  # the first demo of the module trains the default models: about 30 s
-def test_a_file_is_processed_frame_by_frame_and_written_at_its_own_rate(clip: Path, env: dict[str, str],
-                                                                        tmp_path: Path) -> None:
+def test_a_file_is_processed_frame_by_frame_and_written_at_its_own_rate(
+    clip: Path, env: dict[str, str], tmp_path: Path
+) -> None:
     res, stats = _demo(env, tmp_path, "--input", str(clip), timeout=600)
     assert res.returncode == 0, res.stderr[-3000:]
     assert (stats["frames_in"], stats["frames_out"]) == (N_FRAMES, N_FRAMES)
@@ -75,8 +107,9 @@ def test_a_file_is_processed_frame_by_frame_and_written_at_its_own_rate(clip: Pa
 
 @pytest.mark.timeout(300)
 @pytest.mark.parametrize("frames", [0, 1, 5])
-def test_every_short_input_ends_by_itself_and_says_why_it_drew_no_partner(clip: Path, env: dict[str, str],
-                                                                        tmp_path: Path, frames: int) -> None:
+def test_every_short_input_ends_by_itself_and_says_why_it_drew_no_partner(
+    clip: Path, env: dict[str, str], tmp_path: Path, frames: int
+) -> None:
     # 0 frames: the replay starts past the end of the file, a source that fails before its first frame
     args = ["--frames", str(frames)] if frames else ["--set", f"camera.start_frame={N_FRAMES + 10}"]
     res, stats = _demo(env, tmp_path, "--input", str(clip), *args, timeout=120)

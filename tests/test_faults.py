@@ -1,6 +1,8 @@
 """Faults and hostile input, with real processes, sockets and launchers: a graph whose node fails
 early ends; wrong, forged and malformed messages are dropped and counted, never fatal; a paused
-recorder holds nothing back; run folders are private; repeated log lines are rate-limited."""
+recorder holds nothing back; run folders are private; repeated log lines are rate-limited.
+"""
+
 from __future__ import annotations
 
 import json
@@ -14,20 +16,20 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 import psutil
 import pytest
 import zmq
-
 from counterpart.bus.bag_nodes import Recorder
 from counterpart.bus.endpoints import RunDirError, ipc_endpoints, private_dir
 from counterpart.bus.logs import BURST, WINDOW_S, RepeatFilter
 from counterpart.bus.supervisor import prune_run_dirs
 from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
 from counterpart.messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
+
 from tests.faulting import fuzz_silhouette_and_labeller, recorder_stalls_camera
 from tests.graph_nodes import Number
 from tests.launching import REPO, descendants, kill_tree, read_jsonl, start_launch, wait_for, write_launch
@@ -54,17 +56,25 @@ def _all_gone(procs: list[psutil.Process]) -> bool:
 
 
 @pytest.mark.parametrize("how, code", [("exit", 3), ("raise", 1)])
-def test_a_node_failing_before_its_first_message_ends_the_graph_within_5_s(tmp_path: Path, home: Path, how: str,
-                                                                           code: int) -> None:
+def test_a_node_failing_before_its_first_message_ends_the_graph_within_5_s(
+    tmp_path: Path, home: Path, how: str, code: int
+) -> None:
     """The failing source has a restart policy and its readers are a sink and a node still busy in a
-    long setup: the graph ends all the same, with the source's code, naming it."""
+    long setup: the graph ends all the same, with the source's code, naming it.
+    """
     mark = tmp_path / "failed"
-    doc = {"nodes": {
-        "source": {"run": F + "FailAtStart", "params": {"how": how, "code": code, "mark": str(mark), "delay": 1.0},
-                   "remap": {"out": "numbers"}, "restart": "on-failure"},
-        "slow": {"run": F + "SlowSetup", "remap": {"in": "numbers"}},
-        "sink": {"run": N + "Sink", "params": {"path": str(tmp_path / "sink.jsonl")}, "remap": {"in": "numbers"}},
-    }}
+    doc = {
+        "nodes": {
+            "source": {
+                "run": F + "FailAtStart",
+                "params": {"how": how, "code": code, "mark": str(mark), "delay": 1.0},
+                "remap": {"out": "numbers"},
+                "restart": "on-failure",
+            },
+            "slow": {"run": F + "SlowSetup", "remap": {"in": "numbers"}},
+            "sink": {"run": N + "Sink", "params": {"path": str(tmp_path / "sink.jsonl")}, "remap": {"in": "numbers"}},
+        }
+    }
     proc = start_launch(write_launch(tmp_path / "g.yaml", doc), env={"COUNTERPART_HOME": str(home)})
     try:
         kids: list[psutil.Process] = []
@@ -84,10 +94,13 @@ def test_a_node_failing_before_its_first_message_ends_the_graph_within_5_s(tmp_p
 def test_a_camera_that_cannot_decode_its_file_ends_the_graph(tmp_path: Path, home: Path) -> None:
     video = tmp_path / "r.avi"
     video.write_bytes(np.random.default_rng(0).integers(0, 256, 100_000, dtype=np.uint8).tobytes())
-    doc = {"policy": "latest", "nodes": {
-        "camera": {"run": "counterpart.nodes.camera", "params": {"source": str(video)}},
-        "silhouette": {"run": "counterpart.nodes.silhouette"},
-    }}
+    doc = {
+        "policy": "latest",
+        "nodes": {
+            "camera": {"run": "counterpart.nodes.camera", "params": {"source": str(video)}},
+            "silhouette": {"run": "counterpart.nodes.silhouette"},
+        },
+    }
     proc = start_launch(write_launch(tmp_path / "g.yaml", doc), env={"COUNTERPART_HOME": str(home)})
     try:
         out, _ = proc.communicate(timeout=60)
@@ -99,12 +112,18 @@ def test_a_camera_that_cannot_decode_its_file_ends_the_graph(tmp_path: Path, hom
 
 def test_a_required_node_exit_ends_the_graph_within_5_s(tmp_path: Path, home: Path) -> None:
     sink = tmp_path / "sink.jsonl"
-    doc = {"nodes": {
-        "source": {"run": N + "Counter", "params": {"count": 100000, "rate": 100.0}, "remap": {"out": "numbers"}},
-        "slow": {"run": F + "SlowSetup", "params": {"seconds": 0.0}, "remap": {"in": "numbers"}},
-        "sink": {"run": N + "Sink", "params": {"path": str(sink), "exit_after": 20, "exit_code": 7},
-                 "remap": {"in": "numbers"}, "required": True},
-    }}
+    doc = {
+        "nodes": {
+            "source": {"run": N + "Counter", "params": {"count": 100000, "rate": 100.0}, "remap": {"out": "numbers"}},
+            "slow": {"run": F + "SlowSetup", "params": {"seconds": 0.0}, "remap": {"in": "numbers"}},
+            "sink": {
+                "run": N + "Sink",
+                "params": {"path": str(sink), "exit_after": 20, "exit_code": 7},
+                "remap": {"in": "numbers"},
+                "required": True,
+            },
+        }
+    }
     proc = start_launch(write_launch(tmp_path / "g.yaml", doc), env={"COUNTERPART_HOME": str(home)})
     try:
         assert wait_for(lambda: len([r for r in read_jsonl(sink) if "seq" in r]) >= 20, 30, interval=0.01)
@@ -118,9 +137,23 @@ def test_a_required_node_exit_ends_the_graph_within_5_s(tmp_path: Path, home: Pa
 
 
 def test_a_missing_model_file_is_found_when_the_launch_is_checked(home: Path) -> None:
-    res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", "demo.yaml", "--check", "--set",
-                          "responder.model_file=/nonexistent/model.npz"], cwd=REPO, capture_output=True, text=True,
-                         timeout=120, env={**os.environ, "COUNTERPART_HOME": str(home)})
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "launch",
+            "demo.yaml",
+            "--check",
+            "--set",
+            "responder.model_file=/nonexistent/model.npz",
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "COUNTERPART_HOME": str(home)},
+    )
     assert res.returncode == 2
     assert "node 'responder': params: parameter 'model_file': no model file '/nonexistent/model.npz'" in res.stderr
     assert not list(home.glob("run-*"))  # nothing started
@@ -132,7 +165,8 @@ def test_a_missing_model_file_is_found_when_the_launch_is_checked(home: Path) ->
 def test_fuzzed_input_to_real_nodes_is_counted_and_never_fatal(tmp_path: Path) -> None:
     """10,000 hostile messages (random bytes, truncated and nested msgpack, bad arrays, oversize,
     wrong field types, every other registered type, forged end of stream and counters, odd but
-    well-formed messages) to the silhouette node and the labeller over real sockets."""
+    well-formed messages) to the silhouette node and the labeller over real sockets.
+    """
     targets, code, out, took = fuzz_silhouette_and_labeller(tmp_path, 5000, timeout=150)
     assert code == 0 and "crashed" not in out, out[-5000:]
     for t in targets:
@@ -196,7 +230,8 @@ def test_an_input_drops_wrong_types_forged_ends_and_absurd_counters(home: Path) 
 def test_a_subscriber_joining_after_end_of_stream_gets_it_and_confirms(home: Path, policy: str) -> None:
     """A node still starting when its source ended at once joins while the source waits for the
     others to confirm the end: the end of stream is sent again to it, so neither waits for the
-    other (the camera used to wait 120 s for such a node, and that node forever)."""
+    other (the camera used to wait 120 s for such a node, and that node forever).
+    """
     import threading
 
     ctx = zmq.Context()
@@ -245,8 +280,12 @@ def test_a_queued_latest_input_keeps_order_and_counts_what_overflowed(home: Path
 
 
 def test_a_message_with_22_people_decodes_and_array_limits_follow_the_type() -> None:
-    people = [PersonShape(id=i, ctrl=np.zeros((32, 2), np.float32), ref_point=np.zeros(2, np.float32),
-                          centroid=np.ones(2, np.float32)) for i in range(22)]
+    people = [
+        PersonShape(
+            id=i, ctrl=np.zeros((32, 2), np.float32), ref_point=np.zeros(2, np.float32), centroid=np.ones(2, np.float32)
+        )
+        for i in range(22)
+    ]
     msg = Silhouettes(seq=3, people=people, labels=np.zeros((4, 5), np.uint8))
     parts = encode(msg)
     assert len(parts) == 1 + 67 and len(decode(parts).people) == 22
@@ -312,8 +351,14 @@ def test_launch_refuses_a_base_folder_others_can_write(tmp_path: Path) -> None:
     try:
         os.chmod(base, 0o777)
         f = write_launch(tmp_path / "g.yaml", {"nodes": {"source": {"run": N + "Counter", "params": {"count": 1}}}})
-        res = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "launch", str(f)], cwd=REPO, capture_output=True,
-                             text=True, timeout=60, env={**os.environ, "COUNTERPART_HOME": str(base)})
+        res = subprocess.run(
+            [sys.executable, "-m", "counterpart.bus.cli", "launch", str(f)],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=60,
+            env={**os.environ, "COUNTERPART_HOME": str(base)},
+        )
         assert res.returncode == 2 and "writable by others" in res.stderr and "Traceback" not in res.stderr
         assert not list(base.iterdir())
     finally:
@@ -389,9 +434,18 @@ def test_topic_list_into_head_ends_without_a_traceback(home: Path) -> None:
     run = home / "run-x"
     run.mkdir()
     topics = {f"t{i:04d}": {"type": "test.Number/1", "publisher": "a.out", "subscribers": []} for i in range(5000)}
-    (run / "registry.json").write_text(json.dumps({"launch_file": "g.yaml", "launcher_pid": os.getpid(),
-                                                   "run_dir": str(run), "nodes": {}, "topics": topics}))
-    res = subprocess.run(f"{sys.executable} -m counterpart.bus.cli topic list --run {run} | head -n 2", shell=True, cwd=REPO,
-                         capture_output=True, text=True, timeout=60)
+    (run / "registry.json").write_text(
+        json.dumps(
+            {"launch_file": "g.yaml", "launcher_pid": os.getpid(), "run_dir": str(run), "nodes": {}, "topics": topics}
+        )
+    )
+    res = subprocess.run(
+        f"{sys.executable} -m counterpart.bus.cli topic list --run {run} | head -n 2",
+        shell=True,
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert len(res.stdout.splitlines()) == 2
     assert "Traceback" not in res.stderr and "BrokenPipe" not in res.stderr, res.stderr

@@ -1,6 +1,8 @@
 """The labeller's face path on short rendered face clips (``counterpart.sim.face``): tracking, nods, shakes,
 talking and laughing from faces at 25 and 29.97 fps, the node's parameters, and the node in a real
-graph reading a face video file."""
+graph reading a face video file.
+"""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,7 +10,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.bus import ParamError
 from counterpart.nodes.labeller.face import find_face_cascade, load_face_cascade
 from counterpart.nodes.labeller.face_track import FaceTracker, FaceTrackParams
@@ -16,12 +17,14 @@ from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation,
 from counterpart.nodes.labeller.node import Labeller, make_labeller
 from counterpart.nodes.labeller.signals import SIGNALS, UNKNOWN
 from counterpart.sim.face import FaceClip, gesture_face_clip
+
 from tests.launching import read_jsonl, run_launch, write_launch
 
 pytestmark = pytest.mark.skipif(
     find_face_cascade() is None,
     reason="no haarcascade_frontalface_default.xml installed (OpenCV 5 wheels ship none); set "
-           "COUNTERPART_FACE_CASCADE or install opencv-contrib-python-headless<5")
+    "COUNTERPART_FACE_CASCADE or install opencv-contrib-python-headless<5",
+)
 
 
 def _gray(clip: FaceClip, i: int) -> np.ndarray:
@@ -73,13 +76,13 @@ def test_missed_detections_bridged_then_a_long_miss_ends_the_track() -> None:
         ts = tr.update(_gray(clip, i))
     assert len(ts) == 1 and ts[0].detected
     first = ts[0].track_id
-    for i in range(20, 27):   # 7 frames (0.28 s) without a detection: a hand over the eyes
+    for i in range(20, 27):  # 7 frames (0.28 s) without a detection: a hand over the eyes
         g = _gray(clip, i)
         x, y, w, _ = (int(v) for v in ts[0].box)
-        g[y + w // 5:y + w // 2, x:x + w] = 128
+        g[y + w // 5 : y + w // 2, x : x + w] = 128
         ts = tr.update(g)
         assert len(ts) == 1 and not ts[0].detected and ts[0].track_id == first, i
-    for i in range(27, 40):   # the face is back: same track, detections again
+    for i in range(27, 40):  # the face is back: same track, detections again
         ts = tr.update(_gray(clip, i))
         assert len(ts) == 1 and ts[0].track_id == first
     assert ts[0].detected
@@ -90,41 +93,55 @@ def test_missed_detections_bridged_then_a_long_miss_ends_the_track() -> None:
 
 
 # ---------------------------------------------------------------------------- labels from faces
-@pytest.mark.parametrize("kind,fps", [("still", 29.97), ("nod", 25.0), ("nod", 29.97), ("shake", 25.0),
-                                      ("shake", 29.97), ("talk", 29.97), ("laugh", 25.0)])
+@pytest.mark.parametrize(
+    "kind,fps",
+    [
+        ("still", 29.97),
+        ("nod", 25.0),
+        ("nod", 29.97),
+        ("shake", 25.0),
+        ("shake", 29.97),
+        ("talk", 29.97),
+        ("laugh", 25.0),
+    ],
+)
 def test_face_clip_labelled_from_the_face(kind: str, fps: float) -> None:
     clip = gesture_face_clip(kind, fps=fps, duration=4.0, seed=3)
     lab, src = _label(clip)
-    assert set(src[2:]) == {"face"} and src[:2] == ["", ""]   # confirmed on its third frame
-    tail = lab[int(2.7 * fps):]          # windows filled inside the behaviour
+    assert set(src[2:]) == {"face"} and src[:2] == ["", ""]  # confirmed on its third frame
+    tail = lab[int(2.7 * fps) :]  # windows filled inside the behaviour
     on = {s: float((tail[:, SIGNALS.index(s)] == 1).mean()) for s in ("nod", "shake", "talking", "laughing")}
-    want = {"still": set(), "nod": {"nod"}, "shake": {"shake"}, "talk": {"talking"},
-            "laugh": {"talking", "laughing"}}[kind]
+    want = {"still": set(), "nod": {"nod"}, "shake": {"shake"}, "talk": {"talking"}, "laugh": {"talking", "laughing"}}[
+        kind
+    ]
     for s, share in on.items():
         if s in want:
             assert share > 0.9, (s, on)
         else:
             assert share == 0.0, (s, on)
-    assert (lab[:, SIGNALS.index("gaze_at_other")] == UNKNOWN).all()   # a face alone: no 3D body
+    assert (lab[:, SIGNALS.index("gaze_at_other")] == UNKNOWN).all()  # a face alone: no 3D body
 
 
 def test_face_goes_to_the_body_below_it_and_absorbs_fragments_otherwise() -> None:
     clip = gesture_face_clip("nod", fps=25.0, duration=0.4, seed=4)
     lab = SocialLabeller(25.0)
     img = clip.render(0)
-    body = PersonObservation(head_px=np.array([320.0, 60.0]), ref_px=np.array([320.0, 250.0]),
-                             height_px=340.0, box=(200, 10, 240, 350))
-    for _ in range(3):   # a new face is confirmed on its next two frames
+    body = PersonObservation(
+        head_px=np.array([320.0, 60.0]), ref_px=np.array([320.0, 250.0]), height_px=340.0, box=(200, 10, 240, 350)
+    )
+    for _ in range(3):  # a new face is confirmed on its next two frames
         lab.update({7: body}, image=img)
     assert set(lab.faces) == {7} and lab.sources[7] == "face"
     # fragments of motion around the face (a close-up): not bodies, so the face is its own person
-    frag = PersonObservation(head_px=np.array([300.0, 150.0]), ref_px=np.array([300.0, 160.0]),
-                             height_px=30.0, box=(280, 140, 40, 30))
-    far = PersonObservation(head_px=np.array([20.0, 20.0]), ref_px=np.array([20.0, 40.0]),
-                            height_px=40.0, box=(5, 5, 30, 40))
+    frag = PersonObservation(
+        head_px=np.array([300.0, 150.0]), ref_px=np.array([300.0, 160.0]), height_px=30.0, box=(280, 140, 40, 30)
+    )
+    far = PersonObservation(
+        head_px=np.array([20.0, 20.0]), ref_px=np.array([20.0, 40.0]), height_px=40.0, box=(5, 5, 30, 40)
+    )
     lab = SocialLabeller(25.0)
     outs = [lab.update({3: frag, 4: far}, image=img) for _ in range(3)]
-    assert set(outs[0]) == {3, 4}             # not yet confirmed: no face
+    assert set(outs[0]) == {3, 4}  # not yet confirmed: no face
     assert set(outs[-1]) == {4, FACE_ID_BASE}
 
 
@@ -136,7 +153,7 @@ def _params(**kw: object) -> dict:
 def test_node_parameters_follow_the_stream_rate_and_errors_name_settable_parameters() -> None:
     p = _params()
     assert p["fps"] == 0.0 and p["use_face"]
-    assert "frame" in Labeller.ports(p)[0]          # the rate comes from the camera's frames
+    assert "frame" in Labeller.ports(p)[0]  # the rate comes from the camera's frames
     assert make_labeller(p, 29.97).fps == 29.97
     assert make_labeller(_params(fps=29.97, use_face=False), 29.97).fps == 29.97
     with pytest.raises(ParamError) as e:
@@ -156,7 +173,8 @@ def test_node_parameters_follow_the_stream_rate_and_errors_name_settable_paramet
 # ------------------------------------------------------------------------------------ real graph
 def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
     """A 29.97 fps nodding face in an AVI: camera -> silhouette -> labeller with the defaults of
-    labeller_file.yaml (frame rate from the stream, faces on)."""
+    labeller_file.yaml (frame rate from the stream, faces on).
+    """
     fps = 29.97
     clip = gesture_face_clip("nod", fps=fps, duration=4.0, seed=5, width=320, height=240, face_px=100)
     path = tmp_path / "nod.avi"
@@ -166,11 +184,17 @@ def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
     wr.release()
     nodes = {
         "camera": {"run": "counterpart.nodes.camera", "params": {"source": str(path), "pacing": "lockstep"}},
-        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": 10, "mask_every": 0},
-                       "policy": "reliable"},
+        "silhouette": {
+            "run": "counterpart.nodes.silhouette",
+            "params": {"train_frames": 10, "mask_every": 0},
+            "policy": "reliable",
+        },
         "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": False}, "policy": "reliable"},
-        "signals": {"run": "tests.topic_sink", "params": {"topic": "signals", "path": str(tmp_path / "s.jsonl")},
-                    "policy": "reliable"},
+        "signals": {
+            "run": "tests.topic_sink",
+            "params": {"topic": "signals", "path": str(tmp_path / "s.jsonl")},
+            "policy": "reliable",
+        },
     }
     code, text = run_launch(write_launch(tmp_path / "graph.yaml", {"nodes": nodes}), timeout=90)
     assert code == 0, text
@@ -178,19 +202,21 @@ def test_face_video_file_through_the_launcher(tmp_path: Path) -> None:
     sigs = read_jsonl(tmp_path / "s.jsonl")[:-1]
     assert len(sigs) == clip.n_frames
     nod = SIGNALS.index("nod")
-    faces = [p for r in sigs[int(2.7 * fps):] for p in r["people"] if p["id"] == FACE_ID_BASE]
+    faces = [p for r in sigs[int(2.7 * fps) :] for p in r["people"] if p["id"] == FACE_ID_BASE]
     assert len(faces) == clip.n_frames - int(2.7 * fps)
     assert all(p["source"] == "face" for p in faces)
     assert np.mean([p["labels"][nod] == 1 for p in faces]) > 0.9
     # no region of motion around the face is reported as a person of its own
-    assert all(p["id"] == FACE_ID_BASE for r in sigs[int(2.7 * fps):] for p in r["people"])
+    assert all(p["id"] == FACE_ID_BASE for r in sigs[int(2.7 * fps) :] for p in r["people"])
 
 
 def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
     """A stand-in tracker that publishes every other frame's pose: the frames between are labelled
-    from the silhouettes, which the node says once and counts."""
-    from tests.test_labeller_node import EMPTY, N, TRAIN, sink
+    from the silhouettes, which the node says once and counts.
+    """
     from counterpart.nodes.silhouette.synthetic import two_person_sequence
+
+    from tests.test_labeller_node import EMPTY, TRAIN, N, sink
 
     seq = two_person_sequence(n_frames=N - EMPTY, size=(120, 160), empty_frames=EMPTY)
     folder = tmp_path / "scene"
@@ -198,12 +224,21 @@ def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
     for i, f in enumerate(seq.frames):
         cv2.imwrite(str(folder / f"f{i:03d}.png"), f)
     nodes = {
-        "camera": {"run": "counterpart.nodes.camera", "params": {"source": f"folder:{folder}", "pacing": "lockstep", "fps": 25.0}},
-        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
-                       "policy": "reliable"},
+        "camera": {
+            "run": "counterpart.nodes.camera",
+            "params": {"source": f"folder:{folder}", "pacing": "lockstep", "fps": 25.0},
+        },
+        "silhouette": {
+            "run": "counterpart.nodes.silhouette",
+            "params": {"train_frames": TRAIN, "mask_every": 0},
+            "policy": "reliable",
+        },
         "tracker": {"run": "tests.pose_source", "params": {"every": 2}, "policy": "reliable"},
-        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": True, "use_face": False, "max_pending": 1000},
-                     "policy": "reliable"},
+        "labeller": {
+            "run": "counterpart.nodes.labeller",
+            "params": {"use_tracker": True, "use_face": False, "max_pending": 1000},
+            "policy": "reliable",
+        },
         "signals": sink("signals", tmp_path / "signals.jsonl"),
     }
     code, text = run_launch(write_launch(tmp_path / "graph.yaml", {"nodes": nodes}), timeout=60)

@@ -1,11 +1,16 @@
 """Head nod / shake by FFT of head motion relative to the neck (counterpart.nodes.labeller.head_motion)."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from counterpart.nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionParams,
-                                        head_motion, head_motion_2d)
+from counterpart.nodes.labeller.head_motion import (
+    HeadMotionDetector,
+    HeadMotionDetector2D,
+    HeadMotionParams,
+    head_motion,
+    head_motion_2d,
+)
 from counterpart.nodes.labeller.signals import UNKNOWN
 
 FPS = 25.0
@@ -59,9 +64,9 @@ def test_walking_person_gives_no_nod() -> None:
     t = 400
     tt = np.arange(t) / FPS
     # whole body: 1.3 m/s forward, 1.8 Hz vertical gait bob of 3 cm, 0.9 Hz sideways sway of 2 cm
-    body = np.stack([0.02 * np.sin(2 * np.pi * 0.9 * tt),
-                     1.45 + 0.03 * np.sin(2 * np.pi * 1.8 * tt),
-                     1.3 * tt], axis=-1)
+    body = np.stack(
+        [0.02 * np.sin(2 * np.pi * 0.9 * tt), 1.45 + 0.03 * np.sin(2 * np.pi * 1.8 * tt), 1.3 * tt], axis=-1
+    )
     neck = body + rng.normal(0, 0.002, (t, 3))
     head = body + [0.0, 0.17, 0.02] + rng.normal(0, 0.002, (t, 3))
     r = head_motion(head, neck, FPS)
@@ -79,7 +84,7 @@ def test_shake_is_a_shake_not_a_nod() -> None:
     head, neck = _still(t, rng)
     tt = np.arange(t) / FPS
     on = (tt >= 2.0) & (tt < 7.0)
-    head[:, 0] += np.where(on, 0.02 * np.sin(2 * np.pi * 2.5 * tt), 0.0)   # sideways (person's left)
+    head[:, 0] += np.where(on, 0.02 * np.sin(2 * np.pi * 2.5 * tt), 0.0)  # sideways (person's left)
     r = head_motion(head, neck, FPS, center=True)
     assert (r.shake[(tt > 2.5) & (tt < 6.5)] == 1).all()
     assert not (r.nod == 1).any()
@@ -101,7 +106,8 @@ def test_shake_from_head_yaw_input() -> None:
 
 def test_pitch_nod_uses_the_facing_direction() -> None:
     """A nod as a pitch about the neck moves the head forward; for a person facing +X the
-    forward axis is X, which only the facing yaw distinguishes from a sideways shake."""
+    forward axis is X, which only the facing yaw distinguishes from a sideways shake.
+    """
     rng = np.random.default_rng(6)
     t = 200
     tt = np.arange(t) / FPS
@@ -133,9 +139,9 @@ def test_streaming_matches_batch_and_starts_unknown() -> None:
     np.testing.assert_array_equal(out[:, 1].astype(int), batch.nod)
     np.testing.assert_array_equal(out[:, 3].astype(int), batch.shake)
     n = HeadMotionParams(FPS, 1.6).n
-    assert (batch.nod[:n - 1] == UNKNOWN).all() and batch.nod[n - 1] != UNKNOWN
+    assert (batch.nod[: n - 1] == UNKNOWN).all() and batch.nod[n - 1] != UNKNOWN
     # the missing sample makes every window that holds it unknown, and only those
-    assert (batch.nod[150:150 + n] == UNKNOWN).all()
+    assert (batch.nod[150 : 150 + n] == UNKNOWN).all()
     assert batch.nod[150 + n] != UNKNOWN and batch.nod[149] != UNKNOWN
     assert (batch.nod == 1).any() and (batch.shake == 1).any()
 
@@ -144,7 +150,7 @@ def test_2d_nod_in_pixels_and_walking_silhouette() -> None:
     rng = np.random.default_rng(8)
     t = 300
     tt = np.arange(t) / FPS
-    height = 300.0                                   # px for 1.7 m
+    height = 300.0  # px for 1.7 m
     px_per_m = height / 1.7
     # silhouette walks right at 80 px/s with a 1.8 Hz bob of 5 px; centroid moves with it
     ref = np.stack([100 + 80 * tt, 250 + 5 * np.sin(2 * np.pi * 1.8 * tt)], axis=-1)
@@ -159,7 +165,7 @@ def test_2d_nod_in_pixels_and_walking_silhouette() -> None:
     out = np.array([det.update(head[i], ref[i], height) for i in range(t)])
     causal = head_motion_2d(head, ref, height, FPS)
     np.testing.assert_allclose(out[:, 0], causal.nod_score, atol=1e-9, equal_nan=True)
-    assert det.update(head[0], ref[0], 0.0)[1] == UNKNOWN      # no height: cannot scale
+    assert det.update(head[0], ref[0], 0.0)[1] == UNKNOWN  # no height: cannot scale
 
 
 def test_bad_parameters_are_named() -> None:
@@ -173,7 +179,8 @@ def test_bad_parameters_are_named() -> None:
 
 def test_head_yaw_crossing_pi_is_unwrapped() -> None:
     """A shake of a person whose head yaw sits near +-pi wraps every half cycle: the wrap must not
-    look like a 2*pi jump (batch and streaming alike)."""
+    look like a 2*pi jump (batch and streaming alike).
+    """
     rng = np.random.default_rng(9)
     t = 150
     head, neck = _still(t, rng)

@@ -1,5 +1,7 @@
 """The labeller node: seq pairing (no processes), message conversion, and real graphs
-camera -> silhouette -> [pose stand-in] -> labeller -> recording sinks."""
+camera -> silhouette -> [pose stand-in] -> labeller -> recording sinks.
+"""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,7 +9,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-
 from counterpart.messages import Pose3D, Silhouettes
 from counterpart.messages.silhouette import PersonShape
 from counterpart.messages.tracker import TrackedBody
@@ -16,6 +17,7 @@ from counterpart.nodes.labeller.node import observations, signals_message
 from counterpart.nodes.labeller.pairing import SeqPairer
 from counterpart.nodes.labeller.signals import SIGNALS
 from counterpart.nodes.silhouette.synthetic import two_person_sequence
+
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 from tests.pose_source import facing
 
@@ -45,12 +47,12 @@ def test_pairing_falls_back_when_a_pose_never_comes_and_drops_frames_without_sil
     got = []
     got += pr.add("pose", 0, "p0")
     got += pr.add("silhouettes", 0, "s0")
-    got += pr.add("silhouettes", 1, "s1")       # pose 1 will never come
+    got += pr.add("silhouettes", 1, "s1")  # pose 1 will never come
     got += pr.add("silhouettes", 2, "s2")
     assert released(got) == [(0, ["pose", "silhouettes"], False)] and pr.pending == [1, 2]
-    got += pr.add("pose", 2, "p2")              # a newer pose: frame 1 is decided without it
+    got += pr.add("pose", 2, "p2")  # a newer pose: frame 1 is decided without it
     assert released(got)[1:] == [(1, ["silhouettes"], False), (2, ["pose", "silhouettes"], False)]
-    got += pr.add("pose", 3, "p3")              # silhouettes 3 never come
+    got += pr.add("pose", 3, "p3")  # silhouettes 3 never come
     got += pr.add("pose", 4, "p4")
     got += pr.add("silhouettes", 4, "s4")
     assert [p.seq for p in got] == [0, 1, 2, 4]
@@ -60,12 +62,12 @@ def test_pairing_falls_back_when_a_pose_never_comes_and_drops_frames_without_sil
 def test_pairing_bounded_by_max_pending_late_messages_and_end_of_a_port() -> None:
     pr = SeqPairer(["silhouettes", "pose"], "silhouettes", max_pending=3)
     got = []
-    for s in range(6):                          # the pose topic stalls
+    for s in range(6):  # the pose topic stalls
         got += pr.add("silhouettes", s, f"s{s}")
     assert [p.seq for p in got] == [0, 1, 2] and pr.pending == [3, 4, 5]
     assert all(p.msgs.keys() == {"silhouettes"} for p in got) and pr.stats.forced == 3
-    assert pr.add("pose", 1, "p1") == [] and pr.stats.late == 1   # its frame went out already
-    out = pr.end("pose")                        # the tracker is gone: nothing to wait for
+    assert pr.add("pose", 1, "p1") == [] and pr.stats.late == 1  # its frame went out already
+    out = pr.end("pose")  # the tracker is gone: nothing to wait for
     assert [p.seq for p in out] == [3, 4, 5]
     assert released(pr.add("silhouettes", 6, "s6")) == [(6, ["silhouettes"], False)]
     assert pr.flush() == []
@@ -78,7 +80,7 @@ def test_pairing_side_messages_ahead_wait_for_the_required_port_up_to_max_ahead(
         assert pr.add("frame", s, f"f{s}") == []
     assert pr.pending == list(range(7)) and pr.stats.forced == 0
     assert [p.msgs for p in pr.add("silhouettes", 0, "s0")] == [{"frame": "f0", "silhouettes": "s0"}]
-    assert pr.add("frame", 7, "f7") == [] and pr.add("frame", 8, "f8") == []   # 8 frames ahead: 1 goes
+    assert pr.add("frame", 7, "f7") == [] and pr.add("frame", 8, "f8") == []  # 8 frames ahead: 1 goes
     assert pr.pending == list(range(2, 9)) and pr.stats.overflow == 1
     assert released(pr.add("silhouettes", 1, "s1")) == [(1, ["silhouettes"], False)]
     assert released(pr.add("silhouettes", 2, "s2")) == [(2, ["frame", "silhouettes"], False)]
@@ -90,8 +92,13 @@ def test_pairing_restart_flags_the_first_frame_of_the_new_stream() -> None:
     got = []
     for s in (0, 1, 2, 0, 1):
         got += pr.add("silhouettes", s, s)
-    assert released(got) == [(0, ["silhouettes"], False), (1, ["silhouettes"], False), (2, ["silhouettes"], False),
-                             (0, ["silhouettes"], True), (1, ["silhouettes"], False)]
+    assert released(got) == [
+        (0, ["silhouettes"], False),
+        (1, ["silhouettes"], False),
+        (2, ["silhouettes"], False),
+        (0, ["silhouettes"], True),
+        (1, ["silhouettes"], False),
+    ]
     assert pr.stats.restarts == 1
 
 
@@ -99,12 +106,14 @@ def test_pairing_random_interleavings_match_the_exact_pairs() -> None:
     rng = np.random.default_rng(7)
     for trial in range(200):
         n = int(rng.integers(1, 40))
-        have = {port: sorted(rng.choice(n, int(rng.integers(0, n + 1)), replace=False).tolist())
-                for port in ("silhouettes", "pose", "frame")}
+        have = {
+            port: sorted(rng.choice(n, int(rng.integers(0, n + 1)), replace=False).tolist())
+            for port in ("silhouettes", "pose", "frame")
+        }
         streams = {port: [(port, s) for s in seqs] for port, seqs in have.items()}
         pr = SeqPairer(list(streams), "silhouettes", max_pending=10_000)
         got = []
-        while any(streams.values()):   # merge the three in-order streams at random
+        while any(streams.values()):  # merge the three in-order streams at random
             port = rng.choice([p for p, q in streams.items() if q])
             _, s = streams[port].pop(0)
             got += pr.add(port, s, (port, s))
@@ -128,21 +137,38 @@ def test_pairing_rejects_bad_setup() -> None:
 def shape(pid: int, side: str, cx: float, n_ctrl: int = 32) -> PersonShape:
     t = np.linspace(0, 2 * np.pi, n_ctrl, endpoint=False)
     ctrl = np.stack([cx + 10 * np.sin(t), 100 - 50 * np.cos(t)], 1).astype(np.float32)
-    return PersonShape(id=pid, side=side, ctrl=ctrl, ref_point=ctrl[0], centroid=np.array([cx, 100], np.float32),
-                       bbox=(int(cx - 10), 50, 21, 101), height=101.0, area=1500)
+    return PersonShape(
+        id=pid,
+        side=side,
+        ctrl=ctrl,
+        ref_point=ctrl[0],
+        centroid=np.array([cx, 100], np.float32),
+        bbox=(int(cx - 10), 50, 21, 101),
+        height=101.0,
+        area=1500,
+    )
 
 
 def test_observations_choose_3d_where_tracked_else_the_silhouette() -> None:
-    sil = Silhouettes(seq=5, stamp=9, width=320, height=240,
-                      people=[shape(0, "left", 80.0), shape(1, "right", 240.0), shape(2, "left", 160.0, n_ctrl=16)])
-    pose = Pose3D(seq=5, stamp=9, people=[
-        TrackedBody(id=0, side="left", joints=(facing(np.pi / 2) + [-0.8, 0, 3]).astype(np.float32)),
-        TrackedBody(id=1, side="right", joints=(facing(-np.pi / 2) + [0.8, 0, 3]).astype(np.float32)),
-        TrackedBody(id=2, side="left", joints=np.zeros((14, 3), np.float32), lost=True),
-    ])
+    sil = Silhouettes(
+        seq=5,
+        stamp=9,
+        width=320,
+        height=240,
+        people=[shape(0, "left", 80.0), shape(1, "right", 240.0), shape(2, "left", 160.0, n_ctrl=16)],
+    )
+    pose = Pose3D(
+        seq=5,
+        stamp=9,
+        people=[
+            TrackedBody(id=0, side="left", joints=(facing(np.pi / 2) + [-0.8, 0, 3]).astype(np.float32)),
+            TrackedBody(id=1, side="right", joints=(facing(-np.pi / 2) + [0.8, 0, 3]).astype(np.float32)),
+            TrackedBody(id=2, side="left", joints=np.zeros((14, 3), np.float32), lost=True),
+        ],
+    )
     obs, sides = observations(sil, pose)
     assert [obs[i].has_3d() for i in (0, 1, 2)] == [True, True, False]
-    assert obs[2].has_2d_head() and obs[2].control_points is None   # 16 points: no 2D activity
+    assert obs[2].has_2d_head() and obs[2].control_points is None  # 16 points: no 2D activity
     assert obs[0].box == (70, 50, 21, 101) and sides == {0: "left", 1: "right", 2: "left"}
     lab = SocialLabeller(25.0)
     msg = signals_message(5, 9, lab.update(obs), obs, sides)
@@ -178,8 +204,11 @@ def sink(topic: str, path: Path) -> dict[str, Any]:
 def run_graph(tmp_path: Path, source: str, labeller: dict[str, Any], pose_every: int = 0) -> tuple[list, list]:
     nodes: dict[str, Any] = {
         "camera": {"run": "counterpart.nodes.camera", "params": {"source": source, "pacing": "lockstep", "fps": 25.0}},
-        "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": TRAIN, "mask_every": 0},
-                       "policy": "reliable"},
+        "silhouette": {
+            "run": "counterpart.nodes.silhouette",
+            "params": {"train_frames": TRAIN, "mask_every": 0},
+            "policy": "reliable",
+        },
         "labeller": {"run": "counterpart.nodes.labeller", "params": labeller, "policy": "reliable"},
         "frames": sink("frame", tmp_path / "frames.jsonl"),
         "signals": sink("signals", tmp_path / "signals.jsonl"),
@@ -231,8 +260,11 @@ def test_face_input_paired_although_frames_arrive_long_before_silhouettes(tmp_pa
     nodes = {
         "camera": {"run": "counterpart.nodes.camera", "params": {"source": scene, "pacing": "lockstep", "fps": 25.0}},
         "silhouette": {"run": "counterpart.nodes.silhouette", "params": {"train_frames": TRAIN}, "policy": "reliable"},
-        "labeller": {"run": "counterpart.nodes.labeller", "params": {"use_tracker": False, "use_face": True},
-                     "policy": "reliable"},
+        "labeller": {
+            "run": "counterpart.nodes.labeller",
+            "params": {"use_tracker": False, "use_face": True},
+            "policy": "reliable",
+        },
         "signals": sink("signals", tmp_path / "signals.jsonl"),
     }
     code, text = run_launch(write_launch(tmp_path / "graph.yaml", {"nodes": nodes}), timeout=60)
@@ -245,11 +277,13 @@ def test_face_input_paired_although_frames_arrive_long_before_silhouettes(tmp_pa
 
 
 def test_use_tracker_without_a_tracker_refused_naming_pose(tmp_path: Path) -> None:
-    code, text = run_launch(REPO / "launch" / "labeller_file.yaml", "--set", "labeller.use_tracker=true",
-                            "--check", timeout=30)
+    code, text = run_launch(
+        REPO / "launch" / "labeller_file.yaml", "--set", "labeller.use_tracker=true", "--check", timeout=30
+    )
     assert code == 2 and "node 'labeller': inputs.pose: no node publishes topic 'pose'" in text, text
-    code, text = run_launch(REPO / "launch" / "labeller_file.yaml", "--set", "labeller.head_window_s=0.1",
-                            "--check", timeout=30)
+    code, text = run_launch(
+        REPO / "launch" / "labeller_file.yaml", "--set", "labeller.head_window_s=0.1", "--check", timeout=30
+    )
     assert code == 2 and "'head_window_s'" in text and "need >= 8" in text, text
     code, text = run_launch(REPO / "launch" / "labeller_file.yaml", "--check", timeout=30)
     assert code == 0, text

@@ -1,5 +1,7 @@
 """The labeller on the simulator's conversation scenario, fed what the tracker publishes (joints and
-the pose vector's head angles), and the node's reading of those angles from Pose3D."""
+the pose vector's head angles), and the node's reading of those angles from Pose3D.
+"""
+
 from __future__ import annotations
 
 import argparse
@@ -8,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.messages import Pose3D, Silhouettes
 from counterpart.messages.tracker import TrackedBody
@@ -64,12 +65,13 @@ def test_nods_and_shakes_of_a_simulator_conversation_are_found(seed: int) -> Non
             # every planted event is detected, and every detection is a planted event
             assert all(_overlaps(r, pred_runs) for r in true_runs), (p, name, true_runs, pred_runs)
             assert all(_overlaps(r, true_runs) for r in pred_runs), (p, name, true_runs, pred_runs)
-    assert n_true["nod"] >= 5 and n_true["shake"] >= 2, n_true   # the snippet has both
+    assert n_true["nod"] >= 5 and n_true["shake"] >= 2, n_true  # the snippet has both
 
 
 def test_without_the_head_angles_shakes_are_not_seen_but_nods_are() -> None:
     """The simulator's shake turns the head about the neck's vertical axis and leaves the head joint
-    where it is: from joints alone no shake is found (which is why the node reads the yaw)."""
+    where it is: from joints alone no shake is found (which is why the node reads the yaw).
+    """
     sc = conversation(seed=30, fps=FPS, duration=20.0)
     labels = _stream(sc, angles=False)
     truth = sc.signals_a
@@ -88,8 +90,7 @@ def test_a_look_away_and_a_glance_are_not_shakes_but_a_shake_on_a_turn_is() -> N
     away = 0.7 * np.clip((tt - 4.0) / 0.25, 0, 1) - 0.7 * np.clip((tt - 6.0) / 0.25, 0, 1)
     glance = 0.5 * np.clip((tt - 4.0) / 0.2, 0, 1) - 0.5 * np.clip((tt - 4.6) / 0.2, 0, 1)
     for yaw in (away, glance):
-        r = head_motion(head, neck, FPS, head_yaw=yaw + rng.normal(0, 0.002, t), head_pitch=np.zeros(t),
-                        center=True)
+        r = head_motion(head, neck, FPS, head_yaw=yaw + rng.normal(0, 0.002, t), head_pitch=np.zeros(t), center=True)
         assert not (r.shake == 1).any() and not (r.nod == 1).any()
     # a shake made while turning away is still a shake
     on = (tt >= 3.8) & (tt < 4.8)
@@ -103,10 +104,12 @@ def test_node_reads_head_angles_from_the_pose_vector() -> None:
     pose = np.zeros(DOF)
     pose[DOF_INDEX["head_turn"]], pose[DOF_INDEX["head_nod"]] = 0.3, -0.1
     assert head_angles(pose) == (pytest.approx(0.3), pytest.approx(-0.1))
-    assert head_angles(np.zeros(0)) == (None, None)          # a tracker without a pose vector
+    assert head_angles(np.zeros(0)) == (None, None)  # a tracker without a pose vector
     joints = np.tile(np.array([0.0, 1.5, 0.0], np.float32), (14, 1))
-    bodies = [TrackedBody(id=1, side="left", joints=joints, pose=pose),
-              TrackedBody(id=2, side="right", joints=joints + 1.0)]
+    bodies = [
+        TrackedBody(id=1, side="left", joints=joints, pose=pose),
+        TrackedBody(id=2, side="right", joints=joints + 1.0),
+    ]
     obs, _ = observations(Silhouettes(stamp=0, seq=0, people=[]), Pose3D(stamp=0, seq=0, people=bodies))
     assert obs[1].head_yaw == pytest.approx(0.3) and obs[1].head_pitch == pytest.approx(-0.1)
     assert obs[2].has_3d() and obs[2].head_yaw is None and obs[2].head_pitch is None
@@ -114,7 +117,8 @@ def test_node_reads_head_angles_from_the_pose_vector() -> None:
 
 def test_turn_taking_transactions_recover_the_planted_listener_rules() -> None:
     """Speaker = whoever holds the turn; the simulator's planted nod -> nod response (probability
-    0.8 for an interested listener) comes back from its ground-truth labels within sampling error."""
+    0.8 for an interested listener) comes back from its ground-truth labels within sampling error.
+    """
     names = list(SIGNAL_NAMES)
     off = PLANTED_RULES[0]["offset_frames_at_25fps"]
     parts = []
@@ -133,10 +137,10 @@ def test_turn_taking_transactions_recover_the_planted_listener_rules() -> None:
         turn_transactions(sc.signals_a[:, :2], sc.signals_b[:, :2], names[:2])
 
 
-def test_cli_mine_with_turns_on_simulator_trajectory_files(tmp_path: Path,
-                                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_mine_with_turns_on_simulator_trajectory_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``counterpart mine --turns talking`` on the simulator's conversation files: the interested /
-    not-interested confidence ratio of the planted nod -> nod rule (0.8 / 0.3) comes back."""
+    not-interested confidence ratio of the planted nod -> nod rule (0.8 / 0.3) comes back.
+    """
     files: dict[str, list[str]] = {"interested": [], "not_interested": []}
     for scen, seeds in (("interested", range(600, 604)), ("not_interested", range(700, 704))):
         for s in seeds:
@@ -146,8 +150,20 @@ def test_cli_mine_with_turns_on_simulator_trajectory_files(tmp_path: Path,
     parser = argparse.ArgumentParser()
     cli_mine.add_arguments(parser)
     out = tmp_path / "rules.json"
-    args = parser.parse_args(["--interested", *files["interested"], "--not-interested", *files["not_interested"],
-                              "--turns", "talking", "--min-support", "0.005", "--out", str(out)])
+    args = parser.parse_args(
+        [
+            "--interested",
+            *files["interested"],
+            "--not-interested",
+            *files["not_interested"],
+            "--turns",
+            "talking",
+            "--min-support",
+            "0.005",
+            "--out",
+            str(out),
+        ]
+    )
     assert cli_mine.main(args) == 0
     rf = read_rules(out)
     assert rf.params["turns"] == "talking"

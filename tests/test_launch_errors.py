@@ -1,11 +1,12 @@
 """Every kind of launch-file error is caught before any process starts, naming file, node and key."""
+
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
-
 from counterpart.bus.launchfile import LaunchError, check, load
+
 from tests.launching import run_launch, write_launch
 
 N = "tests.graph_nodes:"
@@ -23,28 +24,63 @@ def with_node(name: str, **changes) -> dict:
 
 CASES = [
     ("missing run", with_node("sink", run=None), "node 'sink': run: missing"),
-    ("unknown module", with_node("sink", run="no.such.module"), "node 'sink': run: cannot find a node in 'no.such.module'"),
-    ("old module path", with_node("sink", run="nodes.tracker"),
-     "node 'sink': run: 'nodes.tracker' is the old module path: the project's modules are under 'counterpart' now; "
-     "write 'counterpart.nodes.tracker'"),
-    ("unknown class", with_node("sink", run="tests.graph_nodes:Nope"), "node 'sink': run: 'tests.graph_nodes' has no Node class 'Nope'"),
+    (
+        "unknown module",
+        with_node("sink", run="no.such.module"),
+        "node 'sink': run: cannot find a node in 'no.such.module'",
+    ),
+    (
+        "old module path",
+        with_node("sink", run="nodes.tracker"),
+        "node 'sink': run: 'nodes.tracker' is the old module path: the project's modules are under 'counterpart' now; "
+        "write 'counterpart.nodes.tracker'",
+    ),
+    (
+        "unknown class",
+        with_node("sink", run="tests.graph_nodes:Nope"),
+        "node 'sink': run: 'tests.graph_nodes' has no Node class 'Nope'",
+    ),
     ("unknown param", with_node("source", params={"cuont": 3}), "node 'source': params: unknown parameter(s) 'cuont'"),
     ("wrong type", with_node("source", params={"count": "many"}), "parameter 'count': expected int"),
     ("below minimum", with_node("source", params={"count": -1}), "parameter 'count': -1 is below the minimum 0"),
     ("failing check", with_node("sink", params={"path": ""}), "parameter 'path': must name a file"),
-    ("no publisher", with_node("sink", remap={"in": "nobody"}), "node 'sink': inputs.in: no node publishes topic 'nobody'"),
+    (
+        "no publisher",
+        with_node("sink", remap={"in": "nobody"}),
+        "node 'sink': inputs.in: no node publishes topic 'nobody'",
+    ),
     ("bad remap port", with_node("sink", remap={"inn": "numbers"}), "node 'sink': remap.inn: Sink has no port 'inn'"),
-    ("bad policy", with_node("sink", policy="sometimes"), "node 'sink': policy: 'sometimes' is not one of reliable, latest"),
+    (
+        "bad policy",
+        with_node("sink", policy="sometimes"),
+        "node 'sink': policy: 'sometimes' is not one of reliable, latest",
+    ),
     ("bad input policy", with_node("sink", inputs={"in": {"policy": "x"}}), "node 'sink': inputs.in.policy"),
-    ("bad restart", with_node("sink", restart="maybe"), "node 'sink': restart: 'maybe' is not one of never, on-failure, always"),
+    (
+        "bad restart",
+        with_node("sink", restart="maybe"),
+        "node 'sink': restart: 'maybe' is not one of never, on-failure, always",
+    ),
     ("unknown key", with_node("sink", colour="red"), "node 'sink': colour: unknown key"),
     ("unknown top key", {**with_node("sink"), "nodez": {}}, "nodez: unknown key"),
-    ("two publishers", {"nodes": {**GOOD, "source2": {"run": N + "Counter", "remap": {"out": "numbers"}}}},
-     "node 'source2': outputs.out: topic 'numbers' is already published by node 'source'"),
-    ("bad external", {**with_node("sink"), "external": {"x": {"type": "test.Number", "endpoint": "udp://a"}}},
-     "external.x.endpoint: tcp endpoint 'udp://a': expected tcp://HOST:PORT"),
-    ("unknown external type", {"external": {"numbers": {"type": "no.Type", "endpoint": "tcp://127.0.0.1:7999"}},
-                               "nodes": {"sink": GOOD["sink"]}}, "external.numbers.type: unknown message type 'no.Type'"),
+    (
+        "two publishers",
+        {"nodes": {**GOOD, "source2": {"run": N + "Counter", "remap": {"out": "numbers"}}}},
+        "node 'source2': outputs.out: topic 'numbers' is already published by node 'source'",
+    ),
+    (
+        "bad external",
+        {**with_node("sink"), "external": {"x": {"type": "test.Number", "endpoint": "udp://a"}}},
+        "external.x.endpoint: tcp endpoint 'udp://a': expected tcp://HOST:PORT",
+    ),
+    (
+        "unknown external type",
+        {
+            "external": {"numbers": {"type": "no.Type", "endpoint": "tcp://127.0.0.1:7999"}},
+            "nodes": {"sink": GOOD["sink"]},
+        },
+        "external.numbers.type: unknown message type 'no.Type'",
+    ),
 ]
 
 
@@ -59,13 +95,18 @@ def test_launch_error_names_file_node_and_key(tmp_path: Path, label: str, doc: d
 
 
 def test_type_mismatch_is_reported(tmp_path: Path) -> None:
-    doc = {"nodes": {
-        "source": {"run": N + "Counter", "remap": {"out": "numbers"}},
-        "recorder": {"run": "tests.graph_nodes:FrameSink", "remap": {"in": "numbers"}},
-    }}
+    doc = {
+        "nodes": {
+            "source": {"run": N + "Counter", "remap": {"out": "numbers"}},
+            "recorder": {"run": "tests.graph_nodes:FrameSink", "remap": {"in": "numbers"}},
+        }
+    }
     f = write_launch(tmp_path / "mismatch.yaml", doc)
-    with pytest.raises(LaunchError, match=r"node 'recorder': inputs.in: type mismatch on topic 'numbers': "
-                                          r"source.out publishes test.Number/1, this input takes camera.Frame/1"):
+    with pytest.raises(
+        LaunchError,
+        match=r"node 'recorder': inputs.in: type mismatch on topic 'numbers': "
+        r"source.out publishes test.Number/1, this input takes camera.Frame/1",
+    ):
         check(load(f))
 
 
@@ -83,8 +124,10 @@ def test_invalid_yaml_and_include_errors(tmp_path: Path) -> None:
 
 def test_include_set_and_overrides(tmp_path: Path) -> None:
     write_launch(tmp_path / "part.yaml", {"nodes": {"source": GOOD["source"]}})
-    write_launch(tmp_path / "top.yaml", {"include": [{"file": "part.yaml", "set": {"source.count": 9}}],
-                                         "nodes": {"sink": GOOD["sink"]}})
+    write_launch(
+        tmp_path / "top.yaml",
+        {"include": [{"file": "part.yaml", "set": {"source.count": 9}}], "nodes": {"sink": GOOD["sink"]}},
+    )
     g = check(load(tmp_path / "top.yaml", sets={"sink.delay_ms": "2.5"}))
     assert g.params["source"]["count"] == 9 and g.params["sink"]["delay_ms"] == 2.5
     with pytest.raises(LaunchError, match="--set nope.x: no node 'nope'"):

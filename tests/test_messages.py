@@ -1,13 +1,26 @@
 """The message contract: typed round trips, zero-copy arrays, validation, limits, evolution."""
+
 from __future__ import annotations
 
 import msgpack
 import numpy as np
 import pytest
 import zmq
-
-from counterpart.messages import (DecodeError, EndOfStream, Frame, Limits, NodeStats, TopicStats, by_name, decode,
-                      decode_frames, describe, encode, encode_frames, message)
+from counterpart.messages import (
+    DecodeError,
+    EndOfStream,
+    Frame,
+    Limits,
+    NodeStats,
+    TopicStats,
+    by_name,
+    decode,
+    decode_frames,
+    describe,
+    encode,
+    encode_frames,
+    message,
+)
 from counterpart.messages.codec import ARRAY_EXT
 
 
@@ -42,7 +55,9 @@ def test_arrays_travel_as_raw_frames_and_decode_without_copy() -> None:
     assert np.array_equal(msg.image, img)
     assert not msg.image.flags.writeable  # a view over the received buffer, not a copy
     assert np.shares_memory(msg.image, np.frombuffer(frames[2].buffer, np.uint8))
-    a.close(); b.close(); ctx.term()
+    a.close()
+    b.close()
+    ctx.term()
 
 
 def test_nested_structs_lists_and_dicts() -> None:
@@ -62,8 +77,11 @@ def _raw(header: dict, *bufs: bytes) -> list[bytes]:
 
 
 def test_old_sender_without_new_field_decodes_with_default() -> None:
-    old = {"s": "test.Evolved/2", "f": {"stamp": 1, "seq": 2, "name": "old", "points": msgpack.ExtType(ARRAY_EXT, (0).to_bytes(4, "little"))},
-           "a": [["<f4", [1, 2]]]}
+    old = {
+        "s": "test.Evolved/2",
+        "f": {"stamp": 1, "seq": 2, "name": "old", "points": msgpack.ExtType(ARRAY_EXT, (0).to_bytes(4, "little"))},
+        "a": [["<f4", [1, 2]]],
+    }
     out = decode(_raw(old, np.ones((1, 2), np.float32).tobytes()))
     assert out.added_later == 1.5 and out.name == "old" and out.points.shape == (1, 2)
 

@@ -1,4 +1,5 @@
 """The built wheel installs one import name, ``counterpart``, and runs from it alone."""
+
 from __future__ import annotations
 
 import os
@@ -30,12 +31,20 @@ def test_wheel_installs_only_counterpart_at_the_top_level(tmp_path: Path) -> Non
     wheels, target, src = tmp_path / "wheels", tmp_path / "site", tmp_path / "src"
     # A copy, because an in-tree build leaves build/ and egg-info folders in the checkout.
     shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(".*", "__pycache__", "*.egg-info", "build", "dist"))
-    build = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-                            "-w", str(wheels), str(src)], capture_output=True, text=True, timeout=300)
+    build = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(wheels), str(src)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert build.returncode == 0, build.stderr[-3000:]
     (wheel,) = wheels.glob("counterpart-*.whl")
-    inst = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target),
-                           str(wheel)], capture_output=True, text=True, timeout=300)
+    inst = subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target), str(wheel)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert inst.returncode == 0, inst.stderr[-3000:]
     top = {p.name for p in target.iterdir()} - {"bin"}
     assert {n for n in top if not n.endswith(".dist-info")} == {"counterpart"}, top
@@ -45,9 +54,13 @@ def test_wheel_installs_only_counterpart_at_the_top_level(tmp_path: Path) -> Non
     assert launch_files == {p.name for p in (REPO / "launch").glob("*.yaml")}
     # The installed copy alone runs: from a folder outside the repository, with it first on the path.
     env = {**os.environ, "PYTHONPATH": str(target)}
-    code = ("import counterpart, counterpart.nodes.tracker.node, counterpart.bus.launchfile as lf; "
-            "print(counterpart.__file__); print(lf.check(lf.load('demo.yaml')).nodes['tracker'].run)")
-    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    code = (
+        "import counterpart, counterpart.nodes.tracker.node, counterpart.bus.launchfile as lf; "
+        "print(counterpart.__file__); print(lf.check(lf.load('demo.yaml')).nodes['tracker'].run)"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120
+    )
     assert run.returncode == 0, run.stderr[-3000:]
     first, second = run.stdout.split()
     assert first.startswith(str(target)) and second == "counterpart.nodes.tracker"

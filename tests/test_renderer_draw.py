@@ -1,4 +1,5 @@
 """Renderer building blocks on real pixels: cones, silhouettes, overlays, pairing, video, controls."""
+
 from __future__ import annotations
 
 from dataclasses import replace
@@ -6,16 +7,26 @@ from dataclasses import replace
 import cv2
 import numpy as np
 import pytest
-
-from counterpart.body.camera import Camera, default_camera
+from counterpart.body.camera import camera_for_size, default_camera
 from counterpart.body.raster import rasterise_cones
-from counterpart.messages import Control, Frame, NodeStats, Partner, TopicStats
-from counterpart.body.camera import camera_for_size
-from counterpart.messages import PersonShape, PersonSignals, Pose3D, Silhouettes, SocialSignals, TrackedBody
+from counterpart.messages import (
+    Control,
+    Frame,
+    NodeStats,
+    Partner,
+    PersonShape,
+    PersonSignals,
+    Pose3D,
+    Silhouettes,
+    SocialSignals,
+    TopicStats,
+    TrackedBody,
+)
 from counterpart.nodes.renderer import draw
 from counterpart.nodes.renderer.compositor import Bundle, Compositor
 from counterpart.nodes.renderer.controls import parse_control
 from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames
+
 from tests.renderer_nodes import partner_joints, scene_frame
 
 CAM = default_camera(320, 240)
@@ -75,8 +86,8 @@ def test_shading_follows_the_light() -> None:
     mask = changed(img)
     cols = np.flatnonzero(mask.any(0))
     mid_row = int(np.round(CAM.project(np.array([0.0, 0.9, 0.0]))[1]))
-    left = img[mid_row, cols[0] + 3:cols[0] + 8, 0].mean()
-    right = img[mid_row, cols[-1] - 7:cols[-1] - 2, 0].mean()
+    left = img[mid_row, cols[0] + 3 : cols[0] + 8, 0].mean()
+    right = img[mid_row, cols[-1] - 7 : cols[-1] - 2, 0].mean()
     assert left > right + 60
 
 
@@ -117,7 +128,7 @@ def test_skeleton_marks_each_projected_joint() -> None:
     far = np.ones((240, 320), bool)
     x0, y0 = uv.min(0) - 6
     x1, y1 = uv.max(0) + 6
-    far[max(y0, 0):y1, max(x0, 0):x1] = False
+    far[max(y0, 0) : y1, max(x0, 0) : x1] = False
     assert not changed(img)[far].any()
     with pytest.raises(ValueError, match=r"\(14, 3\)"):
         draw.draw_skeleton(blank(), joints[:5], CAM)
@@ -157,10 +168,16 @@ def test_badges_of_people_standing_close_are_drawn_apart() -> None:
 
 
 def test_stats_text_and_control_bar() -> None:
-    st = NodeStats(node="camera", outputs=[TopicStats(topic="frame", port="frame", rate_hz=25.0)],
-                   inputs=[TopicStats(topic="x", drops=3, latency_ms=4.5)], proc_ms_mean=1.25)
+    st = NodeStats(
+        node="camera",
+        outputs=[TopicStats(topic="frame", port="frame", rate_hz=25.0)],
+        inputs=[TopicStats(topic="x", drops=3, latency_ms=4.5)],
+        proc_ms_mean=1.25,
+    )
     assert draw.stats_lines({"camera": st}) == ["camera       25.0Hz drop 3   lat  4.5ms proc  1.2ms"]
-    (w, _), _ = cv2.getTextSize(draw.stats_lines({"camera": st})[0], cv2.FONT_HERSHEY_SIMPLEX, draw.text_scale(blank(), 0.3), 1)
+    (w, _), _ = cv2.getTextSize(
+        draw.stats_lines({"camera": st})[0], cv2.FONT_HERSHEY_SIMPLEX, draw.text_scale(blank(), 0.3), 1
+    )
     assert w < 310  # fits a 320-pixel frame
     assert changed(draw.draw_stats(blank(), {"camera": st}))[:20, :100].any()
     widths = []
@@ -209,8 +226,14 @@ def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
     assert [(b.frame.seq, b.partner.seq, b.partner_exact) for b in got] == [(2, 1, False), (3, 3, True)]
     assert comp.ready(now=0.2) == []  # frame 4 still waits
     assert [b.frame.seq for b in comp.ready(now=0.6)] == [4]
-    assert comp.counts == {"rendered": 0, "partner_exact": 3, "partner_held": 2, "partner_missing": 0, "forced": 0,
-                           "partner_drawn": 0}
+    assert comp.counts == {
+        "rendered": 0,
+        "partner_exact": 3,
+        "partner_held": 2,
+        "partner_missing": 0,
+        "forced": 0,
+        "partner_drawn": 0,
+    }
 
 
 def test_adaptive_wait_renders_at_once_while_partners_are_late_and_waits_again_when_they_keep_up() -> None:
@@ -335,13 +358,36 @@ def test_video_writer_output_decodes_with_every_frame(tmp_path) -> None:
 
 # ---------------------------------------------------------------------------------------- controls
 def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
-    c = parse_control({"strength": 0.7, "emotion": "happy", "interest": "3", "speaker": "partner",
-                       "overlays": {"stats": False}, "model": "a"}, models=["a", "b"])
-    assert (c.strength, c.emotion, c.interest, c.speaker, c.overlays, c.model) == (0.7, "happy", 3, "partner",
-                                                                                   {"stats": False}, "a")
-    for bad, msg in [({"strength": 1.5}, "strength"), ({"strength": "x"}, "strength"), ({"interest": 4}, "interest"),
-                     ({"emotion": "bored"}, "emotion"), ({"speaker": "dog"}, "speaker"), ({"volume": 1}, "volume"),
-                     ({"overlays": {"fog": True}}, "overlays"), ({"model": "c"}, "model"), ([1], "JSON object")]:
+    c = parse_control(
+        {
+            "strength": 0.7,
+            "emotion": "happy",
+            "interest": "3",
+            "speaker": "partner",
+            "overlays": {"stats": False},
+            "model": "a",
+        },
+        models=["a", "b"],
+    )
+    assert (c.strength, c.emotion, c.interest, c.speaker, c.overlays, c.model) == (
+        0.7,
+        "happy",
+        3,
+        "partner",
+        {"stats": False},
+        "a",
+    )
+    for bad, msg in [
+        ({"strength": 1.5}, "strength"),
+        ({"strength": "x"}, "strength"),
+        ({"interest": 4}, "interest"),
+        ({"emotion": "bored"}, "emotion"),
+        ({"speaker": "dog"}, "speaker"),
+        ({"volume": 1}, "volume"),
+        ({"overlays": {"fog": True}}, "overlays"),
+        ({"model": "c"}, "model"),
+        ([1], "JSON object"),
+    ]:
         with pytest.raises(ValueError, match=msg):
             parse_control(bad, models=["a", "b"])
 
@@ -349,18 +395,26 @@ def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
 def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head() -> None:
     """One row per tracked person with the signals that are on, above the head's box (beside it at the
     top of the picture); an untracked
-    region (a fragment, a ghost) and a person with no signal on get no badge."""
+    region (a fragment, a ghost) and a person with no signal on get no badge.
+    """
     names = ["nod", "shake", "gaze", "act", "talk", "laugh"]
-    people = [PersonShape(id=0, side="left", bbox=(40, 100, 50, 120)),     # tracked, nodding and talking
-              PersonShape(id=1, side="right", bbox=(240, 100, 50, 120)),   # a region nobody tracks
-              PersonShape(id=2, side="right", bbox=(120, 2, 40, 100))]     # tracked, head at the top
-    signals = [PersonSignals(id=i, side=p.side, names=names, labels=np.array(lab, np.int8),
-                             scores=np.full(6, 0.5, np.float32))
-               for i, (p, lab) in enumerate(zip(people, [[1, 0, 0, 0, 1, 0], [1, 1, 1, 1, 1, 1], [0, 0, 1, 0, 0, 0]]))]
+    people = [
+        PersonShape(id=0, side="left", bbox=(40, 100, 50, 120)),  # tracked, nodding and talking
+        PersonShape(id=1, side="right", bbox=(240, 100, 50, 120)),  # a region nobody tracks
+        PersonShape(id=2, side="right", bbox=(120, 2, 40, 100)),
+    ]  # tracked, head at the top
+    signals = [
+        PersonSignals(id=i, side=p.side, names=names, labels=np.array(lab, np.int8), scores=np.full(6, 0.5, np.float32))
+        for i, (p, lab) in enumerate(zip(people, [[1, 0, 0, 0, 1, 0], [1, 1, 1, 1, 1, 1], [0, 0, 1, 0, 0, 0]]))
+    ]
     pose = Pose3D(people=[TrackedBody(id=0, side="left"), TrackedBody(id=2, side="right")])
     comp = Compositor(CAM, overlays={"signals": True})
-    b = Bundle(frame=Frame(image=blank()), silhouettes=Silhouettes(people=people, width=320, height=240),
-               pose=pose, signals=SocialSignals(people=signals))
+    b = Bundle(
+        frame=Frame(image=blank()),
+        silhouettes=Silhouettes(people=people, width=320, height=240),
+        pose=pose,
+        signals=SocialSignals(people=signals),
+    )
     got = changed(comp.render(b))
     bright = (comp.render(b) == (0, 200, 255)).all(-1)
     ys, xs = np.nonzero(bright[:100, :120])
@@ -372,6 +426,10 @@ def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head(
     # person 2's head is at the top of the picture: its badge goes beside the head, not over its face
     assert bright[2:30, 163:200].any() and not bright[2:102, 120:160].any()
     # a person with nothing on gets no badge at all
-    off = Bundle(frame=Frame(image=blank()), silhouettes=b.silhouettes, pose=pose,
-                 signals=SocialSignals(people=[replace(signals[0], labels=np.zeros(6, np.int8))]))
+    off = Bundle(
+        frame=Frame(image=blank()),
+        silhouettes=b.silhouettes,
+        pose=pose,
+        signals=SocialSignals(people=[replace(signals[0], labels=np.zeros(6, np.int8))]),
+    )
     assert not changed(comp.render(off)).any()

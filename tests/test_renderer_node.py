@@ -1,4 +1,5 @@
 """The renderer node in launched graphs: a scene source -> renderer -> video file and `rendered` topic."""
+
 from __future__ import annotations
 
 import hashlib
@@ -8,13 +9,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.body.camera import default_camera
 from counterpart.bus.launchfile import LaunchError, check, load
 from counterpart.messages import Frame, Partner
 from counterpart.nodes.renderer import draw
 from counterpart.nodes.renderer.compositor import Compositor
 from counterpart.nodes.renderer.video import count_frames
+
 from tests.camera_sink import cv2_frames
 from tests.launching import read_jsonl, run_launch, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints, scene_frame
@@ -23,22 +24,36 @@ W, H = 160, 120
 
 
 def graph(tmp_path: Path, source: dict, renderer: dict) -> Path:
-    return write_launch(tmp_path / "graph.yaml", {"nodes": {
-        "source": {"run": "tests.renderer_nodes:SceneSource", "params": source},
-        "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
-        "renderer": {"run": "counterpart.nodes.renderer", "params": renderer, "policy": "reliable"},
-        "sink": {"run": "tests.camera_sink", "params": {"path": str(tmp_path / "rendered.jsonl")},
-                 "remap": {"frame": "rendered"}, "policy": "reliable"},
-    }})
+    return write_launch(
+        tmp_path / "graph.yaml",
+        {
+            "nodes": {
+                "source": {"run": "tests.renderer_nodes:SceneSource", "params": source},
+                "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
+                "renderer": {"run": "counterpart.nodes.renderer", "params": renderer, "policy": "reliable"},
+                "sink": {
+                    "run": "tests.camera_sink",
+                    "params": {"path": str(tmp_path / "rendered.jsonl")},
+                    "remap": {"frame": "rendered"},
+                    "policy": "reliable",
+                },
+            }
+        },
+    )
 
 
 def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path: Path) -> None:
     n = 24
     # a replay: every frame waits for its own partner however busy the machine is (the default
     # 0.1 s is for live use, where a late partner must not hold the video up)
-    code, text = run_launch(graph(tmp_path, {"count": n, "width": W, "height": H, "emotion": "angry", "strength": 1.0},
-                                  {"video": str(tmp_path / "out.mp4"), "pair_timeout": 10.0, "adaptive_wait": False}),
-                            timeout=60)
+    code, text = run_launch(
+        graph(
+            tmp_path,
+            {"count": n, "width": W, "height": H, "emotion": "angry", "strength": 1.0},
+            {"video": str(tmp_path / "out.mp4"), "pair_timeout": 10.0, "adaptive_wait": False},
+        ),
+        timeout=60,
+    )
     assert code == 0, text
     written = [p for p in (tmp_path / "out.mp4", tmp_path / "out.avi") if p.exists()]
     assert len(written) == 1, text
@@ -72,8 +87,11 @@ def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path:
 
 def test_ctrl_c_leaves_a_playable_video_with_every_rendered_frame(tmp_path: Path) -> None:
     snaps = tmp_path / "snaps"
-    file = graph(tmp_path, {"count": 100000, "rate": 30.0, "width": W, "height": H},
-                 {"video": str(tmp_path / "live.avi"), "snapshot_every": 5, "snapshot_dir": str(snaps)})
+    file = graph(
+        tmp_path,
+        {"count": 100000, "rate": 30.0, "width": W, "height": H},
+        {"video": str(tmp_path / "live.avi"), "snapshot_every": 5, "snapshot_dir": str(snaps)},
+    )
     proc = start_launch(file)
     try:
         assert wait_for(lambda: len(read_jsonl(tmp_path / "rendered.jsonl")) >= 12, timeout=30), "no frames rendered"
@@ -92,9 +110,13 @@ def test_ctrl_c_leaves_a_playable_video_with_every_rendered_frame(tmp_path: Path
 
 
 def test_bad_parameters_are_refused_before_start(tmp_path: Path) -> None:
-    for params, msg in [({"video": "x.mkv"}, "video"), ({"style": "wire"}, "style"),
-                        ({"snapshot_every": 3}, "snapshot_dir"), ({"camera": {"fx": 1}}, "camera"),
-                        ({"stats_topics": ["a/stats", "a/stats"]}, "listed twice")]:
+    for params, msg in [
+        ({"video": "x.mkv"}, "video"),
+        ({"style": "wire"}, "style"),
+        ({"snapshot_every": 3}, "snapshot_dir"),
+        ({"camera": {"fx": 1}}, "camera"),
+        ({"stats_topics": ["a/stats", "a/stats"]}, "listed twice"),
+    ]:
         file = graph(tmp_path, {"count": 1}, params)
         with pytest.raises(LaunchError, match=msg):
             check(load(file))

@@ -3,6 +3,7 @@
 The responder follows the Control messages the page puts on the bus, so a control posted to the
 page must come back as a differently coloured partner in the rendered video.
 """
+
 from __future__ import annotations
 
 import http.client
@@ -11,15 +12,15 @@ import shutil
 import time
 import urllib.error
 import urllib.request
-from pathlib import Path
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.body.camera import default_camera
 from counterpart.nodes.renderer import draw
+
 from tests.launching import descendants, read_jsonl, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints
 
@@ -30,16 +31,33 @@ W, H = 160, 120
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any]]:
     tmp = tmp_path_factory.mktemp("web")
     port_file = tmp / "port"
-    file = write_launch(tmp / "graph.yaml", {"nodes": {
-        "source": {"run": "tests.renderer_nodes:SceneSource",
-                   "params": {"count": 100000, "rate": 20.0, "width": W, "height": H, "partner": False}},
-        "calibration": {"run": "counterpart.nodes.calibration"},
-        "responder": {"run": "tests.renderer_nodes:ControlledResponder", "params": {"path": str(tmp / "controls.jsonl")},
-                      "restart": "on-failure"},
-        "renderer": {"run": "counterpart.nodes.renderer", "params": {
-            "serve": True, "port": 0, "port_file": str(port_file), "stats_topics": ["source/stats", "responder/stats"],
-            "models": ["dual-hmm", "listener"]}},
-    }})
+    file = write_launch(
+        tmp / "graph.yaml",
+        {
+            "nodes": {
+                "source": {
+                    "run": "tests.renderer_nodes:SceneSource",
+                    "params": {"count": 100000, "rate": 20.0, "width": W, "height": H, "partner": False},
+                },
+                "calibration": {"run": "counterpart.nodes.calibration"},
+                "responder": {
+                    "run": "tests.renderer_nodes:ControlledResponder",
+                    "params": {"path": str(tmp / "controls.jsonl")},
+                    "restart": "on-failure",
+                },
+                "renderer": {
+                    "run": "counterpart.nodes.renderer",
+                    "params": {
+                        "serve": True,
+                        "port": 0,
+                        "port_file": str(port_file),
+                        "stats_topics": ["source/stats", "responder/stats"],
+                        "models": ["dual-hmm", "listener"],
+                    },
+                },
+            }
+        },
+    )
     proc = start_launch(file)
     try:
         assert wait_for(lambda: port_file.exists() and port_file.read_text().strip(), timeout=30), "no port file"
@@ -93,7 +111,7 @@ def read_parts(port: int, n: int) -> list[tuple[int, bytes]]:
         if line != boundary:
             continue
         headers = {}
-        while (h := r.fp.readline().strip()):
+        while h := r.fp.readline().strip():
             k, _, v = h.decode().partition(":")
             headers[k.strip().lower()] = v.strip()
         parts.append((int(headers["x-frame-seq"]), r.fp.read(int(headers["content-length"]))))
@@ -136,8 +154,13 @@ def test_posted_control_reaches_the_bus_and_changes_the_partner(live: dict[str, 
     core = partner_core()
     status, body = _post(live["url"] + "/control", {"emotion": "happy", "strength": 0.9, "interest": 3})
     assert status == 200 and body == {"emotion": "happy", "strength": 0.9, "interest": 3}
-    assert wait_for(lambda: any(c["strength"] == 0.9 and c["emotion"] == "happy" and c["interest"] == 3
-                                for c in read_jsonl(live["controls"])), timeout=10), "no Control on the bus"
+    assert wait_for(
+        lambda: any(
+            c["strength"] == 0.9 and c["emotion"] == "happy" and c["interest"] == 3
+            for c in read_jsonl(live["controls"])
+        ),
+        timeout=10,
+    ), "no Control on the bus"
     # the responder turned the partner happy (orange: red high, blue low) and the page shows it
     assert wait_for(lambda: (lambda b: b[2] - b[0] > 80)(mean_bgr(_frame(live["url"]), core)), timeout=10)
     state = json.loads(_get(live["url"] + "/state")[1])
@@ -157,8 +180,9 @@ def test_a_restarted_responder_gets_the_controls_in_force(live: dict[str, Any]) 
     (responder,) = [p for p in descendants(live["proc"].pid) if p.cmdline()[-1].endswith("/responder.json")]
     n = len(read_jsonl(live["controls"]))
     responder.kill()
-    assert wait_for(lambda: any(map(in_force, read_jsonl(live["controls"])[n:])), timeout=20), \
+    assert wait_for(lambda: any(map(in_force, read_jsonl(live["controls"])[n:])), timeout=20), (
         "the restarted responder did not get the controls in force"
+    )
 
 
 def test_bad_requests_are_answered_clearly(live: dict[str, Any]) -> None:
@@ -221,7 +245,9 @@ def test_in_a_headless_browser(live: dict[str, Any]) -> None:
     driver = webdriver.Chrome(service=Service(chromedriver), options=opts)
     try:
         driver.get(live["url"] + "/")
-        WebDriverWait(driver, 20).until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "1")
+        WebDriverWait(driver, 20).until(
+            lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "1"
+        )
         video = driver.find_element(By.ID, "video")
         WebDriverWait(driver, 20).until(lambda d: d.execute_script("return arguments[0].naturalWidth", video) == W)
         # frames advance in the page: two screenshots of the video element differ
@@ -239,11 +265,17 @@ def test_in_a_headless_browser(live: dict[str, Any]) -> None:
         slider.send_keys(Keys.END)
         assert slider.get_attribute("value") == "1"
         WebDriverWait(driver, 10).until(lambda d: int(d.find_element(By.ID, "sent-count").text) >= 2)
-        assert wait_for(lambda: any(c["strength"] == 1.0 for c in read_jsonl(live["controls"]))
-                        and any(c["emotion"] == "angry" for c in read_jsonl(live["controls"])), timeout=10)
+        assert wait_for(
+            lambda: (
+                any(c["strength"] == 1.0 for c in read_jsonl(live["controls"]))
+                and any(c["emotion"] == "angry" for c in read_jsonl(live["controls"]))
+            ),
+            timeout=10,
+        )
         core = partner_core()
-        assert wait_for(lambda: (lambda b: b[2] - b[0] > 100 and b[2] - b[1] > 100)(mean_bgr(_frame(live["url"]), core)),
-                        timeout=10), "the partner did not turn angry red"
+        assert wait_for(
+            lambda: (lambda b: b[2] - b[0] > 100 and b[2] - b[1] > 100)(mean_bgr(_frame(live["url"]), core)), timeout=10
+        ), "the partner did not turn angry red"
 
         def red_in_page() -> int:
             shot = cv2.imdecode(np.frombuffer(video.screenshot_as_png, np.uint8), cv2.IMREAD_COLOR).astype(int)

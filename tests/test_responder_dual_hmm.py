@@ -1,12 +1,13 @@
 """The dual HMM learns a planted interaction and reproduces the partner from the observed person."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.responder.dual_hmm import DualHMM
 from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_world
 from counterpart.nodes.responder.models import MODEL_VERSION, ModelVersionError, load_model, save_model
+
 from tests.responder_fixtures import mpjpe_mm, planted_pair
 
 
@@ -31,8 +32,9 @@ def test_reproduces_planted_partner_at_new_places(model: DualHMM) -> None:
     assert pred.shape == test.b.shape and pred.dtype == np.float32
     err = mpjpe_mm(pred, test.b)
     # baseline: the partner's mean pose, placed in A's frame (what a model without the observed gives)
-    _, lb = relative_pair(np.concatenate([planted_pair(s).a for s in range(8)]),
-                          np.concatenate([planted_pair(s).b for s in range(8)]))
+    _, lb = relative_pair(
+        np.concatenate([planted_pair(s).a for s in range(8)]), np.concatenate([planted_pair(s).b for s in range(8)])
+    )
     o, th = actor_frame(test.a)
     base = mpjpe_mm(to_world(np.broadcast_to(lb.mean(0), test.b.shape), o, th), test.b)
     assert err < 0.35 * base, (err, base)
@@ -49,9 +51,9 @@ def test_viterbi_trellis_decoding_is_also_faithful(model: DualHMM) -> None:
 
 
 def test_placement_correction_forest_arrays_predict_as_scikit_learn() -> None:
+    from counterpart.nodes.responder.dual_hmm import _Forest
     from sklearn.ensemble import ExtraTreesRegressor
 
-    from counterpart.nodes.responder.dual_hmm import _Forest
     rng = np.random.default_rng(0)
     X = rng.normal(size=(2000, 5))
     Y = np.c_[np.sin(X[:, 0]) + X[:, 1] ** 2, X[:, 2] * (X[:, 3] > 0)]
@@ -70,6 +72,7 @@ def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> No
     assert np.allclose(back.predict(test.a), model.predict(test.a), atol=1e-5)
     # rewrite the metadata with another version: loading names the file and both versions
     import json
+
     z = dict(np.load(path))
     meta = json.loads(str(z.pop("__meta__")))
     meta["version"] = 99
@@ -92,8 +95,8 @@ def test_phased_trajectories_get_time_ordered_states() -> None:
         phases.append((t >= 0.25).astype(np.int32))
     hmm = GaussianHMM(n_components=4, covariance_type="full", init_params="")
     DualHMM(order_mix=0.2)._init_ordered(hmm, seqs, phases)
-    assert np.all(np.diff(hmm.means_[:, 0]) > 0)               # state k: the k-th stretch of time
-    assert hmm.means_[0, 0] < 0.25 <= hmm.means_[1, 0]          # one state for the first phase's quarter
+    assert np.all(np.diff(hmm.means_[:, 0]) > 0)  # state k: the k-th stretch of time
+    assert hmm.means_[0, 0] < 0.25 <= hmm.means_[1, 0]  # one state for the first phase's quarter
     assert np.argmax(hmm.startprob_) == 0
     assert np.allclose(hmm.transmat_.sum(1), 1) and hmm.transmat_[0, 2] < hmm.transmat_[0, 1]
     # phased trajectories fit and still reproduce the partner

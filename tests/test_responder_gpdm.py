@@ -1,14 +1,15 @@
 """The hierarchical GPDM responder (Taubert et al.) on a few small simulated hand meetings."""
+
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.responder.data import sim_trajectories
 from counterpart.nodes.responder.gpdm import GPDM, reach
 from counterpart.nodes.responder.models import load_model, save_model
+
 from tests.launching import read_jsonl, run_launch, write_launch
 
 SMALL = dict(points=300, num_inducing=15, n_centres=30, max_iters=40, dyn_points=200, support=1500)
@@ -27,7 +28,7 @@ def model() -> GPDM:
             data += trials(range(seed, seed + 1), emotion=emo, strength=1.0, hand_dy=(-0.1, 0.0, 0.1)[seed % 3])
     said: list[str] = []
     m = GPDM(**SMALL).fit(data, said.append)
-    assert any("partner layer" in s for s in said)   # progress is reported layer by layer
+    assert any("partner layer" in s for s in said)  # progress is reported layer by layer
     return m
 
 
@@ -51,11 +52,11 @@ def test_the_partner_answers_and_its_hand_meets_the_offered_hand(model: GPDM) ->
 def test_the_hand_goes_where_it_is_offered_not_where_training_met(model: GPDM) -> None:
     model.set_style("neutral", 0.0)
     heights = {}
-    for dy in (-0.2, 0.2):   # beyond the training's +-0.1 m
+    for dy in (-0.2, 0.2):  # beyond the training's +-0.1 m
         t = trials(range(51, 52), emotion="neutral", hand_dy=dy)[0]
         c = first_contact(t)
         heights[dy] = (model.predict(t.a)[c, 7, 1], t.b[c, 7, 1])
-    assert heights[0.2][0] - heights[-0.2][0] > 0.3            # the truth differs by 0.4 m
+    assert heights[0.2][0] - heights[-0.2][0] > 0.3  # the truth differs by 0.4 m
     assert all(abs(g - r) < 0.1 for g, r in heights.values())
 
 
@@ -64,12 +65,12 @@ def test_the_style_is_a_continuous_input(model: GPDM) -> None:
     out = {}
     for s in (0.0, 0.5, 1.0):
         model.set_style("angry", s)
-        out[s] = model.predict(t.a)[:, [0, 1, 2, 3, 4, 8, 9, 10, 11, 12, 13]]   # all but the reaching arm
+        out[s] = model.predict(t.a)[:, [0, 1, 2, 3, 4, 8, 9, 10, 11, 12, 13]]  # all but the reaching arm
     model.set_style("neutral", 0.0)
     # before the hands reach for each other (the reach, not the style, moves the body later)
     early = slice(0, first_contact(t) - 20)
     full, half = (out[1.0] - out[0.0])[early], (out[0.5] - out[0.0])[early]
-    assert np.abs(full).max() > 0.02                                    # the style moves the body
+    assert np.abs(full).max() > 0.02  # the style moves the body
     # the style amount enters linearly (f = g_0 + s g_angry): half the strength, half the change
     np.testing.assert_allclose(half, 0.5 * full, atol=1e-3)
 
@@ -110,17 +111,30 @@ def test_reach_keeps_the_bones_and_meets_a_reachable_target() -> None:
 def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_path: Path) -> None:
     d = tmp_path / "models"
     save_model(d / "responder-gpdm.npz", model)
-    launch = write_launch(tmp_path / "g.yaml", {"nodes": {
-        "source": {"run": "tests.responder_nodes:PoseSource", "params": {"frames": 60, "control_at": 30}},
-        # a reliable control queue: the source waits for it to connect, so the control is never lost
-        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "gpdm"},
-                      "inputs": {"control": {"policy": "reliable"}}},
-        "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp_path / "out.jsonl")}},
-    }})
+    launch = write_launch(
+        tmp_path / "g.yaml",
+        {
+            "nodes": {
+                "source": {"run": "tests.responder_nodes:PoseSource", "params": {"frames": 60, "control_at": 30}},
+                # a reliable control queue: the source waits for it to connect, so the control is never lost
+                "responder": {
+                    "run": "counterpart.nodes.responder",
+                    "params": {"model": "gpdm"},
+                    "inputs": {"control": {"policy": "reliable"}},
+                },
+                "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp_path / "out.jsonl")}},
+            }
+        },
+    )
     # the emotion model the node loads up front: a fresh default would take a while to build
     from counterpart.nodes.responder.emotion import EmotionModel
-    save_model(d / "responder-emotion.npz", EmotionModel().fit(np.random.default_rng(0).normal(size=(8, 7)),
-                                                                 ["neutral", "angry"] * 4, [0, 1] * 4, ["g"] * 8))
+
+    save_model(
+        d / "responder-emotion.npz",
+        EmotionModel().fit(
+            np.random.default_rng(0).normal(size=(8, 7)), ["neutral", "angry"] * 4, [0, 1] * 4, ["g"] * 8
+        ),
+    )
     code, out = run_launch(launch, timeout=90, env={"COUNTERPART_MODELS": str(d)})
     assert code == 0, out
     rows = read_jsonl(tmp_path / "out.jsonl")
@@ -133,7 +147,8 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     # the node's output is the model's own for that observed sequence with the style switched at k,
     # staged and given the hand contact as the node does (poses without a rate: 25 fps)
     from tests.responder_fixtures import planted_pair
-    obs = planted_pair(7, T=60).a.astype(np.float32)   # as Pose3D carries it
+
+    obs = planted_pair(7, T=60).a.astype(np.float32)  # as Pose3D carries it
     from counterpart.nodes.responder.reach import reach
     from counterpart.nodes.responder.staging import Stage
 
@@ -159,13 +174,36 @@ def test_respond_cli_styles_the_gpdm_and_names_an_unseen_style(model: GPDM, tmp_
     path = save_model(tmp_path / "g.npz", model)
     t = trials(range(55, 56), emotion="neutral")[0]
     t.save(tmp_path / "in.npz")
-    ok = cli("respond", "--model", str(path), "--input", str(tmp_path / "in.npz"), "--out", str(tmp_path / "out.npz"),
-             "--emotion", "angry", "--strength", "1")
+    ok = cli(
+        "respond",
+        "--model",
+        str(path),
+        "--input",
+        str(tmp_path / "in.npz"),
+        "--out",
+        str(tmp_path / "out.npz"),
+        "--emotion",
+        "angry",
+        "--strength",
+        "1",
+    )
     assert ok.returncode == 0, ok.stderr
     from counterpart.body.trajectory import TwoPersonTrajectory
+
     out = TwoPersonTrajectory.load(tmp_path / "out.npz")
     model.set_style("angry", 1.0)
-    np.testing.assert_allclose(out.b, model.predict(t.a), atol=1e-4)   # the model's own style, no filter after
-    bad = cli("respond", "--model", str(path), "--input", str(tmp_path / "in.npz"), "--out", str(tmp_path / "x.npz"),
-              "--emotion", "sad", "--strength", "0.5")
+    np.testing.assert_allclose(out.b, model.predict(t.a), atol=1e-4)  # the model's own style, no filter after
+    bad = cli(
+        "respond",
+        "--model",
+        str(path),
+        "--input",
+        str(tmp_path / "in.npz"),
+        "--out",
+        str(tmp_path / "x.npz"),
+        "--emotion",
+        "sad",
+        "--strength",
+        "0.5",
+    )
     assert bad.returncode == 2 and "style 'sad' was never seen in training" in bad.stderr

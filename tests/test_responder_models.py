@@ -1,11 +1,11 @@
 """Joint-shape CONDENSATION through a decision point, listener rule choices, emotion ranking."""
+
 from __future__ import annotations
 
 import itertools
 
 import numpy as np
 import pytest
-
 from counterpart.body.camera import default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
@@ -18,7 +18,8 @@ from counterpart.nodes.responder.shapes import trajectory_shapes
 
 def branch_pair(branch: int, T: int = 60) -> TwoPersonTrajectory:
     """A and B stand; for 25 frames nothing differs; then A raises the right arm (branch 0) and B
-    raises its right arm too, or A bends forward (branch 1) and B crouches back with arms out."""
+    raises its right arm too, or A bends forward (branch 1) and B crouches back with arms out.
+    """
     u = np.clip((np.arange(T) - 25) / 15, 0, 1)
     PA = np.tile(neutral_pose(x=-0.7, yaw=np.pi / 2), (T, 1))
     PB = np.tile(neutral_pose(x=0.7, yaw=-np.pi / 2), (T, 1))
@@ -45,11 +46,11 @@ def test_condensation_keeps_the_correct_mode_through_a_decision_point(shape_data
         a, b = shape_data[k]
         other = shape_data[1 - k][1]
         pred = m.predict(a)
-        late = slice(45, 60)   # after the decision, once the branches differ
+        late = slice(45, 60)  # after the decision, once the branches differ
         err = np.linalg.norm(pred[late] - b.ctrl[late], axis=-1).mean()
         err_other = np.linalg.norm(pred[late] - other.ctrl[late], axis=-1).mean()
         assert err < 0.5 * err_other, (k, err, err_other)
-        assert err < 3.0   # pixels at 160 x 120
+        assert err < 3.0  # pixels at 160 x 120
 
 
 def test_decay_operator() -> None:
@@ -57,8 +58,10 @@ def test_decay_operator() -> None:
     assert np.allclose(h[-1], [0.125, 0.5, 1.0])
 
 
-RULES = {"interested": [(("S:nod",), ("L:nod",), 0.8), (("S:shake",), ("L:shake",), 0.6)],
-         "not_interested": [(("S:nod",), ("L:nod",), 0.3), (("S:shake",), ("L:shake",), 0.2)]}
+RULES = {
+    "interested": [(("S:nod",), ("L:nod",), 0.8), (("S:shake",), ("L:shake",), 0.6)],
+    "not_interested": [(("S:nod",), ("L:nod",), 0.3), (("S:shake",), ("L:shake",), 0.2)],
+}
 
 
 def test_listener_probabilities_follow_rules_and_interest() -> None:
@@ -78,7 +81,7 @@ def test_listener_nods_as_often_as_the_rule_says(interest: int, expected: float)
     nods = 0
     n_events = 300
     head = []
-    for e in range(n_events):   # speaker nods for 10 frames, then 30 quiet frames
+    for e in range(n_events):  # speaker nods for 10 frames, then 30 quiet frames
         responded = False
         for t in range(40):
             m.step({"nod": t < 10})
@@ -87,7 +90,7 @@ def test_listener_nods_as_often_as_the_rule_says(interest: int, expected: float)
                 head.append(m.body({"nod"}, t)[0])
         nods += responded
     assert abs(nods / n_events - expected) < 0.08
-    if head:   # a nodding head moves
+    if head:  # a nodding head moves
         assert np.ptp(np.array(head), axis=0).max() > 0.03
 
 
@@ -111,7 +114,7 @@ def test_emotion_strength_ranks_and_modulates() -> None:
     # features: log speed rises with angry strength; neutral = 0
     s = rng.uniform(0, 1, 40)
     X = rng.normal(scale=0.05, size=(40, 7))
-    s[:8] = 0.0   # neutral motions: the reference for the style slopes
+    s[:8] = 0.0  # neutral motions: the reference for the style slopes
     X[:, 0] += 0.6 * s
     X[:, 1] += 0.3 * s
     m = EmotionModel().fit(X, ["neutral"] * 8 + ["angry"] * 32, s, ["g"] * 40)

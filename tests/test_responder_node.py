@@ -1,16 +1,17 @@
 """The responder node in a real launch: Pose3D in, Partner out, Control switches take effect."""
+
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.responder.dual_hmm import DualHMM
 from counterpart.nodes.responder.emotion import EmotionModel
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import save_model
+
 from tests.launching import read_jsonl, run_launch, write_launch
 from tests.responder_fixtures import planted_pair
 
@@ -18,11 +19,14 @@ from tests.responder_fixtures import planted_pair
 @pytest.fixture(scope="module")
 def models_dir(tmp_path_factory) -> Path:
     d = tmp_path_factory.mktemp("models")
-    save_model(d / "responder-dual-hmm.npz", DualHMM(n_states=8, n_iter=10, both_roles=False)
-               .fit([planted_pair(s) for s in range(6)]))
+    save_model(
+        d / "responder-dual-hmm.npz",
+        DualHMM(n_states=8, n_iter=10, both_roles=False).fit([planted_pair(s) for s in range(6)]),
+    )
     # an emotion model whose angry style doubles the amplitude at full strength
-    em = EmotionModel().fit(np.random.default_rng(0).normal(size=(8, 7)), ["neutral", "angry"] * 4,
-                            [0, 1] * 4, ["g"] * 8)
+    em = EmotionModel().fit(
+        np.random.default_rng(0).normal(size=(8, 7)), ["neutral", "angry"] * 4, [0, 1] * 4, ["g"] * 8
+    )
     em.k_amp_[:] = np.log(2.0)
     em.k_speed_[:] = np.log(2.0)
     save_model(d / "responder-emotion.npz", em)
@@ -31,14 +35,24 @@ def models_dir(tmp_path_factory) -> Path:
 
 
 def graph(tmp: Path, switch: str = "", **source: int) -> Path:
-    return write_launch(tmp / "g.yaml", {"nodes": {
-        "source": {"run": "tests.responder_nodes:PoseSource",
-                   "params": {"frames": 60, "control_at": 30, "switch": switch, **source}},
-        # a reliable control queue: the source waits for it to connect, so the control is never lost
-        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "dual-hmm", "hold_frames": 5},
-                      "inputs": {"control": {"policy": "reliable"}}},
-        "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp / "out.jsonl")}},
-    }})
+    return write_launch(
+        tmp / "g.yaml",
+        {
+            "nodes": {
+                "source": {
+                    "run": "tests.responder_nodes:PoseSource",
+                    "params": {"frames": 60, "control_at": 30, "switch": switch, **source},
+                },
+                # a reliable control queue: the source waits for it to connect, so the control is never lost
+                "responder": {
+                    "run": "counterpart.nodes.responder",
+                    "params": {"model": "dual-hmm", "hold_frames": 5},
+                    "inputs": {"control": {"policy": "reliable"}},
+                },
+                "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp / "out.jsonl")}},
+            }
+        },
+    )
 
 
 def switch_at(values: list, before: object, after: object) -> int:
@@ -47,7 +61,8 @@ def switch_at(values: list, before: object, after: object) -> int:
     The control and the poses travel on separate sockets and a responder takes a side input as
     soon as it comes, so one still working through queued poses (a loaded machine: it loads its
     models first) takes the control before poses that were sent ahead of it: the switch must
-    happen once and for good, not at one exact pose."""
+    happen once and for good, not at one exact pose.
+    """
     k = values.index(after) if after in values else len(values)
     assert values[:k] == [before] * k and values[k:] == [after] * (len(values) - k), values
     assert k < len(values), f"no switch from {before!r} to {after!r}: {values}"
@@ -78,8 +93,8 @@ def test_the_partner_holds_through_a_short_dropout_of_the_observed_person(tmp_pa
     rows = read_jsonl(tmp_path / "out.jsonl")
     assert [r["seq"] for r in rows] == list(range(60))
     assert all(r["shape"] == [14, 3] and r["joints"] == rows[9]["joints"] for r in rows[10:15])  # held
-    assert all(r["shape"] != [14, 3] for r in rows[15:18])                                       # gone
-    assert all(r["shape"] == [14, 3] for r in rows[18:])                                         # back
+    assert all(r["shape"] != [14, 3] for r in rows[15:18])  # gone
+    assert all(r["shape"] == [14, 3] for r in rows[18:])  # back
 
 
 def test_control_switches_the_model(tmp_path: Path, models_dir: Path) -> None:
@@ -97,13 +112,25 @@ def test_inputs_follow_the_use_params(tmp_path: Path) -> None:
     p = Responder.validate_params({"use_pose": False, "use_silhouettes": True, "use_control": False})
     assert set(Responder.ports(p)[0]) == {"silhouettes"}
     # a graph without a tracker: the pose input is switched off and the graph validates
-    f = write_launch(tmp_path / "g2.yaml", {"nodes": {
-        "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
-        "responder": {"run": "counterpart.nodes.responder", "params": {"model": "listener", "use_pose": False}}}})
+    f = write_launch(
+        tmp_path / "g2.yaml",
+        {
+            "nodes": {
+                "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
+                "responder": {"run": "counterpart.nodes.responder", "params": {"model": "listener", "use_pose": False}},
+            }
+        },
+    )
     assert "responder" in check(load(f)).nodes
     # with the pose input on, the missing publisher is named
-    f = write_launch(tmp_path / "g3.yaml", {"nodes": {
-        "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
-        "responder": {"run": "counterpart.nodes.responder"}}})
+    f = write_launch(
+        tmp_path / "g3.yaml",
+        {
+            "nodes": {
+                "source": {"run": "tests.responder_nodes:PoseSource", "remap": {"pose": "unused"}},
+                "responder": {"run": "counterpart.nodes.responder"},
+            }
+        },
+    )
     with pytest.raises(LaunchError, match="inputs.pose"):
         check(load(f))

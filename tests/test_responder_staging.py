@@ -1,14 +1,16 @@
 """Where the generated partner stands (the stage's limits), its hand contact, and the dual HMM's pose
-on a person unlike any of training."""
+on a person unlike any of training.
+"""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.responder.dual_hmm import DualHMM
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
 from counterpart.nodes.responder.staging import Stage, StageConfig
+
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 
@@ -81,7 +83,7 @@ def test_bad_limits_are_refused_naming_them() -> None:
 def test_the_dual_hmm_gives_a_body_for_a_person_unlike_any_of_training() -> None:
     hmm = DualHMM(n_states=8, n_iter=10, both_roles=False).fit([planted_pair(s) for s in range(6)])
     odd = planted_pair(9).a[0].copy()
-    odd[:, 1] *= 3.0        # a 5 m tall, stretched estimate (a tracker's bad frame)
+    odd[:, 1] *= 3.0  # a 5 m tall, stretched estimate (a tracker's bad frame)
     odd[4] += [2.0, -1.0, 3.0]
     hmm.reset()
     out = hmm.step(odd)
@@ -108,7 +110,7 @@ def test_the_partners_hand_meets_the_hand_it_comes_near_and_ignores_a_far_one() 
     far, pull = reach(obs, par)
     assert pull == 0.0 and np.array_equal(far, par)
     offered = obs.copy()
-    offered[7] = par[4] + [-0.08, 0.05, 0.0]   # the observed right wrist 10 cm from the partner's left
+    offered[7] = par[4] + [-0.08, 0.05, 0.0]  # the observed right wrist 10 cm from the partner's left
     met, pull = reach(offered, par)
     assert pull == 1.0
     np.testing.assert_allclose(met[4], offered[7], atol=1e-5)
@@ -128,7 +130,7 @@ def test_the_partner_steps_back_when_a_hand_pushes_its_chest_and_then_returns() 
     pushing = obs.copy()
     pushing[7] = [0.6, 1.3, 2.0]  # the right wrist on the partner's chest
     gaps = [gap(pushing, stage(pushing, par, 0.04)) for _ in range(10)]
-    assert stage.pushes == 1                       # one push, however long the hand stays
+    assert stage.pushes == 1  # one push, however long the hand stays
     assert max(gaps) > 0.9 and np.all(np.diff(gaps[:3]) > 0) and max(np.diff([0.7, *gaps])) <= 0.1 + 1e-9
     later = [gap(obs, stage(obs, par, 0.04)) for _ in range(100)]
     assert later[-1] == pytest.approx(0.7, abs=0.01)  # the push fades: back where the model puts it

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
+from counterpart.nodes.silhouette.backends import BACKEND_NAMES, make_subtractor
 from counterpart.nodes.silhouette.background import (
     BACKGROUND,
     FOREGROUND,
@@ -17,7 +17,6 @@ from counterpart.nodes.silhouette.background import (
     SHADOW,
     HorprasertBackground,
 )
-from counterpart.nodes.silhouette.backends import BACKEND_NAMES, make_subtractor
 
 H, W = 120, 160
 YY, XX = np.mgrid[0:H, 0:W]

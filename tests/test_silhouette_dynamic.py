@@ -9,16 +9,14 @@ every frame, so each of its pixels flips between the two colours.
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import pytest
-
-from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
 from counterpart.nodes.silhouette.backends import make_subtractor
+from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
 from counterpart.nodes.silhouette.synthetic import textured_background
+
 from tests.shared_data import DATA
 
 H, W = 240, 320
@@ -26,26 +24,31 @@ ROOM = textured_background(H, W)
 LEAVES = (slice(20, 100), slice(180, 300))
 _LEAF_RNG = np.random.default_rng(7)
 #: a leaf / sky texture larger than the patch, cut at a random shift each frame
-_LEAF_TEX = np.where((_LEAF_RNG.random((LEAVES[0].stop - LEAVES[0].start + 8, LEAVES[1].stop - LEAVES[1].start + 8))
-                      < 0.5)[..., None], np.float32([40, 150, 60]), np.float32([210, 170, 120]))
+_LEAF_TEX = np.where(
+    (_LEAF_RNG.random((LEAVES[0].stop - LEAVES[0].start + 8, LEAVES[1].stop - LEAVES[1].start + 8)) < 0.5)[..., None],
+    np.float32([40, 150, 60]),
+    np.float32([210, 170, 120]),
+)
 
 
 def frame(rng: np.random.Generator, person: tuple[int, int, int, int] | None = None, wind: bool = True) -> np.ndarray:
     """One frame: room + noise (sigma 2.5) + leaves, shifted at random when ``wind`` blows;
-    ``person`` (x, y, w, h) a flat magenta box (a small, distant person)."""
+    ``person`` (x, y, w, h) a flat magenta box (a small, distant person).
+    """
     f = ROOM + rng.normal(0.0, 2.5, ROOM.shape).astype(np.float32)
     dy, dx = rng.integers(0, 7, size=2) if wind else (3, 3)
     ph, pw = LEAVES[0].stop - LEAVES[0].start, LEAVES[1].stop - LEAVES[1].start
-    f[LEAVES] = _LEAF_TEX[dy:dy + ph, dx:dx + pw]
+    f[LEAVES] = _LEAF_TEX[dy : dy + ph, dx : dx + pw]
     if person is not None:
         x, y, w, h = person
-        f[y:y + h, x:x + w] = (170.0, 40.0, 190.0)
+        f[y : y + h, x : x + w] = (170.0, 40.0, 190.0)
     return np.clip(np.rint(f), 0, 255).astype(np.uint8)
 
 
 def leaves_foreground(dynamic: bool) -> float:
     """Share of the leaf patch called foreground over the last 50 of 150 frames, the leaves still
-    in the 30 training frames (no wind) and waving after."""
+    in the 30 training frames (no wind) and waving after.
+    """
     rng = np.random.default_rng(0)
     sub = make_subtractor("horprasert", train_frames=30, robust=False, dynamic=dynamic)
     fg = []
@@ -73,11 +76,11 @@ def test_sample_consensus_keeps_a_person_and_the_shadow_class() -> None:
     person = (60, 120, 30, 80)
     f = frame(rng, person)
     y0, x0 = 200, 20
-    f[y0:y0 + 20, x0:x0 + 100] = np.clip(ROOM[y0:y0 + 20, x0:x0 + 100] * 0.6, 0, 255).astype(np.uint8)
+    f[y0 : y0 + 20, x0 : x0 + 100] = np.clip(ROOM[y0 : y0 + 20, x0 : x0 + 100] * 0.6, 0, 255).astype(np.uint8)
     m = sub.apply(f)
     x, y, w, h = person
-    assert m[y:y + h, x:x + w].mean() > 0.99
-    assert (sub.labels[y0 + 2:y0 + 18, x0 + 2:x0 + 98] == SHADOW).mean() > 0.95
+    assert m[y : y + h, x : x + w].mean() > 0.99
+    assert (sub.labels[y0 + 2 : y0 + 18, x0 + 2 : x0 + 98] == SHADOW).mean() > 0.95
 
 
 def test_sample_consensus_validates_and_learns_only_background() -> None:
@@ -131,12 +134,16 @@ CDNET = DATA / "cdnet"
 
 def cdnet_f1(seq: str, backend: str, first: int, last: int) -> float:
     """CDnet-protocol F1 of the extractor's published mask on frames ``first``..``last``, the
-    extractor fed from 30 frames before ``first`` (ours fits on those 30)."""
+    extractor fed from 30 frames before ``first`` (ours fits on those 30).
+    """
     import cv2
 
     d = CDNET / seq
-    ex = SilhouetteExtractor(backend=backend, min_area=None, backend_params={"train_frames": 30, "dynamic": True,
-                             "shadow_ncc": 0.4} if backend == "horprasert" else {})
+    ex = SilhouetteExtractor(
+        backend=backend,
+        min_area=None,
+        backend_params={"train_frames": 30, "dynamic": True, "shadow_ncc": 0.4} if backend == "horprasert" else {},
+    )
     tp = fp = fn = 0
     for n in range(first - 30, last + 1):
         r = ex.process(cv2.imread(str(d / "input" / f"in{n:06d}.jpg")))
@@ -151,8 +158,10 @@ def cdnet_f1(seq: str, backend: str, first: int, last: int) -> float:
     return 2 * tp / max(2 * tp + fp + fn, 1)
 
 
-@pytest.mark.skipif(not (CDNET / "pedestrians" / "input").is_dir() or not (CDNET / "busStation" / "input").is_dir(),
-                    reason=f"CDnet sequences not found under {CDNET} (see ../shared/data/README.md)")
+@pytest.mark.skipif(
+    not (CDNET / "pedestrians" / "input").is_dir() or not (CDNET / "busStation" / "input").is_dir(),
+    reason=f"CDnet sequences not found under {CDNET} (see ../shared/data/README.md)",
+)
 @pytest.mark.parametrize("seq", ["pedestrians", "busStation"])
 def test_cdnet_f1_beats_mog2(seq: str) -> None:
     # 100 frames of the report half (the bench: the whole second half of the evaluated frames),
@@ -168,7 +177,8 @@ def test_cdnet_f1_beats_mog2(seq: str) -> None:
 
 def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
     """On a textured floor a cast shadow keeps the floor's pattern (same colour, darker); a dark
-    shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow."""
+    shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow.
+    """
     from counterpart.nodes.silhouette.background import HorprasertBackground
 
     rng = np.random.default_rng(3)

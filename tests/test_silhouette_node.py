@@ -1,4 +1,5 @@
 """The silhouette node in real graphs: camera (lockstep replay of a generated video) -> silhouette -> sinks."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,8 +8,8 @@ from typing import Any
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.nodes.silhouette.synthetic import SyntheticSequence, two_person_sequence
+
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 
 EMPTY_FRAMES = 15
@@ -38,21 +39,35 @@ def write_folder(folder: Path, seq: SyntheticSequence) -> str:
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, SyntheticSequence]:
     """15 frames of the empty textured scene, then two people (with shadows) walk in, shake hands
-    and part; as a PNG folder source."""
+    and part; as a PNG folder source.
+    """
     seq = two_person_sequence(n_frames=N - EMPTY_FRAMES, size=(120, 160), empty_frames=EMPTY_FRAMES)
     return write_folder(tmp_path_factory.mktemp("scene") / "frames", seq), seq
 
 
 def graph(tmp_path: Path, source: str, silhouette: dict[str, Any], camera: dict[str, Any] | None = None) -> Path:
-    return write_launch(tmp_path / "graph.yaml", {"nodes": {
-        "camera": {"run": "counterpart.nodes.camera", "params": {"source": source, "pacing": "lockstep", "fps": 25.0,
-                                                     **(camera or {})}},
-        "silhouette": {"run": "counterpart.nodes.silhouette", "params": silhouette, "policy": "reliable"},
-        "frames": {"run": "tests.topic_sink", "params": {"topic": "frame", "path": str(tmp_path / "frames.jsonl")},
-                   "policy": "reliable"},
-        "out": {"run": "tests.topic_sink", "params": {"topic": "silhouettes", "path": str(tmp_path / "sil.jsonl")},
-                "policy": "reliable"},
-    }})
+    return write_launch(
+        tmp_path / "graph.yaml",
+        {
+            "nodes": {
+                "camera": {
+                    "run": "counterpart.nodes.camera",
+                    "params": {"source": source, "pacing": "lockstep", "fps": 25.0, **(camera or {})},
+                },
+                "silhouette": {"run": "counterpart.nodes.silhouette", "params": silhouette, "policy": "reliable"},
+                "frames": {
+                    "run": "tests.topic_sink",
+                    "params": {"topic": "frame", "path": str(tmp_path / "frames.jsonl")},
+                    "policy": "reliable",
+                },
+                "out": {
+                    "run": "tests.topic_sink",
+                    "params": {"topic": "silhouettes", "path": str(tmp_path / "sil.jsonl")},
+                    "policy": "reliable",
+                },
+            }
+        },
+    )
 
 
 def records(path: Path) -> list[dict[str, Any]]:
@@ -99,18 +114,20 @@ def test_lockstep_one_silhouettes_per_frame_people_match_truth(tmp_path: Path, s
                 truth_c = np.argwhere(seq.person_masks[k, pid])[:, ::-1].mean(0)
                 assert np.abs(np.array(p["centroid"]) - truth_c).max() <= 1, f"frame {k} person {pid}"
                 assert p["area"] == pytest.approx(seq.person_masks[k, pid].sum(), rel=0.05)
-                assert [abs(a - b) <= 2 for a, b in zip(p["bbox"], (x, y, w, h))] == [True] * 4, f"frame {k} person {pid}"
+                assert [abs(a - b) <= 2 for a, b in zip(p["bbox"], (x, y, w, h))] == [True] * 4, (
+                    f"frame {k} person {pid}"
+                )
                 unmerged += 1
     assert unmerged >= 40
 
 
 def test_mono8_frames_without_shadows_and_thinned_mask(tmp_path: Path) -> None:
     # grey frames: darker people and shadows look alike, so this scene has no cast shadows
-    seq = two_person_sequence(n_frames=N - EMPTY_FRAMES, size=(120, 160), empty_frames=EMPTY_FRAMES,
-                              shadow_factor=1.0)
+    seq = two_person_sequence(n_frames=N - EMPTY_FRAMES, size=(120, 160), empty_frames=EMPTY_FRAMES, shadow_factor=1.0)
     source = write_folder(tmp_path / "frames_in", seq)
-    code, text = run_launch(graph(tmp_path, source, {"train_frames": TRAIN, "mask_every": 4},
-                                  camera={"gray": True}), timeout=60)
+    code, text = run_launch(
+        graph(tmp_path, source, {"train_frames": TRAIN, "mask_every": 4}, camera={"gray": True}), timeout=60
+    )
     assert code == 0, text
     frames, sils = records(tmp_path / "frames.jsonl"), records(tmp_path / "sil.jsonl")
     assert frames[0]["encoding"] == "mono8" and frames[0]["image"]["shape"] == [120, 160]
@@ -119,7 +136,7 @@ def test_mono8_frames_without_shadows_and_thinned_mask(tmp_path: Path) -> None:
     # the mask only on every 4th seq; an empty array otherwise
     assert [r["seq"] for r in sils if r["labels"] != []] == list(range(0, N, 4))
     # the two walkers, before they meet; the left one (dark red, high contrast in grey) within 2 px
-    for r in sils[EMPTY_FRAMES:EMPTY_FRAMES + 10]:
+    for r in sils[EMPTY_FRAMES : EMPTY_FRAMES + 10]:
         k = r["seq"]
         assert [(p["id"], p["side"]) for p in r["people"]] == [(0, "left"), (1, "right")], f"frame {k}"
         x, y, w, h = truth_box(seq.person_masks[k, 0])
@@ -142,8 +159,16 @@ def test_unknown_backend_refused_before_start_naming_it(tmp_path: Path, scene) -
 def test_example_launch_file_runs_on_a_given_mjpg_video(tmp_path: Path, scene) -> None:
     _, seq = scene
     clip = write_clip(tmp_path / "scene.avi", seq)
-    code, text = run_launch(REPO / "launch" / "silhouette_file.yaml", "--set", f"camera.source={clip}",
-                            "--set", "camera.pacing=lockstep", "--set", "silhouette.train_frames=15", timeout=60)
+    code, text = run_launch(
+        REPO / "launch" / "silhouette_file.yaml",
+        "--set",
+        f"camera.source={clip}",
+        "--set",
+        "camera.pacing=lockstep",
+        "--set",
+        "silhouette.train_frames=15",
+        timeout=60,
+    )
     assert code == 0, text
     assert f"published {N} frames" in text and f"people found in {N - EMPTY_FRAMES} of {N} frames" in text
     assert "silhouette exited with 0" in text

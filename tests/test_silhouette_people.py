@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.silhouette.background import (
     BACKGROUND,
     FOREGROUND,
@@ -116,7 +115,8 @@ def test_fit_rejects_an_exclusion_of_the_wrong_shape_or_of_everything(standing):
 def test_person_standing_through_training_is_found_whole_by_the_extractor(standing):
     """The node's start on people in view: fit on frames where someone stands still, then the
     same person must be one region covering them, from the first frame on, and no ghost when they
-    walk away."""
+    walk away.
+    """
     ys, xs = np.nonzero(person_mask(50.0))
     box = (xs.min() - 6, ys.min() - 6, xs.max() - xs.min() + 12, ys.max() - ys.min() + 12)
     ex = SilhouetteExtractor(min_area=100, backend_params={"train_frames": 30, "detector": BoxDetector([box])})
@@ -138,7 +138,8 @@ def test_person_standing_through_training_is_found_whole_by_the_extractor(standi
 
 def test_a_detection_on_the_still_room_is_not_taken_for_a_person():
     """A weak detection where nothing moves (clutter, a parked car) is dropped: the fit is the
-    plain robust one and nothing is filled in."""
+    plain robust one and nothing is filled in.
+    """
     rng = np.random.default_rng(4)
     room = np.stack([render(rng) for _ in range(20)])
     model = HorprasertBackground()
@@ -149,11 +150,13 @@ def test_a_detection_on_the_still_room_is_not_taken_for_a_person():
 
 def test_far_brighter_than_the_room_is_foreground_not_highlight():
     """A white shirt on a grey floor has the floor's chromaticity; only a modest brightening is a
-    highlight (``max_highlight_brightness``)."""
+    highlight (``max_highlight_brightness``).
+    """
     rng = np.random.default_rng(5)
     grey = np.full((40, 40, 3), 100.0, np.float32)
-    frames = np.stack([np.clip(np.rint(grey + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8)
-                       for _ in range(20)])
+    frames = np.stack(
+        [np.clip(np.rint(grey + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8) for _ in range(20)]
+    )
     model = HorprasertBackground().fit(frames)
     brighter = np.clip(np.rint(grey * 1.2 + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8)
     white = np.clip(np.rint(grey * 1.8 + rng.normal(0, 2.0, grey.shape)), 0, 255).astype(np.uint8)
@@ -191,7 +194,8 @@ def test_hog_detector_finds_both_standing_people_on_real_footage(ut_clip):
 
 def test_real_people_standing_from_the_first_frame_are_found_whole(ut_clip):
     """Both people of a real clip, still in the training frames: one region each, on their side,
-    holding their reference keypoints, where the plain robust fit finds nobody."""
+    holding their reference keypoints, where the plain robust fit finds nobody.
+    """
     frames, kp, vis = ut_clip
     ex = SilhouetteExtractor(backend_params={"train_frames": 30})
     ex.fit_background(list(frames[:30]), robust=True)

@@ -6,10 +6,9 @@ import os
 
 import numpy as np
 import pytest
-
+from counterpart.body.spline import evaluate_closed_bspline
 from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
 from counterpart.nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_video
-from counterpart.body.spline import evaluate_closed_bspline
 from counterpart.nodes.silhouette.synthetic import two_person_sequence
 
 from tests.shared_data import VTEST
@@ -118,8 +117,22 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
         writer.write(frame)
     writer.release()
     out = tmp_path / "people.npz"
-    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "silhouettes", str(video), "--out", str(out),
-                        "--train-frames", "20"], capture_output=True, text=True, timeout=120)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "silhouettes",
+            str(video),
+            "--out",
+            str(out),
+            "--train-frames",
+            "20",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     n = len(handshake.frames)
@@ -127,9 +140,23 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
     d = np.load(out)
     assert bool(d["complete"]) and int(d["n_frames"]) == n
     per_frame = np.bincount(d["frame"], minlength=n)
-    assert (per_frame[:20] == 0).all() and np.mean(per_frame[20:] == 2) > 0.9   # the empty room, then two
-    r = subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "silhouettes", str(video), "--out", str(out),
-                        "--train-frames", "0"], capture_output=True, text=True, timeout=60)
+    assert (per_frame[:20] == 0).all() and np.mean(per_frame[20:] == 2) > 0.9  # the empty room, then two
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "counterpart.bus.cli",
+            "silhouettes",
+            str(video),
+            "--out",
+            str(out),
+            "--train-frames",
+            "0",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert r.returncode == 2 and "--train-frames must be at least 1" in r.stderr
 
     def stop_after_30(done: int, declared: int) -> None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask
 
 H, W = 200, 320
@@ -13,7 +12,8 @@ H, W = 200, 320
 
 def draw_person(m: np.ndarray, cx: float, height: float, arm: int = 0) -> None:
     """A standing figure with its feet at y = 190: head, body ellipse and an arm reaching out
-    horizontally by ``arm`` pixels (sign = direction)."""
+    horizontally by ``arm`` pixels (sign = direction).
+    """
     cx = int(round(cx))
     top = int(190 - height)
     head_r = max(4, int(height * 0.09))
@@ -34,7 +34,8 @@ def scene(xa: float, xb: float, arm: int = 0, ha: float = 150, hb: float = 120) 
 
 def handshake_sequence() -> list[tuple[np.ndarray, float, float]]:
     """A walks in from the left, B from the right, they shake hands (regions merge for many
-    frames, bodies even overlapping a little), then they step back apart."""
+    frames, bodies even overlapping a little), then they step back apart.
+    """
     frames = []
     xs_a = np.concatenate([np.linspace(50, 140, 20), np.full(10, 140.0), np.linspace(140, 60, 15)])
     xs_b = np.concatenate([np.linspace(270, 175, 20), np.full(10, 175.0), np.linspace(175, 260, 15)])
@@ -110,7 +111,8 @@ def test_merged_region_is_split_along_each_persons_own_shape():
 
 def test_person_passing_behind_another_keeps_both_ids():
     """A short person walks behind a tall one (their silhouette disappears inside his for
-    several frames) and comes out on the other side: no exchange of identities."""
+    several frames) and comes out on the other side: no exchange of identities.
+    """
     tracker = PersonTracker(min_area=100)
     inside = 0
     for k in range(44):
@@ -182,7 +184,8 @@ def test_person_record_and_errors():
 def test_newcomer_emerging_beside_a_tracked_person_gets_their_own_id():
     """Someone who stood still through the background's training frames is not foreground; when
     they start to move they emerge already touching the person beside them, a few columns a
-    frame. They become a new person and the tracked one keeps id and position (no swap)."""
+    frame. They become a new person and the tracked one keeps id and position (no swap).
+    """
     tracker = PersonTracker(min_area=100)
     b_x, a_x = 200.0, 165.0
     split_at = None
@@ -253,7 +256,8 @@ def test_a_stale_track_does_not_take_a_person_who_then_takes_a_stray_fragment():
 
 def test_a_wide_region_is_not_a_new_person_an_upright_one_is():
     """A car or a barrier (wider than tall) never starts a person; a standing figure does, and
-    one who stretches an arm out later stays who they are."""
+    one who stretches an arm out later stays who they are.
+    """
     tr = PersonTracker(min_area=50)
     m = np.zeros((H, W), np.uint8)
     cv2.rectangle(m, (20, 150), (140, 190), 1, -1)  # a car: 121 x 41 pixels

@@ -1,11 +1,11 @@
 """The silhouette algorithm on simulator sequences: ghosts from a people-in-view start, still people,
-identities through a handshake and a push (ground truth from sim.render)."""
+identities through a handshake and a push (ground truth from sim.render).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.silhouette.background import FOREGROUND, HorprasertBackground
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.sim.stream import open_stream
@@ -15,7 +15,8 @@ TRAIN = 30
 
 def render(scenario: str, seed: int, empty: int = 0, frames: int | None = None):
     """(frames (N, H, W, 3) uint8, person masks (N, 2, H, W) bool, shadows (N, H, W) bool); with
-    ``empty`` frames of the empty room (lit at the scene times just before frame 0) first."""
+    ``empty`` frames of the empty room (lit at the scene times just before frame 0) first.
+    """
     st = open_stream(scenario, seed=seed, frames=frames)
     r = st.renderer
     imgs, masks, shadows = [], [], []
@@ -36,7 +37,8 @@ def render(scenario: str, seed: int, empty: int = 0, frames: int | None = None):
 @pytest.fixture(scope="module")
 def handshake_busy():
     """Handshake, seed 0, people in view from frame 0: B stands in the training frames and walks
-    off later, leaving a ghost in the median start; later both stand still shaking hands."""
+    off later, leaving a ghost in the median start; later both stand still shaking hands.
+    """
     return render("handshake", 0, frames=200)
 
 
@@ -57,7 +59,8 @@ def test_ghost_of_a_people_in_view_start_is_absorbed_and_still_people_are_not(ha
     frames, masks, _ = handshake_busy
     with_absorb = precision_recall(SilhouetteExtractor(backend_params={"train_frames": TRAIN}), frames, masks)
     without = precision_recall(
-        SilhouetteExtractor(backend_params={"train_frames": TRAIN, "absorb_frames": 0}), frames, masks)
+        SilhouetteExtractor(backend_params={"train_frames": TRAIN, "absorb_frames": 0}), frames, masks
+    )
     # B's ghost appears when B walks off (about frame 40) and stays without absorption.
     assert np.nanmean(without[60:90, 0]) < 0.7
     assert np.nanmean(without[150:, 0]) < 0.85
@@ -84,7 +87,8 @@ def test_absorption_is_off_after_a_fit_on_empty_frames():
 
 def test_a_revealed_patch_of_room_is_absorbed_a_distinct_still_object_is_not():
     """Constructed images: a smooth room; in training a grey-blue block covers one patch, which is
-    later uncovered; after training a red block appears elsewhere and stays put."""
+    later uncovered; after training a red block appears elsewhere and stays put.
+    """
     yy, xx = np.mgrid[0:80, 0:120]
     room = np.stack([120 + 30 * np.sin(xx / 17.0), 140 + 20 * np.cos(yy / 13.0), 150 + 0 * xx], -1)
     rng = np.random.default_rng(1)
@@ -110,7 +114,8 @@ def test_a_revealed_patch_of_room_is_absorbed_a_distinct_still_object_is_not():
 @pytest.mark.parametrize("scenario", ["handshake", "push"])
 def test_identities_through_contact_in_the_simulator(scenario):
     """Empty room first, then the scene: each published id stays with the same true person (A or B)
-    through the contact, where the regions merge and are split."""
+    through the contact, where the regions merge and are split.
+    """
     frames, masks, _ = render(scenario, 1, empty=TRAIN)
     ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN, "robust": False})
     who: dict[int, set[int]] = {}
@@ -134,7 +139,8 @@ def test_identities_through_contact_in_the_simulator(scenario):
 
 def test_model_behind_a_long_still_person_follows_the_lighting_drift():
     """Constructed images: the room brightens by 12% while a block stands still over one patch for
-    150 frames; when it leaves, the uncovered patch is background, not a speckled highlight."""
+    150 frames; when it leaves, the uncovered patch is background, not a speckled highlight.
+    """
     yy, xx = np.mgrid[0:60, 0:80]
     room = np.stack([100 + 30 * np.sin(xx / 11.0), 120 + 20 * np.cos(yy / 7.0), 140 + 0 * xx], -1)
     rng = np.random.default_rng(2)
@@ -162,7 +168,8 @@ def test_model_behind_a_long_still_person_follows_the_lighting_drift():
 def test_people_in_view_during_training_come_out_one_region_each(handshake_busy):
     """The demo's start (train_frames 20, people in view): someone who stood still while the
     background was learnt first appears in parts (head and shoulders, legs); each person must
-    still be one id, never three or four people for two."""
+    still be one id, never three or four people for two.
+    """
     frames, masks, _ = handshake_busy
     ex = SilhouetteExtractor(backend_params={"train_frames": 20})
     counts = []

@@ -1,5 +1,7 @@
 """counterpart.sim.render / sim.stream / sim.cli: pixels agree with the ground truth, shadows, determinism,
-the people are not the cone model, the camera-node URI, the CLI's files, the CMU pair."""
+the people are not the cone model, the camera-node URI, the CLI's files, the CMU pair.
+"""
+
 from __future__ import annotations
 
 import argparse
@@ -8,7 +10,6 @@ import os
 import cv2
 import numpy as np
 import pytest
-
 from counterpart.body.raster import rasterise_silhouettes
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.sim import cli
@@ -76,8 +77,10 @@ def test_people_are_not_the_cone_model(hs) -> None:
     for i in _frames(hs):
         _, tr = hs.render_with_truth(i, noise=False)
         ours = tr.masks.any(0)
-        cones = (rasterise_silhouettes(sc.poses_a[i:i + 1], sc.dims_a, hs.camera)[0]
-                 | rasterise_silhouettes(sc.poses_b[i:i + 1], sc.dims_b, hs.camera)[0])
+        cones = (
+            rasterise_silhouettes(sc.poses_a[i : i + 1], sc.dims_a, hs.camera)[0]
+            | rasterise_silhouettes(sc.poses_b[i : i + 1], sc.dims_b, hs.camera)[0]
+        )
         ious.append((ours & cones).sum() / (ours | cones).sum())
         # yet the same people in the same place: projected joints fall in (or next to) the masks
         uv = np.round(tr.joints2d.reshape(-1, 2)).astype(int)
@@ -88,6 +91,7 @@ def test_people_are_not_the_cone_model(hs) -> None:
 
 def test_camera_node_opens_the_simulator() -> None:
     from counterpart.nodes.camera.sources import SourceError, make_source
+
     src = make_source("sim:push?seed=3&emotion=angry&strength=0.7&frames=12", width=160, height=120)
     src.open()
     n = 0
@@ -113,8 +117,22 @@ def _run_cli(out: str, *extra: str) -> int:
 
 
 def test_cli_writes_all_files_deterministically(tmp_path) -> None:
-    args = ("--scenario", "high_five", "--seed", "2", "--frames", "20", "--width", "160",
-            "--height", "120", "--emotion", "happy", "--strength", "0.5")
+    args = (
+        "--scenario",
+        "high_five",
+        "--seed",
+        "2",
+        "--frames",
+        "20",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--emotion",
+        "happy",
+        "--strength",
+        "0.5",
+    )
     assert _run_cli(str(tmp_path / "a"), *args) == 0
     assert _run_cli(str(tmp_path / "b"), *args) == 0
     names = ("video.avi", "truth.npz", "trajectory.npz", "contact_sheet.png")
@@ -133,7 +151,7 @@ def test_cli_writes_all_files_deterministically(tmp_path) -> None:
     assert z["masks"].shape == (20, 2, 120, 160) and z["joints2d"].shape == (20, 2, 14, 2)
     assert z["signals"].shape == (20, 2, 5) and str(z["label"]) == "high_five"
     s = open_stream("high_five", seed=2, width=160, height=120, emotion="happy", strength=0.5)
-    if str(z["codec"]) == "FFV1":   # lossless: the video holds exactly the rendered frames
+    if str(z["codec"]) == "FFV1":  # lossless: the video holds exactly the rendered frames
         assert np.array_equal(frames[7], s.render(7)[0])
     tr = TwoPersonTrajectory.load(tmp_path / "a" / "trajectory.npz")
     assert tr.n_frames == 20 and tr.signal_names[0] == "nod"
@@ -145,7 +163,6 @@ def test_cli_writes_all_files_deterministically(tmp_path) -> None:
 def test_cmu_pair_renders(tmp_path) -> None:
     if not os.path.exists(os.path.join(CMU, "18_01.bvh")):
         pytest.skip(f"CMU BVH files not found in {CMU} (shared development data)")
-    assert _run_cli(str(tmp_path), "--scenario", "cmu", "--frames", "8", "--width", "160",
-                    "--height", "120") == 0
+    assert _run_cli(str(tmp_path), "--scenario", "cmu", "--frames", "8", "--width", "160", "--height", "120") == 0
     z = np.load(tmp_path / "truth.npz")
     assert z["masks"].shape[0] == 8 and z["masks"][:, 0].any() and z["masks"][:, 1].any()

@@ -1,11 +1,11 @@
 """counterpart.sim.scenarios: physics, contacts, determinism, emotion, planted listener rules, CMU pairs."""
+
 from __future__ import annotations
 
 import os
 
 import numpy as np
 import pytest
-
 from counterpart.body.kinematics import forward_kinematics, lowest_point
 from counterpart.body.pose import DOF_INDEX, within_limits
 from counterpart.body.skeleton import JOINT_INDEX as J
@@ -64,12 +64,12 @@ def test_push_recoils_the_pushed_person_and_pull_draws_in() -> None:
         sc = make_scenario("push", seed=seed, emotion="neutral")
         X = sc.joints()
         pushed = 0 if sc.meta["pushed"] == "a" else 1
-        away = -1.0 if pushed == 0 else 1.0      # A recoils to -X, B to +X
+        away = -1.0 if pushed == 0 else 1.0  # A recoils to -X, B to +X
         c0 = int(np.flatnonzero(sc.phase == 1)[0])
         x = _pelvis(X[:, pushed])[:, 0] * away
         assert x[-1] - x[c0] > 0.25, f"seed {seed}: pushed person moved back {x[-1] - x[c0]:.2f} m"
         lean = sc.poses_a if pushed == 0 else sc.poses_b
-        assert lean[sc.phase >= 1, DOF_INDEX["torso_flex"]].min() < -0.15   # leans back
+        assert lean[sc.phase >= 1, DOF_INDEX["torso_flex"]].min() < -0.15  # leans back
         pusher = 1 - pushed
         chest = 0.5 * (X[:, pushed, J["neck"]] + _pelvis(X[:, pushed]))
         hands = X[:, pusher][:, [J["l_wrist"], J["r_wrist"]]]
@@ -131,8 +131,7 @@ def _conditional_rate(sessions: list, antecedent: str, consequent: str, offset: 
 
 @pytest.mark.parametrize("interested", [True, False])
 def test_conversation_planted_rules_hold(interested: bool) -> None:
-    sessions = [make_scenario("conversation", seed=s, interested=interested, duration=120.0)
-                for s in range(6)]
+    sessions = [make_scenario("conversation", seed=s, interested=interested, duration=120.0) for s in range(6)]
     assert all(s.meta["interested"] is interested for s in sessions)
     for rule in PLANTED_RULES:
         off = int(round(rule["offset_s"] * 25))
@@ -179,6 +178,7 @@ def test_cmu_pair_as_scenario() -> None:
     if not (os.path.exists(a) and os.path.exists(b)):
         pytest.skip(f"CMU BVH files not found in {CMU} (shared development data)")
     from counterpart.sim.capture import scenario_from_bvh
+
     sc = scenario_from_bvh(a, b, fps=25)
     X = sc.joints()
     k = int(np.flatnonzero(sc.phase == 1)[0])

@@ -1,9 +1,9 @@
 """Tracker algorithms on silhouettes rendered from known poses (body.raster)."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
@@ -20,7 +20,7 @@ CAM = default_camera()
 
 def _pose() -> np.ndarray:
     P = neutral_pose(DEFAULT_DIMS, x=-0.5, yaw=0.4)
-    P[12], P[15], P[20], P[23] = 1.2, 0.8, 0.4, 0.6     # arm forward, elbow bent, hip and knee flexed
+    P[12], P[15], P[20], P[23] = 1.2, 0.8, 0.4, 0.6  # arm forward, elbow bent, hip and knee flexed
     return P
 
 
@@ -28,7 +28,7 @@ def _render(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     mask = rasterise_silhouettes(P[None], DEFAULT_DIMS, CAM)[0]
     edges = render_edge_maps(P[None], DEFAULT_DIMS, CAM, mode="cones")[0]
     image = np.where(mask, 90, 200).astype(np.uint8)
-    image[edges] = 20                                     # shading seams where cones overlap
+    image[edges] = 20  # shading seams where cones overlap
     return image, mask
 
 
@@ -41,7 +41,7 @@ def test_coverage_cost_matches_direct_capsule_test() -> None:
     c, rho, _ = L.project(P)
     q = obs.cover_uv.astype(np.float64)
     c0, a = c[:, :, 0, None].astype(np.float64), (c[:, :, 1] - c[:, :, 0])[:, :, None].astype(np.float64)
-    d = q[None, None] - c0                                                  # (N, S, M, 2)
+    d = q[None, None] - c0  # (N, S, M, 2)
     s = np.clip((d * a).sum(-1) / np.maximum((a * a).sum(-1), 1e-6), 0, 1)
     dist = np.linalg.norm(d - s[..., None] * a, axis=-1)
     r = rho[..., :1] + s * (rho[..., 1:] - rho[..., :1]) + 1.0
@@ -65,7 +65,7 @@ def test_true_pose_scores_higher_than_perturbed_poses() -> None:
     rng = np.random.default_rng(3)
     for scale in (0.05, 0.15, 0.4):
         noise = rng.normal(size=(64, DOF)) * scale
-        noise[:, :3] *= 0.3                                # metres
+        noise[:, :3] *= 0.3  # metres
         perturbed = np.clip(P + noise, LOWER, UPPER)
         ll = L(np.vstack([P[None], perturbed]), obs)
         assert ll[0] > ll[1:].max(), f"scale {scale}: true {ll[0]:.3f} vs best perturbed {ll[1:].max():.3f}"
@@ -84,7 +84,7 @@ def test_beta_hits_survival_rate() -> None:
     for alpha in (0.2, 0.5, 0.8):
         beta = choose_beta(ll, alpha)
         assert abs(survival_rate(ll, beta) - alpha) < 1e-3
-    assert choose_beta(np.zeros(10), 0.5) > 0                 # flat likelihood: any beta, no crash
+    assert choose_beta(np.zeros(10), 0.5) > 0  # flat likelihood: any beta, no crash
     with pytest.raises(ValueError, match="survival"):
         choose_beta(ll, 1.5)
 
@@ -100,7 +100,7 @@ def test_annealing_schedule_and_limits() -> None:
     apf.initialise(start)
     est = apf.step(lambda X: L(X, obs))
     np.testing.assert_allclose(est.survival, 0.5, atol=0.02)
-    assert est.betas[-1] > est.betas[0]                   # the density sharpens over the layers
+    assert est.betas[-1] > est.betas[0]  # the density sharpens over the layers
     assert est.n_evals == 6 * 128
     inside = (apf.particles >= LOWER) & (apf.particles <= UPPER)
     inside[:, YAW] = True
@@ -142,9 +142,9 @@ def test_a_second_view_sees_the_depth_one_camera_barely_does() -> None:
     ray = P[:3] - CAM.centre
     ray[1] = 0.0
     ray /= np.linalg.norm(ray)
-    X = np.vstack([P] + [np.r_[P[:3] + d * ray, P[3:]] for d in (-0.3, -0.2, 0.2, 0.3)])   # along the view
+    X = np.vstack([P] + [np.r_[P[:3] + d * ray, P[3:]] for d in (-0.3, -0.2, 0.2, 0.3)])  # along the view
     mono = MultiViewLikelihood([CAM])(X, obs[:1])
-    np.testing.assert_array_equal(mono, ConeLikelihood(CAM)(X, obs[0]))   # one view: the plain likelihood
+    np.testing.assert_array_equal(mono, ConeLikelihood(CAM)(X, obs[0]))  # one view: the plain likelihood
     both = MultiViewLikelihood([CAM, SIDE_CAM])(X, obs)
     margin_mono, margin_both = mono[0] - mono[1:], both[0] - both[1:]
     assert (margin_mono > 0).all()
@@ -163,8 +163,9 @@ def test_two_cameras_track_the_body_closer_than_one() -> None:
         side = rasterise_silhouettes(P, sc.dims_a, SIDE_CAM)
         truth = forward_kinematics(P, sc.dims_a)
         one = track_sequence([None] * len(P), front, CAM, n_layers=5, n_particles=128, seed=0)
-        two = track_sequence([None] * len(P), [[a, b] for a, b in zip(front, side)], [CAM, SIDE_CAM],
-                             n_layers=5, n_particles=128, seed=0)
+        two = track_sequence(
+            [None] * len(P), [[a, b] for a, b in zip(front, side)], [CAM, SIDE_CAM], n_layers=5, n_particles=128, seed=0
+        )
         err[1].append(np.linalg.norm(one["joints"] - truth, axis=-1).mean())
         err[2].append(np.linalg.norm(two["joints"] - truth, axis=-1).mean())
     one, two = np.mean(err[1]), np.mean(err[2])
@@ -191,7 +192,8 @@ def test_several_cameras_need_one_mask_per_camera() -> None:
 
 def test_ess_is_that_of_the_final_weighted_set_not_fixed_by_the_annealing() -> None:
     """The annealed weights have ESS = survival x N by construction; the published ESS weighs the
-    final set by the un-annealed density: N for a flat one, about 1 for one peaked on a particle."""
+    final set by the un-annealed density: N for a flat one, about 1 for one peaked on a particle.
+    """
     rng = np.random.default_rng(0)
     start = neutral_pose()[None] + rng.normal(scale=0.05, size=(64, DOF))
     flat = AnnealedParticleFilter(n_layers=2, n_particles=64, seed=0)
@@ -201,5 +203,5 @@ def test_ess_is_that_of_the_final_weighted_set_not_fixed_by_the_annealing() -> N
     peaked.initialise(start)
     target = neutral_pose()
     est = peaked.step(lambda X: -1e4 * np.sum((X - target) ** 2, axis=1))
-    assert 1.0 <= est.ess < 3.0                                 # one particle holds nearly all the mass
+    assert 1.0 <= est.ess < 3.0  # one particle holds nearly all the mass
     assert est.survival[-1] * 64 == pytest.approx(32.0, rel=0.05)  # while annealing kept half alive

@@ -1,4 +1,5 @@
 """The tracker node in launched graphs: simulator frames + silhouettes -> one Pose3D per frame."""
+
 from __future__ import annotations
 
 import time
@@ -6,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from counterpart.bus import Node, Output, Param
 from counterpart.messages import Frame, PersonShape, Silhouettes
+
 from tests.launching import read_jsonl, run_launch, write_launch
 
 
@@ -16,15 +17,19 @@ class SimPeople(Node):
     """Test source: simulator frames with their ground-truth masks as Silhouettes (labels A=1, B=2).
 
     ``hide_from``: from this frame on, the silhouettes hold nobody (a person-less view);
-    ``merged``: every person is flagged as merged with the other."""
+    ``merged``: every person is flagged as merged with the other.
+    """
 
     outputs = {"frame": Output(Frame), "silhouettes": Output(Silhouettes)}
-    params = {"frames": Param(int, 6, "frames to publish", min=1),
-              "hide_from": Param(int, -1, "publish no people from this frame on (-1: never)"),
-              "merged": Param(bool, False, "flag the people as merged")}
+    params = {
+        "frames": Param(int, 6, "frames to publish", min=1),
+        "hide_from": Param(int, -1, "publish no people from this frame on (-1: never)"),
+        "merged": Param(bool, False, "flag the people as merged"),
+    }
 
     def generate(self) -> None:
         from counterpart.sim.stream import open_stream
+
         stream = open_stream("handshake", seed=2, frames=self.p["frames"])
         for i in range(stream.n_frames):
             image, truth = stream.render_with_truth(i)
@@ -37,22 +42,39 @@ class SimPeople(Node):
                     labels[m] = pid + 1
                     ys, xs = np.nonzero(m)
                     bbox = (int(xs.min()), int(ys.min()), int(np.ptp(xs) + 1), int(np.ptp(ys) + 1))
-                    people.append(PersonShape(id=pid, side=side, bbox=bbox, height=float(bbox[3]),
-                                              area=int(m.sum()), merged=self.p["merged"]))
+                    people.append(
+                        PersonShape(
+                            id=pid,
+                            side=side,
+                            bbox=bbox,
+                            height=float(bbox[3]),
+                            area=int(m.sum()),
+                            merged=self.p["merged"],
+                        )
+                    )
             self.publish("frame", Frame(stamp=stamp, seq=i, image=image))
-            self.publish("silhouettes", Silhouettes(stamp=stamp, seq=i, people=people, labels=labels,
-                                                    width=image.shape[1], height=image.shape[0]))
+            self.publish(
+                "silhouettes",
+                Silhouettes(
+                    stamp=stamp, seq=i, people=people, labels=labels, width=image.shape[1], height=image.shape[0]
+                ),
+            )
 
 
 def _graph(tmp_path: Path, source: dict, tracker: dict) -> tuple[Path, Path]:
     out = tmp_path / "pose.jsonl"
-    doc = {"nodes": {
-        "source": {"run": "tests.test_tracker_node:SimPeople", "params": source},
-        "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
-        "tracker": {"run": "counterpart.nodes.tracker", "policy": "reliable",
-                    "params": {"layers": 3, "particles": 48, "prior": "none", **tracker}},
-        "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},
-    }}
+    doc = {
+        "nodes": {
+            "source": {"run": "tests.test_tracker_node:SimPeople", "params": source},
+            "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
+            "tracker": {
+                "run": "counterpart.nodes.tracker",
+                "policy": "reliable",
+                "params": {"layers": 3, "particles": 48, "prior": "none", **tracker},
+            },
+            "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},
+        }
+    }
     return write_launch(tmp_path / "graph.yaml", doc), out
 
 
@@ -86,11 +108,16 @@ def test_nobody_in_view_and_merged_people(tmp_path: Path) -> None:
     assert "merged" in log
 
 
-@pytest.mark.parametrize("camera, needle", [
-    ({"eye": [0, 1.6, 4], "target": [0, 0.9, 0], "fov_deg": 55, "width": 320, "height": 240, "zoom": 2},
-     "unknown key(s) ['zoom']"),
-    ({"fx": 300}, "missing key(s)"),
-])
+@pytest.mark.parametrize(
+    "camera, needle",
+    [
+        (
+            {"eye": [0, 1.6, 4], "target": [0, 0.9, 0], "fov_deg": 55, "width": 320, "height": 240, "zoom": 2},
+            "unknown key(s) ['zoom']",
+        ),
+        ({"fx": 300}, "missing key(s)"),
+    ],
+)
 def test_bad_calibration_is_refused_by_name(tmp_path: Path, camera: dict, needle: str) -> None:
     f, out = _graph(tmp_path, {"frames": 2}, {"camera": camera})
     rc, log = run_launch(f, timeout=60)

@@ -1,4 +1,5 @@
 """``counterpart track``: offline 3D tracking of a real video file, as a real process."""
+
 from __future__ import annotations
 
 import json
@@ -8,25 +9,25 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from counterpart.nodes.tracker.offline import track_video
 from counterpart.nodes.tracker.prior import MotionPrior, train_prior
 from counterpart.sim.cli import open_writer
 from counterpart.sim.stream import open_stream
 
-EMPTY = 20          # frames of the empty room the background model is fitted on
+EMPTY = 20  # frames of the empty room the background model is fitted on
 SCENE = 40
 
 
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarray, Path]:
     """A video (the empty room, then a handshake), the people's true joints (SCENE, 2, 14, 3) and a
-    small motion prior trained on other handshakes."""
+    small motion prior trained on other handshakes.
+    """
     d = tmp_path_factory.mktemp("track")
     st = open_stream("handshake", seed=3, frames=SCENE)
     writer, _ = open_writer(str(d / "video.avi"), st.fps, st.size)
     rng = np.random.default_rng(0)
-    for _ in range(EMPTY):      # sensor noise as on the scene's frames, so the model learns a spread
+    for _ in range(EMPTY):  # sensor noise as on the scene's frames, so the model learns a spread
         writer.write(np.clip(st.background(0) + rng.normal(0, 2, (240, 320, 3)), 0, 255).astype(np.uint8))
     truth = []
     for i in range(st.n_frames):
@@ -39,23 +40,38 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, np.ndarra
 
 
 def _track(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "counterpart.bus.cli", "track", *args], capture_output=True, text=True,
-                          timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", "track", *args], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_track_follows_both_people_of_a_video(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
     video, truth, prior = recording
     out = tmp_path / "poses.npz"
-    r = _track(str(video), "--out", str(out), "--people", "left", "right", "--train-frames", str(EMPTY),
-               "--prior", str(prior), "--layers", "5", "--particles", "128")
+    r = _track(
+        str(video),
+        "--out",
+        str(out),
+        "--people",
+        "left",
+        "right",
+        "--train-frames",
+        str(EMPTY),
+        "--prior",
+        str(prior),
+        "--layers",
+        "5",
+        "--particles",
+        "128",
+    )
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     assert summary["n_frames"] == EMPTY + SCENE and summary["tracked"] == {"left": SCENE, "right": SCENE}
     d = np.load(out)
     assert list(d["sides"]) == ["left", "right"] and bool(d["complete"])
     assert d["joints"].shape == (EMPTY + SCENE, 2, 14, 3) and d["poses"].shape == (EMPTY + SCENE, 2, 28)
-    assert np.isnan(d["joints"][:EMPTY]).all()                      # the empty room: nobody tracked
-    assert (d["ids"][EMPTY:, 0] != d["ids"][EMPTY:, 1]).all()       # two people, never the same region
+    assert np.isnan(d["joints"][:EMPTY]).all()  # the empty room: nobody tracked
+    assert (d["ids"][EMPTY:, 0] != d["ids"][EMPTY:, 1]).all()  # two people, never the same region
     err = np.linalg.norm(d["joints"][EMPTY:] - truth, axis=-1).mean(axis=(0, 2))
     assert (err < 0.1).all(), f"mean joint error per person {err} m"
     assert json.loads(str(d["camera"]))["width"] == 320
@@ -74,13 +90,14 @@ def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarr
     cam.write_text("eye: [0, 1.6, 4]\ntarget: [0, 0.9, 0]\nfov: 55\nwidth: 320\nheight: 240\n")
     r = _track(str(video), "--out", str(out), "--camera", str(cam), "--prior", "none")
     assert r.returncode == 2 and "fov" in r.stderr and "cam.yaml" in r.stderr
-    cam.write_text(json.dumps({"eye": [0, 1.6, 4], "target": [0, 0.9, 0], "fov_deg": 55, "width": 640,
-                               "height": 360}))  # another aspect ratio than the video's 4:3
+    cam.write_text(
+        json.dumps({"eye": [0, 1.6, 4], "target": [0, 0.9, 0], "fov_deg": 55, "width": 640, "height": 360})
+    )  # another aspect ratio than the video's 4:3
     r = _track(str(video), "--out", str(out), "--camera", str(cam), "--prior", "none", "--train-frames", "5")
     assert r.returncode == 2 and "calibrated for 640x360" in r.stderr
     r = _track(str(video), "--out", str(out), "--people", "left", "left", "--prior", "none")
     assert r.returncode == 2 and "distinct sides" in r.stderr
-    assert not out.exists()                                          # nothing half-written
+    assert not out.exists()  # nothing half-written
 
 
 def test_an_interrupted_run_keeps_the_frames_done(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
@@ -93,8 +110,15 @@ def test_an_interrupted_run_keeps_the_frames_done(recording: tuple[Path, np.ndar
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        track_video(video, out, prior=MotionPrior.load(str(prior)), layers=3, particles=64,
-                    train_frames=EMPTY, progress=stop_after_25)
+        track_video(
+            video,
+            out,
+            prior=MotionPrior.load(str(prior)),
+            layers=3,
+            particles=64,
+            train_frames=EMPTY,
+            progress=stop_after_25,
+        )
     d = np.load(out)
     assert int(d["n_frames"]) == 25 and not bool(d["complete"]) and d["joints"].shape == (25, 1, 14, 3)
     assert np.isfinite(d["joints"][EMPTY:25]).all()

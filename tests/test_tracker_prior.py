@@ -1,4 +1,5 @@
 """The tracker's learned motion prior: training, files, prediction, CLI."""
+
 from __future__ import annotations
 
 import argparse
@@ -7,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from counterpart.body.pose import DOF, LOWER, UPPER, YAW
 from counterpart.nodes.tracker import cli_learn
 from counterpart.nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
@@ -29,7 +29,7 @@ def test_prior_trains_with_95_percent_energy(prior: MotionPrior) -> None:
     rec = prior.from_latent(Y)
     A = X[:, 4:]
     kept = 1 - ((rec - A) ** 2).sum() / ((A - A.mean(0)) ** 2).sum()
-    assert kept > 0.85                                   # 95% of the training set's energy overall
+    assert kept > 0.85  # 95% of the training set's energy overall
     np.testing.assert_allclose(prior.transmat.sum(1), 1.0, atol=1e-6)
 
 

@@ -1,4 +1,5 @@
 """Publisher/Subscriber in one process over real ipc sockets: policies and end of stream."""
+
 from __future__ import annotations
 
 import tempfile
@@ -6,16 +7,17 @@ import time
 from pathlib import Path
 
 import zmq
-
 from counterpart.bus.endpoints import ipc_endpoints
 from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
 from counterpart.messages import EndOfStream
+
 from tests.graph_nodes import Number
 
 
 def _pump(sub: Subscriber, timeout: float = 5.0, until: int | None = None) -> list:
     """What a node loop does: poll the subscriber's sockets, receive, also while an end is pending;
-    until the end of stream (or ``until`` messages)."""
+    until the end of stream (or ``until`` messages).
+    """
     got, deadline = [], time.monotonic() + timeout
     while not sub.ended and time.monotonic() < deadline and (until is None or len(got) < until):
         if any(s.poll(20) for s in sub.sockets) or sub.pending:
@@ -55,8 +57,10 @@ def test_latest_subscriber_ends_and_the_publisher_sees_it_has_read_to_the_end() 
 def test_a_latched_topic_gives_its_last_message_to_a_latest_subscriber_that_joins_later() -> None:
     root = Path(tempfile.mkdtemp(dir="/tmp"))
     ctx = zmq.Context()
-    pubs = {latched: Publisher(ctx, f"t{latched:d}", ipc_endpoints(root, f"t{latched:d}"), latched=latched)
-            for latched in (True, False)}
+    pubs = {
+        latched: Publisher(ctx, f"t{latched:d}", ipc_endpoints(root, f"t{latched:d}"), latched=latched)
+        for latched in (True, False)
+    }
     for pub in pubs.values():
         pub.send(Number(seq=0, value=1.0))
         pub.send(Number(seq=1, value=2.0))  # sent while nobody listens

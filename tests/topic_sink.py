@@ -11,6 +11,7 @@ The input port is named after ``topic`` (so no remap is needed) and takes any me
 line is :func:`summarise` of the message plus ``"type"`` (schema id) and ``"received"`` (monotonic
 ns); at end of stream a last line ``{"event": "end", "count", "drops"}``.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -21,7 +22,6 @@ import time
 from typing import Any
 
 import numpy as np
-
 from counterpart.bus import Input, Node, Param
 from counterpart.messages import schema_id
 
@@ -35,16 +35,21 @@ def _number(v: float) -> float | None:
 
 def summarise(value: Any) -> Any:
     """A JSON-able form of a message: dataclass fields by name, small arrays as (nested) lists with
-    NaN/inf as null, larger ones as ``{"shape", "dtype", "sha1", "nonzero", "max"}``."""
+    NaN/inf as null, larger ones as ``{"shape", "dtype", "sha1", "nonzero", "max"}``.
+    """
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {f.name: summarise(getattr(value, f.name)) for f in dataclasses.fields(value)}
     if isinstance(value, np.ndarray):
         if value.size <= SMALL_ARRAY:
             flat = [_number(v) for v in value.ravel().tolist()]
             return np.array(flat, dtype=object).reshape(value.shape).tolist() if value.ndim else flat[0]
-        return {"shape": list(value.shape), "dtype": str(value.dtype),
-                "sha1": hashlib.sha1(np.ascontiguousarray(value).tobytes()).hexdigest(),
-                "nonzero": int(np.count_nonzero(value)), "max": _number(value.max().item())}
+        return {
+            "shape": list(value.shape),
+            "dtype": str(value.dtype),
+            "sha1": hashlib.sha1(np.ascontiguousarray(value).tobytes()).hexdigest(),
+            "nonzero": int(np.count_nonzero(value)),
+            "max": _number(value.max().item()),
+        }
     if isinstance(value, (list, tuple)):
         return [summarise(v) for v in value]
     if isinstance(value, dict):
@@ -60,8 +65,12 @@ class TopicSink(Node):
     """Appends one JSON line per message of ``topic`` to ``path``, then an end line."""
 
     params = {
-        "topic": Param(str, "", "the topic to record (also the input port's name)",
-                       check=lambda v: None if v else "must name a topic"),
+        "topic": Param(
+            str,
+            "",
+            "the topic to record (also the input port's name)",
+            check=lambda v: None if v else "must name a topic",
+        ),
         "path": Param(str, "", "output file (JSON lines)", check=lambda v: None if v else "must name a file"),
     }
 
@@ -81,8 +90,7 @@ class TopicSink(Node):
         self.count += 1
 
     def on_end(self) -> None:
-        self.f.write(json.dumps({"event": "end", "count": self.count,
-                                 "drops": self._in[self.p["topic"]].drops}) + "\n")
+        self.f.write(json.dumps({"event": "end", "count": self.count, "drops": self._in[self.p["topic"]].drops}) + "\n")
 
     def teardown(self) -> None:
         if getattr(self, "f", None) is not None:

@@ -5,4 +5,5 @@ The camera from the people in view, without the bus: ``estimate`` (focal length,
 height from heads and feet against a prior on human height, with scene lines), ``lines`` (scene
 line segments grouped by vanishing point), ``observe`` (head/foot points gathered over frames),
 ``smooth`` (the published camera following the estimates by bounded steps), ``offline``
-(``counterpart calibrate``)."""
+(``counterpart calibrate``).
+"""

@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.calibration --param file=camera.yaml``: run the calibration node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

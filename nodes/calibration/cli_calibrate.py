@@ -8,6 +8,7 @@ deviation); the file is a calibration every node and command that takes a camera
 to stderr; the last stdout line is a JSON summary. Exit code 0 on success, 2 on bad input (or too
 few people seen), 130 when interrupted.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -20,10 +21,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("video", help="the video file (anything OpenCV decodes)")
     p.add_argument("--out", required=True, help="output calibration file (.yaml or .json)")
     p.add_argument("--max-frames", type=int, default=None, help="use at most this many frames (default: all)")
-    p.add_argument("--train-frames", type=int, default=30,
-                   help="first frames the background model is fitted on (people may be in view)")
-    p.add_argument("--person-height", type=float, default=1.70,
-                   help="mean stature of the people, metres (the prior that sets the scale)")
+    p.add_argument(
+        "--train-frames",
+        type=int,
+        default=30,
+        help="first frames the background model is fitted on (people may be in view)",
+    )
+    p.add_argument(
+        "--person-height",
+        type=float,
+        default=1.70,
+        help="mean stature of the people, metres (the prior that sets the scale)",
+    )
     p.add_argument("--person-height-std", type=float, default=0.09, help="its standard deviation, metres")
 
 
@@ -35,14 +44,17 @@ def main(args: argparse.Namespace) -> int:
     if not positive(args, ("train_frames", "max_frames"), "calibrate"):
         return 2
     if not (0.5 < args.person_height < 2.5 and 0 < args.person_height_std < 0.5):
-        print("counterpart calibrate: --person-height must be in (0.5, 2.5) m and --person-height-std in (0, 0.5) m",
-              file=sys.stderr)
+        print(
+            "counterpart calibrate: --person-height must be in (0.5, 2.5) m and --person-height-std in (0, 0.5) m",
+            file=sys.stderr,
+        )
         return 2
 
     def work() -> dict:
         config = CalibrationConfig(person_height=args.person_height, person_height_std=args.person_height_std)
-        est, summary = calibrate_video(args.video, args.max_frames, args.train_frames, config,
-                                       progress=FrameProgress("calibrate"))
+        est, summary = calibrate_video(
+            args.video, args.max_frames, args.train_frames, config, progress=FrameProgress("calibrate")
+        )
         camera = est.camera()
         text = camera_file_text(camera, est, args.video)
         with open(args.out, "w", encoding="utf-8") as f:

@@ -30,16 +30,16 @@ the normalised residuals (priors included), times the reduced chi-square when it
 Starts: a grid over tilt and field of view (vectorised), the best few refined by
 ``scipy.optimize.least_squares`` (trust region reflective).
 """
+
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
+from counterpart.body.camera import Camera
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
-
-from counterpart.body.camera import Camera
 
 from .lines import LineFamilies, segment_angles
 
@@ -48,7 +48,8 @@ from .lines import LineFamilies, segment_angles
 class CalibrationConfig:
     """Priors and noise model of :func:`estimate_camera`.
 
-    Attributes:
+    Attributes
+    ----------
         person_height, person_height_std: prior on an adult's stature, metres (mean, std).
         fov_deg: centre of the weak prior on the horizontal field of view (the default camera's).
         focal_log_std: std of that prior on log f (0.35: 40-75 degrees within about one std).
@@ -90,7 +91,8 @@ class CalibrationConfig:
 class CameraEstimate:
     """A camera estimated from people, with its uncertainty (one standard deviation).
 
-    Attributes:
+    Attributes
+    ----------
         focal: focal length, pixels (fx = fy), for frames of ``width`` x ``height``.
         tilt_deg: downward pitch of the optical axis, degrees; ``roll_deg`` about it, degrees.
         height: camera centre above the ground, metres.
@@ -138,11 +140,20 @@ class CameraEstimate:
 
     def camera(self) -> Camera:
         """The estimate as a ``counterpart.body.camera.Camera``: world Y up, the ground y = 0, the camera
-        looking along -Z at the people, the world origin under their median position."""
+        looking along -Z at the people, the world origin under their median position.
+        """
         R = rotation(np.radians(self.tilt_deg), np.radians(self.roll_deg))
         centre = np.array([-self.offset_x, self.height, self.distance])
-        return Camera(self.focal, self.focal, (self.width - 1) / 2.0, (self.height_px - 1) / 2.0, self.width,
-                      self.height_px, R, -R @ centre)
+        return Camera(
+            self.focal,
+            self.focal,
+            (self.width - 1) / 2.0,
+            (self.height_px - 1) / 2.0,
+            self.width,
+            self.height_px,
+            R,
+            -R @ centre,
+        )
 
     def summary(self) -> dict[str, Any]:
         """Plain figures for printing and JSON (degrees, metres, pixels)."""
@@ -153,16 +164,19 @@ class CameraEstimate:
 
     def describe(self) -> str:
         """One line: each figure with its one-std uncertainty."""
-        return (f"focal {self.focal:.0f} px +- {100 * self.focal_std:.0f}% (horizontal view {self.fov_deg:.0f} deg), "
-                f"tilt {self.tilt_deg:.1f} +- {self.tilt_std_deg:.1f} deg, roll {self.roll_deg:.1f} +- "
-                f"{self.roll_std_deg:.1f} deg, height {self.height:.2f} m +- {100 * self.height_std:.0f}% "
-                f"({self.n_observations} observations of {self.n_people} people, "
-                f"{100 * self.inliers:.0f}% inliers, depth spread {100 * self.depth_spread:.0f}%)")
+        return (
+            f"focal {self.focal:.0f} px +- {100 * self.focal_std:.0f}% (horizontal view {self.fov_deg:.0f} deg), "
+            f"tilt {self.tilt_deg:.1f} +- {self.tilt_std_deg:.1f} deg, roll {self.roll_deg:.1f} +- "
+            f"{self.roll_std_deg:.1f} deg, height {self.height:.2f} m +- {100 * self.height_std:.0f}% "
+            f"({self.n_observations} observations of {self.n_people} people, "
+            f"{100 * self.inliers:.0f}% inliers, depth spread {100 * self.depth_spread:.0f}%)"
+        )
 
 
 def rotation(tilt: float, roll: float) -> np.ndarray:
     """(3, 3) world-to-camera rotation of a camera looking along -Z, pitched down by ``tilt`` and
-    rolled by ``roll`` (radians) about its optical axis; as ``Camera.look_at`` for roll 0."""
+    rolled by ``roll`` (radians) about its optical axis; as ``Camera.look_at`` for roll 0.
+    """
     s, c = np.sin(tilt), np.cos(tilt)
     R0 = np.array([[1.0, 0.0, 0.0], [0.0, -c, s], [0.0, -s, -c]])
     sr, cr = np.sin(roll), np.cos(roll)
@@ -189,28 +203,32 @@ def head_foot(bbox: Any, ctrl: np.ndarray | None, ref_point: np.ndarray | None) 
     return np.array([hx, top]), np.array([fx, bottom])
 
 
-def usable(bbox: Any, width: int, height: int, merged: bool = False, min_height: float = 20.0,
-           min_aspect: float = 1.3) -> bool:
+def usable(
+    bbox: Any, width: int, height: int, merged: bool = False, min_height: float = 20.0, min_aspect: float = 1.3
+) -> bool:
     """Whether a region can serve as an upright person: whole (off the image borders), not shared
-    with another person, tall enough, and taller than ``min_aspect`` times its width."""
+    with another person, tall enough, and taller than ``min_aspect`` times its width.
+    """
     x, y, w, h = (int(v) for v in bbox)
-    return (not merged and h >= min_height and h >= min_aspect * w and x > 0 and y > 0
-            and x + w < width and y + h < height)
+    return (
+        not merged and h >= min_height and h >= min_aspect * w and x > 0 and y > 0 and x + w < width and y + h < height
+    )
 
 
-def _project_heads(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int]
-                   ) -> np.ndarray:
+def _project_heads(
+    x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int]
+) -> np.ndarray:
     """(N, 2) predicted head pixels for parameters ``x`` = (log f, tilt, roll, log h_c, log H_k...)."""
     f, tilt, roll, hc = np.exp(x[0]), x[1], x[2], np.exp(x[3])
     Hk = np.exp(x[4:])
     W, H = size
     c = np.array([(W - 1) / 2.0, (H - 1) / 2.0])
     R = rotation(tilt, roll)
-    d = np.column_stack([(foot - c) / f, np.ones(len(foot))]) @ R      # world directions of the foot rays
-    down = np.maximum(-d[:, 1], 1e-4)                                  # at or above the horizon: far away
+    d = np.column_stack([(foot - c) / f, np.ones(len(foot))]) @ R  # world directions of the foot rays
+    down = np.maximum(-d[:, 1], 1e-4)  # at or above the horizon: far away
     s = hc / down
-    rel = s[:, None] * d                                               # G - C
-    rel[:, 1] += Hk[track]                                             # head - C
+    rel = s[:, None] * d  # G - C
+    rel[:, 1] += Hk[track]  # head - C
     Xc = rel @ R.T
     z = np.maximum(Xc[:, 2], 1e-3)
     return f * Xc[:, :2] / z[:, None] + c
@@ -219,24 +237,38 @@ def _project_heads(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.
 def _vanishing_points(x: np.ndarray, n_people: int, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
     """(N, 3) homogeneous vanishing point predicted for each scene segment: the image of the world
     vertical for the vertical family, of the direction (cos phi_j, 0, sin phi_j) for horizontal
-    family j (phi_j = x[4 + n_people + j])."""
+    family j (phi_j = x[4 + n_people + j]).
+    """
     W, H = size
     f = np.exp(x[0])
     KR = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]]) @ rotation(x[1], x[2])
-    phi = x[4 + n_people:]
+    phi = x[4 + n_people :]
     dirs = np.zeros((len(lines.vertical), 3))
     dirs[lines.vertical, 1] = 1.0
     dirs[~lines.vertical, 0], dirs[~lines.vertical, 2] = np.cos(phi), np.sin(phi)
     return (dirs @ KR.T)[lines.family]
 
 
-def _residuals(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, scale: np.ndarray,
-               size: tuple[int, int], cfg: CalibrationConfig, f0: float, n_people: int,
-               lines: LineFamilies | None = None, line_scale: np.ndarray | None = None) -> np.ndarray:
+def _residuals(
+    x: np.ndarray,
+    head: np.ndarray,
+    foot: np.ndarray,
+    track: np.ndarray,
+    scale: np.ndarray,
+    size: tuple[int, int],
+    cfg: CalibrationConfig,
+    f0: float,
+    n_people: int,
+    lines: LineFamilies | None = None,
+    line_scale: np.ndarray | None = None,
+) -> np.ndarray:
     r = ((_project_heads(x[: 4 + n_people], head, foot, track, size) - head) / scale).ravel()
-    priors = np.concatenate([(x[4:4 + n_people] - np.log(cfg.person_height))
-                             / (cfg.person_height_std / cfg.person_height),
-                             [(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)]])
+    priors = np.concatenate(
+        [
+            (x[4 : 4 + n_people] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height),
+            [(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)],
+        ]
+    )
     if lines is None or not len(lines.segments):
         return np.concatenate([r, priors])
     rl = segment_angles(lines.segments, _vanishing_points(x, n_people, lines, size)) / line_scale
@@ -245,7 +277,8 @@ def _residuals(x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndar
 
 def _directions(x: np.ndarray, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
     """(Fh,) ground directions phi of the horizontal families' detected vanishing points under the
-    camera of ``x`` (their start values)."""
+    camera of ``x`` (their start values).
+    """
     W, H = size
     f = np.exp(x[0])
     K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
@@ -253,16 +286,18 @@ def _directions(x: np.ndarray, lines: LineFamilies, size: tuple[int, int]) -> np
     return np.arctan2(d[:, 2], d[:, 0])
 
 
-def _relative_heights(f: float, tilt: float, roll: float, head: np.ndarray, foot: np.ndarray,
-                      size: tuple[int, int]) -> np.ndarray:
+def _relative_heights(
+    f: float, tilt: float, roll: float, head: np.ndarray, foot: np.ndarray, size: tuple[int, int]
+) -> np.ndarray:
     """(N,) head heights over a camera of height 1: the point of the foot's vertical line nearest to
-    the head, in the algebraic sense ``t x (a + h b) = 0`` (a the foot's image, b the vertical's)."""
+    the head, in the algebraic sense ``t x (a + h b) = 0`` (a the foot's image, b the vertical's).
+    """
     W, H = size
     K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
     R = rotation(tilt, roll)
     d = np.column_stack([(foot - K[:2, 2]) / f, np.ones(len(foot))]) @ R
     s = 1.0 / np.maximum(-d[:, 1], 1e-4)
-    a = (s[:, None] * d) @ (K @ R).T                                  # foot, homogeneous pixels
+    a = (s[:, None] * d) @ (K @ R).T  # foot, homogeneous pixels
     b = np.broadcast_to(K @ R @ np.array([0.0, 1.0, 0.0]), a.shape)  # the vertical direction's image
     t = np.column_stack([head, np.ones(len(head))])
     ta, tb = np.cross(t, a), np.cross(t, b)
@@ -275,9 +310,15 @@ def estimate_camera(*args: Any, **kw: Any) -> CameraEstimate | None:
         return fit_camera(*args, **kw)
 
 
-def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int],
-                    time_s: np.ndarray | None = None, config: CalibrationConfig = CalibrationConfig(),
-                    lines: LineFamilies | None = None) -> CameraEstimate | None:
+def fit_camera(
+    head: np.ndarray,
+    foot: np.ndarray,
+    track: np.ndarray,
+    size: tuple[int, int],
+    time_s: np.ndarray | None = None,
+    config: CalibrationConfig = CalibrationConfig(),
+    lines: LineFamilies | None = None,
+) -> CameraEstimate | None:
     """Estimate the camera from head and foot points of upright people.
 
     Args:
@@ -288,7 +329,9 @@ def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tupl
         config: priors and noise model.
         lines: families of straight scene lines (``counterpart.nodes.calibration.lines``): the vertical ones
             and the horizon of the horizontal ones join the fit (None: the people alone).
-    Returns:
+
+    Returns
+    -------
         The estimate, or None with fewer than ``config.min_observations`` observations.
     """
     head = np.asarray(head, np.float64).reshape(-1, 2)
@@ -309,8 +352,10 @@ def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tupl
     for j in range(len(ids)):
         tk = time_s[k == j]
         per[j] = max(1.0, len(tk) / max(1.0, (tk.max() - tk.min()) / config.correlation_s))
-    scale = np.maximum(np.multiply.outer(pix, [config.lateral_noise, config.pixel_noise]),
-                       config.min_pixel_noise) * np.sqrt(per[k])[:, None]
+    scale = (
+        np.maximum(np.multiply.outer(pix, [config.lateral_noise, config.pixel_noise]), config.min_pixel_noise)
+        * np.sqrt(per[k])[:, None]
+    )
     f0 = (W / 2.0) / np.tan(np.radians(config.fov_deg) / 2)
 
     if lines is not None and not len(lines.segments):
@@ -344,8 +389,9 @@ def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tupl
         hi = np.full(len(x0), np.inf)
         lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
         x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
-        res = least_squares(_residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf",
-                            x_scale="jac", max_nfev=200)
+        res = least_squares(
+            _residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
+        )
         if best is None or res.cost < best.cost:
             best = res
     x = best.x
@@ -364,17 +410,31 @@ def fit_camera(head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tupl
     d = np.column_stack([(foot - [(W - 1) / 2.0, (H - 1) / 2.0]) / f, np.ones(len(foot))]) @ rotation(tilt, roll)
     g = (hc / np.maximum(-d[:, 1], 1e-4))[:, None] * d
     return CameraEstimate(
-        focal=f, tilt_deg=float(np.degrees(tilt)), roll_deg=float(np.degrees(roll)), height=hc,
-        focal_std=float(sd[0]), tilt_std_deg=float(np.degrees(sd[1])), roll_std_deg=float(np.degrees(sd[2])),
-        height_std=float(sd[3]), distance=float(-np.median(g[inlier | ~inlier.any(), 2])),
-        offset_x=float(np.median(g[:, 0])), people_heights=tuple(float(v) for v in np.exp(x[4:4 + nk])),
-        n_observations=int(len(head)), n_people=int(len(ids)), inliers=float(inlier.mean()), width=W, height_px=H,
-        depth_spread=depth_spread(foot[:, 1], pix, k), horizon_segments=horizon_segments(lines, (W, H)))
+        focal=f,
+        tilt_deg=float(np.degrees(tilt)),
+        roll_deg=float(np.degrees(roll)),
+        height=hc,
+        focal_std=float(sd[0]),
+        tilt_std_deg=float(np.degrees(sd[1])),
+        roll_std_deg=float(np.degrees(sd[2])),
+        height_std=float(sd[3]),
+        distance=float(-np.median(g[inlier | ~inlier.any(), 2])),
+        offset_x=float(np.median(g[:, 0])),
+        people_heights=tuple(float(v) for v in np.exp(x[4 : 4 + nk])),
+        n_observations=int(len(head)),
+        n_people=int(len(ids)),
+        inliers=float(inlier.mean()),
+        width=W,
+        height_px=H,
+        depth_spread=depth_spread(foot[:, 1], pix, k),
+        horizon_segments=horizon_segments(lines, (W, H)),
+    )
 
 
 def horizon_segments(lines: LineFamilies | None, size: tuple[int, int]) -> int:
     """Segments of the horizontal families whose vanishing point lies within five image widths of
-    the image centre."""
+    the image centre.
+    """
     if lines is None or not len(lines.vp):
         return 0
     W, H = size
@@ -389,7 +449,8 @@ def horizon_segments(lines: LineFamilies | None, size: tuple[int, int]) -> int:
 def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndarray, min_views: int = 10) -> float:
     """How far the people moved in depth: for each person seen ``min_views`` times or more, the
     interquartile range of its foot's image row over its median pixel height; the largest of them.
-    (N,) pixels, (N,) pixels, (N,) ints from 0."""
+    (N,) pixels, (N,) pixels, (N,) ints from 0.
+    """
     out = 0.0
     for j in range(int(person.max()) + 1 if len(person) else 0):
         m = person == j
@@ -399,4 +460,14 @@ def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndar
     return out
 
 
-__all__ = ["CalibrationConfig", "CameraEstimate", "depth_spread", "estimate_camera", "fit_camera", "horizon_segments", "head_foot", "rotation", "usable"]
+__all__ = [
+    "CalibrationConfig",
+    "CameraEstimate",
+    "depth_spread",
+    "estimate_camera",
+    "fit_camera",
+    "horizon_segments",
+    "head_foot",
+    "rotation",
+    "usable",
+]

@@ -11,10 +11,12 @@ directions, whose vanishing points lie on the horizon (the vanishing line of the
 family adds only its unknown direction on the ground, so it says where the horizon is (tilt and
 roll) without any assumption about the angles between the families.
 """
+
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any
 
 import cv2
 import numpy as np
@@ -24,7 +26,8 @@ import numpy as np
 class LineFamilies:
     """Scene line segments grouped by vanishing point.
 
-    Attributes:
+    Attributes
+    ----------
         segments: (N, 4) float64 pixels, x1, y1, x2, y2.
         family: (N,) int, the family of each segment (index into ``vertical`` and ``vp``).
         vertical: (F,) bool, whether each family is the world's vertical.
@@ -43,7 +46,8 @@ class LineFamilies:
 
 def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: float = 20.0) -> np.ndarray:
     """(N, 4) LSD segments of a BGR or grey uint8 image at least ``min_length`` pixels long, without
-    those whose midpoint lies in any of ``boxes`` ((x, y, w, h), grown by 10%: the people)."""
+    those whose midpoint lies in any of ``boxes`` ((x, y, w, h), grown by 10%: the people).
+    """
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
     found = cv2.createLineSegmentDetector().detect(grey)[0]
     if found is None:
@@ -60,7 +64,8 @@ def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: fl
 
 def segment_angles(segments: np.ndarray, vp: np.ndarray) -> np.ndarray:
     """(N,) sine of the angle between each segment and the line from its midpoint to each vanishing
-    point: ``vp`` (3,) for all, or (N, 3) one per segment (homogeneous; at infinity a direction)."""
+    point: ``vp`` (3,) for all, or (N, 3) one per segment (homogeneous; at infinity a direction).
+    """
     d = segments[:, 2:] - segments[:, :2]
     mid = 0.5 * (segments[:, :2] + segments[:, 2:])
     vp = np.broadcast_to(vp, (len(segments), 3))
@@ -69,8 +74,16 @@ def segment_angles(segments: np.ndarray, vp: np.ndarray) -> np.ndarray:
     return cross / np.maximum(np.linalg.norm(d, axis=1) * np.linalg.norm(to, axis=1), 1e-12)
 
 
-def find_families(segments: np.ndarray, centre_row: float, max_families: int = 3, angle_deg: float = 1.5, min_segments: int = 5,
-                  vertical_deg: float = 25.0, iters: int = 400, seed: int = 0) -> LineFamilies:
+def find_families(
+    segments: np.ndarray,
+    centre_row: float,
+    max_families: int = 3,
+    angle_deg: float = 1.5,
+    min_segments: int = 5,
+    vertical_deg: float = 25.0,
+    iters: int = 400,
+    seed: int = 0,
+) -> LineFamilies:
     """Group segments by vanishing point (sequential RANSAC; see the module docstring).
 
     Args:
@@ -102,9 +115,10 @@ def find_families(segments: np.ndarray, centre_row: float, max_families: int = 3
             break
         d = s[free, 2:] - s[free, :2]
         mid = 0.5 * (s[free, :2] + s[free, 2:])
-        to = cand[:, None, :2] - cand[:, None, 2:3] * mid[None]                         # (C, n, 2)
+        to = cand[:, None, :2] - cand[:, None, 2:3] * mid[None]  # (C, n, 2)
         sin = (d[None, :, 0] * to[..., 1] - d[None, :, 1] * to[..., 0]) / np.maximum(
-            np.linalg.norm(d, axis=1)[None] * np.linalg.norm(to, axis=2), 1e-12)
+            np.linalg.norm(d, axis=1)[None] * np.linalg.norm(to, axis=2), 1e-12
+        )
         score = ((np.abs(sin) < tol) * length[free][None]).sum(axis=1)
         best = cand[int(np.argmax(score))]
         members = free[np.abs(segment_angles(s[free], best)) < tol]
@@ -124,8 +138,9 @@ def find_families(segments: np.ndarray, centre_row: float, max_families: int = 3
     # from the camera, whose vanishing point is on the horizon above
     vertical = np.zeros(n, bool)
     vp = np.array(vps).reshape(-1, 3)
-    below = (np.abs(vp[:, 2]) < 1e-9 * np.linalg.norm(vp[:, :2], axis=1)) | (vp[:, 1] * np.sign(vp[:, 2])
-                                                                           > centre_row * np.abs(vp[:, 2]))
+    below = (np.abs(vp[:, 2]) < 1e-9 * np.linalg.norm(vp[:, :2], axis=1)) | (
+        vp[:, 1] * np.sign(vp[:, 2]) > centre_row * np.abs(vp[:, 2])
+    )
     ok = (steep < np.sin(np.radians(vertical_deg))) & below
     if ok.any():
         vertical[int(np.argmin(np.where(ok, steep, np.inf)))] = True

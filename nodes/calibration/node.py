@@ -21,14 +21,14 @@ counterpart.nodes.calibration``) or alone::
 
     python -m counterpart.nodes.calibration --param file=camera.yaml
 """
+
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
-
-from counterpart.bus import Input, Node, Output, Param
 from counterpart.body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
+from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import CameraInfo, Frame, Silhouettes
 
 from .estimate import CameraEstimate
@@ -48,33 +48,65 @@ def _check_file(value: str) -> str | None:
 
 class Calibration(Node):
     """Publishes the camera of the frames' size, latched, so that nodes joining later get it too;
-    with ``estimate``, refines it from the people in view."""
+    with ``estimate``, refines it from the people in view.
+    """
 
-    inputs = {"frame": Input(Frame, doc="the camera's frames (their size)"),
-              "silhouettes": Input(Silhouettes, doc="the people in view (estimate: true, no file only)")}
-    outputs = {"camera_info": Output(CameraInfo, "the camera for the frames' size, once (again when the size "
-                                                 "changes or the estimate moves); latched", latched=True)}
-    params = {"file": Param(str, "", "calibration file (JSON/YAML: fx, fy, cx, cy, width, height, R, t, or eye, "
-                                     "target, fov_deg, width, height); '': the default camera at the frames' size",
-                            check=_check_file),
-              "estimate": Param(bool, False, "without a file: estimate the camera from the people in view "
-                                             "(subscribes to silhouettes) and refine it while the graph runs"),
-              "every": Param(int, 10, "estimate: frames between two estimates", min=1),
-              "lead": Param(int, 25, "estimate: a refined camera holds from this many frames after the frame it "
-                                     "was estimated on (its seq), so every node switches at that same frame", min=0),
-              "min_seconds": Param(float, 1.0, "estimate: seconds of people in view before the first estimate",
-                                   min=0.0),
-              "max_step": Param(float, 0.03, "estimate: largest change of focal length and height per update "
-                                             "(relative; tilt and roll: this many radians)", min=1e-4, max=1.0),
-              "max_height_std": Param(float, 0.2, "estimate: used only when the height's relative std is below",
-                                      min=0.0),
-              "max_focal_std": Param(float, 0.5, "estimate: ... and the focal length's relative std", min=0.0),
-              "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0),
-              "min_depth_spread": Param(float, 0.12, "estimate: ... and the people seen at depths this much apart "
-                                                     "(relative; at one depth the horizon does not show), or",
-                                    min=0.0),
-              "min_horizon_segments": Param(int, 12, "estimate: ... this many scene segments converging on the "
-                                                     "horizon", min=0)}
+    inputs = {
+        "frame": Input(Frame, doc="the camera's frames (their size)"),
+        "silhouettes": Input(Silhouettes, doc="the people in view (estimate: true, no file only)"),
+    }
+    outputs = {
+        "camera_info": Output(
+            CameraInfo,
+            "the camera for the frames' size, once (again when the size changes or the estimate moves); latched",
+            latched=True,
+        )
+    }
+    params = {
+        "file": Param(
+            str,
+            "",
+            "calibration file (JSON/YAML: fx, fy, cx, cy, width, height, R, t, or eye, "
+            "target, fov_deg, width, height); '': the default camera at the frames' size",
+            check=_check_file,
+        ),
+        "estimate": Param(
+            bool,
+            False,
+            "without a file: estimate the camera from the people in view "
+            "(subscribes to silhouettes) and refine it while the graph runs",
+        ),
+        "every": Param(int, 10, "estimate: frames between two estimates", min=1),
+        "lead": Param(
+            int,
+            25,
+            "estimate: a refined camera holds from this many frames after the frame it "
+            "was estimated on (its seq), so every node switches at that same frame",
+            min=0,
+        ),
+        "min_seconds": Param(float, 1.0, "estimate: seconds of people in view before the first estimate", min=0.0),
+        "max_step": Param(
+            float,
+            0.03,
+            "estimate: largest change of focal length and height per update "
+            "(relative; tilt and roll: this many radians)",
+            min=1e-4,
+            max=1.0,
+        ),
+        "max_height_std": Param(float, 0.2, "estimate: used only when the height's relative std is below", min=0.0),
+        "max_focal_std": Param(float, 0.5, "estimate: ... and the focal length's relative std", min=0.0),
+        "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0),
+        "min_depth_spread": Param(
+            float,
+            0.12,
+            "estimate: ... and the people seen at depths this much apart "
+            "(relative; at one depth the horizon does not show), or",
+            min=0.0,
+        ),
+        "min_horizon_segments": Param(
+            int, 12, "estimate: ... this many scene segments converging on the horizon", min=0
+        ),
+    }
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
@@ -119,8 +151,13 @@ class Calibration(Node):
         self.smoother = CameraSmoother(camera, self.p["max_step"])
         source = f"file:{self.p['file']}" if self.p["file"] else "default"
         self.publish("camera_info", camera_to_info(camera, stamp, seq, source))
-        self.log.info("camera for %dx%d frames (%s): f %.1f px, centre %.1f m above the ground", *size, source,
-                      camera.fx, camera.centre[1])
+        self.log.info(
+            "camera for %dx%d frames (%s): f %.1f px, centre %.1f m above the ground",
+            *size,
+            source,
+            camera.fx,
+            camera.centre[1],
+        )
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
         size = (int(msg.width), int(msg.height))
@@ -140,19 +177,31 @@ class Calibration(Node):
         if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:
             return
         est = self.observations.estimate(lines=self.scene.families())
-        if est is None or not credible(est, self.p["max_height_std"], self.p["max_focal_std"],
-                                       self.p["max_tilt_std_deg"], self.p["min_depth_spread"],
-                                       self.p["min_horizon_segments"]):
+        if est is None or not credible(
+            est,
+            self.p["max_height_std"],
+            self.p["max_focal_std"],
+            self.p["max_tilt_std_deg"],
+            self.p["min_depth_spread"],
+            self.p["min_horizon_segments"],
+        ):
             self.tally("estimates_not_credible")
-            self.log.debug("estimate not credible yet: %s", est.describe() if est else f"{len(self.observations)} observations")
+            self.log.debug(
+                "estimate not credible yet: %s", est.describe() if est else f"{len(self.observations)} observations"
+            )
             return
         if self.latest is None:
             self.log.info("first estimate: %s", est.describe())
         self.latest = est
         self.tally("estimates")
         camera = self.smoother.step(est)
-        self.figures.update({"focal_px": camera.fx, "height_m": float(camera.centre[1]),
-                             "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1])))})
+        self.figures.update(
+            {
+                "focal_px": camera.fx,
+                "height_m": float(camera.centre[1]),
+                "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1]))),
+            }
+        )
         self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq + self.p["lead"], "estimated"))
 
     def on_end(self) -> None:

@@ -8,9 +8,11 @@ can be an upright person (``estimate.usable``). The store is bounded: past ``max
 keeps every second observation of the older half, so a long run keeps its whole span at a lower
 density and each estimate costs about the same.
 """
+
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
@@ -60,19 +62,22 @@ class PeopleObservations:
         a = np.array(self._rows, np.float64).reshape(-1, 6)
         return a[:, 0:2], a[:, 2:4], a[:, 4].astype(np.int64), a[:, 5]
 
-    def estimate(self, config: CalibrationConfig = CalibrationConfig(),
-                 lines: LineFamilies | None = None) -> CameraEstimate | None:
+    def estimate(
+        self, config: CalibrationConfig | None = None, lines: LineFamilies | None = None
+    ) -> CameraEstimate | None:
         """The camera from what was gathered so far (and the scene's ``lines``); None with too few
-        observations."""
+        observations.
+        """
         head, foot, track, t = self.arrays()
-        return estimate_camera(head, foot, track, self.size, t, config, lines)
+        return estimate_camera(head, foot, track, self.size, t, config or CalibrationConfig(), lines)
 
 
 class SceneFrames:
     """A few frames of the scene for its straight lines: frames whose number is a multiple of
     ``every``, up to ``keep`` of them, with the boxes of the people on them. :meth:`families` takes
     the per-pixel median of the frames (people who move are gone from it) and leaves out the
-    segments on any person's box."""
+    segments on any person's box.
+    """
 
     def __init__(self, every: int = 8, keep: int = 9) -> None:
         self.every, self.keep = int(every), int(keep)

@@ -6,10 +6,12 @@ with ids and outlines), the head and foot points of the upright people
 (``counterpart.nodes.calibration.observe``) and the estimate from all of them at once
 (``counterpart.nodes.calibration.estimate``), without the bus.
 """
+
 from __future__ import annotations
 
 import os
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from counterpart.body.camera import Camera
 
@@ -20,9 +22,14 @@ from .observe import PeopleObservations, SceneFrames
 Progress = Callable[[int, int], None]
 
 
-def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None, train_frames: int = 30,
-                    config: CalibrationConfig = CalibrationConfig(), progress: Progress | None = None,
-                    **silhouette_params: Any) -> tuple[CameraEstimate, dict[str, Any]]:
+def calibrate_video(
+    path: str | os.PathLike[str],
+    max_frames: int | None = None,
+    train_frames: int = 30,
+    config: CalibrationConfig | None = None,
+    progress: Progress | None = None,
+    **silhouette_params: Any,
+) -> tuple[CameraEstimate, dict[str, Any]]:
     """Estimate the camera of a video from the people in it.
 
     Args:
@@ -32,12 +39,16 @@ def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None,
         config: priors and noise model of the estimate.
         progress: called after every frame with (frames done, frames the file declares or 0).
         silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
-    Returns:
+
+    Returns
+    -------
         (the estimate, a summary: n_frames, observations, fps, frame_size [H, W]).
     Raises FileNotFoundError / ValueError for a missing or undecodable video, and ValueError when
     too few upright people were seen to estimate anything (the message says how many).
     """
     from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+
+    config = config or CalibrationConfig()
 
     fps, declared = video_info(path)
     extractor = SilhouetteExtractor(**silhouette_params)
@@ -58,22 +69,27 @@ def calibrate_video(path: str | os.PathLike[str], max_frames: int | None = None,
     est = obs.estimate(config, scene.families()) if obs is not None else None
     if est is None:
         got = len(obs) if obs is not None else 0
-        raise ValueError(f"{os.fspath(path)!r}: only {got} views of whole upright people in {n} frames, "
-                         f"{config.min_observations} needed to estimate the camera; use a longer video in which "
-                         "people stand or walk fully in view, or give a calibration file")
+        raise ValueError(
+            f"{os.fspath(path)!r}: only {got} views of whole upright people in {n} frames, "
+            f"{config.min_observations} needed to estimate the camera; use a longer video in which "
+            "people stand or walk fully in view, or give a calibration file"
+        )
     return est, {"n_frames": n, "observations": len(obs), "fps": fps, "frame_size": list(shape)}
 
 
 def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
     """A calibration file (YAML, ``Camera.to_dict``, which ``counterpart.body.camera.load_camera_file`` reads),
-    with the estimate and its uncertainty as comments."""
+    with the estimate and its uncertainty as comments.
+    """
     import yaml
 
-    head = [f"# camera estimated by `counterpart calibrate` from the people in {video}",
-            f"# {est.describe()}",
-            f"# one std: focal {100 * est.focal_std:.0f}%, tilt {est.tilt_std_deg:.1f} deg, roll "
-            f"{est.roll_std_deg:.1f} deg, height {100 * est.height_std:.0f}%; people's heights "
-            + ", ".join(f"{h:.2f} m" for h in est.people_heights)]
+    head = [
+        f"# camera estimated by `counterpart calibrate` from the people in {video}",
+        f"# {est.describe()}",
+        f"# one std: focal {100 * est.focal_std:.0f}%, tilt {est.tilt_std_deg:.1f} deg, roll "
+        f"{est.roll_std_deg:.1f} deg, height {100 * est.height_std:.0f}%; people's heights "
+        + ", ".join(f"{h:.2f} m" for h in est.people_heights),
+    ]
     d = camera.to_dict()
     return "\n".join(head) + "\n" + yaml.safe_dump(d, default_flow_style=None, sort_keys=False)
 

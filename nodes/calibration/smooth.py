@@ -5,10 +5,10 @@ moves every parameter towards the new estimate by at most ``max_step`` (log unit
 length, the height and the distance; radians for tilt and roll; ``max_step`` times the distance for
 the offset), so the projections every node makes change smoothly however the estimate moves.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.camera import Camera
 
 from .estimate import CalibrationConfig, CameraEstimate, rotation
@@ -16,7 +16,8 @@ from .estimate import CalibrationConfig, CameraEstimate, rotation
 
 def camera_parameters(camera: Camera) -> np.ndarray:
     """(6,) [log f, tilt, roll, log height, log distance, offset] of a camera looking roughly along -Z
-    with the ground y = 0 (the distance and offset are those of the world origin)."""
+    with the ground y = 0 (the distance and offset are those of the world origin).
+    """
     R = camera.R
     tilt = float(np.arcsin(np.clip(-R[2, 1], -1, 1)))
     roll = float(np.arctan2(R[0, 1], -R[1, 1])) if abs(np.cos(tilt)) > 1e-6 else 0.0
@@ -32,17 +33,29 @@ def camera_from_parameters(p: np.ndarray, width: int, height: int) -> Camera:
     return Camera(f, f, (width - 1) / 2.0, (height - 1) / 2.0, width, height, R, -R @ centre)
 
 
-def credible(est: CameraEstimate, max_height_std: float, max_focal_std: float, max_tilt_std_deg: float,
-             min_depth_spread: float, min_horizon_segments: int = 12) -> bool:
+def credible(
+    est: CameraEstimate,
+    max_height_std: float,
+    max_focal_std: float,
+    max_tilt_std_deg: float,
+    min_depth_spread: float,
+    min_horizon_segments: int = 12,
+) -> bool:
     """Whether an estimate is sure enough to move the published camera: its uncertainties under the
     bounds, and the horizon seen, by people at different depths (``CameraEstimate.depth_spread``)
     or by scene lines converging on it (``horizon_segments``). Without it the lean of people
     reaching to each other passes for tilt. A tilt on the fit's lower bound is not credible either
-    (a camera looking up: the sign of that lean)."""
-    return (np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all() and est.height_std <= max_height_std
-            and est.focal_std <= max_focal_std and est.tilt_std_deg <= max_tilt_std_deg and est.distance > 0
-            and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments)
-            and est.tilt_deg > CalibrationConfig().min_tilt_deg + 0.5)  # on its bound: the fit wanted further
+    (a camera looking up: the sign of that lean).
+    """
+    return (
+        np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all()
+        and est.height_std <= max_height_std
+        and est.focal_std <= max_focal_std
+        and est.tilt_std_deg <= max_tilt_std_deg
+        and est.distance > 0
+        and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments)
+        and est.tilt_deg > CalibrationConfig().min_tilt_deg + 0.5
+    )  # on its bound: the fit wanted further
 
 
 class CameraSmoother:

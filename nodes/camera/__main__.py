@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.camera --param source=clip.avi ...``: run the camera node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

@@ -12,13 +12,14 @@ read (the error is logged and end of stream is sent first, so the rest of the gr
 capture, for a replay when its pacing releases it, so a replay looks like a camera running now.
 An unpaced replay (``fast``, ``lockstep``) decodes in a prefetch thread a few frames ahead.
 """
+
 from __future__ import annotations
 
 import time
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
-
 from counterpart.bus import Node, Output, Param, ParamError
 from counterpart.messages import Frame
 
@@ -41,22 +42,39 @@ def _check_uri(value: str) -> str | None:
 class Camera(Node):
     """Publishes the frames of ``source`` on ``frame`` (messages.Frame), paced by ``pacing``."""
 
-    outputs = {"frame": Output(Frame, "every frame, bgr8 or mono8; stamp: monotonic ns when the frame is released "
-                                      "(live: right after capture; replay: after pacing)")}
+    outputs = {
+        "frame": Output(
+            Frame,
+            "every frame, bgr8 or mono8; stamp: monotonic ns when the frame is released "
+            "(live: right after capture; replay: after pacing)",
+        )
+    }
     params = {
-        "source": Param(str, DEFAULT_SOURCE, "file:PATH or a path, folder:DIR[?pattern=*.png], v4l2:/dev/videoN, "
-                        "sim:SCENARIO[?seed=S]", check=_check_uri),
-        "pacing": Param(str, "realtime", "realtime | rate (x rate) | fast | lockstep (fast; reliable consumers "
-                        "block it so nothing is dropped)", choices=PACING_MODES),
+        "source": Param(
+            str,
+            DEFAULT_SOURCE,
+            "file:PATH or a path, folder:DIR[?pattern=*.png], v4l2:/dev/videoN, sim:SCENARIO[?seed=S]",
+            check=_check_uri,
+        ),
+        "pacing": Param(
+            str,
+            "realtime",
+            "realtime | rate (x rate) | fast | lockstep (fast; reliable consumers block it so nothing is dropped)",
+            choices=PACING_MODES,
+        ),
         "rate": Param(float, 1.0, "speed factor of pacing 'rate' (2.0: twice real time)", min=1e-3, max=1e3),
-        "fps": Param(float, 0.0, "frame rate of the source, overriding its own (0: the source's; folders: 25)", min=0.0),
+        "fps": Param(
+            float, 0.0, "frame rate of the source, overriding its own (0: the source's; folders: 25)", min=0.0
+        ),
         "width": Param(int, 0, "output width in pixels (0: the source's, or scaled with height)", min=0, max=16384),
         "height": Param(int, 0, "output height in pixels (0: the source's, or scaled with width)", min=0, max=16384),
         "gray": Param(bool, False, "publish mono8 instead of bgr8"),
         "loop": Param(bool, False, "start again at start_frame at the end of a replay"),
         "max_frames": Param(int, 0, "stop after this many frames (0: no limit)", min=0),
         "start_frame": Param(int, 0, "skip this many frames of the source first", min=0),
-        "prefetch": Param(int, 4, "frames an unpaced replay decodes ahead in a thread (0: decode inline)", min=0, max=64),
+        "prefetch": Param(
+            int, 4, "frames an unpaced replay decodes ahead in a thread (0: decode inline)", min=0, max=64
+        ),
     }
 
     @classmethod
@@ -94,12 +112,22 @@ class Camera(Node):
         except ValueError as exc:
             return self._fail(f"source {src.uri}: {exc}")
         if p["pacing"] == "lockstep" and not int(self.spec["outputs"]["frame"].get("reliable_subscribers", 0)):
-            self.log.warning("pacing 'lockstep' but no reliable subscriber on topic %r: consumers with the "
-                             "'latest' policy drop frames when they lag", self.spec["outputs"]["frame"]["topic"])
+            self.log.warning(
+                "pacing 'lockstep' but no reliable subscriber on topic %r: consumers with the "
+                "'latest' policy drop frames when they lag",
+                self.spec["outputs"]["frame"]["topic"],
+            )
         self.figures["source_fps"] = float(src.fps)
-        self.log.info("%s: %dx%d at %.3g fps (%s frames) -> %dx%d %s, pacing %s", src.uri, *src.size, src.fps,
-                      src.frame_count if src.frame_count is not None else "?", *size,
-                      "mono8" if p["gray"] else "bgr8", mode)
+        self.log.info(
+            "%s: %dx%d at %.3g fps (%s frames) -> %dx%d %s, pacing %s",
+            src.uri,
+            *src.size,
+            src.fps,
+            src.frame_count if src.frame_count is not None else "?",
+            *size,
+            "mono8" if p["gray"] else "bgr8",
+            mode,
+        )
         stream: Iterator[tuple[np.ndarray, str, float]] = (
             (*convert(image, size, p["gray"]), t)
             for image, t in frames(src, p["start_frame"], p["loop"], p["max_frames"])
@@ -116,8 +144,18 @@ class Camera(Node):
                 if item is None:
                     break
                 image, encoding, source_time = item
-                self.publish("frame", Frame(stamp=time.monotonic_ns(), seq=seq, image=image, encoding=encoding,
-                                            source=src.uri, source_time=source_time, fps=float(src.fps)))
+                self.publish(
+                    "frame",
+                    Frame(
+                        stamp=time.monotonic_ns(),
+                        seq=seq,
+                        image=image,
+                        encoding=encoding,
+                        source=src.uri,
+                        source_time=source_time,
+                        fps=float(src.fps),
+                    ),
+                )
                 seq += 1
         except (SourceError, ValueError) as exc:
             return self._fail(f"source {src.uri} failed at frame {seq}: {exc}")

@@ -10,12 +10,14 @@ Pacing modes of a replayed source (a live device paces itself: every mode publis
 - ``lockstep``: as ``fast``; meant for graphs whose consumers subscribe with the ``reliable``
   policy, whose backpressure then blocks the camera so that no frame is dropped anywhere.
 """
+
 from __future__ import annotations
 
 import queue
 import threading
 import time
-from typing import Any, Callable, Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import cv2
 import numpy as np
@@ -27,9 +29,12 @@ _SLEEP_SLICE_S = 0.05
 
 class Pacer:
     """Schedules frame k of a replay. ``fps`` frames per second of the footage, ``rate`` speed factor
-    (used by ``rate`` mode); ``clock`` returns seconds (monotonic)."""
+    (used by ``rate`` mode); ``clock`` returns seconds (monotonic).
+    """
 
-    def __init__(self, mode: str, fps: float = 0.0, rate: float = 1.0, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self, mode: str, fps: float = 0.0, rate: float = 1.0, clock: Callable[[], float] = time.monotonic
+    ) -> None:
         if mode not in PACING_MODES:
             raise ValueError(f"pacing {mode!r}: expected one of {', '.join(PACING_MODES)}")
         if mode in ("realtime", "rate") and not fps > 0:
@@ -59,7 +64,8 @@ class Pacer:
 
     def wait(self, k: int, should_stop: Callable[[], bool] = lambda: False) -> bool:
         """Sleep until frame k is due (the first call starts the schedule). Returns False when
-        ``should_stop()`` became true while waiting."""
+        ``should_stop()`` became true while waiting.
+        """
         if not self.paced:
             return not should_stop()
         now = self.clock()
@@ -84,7 +90,8 @@ def frames(source, start_frame: int = 0, loop: bool = False, max_frames: int = 0
     ``start_frame`` at the end when ``loop``, stop after ``max_frames`` (0: no limit).
 
     Raises ValueError when ``start_frame`` is at or past the end of the source, or when ``loop`` is
-    asked of a live source."""
+    asked of a live source.
+    """
     if loop and getattr(source, "live", False):
         raise ValueError(f"loop: source {source.uri} is a live device and cannot loop")
     if start_frame:
@@ -147,7 +154,7 @@ class Prefetch:
             return
         self._put((True, self._END))
 
-    def __iter__(self) -> "Prefetch":
+    def __iter__(self) -> Prefetch:
         return self
 
     def __next__(self) -> Any:
@@ -165,7 +172,8 @@ class Prefetch:
 
 def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple[int, int]:
     """(width, height) of the output for a source of ``size`` pixels: both 0 keeps it, one of them
-    scales keeping the aspect ratio, both give that size exactly."""
+    scales keeping the aspect ratio, both give that size exactly.
+    """
     w0, h0 = size
     if width and height:
         return int(width), int(height)
@@ -178,7 +186,8 @@ def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple
 
 def convert(image: np.ndarray, size: tuple[int, int] | None = None, gray: bool = False) -> tuple[np.ndarray, str]:
     """Resize (H, W, 3) uint8 BGR ``image`` to ``size`` = (width, height) pixels when it differs, and
-    make it (H, W) mono8 when ``gray``. Returns (image, encoding: ``bgr8`` or ``mono8``)."""
+    make it (H, W) mono8 when ``gray``. Returns (image, encoding: ``bgr8`` or ``mono8``).
+    """
     if size is not None and (image.shape[1], image.shape[0]) != tuple(size):
         shrinking = size[0] * size[1] < image.shape[0] * image.shape[1]
         image = cv2.resize(image, tuple(size), interpolation=cv2.INTER_AREA if shrinking else cv2.INTER_LINEAR)

@@ -15,6 +15,7 @@ Replay sources also implement ``rewind()`` (back to frame 0) and ``skip(n)`` (dr
 Problems opening a source raise :class:`SourceError` (a ValueError) whose message names the file or
 device and says what to check.
 """
+
 from __future__ import annotations
 
 import glob
@@ -22,8 +23,9 @@ import importlib
 import logging
 import os
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Callable, Protocol, Sequence
+from typing import Any, Protocol
 from urllib.parse import parse_qsl
 
 import cv2
@@ -90,7 +92,9 @@ class VideoFileSource:
         if not os.access(p, os.R_OK):
             raise SourceError(f"video file '{p}' is not readable by this user; check its permissions")
         if p.stat().st_size == 0:
-            raise SourceError(f"cannot decode video '{p}': the file is empty (0 bytes); check that it was copied completely")
+            raise SourceError(
+                f"cannot decode video '{p}': the file is empty (0 bytes); check that it was copied completely"
+            )
         self._start()
         # A file can open (a valid header) and still yield nothing: read the first frame now so that
         # the error surfaces at open, where the caller can report it, not as an empty stream.
@@ -106,7 +110,11 @@ class VideoFileSource:
         h, w = frame.shape[:2]
         self.size = (int(w), int(h))
         header_fps = float(self._cap.get(cv2.CAP_PROP_FPS) or 0.0)
-        self.fps = float(self._fps_override) if self._fps_override else (header_fps if np.isfinite(header_fps) and header_fps > 0 else 0.0)
+        self.fps = (
+            float(self._fps_override)
+            if self._fps_override
+            else (header_fps if np.isfinite(header_fps) and header_fps > 0 else 0.0)
+        )
         n = int(self._cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         self.frame_count = n if n > 0 else None
 
@@ -139,7 +147,8 @@ class VideoFileSource:
     def _past_damage(self) -> np.ndarray | None:
         """After a frame failed to decode before the end the header announces: the next frame that
         decodes (each one skipped is counted in ``undecodable`` and keeps its place in time), or
-        None at the real end. Headers may overstate the count by a frame or two; that is no damage."""
+        None at the real end. Headers may overstate the count by a frame or two; that is no damage.
+        """
         n = self.frame_count
         while n is not None and self._index < n - 2 and self._cap.grab():
             self.undecodable += 1
@@ -149,8 +158,12 @@ class VideoFileSource:
                 log.warning("video '%s': frame %d did not decode; skipped", self.path, self._index - 1)
                 return frame
         if n is not None and self._index < n - 1:
-            log.warning("video '%s' ended at frame %d of the %d its header announces; the file may be truncated",
-                        self.path, self._index, n)
+            log.warning(
+                "video '%s' ended at frame %d of the %d its header announces; the file may be truncated",
+                self.path,
+                self._index,
+                n,
+            )
         return None
 
     def skip(self, n: int) -> int:
@@ -208,7 +221,9 @@ class ImageFolderSource:
             names.update(glob.glob(os.path.join(glob.escape(str(self.folder)), pat)))
         self.files = sorted(Path(n) for n in names if os.path.isfile(n))
         if not self.files:
-            raise SourceError(f"image folder '{self.folder}' has no file matching '{self.pattern}'; check the folder and pattern")
+            raise SourceError(
+                f"image folder '{self.folder}' has no file matching '{self.pattern}'; check the folder and pattern"
+            )
         first = self._load(0)
         self.size = (int(first.shape[1]), int(first.shape[0]))
         self.frame_count = len(self.files)
@@ -218,12 +233,15 @@ class ImageFolderSource:
         path = self.files[i]
         img = cv2.imread(str(path), cv2.IMREAD_COLOR)
         if img is None:
-            raise SourceError(f"cannot decode image '{path}' (frame {i} of folder '{self.folder}'); check that it is a valid PNG/JPEG")
+            raise SourceError(
+                f"cannot decode image '{path}' (frame {i} of folder '{self.folder}'); check that it is a valid PNG/JPEG"
+            )
         return img
 
     def read(self) -> tuple[bool, np.ndarray | None, float]:
         """The next image; one that does not decode, or has another size than the first, is one bad
-        frame: logged, counted in ``undecodable``, skipped (it keeps its place in time)."""
+        frame: logged, counted in ``undecodable``, skipped (it keeps its place in time).
+        """
         while self._index < len(self.files):
             i = self._index
             self._index += 1
@@ -233,9 +251,11 @@ class ImageFolderSource:
                 self._skip_bad(f"{exc}")
                 continue
             if (img.shape[1], img.shape[0]) != self.size:
-                self._skip_bad(f"image '{self.files[i]}' is {img.shape[1]}x{img.shape[0]} but the folder's first "
-                               f"image is {self.size[0]}x{self.size[1]}; every image of a folder source must have "
-                               "one size")
+                self._skip_bad(
+                    f"image '{self.files[i]}' is {img.shape[1]}x{img.shape[0]} but the folder's first "
+                    f"image is {self.size[0]}x{self.size[1]}; every image of a folder source must have "
+                    "one size"
+                )
                 continue
             return True, img, (i / self.fps if self.fps > 0 else 0.0)
         return False, None, 0.0
@@ -296,8 +316,14 @@ class V4L2Source:
 
     live = True
 
-    def __init__(self, device: str | int, width: int = 0, height: int = 0, fps: float | None = None,
-                 retry_delays: Sequence[float] = RETRY_DELAYS_S) -> None:
+    def __init__(
+        self,
+        device: str | int,
+        width: int = 0,
+        height: int = 0,
+        fps: float | None = None,
+        retry_delays: Sequence[float] = RETRY_DELAYS_S,
+    ) -> None:
         if isinstance(device, int) or (isinstance(device, str) and device.isdigit()):
             device = f"/dev/video{int(device)}"
         if not isinstance(device, str) or not device.startswith("/dev/"):
@@ -315,21 +341,27 @@ class V4L2Source:
     def _present(self) -> str:
         devs = video_devices()
         if not devs:
-            return ("no /dev/video* devices exist on this machine (is a camera connected? in a container, "
-                    "pass it with --device /dev/video0)")
+            return (
+                "no /dev/video* devices exist on this machine (is a camera connected? in a container, "
+                "pass it with --device /dev/video0)"
+            )
         return f"present: {', '.join(devs)}"
 
     def open(self) -> None:
         if not os.path.exists(self.device):
             raise SourceError(f"V4L2 device '{self.device}' does not exist; {self._present()}")
         if not os.access(self.device, os.R_OK | os.W_OK):
-            raise SourceError(f"V4L2 device '{self.device}' is not accessible to this user (add the user to group "
-                              f"'video'); {self._present()}")
+            raise SourceError(
+                f"V4L2 device '{self.device}' is not accessible to this user (add the user to group "
+                f"'video'); {self._present()}"
+            )
         cap = cv2.VideoCapture(self.device, cv2.CAP_V4L2)
         if not cap.isOpened():
             cap.release()
-            raise SourceError(f"V4L2 device '{self.device}' cannot be opened: it is busy (another program holds it: "
-                              f"check 'fuser {self.device}') or not a capture device; {self._present()}")
+            raise SourceError(
+                f"V4L2 device '{self.device}' cannot be opened: it is busy (another program holds it: "
+                f"check 'fuser {self.device}') or not a capture device; {self._present()}"
+            )
         w, h, fps = self.req
         if w:
             cap.set(cv2.CAP_PROP_FRAME_WIDTH, w)
@@ -342,8 +374,10 @@ class V4L2Source:
         ok, frame = read_with_retry(cap.read, self.retry_delays, what=f"V4L2 device '{self.device}'")
         if not ok:
             self.close()
-            raise SourceError(f"V4L2 device '{self.device}' opened but delivers no frames: it is busy or not a "
-                              f"capture device (check 'fuser {self.device}' and 'v4l2-ctl --list-formats'); {self._present()}")
+            raise SourceError(
+                f"V4L2 device '{self.device}' opened but delivers no frames: it is busy or not a "
+                f"capture device (check 'fuser {self.device}' and 'v4l2-ctl --list-formats'); {self._present()}"
+            )
         self._pending = frame
         self.size = (int(frame.shape[1]), int(frame.shape[0]))
         got = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
@@ -369,7 +403,8 @@ class V4L2Source:
 class SimulatorSource:
     """Adapter for any rendered stream: an object with ``render(i) -> (frame, time)``, ``n_frames``
     and ``fps``. ``frame`` is (H, W, 3) uint8 BGR (or (H, W) uint8, made BGR here); ``time`` is the
-    scene time of frame i in seconds."""
+    scene time of frame i in seconds.
+    """
 
     live = False
 
@@ -395,7 +430,9 @@ class SimulatorSource:
         frame, t = self.stream.render(i)
         frame = np.asarray(frame)
         if frame.dtype != np.uint8 or frame.ndim not in (2, 3):
-            raise SourceError(f"simulator stream '{self.uri}' rendered {frame.dtype} {frame.shape}; expected uint8 (H, W, 3) BGR")
+            raise SourceError(
+                f"simulator stream '{self.uri}' rendered {frame.dtype} {frame.shape}; expected uint8 (H, W, 3) BGR"
+            )
         if frame.ndim == 2:
             frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
         return True, frame, float(t)
@@ -421,7 +458,9 @@ class SimulatorSource:
             close()
 
 
-def open_simulator(scenario: str, options: dict[str, str], fps: float | None, width: int, height: int) -> SimulatorSource:
+def open_simulator(
+    scenario: str, options: dict[str, str], fps: float | None, width: int, height: int
+) -> SimulatorSource:
     """The built-in simulator's stream for ``scenario``.
 
     Expected simulator API (``sim`` package), called as::
@@ -438,7 +477,9 @@ def open_simulator(scenario: str, options: dict[str, str], fps: float | None, wi
     try:
         sim = importlib.import_module("counterpart.sim")
     except ImportError as exc:
-        raise SourceError(f"source '{uri}': the simulator package 'counterpart.sim' cannot be imported ({exc})") from None
+        raise SourceError(
+            f"source '{uri}': the simulator package 'counterpart.sim' cannot be imported ({exc})"
+        ) from None
     open_stream = getattr(sim, "open_stream", None)
     if not callable(open_stream):
         raise SourceError(
@@ -467,7 +508,8 @@ SCHEMES = ("file", "folder", "v4l2", "sim")
 def parse_uri(uri: str) -> tuple[str, str, dict[str, str]]:
     """``uri`` -> (scheme, target, options). Schemes: ``file:PATH`` (or a plain path), ``folder:DIR``
     (``?pattern=*.png``), ``v4l2:/dev/videoN`` (or a plain ``/dev/videoN``, or ``v4l2:N``),
-    ``sim:SCENARIO?seed=S&width=W&...``. Raises SourceError for an empty URI or unknown scheme."""
+    ``sim:SCENARIO?seed=S&width=W&...``. Raises SourceError for an empty URI or unknown scheme.
+    """
     if not isinstance(uri, str) or not uri.strip():
         raise SourceError("empty source; give a video file path, folder:DIR, v4l2:/dev/videoN or sim:SCENARIO")
     uri = uri.strip()
@@ -478,8 +520,10 @@ def parse_uri(uri: str) -> tuple[str, str, dict[str, str]]:
             return "v4l2", uri, {}
         return "file", uri, {}
     if scheme not in SCHEMES:
-        raise SourceError(f"source '{uri}': unknown scheme '{scheme}:'; expected one of "
-                          f"{', '.join(s + ':' for s in SCHEMES)} or a plain file path")
+        raise SourceError(
+            f"source '{uri}': unknown scheme '{scheme}:'; expected one of "
+            f"{', '.join(s + ':' for s in SCHEMES)} or a plain file path"
+        )
     options: dict[str, str] = {}
     if scheme in ("sim", "folder") and "?" in rest:
         rest, _, query = rest.partition("?")
@@ -494,7 +538,8 @@ def parse_uri(uri: str) -> tuple[str, str, dict[str, str]]:
 def make_source(uri: str, fps: float | None = None, width: int = 0, height: int = 0) -> FrameSource:
     """A (not yet opened) source for ``uri`` (see :func:`parse_uri`). ``fps`` overrides the source's
     frame rate (image folders need it: default 25); ``width``/``height`` are requested from devices
-    and the simulator (other sources are resized by the caller)."""
+    and the simulator (other sources are resized by the caller).
+    """
     scheme, target, options = parse_uri(uri)
     if scheme == "file":
         return VideoFileSource(target, fps=fps)
@@ -506,6 +551,16 @@ def make_source(uri: str, fps: float | None = None, width: int = 0, height: int 
 
 
 __all__ = [
-    "SourceError", "FrameSource", "VideoFileSource", "ImageFolderSource", "V4L2Source", "SimulatorSource",
-    "make_source", "parse_uri", "open_simulator", "read_with_retry", "video_devices", "RETRY_DELAYS_S",
+    "SourceError",
+    "FrameSource",
+    "VideoFileSource",
+    "ImageFolderSource",
+    "V4L2Source",
+    "SimulatorSource",
+    "make_source",
+    "parse_uri",
+    "open_simulator",
+    "read_with_retry",
+    "video_devices",
+    "RETRY_DELAYS_S",
 ]

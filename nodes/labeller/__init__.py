@@ -7,6 +7,7 @@ between a speaker's signals and a listener's response ``s`` frames later (:mod:`
 
 The algorithms are plain modules over numpy arrays; the bus wrapper lives in ``node.py``.
 """
+
 from counterpart.nodes.labeller.signals import JOINTS, SIGNALS, UNKNOWN
 
 __all__ = ["JOINTS", "SIGNALS", "UNKNOWN"]

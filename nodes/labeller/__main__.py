@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.labeller --param use_tracker=false ...``: run the labeller node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

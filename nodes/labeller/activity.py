@@ -14,14 +14,14 @@ second and does not depend on the person's size or distance to the camera. Const
 translation (walking at a steady pace) has zero velocity variance and is not activity; gesturing,
 swaying, bending and turning are. Label: ``score >= threshold``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
-
 from counterpart.nodes.labeller.signals import JOINT_INDEX, UNKNOWN, threshold_labels
+from numpy.lib.stride_tricks import sliding_window_view
 
 _TORSO_IDX = np.array([JOINT_INDEX[j] for j in ("l_shoulder", "r_shoulder", "l_hip", "r_hip")])
 
@@ -32,7 +32,8 @@ UPPER_BODY_POINTS_32 = np.r_[np.arange(24, 32), np.arange(0, 9)]
 @dataclass(frozen=True)
 class ActivityParams:
     """fps: Hz. window_s: window of the velocity statistics (s). lag_s: finite-difference step (s).
-    threshold: label threshold in torso lengths per second."""
+    threshold: label threshold in torso lengths per second.
+    """
 
     fps: float
     window_s: float = 1.0
@@ -83,14 +84,14 @@ def activity_from_points(
     t, lag, w = pts.shape[0], params.lag, params.w
     score = np.full(t, np.nan)
     if t >= w + lag:
-        v = (pts[lag:] - pts[:-lag]) * (params.fps / lag)              # (T-lag, J, D)
-        vw = sliding_window_view(v, w, axis=0)                         # (M, J, D, W)
-        var = vw.var(axis=-1).sum(axis=-1).mean(axis=-1)               # (M,)
+        v = (pts[lag:] - pts[:-lag]) * (params.fps / lag)  # (T-lag, J, D)
+        vw = sliding_window_view(v, w, axis=0)  # (M, J, D, W)
+        var = vw.var(axis=-1).sum(axis=-1).mean(axis=-1)  # (M,)
         sw = sliding_window_view(sc[lag:], w).mean(axis=-1)
         with np.errstate(invalid="ignore", divide="ignore"):
             s = np.sqrt(var) / sw
         s[~(sw > 0)] = np.nan
-        score[w + lag - 1:] = s
+        score[w + lag - 1 :] = s
     return score, threshold_labels(score, params.threshold)
 
 
@@ -101,11 +102,13 @@ def activity_3d(joints: np.ndarray, fps: float, **params: object) -> tuple[np.nd
     return activity_from_points(pts, sc, p)
 
 
-def activity_2d(control_points: np.ndarray, height_px: np.ndarray | float, fps: float,
-                torso_fraction: float = 0.3, **params: object) -> tuple[np.ndarray, np.ndarray]:
+def activity_2d(
+    control_points: np.ndarray, height_px: np.ndarray | float, fps: float, torso_fraction: float = 0.3, **params: object
+) -> tuple[np.ndarray, np.ndarray]:
     """Activity from silhouette splines: control_points (T,32,2) pixels ordered from the top of the
     head; height_px (T,) or scalar. Uses :data:`UPPER_BODY_POINTS_32`. Crude: arm gestures move the
-    outline as much as the torso does, and they count."""
+    outline as much as the torso does, and they count.
+    """
     cp = np.asarray(control_points, dtype=np.float64)
     if cp.ndim != 3 or cp.shape[1:] != (32, 2):
         raise ValueError(f"control_points must be (T,32,2) pixels, got {cp.shape}")
@@ -121,8 +124,14 @@ class ActivityDetector:
     :meth:`update_2d` for a (32,2) silhouette spline.
     """
 
-    def __init__(self, fps: float, window_s: float = 1.0, lag_s: float = 0.12,
-                 threshold: float = 0.15, torso_fraction: float = 0.3) -> None:
+    def __init__(
+        self,
+        fps: float,
+        window_s: float = 1.0,
+        lag_s: float = 0.12,
+        threshold: float = 0.15,
+        torso_fraction: float = 0.3,
+    ) -> None:
         self.params = ActivityParams(fps=fps, window_s=window_s, lag_s=lag_s, threshold=threshold)
         self.torso_fraction = torso_fraction
         self._n = self.params.w + self.params.lag
@@ -154,9 +163,9 @@ class ActivityDetector:
         if self._count < n:
             return float("nan"), UNKNOWN
         p = self.params
-        buf = self._pts[self._i:self._i + n]
-        v = (buf[p.lag:] - buf[:-p.lag]) * (p.fps / p.lag)
-        sw = self._sc[self._i + p.lag:self._i + n].mean()
+        buf = self._pts[self._i : self._i + n]
+        v = (buf[p.lag :] - buf[: -p.lag]) * (p.fps / p.lag)
+        sw = self._sc[self._i + p.lag : self._i + n].mean()
         if not sw > 0:
             return float("nan"), UNKNOWN
         s = float(np.sqrt(v.var(axis=0).sum(axis=-1).mean()) / sw)

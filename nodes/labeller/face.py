@@ -21,15 +21,14 @@ How crude this is, honestly:
 
 The thresholds are set by hand, not learned; measure them on your own footage.
 """
+
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import os
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 from counterpart.nodes.labeller.signals import UNKNOWN
 
 Box = tuple[int, int, int, int]  # x, y, w, h in pixels
@@ -37,8 +36,12 @@ Box = tuple[int, int, int, int]  # x, y, w, h in pixels
 CASCADE_NAME = "haarcascade_frontalface_default.xml"
 #: environment variable naming the cascade file when OpenCV does not ship it
 CASCADE_ENV = "COUNTERPART_FACE_CASCADE"
-_SYSTEM_DIRS = ("/usr/share/opencv4/haarcascades", "/usr/share/opencv/haarcascades",
-                "/usr/local/share/opencv4/haarcascades", "/opt/homebrew/share/opencv4/haarcascades")
+_SYSTEM_DIRS = (
+    "/usr/share/opencv4/haarcascades",
+    "/usr/share/opencv/haarcascades",
+    "/usr/local/share/opencv4/haarcascades",
+    "/opt/homebrew/share/opencv4/haarcascades",
+)
 
 
 def find_face_cascade() -> str | None:
@@ -69,7 +72,8 @@ def load_face_cascade(path: str | None = None) -> cv2.CascadeClassifier:
         raise FileNotFoundError(
             f"no {CASCADE_NAME} found (looked in ${CASCADE_ENV}, cv2.data.haarcascades and "
             f"{', '.join(_SYSTEM_DIRS)}); install OpenCV's cascade data (e.g. apt install "
-            f"opencv-data, or an opencv-contrib-python-headless 4.x wheel) or set {CASCADE_ENV}")
+            f"opencv-data, or an opencv-contrib-python-headless 4.x wheel) or set {CASCADE_ENV}"
+        )
     cc = cv2.CascadeClassifier(path)
     if cc.empty():
         raise FileNotFoundError(f"could not load the Haar cascade {path!r} (missing or not a cascade)")
@@ -88,8 +92,9 @@ def to_gray(image: np.ndarray) -> np.ndarray:
     raise ValueError(f"image must be (H,W) gray or (H,W,3) BGR, got shape {img.shape}")
 
 
-def detect_face(gray: np.ndarray, cascade: cv2.CascadeClassifier, min_face_px: int = 24,
-                roi: Box | None = None) -> Box | None:
+def detect_face(
+    gray: np.ndarray, cascade: cv2.CascadeClassifier, min_face_px: int = 24, roi: Box | None = None
+) -> Box | None:
     """Largest frontal face (x, y, w, h) in pixels of the full image, or None.
 
     gray: (H,W) uint8. roi: optional search region (x, y, w, h), e.g. the person's silhouette box.
@@ -98,11 +103,10 @@ def detect_face(gray: np.ndarray, cascade: cv2.CascadeClassifier, min_face_px: i
     if roi is not None:
         x, y, w, h = (int(v) for v in roi)
         x0, y0 = max(0, x), max(0, y)
-        gray = gray[y0:max(y0, y + h), x0:max(x0, x + w)]
+        gray = gray[y0 : max(y0, y + h), x0 : max(x0, x + w)]
     if gray.shape[0] < min_face_px or gray.shape[1] < min_face_px:
         return None
-    faces = cascade.detectMultiScale(gray, scaleFactor=1.1, minNeighbors=5,
-                                     minSize=(min_face_px, min_face_px))
+    faces = cascade.detectMultiScale(gray, scaleFactor=1.1, minNeighbors=5, minSize=(min_face_px, min_face_px))
     if len(faces) == 0:
         return None
     fx, fy, fw, fh = max(faces, key=lambda f: int(f[2]) * int(f[3]))
@@ -112,7 +116,8 @@ def detect_face(gray: np.ndarray, cascade: cv2.CascadeClassifier, min_face_px: i
 def mouth_patch(gray: np.ndarray, face: Box, patch_size: tuple[int, int] = (32, 16)) -> np.ndarray | None:
     """Lower third of the face box, middle two thirds of its width, resampled to patch_size
     (width, height) and divided by its mean intensity. Returns (h, w) float32 or None if the region
-    leaves the image."""
+    leaves the image.
+    """
     x, y, w, h = face
     mx0, mx1 = x + w // 6, x + w - w // 6
     my0, my1 = y + (2 * h) // 3, y + h
@@ -130,11 +135,13 @@ MOUTH_DY, MOUTH_W, MOUTH_H = 0.28, 0.5, 0.28
 UPPER_DY, UPPER_W, UPPER_H = -0.1, 0.6, 0.22
 
 
-def subpix_patch(gray: np.ndarray, center: tuple[float, float], size: tuple[float, float],
-                 patch_size: tuple[int, int]) -> np.ndarray | None:
+def subpix_patch(
+    gray: np.ndarray, center: tuple[float, float], size: tuple[float, float], patch_size: tuple[int, int]
+) -> np.ndarray | None:
     """The region of ``size`` (w, h) px centred at the sub-pixel ``center`` (x, y) px of gray
     (H,W) uint8, resampled to ``patch_size`` (w, h) and divided by its mean: (h, w) float32, or
-    None when the region leaves the image."""
+    None when the region leaves the image.
+    """
     w, h = size
     cx, cy = center
     if cx - w / 2 < 0 or cy - h / 2 < 0 or cx + w / 2 > gray.shape[1] or cy + h / 2 > gray.shape[0]:
@@ -153,7 +160,8 @@ class FaceParams:
     min_valid: fraction of the window that must hold measurements. detect_every: run the cascade
     every n frames and reuse the last box in between. talk_energy_tracked, laugh_energy_tracked:
     the thresholds of a tracked face's stabilised mouth energy above its upper face's
-    (:meth:`FaceSignalDetector.update_track`), in the same unit (laughing from the energy alone)."""
+    (:meth:`FaceSignalDetector.update_track`), in the same unit (laughing from the energy alone).
+    """
 
     fps: float
     window_s: float = 1.0
@@ -174,8 +182,10 @@ class FaceParams:
             raise ValueError(f"min_face_px must be >= 12 pixels, got {self.min_face_px}")
         for name in ("talk_energy", "laugh_energy", "talk_energy_tracked", "laugh_energy_tracked", "laugh_extent"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0 (a mean absolute difference of mean-normalised "
-                                 f"patches), got {getattr(self, name)}")
+                raise ValueError(
+                    f"{name} must be > 0 (a mean absolute difference of mean-normalised "
+                    f"patches), got {getattr(self, name)}"
+                )
         if self.detect_every < 1:
             raise ValueError(f"detect_every must be >= 1, got {self.detect_every}")
 
@@ -193,8 +203,7 @@ class FaceSignalDetector:
     another face tracker); ``roi`` restricts the search (e.g. to this person's silhouette box).
     """
 
-    def __init__(self, fps: float, cascade: cv2.CascadeClassifier | None = None,
-                 **params: object) -> None:
+    def __init__(self, fps: float, cascade: cv2.CascadeClassifier | None = None, **params: object) -> None:
         self.params = FaceParams(fps=fps, **params)  # type: ignore[arg-type]
         self._cascade = cascade
         self._energy = np.full(self.params.w, np.nan)
@@ -232,13 +241,15 @@ class FaceSignalDetector:
         self._extent[self._i] = extent
         self._i = (self._i + 1) % len(self._energy)
 
-    def update(self, image: np.ndarray, roi: Box | None = None,
-               face_box: Box | None = None) -> tuple[float, int, float, int]:
+    def update(
+        self, image: np.ndarray, roi: Box | None = None, face_box: Box | None = None
+    ) -> tuple[float, int, float, int]:
         """image: (H,W) uint8 gray or (H,W,3) uint8 BGR. Returns
         (talk_score, talking, laugh_score, laughing); scores nan where labels are UNKNOWN.
 
         The mouth patch comes from the detected (or given) box as it is: no stabilisation, no
-        reference patch. :meth:`update_track` is the stabilised form for a tracked face."""
+        reference patch. :meth:`update_track` is the stabilised form for a tracked face.
+        """
         p = self.params
         gray = to_gray(image)
         if face_box is None:
@@ -261,14 +272,17 @@ class FaceSignalDetector:
         face's features (so it does not slide with the detector's jitter), and its motion energy
         is taken *above* that of a patch of the upper face (eyes and brows) cut the same way: head
         motion, residual misalignment, lighting flicker and sensor noise move both; speech moves
-        the mouth only. A still, silent face scores about 0."""
+        the mouth only. A still, silent face scores about 0.
+        """
         self._box = (int(center[0] - size / 2), int(center[1] - size / 2), int(size), int(size))
         if size < self.params.min_face_px:
             return self._step(None, None)
-        mouth = subpix_patch(gray, (center[0], center[1] + MOUTH_DY * size),
-                             (MOUTH_W * size, MOUTH_H * size), self.params.patch_size)
-        upper = subpix_patch(gray, (center[0], center[1] + UPPER_DY * size),
-                             (UPPER_W * size, UPPER_H * size), self.params.patch_size)
+        mouth = subpix_patch(
+            gray, (center[0], center[1] + MOUTH_DY * size), (MOUTH_W * size, MOUTH_H * size), self.params.patch_size
+        )
+        upper = subpix_patch(
+            gray, (center[0], center[1] + UPPER_DY * size), (UPPER_W * size, UPPER_H * size), self.params.patch_size
+        )
         if mouth is None or upper is None:
             return self._step(None, None)
         return self._step(mouth, upper)
@@ -300,7 +314,7 @@ class FaceSignalDetector:
         extent = float(self._extent[valid].mean())
         tracked = ref is not None
         talk = energy / (p.talk_energy_tracked if tracked else p.talk_energy)
-        if tracked:   # the stabilised energy alone: a laugh opens the mouth wide and fast
+        if tracked:  # the stabilised energy alone: a laugh opens the mouth wide and fast
             laugh = energy / p.laugh_energy_tracked
         else:
             laugh = min(energy / p.laugh_energy, extent / p.laugh_extent)

@@ -25,6 +25,7 @@ lost and found again takes the lowest free slot, with a new ``track_id``. A new 
 detected again on each of its next ``CONFIRM`` frames, or it is dropped (most false detections
 on a textured background are not found twice running).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -67,7 +68,10 @@ class FaceTrackParams:
     def __post_init__(self) -> None:
         checks = {
             "fps": (self.fps > 0, "must be > 0 Hz"),
-            "min_face_px": (self.min_face_px >= HAAR_WINDOW_PX, f"must be >= {HAAR_WINDOW_PX} px (the cascade's window)"),
+            "min_face_px": (
+                self.min_face_px >= HAAR_WINDOW_PX,
+                f"must be >= {HAAR_WINDOW_PX} px (the cascade's window)",
+            ),
             "max_miss_s": (self.max_miss_s >= 0, "must be >= 0 s"),
             "anchor_s": (self.anchor_s > 0, "must be > 0 s"),
             "size_s": (self.size_s > 0, "must be > 0 s"),
@@ -99,7 +103,8 @@ class FaceTrack:
     (px); box: the smoothed box (x, y, w, h) px, floats; detected: the last search found it;
     missed: frames since the last detection (the search runs on every other frame while the flow
     follows a confirmed face, so ``detected`` is that of the last search); age: frames since the track started; slot: its place
-    among the tracked faces; track_id: unique over the run."""
+    among the tracked faces; track_id: unique over the run.
+    """
 
     center: np.ndarray
     size: float
@@ -122,21 +127,31 @@ class FaceTrack:
         return (float(self.center[0] - w / 2), float(self.center[1] - w / 2), float(w), float(w))
 
 
-def _detect(gray: np.ndarray, cascade: cv2.CascadeClassifier, scale: float, min_px: float,
-            max_px: float | None, min_neighbors: int, x0: int = 0, y0: int = 0,
-            scale_factor: float = 1.1) -> np.ndarray:
+def _detect(
+    gray: np.ndarray,
+    cascade: cv2.CascadeClassifier,
+    scale: float,
+    min_px: float,
+    max_px: float | None,
+    min_neighbors: int,
+    x0: int = 0,
+    y0: int = 0,
+    scale_factor: float = 1.1,
+) -> np.ndarray:
     """Faces (K, 4) float (x, y, w, h) in full-image px of ``gray`` searched at ``scale``."""
     if scale < 1.0:
-        gray = cv2.resize(gray, (max(1, int(round(gray.shape[1] * scale))), max(1, int(round(gray.shape[0] * scale)))),
-                          interpolation=cv2.INTER_AREA)
+        gray = cv2.resize(
+            gray,
+            (max(1, int(round(gray.shape[1] * scale))), max(1, int(round(gray.shape[0] * scale)))),
+            interpolation=cv2.INTER_AREA,
+        )
     else:
         scale = 1.0
     mn = max(HAAR_WINDOW_PX, int(min_px * scale))
     if gray.shape[0] < mn or gray.shape[1] < mn:
         return np.empty((0, 4))
     kw = {"maxSize": (int(max_px * scale), int(max_px * scale))} if max_px else {}
-    f = cascade.detectMultiScale(gray, scaleFactor=scale_factor, minNeighbors=min_neighbors,
-                                 minSize=(mn, mn), **kw)
+    f = cascade.detectMultiScale(gray, scaleFactor=scale_factor, minNeighbors=min_neighbors, minSize=(mn, mn), **kw)
     if len(f) == 0:
         return np.empty((0, 4))
     f = np.asarray(f, dtype=np.float64) / scale
@@ -161,8 +176,9 @@ class FaceTracker:
         self._a_pos = params.alpha(params.anchor_s)
         self._a_size = params.alpha(params.size_s)
         self._search_every = max(1, int(round(params.search_every_s * params.fps)))
-        self._lk = dict(winSize=(15, 15), maxLevel=2,
-                        criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
+        self._lk = dict(
+            winSize=(15, 15), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
+        )
 
     def reset(self) -> None:
         """Forget every face (a cut, a gap in the stream)."""
@@ -208,8 +224,17 @@ class FaceTracker:
         y1 = min(gray.shape[0], int(tr.center[1] + w / 2 + m))
         if x1 - x0 < HAAR_WINDOW_PX or y1 - y0 < HAAR_WINDOW_PX:
             return None
-        f = _detect(gray[y0:y1, x0:x1], self.cascade, min(1.0, ROI_FACE_PX / w),
-                    max(self.params.min_face_px, 0.7 * w), 1.45 * w, 3, x0, y0, 1.1)
+        f = _detect(
+            gray[y0:y1, x0:x1],
+            self.cascade,
+            min(1.0, ROI_FACE_PX / w),
+            max(self.params.min_face_px, 0.7 * w),
+            1.45 * w,
+            3,
+            x0,
+            y0,
+            1.1,
+        )
         if len(f) == 0:
             return None
         c = f[:, :2] + f[:, 2:] / 2

@@ -15,18 +15,19 @@ Yaw only: looking up or down is not modelled. Without a head yaw the head is ass
 the shoulders face, so a head turned while the shoulders stay put is missed (the tracker's head
 yaw fixes that). A silhouette alone does not support gaze: the labeller reports UNKNOWN there.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.nodes.labeller.signals import UNKNOWN
 
 
 def facing_yaw_from_shoulders(l_shoulder: np.ndarray, r_shoulder: np.ndarray) -> np.ndarray:
     """Body yaw (rad, about +Y, 0 faces +Z) from shoulders (...,3) metres. Returns (...,); nan
-    where the shoulders coincide in the ground plane."""
+    where the shoulders coincide in the ground plane.
+    """
     s = np.asarray(l_shoulder, dtype=np.float64) - np.asarray(r_shoulder, dtype=np.float64)
     if s.shape[-1] != 3:
         raise ValueError(f"shoulders must be (...,3) metres, got {s.shape}")
@@ -86,7 +87,8 @@ def gaze_at_other(
 
 def gaze_accuracy(pred: np.ndarray, truth: np.ndarray) -> float:
     """Fraction of frames where ``pred == truth``, over frames where both are known (not UNKNOWN).
-    Returns nan if no frame is known in both."""
+    Returns nan if no frame is known in both.
+    """
     pred = np.asarray(pred)
     truth = np.asarray(truth)
     if pred.shape != truth.shape:

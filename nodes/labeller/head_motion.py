@@ -48,14 +48,14 @@ Timing: ``center=False`` (the streaming default) labels frame ``t`` from the win
 ``t`` (causal: the labels are those of ``center=True`` delayed by ``N // 2`` frames, 0.8 s at the
 defaults); ``center=True`` (offline) from the window centred on ``t``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
-
 from counterpart.nodes.labeller.signals import UNKNOWN, threshold_labels
+from numpy.lib.stride_tricks import sliding_window_view
 
 #: channel order inside the detectors: (nod_a, nod_b, shake_a, shake_b); from positions these are
 #: (up, forward, lateral, 0), from the tracker's angles (pitch_radius * pitch, 0, 0,
@@ -107,8 +107,8 @@ class HeadMotionParams:
         n = self.n
         if n < 8:
             raise ValueError(
-                f"window_s * fps = {self.window_s} * {self.fps} gives {n} frames; need >= 8 "
-                "(use a longer window_s)")
+                f"window_s * fps = {self.window_s} * {self.fps} gives {n} frames; need >= 8 (use a longer window_s)"
+            )
         lo, hi = self.band_hz
         if not 0 < lo < hi:
             raise ValueError(f"band_hz must be (low, high) with 0 < low < high, got {self.band_hz}")
@@ -116,20 +116,33 @@ class HeadMotionParams:
         if not ((freqs >= lo) & (freqs <= hi)).any():
             raise ValueError(
                 f"band_hz {self.band_hz} holds no FFT bin for a {n}-frame window at {self.fps} fps "
-                f"(bins are {freqs[1]:.3g} Hz apart): widen the band or lengthen window_s")
-        floors = {k: getattr(self, k) for k in ("nod_floor_m", "shake_floor_m", "pitch_floor_m", "yaw_floor_m",
-                                               "face_nod_floor", "face_shake_floor")}
+                f"(bins are {freqs[1]:.3g} Hz apart): widen the band or lengthen window_s"
+            )
+        floors = {
+            k: getattr(self, k)
+            for k in (
+                "nod_floor_m",
+                "shake_floor_m",
+                "pitch_floor_m",
+                "yaw_floor_m",
+                "face_nod_floor",
+                "face_shake_floor",
+            )
+        }
         for k, v in floors.items():
             if not v > 0:
                 raise ValueError(f"{k} must be > 0 ({'face widths' if k.startswith('face') else 'metres'}), got {v}")
         if not 0 < self.threshold <= 1:
-            raise ValueError(f"threshold must be in (0, 1] (a fraction of the head's oscillating motion), got {self.threshold}")
+            raise ValueError(
+                f"threshold must be in (0, 1] (a fraction of the head's oscillating motion), got {self.threshold}"
+            )
         for name in ("nod_median_s", "shake_median_s"):
             v = getattr(self, name)
             if not v >= 0 or self.median_k(v) > n:
                 raise ValueError(
                     f"{name} must be >= 0 s and its width in frames ({self.median_k(v)}) at most "
-                    f"the window's ({n}), got {name}={v} at {self.fps} fps")
+                    f"the window's ({n}), got {name}={v} at {self.fps} fps"
+                )
 
     def median_k(self, seconds: float) -> int:
         """A running-median width in frames (odd; 1 = no median stage)."""
@@ -158,27 +171,44 @@ class _Spectral:
         self.wt = wt
         lo, hi = p.band_hz
         self.band = wt * ((freqs >= lo) & (freqs <= hi))
-        sw2 = float(np.sum(self.w ** 2))
+        sw2 = float(np.sum(self.w**2))
         # floors: [nod, shake] x [head point (m), angle arc (m), tracked face (face widths)]
-        self.e_floor = np.array([[p.nod_floor_m, p.pitch_floor_m, p.face_nod_floor],
-                                 [p.shake_floor_m, p.yaw_floor_m, p.face_shake_floor]]) ** 2 / 2.0 * sw2
+        self.e_floor = (
+            np.array(
+                [
+                    [p.nod_floor_m, p.pitch_floor_m, p.face_nod_floor],
+                    [p.shake_floor_m, p.yaw_floor_m, p.face_shake_floor],
+                ]
+            )
+            ** 2
+            / 2.0
+            * sw2
+        )
 
-    def scores(self, win: np.ndarray, angles: tuple[int, int] = (False, False),
-               ) -> tuple[np.ndarray, np.ndarray]:
+    def scores(
+        self,
+        win: np.ndarray,
+        angles: tuple[int, int] = (False, False),
+    ) -> tuple[np.ndarray, np.ndarray]:
         """win: (..., 4, N) channel windows (m) -> (nod_score, shake_score), each (...,).
         angles: the kind of the (nod, shake) channels, which picks the floors: 0 (False) a head
-        point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths)."""
+        point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths).
+        """
         bad = np.isnan(win).any(axis=(-2, -1))
         if bad.any():
             win = np.where(np.isnan(win), 0.0, win)
         win = np.concatenate(
-            [oscillation_residual(win[..., :2, :], self.p.median_k(self.p.nod_median_s)),
-             oscillation_residual(win[..., 2:, :], self.p.median_k(self.p.shake_median_s))], axis=-2)
+            [
+                oscillation_residual(win[..., :2, :], self.p.median_k(self.p.nod_median_s)),
+                oscillation_residual(win[..., 2:, :], self.p.median_k(self.p.shake_median_s)),
+            ],
+            axis=-2,
+        )
         x = (win - win.mean(axis=-1, keepdims=True)) * self.w
         spec = np.fft.rfft(x, axis=-1)
-        pw = spec.real ** 2 + spec.imag ** 2                        # (..., 4, F)
-        total = pw @ self.wt                                        # (..., 4)
-        band = pw @ self.band                                       # (..., 4)
+        pw = spec.real**2 + spec.imag**2  # (..., 4, F)
+        total = pw @ self.wt  # (..., 4)
+        band = pw @ self.band  # (..., 4)
         e_all = total.sum(axis=-1)
         nod_b = band[..., _NOD_CHANNELS[0]] + band[..., _NOD_CHANNELS[1]]
         shake_b = band[..., _SHAKE_CHANNELS[0]] + band[..., _SHAKE_CHANNELS[1]]
@@ -199,8 +229,7 @@ def oscillation_residual(win: np.ndarray, k: int) -> np.ndarray:
     if k <= 1:
         return win
     h = k // 2
-    padded = np.concatenate([np.repeat(win[..., :1], h, axis=-1), win,
-                             np.repeat(win[..., -1:], h, axis=-1)], axis=-1)
+    padded = np.concatenate([np.repeat(win[..., :1], h, axis=-1), win, np.repeat(win[..., -1:], h, axis=-1)], axis=-1)
     return win - np.median(sliding_window_view(padded, k, axis=-1), axis=-1)
 
 
@@ -263,7 +292,7 @@ def head_channels_3d(
         ch[:, 1] = np.einsum("ij,ij->i", rel, fwd)
     else:
         ch[:, 0] = pitch_arc
-        ch[np.isnan(rel).any(axis=1), 1] = np.nan   # missing joints stay missing
+        ch[np.isnan(rel).any(axis=1), 1] = np.nan  # missing joints stay missing
     if yaw_arc is None:
         ch[:, 2] = np.einsum("ij,ij->i", rel, left)
     else:
@@ -289,8 +318,7 @@ def head_channels_2d(
     head_px = np.asarray(head_px, dtype=np.float64)
     ref_px = np.asarray(ref_px, dtype=np.float64)
     if head_px.ndim != 2 or head_px.shape[1] != 2 or ref_px.shape != head_px.shape:
-        raise ValueError(
-            f"head_px and ref_px must both be (T,2) pixels; got {head_px.shape} and {ref_px.shape}")
+        raise ValueError(f"head_px and ref_px must both be (T,2) pixels; got {head_px.shape} and {ref_px.shape}")
     t = head_px.shape[0]
     h = np.broadcast_to(np.asarray(height_px, dtype=np.float64), (t,))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -314,7 +342,9 @@ class HeadMotionResult:
 
 
 def scores_from_channels(
-    channels: np.ndarray, params: HeadMotionParams, center: bool = False,
+    channels: np.ndarray,
+    params: HeadMotionParams,
+    center: bool = False,
     angles: tuple[bool, bool] = (False, False),
 ) -> HeadMotionResult:
     """Batch nod/shake over a whole (T,4) channel trajectory, vectorised over all windows.
@@ -330,13 +360,14 @@ def scores_from_channels(
     nod = np.full(t, np.nan)
     shake = np.full(t, np.nan)
     if t >= n:
-        win = sliding_window_view(ch.T, n, axis=1).transpose(1, 0, 2)   # (T-N+1, 4, N)
+        win = sliding_window_view(ch.T, n, axis=1).transpose(1, 0, 2)  # (T-N+1, 4, N)
         s_nod, s_shake = _Spectral(params).scores(win, angles)
         first = n // 2 if center else n - 1
-        nod[first:first + len(s_nod)] = s_nod
-        shake[first:first + len(s_shake)] = s_shake
-    return HeadMotionResult(nod, threshold_labels(nod, params.threshold),
-                            shake, threshold_labels(shake, params.threshold))
+        nod[first : first + len(s_nod)] = s_nod
+        shake[first : first + len(s_shake)] = s_shake
+    return HeadMotionResult(
+        nod, threshold_labels(nod, params.threshold), shake, threshold_labels(shake, params.threshold)
+    )
 
 
 def head_motion(
@@ -360,8 +391,7 @@ def head_motion(
     Returns :class:`HeadMotionResult` of (T,) arrays.
     """
     p = HeadMotionParams(fps=fps, window_s=window_s, **params)  # type: ignore[arg-type]
-    ch = head_channels_3d(head, neck, facing_yaw, head_yaw, p.head_radius_m, head_pitch,
-                          p.pitch_radius_m)
+    ch = head_channels_3d(head, neck, facing_yaw, head_yaw, p.head_radius_m, head_pitch, p.pitch_radius_m)
     return scores_from_channels(ch, p, center, (head_pitch is not None, head_yaw is not None))
 
 
@@ -391,7 +421,7 @@ class _StreamingChannels:
         self._buf = np.full((4, 2 * n), np.nan)
         self._i = 0
         self._count = 0
-        self._angles = (False, False)   # (nod from a pitch, shake from a yaw) in the buffer
+        self._angles = (False, False)  # (nod from a pitch, shake from a yaw) in the buffer
 
     def reset(self) -> None:
         """Forget the history (e.g. after the person was lost)."""
@@ -412,12 +442,11 @@ class _StreamingChannels:
         n = self.params.n
         if self._count < n:
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
-        win = self._buf[:, self._i:self._i + n]
+        win = self._buf[:, self._i : self._i + n]
         s_nod, s_shake = self._spec.scores(win, self._angles)
         th = self.params.threshold
         sn, ss = float(s_nod), float(s_shake)
-        return (sn, UNKNOWN if sn != sn else int(sn >= th),
-                ss, UNKNOWN if ss != ss else int(ss >= th))
+        return (sn, UNKNOWN if sn != sn else int(sn >= th), ss, UNKNOWN if ss != ss else int(ss >= th))
 
 
 class HeadMotionDetector(_StreamingChannels):
@@ -435,7 +464,8 @@ class HeadMotionDetector(_StreamingChannels):
 
     def _arc(self, angle: float, channel: int, r: float) -> float:
         """Arc (m) of a head angle (rad) at radius ``r`` (m), unwrapped against the channel's
-        previous sample so that an angle crossing +-pi is not a 2 pi jump."""
+        previous sample so that an angle crossing +-pi is not a 2 pi jump.
+        """
         prev = self._buf[channel, (self._i - 1) % self.params.n] / r
         a = float(angle)
         if prev == prev:
@@ -467,7 +497,7 @@ class HeadMotionDetector(_StreamingChannels):
         missing = np.nan if np.isnan(rx + ry + rz) else 0.0
         angles = (head_pitch is not None, head_yaw is not None)
         if angles != self._angles:
-            self.reset()   # the channels change kind: no window mixes two kinds
+            self.reset()  # the channels change kind: no window mixes two kinds
             self._angles = angles
         if head_pitch is None:
             nod = (ry, rx * s + rz * c)
@@ -483,17 +513,17 @@ class HeadMotionDetector(_StreamingChannels):
 
 class HeadMotionDetector2D(_StreamingChannels):
     """Streaming nod/shake from the silhouette's head reference point (pixels), scaled by the
-    person's height in pixels; see :func:`head_channels_2d` for what it can and cannot see."""
+    person's height in pixels; see :func:`head_channels_2d` for what it can and cannot see.
+    """
 
-    def __init__(self, fps: float, window_s: float = 1.6, person_height_m: float = 1.7,
-                 **params: object) -> None:
+    def __init__(self, fps: float, window_s: float = 1.6, person_height_m: float = 1.7, **params: object) -> None:
         super().__init__(HeadMotionParams(fps=fps, window_s=window_s, **params))  # type: ignore[arg-type]
         self.person_height_m = person_height_m
 
-    def update(self, head_px: np.ndarray, ref_px: np.ndarray,
-               height_px: float) -> tuple[float, int, float, int]:
+    def update(self, head_px: np.ndarray, ref_px: np.ndarray, height_px: float) -> tuple[float, int, float, int]:
         """head_px, ref_px: (2,) pixels; height_px: silhouette height (pixels).
-        Returns (nod_score, nod, shake_score, shake)."""
+        Returns (nod_score, nod, shake_score, shake).
+        """
         h = np.asarray(head_px, dtype=np.float64)
         r = np.asarray(ref_px, dtype=np.float64)
         if h.shape != (2,) or r.shape != (2,):
@@ -508,7 +538,8 @@ class HeadMotionDetectorFace(_StreamingChannels):
     in units of the face's own width: the channels integrate the point's frame-to-frame motion
     divided by the face width of that frame (so a face that slowly grows as the person leans in
     adds no motion), image up for nods, image x for shakes. Floors: ``face_nod_floor`` /
-    ``face_shake_floor`` (face widths)."""
+    ``face_shake_floor`` (face widths).
+    """
 
     def __init__(self, fps: float, window_s: float = 1.6, **params: object) -> None:
         super().__init__(HeadMotionParams(fps=fps, window_s=window_s, **params))  # type: ignore[arg-type]
@@ -523,7 +554,8 @@ class HeadMotionDetectorFace(_StreamingChannels):
 
     def update(self, center_px: np.ndarray, size_px: float) -> tuple[float, int, float, int]:
         """center_px: (2,) head point (px, y down); size_px: face width (px) > 0.
-        Returns (nod_score, nod, shake_score, shake)."""
+        Returns (nod_score, nod, shake_score, shake).
+        """
         c = np.asarray(center_px, dtype=np.float64)
         if c.shape != (2,) or not size_px > 0:
             raise ValueError(f"center_px must be (2,) pixels and size_px > 0, got {c.shape}, {size_px}")

@@ -27,6 +27,7 @@ A person switching between sources, a face track restarting, or a person missing
 restarts the windows of the affected detectors (so a window never mixes two sources or spans a
 gap): those signals are UNKNOWN until a window has filled again.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -35,13 +36,16 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 from counterpart.nodes.labeller.activity import ActivityDetector, activity_3d
 from counterpart.nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade, to_gray
 from counterpart.nodes.labeller.face_track import FaceTrack, FaceTracker, FaceTrackParams
 from counterpart.nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_at_other
-from counterpart.nodes.labeller.head_motion import (HeadMotionDetector, HeadMotionDetector2D, HeadMotionDetectorFace,
-                                        head_motion)
+from counterpart.nodes.labeller.head_motion import (
+    HeadMotionDetector,
+    HeadMotionDetector2D,
+    HeadMotionDetectorFace,
+    head_motion,
+)
 from counterpart.nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN, UNKNOWN_VALUE
 
 _H, _N = JOINT_INDEX["head"], JOINT_INDEX["neck"]
@@ -81,8 +85,9 @@ class PersonObservation:
         return self.joints is not None and bool(np.isfinite(self.joints).all())
 
     def has_2d_head(self) -> bool:
-        return (self.head_px is not None and self.ref_px is not None and self.height_px is not None
-                and self.height_px > 0)
+        return (
+            self.head_px is not None and self.ref_px is not None and self.height_px is not None and self.height_px > 0
+        )
 
 
 class _PersonState:
@@ -121,12 +126,16 @@ class SocialLabeller:
     a face's person.
     """
 
-    def __init__(self, fps: float, head_window_s: float = 1.6,
-                 gaze_threshold: float = float(np.radians(30.0)),
-                 head_params: Mapping[str, object] | None = None,
-                 activity_params: Mapping[str, object] | None = None,
-                 face_params: Mapping[str, object] | None = None,
-                 track_params: Mapping[str, object] | None = None) -> None:
+    def __init__(
+        self,
+        fps: float,
+        head_window_s: float = 1.6,
+        gaze_threshold: float = float(np.radians(30.0)),
+        head_params: Mapping[str, object] | None = None,
+        activity_params: Mapping[str, object] | None = None,
+        face_params: Mapping[str, object] | None = None,
+        track_params: Mapping[str, object] | None = None,
+    ) -> None:
         self.fps = float(fps)
         self.head_window_s = head_window_s
         self.gaze_threshold = gaze_threshold
@@ -146,7 +155,8 @@ class SocialLabeller:
 
     def _face_cascade(self) -> cv2.CascadeClassifier | None:
         """The face detector, loaded on first use; None (talking/laughing UNKNOWN, one warning)
-        when no cascade file can be found."""
+        when no cascade file can be found.
+        """
         if self._cascade is None and not self._cascade_missing:
             try:
                 self._cascade = load_face_cascade()
@@ -163,12 +173,13 @@ class SocialLabeller:
 
     def skip(self, n_frames: int = 1) -> None:
         """``n_frames`` frames are missing from the stream (dropped upstream): every person's
-        windows restart at the next :meth:`update`, so that no window spans the gap."""
+        windows restart at the next :meth:`update`, so that no window spans the gap.
+        """
         if n_frames < 0:
             raise ValueError(f"n_frames must be >= 0, got {n_frames}")
         self._frame += int(n_frames)
         if n_frames and self._tracker is not None:
-            self._tracker.reset()   # the flow cannot bridge a gap in the stream
+            self._tracker.reset()  # the flow cannot bridge a gap in the stream
 
     def _state(self, pid: Hashable) -> _PersonState:
         st = self._people.get(pid)
@@ -179,8 +190,12 @@ class SocialLabeller:
         st.last_frame = self._frame
         return st
 
-    def update(self, people: Mapping[Hashable, PersonObservation], image: np.ndarray | None = None,
-               targets: Mapping[Hashable, np.ndarray] | None = None) -> dict[Hashable, Labels]:
+    def update(
+        self,
+        people: Mapping[Hashable, PersonObservation],
+        image: np.ndarray | None = None,
+        targets: Mapping[Hashable, np.ndarray] | None = None,
+    ) -> dict[Hashable, Labels]:
         """Label one frame.
 
         people: person id -> :class:`PersonObservation`. image: the camera frame (uint8 gray or
@@ -196,8 +211,7 @@ class SocialLabeller:
             tracks = [t for t in self._tracker.update(gray) if t.confirmed]
         people, faces = self._attribute(people, tracks)
         self.faces = faces
-        heads = {pid: np.asarray(o.joints, dtype=np.float64)[_H]
-                 for pid, o in people.items() if o.has_3d()}
+        heads = {pid: np.asarray(o.joints, dtype=np.float64)[_H] for pid, o in people.items() if o.has_3d()}
         out: dict[Hashable, Labels] = {}
         self.sources = {}
         for pid, obs in people.items():
@@ -216,7 +230,7 @@ class SocialLabeller:
                 st.act_mode = act_mode
             j = np.asarray(obs.joints, dtype=np.float64) if obs.has_3d() else None
             if face is not None:
-                if st.track_id != face.track_id:   # another face (or the same one found again)
+                if st.track_id != face.track_id:  # another face (or the same one found again)
                     st.headf.reset()
                     st.face.reset()
                     st.track_id = face.track_id
@@ -228,8 +242,7 @@ class SocialLabeller:
                 ns, n, ss, s = st.head3.update(j[_H], j[_N], yaw, obs.head_yaw, obs.head_pitch)
                 res["nod"], res["shake"] = (ns, n), (ss, s)
             elif mode == "2d":
-                ns, n, ss, s = st.head2.update(np.asarray(obs.head_px), np.asarray(obs.ref_px),
-                                               float(obs.height_px))  # type: ignore[arg-type]
+                ns, n, ss, s = st.head2.update(np.asarray(obs.head_px), np.asarray(obs.ref_px), float(obs.height_px))  # type: ignore[arg-type]
                 res["nod"], res["shake"] = (ns, n), (ss, s)
             if j is not None:
                 res["activity"] = st.act3.update_3d(j)
@@ -237,14 +250,15 @@ class SocialLabeller:
                 if target is None:
                     target = _nearest_other(pid, heads)
                 if target is not None:
-                    g = gaze_at_other(j[_H], j[_LS], j[_RS], np.asarray(target, dtype=np.float64),
-                                      obs.head_yaw, self.gaze_threshold)
+                    g = gaze_at_other(
+                        j[_H], j[_LS], j[_RS], np.asarray(target, dtype=np.float64), obs.head_yaw, self.gaze_threshold
+                    )
                     res["gaze_at_other"] = (float(g.score[0]), int(g.label[0]))
             elif act_mode == "2d":
                 if obs.control_points is not None:
                     res["activity"] = st.act2.update_2d(obs.control_points, float(obs.height_px))  # type: ignore[arg-type]
                 else:
-                    st.act2.reset()   # a window must not span the gap
+                    st.act2.reset()  # a window must not span the gap
             if face is not None and gray is not None:
                 ts, t, ls, lg = st.face.update_track(gray, face.center, face.size)
                 res["talking"], res["laughing"] = (ts, t), (ls, lg)
@@ -256,10 +270,14 @@ class SocialLabeller:
         self._frame += 1
         return out
 
-    def _attribute(self, people: Mapping[Hashable, PersonObservation], tracks: list[FaceTrack],
-                   ) -> tuple[dict[Hashable, PersonObservation], dict[Hashable, FaceTrack]]:
+    def _attribute(
+        self,
+        people: Mapping[Hashable, PersonObservation],
+        tracks: list[FaceTrack],
+    ) -> tuple[dict[Hashable, PersonObservation], dict[Hashable, FaceTrack]]:
         """Give each tracked face to a person (see the module docstring): returns the people to
-        label (the given ones less those absorbed, plus faces of their own) and person id -> face."""
+        label (the given ones less those absorbed, plus faces of their own) and person id -> face.
+        """
         people = dict(people)
         faces: dict[Hashable, FaceTrack] = {}
         self.absorbed = []
@@ -311,11 +329,18 @@ def _nearest_other(pid: Hashable, heads: Mapping[Hashable, np.ndarray]) -> np.nd
     return best
 
 
-def label_pair_3d(joints_a: np.ndarray, joints_b: np.ndarray, fps: float, center: bool = True,
-                  head_window_s: float = 1.6, gaze_threshold: float = float(np.radians(30.0)),
-                  head_yaw_a: np.ndarray | None = None, head_yaw_b: np.ndarray | None = None,
-                  head_pitch_a: np.ndarray | None = None, head_pitch_b: np.ndarray | None = None,
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def label_pair_3d(
+    joints_a: np.ndarray,
+    joints_b: np.ndarray,
+    fps: float,
+    center: bool = True,
+    head_window_s: float = 1.6,
+    gaze_threshold: float = float(np.radians(30.0)),
+    head_yaw_a: np.ndarray | None = None,
+    head_yaw_b: np.ndarray | None = None,
+    head_pitch_a: np.ndarray | None = None,
+    head_pitch_b: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Offline batch labels of two tracked people looking at each other (vectorised over frames).
 
     joints_a, joints_b: (T,14,3) metres. head_yaw_a/b, head_pitch_a/b: (T,) head angles relative to
@@ -333,8 +358,9 @@ def label_pair_3d(joints_a: np.ndarray, joints_b: np.ndarray, fps: float, center
         sc = np.full((t, len(SIGNALS)), np.nan)
         lb = np.full((t, len(SIGNALS)), UNKNOWN, dtype=np.int8)
         yaw = np.nan_to_num(facing_yaw_from_shoulders(me[:, _LS], me[:, _RS]))
-        hm = head_motion(me[:, _H], me[:, _N], fps, head_window_s, facing_yaw=yaw, head_yaw=hy,
-                         center=center, head_pitch=hp)
+        hm = head_motion(
+            me[:, _H], me[:, _N], fps, head_window_s, facing_yaw=yaw, head_yaw=hy, center=center, head_pitch=hp
+        )
         sc[:, 0], lb[:, 0], sc[:, 1], lb[:, 1] = hm.nod_score, hm.nod, hm.shake_score, hm.shake
         g = gaze_at_other(me[:, _H], me[:, _LS], me[:, _RS], other[:, _H], hy, gaze_threshold)
         sc[:, 2], lb[:, 2] = g.score, g.label

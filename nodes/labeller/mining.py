@@ -22,6 +22,7 @@ whose antecedent is all speaker items and whose consequent is all listener items
 For two scenarios (interested / not-interested listener) :func:`compare_scenarios` pairs the same
 rule in both and gives the ratio of their confidences (Okwechime et al., Table 2).
 """
+
 from __future__ import annotations
 
 import csv
@@ -34,10 +35,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from counterpart.nodes.labeller.signals import UNKNOWN, labels_to_bool
 from mlxtend.frequent_patterns import apriori, association_rules, fpgrowth
 from numpy.lib.stride_tricks import sliding_window_view
-
-from counterpart.nodes.labeller.signals import UNKNOWN, labels_to_bool
 
 SPEAKER_PREFIX = "S:"
 LISTENER_PREFIX = "L:"
@@ -56,7 +56,8 @@ def _as_json(rule: Any) -> dict[str, Any]:
 @dataclass(frozen=True)
 class Rule:
     """One association rule ``antecedent -> consequent``; items are "S:<signal>" / "L:<signal>",
-    sorted. Supports are fractions of transactions."""
+    sorted. Supports are fractions of transactions.
+    """
 
     antecedent: tuple[str, ...]
     consequent: tuple[str, ...]
@@ -71,18 +72,25 @@ class Rule:
         return self.antecedent, self.consequent
 
     def __str__(self) -> str:
-        return (f"{{{', '.join(self.antecedent)}}} -> {{{', '.join(self.consequent)}}} "
-                f"(support {self.support:.3f}, confidence {self.confidence:.3f}, lift {self.lift:.2f})")
+        return (
+            f"{{{', '.join(self.antecedent)}}} -> {{{', '.join(self.consequent)}}} "
+            f"(support {self.support:.3f}, confidence {self.confidence:.3f}, lift {self.lift:.2f})"
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return _as_json(self)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Rule:
-        return cls(antecedent=tuple(d["antecedent"]), consequent=tuple(d["consequent"]),
-                   support=float(d["support"]), confidence=float(d["confidence"]),
-                   lift=float(d["lift"]), antecedent_support=float(d["antecedent_support"]),
-                   consequent_support=float(d["consequent_support"]))
+        return cls(
+            antecedent=tuple(d["antecedent"]),
+            consequent=tuple(d["consequent"]),
+            support=float(d["support"]),
+            confidence=float(d["confidence"]),
+            lift=float(d["lift"]),
+            antecedent_support=float(d["antecedent_support"]),
+            consequent_support=float(d["consequent_support"]),
+        )
 
 
 def _as_bool(labels: np.ndarray, what: str) -> np.ndarray:
@@ -114,33 +122,37 @@ def build_transactions(
     li = _as_bool(listener_labels, "listener_labels")
     lnames = list(names if listener_names is None else listener_names)
     if sp.shape[0] != li.shape[0]:
-        raise ValueError(f"speaker and listener label streams must have the same number of frames "
-                         f"(one clock), got {sp.shape[0]} and {li.shape[0]}")
+        raise ValueError(
+            f"speaker and listener label streams must have the same number of frames "
+            f"(one clock), got {sp.shape[0]} and {li.shape[0]}"
+        )
     if sp.shape[1] != len(names) or li.shape[1] != len(lnames):
-        raise ValueError(f"names do not match the label columns: {len(names)} speaker names for "
-                         f"{sp.shape[1]} columns, {len(lnames)} listener names for {li.shape[1]}")
+        raise ValueError(
+            f"names do not match the label columns: {len(names)} speaker names for "
+            f"{sp.shape[1]} columns, {len(lnames)} listener names for {li.shape[1]}"
+        )
     if offset < 0 or bag < 0:
         raise ValueError(f"offset and bag must be >= 0 frames, got offset={offset}, bag={bag}")
     t = sp.shape[0]
-    first = max(0, bag - offset)          # first t whose bag starts inside the recording
-    last = t - 1 - offset - bag           # last t whose bag ends inside it
+    first = max(0, bag - offset)  # first t whose bag starts inside the recording
+    last = t - 1 - offset - bag  # last t whose bag ends inside it
     n = max(0, last - first + 1)
     lo = first + offset - bag
     if n == 0:
         lb = np.zeros((0, li.shape[1]), dtype=bool)
     elif bag == 0:
-        lb = li[lo:lo + n]
+        lb = li[lo : lo + n]
     else:
-        lb = sliding_window_view(li[lo:lo + n + 2 * bag], 2 * bag + 1, axis=0).any(axis=-1)
+        lb = sliding_window_view(li[lo : lo + n + 2 * bag], 2 * bag + 1, axis=0).any(axis=-1)
     cols = [SPEAKER_PREFIX + x for x in names] + [LISTENER_PREFIX + y for y in lnames]
     if len(set(cols)) != len(cols):
         raise ValueError(f"signal names must be unique, got {list(names)} / {lnames}")
-    data = np.concatenate([sp[first:first + n], lb], axis=1)
+    data = np.concatenate([sp[first : first + n], lb], axis=1)
     if speaker_mask is not None:
         m = np.asarray(speaker_mask, dtype=bool)
         if m.shape != (t,):
             raise ValueError(f"speaker_mask must be (T,) = ({t},) bool, got shape {m.shape}")
-        data = data[m[first:first + n]]
+        data = data[m[first : first + n]]
     return pd.DataFrame(data, columns=cols)
 
 
@@ -164,20 +176,22 @@ def turn_transactions(
         raise ValueError(f"turn_transactions needs a {talking!r} signal to tell the speaker; names are {names}")
     k = names.index(talking)
     a, b = np.asarray(labels_a), np.asarray(labels_b)
-    return pd.concat([build_transactions(sp, li, names, offset, bag, speaker_mask=sp[:, k] == 1)
-                      for sp, li in ((a, b), (b, a))], ignore_index=True)
+    return pd.concat(
+        [build_transactions(sp, li, names, offset, bag, speaker_mask=sp[:, k] == 1) for sp, li in ((a, b), (b, a))],
+        ignore_index=True,
+    )
 
 
 def _association_rules(freq: pd.DataFrame, n_transactions: int, min_confidence: float) -> pd.DataFrame:
-    """mlxtend's association_rules across its API versions: >= 0.23.2 takes ``num_itemsets`` (the
-    number of transactions) and from 0.23.4 ``return_metrics``; older versions take neither."""
+    """Mlxtend's association_rules across its API versions: >= 0.23.2 takes ``num_itemsets`` (the
+    number of transactions) and from 0.23.4 ``return_metrics``; older versions take neither.
+    """
     params = inspect.signature(association_rules).parameters
     kw: dict[str, Any] = {"metric": "confidence", "min_threshold": min_confidence}
     if "num_itemsets" in params:
         kw["num_itemsets"] = n_transactions
     if "return_metrics" in params:
-        kw["return_metrics"] = ["antecedent support", "consequent support", "support",
-                                "confidence", "lift"]
+        kw["return_metrics"] = ["antecedent support", "consequent support", "support", "confidence", "lift"]
     return association_rules(freq, **kw)
 
 
@@ -185,11 +199,18 @@ def rules_from_frame(rules: pd.DataFrame) -> list[Rule]:
     """Keep speaker -> listener rules of an mlxtend rules table; sorted by confidence, support."""
     out = []
     for a, c, sup, conf, lift, asup, csup in zip(
-            rules["antecedents"], rules["consequents"], rules["support"], rules["confidence"],
-            rules["lift"], rules["antecedent support"], rules["consequent support"]):
+        rules["antecedents"],
+        rules["consequents"],
+        rules["support"],
+        rules["confidence"],
+        rules["lift"],
+        rules["antecedent support"],
+        rules["consequent support"],
+    ):
         if all(x.startswith(SPEAKER_PREFIX) for x in a) and all(y.startswith(LISTENER_PREFIX) for y in c):
-            out.append(Rule(tuple(sorted(a)), tuple(sorted(c)), float(sup), float(conf), float(lift),
-                            float(asup), float(csup)))
+            out.append(
+                Rule(tuple(sorted(a)), tuple(sorted(c)), float(sup), float(conf), float(lift), float(asup), float(csup))
+            )
     out.sort(key=lambda r: (-r.confidence, -r.support, r.antecedent, r.consequent))
     return out
 
@@ -210,8 +231,9 @@ def mine_transactions(
     speaker -> listener rules with ``support >= min_support`` and ``confidence >= min_confidence``.
     """
     if not 0 < min_support <= 1 or not 0 <= min_confidence <= 1:
-        raise ValueError(f"min_support must be in (0,1] and min_confidence in [0,1], "
-                         f"got {min_support}, {min_confidence}")
+        raise ValueError(
+            f"min_support must be in (0,1] and min_confidence in [0,1], got {min_support}, {min_confidence}"
+        )
     if algorithm not in ("apriori", "fpgrowth"):
         raise ValueError(f"algorithm must be 'apriori' or 'fpgrowth', got {algorithm!r}")
     n = len(transactions)
@@ -221,8 +243,7 @@ def mine_transactions(
     if df.shape[1] == 0:
         return []
     if algorithm == "apriori":
-        freq = apriori(df, min_support=min_support, use_colnames=True, max_len=max_len,
-                       low_memory=low_memory)
+        freq = apriori(df, min_support=min_support, use_colnames=True, max_len=max_len, low_memory=low_memory)
     else:
         freq = fpgrowth(df, min_support=min_support, use_colnames=True, max_len=max_len)
     if freq.empty or not (freq["itemsets"].map(len) > 1).any():
@@ -246,8 +267,9 @@ def mine_rules(
     speaker_labels, listener_labels: (T,K) bool (or 1/0/UNKNOWN); names: K signal names.
     See :func:`build_transactions` and :func:`mine_transactions`.
     """
-    return mine_rules_sessions([(speaker_labels, listener_labels)], names, offset, min_support,
-                               min_confidence, bag, max_len, algorithm)
+    return mine_rules_sessions(
+        [(speaker_labels, listener_labels)], names, offset, min_support, min_confidence, bag, max_len, algorithm
+    )
 
 
 def mine_rules_sessions(
@@ -261,18 +283,19 @@ def mine_rules_sessions(
     algorithm: str = "apriori",
 ) -> list[Rule]:
     """Like :func:`mine_rules` over several recordings of one scenario: each
-    ``(speaker_labels, listener_labels)`` pair is bagged on its own, then the transactions are pooled."""
+    ``(speaker_labels, listener_labels)`` pair is bagged on its own, then the transactions are pooled.
+    """
     if not sessions:
         raise ValueError("sessions is empty: give at least one (speaker_labels, listener_labels) pair")
-    tx = pd.concat([build_transactions(s, li, names, offset, bag) for s, li in sessions],
-                   ignore_index=True)
+    tx = pd.concat([build_transactions(s, li, names, offset, bag) for s, li in sessions], ignore_index=True)
     return mine_transactions(tx, min_support, min_confidence, max_len, algorithm)
 
 
 @dataclass(frozen=True)
 class RuleComparison:
     """The same rule mined in two scenarios; ratio = confidence_a / confidence_b (Okwechime Table 2,
-    a = interested listener, b = not interested)."""
+    a = interested listener, b = not interested).
+    """
 
     antecedent: tuple[str, ...]
     consequent: tuple[str, ...]
@@ -287,29 +310,47 @@ class RuleComparison:
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RuleComparison:
-        return cls(tuple(d["antecedent"]), tuple(d["consequent"]), float(d["confidence_a"]),
-                   float(d["confidence_b"]), float(d["support_a"]), float(d["support_b"]),
-                   float(d["ratio"]))
+        return cls(
+            tuple(d["antecedent"]),
+            tuple(d["consequent"]),
+            float(d["confidence_a"]),
+            float(d["confidence_b"]),
+            float(d["support_a"]),
+            float(d["support_b"]),
+            float(d["ratio"]),
+        )
 
 
 def compare_scenarios(rules_a: Sequence[Rule], rules_b: Sequence[Rule]) -> list[RuleComparison]:
     """Pair rules with the same antecedent and consequent in both scenarios (rules found in only
-    one are left out) and give the ratio of confidences; sorted by ratio, largest first."""
+    one are left out) and give the ratio of confidences; sorted by ratio, largest first.
+    """
     by_key = {r.key: r for r in rules_b}
-    out = [RuleComparison(r.antecedent, r.consequent, r.confidence, by_key[r.key].confidence,
-                          r.support, by_key[r.key].support,
-                          r.confidence / by_key[r.key].confidence)
-           for r in rules_a if r.key in by_key]
+    out = [
+        RuleComparison(
+            r.antecedent,
+            r.consequent,
+            r.confidence,
+            by_key[r.key].confidence,
+            r.support,
+            by_key[r.key].support,
+            r.confidence / by_key[r.key].confidence,
+        )
+        for r in rules_a
+        if r.key in by_key
+    ]
     out.sort(key=lambda c: (-c.ratio, c.antecedent, c.consequent))
     return out
 
 
 # ---------------------------------------------------------------- rules file (read by the responder)
 
+
 @dataclass(frozen=True)
 class RulesFile:
     """Contents of a rules file: format version, the mining parameters, rules per scenario
-    (e.g. "interested", "not_interested") and the paired comparisons."""
+    (e.g. "interested", "not_interested") and the paired comparisons.
+    """
 
     version: int
     params: dict[str, Any]
@@ -317,9 +358,15 @@ class RulesFile:
     comparisons: list[RuleComparison] = field(default_factory=list)
 
 
-def write_rules(path: str | os.PathLike[str], scenarios: Mapping[str, Sequence[Rule]],
-                params: Mapping[str, Any], comparisons: Sequence[RuleComparison] = ()) -> None:
-    """Write a versioned JSON rules file::
+def write_rules(
+    path: str | os.PathLike[str],
+    scenarios: Mapping[str, Sequence[Rule]],
+    params: Mapping[str, Any],
+    comparisons: Sequence[RuleComparison] = (),
+) -> None:
+    """Write a versioned JSON rules file.
+
+    The format::
 
         {"format": "counterpart.labeller.rules", "version": 1,
          "params": {"offset": 10, "bag": 0, "min_support": ..., "fps": ..., "inputs": {...}, ...},
@@ -349,11 +396,13 @@ def read_rules(path: str | os.PathLike[str]) -> RulesFile:
     with open(path, encoding="utf-8") as f:
         doc = json.load(f)
     if not isinstance(doc, dict) or doc.get("format") != RULES_FORMAT:
-        raise ValueError(f"{path}: not a rules file (expected \"format\": \"{RULES_FORMAT}\")")
+        raise ValueError(f'{path}: not a rules file (expected "format": "{RULES_FORMAT}")')
     version = int(doc.get("version", 0))
     if version < 1 or version > RULES_VERSION:
-        raise ValueError(f"{path}: rules file version {version} is not supported "
-                         f"(this reader knows 1..{RULES_VERSION}); upgrade counterpart")
+        raise ValueError(
+            f"{path}: rules file version {version} is not supported "
+            f"(this reader knows 1..{RULES_VERSION}); upgrade counterpart"
+        )
     return RulesFile(
         version=version,
         params=dict(doc.get("params", {})),
@@ -364,10 +413,12 @@ def read_rules(path: str | os.PathLike[str]) -> RulesFile:
 
 # ---------------------------------------------------------------- label streams
 
+
 @dataclass(frozen=True)
 class LabelStreams:
     """Per-frame labels of the people of one recording: names (K,), people: id -> (T,K) int8
-    (1/0/UNKNOWN), fps (Hz) or None when the file does not say."""
+    (1/0/UNKNOWN), fps (Hz) or None when the file does not say.
+    """
 
     names: tuple[str, ...]
     people: dict[str, np.ndarray]
@@ -381,7 +432,7 @@ def _check_labels(a: np.ndarray, what: str) -> np.ndarray:
     if not np.issubdtype(a.dtype, np.number):
         raise ValueError(f"{what}: labels must be numeric 1/0/{UNKNOWN} or bool, got dtype {a.dtype}")
     if np.issubdtype(a.dtype, np.floating):
-        a = np.where(np.isnan(a), UNKNOWN, a)   # float32 label files may mark UNKNOWN as nan
+        a = np.where(np.isnan(a), UNKNOWN, a)  # float32 label files may mark UNKNOWN as nan
     bad = ~np.isin(a, (1, 0, UNKNOWN))
     if bad.any():
         raise ValueError(f"{what}: labels must be 1, 0 or {UNKNOWN}; found {np.unique(a[bad])[:5]}")
@@ -392,12 +443,15 @@ def read_labels_npz(path: str | os.PathLike[str]) -> LabelStreams:
     """Label streams from an NPZ with keys ``signals_a`` (T,K), ``signals_b`` (T,K) (bool, or
     1/0/-1 integers, or float 1/0/-1 with nan for UNKNOWN), ``signal_names`` (K,) str and ``fps``
     (scalar) -- the keys of the project's two-person trajectory file (``counterpart.body.trajectory``); other
-    keys are ignored."""
+    keys are ignored.
+    """
     with np.load(path, allow_pickle=False) as z:
         missing = [k for k in ("signals_a", "signals_b", "signal_names") if k not in z.files]
         if missing:
-            raise ValueError(f"{path}: missing keys {missing}; a label NPZ needs signals_a, "
-                             f"signals_b, signal_names and fps (has {z.files})")
+            raise ValueError(
+                f"{path}: missing keys {missing}; a label NPZ needs signals_a, "
+                f"signals_b, signal_names and fps (has {z.files})"
+            )
         names = tuple(str(x) for x in z["signal_names"])
         people = {p: _check_labels(z[f"signals_{p}"], f"{path}:signals_{p}") for p in ("a", "b")}
         fps = float(z["fps"]) if "fps" in z.files else None
@@ -405,8 +459,10 @@ def read_labels_npz(path: str | os.PathLike[str]) -> LabelStreams:
         if a.ndim != 2 or a.shape[1] != len(names):
             raise ValueError(f"{path}: signals_{p} has shape {a.shape}, expected (T, {len(names)})")
     if people["a"].shape != people["b"].shape:
-        raise ValueError(f"{path}: signals_a {people['a'].shape} and signals_b "
-                         f"{people['b'].shape} must have the same shape (one clock)")
+        raise ValueError(
+            f"{path}: signals_a {people['a'].shape} and signals_b "
+            f"{people['b'].shape} must have the same shape (one clock)"
+        )
     return LabelStreams(names, people, fps)
 
 

@@ -22,6 +22,7 @@ alone::
 
     python -m counterpart.nodes.labeller --param use_tracker=false
 """
+
 from __future__ import annotations
 
 import math
@@ -29,7 +30,6 @@ import re
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.bus import Input, Node, Output, Param, ParamError
 from counterpart.messages import Frame, Pose3D, Silhouettes, SocialSignals
@@ -50,7 +50,8 @@ _HEAD_TURN, _HEAD_NOD = DOF_INDEX["head_turn"], DOF_INDEX["head_nod"]
 def head_angles(pose: np.ndarray) -> tuple[float | None, float | None]:
     """(head_yaw, head_pitch) relative to the torso (rad) from a tracker's pose vector
     (``counterpart.body.pose``: ``head_turn``, ``head_nod``); (None, None) when the pose is not a finite
-    (DOF,) vector (a tracker that publishes joints only)."""
+    (DOF,) vector (a tracker that publishes joints only).
+    """
     p = np.asarray(pose, dtype=np.float64)
     if p.shape != (DOF,) or not np.isfinite(p[[_HEAD_TURN, _HEAD_NOD]]).all():
         return None, None
@@ -87,30 +88,46 @@ def observations(sil: Silhouettes, pose: Pose3D | None) -> tuple[dict[int, Perso
             continue
         base = obs.get(b.id, PersonObservation())
         head_yaw, head_pitch = head_angles(b.pose)
-        obs[b.id] = PersonObservation(joints=joints, head_yaw=head_yaw, head_pitch=head_pitch,
-                                      head_px=base.head_px,
-                                      ref_px=base.ref_px, height_px=base.height_px,
-                                      control_points=base.control_points, box=base.box)
+        obs[b.id] = PersonObservation(
+            joints=joints,
+            head_yaw=head_yaw,
+            head_pitch=head_pitch,
+            head_px=base.head_px,
+            ref_px=base.ref_px,
+            height_px=base.height_px,
+            control_points=base.control_points,
+            box=base.box,
+        )
         sides.setdefault(b.id, b.side)
     return obs, sides
 
 
-def signals_message(seq: int, stamp: int, labels: dict[Any, dict[str, tuple[float, int]]],
-                    obs: dict[int, PersonObservation], sides: dict[int, str],
-                    sources: dict[Any, str] | None = None) -> SocialSignals:
+def signals_message(
+    seq: int,
+    stamp: int,
+    labels: dict[Any, dict[str, tuple[float, int]]],
+    obs: dict[int, PersonObservation],
+    sides: dict[int, str],
+    sources: dict[Any, str] | None = None,
+) -> SocialSignals:
     """One SocialSignals from ``SocialLabeller.update`` output, people in id order. sources:
-    ``SocialLabeller.sources`` (default: ``3d`` where the observation has joints, else ``2d``)."""
+    ``SocialLabeller.sources`` (default: ``3d`` where the observation has joints, else ``2d``).
+    """
     people = []
     for pid in sorted(labels):
         res = labels[pid]
         o = obs.get(pid)
         src = (sources or {}).get(pid) or ("3d" if o is not None and o.has_3d() else "2d")
-        people.append(PersonSignals(
-            id=int(pid), side=sides.get(pid, "left"), names=list(SIGNALS),
-            scores=np.array([res[s][0] for s in SIGNALS], np.float32),
-            labels=np.array([res[s][1] for s in SIGNALS], np.int8),
-            source=src,
-        ))
+        people.append(
+            PersonSignals(
+                id=int(pid),
+                side=sides.get(pid, "left"),
+                names=list(SIGNALS),
+                scores=np.array([res[s][0] for s in SIGNALS], np.float32),
+                labels=np.array([res[s][1] for s in SIGNALS], np.int8),
+                source=src,
+            )
+        )
     return SocialSignals(stamp=stamp, seq=seq, people=people)
 
 
@@ -133,15 +150,24 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "laugh_energy": ("face_params", "laugh_energy_tracked"),
 }
 #: what the algorithm's messages call a node parameter that has another name in the node
-_FIELD_NAMES = {"threshold": "head_threshold", "band_hz": "band_low_hz/band_high_hz", "window_s": "head_window_s",
-                "talk_energy_tracked": "talk_energy", "laugh_energy_tracked": "laugh_energy"}
+_FIELD_NAMES = {
+    "threshold": "head_threshold",
+    "band_hz": "band_low_hz/band_high_hz",
+    "window_s": "head_window_s",
+    "talk_energy_tracked": "talk_energy",
+    "laugh_energy_tracked": "laugh_energy",
+}
 
 
 def make_labeller(p: dict[str, Any], fps: float) -> SocialLabeller:
     """The SocialLabeller of the node's parameters ``p`` at ``fps`` (Hz). Raises ParamError naming
-    the node parameters (and the frame rate) that do not fit together."""
-    groups: dict[str, dict[str, Any]] = {"head_params": {"band_hz": (p["band_low_hz"], p["band_high_hz"])},
-                                         "track_params": {}, "face_params": {}}
+    the node parameters (and the frame rate) that do not fit together.
+    """
+    groups: dict[str, dict[str, Any]] = {
+        "head_params": {"band_hz": (p["band_low_hz"], p["band_high_hz"])},
+        "track_params": {},
+        "face_params": {},
+    }
     for name, (group, field) in _GROUPED.items():
         groups[group][field] = p[name]
     groups["face_params"]["min_face_px"] = p["min_face_px"]
@@ -156,8 +182,10 @@ def make_labeller(p: dict[str, Any], fps: float) -> SocialLabeller:
             named += ["band_low_hz", "band_high_hz"]
         named = list(dict.fromkeys(named + ["fps"]))
         src = "the parameter 'fps'" if p["fps"] else "the camera's Frame messages ('fps' 0: from the stream)"
-        raise ParamError(f"parameters {', '.join(map(repr, named))} do not fit together at {fps:g} fps (from "
-                         f"{src}), head_window_s={p['head_window_s']}: {text}") from None
+        raise ParamError(
+            f"parameters {', '.join(map(repr, named))} do not fit together at {fps:g} fps (from "
+            f"{src}), head_window_s={p['head_window_s']}: {text}"
+        ) from None
 
 
 class Labeller(Node):
@@ -170,43 +198,92 @@ class Labeller(Node):
     }
     outputs = {"signals": Output(SocialSignals, "one per frame with silhouettes; seq and stamp of that frame")}
     params = {
-        "fps": Param(float, 0.0, "frame rate of the stream (Hz): sets every window in frames; 0: from the "
-                     "camera's Frame messages (subscribes to frame)", min=0.0, max=1e4),
+        "fps": Param(
+            float,
+            0.0,
+            "frame rate of the stream (Hz): sets every window in frames; 0: from the "
+            "camera's Frame messages (subscribes to frame)",
+            min=0.0,
+            max=1e4,
+        ),
         "head_window_s": Param(float, 1.6, "FFT window of nod/shake (s)", min=0.05, max=60.0),
-        "nod_median_s": Param(float, 1.0, "running median removed from the nod channels before the FFT (s; "
-                              "0: none): movements that go one way and stay are not nods", min=0.0, max=60.0),
+        "nod_median_s": Param(
+            float,
+            1.0,
+            "running median removed from the nod channels before the FFT (s; "
+            "0: none): movements that go one way and stay are not nods",
+            min=0.0,
+            max=60.0,
+        ),
         "shake_median_s": Param(float, 0.44, "the same for the shake channels (s)", min=0.0, max=60.0),
         "band_low_hz": Param(float, 1.0, "lowest frequency of nods and shakes (Hz)", min=0.0),
         "band_high_hz": Param(float, 4.0, "highest frequency of nods and shakes (Hz)", min=0.0),
-        "head_threshold": Param(float, 0.5, "nod/shake score threshold (fraction of the head's oscillating "
-                                "motion in the band)", min=0.0, max=1.0),
-        "face_nod_floor": Param(float, 0.04, "amplitude floor of a face's nod motion (face widths): smaller "
-                                "motion scores lower", min=0.0),
+        "head_threshold": Param(
+            float,
+            0.5,
+            "nod/shake score threshold (fraction of the head's oscillating motion in the band)",
+            min=0.0,
+            max=1.0,
+        ),
+        "face_nod_floor": Param(
+            float, 0.04, "amplitude floor of a face's nod motion (face widths): smaller motion scores lower", min=0.0
+        ),
         "face_shake_floor": Param(float, 0.04, "amplitude floor of a face's shake motion (face widths)", min=0.0),
         "nod_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point nod motion (m)", min=0.0),
         "shake_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point shake motion (m)", min=0.0),
         "min_face_px": Param(int, 40, "smallest face width used (px); smaller faces are not tracked", min=24, max=4096),
-        "max_miss_s": Param(float, 0.5, "longest run of missed face detections bridged by optical flow (s)",
-                            min=0.0, max=10.0),
-        "anchor_s": Param(float, 1.0, "time constant of the pull of a face's tracked point towards its "
-                          "detections (s): longer is stiller, shorter follows the detector", min=0.01, max=60.0),
+        "max_miss_s": Param(
+            float, 0.5, "longest run of missed face detections bridged by optical flow (s)", min=0.0, max=10.0
+        ),
+        "anchor_s": Param(
+            float,
+            1.0,
+            "time constant of the pull of a face's tracked point towards its "
+            "detections (s): longer is stiller, shorter follows the detector",
+            min=0.01,
+            max=60.0,
+        ),
         "search_every_s": Param(float, 0.5, "period of the whole-frame search for new faces (s)", min=0.01, max=60.0),
         "max_faces": Param(int, 2, "most faces tracked at once", min=1, max=16),
-        "talk_window_s": Param(float, 1.0, "averaging window of mouth motion for talking/laughing (s)",
-                               min=0.05, max=60.0),
-        "talk_energy": Param(float, 0.008, "talking threshold of a face's mouth motion above its upper face's "
-                             "(mean absolute difference of mean-normalised patches per frame)", min=0.0),
+        "talk_window_s": Param(
+            float, 1.0, "averaging window of mouth motion for talking/laughing (s)", min=0.05, max=60.0
+        ),
+        "talk_energy": Param(
+            float,
+            0.008,
+            "talking threshold of a face's mouth motion above its upper face's "
+            "(mean absolute difference of mean-normalised patches per frame)",
+            min=0.0,
+        ),
         "laugh_energy": Param(float, 0.05, "laughing threshold of the same mouth motion", min=0.0),
-        "gaze_threshold_deg": Param(float, 30.0, "largest angle between gaze and the direction to the other "
-                                    "still counted as looking at them (degrees)",
-                                    check=lambda v: None if 0.0 < v < 180.0 else "must be in (0, 180) degrees"),
+        "gaze_threshold_deg": Param(
+            float,
+            30.0,
+            "largest angle between gaze and the direction to the other still counted as looking at them (degrees)",
+            check=lambda v: None if 0.0 < v < 180.0 else "must be in (0, 180) degrees",
+        ),
         "use_tracker": Param(bool, True, "subscribe to pose (Pose3D) and use 3D joints where tracked"),
-        "use_face": Param(bool, True, "track faces in the camera frames (subscribes to frame): nods, shakes, "
-                          "talking and laughing from faces where they are big enough"),
-        "max_pending": Param(int, 8, "frames with silhouettes held back waiting for a slow pose or frame "
-                             "before going on without it", min=1, max=1000),
-        "max_ahead": Param(int, 64, "frames of pose/camera messages kept while their silhouettes are still "
-                           "to come (memory: camera frames are large); older ones are discarded", min=0, max=10_000),
+        "use_face": Param(
+            bool,
+            True,
+            "track faces in the camera frames (subscribes to frame): nods, shakes, "
+            "talking and laughing from faces where they are big enough",
+        ),
+        "max_pending": Param(
+            int,
+            8,
+            "frames with silhouettes held back waiting for a slow pose or frame before going on without it",
+            min=1,
+            max=1000,
+        ),
+        "max_ahead": Param(
+            int,
+            64,
+            "frames of pose/camera messages kept while their silhouettes are still "
+            "to come (memory: camera frames are large); older ones are discarded",
+            min=0,
+            max=10_000,
+        ),
     }
 
     @classmethod
@@ -214,7 +291,7 @@ class Labeller(Node):
         p = super().validate_params(given, where)
         # the windows in frames must be long enough for their detectors, at the given rate or, when
         # it comes from the stream, at the common ones
-        for fps in ([p["fps"]] if p["fps"] else [25.0, 29.97]):
+        for fps in [p["fps"]] if p["fps"] else [25.0, 29.97]:
             try:
                 make_labeller(p, fps)
             except ParamError as exc:
@@ -234,7 +311,7 @@ class Labeller(Node):
     def setup(self) -> None:
         p = self.p
         self.labeller: SocialLabeller | None = None
-        self.fps = p["fps"] or 25.0   # until the stream says
+        self.fps = p["fps"] or 25.0  # until the stream says
         self.pairer = SeqPairer(list(self.ports(p)[0]), "silhouettes", p["max_pending"], p["max_ahead"])
         self.last_seq = -1
         self.sources = {"face": 0, "3d": 0, "2d": 0}
@@ -246,7 +323,8 @@ class Labeller(Node):
 
     def _rate(self, frame: Frame | None) -> SocialLabeller:
         """The labeller at the stream's frame rate (``fps`` 0) or the given one; rebuilt (windows
-        restart) when the stream's rate changes."""
+        restart) when the stream's rate changes.
+        """
         p = self.p
         fps = self.fps
         if not p["fps"] and frame is not None:
@@ -255,12 +333,19 @@ class Labeller(Node):
                 fps = float(rate)
             elif rate and not self._warned_rate:
                 self._warned_rate = True
-                self.log.warning("a frame says the stream runs at %r fps; ignored (labelling at %g fps): set labeller.fps "
-                                 "to the video's rate", frame.fps, fps)
+                self.log.warning(
+                    "a frame says the stream runs at %r fps; ignored (labelling at %g fps): set labeller.fps "
+                    "to the video's rate",
+                    frame.fps,
+                    fps,
+                )
             elif not self._warned_rate:
                 self._warned_rate = True
-                self.log.warning("the camera's frames do not say their frame rate (Frame.fps 0); labelling at "
-                                 "%g fps: set labeller.fps to the video's rate", fps)
+                self.log.warning(
+                    "the camera's frames do not say their frame rate (Frame.fps 0); labelling at "
+                    "%g fps: set labeller.fps to the video's rate",
+                    fps,
+                )
         if self.labeller is None or fps != self.fps:
             try:
                 lab = make_labeller(p, fps)
@@ -269,8 +354,13 @@ class Labeller(Node):
                     raise
                 if fps not in self._refused:
                     self._refused.add(fps)
-                    self.log.error("the stream's frame rate changed to %g fps, which the parameters do not allow; "
-                                   "labelling at %g fps: %s", fps, self.fps, exc)
+                    self.log.error(
+                        "the stream's frame rate changed to %g fps, which the parameters do not allow; "
+                        "labelling at %g fps: %s",
+                        fps,
+                        self.fps,
+                        exc,
+                    )
                 return self.labeller
             if self.labeller is not None:
                 self.log.info("frame rate %g fps from the stream (was %g): the analysis windows restart", fps, self.fps)
@@ -280,20 +370,30 @@ class Labeller(Node):
 
     def _image(self, frame: Frame | None) -> np.ndarray | None:
         """The frame's image when faces can be searched in it: uint8, (H, W) or (H, W, 3), at least
-        min_face_px a side; otherwise None (counted as ``frames_unusable``, said once)."""
+        min_face_px a side; otherwise None (counted as ``frames_unusable``, said once).
+        """
         if frame is None or not self.p["use_face"]:
             return None
         img = frame.image
-        ok = (isinstance(img, np.ndarray) and img.dtype == np.uint8 and (img.ndim == 2 or (img.ndim == 3 and img.shape[2] == 3))
-              and min(img.shape[:2]) >= self.p["min_face_px"])
+        ok = (
+            isinstance(img, np.ndarray)
+            and img.dtype == np.uint8
+            and (img.ndim == 2 or (img.ndim == 3 and img.shape[2] == 3))
+            and min(img.shape[:2]) >= self.p["min_face_px"]
+        )
         if ok:
             return img
         self.tally("frames_unusable")
         if not self._warned_image:
             self._warned_image = True
-            self.log.warning("frame %d: image %s %s cannot hold a face of min_face_px=%d (need uint8 gray or BGR); "
-                             "such frames are labelled without faces", frame.seq, getattr(img, "dtype", type(img).__name__),
-                             getattr(img, "shape", ""), self.p["min_face_px"])
+            self.log.warning(
+                "frame %d: image %s %s cannot hold a face of min_face_px=%d (need uint8 gray or BGR); "
+                "such frames are labelled without faces",
+                frame.seq,
+                getattr(img, "dtype", type(img).__name__),
+                getattr(img, "shape", ""),
+                self.p["min_face_px"],
+            )
         return None
 
     def on_message(self, port: str, msg: Any) -> None:
@@ -319,8 +419,13 @@ class Labeller(Node):
         odd = [np.shape(p.ctrl) for p in sil.people if np.size(p.ctrl) and np.shape(p.ctrl) != (ACTIVITY_CTRL, 2)]
         if odd and not self._warned_ctrl:
             self._warned_ctrl = True
-            self.log.warning("silhouettes carry splines of shape %s; 2D activity needs (%d, 2) and stays UNKNOWN "
-                             "(set the silhouette node's n_ctrl to %d)", odd[0], ACTIVITY_CTRL, ACTIVITY_CTRL)
+            self.log.warning(
+                "silhouettes carry splines of shape %s; 2D activity needs (%d, 2) and stays UNKNOWN "
+                "(set the silhouette node's n_ctrl to %d)",
+                odd[0],
+                ACTIVITY_CTRL,
+                ACTIVITY_CTRL,
+            )
         labels = lab.update(obs, image=self._image(frame))
         if lab.absorbed:
             self.tally("regions_absorbed", len(lab.absorbed))
@@ -339,32 +444,51 @@ class Labeller(Node):
 
     def _fallback(self, item: Paired, pid: int) -> None:
         """A person labelled from their silhouette although the tracker is subscribed: counted, and
-        said once per reason."""
+        said once per reason.
+        """
         self.tally("fallback_3d_to_2d")
         pose = item.msgs.get("pose")
         if pose is None:
-            why = ("no pose message for this frame (it came late or was dropped; labeller.max_pending sets how "
-                   "long a frame waits for it)")
+            why = (
+                "no pose message for this frame (it came late or was dropped; labeller.max_pending sets how "
+                "long a frame waits for it)"
+            )
         elif not any(b.id == pid for b in pose.people):
             why = "the tracker has no body for this person"
         else:
             why = "the tracker lost this person's body (or its joints were not finite)"
         if why not in self._warned_fallback:
             self._warned_fallback.add(why)
-            self.log.warning("person %d labelled from the silhouette (2D) instead of the tracker (3D) from frame %d: "
-                             "%s; counted in the stats as fallback_3d_to_2d", pid, item.seq, why)
+            self.log.warning(
+                "person %d labelled from the silhouette (2D) instead of the tracker (3D) from frame %d: "
+                "%s; counted in the stats as fallback_3d_to_2d",
+                pid,
+                item.seq,
+                why,
+            )
 
     def on_end(self) -> None:
         for item in self.pairer.flush():
             self._label(item)
         st = self.pairer.stats
         missing = ", ".join(f"{n} without {p}" for p, n in st.missing.items() if n)
-        self.log.info("labelled %d frames (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back from 3D "
-                      "to 2D); %d dropped without silhouettes, %d released early, %d side messages over max_ahead, "
-                      "%d late messages, %d restarts; frame rate %g fps",
-                      st.released, missing or "every input present", self.sources["3d"], self.sources["2d"],
-                      self.sources["face"], int(self.figures.get("fallback_3d_to_2d", 0)),
-                      st.unpaired, st.forced, st.overflow, st.late, st.restarts, self.fps)
+        self.log.info(
+            "labelled %d frames (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back from 3D "
+            "to 2D); %d dropped without silhouettes, %d released early, %d side messages over max_ahead, "
+            "%d late messages, %d restarts; frame rate %g fps",
+            st.released,
+            missing or "every input present",
+            self.sources["3d"],
+            self.sources["2d"],
+            self.sources["face"],
+            int(self.figures.get("fallback_3d_to_2d", 0)),
+            st.unpaired,
+            st.forced,
+            st.overflow,
+            st.late,
+            st.restarts,
+            self.fps,
+        )
 
 
 NODE = Labeller

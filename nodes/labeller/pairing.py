@@ -16,6 +16,7 @@ A required port whose seq goes backwards means the stream restarted (a camera re
 replayed again): what is pending is released first, then the pairing starts afresh and the first
 frame after it is flagged ``restart`` so that a streaming consumer can reset its state.
 """
+
 from __future__ import annotations
 
 from collections.abc import Sequence
@@ -26,7 +27,8 @@ from typing import Any
 @dataclass(frozen=True)
 class Paired:
     """One released frame: ``seq``, ``msgs`` port -> message for the ports that delivered it
-    (always including the required port), ``restart`` True on the first frame after a restart."""
+    (always including the required port), ``restart`` True on the first frame after a restart.
+    """
 
     seq: int
     msgs: dict[str, Any]
@@ -38,7 +40,8 @@ class PairingStats:
     """Counters: frames released, released with a port missing (``incomplete``), dropped without
     the required port (``unpaired``), released early by ``max_pending`` (``forced``), side messages
     discarded beyond ``max_ahead`` (``overflow``), messages that arrived after their frame was
-    released (``late``), and stream restarts."""
+    released (``late``), and stream restarts.
+    """
 
     released: int = 0
     incomplete: int = 0

@@ -10,6 +10,7 @@ Every per-frame signal value is a pair ``(score, label)``:
 
 Label arrays are ``int8``; score arrays are ``float64``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -22,8 +23,20 @@ UNKNOWN: int = -1
 
 #: joint order used across the project (14 joints, metres, world frame Y up, facing +Z at yaw 0)
 JOINTS: tuple[str, ...] = (
-    "head", "neck", "l_shoulder", "l_elbow", "l_wrist", "r_shoulder", "r_elbow", "r_wrist",
-    "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle",
+    "head",
+    "neck",
+    "l_shoulder",
+    "l_elbow",
+    "l_wrist",
+    "r_shoulder",
+    "r_elbow",
+    "r_wrist",
+    "l_hip",
+    "l_knee",
+    "l_ankle",
+    "r_hip",
+    "r_knee",
+    "r_ankle",
 )
 JOINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(JOINTS)}
 
@@ -56,6 +69,5 @@ def labels_to_bool(labels: np.ndarray) -> np.ndarray:
         return labels
     bad = ~np.isin(labels, (1, 0, UNKNOWN))
     if bad.any():
-        raise ValueError(
-            f"labels must be 1, 0 or {UNKNOWN} (UNKNOWN); found {np.unique(labels[bad])[:5]}")
+        raise ValueError(f"labels must be 1, 0 or {UNKNOWN} (UNKNOWN); found {np.unique(labels[bad])[:5]}")
     return labels == 1

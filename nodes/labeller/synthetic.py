@@ -7,31 +7,33 @@ conversation scenario (with labelled signals) exists.
 - :func:`planted_label_streams`: speaker/listener label streams where each planted rule
   ``S:x -> L:y`` holds with a known confidence at a known offset.
 """
+
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.nodes.labeller.signals import JOINT_INDEX, JOINTS
 
-_STAND = np.array([
-    [0.00, 1.62, 0.02],   # head (centre)
-    [0.00, 1.45, 0.00],   # neck
-    [0.18, 1.42, 0.00],   # l_shoulder (+X is the person's left when facing +Z)
-    [0.20, 1.15, 0.00],   # l_elbow
-    [0.20, 0.90, 0.05],   # l_wrist
-    [-0.18, 1.42, 0.00],  # r_shoulder
-    [-0.20, 1.15, 0.00],  # r_elbow
-    [-0.20, 0.90, 0.05],  # r_wrist
-    [0.10, 0.95, 0.00],   # l_hip
-    [0.10, 0.50, 0.00],   # l_knee
-    [0.10, 0.08, 0.00],   # l_ankle
-    [-0.10, 0.95, 0.00],  # r_hip
-    [-0.10, 0.50, 0.00],  # r_knee
-    [-0.10, 0.08, 0.00],  # r_ankle
-])
+_STAND = np.array(
+    [
+        [0.00, 1.62, 0.02],  # head (centre)
+        [0.00, 1.45, 0.00],  # neck
+        [0.18, 1.42, 0.00],  # l_shoulder (+X is the person's left when facing +Z)
+        [0.20, 1.15, 0.00],  # l_elbow
+        [0.20, 0.90, 0.05],  # l_wrist
+        [-0.18, 1.42, 0.00],  # r_shoulder
+        [-0.20, 1.15, 0.00],  # r_elbow
+        [-0.20, 0.90, 0.05],  # r_wrist
+        [0.10, 0.95, 0.00],  # l_hip
+        [0.10, 0.50, 0.00],  # l_knee
+        [0.10, 0.08, 0.00],  # l_ankle
+        [-0.10, 0.95, 0.00],  # r_hip
+        [-0.10, 0.50, 0.00],  # r_knee
+        [-0.10, 0.08, 0.00],  # r_ankle
+    ]
+)
 assert len(_STAND) == len(JOINTS)
 
 #: joints that move with the upper body (everything above the hips)
@@ -57,7 +59,8 @@ def rotate_about_y(points: np.ndarray, yaw: np.ndarray, pivot: np.ndarray) -> np
 @dataclass(frozen=True)
 class Conversation:
     """joints_a, joints_b: (T,14,3) m; head_yaw_a/b: (T,) head yaw relative to the torso (rad);
-    truth_a/b: name -> (T,) bool for "nod", "shake", "gaze_at_other", "activity" (sway or turning)."""
+    truth_a/b: name -> (T,) bool for "nod", "shake", "gaze_at_other", "activity" (sway or turning).
+    """
 
     fps: float
     joints_a: np.ndarray
@@ -68,8 +71,9 @@ class Conversation:
     truth_b: dict[str, np.ndarray]
 
 
-def _segments(rng: np.random.Generator, t: int, fps: float, n: int, dur: tuple[float, float],
-              busy: np.ndarray) -> np.ndarray:
+def _segments(
+    rng: np.random.Generator, t: int, fps: float, n: int, dur: tuple[float, float], busy: np.ndarray
+) -> np.ndarray:
     """Up to n random non-overlapping segments (bool mask) avoiding `busy` (+0.8 s margin)."""
     mask = np.zeros(t, dtype=bool)
     margin = int(0.8 * fps)
@@ -80,12 +84,13 @@ def _segments(rng: np.random.Generator, t: int, fps: float, n: int, dur: tuple[f
         start = int(rng.integers(margin, max(margin + 1, t - length - margin)))
         lo, hi = max(0, start - margin), min(t, start + length + margin)
         if not (busy[lo:hi].any() or mask[lo:hi].any()):
-            mask[start:start + length] = True
+            mask[start : start + length] = True
     return mask
 
 
-def _person(rng: np.random.Generator, t: int, fps: float, position: Sequence[float], yaw0: float,
-            noise_m: float) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray]:
+def _person(
+    rng: np.random.Generator, t: int, fps: float, position: Sequence[float], yaw0: float, noise_m: float
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], np.ndarray]:
     tt = np.arange(t) / fps
     busy = np.zeros(t, dtype=bool)
     # about one nod per 15 s, one shake per 20 s, one turn and one sway per 25 s
@@ -123,13 +128,15 @@ def _person(rng: np.random.Generator, t: int, fps: float, position: Sequence[flo
     return j, yaw_head, truth, yaw
 
 
-def conversation(duration_s: float = 60.0, fps: float = 25.0, seed: int = 0,
-                 distance_m: float = 1.5, noise_m: float = 0.002) -> Conversation:
+def conversation(
+    duration_s: float = 60.0, fps: float = 25.0, seed: int = 0, distance_m: float = 1.5, noise_m: float = 0.002
+) -> Conversation:
     """Two people ``distance_m`` apart facing each other (A at the origin facing +Z, B facing -Z),
     each with random nods (1.6-2.6 Hz, 2-3 cm), shakes (1.8-3 Hz, 20 degrees head yaw with 2 cm
     sideways head motion), turns away (70 degrees, whole body) and torso sway (5 cm, ~1 Hz), never
     overlapping, plus Gaussian joint noise ``noise_m``. Truth of gaze_at_other is geometric:
-    facing within 30 degrees of the other's head."""
+    facing within 30 degrees of the other's head.
+    """
     rng = np.random.default_rng(seed)
     t = int(round(duration_s * fps))
     ja, hya, tra, yaw_a = _person(rng, t, fps, (0.0, 0.0, 0.0), 0.0, noise_m)
@@ -170,5 +177,5 @@ def planted_label_streams(
     li = rng.random((n_frames, n_signals)) < rates_l
     for x, y, c in rules:
         li[:, y] = False
-        li[offset:, y] = sp[:-offset or None, x] & (rng.random(n_frames - offset) < c)
+        li[offset:, y] = sp[: -offset or None, x] & (rng.random(n_frames - offset) < c)
     return sp, li, [f"sig{i:02d}" for i in range(n_signals)]

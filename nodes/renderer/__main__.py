@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.renderer --param video=out.mp4 ...``: run the renderer node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

@@ -10,6 +10,7 @@ silhouettes dissolve into each other without a dark fringe; the result goes over
 feathered alpha. The frames are decoded from the avatar file named in the Partner message (or the
 renderer's ``avatar_file``), loaded once per file.
 """
+
 from __future__ import annotations
 
 import logging
@@ -17,7 +18,6 @@ from typing import Any
 
 import cv2
 import numpy as np
-
 from counterpart.body.avatar_frames import AvatarFrames, load_avatar_frames
 from counterpart.body.camera import Camera
 
@@ -30,7 +30,8 @@ CROWN_M = 0.12
 
 class AvatarPainter:
     """Draws avatar frames into images (module docstring). ``avatar_file``: use this file for every
-    partner instead of the one each message names ('' : the message's)."""
+    partner instead of the one each message names ('' : the message's).
+    """
 
     def __init__(self, avatar_file: str = "") -> None:
         self.avatar_file = avatar_file
@@ -49,7 +50,8 @@ class AvatarPainter:
     def draw(self, img: np.ndarray, partner: Any, cam: Camera) -> bool | None:
         """Composite the partner's avatar frames into ``img`` (H, W, 3) uint8 BGR in place. Returns
         whether any of it falls inside the picture, or None when there is nothing to draw it with (no
-        frames, no file, no placement), so the caller can fall back to another style."""
+        frames, no file, no placement), so the caller can fall back to another style.
+        """
         idx = np.asarray(partner.avatar_frames).astype(np.int64).reshape(-1)
         w = np.asarray(partner.avatar_weights, np.float32).reshape(-1)
         joints = np.asarray(partner.joints, np.float64)
@@ -59,7 +61,9 @@ class AvatarPainter:
         if len(w) != len(idx) or not np.isfinite(w).all() or w.sum() <= 0:
             w = np.ones(len(idx), np.float32)
         if idx.min() < 0 or idx.max() >= len(store):
-            log.warning("avatar frame %d out of range of %d frames: not the same avatar file?", int(idx.max()), len(store))
+            log.warning(
+                "avatar frame %d out of range of %d frames: not the same avatar file?", int(idx.max()), len(store)
+            )
             return None
         g = store.geometry
         feet = 0.5 * (joints[_LA] + joints[_RA])
@@ -70,7 +74,7 @@ class AvatarPainter:
         facing /= max(float(np.linalg.norm(facing)), 1e-9)
         uv = cam.project(np.stack([feet, top, feet + 0.3 * facing]))
         if not np.isfinite(uv).all() or uv[0, 1] - uv[1, 1] <= 1:
-            return None   # behind the camera, or seen from above: no upright placement
+            return None  # behind the camera, or seen from above: no upright placement
         scale = float(uv[0, 1] - uv[1, 1]) / max(g.height_px, 1.0)
         mirror = np.sign(uv[2, 0] - uv[0, 0]) * g.facing < 0
         # premultiplied blend of the frames of a cross-fade
@@ -85,7 +89,7 @@ class AvatarPainter:
             acc, alpha, fx = acc[:, ::-1], alpha[:, ::-1], g.w - fx
         W, H = max(int(round(g.w * scale)), 1), max(int(round(g.h * scale)), 1)
         if W > 4 * img.shape[1] or H > 4 * img.shape[0]:
-            return None   # a placement right in front of the lens: nothing sensible to draw
+            return None  # a placement right in front of the lens: nothing sensible to draw
         acc = cv2.resize(np.ascontiguousarray(acc), (W, H), interpolation=cv2.INTER_LINEAR)
         alpha = cv2.resize(np.ascontiguousarray(alpha), (W, H), interpolation=cv2.INTER_LINEAR)
         x0 = int(round(uv[0, 0] - fx * scale))
@@ -100,8 +104,8 @@ def _over(img: np.ndarray, premult: np.ndarray, alpha: np.ndarray, x0: int, y0: 
     ax0, ay0, ax1, ay1 = max(x0, 0), max(y0, 0), min(x0 + w, W), min(y0 + h, H)
     if ax1 <= ax0 or ay1 <= ay0:
         return False
-    a = alpha[ay0 - y0:ay1 - y0, ax0 - x0:ax1 - x0, None]
-    p = premult[ay0 - y0:ay1 - y0, ax0 - x0:ax1 - x0]
+    a = alpha[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0, None]
+    p = premult[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0]
     roi = img[ay0:ay1, ax0:ax1]
     roi[:] = np.clip(p + (1.0 - a) * roi, 0, 255).astype(np.uint8)
     return bool((a > 0.5).any())

@@ -15,6 +15,7 @@ flickering one). A frame whose partner did not come shows the newest older partn
 
 No bus here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
 """
+
 from __future__ import annotations
 
 import time
@@ -24,7 +25,6 @@ from typing import Any
 
 import cv2
 import numpy as np
-
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size
 
 from . import draw
@@ -64,8 +64,13 @@ class ControlState:
                 setattr(self, k, v)
 
     def as_dict(self) -> dict[str, Any]:
-        return {"model": self.model, "speaker": self.speaker, "interest": self.interest,
-                "emotion": self.emotion, "strength": self.strength}
+        return {
+            "model": self.model,
+            "speaker": self.speaker,
+            "interest": self.interest,
+            "emotion": self.emotion,
+            "strength": self.strength,
+        }
 
 
 class _History:
@@ -151,8 +156,14 @@ class Compositor:
         self.stats: dict[str, Any] = {}
         self.controls = ControlState()
         #: partner_drawn: frames on which a partner was drawn with part of it inside the picture
-        self.counts = {"rendered": 0, "partner_exact": 0, "partner_held": 0, "partner_missing": 0, "forced": 0,
-                       "partner_drawn": 0}
+        self.counts = {
+            "rendered": 0,
+            "partner_exact": 0,
+            "partner_held": 0,
+            "partner_missing": 0,
+            "forced": 0,
+            "partner_drawn": 0,
+        }
         self._cams = CameraSchedule()
         self._unresolved: OrderedDict[int, float] = OrderedDict()  # seq -> arrival, partner delay unknown yet
         self.delays: deque[float] = deque(maxlen=self.delay_window)  # seconds; inf: the partner never came
@@ -191,7 +202,8 @@ class Compositor:
 
     def _resolve_overdue(self, now: float) -> None:
         """Frames whose partner is later than ``timeout`` count as never partnered: for the decision
-        (median delay > timeout) any delay beyond the timeout is the same."""
+        (median delay > timeout) any delay beyond the timeout is the same.
+        """
         while self._unresolved:
             s, t = next(iter(self._unresolved.items()))
             if now - t <= self.timeout:
@@ -209,7 +221,8 @@ class Compositor:
 
     def set_camera(self, camera: Camera, from_seq: int = 0) -> None:
         """The graph's camera for frames of its size from ``from_seq`` on (camera_info, whose seq it
-        is): every drawing uses it."""
+        is): every drawing uses it.
+        """
         self._cams.add(camera, from_seq)
 
     def set_control(self, msg: Any) -> None:
@@ -222,7 +235,8 @@ class Compositor:
     # --------------------------------------------------------------------------------- pairing
     def ready(self, now: float | None = None, flush: bool = False) -> list[Bundle]:
         """Frames ready to render, oldest first, removed from the pending ones. ``flush``: all of
-        them (end of stream)."""
+        them (end of stream).
+        """
         now = time.monotonic() if now is None else now
         self._resolve_overdue(now)
         out = []
@@ -231,8 +245,14 @@ class Compositor:
             if self.wait_camera and not flush and _size(frame) not in self._cams:
                 break
             partner = self.partners.exact(seq) if self.want_partner else None
-            done = (not self.want_partner or partner is not None or self.partners.max_seq > seq or flush
-                    or now - t >= self.timeout or (self.adaptive and self.partners_late))
+            done = (
+                not self.want_partner
+                or partner is not None
+                or self.partners.max_seq > seq
+                or flush
+                or now - t >= self.timeout
+                or (self.adaptive and self.partners_late)
+            )
             forced = not done and len(self.pending) > self.max_pending
             if not (done or forced):
                 break
@@ -274,8 +294,9 @@ class Compositor:
         if ov.get("splines") and b.silhouettes is not None:
             for person in b.silhouettes.people:
                 if np.size(person.ctrl) >= 8:
-                    draw.draw_spline_outline(img, person.ctrl, draw.person_colour(person.id), 1,
-                                             person.ref_point, f"{person.id}")
+                    draw.draw_spline_outline(
+                        img, person.ctrl, draw.person_colour(person.id), 1, person.ref_point, f"{person.id}"
+                    )
         #: whether the last rendered frame shows a partner (inside the picture)
         self.partner_drawn = b.partner is not None and self._draw_partner(img, b.partner, cam)
         self.counts["partner_drawn"] += self.partner_drawn
@@ -324,7 +345,8 @@ class Compositor:
         """One compact row of badges per tracked person with the signals that are on, just above the
         head (below the feet where the head is at the top of the picture), never over the face.
         With a pose input only the tracked people are labelled: other regions (fragments, ghosts)
-        are not people to label."""
+        are not people to label.
+        """
         tracked = None if b.pose is None else {body.id: body for body in b.pose.people if not body.lost}
         boxes = {p.id: p.bbox for p in (b.silhouettes.people if b.silhouettes is not None else [])}
         rows, rects = [], []
@@ -354,7 +376,8 @@ class Compositor:
 def _badge_place(box: tuple[int, int, int, int], w: int, h: int, shape: tuple[int, ...]) -> tuple[int, int]:
     """Top-left (x, y) of a ``w`` x ``h`` row of badges for a person in ``box`` (x, y, w, h): centred
     just above the head; where the head touches the top of the picture, beside the head (right,
-    else left); else below the feet. Never over the person's face."""
+    else left); else below the feet. Never over the person's face.
+    """
     H, W = shape[:2]
     bx, by, bw, bh = box
     if by - h - 3 >= 0:
@@ -374,5 +397,6 @@ def _projected_box(joints: Any, cam: Camera) -> tuple[int, int, int, int] | None
         return None
     (u0, v0), (u1, v1) = uv.min(axis=0), uv.max(axis=0)
     return int(u0), int(v0), int(u1 - u0) + 1, int(v1 - v0) + 1
+
 
 __all__ = ["Compositor", "Bundle", "ControlState", "STYLES", "OVERLAYS"]

@@ -1,8 +1,10 @@
 """Run-time controls from the web page: JSON checked and turned into ``messages.Control``."""
+
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from counterpart.messages import Control
 
@@ -59,8 +61,9 @@ def parse_control(data: Any, models: Sequence[str] = ()) -> Control:
     if data.get("overlays") is not None:
         ov = data["overlays"]
         if not isinstance(ov, dict) or not all(k in OVERLAYS and isinstance(v, bool) for k, v in ov.items()):
-            raise ValueError(f"overlays {ov!r}: expected an object of overlay name -> true/false, "
-                             f"names {list(OVERLAYS)}")
+            raise ValueError(
+                f"overlays {ov!r}: expected an object of overlay name -> true/false, names {list(OVERLAYS)}"
+            )
         out["overlays"] = dict(ov)
     return Control(**out)
 

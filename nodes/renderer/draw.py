@@ -15,20 +15,21 @@ B-spline in image pixels, filled and outlined.
 Images are (H, W, 3) uint8 BGR and are drawn into in place; every function also returns the image.
 Pixel coordinates are (x = column, y = row); world coordinates are metres (Y up).
 """
+
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
 from functools import lru_cache
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 import cv2
 import numpy as np
-
-from counterpart.body.spline import evaluate_closed_bspline
 from counterpart.body.camera import Camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
 from counterpart.body.kinematics import cone_endpoints
 from counterpart.body.raster import cone_rims
 from counterpart.body.skeleton import BONES, JOINT_INDEX, N_JOINTS
+from counterpart.body.spline import evaluate_closed_bspline
 
 _SHIFT = 4  # fixed-point bits: sub-pixel accurate polygon edges in OpenCV
 _SCALE = float(1 << _SHIFT)
@@ -55,7 +56,8 @@ def person_colour(pid: int) -> Colour:
 
 def partner_colour(emotion: str = "neutral", strength: float = 0.0) -> Colour:
     """BGR colour of the partner: the neutral colour blended towards ``emotion``'s colour by
-    ``strength`` in [0, 1] (clipped); unknown emotions count as neutral."""
+    ``strength`` in [0, 1] (clipped); unknown emotions count as neutral.
+    """
     base = np.array(EMOTION_COLOURS["neutral"], np.float64)
     target = np.array(EMOTION_COLOURS.get(emotion, EMOTION_COLOURS["neutral"]), np.float64)
     s = float(np.clip(strength if np.isfinite(strength) else 0.0, 0.0, 1.0))
@@ -72,7 +74,9 @@ def partner_cones(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Args:
         joints: (14, 3) metres, world frame, ``counterpart.body.skeleton.JOINTS`` order.
-    Returns:
+
+    Returns
+    -------
         ends (16, 2, 3) metres (start and end centre of each cone), radii (16, 2) metres.
     """
     X = np.asarray(joints, np.float64)
@@ -90,8 +94,15 @@ def _quad_index(n_rim: int) -> np.ndarray:
     """(n_rim, 4, 2) (rim, point) indices of each side facet: a0, a1, b1, b0."""
     k = np.arange(n_rim)
     k1 = (k + 1) % n_rim
-    return np.stack([np.stack([np.zeros_like(k), k], 1), np.stack([np.zeros_like(k), k1], 1),
-                     np.stack([np.ones_like(k), k1], 1), np.stack([np.ones_like(k), k], 1)], 1)
+    return np.stack(
+        [
+            np.stack([np.zeros_like(k), k], 1),
+            np.stack([np.zeros_like(k), k1], 1),
+            np.stack([np.ones_like(k), k1], 1),
+            np.stack([np.ones_like(k), k], 1),
+        ],
+        1,
+    )
 
 
 def default_light(camera: Camera) -> np.ndarray:
@@ -100,8 +111,14 @@ def default_light(camera: Camera) -> np.ndarray:
     return d / np.linalg.norm(d)
 
 
-def cone_facets(ends: np.ndarray, radii: np.ndarray, camera: Camera, light: np.ndarray | None = None,
-                n_rim: int = 16, ambient: float = 0.35) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+def cone_facets(
+    ends: np.ndarray,
+    radii: np.ndarray,
+    camera: Camera,
+    light: np.ndarray | None = None,
+    n_rim: int = 16,
+    ambient: float = 0.35,
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Visible facets of the cones, shaded and sorted far to near.
 
     Args:
@@ -110,7 +127,9 @@ def cone_facets(ends: np.ndarray, radii: np.ndarray, camera: Camera, light: np.n
         light: (3,) world direction towards the light (default :func:`default_light`).
         n_rim: facets around each cone.
         ambient: shade of a facet turned away from the light, in [0, 1].
-    Returns:
+
+    Returns
+    -------
         polygons: list of (k, 2) float pixel polygons (4 corners for sides, n_rim for ends),
         shade: (F,) intensities in [ambient, 1], depth: (F,) mean camera depth (m), far to near.
     """
@@ -119,20 +138,20 @@ def cone_facets(ends: np.ndarray, radii: np.ndarray, camera: Camera, light: np.n
     if ends.ndim != 3 or ends.shape[1:] != (2, 3) or radii.shape != ends.shape[:2]:
         raise ValueError(f"cones: ends {ends.shape} must be (S, 2, 3) and radii {radii.shape} (S, 2)")
     l_dir = default_light(camera) if light is None else np.asarray(light, np.float64) / np.linalg.norm(light)
-    rims = cone_rims(ends[None], radii, n_rim)[0]                          # (S, 2, n, 3)
+    rims = cone_rims(ends[None], radii, n_rim)[0]  # (S, 2, n, 3)
     S = len(ends)
     eye = camera.centre
     # side facets
     qi = _quad_index(n_rim)
-    quads = rims[:, qi[..., 0], qi[..., 1]]                                # (S, n, 4, 3)
+    quads = rims[:, qi[..., 0], qi[..., 1]]  # (S, n, 4, 3)
     centroid = quads.mean(axis=2)
     normal = np.cross(quads[:, :, 1] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 0])
-    radial = centroid - ends.mean(axis=1)[:, None]                        # facet centroids sit at mid-axis
+    radial = centroid - ends.mean(axis=1)[:, None]  # facet centroids sit at mid-axis
     normal *= np.where((normal * radial).sum(-1, keepdims=True) < 0, -1.0, 1.0)
     # flat ends: outward normals along -axis (start) and +axis (end)
     axis = ends[:, 1] - ends[:, 0]
     axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
-    cap_normal = np.stack([-axis, axis], 1)                                # (S, 2, 3)
+    cap_normal = np.stack([-axis, axis], 1)  # (S, 2, 3)
     cap_centroid = ends
     # one flat list of facets: S*n quads then S*2 caps
     normals = np.concatenate([normal.reshape(-1, 3), cap_normal.reshape(-1, 3)])
@@ -153,11 +172,19 @@ def cone_facets(ends: np.ndarray, radii: np.ndarray, camera: Camera, light: np.n
     return polys, shade[keep], depth[keep]
 
 
-def draw_cones(image: np.ndarray, ends: np.ndarray, radii: np.ndarray, camera: Camera,
-               colour: Colour = EMOTION_COLOURS["neutral"], light: np.ndarray | None = None,
-               n_rim: int = 16, ambient: float = 0.35) -> np.ndarray:
+def draw_cones(
+    image: np.ndarray,
+    ends: np.ndarray,
+    radii: np.ndarray,
+    camera: Camera,
+    colour: Colour = EMOTION_COLOURS["neutral"],
+    light: np.ndarray | None = None,
+    n_rim: int = 16,
+    ambient: float = 0.35,
+) -> np.ndarray:
     """Paint shaded truncated cones (S, 2, 3)/(S, 2) metres into ``image`` (H, W, 3) uint8 BGR,
-    far to near (see :func:`cone_facets`). Returns ``image``."""
+    far to near (see :func:`cone_facets`). Returns ``image``.
+    """
     _check_image(image)
     polys, shade, _ = cone_facets(ends, radii, camera, light, n_rim, ambient)
     base = np.asarray(colour, np.float64)
@@ -168,8 +195,9 @@ def draw_cones(image: np.ndarray, ends: np.ndarray, radii: np.ndarray, camera: C
     return image
 
 
-def draw_partner_3d(image: np.ndarray, joints: np.ndarray, camera: Camera,
-                    colour: Colour = EMOTION_COLOURS["neutral"], **kw: Any) -> np.ndarray:
+def draw_partner_3d(
+    image: np.ndarray, joints: np.ndarray, camera: Camera, colour: Colour = EMOTION_COLOURS["neutral"], **kw: Any
+) -> np.ndarray:
     """Draw a partner given by its (14, 3) joints (metres) as shaded cones. Returns ``image``."""
     ends, radii = partner_cones(joints)
     return draw_cones(image, ends, radii, camera, colour, **kw)
@@ -180,10 +208,16 @@ def draw_partner_3d(image: np.ndarray, joints: np.ndarray, camera: Camera,
 closed_bspline = evaluate_closed_bspline
 
 
-def draw_silhouette(image: np.ndarray, ctrl: np.ndarray, colour: Colour = EMOTION_COLOURS["neutral"],
-                    outline: Colour | None = (40, 40, 40), thickness: int = 1) -> np.ndarray:
+def draw_silhouette(
+    image: np.ndarray,
+    ctrl: np.ndarray,
+    colour: Colour = EMOTION_COLOURS["neutral"],
+    outline: Colour | None = (40, 40, 40),
+    thickness: int = 1,
+) -> np.ndarray:
     """Fill the closed B-spline of ``ctrl`` (n, 2) pixels with ``colour`` and outline it.
-    Returns ``image``."""
+    Returns ``image``.
+    """
     _check_image(image)
     pts = closed_bspline(ctrl)
     if not np.isfinite(pts).all():
@@ -203,10 +237,17 @@ _EXTRA_LINES = ((JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]),)
 SKELETON_LINES: tuple[tuple[int, int], ...] = tuple(BONES) + _EXTRA_LINES
 
 
-def draw_skeleton(image: np.ndarray, joints: np.ndarray, camera: Camera, colour: Colour = (0, 220, 0),
-                  thickness: int = 2, radius: int = 3) -> np.ndarray:
+def draw_skeleton(
+    image: np.ndarray,
+    joints: np.ndarray,
+    camera: Camera,
+    colour: Colour = (0, 220, 0),
+    thickness: int = 2,
+    radius: int = 3,
+) -> np.ndarray:
     """Tracked skeleton: joints (14, 3) metres projected, bones as lines, the spine from the neck to
-    the mid-hip point, joints as dots. Joints behind the camera are left out. Returns ``image``."""
+    the mid-hip point, joints as dots. Joints behind the camera are left out. Returns ``image``.
+    """
     _check_image(image)
     X = np.asarray(joints, np.float64)
     if X.shape != (N_JOINTS, 3):
@@ -224,10 +265,18 @@ def draw_skeleton(image: np.ndarray, joints: np.ndarray, camera: Camera, colour:
     return image
 
 
-def draw_spline_outline(image: np.ndarray, ctrl: np.ndarray, colour: Colour = (0, 220, 0), thickness: int = 1,
-                        ref_point: np.ndarray | None = None, label: str = "", show_ctrl: bool = True) -> np.ndarray:
+def draw_spline_outline(
+    image: np.ndarray,
+    ctrl: np.ndarray,
+    colour: Colour = (0, 220, 0),
+    thickness: int = 1,
+    ref_point: np.ndarray | None = None,
+    label: str = "",
+    show_ctrl: bool = True,
+) -> np.ndarray:
     """A person's B-spline boundary (n, 2) pixels as a closed curve, its control points as dots,
-    its reference point (top of the head) as a ring and an optional label above it."""
+    its reference point (top of the head) as a ring and an optional label above it.
+    """
     _check_image(image)
     pts = closed_bspline(ctrl)
     fixed = np.round(pts * _SCALE).astype(np.int32)
@@ -243,10 +292,18 @@ def draw_spline_outline(image: np.ndarray, ctrl: np.ndarray, colour: Colour = (0
     return image
 
 
-def put_text(image: np.ndarray, text: str, org: tuple[int, int], colour: Colour = (255, 255, 255),
-             scale: float = 0.4, thickness: int = 1, background: Colour | None = None) -> tuple[int, int]:
+def put_text(
+    image: np.ndarray,
+    text: str,
+    org: tuple[int, int],
+    colour: Colour = (255, 255, 255),
+    scale: float = 0.4,
+    thickness: int = 1,
+    background: Colour | None = None,
+) -> tuple[int, int]:
     """Text with its baseline-left corner at ``org`` (pixels), optionally on a filled box.
-    Returns the text's (width, height) in pixels."""
+    Returns the text's (width, height) in pixels.
+    """
     (w, h), base = cv2.getTextSize(text, _FONT, scale, thickness)
     x, y = org
     if background is not None:
@@ -255,10 +312,12 @@ def put_text(image: np.ndarray, text: str, org: tuple[int, int], colour: Colour 
     return w, h + base
 
 
-def _badge_boxes(shape: tuple[int, ...], anchor: tuple[float, float], names: Sequence[str],
-                 scale: float) -> list[tuple[int, int, int, int, str, int]]:
+def _badge_boxes(
+    shape: tuple[int, ...], anchor: tuple[float, float], names: Sequence[str], scale: float
+) -> list[tuple[int, int, int, int, str, int]]:
     """Where the badges of ``names`` go: (x, y, width, height, text, baseline) each, in a row from
-    ``anchor`` that wraps at the image's right edge."""
+    ``anchor`` that wraps at the image's right edge.
+    """
     h_img, w_img = shape[:2]
     x, y = int(anchor[0]), int(anchor[1])
     boxes = []
@@ -275,23 +334,35 @@ def _badge_boxes(shape: tuple[int, ...], anchor: tuple[float, float], names: Seq
     return boxes
 
 
-def signal_badges_rect(image: np.ndarray, anchor: tuple[float, float], names: Sequence[str],
-                       scale: float | None = None) -> tuple[int, int, int, int]:
+def signal_badges_rect(
+    image: np.ndarray, anchor: tuple[float, float], names: Sequence[str], scale: float | None = None
+) -> tuple[int, int, int, int]:
     """(x0, y0, x1, y1) pixels that ``draw_signal_badges`` with the same arguments covers."""
     scale = text_scale(image, 0.35) if scale is None else scale
     boxes = _badge_boxes(image.shape, anchor, names, scale)
     if not boxes:
         return int(anchor[0]), int(anchor[1]), int(anchor[0]), int(anchor[1])
-    return (min(b[0] for b in boxes), min(b[1] for b in boxes),
-            max(b[0] + b[2] for b in boxes), max(b[1] + b[3] for b in boxes))
+    return (
+        min(b[0] for b in boxes),
+        min(b[1] for b in boxes),
+        max(b[0] + b[2] for b in boxes),
+        max(b[1] + b[3] for b in boxes),
+    )
 
 
-def draw_signal_badges(image: np.ndarray, anchor: tuple[float, float], names: Sequence[str],
-                       labels: np.ndarray, scores: np.ndarray | None = None, scale: float | None = None) -> np.ndarray:
+def draw_signal_badges(
+    image: np.ndarray,
+    anchor: tuple[float, float],
+    names: Sequence[str],
+    labels: np.ndarray,
+    scores: np.ndarray | None = None,
+    scale: float | None = None,
+) -> np.ndarray:
     """Social-signal badges of one person: a row of small labelled boxes starting at ``anchor``
     (x, y pixels, top-left). Label 1 (present): a bright box; 0 (absent): a dark box; -1
     (unknown): grey. ``scores`` (K,) in [0, 1], when given, draw a white bar along the bottom of
-    each known badge. Returns ``image``."""
+    each known badge. Returns ``image``.
+    """
     _check_image(image)
     scale = text_scale(image, 0.35) if scale is None else scale
     labels = np.asarray(labels).reshape(-1)
@@ -320,7 +391,8 @@ def place_apart(rects: Sequence[tuple[int, int, int, int]], height: int, gap: in
     """Vertical shifts (pixels) that keep boxes (x0, y0, x1, y1) inside ``height`` rows and from
     overlapping, placed in order: each box moves down below the boxes already placed that it would
     overlap, or, where that runs past ``height``, up above them (not past the top). Where no
-    such place is free the last one tried is kept: the frame is too crowded."""
+    such place is free the last one tried is kept: the frame is too crowded.
+    """
     placed: list[tuple[int, int, int, int]] = []
     shifts = []
     for x0, y0, x1, y1 in rects:
@@ -347,7 +419,8 @@ def _short(name: str) -> str:
 def stats_lines(stats: Mapping[str, Any]) -> list[str]:
     """One text line per node from its latest ``messages.NodeStats``: the rate (Hz) of its first
     output (else of its first input), input drops summed, the largest input latency (ms) and the
-    mean handler time (ms)."""
+    mean handler time (ms).
+    """
     lines = []
     for node in sorted(stats):
         s = stats[node]
@@ -364,10 +437,12 @@ def text_scale(image: np.ndarray, base: float) -> float:
     return base * float(np.clip(image.shape[1] / 320.0, 1.0, 3.0))
 
 
-def draw_stats(image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, int] = (4, 4),
-               scale: float | None = None) -> np.ndarray:
+def draw_stats(
+    image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, int] = (4, 4), scale: float | None = None
+) -> np.ndarray:
     """Per-node statistics (:func:`stats_lines`) as text on a dark box, top-left at ``origin``;
-    ``scale`` None: :func:`text_scale` of 0.3."""
+    ``scale`` None: :func:`text_scale` of 0.3.
+    """
     _check_image(image)
     scale = text_scale(image, 0.3) if scale is None else scale
     lines = stats_lines(stats)
@@ -377,7 +452,7 @@ def draw_stats(image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, i
     lh = max(h + b for (_, h), b in sizes) + 2
     w = max(w for (w, _), _ in sizes) + 6
     x, y = origin
-    roi = image[y:y + lh * len(lines) + 4, x:x + w]
+    roi = image[y : y + lh * len(lines) + 4, x : x + w]
     roi[...] = (roi.astype(np.uint16) * 2 // 5).astype(np.uint8)  # darken: text stays readable on any frame
     for i, t in enumerate(lines):
         cv2.putText(image, t, (x + 3, y + (i + 1) * lh), _FONT, scale, (255, 255, 255), 1, cv2.LINE_AA)
@@ -387,16 +462,19 @@ def draw_stats(image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, i
 def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float | None = None) -> np.ndarray:
     """The run-time controls in force along the bottom edge: model, speaker, interest, emotion and
     a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1]);
-    ``scale`` None: :func:`text_scale` of 0.35."""
+    ``scale`` None: :func:`text_scale` of 0.35.
+    """
     _check_image(image)
     scale = text_scale(image, 0.35) if scale is None else scale
     h, w = image.shape[:2]
-    text = (f"{controls.get('model') or '-'}  speaker {controls.get('speaker') or '-'}  "
-            f"interest {controls.get('interest') or '-'}  {controls.get('emotion') or '-'}")
+    text = (
+        f"{controls.get('model') or '-'}  speaker {controls.get('speaker') or '-'}  "
+        f"interest {controls.get('interest') or '-'}  {controls.get('emotion') or '-'}"
+    )
     (tw, th), base = cv2.getTextSize(text, _FONT, scale, 1)
     bar_h = 6
     top = h - th - base - bar_h - 8
-    roi = image[max(top, 0):, :]
+    roi = image[max(top, 0) :, :]
     roi[...] = (roi.astype(np.uint16) * 2 // 5).astype(np.uint8)
     cv2.putText(image, text, (4, h - bar_h - 6 - base), _FONT, scale, (255, 255, 255), 1, cv2.LINE_AA)
     s = controls.get("strength")
@@ -410,10 +488,12 @@ def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float |
     return image
 
 
-def contact_sheet(frames: Iterable[np.ndarray], cols: int = 4, pad: int = 2,
-                  background: Colour = (0, 0, 0)) -> np.ndarray:
+def contact_sheet(
+    frames: Iterable[np.ndarray], cols: int = 4, pad: int = 2, background: Colour = (0, 0, 0)
+) -> np.ndarray:
     """Tile images (each (H, W, 3) or (H, W) uint8) row by row into one BGR image, ``cols`` per
-    row with ``pad`` pixels between them; every tile is resized to the first one's size."""
+    row with ``pad`` pixels between them; every tile is resized to the first one's size.
+    """
     tiles = [np.asarray(f) for f in frames]
     if not tiles:
         raise ValueError("contact_sheet: no frames given; pass at least one image")
@@ -432,7 +512,7 @@ def contact_sheet(frames: Iterable[np.ndarray], cols: int = 4, pad: int = 2,
         if t.shape[:2] != (h, w):
             t = cv2.resize(t, (w, h), interpolation=cv2.INTER_AREA)
         r, c = divmod(i, cols)
-        sheet[r * (h + pad):r * (h + pad) + h, c * (w + pad):c * (w + pad) + w] = t
+        sheet[r * (h + pad) : r * (h + pad) + h, c * (w + pad) : c * (w + pad) + w] = t
     return sheet
 
 
@@ -445,8 +525,28 @@ def _check_image(image: np.ndarray) -> None:
 
 
 __all__ = [
-    "EMOTION_COLOURS", "PERSON_COLOURS", "UNKNOWN_GREY", "SKELETON_LINES",
-    "person_colour", "partner_colour", "partner_cones", "default_light", "cone_facets", "draw_cones",
-    "draw_partner_3d", "closed_bspline", "text_scale", "draw_silhouette", "draw_skeleton", "draw_spline_outline", "put_text",
-    "draw_signal_badges", "signal_badges_rect", "place_apart", "stats_lines", "draw_stats", "draw_controls", "contact_sheet",
+    "EMOTION_COLOURS",
+    "PERSON_COLOURS",
+    "UNKNOWN_GREY",
+    "SKELETON_LINES",
+    "person_colour",
+    "partner_colour",
+    "partner_cones",
+    "default_light",
+    "cone_facets",
+    "draw_cones",
+    "draw_partner_3d",
+    "closed_bspline",
+    "text_scale",
+    "draw_silhouette",
+    "draw_skeleton",
+    "draw_spline_outline",
+    "put_text",
+    "draw_signal_badges",
+    "signal_badges_rect",
+    "place_apart",
+    "stats_lines",
+    "draw_stats",
+    "draw_controls",
+    "contact_sheet",
 ]

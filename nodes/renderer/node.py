@@ -17,6 +17,7 @@ Pairing by seq, overlays and drawing are in :mod:`.compositor` and :mod:`.draw`;
 :mod:`.video`; the page in :mod:`.web`. The video is closed at end of stream and in teardown, so a
 Ctrl-C leaves a playable file with every frame rendered so far.
 """
+
 from __future__ import annotations
 
 import queue
@@ -62,25 +63,42 @@ class Renderer(Node):
     inputs = {"frame": Input(Frame, RELIABLE, "the camera frames: the renderer's clock")}
     outputs = {
         "rendered": Output(Frame, "the composited image of each frame (bgr8; the frame's stamp and seq)"),
-        "control": Output(Control, "the run-time controls in force, set on the web page (latched: a node that "
-                                   "joins or restarts later gets them)", latched=True),
+        "control": Output(
+            Control,
+            "the run-time controls in force, set on the web page (latched: a node that "
+            "joins or restarts later gets them)",
+            latched=True,
+        ),
     }
     params = {
         "partner": Param(bool, True, "subscribe to the partner (responder.Partner) and wait for it per frame"),
         "silhouettes": Param(bool, False, "subscribe to silhouettes (B-spline overlay, badge placement)"),
         "pose": Param(bool, False, "subscribe to the tracked 3D pose (skeleton overlay)"),
         "signals": Param(bool, False, "subscribe to social signals (badge overlay)"),
-        "stats_topics": Param(list, [], "NodeStats topics to show, e.g. [camera/stats, tracker/stats]",
-                              check=_check_topics),
-        "video": Param(str, "", "output video: .mp4 (H.264, else written as .avi) or .avi (Motion-JPEG); '' none",
-                       check=_check_video),
-        "fps": Param(float, 0.0, "frame rate written into the video file (0: the input's, from the camera's "
-                     "frames; 25 when they do not say)", min=0.0, max=1000.0),
+        "stats_topics": Param(
+            list, [], "NodeStats topics to show, e.g. [camera/stats, tracker/stats]", check=_check_topics
+        ),
+        "video": Param(
+            str,
+            "",
+            "output video: .mp4 (H.264, else written as .avi) or .avi (Motion-JPEG); '' none",
+            check=_check_video,
+        ),
+        "fps": Param(
+            float,
+            0.0,
+            "frame rate written into the video file (0: the input's, from the camera's "
+            "frames; 25 when they do not say)",
+            min=0.0,
+            max=1000.0,
+        ),
         "serve": Param(bool, False, "serve the live web page"),
-        "host": Param(str, "127.0.0.1", "address of the web page; anything but loopback exposes the controls "
-                      "to the network"),
-        "port": Param(int, 8080, "port of the web page (0: any free port, logged and written to port_file)",
-                      min=0, max=65535),
+        "host": Param(
+            str, "127.0.0.1", "address of the web page; anything but loopback exposes the controls to the network"
+        ),
+        "port": Param(
+            int, 8080, "port of the web page (0: any free port, logged and written to port_file)", min=0, max=65535
+        ),
         "port_file": Param(str, "", "file to write the web page's port number to once it listens ('' none)"),
         "jpeg_quality": Param(int, 80, "JPEG quality of the live stream", min=10, max=100),
         "overlay_skeleton": Param(bool, True, "draw the tracked skeleton"),
@@ -88,19 +106,43 @@ class Renderer(Node):
         "overlay_signals": Param(bool, True, "draw social-signal badges"),
         "overlay_stats": Param(bool, True, "draw per-node statistics"),
         "overlay_controls": Param(bool, True, "draw the controls in force (model, speaker, interest, emotion bar)"),
-        "camera_info": Param(bool, True, "take the camera from topic camera_info (the calibration node, so that "
-                             "every node projects with the same one; frames wait for it); false: from 'camera'"),
-        "camera": Param(dict, {}, "without camera_info only: calibration (counterpart.body.camera.Camera.to_dict or look-at "
-                        "form), scaled to a frame size of the same aspect ratio; empty: the default camera at the "
-                        "frame size", check=camera_param_problem),
-        "style": Param(str, "auto", "partner drawing: cones (3D joints), silhouette (B-spline), avatar (the "
-                       "video-texture avatar's frames), auto", choices=STYLES),
-        "avatar_file": Param(str, "", "avatar file of the video-texture partner ('': the one the partner message "
-                             "names)"),
-        "pair_timeout": Param(float, 0.1, "seconds a frame waits for its partner at most (lockstep replay: long, "
-                              "so that every frame gets its own partner)", min=0.0),
-        "adaptive_wait": Param(bool, True, "render at once, with the newest partner, while the recent partners "
-                               "came later than pair_timeout (waiting would only delay every frame)"),
+        "camera_info": Param(
+            bool,
+            True,
+            "take the camera from topic camera_info (the calibration node, so that "
+            "every node projects with the same one; frames wait for it); false: from 'camera'",
+        ),
+        "camera": Param(
+            dict,
+            {},
+            "without camera_info only: calibration (counterpart.body.camera.Camera.to_dict or look-at "
+            "form), scaled to a frame size of the same aspect ratio; empty: the default camera at the "
+            "frame size",
+            check=camera_param_problem,
+        ),
+        "style": Param(
+            str,
+            "auto",
+            "partner drawing: cones (3D joints), silhouette (B-spline), avatar (the "
+            "video-texture avatar's frames), auto",
+            choices=STYLES,
+        ),
+        "avatar_file": Param(
+            str, "", "avatar file of the video-texture partner ('': the one the partner message names)"
+        ),
+        "pair_timeout": Param(
+            float,
+            0.1,
+            "seconds a frame waits for its partner at most (lockstep replay: long, "
+            "so that every frame gets its own partner)",
+            min=0.0,
+        ),
+        "adaptive_wait": Param(
+            bool,
+            True,
+            "render at once, with the newest partner, while the recent partners "
+            "came later than pair_timeout (waiting would only delay every frame)",
+        ),
         "max_pending": Param(int, 128, "frames held waiting for partners at most", min=1, max=10000),
         "snapshot_every": Param(int, 0, "save every Nth rendered frame as PNG in snapshot_dir (0: never)", min=0),
         "snapshot_dir": Param(str, "", "folder of the PNG snapshots"),
@@ -116,8 +158,10 @@ class Renderer(Node):
         if p["snapshot_every"] and not p["snapshot_dir"]:
             raise ParamError(f"{prefix}parameter 'snapshot_dir': needed when snapshot_every > 0")
         if p["camera_info"] and p["camera"]:
-            raise ParamError(f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
-                             "calibration file to the calibration node (calibration.file), or set camera_info: false")
+            raise ParamError(
+                f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
+                "calibration file to the calibration node (calibration.file), or set camera_info: false"
+            )
         if not all(isinstance(m, str) and m for m in p["models"]):
             raise ParamError(f"{prefix}parameter 'models': expected a list of model names, got {p['models']!r}")
         return p
@@ -141,10 +185,17 @@ class Renderer(Node):
     def setup(self) -> None:
         p = self.p
         overlays = {k: p[f"overlay_{k}"] for k in OVERLAYS}
-        self.comp = Compositor(Camera.from_dict(p["camera"]) if p["camera"] else None, want_partner=p["partner"], style=p["style"],
-                               overlays=overlays, timeout=p["pair_timeout"], max_pending=p["max_pending"],
-                               adaptive=p["adaptive_wait"], wait_camera=p["camera_info"],
-                               avatar_file=p["avatar_file"])
+        self.comp = Compositor(
+            Camera.from_dict(p["camera"]) if p["camera"] else None,
+            want_partner=p["partner"],
+            style=p["style"],
+            overlays=overlays,
+            timeout=p["pair_timeout"],
+            max_pending=p["max_pending"],
+            adaptive=p["adaptive_wait"],
+            wait_camera=p["camera_info"],
+            avatar_file=p["avatar_file"],
+        )
         self.video: VideoWriter | None = VideoWriter(p["video"], p["fps"]) if p["video"] else None
         self.controls: queue.Queue[Control] = queue.Queue()
         self.stats_ports = set(p["stats_topics"])
@@ -155,8 +206,9 @@ class Renderer(Node):
         if p["serve"]:
             if not is_loopback(p["host"]):
                 self.log.warning("serving on %s: anyone who can reach it can watch and change the controls", p["host"])
-            self.server = LiveServer(p["host"], p["port"], self._on_web_control, self._state, self._stats,
-                                     p["jpeg_quality"]).start()
+            self.server = LiveServer(
+                p["host"], p["port"], self._on_web_control, self._state, self._stats, p["jpeg_quality"]
+            ).start()
             self.log.info("live page at %s", self.server.url)
             if p["port_file"]:
                 Path(p["port_file"]).write_text(f"{self.server.port}\n")
@@ -203,8 +255,14 @@ class Renderer(Node):
             self.log.info("wrote %d frames to %s", n, self.video.path)
         c = self.comp.counts
         if self.p["partner"]:
-            self.log.info("rendered %d frames: partner exact %d, held %d, missing %d, forced by max_pending %d",
-                          c["rendered"], c["partner_exact"], c["partner_held"], c["partner_missing"], c["forced"])
+            self.log.info(
+                "rendered %d frames: partner exact %d, held %d, missing %d, forced by max_pending %d",
+                c["rendered"],
+                c["partner_exact"],
+                c["partner_held"],
+                c["partner_missing"],
+                c["forced"],
+            )
 
     def _render_ready(self, flush: bool = False, publish: bool = True) -> None:
         for b in self.comp.ready(time.monotonic(), flush=flush):
@@ -213,8 +271,12 @@ class Renderer(Node):
     def _output(self, b: Bundle, image: Any, publish: bool) -> None:
         f = b.frame
         if publish:
-            self.publish("rendered", Frame(stamp=f.stamp, seq=f.seq, image=image, encoding="bgr8",
-                                           source=f.source, source_time=f.source_time))
+            self.publish(
+                "rendered",
+                Frame(
+                    stamp=f.stamp, seq=f.seq, image=image, encoding="bgr8", source=f.source, source_time=f.source_time
+                ),
+            )
         if self.video is not None:
             self.video.write(image, f.fps)
             self.figures["video_fps"] = self.video.fps
@@ -240,21 +302,37 @@ class Renderer(Node):
                 return
             self.comp.set_control(msg)
             if publish:  # all the controls in force, so the latched copy alone restores them
-                self.publish("control", replace(msg, **{k: v for k, v in self.comp.controls.as_dict().items()
-                                                        if v is not None}))
+                self.publish(
+                    "control", replace(msg, **{k: v for k, v in self.comp.controls.as_dict().items() if v is not None})
+                )
 
     # ------------------------------------------------------------------- web (server threads)
     def _on_web_control(self, data: Any) -> dict[str, Any]:
         msg = parse_control(data, self.p["models"])
-        self.controls.put(Control(stamp=time.monotonic_ns(), seq=max(self.last_seq, 0), model=msg.model,
-                                  speaker=msg.speaker, interest=msg.interest, emotion=msg.emotion,
-                                  strength=msg.strength, overlays=msg.overlays))
+        self.controls.put(
+            Control(
+                stamp=time.monotonic_ns(),
+                seq=max(self.last_seq, 0),
+                model=msg.model,
+                speaker=msg.speaker,
+                interest=msg.interest,
+                emotion=msg.emotion,
+                strength=msg.strength,
+                overlays=msg.overlays,
+            )
+        )
         return control_to_json(msg)
 
     def _state(self) -> dict[str, Any]:
-        return {"controls": self.comp.controls_shown(self.last_partner), "overlays": dict(self.comp.overlays),
-                "models": list(self.p["models"]), "emotions": list(EMOTIONS), "speakers": list(SPEAKERS),
-                "interest_levels": list(INTEREST_LEVELS), "seq": self.last_seq}
+        return {
+            "controls": self.comp.controls_shown(self.last_partner),
+            "overlays": dict(self.comp.overlays),
+            "models": list(self.p["models"]),
+            "emotions": list(EMOTIONS),
+            "speakers": list(SPEAKERS),
+            "interest_levels": list(INTEREST_LEVELS),
+            "seq": self.last_seq,
+        }
 
     def _stats(self) -> dict[str, Any]:
         out = {}
@@ -264,9 +342,19 @@ class Renderer(Node):
                 "rate_hz": ports[0].rate_hz if ports else 0.0,
                 "drops": sum(t.drops for t in s.inputs),
                 "latency_ms": max((t.latency_ms for t in s.inputs), default=0.0),
-                "proc_ms_mean": s.proc_ms_mean, "proc_ms_max": s.proc_ms_max, "uptime_s": s.uptime_s,
-                "inputs": [{"topic": t.topic, "rate_hz": t.rate_hz, "count": t.count, "drops": t.drops,
-                            "latency_ms": t.latency_ms} for t in s.inputs],
+                "proc_ms_mean": s.proc_ms_mean,
+                "proc_ms_max": s.proc_ms_max,
+                "uptime_s": s.uptime_s,
+                "inputs": [
+                    {
+                        "topic": t.topic,
+                        "rate_hz": t.rate_hz,
+                        "count": t.count,
+                        "drops": t.drops,
+                        "latency_ms": t.latency_ms,
+                    }
+                    for t in s.inputs
+                ],
                 "outputs": [{"topic": t.topic, "rate_hz": t.rate_hz, "count": t.count} for t in s.outputs],
             }
         return out

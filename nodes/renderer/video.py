@@ -5,6 +5,7 @@ some open an ``avc1`` writer that then fails). So each candidate codec is probed
 a few frames are written to a temporary file and read back; only a codec whose file decodes with
 the right frame count is used. Motion-JPEG in AVI is built into OpenCV and always works.
 """
+
 from __future__ import annotations
 
 import logging
@@ -42,7 +43,8 @@ def _restore_opencv(level: int) -> None:
 
 def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
     """Whether OpenCV here writes ``fourcc`` into a ``suffix`` file that decodes back to ``n``
-    frames (probed once per process, in a temporary folder)."""
+    frames (probed once per process, in a temporary folder).
+    """
     key = f"{fourcc}{suffix}"
     if key in _PROBED:
         return _PROBED[key]
@@ -79,7 +81,8 @@ def count_frames(path: str | os.PathLike) -> int:
 
 def choose_codec(path: str | os.PathLike) -> tuple[str, Path]:
     """The fourcc and the actual output path for a requested ``path``: ``.mp4`` gets H.264 when a
-    probe shows it works here, else the same name with ``.avi`` and MJPG; ``.avi`` gets MJPG."""
+    probe shows it works here, else the same name with ``.avi`` and MJPG; ``.avi`` gets MJPG.
+    """
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix == ".mp4":
@@ -104,7 +107,8 @@ class VideoWriter:
 
     def __init__(self, path: str | os.PathLike, fps: float = 25.0) -> None:
         """``fps``: frames per second written into the file; 0 takes the rate the first
-        :meth:`write` gives (the stream's), or ``DEFAULT_FPS`` when that is unknown too."""
+        :meth:`write` gives (the stream's), or ``DEFAULT_FPS`` when that is unknown too.
+        """
         if not fps >= 0:
             raise ValueError(f"video fps={fps!r}: must be > 0 frames per second, or 0 for the stream's")
         self.requested = Path(path)
@@ -118,7 +122,8 @@ class VideoWriter:
     def write(self, image: np.ndarray, stream_fps: float = 0.0) -> None:
         """Append one (H, W, 3) uint8 BGR image (mono8 is converted). Every image must have the
         size of the first. ``stream_fps``: the input's frame rate (0: unknown), used by a writer
-        made with ``fps=0`` when the file is opened on the first frame."""
+        made with ``fps=0`` when the file is opened on the first frame.
+        """
         if self._closed:
             raise ValueError(f"video {self.path} is closed; no more frames can be written")
         if image.ndim == 2:
@@ -134,8 +139,10 @@ class VideoWriter:
             self.size = (w, h)
             log.info("writing %s (%s, %dx%d, %.3g fps)", self.path, self.fourcc, w, h, self.fps)
         elif (w, h) != self.size:
-            raise ValueError(f"frame of {w}x{h} pixels for video {self.path} of {self.size[0]}x{self.size[1]}; "
-                             "every frame of a video must have the same size")
+            raise ValueError(
+                f"frame of {w}x{h} pixels for video {self.path} of {self.size[0]}x{self.size[1]}; "
+                "every frame of a video must have the same size"
+            )
         self._writer.write(np.ascontiguousarray(image))
         self.frames += 1
 
@@ -148,7 +155,7 @@ class VideoWriter:
                 self._writer = None
         return self.frames
 
-    def __enter__(self) -> "VideoWriter":
+    def __enter__(self) -> VideoWriter:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -173,5 +180,13 @@ def encode_image(image: np.ndarray, ext: str = ".jpg", quality: int = 80) -> byt
     return buf.tobytes()
 
 
-__all__ = ["VideoWriter", "choose_codec", "codec_works", "count_frames", "write_png", "encode_image",
-           "H264_CANDIDATES", "FALLBACK"]
+__all__ = [
+    "VideoWriter",
+    "choose_codec",
+    "codec_works",
+    "count_frames",
+    "write_png",
+    "encode_image",
+    "H264_CANDIDATES",
+    "FALLBACK",
+]

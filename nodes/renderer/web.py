@@ -20,16 +20,18 @@ Threads: handlers run in server threads and never touch the bus. The node pushes
 :meth:`LiveServer.push`; controls go back through the ``on_control`` callback, which must be
 thread-safe (the node queues them and publishes from its own thread).
 """
+
 from __future__ import annotations
 
 import ipaddress
 import json
 import logging
 import threading
+from collections.abc import Callable
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -68,9 +70,15 @@ class LiveServer:
         jpeg_quality: 1-100 for the stream.
     """
 
-    def __init__(self, host: str, port: int, on_control: Callable[[Any], dict[str, Any]],
-                 state: Callable[[], dict[str, Any]], stats: Callable[[], dict[str, Any]],
-                 jpeg_quality: int = 80) -> None:
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        on_control: Callable[[Any], dict[str, Any]],
+        state: Callable[[], dict[str, Any]],
+        stats: Callable[[], dict[str, Any]],
+        jpeg_quality: int = 80,
+    ) -> None:
         self.host = host
         self.requested_port = port
         self.on_control = on_control
@@ -88,16 +96,19 @@ class LiveServer:
         self.clients = 0
 
     # ------------------------------------------------------------------------------- life cycle
-    def start(self) -> "LiveServer":
+    def start(self) -> LiveServer:
         """Bind and serve in a daemon thread. OSError (port in use, bad host) names the address."""
         handler = type("Handler", (_Handler,), {"live": self})
         try:
             self.httpd = ThreadingHTTPServer((self.host, self.requested_port), handler)
         except OSError as exc:
-            raise OSError(f"cannot serve the web page on {self.host}:{self.requested_port}: {exc.strerror or exc}") from None
+            raise OSError(
+                f"cannot serve the web page on {self.host}:{self.requested_port}: {exc.strerror or exc}"
+            ) from None
         self.httpd.daemon_threads = True
-        self.thread = threading.Thread(target=self.httpd.serve_forever, kwargs={"poll_interval": 0.2},
-                                       name="renderer-web", daemon=True)
+        self.thread = threading.Thread(
+            target=self.httpd.serve_forever, kwargs={"poll_interval": 0.2}, name="renderer-web", daemon=True
+        )
         self.thread.start()
         return self
 
@@ -181,8 +192,7 @@ class _Handler(BaseHTTPRequestHandler):
     def _refuse_host(self) -> bool:
         if self._host_ok():
             return False
-        self._json(HTTPStatus.FORBIDDEN, {"error": "this page is served on loopback only; open it as "
-                                                   f"{self.live.url}"})
+        self._json(HTTPStatus.FORBIDDEN, {"error": f"this page is served on loopback only; open it as {self.live.url}"})
         return True
 
     # ------------------------------------------------------------------------------------ routes
@@ -208,8 +218,12 @@ class _Handler(BaseHTTPRequestHandler):
                 image, seq = live.image, live.seq
             if image is None:
                 return self._json(HTTPStatus.SERVICE_UNAVAILABLE, {"error": "no frame rendered yet"})
-            self._send(HTTPStatus.OK, encode_image(image, ".png"), "image/png",
-                       {"X-Frame-Seq": str(seq), "Content-Disposition": f'inline; filename="frame{seq:06d}.png"'})
+            self._send(
+                HTTPStatus.OK,
+                encode_image(image, ".png"),
+                "image/png",
+                {"X-Frame-Seq": str(seq), "Content-Disposition": f'inline; filename="frame{seq:06d}.png"'},
+            )
         elif path == "/stats":
             self._json(HTTPStatus.OK, live.stats())
         elif path == "/state":
@@ -255,8 +269,12 @@ class _Handler(BaseHTTPRequestHandler):
                     live.wait_newer(last, 1.0)
                     continue
                 last, data = got
-                self.wfile.write(f"--{BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(data)}\r\n"
-                                 f"X-Frame-Seq: {last}\r\n\r\n".encode() + data + b"\r\n")
+                self.wfile.write(
+                    f"--{BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(data)}\r\n"
+                    f"X-Frame-Seq: {last}\r\n\r\n".encode()
+                    + data
+                    + b"\r\n"
+                )
                 self.wfile.flush()
         except (BrokenPipeError, ConnectionResetError, TimeoutError):
             pass  # the viewer went away

@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.responder --param model=dual-hmm ...``: run the responder node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

@@ -1,4 +1,5 @@
 """The default video-texture avatar, built from the simulator when no avatar file is given."""
+
 from __future__ import annotations
 
 import time
@@ -9,10 +10,12 @@ from typing import Any
 DEFAULT_SECONDS = 60.0
 
 
-def build_default_avatar(progress: Callable[[str], None] | None = None, seconds: float = DEFAULT_SECONDS,
-                         seed: int = 0) -> tuple[Any, dict[str, Any]]:
+def build_default_avatar(
+    progress: Callable[[str], None] | None = None, seconds: float = DEFAULT_SECONDS, seed: int = 0
+) -> tuple[Any, dict[str, Any]]:
     """(model, training summary): the listener of a simulated conversation (``sim_recording``) with the
-    simulator's exact masks and labels, learnt with the default configuration."""
+    simulator's exact masks and labels, learnt with the default configuration.
+    """
     from .avatar_recording import sim_recording
     from .video_texture import fit_recording
 
@@ -20,5 +23,9 @@ def build_default_avatar(progress: Callable[[str], None] | None = None, seconds:
     t0 = time.perf_counter()
     rec, _ = sim_recording(seconds, seed=seed, say=say)
     model = fit_recording(rec, required=("nod",), progress=say)
-    return model, {"source": f"sim (default): conversation listener, seed {seed}", "frames": int(len(rec.crops)),
-                   "fps": rec.fps, "seconds": round(time.perf_counter() - t0, 2)}
+    return model, {
+        "source": f"sim (default): conversation listener, seed {seed}",
+        "frames": int(len(rec.crops)),
+        "fps": rec.fps,
+        "seconds": round(time.perf_counter() - t0, 2),
+    }

@@ -14,6 +14,7 @@ Alignment (the paper is silent): one fixed crop box for the whole recording
 graph join frames in the same image coordinates and the composited avatar stands still where the
 person stood still.
 """
+
 from __future__ import annotations
 
 import os
@@ -22,7 +23,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 
 Progress = Callable[[str], None] | None
 
@@ -63,8 +63,9 @@ def crop_box(boxes: np.ndarray, size: tuple[int, int], margin: int = 4) -> tuple
     return x0, y0, x1 - x0, y1 - y0
 
 
-def crop_recording(pieces: Sequence[tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]] | None],
-                   size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+def crop_recording(
+    pieces: Sequence[tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]] | None], size: tuple[int, int]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
     """Crops in one box from per-frame pieces.
 
     pieces: per frame None (nobody found) or (image (bh, bw, 3) uint8, mask (bh, bw) bool, bbox (x, y,
@@ -89,8 +90,8 @@ def crop_recording(pieces: Sequence[tuple[np.ndarray, np.ndarray, tuple[int, int
         ax1, ay1 = min(x + w, x0 + ww), min(y + h, y0 + hh)
         if ax1 <= ax0 or ay1 <= ay0:
             continue
-        crops[t, ay0 - y0:ay1 - y0, ax0 - x0:ax1 - x0] = img[ay0 - y:ay1 - y, ax0 - x:ax1 - x]
-        masks[t, ay0 - y0:ay1 - y0, ax0 - x0:ax1 - x0] = m[ay0 - y:ay1 - y, ax0 - x:ax1 - x]
+        crops[t, ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0] = img[ay0 - y : ay1 - y, ax0 - x : ax1 - x]
+        masks[t, ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0] = m[ay0 - y : ay1 - y, ax0 - x : ax1 - x]
     valid = masks.reshape(T, -1).sum(1) >= 0.25 * np.median(masks[have].reshape(int(have.sum()), -1).sum(1))
     return crops, masks, valid, (x0, y0, ww, hh)
 
@@ -124,36 +125,46 @@ def refine_matte(frame: np.ndarray, region: np.ndarray, background: np.ndarray, 
     return clean_mask(region & (d > tau), open_px=0, close_px=5, fill_holes=True) & region
 
 
-def read_label_file(path: str | os.PathLike[str], person: str, required: Sequence[str] = ()) -> tuple[np.ndarray, tuple[str, ...]]:
+def read_label_file(
+    path: str | os.PathLike[str], person: str, required: Sequence[str] = ()
+) -> tuple[np.ndarray, tuple[str, ...]]:
     """(labels (T, K) int8, names) of ``person`` from a label file (``counterpart.nodes.labeller.mining.read_labels``:
     ``.npz`` with signals_a/_b, or ``.csv``); ValueError naming each ``required`` signal that the file
-    lacks or that never occurs in it."""
+    lacks or that never occurs in it.
+    """
     from counterpart.nodes.labeller.mining import read_labels
 
     from .video_texture import RecordingError
 
     streams = read_labels(path)
     if person not in streams.people:
-        raise ValueError(f"{os.fspath(path)}: no person {person!r} (it has {', '.join(streams.people)}); "
-                         "choose one with --person")
+        raise ValueError(
+            f"{os.fspath(path)}: no person {person!r} (it has {', '.join(streams.people)}); choose one with --person"
+        )
     lab = np.asarray(streams.people[person], np.int8)
     names = tuple(streams.names)
     for r in required:
         if r not in names:
-            raise RecordingError(f"signal {r!r} is not among the labels of {os.fspath(path)} ({', '.join(names)}); "
-                                 "give labels that include it, or leave it out of --signals")
+            raise RecordingError(
+                f"signal {r!r} is not among the labels of {os.fspath(path)} ({', '.join(names)}); "
+                "give labels that include it, or leave it out of --signals"
+            )
         if not (lab[:, names.index(r)] == 1).any():
-            raise RecordingError(f"signal {r!r} never occurs in {os.fspath(path)} (0 of {len(lab)} frames of person "
-                                 f"{person} labelled {r}): record the person doing it, or leave it out of --signals")
+            raise RecordingError(
+                f"signal {r!r} never occurs in {os.fspath(path)} (0 of {len(lab)} frames of person "
+                f"{person} labelled {r}): record the person doing it, or leave it out of --signals"
+            )
     return lab, names
 
 
-def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labelling: bool,
-                part: str, one_thread: bool = False) -> tuple[list, list[np.ndarray], tuple[int, int]]:
+def _masks_part(
+    path: str, start: int, stop: int | None, train_frames: int, labelling: bool, part: str, one_thread: bool = False
+) -> tuple[list, list[np.ndarray], tuple[int, int]]:
     """Frames [start, stop) of a video: per frame the person's piece (``_piece``) and, when
     ``labelling``, the labeller's row of labels (SIGNALS order); and the frame size. ``one_thread``:
     OpenCV on one thread (in a worker process: the processes are the parallelism, and OpenCV's own
-    threads on top cost a fifth more CPU on a busy machine)."""
+    threads on top cost a fifth more CPU on a busy machine).
+    """
     from counterpart.bus.cli_offline import FrameProgress
 
     if one_thread:
@@ -177,7 +188,7 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
         p = max(res.people, key=lambda q: q.area) if res.people else None
         piece = None
         if p is not None:
-            x, y, w, h = p.bbox   # the matte is refined inside the person's box only: a fraction of the frame
+            x, y, w, h = p.bbox  # the matte is refined inside the person's box only: a fraction of the frame
             box = (slice(y, y + h), slice(x, x + w))
             matte = np.zeros(frame.shape[:2], bool)
             matte[box] = refine_matte(frame[box], res.labels[box] == p.id + 1, ex.subtractor.model.mean_[box])
@@ -186,8 +197,13 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
         if labelling:
             row = np.full(len(SIGNALS), UNKNOWN, np.int8)
             if p is not None and p.ref_point is not None:
-                obs = PersonObservation(head_px=np.asarray(p.ref_point), ref_px=np.asarray(p.centroid),
-                                        height_px=float(p.height), control_points=p.ctrl, box=p.bbox)
+                obs = PersonObservation(
+                    head_px=np.asarray(p.ref_point),
+                    ref_px=np.asarray(p.centroid),
+                    height_px=float(p.height),
+                    control_points=p.ctrl,
+                    box=p.bbox,
+                )
                 out = labeller.update({0: obs}, image=frame)[0]
                 row = np.array([out[s][1] for s in SIGNALS], np.int8)
             else:
@@ -197,9 +213,16 @@ def _masks_part(path: str, start: int, stop: int | None, train_frames: int, labe
     return pieces, rows, size
 
 
-def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str] | None = None, person: str = "a",
-                    facing: float = -1.0, train_frames: int = 30, workers: int = 2, required: Sequence[str] = (),
-                    say: Progress = None) -> Recording:
+def video_recording(
+    path: str | os.PathLike[str],
+    labels: str | os.PathLike[str] | None = None,
+    person: str = "a",
+    facing: float = -1.0,
+    train_frames: int = 30,
+    workers: int = 2,
+    required: Sequence[str] = (),
+    say: Progress = None,
+) -> Recording:
     """The recording of the one person in a video file (module docstring).
 
     labels: a label file (else the labeller labels every frame); person: its person id; required:
@@ -215,13 +238,15 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
     say = say or (lambda s: None)
     p = os.fspath(path)
     fps, declared = video_info(p)
-    if labels is not None:   # a bad label file fails now, not after minutes of masks
+    if labels is not None:  # a bad label file fails now, not after minutes of masks
         lab, names = read_label_file(labels, person, required)
     fps = fps or 25.0
     labelling = labels is None
     if labelling:
-        say("no label file: the labeller labels every frame (nod, shake, activity from the silhouette; "
-            "talking, laughing from a frontal face)")
+        say(
+            "no label file: the labeller labels every frame (nod, shake, activity from the silhouette; "
+            "talking, laughing from a frontal face)"
+        )
     n = 1 if labelling or declared < 4 * train_frames else max(1, min(int(workers), os.cpu_count() or 1))
     bounds = [declared * k // n for k in range(n)] + [None]
     if n == 1:
@@ -232,8 +257,10 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
 
         say(f"cutting the masks out in {n} processes, one part of the video each")
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
-            futures = [pool.submit(_masks_part, p, bounds[k], bounds[k + 1], train_frames, False, f" part {k + 1}/{n}",
-                                   True) for k in range(n)]
+            futures = [
+                pool.submit(_masks_part, p, bounds[k], bounds[k + 1], train_frames, False, f" part {k + 1}/{n}", True)
+                for k in range(n)
+            ]
             parts = [f.result() for f in futures]
     pieces = [q for part in parts for q in part[0]]
     size = next((part[2] for part in parts if part[2] != (0, 0)), (0, 0))
@@ -242,19 +269,29 @@ def video_recording(path: str | os.PathLike[str], labels: str | os.PathLike[str]
     if labelling:
         lab, names = np.stack(parts[0][1]), SIGNALS
     elif len(lab) != len(pieces):
-        raise ValueError(f"{os.fspath(labels)}: {len(lab)} frames of labels for a video of {len(pieces)} frames; "
-                         "the labels must have one row per video frame")
+        raise ValueError(
+            f"{os.fspath(labels)}: {len(lab)} frames of labels for a video of {len(pieces)} frames; "
+            "the labels must have one row per video frame"
+        )
     found = sum(q is not None for q in pieces)
     say(f"the person is found on {found} of {len(pieces)} frames")
     if found == 0:
-        raise ValueError(f"{p}: nobody found on any frame; the video must start with about "
-                         f"{train_frames / fps:.1f} s of the empty room (the background), then the person in view")
+        raise ValueError(
+            f"{p}: nobody found on any frame; the video must start with about "
+            f"{train_frames / fps:.1f} s of the empty room (the background), then the person in view"
+        )
     crops, masks, valid, box = crop_recording(pieces, size)
     return Recording(crops, masks, valid, lab, tuple(names), fps, box, facing)
 
 
-def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True, empty_s: float = 1.6,
-                  video: str | os.PathLike[str] | None = None, say: Progress = None) -> tuple[Recording, np.ndarray]:
+def sim_recording(
+    seconds: float = 60.0,
+    seed: int = 0,
+    interested: bool = True,
+    empty_s: float = 1.6,
+    video: str | os.PathLike[str] | None = None,
+    say: Progress = None,
+) -> tuple[Recording, np.ndarray]:
     """A recorded person with known labels from the simulator: the right person of a ``conversation``
     (who listens and nods half of the time and talks the other half), rendered alone (the other
     person out of view; the labels are those of the conversation), after ``empty_s`` seconds of the
@@ -269,12 +306,13 @@ def sim_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True,
     from counterpart.sim.scenarios import make_scenario
 
     say = say or (lambda s: None)
-    sc = make_scenario("conversation", seed=seed, duration=seconds, emotion="neutral", strength=0.0,
-                       interested=interested)
+    sc = make_scenario(
+        "conversation", seed=seed, duration=seconds, emotion="neutral", strength=0.0, interested=interested
+    )
     fps = sc.fps
     n_empty = int(round(empty_s * fps))
     away = sc.poses_a.copy()
-    away[:, DOF_INDEX["root_x"]] -= 40.0   # far out of view: the listener alone in the picture
+    away[:, DOF_INDEX["root_x"]] -= 40.0  # far out of view: the listener alone in the picture
     gone = np.repeat(sc.poses_b[:1], n_empty, axis=0)
     gone[:, DOF_INDEX["root_x"]] += 40.0
     unknown = np.full((n_empty, len(sc.signal_names)), -1, np.int8)

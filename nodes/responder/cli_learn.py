@@ -4,6 +4,7 @@ Data specs: trajectory files (``.npz``), BVH pairs ``a.bvh:b.bvh``, ``sim`` or `
 (see :mod:`counterpart.nodes.responder.data`); for ``--model listener`` also a labeller rules file (``.json``).
 Progress goes to stderr; exit 0 on success, 2 on bad input.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -15,10 +16,19 @@ from .models import MODEL_NAMES, save_model
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     # the video-texture avatar learns from a video of a person: 'counterpart learn avatar'
-    p.add_argument("--model", required=True, choices=[m for m in MODEL_NAMES if m != "video-texture"],
-                   help="which interaction model (the video-texture avatar: 'counterpart learn avatar')")
-    p.add_argument("--data", nargs="+", default=["sim"], metavar="SPEC",
-                   help="PATH.npz, A.bvh:B.bvh, sim, sim:NAME,NAME (listener: also RULES.json); default sim")
+    p.add_argument(
+        "--model",
+        required=True,
+        choices=[m for m in MODEL_NAMES if m != "video-texture"],
+        help="which interaction model (the video-texture avatar: 'counterpart learn avatar')",
+    )
+    p.add_argument(
+        "--data",
+        nargs="+",
+        default=["sim"],
+        metavar="SPEC",
+        help="PATH.npz, A.bvh:B.bvh, sim, sim:NAME,NAME (listener: also RULES.json); default sim",
+    )
     p.add_argument("--seeds", type=int, default=6, help="simulator seeds per scenario (default 6)")
     p.add_argument("--out", required=True, help="model file to write (.npz)")
 
@@ -34,6 +44,7 @@ def main(args: argparse.Namespace) -> int:
 
         if args.model == "listener" and any(d.endswith(".json") for d in args.data):
             from .listener import ListenerModel
+
             rules = [d for d in args.data if d.endswith(".json")]
             if len(rules) > 1:
                 raise ValueError("give one rules file")

@@ -7,13 +7,13 @@ observed person and the generated partner in the other slot (label ``generated:<
 ``--emotion``/``--strength`` restyle the partner with the default emotion model (the gpdm model
 takes them as its style variables instead).
 """
+
 from __future__ import annotations
 
 import argparse
 import sys
 
 import numpy as np
-
 from counterpart.body.trajectory import TwoPersonTrajectory
 
 
@@ -39,8 +39,9 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
         sig = traj.signals_a if observed == "a" else traj.signals_b
         model.reset()
         model.interest = interest
-        return np.stack([model.step({n: bool(v == 1) for n, v in zip(traj.signal_names, row)}, x)
-                         for row, x in zip(sig, obs)])
+        return np.stack(
+            [model.step({n: bool(v == 1) for n, v in zip(traj.signal_names, row)}, x) for row, x in zip(sig, obs)]
+        )
     raise ValueError(f"model {name!r} does not generate 3D joints; use dual-hmm, gpdm or listener")
 
 
@@ -54,17 +55,26 @@ def main(args: argparse.Namespace) -> int:
             model = load_model(args.model)
         traj = TwoPersonTrajectory.load(args.input)
         gpdm = getattr(model, "name", "") == "gpdm"
-        if gpdm:   # the gpdm's style is its own input, not a filter afterwards
+        if gpdm:  # the gpdm's style is its own input, not a filter afterwards
             model.set_style(args.emotion, args.strength)
         partner = generate(model, traj, args.observed, args.interest)
         if args.emotion != "neutral" and args.strength > 0 and not gpdm:
             partner = load_default("emotion").modulate(partner, args.emotion, args.strength)
         obs = traj.a if args.observed == "a" else traj.b
         a, b = (obs, partner) if args.observed == "a" else (partner, obs)
-        out = TwoPersonTrajectory(a=a, b=b, fps=traj.fps, label=f"generated:{traj.label}",
-                                  meta={"model": getattr(model, "name", ""), "input": args.input,
-                                        "observed": args.observed, "emotion": args.emotion,
-                                        "strength": args.strength})
+        out = TwoPersonTrajectory(
+            a=a,
+            b=b,
+            fps=traj.fps,
+            label=f"generated:{traj.label}",
+            meta={
+                "model": getattr(model, "name", ""),
+                "input": args.input,
+                "observed": args.observed,
+                "emotion": args.emotion,
+                "strength": args.strength,
+            },
+        )
         out.save(args.out)
     except (ValueError, FileNotFoundError) as e:
         print(f"counterpart respond: {e}", file=sys.stderr)

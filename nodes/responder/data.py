@@ -7,13 +7,13 @@ A data spec is one of::
     sim                      every simulator scenario, ``seeds`` seeds each
     sim:handshake,push       the named simulator scenarios only
 """
+
 from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
 
 import numpy as np
-
 from counterpart.body.trajectory import TwoPersonTrajectory
 
 #: the simulator's interaction types (counterpart.sim.scenarios.SCENARIOS), in a fixed order
@@ -23,9 +23,13 @@ EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
 Progress = Callable[[str], None]
 
 
-def sim_trajectories(scenarios: Sequence[str] = SIM_SCENARIOS, seeds: Sequence[int] = range(6),
-                     fps: float = 25.0, max_frames: int | None = 400,
-                     **kw: object) -> list[TwoPersonTrajectory]:
+def sim_trajectories(
+    scenarios: Sequence[str] = SIM_SCENARIOS,
+    seeds: Sequence[int] = range(6),
+    fps: float = 25.0,
+    max_frames: int | None = 400,
+    **kw: object,
+) -> list[TwoPersonTrajectory]:
     """Simulated interactions (joints only, no rendering), one per (scenario, seed).
 
     ``max_frames`` crops long scenarios (conversations run 30 s) to keep training fast; extra keyword
@@ -45,8 +49,9 @@ def sim_trajectories(scenarios: Sequence[str] = SIM_SCENARIOS, seeds: Sequence[i
     return out
 
 
-def load_data(specs: Sequence[str], seeds: Sequence[int] = range(6), fps: float = 25.0,
-              progress: Progress | None = None) -> list[TwoPersonTrajectory]:
+def load_data(
+    specs: Sequence[str], seeds: Sequence[int] = range(6), fps: float = 25.0, progress: Progress | None = None
+) -> list[TwoPersonTrajectory]:
     """Trajectories for every spec (see the module docstring), resampled to ``fps``."""
     say = progress or (lambda s: None)
     out: list[TwoPersonTrajectory] = []
@@ -64,8 +69,9 @@ def load_data(specs: Sequence[str], seeds: Sequence[int] = range(6), fps: float 
             out.append(TwoPersonTrajectory.from_bvh_pair(a, b).resample(fps))
         else:
             if not os.path.exists(spec):
-                raise FileNotFoundError(f"data {spec!r}: no such trajectory file (give PATH.npz, "
-                                        "A.bvh:B.bvh, sim or sim:NAME,NAME)")
+                raise FileNotFoundError(
+                    f"data {spec!r}: no such trajectory file (give PATH.npz, A.bvh:B.bvh, sim or sim:NAME,NAME)"
+                )
             say(f"reading {spec}")
             tr = TwoPersonTrajectory.load(spec)
             out.append(tr if abs(tr.fps - fps) < 1e-6 else tr.resample(fps))
@@ -86,5 +92,9 @@ def summary(trajs: Sequence[TwoPersonTrajectory]) -> dict[str, object]:
     labels: dict[str, int] = {}
     for t in trajs:
         labels[t.label] = labels.get(t.label, 0) + 1
-    return {"sequences": len(trajs), "frames": int(sum(t.n_frames for t in trajs)),
-            "fps": float(np.median([t.fps for t in trajs])) if trajs else 0.0, "labels": labels}
+    return {
+        "sequences": len(trajs),
+        "frames": int(sum(t.n_frames for t in trajs)),
+        "fps": float(np.median([t.fps for t in trajs])) if trajs else 0.0,
+        "labels": labels,
+    }

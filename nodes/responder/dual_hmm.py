@@ -73,16 +73,16 @@ the gain in the approach phase (handshake approach 205 -> 144 mm).
 The partner's own pose is mapped back through its PCA and placed with the placement and
 relative heading in the observed person's frame: world joints (14, 3), metres.
 """
+
 from __future__ import annotations
 
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from counterpart.body.trajectory import TwoPersonTrajectory
 from scipy.special import logsumexp
 from sklearn.decomposition import PCA
-
-from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .frames import actor_frame, to_local, to_world
 
@@ -157,18 +157,22 @@ class _Forest:
     x[feature] <= threshold; the prediction is the mean over trees of the leaf values.
     """
 
-    def __init__(self, feature: np.ndarray, threshold: np.ndarray, left: np.ndarray, right: np.ndarray,
-                 value: np.ndarray) -> None:
+    def __init__(
+        self, feature: np.ndarray, threshold: np.ndarray, left: np.ndarray, right: np.ndarray, value: np.ndarray
+    ) -> None:
         self.feature, self.threshold = np.asarray(feature, np.intp), np.asarray(threshold, np.float64)
         self.left, self.right, self.value = np.asarray(left, np.intp), np.asarray(right, np.intp), np.asarray(value)
         self._rows = np.arange(len(self.feature))
 
     @classmethod
-    def from_sklearn(cls, forest: Any) -> "_Forest":
+    def from_sklearn(cls, forest: Any) -> _Forest:
         trees = [e.tree_ for e in forest.estimators_]
         n, d = max(t.node_count for t in trees), trees[0].value.shape[1]
-        F, L, R = (np.zeros((len(trees), n), np.int32), np.full((len(trees), n), -1, np.int32),
-                   np.full((len(trees), n), -1, np.int32))
+        F, L, R = (
+            np.zeros((len(trees), n), np.int32),
+            np.full((len(trees), n), -1, np.int32),
+            np.full((len(trees), n), -1, np.int32),
+        )
         th, V = np.zeros((len(trees), n)), np.zeros((len(trees), n, d))
         for i, t in enumerate(trees):
             k = t.node_count
@@ -177,8 +181,13 @@ class _Forest:
         return cls(F, th, L, R, V)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {"feature": self.feature.astype(np.int32), "threshold": self.threshold,
-                "left": self.left.astype(np.int32), "right": self.right.astype(np.int32), "value": self.value}
+        return {
+            "feature": self.feature.astype(np.int32),
+            "threshold": self.threshold,
+            "left": self.left.astype(np.int32),
+            "right": self.right.astype(np.int32),
+            "value": self.value,
+        }
 
     def predict(self, x: np.ndarray) -> np.ndarray:
         """(d,) features -> (n_out,) the forest's mean prediction; all trees walked together."""
@@ -218,12 +227,26 @@ class DualHMM:
 
     name = "dual-hmm"
 
-    def __init__(self, n_states: int = 48, energy: float = 0.95, velocity_weight: float = 2.0,
-                 n_iter: int = 25, decode: str = "filter", lag: int = 8, placement: str = "tracked",
-                 process_noise: float = 1e-4, evidence_weight: float = 0.05,
-                 leak: float = 1e-5, both_roles: bool = True, order_mix: float = 0.2,
-                 min_covar: float = 1e-2, random_state: int = 0, correction_folds: int = 2,
-                 correction_trees: int = 30, correction_leaf: int = 20) -> None:
+    def __init__(
+        self,
+        n_states: int = 48,
+        energy: float = 0.95,
+        velocity_weight: float = 2.0,
+        n_iter: int = 25,
+        decode: str = "filter",
+        lag: int = 8,
+        placement: str = "tracked",
+        process_noise: float = 1e-4,
+        evidence_weight: float = 0.05,
+        leak: float = 1e-5,
+        both_roles: bool = True,
+        order_mix: float = 0.2,
+        min_covar: float = 1e-2,
+        random_state: int = 0,
+        correction_folds: int = 2,
+        correction_trees: int = 30,
+        correction_leaf: int = 20,
+    ) -> None:
         if decode not in DECODES:
             raise ValueError(f"decode={decode!r}; choose one of {', '.join(DECODES)}")
         if placement not in PLACEMENTS:
@@ -245,8 +268,10 @@ class DualHMM:
             raise ValueError(f"order_mix={order_mix!r} must be in [0, 1]")
         self.order_mix = float(order_mix)
         if correction_folds == 1 or correction_folds < 0 or correction_trees < 1 or correction_leaf < 1:
-            raise ValueError(f"correction_folds={correction_folds!r} must be 0 (no correction) or >= 2, "
-                             f"correction_trees={correction_trees!r} and correction_leaf={correction_leaf!r} >= 1")
+            raise ValueError(
+                f"correction_folds={correction_folds!r} must be 0 (no correction) or >= 2, "
+                f"correction_trees={correction_trees!r} and correction_leaf={correction_leaf!r} >= 1"
+            )
         self.correction_folds, self.correction_trees = int(correction_folds), int(correction_trees)
         self.correction_leaf = int(correction_leaf)
         self._forest: _Forest | None = None
@@ -270,23 +295,34 @@ class DualHMM:
     def _pairs(self, trajs: Sequence[TwoPersonTrajectory]) -> list[tuple[np.ndarray, ...]]:
         """Per role: (observed local pose (T,14,3), observed velocity (T,3), partner placement (T,4),
         partner ground velocity (T,2), partner own-frame pose (T,14,3), interaction label,
-        phase labels (T,) or None)."""
+        phase labels (T,) or None).
+        """
         out = []
         for t in trajs:
             roles = [(t.a, t.b), (t.b, t.a)] if self.both_roles else [(t.a, t.b)]
             for obs, par in roles:
                 o, th = actor_frame(obs)
                 q, own = partner_placement(par, o, th)
-                out.append((to_local(obs, o, th), self._velocity(obs, t.fps), q,
-                            partner_velocity(par, th, t.fps), own, t.label, t.phase))
+                out.append(
+                    (
+                        to_local(obs, o, th),
+                        self._velocity(obs, t.fps),
+                        q,
+                        partner_velocity(par, th, t.fps),
+                        own,
+                        t.label,
+                        t.phase,
+                    )
+                )
         return out
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, trajectories: Sequence[TwoPersonTrajectory]) -> "DualHMM":
+    def fit(self, trajectories: Sequence[TwoPersonTrajectory]) -> DualHMM:
         """Fit PCAs and the joint HMM to two-person trajectories (observed = A, and B if both_roles).
 
         Runs with one BLAS thread: the matrices are small, and threads contending for a few busy
-        cores made Baum-Welch several times slower."""
+        cores made Baum-Welch several times slower.
+        """
         from threadpoolctl import threadpool_limits
 
         with threadpool_limits(1):
@@ -298,13 +334,25 @@ class DualHMM:
 
     def _config(self) -> dict[str, Any]:
         """The constructor parameters."""
-        return {"n_states": self.n_states, "energy": self.energy, "velocity_weight": self.velocity_weight,
-                "n_iter": self.n_iter, "decode": self.decode, "lag": self.lag, "placement": self.placement,
-                "process_noise": self.process_noise, "evidence_weight": self.evidence_weight, "leak": self.leak,
-                "both_roles": self.both_roles, "order_mix": self.order_mix,
-                "min_covar": self.min_covar, "random_state": self.random_state,
-                "correction_folds": self.correction_folds, "correction_trees": self.correction_trees,
-                "correction_leaf": self.correction_leaf}
+        return {
+            "n_states": self.n_states,
+            "energy": self.energy,
+            "velocity_weight": self.velocity_weight,
+            "n_iter": self.n_iter,
+            "decode": self.decode,
+            "lag": self.lag,
+            "placement": self.placement,
+            "process_noise": self.process_noise,
+            "evidence_weight": self.evidence_weight,
+            "leak": self.leak,
+            "both_roles": self.both_roles,
+            "order_mix": self.order_mix,
+            "min_covar": self.min_covar,
+            "random_state": self.random_state,
+            "correction_folds": self.correction_folds,
+            "correction_trees": self.correction_trees,
+            "correction_leaf": self.correction_leaf,
+        }
 
     def _fit_correction(self, trajectories: Sequence[TwoPersonTrajectory]) -> None:
         """The placement correction, by cross-fitting: the trajectories of each label are dealt to
@@ -313,7 +361,8 @@ class DualHMM:
         placement (true minus generated ground position, observed frame, metres). A forest of
         extremely randomised trees (scikit-learn, ``correction_trees`` trees, leaves of at least
         ``correction_leaf`` frames) learns the error from the features. Held-out runs, not the
-        model's own training sequences, so that the errors are those of sequences it has not seen."""
+        model's own training sequences, so that the errors are those of sequences it has not seen.
+        """
         from sklearn.ensemble import ExtraTreesRegressor
 
         trajs = list(trajectories)
@@ -330,20 +379,25 @@ class DualHMM:
             sub = DualHMM(**{**self._config(), "correction_folds": 0})._fit(rest)
             sub._feature_labels = np.unique(self.block_labels_)
             for t in held:
-                for obs, par in ([(t.a, t.b), (t.b, t.a)] if self.both_roles else [(t.a, t.b)]):
+                for obs, par in [(t.a, t.b), (t.b, t.a)] if self.both_roles else [(t.a, t.b)]:
                     f, q = sub._record(obs)
                     o, th = actor_frame(obs)
                     X.append(f)
                     Y.append(partner_placement(par, o, th)[0][:, :2] - q)
         if not X:
             return
-        forest = ExtraTreesRegressor(self.correction_trees, min_samples_leaf=self.correction_leaf, max_features=1.0,
-                                     random_state=self.random_state).fit(np.concatenate(X), np.concatenate(Y))
+        forest = ExtraTreesRegressor(
+            self.correction_trees,
+            min_samples_leaf=self.correction_leaf,
+            max_features=1.0,
+            random_state=self.random_state,
+        ).fit(np.concatenate(X), np.concatenate(Y))
         self._forest = _Forest.from_sklearn(forest)
 
     def _record(self, observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Run a sequence (T, 14, 3) online; returns each frame's correction features (T, d_f) and
-        uncorrected placement (T, 2) (x, z, observed frame, metres)."""
+        uncorrected placement (T, 2) (x, z, observed frame, metres).
+        """
         self.reset()
         self._rec = []
         for x in np.asarray(observed, np.float64):
@@ -352,7 +406,7 @@ class DualHMM:
         self.reset()
         return f, q
 
-    def _fit(self, trajectories: Sequence[TwoPersonTrajectory]) -> "DualHMM":
+    def _fit(self, trajectories: Sequence[TwoPersonTrajectory]) -> DualHMM:
         import logging
 
         from hmmlearn.hmm import GaussianHMM
@@ -375,8 +429,14 @@ class DualHMM:
         self.pca_o_ = _Linear(**_pca_state(PCA(self.energy, whiten=True, svd_solver="full").fit(O)))
         self.pca_p_ = _Linear(**_pca_state(PCA(self.energy, whiten=True, svd_solver="full").fit(P)))
         self.place_mean_, self.place_scale_ = Q.mean(0), np.maximum(Q.std(0), 1e-3)
-        X = np.concatenate([self._observed_features(O.reshape(-1, 14, 3), V),
-                            (Q - self.place_mean_) / self.place_scale_, self.pca_p_.forward(P)], axis=1)
+        X = np.concatenate(
+            [
+                self._observed_features(O.reshape(-1, 14, 3), V),
+                (Q - self.place_mean_) / self.place_scale_,
+                self.pca_p_.forward(P),
+            ],
+            axis=1,
+        )
         self.d_o_ = X.shape[1] - _NQ - len(self.pca_p_.scale)
         lengths = np.array([len(p[0]) for p in pairs])
         labels = [p[5] for p in pairs]
@@ -384,8 +444,9 @@ class DualHMM:
         members = {g: [i for i, lab in enumerate(labels) if lab == g] for g in groups}
         phases = {g: [pairs[i][6] for i in members[g]] for g in groups}
         # a label's phases: the distinct phase labels of its sequences (one where any has none)
-        n_phases = {g: 1 if any(ph is None for ph in phases[g]) else len(np.unique(np.concatenate(phases[g])))
-                    for g in groups}
+        n_phases = {
+            g: 1 if any(ph is None for ph in phases[g]) else len(np.unique(np.concatenate(phases[g]))) for g in groups
+        }
         total = sum(n_phases.values())
         starts, ends = np.cumsum(lengths) - lengths, np.cumsum(lengths)
 
@@ -393,21 +454,30 @@ class DualHMM:
             # the priors (a ridge of one pseudo-frame, a vanishing pull of the means to 0) keep the
             # M-step finite and positive definite for a state that Baum-Welch leaves (almost) empty
             d = X.shape[1]
-            return GaussianHMM(n_components=n, covariance_type="full", n_iter=self.n_iter, min_covar=self.min_covar,
-                               covars_prior=self.min_covar * np.eye(d), covars_weight=d + 1, means_weight=1e-3,
-                               random_state=self.random_state, tol=1e-3, init_params="" if ordered else "stmc")
+            return GaussianHMM(
+                n_components=n,
+                covariance_type="full",
+                n_iter=self.n_iter,
+                min_covar=self.min_covar,
+                covars_prior=self.min_covar * np.eye(d),
+                covars_weight=d + 1,
+                means_weight=1e-3,
+                random_state=self.random_state,
+                tol=1e-3,
+                init_params="" if ordered else "stmc",
+            )
 
         blocks = []
         for g in groups:
             idx = members[g]
-            Xg = np.concatenate([X[starts[i]:ends[i]] for i in idx])
+            Xg = np.concatenate([X[starts[i] : ends[i]] for i in idx])
             # the state budget is shared out by phases: a three-phase interaction gets three times
             # the states of a one-phase one (a conversation)
             n = min(max(2, self.n_states * n_phases[g] // total), len(Xg))
             ordered = self.order_mix < 1 and n_phases[g] > 1
             hmm = new_hmm(n, ordered)
             if ordered:
-                self._init_ordered(hmm, [X[starts[i]:ends[i]] for i in idx], phases[g])
+                self._init_ordered(hmm, [X[starts[i] : ends[i]] for i in idx], phases[g])
             hmm.fit(Xg, lengths[idx])
             blocks.append((hmm, len(idx) / len(pairs)))
         # one HMM: block-diagonal transitions (one block per interaction type), weighted start
@@ -422,8 +492,8 @@ class DualHMM:
             T = np.nan_to_num(hmm.transmat_)
             empty = T.sum(1) <= 0
             T[empty] = np.eye(n)[empty]
-            A[k:k + n, k:k + n] = T
-            pi[k:k + n] = w * hmm.startprob_
+            A[k : k + n, k : k + n] = T
+            pi[k : k + n] = w * hmm.startprob_
             means.append(np.nan_to_num(hmm.means_))
             # states that collapsed onto a few frames (e.g. standing still: zero velocity) get a ridge
             # so that every S_oo,k stays invertible
@@ -431,7 +501,7 @@ class DualHMM:
             k += n
         if len(blocks) > 1:
             A = (1 - self.leak) * A + self.leak * np.broadcast_to(pi, A.shape)
-        self.block_labels_ = np.repeat(groups, [h.n_components for h, _ in blocks])   # the label of each state
+        self.block_labels_ = np.repeat(groups, [h.n_components for h, _ in blocks])  # the label of each state
         self._set_params(pi / pi.sum(), A / A.sum(1, keepdims=True), np.concatenate(means), np.concatenate(covars))
         self.reset()
         return self
@@ -441,7 +511,8 @@ class DualHMM:
         phases in proportion to their frames, and within a phase each sequence's frames are cut into
         equal time segments; state k's Gaussian is fitted to its segments. Start in the first state,
         stay or move one state on (A banded), both mixed with ``order_mix`` of uniform so that
-        Baum-Welch can still learn other transitions."""
+        Baum-Welch can still learn other transitions.
+        """
         n, d = hmm.n_components, seqs[0].shape[1]
         names = sorted(set(np.concatenate(phases).tolist()))
         counts = np.array([sum(int((ph == p).sum()) for ph in phases) for p in names], float)
@@ -478,7 +549,7 @@ class DualHMM:
         S_po = self.covars_[:, do:, :do]
         self._inv_oo = np.linalg.inv(S_oo)
         self._logdet_oo = np.linalg.slogdet(S_oo)[1]
-        self._gain = S_po @ self._inv_oo                       # (N, d_p, d_o)
+        self._gain = S_po @ self._inv_oo  # (N, d_p, d_o)
         # the conditional mean is linear in the observed block, so an observed person unlike any
         # of training (a tracker's bad frame, a pose no pair showed) extrapolates it without bound
         # into poses no body takes: keep each state's conditional within CLIP_SD standard deviations
@@ -501,7 +572,7 @@ class DualHMM:
         self._prev_origin: np.ndarray | None = None
         self._lls: list[np.ndarray] = []
         self._alphas: list[np.ndarray] = []
-        self._track: tuple[np.ndarray, np.ndarray] | None = None   # partner ground (x, z) world, (2, 2) cov
+        self._track: tuple[np.ndarray, np.ndarray] | None = None  # partner ground (x, z) world, (2, 2) cov
         self.posterior_ = None
         # the observed person's motion so far (correction features): frames, last ground speeds
         # (m/s), fastest smoothed speed (m/s), path walked (m)
@@ -522,7 +593,8 @@ class DualHMM:
 
     def _conditional(self, o: np.ndarray) -> np.ndarray:
         """(d_o,) -> (N, d_p) E[p | o, s = k] for every state k, each dimension kept within
-        ``CLIP_SD`` standard deviations of the state's partner marginal."""
+        ``CLIP_SD`` standard deviations of the state's partner marginal.
+        """
         d = o[None, :] - self.means_[:, : self.d_o_]
         cond = self.means_[:, self.d_o_ :] + np.einsum("npo,no->np", self._gain, d)
         return np.clip(cond, self._cond_lo, self._cond_hi)
@@ -588,8 +660,12 @@ class DualHMM:
         mass = member @ self.posterior_
         z_k = cond[:, _POS[1]] * self.place_scale_[_POS[1]] + self.place_mean_[_POS[1]]
         z_l = (member @ (self.posterior_ * z_k)) / np.maximum(mass, 1e-12)
-        motion = [min((self._n_seen - 1) / self.fps_, _T_CAP_S), mean_speed, self._top_speed,
-                  min(self._path, _PATH_CAP_M)]
+        motion = [
+            min((self._n_seen - 1) / self.fps_, _T_CAP_S),
+            mean_speed,
+            self._top_speed,
+            min(self._path, _PATH_CAP_M),
+        ]
         return np.concatenate([pos, mass, motion, z_l, z_l - pos[1]])
 
     def _track_position(self, cond: np.ndarray, w: np.ndarray, origin: np.ndarray, theta: float) -> np.ndarray:
@@ -601,8 +677,8 @@ class DualHMM:
         the state mixture: m = sum_k w_k m_k, C = sum_k w_k (C_k + m_k m_k^T) - m m^T.
         """
         sc, mu = self.place_scale_, self.place_mean_
-        m_k = cond[:, _POS] * sc[_POS] + mu[_POS]                       # (N, 2) metres, observed frame
-        v_k = cond[:, _VEL] * sc[_VEL] + mu[_VEL]                       # (N, 2) m/s
+        m_k = cond[:, _POS] * sc[_POS] + mu[_POS]  # (N, 2) metres, observed frame
+        v_k = cond[:, _VEL] * sc[_VEL] + mu[_VEL]  # (N, 2) m/s
         m, v = w @ m_k, w @ v_k
         C = np.einsum("n,nij->ij", w, self._cov_pos) + np.einsum("n,ni,nj->ij", w, m_k - m, m_k - m)
         Cv = np.einsum("n,nij->ij", w, self._cov_vel) + np.einsum("n,ni,nj->ij", w, v_k - v, v_k - v)
@@ -614,7 +690,7 @@ class DualHMM:
         else:
             pos, cov = self._track
             pos = pos + R @ v / self.fps_
-            cov = cov + R @ Cv @ R.T / self.fps_ ** 2 + self.process_noise * np.eye(2)
+            cov = cov + R @ Cv @ R.T / self.fps_**2 + self.process_noise * np.eye(2)
             K = cov @ np.linalg.inv(cov + meas_cov)
             pos = pos + K @ (meas - pos)
             cov = (np.eye(2) - K) @ cov
@@ -647,8 +723,12 @@ class DualHMM:
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        arrays = {"startprob": self.startprob_, "transmat": self.transmat_, "means": self.means_,
-                  "covars": self.covars_}
+        arrays = {
+            "startprob": self.startprob_,
+            "transmat": self.transmat_,
+            "means": self.means_,
+            "covars": self.covars_,
+        }
         for tag, lin in (("pca_o", self.pca_o_), ("pca_p", self.pca_p_)):
             arrays.update({f"{tag}_mean": lin.mean, f"{tag}_components": lin.components, f"{tag}_scale": lin.scale})
         arrays.update(place_mean=self.place_mean_, place_scale=self.place_scale_, block_labels=self.block_labels_)
@@ -658,7 +738,7 @@ class DualHMM:
         return arrays, config
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "DualHMM":
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> DualHMM:
         c = dict(config)
         fps, d_o = float(c.pop("fps")), int(c.pop("d_o"))
         m = cls(**c)

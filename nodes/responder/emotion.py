@@ -23,22 +23,29 @@ v(s) = exp((k_speed - k_amp) s), so that speed = amplitude x rate follows exp(k_
 (:meth:`EmotionModel.modulate`). Online, :class:`StyleFilter` applies the amplitude gain about a
 running mean pose (a time warp needs the future).
 """
+
 from __future__ import annotations
 
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize
-
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
+from scipy.optimize import minimize
 
 from .frames import actor_frame, to_local, to_world
 
 EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
-FEATURES: tuple[str, ...] = ("log_speed", "log_amplitude", "log_jerk", "head_drop", "head_forward",
-                             "trunk_lean", "bounce")
+FEATURES: tuple[str, ...] = (
+    "log_speed",
+    "log_amplitude",
+    "log_jerk",
+    "head_drop",
+    "head_forward",
+    "trunk_lean",
+    "bounce",
+)
 _H, _N = JOINT_INDEX["head"], JOINT_INDEX["neck"]
 _W = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
 
@@ -54,7 +61,7 @@ def motion_features(X: np.ndarray, fps: float) -> np.ndarray:
     v = np.diff(L, axis=0) * fps
     speed = np.linalg.norm(v[:, [_H] + _W], axis=-1).mean()
     amp = L.std(axis=0).mean()
-    jerk = np.linalg.norm(np.diff(L[:, _W], 3, axis=0) * fps ** 3, axis=-1).mean()
+    jerk = np.linalg.norm(np.diff(L[:, _W], 3, axis=0) * fps**3, axis=-1).mean()
     pelvis = 0.5 * (L[:, 8] + L[:, 11])
     head_drop = (L[:, _H, 1] - L[:, _N, 1]).mean()
     head_fwd = (L[:, _H, 2] - L[:, _N, 2]).mean()
@@ -65,7 +72,8 @@ def motion_features(X: np.ndarray, fps: float) -> np.ndarray:
 
 def rank_svm(D: np.ndarray, S: np.ndarray, C: float = 1.0, C_sim: float = 1.0) -> np.ndarray:
     """Solve the ranking problem above: D (n_o, F) ordered differences (z_i - z_j, i ranked higher),
-    S (n_s, F) similar differences -> w (F,)."""
+    S (n_s, F) similar differences -> w (F,).
+    """
     F = D.shape[1] if len(D) else S.shape[1]
 
     def f(w: np.ndarray) -> tuple[float, np.ndarray]:
@@ -86,10 +94,12 @@ class EmotionModel:
     def __init__(self, C: float = 1.0, C_sim: float = 1.0, margin: float = 0.1, similar: float = 0.03) -> None:
         self.C, self.C_sim, self.margin, self.similar = float(C), float(C_sim), float(margin), float(similar)
 
-    def fit(self, X: np.ndarray, emotions: Sequence[str], strengths: Sequence[float],
-            groups: Sequence[str]) -> "EmotionModel":
+    def fit(
+        self, X: np.ndarray, emotions: Sequence[str], strengths: Sequence[float], groups: Sequence[str]
+    ) -> EmotionModel:
         """X (M, F) features; per motion its emotion, strength in [0, 1] (neutral: any, taken as 0)
-        and group (interaction label: pairs are only formed within a group)."""
+        and group (interaction label: pairs are only formed within a group).
+        """
         X = np.asarray(X, float)
         emo = np.asarray(emotions)
         s = np.where(emo == "neutral", 0.0, np.asarray(strengths, float))
@@ -123,13 +133,16 @@ class EmotionModel:
                 self.k_amp_[e_i] = float(ss_ @ np.asarray(rel_amp) / (ss_ @ ss_))
         return self
 
-    def fit_trajectories(self, trajs: Sequence[TwoPersonTrajectory]) -> "EmotionModel":
+    def fit_trajectories(self, trajs: Sequence[TwoPersonTrajectory]) -> EmotionModel:
         """Learn from simulator-style trajectories whose ``meta`` has ``emotion`` and ``strength``
-        (both people move in that style, so both are samples)."""
+        (both people move in that style, so both are samples).
+        """
         X, e, s, g = [], [], [], []
         for t in trajs:
             if "emotion" not in t.meta:
-                raise ValueError(f"trajectory {t.label!r} has no meta['emotion']: emotion training needs labelled motions")
+                raise ValueError(
+                    f"trajectory {t.label!r} has no meta['emotion']: emotion training needs labelled motions"
+                )
             for person in (t.a, t.b):
                 X.append(motion_features(person, t.fps))
                 e.append(t.meta["emotion"])
@@ -156,7 +169,8 @@ class EmotionModel:
 
     def modulate(self, X: np.ndarray, emotion: str, strength: float) -> np.ndarray:
         """A motion (T, 14, 3) metres restyled: time-warped by the playback rate (the motion runs
-        faster or slower, holding its last pose) and scaled about its mean pose. Returns (T, 14, 3)."""
+        faster or slower, holding its last pose) and scaled about its mean pose. Returns (T, 14, 3).
+        """
         X = np.asarray(X, np.float64)
         amp, rate = self.style_gains(emotion, strength)
         T = len(X)
@@ -172,11 +186,13 @@ class EmotionModel:
         return to_world(M + amp * (L - M), o, th).astype(np.float32)
 
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        return ({"w": self.w_, "mu": self.mu_, "sd": self.sd_, "k_speed": self.k_speed_, "k_amp": self.k_amp_},
-                {"C": self.C, "C_sim": self.C_sim, "margin": self.margin, "similar": self.similar})
+        return (
+            {"w": self.w_, "mu": self.mu_, "sd": self.sd_, "k_speed": self.k_speed_, "k_amp": self.k_amp_},
+            {"C": self.C, "C_sim": self.C_sim, "margin": self.margin, "similar": self.similar},
+        )
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "EmotionModel":
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> EmotionModel:
         m = cls(**config)
         m.w_, m.mu_, m.sd_ = arrays["w"], arrays["mu"], arrays["sd"]
         m.k_speed_, m.k_amp_ = arrays["k_speed"], arrays["k_amp"]
@@ -185,7 +201,8 @@ class EmotionModel:
 
 class StyleFilter:
     """Online amplitude gain about a running mean pose (time constant ``tau_s`` seconds) in the
-    person's own frame: L' = M + a (L - M), M <- M + (L - M) / (tau fps)."""
+    person's own frame: L' = M + a (L - M), M <- M + (L - M) / (tau fps).
+    """
 
     def __init__(self, model: EmotionModel | None, fps: float = 25.0, tau_s: float = 2.0) -> None:
         self.model, self.alpha = model, 1.0 / max(1.0, tau_s * fps)

@@ -11,10 +11,10 @@ heading angle theta = atan2(f_x, f_z)::
 R_y(theta) = [[cos, 0, sin], [0, 1, 0], [-sin, 0, cos]]. Models learnt in this frame do not depend
 on where the pair stands or which way it faces.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.skeleton import JOINT_INDEX
 
 _LH, _RH = JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]

@@ -15,13 +15,13 @@ A, the inducing inputs, the kernel parameters and the noise. GPy does the infere
 gradients; this module adds only the back constraint over [x, s] with s fixed (GPy's BCGPLVM is
 dense and has no fixed inputs) and the numpy evaluation of the fitted layer.
 """
+
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
-
-import time
 
 import numpy as np
 
@@ -82,16 +82,24 @@ class GPLayer:
         return {f"{prefix}_{k}": np.asarray(v, np.float64) for k, v in self.__dict__.items()}
 
     @classmethod
-    def from_arrays(cls, arrays: dict[str, np.ndarray], prefix: str) -> "GPLayer":
+    def from_arrays(cls, arrays: dict[str, np.ndarray], prefix: str) -> GPLayer:
         kw: dict[str, Any] = {k: arrays[f"{prefix}_{k}"] for k in cls.__dataclass_fields__}
         for k in ("map_ls", "var", "noise"):
             kw[k] = float(kw[k])
         return cls(**kw)
 
 
-def fit_layer(Y: np.ndarray, q: int, S: np.ndarray | None = None, num_inducing: int = 30,
-              n_centres: int = 80, max_iters: int = 200, seed: int = 0,
-              progress: Callable[[str], None] | None = None, name: str = "layer") -> GPLayer:
+def fit_layer(
+    Y: np.ndarray,
+    q: int,
+    S: np.ndarray | None = None,
+    num_inducing: int = 30,
+    n_centres: int = 80,
+    max_iters: int = 200,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+    name: str = "layer",
+) -> GPLayer:
     """Fit a back-constrained sparse GP-LVM layer (module docstring) with GPy.
 
     Y (N, D) data; q latent dimensions; S (N, n_s) fixed style amounts per point (None: no style);
@@ -128,15 +136,17 @@ def fit_layer(Y: np.ndarray, q: int, S: np.ndarray | None = None, num_inducing: 
     if ns:
         sd = list(range(q, q + ns))
         bias = GPy.kern.Bias(ns, variance=1.0, active_dims=sd)
-        bias.variance.fix()   # the content term's scale is the RBF's variance
+        bias.variance.fix()  # the content term's scale is the RBF's variance
         kern = kern * (bias + GPy.kern.Linear(ns, ARD=True, active_dims=sd))
     X = np.hstack([X0, S])
     Z = X[rng.choice(N, size=min(num_inducing, N), replace=False)].copy()
     model = _bc_class()(Yn, S, mapping, kern, Z)
     model.likelihood.variance = 0.05
     say = progress or (lambda s: None)
-    say(f"{name}: back-constrained sparse GP-LVM, {N} points x {D} dims -> {q} latent"
-        f"{f' + {ns} style' if ns else ''}, {len(Z)} inducing, up to {max_iters} iterations")
+    say(
+        f"{name}: back-constrained sparse GP-LVM, {N} points x {D} dims -> {q} latent"
+        f"{f' + {ns} style' if ns else ''}, {len(Z)} inducing, up to {max_iters} iterations"
+    )
     t0 = time.perf_counter()
     model.optimize("lbfgsb", max_iters=max_iters, messages=False)
     say(f"{name}: {time.perf_counter() - t0:.1f} s, bound {-float(model.objective_function()):.1f}")
@@ -146,10 +156,19 @@ def fit_layer(Y: np.ndarray, q: int, S: np.ndarray | None = None, num_inducing: 
         style_w = np.asarray(lin.variances, np.float64).copy()
     else:
         rbf_k, style_w = model.kern, np.zeros(0)
-    return GPLayer(y_mean=y_mean, y_sd=y_sd, centres=centres, map_ls=map_ls, A=np.asarray(mapping.A).copy(),
-                   Z=np.asarray(model.Z).copy(), ls=np.asarray(rbf_k.lengthscale, np.float64).copy() * np.ones(q),
-                   var=float(np.ravel(rbf_k.variance)[0]), style_w=style_w, woodbury=np.asarray(post.woodbury_vector).copy(),
-                   noise=float(np.ravel(model.likelihood.variance)[0]))
+    return GPLayer(
+        y_mean=y_mean,
+        y_sd=y_sd,
+        centres=centres,
+        map_ls=map_ls,
+        A=np.asarray(mapping.A).copy(),
+        Z=np.asarray(model.Z).copy(),
+        ls=np.asarray(rbf_k.lengthscale, np.float64).copy() * np.ones(q),
+        var=float(np.ravel(rbf_k.variance)[0]),
+        style_w=style_w,
+        woodbury=np.asarray(post.woodbury_vector).copy(),
+        noise=float(np.ravel(model.likelihood.variance)[0]),
+    )
 
 
 _BC: type | None = None
@@ -157,7 +176,8 @@ _BC: type | None = None
 
 def _bc_class() -> type:
     """GPy's sparse GP with the latent inputs back-constrained and the style inputs fixed (built on
-    first use so that GPy is imported only for training)."""
+    first use so that GPy is imported only for training).
+    """
     global _BC
     if _BC is not None:
         return _BC
@@ -168,8 +188,15 @@ def _bc_class() -> type:
     class BCSparseGPLVM(SparseGP):
         def __init__(self, Y: np.ndarray, S: np.ndarray, mapping: Any, kernel: Any, Z: np.ndarray) -> None:
             self.S, self.mapping = S, mapping
-            super().__init__(np.hstack([mapping.f(Y), S]), Y, Z, kernel, GPy.likelihoods.Gaussian(),
-                             inference_method=VarDTC(), name="bc_sparse_gplvm")
+            super().__init__(
+                np.hstack([mapping.f(Y), S]),
+                Y,
+                Z,
+                kernel,
+                GPy.likelihoods.Gaussian(),
+                inference_method=VarDTC(),
+                name="bc_sparse_gplvm",
+            )
             self.link_parameter(self.mapping)
 
         def parameters_changed(self) -> None:

@@ -36,6 +36,7 @@ q and low-passed (``smooth_s``), and the right arm is bent by two-bone inverse k
 hand (plus the mean contact offset of the training trials) in proportion to the predicted contact
 c: the target is where the hand is offered, not where the training trials met.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
@@ -43,7 +44,6 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
 
@@ -123,7 +123,8 @@ def partner_features(observed: np.ndarray, partner: np.ndarray, contact_m: float
 
 def partner_world(q: np.ndarray, own: np.ndarray, origin: np.ndarray, theta: float) -> np.ndarray:
     """Placement q (x, z, cos, sin) in the observed frame and the partner's own-frame joints (14, 3)
-    -> the partner's world joints (14, 3), metres."""
+    -> the partner's world joints (14, 3), metres.
+    """
     p_origin = to_world(np.array([[q[0], 0.0, q[1]]]), origin, theta)[0]
     return to_world(own, p_origin, theta + np.arctan2(q[3], q[2]))
 
@@ -132,7 +133,8 @@ def reach(joints: np.ndarray, target: np.ndarray, weight: float) -> np.ndarray:
     """Two-bone inverse kinematics of the right arm towards ``target`` (3,) world metres, blended by
     ``weight`` in [0, 1]. The bone lengths are kept and the elbow stays in its bending plane; for a
     target beyond 95% of the arm's length the whole body first steps towards it along the floor by
-    the shortfall (times ``weight``). Returns new joints (14, 3)."""
+    the shortfall (times ``weight``). Returns new joints (14, 3).
+    """
     if weight <= 0:
         return joints
     J = joints.copy()
@@ -157,13 +159,14 @@ class GPDM:
     def __init__(self, **params: Any) -> None:
         self.config = GPDMConfig(**params)
         self.style_ = np.zeros(len(STYLES))
-        self.posterior_ = np.ones(1)   # the node reports max(posterior_) as confidence
+        self.posterior_ = np.ones(1)  # the node reports max(posterior_) as confidence
         self.reset()
 
     # ------------------------------------------------------------------ fitting
     def fit(self, trajectories: Sequence[TwoPersonTrajectory], progress: Callable[[str], None] | None = None) -> GPDM:
         """Learn the hierarchy from two-person trajectories (``meta['emotion']``, ``meta['strength']``
-        label each trial's style; missing: neutral). Progress messages go to ``progress``."""
+        label each trial's style; missing: neutral). Progress messages go to ``progress``.
+        """
         from threadpoolctl import threadpool_limits
 
         if not trajectories:
@@ -248,29 +251,34 @@ class GPDM:
 
     def _dynamics(self, X: np.ndarray) -> np.ndarray:
         """Mean change of the interaction latent (N, q_z) for inputs [z_t-1, z_t-1 - z_t-2] (N, 2 q_z)."""
-        return rbf(np.atleast_2d(X), self.dyn_X_, self.dyn_ls_, self.dyn_var_) @ self.dyn_alpha_ * self.dyn_ysd_ \
+        return (
+            rbf(np.atleast_2d(X), self.dyn_X_, self.dyn_ls_, self.dyn_var_) @ self.dyn_alpha_ * self.dyn_ysd_
             + self.dyn_ymean_
+        )
 
     # ------------------------------------------------------------------ style
     def set_style(self, emotion: str, strength: float) -> None:
         """Set the style variables from an emotion and its strength in [0, 1] (continuous). A style
         the model never saw in training raises ValueError naming the styles it knows (neutral, no
-        style amount, is the content function itself and always available)."""
+        style amount, is the content function itself and always available).
+        """
         if emotion in EMOTIONS and emotion != "neutral" and emotion not in self.styles_:
-            raise ValueError(f"gpdm: style {emotion!r} was never seen in training (this model knows "
-                             f"{', '.join(self.styles_)}); retrain with trials of that emotion, e.g. "
-                             f"'counterpart learn responder --model gpdm --data sim --out FILE'")
+            raise ValueError(
+                f"gpdm: style {emotion!r} was never seen in training (this model knows "
+                f"{', '.join(self.styles_)}); retrain with trials of that emotion, e.g. "
+                f"'counterpart learn responder --model gpdm --data sim --out FILE'"
+            )
         self.style_ = style_vector(emotion, strength)
 
     # ------------------------------------------------------------------ online generation
     def reset(self) -> None:
         """Forget the past: the next frame starts a new sequence."""
-        self._prev: np.ndarray | None = None     # the observed joints of the previous frame
+        self._prev: np.ndarray | None = None  # the observed joints of the previous frame
         self._z: np.ndarray | None = None
         self._z_prev: np.ndarray | None = None
         self._P: np.ndarray | None = None
         self.contact_ = 0.0
-        self._out: np.ndarray | None = None       # the last partner joints before the reach
+        self._out: np.ndarray | None = None  # the last partner joints before the reach
         if hasattr(self, "R_"):
             self._r_sd = np.sqrt(np.diag(self.R_))
 
@@ -303,8 +311,8 @@ class GPDM:
         self.posterior_ = np.array([w.max()])
         u = self.inter_.mean(z_new[None])[0]
         qh, qp = self.config.q_h, self.config.q_p
-        pose = self.partner_.mean(u[None, qh:qh + qp], self.style_[None])[0]
-        p = np.concatenate([u[qh + qp:qh + qp + _NQ], pose, u[-1:]])
+        pose = self.partner_.mean(u[None, qh : qh + qp], self.style_[None])[0]
+        p = np.concatenate([u[qh + qp : qh + qp + _NQ], pose, u[-1:]])
         origin, theta = actor_frame(X)
         joints = partner_world(p[:_NQ], p[_NQ:-1].reshape(14, 3), origin, float(theta))
         if self._out is not None and self.config.smooth_s > 0:
@@ -325,9 +333,20 @@ class GPDM:
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         arrays = {**self.human_.arrays("human"), **self.partner_.arrays("partner"), **self.inter_.arrays("inter")}
-        arrays.update(dyn_X=self.dyn_X_, dyn_alpha=self.dyn_alpha_, dyn_ls=self.dyn_ls_, dyn_ymean=self.dyn_ymean_,
-                      dyn_ysd=self.dyn_ysd_, z0=self.z0_, P0=self.P0_, Q=self.Q_, R=self.R_,
-                      support_h=self.support_h_, support_z=self.support_z_, contact_offset=self.contact_offset_)
+        arrays.update(
+            dyn_X=self.dyn_X_,
+            dyn_alpha=self.dyn_alpha_,
+            dyn_ls=self.dyn_ls_,
+            dyn_ymean=self.dyn_ymean_,
+            dyn_ysd=self.dyn_ysd_,
+            z0=self.z0_,
+            P0=self.P0_,
+            Q=self.Q_,
+            R=self.R_,
+            support_h=self.support_h_,
+            support_z=self.support_z_,
+            contact_offset=self.contact_offset_,
+        )
         config = {**asdict(self.config), "fps": self.fps_, "dyn_var": self.dyn_var_, "styles": list(self.styles_)}
         return arrays, config
 

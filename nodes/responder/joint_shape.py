@@ -36,6 +36,7 @@ against the observed half H x(y) of each hypothesis' joint shape::
 and resample. The partner is the second half of the weighted mean over the hypotheses of the
 dominant target behaviour j, mapped back to pixels with the observed person's position and height.
 """
+
 from __future__ import annotations
 
 from collections.abc import Sequence
@@ -81,14 +82,29 @@ class JointShapeModel:
 
     name = "joint-shape"
 
-    def __init__(self, energy: float = 0.98, n_states: int = 40, n_behaviours: int = 24, gamma: float = 0.8,
-                 deriv_weight: float = 5.0, n_hypotheses: int = 200, sigma: float = 0.03,
-                 rate_noise: float = 0.3, both_roles: bool = True, random_state: int = 0) -> None:
+    def __init__(
+        self,
+        energy: float = 0.98,
+        n_states: int = 40,
+        n_behaviours: int = 24,
+        gamma: float = 0.8,
+        deriv_weight: float = 5.0,
+        n_hypotheses: int = 200,
+        sigma: float = 0.03,
+        rate_noise: float = 0.3,
+        both_roles: bool = True,
+        random_state: int = 0,
+    ) -> None:
         if not 0 < gamma < 1:
             raise ValueError(f"gamma={gamma!r}: the decay constant must be in (0, 1)")
         if n_hypotheses < 1 or n_states < 2 or n_behaviours < 2:
             raise ValueError("n_hypotheses >= 1, n_states >= 2 and n_behaviours >= 2 are required")
-        self.energy, self.n_states, self.n_behaviours, self.gamma = float(energy), int(n_states), int(n_behaviours), float(gamma)
+        self.energy, self.n_states, self.n_behaviours, self.gamma = (
+            float(energy),
+            int(n_states),
+            int(n_behaviours),
+            float(gamma),
+        )
         self.deriv_weight, self.n_hypotheses, self.sigma = float(deriv_weight), int(n_hypotheses), float(sigma)
         self.rate_noise, self.both_roles, self.random_state = float(rate_noise), bool(both_roles), int(random_state)
 
@@ -104,7 +120,7 @@ class JointShapeModel:
             h[t] = cur
         return h
 
-    def fit(self, pairs: Sequence[tuple[ShapeTrack, ShapeTrack]]) -> "JointShapeModel":
+    def fit(self, pairs: Sequence[tuple[ShapeTrack, ShapeTrack]]) -> JointShapeModel:
         """Learn from (observed, partner) shape tracks, A = left person as observed."""
         seqs = []
         for a, b in pairs:
@@ -126,7 +142,7 @@ class JointShapeModel:
         km = KMeans(K, n_init=2, random_state=self.random_state).fit(V)
         self.state_prototypes_ = km.cluster_centers_
         lens = np.cumsum([0] + [len(y) for y in Y])
-        S = [km.labels_[lens[i]:lens[i + 1]] for i in range(len(Y))]
+        S = [km.labels_[lens[i] : lens[i + 1]] for i in range(len(Y))]
         H = np.concatenate([self.decay_vectors(s, K, self.gamma) for s in S])
         Bn = min(self.n_behaviours, len(H))
         kb = KMeans(Bn, n_init=2, random_state=self.random_state).fit(H)
@@ -138,7 +154,7 @@ class JointShapeModel:
         trans = np.full((Bn, Bn + 1), 1e-3)
         runs: dict[int, list[int]] = {j: [] for j in range(Bn)}
         for i in range(len(Y)):
-            b = kb.labels_[lens[i]:lens[i + 1]]
+            b = kb.labels_[lens[i] : lens[i + 1]]
             cut = np.flatnonzero(np.diff(b)) + 1
             bounds = np.r_[0, cut, len(b)]
             labels = b[bounds[:-1]]
@@ -192,8 +208,13 @@ class JointShapeModel:
         """(N, 4n + 3) joint shapes of the hypotheses."""
         d = self.durations_[self._j]
         u = np.clip(self._tau / d, 0.0, 1.0)
-        y = hermite(self.keys_[self._i], d[:, None] * self.key_velocity_[self._i],
-                    self.keys_[self._j], d[:, None] * self.key_velocity_[self._j], u)
+        y = hermite(
+            self.keys_[self._i],
+            d[:, None] * self.key_velocity_[self._i],
+            self.keys_[self._j],
+            d[:, None] * self.key_velocity_[self._j],
+            u,
+        )
         return self.mean_ + y @ self.components_
 
     def _predict(self) -> None:
@@ -216,7 +237,8 @@ class JointShapeModel:
     def step(self, ctrl: np.ndarray, height: float, pos: np.ndarray, mirrored: bool = False) -> np.ndarray:
         """One frame: the observed person's control points (n, 2), height (px) and position (2,) px ->
         the partner's control points (n, 2) pixels. ``mirrored`` for an observed person on the
-        right (the model was trained with the observed person on the left)."""
+        right (the model was trained with the observed person on the left).
+        """
         c = np.asarray(ctrl, np.float64)
         n = self.n_ctrl_
         if c.shape != (n, 2):
@@ -233,7 +255,7 @@ class JointShapeModel:
             self._predict()
         X = self._shapes()
         d2 = ((X[:, : 2 * n] - z) ** 2).sum(1)
-        logw = -d2 / (2 * self.sigma ** 2 * 2 * n)
+        logw = -d2 / (2 * self.sigma**2 * 2 * n)
         w = np.exp(logw - logw.max())
         w /= w.sum()
         self.weights_ = w
@@ -266,17 +288,39 @@ class JointShapeModel:
         return out
 
     # ------------------------------------------------------------------ persistence
-    _ARRAYS = ("mean_", "components_", "state_prototypes_", "behaviour_prototypes_", "keys_",
-               "key_velocity_", "durations_", "start_", "transitions_")
+    _ARRAYS = (
+        "mean_",
+        "components_",
+        "state_prototypes_",
+        "behaviour_prototypes_",
+        "keys_",
+        "key_velocity_",
+        "durations_",
+        "start_",
+        "transitions_",
+    )
 
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        config = {k: getattr(self, k) for k in ("energy", "n_states", "n_behaviours", "gamma", "deriv_weight",
-                                                "n_hypotheses", "sigma", "rate_noise", "both_roles", "random_state")}
+        config = {
+            k: getattr(self, k)
+            for k in (
+                "energy",
+                "n_states",
+                "n_behaviours",
+                "gamma",
+                "deriv_weight",
+                "n_hypotheses",
+                "sigma",
+                "rate_noise",
+                "both_roles",
+                "random_state",
+            )
+        }
         config["n_ctrl"] = self.n_ctrl_
         return {k.rstrip("_"): getattr(self, k) for k in self._ARRAYS}, config
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "JointShapeModel":
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> JointShapeModel:
         c = dict(config)
         n = int(c.pop("n_ctrl"))
         m = cls(**c)

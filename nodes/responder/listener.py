@@ -21,6 +21,7 @@ shake one of ``head_turn`` with a little ``head_tilt`` so the head centre moves 
 ``gaze_at_other`` turns the head to the speaker (otherwise it looks 0.5 rad aside), ``activity``
 sways the torso (0.6 Hz).
 """
+
 from __future__ import annotations
 
 import json
@@ -29,7 +30,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
@@ -52,18 +52,22 @@ def read_rules_file(path: str | os.PathLike[str]) -> tuple[dict[str, list[RuleTu
     except (OSError, json.JSONDecodeError) as e:
         raise ValueError(f"{os.fspath(path)}: cannot read a rules file ({e})") from None
     if not isinstance(doc, dict) or doc.get("format") != RULES_FORMAT:
-        raise ValueError(f"{os.fspath(path)}: not a rules file (expected \"format\": \"{RULES_FORMAT}\")")
+        raise ValueError(f'{os.fspath(path)}: not a rules file (expected "format": "{RULES_FORMAT}")')
     if int(doc.get("version", 0)) != 1:
         raise ValueError(f"{os.fspath(path)}: rules file version {doc.get('version')!r}; this reader knows 1")
-    scen = {k: [(tuple(r["antecedent"]), tuple(r["consequent"]), float(r["confidence"])) for r in v]
-            for k, v in doc.get("scenarios", {}).items()}
+    scen = {
+        k: [(tuple(r["antecedent"]), tuple(r["consequent"]), float(r["confidence"])) for r in v]
+        for k, v in doc.get("scenarios", {}).items()
+    }
     return scen, dict(doc.get("params", {}))
 
 
-def count_rules(speaker: Sequence[np.ndarray], listener: Sequence[np.ndarray], names: Sequence[str],
-                offset: int) -> list[RuleTuple]:
+def count_rules(
+    speaker: Sequence[np.ndarray], listener: Sequence[np.ndarray], names: Sequence[str], offset: int
+) -> list[RuleTuple]:
     """Single-item rules S:x -> L:y from recordings: confidence = P(L:y at t + s | S:x at t) over
-    frames t (labels (T, K), 1 present; -1 unknown counts as absent)."""
+    frames t (labels (T, K), 1 present; -1 unknown counts as absent).
+    """
     K = len(names)
     joint, ante = np.zeros((K, K)), np.zeros(K)
     for sp, li in zip(speaker, listener):
@@ -73,8 +77,12 @@ def count_rules(speaker: Sequence[np.ndarray], listener: Sequence[np.ndarray], n
         s, l_ = s[: len(s) - offset].astype(float), l_[offset:].astype(float)
         joint += s.T @ l_
         ante += s.sum(0)
-    return [((f"S:{names[i]}",), (f"L:{names[j]}",), float(joint[i, j] / ante[i]))
-            for i in range(K) for j in range(K) if ante[i] > 0 and joint[i, j] > 0]
+    return [
+        ((f"S:{names[i]}",), (f"L:{names[j]}",), float(joint[i, j] / ante[i]))
+        for i in range(K)
+        for j in range(K)
+        if ante[i] > 0 and joint[i, j] > 0
+    ]
 
 
 class ListenerModel:
@@ -87,8 +95,14 @@ class ListenerModel:
 
     name = "listener"
 
-    def __init__(self, offset_s: float = 0.4, response_s: float = 1.0, distance: float = 1.2,
-                 fps: float = 25.0, random_state: int = 0) -> None:
+    def __init__(
+        self,
+        offset_s: float = 0.4,
+        response_s: float = 1.0,
+        distance: float = 1.2,
+        fps: float = 25.0,
+        random_state: int = 0,
+    ) -> None:
         if offset_s < 0 or response_s <= 0 or distance <= 0 or fps <= 0:
             raise ValueError("offset_s >= 0, response_s > 0, distance > 0 and fps > 0 are required")
         self.offset_s, self.response_s, self.distance = float(offset_s), float(response_s), float(distance)
@@ -97,7 +111,7 @@ class ListenerModel:
         self.dims: BodyDims = DEFAULT_DIMS
 
     # ------------------------------------------------------------------ rules
-    def fit(self, rules: Mapping[str, Sequence[RuleTuple]], params: Mapping[str, Any] | None = None) -> "ListenerModel":
+    def fit(self, rules: Mapping[str, Sequence[RuleTuple]], params: Mapping[str, Any] | None = None) -> ListenerModel:
         """Take the mined rules per scenario (``interested``/``not_interested``, or any one scenario)."""
         if not rules or not any(rules.values()):
             raise ValueError("ListenerModel.fit: no rules; mine some with 'counterpart mine' first")
@@ -109,7 +123,7 @@ class ListenerModel:
         return self
 
     @classmethod
-    def from_rules_file(cls, path: str | os.PathLike[str], **kw: Any) -> "ListenerModel":
+    def from_rules_file(cls, path: str | os.PathLike[str], **kw: Any) -> ListenerModel:
         scen, params = read_rules_file(path)
         return cls(**kw).fit(scen, params)
 
@@ -126,9 +140,12 @@ class ListenerModel:
         only = r.get("interested") or next(iter(r.values()))
         return {(a, c): INTEREST_GAIN[interest - 1] * p for a, c, p in only}
 
-    def response_probabilities(self, speaker_items: set[str] | Sequence[str], interest: int | None = None) -> dict[str, float]:
+    def response_probabilities(
+        self, speaker_items: set[str] | Sequence[str], interest: int | None = None
+    ) -> dict[str, float]:
         """Behaviour -> probability that the listener performs it, given the speaker's present signals
-        (``"nod"`` or ``"S:nod"``), by noisy-or over the matching rules."""
+        (``"nod"`` or ``"S:nod"``), by noisy-or over the matching rules.
+        """
         items = {s if s.startswith("S:") else f"S:{s}" for s in speaker_items}
         miss: dict[str, float] = {}
         for (ante, cons), p in self.confidences(self.interest if interest is None else interest).items():
@@ -143,12 +160,13 @@ class ListenerModel:
         self._rng = np.random.default_rng(self.random_state)
         self._t = 0
         self._prev: set[str] = set()
-        self._active: dict[str, tuple[int, int]] = {}   # behaviour -> (start frame, end frame)
+        self._active: dict[str, tuple[int, int]] = {}  # behaviour -> (start frame, end frame)
         self.behaviour_ = ""
 
     def step(self, speaker_signals: Mapping[str, bool], observed: np.ndarray | None = None) -> np.ndarray:
         """One frame: the speaker's signals (name -> present) and optionally the speaker's joints (14, 3)
-        metres -> the listener's joints (14, 3) metres. ``behaviour_`` names what it does."""
+        metres -> the listener's joints (14, 3) metres. ``behaviour_`` names what it does.
+        """
         now = {k for k, v in speaker_signals.items() if v}
         onsets = now - self._prev
         self._prev = now
@@ -191,13 +209,18 @@ class ListenerModel:
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        config = {"offset_s": self.offset_s, "response_s": self.response_s, "distance": self.distance,
-                  "fps": self.fps, "random_state": self.random_state,
-                  "rules": {k: [[list(a), list(c), p] for a, c, p in v] for k, v in self.rules_.items()}}
+        config = {
+            "offset_s": self.offset_s,
+            "response_s": self.response_s,
+            "distance": self.distance,
+            "fps": self.fps,
+            "random_state": self.random_state,
+            "rules": {k: [[list(a), list(c), p] for a, c, p in v] for k, v in self.rules_.items()},
+        }
         return {}, config
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "ListenerModel":
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> ListenerModel:
         c = dict(config)
         rules = c.pop("rules")
         return cls(**c).fit({k: [(tuple(a), tuple(cc), float(p)) for a, cc, p in v] for k, v in rules.items()})

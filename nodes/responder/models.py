@@ -11,6 +11,7 @@ version and the version this code reads. Default models live in
 ``~/.cache/counterpart/models/responder-<model>.npz`` (``$COUNTERPART_MODELS`` overrides the folder)
 and are trained from the simulator when missing (:func:`load_default`).
 """
+
 from __future__ import annotations
 
 import json
@@ -23,9 +24,9 @@ from typing import Any, Protocol
 import numpy as np
 
 MODEL_FORMAT = "counterpart.responder.model"
-MODEL_VERSION = 4   # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
-                    # 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation;
-                    # 4: dual-hmm placement correction (cross-fitted forest arrays)
+MODEL_VERSION = 4  # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
+# 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation;
+# 4: dual-hmm placement correction (cross-fitted forest arrays)
 MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion", "video-texture", "gpdm")
 
 
@@ -39,28 +40,34 @@ class Storable(Protocol):
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]: ...
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "Storable": ...
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> Storable: ...
 
 
 def model_class(name: str) -> type:
     """The class of model ``name`` (one of ``MODEL_NAMES``)."""
     if name == "dual-hmm":
         from .dual_hmm import DualHMM
+
         return DualHMM
     if name == "joint-shape":
         from .joint_shape import JointShapeModel
+
         return JointShapeModel
     if name == "listener":
         from .listener import ListenerModel
+
         return ListenerModel
     if name == "emotion":
         from .emotion import EmotionModel
+
         return EmotionModel
     if name == "video-texture":
         from .video_texture import VideoTexture
+
         return VideoTexture
     if name == "gpdm":
         from .gpdm import GPDM
+
         return GPDM
     raise ValueError(f"unknown responder model {name!r}; choose one of {', '.join(MODEL_NAMES)}")
 
@@ -71,8 +78,13 @@ def save_model(path: str | os.PathLike[str], model: Storable, training: dict[str
     if path.suffix != ".npz":
         path = path.with_name(path.name + ".npz")
     arrays, config = model.get_state()
-    meta = {"format": MODEL_FORMAT, "version": MODEL_VERSION, "model": model.name,
-            "config": config, "training": training or {}}
+    meta = {
+        "format": MODEL_FORMAT,
+        "version": MODEL_VERSION,
+        "model": model.name,
+        "config": config,
+        "training": training or {},
+    }
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez_compressed(tmp, __meta__=np.array(json.dumps(meta)), **arrays)
@@ -100,9 +112,11 @@ def _open(path: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], dict[str
     if meta.get("format") != MODEL_FORMAT:
         raise ValueError(f"{p}: format {meta.get('format')!r} is not a responder model ({MODEL_FORMAT!r})")
     if meta.get("version") != MODEL_VERSION:
-        raise ModelVersionError(f"{p}: model file version {meta.get('version')!r}, but this counterpart reads "
-                                f"version {MODEL_VERSION}; retrain it with 'counterpart learn responder "
-                                f"--model {meta.get('model', 'M')} ...'")
+        raise ModelVersionError(
+            f"{p}: model file version {meta.get('version')!r}, but this counterpart reads "
+            f"version {MODEL_VERSION}; retrain it with 'counterpart learn responder "
+            f"--model {meta.get('model', 'M')} ...'"
+        )
     return arrays, meta
 
 
@@ -137,6 +151,7 @@ def build_default(name: str, progress: Callable[[str], None] | None = None) -> t
     t0 = time.perf_counter()
     if name == "video-texture":  # an avatar learns from a recording of a person, not trajectories
         from .avatar_default import build_default_avatar
+
         return build_default_avatar(progress)
     data = default_training_data(name, progress)
     model = train(name, data, progress)
@@ -146,7 +161,8 @@ def build_default(name: str, progress: Callable[[str], None] | None = None) -> t
 
 def load_default(name: str, progress: Callable[[str], None] | None = None) -> Any:
     """The default model ``name``: loaded from :func:`default_model_path`, built from the simulator
-    and saved there first when missing or of an older version."""
+    and saved there first when missing or of an older version.
+    """
     path = default_model_path(name)
     if path.exists():
         try:

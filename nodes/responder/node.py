@@ -10,6 +10,7 @@ drives the output: dual-hmm, gpdm, listener and video-texture produce one Partne
 paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
 emotion and strength at run time; ``None`` fields leave a setting unchanged.
 """
+
 from __future__ import annotations
 
 import os
@@ -17,7 +18,6 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
 
@@ -42,41 +42,76 @@ class Responder(Node):
     outputs = {"partner": Output(Partner, "the generated partner, one per frame of the driving input")}
     params = {
         "model": Param(str, "dual-hmm", "interaction model", choices=MODELS),
-        "model_file": Param(str, "default", "model file for the selected model, or 'default' (built from the "
-                            "simulator into ~/.cache/counterpart/models when missing)",
-                            check=lambda v: None if v == "default" or os.path.isfile(v) else
-                            f"no model file {v!r}; make one with 'counterpart learn responder' (an avatar: 'counterpart "
-                            "learn avatar') or use 'default'"),
+        "model_file": Param(
+            str,
+            "default",
+            "model file for the selected model, or 'default' (built from the "
+            "simulator into ~/.cache/counterpart/models when missing)",
+            check=lambda v: (
+                None
+                if v == "default" or os.path.isfile(v)
+                else f"no model file {v!r}; make one with 'counterpart learn responder' (an avatar: 'counterpart "
+                "learn avatar') or use 'default'"
+            ),
+        ),
         "use_pose": Param(bool, True, "subscribe to 'pose'"),
         "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
         "use_signals": Param(bool, False, "subscribe to 'signals'"),
         "use_control": Param(bool, True, "subscribe to 'control'"),
-        "speaker": Param(str, "person", "who speaks (listener model): person or partner", choices=("person", "partner")),
+        "speaker": Param(
+            str, "person", "who speaks (listener model): person or partner", choices=("person", "partner")
+        ),
         "interest": Param(int, 3, "listener interest level", min=1, max=3),
         "emotion": Param(str, "neutral", "partner emotion", choices=EMOTIONS),
         "strength": Param(float, 0.0, "emotion strength", min=0.0, max=1.0),
         "observed": Param(str, "left", "which person the partner responds to", choices=("left", "right")),
-        "hold_frames": Param(int, 15, "frames the partner stays where it was while the observed person is lost "
-                             "or missing (a tracker's dropout is not the person leaving); 0: it vanishes at once",
-                             min=0),
-        "stage": Param(bool, True, "keep the 3D partner standing where a partner would: on the ground, "
-                       "between min_distance_m and max_distance_m from the observed person, moving at most "
-                       "max_speed_m_s (false: where the model puts it)"),
-        "min_distance_m": Param(float, 0.5, "nearest the partner stands to the observed person (m, ground "
-                                "distance between the mid-hips)", min=0.0),
+        "hold_frames": Param(
+            int,
+            15,
+            "frames the partner stays where it was while the observed person is lost "
+            "or missing (a tracker's dropout is not the person leaving); 0: it vanishes at once",
+            min=0,
+        ),
+        "stage": Param(
+            bool,
+            True,
+            "keep the 3D partner standing where a partner would: on the ground, "
+            "between min_distance_m and max_distance_m from the observed person, moving at most "
+            "max_speed_m_s (false: where the model puts it)",
+        ),
+        "min_distance_m": Param(
+            float,
+            0.5,
+            "nearest the partner stands to the observed person (m, ground distance between the mid-hips)",
+            min=0.0,
+        ),
         "max_distance_m": Param(float, 1.2, "farthest the partner stands from the observed person (m)", min=0.0),
         "max_speed_m_s": Param(float, 2.5, "fastest the partner's placement moves (m/s)", min=0.01),
-        "recoil_m": Param(float, 0.3, "how far the partner steps back when a hand of the observed person touches "
-                          "its chest (m, fading over about a second; 0: it does not recoil)", min=0.0),
-        "reach_m": Param(float, 0.45, "the partner's hand that the model brings within this distance of the "
-                         "observed person's hand is pulled onto it (m; hand contact by inverse kinematics, "
-                         "complete at 0.1 m); 0: the model's hand as it is", min=0.0),
+        "recoil_m": Param(
+            float,
+            0.3,
+            "how far the partner steps back when a hand of the observed person touches "
+            "its chest (m, fading over about a second; 0: it does not recoil)",
+            min=0.0,
+        ),
+        "reach_m": Param(
+            float,
+            0.45,
+            "the partner's hand that the model brings within this distance of the "
+            "observed person's hand is pulled onto it (m; hand contact by inverse kinematics, "
+            "complete at 0.1 m); 0: the model's hand as it is",
+            min=0.0,
+        ),
     }
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
-        use = {"pose": params["use_pose"], "silhouettes": params["use_silhouettes"],
-               "signals": params["use_signals"], "control": params["use_control"]}
+        use = {
+            "pose": params["use_pose"],
+            "silhouettes": params["use_silhouettes"],
+            "signals": params["use_signals"],
+            "control": params["use_control"],
+        }
         return {k: v for k, v in cls.inputs.items() if use[k]}, dict(cls.outputs)
 
     def setup(self) -> None:
@@ -94,13 +129,19 @@ class Responder(Node):
         self.reach: ReachConfig | None = None
         try:
             if self.p["stage"]:
-                self.stage = Stage(StageConfig(self.p["min_distance_m"], self.p["max_distance_m"],
-                                               self.p["max_speed_m_s"], recoil_m=self.p["recoil_m"]))
+                self.stage = Stage(
+                    StageConfig(
+                        self.p["min_distance_m"],
+                        self.p["max_distance_m"],
+                        self.p["max_speed_m_s"],
+                        recoil_m=self.p["recoil_m"],
+                    )
+                )
             if self.p["reach_m"] > 0:
                 self.reach = ReachConfig(r_engage=self.p["reach_m"])
         except ValueError as e:
-            raise SystemExit(f"responder: {e}; set responder.min_distance_m, max_distance_m or reach_m")
-        self._unseen: set[str] = set()    # styles the gpdm model never saw, already reported
+            raise SystemExit(f"responder: {e}; set responder.min_distance_m, max_distance_m or reach_m") from None
+        self._unseen: set[str] = set()  # styles the gpdm model never saw, already reported
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -135,8 +176,14 @@ class Responder(Node):
             self.emotion = msg.emotion
         if msg.strength is not None:
             self.strength = float(min(max(msg.strength, 0.0), 1.0))
-        self.log.info("control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
-                      self.model, self.speaker, self.interest, self.emotion, self.strength)
+        self.log.info(
+            "control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
+            self.model,
+            self.speaker,
+            self.interest,
+            self.emotion,
+            self.strength,
+        )
 
     def _reset_stage(self) -> None:
         if self.stage is not None:
@@ -144,7 +191,8 @@ class Responder(Node):
 
     def _staged(self, observed: np.ndarray, joints: np.ndarray, driver: Any) -> np.ndarray:
         """The model's partner moved to where a partner stands (``stage``) and its hand onto the
-        observed hand it comes near (``reach_m``); both counted when they act."""
+        observed hand it comes near (``reach_m``); both counted when they act.
+        """
         if self.stage is not None:
             fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
             gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
@@ -162,7 +210,8 @@ class Responder(Node):
 
     def _avatar(self, texture: Any, listener: Any) -> dict[str, Any]:
         """The video-texture avatar's Partner fields, driven by the listener rules
-        (:func:`counterpart.nodes.responder.avatar_driver.avatar_partner`)."""
+        (:func:`counterpart.nodes.responder.avatar_driver.avatar_partner`).
+        """
         from .avatar_driver import avatar_partner
         from .models import default_model_path
 
@@ -170,17 +219,28 @@ class Responder(Node):
         signals = self.latest.get("signals")
         who = self._pick(list(signals.people)) if signals is not None else None
         heard = {} if who is None else {n: bool(v == 1) for n, v in zip(who.names, np.asarray(who.labels))}
-        file = self.p["model_file"] if self.p["model"] == "video-texture" and self.p["model_file"] != "default" \
+        file = (
+            self.p["model_file"]
+            if self.p["model"] == "video-texture" and self.p["model_file"] != "default"
             else default_model_path("video-texture")
-        fields = avatar_partner(texture, listener, heard, None if body is None else body.joints, self.speaker,
-                                self.interest, os.path.abspath(file))   # the renderer may run from another folder
+        )
+        fields = avatar_partner(
+            texture,
+            listener,
+            heard,
+            None if body is None else body.joints,
+            self.speaker,
+            self.interest,
+            os.path.abspath(file),
+        )  # the renderer may run from another folder
         if body is not None:  # the avatar stands where a partner stands, as the listener's body does
             fields["joints"] = self._staged(body.joints, fields["joints"], self.latest["pose"])
         return dict(fields, observed_id=-1 if body is None else body.id)
 
     def _gpdm_style(self, m: Any) -> None:
         """Set the gpdm's style variables from the emotion and strength; a style the model never saw
-        is reported once and generated as neutral."""
+        is reported once and generated as neutral.
+        """
         try:
             m.set_style(self.emotion, self.strength)
         except ValueError as e:
@@ -213,7 +273,8 @@ class Responder(Node):
     # ------------------------------------------------------------------ output
     def _emit(self, driver: Any) -> None:
         """One Partner per driving message; an empty one (no joints, no ctrl) when there is nobody to
-        respond to, so that downstream nodes pairing by seq never wait for a partner that won't come."""
+        respond to, so that downstream nodes pairing by seq never wait for a partner that won't come.
+        """
         out = dict(model=self.model, emotion=self.emotion, strength=self.strength)
 
         def nobody() -> None:
@@ -237,13 +298,12 @@ class Responder(Node):
                 m.reset()
                 self._reset_stage()
                 self.tally("observed_switches")
-            if self.model == "gpdm":   # the style is the model's own input (Taubert et al.), not a filter
+            if self.model == "gpdm":  # the style is the model's own input (Taubert et al.), not a filter
                 self._gpdm_style(m)
             joints = self._staged(body.joints, m.step(body.joints), driver)
             if self.model == "dual-hmm":
                 joints = self.style(joints, self.emotion, self.strength)
-            out.update(joints=joints, observed_id=body.id,
-                       behaviour="respond", confidence=float(np.max(m.posterior_)))
+            out.update(joints=joints, observed_id=body.id, behaviour="respond", confidence=float(np.max(m.posterior_)))
         elif self.model == "listener":
             m.interest = self.interest
             sig = self.latest.get("signals")
@@ -255,8 +315,12 @@ class Responder(Node):
             joints = m.step(speaking, None if body is None else body.joints)
             if body is not None and np.shape(joints) == (14, 3):
                 joints = self._staged(body.joints, joints, self.latest["pose"])
-            out.update(joints=self.style(joints, self.emotion, self.strength),
-                       observed_id=-1 if body is None else body.id, behaviour=m.behaviour_ or "listen", confidence=1.0)
+            out.update(
+                joints=self.style(joints, self.emotion, self.strength),
+                observed_id=-1 if body is None else body.id,
+                behaviour=m.behaviour_ or "listen",
+                confidence=1.0,
+            )
         elif self.model == "video-texture":
             lm = self._model("listener")
             if lm is None:

@@ -12,12 +12,12 @@ d the distance between the model's wrist W and the nearest observed wrist H (met
 smoothly from 0 at ``r_engage`` to 1 at ``r_contact``, so the hand is never thrown across; beyond
 reach of the shoulder the arm stretches towards the target without leaving its shoulder.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.body.skeleton import JOINT_INDEX
 
 #: (shoulder, elbow, wrist) joint indices of each arm
@@ -28,22 +28,26 @@ _WRISTS = [w for _, _, w in ARMS]
 @dataclass(frozen=True)
 class ReachConfig:
     """Distances (metres) between the model's wrist and the observed wrist: the pull starts at
-    ``r_engage`` and is complete at ``r_contact``."""
+    ``r_engage`` and is complete at ``r_contact``.
+    """
 
     r_engage: float = 0.45
     r_contact: float = 0.1
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.r_contact < self.r_engage:
-            raise ValueError(f"reach distances r_contact={self.r_contact}, r_engage={self.r_engage}: "
-                             "need 0 <= r_contact < r_engage")
+            raise ValueError(
+                f"reach distances r_contact={self.r_contact}, r_engage={self.r_engage}: need 0 <= r_contact < r_engage"
+            )
 
 
-def two_bone_ik(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray,
-                target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def two_bone_ik(
+    shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray, target: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """New (elbow, wrist) (3,) each, metres: the wrist on ``target`` (or as near as the arm
     reaches), both bone lengths kept, the elbow bent in the plane of the shoulder, the target and
-    the old elbow (the law of cosines in that plane)."""
+    the old elbow (the law of cosines in that plane).
+    """
     a = float(np.linalg.norm(elbow - shoulder))
     b = float(np.linalg.norm(wrist - elbow))
     to = target - shoulder

@@ -6,12 +6,12 @@ people) and fitted with a closed B-spline of ``n`` control points
 (``counterpart.body.spline.silhouette_spline``), giving per frame the control points (n, 2)
 pixels, the region centroid (2,) pixels and the height (pixels, bounding box).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
 from counterpart.body.raster import rasterise_silhouettes
@@ -21,7 +21,8 @@ from counterpart.body.trajectory import TwoPersonTrajectory
 @dataclass
 class ShapeTrack:
     """One person's silhouette over T frames: ctrl (T, n, 2), pos (T, 2), height (T,), pixels;
-    valid (T,) bool (False where the person is out of view)."""
+    valid (T,) bool (False where the person is out of view).
+    """
 
     ctrl: np.ndarray
     pos: np.ndarray
@@ -50,8 +51,9 @@ def silhouette_track(joints: np.ndarray, camera: Camera, n: int = 32) -> ShapeTr
     return ShapeTrack(ctrl, pos, height, valid)
 
 
-def trajectory_shapes(traj: TwoPersonTrajectory, camera: Camera | None = None,
-                      n: int = 32) -> tuple[ShapeTrack, ShapeTrack]:
+def trajectory_shapes(
+    traj: TwoPersonTrajectory, camera: Camera | None = None, n: int = 32
+) -> tuple[ShapeTrack, ShapeTrack]:
     """Both people's silhouette tracks (A, B) of a trajectory; default camera 160 x 120 pixels."""
     cam = camera or default_camera(160, 120)
     return silhouette_track(traj.a, cam, n), silhouette_track(traj.b, cam, n)
@@ -59,7 +61,8 @@ def trajectory_shapes(traj: TwoPersonTrajectory, camera: Camera | None = None,
 
 def mirror_ctrl(ctrl: np.ndarray) -> np.ndarray:
     """Mirror control points (..., n, 2) left-right (x -> -x) keeping the ordering convention: point
-    0 stays at the head, and the order is reversed so the curve stays counter-clockwise."""
+    0 stays at the head, and the order is reversed so the curve stays counter-clockwise.
+    """
     c = np.asarray(ctrl, np.float64).copy()
     c[..., 0] *= -1
     n = c.shape[-2]

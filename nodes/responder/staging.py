@@ -22,12 +22,12 @@ model's posture and gestures are kept:
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-
 from counterpart.body.skeleton import JOINT_INDEX
 
 from .frames import actor_frame
@@ -51,14 +51,15 @@ class StageConfig:
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
-            raise ValueError(f"partner distance limits [{self.min_distance_m}, {self.max_distance_m}] m: "
-                             "need 0 <= min <= max")
+            raise ValueError(
+                f"partner distance limits [{self.min_distance_m}, {self.max_distance_m}] m: need 0 <= min <= max"
+            )
         if self.max_speed_m_s <= 0 or self.max_ankle_m < 0:
-            raise ValueError(f"max_speed_m_s={self.max_speed_m_s} must be > 0 and max_ankle_m="
-                             f"{self.max_ankle_m} >= 0")
+            raise ValueError(f"max_speed_m_s={self.max_speed_m_s} must be > 0 and max_ankle_m={self.max_ankle_m} >= 0")
         if self.contact_m < 0 or self.recoil_m < 0 or self.recoil_s <= 0:
-            raise ValueError(f"contact_m={self.contact_m}, recoil_m={self.recoil_m} must be >= 0 and "
-                             f"recoil_s={self.recoil_s} > 0")
+            raise ValueError(
+                f"contact_m={self.contact_m}, recoil_m={self.recoil_m} must be >= 0 and recoil_s={self.recoil_s} > 0"
+            )
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -70,7 +71,8 @@ def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
 
 def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarray:
     """Ground vector d (2,) (x, z) with its length clipped to [lo, hi]; the facing direction
-    (heading ``facing``, radians) where d is too short to have one."""
+    (heading ``facing``, radians) where d is too short to have one.
+    """
     r = float(np.hypot(*d))
     u = d / r if r > 1e-6 else np.array([np.sin(facing), np.cos(facing)])
     return u * min(max(r, lo), hi)
@@ -79,7 +81,8 @@ def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarr
 def _walk(start: np.ndarray, goal: np.ndarray, limit: float) -> np.ndarray:
     """Ground offset (2,) from ``start`` towards ``goal`` (both (2,), metres, non-zero), moved at most
     about ``limit`` metres: in polar coordinates about the person, so that a partner going to the
-    other side walks round them rather than through them."""
+    other side walks round them rather than through them.
+    """
     r0, r1 = float(np.hypot(*start)), float(np.hypot(*goal))
     a0, a1 = np.arctan2(start[1], start[0]), np.arctan2(goal[1], goal[0])
     da = (a1 - a0 + np.pi) % (2 * np.pi) - np.pi
@@ -109,9 +112,9 @@ class Stage:
     def reset(self) -> None:
         """Forget the last placement (another person observed, or a new stream)."""
         self._last: np.ndarray | None = None  # the last ground offset from the observed person
-        self._recoil = 0.0   # metres added to the partner's distance by a push, fading
+        self._recoil = 0.0  # metres added to the partner's distance by a push, fading
         self._touching = False
-        self.pushes = 0      # pushes the partner recoiled from
+        self.pushes = 0  # pushes the partner recoiled from
 
     def __call__(self, observed: np.ndarray, partner: np.ndarray, dt: float) -> np.ndarray:
         """The partner's joints (14, 3), world metres, moved rigidly to a valid place.
@@ -131,8 +134,9 @@ class Stage:
         if self._last is not None:  # the hands against the partner where it stands (last frame's offset)
             at = np.zeros(3)
             at[[0, 2]] = o + self._last - p
-            touching = bool((_segment_distance(X[_WRISTS], P[_NECK] + at, P[_HIPS].mean(axis=0) + at)
-                             < c.contact_m).any())
+            touching = bool(
+                (_segment_distance(X[_WRISTS], P[_NECK] + at, P[_HIPS].mean(axis=0) + at) < c.contact_m).any()
+            )
         if touching and not self._touching:
             self._recoil += c.recoil_m
             self.pushes += 1

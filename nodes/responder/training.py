@@ -1,11 +1,11 @@
 """Training each responder model from two-person trajectories (and the simulator defaults)."""
+
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-
 from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .data import EMOTIONS, SIM_SCENARIOS, sim_trajectories
@@ -37,13 +37,20 @@ def default_training_data(name: str, progress: Progress = None) -> list[TwoPerso
 def gpdm_training_data(seeds: int = 8, max_frames: int = 250) -> list[TwoPersonTrajectory]:
     """The gpdm's default data: high fives and handshakes, neutral and each emotion at strengths 0.5
     and 1, the hands meeting 0.1 m lower, at, and 0.1 m higher than the simulator's own height in
-    turn (2 x 7 x ``seeds`` trials, 112 by default)."""
+    turn (2 x 7 x ``seeds`` trials, 112 by default).
+    """
     out = []
     for e in EMOTIONS:
-        for s in ((0.0,) if e == "neutral" else (0.5, 1.0)):
+        for s in (0.0,) if e == "neutral" else (0.5, 1.0):
             for seed in range(seeds):
-                out += sim_trajectories(("handshake", "high_five"), [seed], max_frames=max_frames, emotion=e,
-                                        strength=s, hand_dy=(-0.1, 0.0, 0.1)[seed % 3])
+                out += sim_trajectories(
+                    ("handshake", "high_five"),
+                    [seed],
+                    max_frames=max_frames,
+                    emotion=e,
+                    strength=s,
+                    hand_dy=(-0.1, 0.0, 0.1)[seed % 3],
+                )
     return out
 
 
@@ -61,6 +68,7 @@ def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = N
     say = progress or (lambda s: None)
     if name == "dual-hmm":
         from .dual_hmm import DualHMM
+
         model = DualHMM(**params)
         folds = model.correction_folds
         extra = f", then the placement correction on {folds} held-out folds" if folds else ""
@@ -69,12 +77,14 @@ def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = N
     if name == "joint-shape":
         from .joint_shape import JointShapeModel
         from .shapes import trajectory_shapes
+
         say(f"joint-shape: silhouettes and splines of {len(data)} sequences")
         shapes = [trajectory_shapes(t) for t in data]
         say("joint-shape: prototypes, behaviours and Markov chain")
         return JointShapeModel(**params).fit(shapes)
     if name == "listener":
         from .listener import ListenerModel, count_rules
+
         fps = float(data[0].fps)
         model = ListenerModel(fps=fps, **params)
         offset = int(round(model.offset_s * fps))
@@ -90,9 +100,11 @@ def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = N
         return model.fit(rules, {"offset": offset, "fps": fps})
     if name == "emotion":
         from .emotion import EmotionModel
+
         say(f"emotion: ranking functions from {len(data)} labelled sequences")
         return EmotionModel(**params).fit_trajectories(data)
     if name == "gpdm":
         from .gpdm import GPDM
+
         return GPDM(**params).fit(data, say)
     raise ValueError(f"unknown responder model {name!r}")

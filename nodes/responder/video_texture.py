@@ -36,6 +36,7 @@ While a signal is requested (s_g >= 1) only transitions on a shortest way to it 
 ``goal_slack`` frames) are drawn from, so a request is met as soon as the graph allows. A
 cut is cross-faded over ``crossfade`` frames: the frames that would have followed fade out.
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
@@ -44,10 +45,9 @@ from typing import Any
 
 import cv2
 import numpy as np
+from counterpart.body.avatar_frames import AvatarFrames
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
-
-from counterpart.body.avatar_frames import AvatarFrames
 
 #: the labels that define a frame's social state (pruning and signal-set subgraphs)
 STATE_SIGNALS: tuple[str, ...] = ("gaze_at_other", "talking", "laughing")
@@ -139,8 +139,8 @@ class _Synth:
     """Synthesis state."""
 
     cur: int = -1
-    ghost: int = -1          # the frame that would have followed without the last cut
-    fade: int = 0            # cross-fade frames left
+    ghost: int = -1  # the frame that would have followed without the last cut
+    fade: int = 0  # cross-fade frames left
     cuts: list[tuple[int, int]] = field(default_factory=list)
 
 
@@ -165,9 +165,17 @@ class VideoTexture:
         self.training_: dict[str, Any] = {}
 
     # ---------------------------------------------------------------------------------- learning
-    def fit(self, features: np.ndarray, labels: np.ndarray, names: Sequence[str], fps: float,
-            valid: np.ndarray | None = None, required: Sequence[str] = (), frames: AvatarFrames | None = None,
-            progress: Progress = None) -> "VideoTexture":
+    def fit(
+        self,
+        features: np.ndarray,
+        labels: np.ndarray,
+        names: Sequence[str],
+        fps: float,
+        valid: np.ndarray | None = None,
+        required: Sequence[str] = (),
+        frames: AvatarFrames | None = None,
+        progress: Progress = None,
+    ) -> VideoTexture:
         """Learn the graph (on one BLAS thread: the matrices are small, and a second thread on a
         busy machine makes the eigendecomposition ten times slower, not faster).
 
@@ -182,9 +190,17 @@ class VideoTexture:
         with threadpool_limits(1):
             return self._fit(features, labels, names, fps, valid, required, frames, progress)
 
-    def _fit(self, features: np.ndarray, labels: np.ndarray, names: Sequence[str], fps: float,
-             valid: np.ndarray | None, required: Sequence[str], frames: AvatarFrames | None,
-             progress: Progress) -> "VideoTexture":
+    def _fit(
+        self,
+        features: np.ndarray,
+        labels: np.ndarray,
+        names: Sequence[str],
+        fps: float,
+        valid: np.ndarray | None,
+        required: Sequence[str],
+        frames: AvatarFrames | None,
+        progress: Progress,
+    ) -> VideoTexture:
         say = progress or (lambda s: None)
         c = self.config
         X = np.asarray(features, np.float32)
@@ -198,19 +214,26 @@ class VideoTexture:
         W = max(int(round(c.window_s * fps)), 1)
         have = int(valid.sum())
         if have < c.min_seconds * fps:
-            raise RecordingError(f"the recording has {have / fps:.1f} s with the person in view ({have} frames); "
-                                 f"an avatar needs at least {c.min_seconds:g} s: record for longer (a minute "
-                                 "or more gives a lively avatar)")
+            raise RecordingError(
+                f"the recording has {have / fps:.1f} s with the person in view ({have} frames); "
+                f"an avatar needs at least {c.min_seconds:g} s: record for longer (a minute "
+                "or more gives a lively avatar)"
+            )
         for r in required:
             if r not in names:
-                raise RecordingError(f"signal {r!r} is not among the labels ({', '.join(names)}); give labels "
-                                     f"that include it, or leave it out of --signals")
+                raise RecordingError(
+                    f"signal {r!r} is not among the labels ({', '.join(names)}); give labels "
+                    f"that include it, or leave it out of --signals"
+                )
             if not (L[valid, names.index(r)] == 1).any():
-                raise RecordingError(f"signal {r!r} never occurs in the recording (0 of {have} frames labelled "
-                                     f"{r}): record the person doing it, or leave it out of --signals")
+                raise RecordingError(
+                    f"signal {r!r} never occurs in the recording (0 of {have} frames labelled "
+                    f"{r}): record the person doing it, or leave it out of --signals"
+                )
 
         say(f"eigenspace: PCA of {have} frames to {c.energy:.0%} of the energy")
         from sklearn.decomposition import PCA
+
         pca = PCA(n_components=c.energy, svd_solver="covariance_eigh", random_state=c.random_state).fit(X[valid])
         x = np.full((T, pca.n_components_), np.nan, np.float32)
         x[valid] = pca.transform(X[valid])
@@ -236,15 +259,18 @@ class VideoTexture:
 
         k = c.n_clusters or int(np.clip(round(have / fps / c.seconds_per_cluster), 4, 200))
         k = min(k, len(wf) // 2)
-        sub = wf if len(wf) <= c.max_cluster_frames else wf[np.linspace(0, len(wf) - 1, c.max_cluster_frames).astype(int)]
+        sub = (
+            wf if len(wf) <= c.max_cluster_frames else wf[np.linspace(0, len(wf) - 1, c.max_cluster_frames).astype(int)]
+        )
         say(f"cut-point clusters: k-medoids (FasterPAM), k={k}, on {len(sub)} frames, window {W} frames")
         import kmedoids
+
         pos = np.searchsorted(wf, sub)
         D = _pairwise(Y[pos], Y[pos])
         # random initialisation: FasterPAM's swaps make up for it, and BUILD costs k n^2
         res = kmedoids.fasterpam(D, k, max_iter=100, init="random", random_state=c.random_state, n_cpu=1)
         self.medoids_ = sub[np.asarray(res.medoids, np.int64)]
-        Dm = _pairwise(Y, Y[np.searchsorted(wf, self.medoids_)]) / np.sqrt(W)   # (n windowed, k) per frame
+        Dm = _pairwise(Y, Y[np.searchsorted(wf, self.medoids_)]) / np.sqrt(W)  # (n windowed, k) per frame
         nearest = np.full(T, -1, np.int64)
         nearest[wf] = np.argmin(Dm, axis=1)
         state_cols = [names.index(s) for s in STATE_SIGNALS if s in names]
@@ -258,8 +284,10 @@ class VideoTexture:
         member &= far_rank < c.max_members
         self.members_ = [wf[member[:, j]] for j in range(k)]
         n_cut = int(member.any(1).sum())
-        say(f"{n_cut} cut points in {sum(len(m) >= 2 for m in self.members_)} clusters after pruning by "
-            f"{', '.join(STATE_SIGNALS[i] for i, s in enumerate(STATE_SIGNALS) if s in names) or 'no labels'}")
+        say(
+            f"{n_cut} cut points in {sum(len(m) >= 2 for m in self.members_)} clusters after pruning by "
+            f"{', '.join(STATE_SIGNALS[i] for i, s in enumerate(STATE_SIGNALS) if s in names) or 'no labels'}"
+        )
 
         # jumps i -> j + 1 within a cluster
         src, dst, seam = [], [], []
@@ -306,19 +334,22 @@ class VideoTexture:
         e_src, e_dst, e_seam = e_src[keep], e_dst[keep], e_seam[keep]
         self.alive_ = alive
         if alive.sum() < W * 4:
-            raise RecordingError(f"the recording's frames do not join up into a loop ({int(alive.sum())} frames "
-                                 "would remain): record for longer, returning to the same rest pose now and then")
+            raise RecordingError(
+                f"the recording's frames do not join up into a loop ({int(alive.sum())} frames "
+                "would remain): record for longer, returning to the same rest pose now and then"
+            )
 
         # the likelihood of each transition: KDE of poses at the seam x Markov chain x smoothness
         say("transition likelihood: KDE of poses in eigenspace, Markov chain between clusters")
         from sklearn.neighbors import KernelDensity
+
         q = min(c.kde_dims, d)
         xa = x[alive][:, :q].astype(np.float64)
         sd = xa.std(0) + 1e-9
         rng = np.random.default_rng(c.random_state)
         fit_rows = xa if len(xa) <= c.kde_frames else xa[rng.choice(len(xa), c.kde_frames, replace=False)]
-        bw = float(len(fit_rows) ** (-1.0 / (q + 4)))   # Scott's rule on standardised coordinates
-        kde = KernelDensity(bandwidth=bw, rtol=1e-2).fit(fit_rows / sd)   # 1%: a log-weight needs no more
+        bw = float(len(fit_rows) ** (-1.0 / (q + 4)))  # Scott's rule on standardised coordinates
+        kde = KernelDensity(bandwidth=bw, rtol=1e-2).fit(fit_rows / sd)  # 1%: a log-weight needs no more
         mid = 0.5 * (x[e_src, :q] + x[e_dst, :q]).astype(np.float64) / sd
         ll = kde.score_samples(mid)
         lag = max(int(round(c.markov_lag_s * fps)), 1)
@@ -330,7 +361,9 @@ class VideoTexture:
         ahead = np.minimum(e_dst + lag, T - 1)
         ahead = np.where((run[ahead] == run[e_dst]) & (nearest[ahead] >= 0), ahead, e_dst)
         ca, cb = nearest[e_src], nearest[ahead]
-        lm = np.where((ca >= 0) & (cb >= 0), np.log(self.markov_[np.maximum(ca, 0), np.maximum(cb, 0)]), np.log(1.0 / k))
+        lm = np.where(
+            (ca >= 0) & (cb >= 0), np.log(self.markov_[np.maximum(ca, 0), np.maximum(cb, 0)]), np.log(1.0 / k)
+        )
         sigma = max(self.step_median_, 1e-6)
         is_jump = e_dst != e_src + 1
         after = np.minimum(e_src + 1, T - 1)
@@ -356,8 +389,10 @@ class VideoTexture:
                 say(f"note: {nm!r} never occurs in the graph: the avatar cannot show it")
         for r in required:
             if r not in goals:
-                raise RecordingError(f"signal {r!r} occurs only where the recording cannot loop back (a dead end); "
-                                     "record it once more in the middle of the recording")
+                raise RecordingError(
+                    f"signal {r!r} occurs only where the recording cannot loop back (a dead end); "
+                    "record it once more in the middle of the recording"
+                )
         Ga = csr_matrix((np.ones(len(self.e_src_)), (self.e_src_, self.e_dst_)), shape=(T, T))
         codes = state @ (1 << np.arange(state.shape[1])) if state.shape[1] else np.zeros(T, np.int64)
         sub_names = [STATE_SIGNALS[i] for i, s in enumerate(STATE_SIGNALS) if s in names]
@@ -369,13 +404,16 @@ class VideoTexture:
             sz = np.bincount(cc[inset], minlength=nc)
             best = int(np.argmax(sz))
             if sz[best] < 2 * W:
-                continue   # no loop of its own: the avatar could not stay in this state
+                continue  # no loop of its own: the avatar could not stay in this state
             goals.append(STATE_PREFIX + ("+".join(n for i, n in enumerate(sub_names) if code >> i & 1) or "none"))
             targets.append(inset & (cc == best))
         say(f"graph distances to {len(goals)} goals: {', '.join(goals)}")
         self.goals_ = goals
-        self.dist_ = np.stack([self._distance_to(Ga, t) for t in targets]).astype(np.float32) if targets else \
-            np.zeros((0, T), np.float32)
+        self.dist_ = (
+            np.stack([self._distance_to(Ga, t) for t in targets]).astype(np.float32)
+            if targets
+            else np.zeros((0, T), np.float32)
+        )
         self.frames = frames
         self.reset()
         return self
@@ -409,12 +447,13 @@ class VideoTexture:
 
     def state_goal(self, wanted: Mapping[str, bool]) -> str | None:
         """The signal-set subgraph closest to the wanted state (signal -> on): the most agreeing
-        signals, ties to the first; None when the graph has no state subgraphs."""
+        signals, ties to the first; None when the graph has no state subgraphs.
+        """
         best, score = None, -1
         for g in self.goals_:
             if not g.startswith(STATE_PREFIX):
                 continue
-            on = set(g[len(STATE_PREFIX):].split("+")) - {"none"}
+            on = set(g[len(STATE_PREFIX) :].split("+")) - {"none"}
             s = sum((n in on) == bool(v) for n, v in wanted.items())
             if s > score:
                 best, score = g, s
@@ -470,21 +509,37 @@ class VideoTexture:
 
     # ------------------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        arrays = {"pca_mean": self.pca_mean_, "pca_components": self.pca_components_, "x": self.x_,
-                  "medoids": self.medoids_, "alive": self.alive_, "indptr": self.indptr_, "indices": self.indices_,
-                  "logw": self.logw_, "seam": self.seam_, "dist": self.dist_, "labels": self.labels_,
-                  "markov": self.markov_}
+        arrays = {
+            "pca_mean": self.pca_mean_,
+            "pca_components": self.pca_components_,
+            "x": self.x_,
+            "medoids": self.medoids_,
+            "alive": self.alive_,
+            "indptr": self.indptr_,
+            "indices": self.indices_,
+            "logw": self.logw_,
+            "seam": self.seam_,
+            "dist": self.dist_,
+            "labels": self.labels_,
+            "markov": self.markov_,
+        }
         for j, m in enumerate(self.members_):
             arrays[f"members_{j}"] = m
         if self.frames is not None:
             arrays.update(self.frames.arrays())
-        config = {"config": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self.config).items()},
-                  "fps": self.fps, "names": list(self.names_), "goals": list(self.goals_),
-                  "n_members": len(self.members_), "step_median": self.step_median_, "step_q95": self.step_q95_}
+        config = {
+            "config": {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self.config).items()},
+            "fps": self.fps,
+            "names": list(self.names_),
+            "goals": list(self.goals_),
+            "n_members": len(self.members_),
+            "step_median": self.step_median_,
+            "step_q95": self.step_q95_,
+        }
         return arrays, config
 
     @classmethod
-    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> "VideoTexture":
+    def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> VideoTexture:
         cfg = {k: tuple(v) if isinstance(v, list) else v for k, v in config["config"].items()}
         m = cls(VideoTextureConfig(**cfg))
         m.fps = float(config["fps"])
@@ -503,15 +558,18 @@ class VideoTexture:
         return m
 
 
-def fit_recording(rec: Any, config: VideoTextureConfig | None = None, required: Sequence[str] = (),
-                  progress: Progress = None) -> VideoTexture:
+def fit_recording(
+    rec: Any, config: VideoTextureConfig | None = None, required: Sequence[str] = (), progress: Progress = None
+) -> VideoTexture:
     """Learn an avatar from a :class:`~counterpart.nodes.responder.avatar_recording.Recording`: appearance
-    features, the compressed masked frames and the texture motion graph."""
+    features, the compressed masked frames and the texture motion graph.
+    """
     say = progress or (lambda s: None)
     model = VideoTexture(config)
     say(f"appearance features of {len(rec.crops)} masked {rec.crops.shape[2]}x{rec.crops.shape[1]} frames")
     feats = appearance_features(rec.crops, rec.masks, model.config.feature_size)
     say("compressing the masked frames (JPEG + packed masks)")
     frames = AvatarFrames.encode(rec.crops, rec.masks, rec.facing)
-    return model.fit(feats, rec.labels, rec.names, rec.fps, valid=rec.valid, required=required, frames=frames,
-                     progress=say)
+    return model.fit(
+        feats, rec.labels, rec.names, rec.fps, valid=rec.valid, required=required, frames=frames, progress=say
+    )

@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.silhouette --param backend=mog2 ...``: run the silhouette node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

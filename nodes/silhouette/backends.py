@@ -15,7 +15,8 @@ Shadows and highlights always count as background in the mask.
 
 from __future__ import annotations
 
-from typing import Any, Callable, Protocol
+from collections.abc import Callable
+from typing import Any, Protocol
 
 import cv2
 import numpy as np
@@ -58,9 +59,16 @@ class HorprasertSubtractor:
     name = "horprasert"
     provides_shadows = True
 
-    def __init__(self, train_frames: int = 30, robust: bool = True, people_aware: bool = True,
-                 detector: Any = None, dynamic: bool = False, sample_params: dict[str, Any] | None = None,
-                 **model_params: Any) -> None:
+    def __init__(
+        self,
+        train_frames: int = 30,
+        robust: bool = True,
+        people_aware: bool = True,
+        detector: Any = None,
+        dynamic: bool = False,
+        sample_params: dict[str, Any] | None = None,
+        **model_params: Any,
+    ) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
@@ -83,10 +91,11 @@ class HorprasertSubtractor:
     def ready(self) -> bool:
         return self.model.is_fitted
 
-    def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> "HorprasertSubtractor":
+    def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> HorprasertSubtractor:
         """Fit the model on training frames (N, H, W, 3) uint8 BGR. Robust (people may be in view)
         and ``people_aware``: the people are detected and the room around them learnt
-        (``people.fit_around_people``); robust alone: the per-pixel median."""
+        (``people.fit_around_people``); robust alone: the per-pixel median.
+        """
         stack = as_frame_stack(frames)
         robust = self.robust if robust is None else robust
         if robust and self.people_aware:
@@ -103,8 +112,9 @@ class HorprasertSubtractor:
                 # shows it, and the person who most likely still stands there must not be learnt
                 fg |= unseen[None]
             self.samples.fit(stack, self.model.mean_, fg)
-            self._unseen_fg = (np.where(unseen, FOREGROUND, 0).astype(np.uint8)
-                               if unseen is not None and unseen.any() else None)
+            self._unseen_fg = (
+                np.where(unseen, FOREGROUND, 0).astype(np.uint8) if unseen is not None and unseen.any() else None
+            )
         self._buffer = []
         return self
 
@@ -131,7 +141,8 @@ class HorprasertSubtractor:
 
 class OpenCVSubtractor:
     """Any ``cv2.BackgroundSubtractor``; its 255 / 127 / 0 output becomes FOREGROUND / SHADOW /
-    BACKGROUND. ``learning_rate`` is passed to ``apply`` (-1: the subtractor's own schedule)."""
+    BACKGROUND. ``learning_rate`` is passed to ``apply`` (-1: the subtractor's own schedule).
+    """
 
     def __init__(self, name: str, subtractor: Any, provides_shadows: bool, learning_rate: float = -1.0) -> None:
         self.name = name

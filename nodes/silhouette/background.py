@@ -118,18 +118,14 @@ def as_frame_stack(frames: np.ndarray | Iterable[np.ndarray]) -> np.ndarray:
                 )
         stack = np.stack(items)
     if stack.ndim != 4 or stack.shape[-1] != 3 or stack.dtype != np.uint8:
-        raise ValueError(
-            f"frames must be (N, H, W, 3) uint8 BGR, got shape {stack.shape} dtype {stack.dtype}"
-        )
+        raise ValueError(f"frames must be (N, H, W, 3) uint8 BGR, got shape {stack.shape} dtype {stack.dtype}")
     return np.ascontiguousarray(stack)
 
 
 def _check_frame(frame: np.ndarray, shape: tuple[int, int]) -> None:
     if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8 or frame.shape != (*shape, 3):
         got = (getattr(frame, "shape", None), getattr(frame, "dtype", None))
-        raise ValueError(
-            f"frame must be a uint8 BGR array of shape {(*shape, 3)} (the training size), got {got}"
-        )
+        raise ValueError(f"frame must be a uint8 BGR array of shape {(*shape, 3)} (the training size), got {got}")
 
 
 class HorprasertBackground:
@@ -244,8 +240,10 @@ class HorprasertBackground:
         if max_highlight_brightness <= 1.0:
             raise ValueError(f"max_highlight_brightness must be > 1, got {max_highlight_brightness}")
         if not min_shadow_brightness <= unseen_min_shadow_brightness < 1.0:
-            raise ValueError("unseen_min_shadow_brightness must be in [min_shadow_brightness, 1), got "
-                             f"{unseen_min_shadow_brightness}")
+            raise ValueError(
+                "unseen_min_shadow_brightness must be in [min_shadow_brightness, 1), got "
+                f"{unseen_min_shadow_brightness}"
+            )
         self.max_highlight_brightness = max_highlight_brightness
         self.unseen_min_shadow_brightness = unseen_min_shadow_brightness
         self.tau_cd = tau_cd
@@ -263,8 +261,9 @@ class HorprasertBackground:
         if not -1.0 <= shadow_ncc <= 1.0:
             raise ValueError(f"shadow_ncc must be in [-1, 1] (-1: no texture test), got {shadow_ncc}")
         if shadow_texture_k < 0 or shadow_window < 3 or shadow_window % 2 == 0:
-            raise ValueError(f"shadow_texture_k must be >= 0 and shadow_window odd >= 3, got {shadow_texture_k}, "
-                             f"{shadow_window}")
+            raise ValueError(
+                f"shadow_texture_k must be >= 0 and shadow_window odd >= 3, got {shadow_texture_k}, {shadow_window}"
+            )
         self.shadow_ncc = shadow_ncc
         self.shadow_texture_k = shadow_texture_k
         self.shadow_window = shadow_window
@@ -312,8 +311,9 @@ class HorprasertBackground:
         self._require_fitted()
         return self._mu.shape[1:]
 
-    def fit(self, frames: np.ndarray | Iterable[np.ndarray], robust: bool = False,
-            exclude: np.ndarray | None = None) -> "HorprasertBackground":
+    def fit(
+        self, frames: np.ndarray | Iterable[np.ndarray], robust: bool = False, exclude: np.ndarray | None = None
+    ) -> HorprasertBackground:
         """Learn the background from training frames (N, H, W, 3) uint8 BGR, N >= 2.
 
         ``robust=False``: frames are empty of people; E and s are the sample mean and standard
@@ -472,11 +472,13 @@ class HorprasertBackground:
         # where brighter, cleared to BACKGROUND 0 inside the brightness band, FOREGROUND 3 (= all
         # bits) where the chromaticity or the darkening is too large.
         labels = cv2.add(cv2.bitwise_and(cv2.compare(alpha, 1.0, cv2.CMP_GE), 1), SHADOW)
-        band = cv2.bitwise_and(cv2.compare(alpha, self._alpha_hi, cv2.CMP_LT),
-                               cv2.compare(alpha, self._alpha_lo, cv2.CMP_GT))
+        band = cv2.bitwise_and(
+            cv2.compare(alpha, self._alpha_hi, cv2.CMP_LT), cv2.compare(alpha, self._alpha_lo, cv2.CMP_GT)
+        )
         cv2.bitwise_and(labels, cv2.bitwise_not(band), dst=labels)
-        fg = cv2.bitwise_or(cv2.compare(cd2, self._cd2_max, cv2.CMP_GT),
-                            cv2.compare(alpha, self._alpha_min, cv2.CMP_LT))
+        fg = cv2.bitwise_or(
+            cv2.compare(cd2, self._cd2_max, cv2.CMP_GT), cv2.compare(alpha, self._alpha_min, cv2.CMP_LT)
+        )
         cv2.bitwise_or(fg, cv2.compare(alpha, self._alpha_max, cv2.CMP_GT), dst=fg)
         cv2.bitwise_or(labels, cv2.bitwise_and(fg, FOREGROUND), dst=labels)
         if self.shadow_ncc > -1.0:
@@ -486,7 +488,8 @@ class HorprasertBackground:
     def _verify_shadow_texture(self, planes: list[np.ndarray], labels: np.ndarray) -> None:
         """Relabel, in place, SHADOW pixels (H, W) that are textured and do not correlate with the
         background's texture as FOREGROUND (see the module docstring). Local means over a
-        ``shadow_window`` box: NCC = (m(IE) - m(I) m(E)) / sqrt(var(I) var(E)) on grey levels."""
+        ``shadow_window`` box: NCC = (m(IE) - m(I) m(E)) / sqrt(var(I) var(E)) on grey levels.
+        """
         sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
         if cv2.countNonZero(sh) == 0:
             return
@@ -583,7 +586,8 @@ class HorprasertBackground:
         person who stands for seconds would lag, and the uncovered room would show as speckle.
         Their E follows the scene-wide brightness change instead: the mean brightness
         distortion alpha (eq. 5) over the background pixels, at the background's rate,
-        E <- E (1 + r (mean alpha - 1)). ``fg_idx``: flat indices of the foreground pixels."""
+        E <- E (1 + r (mean alpha - 1)). ``fg_idx``: flat indices of the foreground pixels.
+        """
         last = self._last_alpha
         if last is None or last[0] is not frame or fg_idx.size == 0:
             return
@@ -656,12 +660,14 @@ class HorprasertBackground:
         s_near = near.sum(axis=0) + 1.0
         chroma = np.abs(run / s_run - near / s_near).sum(axis=0)
         ratio = s_run / s_near
-        sel = ((cnt >= 0.1) & (chroma <= _GHOST_CHROMA)
-               & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1]))
+        sel = (cnt >= 0.1) & (chroma <= _GHOST_CHROMA) & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1])
         if self.unseen_ is not None:
             tight = self.unseen_[ys, xs]
-            sel &= ~tight | ((chroma <= _UNSEEN_GHOST_CHROMA) & (ratio > _UNSEEN_GHOST_BRIGHTNESS[0])
-                             & (ratio < _UNSEEN_GHOST_BRIGHTNESS[1]))
+            sel &= ~tight | (
+                (chroma <= _UNSEEN_GHOST_CHROMA)
+                & (ratio > _UNSEEN_GHOST_BRIGHTNESS[0])
+                & (ratio < _UNSEEN_GHOST_BRIGHTNESS[1])
+            )
         if not sel.any():
             return False
         ys, xs = ys[sel], xs[sel]
@@ -680,12 +686,28 @@ class HorprasertBackground:
         return {
             k: getattr(self, k)
             for k in (
-                "detection_rate", "learning_rate", "spread_learning_rate", "shadow_learning_rate",
+                "detection_rate",
+                "learning_rate",
+                "spread_learning_rate",
+                "shadow_learning_rate",
                 "min_spread",
-                "min_shadow_brightness", "max_highlight_brightness", "unseen_min_shadow_brightness",
-                "tau_cd", "tau_alpha1", "tau_alpha2", "tau_alpha_lo",
-                "robust_inlier_k", "absorb_frames", "absorb_k", "min_free_frac", "unseen_spread_gain",
-                "max_threshold_samples", "random_state", "shadow_ncc", "shadow_texture_k", "shadow_window",
+                "min_shadow_brightness",
+                "max_highlight_brightness",
+                "unseen_min_shadow_brightness",
+                "tau_cd",
+                "tau_alpha1",
+                "tau_alpha2",
+                "tau_alpha_lo",
+                "robust_inlier_k",
+                "absorb_frames",
+                "absorb_k",
+                "min_free_frac",
+                "unseen_spread_gain",
+                "max_threshold_samples",
+                "random_state",
+                "shadow_ncc",
+                "shadow_texture_k",
+                "shadow_window",
             )
         }
 
@@ -733,7 +755,8 @@ class HorprasertBackground:
 
     def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32, and the frame's three float32
-        channel planes (H, W), left unchanged for ``update``."""
+        channel planes (H, W), left unchanged for ``update``.
+        """
         planes = _float_planes(frame)
         w, inv_var = self._w, self._inv_var
         # S = sum_c I_c E_c / s_c^2, alpha = S / sum_c (E_c / s_c)^2 (eq. 5). Expanding the square
@@ -805,7 +828,8 @@ def _median_mad(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.n
 
 def _masked_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
     """Median along axis 0 of (N, ...) values whose excluded entries are +inf; ``count`` (1, ...)
-    the finite entries per position (>= 1 where the result is used)."""
+    the finite entries per position (>= 1 where the result is used).
+    """
     srt = np.sort(values, axis=0)
     last = values.shape[0] - 1
     lo = np.take_along_axis(srt, np.clip((count - 1) // 2, 0, last), axis=0)[0]
@@ -817,7 +841,8 @@ def _masked_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
 
 def _mean_std(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per-pixel sample mean and standard deviation of (N, H, W, 3) uint8 over the ``free``
-    (N, H, W) bool samples (None: all); returns mean, std (H, W, 3) float32 and counts (H, W)."""
+    (N, H, W) bool samples (None: all); returns mean, std (H, W, 3) float32 and counts (H, W).
+    """
     n = stack.shape[0]
     acc = np.zeros(stack.shape[1:], np.float64)
     acc2 = np.zeros(stack.shape[1:], np.float64)
@@ -834,8 +859,9 @@ def _mean_std(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.nda
     return m.astype(np.float32), np.sqrt(var).astype(np.float32), count
 
 
-def _fill_unseen(mean: np.ndarray, spread: np.ndarray, unseen: np.ndarray,
-                 spread_gain: float) -> tuple[np.ndarray, np.ndarray]:
+def _fill_unseen(
+    mean: np.ndarray, spread: np.ndarray, unseen: np.ndarray, spread_gain: float
+) -> tuple[np.ndarray, np.ndarray]:
     """E and s (H, W, 3) float32 with the ``unseen`` (H, W) pixels filled in from around them.
 
     Telea inpainting (``cv2.inpaint``) continues the colours of the surrounding room into the

@@ -6,6 +6,7 @@ people with sides, ids and B-spline outlines, one row per person and frame
 corpus. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
 Exit code 0 on success, 2 on bad input, 130 when interrupted.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -20,11 +21,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("video", help="the video file (anything OpenCV decodes)")
     p.add_argument("--out", required=True, help="output .npz (one row per person and frame)")
     p.add_argument("--backend", default="horprasert", choices=BACKEND_NAMES, help="background subtractor")
-    p.add_argument("--train-frames", type=int, default=30,
-                   help="first frames the background model is fitted on (people may be in view)")
+    p.add_argument(
+        "--train-frames",
+        type=int,
+        default=30,
+        help="first frames the background model is fitted on (people may be in view)",
+    )
     p.add_argument("--max-frames", type=int, default=None, help="process at most this many frames")
-    p.add_argument("--min-area", type=int, default=300,
-                   help="smallest person region, pixels (0: from the frame size, a person 1.7 m tall 30 m away)")
+    p.add_argument(
+        "--min-area",
+        type=int,
+        default=300,
+        help="smallest person region, pixels (0: from the frame size, a person 1.7 m tall 30 m away)",
+    )
     p.add_argument("--n-ctrl", type=int, default=32, help="B-spline control points per outline")
 
 
@@ -33,9 +42,20 @@ def main(args: argparse.Namespace) -> int:
 
     if not positive(args, ("train_frames", "max_frames"), "silhouettes"):
         return 2
-    return run_offline("silhouettes", args.out, lambda: extract_video(
-        args.video, args.out, max_frames=args.max_frames, train_frames=args.train_frames,
-        progress=FrameProgress("silhouettes"), backend=args.backend, min_area=args.min_area or None, n_ctrl=args.n_ctrl))
+    return run_offline(
+        "silhouettes",
+        args.out,
+        lambda: extract_video(
+            args.video,
+            args.out,
+            max_frames=args.max_frames,
+            train_frames=args.train_frames,
+            progress=FrameProgress("silhouettes"),
+            backend=args.backend,
+            min_area=args.min_area or None,
+            n_ctrl=args.n_ctrl,
+        ),
+    )
 
 
 if __name__ == "__main__":

@@ -16,13 +16,13 @@ from a darker person there, shadow detection is off for them (every change from 
 foreground). A frame of another size or encoding than the ones before (a camera restarted at a new
 resolution) starts the background model and the people afresh.
 """
+
 from __future__ import annotations
 
 from typing import Any
 
 import cv2
 import numpy as np
-
 from counterpart.body.camera import Camera, camera_param_problem
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Frame, Silhouettes
@@ -56,58 +56,108 @@ def as_bgr(image: np.ndarray) -> np.ndarray:
 def person_shape(p: Person) -> PersonShape:
     """The message form of one person (no outline: ``ctrl`` (0, 2) and ``ref_point`` NaN)."""
     return PersonShape(
-        id=int(p.id), side=p.side,
+        id=int(p.id),
+        side=p.side,
         ctrl=_NO_CTRL if p.ctrl is None else np.asarray(p.ctrl, np.float32),
         ref_point=_NO_POINT if p.ref_point is None else np.asarray(p.ref_point, np.float32),
-        centroid=np.asarray(p.centroid, np.float32), bbox=tuple(int(v) for v in p.bbox),
-        height=float(p.height), area=int(p.area), merged=bool(p.merged),
+        centroid=np.asarray(p.centroid, np.float32),
+        bbox=tuple(int(v) for v in p.bbox),
+        height=float(p.height),
+        area=int(p.area),
+        merged=bool(p.merged),
     )
 
 
 def label_mask(labels: np.ndarray) -> tuple[np.ndarray, bool]:
     """(H, W) uint8 mask from the extractor's int32 labels, and whether any id had to be clipped
-    (ids >= 255 share the value 255)."""
+    (ids >= 255 share the value 255).
+    """
     clipped = bool(labels.max(initial=0) > MAX_LABEL)
     return np.minimum(labels, MAX_LABEL).astype(np.uint8), clipped
 
 
 class Silhouette(Node):
     """Background subtraction with shadows (Horprasert et al. 1999), people with stable ids, and each
-    outline as a closed cubic B-spline from the top of the head (Baumberg & Hogg)."""
+    outline as a closed cubic B-spline from the top of the head (Baumberg & Hogg).
+    """
 
     inputs = {"frame": Input(Frame, doc="bgr8 or mono8 frames")}
     outputs = {"silhouettes": Output(Silhouettes, "one per frame; no people while the background is learnt")}
     params = {
         "backend": Param(str, "horprasert", "background subtractor", choices=BACKEND_NAMES),
-        "n_ctrl": Param(int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)",
-                        min=4, max=1024),
-        "min_area": Param(int, 300, "smallest person region (pixels); 0: a person 1.7 m tall at max_distance_m "
-                          "from the camera, so it scales with the frame size and the lens", min=0),
-        "max_distance_m": Param(float, 30.0, "with min_area 0: the farthest person to find (metres); 30: "
-                                "17 px tall at 320x240 with the default camera", min=0.1),
-        "camera": Param(dict, {}, "with min_area 0: {fx, fy, cx, cy, width, height, R, t} of the camera (scaled "
-                        "to the frame size); {}: the default camera", check=camera_param_problem),
-        "train_frames": Param(int, 30, "first frames the background is learnt from; they give no people unless "
-                              "replay_training", min=2, max=100_000),
+        "n_ctrl": Param(
+            int, 32, "B-spline control points per outline (the labeller's 2D activity needs 32)", min=4, max=1024
+        ),
+        "min_area": Param(
+            int,
+            300,
+            "smallest person region (pixels); 0: a person 1.7 m tall at max_distance_m "
+            "from the camera, so it scales with the frame size and the lens",
+            min=0,
+        ),
+        "max_distance_m": Param(
+            float,
+            30.0,
+            "with min_area 0: the farthest person to find (metres); 30: 17 px tall at 320x240 with the default camera",
+            min=0.1,
+        ),
+        "camera": Param(
+            dict,
+            {},
+            "with min_area 0: {fx, fy, cx, cy, width, height, R, t} of the camera (scaled "
+            "to the frame size); {}: the default camera",
+            check=camera_param_problem,
+        ),
+        "train_frames": Param(
+            int,
+            30,
+            "first frames the background is learnt from; they give no people unless replay_training",
+            min=2,
+            max=100_000,
+        ),
         "robust": Param(bool, True, "horprasert: robust (median) fit, for people in view from the first frame"),
-        "people_aware": Param(bool, True, "horprasert: find the people in the training frames (OpenCV's HOG people "
-                              "detector) and learn the room around them, so that people standing still "
-                              "from the first frame are not learnt as background"),
-        "absorb_frames": Param(int, -1, "horprasert: still frames before a ghost (room uncovered by someone who "
-                               "stood in the training frames) is absorbed; -1: 10 after a robust fit, "
-                               "never after a plain one; 0: never", min=-1, max=100_000),
-        "dynamic": Param(bool, False, "horprasert: a sample-consensus model (ViBe-like) beside the statistics, so that "
-                         "leaves, water and flicker are background; false: the statistics alone"),
-        "shadow_ncc": Param(float, -1.0, "horprasert: shadow pixels on a textured floor that correlate less than "
-                            "this with its texture are foreground (a dark shirt, not a shadow); -1: off, 0.4: "
-                            "tuned on CDnet busStation", min=-1.0, max=1.0),
+        "people_aware": Param(
+            bool,
+            True,
+            "horprasert: find the people in the training frames (OpenCV's HOG people "
+            "detector) and learn the room around them, so that people standing still "
+            "from the first frame are not learnt as background",
+        ),
+        "absorb_frames": Param(
+            int,
+            -1,
+            "horprasert: still frames before a ghost (room uncovered by someone who "
+            "stood in the training frames) is absorbed; -1: 10 after a robust fit, "
+            "never after a plain one; 0: never",
+            min=-1,
+            max=100_000,
+        ),
+        "dynamic": Param(
+            bool,
+            False,
+            "horprasert: a sample-consensus model (ViBe-like) beside the statistics, so that "
+            "leaves, water and flicker are background; false: the statistics alone",
+        ),
+        "shadow_ncc": Param(
+            float,
+            -1.0,
+            "horprasert: shadow pixels on a textured floor that correlate less than "
+            "this with its texture are foreground (a dark shirt, not a shadow); -1: off, 0.4: "
+            "tuned on CDnet busStation",
+            min=-1.0,
+            max=1.0,
+        ),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
         "fill_holes": Param(bool, True, "fill holes inside each region"),
-        "replay_training": Param(bool, False, "horprasert: hold the training frames back, and once the background "
-                                 "is learnt (or the stream ends first: from the frames there are) find the people "
-                                 "in them too; for recordings in lockstep, where a delay costs nothing"),
+        "replay_training": Param(
+            bool,
+            False,
+            "horprasert: hold the training frames back, and once the background "
+            "is learnt (or the stream ends first: from the frames there are) find the people "
+            "in them too; for recordings in lockstep, where a delay costs nothing",
+        ),
     }
 
     def setup(self) -> None:
@@ -129,19 +179,31 @@ class Silhouette(Node):
         p = self.p
         backend_params: dict[str, Any] = {}
         if p["backend"] == "horprasert":
-            backend_params = {"train_frames": p["train_frames"], "robust": p["robust"],
-                              "people_aware": p["people_aware"],
-                              "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
-                              "dynamic": p["dynamic"], "shadow_ncc": p["shadow_ncc"]}
+            backend_params = {
+                "train_frames": p["train_frames"],
+                "robust": p["robust"],
+                "people_aware": p["people_aware"],
+                "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
+                "dynamic": p["dynamic"],
+                "shadow_ncc": p["shadow_ncc"],
+            }
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
         # without colour a shadow cannot be told from a darker person (Horprasert's test is on
         # chromaticity): on grey frames every change from the background is foreground
         camera = Camera.from_dict(p["camera"]) if p["camera"] else None
-        return SilhouetteExtractor(backend=p["backend"], n_ctrl=p["n_ctrl"], min_area=p["min_area"] or None,
-                                   camera=camera, max_distance_m=p["max_distance_m"],
-                                   open_px=p["open_px"], close_px=p["close_px"], fill_holes=p["fill_holes"],
-                                   shadows=not mono, backend_params=backend_params)
+        return SilhouetteExtractor(
+            backend=p["backend"],
+            n_ctrl=p["n_ctrl"],
+            min_area=p["min_area"] or None,
+            camera=camera,
+            max_distance_m=p["max_distance_m"],
+            open_px=p["open_px"],
+            close_px=p["close_px"],
+            fill_holes=p["fill_holes"],
+            shadows=not mono,
+            backend_params=backend_params,
+        )
 
     def _key_changed(self, image: np.ndarray, mono: bool) -> bool:
         return self.extractor is None or (image.shape[:2], mono) != self.key
@@ -150,9 +212,15 @@ class Silhouette(Node):
         key = (image.shape[:2], mono)
         if self._key_changed(image, mono):
             if self.key is not None:
-                self.log.warning("frames changed from %dx%d %s to %dx%d %s: learning the background again",
-                                 self.key[0][1], self.key[0][0], "mono8" if self.key[1] else "bgr8",
-                                 key[0][1], key[0][0], "mono8" if mono else "bgr8")
+                self.log.warning(
+                    "frames changed from %dx%d %s to %dx%d %s: learning the background again",
+                    self.key[0][1],
+                    self.key[0][0],
+                    "mono8" if self.key[1] else "bgr8",
+                    key[0][1],
+                    key[0][0],
+                    "mono8" if mono else "bgr8",
+                )
             self.extractor, self.key = self._new_extractor(mono), key
         ex = self.extractor
         # horprasert trains itself on its first train_frames frames; the online OpenCV models only
@@ -184,7 +252,8 @@ class Silhouette(Node):
 
     def _release_held(self) -> None:
         """Learn the background from the held frames (all of them, however few the stream gave),
-        then find the people in each and publish them in order."""
+        then find the people in each and publish them in order.
+        """
         if not self.held:
             return
         held, self.held = self.held, []
@@ -194,8 +263,11 @@ class Silhouette(Node):
             self.extractor.fit_background([img for _, img, _ in held], robust=self.p["robust"])
             self.log.info("background learnt from %d frames", len(held))
         else:
-            self._warn_once("short", "the stream gave %d frame(s) before it ended or changed; a background "
-                            "needs 2: no people in them", len(held))
+            self._warn_once(
+                "short",
+                "the stream gave %d frame(s) before it ended or changed; a background needs 2: no people in them",
+                len(held),
+            )
         for msg, image, _ in held:
             if self.extractor.subtractor.ready:
                 self._publish(msg, self.extractor.process(image))
@@ -209,13 +281,18 @@ class Silhouette(Node):
         if every and msg.seq % every == 0:
             labels, clipped = label_mask(result.labels)
             if clipped:
-                self._warn_once("ids", "person ids above %d do not fit the uint8 label mask; their pixels read %d",
-                                MAX_LABEL - 1, MAX_LABEL)
+                self._warn_once(
+                    "ids",
+                    "person ids above %d do not fit the uint8 label mask; their pixels read %d",
+                    MAX_LABEL - 1,
+                    MAX_LABEL,
+                )
         people = [person_shape(p) for p in result.people]
         self.found += bool(people)
         self.tally("frames_with_people", bool(people))
-        self.publish("silhouettes", Silhouettes(stamp=msg.stamp, seq=msg.seq, people=people, labels=labels,
-                                                width=w, height=h))
+        self.publish(
+            "silhouettes", Silhouettes(stamp=msg.stamp, seq=msg.seq, people=people, labels=labels, width=w, height=h)
+        )
 
     def on_end(self) -> None:
         self._release_held()

@@ -66,8 +66,14 @@ class PeopleDetector:
         median colour (a replicated or mirrored border draws false edges).
     """
 
-    def __init__(self, hit_threshold: float = 0.0, min_score: float = 0.3, scale: float = 1.05,
-                 stride: int = 8, pad_frac: float = 0.15) -> None:
+    def __init__(
+        self,
+        hit_threshold: float = 0.0,
+        min_score: float = 0.3,
+        scale: float = 1.05,
+        stride: int = 8,
+        pad_frac: float = 0.15,
+    ) -> None:
         if scale <= 1.0:
             raise ValueError(f"scale must be > 1, got {scale}")
         if stride < 1 or stride % 8:
@@ -97,8 +103,12 @@ class PeopleDetector:
         if min(padded.shape[:2]) < 128 or padded.shape[1] < 64:
             return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
         rects, weights = self._hog.detectMultiScale(
-            padded, hitThreshold=self.hit_threshold, winStride=(self.stride, self.stride),
-            padding=(0, 0), scale=self.scale)
+            padded,
+            hitThreshold=self.hit_threshold,
+            winStride=(self.stride, self.stride),
+            padding=(0, 0),
+            scale=self.scale,
+        )
         rects = np.asarray(rects, np.float64).reshape(-1, 4)
         scores = np.asarray(weights, np.float32).reshape(-1)
         keep = scores >= self.min_score
@@ -118,7 +128,8 @@ class PeopleDetector:
 def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
     """Fraction of the pixels of box (x, y, w, h) in frames (N, H, W, 3) uint8 whose colour (any
     channel) differs by more than ``_MOVED_GREY`` grey levels from its temporal median in at least
-    one frame."""
+    one frame.
+    """
     x, y, w, h = (int(v) for v in box)
     blk = frames[:, y : y + h, x : x + w].astype(np.int16)
     if blk.size == 0:
@@ -129,19 +140,23 @@ def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
 
 def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The boxes (K, 4) and scores (K,) of the detections that are sure or hold movement
-    (``_SURE_SCORE``, ``_MOVED_FRAC``)."""
-    keep = [k for k in range(len(boxes))
-            if scores[k] >= _SURE_SCORE or moving_fraction(frames, boxes[k]) >= _MOVED_FRAC]
+    (``_SURE_SCORE``, ``_MOVED_FRAC``).
+    """
+    keep = [
+        k for k in range(len(boxes)) if scores[k] >= _SURE_SCORE or moving_fraction(frames, boxes[k]) >= _MOVED_FRAC
+    ]
     return boxes[keep], scores[keep]
 
 
-def _boxes_for(frames: np.ndarray, j: int, found: dict[int, tuple[np.ndarray, np.ndarray]],
-               step: int) -> tuple[np.ndarray, np.ndarray]:
+def _boxes_for(
+    frames: np.ndarray, j: int, found: dict[int, tuple[np.ndarray, np.ndarray]], step: int
+) -> tuple[np.ndarray, np.ndarray]:
     """The boxes (K, 4) in which frame j is searched for people, and whether each holds a person
     standing still (K,) bool. They are the boxes detected within ``step`` frames of j, and the
     boxes of a still person (``_still_person``) detected further away whose content frame j
     still shows (fewer than ``_SAME_FRAC`` of the box's pixels changed by more than
-    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,))."""
+    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,)).
+    """
     out, still = [], []
     for k, (boxes, scores) in found.items():
         for b, s in zip(boxes, scores):
@@ -156,9 +171,15 @@ def _still_person(found: dict[int, tuple[np.ndarray, np.ndarray]], k: int, box: 
     """Whether a box found in frame k is found again (IoU >= 0.5) in another frame, and surely
     (score >= ``_STILL_SCORE``) in at least one of them: someone standing still is found again
     and again; a weak detection on the room's clutter, which would be carried to every frame
-    and learnt as a hole in the room, may be found twice too, but not surely."""
-    again = [s for j, (boxes, scores) in found.items() if j != k
-             for other, s in zip(boxes, scores) if _iou(box, other) >= 0.5]
+    and learnt as a hole in the room, may be found twice too, but not surely.
+    """
+    again = [
+        s
+        for j, (boxes, scores) in found.items()
+        if j != k
+        for other, s in zip(boxes, scores)
+        if _iou(box, other) >= 0.5
+    ]
     return bool(again) and max(again + [score]) >= _STILL_SCORE
 
 
@@ -172,7 +193,8 @@ def _iou(a: np.ndarray, b: np.ndarray) -> float:
 
 def _changed_fraction(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> float:
     """Fraction of box (x, y, w, h) pixels whose colour (any channel) differs by more than
-    ``_MOVED_GREY`` grey levels between frames a and b (H, W, 3) uint8."""
+    ``_MOVED_GREY`` grey levels between frames a and b (H, W, 3) uint8.
+    """
     x, y, w, h = (int(v) for v in box)
     d = cv2.absdiff(a[y : y + h, x : x + w], b[y : y + h, x : x + w])
     return float(np.mean(d.max(axis=2) > _MOVED_GREY)) if d.size else 1.0
@@ -187,7 +209,8 @@ def _feet_bands(boxes: np.ndarray) -> np.ndarray:
 
 def box_mask(shape: tuple[int, int], boxes: np.ndarray, grow: float = 0.0) -> np.ndarray:
     """(H, W) bool, True inside any of the boxes (K, 4) (x, y, w, h), each grown on every side by
-    ``grow`` times its height (pixels, clipped to the image)."""
+    ``grow`` times its height (pixels, clipped to the image).
+    """
     h, w = shape
     out = np.zeros((h, w), bool)
     for x, y, bw, bh in np.asarray(boxes).reshape(-1, 4):
@@ -198,9 +221,14 @@ def box_mask(shape: tuple[int, int], boxes: np.ndarray, grow: float = 0.0) -> np
     return out
 
 
-def fit_around_people(model: HorprasertBackground, frames: np.ndarray | list[np.ndarray],
-                      detector: PeopleDetector | None = None, detect_every: int = 5,
-                      box_grow: float = 0.05, person_grow: float = 0.03) -> np.ndarray:
+def fit_around_people(
+    model: HorprasertBackground,
+    frames: np.ndarray | list[np.ndarray],
+    detector: PeopleDetector | None = None,
+    detect_every: int = 5,
+    box_grow: float = 0.05,
+    person_grow: float = 0.03,
+) -> np.ndarray:
     """Fit ``model`` (robustly) on training frames in which people may stand still.
 
     Parameters
@@ -238,14 +266,24 @@ def fit_around_people(model: HorprasertBackground, frames: np.ndarray | list[np.
         # everyone found moved enough for the room behind them to be seen in most frames (the
         # robust median copes with them): the fit without their boxes is the answer
         return boxes
-    people = np.stack([_person_pixels(model, stack[j], boxes[j], box_mask((h, w), b[still], box_grow), b, person_grow)
-                       for j, (b, still) in enumerate(near)])
+    people = np.stack(
+        [
+            _person_pixels(model, stack[j], boxes[j], box_mask((h, w), b[still], box_grow), b, person_grow)
+            for j, (b, still) in enumerate(near)
+        ]
+    )
     model.fit(stack, robust=True, exclude=people)
     return people
 
 
-def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.ndarray, still: np.ndarray,
-                   box_list: np.ndarray, grow: float) -> np.ndarray:
+def _person_pixels(
+    model: HorprasertBackground,
+    frame: np.ndarray,
+    boxes: np.ndarray,
+    still: np.ndarray,
+    box_list: np.ndarray,
+    grow: float,
+) -> np.ndarray:
     """(H, W) bool: the pixels of one training frame, inside the people's (grown) boxes, that the
     first fit does not explain as the room, as solid regions grown by ``grow`` times the typical
     box height. ``boxes``, ``still``: (H, W) bool masks of all boxes and of those of people
@@ -256,7 +294,8 @@ def _person_pixels(model: HorprasertBackground, frame: np.ndarray, boxes: np.nda
     sign, a bin) differs too: there only a person standing still, who has to be left out, is
     taken. And as the fill is a guess, a pixel counts there when it is foreground or differs in
     brightness by more than ``_PERSON_BRIGHTNESS``: a darker or lighter shade of the floor's
-    colour is more likely a grey shirt than the room."""
+    colour is more likely a grey shirt than the room.
+    """
     if not boxes.any():
         return boxes
     alpha_hat, cd_hat = model.distortions(frame)
@@ -277,7 +316,8 @@ def _solid_regions(mask: np.ndarray, r: int) -> np.ndarray:
     """A person's (H, W) bool pixels made solid: speckle opened away, thin horizontal runs removed
     (the edges of the room the fill did not continue, a skirting board or a kerb, not a standing
     person: an opening with a vertical line of 2r + 1 pixels), gaps closed and holes filled (disk
-    of radius r), and the result grown by r pixels."""
+    of radius r), and the result grown by r pixels.
+    """
     m = cv2.morphologyEx(mask.view(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     m = cv2.morphologyEx(m, cv2.MORPH_OPEN, np.ones((2 * r + 1, 1), np.uint8))
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))

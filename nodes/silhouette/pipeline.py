@@ -10,17 +10,18 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator
+from typing import Any
 
 import cv2
 import numpy as np
-
-from .background import BACKGROUND
-from .backends import HorprasertSubtractor, make_subtractor
-from .regions import Person, PersonTracker, clean_mask
 from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.spline import silhouette_spline
+
+from .backends import HorprasertSubtractor, make_subtractor
+from .background import BACKGROUND
+from .regions import Person, PersonTracker, clean_mask
 
 #: a standing adult, metres: the smallest person is one this tall at ``max_distance_m``
 PERSON_HEIGHT_M = 1.7
@@ -38,7 +39,8 @@ def person_min_area(width: int, height: int, camera: Camera | None = None, max_d
     (pinhole) and covers about 0.25 h^2 pixels. With the default camera and 30 m a person is
     1/14 of the frame height tall, 17 px at 320x240 (76 px of area): people down to 20 px tall
     are kept with a margin, and the threshold follows the frame size and the lens rather than a
-    fixed pixel count. h is at least ``MIN_PERSON_HEIGHT_PX`` (64 px of area) in small frames."""
+    fixed pixel count. h is at least ``MIN_PERSON_HEIGHT_PX`` (64 px of area) in small frames.
+    """
     if max_distance_m <= 0:
         raise ValueError(f"max_distance_m must be > 0 metres, got {max_distance_m}")
     cam = camera_for_size(camera, width, height)
@@ -132,7 +134,7 @@ class SilhouetteExtractor:
         self._index = 0
         self._auto_size: tuple[int, int] | None = None
 
-    def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> "SilhouetteExtractor":
+    def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> SilhouetteExtractor:
         """Train the Horprasert model now (e.g. on the first seconds of a recording)."""
         if not isinstance(self.subtractor, HorprasertSubtractor):
             raise ValueError(f"fit_background needs backend='horprasert', this extractor uses {self.backend!r}")
@@ -150,7 +152,8 @@ class SilhouetteExtractor:
 
     def learn(self, frame: np.ndarray) -> FrameResult:
         """Feed one uint8 BGR frame (H, W, 3) to the background model only: no clean-up, no people,
-        no tracks (a stream's first frames, while an online backend is still warming up)."""
+        no tracks (a stream's first frames, while an online backend is still warming up).
+        """
         self.subtractor.apply(frame)
         index = self._index
         self._index += 1
@@ -168,8 +171,7 @@ class SilhouetteExtractor:
             return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], classes, False)
         if self.min_area is None and self._auto_size != frame.shape[:2]:
             self._auto_size = frame.shape[:2]
-            self.tracker.min_area = person_min_area(frame.shape[1], frame.shape[0], self.camera,
-                                                    self.max_distance_m)
+            self.tracker.min_area = person_min_area(frame.shape[1], frame.shape[0], self.camera, self.max_distance_m)
         # min_area 0: the tracker drops regions below min_area in its own labelling pass
         mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, 0)
         labels, people = self.tracker.update(mask)
@@ -203,7 +205,8 @@ def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
 
 def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> np.ndarray:
     """The first ``max_frames`` (None: all) frames of a video that decode, (N, H, W, 3) uint8 BGR.
-    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode."""
+    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
+    """
     cap = _open_video(path)
     frames = []
     try:
@@ -221,7 +224,8 @@ def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> 
 
 def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
     """(frame rate, frame count) a video file declares (0 where it declares none; the count is a
-    guide for progress, not a promise)."""
+    guide for progress, not a promise).
+    """
     cap = _open_video(path)
     try:
         return float(cap.get(cv2.CAP_PROP_FPS) or 0.0), max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
@@ -229,8 +233,13 @@ def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
         cap.release()
 
 
-def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max_frames: int | None = None,
-               train_frames: int = 30, start: int = 0) -> Iterator[tuple[np.ndarray, FrameResult]]:
+def iter_video(
+    path: str | os.PathLike[str],
+    extractor: SilhouetteExtractor,
+    max_frames: int | None = None,
+    train_frames: int = 30,
+    start: int = 0,
+) -> Iterator[tuple[np.ndarray, FrameResult]]:
     """Yield (frame (H, W, 3) uint8 BGR, ``extractor.process(frame)``) for every frame of a video.
 
     With the Horprasert backend the background is first fitted (robustly: people may be in view)
@@ -272,8 +281,16 @@ def iter_video(path: str | os.PathLike[str], extractor: SilhouetteExtractor, max
         raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
 
 
-def _save_people(out_npz: str | os.PathLike[str], rows: list[tuple[int, Person]], n: int, n_frames: int,
-                 size: tuple[int, int], fps: float, complete: bool, params: dict[str, Any]) -> None:
+def _save_people(
+    out_npz: str | os.PathLike[str],
+    rows: list[tuple[int, Person]],
+    n: int,
+    n_frames: int,
+    size: tuple[int, int],
+    fps: float,
+    complete: bool,
+    params: dict[str, Any],
+) -> None:
     """Write ``extract_video``'s file (its docstring gives the layout)."""
     nan2 = np.full(2, np.nan)
     np.savez_compressed(
@@ -286,12 +303,12 @@ def _save_people(out_npz: str | os.PathLike[str], rows: list[tuple[int, Person]]
         centroid=np.array([p.centroid for _, p in rows], np.float32).reshape(-1, 2),
         height=np.array([p.height for _, p in rows], np.float32),
         merged=np.array([p.merged for _, p in rows], bool),
-        ctrl=np.array(
-            [p.ctrl if p.ctrl is not None else np.full((n, 2), np.nan) for _, p in rows], np.float32
-        ).reshape(-1, n, 2),
-        ref_point=np.array(
-            [p.ref_point if p.ref_point is not None else nan2 for _, p in rows], np.float32
-        ).reshape(-1, 2),
+        ctrl=np.array([p.ctrl if p.ctrl is not None else np.full((n, 2), np.nan) for _, p in rows], np.float32).reshape(
+            -1, n, 2
+        ),
+        ref_point=np.array([p.ref_point if p.ref_point is not None else nan2 for _, p in rows], np.float32).reshape(
+            -1, 2
+        ),
         n_frames=np.int64(n_frames),
         frame_size=np.array(size, np.int64),
         fps=np.float64(fps),
@@ -343,8 +360,9 @@ def extract_video(
         complete = True
     finally:
         if size is not None:
-            _save_people(out_npz, rows, extractor.n_ctrl, n_frames, size, fps, complete,
-                         {"train_frames": train_frames, **params})
+            _save_people(
+                out_npz, rows, extractor.n_ctrl, n_frames, size, fps, complete, {"train_frames": train_frames, **params}
+            )
     return {
         "n_frames": n_frames,
         "n_rows": len(rows),

@@ -104,7 +104,8 @@ def clean_mask(
 class _Track:
     """A person's state. ``crop``/``origin`` is their shape template: the mask of the last frame
     in which they were seen on their own (not merged); prediction places it at the predicted
-    centroid, so a long merge cannot erode or grow anyone's shape."""
+    centroid, so a long merge cannot erode or grow anyone's shape.
+    """
 
     id: int
     side: str
@@ -200,8 +201,10 @@ class PersonTracker:
         self.min_overlap = min_overlap
         self.velocity_smoothing = velocity_smoothing
         if newcomer_growth < 0 or newcomer_margin < 0 or newcomer_min_frac <= 0:
-            raise ValueError(f"newcomer_growth={newcomer_growth} and newcomer_margin={newcomer_margin} must be "
-                             f">= 0, newcomer_min_frac={newcomer_min_frac} > 0")
+            raise ValueError(
+                f"newcomer_growth={newcomer_growth} and newcomer_margin={newcomer_margin} must be "
+                f">= 0, newcomer_min_frac={newcomer_min_frac} > 0"
+            )
         self.newcomer_growth = newcomer_growth
         self.newcomer_margin = newcomer_margin
         self.newcomer_min_frac = newcomer_min_frac
@@ -374,7 +377,9 @@ class PersonTracker:
         return comp[y : y + h, x : x + w] == r, x, y
 
     @staticmethod
-    def _split(comp: np.ndarray, stats: np.ndarray, r: int, claim: list[_Track]) -> dict[int, tuple[np.ndarray, int, int]]:
+    def _split(
+        comp: np.ndarray, stats: np.ndarray, r: int, claim: list[_Track]
+    ) -> dict[int, tuple[np.ndarray, int, int]]:
         """Share region r between the claiming tracks; returns claim index -> (crop, x0, y0)."""
         x, y, w, h = (int(v) for v in stats[r, :4])
         region = comp[y : y + h, x : x + w] == r
@@ -395,17 +400,20 @@ class PersonTracker:
 
     def _established(self, t: _Track, w_img: int, h_img: int) -> bool:
         """Whether track t's usual size is known well enough for the newcomer check: seen long
-        enough, and its template clear of the image border (someone walking in grows fast)."""
+        enough, and its template clear of the image border (someone walking in grows fast).
+        """
         if not self.newcomer_growth or t.seen < NEWCOMER_MIN_AGE:
             return False
         (x0, y0), (h, w) = t.origin, t.crop.shape
         return x0 > 1 and y0 > 1 and x0 + w < w_img - 1 and y0 + h < h_img - 1
 
-    def _split_newcomer(self, comp: np.ndarray, stats: np.ndarray, r: int, t: _Track
-                        ) -> tuple[tuple[np.ndarray, int, int], tuple[np.ndarray, int, int]] | None:
+    def _split_newcomer(
+        self, comp: np.ndarray, stats: np.ndarray, r: int, t: _Track
+    ) -> tuple[tuple[np.ndarray, int, int], tuple[np.ndarray, int, int]] | None:
         """Region r, grown well past track t's usual area: (t's piece, the newcomer's piece), each
         (crop, x0, y0), or None when what lies outside t's predicted mask is too small to be a
-        person (an arm stretched out, a step forward)."""
+        person (an arm stretched out, a step forward).
+        """
         x, y, w, h = (int(v) for v in stats[r, :4])
         region = comp[y : y + h, x : x + w] == r
         pred = _paste(t, x, y, h, w).astype(np.uint8)
@@ -423,8 +431,9 @@ class PersonTracker:
             return None
         return _crop_box(mine, x, y), _crop_box(new, x, y)
 
-    def _observe(self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool,
-                 keep_template: bool = False) -> Person:
+    def _observe(
+        self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool, keep_template: bool = False
+    ) -> Person:
         ys, xs = np.nonzero(crop)
         c = np.array([xs.mean() + x0, ys.mean() + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
@@ -477,7 +486,8 @@ def _union(a: tuple[np.ndarray, int, int], b: tuple[np.ndarray, int, int]) -> tu
 def _with_unmatched(cost: np.ndarray, unmatched: float) -> np.ndarray:
     """(T, R) assignment costs -> (T + R, R + T): each track and each region may also stay
     unmatched at ``unmatched``. Without this, a full matching prefers two feasible but wrong pairs
-    (a stale track takes someone's region, who then takes a stray fragment) to one right pair."""
+    (a stale track takes someone's region, who then takes a stray fragment) to one right pair.
+    """
     T, R = cost.shape
     out = np.full((T + R, R + T), _INFEASIBLE)
     out[:T, :R] = cost
@@ -487,8 +497,9 @@ def _with_unmatched(cost: np.ndarray, unmatched: float) -> np.ndarray:
     return out
 
 
-def group_stacked(parts: list[tuple[np.ndarray, int, int]],
-                  max_aspect: float = 0.45) -> list[tuple[np.ndarray, int, int]]:
+def group_stacked(
+    parts: list[tuple[np.ndarray, int, int]], max_aspect: float = 0.45
+) -> list[tuple[np.ndarray, int, int]]:
     """Join first-sight regions that are parts of one standing person.
 
     Someone who stood still while the background was learnt is partly background; when they move,
@@ -499,13 +510,22 @@ def group_stacked(parts: list[tuple[np.ndarray, int, int]],
 
     Args:
         parts: (crop (h, w) bool, x0, y0) per region, pixels.
-    Returns:
+
+    Returns
+    -------
         the groups' unions, in the same form.
     """
     groups = list(parts)
     while True:
-        pair = next(((i, j) for i in range(len(groups)) for j in range(i + 1, len(groups))
-                     if _upright_pair(groups[i], groups[j], max_aspect)), None)
+        pair = next(
+            (
+                (i, j)
+                for i in range(len(groups))
+                for j in range(i + 1, len(groups))
+                if _upright_pair(groups[i], groups[j], max_aspect)
+            ),
+            None,
+        )
         if pair is None:
             return groups
         groups[pair[0]] = _union(groups[pair[0]], groups.pop(pair[1]))

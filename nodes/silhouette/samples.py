@@ -61,10 +61,19 @@ class SampleConsensus:
     samples_ : (3, n_samples, H * W) uint8, channel planes B, G, R.  radius_ : (H, W) float32 radius gain 1 + v(x).
     """
 
-    def __init__(self, n_samples: int = 20, min_matches: int = 2, radius: float = 10.0,
-                 relative_radius: float = 0.06,
-                 max_radius_gain: float = 2.5, subsampling: int = 16, blink_gain: float = 0.1,
-                 blink_decay: float = 0.005, learn_blink: float = 0.5, random_state: int | None = 0) -> None:
+    def __init__(
+        self,
+        n_samples: int = 20,
+        min_matches: int = 2,
+        radius: float = 10.0,
+        relative_radius: float = 0.06,
+        max_radius_gain: float = 2.5,
+        subsampling: int = 16,
+        blink_gain: float = 0.1,
+        blink_decay: float = 0.005,
+        learn_blink: float = 0.5,
+        random_state: int | None = 0,
+    ) -> None:
         if n_samples < 1:
             raise ValueError(f"n_samples must be >= 1, got {n_samples}")
         if not 1 <= min_matches <= n_samples:
@@ -103,8 +112,7 @@ class SampleConsensus:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return (1.0 + self._blink).reshape(self._shape)
 
-    def fit(self, frames: np.ndarray, background: np.ndarray, foreground: np.ndarray | None = None
-            ) -> "SampleConsensus":
+    def fit(self, frames: np.ndarray, background: np.ndarray, foreground: np.ndarray | None = None) -> SampleConsensus:
         """Fill the sample sets from training frames (N, H, W, 3) uint8 BGR.
 
         Sample k comes from frame k mod N; where ``foreground`` (N, H, W) bool marks a pixel that
@@ -174,8 +182,9 @@ class SampleConsensus:
         if self.samples_ is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if frame.shape[:2] != self._shape or labels.shape != self._shape:
-            raise ValueError(f"frame and labels must be {self._shape} (the fitted size), got "
-                             f"{frame.shape[:2]} and {labels.shape}")
+            raise ValueError(
+                f"frame and labels must be {self._shape} (the fitted size), got {frame.shape[:2]} and {labels.shape}"
+            )
         flat = labels.reshape(-1)
         idx = np.flatnonzero(flat == FOREGROUND)
         out = labels.copy()
@@ -194,10 +203,11 @@ class SampleConsensus:
         self._feedback(fg_idx)
         return out
 
-    def _update(self, frame: np.ndarray, learn: "_Learnable") -> None:
+    def _update(self, frame: np.ndarray, learn: _Learnable) -> None:
         """ViBe's conservative update: each pixel to ``learn`` (read at flat indices), with probability
         1/phi, writes its colour over a random sample of its own and, independently, of a random
-        8-neighbour that is learnt too."""
+        8-neighbour that is learnt too.
+        """
         h, w = self._shape
         npx = h * w
         m = max(1, npx // self.subsampling)
@@ -224,7 +234,8 @@ class SampleConsensus:
 
     def _write(self, flat_idx: np.ndarray, colours: np.ndarray) -> None:
         """Store colours (M, 3) uint8 at flat indices k * H * W + pixel of the sample planes
-        (1-D scatters: far cheaper than indexing the (3, N, H * W) array with two index arrays)."""
+        (1-D scatters: far cheaper than indexing the (3, N, H * W) array with two index arrays).
+        """
         for c in range(3):
             self.samples_[c].reshape(-1)[flat_idx] = colours[:, c]
 
@@ -235,7 +246,8 @@ class SampleConsensus:
         As in SuBSENSE, switches in and around the solid foreground of the last frame (its
         opening, dilated) do not count: the outline of a person who moves or fidgets switches
         all the time, and a radius grown there would eat them; leaves and flicker give speckle,
-        which the opening removes."""
+        which the opening removes.
+        """
         h, w = self._shape
         fg = np.zeros((h, w), np.uint8)
         fg.reshape(-1)[fg_idx] = 1
@@ -255,7 +267,8 @@ class SampleConsensus:
 class _Learnable:
     """Which pixels the samples may learn, read only where the update looks (a few thousand
     pixels a frame, not the whole frame): the statistics' BACKGROUND, and any pixel whose blink
-    level is at least ``level``. Indexed by flat pixel indices, returns bool."""
+    level is at least ``level``. Indexed by flat pixel indices, returns bool.
+    """
 
     def __init__(self, flat_labels: np.ndarray, blink: np.ndarray, level: float) -> None:
         self.flat_labels = flat_labels

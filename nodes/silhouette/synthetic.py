@@ -18,7 +18,8 @@ import numpy as np
 class SyntheticSequence:
     """frames (N, H, W, 3) uint8 BGR; person_masks (N, 2, H, W) bool (person 0 starts on the
     left); shadow_masks (N, H, W) bool (shadow pixels not covered by a person); background
-    (H, W, 3) float32 noise-free background; heights (2,) pixels."""
+    (H, W, 3) float32 noise-free background; heights (2,) pixels.
+    """
 
     frames: np.ndarray
     person_masks: np.ndarray
@@ -47,7 +48,9 @@ def draw_figure(mask: np.ndarray, cx: float, feet_y: int, height: float, arm: in
     head_r = max(3, int(height * 0.09))
     cv2.circle(mask, (cx_i, top + head_r), head_r, 1, -1)
     body_h = int(height - 2 * head_r)
-    cv2.ellipse(mask, (cx_i, top + 2 * head_r + body_h // 2), (max(2, int(height * 0.14)), body_h // 2), 0, 0, 360, 1, -1)
+    cv2.ellipse(
+        mask, (cx_i, top + 2 * head_r + body_h // 2), (max(2, int(height * 0.14)), body_h // 2), 0, 0, 360, 1, -1
+    )
     if arm:
         y = top + 2 * head_r + int(body_h * 0.3)
         cv2.line(mask, (cx_i, y), (cx_i + arm, y + 3), 1, thickness=max(2, int(height * 0.05)))
@@ -71,8 +74,12 @@ def two_person_sequence(
     walk = n_frames // 3
     hold = n_frames - 2 * walk
     meet_a, meet_b = 0.44 * w, 0.56 * w
-    xa = np.concatenate([np.linspace(0.12 * w, meet_a, walk), np.full(hold, meet_a), np.linspace(meet_a, 0.2 * w, walk)])
-    xb = np.concatenate([np.linspace(0.88 * w, meet_b, walk), np.full(hold, meet_b), np.linspace(meet_b, 0.8 * w, walk)])
+    xa = np.concatenate(
+        [np.linspace(0.12 * w, meet_a, walk), np.full(hold, meet_a), np.linspace(meet_a, 0.2 * w, walk)]
+    )
+    xb = np.concatenate(
+        [np.linspace(0.88 * w, meet_b, walk), np.full(hold, meet_b), np.linspace(meet_b, 0.8 * w, walk)]
+    )
     total = empty_frames + n_frames
     frames = np.empty((total, h, w, 3), np.uint8)
     persons = np.zeros((total, 2, h, w), bool)
@@ -89,7 +96,16 @@ def two_person_sequence(
                 draw_figure(m, x, feet, heights[p], sign * arm)
                 persons[k, p] = m.astype(bool)
                 # Shadow: a flattened ellipse on the ground, cast towards the bottom right.
-                cv2.ellipse(sh, (int(x + 0.1 * heights[p]), feet + 2), (int(0.3 * heights[p]), max(3, int(0.06 * h))), 0, 0, 360, 1, -1)
+                cv2.ellipse(
+                    sh,
+                    (int(x + 0.1 * heights[p]), feet + 2),
+                    (int(0.3 * heights[p]), max(3, int(0.06 * h))),
+                    0,
+                    0,
+                    360,
+                    1,
+                    -1,
+                )
             anyone = persons[k].any(axis=0)
             shadows[k] = sh.astype(bool) & ~anyone
             f[shadows[k]] *= shadow_factor

@@ -1,4 +1,5 @@
 """``python -m counterpart.nodes.tracker --param people='[left]' ...``: run the tracker node alone."""
+
 import sys
 
 from counterpart.bus.runner import run_standalone

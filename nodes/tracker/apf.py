@@ -19,13 +19,13 @@ and heading from one camera), so the weighted mean averages over them instead of
 
 Angles in radians, positions in metres (``counterpart.body.pose``). The yaw is averaged on the circle.
 """
+
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
-
 from counterpart.body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 LogLikelihood = Callable[[np.ndarray], np.ndarray]
@@ -39,7 +39,8 @@ MIN_STD = np.where(np.arange(DOF) < 3, 0.005, 0.01)
 class Estimate:
     """Result of one filter step.
 
-    Attributes:
+    Attributes
+    ----------
         mean: (DOF,) weighted mean pose of the last layer (yaw: circular mean).
         best: (DOF,) highest-likelihood particle of the last layer.
         ess: effective sample size 1 / sum(pi^2) of the last layer's particles weighted by the
@@ -74,8 +75,9 @@ def survival_rate(ll: np.ndarray, beta: float) -> float:
     return float(1.0 / (len(ll) * np.dot(w, w)))
 
 
-def choose_beta(ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, rounds: int = 5,
-                grid: int = 16) -> float:
+def choose_beta(
+    ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, rounds: int = 5, grid: int = 16
+) -> float:
     """The exponent beta whose weights exp(beta * ll) have survival rate ``survival``.
 
     D(beta) falls monotonically from 1 (beta = 0) towards 1/N, so a bracketing search on log beta
@@ -98,9 +100,9 @@ def choose_beta(ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1
     a, b = np.log(lo), np.log(hi)
     for _ in range(rounds):
         logb = np.linspace(a, b, grid)
-        w = np.exp(np.exp(logb)[:, None] * d)                      # (grid, N)
-        D = w.sum(axis=1) ** 2 / (len(d) * (w * w).sum(axis=1))     # 1 / (N sum pi^2)
-        k = int(np.clip(np.searchsorted(-D, -survival), 1, grid - 1))   # D[k-1] > survival >= D[k]
+        w = np.exp(np.exp(logb)[:, None] * d)  # (grid, N)
+        D = w.sum(axis=1) ** 2 / (len(d) * (w * w).sum(axis=1))  # 1 / (N sum pi^2)
+        k = int(np.clip(np.searchsorted(-D, -survival), 1, grid - 1))  # D[k-1] > survival >= D[k]
         a, b = logb[k - 1], logb[k]
     return float(np.exp(0.5 * (a + b)))
 
@@ -151,9 +153,17 @@ class AnnealedParticleFilter:
         seed: seed or Generator of the filter's random numbers.
     """
 
-    def __init__(self, n_layers: int = 10, n_particles: int = 256, survival: float = 0.5,
-                 diffusion: float = 0.6, shrink: float = 0.85, max_std: np.ndarray | None = None,
-                 min_std: np.ndarray | None = None, seed: int | np.random.Generator | None = 0) -> None:
+    def __init__(
+        self,
+        n_layers: int = 10,
+        n_particles: int = 256,
+        survival: float = 0.5,
+        diffusion: float = 0.6,
+        shrink: float = 0.85,
+        max_std: np.ndarray | None = None,
+        min_std: np.ndarray | None = None,
+        seed: int | np.random.Generator | None = 0,
+    ) -> None:
         if n_layers < 1:
             raise ValueError(f"n_layers={n_layers}: need at least one annealing layer")
         if n_particles < 2:
@@ -174,9 +184,14 @@ class AnnealedParticleFilter:
         """Set the particle set (K, DOF), K resampled to N if it differs."""
         self.particles = initial_set(particles, self.n_particles, self.rng)
 
-    def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
-             n_layers: int | None = None, min_std: np.ndarray | None = None,
-             max_std: np.ndarray | None = None) -> Estimate:
+    def step(
+        self,
+        log_likelihood: LogLikelihood,
+        predict_fn: PredictFn | None = None,
+        n_layers: int | None = None,
+        min_std: np.ndarray | None = None,
+        max_std: np.ndarray | None = None,
+    ) -> Estimate:
         """Run one frame: predict, then ``n_layers`` (default ``self.n_layers``) annealing layers.
 
         Args:
@@ -212,8 +227,7 @@ class AnnealedParticleFilter:
             idx = systematic_resample(w, self.rng)
             P = P[idx]
             if m < M - 1:
-                std = np.clip(self.diffusion * weighted_std(P, np.full(len(P), 1.0 / len(P))),
-                              lo, hi) * self.shrink ** m
+                std = np.clip(self.diffusion * weighted_std(P, np.full(len(P), 1.0 / len(P))), lo, hi) * self.shrink**m
                 P = clip_to_limits(P + self.rng.normal(size=P.shape) * std)
         self.particles = P
         return Estimate(mean, est_best, ess, est_ll, P, betas, surv, n_evals)
@@ -226,11 +240,13 @@ class ParticleFilter:
     likelihood evaluations per frame; it is the baseline of Deutscher et al.'s comparison.
     """
 
-    def __init__(self, n_particles: int = 2560, survival: float | None = 0.5,
-                 seed: int | np.random.Generator | None = 0) -> None:
+    def __init__(
+        self, n_particles: int = 2560, survival: float | None = 0.5, seed: int | np.random.Generator | None = 0
+    ) -> None:
         """``survival``: the likelihood exponent is chosen per frame for this survival rate (the
         fairest single-layer baseline: the same weighting as one annealing layer); None weights by
-        the raw likelihood exp(l) as in CONDENSATION."""
+        the raw likelihood exp(l) as in CONDENSATION.
+        """
         self.survival = survival
         if n_particles < 2:
             raise ValueError(f"n_particles={n_particles}: need at least two particles")
@@ -242,11 +258,17 @@ class ParticleFilter:
         """Set the particle set (K, DOF), K resampled to N if it differs."""
         self.particles = initial_set(particles, self.n_particles, self.rng)
 
-    def step(self, log_likelihood: LogLikelihood, predict_fn: PredictFn | None = None,
-             n_layers: int | None = None, min_std: np.ndarray | None = None,
-             max_std: np.ndarray | None = None) -> Estimate:
+    def step(
+        self,
+        log_likelihood: LogLikelihood,
+        predict_fn: PredictFn | None = None,
+        n_layers: int | None = None,
+        min_std: np.ndarray | None = None,
+        max_std: np.ndarray | None = None,
+    ) -> Estimate:
         """Predict, weight by exp(log-likelihood), estimate, resample (one layer: ``n_layers`` and
-        the diffusion bounds are accepted for the annealed filter's interface and unused)."""
+        the diffusion bounds are accepted for the annealed filter's interface and unused).
+        """
         if self.particles is None:
             raise RuntimeError("ParticleFilter.step before initialise(particles)")
         P = self.particles
@@ -255,12 +277,29 @@ class ParticleFilter:
         ll = log_likelihood(P)
         w = _normalised(ll, 1.0 if self.survival is None else choose_beta(ll, self.survival))
         b = int(np.argmax(ll))
-        est = Estimate(weighted_mean_pose(P, w), P[b].copy(), float(1.0 / np.dot(w, w)), float(ll[b]),
-                       P, np.ones(1), np.array([1.0 / (len(w) * np.dot(w, w))]), len(P))
+        est = Estimate(
+            weighted_mean_pose(P, w),
+            P[b].copy(),
+            float(1.0 / np.dot(w, w)),
+            float(ll[b]),
+            P,
+            np.ones(1),
+            np.array([1.0 / (len(w) * np.dot(w, w))]),
+            len(P),
+        )
         self.particles = P[systematic_resample(w, self.rng)]
         est.particles = self.particles
         return est
 
 
-__all__ = ["AnnealedParticleFilter", "ParticleFilter", "Estimate", "choose_beta", "survival_rate",
-           "systematic_resample", "weighted_mean_pose", "weighted_std", "MIN_STD"]
+__all__ = [
+    "AnnealedParticleFilter",
+    "ParticleFilter",
+    "Estimate",
+    "choose_beta",
+    "survival_rate",
+    "systematic_resample",
+    "weighted_mean_pose",
+    "weighted_std",
+    "MIN_STD",
+]

@@ -5,6 +5,7 @@ without the bus (``counterpart.nodes.tracker.offline.track_video``); the layout 
 docstring. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
 Exit code 0 on success, 2 on bad input, 130 when interrupted.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -21,20 +22,37 @@ from .tracker import SIDES
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("video", help="the video file (anything OpenCV decodes)")
     p.add_argument("--out", required=True, help="output .npz (joints, poses, ess, ... per frame and side)")
-    p.add_argument("--people", nargs="+", default=["left"], choices=SIDES,
-                   help="sides of the frame to track: left, right or both (default: left)")
-    p.add_argument("--camera", default=None, metavar="FILE",
-                   help="calibration, JSON or YAML: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
-                        "fov_deg, width, height} (default: the simulator's camera at the video's size)")
-    p.add_argument("--prior", default="default",
-                   help="motion prior: 'default' (built from the simulator when missing), 'none', or a .npz")
+    p.add_argument(
+        "--people",
+        nargs="+",
+        default=["left"],
+        choices=SIDES,
+        help="sides of the frame to track: left, right or both (default: left)",
+    )
+    p.add_argument(
+        "--camera",
+        default=None,
+        metavar="FILE",
+        help="calibration, JSON or YAML: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
+        "fov_deg, width, height} (default: the simulator's camera at the video's size)",
+    )
+    p.add_argument(
+        "--prior",
+        default="default",
+        help="motion prior: 'default' (built from the simulator when missing), 'none', or a .npz",
+    )
     p.add_argument("--layers", type=int, default=10, help="annealing layers per frame")
     p.add_argument("--particles", type=int, default=256, help="particles per layer")
     p.add_argument("--max-frames", type=int, default=None, help="track at most this many frames")
-    p.add_argument("--train-frames", type=int, default=30,
-                   help="first frames the background model is fitted on (people may be in view)")
-    p.add_argument("--backend", default="horprasert", choices=BACKEND_NAMES,
-                   help="background subtractor of the silhouette node")
+    p.add_argument(
+        "--train-frames",
+        type=int,
+        default=30,
+        help="first frames the background model is fitted on (people may be in view)",
+    )
+    p.add_argument(
+        "--backend", default="horprasert", choices=BACKEND_NAMES, help="background subtractor of the silhouette node"
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the particle filters")
 
 
@@ -58,12 +76,25 @@ def main(args: argparse.Namespace) -> int:
         camera = load_camera(args.camera) if args.camera else None
         video_info(args.video)  # a missing or undecodable video is said before a minute of building a prior
         if args.prior == "default":
-            print("[track] loading the default motion prior (built from the simulator on first use, "
-                  "about a minute)", file=sys.stderr, flush=True)
-        return track_video(args.video, args.out, people=args.people, camera=camera, prior=resolve_prior(args.prior),
-                           layers=args.layers, particles=args.particles, max_frames=args.max_frames,
-                           train_frames=args.train_frames, seed=args.seed, progress=FrameProgress("track"),
-                           backend=args.backend)
+            print(
+                "[track] loading the default motion prior (built from the simulator on first use, about a minute)",
+                file=sys.stderr,
+                flush=True,
+            )
+        return track_video(
+            args.video,
+            args.out,
+            people=args.people,
+            camera=camera,
+            prior=resolve_prior(args.prior),
+            layers=args.layers,
+            particles=args.particles,
+            max_frames=args.max_frames,
+            train_frames=args.train_frames,
+            seed=args.seed,
+            progress=FrameProgress("track"),
+            backend=args.backend,
+        )
 
     return run_offline("track", args.out, work)
 

@@ -6,10 +6,10 @@ the height at that place whose top projects onto the bbox's top row; the heading
 side of the frame the person stands on (the simulator's and a face-to-face interaction's layout:
 the left person faces +X, the right one -X), spread widely because a silhouette barely shows it.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from counterpart.body.camera import Camera
 from counterpart.body.pose import DOF, clip_to_limits, neutral_pose
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
@@ -22,7 +22,8 @@ INIT_STD = np.r_[[0.08, 0.03, 0.15], [0.6, 0.05, 0.05], [0.1] * 6, [0.25] * 16]
 
 class PlacementError(ValueError):
     """A person's region that no ground point of this camera can stand under: one bad region,
-    counted and skipped by the tracker node and ``counterpart track``, never the end of a run."""
+    counted and skipped by the tracker node and ``counterpart track``, never the end of a run.
+    """
 
 
 def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
@@ -33,11 +34,13 @@ def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     return int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1)
 
 
-def place_from_bbox(bbox: tuple[int, int, int, int], camera: Camera,
-                    base: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, float]:
+def place_from_bbox(
+    bbox: tuple[int, int, int, int], camera: Camera, base: BodyDims = DEFAULT_DIMS
+) -> tuple[np.ndarray, float]:
     """Ground position (3,) metres and stature (metres, clamped to 1.4-2.1) from a bbox (x, y, w, h).
 
-    Raises PlacementError when the bbox bottom lies above the horizon (no ground point)."""
+    Raises PlacementError when the bbox bottom lies above the horizon (no ground point).
+    """
     x, y, w, h = bbox
     u = x + 0.5 * (w - 1)
     g = camera.ground_point(np.float64(u), np.float64(y + h - 1))
@@ -53,12 +56,19 @@ def place_from_bbox(bbox: tuple[int, int, int, int], camera: Camera,
     return g, height
 
 
-def initial_particles(bbox: tuple[int, int, int, int], side: str, camera: Camera, n: int,
-                      rng: np.random.Generator, base: BodyDims = DEFAULT_DIMS,
-                      spread: float = 1.0) -> tuple[np.ndarray, BodyDims]:
+def initial_particles(
+    bbox: tuple[int, int, int, int],
+    side: str,
+    camera: Camera,
+    n: int,
+    rng: np.random.Generator,
+    base: BodyDims = DEFAULT_DIMS,
+    spread: float = 1.0,
+) -> tuple[np.ndarray, BodyDims]:
     """Particles (n, 28) for a new track and the body dimensions scaled to the measured stature.
 
-    The first particle is the un-jittered guess; the rest are spread by ``INIT_STD * spread``."""
+    The first particle is the un-jittered guess; the rest are spread by ``INIT_STD * spread``.
+    """
     if side not in SIDE_YAW:
         raise ValueError(f"side={side!r}: expected one of {sorted(SIDE_YAW)}")
     g, height = place_from_bbox(bbox, camera, base)
@@ -77,7 +87,8 @@ class LostDetector:
     """Declares a track lost when its best image cost stays above ``threshold`` (a likelihood
     collapse: the model no longer covers the silhouette) for ``patience`` frames in a row.
 
-    ``update(cost)`` takes the image cost (S_r + S_e + S_c of the best particle, 0 best, 3 worst)."""
+    ``update(cost)`` takes the image cost (S_r + S_e + S_c of the best particle, 0 best, 3 worst).
+    """
 
     def __init__(self, threshold: float = 0.9, patience: int = 3) -> None:
         self.threshold = float(threshold)

@@ -24,18 +24,17 @@ one flat gather from the frame's per-pixel cost map (``Observation.cost``) and t
 as a matmul plus in-place array arithmetic. Pixel units throughout; out-of-image points read 0
 (no foreground, no edge).
 """
+
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import cv2
 import numpy as np
-
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import anchor_points
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
-
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
 #: (``r_toe`` above it)
@@ -44,7 +43,8 @@ _FOOT_ANCHORS = np.array([ANCHOR_INDEX[n] for n in ("l_ankle", "r_ankle", "l_toe
 
 def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
     """Flattened fg and edge maps (H*W + 1,) -> (2 (H*W + 1),) float32 ``(1 - fg)^2`` then
-    ``(1 - edge)^2``: the per-sample costs of S_r and S_e."""
+    ``(1 - edge)^2``: the per-sample costs of S_r and S_e.
+    """
     return np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32)
 
 
@@ -52,7 +52,8 @@ def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
 class Observation:
     """One person in one frame, ready for the likelihood.
 
-    Attributes:
+    Attributes
+    ----------
         fg: (H*W + 1,) float32 flattened foreground mask (1 person, 0 background), with a trailing
             0 that out-of-image points read.
         edge: (H*W + 1,) float32 flattened smoothed edge map in [0, 1], same layout.
@@ -81,8 +82,13 @@ class Observation:
         return self.cover_uv.shape[0] == 0
 
 
-def edge_map(image: np.ndarray | None, mask: np.ndarray, canny: tuple[int, int] = (40, 120),
-             dilate_px: int = 5, blur_sigma: float = 1.5) -> np.ndarray:
+def edge_map(
+    image: np.ndarray | None,
+    mask: np.ndarray,
+    canny: tuple[int, int] = (40, 120),
+    dilate_px: int = 5,
+    blur_sigma: float = 1.5,
+) -> np.ndarray:
     """Deutscher's smoothed edge map: Canny edges within the dilated foreground, Gaussian blurred
     and scaled so that an edge pixel reads 1.
 
@@ -92,7 +98,9 @@ def edge_map(image: np.ndarray | None, mask: np.ndarray, canny: tuple[int, int] 
         canny: Canny hysteresis thresholds (grey levels).
         dilate_px: how far outside the mask image edges still count (pixels).
         blur_sigma: Gaussian sigma (pixels) of the smoothing that gives the cost a basin.
-    Returns:
+
+    Returns
+    -------
         (H, W) float32 in [0, 1].
     """
     m = mask.astype(np.uint8)
@@ -111,8 +119,9 @@ def edge_map(image: np.ndarray | None, mask: np.ndarray, canny: tuple[int, int] 
     return np.clip(sm / peak, 0.0, 1.0)
 
 
-def make_observation(image: np.ndarray | None, mask: np.ndarray, n_cover: int = 32,
-                     rng: np.random.Generator | None = None, **edge_kw) -> Observation:
+def make_observation(
+    image: np.ndarray | None, mask: np.ndarray, n_cover: int = 32, rng: np.random.Generator | None = None, **edge_kw
+) -> Observation:
     """Build the per-frame maps once (Deutscher: computed once per frame, read by every particle).
 
     Args:
@@ -141,7 +150,8 @@ def make_observation(image: np.ndarray | None, mask: np.ndarray, n_cover: int = 
 
 def pose_anchor_points(P: np.ndarray, dims: BodyDims) -> np.ndarray:
     """(N, 28) poses -> (N, A, 3) float32 anchor points in metres (one forward kinematics, shared by
-    every camera's view); a clear error for a wrong shape."""
+    every camera's view); a clear error for a wrong shape.
+    """
     P = np.asarray(P, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 28:
         raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
@@ -164,12 +174,23 @@ class ConeLikelihood:
             the foot and the calibrated camera give the distance).
     """
 
-    def __init__(self, camera: Camera, dims: BodyDims = DEFAULT_DIMS, n_along: int = 4, n_across: int = 3,
-                 per_side: int = 4, w_sil: float = 1.0, w_edge: float = 1.0, w_cover: float = 1.0,
-                 gain: float = 1.0, w_ground: float = 1.0, ground_sigma: float = 0.05) -> None:
+    def __init__(
+        self,
+        camera: Camera,
+        dims: BodyDims = DEFAULT_DIMS,
+        n_along: int = 4,
+        n_across: int = 3,
+        per_side: int = 4,
+        w_sil: float = 1.0,
+        w_edge: float = 1.0,
+        w_cover: float = 1.0,
+        gain: float = 1.0,
+        w_ground: float = 1.0,
+        ground_sigma: float = 0.05,
+    ) -> None:
         self.camera = camera
         self.dims = dims
-        self.radii = dims.segment_radii().astype(np.float32)          # (S, 2)
+        self.radii = dims.segment_radii().astype(np.float32)  # (S, 2)
         self.w = (float(w_sil), float(w_edge), float(w_cover))
         self.gain = float(gain)
         self.w_ground = float(w_ground)
@@ -181,10 +202,10 @@ class ConeLikelihood:
         s_out = np.tile((np.arange(per_side) + 0.5) / per_side, 2)
         t_out = np.repeat([1.0, -1.0], per_side)
         self.n_in = len(s_in)
-        self.s = np.concatenate([s_in, s_out]).astype(np.float32)     # (K,)
+        self.s = np.concatenate([s_in, s_out]).astype(np.float32)  # (K,)
         self.t = np.concatenate([t_in, t_out]).astype(np.float32)
         # a sample is sum_j F_j G_j with F = (x0, ax, rho0 n, drho n) per cone: one matmul
-        self._G = np.stack([np.ones_like(self.s), self.s, self.t, self.s * self.t])   # (4, K)
+        self._G = np.stack([np.ones_like(self.s), self.s, self.t, self.s * self.t])  # (4, K)
         self.f = np.float32(0.5 * (camera.fx + camera.fy))
         self.R = camera.R.astype(np.float32)
         self.tc = camera.t.astype(np.float32)
@@ -193,7 +214,8 @@ class ConeLikelihood:
     # ---------------------------------------------------------------------------------------
     def project(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, 28) poses -> cone end centres (N, S, 2, 2) px, half-widths (N, S, 2) px, depth ok
-        (N,) bool (every anchor in front of the camera)."""
+        (N,) bool (every anchor in front of the camera).
+        """
         return self._project(anchor_points(P, self.dims).astype(np.float32))
 
     def ground_cost(self, pts: np.ndarray) -> np.ndarray:
@@ -206,29 +228,33 @@ class ConeLikelihood:
         z = Xc[..., 2]
         ok = (z > 0.05).all(axis=1)
         zi = 1.0 / np.maximum(z, np.float32(0.05))
-        uv = np.stack([self.camera.fx * Xc[..., 0] * zi + self.camera.cx,
-                       self.camera.fy * Xc[..., 1] * zi + self.camera.cy], axis=-1).astype(np.float32)
-        c = uv[:, SEGMENT_ANCHORS]                                    # (N, S, 2, 2)
-        rho = self.f * self.radii * zi[:, SEGMENT_ANCHORS]            # (N, S, 2)
+        uv = np.stack(
+            [self.camera.fx * Xc[..., 0] * zi + self.camera.cx, self.camera.fy * Xc[..., 1] * zi + self.camera.cy],
+            axis=-1,
+        ).astype(np.float32)
+        c = uv[:, SEGMENT_ANCHORS]  # (N, S, 2, 2)
+        rho = self.f * self.radii * zi[:, SEGMENT_ANCHORS]  # (N, S, 2)
         return c, rho, ok
 
     def sample_points(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(N, 28) -> interior points (N, S*K_in, 2), outline points (N, S*K_out, 2) px, ok (N,).
 
         Same points as ``counterpart.body.raster.cone_interior_points`` / ``cone_outline_points`` (trapezoid
-        approximation of each projected cone), computed in one broadcast."""
+        approximation of each projected cone), computed in one broadcast.
+        """
         c, rho, ok = self.project(P)
         u, v = self._points_uv(c, rho)
-        pts = np.stack([u, v], axis=-1)                               # (N, S, K, 2)
+        pts = np.stack([u, v], axis=-1)  # (N, S, K, 2)
         N = pts.shape[0]
-        return pts[:, :, :self.n_in].reshape(N, -1, 2), pts[:, :, self.n_in:].reshape(N, -1, 2), ok
+        return pts[:, :, : self.n_in].reshape(N, -1, 2), pts[:, :, self.n_in :].reshape(N, -1, 2), ok
 
     def _points_uv(self, c: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples.
 
         Each sample is c0 + s a + (r0 + s dr) t n (axis a, unit normal n, sample (s, t)): linear
-        in (1, s, t, s t), so all of them are one (N S 2, 4) x (4, K) matmul."""
-        x0, y0 = c[:, :, 0, 0], c[:, :, 0, 1]                        # (N, S)
+        in (1, s, t, s t), so all of them are one (N S 2, 4) x (4, K) matmul.
+        """
+        x0, y0 = c[:, :, 0, 0], c[:, :, 0, 1]  # (N, S)
         ax, ay = c[:, :, 1, 0] - x0, c[:, :, 1, 1] - y0
         L = np.sqrt(ax * ax + ay * ay)
         ok = L > 1e-6
@@ -238,7 +264,7 @@ class ConeLikelihood:
         r0, dr = rho[..., 0], rho[..., 1] - rho[..., 0]
         # point = c0 + s a + (r0 + s dr) t n, per axis sum_j F_j G_j over (1, s, t, s t)
         F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32)
-        uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)      # (N, S, 2, K)
+        uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
         return uv[:, :, 0], uv[:, :, 1]
 
     def coverage_cost(self, c: np.ndarray, rho: np.ndarray, cover_uv: np.ndarray) -> np.ndarray:
@@ -247,33 +273,38 @@ class ConeLikelihood:
 
         The projection of a sample q onto the axis and its squared distance come from 2 d.a and
         |d|^2 (d = q - c0), both linear in (q_x, q_y, 1): one matmul over cones x samples, then
-        in-place arithmetic on the (N, S, M) arrays."""
+        in-place arithmetic on the (N, S, M) arrays.
+        """
         if cover_uv.shape[0] == 0:
             return np.zeros(c.shape[0], np.float32)
         # coordinates relative to the samples' centre keep the float32 squares accurate
         o = cover_uv.mean(axis=0)
-        q = cover_uv - o                                              # (M, 2)
-        x0, y0 = c[:, :, 0, 0] - o[0], c[:, :, 0, 1] - o[1]          # (N, S)
+        q = cover_uv - o  # (M, 2)
+        x0, y0 = c[:, :, 0, 0] - o[0], c[:, :, 0, 1] - o[1]  # (N, S)
         ax, ay = c[:, :, 1, 0] - c[:, :, 0, 0], c[:, :, 1, 1] - c[:, :, 0, 1]
         aa = np.maximum(ax * ax + ay * ay, np.float32(1e-6))
         # with d = q - c0: 2 d.a and |d|^2 - |q|^2 are linear in (qx, qy, 1): one matmul
-        F = np.stack([np.stack([2 * ax, 2 * ay, -2 * (x0 * ax + y0 * ay)], axis=-1),
-                      np.stack([-2 * x0, -2 * y0, x0 * x0 + y0 * y0], axis=-1)]).astype(np.float32)
-        G = np.concatenate([q.T, np.ones((1, len(q)), np.float32)]).astype(np.float32)   # (3, M)
-        pd2, d2 = F @ G                                               # 2 x (N, S, M)
-        d2 += (q * q).sum(axis=1)                                     # |d|^2
+        F = np.stack(
+            [
+                np.stack([2 * ax, 2 * ay, -2 * (x0 * ax + y0 * ay)], axis=-1),
+                np.stack([-2 * x0, -2 * y0, x0 * x0 + y0 * y0], axis=-1),
+            ]
+        ).astype(np.float32)
+        G = np.concatenate([q.T, np.ones((1, len(q)), np.float32)]).astype(np.float32)  # (3, M)
+        pd2, d2 = F @ G  # 2 x (N, S, M)
+        d2 += (q * q).sum(axis=1)  # |d|^2
         # s = clip(d.a / |a|^2, 0, 1), the nearest axis point; |d - s a|^2 = |d|^2 - s (2 d.a - s |a|^2)
         s = np.multiply(pd2, (0.5 / aa)[..., None])
         np.clip(s, 0.0, 1.0, out=s)
         tmp = np.multiply(s, aa[..., None])
         np.subtract(pd2, tmp, out=tmp)
         tmp *= s
-        d2 -= tmp                                                     # squared distance to the axis
+        d2 -= tmp  # squared distance to the axis
         # + 1 px: a rasterised mask holds every pixel the body touches, the capsule test their centres
         r = np.multiply(s, (rho[..., 1] - rho[..., 0])[..., None], out=tmp)
         r += (rho[..., 0] + np.float32(1.0))[..., None]
         r *= r
-        covered = (d2 <= r).any(axis=1)                               # (N, M)
+        covered = (d2 <= r).any(axis=1)  # (N, M)
         return 1.0 - covered.mean(axis=1, dtype=np.float32)
 
     def terms(self, P: np.ndarray, obs: Observation) -> np.ndarray:
@@ -286,14 +317,16 @@ class ConeLikelihood:
 
     def evaluate(self, P: np.ndarray, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
         """(N, 28) -> image costs (N, 3) S_r, S_e, S_c and ground costs (N,) S_g from one forward
-        kinematics (``combine`` turns them into log-likelihoods)."""
+        kinematics (``combine`` turns them into log-likelihoods).
+        """
         pts = pose_anchor_points(P, self.dims)
         g = self.ground_cost(pts) if self.w_ground else np.zeros(len(pts), np.float32)
         return self.image_costs(pts, obs), g
 
     def image_costs(self, pts: np.ndarray, obs: Observation) -> np.ndarray:
         """(N, A, 3) float32 anchor points (``pose_anchor_points``) -> (N, 3) S_r, S_e, S_c of this
-        camera's view; poses with an anchor behind the camera get 1."""
+        camera's view; poses with an anchor behind the camera get 1.
+        """
         c, rho, ok = self._project(pts)
         u, v = self._points_uv(c, rho)
         W, H = obs.width, obs.height
@@ -305,7 +338,7 @@ class ConeLikelihood:
         vi += ui
         idx = np.where(inside, vi, np.float32(W * H)).astype(np.intp)
         idx[:, :, k:] += W * H + 1
-        cost = obs.cost_map()[idx]                                    # (N, S, K)
+        cost = obs.cost_map()[idx]  # (N, S, K)
         S_r = cost[:, :, :k].mean(axis=(1, 2))
         S_e = cost[:, :, k:].mean(axis=(1, 2))
         S_c = self.coverage_cost(c, rho, obs.cover_uv) if self.w[2] else np.zeros_like(S_r)
@@ -344,7 +377,8 @@ class MultiViewLikelihood:
 
     def evaluate(self, P: np.ndarray, obs: Sequence[Observation]) -> tuple[np.ndarray, np.ndarray]:
         """(N, 28) poses, one Observation per camera -> image costs (N, 3) summed over the views
-        whose observation is not empty (0 <= each <= views seen), ground costs (N,)."""
+        whose observation is not empty (0 <= each <= views seen), ground costs (N,).
+        """
         if len(obs) != len(self.views):
             raise ValueError(f"{len(obs)} observations for {len(self.views)} cameras; give one per camera")
         pts = pose_anchor_points(P, self.dims)
@@ -365,5 +399,12 @@ class MultiViewLikelihood:
         return self.views[0].combine(terms, ground)
 
 
-__all__ = ["Observation", "edge_map", "make_observation", "ConeLikelihood", "MultiViewLikelihood",
-           "pose_anchor_points", "N_SEGMENTS"]
+__all__ = [
+    "Observation",
+    "edge_map",
+    "make_observation",
+    "ConeLikelihood",
+    "MultiViewLikelihood",
+    "pose_anchor_points",
+    "N_SEGMENTS",
+]

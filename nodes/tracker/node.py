@@ -10,13 +10,13 @@ people (the tracks wait); a merged region is still tracked, with the mask the si
 split by its labels. A frame whose partner message never comes is dropped once it is
 ``max_pending`` frames old.
 """
+
 from __future__ import annotations
 
 from typing import Any
 
 import cv2
 import numpy as np
-
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
 from counterpart.bus import Input, Node, Output, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
@@ -29,6 +29,7 @@ def _check_prior(v: str) -> str | None:
     if v in ("default", "none", ""):
         return None
     from .prior import MotionPrior
+
     try:
         MotionPrior.load(v)
     except (ValueError, FileNotFoundError, OSError) as exc:
@@ -38,7 +39,8 @@ def _check_prior(v: str) -> str | None:
 
 def person_mask(shape: Any, labels: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     """(H, W) bool mask of one PersonShape: its label where the silhouette node sent labels,
-    else the polygon of its B-spline control points."""
+    else the polygon of its B-spline control points.
+    """
     if labels.size:
         return labels == shape.id + 1
     mask = np.zeros((size[1], size[0]), np.uint8)
@@ -50,24 +52,38 @@ def person_mask(shape: Any, labels: np.ndarray, size: tuple[int, int]) -> np.nda
 class TrackerNode(Node):
     """3D poses of the people of each frame (annealed particle filter, Deutscher et al. 2000)."""
 
-    inputs = {"frame": Input(Frame, doc="the video frames (edge term)"),
-              "silhouettes": Input(Silhouettes, doc="the people's masks (silhouette term)"),
-              # awaited to its end: the calibration node publishes after it has seen a frame, so on a
-              # short stream the frames' end can overtake the camera their tracking waits for
-              "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)")}
+    inputs = {
+        "frame": Input(Frame, doc="the video frames (edge term)"),
+        "silhouettes": Input(Silhouettes, doc="the people's masks (silhouette term)"),
+        # awaited to its end: the calibration node publishes after it has seen a frame, so on a
+        # short stream the frames' end can overtake the camera their tracking waits for
+        "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)"),
+    }
     outputs = {"pose": Output(Pose3D, "one per frame: the tracked people (empty when nobody is in view)")}
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
-        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right",
-                        check=people_problem),
-        "camera_info": Param(bool, True, "take the camera from topic camera_info (the calibration node, so that "
-                             "every node projects with the same one); false: from 'camera'"),
-        "camera": Param(dict, {}, "without camera_info only: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
-                        "fov_deg, width, height}, scaled to a frame size of the same aspect ratio; empty: the default "
-                        "camera at the frame size", check=camera_param_problem),
-        "prior": Param(str, "default", "motion prior: 'default' (built from the simulator when missing), "
-                       "'none' (random walk), or a .npz path", check=_check_prior),
+        "people": Param(list, ["left"], "sides of the frame to track, one or two of left/right", check=people_problem),
+        "camera_info": Param(
+            bool,
+            True,
+            "take the camera from topic camera_info (the calibration node, so that "
+            "every node projects with the same one); false: from 'camera'",
+        ),
+        "camera": Param(
+            dict,
+            {},
+            "without camera_info only: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
+            "fov_deg, width, height}, scaled to a frame size of the same aspect ratio; empty: the default "
+            "camera at the frame size",
+            check=camera_param_problem,
+        ),
+        "prior": Param(
+            str,
+            "default",
+            "motion prior: 'default' (built from the simulator when missing), 'none' (random walk), or a .npz path",
+            check=_check_prior,
+        ),
         "seed": Param(int, 0, "seed of the particle filters"),
         "max_pending": Param(int, 50, "frames kept while waiting for the other input", min=1),
     }
@@ -77,8 +93,10 @@ class TrackerNode(Node):
         p = super().validate_params(given, where)
         if p["camera_info"] and p["camera"]:
             prefix = f"{where}: " if where else ""
-            raise ParamError(f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
-                             "calibration file to the calibration node (calibration.file), or set camera_info: false")
+            raise ParamError(
+                f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
+                "calibration file to the calibration node (calibration.file), or set camera_info: false"
+            )
         return p
 
     @classmethod
@@ -111,16 +129,24 @@ class TrackerNode(Node):
 
     def _tracker(self, side: str, camera: Camera) -> Tracker:
         if camera is not self.camera:
-            same_view = self.camera is not None and (camera.width, camera.height) == (self.camera.width,
-                                                                                      self.camera.height)
+            same_view = self.camera is not None and (camera.width, camera.height) == (
+                self.camera.width,
+                self.camera.height,
+            )
             # a refined camera of the same frames (the calibration's estimate, by small steps) keeps the
             # tracks going; frames of another size are another view: the tracks start again
             for tr in self.trackers.values() if same_view else ():
                 tr.set_camera(camera)
             self.camera, self.trackers = camera, (self.trackers if same_view else {})
         if side not in self.trackers:
-            self.trackers[side] = Tracker(camera, side, self.p["layers"], self.p["particles"], prior=self.prior,
-                                          seed=self.p["seed"] + SIDES.index(side))
+            self.trackers[side] = Tracker(
+                camera,
+                side,
+                self.p["layers"],
+                self.p["particles"],
+                prior=self.prior,
+                seed=self.p["seed"] + SIDES.index(side),
+            )
         return self.trackers[side]
 
     def on_camera_info(self, msg: CameraInfo) -> None:
@@ -142,8 +168,11 @@ class TrackerNode(Node):
 
     def on_end(self) -> None:
         if self.paired:  # the camera never came: one empty pose per frame keeps downstream in step
-            self.log.error("no camera_info came for %d frame(s); published them without people (is a calibration "
-                           "node in the graph?)", len(self.paired))
+            self.log.error(
+                "no camera_info came for %d frame(s); published them without people (is a calibration "
+                "node in the graph?)",
+                len(self.paired),
+            )
             for seq in sorted(self.paired):
                 frame, _ = self.paired.pop(seq)
                 self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
@@ -161,12 +190,15 @@ class TrackerNode(Node):
 
     def _drain(self) -> None:
         """Track the paired frames in seq order, as far as the camera of their size is known; beyond
-        ``max_pending`` waiting frames the oldest go out without people."""
+        ``max_pending`` waiting frames the oldest go out without people.
+        """
         for seq in sorted(self.paired):
             frame, sil = self.paired[seq]
             image = frame.image if frame.image.size else None
-            size = (sil.width or (image.shape[1] if image is not None else 0),
-                    sil.height or (image.shape[0] if image is not None else 0))
+            size = (
+                sil.width or (image.shape[1] if image is not None else 0),
+                sil.height or (image.shape[0] if image is not None else 0),
+            )
             try:
                 camera = self._camera(size, seq)
                 give_up = len(self.paired) > self.p["max_pending"]
@@ -197,8 +229,11 @@ class TrackerNode(Node):
                 tr = self._tracker(side, camera)
                 mask = person_mask(shape, sil.labels, size)
                 if shape.merged:
-                    self._warn_once("merged", f"frame {frame.seq}: {side} person merged with another; "
-                                    "tracking the part the silhouette node assigned to it")
+                    self._warn_once(
+                        "merged",
+                        f"frame {frame.seq}: {side} person merged with another; "
+                        "tracking the part the silhouette node assigned to it",
+                    )
                 r = tr.update(image, mask)
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
@@ -206,8 +241,18 @@ class TrackerNode(Node):
                 continue
             if r is None:
                 continue
-            people.append(TrackedBody(id=shape.id, side=side, joints=r.joints, pose=r.pose, best_pose=r.best,
-                                      ess=float(r.ess), log_likelihood=float(r.log_likelihood), lost=bool(r.lost)))
+            people.append(
+                TrackedBody(
+                    id=shape.id,
+                    side=side,
+                    joints=r.joints,
+                    pose=r.pose,
+                    best_pose=r.best,
+                    ess=float(r.ess),
+                    log_likelihood=float(r.log_likelihood),
+                    lost=bool(r.lost),
+                )
+            )
         self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps, people=people))
 
 

@@ -5,14 +5,15 @@ extractor (``counterpart.nodes.silhouette.pipeline.iter_video``: background fitt
 with sides and ids) and one :class:`counterpart.nodes.tracker.tracker.Tracker` per tracked side, each fed the
 frame and its person's pixels of the label mask, frame by frame. For batch work on a corpus.
 """
+
 from __future__ import annotations
 
 import json
 import os
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-
 from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.pose import DOF
 
@@ -27,10 +28,20 @@ if TYPE_CHECKING:
 Progress = Callable[[int, int], None]
 
 
-def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], people: Sequence[str] = ("left",),
-                camera: Camera | None = None, prior: MotionPrior | None = None, layers: int = 10,
-                particles: int = 256, max_frames: int | None = None, train_frames: int = 30, seed: int = 0,
-                progress: Progress | None = None, **silhouette_params: Any) -> dict[str, Any]:
+def track_video(
+    path: str | os.PathLike[str],
+    out_npz: str | os.PathLike[str],
+    people: Sequence[str] = ("left",),
+    camera: Camera | None = None,
+    prior: MotionPrior | None = None,
+    layers: int = 10,
+    particles: int = 256,
+    max_frames: int | None = None,
+    train_frames: int = 30,
+    seed: int = 0,
+    progress: Progress | None = None,
+    **silhouette_params: Any,
+) -> dict[str, Any]:
     """Track the people of a video in 3D and save every frame's estimate.
 
     Args:
@@ -45,7 +56,9 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
         max_frames, train_frames: frames to track at most; frames the background is fitted on.
         progress: called after every frame with (frames done, frames the file declares or 0).
         silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
-    Returns:
+
+    Returns
+    -------
         A summary: n_frames, tracked (frames with an estimate, per side), not_placed (frames whose
         region could not be placed, per side), fps, frame_size, out_npz.
 
@@ -76,33 +89,63 @@ def track_video(path: str | os.PathLike[str], out_npz: str | os.PathLike[str], p
             if size is None:
                 camera = camera_for_size(camera, frame.shape[1], frame.shape[0])
                 size = frame.shape[:2]
-                trackers = {s: Tracker(camera, s, layers, particles, prior=prior, seed=seed + SIDES.index(s))
-                            for s in sides}
+                trackers = {
+                    s: Tracker(camera, s, layers, particles, prior=prior, seed=seed + SIDES.index(s)) for s in sides
+                }
             rows.append(_track_frame(frame, result, sides, trackers))
             if progress is not None:
                 progress(len(rows), declared)
         complete = True
     finally:
         if size is not None:
-            _save(out_npz, rows, sides, size, fps, complete, camera,
-                  {"people": sides, "layers": layers, "particles": particles, "seed": seed,
-                   "train_frames": train_frames, "max_frames": max_frames, "prior": prior is not None,
-                   **silhouette_params})
+            _save(
+                out_npz,
+                rows,
+                sides,
+                size,
+                fps,
+                complete,
+                camera,
+                {
+                    "people": sides,
+                    "layers": layers,
+                    "particles": particles,
+                    "seed": seed,
+                    "train_frames": train_frames,
+                    "max_frames": max_frames,
+                    "prior": prior is not None,
+                    **silhouette_params,
+                },
+            )
     tracked = {s: int(sum(np.isfinite(r["joints"][k, 0, 0]) for r in rows)) for k, s in enumerate(sides)}
     not_placed = {s: int(sum(r["not_placed"][k] for r in rows)) for k, s in enumerate(sides)}
-    return {"n_frames": len(rows), "tracked": tracked, "not_placed": not_placed, "fps": fps,
-            "frame_size": list(size or (0, 0)), "out_npz": os.fspath(out_npz)}
+    return {
+        "n_frames": len(rows),
+        "tracked": tracked,
+        "not_placed": not_placed,
+        "fps": fps,
+        "frame_size": list(size or (0, 0)),
+        "out_npz": os.fspath(out_npz),
+    }
 
 
 def _empty_row(P: int) -> dict[str, np.ndarray]:
     """One frame's arrays for P sides, as if nobody were tracked."""
-    return {"joints": np.full((P, 14, 3), np.nan, np.float32), "poses": np.full((P, DOF), np.nan),
-            "best_poses": np.full((P, DOF), np.nan), "ess": np.zeros(P), "log_likelihood": np.full(P, -np.inf),
-            "lost": np.zeros(P, bool), "ids": np.full(P, -1, np.int32), "not_placed": np.zeros(P, bool)}
+    return {
+        "joints": np.full((P, 14, 3), np.nan, np.float32),
+        "poses": np.full((P, DOF), np.nan),
+        "best_poses": np.full((P, DOF), np.nan),
+        "ess": np.zeros(P),
+        "log_likelihood": np.full(P, -np.inf),
+        "lost": np.zeros(P, bool),
+        "ids": np.full(P, -1, np.int32),
+        "not_placed": np.zeros(P, bool),
+    }
 
 
-def _track_frame(frame: np.ndarray, result: FrameResult, sides: list[str],
-                 trackers: dict[str, Tracker]) -> dict[str, np.ndarray]:
+def _track_frame(
+    frame: np.ndarray, result: FrameResult, sides: list[str], trackers: dict[str, Tracker]
+) -> dict[str, np.ndarray]:
     """One frame's row: every side's estimate from its person's pixels of the label mask."""
     row = _empty_row(len(sides))
     for k, side in enumerate(sides):
@@ -122,14 +165,31 @@ def _track_frame(frame: np.ndarray, result: FrameResult, sides: list[str],
     return row
 
 
-def _save(out_npz: str | os.PathLike[str], rows: list[dict[str, np.ndarray]], sides: list[str],
-          size: tuple[int, int], fps: float, complete: bool, camera: Camera | None, params: dict[str, Any]) -> None:
-    stacked = {k: np.stack([r[k] for r in rows]) if rows else np.zeros((0,) + v.shape, v.dtype)
-               for k, v in _empty_row(len(sides)).items()}
-    np.savez_compressed(out_npz, sides=np.array(sides, dtype="<U5"), n_frames=np.int64(len(rows)),
-                        frame_size=np.array(size, np.int64), fps=np.float64(fps), complete=np.bool_(complete),
-                        camera=json.dumps(camera.to_dict() if camera is not None else {}),
-                        params=json.dumps(params, default=str), **stacked)
+def _save(
+    out_npz: str | os.PathLike[str],
+    rows: list[dict[str, np.ndarray]],
+    sides: list[str],
+    size: tuple[int, int],
+    fps: float,
+    complete: bool,
+    camera: Camera | None,
+    params: dict[str, Any],
+) -> None:
+    stacked = {
+        k: np.stack([r[k] for r in rows]) if rows else np.zeros((0,) + v.shape, v.dtype)
+        for k, v in _empty_row(len(sides)).items()
+    }
+    np.savez_compressed(
+        out_npz,
+        sides=np.array(sides, dtype="<U5"),
+        n_frames=np.int64(len(rows)),
+        frame_size=np.array(size, np.int64),
+        fps=np.float64(fps),
+        complete=np.bool_(complete),
+        camera=json.dumps(camera.to_dict() if camera is not None else {}),
+        params=json.dumps(params, default=str),
+        **stacked,
+    )
 
 
 __all__ = ["track_video"]

@@ -16,17 +16,18 @@ follow the random walk.
 Files: ``.npz`` with the arrays and a ``meta`` JSON string (``version``, ``n_states``, ``energy``,
 ``n_components``, ``dofs``, ``sources``, ``n_frames``). ``load`` refuses other versions.
 """
+
 from __future__ import annotations
 
 import json
 import os
 import sys
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
-
 from counterpart.body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 VERSION = 1
@@ -38,8 +39,11 @@ ANGLE_DOFS: np.ndarray = np.arange(4, DOF)
 RW_FLOOR = np.where(np.arange(DOF) < 3, 0.005, 0.01)
 RW_FLOOR[YAW] = 0.02
 #: simulator scenarios and seeds of the default prior (the benches use seeds 0-9: kept apart)
-DEFAULT_TRAINING = tuple(f"sim:{n}?seed={s}" for n in ("handshake", "high_five", "push", "pull", "wave",
-                                                       "conversation") for s in (100, 101, 102))
+DEFAULT_TRAINING = tuple(
+    f"sim:{n}?seed={s}"
+    for n in ("handshake", "high_five", "push", "pull", "wave", "conversation")
+    for s in (100, 101, 102)
+)
 
 
 @dataclass
@@ -87,7 +91,7 @@ class MotionPrior:
         return int(self.components.shape[0])
 
     # -------------------------------------------------------------------------------- learning
-    def fit(self, sequences: list[np.ndarray], sources: Iterable[str] = (), progress: bool = False) -> "MotionPrior":
+    def fit(self, sequences: list[np.ndarray], sources: Iterable[str] = (), progress: bool = False) -> MotionPrior:
         """Fit PCA, HMM and random walk to pose sequences, each (T_i, 28) at the tracker's frame rate."""
         from hmmlearn.hmm import GaussianHMM
         from sklearn.decomposition import PCA
@@ -95,8 +99,11 @@ class MotionPrior:
         seqs = [np.asarray(s, dtype=np.float64) for s in sequences]
         bad = [i for i, s in enumerate(seqs) if s.ndim != 2 or s.shape[1] != DOF or len(s) < 2]
         if not seqs or bad:
-            raise ValueError(f"MotionPrior.fit: need pose sequences of shape (T >= 2, {DOF}); "
-                             f"bad ones at positions {bad}" if seqs else "MotionPrior.fit: no sequences given")
+            raise ValueError(
+                f"MotionPrior.fit: need pose sequences of shape (T >= 2, {DOF}); bad ones at positions {bad}"
+                if seqs
+                else "MotionPrior.fit: no sequences given"
+            )
         X = np.concatenate([s[:, ANGLE_DOFS] for s in seqs])
         if len(X) < 2 * self.n_states:
             raise ValueError(f"MotionPrior.fit: {len(X)} frames are too few for {self.n_states} states")
@@ -104,11 +111,15 @@ class MotionPrior:
         self.pca_mean, self.components = pca.mean_, pca.components_
         Y = self.to_latent(np.concatenate(seqs))
         if progress:
-            print(f"tracker prior: {len(X)} frames, PCA keeps {self.n_components} of {X.shape[1]} "
-                  f"dimensions ({pca.explained_variance_ratio_.sum():.3f} of the variance); fitting "
-                  f"a {self.n_states}-state HMM", file=sys.stderr)
-        hmm = GaussianHMM(n_components=self.n_states, covariance_type="full", n_iter=25, min_covar=1e-4,
-                          random_state=self.seed)
+            print(
+                f"tracker prior: {len(X)} frames, PCA keeps {self.n_components} of {X.shape[1]} "
+                f"dimensions ({pca.explained_variance_ratio_.sum():.3f} of the variance); fitting "
+                f"a {self.n_states}-state HMM",
+                file=sys.stderr,
+            )
+        hmm = GaussianHMM(
+            n_components=self.n_states, covariance_type="full", n_iter=25, min_covar=1e-4, random_state=self.seed
+        )
         hmm.fit(Y, lengths=[len(s) for s in seqs])
         self.startprob, self.transmat = hmm.startprob_, hmm.transmat_
         # a state fitted to few frames can end with a singular covariance; a floor keeps every state
@@ -133,14 +144,14 @@ class MotionPrior:
     def state_loglik(self, Y: np.ndarray) -> np.ndarray:
         """(N, d) -> (N, K) log N(y | mu_k, S_k) of every state."""
         self._require()
-        L = np.linalg.cholesky(self.covars)                                   # (K, d, d)
-        diff = Y[:, None, :] - self.means[None]                               # (N, K, d)
+        L = np.linalg.cholesky(self.covars)  # (K, d, d)
+        diff = Y[:, None, :] - self.means[None]  # (N, K, d)
         z = np.linalg.solve(L[None], diff[..., None])[..., 0]
         logdet = 2 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(-1)
         d = Y.shape[1]
-        return -0.5 * ((z ** 2).sum(-1) + logdet + d * np.log(2 * np.pi))
+        return -0.5 * ((z**2).sum(-1) + logdet + d * np.log(2 * np.pi))
 
-    def predictor(self) -> "PriorPredictor":
+    def predictor(self) -> PriorPredictor:
         """A fresh per-track predictor (its own state posterior)."""
         self._require()
         return PriorPredictor(self)
@@ -151,10 +162,18 @@ class MotionPrior:
 
     # -------------------------------------------------------------------------------- files
     def meta(self) -> dict[str, Any]:
-        return {"version": VERSION, "kind": "counterpart.tracker_prior", "n_states": int(self.n_states),
-                "energy": float(self.energy), "n_components": self.n_components,
-                "dofs": [int(i) for i in ANGLE_DOFS], "hmm_weight": float(self.hmm_weight),
-                "rw_scale": float(self.rw_scale), "sources": list(self.sources), "n_frames": self.n_frames}
+        return {
+            "version": VERSION,
+            "kind": "counterpart.tracker_prior",
+            "n_states": int(self.n_states),
+            "energy": float(self.energy),
+            "n_components": self.n_components,
+            "dofs": [int(i) for i in ANGLE_DOFS],
+            "hmm_weight": float(self.hmm_weight),
+            "rw_scale": float(self.rw_scale),
+            "sources": list(self.sources),
+            "n_frames": self.n_frames,
+        }
 
     def save(self, path: str | os.PathLike) -> Path:
         """Write the ``.npz`` (arrays + ``meta`` JSON); returns the path."""
@@ -162,19 +181,28 @@ class MotionPrior:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp.npz")
-        np.savez(tmp, meta=json.dumps(self.meta()), pca_mean=self.pca_mean, components=self.components,
-                 startprob=self.startprob, transmat=self.transmat, means=self.means, covars=self.covars,
-                 rw_std=self.rw_std)
+        np.savez(
+            tmp,
+            meta=json.dumps(self.meta()),
+            pca_mean=self.pca_mean,
+            components=self.components,
+            startprob=self.startprob,
+            transmat=self.transmat,
+            means=self.means,
+            covars=self.covars,
+            rw_std=self.rw_std,
+        )
         os.replace(tmp, path)
         return path
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> "MotionPrior":
+    def load(cls, path: str | os.PathLike) -> MotionPrior:
         """Read a prior file; ValueError naming the file for another version or a missing key."""
         path = Path(path)
         if not path.exists():
-            raise FileNotFoundError(f"tracker prior {path} does not exist; train one with "
-                                    f"'counterpart learn tracker-prior --out {path}'")
+            raise FileNotFoundError(
+                f"tracker prior {path} does not exist; train one with 'counterpart learn tracker-prior --out {path}'"
+            )
         with np.load(path, allow_pickle=False) as z:
             if "meta" not in z:
                 raise ValueError(f"{path}: not a tracker prior (no 'meta' entry)")
@@ -182,14 +210,22 @@ class MotionPrior:
             if meta.get("kind") != "counterpart.tracker_prior":
                 raise ValueError(f"{path}: not a tracker prior (kind {meta.get('kind')!r})")
             if meta.get("version") != VERSION:
-                raise ValueError(f"{path}: tracker prior version {meta.get('version')!r}, this program reads "
-                                 f"version {VERSION}; retrain it with 'counterpart learn tracker-prior'")
+                raise ValueError(
+                    f"{path}: tracker prior version {meta.get('version')!r}, this program reads "
+                    f"version {VERSION}; retrain it with 'counterpart learn tracker-prior'"
+                )
             if meta.get("dofs") != [int(i) for i in ANGLE_DOFS]:
                 raise ValueError(f"{path}: prior models DOFs {meta.get('dofs')}, expected {list(ANGLE_DOFS)}")
-            arrays = {k: z[k] for k in ("pca_mean", "components", "startprob", "transmat", "means",
-                                        "covars", "rw_std")}
-        return cls(n_states=meta["n_states"], energy=meta["energy"], hmm_weight=meta["hmm_weight"],
-                   rw_scale=meta["rw_scale"], sources=meta["sources"], n_frames=meta["n_frames"], **arrays)
+            arrays = {k: z[k] for k in ("pca_mean", "components", "startprob", "transmat", "means", "covars", "rw_std")}
+        return cls(
+            n_states=meta["n_states"],
+            energy=meta["energy"],
+            hmm_weight=meta["hmm_weight"],
+            rw_scale=meta["rw_scale"],
+            sources=meta["sources"],
+            n_frames=meta["n_frames"],
+            **arrays,
+        )
 
 
 class PriorPredictor:
@@ -205,12 +241,12 @@ class PriorPredictor:
         self._chol = np.linalg.cholesky(prior.covars)
         # Mahalanobis distances of all states as matmuls (``log_prior``):
         # (y - mu_k)' S_k^-1 (y - mu_k) = vec(y y') . vec(S_k^-1) - 2 y . S_k^-1 mu_k + mu_k' S_k^-1 mu_k
-        Sinv = np.linalg.inv(prior.covars)                                        # (K, d, d)
+        Sinv = np.linalg.inv(prior.covars)  # (K, d, d)
         d = Sinv.shape[1]
-        self._q2 = Sinv.reshape(len(Sinv), d * d).T                               # (d*d, K)
-        Smu = np.einsum("kij,kj->ki", Sinv, prior.means)                          # (K, d)
-        self._q1 = -2 * Smu.T                                                     # (d, K)
-        self._q0 = np.einsum("ki,ki->k", Smu, prior.means)                        # (K,)
+        self._q2 = Sinv.reshape(len(Sinv), d * d).T  # (d*d, K)
+        Smu = np.einsum("kij,kj->ki", Sinv, prior.means)  # (K, d)
+        self._q1 = -2 * Smu.T  # (d, K)
+        self._q0 = np.einsum("ki,ki->k", Smu, prior.means)  # (K,)
         self._logdet = 2 * np.log(np.diagonal(self._chol, axis1=1, axis2=2)).sum(-1)
         self.std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale
 
@@ -239,14 +275,14 @@ class PriorPredictor:
         This is the pose prior p(x_t | x_{t-1}) of the posterior the annealing layers sharpen.
         """
         A = np.asarray(P, dtype=np.float64)[:, ANGLE_DOFS]
-        Y = (A - self.prior.pca_mean) @ self.prior.components.T               # (N, d)
+        Y = (A - self.prior.pca_mean) @ self.prior.components.T  # (N, d)
         R = A - (Y @ self.prior.components + self.prior.pca_mean)
         maha = (Y[:, :, None] * Y[:, None, :]).reshape(len(Y), -1) @ self._q2 + Y @ self._q1 + self._q0
         w = (1 - uniform) * self.predicted_states() + uniform / len(self._logdet)
-        lk = np.log(np.maximum(w, 1e-300)) - 0.5 * (maha + self._logdet)          # (N, K)
+        lk = np.log(np.maximum(w, 1e-300)) - 0.5 * (maha + self._logdet)  # (N, K)
         m = lk.max(axis=1)
         lse = m + np.log(np.exp(lk - m[:, None]).sum(axis=1))
-        return (lse - 0.5 * np.einsum("ni,ni->n", R, R) / resid_std ** 2) / len(ANGLE_DOFS)
+        return (lse - 0.5 * np.einsum("ni,ni->n", R, R) / resid_std**2) / len(ANGLE_DOFS)
 
     def __call__(self, P: np.ndarray, rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
         """Predict particles (N, 28) -> (N, 28); ``scale`` widens the random walk (re-initialisation)."""
@@ -285,6 +321,7 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
         src = str(src)
         if src.startswith("sim:"):
             from counterpart.sim.scenarios import make_scenario
+
             name, _, query = src[4:].partition("?")
             seed = int(query.split("=", 1)[1]) if query.startswith("seed=") else 0
             sc = make_scenario(name, seed=seed, fps=fps)
@@ -304,6 +341,7 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
         elif p.suffix.lower() == ".bvh":
             from counterpart.body.bvh import bvh_to_joints14, read_bvh
             from counterpart.body.ik import inverse_kinematics
+
             b = read_bvh(p)
             seqs.append(_resample(inverse_kinematics(bvh_to_joints14(b)), b.fps, fps))
             names.append(str(p))
@@ -318,6 +356,7 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
                     continue
             from counterpart.body.ik import inverse_kinematics
             from counterpart.body.trajectory import TwoPersonTrajectory
+
             tr = TwoPersonTrajectory.load(p)
             for who, X in (("a", tr.a), ("b", tr.b)):
                 seqs.append(_resample(inverse_kinematics(X), tr.fps, fps))
@@ -327,8 +366,14 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
     return seqs, names
 
 
-def train_prior(sources: Iterable[str], n_states: int = 30, energy: float = 0.95, fps: float = 25.0,
-                seed: int = 0, progress: bool = False) -> MotionPrior:
+def train_prior(
+    sources: Iterable[str],
+    n_states: int = 30,
+    energy: float = 0.95,
+    fps: float = 25.0,
+    seed: int = 0,
+    progress: bool = False,
+) -> MotionPrior:
     """Load ``sources`` (see ``load_sequences``) and fit a MotionPrior."""
     sources = list(sources)
     seqs, names = load_sequences(sources, fps)
@@ -345,7 +390,8 @@ def default_prior_path() -> Path:
 
 def load_default_prior(progress: bool = False) -> MotionPrior:
     """The default prior, trained from the simulator (``DEFAULT_TRAINING``) and cached when missing
-    or of another version."""
+    or of another version.
+    """
     path = default_prior_path()
     if path.exists():
         try:
@@ -367,5 +413,15 @@ def resolve_prior(spec: str | None) -> MotionPrior | None:
     return MotionPrior.load(spec)
 
 
-__all__ = ["MotionPrior", "PriorPredictor", "VERSION", "ANGLE_DOFS", "DEFAULT_TRAINING", "load_sequences",
-           "train_prior", "default_prior_path", "load_default_prior", "resolve_prior"]
+__all__ = [
+    "MotionPrior",
+    "PriorPredictor",
+    "VERSION",
+    "ANGLE_DOFS",
+    "DEFAULT_TRAINING",
+    "load_sequences",
+    "train_prior",
+    "default_prior_path",
+    "load_default_prior",
+    "resolve_prior",
+]

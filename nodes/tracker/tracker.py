@@ -18,13 +18,13 @@ Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006):
    ambiguities (mirror-image limbs, depth, heading);
 5. the estimate (weighted mean of the last layer) updates the HMM posterior and the lost detector.
 """
+
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Iterable, Sequence
 
 import numpy as np
-
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF, YAW, wrap_angle
@@ -40,7 +40,8 @@ from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 class TrackResult:
     """One frame of one person: ``pose``/``best`` (28,), ``joints`` (14, 3) float32 metres of the
     mean pose, ``ess``, ``log_likelihood`` (image term of the best particle), ``cost`` (its
-    S_r + S_e + S_c), ``lost`` and ``initialised`` (this frame started the track)."""
+    S_r + S_e + S_c), ``lost`` and ``initialised`` (this frame started the track).
+    """
 
     pose: np.ndarray
     best: np.ndarray
@@ -117,13 +118,31 @@ class Tracker:
         likelihood_kw: keyword arguments of ``ConeLikelihood``.
     """
 
-    def __init__(self, camera: Camera | Sequence[Camera], side: str = "left", n_layers: int = 10,
-                 n_particles: int = 256, prior: MotionPrior | None = None, plain: bool = False, w_temporal: float = 1.0,
-                 temporal_sigma: float = 3.0, w_prior: float = 0.5, resid_std: float = 0.15,
-                 init_layers: int = 20, init_spread: float = 0.5, predict_scale: float = 3.0,
-                 apf_diffusion: float = 0.5, apf_min: float = 0.05, apf_max: float = 3.0,
-                 apf_shrink: float = 1.0, init_min: float = 0.01, init_max: float = 1.0,
-                 dims: BodyDims | None = None, seed: int = 0, likelihood_kw: dict | None = None) -> None:
+    def __init__(
+        self,
+        camera: Camera | Sequence[Camera],
+        side: str = "left",
+        n_layers: int = 10,
+        n_particles: int = 256,
+        prior: MotionPrior | None = None,
+        plain: bool = False,
+        w_temporal: float = 1.0,
+        temporal_sigma: float = 3.0,
+        w_prior: float = 0.5,
+        resid_std: float = 0.15,
+        init_layers: int = 20,
+        init_spread: float = 0.5,
+        predict_scale: float = 3.0,
+        apf_diffusion: float = 0.5,
+        apf_min: float = 0.05,
+        apf_max: float = 3.0,
+        apf_shrink: float = 1.0,
+        init_min: float = 0.01,
+        init_max: float = 1.0,
+        dims: BodyDims | None = None,
+        seed: int = 0,
+        likelihood_kw: dict | None = None,
+    ) -> None:
         self.cameras = [camera] if isinstance(camera, Camera) else list(camera)
         if not self.cameras or not all(isinstance(c, Camera) for c in self.cameras):
             raise ValueError(f"camera={camera!r}: expected a Camera or a non-empty sequence of Cameras")
@@ -134,7 +153,8 @@ class Tracker:
         self.plain = bool(plain)
         self.rng = np.random.default_rng(seed)
         self.predictor: PriorPredictor | _RandomWalk = (
-            prior.predictor() if prior is not None else _RandomWalk(RW_FLOOR * 3.0))
+            prior.predictor() if prior is not None else _RandomWalk(RW_FLOOR * 3.0)
+        )
         self.w_temporal = float(w_temporal)
         self.temporal_sigma = float(temporal_sigma)
         self.w_prior = float(w_prior)
@@ -147,10 +167,19 @@ class Tracker:
         self.dims: BodyDims = dims or DEFAULT_DIMS
         self.likelihood_kw = dict(likelihood_kw or {})
         self.likelihood = MultiViewLikelihood(self.cameras, self.dims, **self.likelihood_kw)
-        self.filter = (ParticleFilter(self.n_layers * self.n_particles, seed=self.rng) if self.plain else
-                       AnnealedParticleFilter(self.n_layers, self.n_particles, seed=self.rng,
-                                              max_std=self.predictor.std * apf_max, diffusion=apf_diffusion,
-                                              min_std=self.predictor.std * apf_min, shrink=apf_shrink))
+        self.filter = (
+            ParticleFilter(self.n_layers * self.n_particles, seed=self.rng)
+            if self.plain
+            else AnnealedParticleFilter(
+                self.n_layers,
+                self.n_particles,
+                seed=self.rng,
+                max_std=self.predictor.std * apf_max,
+                diffusion=apf_diffusion,
+                min_std=self.predictor.std * apf_min,
+                shrink=apf_shrink,
+            )
+        )
         self.lost_detector = LostDetector()
         self.prev: np.ndarray | None = None
         self.n_frames = 0
@@ -161,7 +190,8 @@ class Tracker:
 
     def set_camera(self, camera: Camera) -> None:
         """A refined calibration of the same single view (the calibration node's estimate moving by
-        small steps): the track goes on, projected with the new camera from the next frame."""
+        small steps): the track goes on, projected with the new camera from the next frame.
+        """
         self.cameras, self.camera = [camera], camera
         self.likelihood = MultiViewLikelihood(self.cameras, self.dims, **self.likelihood_kw)
 
@@ -171,11 +201,11 @@ class Tracker:
         self.predictor.reset()
         self.lost_detector.reset()
 
-    def _temporal(self, X: np.ndarray, centre: np.ndarray | None = None,
-                  sig: np.ndarray | None = None) -> np.ndarray:
+    def _temporal(self, X: np.ndarray, centre: np.ndarray | None = None, sig: np.ndarray | None = None) -> np.ndarray:
         """Gaussian term around the previous estimate, or (first frame) around the initial guess
         ``centre`` with its uncertainty ``sig``: the heading and depth barely show in one
-        silhouette, so without it the first search wanders along them."""
+        silhouette, so without it the first search wanders along them.
+        """
         centre = self.prev if centre is None else centre
         if centre is None or not self.w_temporal:
             return np.zeros(len(X))
@@ -189,27 +219,34 @@ class Tracker:
             return np.zeros(len(X))
         return self.w_prior * self.predictor.log_prior(X, self.resid_std)
 
-    def _observations(self, image: np.ndarray | None | Sequence[np.ndarray | None],
-                      mask: np.ndarray | Sequence[np.ndarray]) -> list[Observation]:
+    def _observations(
+        self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
+    ) -> list[Observation]:
         """One Observation per camera from one frame and mask (one camera) or sequences of them."""
         n = len(self.cameras)
         if n == 1 and not _per_camera(mask, 1):
             return [make_observation(image, mask, rng=self.rng)]
         if not _per_camera(mask, n):
-            raise ValueError(f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
-                             f"(got {type(mask).__name__} of shape {np.shape(mask)})")
+            raise ValueError(
+                f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
+                f"(got {type(mask).__name__} of shape {np.shape(mask)})"
+            )
         images = [None] * n if image is None else image
         if not _per_camera(images, n):
-            raise ValueError(f"the tracker has {n} cameras: give a list of {n} frames (or None), one per "
-                             f"camera (got {type(image).__name__})")
+            raise ValueError(
+                f"the tracker has {n} cameras: give a list of {n} frames (or None), one per "
+                f"camera (got {type(image).__name__})"
+            )
         return [make_observation(im, m, rng=self.rng) for im, m in zip(images, mask)]
 
-    def update(self, image: np.ndarray | None | Sequence[np.ndarray | None],
-               mask: np.ndarray | Sequence[np.ndarray]) -> TrackResult | None:
+    def update(
+        self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
+    ) -> TrackResult | None:
         """Track one frame. ``image`` (H, W[, 3]) uint8 or None; ``mask`` (H, W) bool of this
         person; with several cameras, lists of them in the cameras' order. Returns None (and keeps
         the track) when the reference view's mask is empty; another view with an empty mask (the
-        person out of its sight) is left out of this frame's likelihood."""
+        person out of its sight) is left out of this frame's likelihood.
+        """
         obs = self._observations(image, mask)
         if obs[0].empty:
             return None
@@ -217,8 +254,9 @@ class Tracker:
         if start:
             ref_mask = mask[0] if _per_camera(mask, len(self.cameras)) else mask
             bbox = bbox_from_mask(np.asarray(ref_mask, bool))
-            P0, dims = initial_particles(bbox, self.side, self.camera, self.filter.n_particles,
-                                         self.rng, spread=self.init_spread)
+            P0, dims = initial_particles(
+                bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=self.init_spread
+            )
             if self.fixed_dims is None:
                 self.dims = dims
                 self.likelihood = MultiViewLikelihood(self.cameras, dims, **self.likelihood_kw)
@@ -232,13 +270,14 @@ class Tracker:
             return self.likelihood(X, obs) + self._temporal(X, guess, wide) + self._pose_prior(X)
 
         if start:
-            est = self.filter.step(loglik, None, n_layers=self.init_layers, min_std=self.init_min * wide,
-                                   max_std=self.init_max * wide)
+            est = self.filter.step(
+                loglik, None, n_layers=self.init_layers, min_std=self.init_min * wide, max_std=self.init_max * wide
+            )
         else:
             scale = 1.0 if self.plain else self.predict_scale
             est = self.filter.step(loglik, lambda P, rng: self.predictor(P, rng, scale=scale))
         terms, ground = self.likelihood.evaluate(est.best[None], obs)
-        cost = float(terms.sum()) / sum(not o.empty for o in obs)     # per view seen: 0 best, 3 worst
+        cost = float(terms.sum()) / sum(not o.empty for o in obs)  # per view seen: 0 best, 3 worst
         image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
         self.prev = est.mean.copy()
@@ -246,13 +285,25 @@ class Tracker:
         if lost:
             self.reset()
         self.n_frames += 1
-        return TrackResult(est.mean, est.best, forward_kinematics(est.mean, self.dims)[0].astype(np.float32),
-                           est.ess, image_ll, cost, lost, start)
+        return TrackResult(
+            est.mean,
+            est.best,
+            forward_kinematics(est.mean, self.dims)[0].astype(np.float32),
+            est.ess,
+            image_ll,
+            cost,
+            lost,
+            start,
+        )
 
 
-def track_sequence(frames: Iterable[np.ndarray | None | Sequence[np.ndarray | None]],
-                   masks: Iterable[np.ndarray | Sequence[np.ndarray]], camera: Camera | Sequence[Camera],
-                   side: str = "left", **tracker_kw) -> dict[str, np.ndarray]:
+def track_sequence(
+    frames: Iterable[np.ndarray | None | Sequence[np.ndarray | None]],
+    masks: Iterable[np.ndarray | Sequence[np.ndarray]],
+    camera: Camera | Sequence[Camera],
+    side: str = "left",
+    **tracker_kw,
+) -> dict[str, np.ndarray]:
     """Track one person offline.
 
     Args:
@@ -260,7 +311,9 @@ def track_sequence(frames: Iterable[np.ndarray | None | Sequence[np.ndarray | No
             cameras each entry is a list of one image (or None) per camera.
         masks: T (H, W) bool masks of the person (several cameras: T lists of one per camera).
         camera: the camera, or the cameras; ``side`` and ``tracker_kw`` go to :class:`Tracker`.
-    Returns:
+
+    Returns
+    -------
         dict with ``poses`` (T, 28), ``joints`` (T, 14, 3) float32 (NaN where nobody was in
         view), ``ess`` (T,), ``log_likelihood`` (T,), ``lost`` (T,) bool, ``dims`` (BodyDims).
     """
@@ -280,8 +333,14 @@ def track_sequence(frames: Iterable[np.ndarray | None | Sequence[np.ndarray | No
         ess.append(r.ess)
         ll.append(r.log_likelihood)
         lost.append(r.lost)
-    return {"poses": np.array(poses), "joints": np.array(joints), "ess": np.array(ess),
-            "log_likelihood": np.array(ll), "lost": np.array(lost, bool), "dims": tr.dims}
+    return {
+        "poses": np.array(poses),
+        "joints": np.array(joints),
+        "ess": np.array(ess),
+        "log_likelihood": np.array(ll),
+        "lost": np.array(lost, bool),
+        "dims": tr.dims,
+    }
 
 
 __all__ = ["Tracker", "TrackResult", "track_sequence", "SIDES", "people_problem"]
