@@ -19,7 +19,7 @@ from counterpart.body.pose import DOF
 
 from .init import PlacementError
 from .prior import MotionPrior
-from .tracker import SIDES, Tracker, people_problem
+from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
 if TYPE_CHECKING:
     from counterpart.nodes.silhouette.pipeline import FrameResult
@@ -89,9 +89,8 @@ def track_video(
             if size is None:
                 camera = camera_for_size(camera, frame.shape[1], frame.shape[0])
                 size = frame.shape[:2]
-                trackers = {
-                    s: Tracker(camera, s, layers, particles, prior=prior, seed=seed + SIDES.index(s)) for s in sides
-                }
+                config = TrackerConfig(apf=APFConfig(n_layers=layers, n_particles=particles))
+                trackers = {s: Tracker(camera, s, config, prior=prior, seed=seed + SIDES.index(s)) for s in sides}
             rows.append(_track_frame(frame, result, sides, trackers))
             if progress is not None:
                 progress(len(rows), declared)
