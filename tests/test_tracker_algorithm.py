@@ -187,6 +187,8 @@ def test_several_cameras_need_one_mask_per_camera() -> None:
         MultiViewLikelihood([CAM, SIDE_CAM])(_pose()[None], [make_observation(None, mask)] * 3)
     with pytest.raises(ValueError, match="non-empty sequence of Cameras"):
         Tracker([])
+    with pytest.raises(TypeError, match="expected a TrackerConfig"):
+        Tracker(CAM, "left", 10)  # type: ignore[arg-type]  # the flat parameters are grouped now
     # the person out of the reference view: no estimate, no error
     assert trk.update(None, [np.zeros_like(mask), mask]) is None
     assert trk.update(None, [mask, mask]) is not None
