@@ -18,7 +18,7 @@ from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.pose import DOF
 from counterpart.nodes.tracker.init import PlacementError
 from counterpart.nodes.tracker.prior import MotionPrior
-from counterpart.nodes.tracker.tracker import SIDES, Tracker, people_problem
+from counterpart.nodes.tracker.tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
 if TYPE_CHECKING:
     from counterpart.nodes.silhouette.pipeline import FrameResult
@@ -88,9 +88,8 @@ def track_video(
             if size is None:
                 camera = camera_for_size(camera, frame.shape[1], frame.shape[0])
                 size = frame.shape[:2]
-                trackers = {
-                    s: Tracker(camera, s, layers, particles, prior=prior, seed=seed + SIDES.index(s)) for s in sides
-                }
+                config = TrackerConfig(apf=APFConfig(n_layers=layers, n_particles=particles))
+                trackers = {s: Tracker(camera, s, config, prior=prior, seed=seed + SIDES.index(s)) for s in sides}
             rows.append(_track_frame(frame, result, sides, trackers))
             if progress is not None:
                 progress(len(rows), declared)

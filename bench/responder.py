@@ -50,9 +50,9 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from counterpart.nodes.responder.data import SIM_SCENARIOS, sim_trajectories  # noqa: E402
-from counterpart.nodes.responder.dual_hmm import partner_placement  # noqa: E402
 from counterpart.nodes.responder.emotion import motion_features  # noqa: E402
 from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_local, to_world  # noqa: E402
+from counterpart.nodes.responder.pair_features import partner_placement  # noqa: E402
 from counterpart.nodes.responder.reach import reach  # noqa: E402
 from counterpart.nodes.responder.staging import Stage  # noqa: E402
 from counterpart.nodes.responder.training import default_training_data, train  # noqa: E402

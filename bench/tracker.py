@@ -97,7 +97,7 @@ def _track_timed(trk: Tracker, frames: list, masks: list) -> tuple[np.ndarray, f
 def main() -> int:
     from counterpart.nodes.tracker.likelihood import ConeLikelihood, make_observation
     from counterpart.nodes.tracker.prior import MotionPrior, load_default_prior
-    from counterpart.nodes.tracker.tracker import Tracker
+    from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig
     from counterpart.sim.stream import open_stream
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -137,7 +137,8 @@ def main() -> int:
         cam = cams[0]
         for seed in args.seeds:
             for kind in ("apf", "pf"):
-                trk = Tracker(cams, "left", args.layers, args.particles, prior=prior, plain=kind == "pf", seed=seed)
+                apf = APFConfig(n_layers=args.layers, n_particles=args.particles, plain=kind == "pf")
+                trk = Tracker(cams, "left", TrackerConfig(apf=apf), prior=prior, seed=seed)
                 est, t_sum, n = _track_timed(trk, frames, masks)
                 e = np.linalg.norm(est - truth3, axis=-1).mean(axis=1)
                 errs.setdefault((kind, seed), []).append(e)

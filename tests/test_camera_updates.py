@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from counterpart.body.camera import Camera, CameraSchedule, default_camera
 from counterpart.body.raster import rasterise_silhouettes
-from counterpart.nodes.tracker.tracker import Tracker
+from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig
 from counterpart.sim.scenarios import make_scenario
 
 
@@ -30,7 +30,7 @@ def test_the_tracker_keeps_its_track_through_a_refined_camera() -> None:
     sc = make_scenario("handshake", seed=4)
     P = sc.poses_a[::2][:8]
     masks = rasterise_silhouettes(P, sc.dims_a, cam)
-    tr = Tracker(cam, "left", n_layers=3, n_particles=64, seed=0)
+    tr = Tracker(cam, "left", TrackerConfig(apf=APFConfig(n_layers=3, n_particles=64)), seed=0)
     for m in masks[:4]:
         tr.update(None, m)
     # the calibration moved by one bounded step: 2% longer focal length, 2 cm higher

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_world
 from counterpart.nodes.responder.models import MODEL_VERSION, ModelVersionError, load_model, save_model
 
@@ -13,7 +13,9 @@ from tests.responder_fixtures import mpjpe_mm, planted_pair
 
 @pytest.fixture(scope="module")
 def model() -> DualHMM:
-    return DualHMM(n_states=12, n_iter=15, both_roles=False).fit([planted_pair(s) for s in range(8)])
+    return DualHMM(DualHMMConfig(fit=FitConfig(n_states=12, n_iter=15, both_roles=False))).fit(
+        [planted_pair(s) for s in range(8)]
+    )
 
 
 def test_actor_frame_round_trip_and_facing() -> None:
@@ -45,20 +47,20 @@ def test_reproduces_planted_partner_at_new_places(model: DualHMM) -> None:
 
 def test_viterbi_trellis_decoding_is_also_faithful(model: DualHMM) -> None:
     test = planted_pair(101)
-    vit = DualHMM.from_state(*model.get_state())
-    vit.decode, vit.lag = "viterbi", 6
+    arrays, config = model.get_state()
+    vit = DualHMM.from_state(arrays, {**config, "decode": "viterbi", "lag": 6})
     assert mpjpe_mm(vit.predict(test.a), test.b) < 60.0
 
 
 def test_placement_correction_forest_arrays_predict_as_scikit_learn() -> None:
-    from counterpart.nodes.responder.dual_hmm import _Forest
+    from counterpart.nodes.responder.placement_correction import ForestArrays
     from sklearn.ensemble import ExtraTreesRegressor
 
     rng = np.random.default_rng(0)
     X = rng.normal(size=(2000, 5))
     Y = np.c_[np.sin(X[:, 0]) + X[:, 1] ** 2, X[:, 2] * (X[:, 3] > 0)]
     et = ExtraTreesRegressor(7, min_samples_leaf=5, random_state=0).fit(X, Y)
-    forest = _Forest.from_sklearn(et)
+    forest = ForestArrays.from_sklearn(et)
     Xt = rng.normal(size=(50, 5))
     assert np.allclose(np.stack([forest.predict(x) for x in Xt]), et.predict(Xt), atol=1e-9)
 
@@ -66,7 +68,7 @@ def test_placement_correction_forest_arrays_predict_as_scikit_learn() -> None:
 def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> None:
     path = save_model(tmp_path / "m.npz", model, {"sequences": 8})
     # the cross-fitted placement correction travels in the file
-    assert model._forest is not None and "correction_value" in np.load(path).files
+    assert model.forest_ is not None and "correction_value" in np.load(path).files
     back = load_model(path, expected="dual-hmm")
     test = planted_pair(102)
     assert np.allclose(back.predict(test.a), model.predict(test.a), atol=1e-5)
@@ -84,6 +86,7 @@ def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> No
 
 
 def test_phased_trajectories_get_time_ordered_states() -> None:
+    from counterpart.nodes.responder.hmm_blocks import init_ordered
     from hmmlearn.hmm import GaussianHMM
 
     # the ordered start: states shared out between the phases by frames, along time within each
@@ -94,7 +97,7 @@ def test_phased_trajectories_get_time_ordered_states() -> None:
         seqs.append(np.stack([t, rng.normal(0, 0.01, T)], axis=1))
         phases.append((t >= 0.25).astype(np.int32))
     hmm = GaussianHMM(n_components=4, covariance_type="full", init_params="")
-    DualHMM(order_mix=0.2)._init_ordered(hmm, seqs, phases)
+    init_ordered(hmm, seqs, phases, order_mix=0.2, min_covar=1e-2)
     assert np.all(np.diff(hmm.means_[:, 0]) > 0)  # state k: the k-th stretch of time
     assert hmm.means_[0, 0] < 0.25 <= hmm.means_[1, 0]  # one state for the first phase's quarter
     assert np.argmax(hmm.startprob_) == 0
@@ -103,8 +106,34 @@ def test_phased_trajectories_get_time_ordered_states() -> None:
     data = [planted_pair(s) for s in range(6)]
     for tr in data:
         tr.phase = (np.arange(tr.n_frames) >= tr.n_frames // 3).astype(np.int32)
-    m = DualHMM(n_states=6, n_iter=10, both_roles=False).fit(data)
+    m = DualHMM(DualHMMConfig(fit=FitConfig(n_states=6, n_iter=10, both_roles=False))).fit(data)
     test = planted_pair(100)
     assert mpjpe_mm(m.predict(test.a), test.b) < 60.0
     with pytest.raises(ValueError, match="order_mix"):
-        DualHMM(order_mix=1.5)
+        FitConfig(order_mix=1.5)
+
+
+def test_the_grouped_config_reads_and_writes_the_model_files_flat_names() -> None:
+    from counterpart.nodes.responder.dual_hmm import CorrectionConfig, DecodeConfig, PlacementConfig
+
+    # the names of model format version 4: files written before the grouping load unchanged
+    flat = DualHMMConfig().flat()
+    assert list(flat) == [
+        "n_states", "energy", "velocity_weight", "n_iter", "decode", "lag", "placement", "process_noise",
+        "evidence_weight", "leak", "both_roles", "order_mix", "min_covar", "random_state",
+        "correction_folds", "correction_trees", "correction_leaf",
+    ]  # fmt: skip
+    cfg = DualHMMConfig(
+        fit=FitConfig(n_states=7, leak=0.01),
+        decode=DecodeConfig(decode="viterbi", lag=3),
+        placement=PlacementConfig(mode="relative"),
+        correction=CorrectionConfig(folds=0),
+    )
+    assert DualHMMConfig.from_flat(cfg.flat()) == cfg
+    assert DualHMMConfig.from_flat({"n_states": 7}).fit.n_states == 7
+    with pytest.raises(ValueError, match=r"unknown dual-hmm setting\(s\) \['states'\]"):
+        DualHMMConfig.from_flat({"states": 7})
+    with pytest.raises(ValueError, match="placement='nearby'"):
+        DualHMMConfig.from_flat({"placement": "nearby"})
+    with pytest.raises(TypeError, match="expected a DualHMMConfig"):
+        DualHMM(12)  # type: ignore[arg-type]

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.emotion import EmotionModel
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.listener import ListenerModel
@@ -21,7 +21,9 @@ def models_dir(tmp_path_factory) -> Path:
     d = tmp_path_factory.mktemp("models")
     save_model(
         d / "responder-dual-hmm.npz",
-        DualHMM(n_states=8, n_iter=10, both_roles=False).fit([planted_pair(s) for s in range(6)]),
+        DualHMM(DualHMMConfig(fit=FitConfig(n_states=8, n_iter=10, both_roles=False))).fit(
+            [planted_pair(s) for s in range(6)]
+        ),
     )
     # an emotion model whose angry style doubles the amplitude at full strength
     em = EmotionModel().fit(

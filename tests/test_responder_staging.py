@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
 from counterpart.nodes.responder.staging import Stage, StageConfig
@@ -81,7 +81,9 @@ def test_bad_limits_are_refused_naming_them() -> None:
 
 
 def test_the_dual_hmm_gives_a_body_for_a_person_unlike_any_of_training() -> None:
-    hmm = DualHMM(n_states=8, n_iter=10, both_roles=False).fit([planted_pair(s) for s in range(6)])
+    hmm = DualHMM(DualHMMConfig(fit=FitConfig(n_states=8, n_iter=10, both_roles=False))).fit(
+        [planted_pair(s) for s in range(6)]
+    )
     odd = planted_pair(9).a[0].copy()
     odd[:, 1] *= 3.0  # a 5 m tall, stretched estimate (a tracker's bad frame)
     odd[4] += [2.0, -1.0, 3.0]

@@ -12,10 +12,14 @@ from counterpart.body.skeleton import DEFAULT_DIMS
 from counterpart.nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
 from counterpart.nodes.tracker.init import bbox_from_mask, place_from_bbox
 from counterpart.nodes.tracker.likelihood import ConeLikelihood, MultiViewLikelihood, make_observation
-from counterpart.nodes.tracker.tracker import Tracker, track_sequence
+from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig, track_sequence
 from counterpart.sim.scenarios import make_scenario
 
 CAM = default_camera()
+#: small filters that keep the tests fast: 5 layers x 128 particles, and 2 x 16 where only the
+#: interface is checked
+SMALL = TrackerConfig(apf=APFConfig(n_layers=5, n_particles=128))
+TINY = TrackerConfig(apf=APFConfig(n_layers=2, n_particles=16))
 
 
 def _pose() -> np.ndarray:
@@ -123,7 +127,7 @@ def test_tracker_follows_rendered_sequence() -> None:
     sc = make_scenario("handshake", seed=4)
     P = sc.poses_a[::2][:20]
     masks = rasterise_silhouettes(P, sc.dims_a, CAM)
-    out = track_sequence([None] * len(P), masks, CAM, side="left", n_layers=5, n_particles=128, seed=0)
+    out = track_sequence([None] * len(P), masks, CAM, side="left", config=SMALL, seed=0)
     truth = forward_kinematics(P, sc.dims_a)
     err = np.linalg.norm(out["joints"] - truth, axis=-1).mean(axis=1)
     assert out["joints"].shape == (20, 14, 3)
@@ -162,9 +166,9 @@ def test_two_cameras_track_the_body_closer_than_one() -> None:
         front = rasterise_silhouettes(P, sc.dims_a, CAM)
         side = rasterise_silhouettes(P, sc.dims_a, SIDE_CAM)
         truth = forward_kinematics(P, sc.dims_a)
-        one = track_sequence([None] * len(P), front, CAM, n_layers=5, n_particles=128, seed=0)
+        one = track_sequence([None] * len(P), front, CAM, config=SMALL, seed=0)
         two = track_sequence(
-            [None] * len(P), [[a, b] for a, b in zip(front, side)], [CAM, SIDE_CAM], n_layers=5, n_particles=128, seed=0
+            [None] * len(P), [[a, b] for a, b in zip(front, side)], [CAM, SIDE_CAM], config=SMALL, seed=0
         )
         err[1].append(np.linalg.norm(one["joints"] - truth, axis=-1).mean())
         err[2].append(np.linalg.norm(two["joints"] - truth, axis=-1).mean())
@@ -174,7 +178,7 @@ def test_two_cameras_track_the_body_closer_than_one() -> None:
 
 def test_several_cameras_need_one_mask_per_camera() -> None:
     mask = rasterise_silhouettes(_pose()[None], DEFAULT_DIMS, CAM)[0]
-    trk = Tracker([CAM, SIDE_CAM], n_layers=2, n_particles=16)
+    trk = Tracker([CAM, SIDE_CAM], config=TINY)
     with pytest.raises(ValueError, match="2 cameras: give a list of 2 masks"):
         trk.update(None, mask)
     with pytest.raises(ValueError, match="2 cameras: give a list of 2 frames"):
@@ -183,11 +187,13 @@ def test_several_cameras_need_one_mask_per_camera() -> None:
         MultiViewLikelihood([CAM, SIDE_CAM])(_pose()[None], [make_observation(None, mask)] * 3)
     with pytest.raises(ValueError, match="non-empty sequence of Cameras"):
         Tracker([])
+    with pytest.raises(TypeError, match="expected a TrackerConfig"):
+        Tracker(CAM, "left", 10)  # type: ignore[arg-type]  # the flat parameters are grouped now
     # the person out of the reference view: no estimate, no error
     assert trk.update(None, [np.zeros_like(mask), mask]) is None
     assert trk.update(None, [mask, mask]) is not None
     # one camera takes a mask, or a list of one
-    assert Tracker([CAM], n_layers=2, n_particles=16).update(None, [mask]) is not None
+    assert Tracker([CAM], config=TINY).update(None, [mask]) is not None
 
 
 def test_ess_is_that_of_the_final_weighted_set_not_fixed_by_the_annealing() -> None:

@@ -4,7 +4,8 @@ Models (each a scikit-learn-style class over numpy arrays, usable without the bu
 
 * :class:`~counterpart.nodes.responder.dual_hmm.DualHMM` (Zheng et al. 2006; Cosker et al. 2004): one Gaussian
   HMM over both people's PCA-reduced, actor-centred 3D poses; the partner is read off by Gaussian
-  conditioning on the observed person.
+  conditioning on the observed person; its parts in ``pair_features``, ``hmm_blocks``,
+  ``conditioning``, ``forward_filter``, ``placement_kalman`` and ``placement_correction``.
 * :class:`~counterpart.nodes.responder.joint_shape.JointShapeModel` (Johnson, Galata & Hogg 1998): joint
   B-spline silhouettes, state and behaviour prototypes, a Markov chain, CONDENSATION.
 * :class:`~counterpart.nodes.responder.listener.ListenerModel` (Okwechime et al.): listener behaviour chosen by

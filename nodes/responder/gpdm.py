@@ -47,10 +47,11 @@ import numpy as np
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
 
-from .dual_hmm import DualHMM, partner_placement, partner_velocity
+from .dual_hmm import DualHMM
 from .emotion import EMOTIONS
 from .frames import actor_frame, to_local, to_world
 from .gp_layers import GPLayer, fit_layer, rbf
+from .pair_features import partner_placement, partner_velocity, partner_world
 from .reach import two_bone_ik
 
 _RS, _RE, _RW = JOINT_INDEX["r_shoulder"], JOINT_INDEX["r_elbow"], JOINT_INDEX["r_wrist"]
@@ -119,14 +120,6 @@ def partner_features(observed: np.ndarray, partner: np.ndarray, contact_m: float
     q, own = partner_placement(partner, o, th)
     touch = np.linalg.norm(observed[:, _RW] - partner[:, _RW], axis=-1) < contact_m
     return np.hstack([q, own.reshape(len(own), -1), touch[:, None].astype(float)])
-
-
-def partner_world(q: np.ndarray, own: np.ndarray, origin: np.ndarray, theta: float) -> np.ndarray:
-    """Placement q (x, z, cos, sin) in the observed frame and the partner's own-frame joints (14, 3)
-    -> the partner's world joints (14, 3), metres.
-    """
-    p_origin = to_world(np.array([[q[0], 0.0, q[1]]]), origin, theta)[0]
-    return to_world(own, p_origin, theta + np.arctan2(q[3], q[2]))
 
 
 def reach(joints: np.ndarray, target: np.ndarray, weight: float) -> np.ndarray:

@@ -70,7 +70,7 @@ def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = N
         from .dual_hmm import DualHMM
 
         model = DualHMM(**params)
-        folds = model.correction_folds
+        folds = model.config.correction.folds
         extra = f", then the placement correction on {folds} held-out folds" if folds else ""
         say(f"dual-hmm: fitting PCA + HMM on {len(data)} sequences{extra}")
         return model.fit(data)

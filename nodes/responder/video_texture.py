@@ -135,6 +135,41 @@ def _pairwise(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 @dataclass
+class _Recording:
+    """The recording as :meth:`VideoTexture.fit`'s steps see it.
+
+    x: (T, d) float32 eigenspace coordinates (NaN where the person was not found); valid: (T,)
+    frames with the person; run: (T,) id of each frame's run of consecutive valid frames (-1
+    invalid); nxt: (T,) frames whose next frame plays on in the same run; W: frames of a cut
+    point's window; fps: frames per second; have: the number of valid frames.
+    """
+
+    x: np.ndarray
+    valid: np.ndarray
+    run: np.ndarray
+    nxt: np.ndarray
+    W: int
+    fps: float
+    have: int
+
+
+def _windows(rec: _Recording) -> tuple[np.ndarray, np.ndarray]:
+    """Windowed features: the frames wf whose whole window of W frames lies in one run of valid
+    frames, and their windows' eigenspace coordinates Y (len(wf), W d).
+    """
+    x, valid, run, W = rec.x, rec.valid, rec.run, rec.W
+    T, d = x.shape
+    offs = np.arange(W) - W // 2
+    idx = np.arange(T)[:, None] + offs[None, :]
+    inside = (idx >= 0) & (idx < T)
+    idc = np.clip(idx, 0, T - 1)
+    wok = valid & inside.all(1) & (run[idc] == run[:, None]).all(1)
+    wf = np.flatnonzero(wok)
+    Y = x[idc[wf]].reshape(len(wf), W * d)
+    return wf, Y
+
+
+@dataclass
 class _Synth:
     """Synthesis state."""
 
@@ -201,17 +236,45 @@ class VideoTexture:
         frames: AvatarFrames | None,
         progress: Progress,
     ) -> VideoTexture:
+        """:meth:`fit`'s steps: check the recording, its eigenspace and playback, the cut-point
+        clusters, the jumps within them, the graph without dead ends, the transitions' likelihoods,
+        the goals and their graph distances.
+        """
         say = progress or (lambda s: None)
-        c = self.config
         X = np.asarray(features, np.float32)
+        L, names, valid, have = self._check_recording(len(X), labels, names, fps, valid, required)
+        self.fps = float(fps)
+        x = self._eigenspace(X, valid, have, say)
+        run, nxt = self._playback(x, valid)
+        rec = _Recording(x, valid, run, nxt, max(int(round(self.config.window_s * fps)), 1), fps, have)
+        wf, Y = _windows(rec)
+        nearest, state, k = self._cut_points(rec, wf, Y, L, names, say)
+        src, dst, seam = self._jumps(rec)
+        e_src, e_dst, e_seam = self._graph(rec, src, dst, seam, say)
+        self._transitions(rec, nearest, k, e_src, e_dst, e_seam, say)
+        self._goals(rec, L, names, state, required, say)
+        self.frames = frames
+        self.reset()
+        return self
+
+    def _check_recording(
+        self,
+        T: int,
+        labels: np.ndarray,
+        names: Sequence[str],
+        fps: float,
+        valid: np.ndarray | None,
+        required: Sequence[str],
+    ) -> tuple[np.ndarray, list[str], np.ndarray, int]:
+        """The labels (T, K) int8, the names, the valid frames (T,) and their count; a
+        RecordingError saying what is missing when the recording cannot make an avatar.
+        """
+        c = self.config
         L = np.asarray(labels).astype(np.int8)
-        T = len(X)
         names = list(names)
         if L.shape != (T, len(names)):
             raise RecordingError(f"labels {L.shape} do not match {T} frames x {len(names)} names")
         valid = np.ones(T, bool) if valid is None else np.asarray(valid, bool)
-        self.fps = float(fps)
-        W = max(int(round(c.window_s * fps)), 1)
         have = int(valid.sum())
         if have < c.min_seconds * fps:
             raise RecordingError(
@@ -230,7 +293,14 @@ class VideoTexture:
                     f"signal {r!r} never occurs in the recording (0 of {have} frames labelled "
                     f"{r}): record the person doing it, or leave it out of --signals"
                 )
+        return L, names, valid, have
 
+    def _eigenspace(self, X: np.ndarray, valid: np.ndarray, have: int, say: Callable[[str], None]) -> np.ndarray:
+        """PCA of the valid frames' features (T, D) -> eigenspace coordinates (T, d) float32, NaN
+        where the person was not found.
+        """
+        c = self.config
+        T = len(X)
         say(f"eigenspace: PCA of {have} frames to {c.energy:.0%} of the energy")
         from sklearn.decomposition import PCA
 
@@ -239,24 +309,34 @@ class VideoTexture:
         x[valid] = pca.transform(X[valid])
         self.pca_mean_, self.pca_components_ = pca.mean_.astype(np.float32), pca.components_.astype(np.float32)
         self.x_ = x
-        d = x.shape[1]
+        return x
 
-        # steps of the recording itself: the scale of every distance below
+    def _playback(self, x: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The recording's runs of valid frames (T,) and the frames whose next one plays on in the
+        same run (T,); the steps between them set the scale of every distance below.
+        """
         run = _runs(valid)
         nxt = np.r_[run[1:] == run[:-1], False] & valid
         steps = np.linalg.norm(x[1:] - x[:-1], axis=1)[nxt[:-1]]
         self.step_median_ = float(np.median(steps)) if len(steps) else 1.0
         self.step_q95_ = float(np.percentile(steps, 95)) if len(steps) else 1.0
+        return run, nxt
 
-        # windowed features: frames whose whole window lies in one run of valid frames
-        offs = np.arange(W) - W // 2
-        idx = np.arange(T)[:, None] + offs[None, :]
-        inside = (idx >= 0) & (idx < T)
-        idc = np.clip(idx, 0, T - 1)
-        wok = valid & inside.all(1) & (run[idc] == run[:, None]).all(1)
-        wf = np.flatnonzero(wok)
-        Y = x[idc[wf]].reshape(len(wf), W * d)
-
+    def _cut_points(
+        self,
+        rec: _Recording,
+        wf: np.ndarray,
+        Y: np.ndarray,
+        L: np.ndarray,
+        names: list[str],
+        say: Callable[[str], None],
+    ) -> tuple[np.ndarray, np.ndarray, int]:
+        """Cut-point clusters: k-medoids (FasterPAM) of the windowed frames ``wf`` (features Y),
+        members within the ``radius`` quantile of their medoid, pruned to the medoid's social state.
+        Returns each frame's nearest medoid (T,) (-1: not windowed), the social state (T, S) and k.
+        """
+        c = self.config
+        have, fps, W, T = rec.have, rec.fps, rec.W, len(rec.x)
         k = c.n_clusters or int(np.clip(round(have / fps / c.seconds_per_cluster), 4, 200))
         k = min(k, len(wf) // 2)
         sub = (
@@ -288,8 +368,14 @@ class VideoTexture:
             f"{n_cut} cut points in {sum(len(m) >= 2 for m in self.members_)} clusters after pruning by "
             f"{', '.join(STATE_SIGNALS[i] for i, s in enumerate(STATE_SIGNALS) if s in names) or 'no labels'}"
         )
+        return nearest, state, k
 
-        # jumps i -> j + 1 within a cluster
+    def _jumps(self, rec: _Recording) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Jumps i -> j + 1 between members i, j of a cluster (at least a window apart): source and
+        landing frames and the seam's eigenspace distance, thinned to the smoothest per source.
+        """
+        c = self.config
+        x, valid, run, W, T = rec.x, rec.valid, rec.run, rec.W, len(rec.x)
         src, dst, seam = [], [], []
         for m in self.members_:
             if len(m) < 2:
@@ -320,7 +406,15 @@ class VideoTexture:
         rank = np.arange(len(src)) - np.repeat(start, np.diff(np.r_[start, len(src)])) if len(src) else src
         keep = rank < c.max_jumps
         src, dst, seam = src[keep], dst[keep], seam[keep]
+        return src, dst, seam
 
+    def _graph(
+        self, rec: _Recording, src: np.ndarray, dst: np.ndarray, seam: np.ndarray, say: Callable[[str], None]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The texture motion graph: playback edges and jumps, kept within the largest strongly
+        connected component (no dead ends, Tarjan); returns its edges' sources, targets and seams.
+        """
+        x, valid, nxt, W, T = rec.x, rec.valid, rec.nxt, rec.W, len(rec.x)
         play = np.flatnonzero(nxt)
         e_src = np.r_[play, src].astype(np.int64)
         e_dst = np.r_[play + 1, dst].astype(np.int64)
@@ -338,8 +432,24 @@ class VideoTexture:
                 f"the recording's frames do not join up into a loop ({int(alive.sum())} frames "
                 "would remain): record for longer, returning to the same rest pose now and then"
             )
+        return e_src, e_dst, e_seam
 
-        # the likelihood of each transition: KDE of poses at the seam x Markov chain x smoothness
+    def _transitions(
+        self,
+        rec: _Recording,
+        nearest: np.ndarray,
+        k: int,
+        e_src: np.ndarray,
+        e_dst: np.ndarray,
+        e_seam: np.ndarray,
+        say: Callable[[str], None],
+    ) -> None:
+        """The log-likelihood of each edge: KDE of poses at the seam x Markov chain between the
+        clusters x smoothness, minus the jump cost; the edges stored in CSR order.
+        """
+        c = self.config
+        x, valid, run, fps, alive = rec.x, rec.valid, rec.run, rec.fps, self.alive_
+        T, d = x.shape
         say("transition likelihood: KDE of poses in eigenspace, Markov chain between clusters")
         from sklearn.neighbors import KernelDensity
 
@@ -377,7 +487,19 @@ class VideoTexture:
         self.indptr_ = np.r_[0, np.cumsum(np.bincount(self.e_src_, minlength=T))].astype(np.int64)
         self.indices_ = self.e_dst_
 
-        # goals: every signal that occurs in the graph, and one subgraph per set of social signals
+    def _goals(
+        self,
+        rec: _Recording,
+        L: np.ndarray,
+        names: list[str],
+        state: np.ndarray,
+        required: Sequence[str],
+        say: Callable[[str], None],
+    ) -> None:
+        """Goals: every signal that occurs in the graph, and one subgraph per set of social signals
+        with a loop of its own; the graph distance of every frame to each.
+        """
+        W, T, alive = rec.W, len(rec.x), self.alive_
         self.labels_, self.names_ = L, names
         goals, targets = [], []
         for kk, nm in enumerate(names):
@@ -414,9 +536,6 @@ class VideoTexture:
             if targets
             else np.zeros((0, T), np.float32)
         )
-        self.frames = frames
-        self.reset()
-        return self
 
     @staticmethod
     def _distance_to(G: csr_matrix, target: np.ndarray) -> np.ndarray:

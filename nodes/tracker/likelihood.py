@@ -158,45 +158,67 @@ def pose_anchor_points(P: np.ndarray, dims: BodyDims) -> np.ndarray:
     return anchor_points(P, dims).astype(np.float32)
 
 
+@dataclass(frozen=True)
+class LikelihoodConfig:
+    """The sample points and weights of the observation model (Deutscher et al. 2000, eqs. 4-6).
+
+    Parameters
+    ----------
+    n_along, n_across : int
+        Interior grid of sample points per cone, along and across its axis (as
+        ``counterpart.body.raster.cone_interior_points``); default 4 x 3.
+    per_side : int
+        Outline sample points per long side of each cone (``cone_outline_points``); default 4.
+    w_sil, w_edge, w_cover : float
+        Weights of the silhouette cost S_r, the edge cost S_e and the coverage cost S_c (default 1).
+    gain : float
+        Overall scale of the cost: its sharpness before annealing (the APF's beta rescales it).
+    w_ground : float
+        Weight of the ground-contact cost ``S_g = min(1, (h / ground_sigma)^2)``, h the height
+        (metres) of the lowest sole above y = 0. One camera cannot see depth; a foot on the ground
+        plane fixes it (the image row of the foot and the calibrated camera give the distance).
+    ground_sigma : float
+        Width of the ground-contact cost, metres (default 0.05).
+    """
+
+    n_along: int = 4
+    n_across: int = 3
+    per_side: int = 4
+    w_sil: float = 1.0
+    w_edge: float = 1.0
+    w_cover: float = 1.0
+    gain: float = 1.0
+    w_ground: float = 1.0
+    ground_sigma: float = 0.05
+
+
 class ConeLikelihood:
     """Log-likelihood of N poses against one Observation (see the module docstring).
 
-    Args:
-        camera: the calibrated camera.
-        dims: body dimensions of the tracked person.
-        n_along, n_across: interior grid per cone (as ``counterpart.body.raster.cone_interior_points``).
-        per_side: outline points per long side of each cone (``cone_outline_points``).
-        w_sil, w_edge, w_cover: weights of S_r, S_e, S_c.
-        gain: overall scale of the cost (sharpness before annealing; the APF's beta rescales it).
-        w_ground, ground_sigma: weight and width (metres) of the ground-contact term
-            ``S_g = min(1, (h / ground_sigma)^2)``, h the height of the lowest sole above y = 0.
-            One camera cannot see depth; a foot on the ground plane fixes it (the image row of
-            the foot and the calibrated camera give the distance).
+    Parameters
+    ----------
+    camera : Camera
+        The calibrated camera.
+    dims : BodyDims
+        Body dimensions of the tracked person.
+    config : LikelihoodConfig
+        Sample points per cone and the weights of the costs.
     """
 
     def __init__(
-        self,
-        camera: Camera,
-        dims: BodyDims = DEFAULT_DIMS,
-        n_along: int = 4,
-        n_across: int = 3,
-        per_side: int = 4,
-        w_sil: float = 1.0,
-        w_edge: float = 1.0,
-        w_cover: float = 1.0,
-        gain: float = 1.0,
-        w_ground: float = 1.0,
-        ground_sigma: float = 0.05,
+        self, camera: Camera, dims: BodyDims = DEFAULT_DIMS, config: LikelihoodConfig = LikelihoodConfig()
     ) -> None:
         self.camera = camera
         self.dims = dims
+        self.config = config
         self.radii = dims.segment_radii().astype(np.float32)  # (S, 2)
-        self.w = (float(w_sil), float(w_edge), float(w_cover))
-        self.gain = float(gain)
-        self.w_ground = float(w_ground)
-        self.ground_sigma = float(ground_sigma)
+        self.w = (float(config.w_sil), float(config.w_edge), float(config.w_cover))
+        self.gain = float(config.gain)
+        self.w_ground = float(config.w_ground)
+        self.ground_sigma = float(config.ground_sigma)
         self.sole_offset = np.array([dims.ankle_height] * 2 + [dims.r_toe] * 2, np.float32)
         # (s, t) of each sample: s along the axis, t across in units of the half-width.
+        n_along, n_across, per_side = config.n_along, config.n_across, config.per_side
         s_in = np.repeat((np.arange(n_along) + 0.5) / n_along, n_across)
         t_in = np.tile((2 * np.arange(n_across) + 1) / n_across - 1.0, n_along)
         s_out = np.tile((np.arange(per_side) + 0.5) / per_side, 2)
@@ -363,16 +385,22 @@ class MultiViewLikelihood:
     With one camera it is ``ConeLikelihood`` itself. A second view sees the depth and the heading
     that one silhouette leaves open (a limb towards the camera, a person turned towards or away).
 
-    Args:
-        cameras: the calibrated cameras, the first one the reference view (initialisation, 2D).
-        dims: body dimensions of the tracked person; ``likelihood_kw`` go to every view's
-            :class:`ConeLikelihood`.
+    Parameters
+    ----------
+    cameras : sequence of Camera
+        The calibrated cameras, the first one the reference view (initialisation, 2D).
+    dims : BodyDims
+        Body dimensions of the tracked person.
+    config : LikelihoodConfig
+        Every view's sample points and weights (:class:`ConeLikelihood`).
     """
 
-    def __init__(self, cameras: Sequence[Camera], dims: BodyDims = DEFAULT_DIMS, **likelihood_kw) -> None:
+    def __init__(
+        self, cameras: Sequence[Camera], dims: BodyDims = DEFAULT_DIMS, config: LikelihoodConfig = LikelihoodConfig()
+    ) -> None:
         if not cameras:
             raise ValueError("MultiViewLikelihood needs at least one camera")
-        self.views = [ConeLikelihood(cam, dims, **likelihood_kw) for cam in cameras]
+        self.views = [ConeLikelihood(cam, dims, config) for cam in cameras]
         self.dims = dims
 
     def evaluate(self, P: np.ndarray, obs: Sequence[Observation]) -> tuple[np.ndarray, np.ndarray]:
@@ -404,6 +432,7 @@ __all__ = [
     "edge_map",
     "make_observation",
     "ConeLikelihood",
+    "LikelihoodConfig",
     "MultiViewLikelihood",
     "pose_anchor_points",
     "N_SEGMENTS",

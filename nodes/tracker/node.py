@@ -22,7 +22,7 @@ from counterpart.bus import Input, Node, Output, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .prior import resolve_prior
-from .tracker import SIDES, Tracker, people_problem
+from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
 
 def _check_prior(v: str) -> str | None:
@@ -139,13 +139,9 @@ class TrackerNode(Node):
                 tr.set_camera(camera)
             self.camera, self.trackers = camera, (self.trackers if same_view else {})
         if side not in self.trackers:
+            config = TrackerConfig(apf=APFConfig(n_layers=self.p["layers"], n_particles=self.p["particles"]))
             self.trackers[side] = Tracker(
-                camera,
-                side,
-                self.p["layers"],
-                self.p["particles"],
-                prior=self.prior,
-                seed=self.p["seed"] + SIDES.index(side),
+                camera, side, config, prior=self.prior, seed=self.p["seed"] + SIDES.index(side)
             )
         return self.trackers[side]
 

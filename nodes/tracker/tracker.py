@@ -1,22 +1,24 @@
 """The per-person tracker: observation model + annealed particle filter + motion prior.
 
-Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006):
+Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006), ``Tracker.update``'s steps:
 
 1. maps of the person's mask and the frame (``likelihood.make_observation``), one per camera when
    several calibrated cameras see the scene (``likelihood.MultiViewLikelihood`` sums their costs);
-2. no track yet, or the track was lost: particles around the silhouette's guess (``init``: placed
-   from the bounding box, neutral pose, heading from the side of the frame, spread by
-   ``init_spread`` x ``INIT_STD``) and a longer first search (``init_layers`` layers, diffusion
-   bounded by [init_min, init_max] x that spread);
-3. otherwise ``predict_fn`` = the prior (HMM mixture + random walk; widened by ``predict_scale``
-   for the annealed filter) and ``n_layers`` layers;
-4. the annealed density is the posterior: the image log-likelihood (with its ground-contact term),
-   the prior's pose density ``w_prior * log p(x)`` (``PriorPredictor.log_prior``) and a Gaussian
-   temporal term ``-w_temporal / 2 * mean(((x - c) / s)^2)``: around the previous estimate with
+2. no track yet, or the track was lost (``Tracker._first_search``): particles around the
+   silhouette's guess (``init``: placed from the bounding box, neutral pose, heading from the side
+   of the frame, spread by ``InitConfig.spread`` x ``INIT_STD``) and a longer first search
+   (``InitConfig.layers`` layers, diffusion bounded by [min_std, max_std] x that spread);
+3. otherwise (``Tracker._follow``) the prediction is the prior (HMM mixture + random walk; widened
+   by ``APFConfig.predict_scale`` for the annealed filter) and ``APFConfig.n_layers`` layers;
+4. the annealed density is the posterior (``Tracker._density``): the image log-likelihood (with
+   its ground-contact term), the prior's pose density ``w_prior * log p(x)``
+   (``PriorPredictor.log_prior``) and a Gaussian temporal term
+   ``-w_temporal / 2 * mean(((x - c) / s)^2)``: around the previous estimate with
    s = ``temporal_sigma`` x the random walk's std, or, on a track's first frame, around the
    silhouette's guess with s = its spread; it keeps the search out of the silhouette's
-   ambiguities (mirror-image limbs, depth, heading);
-5. the estimate (weighted mean of the last layer) updates the HMM posterior and the lost detector.
+   ambiguities (mirror-image limbs, depth, heading) (weights in ``PosteriorConfig``);
+5. the estimate (weighted mean of the last layer) updates the HMM posterior and the lost detector
+   (``Tracker._finish``).
 """
 
 from __future__ import annotations
@@ -30,9 +32,9 @@ from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
-from .apf import AnnealedParticleFilter, ParticleFilter
+from .apf import AnnealedParticleFilter, Estimate, LogLikelihood, ParticleFilter
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
-from .likelihood import MultiViewLikelihood, Observation, make_observation
+from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
 
@@ -87,97 +89,167 @@ def _per_camera(x: object, n: int) -> bool:
     return isinstance(x, (list, tuple)) and len(x) == n
 
 
+@dataclass(frozen=True)
+class APFConfig:
+    """The search of each frame of a running track: the annealed particle filter (``apf``).
+
+    Parameters
+    ----------
+    n_layers : int
+        Annealing layers M per frame (Deutscher et al. 2000: 10).
+    n_particles : int
+        Particles N per layer (Deutscher et al.: 256).
+    plain : bool
+        Use a plain particle filter of ``n_layers * n_particles`` particles instead (the baseline
+        of Deutscher et al.'s comparison).
+    predict_scale : float
+        The annealed filter's prediction widens the prior's random walk by this factor (Deutscher:
+        the first layer searches widest, the layers narrow it); the plain filter predicts with
+        the random walk itself.
+    diffusion : float
+        Diffusion std after each layer's resampling as a fraction of the particle set's spread per
+        DOF (Deutscher & Reid 2005).
+    min_std, max_std : float
+        Bounds of that std in multiples of the random walk's std per DOF (metres, radians).
+    shrink : float
+        Factor by which the diffusion shrinks per layer (1: it does not).
+    """
+
+    n_layers: int = 10
+    n_particles: int = 256
+    plain: bool = False
+    predict_scale: float = 3.0
+    diffusion: float = 0.5
+    min_std: float = 0.05
+    max_std: float = 3.0
+    shrink: float = 1.0
+
+
+@dataclass(frozen=True)
+class InitConfig:
+    """The first search of a track, from the silhouette's guess (``init.initial_particles``).
+
+    Parameters
+    ----------
+    layers : int
+        Annealing layers of the first search (longer than a running track's).
+    spread : float
+        Spread of the particles around the guess, in multiples of ``init.INIT_STD`` (metres,
+        radians); the same width sets the temporal term of the first frame.
+    min_std, max_std : float
+        Bounds of the first search's diffusion std in multiples of that spread.
+    """
+
+    layers: int = 20
+    spread: float = 0.5
+    min_std: float = 0.01
+    max_std: float = 1.0
+
+
+@dataclass(frozen=True)
+class PosteriorConfig:
+    """The terms the annealed density adds to the image log-likelihood (module docstring, step 4).
+
+    Parameters
+    ----------
+    w_temporal : float
+        Weight of the Gaussian temporal term ``-w_temporal / 2 * mean(((x - c) / s)^2)`` (0: off).
+    temporal_sigma : float
+        Its width s in multiples of the random walk's std per DOF.
+    w_prior : float
+        Weight of the motion prior's pose density ``w_prior * log p(x)``. At 1.0 the prior, fitted
+        to few training sequences, outweighed the image for poses it had seen little of (the
+        wave's raised arm); 0.5 was chosen on simulator seeds 5-8.
+    resid_std : float
+        Std (radians) of the joint angles off the prior's PCA subspace
+        (``PriorPredictor.log_prior``).
+    """
+
+    w_temporal: float = 1.0
+    temporal_sigma: float = 3.0
+    w_prior: float = 0.5
+    resid_std: float = 0.15
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Every setting of a :class:`Tracker`, grouped by job.
+
+    Parameters
+    ----------
+    apf : APFConfig
+        The search of each frame of a running track (annealed or plain particle filter).
+    init : InitConfig
+        The first search of a track from the silhouette's guess.
+    posterior : PosteriorConfig
+        The temporal and prior terms of the annealed density.
+    likelihood : LikelihoodConfig
+        The observation model's sample points and cost weights (``likelihood.ConeLikelihood``).
+    """
+
+    apf: APFConfig = APFConfig()
+    init: InitConfig = InitConfig()
+    posterior: PosteriorConfig = PosteriorConfig()
+    likelihood: LikelihoodConfig = LikelihoodConfig()
+
+
 class Tracker:
     """Tracks one person through frames + masks of one camera, or of several calibrated cameras.
 
-    Args:
-        camera: calibrated camera of the frames, or a sequence of cameras that see the same scene
-            at the same instants (``update`` then takes one frame and one mask per camera; the
-            first camera is the reference view: the track starts from its silhouette).
-        side: "left" / "right": the person's side of the frame (sets the initial heading).
-        n_layers, n_particles: annealing layers and particles per layer (Deutscher: 10 x 256).
-        prior: learned MotionPrior, or None for a plain random walk.
-        plain: use a plain particle filter of ``n_layers * n_particles`` particles instead (baseline).
-        w_temporal, temporal_sigma: weight and width (x the random walk's std) of the temporal term.
-        w_prior, resid_std: weight of the prior's pose density in the annealed density, and the
-            std (radians) of the joint angles off its PCA subspace (``PriorPredictor.log_prior``).
-            At 1.0 the prior, fitted to few training sequences, outweighed the image for poses
-            it had seen little of (the wave's raised arm); 0.5 gave 6-13 mm lower errors on
-            simulator seeds 5-8.
-        init_layers, init_spread: layers of the first search of a track and the spread of its
-            particles around the silhouette's guess (x ``init.INIT_STD``).
-        predict_scale: the annealed filter's prediction widens the random walk by this factor
-            (Deutscher: the first layer searches widest, the layers narrow it); the plain filter
-            predicts with the random walk itself.
-        apf_diffusion, apf_min, apf_max, apf_shrink: the annealed filter's diffusion: std =
-            ``apf_diffusion`` x the particle set's spread per DOF, clipped to [apf_min, apf_max] x
-            the random walk's std (the first search: [init_min, init_max] x its spread), x
-            ``apf_shrink`` per layer.
-        dims: body dimensions (default: scaled to the stature measured at initialisation).
-        seed: seed of all random numbers.
-        likelihood_kw: keyword arguments of ``ConeLikelihood``.
+    Parameters
+    ----------
+    camera : Camera or sequence of Camera
+        Calibrated camera of the frames, or cameras that see the same scene at the same instants
+        (``update`` then takes one frame and one mask per camera; the first camera is the
+        reference view: the track starts from its silhouette).
+    side : str
+        "left" / "right": the person's side of the frame (sets the initial heading).
+    config : TrackerConfig
+        The filter, first search, posterior and likelihood settings.
+    prior : MotionPrior or None
+        Learned motion prior, or None for a plain random walk.
+    dims : BodyDims or None
+        Body dimensions (default: scaled to the stature measured at initialisation).
+    seed : int
+        Seed of all random numbers.
     """
 
     def __init__(
         self,
         camera: Camera | Sequence[Camera],
         side: str = "left",
-        n_layers: int = 10,
-        n_particles: int = 256,
+        config: TrackerConfig = TrackerConfig(),
         prior: MotionPrior | None = None,
-        plain: bool = False,
-        w_temporal: float = 1.0,
-        temporal_sigma: float = 3.0,
-        w_prior: float = 0.5,
-        resid_std: float = 0.15,
-        init_layers: int = 20,
-        init_spread: float = 0.5,
-        predict_scale: float = 3.0,
-        apf_diffusion: float = 0.5,
-        apf_min: float = 0.05,
-        apf_max: float = 3.0,
-        apf_shrink: float = 1.0,
-        init_min: float = 0.01,
-        init_max: float = 1.0,
         dims: BodyDims | None = None,
         seed: int = 0,
-        likelihood_kw: dict | None = None,
     ) -> None:
         self.cameras = [camera] if isinstance(camera, Camera) else list(camera)
         if not self.cameras or not all(isinstance(c, Camera) for c in self.cameras):
             raise ValueError(f"camera={camera!r}: expected a Camera or a non-empty sequence of Cameras")
+        if not isinstance(config, TrackerConfig):
+            raise TypeError(f"config={config!r}: expected a TrackerConfig (e.g. TrackerConfig(apf=APFConfig(...)))")
         self.camera = self.cameras[0]
         self.side = side
-        self.n_layers = int(n_layers)
-        self.n_particles = int(n_particles)
-        self.plain = bool(plain)
+        self.config = config
         self.rng = np.random.default_rng(seed)
         self.predictor: PriorPredictor | _RandomWalk = (
             prior.predictor() if prior is not None else _RandomWalk(RW_FLOOR * 3.0)
         )
-        self.w_temporal = float(w_temporal)
-        self.temporal_sigma = float(temporal_sigma)
-        self.w_prior = float(w_prior)
-        self.resid_std = float(resid_std)
-        self.init_layers = int(init_layers)
-        self.init_spread = float(init_spread)
-        self.predict_scale = float(predict_scale)
-        self.init_min, self.init_max = float(init_min), float(init_max)
         self.fixed_dims = dims
         self.dims: BodyDims = dims or DEFAULT_DIMS
-        self.likelihood_kw = dict(likelihood_kw or {})
-        self.likelihood = MultiViewLikelihood(self.cameras, self.dims, **self.likelihood_kw)
+        self.likelihood = self._likelihood()
+        apf = config.apf
         self.filter = (
-            ParticleFilter(self.n_layers * self.n_particles, seed=self.rng)
-            if self.plain
+            ParticleFilter(int(apf.n_layers) * int(apf.n_particles), seed=self.rng)
+            if apf.plain
             else AnnealedParticleFilter(
-                self.n_layers,
-                self.n_particles,
+                int(apf.n_layers),
+                int(apf.n_particles),
                 seed=self.rng,
-                max_std=self.predictor.std * apf_max,
-                diffusion=apf_diffusion,
-                min_std=self.predictor.std * apf_min,
-                shrink=apf_shrink,
+                max_std=self.predictor.std * apf.max_std,
+                diffusion=apf.diffusion,
+                min_std=self.predictor.std * apf.min_std,
+                shrink=apf.shrink,
             )
         )
         self.lost_detector = LostDetector()
@@ -188,12 +260,16 @@ class Tracker:
     def tracking(self) -> bool:
         return self.prev is not None
 
+    def _likelihood(self) -> MultiViewLikelihood:
+        """The observation model of the current cameras and body dimensions."""
+        return MultiViewLikelihood(self.cameras, self.dims, self.config.likelihood)
+
     def set_camera(self, camera: Camera) -> None:
         """A refined calibration of the same single view (the calibration node's estimate moving by
         small steps): the track goes on, projected with the new camera from the next frame.
         """
         self.cameras, self.camera = [camera], camera
-        self.likelihood = MultiViewLikelihood(self.cameras, self.dims, **self.likelihood_kw)
+        self.likelihood = self._likelihood()
 
     def reset(self) -> None:
         """Forget the track; the next frame with a person re-initialises it."""
@@ -206,18 +282,20 @@ class Tracker:
         ``centre`` with its uncertainty ``sig``: the heading and depth barely show in one
         silhouette, so without it the first search wanders along them.
         """
+        post = self.config.posterior
         centre = self.prev if centre is None else centre
-        if centre is None or not self.w_temporal:
+        if centre is None or not post.w_temporal:
             return np.zeros(len(X))
-        sig = self.temporal_sigma * self.predictor.std if sig is None else sig
+        sig = post.temporal_sigma * self.predictor.std if sig is None else sig
         d = (X - centre) / sig
         d[:, YAW] = wrap_angle(X[:, YAW] - centre[YAW]) / sig[YAW]
-        return -0.5 * self.w_temporal * (d * d).mean(axis=1)
+        return -0.5 * post.w_temporal * (d * d).mean(axis=1)
 
     def _pose_prior(self, X: np.ndarray) -> np.ndarray:
-        if not self.w_prior or not hasattr(self.predictor, "log_prior"):
+        post = self.config.posterior
+        if not post.w_prior or not hasattr(self.predictor, "log_prior"):
             return np.zeros(len(X))
-        return self.w_prior * self.predictor.log_prior(X, self.resid_std)
+        return post.w_prior * self.predictor.log_prior(X, post.resid_std)
 
     def _observations(
         self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
@@ -242,40 +320,73 @@ class Tracker:
     def update(
         self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
     ) -> TrackResult | None:
-        """Track one frame. ``image`` (H, W[, 3]) uint8 or None; ``mask`` (H, W) bool of this
-        person; with several cameras, lists of them in the cameras' order. Returns None (and keeps
-        the track) when the reference view's mask is empty; another view with an empty mask (the
-        person out of its sight) is left out of this frame's likelihood.
+        """Track one frame (the steps of the module docstring).
+
+        Parameters
+        ----------
+        image : (H, W[, 3]) uint8 or None
+            The frame; with several cameras, a list of them in the cameras' order.
+        mask : (H, W) bool
+            This person's mask; with several cameras, a list of them in the cameras' order.
+
+        Returns
+        -------
+        TrackResult or None
+            None (the track kept) when the reference view's mask is empty; another view with an
+            empty mask (the person out of its sight) is left out of this frame's likelihood.
         """
         obs = self._observations(image, mask)
         if obs[0].empty:
             return None
         start = not self.tracking
-        if start:
-            ref_mask = mask[0] if _per_camera(mask, len(self.cameras)) else mask
-            bbox = bbox_from_mask(np.asarray(ref_mask, bool))
-            P0, dims = initial_particles(
-                bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=self.init_spread
-            )
-            if self.fixed_dims is None:
-                self.dims = dims
-                self.likelihood = MultiViewLikelihood(self.cameras, dims, **self.likelihood_kw)
-            self.filter.initialise(P0)
-            self.predictor.reset()
+        est = self._first_search(obs, mask) if start else self._follow(obs)
+        return self._finish(est, obs, start)
 
-        guess = P0[0] if start else None
-        wide = INIT_STD * self.init_spread if start else None
+    def _density(
+        self, obs: list[Observation], centre: np.ndarray | None = None, sig: np.ndarray | None = None
+    ) -> LogLikelihood:
+        """The annealed density of this frame: (N, 28) poses -> (N,) image log-likelihood + the
+        temporal term (around ``centre`` with width ``sig`` on a first frame, else around the
+        previous estimate) + the prior's pose density.
+        """
 
         def loglik(X: np.ndarray) -> np.ndarray:
-            return self.likelihood(X, obs) + self._temporal(X, guess, wide) + self._pose_prior(X)
+            return self.likelihood(X, obs) + self._temporal(X, centre, sig) + self._pose_prior(X)
 
-        if start:
-            est = self.filter.step(
-                loglik, None, n_layers=self.init_layers, min_std=self.init_min * wide, max_std=self.init_max * wide
-            )
-        else:
-            scale = 1.0 if self.plain else self.predict_scale
-            est = self.filter.step(loglik, lambda P, rng: self.predictor(P, rng, scale=scale))
+        return loglik
+
+    def _first_search(self, obs: list[Observation], mask: np.ndarray | Sequence[np.ndarray]) -> Estimate:
+        """Start a track: particles around the reference view's silhouette guess (the body scaled
+        to its stature unless ``dims`` was given), searched with the first search's longer schedule.
+        """
+        ref_mask = mask[0] if _per_camera(mask, len(self.cameras)) else mask
+        bbox = bbox_from_mask(np.asarray(ref_mask, bool))
+        init = self.config.init
+        P0, dims = initial_particles(
+            bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=init.spread
+        )
+        if self.fixed_dims is None:
+            self.dims = dims
+            self.likelihood = self._likelihood()
+        self.filter.initialise(P0)
+        self.predictor.reset()
+        wide = INIT_STD * init.spread
+        return self.filter.step(
+            self._density(obs, P0[0], wide),
+            None,
+            n_layers=init.layers,
+            min_std=init.min_std * wide,
+            max_std=init.max_std * wide,
+        )
+
+    def _follow(self, obs: list[Observation]) -> Estimate:
+        """Go on with a running track: predict with the prior, then search."""
+        apf = self.config.apf
+        scale = 1.0 if apf.plain else apf.predict_scale
+        return self.filter.step(self._density(obs), lambda P, rng: self.predictor(P, rng, scale=scale))
+
+    def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
+        """Score the estimate's best particle, update the prior's posterior and the lost detector."""
         terms, ground = self.likelihood.evaluate(est.best[None], obs)
         cost = float(terms.sum()) / sum(not o.empty for o in obs)  # per view seen: 0 best, 3 worst
         image_ll = float(self.likelihood.combine(terms, ground)[0])
@@ -310,7 +421,8 @@ def track_sequence(
         frames: T images (H, W[, 3]) uint8, or None entries for mask-only tracking; with several
             cameras each entry is a list of one image (or None) per camera.
         masks: T (H, W) bool masks of the person (several cameras: T lists of one per camera).
-        camera: the camera, or the cameras; ``side`` and ``tracker_kw`` go to :class:`Tracker`.
+        camera: the camera, or the cameras; ``side`` and ``tracker_kw`` (``config``, ``prior``,
+            ``dims``, ``seed``) go to :class:`Tracker`.
 
     Returns
     -------
@@ -343,4 +455,15 @@ def track_sequence(
     }
 
 
-__all__ = ["Tracker", "TrackResult", "track_sequence", "SIDES", "people_problem"]
+__all__ = [
+    "Tracker",
+    "TrackerConfig",
+    "APFConfig",
+    "InitConfig",
+    "PosteriorConfig",
+    "LikelihoodConfig",
+    "TrackResult",
+    "track_sequence",
+    "SIDES",
+    "people_problem",
+]

@@ -1,0 +1,167 @@
+"""The dual HMM's placement correction: a regression forest over causal features of each frame.
+
+While the two people are still walking up or standing, the interaction, and with it where the
+partner stands (a wave's partner 2.5 m away, a push's 1.3 m and walking in), is ambiguous; the
+tracked placement then mixes the labels' placements in the proportions of the tempered posterior,
+which is not calibrated for this. A regression forest (extremely randomised trees, scikit-learn)
+learns the error of the placement (true minus generated ground position x, z, metres) from the
+features of :class:`CorrectionFeatures`; its prediction is added to the placement. The model fits
+it by cross-fitting (:func:`deal_folds`): models fitted without one fold of the training sequences
+are run online on that fold, so that the errors learnt are those of unseen sequences. Online, the
+fitted forest is walked as plain arrays (:class:`ForestArrays`), all trees together.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+#: the observed person's motion summaries in the features: seconds since the sequence started,
+#: mean ground speed over the last frames, its maximum so far (m/s), the ground path walked so far
+#: (m); capped where longer histories tell nothing more about the approach
+_T_CAP_S, _PATH_CAP_M, _SPEED_FRAMES = 6.0, 2.0, 5
+
+
+class ForestArrays:
+    """A fitted regression forest (scikit-learn's tree arrays, padded to one width) as plain arrays.
+
+    Parameters
+    ----------
+    feature, threshold, left, right : (n_trees, n_nodes) arrays
+        Split feature index, threshold, child nodes (-1 at a leaf). A sample goes left where
+        x[feature] <= threshold.
+    value : (n_trees, n_nodes, n_out) array
+        The node means; the prediction is the mean over trees of the leaf values.
+    """
+
+    def __init__(
+        self, feature: np.ndarray, threshold: np.ndarray, left: np.ndarray, right: np.ndarray, value: np.ndarray
+    ) -> None:
+        self.feature, self.threshold = np.asarray(feature, np.intp), np.asarray(threshold, np.float64)
+        self.left, self.right, self.value = np.asarray(left, np.intp), np.asarray(right, np.intp), np.asarray(value)
+        self._rows = np.arange(len(self.feature))
+
+    @classmethod
+    def from_sklearn(cls, forest: Any) -> ForestArrays:
+        """A fitted scikit-learn forest regressor (``estimators_`` of trees) -> its arrays."""
+        trees = [e.tree_ for e in forest.estimators_]
+        n, d = max(t.node_count for t in trees), trees[0].value.shape[1]
+        F, L, R = (
+            np.zeros((len(trees), n), np.int32),
+            np.full((len(trees), n), -1, np.int32),
+            np.full((len(trees), n), -1, np.int32),
+        )
+        th, V = np.zeros((len(trees), n)), np.zeros((len(trees), n, d))
+        for i, t in enumerate(trees):
+            k = t.node_count
+            F[i, :k], th[i, :k] = np.maximum(t.feature, 0), t.threshold
+            L[i, :k], R[i, :k], V[i, :k] = t.children_left, t.children_right, t.value[:, :, 0]
+        return cls(F, th, L, R, V)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of a model file (``feature``, ``threshold``, ``left``, ``right``, ``value``)."""
+        return {
+            "feature": self.feature.astype(np.int32),
+            "threshold": self.threshold,
+            "left": self.left.astype(np.int32),
+            "right": self.right.astype(np.int32),
+            "value": self.value,
+        }
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        """(d,) features -> (n_out,) the forest's mean prediction; all trees walked together."""
+        # scikit-learn splits on float32 features: compare the same rounded values
+        x = np.asarray(x, np.float32).astype(np.float64)
+        idx = np.zeros(len(self._rows), np.intp)
+        while True:
+            left = self.left[self._rows, idx]
+            inner = left >= 0
+            if not inner.any():
+                return self.value[self._rows, idx].mean(0)
+            go_left = x[self.feature[self._rows, idx]] <= self.threshold[self._rows, idx]
+            idx = np.where(inner, np.where(go_left, left, self.right[self._rows, idx]), idx)
+
+
+def fit_forest(X: np.ndarray, Y: np.ndarray, trees: int, leaf: int, random_state: int) -> ForestArrays:
+    """Extremely randomised trees (``trees`` of them, leaves of at least ``leaf`` frames) fitted to
+    features X (F, d) and placement errors Y (F, 2) metres.
+    """
+    from sklearn.ensemble import ExtraTreesRegressor
+
+    forest = ExtraTreesRegressor(trees, min_samples_leaf=leaf, max_features=1.0, random_state=random_state)
+    return ForestArrays.from_sklearn(forest.fit(X, Y))
+
+
+def deal_folds(labels: Sequence[str], folds: int) -> np.ndarray:
+    """(S,) fold of each training sequence: each label's sequences dealt round the folds in turn."""
+    labels = np.asarray(labels)
+    fold = np.zeros(len(labels), int)
+    for g in np.unique(labels):
+        idx = np.flatnonzero(labels == g)
+        fold[idx] = np.arange(len(idx)) % folds
+    return fold
+
+
+class CorrectionFeatures:
+    """The correction's features of each frame of a sequence, (2 + 3 L + 4,) for L labels.
+
+    Parameters
+    ----------
+    label_member : (L, N) array
+        1 where state k belongs to label l, else 0 (fixed per model).
+    fps : float
+        Frames per second of the sequence.
+
+    Features: the placement; the posterior mass of each label's states; the seconds since the
+    sequence started, the observed ground speed averaged over the last frames, its maximum so far
+    and the path walked (capped); each label's posterior-weighted conditional distance z (metres; 0
+    where the label has no mass) and its difference to the placement's. While the interaction is
+    unclear the tracked placement mixes the labels' placements in the proportions of a tempered
+    posterior; these let the correction reweigh them by how far into the sequence, and how far and
+    fast the observed person has come.
+    """
+
+    def __init__(self, label_member: np.ndarray, fps: float) -> None:
+        self.label_member, self.fps = label_member, float(fps)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the sequence's motion: frames, last ground speeds (m/s), fastest smoothed speed
+        (m/s), path walked (m).
+        """
+        self._n_seen, self._speeds, self._top_speed, self._path = 0, [], 0.0, 0.0
+
+    def __call__(self, pos: np.ndarray, z_k: np.ndarray, posterior: np.ndarray, speed: float) -> np.ndarray:
+        """The features of this frame.
+
+        Parameters
+        ----------
+        pos : (2,) array
+            The model's placement (x, z, observed frame, metres).
+        z_k : (N,) array
+            Each state's conditional distance z (metres, observed frame).
+        posterior : (N,) array
+            The state posterior.
+        speed : float
+            The observed person's ground speed, m/s.
+        """
+        self._n_seen += 1
+        self._speeds = (self._speeds + [speed])[-_SPEED_FRAMES:]
+        mean_speed = float(np.mean(self._speeds))
+        self._top_speed = max(self._top_speed, mean_speed)
+        self._path += speed / self.fps
+        member = self.label_member
+        mass = member @ posterior
+        z_l = (member @ (posterior * z_k)) / np.maximum(mass, 1e-12)
+        motion = [
+            min((self._n_seen - 1) / self.fps, _T_CAP_S),
+            mean_speed,
+            self._top_speed,
+            min(self._path, _PATH_CAP_M),
+        ]
+        return np.concatenate([pos, mass, motion, z_l, z_l - pos[1]])
+
+
+__all__ = ["ForestArrays", "CorrectionFeatures", "fit_forest", "deal_folds"]
