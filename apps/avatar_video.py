@@ -169,7 +169,9 @@ def video_recording(
         from concurrent.futures import ProcessPoolExecutor
 
         say(f"cutting the masks out in {n} processes, one part of the video each")
-        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
+        # forkserver, not fork: a fork of a process whose OpenCV or BLAS threads hold a lock can hang
+        # its workers forever (seen once in the test suite, which runs after other OpenCV work)
+        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("forkserver")) as pool:
             futures = [
                 pool.submit(_masks_part, p, bounds[k], bounds[k + 1], train_frames, False, f" part {k + 1}/{n}", True)
                 for k in range(n)
