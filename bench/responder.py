@@ -101,7 +101,7 @@ def timing_error(obs: np.ndarray, par: np.ndarray, pred: np.ndarray, fps: float)
 
 def gpdm_figures(test: list, hmm: object, em: object, quick: bool) -> dict[str, float]:
     """The gpdm block of the output (module docstring)."""
-    from counterpart.nodes.responder.emotion import EMOTIONS
+    from counterpart.messages import EMOTIONS
     from sklearn.ensemble import RandomForestClassifier
 
     out: dict[str, float] = {}

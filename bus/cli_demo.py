@@ -21,12 +21,14 @@ import logging
 import sys
 from pathlib import Path
 
+from counterpart.messages import INTERACTION_MODELS
+
 from .run_summary import RunSummary, read_stats, stats_json, stats_table, summarise
 
-#: the responder's models offered on the live page, built before the graph starts
+#: the responder's models built before the graph starts (the emotion model styles the others)
 RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
-#: offered on the live page only (``--serve``): the default video-texture avatar is built then
-SERVE_MODELS = ("video-texture",)
+#: the rest of what the live page offers (``--serve``: every interaction model of the contract)
+SERVE_MODELS = tuple(m for m in INTERACTION_MODELS if m not in RESPONDER_MODELS)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -302,7 +302,13 @@ def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
         dec = _DECODERS[cls] = compile_decoder(cls)
     arrays = _arrays(header.get("a", _NO_ARRAYS), parts[1:], limits, cls)
     counter = header.get("n")
-    return dec(header["f"], arrays), counter if type(counter) is int else None
+    try:
+        msg = dec(header["f"], arrays)
+    except DecodeError:
+        raise
+    except ValueError as exc:  # a class's own check of its values (__post_init__), e.g. a name outside the contract
+        raise DecodeError("bad_field", f"{header['s']}: {exc}") from None
+    return msg, counter if type(counter) is int else None
 
 
 def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[str, Any]:

@@ -29,7 +29,8 @@ from typing import Any
 
 import cv2
 import numpy as np
-from counterpart.sim.scenarios import EMOTIONS, SCENARIOS
+from counterpart.messages import EMOTIONS
+from counterpart.sim.scenarios import SCENARIOS
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
