@@ -49,19 +49,12 @@ MAX_SEND_RATE = 1_000_000
 ZERO_COPY_MIN = 262144
 
 
-_SNDMORE = zmq.SNDMORE
-_socket_send = zmq.backend.Socket.send  # pyzmq's frame send, without the Python layer of zmq.Socket
-
-
 def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags: int) -> None:
-    """``[topic, *parts]`` as one multipart message, like ``send_multipart(copy=False)``: pyzmq
-    copies each part below the socket's ``copy_threshold`` and sends larger ones zero-copy. ZeroMQ
-    queues a multipart message whole or not at all (zmq.Again comes from the first part).
+    """``[topic, *parts]`` as one multipart message: pyzmq copies each part below the socket's
+    ``copy_threshold`` and sends larger ones zero-copy. ZeroMQ queues a multipart message whole or
+    not at all (zmq.Again comes from the first part).
     """
-    _socket_send(sock, topic, flags | _SNDMORE, False)
-    last = len(parts) - 1
-    for i, part in enumerate(parts):
-        _socket_send(sock, part, flags if i == last else flags | _SNDMORE, False)
+    sock.send_multipart([topic, *parts], flags, copy=False)
 
 
 class Publisher:
