@@ -69,6 +69,8 @@ class DecodeError(ValueError):
 
 
 _SCALARS = (bool, int, float, str, bytes, type(None))
+#: an ext value (array reference) as the header unpacker returns it: plain, fast path
+_EXT_TYPES = (msgpack.ExtType, slice)
 
 
 def array_ref(index: int) -> msgpack.ExtType:
@@ -178,7 +180,7 @@ def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
         if size <= limits.max_container_len:
             # msgpack bounds every string and container by the buffer's own length when no limit is
             # given, which is within ours here: the plain call is the cheaper one
-            header = msgpack.unpackb(buf, max_ext_len=16)
+            header = fastpath.unpack_header(buf) if FAST else msgpack.unpackb(buf, max_ext_len=16)
         else:
             n = limits.max_container_len
             header = msgpack.unpackb(
@@ -190,6 +192,7 @@ def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
                 max_array_len=n,
                 max_map_len=n,
                 max_ext_len=16,
+                ext_hook=slice if FAST else msgpack.ExtType,  # as fastpath.unpack_header
             )
     except Exception as exc:  # msgpack raises several unrelated types on garbage
         raise DecodeError("malformed", f"header is not valid msgpack ({type(exc).__name__}: {exc})") from None
@@ -311,7 +314,8 @@ def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
     if dec is None:
         plain = functools.partial(build_plain, cls)
         flat = FAST and fastpath.is_flat(cls)
-        dec = _DECODERS[cls] = fastpath.flat_decoder(cls, plain, array_ref) if flat else plain
+        ref = functools.partial(fastpath.unpacked_ref, ARRAY_EXT)
+        dec = _DECODERS[cls] = fastpath.flat_decoder(cls, plain, ref) if flat else plain
     arrays = _arrays(header.get("a", _NO_ARRAYS), parts[1:], limits, cls)
     counter = header.get("n")
     try:
@@ -471,7 +475,7 @@ def _check(value: Any, tp: Any, arrays: list[np.ndarray], where: str) -> Any:
 
 
 def _resolve_any(value: Any, arrays: list[np.ndarray]) -> Any:
-    if type(value) is msgpack.ExtType:
+    if type(value) in _EXT_TYPES:
         return _array(value, arrays, "<any>")
     if isinstance(value, list):
         return [_resolve_any(v, arrays) for v in value]
@@ -484,15 +488,21 @@ def array_index(value: Any) -> int | None:
     """The buffer index of an array reference in a header from :func:`read_header`; None when
     ``value`` is anything else.
     """
-    if type(value) is msgpack.ExtType and value.code == ARRAY_EXT and len(value.data) == 4:
-        return int.from_bytes(value.data, "little")
+    if type(value) is msgpack.ExtType:
+        code, data = value
+    elif type(value) is slice:  # as the fast path unpacks it (fastpath.unpack_header)
+        code, data = value.start, value.stop
+    else:
+        return None
+    if code == ARRAY_EXT and type(data) is bytes and len(data) == 4:
+        return int.from_bytes(data, "little")
     return None
 
 
 def _array(value: Any, arrays: list[np.ndarray], where: str) -> np.ndarray:
     idx = array_index(value)
     if idx is None:
-        kind = "ext value" if type(value) is msgpack.ExtType else type(value).__name__
+        kind = "ext value" if type(value) in _EXT_TYPES else type(value).__name__
         raise DecodeError("bad_field", f"{where}: expected an array reference, got {kind}")
     if idx >= len(arrays):
         raise DecodeError("bad_array", f"{where}: array reference {idx} out of range")

@@ -12,15 +12,21 @@ function it stands for:
 - :func:`flat_decoder` (for ``codec.build_plain``): reads every field in one ``itemgetter`` call
   and accepts the values when each has exactly its declared type; anything else (a missing field,
   an ``int`` for a ``float``, a bad value) goes to the plain builder, which converts it or raises
-  the same error.
+  the same error. The frozen instance is filled through its ``__dict__``, as the dataclass's own
+  ``__init__`` would fill it, without its call per field (a class with ``__post_init__``, which
+  checks its values, is made by its constructor).
+- :func:`unpack_header` (for ``msgpack.unpackb``): ext values (the array references) come back as
+  ``slice(code, data)``: the builtin keeps both without running Python code, where msgpack's
+  ``ExtType`` runs a Python constructor per reference. ``codec.array_index`` reads either.
 - :class:`HeaderPacker` (for ``msgpack.packb``): one reusable ``msgpack.Packer`` per thread.
 
 The trade: three small functions to keep equal to the plain ones (``tests/test_codec_paths.py``
 checks bytes and objects of every registered message type through both), against the time they
 save on every message a node sends and receives. ``bench/bus_latency.py`` measures it end to end,
-fast against plain against raw pyzmq, as ``codec_fast_vs_plain_*``; what did not pay there (code
-generated with ``exec``, frozen instances filled through ``__dict__``, a private pyzmq send) is
-gone. This module imports nothing of the codec: the plain functions are handed in.
+fast against plain against raw pyzmq, as ``codec_fast_vs_plain_*`` (below 1: the fast path pays).
+Code generated with ``exec`` is gone: these closures do its work. So is pyzmq's private frame send
+(``zmq.backend.Socket.send``), which saved a few per cent of a one-way latency over
+``send_multipart`` in the bench: too little for an API pyzmq does not promise to keep. This module imports nothing of the codec: the plain functions are handed in.
 """
 
 from __future__ import annotations
@@ -57,6 +63,16 @@ class HeaderPacker(threading.local):
 
 
 pack_header = HeaderPacker()
+
+
+def unpack_header(buf: memoryview) -> Any:
+    """``msgpack.unpackb(buf, max_ext_len=16)`` with ext values as ``slice(code, data)``."""
+    return msgpack.unpackb(buf, max_ext_len=16, ext_hook=slice)
+
+
+def unpacked_ref(code: int, index: int) -> slice:
+    """Array reference ``index`` (ext ``code``) as :func:`unpack_header` returns it."""
+    return slice(code, index.to_bytes(4, "little"))
 
 
 def is_flat(cls: type) -> bool:
@@ -146,6 +162,8 @@ def flat_decoder(cls: type, plain: Decoder, array_ref: Callable[[int], Any]) -> 
     scalar_types = tuple(hints[names[i]] for i in at_scalar)
     refs = tuple(array_ref(k) for k in range(len(at_array)))
     get = _getter(itemgetter(*names), len(names))
+    checked = hasattr(cls, "__post_init__")
+    new = object.__new__
 
     def decode(fields: dict[str, Any], arrays: list[np.ndarray]) -> Any:
         try:
@@ -158,9 +176,22 @@ def flat_decoder(cls: type, plain: Decoder, array_ref: Callable[[int], Any]) -> 
             if values[i] != refs[k]:
                 return plain(fields, arrays)
             values[i] = arrays[k]
-        return cls(**dict(zip(names, values)))
+        if checked:
+            return cls(**dict(zip(names, values)))
+        obj = new(cls)
+        obj.__dict__.update(zip(names, values))
+        return obj
 
     return decode
 
 
-__all__ = ["flat_encoder", "flat_decoder", "is_flat", "pack_header", "HeaderPacker", "FLAT_SCALARS"]
+__all__ = [
+    "flat_encoder",
+    "flat_decoder",
+    "is_flat",
+    "pack_header",
+    "unpack_header",
+    "unpacked_ref",
+    "HeaderPacker",
+    "FLAT_SCALARS",
+]

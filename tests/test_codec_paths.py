@@ -137,3 +137,15 @@ def test_the_plain_path_alone_carries_a_message(plain: None) -> None:
     msg = Partner(seq=3, model="listener", joints=np.ones((14, 3), np.float32), speaker="partner", interest=1)
     assert encode(msg)[0] == codec.encode_plain(msg)[0]
     assert same(decode([bytes(p) for p in encode(msg)]), msg)
+
+
+def test_an_array_reference_reads_the_same_as_either_path_unpacks_it() -> None:
+    from counterpart.messages import fastpath
+
+    head = codec.encode_plain(Frame(image=np.zeros((2, 2), np.uint8)))[0]
+    plain = msgpack.unpackb(head)["f"]["image"]
+    fast = fastpath.unpack_header(memoryview(head))["f"]["image"]
+    assert type(plain) is msgpack.ExtType and type(fast) is slice
+    assert codec.array_index(plain) == codec.array_index(fast) == 0
+    assert fast == fastpath.unpacked_ref(codec.ARRAY_EXT, 0)
+    assert codec.array_index(slice(2, b"\0\0\0\0")) is None and codec.array_index("x") is None
