@@ -17,6 +17,9 @@ import numpy as np
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.messages import EMOTIONS, INTEREST_LEVELS
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "offline: generate the partner for one person's trajectory"
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--model", required=True, help="model file, or default:dual-hmm / default:listener")
@@ -47,7 +50,7 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
 
 
 def main(args: argparse.Namespace) -> int:
-    from .models import load_default, load_model
+    from counterpart.nodes.responder.models import load_default, load_model
 
     try:
         if args.model.startswith("default:"):
