@@ -20,13 +20,14 @@ function it stands for:
   ``ExtType`` runs a Python constructor per reference. ``codec.array_index`` reads either.
 - :class:`HeaderPacker` (for ``msgpack.packb``): one reusable ``msgpack.Packer`` per thread.
 
-The trade: three small functions to keep equal to the plain ones (``tests/test_codec_paths.py``
-checks bytes and objects of every registered message type through both), against the time they
-save on every message a node sends and receives. ``bench/bus_latency.py`` measures it end to end,
-fast against plain against raw pyzmq, as ``codec_fast_vs_plain_*`` (below 1: the fast path pays).
+The trade: four small pieces to keep equal to the plain ones (``tests/test_codec_paths.py`` checks
+bytes and objects of every registered message type through both), against the time they save on
+every message a node sends and receives. ``bench/bus_latency.py`` measures it end to end, fast
+against plain against raw pyzmq, as ``codec_fast_vs_plain_*`` (below 1: the fast path pays).
 Code generated with ``exec`` is gone: these closures do its work. So is pyzmq's private frame send
 (``zmq.backend.Socket.send``), which saved a few per cent of a one-way latency over
-``send_multipart`` in the bench: too little for an API pyzmq does not promise to keep. This module imports nothing of the codec: the plain functions are handed in.
+``send_multipart`` in the bench: too little for an API pyzmq does not promise to keep. This module
+imports nothing of the codec: the plain functions are handed in.
 """
 
 from __future__ import annotations
