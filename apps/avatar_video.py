@@ -78,7 +78,7 @@ def _masks_part(
     OpenCV on one thread (in a worker process: the processes are the parallelism, and OpenCV's own
     threads on top cost a fifth more CPU on a busy machine).
     """
-    from counterpart.bus.cli_offline import FrameProgress
+    from counterpart.apps.offline import FrameProgress
 
     if one_thread:
         cv2.setNumThreads(1)

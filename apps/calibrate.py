@@ -14,22 +14,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
+from counterpart.apps.offline import FrameProgress, add_video_arguments, positive, run_offline
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "offline: the camera of a video file, estimated from the people in it"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("video", help="the video file (anything OpenCV decodes)")
-    p.add_argument("--out", required=True, help="output calibration file (.yaml or .json)")
-    p.add_argument("--max-frames", type=int, default=None, help="use at most this many frames (default: all)")
-    p.add_argument(
-        "--train-frames",
-        type=int,
-        default=30,
-        help="first frames the background model is fitted on (people may be in view)",
-    )
+    add_video_arguments(p, "output calibration file (.yaml or .json)", "use at most this many frames (default: all)")
     p.add_argument(
         "--person-height",
         type=float,

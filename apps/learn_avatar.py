@@ -15,7 +15,7 @@ import sys
 import time
 from typing import Any
 
-from counterpart.bus.cli_offline import run_offline
+from counterpart.apps.offline import run_offline
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "a video-texture avatar from a recording of a person"

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
+from counterpart.apps.offline import FrameProgress, add_video_arguments, positive, run_offline
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 
 #: the one-line help of this command in `counterpart --help`
@@ -20,16 +20,8 @@ HELP = "offline: the people's silhouettes of a video file"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("video", help="the video file (anything OpenCV decodes)")
-    p.add_argument("--out", required=True, help="output .npz (one row per person and frame)")
+    add_video_arguments(p, "output .npz (one row per person and frame)", "process at most this many frames")
     p.add_argument("--backend", default="horprasert", choices=BACKEND_NAMES, help="background subtractor")
-    p.add_argument(
-        "--train-frames",
-        type=int,
-        default=30,
-        help="first frames the background model is fitted on (people may be in view)",
-    )
-    p.add_argument("--max-frames", type=int, default=None, help="process at most this many frames")
     p.add_argument(
         "--min-area",
         type=int,

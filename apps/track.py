@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from counterpart.apps.offline import FrameProgress, add_video_arguments, positive, run_offline
 from counterpart.body.camera import Camera, load_camera_file
-from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 from counterpart.nodes.tracker.prior import resolve_prior
 from counterpart.nodes.tracker.tracker import SIDES
@@ -22,8 +22,7 @@ HELP = "offline: the 3D body of the people of a video file"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("video", help="the video file (anything OpenCV decodes)")
-    p.add_argument("--out", required=True, help="output .npz (joints, poses, ess, ... per frame and side)")
+    add_video_arguments(p, "output .npz (joints, poses, ess, ... per frame and side)", "track at most this many frames")
     p.add_argument(
         "--people",
         nargs="+",
@@ -45,13 +44,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--layers", type=int, default=10, help="annealing layers per frame")
     p.add_argument("--particles", type=int, default=256, help="particles per layer")
-    p.add_argument("--max-frames", type=int, default=None, help="track at most this many frames")
-    p.add_argument(
-        "--train-frames",
-        type=int,
-        default=30,
-        help="first frames the background model is fitted on (people may be in view)",
-    )
     p.add_argument(
         "--backend", default="horprasert", choices=BACKEND_NAMES, help="background subtractor of the silhouette node"
     )

@@ -1,6 +1,6 @@
-"""What the long offline commands (``counterpart track``, ``counterpart silhouettes``) share: progress
-lines, argument checks, and one way to end (exit 0 and a JSON summary, 2 on bad input with the
-reason, 130 on Ctrl-C saying what was kept).
+"""What the long offline commands (``counterpart track``, ``silhouettes``, ``calibrate``, ``learn avatar``)
+share: the video arguments, progress lines, argument checks, and one way to end (exit 0 and a JSON
+summary, 2 on bad input with the reason, 130 on Ctrl-C saying what was kept).
 """
 
 from __future__ import annotations
@@ -37,6 +37,19 @@ class FrameProgress:
             of = f"/{declared}" if declared else ""
             fps = (done - self.first) / (now - self.t0)
             print(f"[{self.label}] frame {done}{of}, {fps:.1f} fps", file=sys.stderr, flush=True)
+
+
+def add_video_arguments(p: argparse.ArgumentParser, out_help: str, max_frames_help: str) -> None:
+    """The arguments of a command over one video file: ``video``, ``--out``, ``--train-frames``, ``--max-frames``."""
+    p.add_argument("video", help="the video file (anything OpenCV decodes)")
+    p.add_argument("--out", required=True, help=out_help)
+    p.add_argument(
+        "--train-frames",
+        type=int,
+        default=30,
+        help="first frames the background model is fitted on (people may be in view)",
+    )
+    p.add_argument("--max-frames", type=int, default=None, help=max_frames_help)
 
 
 def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> bool:
