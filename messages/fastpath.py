@@ -24,10 +24,9 @@ The trade: four small pieces to keep equal to the plain ones (``tests/test_codec
 bytes and objects of every registered message type through both), against the time they save on
 every message a node sends and receives. ``bench/bus_latency.py`` measures it end to end, fast
 against plain against raw pyzmq, as ``codec_fast_vs_plain_*`` (below 1: the fast path pays).
-Code generated with ``exec`` is gone: these closures do its work. So is pyzmq's private frame send
-(``zmq.backend.Socket.send``), which saved a few per cent of a one-way latency over
-``send_multipart`` in the bench: too little for an API pyzmq does not promise to keep. This module
-imports nothing of the codec: the plain functions are handed in.
+Code generated with ``exec`` is gone: these closures do its work. This module imports nothing of
+the codec: the plain functions are handed in. (The one shortcut outside it is the transport's frame
+send, ``counterpart.bus.transport._send_multipart``, with its own figure.)
 """
 
 from __future__ import annotations
