@@ -22,14 +22,15 @@ import sys
 from pathlib import Path
 
 from counterpart.bus.run_summary import RunSummary, read_stats, stats_json, stats_table, summarise
+from counterpart.messages import INTERACTION_MODELS
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "the whole graph end to end on the built-in scene, your video or a camera"
 
-#: the responder's models offered on the live page, built before the graph starts
+#: the responder's models built before the graph starts (the emotion model styles the others)
 RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
-#: offered on the live page only (``--serve``): the default video-texture avatar is built then
-SERVE_MODELS = ("video-texture",)
+#: the rest of what the live page offers (``--serve``: every interaction model of the contract)
+SERVE_MODELS = tuple(m for m in INTERACTION_MODELS if m not in RESPONDER_MODELS)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

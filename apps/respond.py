@@ -15,6 +15,7 @@ import sys
 
 import numpy as np
 from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.messages import EMOTIONS, INTEREST_LEVELS
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "offline: generate the partner for one person's trajectory"
@@ -25,8 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--input", required=True, help="two-person trajectory file (.npz)")
     p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
     p.add_argument("--observed", choices=("a", "b"), default="a", help="the person fed to the model")
-    p.add_argument("--interest", type=int, choices=(1, 2, 3), default=3, help="listener interest level")
-    p.add_argument("--emotion", default="neutral", help="neutral, happy, sad or angry")
+    p.add_argument("--interest", type=int, choices=INTEREST_LEVELS, default=3, help="listener interest level")
+    p.add_argument("--emotion", choices=EMOTIONS, default="neutral", help="the partner's emotion")
     p.add_argument("--strength", type=float, default=0.0, help="emotion strength in [0, 1]")
 
 

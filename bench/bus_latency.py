@@ -11,10 +11,13 @@ Each measurement runs a publisher and a subscriber in two processes over ipc:// 
 The raw reference uses the same frames per message as ours (topic, a small header, the payload) and
 the same per-frame copy policy (pyzmq ``copy_threshold`` = ``counterpart.bus.transport.ZERO_COPY_MIN``, sent with
 ``copy=False``), so the ratio is what our codec and transport add, not a different copy choice.
+A third kind, plain, is ours with the codec's fast path off (``counterpart.messages.codec.use_fast_path``):
+``codec_fast_vs_plain_*`` = median(ours) / median(plain), what the fast path
+(``counterpart.messages.fastpath``) saves end to end (below 1: it pays).
 The publisher and the subscriber are pinned to two different CPUs, the same two for raw and ours
 (``--no-pin`` leaves placement to the scheduler, which on a 2-core machine puts the pair on one core
 in some runs and on two in others: that changes the wake-up time by more than the whole difference
-being measured). Raw and ours alternate ``--repeats`` times (which one goes first alternates too); a figure is the
+being measured). The kinds alternate ``--repeats`` times (their order reverses every other repeat); a figure is the
 median over repeats of each run's median. ``*_ratio_*`` = median(ours) / median(raw); the spread
 fields give the per-repeat paired ratios (ours / raw of the same repeat) as [min, median, max].
 Last stdout line: one JSON object.
@@ -39,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from counterpart.bus.endpoints import ipc_endpoints  # noqa: E402
 from counterpart.bus.transport import RELIABLE, ZERO_COPY_MIN, Publisher, Subscriber  # noqa: E402
-from counterpart.messages import message  # noqa: E402
+from counterpart.messages import codec, message  # noqa: E402
 
 
 @message("bench.Blob", 1)
@@ -48,6 +51,8 @@ class Blob:
 
 
 SIZES = (64, 76800, 921600)
+#: raw pyzmq; ours (the codec's fast path, as nodes run); ours with the plain codec path alone
+KINDS = ("raw", "ours", "plain")
 #: pin the publisher and the subscriber to two CPUs (``--no-pin`` clears it)
 PIN = True
 WARMUP = 50  # first messages of a latency run: connection set-up, first calls of every code path
@@ -101,7 +106,13 @@ def _raw_sub(ep: str, q, ready) -> None:
     ctx.term()
 
 
-def _our_pub(root: str, n: int, size: int, gap: float, ready) -> None:
+def _paths(fast: bool) -> None:
+    """The codec's fast path on (ours, as nodes run) or off (plain), in this process."""
+    codec.use_fast_path(fast)
+
+
+def _our_pub(root: str, n: int, size: int, gap: float, ready, fast: bool = True) -> None:
+    _paths(fast)
     ctx = zmq.Context()
     pub = Publisher(ctx, "blob", ipc_endpoints(Path(root), "blob"), expected=1)
     payload = np.zeros(size, np.uint8)
@@ -116,7 +127,8 @@ def _our_pub(root: str, n: int, size: int, gap: float, ready) -> None:
     ctx.term()
 
 
-def _our_sub(root: str, q, ready, delay: float = 0.0) -> None:
+def _our_sub(root: str, q, ready, delay: float = 0.0, fast: bool = True) -> None:
+    _paths(fast)
     ctx = zmq.Context()
     sub = Subscriber(ctx, "blob", ipc_endpoints(Path(root), "blob"), RELIABLE)
     ready.set()
@@ -170,8 +182,9 @@ def run_pair(kind: str, n: int, size: int, gap: float, delay: float = 0.0):
             sub = mp.Process(target=_pinned, args=(_raw_sub, sub_cpu, ep, q, ready))
             pub = mp.Process(target=_pinned, args=(_raw_pub, pub_cpu, ep, n, size, gap, ready))
         else:
-            sub = mp.Process(target=_pinned, args=(_our_sub, sub_cpu, root, q, ready, delay))
-            pub = mp.Process(target=_pinned, args=(_our_pub, pub_cpu, root, n, size, gap, ready))
+            fast = kind == "ours"
+            sub = mp.Process(target=_pinned, args=(_our_sub, sub_cpu, root, q, ready, delay, fast))
+            pub = mp.Process(target=_pinned, args=(_our_pub, pub_cpu, root, n, size, gap, ready, fast))
         sub.start()
         pub.start()
         result = q.get(timeout=120)
@@ -196,9 +209,9 @@ def main() -> None:
     n_lat, n_thr, n_rel = (150, 500, 2000) if args.quick else (400, 3000, 10000)
     out: dict[str, object] = {"repeats": args.repeats}
     for size in SIZES:
-        res: dict[str, list[float]] = {"raw": [], "ours": []}
+        res: dict[str, list[float]] = {"raw": [], "ours": [], "plain": []}
         for r in range(args.repeats):
-            for kind in ("raw", "ours") if r % 2 == 0 else ("ours", "raw"):
+            for kind in KINDS if r % 2 == 0 else KINDS[::-1]:
                 lat = run_pair(kind, n_lat, size, 0.002)[0][WARMUP:]
                 res[kind].append(statistics.median(lat) / 1e3)
         ours, raw = statistics.median(res["ours"]), statistics.median(res["raw"])
@@ -206,20 +219,29 @@ def main() -> None:
         out[f"latency_us_ours_{size}B"] = round(ours, 1)
         out[f"latency_ratio_{size}B"] = round(ours / raw, 3)
         out[f"latency_ratio_{size}B_spread"] = _spread(res["ours"], res["raw"])
+        plain = statistics.median(res["plain"])
+        out[f"latency_us_plain_{size}B"] = round(plain, 1)
+        out[f"codec_fast_vs_plain_{size}B"] = round(ours / plain, 3)
+        out[f"codec_fast_vs_plain_{size}B_spread"] = _spread(res["ours"], res["plain"])
         print(
-            f"{size:>7} B  one-way median: raw {raw:.1f} us, ours {ours:.1f} us; per repeat raw "
-            f"{[round(x) for x in res['raw']]}, ours {[round(x) for x in res['ours']]}",
+            f"{size:>7} B  one-way median: raw {raw:.1f} us, ours {ours:.1f} us, plain {plain:.1f} us; per repeat "
+            f"raw {[round(x) for x in res['raw']]}, ours {[round(x) for x in res['ours']]}, "
+            f"plain {[round(x) for x in res['plain']]}",
             file=sys.stderr,
         )
-    thr: dict[str, list[float]] = {"raw": [], "ours": []}
+    thr: dict[str, list[float]] = {"raw": [], "ours": [], "plain": []}
     for r in range(args.repeats):
-        for kind in ("raw", "ours") if r % 2 == 0 else ("ours", "raw"):
+        for kind in KINDS if r % 2 == 0 else KINDS[::-1]:
             _, n, dt, _ = run_pair(kind, n_thr, 76800, 0.0)
             thr[kind].append(n / dt)
     out["throughput_msgs_raw_76800B"] = round(statistics.median(thr["raw"]))
     out["throughput_msgs_ours_76800B"] = round(statistics.median(thr["ours"]))
     out["throughput_ratio_76800B"] = round(statistics.median(thr["ours"]) / statistics.median(thr["raw"]), 3)
     out["throughput_ratio_76800B_spread"] = _spread(thr["ours"], thr["raw"])
+    out["throughput_msgs_plain_76800B"] = round(statistics.median(thr["plain"]))
+    out["codec_fast_vs_plain_throughput_76800B"] = round(
+        statistics.median(thr["ours"]) / statistics.median(thr["plain"]), 3
+    )
     _, n, _, seqs = run_pair("ours", n_rel, 64, 0.0, delay=0.00005)
     out["reliable_messages"] = n_rel
     out["reliable_drops"] = n_rel - len(set(seqs))

@@ -49,6 +49,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+from counterpart.messages import EMOTIONS  # noqa: E402
 from counterpart.nodes.responder.data import SIM_SCENARIOS, sim_trajectories  # noqa: E402
 from counterpart.nodes.responder.emotion import motion_features  # noqa: E402
 from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_local, to_world  # noqa: E402
@@ -101,7 +102,6 @@ def timing_error(obs: np.ndarray, par: np.ndarray, pred: np.ndarray, fps: float)
 
 def gpdm_figures(test: list, hmm: object, em: object, quick: bool) -> dict[str, float]:
     """The gpdm block of the output (module docstring)."""
-    from counterpart.nodes.responder.emotion import EMOTIONS
     from sklearn.ensemble import RandomForestClassifier
 
     out: dict[str, float] = {}
@@ -250,7 +250,7 @@ def main() -> None:
     # emotion ranking on held-out seeds
     em = train("emotion", default_training_data("emotion"))
     held = []
-    for e in ("neutral", "happy", "sad", "angry"):
+    for e in EMOTIONS:
         for s in (0.0,) if e == "neutral" else (0.15, 0.45, 0.75, 0.95):
             held += sim_trajectories(SIM_SCENARIOS, range(300, 301), max_frames=200, emotion=e, strength=s)
     ok = tot = 0

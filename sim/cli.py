@@ -29,7 +29,8 @@ from typing import Any
 
 import cv2
 import numpy as np
-from counterpart.sim.scenarios import EMOTIONS, SCENARIOS
+from counterpart.messages import EMOTIONS
+from counterpart.sim.scenarios import SCENARIOS
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "render a simulated two-person scene with ground truth"

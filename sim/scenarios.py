@@ -46,13 +46,13 @@ from counterpart.body.kinematics import forward_kinematics, frames
 from counterpart.body.pose import DOF_INDEX, clip_to_limits, neutral_pose
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, JOINT_INDEX, BodyDims
 from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.messages import EMOTIONS
 from counterpart.sim.motion import Track, add_gait, apply_reach, ground, oscillation, ramp, smooth_noise, window
 
 SIGNAL_NAMES: tuple[str, ...] = ("nod", "shake", "gaze_at_other", "talking", "activity")
 SIGNAL_INDEX: dict[str, int] = {n: i for i, n in enumerate(SIGNAL_NAMES)}
 UNKNOWN: int = -1
 PHASES: dict[int, str] = {0: "approach", 1: "contact", 2: "retreat"}
-EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
 
 #: Listener responses planted in ``conversation``: when the speaker starts signal ``antecedent``
 #: (an event of ``d`` frames starting at frame t), the listener performs ``consequent`` over frames

@@ -365,9 +365,9 @@ def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
             "interest": "3",
             "speaker": "partner",
             "overlays": {"stats": False},
-            "model": "a",
+            "model": "listener",
         },
-        models=["a", "b"],
+        models=["dual-hmm", "listener"],
     )
     assert (c.strength, c.emotion, c.interest, c.speaker, c.overlays, c.model) == (
         0.7,
@@ -375,7 +375,7 @@ def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
         3,
         "partner",
         {"stats": False},
-        "a",
+        "listener",
     )
     for bad, msg in [
         ({"strength": 1.5}, "strength"),
@@ -385,11 +385,12 @@ def test_parse_control_accepts_valid_and_names_bad_keys() -> None:
         ({"speaker": "dog"}, "speaker"),
         ({"volume": 1}, "volume"),
         ({"overlays": {"fog": True}}, "overlays"),
-        ({"model": "c"}, "model"),
+        ({"model": "gpdm"}, "model"),  # a model of the contract the page does not offer
+        ({"model": "emotion"}, "model"),  # the style model is not an interaction model
         ([1], "JSON object"),
     ]:
         with pytest.raises(ValueError, match=msg):
-            parse_control(bad, models=["a", "b"])
+            parse_control(bad, models=["dual-hmm", "listener"])
 
 
 def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head() -> None:

@@ -7,7 +7,7 @@ joints, camera)`` in a notebook.
 """
 
 from .compositor import OVERLAYS, STYLES, Bundle, Compositor, ControlState
-from .controls import EMOTIONS, SPEAKERS, control_to_json, parse_control
+from .controls import control_to_json, parse_control
 from .draw import (
     closed_bspline,
     contact_sheet,
@@ -30,8 +30,6 @@ __all__ = [
     "Bundle",
     "Compositor",
     "ControlState",
-    "EMOTIONS",
-    "SPEAKERS",
     "control_to_json",
     "parse_control",
     "closed_bspline",

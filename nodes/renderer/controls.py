@@ -1,4 +1,8 @@
-"""Run-time controls from the web page: JSON checked and turned into ``messages.Control``."""
+"""Run-time controls from the web page: JSON checked and turned into ``messages.Control``.
+
+The names the controls allow are the contract's (``counterpart.messages.INTERACTION_MODELS``,
+``EMOTIONS``, ``SPEAKERS``, ``INTEREST_LEVELS``); this module only reads JSON into them.
+"""
 
 from __future__ import annotations
 
@@ -6,22 +10,35 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from counterpart.messages import Control
+from counterpart.messages import EMOTIONS, INTERACTION_MODELS, INTEREST_LEVELS, SPEAKERS, Control
 
 from .compositor import OVERLAYS
 
-SPEAKERS = ("person", "partner")
-EMOTIONS = ("neutral", "happy", "sad", "angry")
-INTEREST_LEVELS = (1, 2, 3)
 CONTROL_KEYS = ("model", "speaker", "interest", "emotion", "strength", "overlays")
 
 
-def parse_control(data: Any, models: Sequence[str] = ()) -> Control:
+def parse_control(data: Any, models: Sequence[str] = INTERACTION_MODELS) -> Control:
     """A ``Control`` from a JSON object such as ``{"strength": 0.7, "emotion": "happy"}``.
 
-    Keys (all optional): ``model`` (one of ``models`` when given), ``speaker`` (person/partner),
-    ``interest`` (1-3), ``emotion`` (neutral/happy/sad/angry), ``strength`` (number in [0, 1]),
-    ``overlays`` (overlay name -> bool). Raises ValueError naming the bad key and what it takes.
+    Parameters
+    ----------
+    data
+        The decoded JSON. Keys (all optional): ``model`` (one of ``models``), ``speaker`` (one of
+        ``SPEAKERS``), ``interest`` (one of ``INTEREST_LEVELS``, a digit string accepted),
+        ``emotion`` (one of ``EMOTIONS``), ``strength`` (number in [0, 1]), ``overlays`` (overlay
+        name -> bool).
+    models
+        The interaction models offered (a subset of ``INTERACTION_MODELS``).
+
+    Returns
+    -------
+    Control
+        The control, with stamp and seq 0.
+
+    Raises
+    ------
+    ValueError
+        Naming the bad key and what it takes.
     """
     if not isinstance(data, dict):
         raise ValueError(f"control must be a JSON object, got {type(data).__name__}")
@@ -31,7 +48,7 @@ def parse_control(data: Any, models: Sequence[str] = ()) -> Control:
     out: dict[str, Any] = {}
     if data.get("model") is not None:
         m = data["model"]
-        if not isinstance(m, str) or (models and m not in models):
+        if not isinstance(m, str) or m not in models:
             raise ValueError(f"model {m!r}: expected one of {list(models)}")
         out["model"] = m
     if data.get("speaker") is not None:
@@ -43,7 +60,7 @@ def parse_control(data: Any, models: Sequence[str] = ()) -> Control:
         if isinstance(i, str) and i.strip().isdigit():
             i = int(i)
         if isinstance(i, bool) or i not in INTEREST_LEVELS:
-            raise ValueError(f"interest {data['interest']!r}: expected 1, 2 or 3")
+            raise ValueError(f"interest {data['interest']!r}: expected one of {list(INTEREST_LEVELS)}")
         out["interest"] = int(i)
     if data.get("emotion") is not None:
         if data["emotion"] not in EMOTIONS:
@@ -73,4 +90,4 @@ def control_to_json(msg: Control) -> dict[str, Any]:
     return {k: getattr(msg, k) for k in CONTROL_KEYS if getattr(msg, k) is not None}
 
 
-__all__ = ["parse_control", "control_to_json", "SPEAKERS", "EMOTIONS", "INTEREST_LEVELS", "CONTROL_KEYS"]
+__all__ = ["parse_control", "control_to_json", "CONTROL_KEYS"]

@@ -28,15 +28,26 @@ from typing import Any
 
 from counterpart.body.camera import Camera, camera_from_info, camera_param_problem
 from counterpart.bus import LATEST, RELIABLE, Input, Node, Output, Param, ParamError
-from counterpart.messages import CameraInfo, Control, Frame, NodeStats, Partner, Pose3D, Silhouettes, SocialSignals
+from counterpart.messages import (
+    EMOTIONS,
+    INTERACTION_MODELS,
+    INTEREST_LEVELS,
+    SPEAKERS,
+    CameraInfo,
+    Control,
+    Frame,
+    NodeStats,
+    Partner,
+    Pose3D,
+    Silhouettes,
+    SocialSignals,
+)
 
 from .compositor import OVERLAYS, STYLES, Bundle, Compositor
-from .controls import EMOTIONS, INTEREST_LEVELS, SPEAKERS, control_to_json, parse_control
+from .controls import control_to_json, parse_control
 from .video import VideoWriter, write_png
 from .web import LiveServer, is_loopback
 
-#: the responder's model names (counterpart.nodes.responder.models.MODEL_NAMES; a node does not import another node)
-DEFAULT_MODELS = ["dual-hmm", "joint-shape", "listener", "emotion", "video-texture", "gpdm"]
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
 #: seconds of the stream at its start that the ``*_after_1s`` figures leave out
 SETTLE_S = 1.0
@@ -146,7 +157,11 @@ class Renderer(Node):
         "max_pending": Param(int, 128, "frames held waiting for partners at most", min=1, max=10000),
         "snapshot_every": Param(int, 0, "save every Nth rendered frame as PNG in snapshot_dir (0: never)", min=0),
         "snapshot_dir": Param(str, "", "folder of the PNG snapshots"),
-        "models": Param(list, DEFAULT_MODELS, "interaction models offered on the page"),
+        "models": Param(
+            list,
+            list(INTERACTION_MODELS),
+            f"interaction models offered on the page, of {', '.join(INTERACTION_MODELS)}",
+        ),
     }
     #: how often waiting frames are looked at: the resolution of pair_timeout
     timer_period = 0.01
@@ -162,8 +177,10 @@ class Renderer(Node):
                 f"{prefix}parameter 'camera': the camera comes from topic camera_info; give the "
                 "calibration file to the calibration node (calibration.file), or set camera_info: false"
             )
-        if not all(isinstance(m, str) and m for m in p["models"]):
-            raise ParamError(f"{prefix}parameter 'models': expected a list of model names, got {p['models']!r}")
+        if not p["models"] or not all(m in INTERACTION_MODELS for m in p["models"]):
+            raise ParamError(
+                f"{prefix}parameter 'models': expected a list of some of {', '.join(INTERACTION_MODELS)}, got {p['models']!r}"
+            )
         return p
 
     @classmethod

@@ -18,7 +18,6 @@ from counterpart.body.trajectory import TwoPersonTrajectory
 
 #: the simulator's interaction types (counterpart.sim.scenarios.SCENARIOS), in a fixed order
 SIM_SCENARIOS: tuple[str, ...] = ("handshake", "high_five", "push", "pull", "wave", "conversation")
-EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
 
 Progress = Callable[[str], None]
 

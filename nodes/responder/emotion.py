@@ -32,11 +32,11 @@ from typing import Any
 import numpy as np
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.messages import EMOTIONS
 from scipy.optimize import minimize
 
 from .frames import actor_frame, to_local, to_world
 
-EMOTIONS: tuple[str, ...] = ("neutral", "happy", "sad", "angry")
 FEATURES: tuple[str, ...] = (
     "log_speed",
     "log_amplitude",

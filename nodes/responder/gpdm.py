@@ -46,9 +46,9 @@ from typing import Any
 import numpy as np
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.messages import EMOTIONS
 
 from .dual_hmm import DualHMM
-from .emotion import EMOTIONS
 from .frames import actor_frame, to_local, to_world
 from .gp_layers import GPLayer, fit_layer, rbf
 from .pair_features import partner_placement, partner_velocity, partner_world

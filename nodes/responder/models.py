@@ -22,12 +22,14 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+from counterpart.messages import INTERACTION_MODELS
 
 MODEL_FORMAT = "counterpart.responder.model"
 MODEL_VERSION = 4  # 2: dual-hmm partner velocity, per-label state blocks, tracked placement;
 # 3: dual-hmm time-ordered state blocks, states shared by phases, no inflation;
 # 4: dual-hmm placement correction (cross-fitted forest arrays)
-MODEL_NAMES: tuple[str, ...] = ("dual-hmm", "joint-shape", "listener", "emotion", "video-texture", "gpdm")
+#: the kinds of model file: the contract's interaction models and the emotion model that styles them
+MODEL_NAMES: tuple[str, ...] = (*INTERACTION_MODELS, "emotion")
 
 
 class ModelVersionError(ValueError):

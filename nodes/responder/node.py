@@ -19,13 +19,22 @@ from typing import Any
 
 import numpy as np
 from counterpart.bus import Input, Node, Output, Param
-from counterpart.messages import Control, Partner, Pose3D, Silhouettes, SocialSignals
+from counterpart.messages import (
+    EMOTIONS,
+    INTERACTION_MODELS,
+    INTEREST_LEVELS,
+    SPEAKERS,
+    Control,
+    Partner,
+    Pose3D,
+    Silhouettes,
+    SocialSignals,
+)
 
-from .emotion import EMOTIONS, StyleFilter
+from .emotion import StyleFilter
 from .reach import ReachConfig, reach
 from .staging import Stage, StageConfig
 
-MODELS = ("dual-hmm", "joint-shape", "listener", "video-texture", "gpdm")
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
 
@@ -41,7 +50,7 @@ class Responder(Node):
     }
     outputs = {"partner": Output(Partner, "the generated partner, one per frame of the driving input")}
     params = {
-        "model": Param(str, "dual-hmm", "interaction model", choices=MODELS),
+        "model": Param(str, "dual-hmm", "interaction model", choices=INTERACTION_MODELS),
         "model_file": Param(
             str,
             "default",
@@ -58,10 +67,8 @@ class Responder(Node):
         "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
         "use_signals": Param(bool, False, "subscribe to 'signals'"),
         "use_control": Param(bool, True, "subscribe to 'control'"),
-        "speaker": Param(
-            str, "person", "who speaks (listener model): person or partner", choices=("person", "partner")
-        ),
-        "interest": Param(int, 3, "listener interest level", min=1, max=3),
+        "speaker": Param(str, "person", "who speaks (listener model)", choices=SPEAKERS),
+        "interest": Param(int, 3, "listener interest level", choices=INTEREST_LEVELS),
         "emotion": Param(str, "neutral", "partner emotion", choices=EMOTIONS),
         "strength": Param(float, 0.0, "emotion strength", min=0.0, max=1.0),
         "observed": Param(str, "left", "which person the partner responds to", choices=("left", "right")),
@@ -161,21 +168,20 @@ class Responder(Node):
 
     # ------------------------------------------------------------------ inputs
     def on_control(self, msg: Control) -> None:
-        if msg.model is not None:
-            if msg.model not in MODELS:
-                self.log.warning("control: unknown model %r ignored; models: %s", msg.model, ", ".join(MODELS))
-            elif self._model(msg.model) is not None:
-                self.model = msg.model
-                self.models[msg.model].reset()
-                self._reset_stage()
-        if msg.speaker is not None and msg.speaker in ("person", "partner"):
+        # every name in a Control is one of the contract's (the message refuses others when made
+        # or decoded), and every one of them is a setting of this node
+        if msg.model is not None and self._model(msg.model) is not None:
+            self.model = msg.model
+            self.models[msg.model].reset()
+            self._reset_stage()
+        if msg.speaker is not None:
             self.speaker = msg.speaker
-        if msg.interest is not None and msg.interest in (1, 2, 3):
-            self.interest = int(msg.interest)
-        if msg.emotion is not None and msg.emotion in EMOTIONS:
+        if msg.interest is not None:
+            self.interest = msg.interest
+        if msg.emotion is not None:
             self.emotion = msg.emotion
         if msg.strength is not None:
-            self.strength = float(min(max(msg.strength, 0.0), 1.0))
+            self.strength = float(msg.strength)
         self.log.info(
             "control: model=%s speaker=%s interest=%d emotion=%s strength=%.2f",
             self.model,
@@ -275,7 +281,13 @@ class Responder(Node):
         """One Partner per driving message; an empty one (no joints, no ctrl) when there is nobody to
         respond to, so that downstream nodes pairing by seq never wait for a partner that won't come.
         """
-        out = dict(model=self.model, emotion=self.emotion, strength=self.strength)
+        out = dict(
+            model=self.model,
+            emotion=self.emotion,
+            strength=self.strength,
+            speaker=self.speaker,
+            interest=self.interest,
+        )
 
         def nobody() -> None:
             last = self.last

@@ -7,8 +7,9 @@ from typing import Any
 
 import numpy as np
 from counterpart.body.trajectory import TwoPersonTrajectory
+from counterpart.messages import EMOTIONS
 
-from .data import EMOTIONS, SIM_SCENARIOS, sim_trajectories
+from .data import SIM_SCENARIOS, sim_trajectories
 
 Progress = Callable[[str], None] | None
 
