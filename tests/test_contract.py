@@ -17,7 +17,7 @@ from counterpart.body.camera import default_camera
 from counterpart.messages import EMOTIONS, INTERACTION_MODELS, INTEREST_LEVELS, SPEAKERS
 from counterpart.nodes.responder.avatar_recording import sim_recording
 from counterpart.nodes.responder.data import sim_trajectories
-from counterpart.nodes.responder.dual_hmm import DualHMM
+from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.emotion import EmotionModel
 from counterpart.nodes.responder.gpdm import GPDM
 from counterpart.nodes.responder.joint_shape import JointShapeModel
@@ -37,7 +37,7 @@ def small_models(folder: Path) -> Path:
     """A default model of every kind, small enough to fit in seconds."""
     save_model(
         folder / "responder-dual-hmm.npz",
-        DualHMM(n_states=8, n_iter=10, both_roles=False).fit([planted_pair(s) for s in range(4)]),
+        DualHMM(DualHMMConfig(fit=FitConfig(n_states=8, n_iter=10, both_roles=False))).fit([planted_pair(s) for s in range(4)]),
     )
     cam = default_camera(160, 120)
     save_model(
