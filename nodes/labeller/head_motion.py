@@ -84,6 +84,11 @@ class HeadMotionParams:
     amplitude floors of a tracked face's head point (:class:`HeadMotionDetectorFace`), in units
     of the face's own width (a 10 degree nod moves the eyes about 0.1 face widths; detector
     jitter left after tracking is about 0.005).
+    local_s / event_on / event_off: localisation of an event inside its window (see
+    :func:`localise_labels`): the width (s) of the moving mean of band-passed motion energy, and
+    the hysteresis thresholds on the local amplitude as a fraction of the window's largest local
+    amplitude (on: a frame starts an event at >= event_on; it goes on while >= event_off).
+    ``event_on`` 0 labels every frame of a detected window (no localisation).
     """
 
     fps: float
@@ -100,6 +105,9 @@ class HeadMotionParams:
     shake_median_s: float = 0.44
     face_nod_floor: float = 0.04
     face_shake_floor: float = 0.04
+    local_s: float = 0.4
+    event_on: float = 0.6
+    event_off: float = 0.4
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -136,6 +144,16 @@ class HeadMotionParams:
             raise ValueError(
                 f"threshold must be in (0, 1] (a fraction of the head's oscillating motion), got {self.threshold}"
             )
+        if self.event_on != 0 and not 0 <= self.event_off <= self.event_on <= 1:
+            raise ValueError(
+                f"event_on and event_off must satisfy 0 <= event_off <= event_on <= 1 (fractions of "
+                f"the window's largest local amplitude; event_on 0: no localisation), got event_on={self.event_on}, event_off={self.event_off}"
+            )
+        if not self.local_s > 0 or 2 * (self.local_k // 2) + 1 > n:
+            raise ValueError(
+                f"local_s must be > 0 s and its width in frames ({self.local_k}) at most the window's ({n}), "
+                f"got local_s={self.local_s} at {self.fps} fps"
+            )
         for name in ("nod_median_s", "shake_median_s"):
             v = getattr(self, name)
             if not v >= 0 or self.median_k(v) > n:
@@ -147,6 +165,11 @@ class HeadMotionParams:
     def median_k(self, seconds: float) -> int:
         """A running-median width in frames (odd; 1 = no median stage)."""
         return (max(int(round(seconds * self.fps)), 1) | 1) if seconds > 0 else 1
+
+    @property
+    def local_k(self) -> int:
+        """Width in frames (odd, >= 1) of the moving mean of local motion energy."""
+        return max(int(round(self.local_s * self.fps)), 1) | 1
 
     @property
     def n(self) -> int:
@@ -170,7 +193,9 @@ class _Spectral:
         wt[0] = 0.0  # DC is removed: it is the head's mean offset, not motion
         self.wt = wt
         lo, hi = p.band_hz
-        self.band = wt * ((freqs >= lo) & (freqs <= hi))
+        in_band = (freqs >= lo) & (freqs <= hi)
+        self.band = wt * in_band
+        self.band_pass = in_band.astype(np.float64)
         sw2 = float(np.sum(self.w**2))
         # floors: [nod, shake] x [head point (m), angle arc (m), tracked face (face widths)]
         self.e_floor = (
@@ -189,23 +214,35 @@ class _Spectral:
         self,
         win: np.ndarray,
         angles: tuple[int, int] = (False, False),
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """win: (..., 4, N) channel windows (m) -> (nod_score, shake_score), each (...,).
-        angles: the kind of the (nod, shake) channels, which picks the floors: 0 (False) a head
-        point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths).
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Scores of channel windows and the local amplitude at their centres.
+
+        Parameters
+        ----------
+        win : (..., 4, N) channel windows (m, or face widths).
+        angles : the kind of the (nod, shake) channels, which picks the floors: 0 (False) a head
+            point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths).
+
+        Returns
+        -------
+        nod_score, shake_score : (...,) in [0, 1], nan where the window's second half (from its
+            centre sample on) holds a missing sample; missing samples before the centre are filled
+            (:func:`fill_window_start`), so a track that starts again is labelled from its first frame.
+        nod_local, shake_local : (...,) the local amplitude of the band-passed nod (shake) motion
+            at the window's centre sample ``N // 2`` (moving mean of ``local_k`` frames of its
+            energy) over the largest such amplitude anywhere in the window, in [0, 1].
         """
-        bad = np.isnan(win).any(axis=(-2, -1))
-        if bad.any():
-            win = np.where(np.isnan(win), 0.0, win)
+        p = self.p
+        win, bad = fill_window_start(win)
         win = np.concatenate(
             [
-                oscillation_residual(win[..., :2, :], self.p.median_k(self.p.nod_median_s)),
-                oscillation_residual(win[..., 2:, :], self.p.median_k(self.p.shake_median_s)),
+                oscillation_residual(win[..., :2, :], p.median_k(p.nod_median_s)),
+                oscillation_residual(win[..., 2:, :], p.median_k(p.shake_median_s)),
             ],
             axis=-2,
         )
-        x = (win - win.mean(axis=-1, keepdims=True)) * self.w
-        spec = np.fft.rfft(x, axis=-1)
+        win = win - win.mean(axis=-1, keepdims=True)
+        spec = np.fft.rfft(win * self.w, axis=-1)
         pw = spec.real**2 + spec.imag**2  # (..., 4, F)
         total = pw @ self.wt  # (..., 4)
         band = pw @ self.band  # (..., 4)
@@ -216,7 +253,68 @@ class _Spectral:
         shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
-        return nod, shake
+        local = self.local(win)
+        return nod, shake, local[..., 0], local[..., 1]
+
+    def local(self, res: np.ndarray) -> np.ndarray:
+        """(..., 4, N) zero-mean oscillation residuals -> (..., 2) local amplitude ratios of the
+        (nod, shake) channel pairs at the centre sample (see :meth:`scores`).
+
+        The residual is band-passed with the FFT (no taper: the window's ends must keep their
+        weight), its energy summed over each pair and averaged over ``local_k`` frames; the ratio
+        is ``sqrt(E[N // 2] / max_j E[j])`` over the positions ``j`` whose average lies inside the
+        window.
+        """
+        n, k = self.p.n, self.p.local_k
+        xb = np.fft.irfft(np.fft.rfft(res, axis=-1) * self.band_pass, n, axis=-1)
+        e2 = xb**2
+        e = np.stack([e2[..., 0, :] + e2[..., 1, :], e2[..., 2, :] + e2[..., 3, :]], axis=-2)  # (..., 2, N)
+        c = np.cumsum(np.concatenate([np.zeros((*e.shape[:-1], 1)), e], axis=-1), axis=-1)
+        mov = c[..., k:] - c[..., :-k]  # (..., 2, N - k + 1): mean * k around j = i + k // 2
+        centre = mov[..., n // 2 - k // 2]
+        peak = mov.max(axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.sqrt(np.where(peak > 0, centre / peak, 0.0))
+
+
+def localise_labels(score: np.ndarray, local: np.ndarray, p: HeadMotionParams) -> np.ndarray:
+    """(T,) window scores and (T,) local amplitude ratios (:meth:`_Spectral.scores`) -> (T,) int8
+    labels: a frame is labelled 1 where its window is detected (``score >= threshold``) and the
+    motion at the frame is part of the event, by hysteresis on ``local``: an event starts at a frame
+    with ``local >= event_on`` and goes on while ``local >= event_off`` (and its window is detected).
+    UNKNOWN where the score is nan. Vectorised: within each run of candidate frames
+    (detected and ``local >= event_off``) the frames from the run's first start frame on.
+    The streaming detectors apply the same rule frame by frame.
+    """
+    lab = threshold_labels(score, p.threshold)
+    if p.event_on <= 0:
+        return lab
+    cand = (lab == 1) & (local >= p.event_off)
+    start = cand & (local >= p.event_on)
+    idx = np.arange(len(cand))
+    run_start = np.maximum.accumulate(np.where(cand & ~np.r_[False, cand[:-1]], idx, -1))
+    last_start = np.maximum.accumulate(np.where(start, idx, -1))
+    on = cand & (last_start >= run_start)
+    return np.where(lab == UNKNOWN, lab, on.astype(np.int8)).astype(np.int8)
+
+
+def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Windows (..., C, N) with missing samples (nan in any channel) before their centre ``N // 2`` filled with the
+    next known sample of their channel (as if the head had held still until it was seen), and
+    (...,) bool: the windows with a missing sample from the centre on (unknown; filled with 0).
+
+    A track that was lost is then scored again once half a window has been seen since (its
+    centre frame known), instead of a whole window, and the first half's gap adds no motion.
+    """
+    miss = np.isnan(win).any(axis=-2)  # (..., N): a sample is missing when any channel is
+    if not miss.any():
+        return win, np.zeros(win.shape[:-2], bool)
+    n = win.shape[-1]
+    bad = miss[..., n // 2 :].any(axis=-1)
+    idx = np.where(miss, n - 1, np.arange(n))
+    nxt = np.flip(np.minimum.accumulate(np.flip(idx, axis=-1), axis=-1), axis=-1)
+    filled = np.take_along_axis(win, np.broadcast_to(nxt[..., None, :], win.shape), axis=-1)
+    return np.where(np.isnan(filled), 0.0, filled), bad
 
 
 def oscillation_residual(win: np.ndarray, k: int) -> np.ndarray:
@@ -350,8 +448,9 @@ def scores_from_channels(
     """Batch nod/shake over a whole (T,4) channel trajectory, vectorised over all windows.
 
     Frame ``t`` is scored from window ``[t-N+1, t]`` (causal) or ``[t-N//2, t-N//2+N)`` (center);
-    frames without a full window are UNKNOWN. angles: (nod channels from the tracker's pitch, shake
-    channels from its yaw), which picks the amplitude floors.
+    the samples before the sequence count as missing (:func:`fill_window_start`: a window is scored
+    once its centre sample is), later frames without a full window are UNKNOWN. angles: (nod
+    channels from the tracker's pitch, shake channels from its yaw), which picks the amplitude floors.
     """
     ch = np.asarray(channels, dtype=np.float64)
     if ch.ndim != 2 or ch.shape[1] != 4:
@@ -359,14 +458,18 @@ def scores_from_channels(
     t, n = ch.shape[0], params.n
     nod = np.full(t, np.nan)
     shake = np.full(t, np.nan)
-    if t >= n:
-        win = sliding_window_view(ch.T, n, axis=1).transpose(1, 0, 2)  # (T-N+1, 4, N)
-        s_nod, s_shake = _Spectral(params).scores(win, angles)
-        first = n // 2 if center else n - 1
-        nod[first : first + len(s_nod)] = s_nod
-        shake[first : first + len(s_shake)] = s_shake
+    loc_nod = np.zeros(t)
+    loc_shake = np.zeros(t)
+    # window i ends at frame i (the n - 1 before the sequence are missing)
+    padded = np.concatenate([np.full((n - 1, 4), np.nan), ch])
+    win = sliding_window_view(padded.T, n, axis=1).transpose(1, 0, 2)  # (T, 4, N)
+    s_nod, s_shake, l_nod, l_shake = _Spectral(params).scores(win, angles)
+    first = -(n - 1 - n // 2) if center else 0  # frame of window 0
+    lo, hi = max(first, 0), min(t, t + first)
+    for dst, src in ((nod, s_nod), (shake, s_shake), (loc_nod, l_nod), (loc_shake, l_shake)):
+        dst[lo:hi] = src[lo - first : hi - first]
     return HeadMotionResult(
-        nod, threshold_labels(nod, params.threshold), shake, threshold_labels(shake, params.threshold)
+        nod, localise_labels(nod, loc_nod, params), shake, localise_labels(shake, loc_shake, params)
     )
 
 
@@ -422,12 +525,14 @@ class _StreamingChannels:
         self._i = 0
         self._count = 0
         self._angles = (False, False)  # (nod from a pitch, shake from a yaw) in the buffer
+        self._on = [False, False]  # (nod, shake) event going on at the previous frame (hysteresis)
 
     def reset(self) -> None:
         """Forget the history (e.g. after the person was lost)."""
         self._buf.fill(np.nan)
         self._i = 0
         self._count = 0
+        self._on = [False, False]
 
     def push(self, sample: np.ndarray) -> None:
         """Append a (4,) sample without scoring (nan for a missing frame)."""
@@ -440,13 +545,26 @@ class _StreamingChannels:
     def score(self) -> tuple[float, int, float, int]:
         """(nod_score, nod, shake_score, shake) of the window ending at the newest sample."""
         n = self.params.n
-        if self._count < n:
+        if self._count < n - n // 2:  # the window's centre not seen yet
+            self._on = [False, False]
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
         win = self._buf[:, self._i : self._i + n]
-        s_nod, s_shake = self._spec.scores(win, self._angles)
-        th = self.params.threshold
+        s_nod, s_shake, l_nod, l_shake = self._spec.scores(win, self._angles)
         sn, ss = float(s_nod), float(s_shake)
-        return (sn, UNKNOWN if sn != sn else int(sn >= th), ss, UNKNOWN if ss != ss else int(ss >= th))
+        return (sn, self._label(0, sn, float(l_nod)), ss, self._label(1, ss, float(l_shake)))
+
+    def _label(self, kind: int, score: float, local: float) -> int:
+        """The label of :func:`localise_labels` for the newest frame; kind 0 nod, 1 shake."""
+        p = self.params
+        if score != score:
+            self._on[kind] = False
+            return UNKNOWN
+        detected = score >= p.threshold
+        if p.event_on <= 0:
+            return int(detected)
+        cand = detected and local >= p.event_off
+        self._on[kind] = cand and (local >= p.event_on or self._on[kind])
+        return int(self._on[kind])
 
 
 class HeadMotionDetector(_StreamingChannels):
