@@ -92,6 +92,31 @@ def test_missed_detections_bridged_then_a_long_miss_ends_the_track() -> None:
     assert tr.update(blank) == []
 
 
+def test_a_look_away_is_bridged_while_the_flow_follows_the_face() -> None:
+    """The head turns 50 degrees away for 1.2 s (past the frontal cascade's reach) and back: the
+    flow follows the eyes and brows, so the face keeps its track (``max_flow_s``); bridged for
+    ``max_miss_s`` alone, the track ends.
+    """
+    fps = 25.0
+    base = gesture_face_clip("still", fps=fps, duration=3.2, seed=5)
+    t = np.arange(base.n_frames) / fps
+    ramp = np.clip((t - 0.6) / 0.3, 0, 1) * np.clip((2.1 - t) / 0.3, 0, 1)
+    clip = FaceClip(
+        base.renderer, fps, np.radians(50.0) * ramp, base.pitch, base.mouth, base.offset, base.truth, seed=5
+    )
+    cc = load_face_cascade()
+    away = [i for i in range(clip.n_frames) if ramp[i] == 1.0]
+    missed = sum(len(cc.detectMultiScale(_gray(clip, i), 1.1, 3, minSize=(60, 60))) == 0 for i in away)
+    assert missed >= 0.8 * len(away), "the cascade must lose the turned face for this test to mean anything"
+    for max_flow_s, kept in ((2.0, True), (0.5, False)):
+        tr = FaceTracker(FaceTrackParams(fps, max_miss_s=0.5, max_flow_s=max_flow_s), cc)
+        ids = [[x.track_id for x in tr.update(_gray(clip, i))] for i in range(clip.n_frames)]
+        first = ids[5]
+        assert len(first) == 1
+        same = all(x == first for x in ids[5:])
+        assert same == kept, (max_flow_s, ids)
+
+
 # ---------------------------------------------------------------------------- labels from faces
 @pytest.mark.parametrize(
     "kind,fps",

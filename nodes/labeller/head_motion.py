@@ -82,8 +82,9 @@ class HeadMotionParams:
     the nod / shake channels (0: no median stage); movements that go one way and stay are removed,
     back-and-forth ones up to about this long kept. face_nod_floor / face_shake_floor: the
     amplitude floors of a tracked face's head point (:class:`HeadMotionDetectorFace`), in units
-    of the face's own width (a 10 degree nod moves the eyes about 0.1 face widths; detector
-    jitter left after tracking is about 0.005).
+    of the face's own width (a 10 degree nod moves the eyes about 0.15 face widths, a 5 degree
+    one 0.075; detector jitter left after tracking is about 0.005; a body bouncing on its knees
+    moves the face about 0.03).
     local_s / event_on / event_off: localisation of an event inside its window (see
     :func:`localise_labels`): the width (s) of the moving mean of band-passed motion energy, and
     the hysteresis thresholds on the local amplitude as a fraction of the window's largest local
@@ -103,11 +104,11 @@ class HeadMotionParams:
     pitch_radius_m: float = 0.18
     nod_median_s: float = 1.0
     shake_median_s: float = 0.44
-    face_nod_floor: float = 0.04
-    face_shake_floor: float = 0.04
+    face_nod_floor: float = 0.06
+    face_shake_floor: float = 0.06
     local_s: float = 0.4
     event_on: float = 0.6
-    event_off: float = 0.4
+    event_off: float = 0.3
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
