@@ -86,9 +86,9 @@ class HeadMotionParams:
     one 0.075; detector jitter left after tracking is about 0.005; a body bouncing on its knees
     moves the face about 0.03).
     local_s / event_on / event_off: localisation of an event inside its window (see
-    :func:`localise_labels`): the width (s) of the moving mean of band-passed motion energy, and
+    :meth:`_Spectral.local`): the width (s) of the moving mean of band-passed motion energy, and
     the hysteresis thresholds on the local amplitude as a fraction of the window's largest local
-    amplitude (on: a frame starts an event at >= event_on; it goes on while >= event_off).
+    amplitude (an event is a run of frames >= event_off that reaches event_on).
     ``event_on`` 0 labels every frame of a detected window (no localisation).
     """
 
@@ -106,7 +106,7 @@ class HeadMotionParams:
     shake_median_s: float = 0.44
     face_nod_floor: float = 0.06
     face_shake_floor: float = 0.06
-    local_s: float = 0.4
+    local_s: float = 0.25
     event_on: float = 0.6
     event_off: float = 0.3
 
@@ -229,9 +229,8 @@ class _Spectral:
         nod_score, shake_score : (...,) in [0, 1], nan where the window's second half (from its
             centre sample on) holds a missing sample; missing samples before the centre are filled
             (:func:`fill_window_start`), so a track that starts again is labelled from its first frame.
-        nod_local, shake_local : (...,) the local amplitude of the band-passed nod (shake) motion
-            at the window's centre sample ``N // 2`` (moving mean of ``local_k`` frames of its
-            energy) over the largest such amplitude anywhere in the window, in [0, 1].
+        nod_inside, shake_inside : (...,) 1.0 where the window's centre sample ``N // 2`` is part
+            of the window's nod (shake) event by its local band-passed motion (:meth:`local`), else 0.0.
         """
         p = self.p
         win, bad = fill_window_start(win)
@@ -258,45 +257,44 @@ class _Spectral:
         return nod, shake, local[..., 0], local[..., 1]
 
     def local(self, res: np.ndarray) -> np.ndarray:
-        """(..., 4, N) zero-mean oscillation residuals -> (..., 2) local amplitude ratios of the
-        (nod, shake) channel pairs at the centre sample (see :meth:`scores`).
+        """(..., 4, N) zero-mean oscillation residuals -> (..., 2) float, 1.0 where the window's
+        centre sample is part of the (nod, shake) event in the window, else 0.0 (see :meth:`scores`).
 
-        The residual is band-passed with the FFT (no taper: the window's ends must keep their
-        weight), its energy summed over each pair and averaged over ``local_k`` frames; the ratio
-        is ``sqrt(E[N // 2] / max_j E[j])`` over the positions ``j`` whose average lies inside the
-        window.
+        The residual is band-passed with the FFT (no taper: the window's ends keep their weight),
+        its energy summed over each channel pair and averaged over ``local_k`` frames, giving the
+        local amplitude ``a_j = sqrt(E_j / max_j E_j)`` relative to the window's largest. The centre
+        is in the event when it lies in a run of positions with ``a >= event_off`` that reaches
+        ``a >= event_on`` somewhere (hysteresis both ways in time: the window sees the centre's past
+        and future, so an event is not labelled late). ``event_on`` 0: always 1.0.
         """
-        n, k = self.p.n, self.p.local_k
+        p = self.p
+        if p.event_on <= 0:
+            return np.ones((*res.shape[:-2], 2))
+        n, k = p.n, p.local_k
         xb = np.fft.irfft(np.fft.rfft(res, axis=-1) * self.band_pass, n, axis=-1)
         e2 = xb**2
         e = np.stack([e2[..., 0, :] + e2[..., 1, :], e2[..., 2, :] + e2[..., 3, :]], axis=-2)  # (..., 2, N)
         c = np.cumsum(np.concatenate([np.zeros((*e.shape[:-1], 1)), e], axis=-1), axis=-1)
-        mov = c[..., k:] - c[..., :-k]  # (..., 2, N - k + 1): mean * k around j = i + k // 2
-        centre = mov[..., n // 2 - k // 2]
-        peak = mov.max(axis=-1)
+        mov = c[..., k:] - c[..., :-k]  # (..., 2, P): k * mean energy around position j + k // 2
+        peak = mov.max(axis=-1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):
-            return np.sqrt(np.where(peak > 0, centre / peak, 0.0))
+            amp = np.sqrt(np.where(peak > 0, mov / peak, 0.0))
+        ci = n // 2 - k // 2  # the centre sample's position
+        pos = np.arange(amp.shape[-1])
+        low = amp < p.event_off
+        left = np.where(low[..., : ci + 1], pos[: ci + 1], -1).max(axis=-1)  # last low position <= ci
+        right = np.where(low[..., ci:], pos[ci:], amp.shape[-1]).min(axis=-1)  # first low position >= ci
+        strong = (amp >= p.event_on) & (pos > left[..., None]) & (pos < right[..., None])
+        return (~low[..., ci] & strong.any(axis=-1)).astype(np.float64)
 
 
-def localise_labels(score: np.ndarray, local: np.ndarray, p: HeadMotionParams) -> np.ndarray:
-    """(T,) window scores and (T,) local amplitude ratios (:meth:`_Spectral.scores`) -> (T,) int8
-    labels: a frame is labelled 1 where its window is detected (``score >= threshold``) and the
-    motion at the frame is part of the event, by hysteresis on ``local``: an event starts at a frame
-    with ``local >= event_on`` and goes on while ``local >= event_off`` (and its window is detected).
-    UNKNOWN where the score is nan. Vectorised: within each run of candidate frames
-    (detected and ``local >= event_off``) the frames from the run's first start frame on.
-    The streaming detectors apply the same rule frame by frame.
+def localise_labels(score: np.ndarray, inside: np.ndarray, p: HeadMotionParams) -> np.ndarray:
+    """(T,) window scores and (T,) centre-in-event flags (:meth:`_Spectral.scores`) -> (T,) int8
+    labels: 1 where the frame's window is detected (``score >= threshold``) and the frame is part
+    of the window's event; UNKNOWN where the score is nan. The streaming detectors give the same.
     """
     lab = threshold_labels(score, p.threshold)
-    if p.event_on <= 0:
-        return lab
-    cand = (lab == 1) & (local >= p.event_off)
-    start = cand & (local >= p.event_on)
-    idx = np.arange(len(cand))
-    run_start = np.maximum.accumulate(np.where(cand & ~np.r_[False, cand[:-1]], idx, -1))
-    last_start = np.maximum.accumulate(np.where(start, idx, -1))
-    on = cand & (last_start >= run_start)
-    return np.where(lab == UNKNOWN, lab, on.astype(np.int8)).astype(np.int8)
+    return np.where(lab == 1, (inside > 0).astype(np.int8), lab).astype(np.int8)
 
 
 def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -526,14 +524,12 @@ class _StreamingChannels:
         self._i = 0
         self._count = 0
         self._angles = (False, False)  # (nod from a pitch, shake from a yaw) in the buffer
-        self._on = [False, False]  # (nod, shake) event going on at the previous frame (hysteresis)
 
     def reset(self) -> None:
         """Forget the history (e.g. after the person was lost)."""
         self._buf.fill(np.nan)
         self._i = 0
         self._count = 0
-        self._on = [False, False]
 
     def push(self, sample: np.ndarray) -> None:
         """Append a (4,) sample without scoring (nan for a missing frame)."""
@@ -547,25 +543,17 @@ class _StreamingChannels:
         """(nod_score, nod, shake_score, shake) of the window ending at the newest sample."""
         n = self.params.n
         if self._count < n - n // 2:  # the window's centre not seen yet
-            self._on = [False, False]
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
         win = self._buf[:, self._i : self._i + n]
         s_nod, s_shake, l_nod, l_shake = self._spec.scores(win, self._angles)
         sn, ss = float(s_nod), float(s_shake)
-        return (sn, self._label(0, sn, float(l_nod)), ss, self._label(1, ss, float(l_shake)))
+        return (sn, self._label(sn, float(l_nod)), ss, self._label(ss, float(l_shake)))
 
-    def _label(self, kind: int, score: float, local: float) -> int:
-        """The label of :func:`localise_labels` for the newest frame; kind 0 nod, 1 shake."""
-        p = self.params
+    def _label(self, score: float, inside: float) -> int:
+        """The label of :func:`localise_labels` for the newest window."""
         if score != score:
-            self._on[kind] = False
             return UNKNOWN
-        detected = score >= p.threshold
-        if p.event_on <= 0:
-            return int(detected)
-        cand = detected and local >= p.event_off
-        self._on[kind] = cand and (local >= p.event_on or self._on[kind])
-        return int(self._on[kind])
+        return int(score >= self.params.threshold and inside > 0)
 
 
 class HeadMotionDetector(_StreamingChannels):

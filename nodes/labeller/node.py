@@ -237,13 +237,15 @@ class Labeller(Node):
         "event_on": Param(
             float,
             0.6,
-            "a nod/shake starts at a frame whose local motion is this fraction of its window's "
-            "largest (0: every frame of a detected window)",
+            "a nod/shake is a run of frames whose local motion is at least event_off of its "
+            "window's largest and reaches this fraction (0: every frame of a detected window)",
             min=0.0,
             max=1.0,
         ),
-        "event_off": Param(float, 0.3, "a nod/shake goes on while its local motion is this fraction", min=0.0, max=1.0),
-        "event_local_s": Param(float, 0.4, "width of the local motion average of event_on/event_off (s)", min=0.01),
+        "event_off": Param(
+            float, 0.3, "the fraction of the window's largest local motion a nod/shake's frames keep", min=0.0, max=1.0
+        ),
+        "event_local_s": Param(float, 0.25, "width of the local motion average of event_on/event_off (s)", min=0.01),
         "nod_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point nod motion (m)", min=0.0),
         "shake_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point shake motion (m)", min=0.0),
         "min_face_px": Param(int, 40, "smallest face width used (px); smaller faces are not tracked", min=24, max=4096),
