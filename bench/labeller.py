@@ -75,8 +75,9 @@ Figures (last stdout line, one JSON object):
                        still / nod / shake, ``--face-verdict-seeds`` 0-2, both frame rates), each judged by which of
                        nod and shake is labelled on at least 30% of its frames after the first
                        2.6 s (neither: still); ``verdicts_right`` counts the right ones. The face
-                       floors and talk thresholds were set by hand on the gesture clips and
-                       conversation seed 301 (30 s), not on the reported seeds.
+                       floors, event_on/event_off/local_s, max_flow_s, talk thresholds and
+                       talk_gap_s were set on the gesture clips and conversation seeds 301
+                       (25 fps) and 305 (29.97 fps), 45 s each, not on the reported seeds.
   mine_s               seconds to mine 45,000 frames x 27 speaker + 27 listener labels (synthetic
                        planted streams, rates 0.02-0.3, min_support 0.005, max_len 4);
                        mine_synthetic_recovered its planted rules found; --dense adds mine_s_dense
@@ -305,7 +306,7 @@ def bench_fps(c: Sequence, repeats: int = 3) -> tuple[float, float]:
 
 # ------------------------------------------------------------------------------ face video
 FACE_FPS = (25.0, 29.97)
-FACE_TUNING_SEEDS = (301,)
+FACE_TUNING_SEEDS = (301, 305)
 
 
 def face_labels(clip: FaceClip, lab: SocialLabeller | None = None) -> tuple[np.ndarray, list[str], float]:

@@ -151,6 +151,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "max_faces": ("track_params", "max_faces"),
     "talk_window_s": ("face_params", "window_s"),
     "talk_energy": ("face_params", "talk_energy_tracked"),
+    "talk_gap_s": ("face_params", "talk_gap_s"),
     "laugh_energy": ("face_params", "laugh_energy_tracked"),
 }
 #: what the algorithm's messages call a node parameter that has another name in the node
@@ -280,6 +281,14 @@ class Labeller(Node):
             min=0.0,
         ),
         "laugh_energy": Param(float, 0.05, "laughing threshold of the same mouth motion", min=0.0),
+        "talk_gap_s": Param(
+            float,
+            0.45,
+            "a face talks only where its mouth moved within this long before and after (s): "
+            "shorter pauses are bridged, the label does not spread past the first and last syllable",
+            min=0.0,
+            max=30.0,
+        ),
         "gaze_threshold_deg": Param(
             float,
             30.0,
