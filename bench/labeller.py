@@ -70,6 +70,10 @@ Figures (last stdout line, one JSON object):
                        with nod/shake frame recall and precision, ``still_nodshake_rate`` (the share
                        of frames more than 1 s from any true nod or shake that are labelled nod or
                        shake) and ``face_known`` (the share of frames with a tracked face).
+                       ``laugh_recall``: the share of frames labelled laughing on clips of a
+                       laughing face, ``laugh_false_rate_talk`` on clips of a talking face
+                       (``gesture_face_clip`` laugh / talk, the verdict seeds, frames from 2 s on;
+                       the lower / higher of the two rates: the conversations have no laughter).
                        The clips are ``realistic`` (blinks, slow lighting changes, JPEG quality 80).
                        ``verdicts``: short clips of one behaviour (``counterpart.sim.face.gesture_face_clip``
                        still / nod / shake, ``--face-verdict-seeds`` 0-2, both frame rates), each judged by which of
@@ -417,9 +421,21 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
                 )
     for key, (fp, n_known) in still_cnt.items():
         per[key]["still_false_rate"] = round(fp / n_known, 4) if n_known else float("nan")
+    # laughing: the conversations have none, so one-behaviour clips (wide-open mouth with a
+    # smile, or speech), frames from 2 s on (the 1 s talk window inside the behaviour)
+    for fps in FACE_FPS:
+        shares: dict[str, list[float]] = {"laugh": [], "talk": []}
+        for kind in shares:
+            for seed in verdict_seeds if verdict_seeds is not None else range(3):
+                lab_g, _, _ = face_labels(gesture_face_clip(kind, fps=fps, duration=4.0, seed=seed))
+                shares[kind].append(float((lab_g[int(2.0 * fps) :, SIGNALS.index("laughing")] == 1).mean()))
+        per[f"{fps:g}"]["laugh_recall"] = round(float(np.mean(shares["laugh"])), 4)
+        per[f"{fps:g}"]["laugh_false_rate_talk"] = round(float(np.mean(shares["talk"])), 4)
     names = ("nod_f1", "shake_f1", "talk_acc", "nod_precision", "nod_recall", "shake_precision", "shake_recall")
     worst: dict[str, object] = {k: min(per[f"{f:g}"][k] for f in FACE_FPS) for k in names}  # type: ignore[type-var]
     worst["still_false_rate"] = max(per[f"{f:g}"]["still_false_rate"] for f in FACE_FPS)  # type: ignore[type-var]
+    worst["laugh_recall"] = min(per[f"{f:g}"]["laugh_recall"] for f in FACE_FPS)  # type: ignore[type-var]
+    worst["laugh_false_rate_talk"] = max(per[f"{f:g}"]["laugh_false_rate_talk"] for f in FACE_FPS)  # type: ignore[type-var]
     return {
         **worst,
         "fps": round(fps_lab, 1),
