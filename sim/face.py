@@ -4,7 +4,9 @@ A small synthetic face renderer for the labeller's face path (OpenCV's frontal H
 find it): a head ellipsoid with hair, eye sockets, eyes, brows, a nose with nostrils and a mouth
 whose jaw drops, rotated about a neck pivot by a yaw (shake) and a pitch (nod), projected
 orthographically into a ``width`` x ``height`` frame over a textured background, lit from one side,
-supersampled twice, blurred, and with sensor noise and a slight brightness flicker per frame.
+supersampled twice, blurred, and with sensor noise and a slight brightness flicker per frame;
+the clips add what a camera filming a real face adds to that: blinks (10-25 a minute), slow
+lighting changes and JPEG compression (``realistic``, the default).
 
     clip = conversation_face_clip(seed=3, fps=29.97, duration=60.0)
     for i in range(clip.n_frames):
@@ -136,12 +138,17 @@ class FaceRenderer:
         offset_px: tuple[float, float] = (0.0, 0.0),
         smile: float = 0.0,
         rng: np.random.Generator | None = None,
+        blink: float = 0.0,
+        light: float = 1.0,
+        jpeg_quality: int = 0,
     ) -> np.ndarray:
         """One frame, (H, W, 3) uint8 BGR.
 
         yaw, pitch: head rotation (rad; see :func:`rotation`). mouth: jaw opening in [0, 1]
         (1: about 2 cm). offset_px: head translation (x right, y down, px). smile: widens the
-        mouth, [0, 1]. rng: sensor noise (None: no noise).
+        mouth, [0, 1]. rng: sensor noise (None: no noise). blink: eyelid closure in [0, 1] (1:
+        shut). light: brightness gain of the scene (slow illumination changes). jpeg_quality:
+        1-100 to pass the frame through JPEG compression (a camera's or a codec's artefacts), 0 not.
         """
         lk = self.look
         img = self._background.copy()
@@ -190,12 +197,14 @@ class FaceRenderer:
         my = -0.052 - 0.5 * drop
         mw = 0.026 * (1.0 + 0.25 * smile)
         feats: list[tuple[np.ndarray, tuple[float, ...]]] = []
+        lid = 1.0 - float(np.clip(blink, 0.0, 1.0))  # the open part of the eye
         for sx in (-1.0, 1.0):
             feats += [
                 (_ring((sx * 0.033, 0.030, 0.072), 0.024, 0.019), tuple(0.62 * skin)),  # socket
                 (_ring((sx * 0.034, 0.046, 0.080), 0.020, 0.0055), lk.hair),  # brow
-                (_ring((sx * 0.033, 0.022, 0.079), 0.013, 0.0055), (215.0, 215.0, 220.0)),  # eye white
-                (_ring((sx * 0.033, 0.022, 0.080), 0.0055, 0.0055), (40.0, 35.0, 30.0)),  # iris
+                (_ring((sx * 0.033, 0.022, 0.079), 0.013, 0.0055), tuple(0.8 * skin)),  # closed lid
+                (_ring((sx * 0.033, 0.022, 0.0795), 0.013, 0.0055 * lid), (215.0, 215.0, 220.0)),  # eye white
+                (_ring((sx * 0.033, 0.022, 0.080), 0.0055, 0.0055 * lid), (40.0, 35.0, 30.0)),  # iris
                 (_ring((sx * 0.012, -0.012, 0.095), 0.006, 0.014), tuple(0.85 * skin)),  # nose side
                 (_ring((sx * 0.008, -0.030, 0.098), 0.0045, 0.0025), tuple(0.35 * skin)),  # nostril
             ]
@@ -213,13 +222,17 @@ class FaceRenderer:
             )[2]
             if normal > 0.15:
                 poly(uv, colour)
-        out = img.astype(np.float32) * self._light
+        out = img.astype(np.float32) * (self._light * np.float32(light))
         out = cv2.GaussianBlur(out, (0, 0), 1.2)
         out = cv2.resize(out, (self.width, self.height), interpolation=cv2.INTER_AREA)
         if rng is not None:
             out *= float(1.0 + rng.normal(0.0, 0.004))
             out += rng.normal(0.0, self.noise, out.shape).astype(np.float32)
-        return np.clip(out, 0, 255).astype(np.uint8)
+        out8 = np.clip(out, 0, 255).astype(np.uint8)
+        if jpeg_quality:
+            ok, buf = cv2.imencode(".jpg", out8, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
+            out8 = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        return out8
 
 
 def syllables(
@@ -252,10 +265,40 @@ def syllables(
     return out * talking
 
 
+def blinks(n: int, fps: float, rng: np.random.Generator, rate_hz: tuple[float, float] = (0.2, 0.4)) -> np.ndarray:
+    """(n,) eyelid closure in [0, 1]: blinks at a seeded rate of ``rate_hz`` per second (people
+    blink 10-25 times a minute), each 0.1-0.25 s, closing and opening as a raised cosine.
+    """
+    out = np.zeros(n)
+    rate = float(rng.uniform(*rate_hz))
+    t = float(rng.exponential(1.0 / rate))
+    while t * fps < n:
+        d = float(rng.uniform(0.1, 0.25))
+        k = np.arange(int(np.ceil(d * fps)) + 1)
+        idx = int(t * fps) + k
+        ok = idx < n
+        out[idx[ok]] = np.maximum(out[idx[ok]], 0.5 * (1 - np.cos(2 * np.pi * np.clip(k / (d * fps), 0, 1))))[ok]
+        t += d + float(rng.exponential(1.0 / rate))
+    return out
+
+
+def lighting(n: int, fps: float, rng: np.random.Generator, depth: float = 0.08) -> np.ndarray:
+    """(n,) slow brightness gain around 1 (clouds, auto exposure): a sum of a few sinusoids of
+    periods 4-20 s, peak change about ``depth``.
+    """
+    t = np.arange(n) / fps
+    g = np.zeros(n)
+    for _ in range(3):
+        g += np.sin(2 * np.pi * t / float(rng.uniform(4.0, 20.0)) + float(rng.uniform(0, 2 * np.pi)))
+    return 1.0 + depth / 3.0 * g
+
+
 @dataclass
 class FaceClip:
     """A face video with per-frame truth. yaw, pitch: (T,) rad; mouth: (T,) jaw opening; offset:
-    (T, 2) px; truth: name -> (T,) bool ("nod", "shake", "talking", "laughing").
+    (T, 2) px; truth: name -> (T,) bool ("nod", "shake", "talking", "laughing"). blink: (T,)
+    eyelid closure; light: (T,) scene brightness gain; jpeg_quality: per-frame JPEG compression
+    (0: none); see :meth:`FaceRenderer.render`.
     """
 
     renderer: FaceRenderer
@@ -268,6 +311,9 @@ class FaceClip:
     smile: np.ndarray | None = None
     seed: int = 0
     meta: dict[str, object] = field(default_factory=dict)
+    blink: np.ndarray | None = None
+    light: np.ndarray | None = None
+    jpeg_quality: int = 0
 
     @property
     def n_frames(self) -> int:
@@ -284,7 +330,25 @@ class FaceClip:
             (float(self.offset[i, 0]), float(self.offset[i, 1])),
             sm,
             rng,
+            0.0 if self.blink is None else float(self.blink[i]),
+            1.0 if self.light is None else float(self.light[i]),
+            self.jpeg_quality,
         )
+
+
+#: JPEG quality of the rendered clips (a webcam's or a video codec's compression)
+JPEG_QUALITY = 80
+
+
+def _camera(n: int, fps: float, seed: int, realistic: bool) -> dict[str, object]:
+    """The FaceClip fields of a real camera and face: blinks, slow lighting changes, compression
+    (none when not ``realistic``); drawn from their own seeded stream, so the motion stays that of
+    ``seed``.
+    """
+    if not realistic:
+        return {}
+    rng = np.random.default_rng([seed, 1014])
+    return {"blink": blinks(n, fps, rng), "light": lighting(n, fps, rng), "jpeg_quality": JPEG_QUALITY}
 
 
 def conversation_face_clip(
@@ -295,10 +359,12 @@ def conversation_face_clip(
     height: int = 360,
     face_px: float | None = None,
     person: str = "a",
+    realistic: bool = True,
 ) -> FaceClip:
     """Person ``person`` of ``counterpart.sim.scenarios.conversation(seed, fps, duration=duration)`` filmed
     face-on (see the module docstring). face_px: face width (px), default seeded 100-170 at
-    640x360 (scaled with the frame height).
+    640x360 (scaled with the frame height). realistic: blinks, slow lighting changes and JPEG
+    compression (:data:`JPEG_QUALITY`) on top of the sensor noise.
     """
     if person not in ("a", "b"):
         raise ValueError(f"person={person!r}: use 'a' or 'b'")
@@ -338,6 +404,7 @@ def conversation_face_clip(
         truth,
         seed=seed,
         meta={"scenario": "conversation", "seed": seed, "person": person, "face_px": face_px},
+        **_camera(len(yaw), fps, seed, realistic),
     )
 
 
@@ -349,10 +416,12 @@ def gesture_face_clip(
     width: int = 640,
     height: int = 360,
     face_px: float = 130.0,
+    realistic: bool = True,
 ) -> FaceClip:
     """A short clip of one behaviour throughout (after 1 s of rest): ``still``, ``nod`` (2 Hz,
     8 degrees), ``shake`` (2.5 Hz, 15 degrees), ``talk`` or ``laugh`` (mouth wide open at about
     5 per second, with a smile), for tests. Truth is True from the behaviour's start to its end.
+    realistic: as in :func:`conversation_face_clip`.
     """
     kinds = ("still", "nod", "shake", "talk", "laugh")
     if kind not in kinds:
@@ -380,4 +449,16 @@ def gesture_face_clip(
     if key:
         truth[key] = on.copy()
     r = FaceRenderer(width, height, face_px, random_look(rng))
-    return FaceClip(r, float(fps), yaw, pitch, mouth, np.zeros((n, 2)), truth, smile, seed=seed, meta={"kind": kind})
+    return FaceClip(
+        r,
+        float(fps),
+        yaw,
+        pitch,
+        mouth,
+        np.zeros((n, 2)),
+        truth,
+        smile,
+        seed=seed,
+        meta={"kind": kind},
+        **_camera(n, fps, seed, realistic),
+    )

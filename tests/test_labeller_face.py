@@ -31,9 +31,11 @@ def _gray(clip: FaceClip, i: int) -> np.ndarray:
     return cv2.cvtColor(clip.render(i), cv2.COLOR_BGR2GRAY)
 
 
-def _label(clip: FaceClip, people: dict | None = None) -> tuple[np.ndarray, list[str]]:
-    """(T, 6) labels of the face's person (UNKNOWN where none) and its per-frame source."""
-    lab = SocialLabeller(clip.fps)
+def _label(clip: FaceClip, people: dict | None = None, **kw: object) -> tuple[np.ndarray, list[str]]:
+    """(T, 6) labels of the face's person (UNKNOWN where none) and its per-frame source; kw: the
+    labeller's keyword arguments.
+    """
+    lab = SocialLabeller(clip.fps, **kw)
     out = np.full((clip.n_frames, len(SIGNALS)), UNKNOWN, np.int8)
     src = []
     for i in range(clip.n_frames):
@@ -92,6 +94,31 @@ def test_missed_detections_bridged_then_a_long_miss_ends_the_track() -> None:
     assert tr.update(blank) == []
 
 
+def test_a_look_away_is_bridged_while_the_flow_follows_the_face() -> None:
+    """The head turns 50 degrees away for 1.2 s (past the frontal cascade's reach) and back: the
+    flow follows the eyes and brows, so the face keeps its track (``max_flow_s``); bridged for
+    ``max_miss_s`` alone, the track ends.
+    """
+    fps = 25.0
+    base = gesture_face_clip("still", fps=fps, duration=3.2, seed=5)
+    t = np.arange(base.n_frames) / fps
+    ramp = np.clip((t - 0.6) / 0.3, 0, 1) * np.clip((2.1 - t) / 0.3, 0, 1)
+    clip = FaceClip(
+        base.renderer, fps, np.radians(50.0) * ramp, base.pitch, base.mouth, base.offset, base.truth, seed=5
+    )
+    cc = load_face_cascade()
+    away = [i for i in range(clip.n_frames) if ramp[i] == 1.0]
+    missed = sum(len(cc.detectMultiScale(_gray(clip, i), 1.1, 3, minSize=(60, 60))) == 0 for i in away)
+    assert missed >= 0.8 * len(away), "the cascade must lose the turned face for this test to mean anything"
+    for max_flow_s, kept in ((2.0, True), (0.5, False)):
+        tr = FaceTracker(FaceTrackParams(fps, max_miss_s=0.5, max_flow_s=max_flow_s), cc)
+        ids = [[x.track_id for x in tr.update(_gray(clip, i))] for i in range(clip.n_frames)]
+        first = ids[5]
+        assert len(first) == 1
+        same = all(x == first for x in ids[5:])
+        assert same == kept, (max_flow_s, ids)
+
+
 # ---------------------------------------------------------------------------- labels from faces
 @pytest.mark.parametrize(
     "kind,fps",
@@ -120,6 +147,33 @@ def test_face_clip_labelled_from_the_face(kind: str, fps: float) -> None:
         else:
             assert share == 0.0, (s, on)
     assert (lab[:, SIGNALS.index("gaze_at_other")] == UNKNOWN).all()  # a face alone: no 3D body
+
+
+def test_talking_is_labelled_from_the_first_to_the_last_syllable() -> None:
+    """Speech from 1 s to 2.6 s of a still face: the talking labels (their latency removed) stay
+    on the speech (``talk_gap_s``); the window's mean alone spreads them about half a window
+    around it.
+    """
+    fps = 25.0
+    base = gesture_face_clip("talk", fps=fps, duration=4.0, seed=6)
+    t = np.arange(base.n_frames) / fps
+    mouth = np.where(t < 2.6, base.mouth, 0.0)
+    speech = np.flatnonzero(mouth > 0.05) / fps
+    clip = FaceClip(
+        base.renderer, fps, base.yaw, base.pitch, mouth, base.offset, base.truth, seed=6, **_camera_fields(base)
+    )
+    w = int(round(1.0 * fps))  # the talk window
+    for gap_s, tight in ((0.45, True), (0.0, False)):
+        lab, _ = _label(clip, face_params={"talk_gap_s": gap_s})
+        talk = lab[w - 1 - (w - 1) // 2 :, SIGNALS.index("talking")]
+        on = np.flatnonzero(talk == 1) / fps
+        assert len(on) > 0.8 * (speech[-1] - speech[0]) * fps, on
+        inside = on[0] >= speech[0] - 0.1 and on[-1] <= speech[-1] + 0.1
+        assert inside == tight, (gap_s, on[0], on[-1], speech[0], speech[-1])
+
+
+def _camera_fields(c: FaceClip) -> dict:
+    return {"blink": c.blink, "light": c.light, "jpeg_quality": c.jpeg_quality}
 
 
 def test_face_goes_to_the_body_below_it_and_absorbs_fragments_otherwise() -> None:

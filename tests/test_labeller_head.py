@@ -7,6 +7,7 @@ import pytest
 from counterpart.nodes.labeller.head_motion import (
     HeadMotionDetector,
     HeadMotionDetector2D,
+    HeadMotionDetectorFace,
     HeadMotionParams,
     head_motion,
     head_motion_2d,
@@ -54,7 +55,9 @@ def test_still_head_gives_no_nod_or_shake() -> None:
     head, neck = _still(500, np.random.default_rng(2))
     r = head_motion(head, neck, FPS)
     known = r.nod != UNKNOWN
-    assert known.sum() == 500 - HeadMotionParams(FPS).n + 1
+    n = HeadMotionParams(FPS).n
+    # scored once the window's centre is seen (the samples before the start count as held still)
+    assert known.sum() == 500 - (n - 1 - n // 2)
     assert not (r.nod[known] == 1).any() and not (r.shake[known] == 1).any()
     assert np.nanmax(r.nod_score) < 0.2
 
@@ -116,10 +119,10 @@ def test_pitch_nod_uses_the_facing_direction() -> None:
     head = neck + np.stack([0.17 * np.sin(pitch), 0.17 * np.cos(pitch), 0 * tt], axis=-1)
     head += rng.normal(0, 0.001, (t, 3))
     r = head_motion(head, neck, FPS, facing_yaw=np.pi / 2)
-    known = r.nod != UNKNOWN
-    assert (r.nod[known] == 1).all() and not (r.shake == 1).any()
+    full = r.nod[HeadMotionParams(FPS).n - 1 :]  # whole windows (the first ones are part-seen)
+    assert (full == 1).all() and not (r.shake == 1).any()
     wrong = head_motion(head, neck, FPS, facing_yaw=0.0)
-    assert (wrong.shake[known] == 1).all()
+    assert (wrong.shake[HeadMotionParams(FPS).n - 1 :] == 1).all()
 
 
 def test_streaming_matches_batch_and_starts_unknown() -> None:
@@ -139,10 +142,12 @@ def test_streaming_matches_batch_and_starts_unknown() -> None:
     np.testing.assert_array_equal(out[:, 1].astype(int), batch.nod)
     np.testing.assert_array_equal(out[:, 3].astype(int), batch.shake)
     n = HeadMotionParams(FPS, 1.6).n
-    assert (batch.nod[: n - 1] == UNKNOWN).all() and batch.nod[n - 1] != UNKNOWN
-    # the missing sample makes every window that holds it unknown, and only those
-    assert (batch.nod[150 : 150 + n] == UNKNOWN).all()
-    assert batch.nod[150 + n] != UNKNOWN and batch.nod[149] != UNKNOWN
+    c = n - 1 - n // 2  # frames from a window's centre to its end
+    assert (batch.nod[:c] == UNKNOWN).all() and batch.nod[c] != UNKNOWN
+    # the missing sample makes the windows that hold it from their centre on unknown, and only
+    # those (before the centre it is filled with the next sample)
+    assert (batch.nod[150 : 150 + c + 1] == UNKNOWN).all()
+    assert batch.nod[150 + c + 1] != UNKNOWN and batch.nod[149] != UNKNOWN
     assert (batch.nod == 1).any() and (batch.shake == 1).any()
 
 
@@ -175,6 +180,65 @@ def test_bad_parameters_are_named() -> None:
         HeadMotionParams(25.0, band_hz=(4.0, 1.0))
     with pytest.raises(ValueError, match=r"\(T,3\)"):
         head_motion(np.zeros((10, 2)), np.zeros((10, 2)), 25.0)
+    with pytest.raises(ValueError, match="event_on.*event_off"):
+        HeadMotionParams(25.0, event_on=0.3, event_off=0.5)
+    with pytest.raises(ValueError, match="local_s"):
+        HeadMotionParams(25.0, local_s=3.0)
+
+
+def _short_nods(fps: float, starts: tuple[float, ...], dur: float, t_s: float = 14.0) -> tuple[np.ndarray, ...]:
+    """A still head with nods of ``dur`` s (2 Hz, 2.5 cm, under a Hann envelope as a real nod
+    starts and ends at rest) at ``starts`` s: (head, neck, truth) at ``fps``.
+    """
+    head, neck = _still(int(t_s * fps), np.random.default_rng(11))
+    tt = np.arange(len(head)) / fps
+    truth = np.zeros(len(head), bool)
+    for t0 in starts:
+        on = (tt >= t0) & (tt < t0 + dur)
+        env = 0.5 - 0.5 * np.cos(2 * np.pi * (tt - t0) / dur)
+        head[:, 1] += np.where(on, 0.025 * env * np.sin(2 * np.pi * 2.0 * (tt - t0)), 0.0)
+        truth |= on
+    return head, neck, truth
+
+
+@pytest.mark.parametrize("fps", [25.0, 29.97])
+def test_short_nods_are_localised_in_their_window(fps: float) -> None:
+    """Nods of 0.8 s, half the 1.6 s window: the labels cover the nods (frame precision >= 0.9,
+    recall >= 0.7), where labelling every frame of a detected window smears each nod over its
+    neighbours (precision under 0.85).
+    """
+    head, neck, truth = _short_nods(fps, (2.0, 5.5, 9.0), 0.8)
+    for on, pmin, pmax in ((0.6, 0.9, 1.0), (0.0, 0.0, 0.85)):
+        r = head_motion(head, neck, fps, center=True, event_on=on)
+        pred = r.nod == 1
+        hit = (pred & truth).sum()
+        prec, rec = hit / max(pred.sum(), 1), hit / truth.sum()
+        assert pmin <= prec <= pmax and rec >= 0.7, (on, prec, rec)
+        assert not (r.shake == 1).any()
+    # streaming: the same labels, each given when its window's centre is the frame
+    det = HeadMotionDetector(fps)
+    out = np.array([det.update(head[i], neck[i])[1] for i in range(len(head))])
+    lat = HeadMotionParams(fps).n - 1 - HeadMotionParams(fps).n // 2
+    ref = head_motion(head, neck, fps, center=True).nod
+    np.testing.assert_array_equal(out[lat:], ref[: len(ref) - lat])
+
+
+def test_a_face_seen_again_is_labelled_after_half_a_window() -> None:
+    """After a reset (a face track that starts again) the labels come once the window's centre is
+    seen, half a window later, not a whole one: a nod that starts 0.3 s after the restart is found.
+    """
+    fps = 25.0
+    n = HeadMotionParams(fps).n
+    det = HeadMotionDetectorFace(fps)
+    t = np.arange(int(4 * fps)) / fps
+    y = 200.0 + np.where(t >= 0.3, 10.0 * np.sin(2 * np.pi * 2.0 * (t - 0.3)), 0.0)  # 0.08 face widths
+    out = np.array([det.update(np.array([320.0, yy]), 125.0) for yy in y])
+    lab = out[:, 1].astype(int)
+    first = n - 1 - n // 2
+    assert (lab[:first] == UNKNOWN).all() and lab[first] != UNKNOWN
+    nodded = np.flatnonzero(lab == 1)
+    assert len(nodded) and nodded[0] - first < 0.6 * fps  # the nod's frames, about 0.3 s in
+    assert not (out[:, 3] == 1).any()
 
 
 def test_head_yaw_crossing_pi_is_unwrapped() -> None:

@@ -161,6 +161,11 @@ class FaceParams:
     every n frames and reuse the last box in between. talk_energy_tracked, laugh_energy_tracked:
     the thresholds of a tracked face's stabilised mouth energy above its upper face's
     (:meth:`FaceSignalDetector.update_track`), in the same unit (laughing from the energy alone).
+    talk_gap_s: a tracked face talks (laughs) at the window's centre frame only when its mouth
+    moved (a frame's energy >= ``talk_energy_tracked``) within ``talk_gap_s`` seconds before it
+    and within as long after it: pauses between syllables and words shorter than that are
+    bridged, and the label does not spread past the first and last syllable (the window's mean
+    alone spreads it by up to half a window). At most half the window; 0: off.
     """
 
     fps: float
@@ -174,6 +179,7 @@ class FaceParams:
     patch_size: tuple[int, int] = (32, 16)
     talk_energy_tracked: float = 0.008
     laugh_energy_tracked: float = 0.05
+    talk_gap_s: float = 0.45
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -188,6 +194,10 @@ class FaceParams:
                 )
         if self.detect_every < 1:
             raise ValueError(f"detect_every must be >= 1, got {self.detect_every}")
+        if not 0 <= self.talk_gap_s <= self.window_s / 2:
+            raise ValueError(
+                f"talk_gap_s must be between 0 and half of window_s ({self.window_s / 2:g} s), got {self.talk_gap_s}"
+            )
 
     @property
     def w(self) -> int:
@@ -318,4 +328,18 @@ class FaceSignalDetector:
             laugh = energy / p.laugh_energy_tracked
         else:
             laugh = min(energy / p.laugh_energy, extent / p.laugh_extent)
-        return talk, int(talk >= 1.0), laugh, int(laugh >= 1.0)
+        moving = self._moving_around_centre() if tracked else True
+        return talk, int(talk >= 1.0 and moving), laugh, int(laugh >= 1.0 and moving)
+
+    def _moving_around_centre(self) -> bool:
+        """The mouth moved within ``talk_gap_s`` before and after the window's centre frame
+        ``(w - 1) // 2`` (the frame the window's mean is centred on; see :class:`FaceParams`).
+        """
+        p = self.params
+        g = int(round(p.talk_gap_s * p.fps))
+        if g <= 0:
+            return True
+        e = np.roll(self._energy, -self._i)  # oldest first
+        active = np.nan_to_num(e, nan=0.0) >= p.talk_energy_tracked
+        c = (len(e) - 1) // 2
+        return bool(active[max(0, c - g) : c + 1].any() and active[c : c + g + 1].any())

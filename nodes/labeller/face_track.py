@@ -15,7 +15,10 @@ small nod. So the box is not the head point. Each tracked face instead carries:
   ``sqrt(1 / (2 anchor_s fps))``; the face size (the box width) is smoothed the same way with
   ``size_s``;
 - **bridging**: a detection missed for up to ``max_miss_s`` seconds (a blink of the detector,
-  a quick turn) is carried by the flow alone; only a longer miss ends the track.
+  a quick turn) is carried by the flow alone, and for up to ``max_flow_s`` seconds while the flow
+  keeps following the face's points (a look away past the frontal detector's reach: the eyes and
+  brows stay in view and trackable, and a nod or shake made then is still measured); only a
+  longer miss ends the track.
 
 While a face is tracked it is searched for only around its last position (one face width
 around it, at the scale of its size: cheap); the whole frame is searched, at the scale that makes
@@ -52,7 +55,8 @@ class FaceTrackParams:
     search_every_s: period of the whole-frame search for new faces while one is tracked (s).
     max_faces: most faces tracked at once. n_points: optical-flow points per face. max_jump:
     largest distance (face widths) from the tracked point at which a detection is taken as this
-    face (beyond it the track is ended and restarted there).
+    face (beyond it the track is ended and restarted there). max_flow_s: longest run of missed
+    detections bridged while the flow follows the face (s; at least ``max_miss_s``).
     """
 
     fps: float
@@ -64,6 +68,7 @@ class FaceTrackParams:
     max_faces: int = 2
     n_points: int = 40
     max_jump: float = 0.5
+    max_flow_s: float = 2.0
 
     def __post_init__(self) -> None:
         checks = {
@@ -79,6 +84,7 @@ class FaceTrackParams:
             "max_faces": (self.max_faces >= 1, "must be >= 1"),
             "n_points": (self.n_points >= 8, "must be >= 8"),
             "max_jump": (self.max_jump > 0, "must be > 0 face widths"),
+            "max_flow_s": (self.max_flow_s >= self.max_miss_s, "must be >= max_miss_s (s)"),
         }
         for name, (ok, why) in checks.items():
             if not ok:
@@ -92,6 +98,11 @@ class FaceTrackParams:
     def max_miss(self) -> int:
         """Missed detections bridged, in frames."""
         return int(round(self.max_miss_s * self.fps))
+
+    @property
+    def max_flow_miss(self) -> int:
+        """Missed detections bridged while the flow follows the face, in frames."""
+        return int(round(self.max_flow_s * self.fps))
 
 
 _ids = count()
@@ -263,7 +274,7 @@ class FaceTracker:
                 tr.missed += 1
                 # a new face must be found again on its next CONFIRM frames: the cascade's false
                 # positives on a textured background rarely are
-                if tr.missed > p.max_miss or tr.age <= CONFIRM:
+                if tr.missed > (p.max_miss if d is None else p.max_flow_miss) or tr.age <= CONFIRM:
                     continue
             else:
                 tr.detected, tr.missed = True, 0

@@ -82,8 +82,14 @@ class HeadMotionParams:
     the nod / shake channels (0: no median stage); movements that go one way and stay are removed,
     back-and-forth ones up to about this long kept. face_nod_floor / face_shake_floor: the
     amplitude floors of a tracked face's head point (:class:`HeadMotionDetectorFace`), in units
-    of the face's own width (a 10 degree nod moves the eyes about 0.1 face widths; detector
-    jitter left after tracking is about 0.005).
+    of the face's own width (a 10 degree nod moves the eyes about 0.15 face widths, a 5 degree
+    one 0.075; detector jitter left after tracking is about 0.005; a body bouncing on its knees
+    moves the face about 0.03).
+    local_s / event_on / event_off: localisation of an event inside its window (see
+    :meth:`_Spectral.local`): the width (s) of the moving mean of band-passed motion energy, and
+    the hysteresis thresholds on the local amplitude as a fraction of the window's largest local
+    amplitude (an event is a run of frames >= event_off that reaches event_on).
+    ``event_on`` 0 labels every frame of a detected window (no localisation).
     """
 
     fps: float
@@ -98,8 +104,11 @@ class HeadMotionParams:
     pitch_radius_m: float = 0.18
     nod_median_s: float = 1.0
     shake_median_s: float = 0.44
-    face_nod_floor: float = 0.04
-    face_shake_floor: float = 0.04
+    face_nod_floor: float = 0.06
+    face_shake_floor: float = 0.06
+    local_s: float = 0.25
+    event_on: float = 0.6
+    event_off: float = 0.3
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -136,6 +145,16 @@ class HeadMotionParams:
             raise ValueError(
                 f"threshold must be in (0, 1] (a fraction of the head's oscillating motion), got {self.threshold}"
             )
+        if self.event_on != 0 and not 0 <= self.event_off <= self.event_on <= 1:
+            raise ValueError(
+                f"event_on and event_off must satisfy 0 <= event_off <= event_on <= 1 (fractions of "
+                f"the window's largest local amplitude; event_on 0: no localisation), got event_on={self.event_on}, event_off={self.event_off}"
+            )
+        if not self.local_s > 0 or 2 * (self.local_k // 2) + 1 > n:
+            raise ValueError(
+                f"local_s must be > 0 s and its width in frames ({self.local_k}) at most the window's ({n}), "
+                f"got local_s={self.local_s} at {self.fps} fps"
+            )
         for name in ("nod_median_s", "shake_median_s"):
             v = getattr(self, name)
             if not v >= 0 or self.median_k(v) > n:
@@ -147,6 +166,11 @@ class HeadMotionParams:
     def median_k(self, seconds: float) -> int:
         """A running-median width in frames (odd; 1 = no median stage)."""
         return (max(int(round(seconds * self.fps)), 1) | 1) if seconds > 0 else 1
+
+    @property
+    def local_k(self) -> int:
+        """Width in frames (odd, >= 1) of the moving mean of local motion energy."""
+        return max(int(round(self.local_s * self.fps)), 1) | 1
 
     @property
     def n(self) -> int:
@@ -170,7 +194,9 @@ class _Spectral:
         wt[0] = 0.0  # DC is removed: it is the head's mean offset, not motion
         self.wt = wt
         lo, hi = p.band_hz
-        self.band = wt * ((freqs >= lo) & (freqs <= hi))
+        in_band = (freqs >= lo) & (freqs <= hi)
+        self.band = wt * in_band
+        self.band_pass = in_band.astype(np.float64)
         sw2 = float(np.sum(self.w**2))
         # floors: [nod, shake] x [head point (m), angle arc (m), tracked face (face widths)]
         self.e_floor = (
@@ -189,23 +215,34 @@ class _Spectral:
         self,
         win: np.ndarray,
         angles: tuple[int, int] = (False, False),
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """win: (..., 4, N) channel windows (m) -> (nod_score, shake_score), each (...,).
-        angles: the kind of the (nod, shake) channels, which picks the floors: 0 (False) a head
-        point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths).
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Scores of channel windows and the local amplitude at their centres.
+
+        Parameters
+        ----------
+        win : (..., 4, N) channel windows (m, or face widths).
+        angles : the kind of the (nod, shake) channels, which picks the floors: 0 (False) a head
+            point (m), 1 (True) a tracker's angle (m of arc), :data:`FACE` a tracked face (face widths).
+
+        Returns
+        -------
+        nod_score, shake_score : (...,) in [0, 1], nan where the window's second half (from its
+            centre sample on) holds a missing sample; missing samples before the centre are filled
+            (:func:`fill_window_start`), so a track that starts again is labelled from its first frame.
+        nod_inside, shake_inside : (...,) 1.0 where the window's centre sample ``N // 2`` is part
+            of the window's nod (shake) event by its local band-passed motion (:meth:`local`), else 0.0.
         """
-        bad = np.isnan(win).any(axis=(-2, -1))
-        if bad.any():
-            win = np.where(np.isnan(win), 0.0, win)
+        p = self.p
+        win, bad = fill_window_start(win)
         win = np.concatenate(
             [
-                oscillation_residual(win[..., :2, :], self.p.median_k(self.p.nod_median_s)),
-                oscillation_residual(win[..., 2:, :], self.p.median_k(self.p.shake_median_s)),
+                oscillation_residual(win[..., :2, :], p.median_k(p.nod_median_s)),
+                oscillation_residual(win[..., 2:, :], p.median_k(p.shake_median_s)),
             ],
             axis=-2,
         )
-        x = (win - win.mean(axis=-1, keepdims=True)) * self.w
-        spec = np.fft.rfft(x, axis=-1)
+        win = win - win.mean(axis=-1, keepdims=True)
+        spec = np.fft.rfft(win * self.w, axis=-1)
         pw = spec.real**2 + spec.imag**2  # (..., 4, F)
         total = pw @ self.wt  # (..., 4)
         band = pw @ self.band  # (..., 4)
@@ -216,7 +253,67 @@ class _Spectral:
         shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
-        return nod, shake
+        local = self.local(win)
+        return nod, shake, local[..., 0], local[..., 1]
+
+    def local(self, res: np.ndarray) -> np.ndarray:
+        """(..., 4, N) zero-mean oscillation residuals -> (..., 2) float, 1.0 where the window's
+        centre sample is part of the (nod, shake) event in the window, else 0.0 (see :meth:`scores`).
+
+        The residual is band-passed with the FFT (no taper: the window's ends keep their weight),
+        its energy summed over each channel pair and averaged over ``local_k`` frames, giving the
+        local amplitude ``a_j = sqrt(E_j / max_j E_j)`` relative to the window's largest. The centre
+        is in the event when it lies in a run of positions with ``a >= event_off`` that reaches
+        ``a >= event_on`` somewhere (hysteresis both ways in time: the window sees the centre's past
+        and future, so an event is not labelled late). ``event_on`` 0: always 1.0.
+        """
+        p = self.p
+        if p.event_on <= 0:
+            return np.ones((*res.shape[:-2], 2))
+        n, k = p.n, p.local_k
+        xb = np.fft.irfft(np.fft.rfft(res, axis=-1) * self.band_pass, n, axis=-1)
+        e2 = xb**2
+        e = np.stack([e2[..., 0, :] + e2[..., 1, :], e2[..., 2, :] + e2[..., 3, :]], axis=-2)  # (..., 2, N)
+        c = np.cumsum(np.concatenate([np.zeros((*e.shape[:-1], 1)), e], axis=-1), axis=-1)
+        mov = c[..., k:] - c[..., :-k]  # (..., 2, P): k * mean energy around position j + k // 2
+        peak = mov.max(axis=-1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            amp = np.sqrt(np.where(peak > 0, mov / peak, 0.0))
+        ci = n // 2 - k // 2  # the centre sample's position
+        pos = np.arange(amp.shape[-1])
+        low = amp < p.event_off
+        left = np.where(low[..., : ci + 1], pos[: ci + 1], -1).max(axis=-1)  # last low position <= ci
+        right = np.where(low[..., ci:], pos[ci:], amp.shape[-1]).min(axis=-1)  # first low position >= ci
+        strong = (amp >= p.event_on) & (pos > left[..., None]) & (pos < right[..., None])
+        return (~low[..., ci] & strong.any(axis=-1)).astype(np.float64)
+
+
+def localise_labels(score: np.ndarray, inside: np.ndarray, p: HeadMotionParams) -> np.ndarray:
+    """(T,) window scores and (T,) centre-in-event flags (:meth:`_Spectral.scores`) -> (T,) int8
+    labels: 1 where the frame's window is detected (``score >= threshold``) and the frame is part
+    of the window's event; UNKNOWN where the score is nan. The streaming detectors give the same.
+    """
+    lab = threshold_labels(score, p.threshold)
+    return np.where(lab == 1, (inside > 0).astype(np.int8), lab).astype(np.int8)
+
+
+def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Windows (..., C, N) with missing samples (nan in any channel) before their centre ``N // 2`` filled with the
+    next known sample of their channel (as if the head had held still until it was seen), and
+    (...,) bool: the windows with a missing sample from the centre on (unknown; filled with 0).
+
+    A track that was lost is then scored again once half a window has been seen since (its
+    centre frame known), instead of a whole window, and the first half's gap adds no motion.
+    """
+    miss = np.isnan(win).any(axis=-2)  # (..., N): a sample is missing when any channel is
+    if not miss.any():
+        return win, np.zeros(win.shape[:-2], bool)
+    n = win.shape[-1]
+    bad = miss[..., n // 2 :].any(axis=-1)
+    idx = np.where(miss, n - 1, np.arange(n))
+    nxt = np.flip(np.minimum.accumulate(np.flip(idx, axis=-1), axis=-1), axis=-1)
+    filled = np.take_along_axis(win, np.broadcast_to(nxt[..., None, :], win.shape), axis=-1)
+    return np.where(np.isnan(filled), 0.0, filled), bad
 
 
 def oscillation_residual(win: np.ndarray, k: int) -> np.ndarray:
@@ -350,8 +447,9 @@ def scores_from_channels(
     """Batch nod/shake over a whole (T,4) channel trajectory, vectorised over all windows.
 
     Frame ``t`` is scored from window ``[t-N+1, t]`` (causal) or ``[t-N//2, t-N//2+N)`` (center);
-    frames without a full window are UNKNOWN. angles: (nod channels from the tracker's pitch, shake
-    channels from its yaw), which picks the amplitude floors.
+    the samples before the sequence count as missing (:func:`fill_window_start`: a window is scored
+    once its centre sample is), later frames without a full window are UNKNOWN. angles: (nod
+    channels from the tracker's pitch, shake channels from its yaw), which picks the amplitude floors.
     """
     ch = np.asarray(channels, dtype=np.float64)
     if ch.ndim != 2 or ch.shape[1] != 4:
@@ -359,14 +457,18 @@ def scores_from_channels(
     t, n = ch.shape[0], params.n
     nod = np.full(t, np.nan)
     shake = np.full(t, np.nan)
-    if t >= n:
-        win = sliding_window_view(ch.T, n, axis=1).transpose(1, 0, 2)  # (T-N+1, 4, N)
-        s_nod, s_shake = _Spectral(params).scores(win, angles)
-        first = n // 2 if center else n - 1
-        nod[first : first + len(s_nod)] = s_nod
-        shake[first : first + len(s_shake)] = s_shake
+    loc_nod = np.zeros(t)
+    loc_shake = np.zeros(t)
+    # window i ends at frame i (the n - 1 before the sequence are missing)
+    padded = np.concatenate([np.full((n - 1, 4), np.nan), ch])
+    win = sliding_window_view(padded.T, n, axis=1).transpose(1, 0, 2)  # (T, 4, N)
+    s_nod, s_shake, l_nod, l_shake = _Spectral(params).scores(win, angles)
+    first = -(n - 1 - n // 2) if center else 0  # frame of window 0
+    lo, hi = max(first, 0), min(t, t + first)
+    for dst, src in ((nod, s_nod), (shake, s_shake), (loc_nod, l_nod), (loc_shake, l_shake)):
+        dst[lo:hi] = src[lo - first : hi - first]
     return HeadMotionResult(
-        nod, threshold_labels(nod, params.threshold), shake, threshold_labels(shake, params.threshold)
+        nod, localise_labels(nod, loc_nod, params), shake, localise_labels(shake, loc_shake, params)
     )
 
 
@@ -440,13 +542,18 @@ class _StreamingChannels:
     def score(self) -> tuple[float, int, float, int]:
         """(nod_score, nod, shake_score, shake) of the window ending at the newest sample."""
         n = self.params.n
-        if self._count < n:
+        if self._count < n - n // 2:  # the window's centre not seen yet
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
         win = self._buf[:, self._i : self._i + n]
-        s_nod, s_shake = self._spec.scores(win, self._angles)
-        th = self.params.threshold
+        s_nod, s_shake, l_nod, l_shake = self._spec.scores(win, self._angles)
         sn, ss = float(s_nod), float(s_shake)
-        return (sn, UNKNOWN if sn != sn else int(sn >= th), ss, UNKNOWN if ss != ss else int(ss >= th))
+        return (sn, self._label(sn, float(l_nod)), ss, self._label(ss, float(l_shake)))
+
+    def _label(self, score: float, inside: float) -> int:
+        """The label of :func:`localise_labels` for the newest window."""
+        if score != score:
+            return UNKNOWN
+        return int(score >= self.params.threshold and inside > 0)
 
 
 class HeadMotionDetector(_StreamingChannels):

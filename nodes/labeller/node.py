@@ -140,6 +140,10 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "shake_floor_m": ("head_params", "shake_floor_m"),
     "face_nod_floor": ("head_params", "face_nod_floor"),
     "face_shake_floor": ("head_params", "face_shake_floor"),
+    "event_on": ("head_params", "event_on"),
+    "event_off": ("head_params", "event_off"),
+    "event_local_s": ("head_params", "local_s"),
+    "max_flow_s": ("track_params", "max_flow_s"),
     "min_face_px": ("track_params", "min_face_px"),
     "max_miss_s": ("track_params", "max_miss_s"),
     "anchor_s": ("track_params", "anchor_s"),
@@ -147,6 +151,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "max_faces": ("track_params", "max_faces"),
     "talk_window_s": ("face_params", "window_s"),
     "talk_energy": ("face_params", "talk_energy_tracked"),
+    "talk_gap_s": ("face_params", "talk_gap_s"),
     "laugh_energy": ("face_params", "laugh_energy_tracked"),
 }
 #: what the algorithm's messages call a node parameter that has another name in the node
@@ -156,6 +161,7 @@ _FIELD_NAMES = {
     "window_s": "head_window_s",
     "talk_energy_tracked": "talk_energy",
     "laugh_energy_tracked": "laugh_energy",
+    "local_s": "event_local_s",
 }
 
 
@@ -226,14 +232,33 @@ class Labeller(Node):
             max=1.0,
         ),
         "face_nod_floor": Param(
-            float, 0.04, "amplitude floor of a face's nod motion (face widths): smaller motion scores lower", min=0.0
+            float, 0.06, "amplitude floor of a face's nod motion (face widths): smaller motion scores lower", min=0.0
         ),
-        "face_shake_floor": Param(float, 0.04, "amplitude floor of a face's shake motion (face widths)", min=0.0),
+        "face_shake_floor": Param(float, 0.06, "amplitude floor of a face's shake motion (face widths)", min=0.0),
+        "event_on": Param(
+            float,
+            0.6,
+            "a nod/shake is a run of frames whose local motion is at least event_off of its "
+            "window's largest and reaches this fraction (0: every frame of a detected window)",
+            min=0.0,
+            max=1.0,
+        ),
+        "event_off": Param(
+            float, 0.3, "the fraction of the window's largest local motion a nod/shake's frames keep", min=0.0, max=1.0
+        ),
+        "event_local_s": Param(float, 0.25, "width of the local motion average of event_on/event_off (s)", min=0.01),
         "nod_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point nod motion (m)", min=0.0),
         "shake_floor_m": Param(float, 0.01, "amplitude floor of 3D/2D head-point shake motion (m)", min=0.0),
         "min_face_px": Param(int, 40, "smallest face width used (px); smaller faces are not tracked", min=24, max=4096),
         "max_miss_s": Param(
             float, 0.5, "longest run of missed face detections bridged by optical flow (s)", min=0.0, max=10.0
+        ),
+        "max_flow_s": Param(
+            float,
+            2.0,
+            "the same while the flow still follows the face's points (a look away) (s)",
+            min=0.0,
+            max=60.0,
         ),
         "anchor_s": Param(
             float,
@@ -256,6 +281,14 @@ class Labeller(Node):
             min=0.0,
         ),
         "laugh_energy": Param(float, 0.05, "laughing threshold of the same mouth motion", min=0.0),
+        "talk_gap_s": Param(
+            float,
+            0.45,
+            "a face talks only where its mouth moved within this long before and after (s): "
+            "shorter pauses are bridged, the label does not spread past the first and last syllable",
+            min=0.0,
+            max=30.0,
+        ),
         "gaze_threshold_deg": Param(
             float,
             30.0,
