@@ -37,7 +37,9 @@ def small_models(folder: Path) -> Path:
     """A default model of every kind, small enough to fit in seconds."""
     save_model(
         folder / "responder-dual-hmm.npz",
-        DualHMM(DualHMMConfig(fit=FitConfig(n_states=8, n_iter=10, both_roles=False))).fit([planted_pair(s) for s in range(4)]),
+        DualHMM(DualHMMConfig(fit=FitConfig(n_states=8, n_iter=10, both_roles=False))).fit(
+            [planted_pair(s) for s in range(4)]
+        ),
     )
     cam = default_camera(160, 120)
     save_model(
