@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from counterpart.nodes.silhouette.backends import make_subtractor
-from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
+from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW, HorprasertBackground, ShadowConfig
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
 from counterpart.nodes.silhouette.synthetic import textured_background
@@ -179,8 +179,6 @@ def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
     """On a textured floor a cast shadow keeps the floor's pattern (same colour, darker); a dark
     shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow.
     """
-    from counterpart.nodes.silhouette.background import HorprasertBackground
-
     rng = np.random.default_rng(3)
     floor = np.repeat(np.repeat(rng.uniform(80, 200, (30, 40)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])
 
@@ -195,6 +193,6 @@ def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
     shirt = np.full_like(shadow, 0.6 * floor[40:80, 40:100].mean(axis=(0, 1)))
     inner = (slice(44, 76), slice(44, 96))
     for ncc, want_shirt in ((0.4, FOREGROUND), (-1.0, SHADOW)):
-        model = HorprasertBackground(shadow_ncc=ncc).fit(train)
+        model = HorprasertBackground(shadows=ShadowConfig(shadow_ncc=ncc)).fit(train)
         assert (model.apply(shot(shadow))[inner] == SHADOW).mean() > 0.9
         assert (model.apply(shot(shirt))[inner] == want_shirt).mean() > 0.7
