@@ -83,6 +83,31 @@ def test_sample_consensus_keeps_a_person_and_the_shadow_class() -> None:
     assert (sub.labels[y0 + 2 : y0 + 18, x0 + 2 : x0 + 98] == SHADOW).mean() > 0.95
 
 
+def test_the_match_radius_follows_each_pixel_own_spread() -> None:
+    """A shirt a little off the wall's colour (+12 blue, -12 red: L1 24 grey levels, a change of
+    chromaticity the statistics flag) stays foreground on the plain, low-noise wall: the radius
+    comes from the wall's own spread. A radius that grows with brightness alone (10 + 6% of
+    |S|_1, the first version) took it for the wall. The waving leaves' spread is far wider.
+    """
+
+    def run(**sample_params: float) -> tuple[float, np.ndarray]:
+        rng = np.random.default_rng(4)
+        sub = make_subtractor("horprasert", train_frames=30, robust=False, sample_params=sample_params)
+        for k in range(150):
+            sub.apply(frame(rng, wind=k >= 30))
+        x, y, w, h = 40, 130, 30, 80
+        f = frame(rng)
+        shirt = ROOM[y : y + h, x : x + w] + np.float32([12.0, 0.0, -12.0])
+        f[y : y + h, x : x + w] = np.clip(np.rint(shirt), 0, 255).astype(np.uint8)
+        return float(sub.apply(f)[y : y + h, x : x + w].mean()), sub.samples.spread_
+
+    kept, spread = run()
+    assert kept > 0.95, kept
+    assert np.median(spread[LEAVES]) > 3 * np.median(spread[150:, :100]), (spread[LEAVES].mean(), spread.mean())
+    eaten, _ = run(radius=10.0, relative_radius=0.06, spread_k=0.0)
+    assert eaten < 0.5, eaten
+
+
 def test_sample_consensus_validates_and_learns_only_background() -> None:
     with pytest.raises(ValueError, match="min_matches"):
         SampleConsensus(n_samples=5, min_matches=6)

@@ -65,7 +65,7 @@ class HorprasertSubtractor:
         robust: bool = True,
         people_aware: bool = True,
         detector: Any = None,
-        dynamic: bool = False,
+        dynamic: bool = True,
         sample_params: dict[str, Any] | None = None,
         **model_params: Any,
     ) -> None:

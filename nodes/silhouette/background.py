@@ -208,7 +208,7 @@ class ShadowConfig:
         training frames they most likely still stand, and a grey shirt there is a darker shade of
         the grey floor filled in around them, not a shadow (``people.fit_around_people`` keeps
         their cast shadow, on the ground at their feet, out of those pixels).
-    shadow_ncc : float, default -1.0
+    shadow_ncc : float, default 0.4
         A shadow pixel whose ``shadow_window`` neighbourhood correlates less than this
         (normalised cross-correlation of grey levels; Jacques, Jung & Musse 2005, eq. 4) with the
         background's is foreground, when the neighbourhood is textured; -1 turns the texture test
@@ -224,7 +224,7 @@ class ShadowConfig:
     min_shadow_brightness: float = 0.4
     max_highlight_brightness: float = 1.5
     unseen_min_shadow_brightness: float = 0.6
-    shadow_ncc: float = -1.0
+    shadow_ncc: float = 0.4
     shadow_texture_k: float = 4.0
     shadow_window: int = 7
 

@@ -14,10 +14,15 @@ probability one sample of a random 8-neighbour (so a ghost at the edge of the ba
 from its rim, and a sample set keeps memories of every age with an exponentially decaying
 chance). Foreground pixels never enter the samples.
 
-The radius adapts per pixel (SuBSENSE: St-Charles, Bilodeau & Bergevin, IEEE TIP 2015): a pixel
-whose foreground label keeps switching on and off ("blinking", eq. 5 of that paper) is in a
-dynamic region and its R(x) grows; everywhere else R(x) drifts back to ``radius``. The blink
-level v(x) rises by ``blink_gain`` on every switch and decays by ``blink_decay`` per frame.
+The radius is each pixel's own (SuBSENSE: St-Charles, Bilodeau & Bergevin, IEEE TIP 2015, whose
+R(x) follows the pixel's background dynamics D_min(x)): R(x) = max(radius, spread_k d(x)) +
+relative_radius |S_k|_1, with d(x) the mean L1 distance between a background observation and the
+pixel's samples. A plain wall under a clean camera keeps a tight radius, so a grey head in front of
+it is not taken for the wall; leaves, water and compression noise get a wide one. The brightness
+term covers a change of light, which moves a colour in proportion to it. A pixel whose foreground
+label keeps switching on and off ("blinking", eq. 5 of that paper) is in a dynamic region and its
+radius grows by the blink level v(x): it rises by ``blink_gain`` on every switch and decays by
+``blink_decay`` per frame.
 
 Only the pixels the statistical model calls foreground are tested (a few percent of a frame), so
 the cost per frame is small. Frames are uint8 BGR (H, W, 3).
@@ -44,9 +49,16 @@ class SampleConsensus:
     ----------
     n_samples : colours kept per pixel (ViBe's N, 20 in the paper).
     min_matches : samples that must lie within the radius for a match (#min, 2 in the paper).
-    radius, relative_radius : matching radius R = radius + relative_radius * |S_k|_1 for sample
-        S_k, L1 distance over B, G, R in grey levels (ViBe uses a fixed 20 on grey images; the
-        noise of a camera grows with brightness, so a dark pixel here gets a tighter radius).
+    radius, relative_radius, spread_k : matching radius
+        R = max(radius, spread_k * d(x)) + relative_radius * |S_k|_1 for sample S_k, L1 distance
+        over B, G, R in grey levels. d(x) is the pixel's own spread: the mean L1 distance between
+        a background observation and its samples (SuBSENSE's D_min idea), initialised from
+        consecutive training frames and followed at ``spread_rate`` on the pixels drawn for an
+        update. A clean camera on a plain wall gets a tight radius (a grey head in front of a
+        grey wall stays a person), leaves or compression noise a wide one. ViBe uses a fixed 20
+        on grey images; ``relative_radius`` (noise that grows with brightness) is 0 by default.
+    spread_rate : running-average rate of d(x), per update of the pixel (about every
+        ``subsampling`` frames).
     max_radius_gain : largest R(x) / radius in blinking regions.
     subsampling : 1 / probability of an update at each background pixel (phi, 16 in the paper).
     blink_gain, blink_decay : rise of the blink level v(x) on a label switch and its decay per frame;
@@ -59,14 +71,17 @@ class SampleConsensus:
     Fitted attributes
     -----------------
     samples_ : (3, n_samples, H * W) uint8, channel planes B, G, R.  radius_ : (H, W) float32 radius gain 1 + v(x).
+    spread_ : (H, W) float32 d(x), grey levels (L1).
     """
 
     def __init__(
         self,
         n_samples: int = 20,
         min_matches: int = 2,
-        radius: float = 10.0,
-        relative_radius: float = 0.06,
+        radius: float = 0.5,
+        relative_radius: float = 0.025,
+        spread_k: float = 0.75,
+        spread_rate: float = 0.1,
         max_radius_gain: float = 2.5,
         subsampling: int = 16,
         blink_gain: float = 0.1,
@@ -92,6 +107,10 @@ class SampleConsensus:
         if relative_radius < 0:
             raise ValueError(f"relative_radius must be >= 0, got {relative_radius}")
         self.relative_radius = relative_radius
+        if spread_k < 0 or not 0.0 < spread_rate <= 1.0:
+            raise ValueError(f"spread_k must be >= 0 and spread_rate in (0, 1], got {spread_k}, {spread_rate}")
+        self.spread_k = spread_k
+        self.spread_rate = spread_rate
         self.max_radius_gain = max_radius_gain
         self.subsampling = subsampling
         self.blink_gain = blink_gain
@@ -111,6 +130,13 @@ class SampleConsensus:
         if self.samples_ is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return (1.0 + self._blink).reshape(self._shape)
+
+    @property
+    def spread_(self) -> np.ndarray:
+        """(H, W) float32 spread d(x) of each pixel's background, mean L1 distance in grey levels."""
+        if self.samples_ is None:
+            raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
+        return self._spread.reshape(self._shape)
 
     def fit(self, frames: np.ndarray, background: np.ndarray, foreground: np.ndarray | None = None) -> SampleConsensus:
         """Fill the sample sets from training frames (N, H, W, 3) uint8 BGR.
@@ -142,6 +168,11 @@ class SampleConsensus:
                 s[np.asarray(foreground[j]).reshape(-1)] = flat_bg[np.asarray(foreground[j]).reshape(-1)]
             samples[:, k] = s.T
         self.samples_ = samples
+        # d(x): the mean L1 distance of one background observation from another; consecutive
+        # training samples give it (noise and any motion of the background between frames)
+        nxt = np.roll(samples, -1, axis=1).astype(np.int16)
+        gap = np.abs(nxt - samples).sum(axis=0, dtype=np.float32)  # (N, H * W)
+        self._spread = gap[: max(1, min(n, self.n_samples) - 1)].mean(axis=0)
         self._blink = np.zeros(h * w, np.float32)
         self._prev_fg = np.zeros(h * w, np.uint8)
         return self
@@ -168,8 +199,10 @@ class SampleConsensus:
         # shirt for a dark doorway. dist < R (1 + v) <=> dist / (1 + v) - rel |S_k| < R0.
         lhs = dist * (1.0 / (1.0 + np.take(self._blink, idx)))[None]
         lhs -= np.float32(self.relative_radius) * total
-        matches = np.count_nonzero(lhs < np.float32(self.radius), axis=0)
-        return matches >= self.min_matches
+        base = np.float32(self.radius)
+        if self.spread_k > 0.0:
+            base = np.maximum(base, np.float32(self.spread_k) * np.take(self._spread, idx))[None]
+        return np.count_nonzero(lhs < base, axis=0) >= self.min_matches
 
     def apply(self, frame: np.ndarray, labels: np.ndarray) -> np.ndarray:
         """Veto the statistical model's foreground where the samples explain the colour, and learn.
@@ -221,6 +254,8 @@ class SampleConsensus:
                 continue
             k = rng.integers(0, self.n_samples, size=cand.size)
             if own:
+                if self.spread_k > 0.0:
+                    self._follow_spread(px[cand], cand)
                 self._write(k * npx + cand, px[cand])
                 continue
             off = _NEIGHBOURS[rng.integers(0, 8, size=cand.size)]
@@ -231,6 +266,19 @@ class SampleConsensus:
             # who stands still from their rim; uncovered room (ghosts) is the statistics' job
             ok = learn[nb]
             self._write(k[ok] * npx + nb[ok], px[cand[ok]])
+
+    def _follow_spread(self, colours: np.ndarray, cand: np.ndarray) -> None:
+        """d(x) += spread_rate (mean_k |I - S_k|_1 - d(x)) at the pixels ``cand`` (M,) drawn for an
+        update, whose observed background colours are ``colours`` (M, 3) uint8.
+        """
+        dist = np.zeros((self.n_samples, cand.size), np.int16)
+        for c in range(3):
+            sc = np.take(self.samples_[c], cand, axis=1).astype(np.int16)
+            sc -= colours[:, c].astype(np.int16)
+            dist += np.abs(sc)
+        d = self._spread[cand]
+        d += np.float32(self.spread_rate) * (dist.mean(axis=0, dtype=np.float32) - d)
+        self._spread[cand] = d
 
     def _write(self, flat_idx: np.ndarray, colours: np.ndarray) -> None:
         """Store colours (M, 3) uint8 at flat indices k * H * W + pixel of the sample planes
