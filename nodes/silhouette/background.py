@@ -665,19 +665,24 @@ class HorprasertBackground:
         m = cv2.bitwise_and(shw, 1).astype(np.float32)
         box = lambda a: cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)  # noqa: E731
         inv_n = 1.0 / np.maximum(box(m), 1.0)
-        gm, em = grey * m, e * m
-        mi, me = box(gm) * inv_n, box(em) * inv_n
-        vi = box(gm * grey) * inv_n - mi * mi
+        em = e * m
+        me = box(em) * inv_n
         ve = box(em * e) * inv_n - me * me
-        cov = box(gm * e) * inv_n - mi * me
         # noise of the grey sum (3 channels): its variance is the sum of the channel variances
         var = self._var
         floor = var[0][win] + var[1][win]
         floor += var[2][win]
         floor *= np.float32(self.shadows.shadow_texture_k**2)
+        textured = (shw > 0) & (ve > floor)
+        if not textured.any():
+            # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
+            return
+        gm = grey * m
+        mi = box(gm) * inv_n
+        vi = box(gm * grey) * inv_n - mi * mi
+        cov = box(gm * e) * inv_n - mi * me
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        person = (shw > 0) & (ve > floor) & (ncc < self.shadows.shadow_ncc)
-        labels[win][person] = FOREGROUND
+        labels[win][textured & (ncc < self.shadows.shadow_ncc)] = FOREGROUND
 
     def update(self, frame: np.ndarray, labels: np.ndarray) -> None:
         """Blend the frame into the model, never where ``labels == FOREGROUND``.
