@@ -2,7 +2,7 @@
 
 Usage: python bench/silhouette.py [--source synthetic|vtest|sim|all] [--frames N]
            [--scenarios handshake,push,wave,conversation] [--seeds 0,1,2] [--sim-frames 250]
-           [--threads 1] [--no-real | --real-only] [--out FILE]
+           [--threads 1] [--no-real | --real-only | --speed-only] [--out FILE]
 
 Real footage (``../shared/data/cdnet``, skipped when absent; ``--real-only`` runs only this):
 each CDnet sequence (pedestrians, busStation) is fed from its first frame to ours, MOG2, KNN and
@@ -11,14 +11,17 @@ close 7, holes filled, minimum area from the frame size, tracking), and the publ
 is scored with the CDnet protocol: F1 pooled over the evaluated frames (``temporalROI.txt``),
 label 255 positive, 0 and 50 negative, 85 and 170 ignored. The first half of the evaluated frames
 was used to tune our model (``*_tune``); the figures (``f1_ours``, ``f1_mog2``, ``f1_knn``,
-``f1_gsoc``) are those of the second half; ``f1_ours_dynamic``: ours with the sample-consensus
-model on, the minimum area from the frame size and the shadow texture test on
-(``dynamic=True, min_area=None, shadow_ncc=0.4``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
+``f1_gsoc``) are those of the second half; ``f1_ours_auto_area``: ours with the minimum area
+from the frame size and camera (``min_area=None``, node ``min_area: 0``) instead of the node's
+300 px. Ours with the node defaults has the sample-consensus model and the shadow texture test
+on (``dynamic: true, shadow_ncc: 0.4``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
 theirs): the SHADOW class of the raw pixels against label 50, where the ground truth marks shadows.
 Top-level key ``real``: one object per sequence.
 
 Speed beside MOG2: ``fps_320x240_2cores`` (ours) and ``fps_320x240_2cores_mog2`` (the same
 extractor with MOG2 as its backend), whole extractor with splines, two OpenCV threads, sim frames.
+``--speed-only`` runs only the speed figures (run it alone on the machine: they are wall-clock
+medians); ``load_1min`` is the machine's load average when they were taken.
 
 Simulator evaluation (``--source sim`` or ``all``): every scenario x seed, 320x240, with the
 renderer's cast shadows, lighting drift and sensor noise, in two starts: 30 frames of the empty
@@ -74,11 +77,9 @@ SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(
 CDNET = os.path.join(SHARED, "cdnet")
 TRAIN_FRAMES = 30
 REAL_BACKENDS = ("horprasert", "mog2", "knn", "gsoc")
-#: ours for dynamic scenes and distant people: the sample-consensus model on, the minimum area
-#: from the frame size (``SilhouetteExtractor(min_area=None)``); reported as ``*_ours_dynamic``
-DYNAMIC = "horprasert-dynamic"
-#: and with the shadow texture test on (``HorprasertBackground(shadow_ncc=...)``)
-DYNAMIC_SHADOW_NCC = 0.4
+#: ours for distant people: the minimum area from the frame size and camera
+#: (``SilhouetteExtractor(min_area=None)``); reported as ``*_ours_auto_area``
+AUTO_AREA = "horprasert-auto-area"
 #: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
 GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
@@ -321,12 +322,9 @@ def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
 
 
 def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
-    """See ``_evaluate_real``; ``backend`` DYNAMIC is ours with ``dynamic=True, min_area=None``."""
-    if backend == DYNAMIC:
-        ex = SilhouetteExtractor(
-            min_area=None,
-            backend_params={"train_frames": TRAIN_FRAMES, "dynamic": True, "shadow_ncc": DYNAMIC_SHADOW_NCC},
-        )
+    """See ``_evaluate_real``; ``backend`` AUTO_AREA is ours with ``min_area=None``."""
+    if backend == AUTO_AREA:
+        ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES})
     else:
         ex = SilhouetteExtractor(
             backend=backend, backend_params={"train_frames": TRAIN_FRAMES} if backend == "horprasert" else {}
@@ -397,15 +395,15 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
             "split": "tune: first half of the evaluated frames; figures: second half",
         }
         has_shadow = bool(np.any(gt[first - 1 :] == GT_SHADOW))
-        for b in (*REAL_BACKENDS, DYNAMIC):
+        for b in (*REAL_BACKENDS, AUTO_AREA):
             t0 = time.perf_counter()
             ev = evaluate_real(frames, gt, first, b)
-            tag = {"horprasert": "ours", DYNAMIC: "ours_dynamic"}.get(b, b)
+            tag = {"horprasert": "ours", AUTO_AREA: "ours_auto_area"}.get(b, b)
             for half, suffix in (("report", ""), ("tune", "_tune")):
                 c = ev[half]
                 row[f"f1_{tag}{suffix}"] = _f1_counts(c["tp"], c["fp"], c["fn"])
-                if has_shadow and b in ("horprasert", DYNAMIC, "mog2", "knn"):
-                    key = {"horprasert": "shadow_f1", DYNAMIC: "shadow_f1_dynamic"}.get(b, f"shadow_f1_{b}")
+                if has_shadow and b in ("horprasert", AUTO_AREA, "mog2", "knn"):
+                    key = {"horprasert": "shadow_f1", AUTO_AREA: "shadow_f1_auto_area"}.get(b, f"shadow_f1_{b}")
                     row[key + suffix] = _f1_counts(c["sh_tp"], c["sh_fp"], c["sh_fn"])
             row[f"fps_{tag}"] = round(len(frames) / (time.perf_counter() - t0), 1)
         out[name] = row
@@ -552,6 +550,28 @@ def run(
     return report
 
 
+def speed_report(n_frames: int) -> dict[str, Any]:
+    """The speed figures alone, on the sim source: ``fps_320x240`` (whole extractor with splines,
+    the OpenCV threads set by ``--threads``), ``fps_320x240_2cores`` and ``fps_320x240_2cores_mog2``
+    (two threads, ours and MOG2 as the backend, same frames, same run), and the 1-minute load
+    average before and after, since wall-clock medians are only comparable on an idle machine.
+    """
+    frames = sim_source(n_frames).frames
+    load0 = os.getloadavg()[0]
+    one = _time_extractor(frames)
+    two = speed_two_cores(frames)
+    return {
+        "bench": "silhouette",
+        "cpu_threads": cv2.getNumThreads(),
+        "machine": platform.machine(),
+        "frames_requested": n_frames,
+        "fps_320x240": round(1e3 / one["extractor_ms_per_frame"], 1),
+        "fps_320x240_2cores": two["ours"],
+        "fps_320x240_2cores_mog2": two["mog2"],
+        "load_1min": [round(load0, 2), round(os.getloadavg()[0], 2)],
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--source", choices=[*SOURCES, "all"], default="all")
@@ -566,6 +586,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=1, help="OpenCV threads (1: the one-core figures)")
     ap.add_argument("--no-real", action="store_true", help="skip the real-footage (CDnet) evaluation")
     ap.add_argument("--real-only", action="store_true", help="only the real-footage (CDnet) evaluation")
+    ap.add_argument(
+        "--speed-only", action="store_true", help="only the speed figures (fps_320x240, *_2cores, beside MOG2)"
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if args.frames <= TRAIN_FRAMES + 1:
@@ -574,6 +597,10 @@ def main(argv: list[str] | None = None) -> int:
     names = list(SOURCES) if args.source == "all" else [args.source]
     scenarios = [s for s in args.scenarios.split(",") if s]
     seeds = [int(s) for s in args.seeds.split(",") if s]
+    if args.speed_only:
+        report = speed_report(args.frames)
+        print(json.dumps(report))
+        return 0
     if args.real_only:
         names, scenarios = [], []
     report = run(names, args.frames, scenarios, seeds, args.sim_frames, real=not args.no_real)

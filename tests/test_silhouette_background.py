@@ -15,7 +15,11 @@ from counterpart.nodes.silhouette.background import (
     FOREGROUND,
     HIGHLIGHT,
     SHADOW,
+    AdaptationConfig,
+    GhostConfig,
     HorprasertBackground,
+    ShadowConfig,
+    ThresholdConfig,
 )
 
 H, W = 120, 160
@@ -76,7 +80,7 @@ def test_person_is_foreground_shadow_is_shadow_background_is_background(empty_fr
 
 
 def test_thresholds_are_chosen_from_training_distortions(empty_frames):
-    model = HorprasertBackground(detection_rate=0.999).fit(empty_frames)
+    model = HorprasertBackground(ThresholdConfig(detection_rate=0.999)).fit(empty_frames)
     t = model.thresholds_
     assert t["tau_alpha_lo"] < t["tau_alpha2"] < 0.0 < t["tau_alpha1"]
     # On the training frames themselves the detection rate is met by construction.
@@ -84,7 +88,7 @@ def test_thresholds_are_chosen_from_training_distortions(empty_frames):
     assert np.mean(cd_hat <= t["tau_cd"]) > 0.99
     # Sensor noise of 2.5 grey levels on ~100-level pixels: RMS brightness distortion ~1-3 %.
     assert 0.005 < float(np.median(model.a_)) < 0.05
-    stricter = HorprasertBackground(detection_rate=0.99).fit(empty_frames)
+    stricter = HorprasertBackground(ThresholdConfig(detection_rate=0.99)).fit(empty_frames)
     assert stricter.thresholds_["tau_cd"] < t["tau_cd"]
 
 
@@ -100,7 +104,7 @@ def test_brighter_same_chromaticity_is_highlight_darker_is_shadow(empty_frames):
 def test_slow_lighting_drift_is_absorbed_not_foreground(empty_frames):
     """A 200-frame drift of brightness and white balance (R +12 %, G +5 %, B -8 %)."""
     adaptive = HorprasertBackground().fit(empty_frames)
-    frozen = HorprasertBackground(learning_rate=0.0, spread_learning_rate=0.0).fit(empty_frames)
+    frozen = HorprasertBackground(adaptation=AdaptationConfig(learning_rate=0.0)).fit(empty_frames)
     rng = np.random.default_rng(3)
     worst_fg = 0.0
     for k in range(200):
@@ -117,7 +121,7 @@ def test_slow_lighting_drift_is_absorbed_not_foreground(empty_frames):
 
 
 def test_person_never_enters_the_model_while_standing_still(empty_frames):
-    model = HorprasertBackground(learning_rate=0.2).fit(empty_frames)
+    model = HorprasertBackground(adaptation=AdaptationConfig(learning_rate=0.2)).fit(empty_frames)
     rng = np.random.default_rng(4)
     for _ in range(40):
         labels = model.apply_update(render(rng, person_x=80.0))
@@ -191,3 +195,18 @@ def test_unknown_backend_and_parameter_are_value_errors():
         make_subtractor("mog2", histroy=100)
     with pytest.raises(ValueError, match="unknown parameter"):
         make_subtractor("horprasert", tau=3.0)
+
+
+def test_flat_parameters_are_routed_to_their_config_groups():
+    model = HorprasertBackground.from_params(learning_rate=0.02, shadow_ncc=0.4, absorb_frames=5, detection_rate=0.99)
+    assert model.adaptation == AdaptationConfig(learning_rate=0.02)
+    assert model.shadows == ShadowConfig(shadow_ncc=0.4)
+    assert model.ghosts == GhostConfig(absorb_frames=5)
+    assert model.thresholds == ThresholdConfig(detection_rate=0.99)
+    assert set(model.get_params()) == {"thresholds", "adaptation", "shadows", "training", "ghosts"}
+    with pytest.raises(ValueError, match="'learning_rat'.*learning_rate"):
+        HorprasertBackground.from_params(learning_rat=0.02)
+    with pytest.raises(ValueError, match="shadow_window"):
+        ShadowConfig(shadow_window=4)
+    with pytest.raises(TypeError, match="adaptation must be a AdaptationConfig"):
+        HorprasertBackground(adaptation={"learning_rate": 0.02})

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from counterpart.nodes.silhouette.backends import make_subtractor
-from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
+from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW, HorprasertBackground, ShadowConfig
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
 from counterpart.sim.flat_scenes import textured_background
@@ -81,6 +81,31 @@ def test_sample_consensus_keeps_a_person_and_the_shadow_class() -> None:
     x, y, w, h = person
     assert m[y : y + h, x : x + w].mean() > 0.99
     assert (sub.labels[y0 + 2 : y0 + 18, x0 + 2 : x0 + 98] == SHADOW).mean() > 0.95
+
+
+def test_the_match_radius_follows_each_pixel_own_spread() -> None:
+    """A shirt a little off the wall's colour (+12 blue, -12 red: L1 24 grey levels, a change of
+    chromaticity the statistics flag) stays foreground on the plain, low-noise wall: the radius
+    comes from the wall's own spread. A radius that grows with brightness alone (10 + 6% of
+    |S|_1, the first version) took it for the wall. The waving leaves' spread is far wider.
+    """
+
+    def run(**sample_params: float) -> tuple[float, np.ndarray]:
+        rng = np.random.default_rng(4)
+        sub = make_subtractor("horprasert", train_frames=30, robust=False, sample_params=sample_params)
+        for k in range(150):
+            sub.apply(frame(rng, wind=k >= 30))
+        x, y, w, h = 40, 130, 30, 80
+        f = frame(rng)
+        shirt = ROOM[y : y + h, x : x + w] + np.float32([12.0, 0.0, -12.0])
+        f[y : y + h, x : x + w] = np.clip(np.rint(shirt), 0, 255).astype(np.uint8)
+        return float(sub.apply(f)[y : y + h, x : x + w].mean()), sub.samples.spread_
+
+    kept, spread = run()
+    assert kept > 0.95, kept
+    assert np.median(spread[LEAVES]) > 3 * np.median(spread[150:, :100]), (spread[LEAVES].mean(), spread.mean())
+    eaten, _ = run(radius=10.0, relative_radius=0.06, spread_k=0.0)
+    assert eaten < 0.5, eaten
 
 
 def test_sample_consensus_validates_and_learns_only_background() -> None:
@@ -179,8 +204,6 @@ def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
     """On a textured floor a cast shadow keeps the floor's pattern (same colour, darker); a dark
     shirt of the floor's colour does not: with ``shadow_ncc`` on it is foreground, off a shadow.
     """
-    from counterpart.nodes.silhouette.background import HorprasertBackground
-
     rng = np.random.default_rng(3)
     floor = np.repeat(np.repeat(rng.uniform(80, 200, (30, 40)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])
 
@@ -195,6 +218,6 @@ def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
     shirt = np.full_like(shadow, 0.6 * floor[40:80, 40:100].mean(axis=(0, 1)))
     inner = (slice(44, 76), slice(44, 96))
     for ncc, want_shirt in ((0.4, FOREGROUND), (-1.0, SHADOW)):
-        model = HorprasertBackground(shadow_ncc=ncc).fit(train)
+        model = HorprasertBackground(shadows=ShadowConfig(shadow_ncc=ncc)).fit(train)
         assert (model.apply(shot(shadow))[inner] == SHADOW).mean() > 0.9
         assert (model.apply(shot(shirt))[inner] == want_shirt).mean() > 0.7

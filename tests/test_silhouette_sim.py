@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from counterpart.nodes.silhouette.background import FOREGROUND, HorprasertBackground
+from counterpart.nodes.silhouette.background import FOREGROUND, GhostConfig, HorprasertBackground
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.sim.stream import open_stream
 
@@ -80,9 +80,9 @@ def test_absorption_is_off_after_a_fit_on_empty_frames():
     empty = [np.clip(room + rng.normal(0, 2, room.shape), 0, 255).astype(np.uint8) for _ in range(10)]
     assert model.fit(empty).absorb_frames_ == 0
     assert model.fit(empty, robust=True).absorb_frames_ > 0
-    assert HorprasertBackground(absorb_frames=7).fit(empty, robust=True).absorb_frames_ == 7
+    assert HorprasertBackground(ghosts=GhostConfig(absorb_frames=7)).fit(empty, robust=True).absorb_frames_ == 7
     with pytest.raises(ValueError, match="absorb_frames"):
-        HorprasertBackground(absorb_frames=-1)
+        GhostConfig(absorb_frames=-1)
 
 
 def test_a_revealed_patch_of_room_is_absorbed_a_distinct_still_object_is_not():
@@ -100,7 +100,9 @@ def test_a_revealed_patch_of_room_is_absorbed_a_distinct_still_object_is_not():
         return np.clip(img + rng.normal(0, 2, img.shape), 0, 255).astype(np.uint8)
 
     ghost, still = (slice(20, 60), slice(10, 30)), (slice(20, 60), slice(80, 100))
-    model = HorprasertBackground(absorb_frames=10).fit([frame(ghost, (90, 80, 70)) for _ in range(20)], robust=True)
+    model = HorprasertBackground(ghosts=GhostConfig(absorb_frames=10)).fit(
+        [frame(ghost, (90, 80, 70)) for _ in range(20)], robust=True
+    )
     fg_ghost, fg_still = [], []
     for _ in range(60):
         labels = model.apply_update(frame(still, (40, 40, 200)))

@@ -53,7 +53,7 @@ class HorprasertSubtractor:
     blink-adapted radius, ``sample_params`` its parameters) sits beside the statistics, and a pixel
     they call foreground is background when its colour is one the pixel has shown as background
     before (leaves, water, flicker); the shadow and highlight classes are the statistics' own.
-    Other keyword parameters go to ``HorprasertBackground``.
+    Other keyword parameters go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
     """
 
     name = "horprasert"
@@ -65,16 +65,16 @@ class HorprasertSubtractor:
         robust: bool = True,
         people_aware: bool = True,
         detector: Any = None,
-        dynamic: bool = False,
+        dynamic: bool = True,
         sample_params: dict[str, Any] | None = None,
         **model_params: Any,
     ) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
-            self.model = HorprasertBackground(**model_params)
-        except TypeError as exc:
-            raise ValueError(f"horprasert: unknown parameter ({exc})") from None
+            self.model = HorprasertBackground.from_params(**model_params)
+        except ValueError as exc:
+            raise ValueError(f"horprasert: {exc}") from None
         self.train_frames = train_frames
         self.robust = robust
         self.people_aware = people_aware

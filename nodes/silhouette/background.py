@@ -67,6 +67,7 @@ Frames are uint8 BGR, H x W x 3; all arithmetic is float32 and vectorised over p
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass, fields
 from typing import Any
 
 import cv2
@@ -128,165 +129,281 @@ def _check_frame(frame: np.ndarray, shape: tuple[int, int]) -> None:
         raise ValueError(f"frame must be a uint8 BGR array of shape {(*shape, 3)} (the training size), got {got}")
 
 
+@dataclass(frozen=True)
+class ThresholdConfig:
+    """How the classification thresholds of eq. 9 are chosen.
+
+    Parameters
+    ----------
+    detection_rate : float, default 0.9999
+        Target fraction r of training (background) samples accepted as background; sets tau_CD
+        (r-quantile of CD_hat) and tau_alpha1/2 (central r-interval of alpha_hat), in (0.5, 1).
+    tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo : float or None, default None
+        Fixed thresholds on the normalised distortions (eq. 9); None chooses them from the
+        training frames (tau_alpha_lo then per pixel from ``ShadowConfig.min_shadow_brightness``).
+    max_threshold_samples : int, default 2_000_000
+        Normalised distortion samples drawn to set the thresholds.
+    random_state : int or None, default 0
+        Seed of that subsample.
+    """
+
+    detection_rate: float = 0.9999
+    tau_cd: float | None = None
+    tau_alpha1: float | None = None
+    tau_alpha2: float | None = None
+    tau_alpha_lo: float | None = None
+    max_threshold_samples: int = 2_000_000
+    random_state: int | None = 0
+
+    def __post_init__(self) -> None:
+        if not 0.5 < self.detection_rate < 1.0:
+            raise ValueError(f"detection_rate must be in (0.5, 1), got {self.detection_rate}")
+
+
+@dataclass(frozen=True)
+class AdaptationConfig:
+    """Running-average rates of ``HorprasertBackground.update``, per frame.
+
+    Parameters
+    ----------
+    learning_rate : float, default 0.05
+        Rate r of E <- (1 - r) E + r I at BACKGROUND pixels; 0 disables adaptation. Lighting drift
+        slower than about ``learning_rate`` * tau_alpha1 * a per frame keeps pixels in the
+        background class.
+    spread_learning_rate : float, default 0.0
+        The same for the per-channel variance s^2. Off by default: single-frame variance
+        estimates are noisy, the thresholds were set for the trained spreads, and adapting only E
+        keeps ``update`` about twice as fast.
+    shadow_learning_rate : float, default 0.01
+        Rate at SHADOW and HIGHLIGHT pixels (FOREGROUND: never).
+    """
+
+    learning_rate: float = 0.05
+    spread_learning_rate: float = 0.0
+    shadow_learning_rate: float = 0.01
+
+    def __post_init__(self) -> None:
+        for name in ("learning_rate", "spread_learning_rate", "shadow_learning_rate"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {v}")
+
+
+@dataclass(frozen=True)
+class ShadowConfig:
+    """Bounds on the shadow and highlight classes and the shadow texture test.
+
+    Parameters
+    ----------
+    min_shadow_brightness : float, default 0.4
+        Darkest shadow accepted, as a fraction of the background brightness (raw alpha, eq. 5);
+        darker pixels are foreground. Sets the automatic tau_alpha_lo per pixel. In [0, 1).
+    max_highlight_brightness : float, default 1.5
+        Brightest highlight accepted, as a multiple of the background brightness (raw alpha);
+        brighter pixels are foreground. A change of light brightens a surface by tens of
+        percent; a white shirt on a grey floor has the floor's chromaticity too, and is far
+        brighter. > 1.
+    unseen_min_shadow_brightness : float, default 0.6
+        ``min_shadow_brightness`` at the ``unseen_`` pixels: where someone stood through the
+        training frames they most likely still stand, and a grey shirt there is a darker shade of
+        the grey floor filled in around them, not a shadow (``people.fit_around_people`` keeps
+        their cast shadow, on the ground at their feet, out of those pixels).
+    shadow_ncc : float, default 0.4
+        A shadow pixel whose ``shadow_window`` neighbourhood correlates less than this
+        (normalised cross-correlation of grey levels; Jacques, Jung & Musse 2005, eq. 4) with the
+        background's is foreground, when the neighbourhood is textured; -1 turns the texture test
+        off; 0.4 was tuned on CDnet busStation (the first half of its evaluated frames).
+    shadow_texture_k : float, default 8.0
+        Textured: the local standard deviation of the background exceeds this many times the
+        pixel's noise (grey sum of the channels, spread s). A shadow edge on a plain floor
+        correlates badly with it but is not checked. 4 is best on CDnet's tune halves, but moves
+        cast shadows on the simulator's wooden floor (its grain is weak against its noise) into
+        the foreground; 8 leaves them shadows.
+    shadow_window : int, default 7
+        Side of the square window of the texture test, pixels (odd, >= 3).
+    """
+
+    min_shadow_brightness: float = 0.4
+    max_highlight_brightness: float = 1.5
+    unseen_min_shadow_brightness: float = 0.6
+    shadow_ncc: float = 0.4
+    shadow_texture_k: float = 8.0
+    shadow_window: int = 7
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.min_shadow_brightness < 1.0:
+            raise ValueError(f"min_shadow_brightness must be in [0, 1), got {self.min_shadow_brightness}")
+        if self.max_highlight_brightness <= 1.0:
+            raise ValueError(f"max_highlight_brightness must be > 1, got {self.max_highlight_brightness}")
+        if not self.min_shadow_brightness <= self.unseen_min_shadow_brightness < 1.0:
+            raise ValueError(
+                "unseen_min_shadow_brightness must be in [min_shadow_brightness, 1), got "
+                f"{self.unseen_min_shadow_brightness}"
+            )
+        if not -1.0 <= self.shadow_ncc <= 1.0:
+            raise ValueError(f"shadow_ncc must be in [-1, 1] (-1: no texture test), got {self.shadow_ncc}")
+        if self.shadow_texture_k < 0 or self.shadow_window < 3 or self.shadow_window % 2 == 0:
+            raise ValueError(
+                "shadow_texture_k must be >= 0 and shadow_window odd >= 3, got "
+                f"{self.shadow_texture_k}, {self.shadow_window}"
+            )
+
+
+@dataclass(frozen=True)
+class TrainingConfig:
+    """How E and s are learnt from the training frames (eqs. 1-4, or their robust forms).
+
+    Parameters
+    ----------
+    min_spread : float, default 1.5
+        Lower bound on each channel's spread s_c, grey levels; keeps the normalisation finite for
+        pixels that were constant in training (saturated, black, codec-flattened). > 0.
+    robust_inlier_k : float, default 3.5
+        In ``fit(robust=True)``, a training sample counts towards a, b and the thresholds only if
+        every channel lies within k robust spreads of the median. > 0.
+    min_free_frac : float, default 0.5
+        In ``fit(exclude=...)``, a pixel with fewer training samples left than this fraction of the
+        frames (and at least 3) is taken as not seen: its E and s are filled in from the pixels
+        around it. A person the detector missed in some frames is in the samples left there; over
+        half of the frames they would be the median. In [0, 1].
+    unseen_spread_gain : float, default 2.0
+        Those pixels' filled-in spread is widened by this factor (a guess from the surroundings
+        is less certain than a measurement). >= 1.
+    """
+
+    min_spread: float = 1.5
+    robust_inlier_k: float = 3.5
+    min_free_frac: float = 0.5
+    unseen_spread_gain: float = 2.0
+
+    def __post_init__(self) -> None:
+        if self.min_spread <= 0:
+            raise ValueError(f"min_spread must be > 0 grey levels, got {self.min_spread}")
+        if self.robust_inlier_k <= 0:
+            raise ValueError(f"robust_inlier_k must be > 0, got {self.robust_inlier_k}")
+        if not 0.0 <= self.min_free_frac <= 1.0:
+            raise ValueError(f"min_free_frac must be in [0, 1], got {self.min_free_frac}")
+        if self.unseen_spread_gain < 1.0:
+            raise ValueError(f"unseen_spread_gain must be >= 1, got {self.unseen_spread_gain}")
+
+
+@dataclass(frozen=True)
+class GhostConfig:
+    """Ghost removal: still foreground that matches the room around it is absorbed into E.
+
+    Parameters
+    ----------
+    absorb_frames : int or None, default None
+        A foreground pixel whose colour stays within ``absorb_k`` spreads of the colour it had
+        when its still run began, for this many consecutive frames, is taken to be background that
+        a person uncovered and becomes the model's E there. None: 10 frames (0.4 s at 25 fps)
+        after ``fit(robust=True)``, whose median can hold people who stood still in the training
+        frames, and 0 (never) after a plain fit from empty frames, whose model is trusted. A still
+        person is absorbed this way too; that is the price of learning with people in view.
+    absorb_k : float, default 4.0
+        Tolerance of the still test, in spreads s per channel (noise, slow drift). > 0.
+    """
+
+    absorb_frames: int | None = None
+    absorb_k: float = 4.0
+
+    def __post_init__(self) -> None:
+        if self.absorb_frames is not None and self.absorb_frames < 0:
+            raise ValueError(f"absorb_frames must be >= 0 frames (0: never) or None (auto), got {self.absorb_frames}")
+        if self.absorb_k <= 0:
+            raise ValueError(f"absorb_k must be > 0 spreads, got {self.absorb_k}")
+
+
+#: the configuration groups of ``HorprasertBackground``, by constructor keyword
+_CONFIGS: dict[str, type] = {
+    "thresholds": ThresholdConfig,
+    "adaptation": AdaptationConfig,
+    "shadows": ShadowConfig,
+    "training": TrainingConfig,
+    "ghosts": GhostConfig,
+}
+
+
 class HorprasertBackground:
     """Per-pixel colour background model with shadow/highlight classes (Horprasert et al. 1999).
 
     Parameters
     ----------
-    detection_rate : target fraction r of training (background) samples accepted as background;
-        sets tau_CD (r-quantile of CD_hat) and tau_alpha1/2 (central r-interval of alpha_hat).
-    learning_rate : running-average rate (per frame) for the mean colour of background-labelled
-        pixels in ``update``; 0 disables adaptation. Lighting drift slower than about
-        ``learning_rate`` * tau_alpha1 * a per frame keeps pixels in the background class.
-    spread_learning_rate : the same for the per-channel variance. Off by default: single-frame
-        variance estimates are noisy, the thresholds were set for the trained spreads, and
-        adapting only E keeps ``update`` about twice as fast.
-    shadow_learning_rate : rate for pixels labelled shadow or highlight (foreground: never).
-    min_spread : lower bound on each channel's spread s_c, grey levels; keeps the normalisation
-        finite for pixels that were constant in training (saturated, black, codec-flattened).
-    max_highlight_brightness : brightest highlight accepted, as a multiple of the background
-        brightness (raw alpha); brighter pixels are foreground. A change of light brightens a
-        surface by tens of percent; a white shirt on a grey floor has the floor's chromaticity
-        too, and is far brighter.
-    unseen_min_shadow_brightness : ``min_shadow_brightness`` at the ``unseen_`` pixels: where
-        someone stood through the training frames they most likely still stand, and a grey
-        shirt there is a darker shade of the grey floor filled in around them, not a shadow
-        (``people.fit_around_people`` keeps their cast shadow, on the ground at their feet, out
-        of those pixels).
-    min_shadow_brightness : darkest shadow accepted, as a fraction of the background brightness
-        (raw alpha); darker pixels are foreground. Sets the automatic tau_alpha_lo per pixel.
-    tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo : fixed thresholds; None (default) chooses them
-        from the training frames.
-    robust_inlier_k : in ``fit(robust=True)``, a training sample counts towards a, b and the
-        thresholds only if every channel lies within k robust spreads of the median.
-    absorb_frames : ghost removal. A foreground pixel whose colour stays within ``absorb_k``
-        spreads of the colour it had when its still run began, for this many consecutive frames,
-        is taken to be background that a person uncovered and becomes the model's E there. None
-        (default): 10 frames (0.4 s at 25 fps) after ``fit(robust=True)``, whose median can hold
-        people who stood still in the training frames, and 0 (never) after a plain fit from
-        empty frames, whose model is trusted. A still person is absorbed this way too; that is
-        the price of learning with people in view.
-    absorb_k : tolerance of the still test, in spreads s per channel (noise, slow drift).
-    min_free_frac : in ``fit(exclude=...)``, a pixel with fewer training samples left than this
-        fraction of the frames (and at least 3) is taken as not seen: its E and s are filled in
-        from the pixels around it. A person the detector missed in some frames is in the
-        samples left there; over half of the frames they would be the median.
-    unseen_spread_gain : those pixels' filled-in spread is widened by this factor (a guess from
-        the surroundings is less certain than a measurement).
-    max_threshold_samples : number of normalised distortion samples drawn to set the thresholds.
-    random_state : seed of that subsample.
-    shadow_ncc : a shadow pixel whose ``shadow_window`` neighbourhood correlates less than this
-        (normalised cross-correlation of grey levels) with the background's is foreground, when
-        the neighbourhood is textured; -1 (default) turns the texture test off; 0.4 was tuned on
-        CDnet busStation (the first half of its evaluated frames).
-    shadow_texture_k : textured: the local standard deviation of the background exceeds this many
-        times the pixel's noise (grey sum of the channels, spread s). A shadow edge on a plain
-        floor correlates badly with it but is not checked.
-    shadow_window : side of the square window of the texture test, pixels (odd).
+    thresholds : ThresholdConfig
+        How the thresholds of eq. 9 are set (detection rate, fixed values).
+    adaptation : AdaptationConfig
+        Learning rates of ``update``.
+    shadows : ShadowConfig
+        Brightness bounds of the shadow and highlight classes; the shadow texture test.
+    training : TrainingConfig
+        Spread floor and the robust / people-aware fit.
+    ghosts : GhostConfig
+        Absorbing uncovered background (ghosts) into the model.
 
-    Fitted attributes
-    -----------------
-    mean_ : (H, W, 3) float32 expected colour E, grey levels.  spread_ : (H, W, 3) float32 s.
-    a_, b_ : (H, W) float32 RMS brightness / chromaticity distortion.  thresholds_ : dict.
-    unseen_ : (H, W) bool, pixels no training sample showed (``fit(exclude=...)``), filled in.
+    ``HorprasertBackground.from_params(**flat)`` builds the groups from the configs' field names
+    (the node's parameter names, e.g. ``learning_rate=0.02, shadow_ncc=0.4``).
+
+    Attributes
+    ----------
+    mean_ : (H, W, 3) float32
+        Expected colour E, grey levels.
+    spread_ : (H, W, 3) float32
+        Per-channel spread s, grey levels.
+    a_, b_ : (H, W) float32
+        RMS brightness / chromaticity distortion (eqs. 7, 8).
+    thresholds_ : dict
+        tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo as fitted.
+    unseen_ : (H, W) bool
+        Pixels no training sample showed (``fit(exclude=...)``), filled in.
     """
 
     def __init__(
         self,
-        detection_rate: float = 0.9999,
-        learning_rate: float = 0.05,
-        spread_learning_rate: float = 0.0,
-        shadow_learning_rate: float = 0.01,
-        min_spread: float = 1.5,
-        min_shadow_brightness: float = 0.4,
-        max_highlight_brightness: float = 1.5,
-        unseen_min_shadow_brightness: float = 0.6,
-        tau_cd: float | None = None,
-        tau_alpha1: float | None = None,
-        tau_alpha2: float | None = None,
-        tau_alpha_lo: float | None = None,
-        robust_inlier_k: float = 3.5,
-        absorb_frames: int | None = None,
-        absorb_k: float = 4.0,
-        min_free_frac: float = 0.5,
-        unseen_spread_gain: float = 2.0,
-        max_threshold_samples: int = 2_000_000,
-        random_state: int | None = 0,
-        shadow_ncc: float = -1.0,
-        shadow_texture_k: float = 4.0,
-        shadow_window: int = 7,
+        thresholds: ThresholdConfig = ThresholdConfig(),  # noqa: B008 (frozen: safe to share)
+        adaptation: AdaptationConfig = AdaptationConfig(),  # noqa: B008
+        shadows: ShadowConfig = ShadowConfig(),  # noqa: B008
+        training: TrainingConfig = TrainingConfig(),  # noqa: B008
+        ghosts: GhostConfig = GhostConfig(),  # noqa: B008
     ) -> None:
-        if not 0.5 < detection_rate < 1.0:
-            raise ValueError(f"detection_rate must be in (0.5, 1), got {detection_rate}")
-        for name, v in (
-            ("learning_rate", learning_rate),
-            ("spread_learning_rate", spread_learning_rate),
-            ("shadow_learning_rate", shadow_learning_rate),
-        ):
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must be in [0, 1], got {v}")
-        if min_spread <= 0:
-            raise ValueError(f"min_spread must be > 0 grey levels, got {min_spread}")
-        if not 0.0 <= min_shadow_brightness < 1.0:
-            raise ValueError(f"min_shadow_brightness must be in [0, 1), got {min_shadow_brightness}")
-        if robust_inlier_k <= 0:
-            raise ValueError(f"robust_inlier_k must be > 0, got {robust_inlier_k}")
-        self.detection_rate = detection_rate
-        self.learning_rate = learning_rate
-        self.spread_learning_rate = spread_learning_rate
-        self.shadow_learning_rate = shadow_learning_rate
-        self.min_spread = min_spread
-        self.min_shadow_brightness = min_shadow_brightness
-        if max_highlight_brightness <= 1.0:
-            raise ValueError(f"max_highlight_brightness must be > 1, got {max_highlight_brightness}")
-        if not min_shadow_brightness <= unseen_min_shadow_brightness < 1.0:
-            raise ValueError(
-                "unseen_min_shadow_brightness must be in [min_shadow_brightness, 1), got "
-                f"{unseen_min_shadow_brightness}"
-            )
-        self.max_highlight_brightness = max_highlight_brightness
-        self.unseen_min_shadow_brightness = unseen_min_shadow_brightness
-        self.tau_cd = tau_cd
-        self.tau_alpha1 = tau_alpha1
-        self.tau_alpha2 = tau_alpha2
-        self.tau_alpha_lo = tau_alpha_lo
-        if absorb_frames is not None and absorb_frames < 0:
-            raise ValueError(f"absorb_frames must be >= 0 frames (0: never) or None (auto), got {absorb_frames}")
-        if absorb_k <= 0:
-            raise ValueError(f"absorb_k must be > 0 spreads, got {absorb_k}")
-        if not 0.0 <= min_free_frac <= 1.0:
-            raise ValueError(f"min_free_frac must be in [0, 1], got {min_free_frac}")
-        if unseen_spread_gain < 1.0:
-            raise ValueError(f"unseen_spread_gain must be >= 1, got {unseen_spread_gain}")
-        if not -1.0 <= shadow_ncc <= 1.0:
-            raise ValueError(f"shadow_ncc must be in [-1, 1] (-1: no texture test), got {shadow_ncc}")
-        if shadow_texture_k < 0 or shadow_window < 3 or shadow_window % 2 == 0:
-            raise ValueError(
-                f"shadow_texture_k must be >= 0 and shadow_window odd >= 3, got {shadow_texture_k}, {shadow_window}"
-            )
-        self.shadow_ncc = shadow_ncc
-        self.shadow_texture_k = shadow_texture_k
-        self.shadow_window = shadow_window
-        self.robust_inlier_k = robust_inlier_k
-        self.min_free_frac = min_free_frac
-        self.unseen_spread_gain = unseen_spread_gain
+        for name, cls in _CONFIGS.items():
+            value = locals()[name]
+            if not isinstance(value, cls):
+                raise TypeError(f"{name} must be a {cls.__name__}, got {type(value).__name__}")
+        self.thresholds = thresholds
+        self.adaptation = adaptation
+        self.shadows = shadows
+        self.training = training
+        self.ghosts = ghosts
         self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
         self._unseen_u8: np.ndarray | None = None
-        self.absorb_frames = absorb_frames
-        self.absorb_k = absorb_k
         self.absorb_frames_: int = 0
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
         self._still_ref: np.ndarray | None = None  # (3, H * W) float32 mean colour of that run
         # (frame, its alpha, its float32 channel planes) of the last apply
         self._last_alpha: tuple[np.ndarray, np.ndarray, list[np.ndarray]] | None = None
-        self.max_threshold_samples = max_threshold_samples
-        self.random_state = random_state
         self._w: np.ndarray | None = None
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
         self.b_: np.ndarray | None = None
         self.thresholds_: dict[str, float] = {}
+
+    @classmethod
+    def from_params(cls, **params: Any) -> HorprasertBackground:
+        """A model from flat parameters named as the configs' fields (``learning_rate=0.02``,
+        ``shadow_ncc=0.4``, ...), each routed to its group; others go to their defaults.
+
+        Raises ValueError naming an unknown parameter and the valid names.
+        """
+        groups: dict[str, dict[str, Any]] = {name: {} for name in _CONFIGS}
+        owner = {f.name: name for name, c in _CONFIGS.items() for f in fields(c)}
+        for key, value in params.items():
+            if key not in owner:
+                raise ValueError(
+                    f"unknown parameter {key!r} of the background model; valid names: {', '.join(sorted(owner))}"
+                )
+            groups[owner[key]][key] = value
+        return cls(**{name: _CONFIGS[name](**kw) for name, kw in groups.items()})
 
     # ------------------------------------------------------------------ fitting
     @property
@@ -314,57 +431,89 @@ class HorprasertBackground:
     def fit(
         self, frames: np.ndarray | Iterable[np.ndarray], robust: bool = False, exclude: np.ndarray | None = None
     ) -> HorprasertBackground:
-        """Learn the background from training frames (N, H, W, 3) uint8 BGR, N >= 2.
+        """Learn the background from training frames.
 
-        ``robust=False``: frames are empty of people; E and s are the sample mean and standard
-        deviation (Horprasert eqs. 1-4). ``robust=True``: people may be present; E is the
-        per-pixel temporal median and s = 1.4826 * MAD, and a, b and the thresholds use only the
-        samples within ``robust_inlier_k`` spreads of the median. Pixels covered by a person in
-        more than half of the frames cannot be recovered this way: pass ``exclude``.
+        Parameters
+        ----------
+        frames : (N, H, W, 3) uint8 BGR, N >= 2 (or an iterable of such frames)
+        robust : bool
+            False: the frames are empty of people; E and s are the sample mean and standard
+            deviation (Horprasert eqs. 1-4). True: people may be present; E is the per-pixel
+            temporal median and s = 1.4826 * MAD, and a, b and the thresholds use only the samples
+            within ``robust_inlier_k`` spreads of the median. Pixels covered by a person in more
+            than half of the frames cannot be recovered this way: pass ``exclude``.
+        exclude : (N, H, W) bool or None
+            True where a sample is known not to show the background (a detected person, see
+            ``people.fit_around_people``). Every statistic then uses only the other samples; a
+            pixel with fewer than ``min_free_frac`` of the frames left was not seen (someone stood
+            on it throughout) and its E and s are filled in from the pixels around it
+            (``cv2.inpaint``), s widened by ``unseen_spread_gain``; ``unseen_`` marks those pixels.
 
-        ``exclude``: (N, H, W) bool, True where a sample is known not to show the background
-        (a detected person, see ``people.fit_around_people``). Every statistic then uses only
-        the other samples; a pixel with fewer than ``min_free_frac`` of the frames left was not seen
-        (someone stood on it throughout) and its E and s are filled in from the pixels around it
-        (``cv2.inpaint``), s widened by ``unseen_spread_gain``; ``unseen_`` marks those pixels.
+        Returns
+        -------
+        self
         """
         stack = as_frame_stack(frames)
-        n = stack.shape[0]
-        if n < 2:
-            raise ValueError(f"fit needs at least 2 frames, got {n}")
+        if stack.shape[0] < 2:
+            raise ValueError(f"fit needs at least 2 frames, got {stack.shape[0]}")
         free = None
         if exclude is not None:
             exclude = np.asarray(exclude, bool)
             if exclude.shape != stack.shape[:3]:
                 raise ValueError(f"exclude must be (N, H, W) bool of shape {stack.shape[:3]}, got {exclude.shape}")
             free = ~exclude
+        mean, spread, unseen = self._colour_statistics(stack, robust, free)
+        self._start_model(mean, spread, unseen, robust)
+        inliers = self._fit_distortion_rms(stack, robust, free, unseen)
+        self._fit_thresholds(stack, inliers)
+        return self
+
+    def _colour_statistics(
+        self, stack: np.ndarray, robust: bool, free: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """E and s (H, W, 3) float32 of the training stack (eqs. 1-4, or median and MAD when
+        ``robust``) over the ``free`` (N, H, W) samples, with the pixels seen in too few samples
+        filled in from around them; returns E, s and those pixels (H, W) bool.
+        """
+        n = stack.shape[0]
         if robust:
             mean, spread, n_free = _median_mad(stack, free)
         else:
             mean, spread, n_free = _mean_std(stack, free)
-        unseen = n_free < min(max(3.0, self.min_free_frac * n), n)
+        unseen = n_free < min(max(3.0, self.training.min_free_frac * n), n)
         if unseen.all():
             raise ValueError("exclude leaves no pixel with enough background samples to learn from")
         if unseen.any():
-            mean, spread = _fill_unseen(mean, spread, unseen, self.unseen_spread_gain)
+            mean, spread = _fill_unseen(mean, spread, unseen, self.training.unseen_spread_gain)
+        return mean, spread, unseen
+
+    def _start_model(self, mean: np.ndarray, spread: np.ndarray, unseen: np.ndarray, robust: bool) -> None:
+        """Set E, s^2 (floored at ``min_spread``) and the per-frame state from the statistics; the
+        ghost runs start empty and ``absorb_frames_`` is resolved for this kind of fit.
+        """
         self.unseen_ = unseen
         # 255 where seen, 0 where filled in: the mask of the shadow-learning step (None: all seen)
         self._unseen_u8 = np.where(unseen, 0, 255).astype(np.uint8) if unseen.any() else None
         self._mu = np.ascontiguousarray(np.moveaxis(mean, -1, 0), np.float32)
-        s2 = np.maximum(np.moveaxis(spread, -1, 0), self.min_spread).astype(np.float32) ** 2
+        s2 = np.maximum(np.moveaxis(spread, -1, 0), self.training.min_spread).astype(np.float32) ** 2
         self._var = np.ascontiguousarray(s2)
         self._w = None
-        if self.absorb_frames is None:
+        if self.ghosts.absorb_frames is None:
             self.absorb_frames_ = _AUTO_ABSORB_FRAMES if robust else 0
         else:
-            self.absorb_frames_ = int(self.absorb_frames)
+            self.absorb_frames_ = int(self.ghosts.absorb_frames)
         self._last_alpha = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
         self._still_ref = np.zeros((3, self._mu[0].size), np.float32)
         self.a_ = None
         self._refresh_colour_terms(spread_changed=True)
 
-        # Pass 1: per-pixel RMS of the distortions (eqs. 7, 8) over the (inlier) samples.
+    def _fit_distortion_rms(
+        self, stack: np.ndarray, robust: bool, free: np.ndarray | None, unseen: np.ndarray
+    ) -> list[np.ndarray | None]:
+        """Set ``a_`` and ``b_``, the per-pixel RMS of the distortions (eqs. 7, 8) over the (inlier)
+        samples; returns each frame's inlier mask (H, W) bool, None where every sample counts.
+        """
         h, w = self.shape
         sum_a = np.zeros((h, w), np.float64)
         sum_b = np.zeros((h, w), np.float64)
@@ -398,13 +547,18 @@ class HorprasertBackground:
         b = np.maximum(np.where(valid, np.maximum(b, 0.25 * med_b), med_b), b_noise)
         self.a_ = np.maximum(a, 1e-6).astype(np.float32)
         self.b_ = np.maximum(b, 1e-6).astype(np.float32)
-        med_a = float(np.median(self.a_))
+        return inliers
 
-        # Pass 2: thresholds from the distribution of the normalised distortions.
-        rng = np.random.default_rng(self.random_state)
-        per_frame = max(1, self.max_threshold_samples // n)
+    def _fit_thresholds(self, stack: np.ndarray, inliers: list[np.ndarray | None]) -> None:
+        """Set ``thresholds_`` (eq. 9) from the distribution of the normalised distortions of a
+        random subsample of the (inlier) training samples, unless given in ``ThresholdConfig``.
+        """
+        cfg = self.thresholds
+        med_a = float(np.median(self.a_))
+        rng = np.random.default_rng(cfg.random_state)
+        per_frame = max(1, cfg.max_threshold_samples // stack.shape[0])
         ah_s, cd_s = [], []
-        for f, inl in zip(stack, inliers):
+        for f, inl in zip(stack, inliers, strict=True):
             alpha, cd2, _ = self._distortions(f)
             ah = ((alpha - 1.0) / self.a_).ravel()
             ch = (np.sqrt(cd2) / self.b_).ravel()
@@ -419,20 +573,20 @@ class HorprasertBackground:
             cd_s.append(ch[pick])
         ah_all = np.concatenate(ah_s)
         cd_all = np.concatenate(cd_s)
-        r = self.detection_rate
+        r = cfg.detection_rate
         # Each automatic threshold is at least _MIN_TAU normalised units: training frames that
         # are nearly noise-free (synthetic, a frozen stream) would otherwise give thresholds of
         # zero. With real sensor noise the quantiles are 3-4 and the floor does not bind.
         lo_q, hi_q = np.quantile(ah_all, [(1.0 - r) / 2.0, 1.0 - (1.0 - r) / 2.0])
         auto_cd = max(float(np.quantile(cd_all, r)), _MIN_TAU)
-        tau_cd = auto_cd if self.tau_cd is None else float(self.tau_cd)
-        tau_a1 = max(float(hi_q), _MIN_TAU) if self.tau_alpha1 is None else float(self.tau_alpha1)
-        tau_a2 = min(float(lo_q), -_MIN_TAU) if self.tau_alpha2 is None else float(self.tau_alpha2)
-        if self.tau_alpha_lo is None:
+        tau_cd = auto_cd if cfg.tau_cd is None else float(cfg.tau_cd)
+        tau_a1 = max(float(hi_q), _MIN_TAU) if cfg.tau_alpha1 is None else float(cfg.tau_alpha1)
+        tau_a2 = min(float(lo_q), -_MIN_TAU) if cfg.tau_alpha2 is None else float(cfg.tau_alpha2)
+        if cfg.tau_alpha_lo is None:
             # Reported at the median a; applied per pixel (see _refresh_thresholds).
-            tau_lo = min((self.min_shadow_brightness - 1.0) / med_a, tau_a2 - 1.0)
+            tau_lo = min((self.shadows.min_shadow_brightness - 1.0) / med_a, tau_a2 - 1.0)
         else:
-            tau_lo = float(self.tau_alpha_lo)
+            tau_lo = float(cfg.tau_alpha_lo)
         if not (tau_lo < tau_a2 < 0.0 < tau_a1) or tau_cd <= 0.0:
             raise ValueError(
                 "thresholds must satisfy tau_alpha_lo < tau_alpha2 < 0 < tau_alpha1 and tau_cd > 0; "
@@ -445,7 +599,6 @@ class HorprasertBackground:
             "tau_alpha_lo": tau_lo,
         }
         self._refresh_thresholds()
-        return self
 
     # ------------------------------------------------------------------ per frame
     def distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -481,7 +634,7 @@ class HorprasertBackground:
         )
         cv2.bitwise_or(fg, cv2.compare(alpha, self._alpha_max, cv2.CMP_GT), dst=fg)
         cv2.bitwise_or(labels, cv2.bitwise_and(fg, FOREGROUND), dst=labels)
-        if self.shadow_ncc > -1.0:
+        if self.shadows.shadow_ncc > -1.0:
             self._verify_shadow_texture(planes, labels)
         return labels
 
@@ -495,12 +648,12 @@ class HorprasertBackground:
             return
         # only the box around the shadow pixels (and half a window) is filtered: in most frames
         # the shadows lie at people's feet
-        r = self.shadow_window // 2
+        r = self.shadows.shadow_window // 2
         x, y, bw, bh = cv2.boundingRect(sh)
         h, w = sh.shape
         x0, y0, x1, y1 = max(x - r, 0), max(y - r, 0), min(x + bw + r, w), min(y + bh + r, h)
         win = (slice(y0, y1), slice(x0, x1))
-        k = (self.shadow_window, self.shadow_window)
+        k = (self.shadows.shadow_window, self.shadows.shadow_window)
         grey = planes[0][win] + planes[1][win]
         grey += planes[2][win]
         mu = self._mu
@@ -512,19 +665,24 @@ class HorprasertBackground:
         m = cv2.bitwise_and(shw, 1).astype(np.float32)
         box = lambda a: cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)  # noqa: E731
         inv_n = 1.0 / np.maximum(box(m), 1.0)
-        gm, em = grey * m, e * m
-        mi, me = box(gm) * inv_n, box(em) * inv_n
-        vi = box(gm * grey) * inv_n - mi * mi
+        em = e * m
+        me = box(em) * inv_n
         ve = box(em * e) * inv_n - me * me
-        cov = box(gm * e) * inv_n - mi * me
         # noise of the grey sum (3 channels): its variance is the sum of the channel variances
         var = self._var
         floor = var[0][win] + var[1][win]
         floor += var[2][win]
-        floor *= np.float32(self.shadow_texture_k**2)
+        floor *= np.float32(self.shadows.shadow_texture_k**2)
+        textured = (shw > 0) & (ve > floor)
+        if not textured.any():
+            # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
+            return
+        gm = grey * m
+        mi = box(gm) * inv_n
+        vi = box(gm * grey) * inv_n - mi * mi
+        cov = box(gm * e) * inv_n - mi * me
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        person = (shw > 0) & (ve > floor) & (ncc < self.shadow_ncc)
-        labels[win][person] = FOREGROUND
+        labels[win][textured & (ncc < self.shadows.shadow_ncc)] = FOREGROUND
 
     def update(self, frame: np.ndarray, labels: np.ndarray) -> None:
         """Blend the frame into the model, never where ``labels == FOREGROUND``.
@@ -545,7 +703,7 @@ class HorprasertBackground:
         if labels.shape != self.shape:
             raise ValueError(f"labels must have shape {self.shape}, got {labels.shape}")
         labels = np.asarray(labels, np.uint8)  # apply's own labels pass through without a copy
-        lr, slr = self.learning_rate, self.spread_learning_rate
+        lr, slr = self.adaptation.learning_rate, self.adaptation.spread_learning_rate
         fg = labels == FOREGROUND
         # the foreground is a few percent of the frame: its flat indices serve both steps below
         fg_idx = np.flatnonzero(fg)
@@ -560,7 +718,7 @@ class HorprasertBackground:
             # where someone stood through training, a shade of the filled-in floor is more likely
             # their clothing than a shadow: learn only what is plainly background there
             cv2.bitwise_and(sh, self._unseen_u8, dst=sh)
-        k = self.shadow_learning_rate / lr if lr > 0.0 else 0.0
+        k = self.adaptation.shadow_learning_rate / lr if lr > 0.0 else 0.0
         # cv2.accumulateWeighted is dst <- (1 - r) dst + r src under a mask, in place.
         last = self._last_alpha
         planes = last[2] if last is not None and last[0] is frame else _float_planes(frame)
@@ -576,7 +734,7 @@ class HorprasertBackground:
                 if k > 0.0:
                     cv2.accumulateWeighted(f, self._mu[c], lr * k, mask=sh)
         if slr > 0.0:
-            np.maximum(self._var, np.float32(self.min_spread**2), out=self._var)
+            np.maximum(self._var, np.float32(self.training.min_spread**2), out=self._var)
         if lr > 0.0:
             self._follow_global_drift(frame, fg_idx, bg)
         self._refresh_colour_terms(spread_changed=slr > 0.0)
@@ -596,49 +754,73 @@ class HorprasertBackground:
         if n_bg < 0.05 * bg.size:
             return
         g = float(cv2.mean(alpha, mask=bg)[0])
-        step = np.float32(1.0 + self.learning_rate * (g - 1.0))
+        step = np.float32(1.0 + self.adaptation.learning_rate * (g - 1.0))
         if step != 1.0:
             for c in range(3):  # flat gathers beat a masked pass over the whole frame
                 mu = self._mu[c].reshape(-1)
                 mu[fg_idx] = mu[fg_idx] * step
 
     def _absorb_still(self, frame: np.ndarray, fg: np.ndarray, idx: np.ndarray) -> bool:
-        """Ghost removal (see ``absorb_frames``). ``fg`` (H, W) bool foreground, ``idx`` its flat
+        """Ghost removal (see ``GhostConfig``). ``fg`` (H, W) bool foreground, ``idx`` its flat
         indices. Returns whether any pixel was absorbed.
 
         Each foreground pixel keeps the mean colour of its current still run and the run's
-        length; a frame more than ``absorb_k`` spreads (any channel) from that mean restarts the
-        run. A run of ``absorb_frames`` is absorbed only where the colour also matches the model
-        of the surrounding background (a normalised box average of E over the pixels not labelled
-        foreground, compared in chromaticity and, loosely, brightness): uncovered background
-        continues the room around it, a person standing still does not. Deep inside a large ghost
-        there is no such support yet; it is peeled from its rim inwards, frame by frame.
+        length (``_advance_still_runs``). A run of ``absorb_frames`` is absorbed only where the
+        colour also matches the model of the surrounding background (``_matches_surround``):
+        uncovered background continues the room around it, a person standing still does not.
+        Deep inside a large ghost there is no such support yet; it is peeled from its rim
+        inwards, frame by frame.
+        """
+        if idx.size == 0:
+            self._still.fill(0)
+            return False
+        n, refs = self._advance_still_runs(frame, idx)
+        ripe = n >= self.absorb_frames_
+        if not ripe.any():
+            return False
+        ys, xs = np.divmod(idx[ripe], self.shape[1])
+        run = np.stack([r[ripe] for r in refs])  # (3, K') the runs' mean colours
+        sel = self._matches_surround(run, ys, xs, fg)
+        if not sel.any():
+            return False
+        ys, xs = ys[sel], xs[sel]
+        for c in range(3):
+            self._mu[c][ys, xs] = run[c, sel]
+        self._still[ys, xs] = 0
+        return True
+
+    def _advance_still_runs(self, frame: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Extend or restart the still run of each foreground pixel (flat indices ``idx`` (K,)):
+        a frame more than ``absorb_k`` spreads (any channel) from the run's mean colour restarts
+        it. Runs off the foreground end. Returns the runs' lengths (K,) uint16 and their mean
+        colours, three (K,) float32 planes.
         """
         still = self._still.reshape(-1)
         # Runs only live on foreground pixels (a few percent of the frame): work on those alone,
         # one flat channel plane at a time (1-D gathers and scatters are the cheap ones).
         prev = still[idx]
         still.fill(0)
-        if idx.size == 0:
-            return False
         px = np.take(frame.reshape(-1, 3), idx, axis=0)  # (K, 3) uint8
         obs = [px[:, c].astype(np.float32) for c in range(3)]
         refs = [np.take(self._still_ref[c], idx) for c in range(3)]
         dev = np.abs(obs[0] - refs[0]) * np.take(self._inv_s[0].reshape(-1), idx)
         for c in (1, 2):
             np.maximum(dev, np.abs(obs[c] - refs[c]) * np.take(self._inv_s[c].reshape(-1), idx), out=dev)
-        n = np.where((prev > 0) & (dev <= self.absorb_k), prev + 1, 1).astype(np.uint16)
+        n = np.where((prev > 0) & (dev <= self.ghosts.absorb_k), prev + 1, 1).astype(np.uint16)
         still[idx] = n
         # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
         inv_n = 1.0 / n.astype(np.float32)
         for c in range(3):
             refs[c] += (obs[c] - refs[c]) * inv_n
             self._still_ref[c][idx] = refs[c]
-        ripe = n >= self.absorb_frames_
-        if not ripe.any():
-            return False
-        ys, xs = np.divmod(idx[ripe], self.shape[1])
-        run = np.stack([r[ripe] for r in refs])  # (3, K') the runs' mean colours
+        return n, refs
+
+    def _matches_surround(self, run: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
+        """Whether each ripe run's mean colour ``run`` (3, K) at pixels (``ys``, ``xs``) matches the
+        surrounding background: a normalised box average of E over the pixels not in ``fg``
+        (H, W) bool, compared in chromaticity and, loosely, brightness (tighter at ``unseen_``
+        pixels). Returns (K,) bool.
+        """
         # The surround is a local average: computed at 1/4 resolution (16x fewer pixels) and
         # read at the candidates only, as it only has to be smooth.
         h, w = self.shape
@@ -668,13 +850,7 @@ class HorprasertBackground:
                 & (ratio > _UNSEEN_GHOST_BRIGHTNESS[0])
                 & (ratio < _UNSEEN_GHOST_BRIGHTNESS[1])
             )
-        if not sel.any():
-            return False
-        ys, xs = ys[sel], xs[sel]
-        for c in range(3):
-            self._mu[c][ys, xs] = run[c, sel]
-        self._still[ys, xs] = 0
-        return True
+        return sel
 
     def apply_update(self, frame: np.ndarray) -> np.ndarray:
         """``apply`` then ``update`` with its labels; returns the labels."""
@@ -683,33 +859,8 @@ class HorprasertBackground:
         return labels
 
     def get_params(self) -> dict[str, Any]:
-        return {
-            k: getattr(self, k)
-            for k in (
-                "detection_rate",
-                "learning_rate",
-                "spread_learning_rate",
-                "shadow_learning_rate",
-                "min_spread",
-                "min_shadow_brightness",
-                "max_highlight_brightness",
-                "unseen_min_shadow_brightness",
-                "tau_cd",
-                "tau_alpha1",
-                "tau_alpha2",
-                "tau_alpha_lo",
-                "robust_inlier_k",
-                "absorb_frames",
-                "absorb_k",
-                "min_free_frac",
-                "unseen_spread_gain",
-                "max_threshold_samples",
-                "random_state",
-                "shadow_ncc",
-                "shadow_texture_k",
-                "shadow_window",
-            )
-        }
+        """The constructor's parameters: the configuration groups by keyword (scikit-learn style)."""
+        return {name: getattr(self, name) for name in _CONFIGS}
 
     # ------------------------------------------------------------------ internals
     def _require_fitted(self) -> None:
@@ -743,15 +894,15 @@ class HorprasertBackground:
         t = self.thresholds_
         self._alpha_hi = (1.0 + t["tau_alpha1"] * self.a_).astype(np.float32)
         self._alpha_lo = (1.0 + t["tau_alpha2"] * self.a_).astype(np.float32)
-        if self.tau_alpha_lo is None:
-            floor = np.full(self.a_.shape, np.float32(self.min_shadow_brightness))
+        if self.thresholds.tau_alpha_lo is None:
+            floor = np.full(self.a_.shape, np.float32(self.shadows.min_shadow_brightness))
             if self.unseen_ is not None:
-                floor[self.unseen_] = self.unseen_min_shadow_brightness
+                floor[self.unseen_] = self.shadows.unseen_min_shadow_brightness
             self._alpha_min = np.minimum(floor, self._alpha_lo)
         else:
             self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
         self._cd2_max = ((t["tau_cd"] * self.b_) ** 2).astype(np.float32)
-        self._alpha_max = np.maximum(np.float32(self.max_highlight_brightness), self._alpha_hi)
+        self._alpha_max = np.maximum(np.float32(self.shadows.max_highlight_brightness), self._alpha_hi)
 
     def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32, and the frame's three float32
@@ -780,7 +931,7 @@ class HorprasertBackground:
 
     def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
         z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
-        return z.max(axis=0) <= self.robust_inlier_k
+        return z.max(axis=0) <= self.training.robust_inlier_k
 
 
 def _float_planes(frame: np.ndarray) -> list[np.ndarray]:

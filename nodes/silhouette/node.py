@@ -134,16 +134,17 @@ class Silhouette(Node):
         ),
         "dynamic": Param(
             bool,
-            False,
-            "horprasert: a sample-consensus model (ViBe-like) beside the statistics, so that "
-            "leaves, water and flicker are background; false: the statistics alone",
+            True,
+            "horprasert: a sample-consensus model (ViBe-like, radius from each pixel's own "
+            "spread) beside the statistics, so that leaves, water and flicker are background; "
+            "false: the statistics alone",
         ),
         "shadow_ncc": Param(
             float,
-            -1.0,
+            0.4,
             "horprasert: shadow pixels on a textured floor that correlate less than "
-            "this with its texture are foreground (a dark shirt, not a shadow); -1: off, 0.4: "
-            "tuned on CDnet busStation",
+            "this with its texture are foreground (a dark shirt, not a shadow); -1: off; 0.4 "
+            "was tuned on CDnet busStation",
             min=-1.0,
             max=1.0,
         ),

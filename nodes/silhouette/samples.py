@@ -14,10 +14,15 @@ probability one sample of a random 8-neighbour (so a ghost at the edge of the ba
 from its rim, and a sample set keeps memories of every age with an exponentially decaying
 chance). Foreground pixels never enter the samples.
 
-The radius adapts per pixel (SuBSENSE: St-Charles, Bilodeau & Bergevin, IEEE TIP 2015): a pixel
-whose foreground label keeps switching on and off ("blinking", eq. 5 of that paper) is in a
-dynamic region and its R(x) grows; everywhere else R(x) drifts back to ``radius``. The blink
-level v(x) rises by ``blink_gain`` on every switch and decays by ``blink_decay`` per frame.
+The radius is each pixel's own (SuBSENSE: St-Charles, Bilodeau & Bergevin, IEEE TIP 2015, whose
+R(x) follows the pixel's background dynamics D_min(x)): R(x) = max(radius, spread_k d(x)) +
+relative_radius |S_k|_1, with d(x) the mean L1 distance between a background observation and the
+pixel's samples. A plain wall under a clean camera keeps a tight radius, so a grey head in front of
+it is not taken for the wall; leaves, water and compression noise get a wide one. The brightness
+term covers a change of light, which moves a colour in proportion to it. A pixel whose foreground
+label keeps switching on and off ("blinking", eq. 5 of that paper) is in a dynamic region and its
+radius grows by the blink level v(x): it rises by ``blink_gain`` on every switch and decays by
+``blink_decay`` per frame.
 
 Only the pixels the statistical model calls foreground are tested (a few percent of a frame), so
 the cost per frame is small. Frames are uint8 BGR (H, W, 3).
@@ -44,9 +49,16 @@ class SampleConsensus:
     ----------
     n_samples : colours kept per pixel (ViBe's N, 20 in the paper).
     min_matches : samples that must lie within the radius for a match (#min, 2 in the paper).
-    radius, relative_radius : matching radius R = radius + relative_radius * |S_k|_1 for sample
-        S_k, L1 distance over B, G, R in grey levels (ViBe uses a fixed 20 on grey images; the
-        noise of a camera grows with brightness, so a dark pixel here gets a tighter radius).
+    radius, relative_radius, spread_k : matching radius
+        R = max(radius, spread_k * d(x)) + relative_radius * |S_k|_1 for sample S_k, L1 distance
+        over B, G, R in grey levels. d(x) is the pixel's own spread: the mean L1 distance between
+        a background observation and its samples (SuBSENSE's D_min idea), initialised from
+        consecutive training frames and followed at ``spread_rate`` on the pixels drawn for an
+        update. A clean camera on a plain wall gets a tight radius (a grey head in front of a
+        grey wall stays a person), leaves or compression noise a wide one. ViBe uses a fixed 20
+        on grey images; ``relative_radius`` (noise that grows with brightness) is 0 by default.
+    spread_rate : running-average rate of d(x), per update of the pixel (about every
+        ``subsampling`` frames).
     max_radius_gain : largest R(x) / radius in blinking regions.
     subsampling : 1 / probability of an update at each background pixel (phi, 16 in the paper).
     blink_gain, blink_decay : rise of the blink level v(x) on a label switch and its decay per frame;
@@ -58,15 +70,18 @@ class SampleConsensus:
 
     Fitted attributes
     -----------------
-    samples_ : (3, n_samples, H * W) uint8, channel planes B, G, R.  radius_ : (H, W) float32 radius gain 1 + v(x).
+    samples_ : (H * W, 3, n_samples) uint8, per pixel the B, G, R rows of its samples.  radius_ : (H, W) float32 radius gain 1 + v(x).
+    spread_ : (H, W) float32 d(x), grey levels (L1).
     """
 
     def __init__(
         self,
         n_samples: int = 20,
         min_matches: int = 2,
-        radius: float = 10.0,
-        relative_radius: float = 0.06,
+        radius: float = 0.5,
+        relative_radius: float = 0.025,
+        spread_k: float = 0.75,
+        spread_rate: float = 0.1,
         max_radius_gain: float = 2.5,
         subsampling: int = 16,
         blink_gain: float = 0.1,
@@ -92,6 +107,10 @@ class SampleConsensus:
         if relative_radius < 0:
             raise ValueError(f"relative_radius must be >= 0, got {relative_radius}")
         self.relative_radius = relative_radius
+        if spread_k < 0 or not 0.0 < spread_rate <= 1.0:
+            raise ValueError(f"spread_k must be >= 0 and spread_rate in (0, 1], got {spread_k}, {spread_rate}")
+        self.spread_k = spread_k
+        self.spread_rate = spread_rate
         self.max_radius_gain = max_radius_gain
         self.subsampling = subsampling
         self.blink_gain = blink_gain
@@ -112,6 +131,13 @@ class SampleConsensus:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return (1.0 + self._blink).reshape(self._shape)
 
+    @property
+    def spread_(self) -> np.ndarray:
+        """(H, W) float32 spread d(x) of each pixel's background, mean L1 distance in grey levels."""
+        if self.samples_ is None:
+            raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
+        return self._spread.reshape(self._shape)
+
     def fit(self, frames: np.ndarray, background: np.ndarray, foreground: np.ndarray | None = None) -> SampleConsensus:
         """Fill the sample sets from training frames (N, H, W, 3) uint8 BGR.
 
@@ -131,17 +157,22 @@ class SampleConsensus:
             raise ValueError(f"foreground must be (N, H, W) bool = {(n, h, w)}, got {np.shape(foreground)}")
         self._rng = np.random.default_rng(self.random_state)
         self._shape = (h, w)
-        # channel planes (3, N, H * W): the test gathers K pixels as three (N, K) planes and adds
-        # them elementwise, far cheaper than reducing a (N, K, 3) array over its short last axis
-        samples = np.empty((3, self.n_samples, h * w), np.uint8)
+        # (H * W, 3, N): the test gathers K pixels as K contiguous rows of 3 N bytes (a strided
+        # gather from each of 3 N planes took twice as long) and adds the channels as views
+        samples = np.empty((h * w, 3, self.n_samples), np.uint8)
         flat_bg = bg.reshape(-1, 3)
         for k in range(self.n_samples):
             j = k % n
             s = frames[j].reshape(-1, 3).copy()
             if foreground is not None:
                 s[np.asarray(foreground[j]).reshape(-1)] = flat_bg[np.asarray(foreground[j]).reshape(-1)]
-            samples[:, k] = s.T
+            samples[:, :, k] = s
         self.samples_ = samples
+        # d(x): the mean L1 distance of one background observation from another; consecutive
+        # training samples give it (noise and any motion of the background between frames)
+        nxt = np.roll(samples, -1, axis=2).astype(np.int16)
+        gap = np.abs(nxt - samples).sum(axis=1, dtype=np.float32)  # (H * W, N)
+        self._spread = gap[:, : max(1, min(n, self.n_samples) - 1)].mean(axis=1)
         self._blink = np.zeros(h * w, np.float32)
         self._prev_fg = np.zeros(h * w, np.uint8)
         return self
@@ -155,21 +186,19 @@ class SampleConsensus:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if idx.size == 0:
             return np.zeros(0, bool)
-        px = np.take(frame.reshape(-1, 3), idx, axis=0).T.astype(np.int16)  # (3, K)
-        dist = np.zeros((self.n_samples, idx.size), np.int16)  # (N, K) L1 distance
-        total = np.zeros((self.n_samples, idx.size), np.int16)  # (N, K) |S_k|_1
-        for c in range(3):
-            sc = np.take(self.samples_[c], idx, axis=1).astype(np.int16)
-            total += sc
-            sc -= px[c]
-            dist += np.abs(sc)
+        rows = np.take(self.samples_, idx, axis=0).astype(np.int16)  # (K, 3, N)
+        total = rows[:, 0] + rows[:, 1]  # (K, N) |S_k|_1
+        total += rows[:, 2]
+        dist = _l1(rows, np.take(frame.reshape(-1, 3), idx, axis=0))  # (K, N)
         # noise grows with brightness (shot noise, compression): R = R0 + rel * |S_k|_1, times
         # the blink gain; a dark pixel keeps a tight radius, where a fixed one would take a dark
         # shirt for a dark doorway. dist < R (1 + v) <=> dist / (1 + v) - rel |S_k| < R0.
-        lhs = dist * (1.0 / (1.0 + np.take(self._blink, idx)))[None]
+        lhs = dist * (1.0 / (1.0 + np.take(self._blink, idx)))[:, None]
         lhs -= np.float32(self.relative_radius) * total
-        matches = np.count_nonzero(lhs < np.float32(self.radius), axis=0)
-        return matches >= self.min_matches
+        base = np.float32(self.radius)
+        if self.spread_k > 0.0:
+            base = np.maximum(base, np.float32(self.spread_k) * np.take(self._spread, idx))[:, None]
+        return np.count_nonzero(lhs < base, axis=1) >= self.min_matches
 
     def apply(self, frame: np.ndarray, labels: np.ndarray) -> np.ndarray:
         """Veto the statistical model's foreground where the samples explain the colour, and learn.
@@ -221,7 +250,9 @@ class SampleConsensus:
                 continue
             k = rng.integers(0, self.n_samples, size=cand.size)
             if own:
-                self._write(k * npx + cand, px[cand])
+                if self.spread_k > 0.0:
+                    self._follow_spread(px[cand], cand)
+                self._write(cand, k, px[cand])
                 continue
             off = _NEIGHBOURS[rng.integers(0, 8, size=cand.size)]
             y = np.clip(cand // w + off[:, 0], 0, h - 1)
@@ -230,14 +261,21 @@ class SampleConsensus:
             # only into background neighbours: ViBe's diffusion into foreground eats a person
             # who stands still from their rim; uncovered room (ghosts) is the statistics' job
             ok = learn[nb]
-            self._write(k[ok] * npx + nb[ok], px[cand[ok]])
+            self._write(nb[ok], k[ok], px[cand[ok]])
 
-    def _write(self, flat_idx: np.ndarray, colours: np.ndarray) -> None:
-        """Store colours (M, 3) uint8 at flat indices k * H * W + pixel of the sample planes
-        (1-D scatters: far cheaper than indexing the (3, N, H * W) array with two index arrays).
+    def _follow_spread(self, colours: np.ndarray, cand: np.ndarray) -> None:
+        """d(x) += spread_rate (mean_k |I - S_k|_1 - d(x)) at the pixels ``cand`` (M,) drawn for an
+        update, whose observed background colours are ``colours`` (M, 3) uint8.
         """
-        for c in range(3):
-            self.samples_[c].reshape(-1)[flat_idx] = colours[:, c]
+        dist = _l1(np.take(self.samples_, cand, axis=0).astype(np.int16), colours)  # (M, N)
+        d = self._spread[cand]
+        # an exact integer sum (float32 holds it), so the mean does not depend on the layout
+        d += np.float32(self.spread_rate) * (dist.mean(axis=1, dtype=np.float32) - d)
+        self._spread[cand] = d
+
+    def _write(self, pixels: np.ndarray, k: np.ndarray, colours: np.ndarray) -> None:
+        """Store colours (M, 3) uint8 as sample ``k`` (M,) of the flat pixels ``pixels`` (M,)."""
+        self.samples_[pixels, :, k] = colours
 
     def _feedback(self, fg_idx: np.ndarray) -> None:
         """SuBSENSE's blink level: v(x) += blink_gain where the foreground label switched since
@@ -262,6 +300,18 @@ class SampleConsensus:
         cv2.add(v, float(np.float32(self.blink_gain + self.blink_decay)), dst=v, mask=blink)
         cv2.min(v, float(np.float32(self.max_radius_gain - 1.0)), dst=v)
         cv2.max(v, 0.0, dst=v)
+
+
+def _l1(rows: np.ndarray, colours: np.ndarray) -> np.ndarray:
+    """L1 distances (K, N) int16 between samples ``rows`` (K, 3, N) int16 (overwritten) and the
+    colours (K, 3) uint8 observed at the same pixels.
+    """
+    rows -= colours.astype(np.int16)[:, :, None]
+    np.abs(rows, out=rows)
+    dist = rows[:, 0]
+    dist += rows[:, 1]
+    dist += rows[:, 2]
+    return dist
 
 
 class _Learnable:
