@@ -32,6 +32,23 @@ _USUAL_AREA_RATE = 0.2
 #: cost of leaving a track or a region out of the assignment; a pair costs its distance in person
 #: heights + size term - overlap, and is kept when cheaper than leaving both out (2 x this)
 UNMATCHED_COST = 1.0
+#: a person slower than this many of their heights per frame (0.3 heights/s at 30 fps, about 0.5
+#: m/s) is not walking: their "velocity" is the sway of a changing outline, or the last steps
+#: before they stopped to embrace someone. When a merge hides them (their piece is small) it is
+#: not extrapolated, so the prediction does not wander off the merged region; a walker passing
+#: behind someone keeps theirs
+WALK_SPEED = 0.01
+#: a left-over region below a person is their legs or feet (``PersonTracker._stacked_owner``)
+#: when this share of its width lies in their columns, the rows between it and them are at most
+#: this share of their height (trousers of the floor's colour leave a gap), and it is at most this
+#: share of their height tall (as long as the rest of them when their template lacks the legs)
+STACK_OVERLAP = 0.5
+STACK_GAP = 0.35
+STACK_MAX_BELOW = 1.0
+#: someone who was part of a merged region last frame still claims it with this share of their
+#: predicted pixels on it (``min_overlap`` otherwise): hidden in a hug, their template, of their
+#: shape before the people met, overlaps the merged region less and less as it changes shape
+MERGE_KEEP_OVERLAP = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,6 +137,7 @@ class _Track:
     seen: int = 0  # frames this person was observed in
     usual_area: float = 0.0  # running mean of the template area (newcomer check)
     frozen: int = 0  # consecutive frames the template was kept through a growth (newcomer check)
+    in_merge: bool = False  # the last observation was a piece of a merged region
 
     def predicted_centroid(self) -> np.ndarray:
         return self.centroid + self.velocity
@@ -164,12 +182,14 @@ _Piece = tuple[np.ndarray, int, int, bool]
 @dataclass
 class _Matching:
     """What the steps of ``PersonTracker.update`` decided so far: track index -> its piece,
-    regions taken, tracks hidden in a merge, and the regions (crop, x0, y0) that start new people.
+    regions taken, tracks hidden in a merge, the bbox (x, y, w, h) of the merged region each
+    claimant of a merge is in, and the regions (crop, x0, y0) that start new people.
     """
 
     assigned: dict[int, _Piece] = field(default_factory=dict)
     used_regions: set[int] = field(default_factory=set)
     occluded: set[int] = field(default_factory=set)
+    within: dict[int, tuple[int, int, int, int]] = field(default_factory=dict)  # track -> merged bbox
     fresh: list[tuple[np.ndarray, int, int]] = field(default_factory=list)
 
 
@@ -309,7 +329,8 @@ class PersonTracker:
         if not (tracks and frame.regions):
             return
         best = np.argmax(frame.frac_track, axis=1)
-        strong = frame.frac_track[np.arange(len(tracks)), best] >= self.min_overlap
+        need = np.array([MERGE_KEEP_OVERLAP if t.in_merge else self.min_overlap for t in tracks])
+        strong = frame.frac_track[np.arange(len(tracks)), best] >= need
         for r in frame.regions:
             claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
             if len(claim) >= 2:
@@ -317,6 +338,8 @@ class PersonTracker:
                 # A claimant left with no pixels is hidden behind the others: it sits out
                 # the assignment below rather than grab someone else's region.
                 match.occluded.update(claim)
+                box = tuple(int(v) for v in frame.stats[r, :4])
+                match.within.update({i: box for i in claim})
                 for i, piece in self._split(frame.comp, frame.stats, r, [tracks[i] for i in claim]).items():
                     match.assigned[claim[i]] = (*piece, True)
 
@@ -355,20 +378,23 @@ class PersonTracker:
                 match.used_regions.add(r)
 
     def _take_leftovers(self, frame: _Regions, match: _Matching) -> None:
-        """Left-over regions: a fragment of an assigned person (mostly inside their predicted
-        mask) joins them; the rest start new people when they look like one.
+        """Left-over regions: the legs or feet of an assigned person (``_stacked_owner``) or a
+        fragment of one (mostly inside their predicted mask) join them; the rest start new
+        people when they look like one.
         """
         unowned: list[tuple[np.ndarray, int, int]] = []  # left-over regions no one claims
         for r in frame.regions:
             if r in match.used_regions:
                 continue
-            owner = -1
-            if self._tracks:
+            crop, x0, y0 = self._region_crop(frame.comp, frame.stats, r)
+            # the person it stands under first: a template can hold someone else's feet, taken
+            # in while the two touched, and would keep them for good
+            owner = self._stacked_owner(crop, x0, y0, match)
+            if owner < 0 and self._tracks:
                 frac_region = frame.counts[:, r] / frame.region_area[r]
                 i = int(np.argmax(frac_region))
                 if frac_region[i] >= 0.5 and i in match.assigned:
                     owner = i
-            crop, x0, y0 = self._region_crop(frame.comp, frame.stats, r)
             if owner >= 0:
                 match.assigned[owner] = (*_union(match.assigned[owner][:3], (crop, x0, y0)), match.assigned[owner][3])
             else:
@@ -376,6 +402,35 @@ class PersonTracker:
         # a new person must look like one: a standing person, or two side by side, is taller than
         # wide; a car, a barrier, the strip of a ghost along a skirting board or a kerb is not
         match.fresh += [g for g in group_stacked(unowned) if g[0].shape[0] >= self.min_upright * g[0].shape[1]]
+
+    def _stacked_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
+        """The index of the assigned track whose legs or feet a left-over region (crop (h, w), x0,
+        y0) is, or -1.
+
+        Legs in trousers of the floor's colour come out as a region of their own below a gap;
+        once the person has moved, it lies outside their predicted mask and would start a new
+        "person". It is theirs when its middle lies in their lower half or under them, within their columns
+        (``STACK_OVERLAP`` of its width), at most ``STACK_GAP`` of their height below it, and is
+        no taller than ``STACK_MAX_BELOW`` of their height (someone standing nearer the camera,
+        lower in the picture, is taller than the person further back).
+        """
+        h, w = crop.shape
+        best, best_overlap = -1, 0
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            overlap = min(x0 + w, px + pw) - max(x0, px)
+            height = max(self._tracks[i].height, float(ph))
+            gap = y0 - (py + ph)  # rows between them; < 0 where they share rows
+            below = y0 + 0.5 * h > py + 0.5 * ph  # its middle in their lower half, or under them
+            if (
+                below
+                and overlap >= STACK_OVERLAP * w
+                and gap <= STACK_GAP * height
+                and h <= STACK_MAX_BELOW * height
+                and overlap > best_overlap
+            ):
+                best, best_overlap = i, overlap
+        return best
 
     def _commit(self, frame: _Regions, match: _Matching) -> tuple[np.ndarray, list[Person]]:
         """Update the tracks, start new ones, retire the long unseen; paint the labels."""
@@ -398,7 +453,7 @@ class PersonTracker:
             t.frozen = t.frozen + 1 if grown else 0
             if t.frozen > NEWCOMER_PATIENCE:  # no newcomer after all: they did change size
                 t.frozen, t.usual_area = 0, float(crop.sum())
-            person = self._observe(t, crop, x0, y0, merged, keep_template=t.frozen > 0)
+            person = self._observe(t, crop, x0, y0, merged, t.frozen > 0, match.within.get(i))
             people.append(person)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
@@ -494,8 +549,18 @@ class PersonTracker:
         return _crop_box(mine, x, y), _crop_box(new, x, y)
 
     def _observe(
-        self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool, keep_template: bool = False
+        self,
+        t: _Track,
+        crop: np.ndarray,
+        x0: int,
+        y0: int,
+        merged: bool,
+        keep_template: bool = False,
+        within: tuple[int, int, int, int] | None = None,
     ) -> Person:
+        """Update track t from its piece (crop (h, w) bool at x0, y0) of this frame; ``within``:
+        the bbox (x, y, w, h) of the merged region the piece comes from, if any.
+        """
         ys, xs = np.nonzero(crop)
         c = np.array([xs.mean() + x0, ys.mean() + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
@@ -509,6 +574,16 @@ class PersonTracker:
             t.centroid = c
         else:
             t.centroid = t.predicted_centroid()
+            if np.hypot(*t.velocity) < WALK_SPEED * t.height:
+                t.velocity = np.zeros(2)
+            if within is not None:
+                # someone hidden in a merged region is in it: a velocity taken from the jumping
+                # centroids of their pieces must not carry them out of it
+                bx, by, bw, bh = within
+                inside = np.clip(t.centroid, [bx, by], [bx + bw - 1, by + bh - 1])
+                t.velocity = np.where(inside != t.centroid, 0.0, t.velocity)
+                t.centroid = inside
+        t.in_merge = merged
         if not merged and not keep_template:
             t.crop, t.origin, t.offset = crop, np.array([x0, y0], np.int64), c - np.array([x0, y0])
             t.area, t.height = int(xs.size), float(crop.shape[0])
