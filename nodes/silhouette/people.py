@@ -142,10 +142,12 @@ def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
 
 def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The boxes (K, 4) and scores (K,) of the detections that are sure or hold movement
-    (``_SURE_SCORE``, ``_MOVED_FRAC``), and whether each holds movement (K,) bool.
+    (``_SURE_SCORE``, ``_MOVED_FRAC``), and whether each holds movement (K,) bool: measured on the
+    unsure ones only (False on the sure ones, which the detector finds again as a rule).
     """
-    moved = np.array([moving_fraction(frames, b) >= _MOVED_FRAC for b in boxes], bool)
-    keep = (scores >= _SURE_SCORE) | moved
+    sure = scores >= _SURE_SCORE
+    moved = np.array([not s and moving_fraction(frames, b) >= _MOVED_FRAC for b, s in zip(boxes, sure)], bool)
+    keep = sure | moved
     return boxes[keep], scores[keep], moved[keep]
 
 
