@@ -34,8 +34,17 @@ least ``MIN_VISIBLE`` reference keypoints of visibility >= 0.5 on that frame:
   now and then, so it is not 0 even for a perfect method);
 * ``fit_s``: seconds per ``fit_background`` call; ``fps``: frames per second of ``process``.
 
+Where the misses are: ``misses`` counts the missed person-frames by cause (``miss_cause``):
+``missing`` (no region on their keypoints: not found yet, or lost), ``shared`` (their keypoints
+on the other person's region: merged), ``split`` (no region holds half of them), ``side`` (found
+with the other side: identities exchanged); ``missed_frames`` the frames with a miss.
+
 The reference can also swap the two people when they touch (hugs, pushes) without collapsing;
-such frames count as misses (seen by eye on the hug clips 14_3_1 and 32_6_1, not counted).
+such frames count as misses (seen by eye on the hug clips 14_3_1 and 32_6_1). The people of set 1
+never pass each other, so a frame on which reference person 0's body (head, neck, shoulders,
+hips) stands right of person 1's is one the reference got wrong (``reference_reversed``: their
+share of the scored frames); ``people_found_reference_ordered`` is ``people_found`` without them,
+reported beside it, not instead of it.
 
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
@@ -103,6 +112,46 @@ def reference_collapsed(kp: np.ndarray, vis: np.ndarray) -> bool:
     return bool(d < COLLAPSE_FRAC * h)
 
 
+#: the causes of a miss (``miss_cause``), in the order they are tested
+MISS_CAUSES = ("missing", "shared", "split", "side")
+
+
+def miss_cause(best: int, held: int, n: int, side: str | None, want: str, chosen: list[int]) -> str:
+    """Why a scored person is not found: "missing" (none of their keypoints on any region: not
+    found yet, or lost), "shared" (their region is the other person's: merged), "split" (no
+    region holds half of their keypoints), "side" (the region holding them is reported with the
+    other side: an identity exchanged). ``best`` the region holding most (``held``) of their
+    ``n`` keypoints, ``side`` its side, ``want`` theirs, ``chosen`` the other person's region.
+    """
+    if best == 0:
+        return "missing"
+    if best in chosen:
+        return "shared"
+    if held < 0.5 * n:
+        return "split"
+    return "side" if side != want else "ok"
+
+
+#: the joints whose median column places a reference person left or right: head, neck,
+#: shoulders, hips (the body, not the arms and legs that reach across in a hug or a kick)
+_BODY = (0, 1, 2, 5, 8, 11)
+
+
+def reference_reversed(kp: np.ndarray, vis: np.ndarray) -> bool:
+    """Whether reference person 0 (the left one at frame 0) stands right of person 1 on this
+    frame, kp (2, 14, 2) pixels, vis (2, 14): the body joints' median columns, each person with
+    at least two visible. In set 1 the two people never pass each other, so such a frame is one
+    on which the reference's crops have exchanged the people (they touch); reported, not excluded.
+    """
+    x = []
+    for k in range(2):
+        sel = vis[k, list(_BODY)] >= VIS
+        if sel.sum() < 2:
+            return False
+        x.append(float(np.median(kp[k, list(_BODY), 0][sel])))
+    return x[0] > x[1]
+
+
 def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarray) -> dict[str, int]:
     """One frame's counts.
 
@@ -136,9 +185,13 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
             out["kp_inside"] += int(counts[r_own])
         best = int(np.argmax(counts))
         found = best > 0 and counts[best] >= 0.5 * n and side_of.get(best) == SIDES[k] and best not in chosen
+        if not found:
+            out[f"miss_{miss_cause(best, counts[best], n, side_of.get(best), SIDES[k], chosen)}"] = 1
         chosen.append(best)
         ok_all &= found
     out["found"] = int(out["scored"] and ok_all)
+    out["reversed"] = int(out["scored"] and reference_reversed(kp, vis))
+    out["found_reversed"] = out["found"] * out["reversed"]
     # regions that hold most of some scored person's keypoints; the rest are extra
     out["matched"] = len({r for r in chosen if r > 0})
     return out
@@ -178,13 +231,18 @@ def run_clip(path: Path, ours: bool, train_frames: int) -> dict[str, Any]:
     return tot
 
 
-def summarise(rows: list[dict[str, Any]]) -> dict[str, float]:
-    s = {k: sum(r[k] for r in rows) for k in rows[0]}
+def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    s = {k: sum(r.get(k, 0) for r in rows) for k in set().union(*rows)}
+    ordered = s["scored"] - s["reversed"]
     return {
         "people_found": round(s["found"] / max(s["scored"], 1), 4),
         "keypoint_coverage": round(s["kp_inside"] / max(s["kp_total"], 1), 4),
         "extra_people": round((s["reported"] - s["matched"]) / max(s["scored"], 1), 3),
         "reference_collapsed": round(s["collapsed"] / max(s["collapsed"] + s["scored"], 1), 3),
+        "reference_reversed": round(s["reversed"] / max(s["scored"], 1), 4),
+        "people_found_reference_ordered": round((s["found"] - s["found_reversed"]) / max(ordered, 1), 4),
+        "missed_frames": s["scored"] - s["found"],
+        "misses": {c: s.get(f"miss_{c}", 0) for c in MISS_CAUSES},
         "fit_s": round(s["fit_s"] / len(rows), 3),
         "fps": round(s["frames"] / max(s["process_s"], 1e-9), 1),
         "clips": len(rows),
@@ -227,14 +285,24 @@ def main(argv: list[str] | None = None) -> int:
                 rows[m].append(r)
                 line[m] = summarise([r])
             report["clips"][p.stem] = {
-                m: {k: line[m][k] for k in ("people_found", "keypoint_coverage", "extra_people")} for m in methods
+                m: {k: line[m][k] for k in ("people_found", "keypoint_coverage", "extra_people", "misses")}
+                for m in methods
             }
             print(p.stem, json.dumps(report["clips"][p.stem]), flush=True)
         report[split] = {m: summarise(rows[m]) for m in methods}
     main_split = "report" if "report" in splits else splits[0]
     for m in methods:
         suffix = "" if m == "ours" else "_baseline"
-        for k in ("people_found", "keypoint_coverage", "extra_people", "fps", "fit_s"):
+        for k in (
+            "people_found",
+            "keypoint_coverage",
+            "extra_people",
+            "people_found_reference_ordered",
+            "reference_reversed",
+            "misses",
+            "fps",
+            "fit_s",
+        ):
             report[k + suffix] = report[main_split][m][k]
     report["quoted_split"] = main_split
     line = json.dumps(report)

@@ -50,6 +50,8 @@ _SAME_FRAC = 0.2
 _FEET_BAND = 0.25
 #: the score a still person (``_still_person``) reaches at least once
 _STILL_SCORE = 0.75
+#: one frame's confirmed detections: boxes (K, 4), scores (K,), moved (K,) bool (``_confirmed``)
+_Found = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 class PeopleDetector:
@@ -138,49 +140,50 @@ def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
     return float(np.mean(dev > _MOVED_GREY))
 
 
-def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The boxes (K, 4) and scores (K,) of the detections that are sure or hold movement
-    (``_SURE_SCORE``, ``_MOVED_FRAC``).
+    (``_SURE_SCORE``, ``_MOVED_FRAC``), and whether each holds movement (K,) bool: measured on the
+    unsure ones only (False on the sure ones, which the detector finds again as a rule).
     """
-    keep = [
-        k for k in range(len(boxes)) if scores[k] >= _SURE_SCORE or moving_fraction(frames, boxes[k]) >= _MOVED_FRAC
-    ]
-    return boxes[keep], scores[keep]
+    sure = scores >= _SURE_SCORE
+    moved = np.array([not s and moving_fraction(frames, b) >= _MOVED_FRAC for b, s in zip(boxes, sure)], bool)
+    keep = sure | moved
+    return boxes[keep], scores[keep], moved[keep]
 
 
-def _boxes_for(
-    frames: np.ndarray, j: int, found: dict[int, tuple[np.ndarray, np.ndarray]], step: int
-) -> tuple[np.ndarray, np.ndarray]:
+def _boxes_for(frames: np.ndarray, j: int, found: dict[int, _Found], step: int) -> tuple[np.ndarray, np.ndarray]:
     """The boxes (K, 4) in which frame j is searched for people, and whether each holds a person
     standing still (K,) bool. They are the boxes detected within ``step`` frames of j, and the
     boxes of a still person (``_still_person``) detected further away whose content frame j
     still shows (fewer than ``_SAME_FRAC`` of the box's pixels changed by more than
-    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,)).
+    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,), moved (K,)).
     """
     out, still = [], []
-    for k, (boxes, scores) in found.items():
-        for b, s in zip(boxes, scores):
-            stays = _still_person(found, k, b, s) and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
+    for k, (boxes, scores, moved) in found.items():
+        for b, s, m in zip(boxes, scores, moved):
+            stays = _still_person(found, k, b, s, m) and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
             if abs(j - k) <= step or stays:
                 out.append(b)
                 still.append(stays)
     return np.array(out, np.int32).reshape(-1, 4), np.array(still, bool)
 
 
-def _still_person(found: dict[int, tuple[np.ndarray, np.ndarray]], k: int, box: np.ndarray, score: float) -> bool:
-    """Whether a box found in frame k is found again (IoU >= 0.5) in another frame, and surely
-    (score >= ``_STILL_SCORE``) in at least one of them: someone standing still is found again
-    and again; a weak detection on the room's clutter, which would be carried to every frame
-    and learnt as a hole in the room, may be found twice too, but not surely.
+def _still_person(found: dict[int, _Found], k: int, box: np.ndarray, score: float, moved: bool) -> bool:
+    """Whether a box found in frame k holds someone standing still: found again (IoU >= 0.5) in
+    another frame or moving a little in the training frames (swaying, breathing, turning their
+    head: the detector misses people now and then, and may find a still one only once), and
+    surely (score >= ``_STILL_SCORE``) in at least one of them. A weak detection on the room's
+    clutter, which would be carried to every frame and learnt as a hole in the room, may be
+    found twice too, but not surely, and does not move.
     """
     again = [
         s
-        for j, (boxes, scores) in found.items()
+        for j, (boxes, scores, _) in found.items()
         if j != k
         for other, s in zip(boxes, scores)
         if _iou(box, other) >= 0.5
     ]
-    return bool(again) and max(again + [score]) >= _STILL_SCORE
+    return (bool(again) or bool(moved)) and max(again + [score]) >= _STILL_SCORE
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> float:
@@ -255,7 +258,7 @@ def fit_around_people(
     det = detector or PeopleDetector()
     step = max(1, int(detect_every))
     at = sorted(set(range(0, n, step)) | {n - 1})
-    found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores)
+    found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores, moved)
     near = [_boxes_for(stack, j, found, step) for j in range(n)]
     if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)

@@ -13,7 +13,7 @@ between tracks. Image coordinates are pixels, x = column, y = row.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -32,6 +32,23 @@ _USUAL_AREA_RATE = 0.2
 #: cost of leaving a track or a region out of the assignment; a pair costs its distance in person
 #: heights + size term - overlap, and is kept when cheaper than leaving both out (2 x this)
 UNMATCHED_COST = 1.0
+#: a person slower than this many of their heights per frame (0.3 heights/s at 30 fps, about 0.5
+#: m/s) is not walking: their "velocity" is the sway of a changing outline, or the last steps
+#: before they stopped to embrace someone. When a merge hides them (their piece is small) it is
+#: not extrapolated, so the prediction does not wander off the merged region; a walker passing
+#: behind someone keeps theirs
+WALK_SPEED = 0.01
+#: a left-over region below a person is their legs or feet (``PersonTracker._stacked_owner``)
+#: when this share of its width lies in their columns, the rows between it and them are at most
+#: this share of their height (trousers of the floor's colour leave a gap), and it is at most this
+#: share of their height tall (as long as the rest of them when their template lacks the legs)
+STACK_OVERLAP = 0.5
+STACK_GAP = 0.35
+STACK_MAX_BELOW = 1.0
+#: someone who was part of a merged region last frame still claims it with this share of their
+#: predicted pixels on it (``min_overlap`` otherwise): hidden in a hug, their template, of their
+#: shape before the people met, overlaps the merged region less and less as it changes shape
+MERGE_KEEP_OVERLAP = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,6 +137,7 @@ class _Track:
     seen: int = 0  # frames this person was observed in
     usual_area: float = 0.0  # running mean of the template area (newcomer check)
     frozen: int = 0  # consecutive frames the template was kept through a growth (newcomer check)
+    in_merge: bool = False  # the last observation was a piece of a merged region
 
     def predicted_centroid(self) -> np.ndarray:
         return self.centroid + self.velocity
@@ -138,6 +156,41 @@ def _paste(track: _Track, x0: int, y0: int, h: int, w: int) -> np.ndarray:
     if ax1 > ax0 and ay1 > ay0:
         out[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0] = track.crop[ay0 - oy : ay1 - oy, ax0 - ox : ax1 - ox]
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class _Regions:
+    """One mask's connected regions (``cv2.connectedComponentsWithStats``): comp (H, W) labels,
+    stats (n, 5), cents (n, 2) x, y; regions the labels of those of at least min_area pixels;
+    counts (T, n) pixels of each track's predicted mask in each region (0 for small regions),
+    frac_track (T, n) the same over the track's area; region_area (n,) pixels.
+    """
+
+    comp: np.ndarray
+    stats: np.ndarray
+    cents: np.ndarray
+    regions: list[int]
+    counts: np.ndarray
+    frac_track: np.ndarray
+    region_area: np.ndarray
+
+
+#: a person's piece of this frame: (crop (h, w) bool, x0, y0, merged)
+_Piece = tuple[np.ndarray, int, int, bool]
+
+
+@dataclass
+class _Matching:
+    """What the steps of ``PersonTracker.update`` decided so far: track index -> its piece,
+    regions taken, tracks hidden in a merge, the bbox (x, y, w, h) of the merged region each
+    claimant of a merge is in, and the regions (crop, x0, y0) that start new people.
+    """
+
+    assigned: dict[int, _Piece] = field(default_factory=dict)
+    used_regions: set[int] = field(default_factory=set)
+    occluded: set[int] = field(default_factory=set)
+    within: dict[int, tuple[int, int, int, int]] = field(default_factory=dict)  # track -> merged bbox
+    fresh: list[tuple[np.ndarray, int, int]] = field(default_factory=list)
 
 
 class PersonTracker:
@@ -232,12 +285,20 @@ class PersonTracker:
         m = np.asarray(mask)
         if m.ndim != 2:
             raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
+        frame = self._label_regions(m)
+        match = _Matching()
+        self._split_merges(frame, match)
+        self._assign_by_position(frame, match)
+        self._take_leftovers(frame, match)
+        return self._commit(frame, match)
+
+    # ------------------------------------------------------------------ the steps of update
+    def _label_regions(self, m: np.ndarray) -> _Regions:
+        """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
         n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
         regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
         tracks = self._tracks
-
-        # Overlap of each track's predicted mask with each region: counts[t, r].
         counts = np.zeros((len(tracks), n), np.int64)
         for i, t in enumerate(tracks):
             x0, y0 = t.predicted_origin()
@@ -252,82 +313,133 @@ class PersonTracker:
         small[0] = True
         counts[:, small] = 0
         frac_track = counts / np.maximum([t.area for t in tracks], 1)[:, None] if tracks else counts.astype(float)
-        region_area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
+        return _Regions(
+            comp=comp,
+            stats=stats,
+            cents=cents,
+            regions=regions,
+            counts=counts,
+            frac_track=frac_track,
+            region_area=stats[:, cv2.CC_STAT_AREA].astype(np.float64),
+        )
 
-        assigned: dict[int, tuple[np.ndarray, int, int, bool]] = {}  # track idx -> (crop, x0, y0, merged)
-        used_regions: set[int] = set()
-        occluded: set[int] = set()
-        fresh: list[tuple[np.ndarray, int, int]] = []  # regions that start new tracks
+    def _split_merges(self, frame: _Regions, match: _Matching) -> None:
+        """A region that is the main region of two or more tracks is split between them."""
+        tracks = self._tracks
+        if not (tracks and frame.regions):
+            return
+        best = np.argmax(frame.frac_track, axis=1)
+        need = np.array([MERGE_KEEP_OVERLAP if t.in_merge else self.min_overlap for t in tracks])
+        strong = frame.frac_track[np.arange(len(tracks)), best] >= need
+        for r in frame.regions:
+            claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
+            if len(claim) >= 2:
+                match.used_regions.add(r)
+                # A claimant left with no pixels is hidden behind the others: it sits out
+                # the assignment below rather than grab someone else's region.
+                match.occluded.update(claim)
+                box = tuple(int(v) for v in frame.stats[r, :4])
+                match.within.update({i: box for i in claim})
+                for i, piece in self._split(frame.comp, frame.stats, r, [tracks[i] for i in claim]).items():
+                    match.assigned[claim[i]] = (*piece, True)
+
+    def _assign_by_position(self, frame: _Regions, match: _Matching) -> None:
+        """Hungarian assignment of the remaining tracks and regions on position and size; a
+        region grown past an established track's usual area may give a newcomer away.
+        """
+        tracks = self._tracks
+        h_img, w_img = frame.comp.shape
+        free_t = [i for i in range(len(tracks)) if i not in match.assigned and i not in match.occluded]
+        free_r = [r for r in frame.regions if r not in match.used_regions]
+        if not (free_t and free_r):
+            return
+        cost = np.empty((len(free_t), len(free_r)))
+        for a, i in enumerate(free_t):
+            t = tracks[i]
+            scale = max(t.height, 10.0)
+            d = np.hypot(*(frame.cents[free_r] - t.predicted_centroid()).T) / scale
+            size = np.abs(np.log(frame.region_area[free_r] / max(t.area, 1)))
+            c = d + self.size_weight * size - frame.frac_track[i, free_r]
+            ok = (d <= self.max_distance) | (frame.frac_track[i, free_r] >= self.min_overlap)
+            cost[a] = np.where(ok, c, _INFEASIBLE)
+        rows, cols = linear_sum_assignment(_with_unmatched(cost, UNMATCHED_COST))
+        for a, b in zip(rows, cols):
+            if a < len(free_t) and b < len(free_r) and cost[a, b] < _INFEASIBLE:
+                r = free_r[b]
+                t = tracks[free_t[a]]
+                split = None
+                if self._established(t, w_img, h_img) and frame.region_area[r] >= self.newcomer_growth * t.usual_area:
+                    split = self._split_newcomer(frame.comp, frame.stats, r, t)
+                if split is None:
+                    match.assigned[free_t[a]] = (*self._region_crop(frame.comp, frame.stats, r), False)
+                else:
+                    match.assigned[free_t[a]] = (*split[0], True)
+                    match.fresh.append(split[1])
+                match.used_regions.add(r)
+
+    def _take_leftovers(self, frame: _Regions, match: _Matching) -> None:
+        """Left-over regions: the legs or feet of an assigned person (``_stacked_owner``) or a
+        fragment of one (mostly inside their predicted mask) join them; the rest start new
+        people when they look like one.
+        """
         unowned: list[tuple[np.ndarray, int, int]] = []  # left-over regions no one claims
-
-        # 1. Merges: a region that is the main region of two or more tracks is split between them.
-        if tracks and regions:
-            best = np.argmax(frac_track, axis=1)
-            strong = frac_track[np.arange(len(tracks)), best] >= self.min_overlap
-            for r in regions:
-                claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
-                if len(claim) >= 2:
-                    used_regions.add(r)
-                    # A claimant left with no pixels is hidden behind the others: it sits out
-                    # the assignment below rather than grab someone else's region.
-                    occluded.update(claim)
-                    for i, piece in self._split(comp, stats, r, [tracks[i] for i in claim]).items():
-                        assigned[claim[i]] = (*piece, True)
-
-        # 2. Hungarian assignment of the remaining tracks and regions on position and size.
-        free_t = [i for i in range(len(tracks)) if i not in assigned and i not in occluded]
-        free_r = [r for r in regions if r not in used_regions]
-        if free_t and free_r:
-            cost = np.empty((len(free_t), len(free_r)))
-            for a, i in enumerate(free_t):
-                t = tracks[i]
-                scale = max(t.height, 10.0)
-                d = np.hypot(*(cents[free_r] - t.predicted_centroid()).T) / scale
-                size = np.abs(np.log(region_area[free_r] / max(t.area, 1)))
-                c = d + self.size_weight * size - frac_track[i, free_r]
-                ok = (d <= self.max_distance) | (frac_track[i, free_r] >= self.min_overlap)
-                cost[a] = np.where(ok, c, _INFEASIBLE)
-            rows, cols = linear_sum_assignment(_with_unmatched(cost, UNMATCHED_COST))
-            for a, b in zip(rows, cols):
-                if a < len(free_t) and b < len(free_r) and cost[a, b] < _INFEASIBLE:
-                    r = free_r[b]
-                    t = tracks[free_t[a]]
-                    split = None
-                    if self._established(t, w_img, h_img) and region_area[r] >= self.newcomer_growth * t.usual_area:
-                        split = self._split_newcomer(comp, stats, r, t)
-                    if split is None:
-                        assigned[free_t[a]] = (*self._region_crop(comp, stats, r), False)
-                    else:
-                        assigned[free_t[a]] = (*split[0], True)
-                        fresh.append(split[1])
-                    used_regions.add(r)
-
-        # 3. Left-over regions: a fragment of an assigned person (mostly inside their predicted
-        #    mask) joins them; anything else is a new person.
-        for r in regions:
-            if r in used_regions:
+        for r in frame.regions:
+            if r in match.used_regions:
                 continue
-            owner = -1
-            if tracks:
-                frac_region = counts[:, r] / region_area[r]
+            crop, x0, y0 = self._region_crop(frame.comp, frame.stats, r)
+            # the person it stands under first: a template can hold someone else's feet, taken
+            # in while the two touched, and would keep them for good
+            owner = self._stacked_owner(crop, x0, y0, match)
+            if owner < 0 and self._tracks:
+                frac_region = frame.counts[:, r] / frame.region_area[r]
                 i = int(np.argmax(frac_region))
-                if frac_region[i] >= 0.5 and i in assigned:
+                if frac_region[i] >= 0.5 and i in match.assigned:
                     owner = i
-            crop, x0, y0 = self._region_crop(comp, stats, r)
             if owner >= 0:
-                assigned[owner] = (*_union(assigned[owner][:3], (crop, x0, y0)), assigned[owner][3])
+                match.assigned[owner] = (*_union(match.assigned[owner][:3], (crop, x0, y0)), match.assigned[owner][3])
             else:
                 unowned.append((crop, x0, y0))
         # a new person must look like one: a standing person, or two side by side, is taller than
         # wide; a car, a barrier, the strip of a ghost along a skirting board or a kerb is not
-        fresh += [g for g in group_stacked(unowned) if g[0].shape[0] >= self.min_upright * g[0].shape[1]]
+        match.fresh += [g for g in group_stacked(unowned) if g[0].shape[0] >= self.min_upright * g[0].shape[1]]
 
-        # 4. Update tracks, start new ones, retire the long unseen.
+    def _stacked_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
+        """The index of the assigned track whose legs or feet a left-over region (crop (h, w), x0,
+        y0) is, or -1.
+
+        Legs in trousers of the floor's colour come out as a region of their own below a gap;
+        once the person has moved, it lies outside their predicted mask and would start a new
+        "person". It is theirs when its middle lies in their lower half or under them, within their columns
+        (``STACK_OVERLAP`` of its width), at most ``STACK_GAP`` of their height below it, and is
+        no taller than ``STACK_MAX_BELOW`` of their height (someone standing nearer the camera,
+        lower in the picture, is taller than the person further back).
+        """
+        h, w = crop.shape
+        best, best_overlap = -1, 0
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            overlap = min(x0 + w, px + pw) - max(x0, px)
+            height = max(self._tracks[i].height, float(ph))
+            gap = y0 - (py + ph)  # rows between them; < 0 where they share rows
+            below = y0 + 0.5 * h > py + 0.5 * ph  # its middle in their lower half, or under them
+            if (
+                below
+                and overlap >= STACK_OVERLAP * w
+                and gap <= STACK_GAP * height
+                and h <= STACK_MAX_BELOW * height
+                and overlap > best_overlap
+            ):
+                best, best_overlap = i, overlap
+        return best
+
+    def _commit(self, frame: _Regions, match: _Matching) -> tuple[np.ndarray, list[Person]]:
+        """Update the tracks, start new ones, retire the long unseen; paint the labels."""
+        h_img, w_img = frame.comp.shape
         labels = np.zeros((h_img, w_img), np.int32)
         people: list[Person] = []
         alive: list[_Track] = []
-        for i, t in enumerate(tracks):
-            piece = assigned.get(i)
+        for i, t in enumerate(self._tracks):
+            piece = match.assigned.get(i)
             if piece is None or not piece[0].any():
                 t.missed += 1
                 t.centroid = t.predicted_centroid()
@@ -341,34 +453,39 @@ class PersonTracker:
             t.frozen = t.frozen + 1 if grown else 0
             if t.frozen > NEWCOMER_PATIENCE:  # no newcomer after all: they did change size
                 t.frozen, t.usual_area = 0, float(crop.sum())
-            person = self._observe(t, crop, x0, y0, merged, keep_template=t.frozen > 0)
+            person = self._observe(t, crop, x0, y0, merged, t.frozen > 0, match.within.get(i))
             people.append(person)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
         # New people are numbered left to right, so ids do not depend on the labelling order.
-        fresh.sort(key=lambda f: f[1] + 0.5 * f[0].shape[1])
-        for crop, x0, y0 in fresh:
-            ys, xs = np.nonzero(crop)
-            c = np.array([xs.mean() + x0, ys.mean() + y0])
-            t = _Track(
-                id=self._next_id,
-                side=LEFT if c[0] < w_img / 2.0 else RIGHT,
-                centroid=c,
-                velocity=np.zeros(2),
-                crop=crop,
-                origin=np.array([x0, y0], np.int64),
-                area=int(crop.sum()),
-                height=float(crop.shape[0]),
-                offset=c - np.array([x0, y0]),
-                missed=-1,  # no previous position: no velocity from the first observation
-            )
-            self._next_id += 1
+        match.fresh.sort(key=lambda f: f[1] + 0.5 * f[0].shape[1])
+        for crop, x0, y0 in match.fresh:
+            t = self._new_track(crop, x0, y0, w_img)
             people.append(self._observe(t, crop, x0, y0, False))
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
         self._tracks = alive
         people.sort(key=lambda p: p.id)
         return labels, people
+
+    def _new_track(self, crop: np.ndarray, x0: int, y0: int, w_img: int) -> _Track:
+        """A new person's track from their first region (crop, x0, y0), with the next id."""
+        ys, xs = np.nonzero(crop)
+        c = np.array([xs.mean() + x0, ys.mean() + y0])
+        t = _Track(
+            id=self._next_id,
+            side=LEFT if c[0] < w_img / 2.0 else RIGHT,
+            centroid=c,
+            velocity=np.zeros(2),
+            crop=crop,
+            origin=np.array([x0, y0], np.int64),
+            area=int(crop.sum()),
+            height=float(crop.shape[0]),
+            offset=c - np.array([x0, y0]),
+            missed=-1,  # no previous position: no velocity from the first observation
+        )
+        self._next_id += 1
+        return t
 
     # ------------------------------------------------------------------ internals
     @staticmethod
@@ -432,8 +549,18 @@ class PersonTracker:
         return _crop_box(mine, x, y), _crop_box(new, x, y)
 
     def _observe(
-        self, t: _Track, crop: np.ndarray, x0: int, y0: int, merged: bool, keep_template: bool = False
+        self,
+        t: _Track,
+        crop: np.ndarray,
+        x0: int,
+        y0: int,
+        merged: bool,
+        keep_template: bool = False,
+        within: tuple[int, int, int, int] | None = None,
     ) -> Person:
+        """Update track t from its piece (crop (h, w) bool at x0, y0) of this frame; ``within``:
+        the bbox (x, y, w, h) of the merged region the piece comes from, if any.
+        """
         ys, xs = np.nonzero(crop)
         c = np.array([xs.mean() + x0, ys.mean() + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
@@ -447,6 +574,16 @@ class PersonTracker:
             t.centroid = c
         else:
             t.centroid = t.predicted_centroid()
+            if np.hypot(*t.velocity) < WALK_SPEED * t.height:
+                t.velocity = np.zeros(2)
+            if within is not None:
+                # someone hidden in a merged region is in it: a velocity taken from the jumping
+                # centroids of their pieces must not carry them out of it
+                bx, by, bw, bh = within
+                inside = np.clip(t.centroid, [bx, by], [bx + bw - 1, by + bh - 1])
+                t.velocity = np.where(inside != t.centroid, 0.0, t.velocity)
+                t.centroid = inside
+        t.in_merge = merged
         if not merged and not keep_template:
             t.crop, t.origin, t.offset = crop, np.array([x0, y0], np.int64), c - np.array([x0, y0])
             t.area, t.height = int(xs.size), float(crop.shape[0])
