@@ -187,6 +187,7 @@ class SeqSynchronizer:
             raise KeyError(f"unknown port {port!r}; paired ports: {', '.join(self.ports)}")
         now = time.monotonic() if now is None else now
         out: list[PairedSet] = []
+        self._ended.discard(port)
         if port in self._aside:
             if seq <= self._last[port]:
                 self._hold_aside(port, seq, msg, now)
@@ -209,9 +210,7 @@ class SeqSynchronizer:
         """``port`` ended (end of stream): it goes past every set; return the sets now decided."""
         if port not in self._last:
             raise KeyError(f"unknown port {port!r}; paired ports: {', '.join(self.ports)}")
-        if port in self._aside:
-            self._stragglers(port)
-        self._ended.add(port)
+        self._ended.add(port)  # what it held aside still joins the new stream if the anchor restarts
         out: list[PairedSet] = []
         self._drain(out)
         return out
@@ -247,7 +246,6 @@ class SeqSynchronizer:
     def _put(self, port: str, seq: int, msg: Any, now: float, straggler: bool = False) -> None:
         if not straggler:
             self._last[port] = seq
-            self._ended.discard(port)
         key = (self._epoch[port], seq)
         if key <= self._decided and key not in self._pending:
             self.stats.late += 1

@@ -1,10 +1,16 @@
-"""The runtime's seq synchroniser (counterpart.bus.pairing) alone: no processes, no sockets."""
+"""The runtime's seq synchroniser (counterpart.bus.pairing): alone (no processes, no sockets), and in a real
+graph (real launcher, real nodes) through a node that declares paired inputs.
+"""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
 from counterpart.bus import PairedSet, Pairing, SeqSynchronizer
+
+from tests.launching import read_jsonl, run_launch, write_launch
 
 
 def sync(required=("silhouettes",), optional=("pose",), **kw) -> SeqSynchronizer:
@@ -135,6 +141,21 @@ def test_an_input_that_restarts_before_the_anchor_joins_the_new_stream_when_the_
     assert pr.flush() == []
 
 
+def test_an_input_that_replays_and_ends_before_the_anchor_restarts_still_pairs_with_its_own_stream() -> None:
+    pr = sync(optional=("frame",))
+    got = []
+    for loop in ("old", "new"):  # the fast input plays both streams and ends
+        for s in range(3):
+            got += pr.add("frame", s, (loop, s))
+    got += pr.end("frame")
+    for loop in ("old", "new"):
+        for s in range(3):
+            got += pr.add("silhouettes", s, (loop, s))
+    got += pr.flush()
+    assert [(p.seq, p.restart) for p in got] == [(0, False), (1, False), (2, False), (0, True), (1, False), (2, False)]
+    assert all(p["frame"] == p["silhouettes"] for p in got)
+
+
 def test_a_straggler_that_goes_back_alone_is_late_and_pairing_goes_on() -> None:
     pr = sync(required=("frame",), optional=("partner",))
     got = []
@@ -212,3 +233,31 @@ def test_bad_declarations_are_refused_naming_the_problem() -> None:
     p = Pairing(("silhouettes",), ("pose", "frame"))
     assert p.restrict(["silhouettes", "frame"]) == Pairing(("silhouettes",), ("frame",))
     assert p.restrict(["pose"]) is None
+
+
+# ------------------------------------------------------------------------ real launcher, real nodes
+@pytest.mark.slow
+def test_a_node_declaring_paired_inputs_gets_one_callback_per_complete_set(tmp_path: Path) -> None:
+    P = "tests.pairing_nodes:"
+    loops = {"count": 100, "loops": 2}
+    graph = {
+        "nodes": {
+            "a": {"run": P + "Frames", "params": loops, "remap": {"out": "a"}},
+            "b": {"run": P + "Frames", "params": {**loops, "skip_every": 5}, "remap": {"out": "b"}},
+            "c": {"run": P + "Frames", "params": {**loops, "keep_every": 3}, "remap": {"out": "c"}},
+            "sink": {"run": P + "PairSink", "params": {"path": str(tmp_path / "sets.jsonl")}},
+        }
+    }
+    code, out = run_launch(write_launch(tmp_path / "g.yaml", graph), timeout=60)
+    assert code == 0, out
+    rows = read_jsonl(tmp_path / "sets.jsonl")
+    sets, figures = rows[:-1], rows[-1]["figures"]
+    both = [s for s in range(100) if s % 5]  # b leaves out multiples of 5: those sets never complete
+    assert [(r["seq"], r["loop"], r["b"]) for r in sets] == [(s, lp, lp) for lp in (0.0, 1.0) for s in both]
+    assert [r["c"] for r in sets] == [lp if s % 3 == 0 else None for lp in (0.0, 1.0) for s in both]
+    assert [i for i, r in enumerate(sets) if r["restart"]] == [len(both)]  # the first set of the replay
+    partial = 2 * sum(s % 3 != 0 for s in both)
+    assert figures["paired_delivered"] == 2 * len(both) and figures["paired_partial"] == partial
+    assert figures["paired_missing_c"] == partial and figures["paired_missing_b"] == 0
+    assert figures["paired_dropped"] == 2 * 20 and figures["paired_restarts"] == 1
+    assert figures["paired_late"] == 0 and figures["paired_forced"] == 0 and figures["paired_overflow"] == 0
