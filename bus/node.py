@@ -176,7 +176,9 @@ class Node:
         raise NotImplementedError(f"{type(self).__name__} declares paired inputs and must implement on_paired()")
 
     def on_end(self) -> None:
-        """Called once when every input has ended (after the last paired set), before end of stream goes out downstream."""
+        """Called once when every input has ended (after the last paired set), before end of stream
+        goes out downstream.
+        """
 
     def on_timer(self) -> None:
         """Called about every ``timer_period`` seconds when the class sets it (not None)."""

@@ -103,38 +103,36 @@ def test_restart_flags_the_first_set_of_the_new_stream() -> None:
     assert pr.stats.restarts == 1
 
 
-def test_restart_never_pairs_the_old_stream_with_the_new_one() -> None:
-    # frames restart first (the camera), the slower silhouettes still deliver the old stream's tail
-    pr = sync(required=("frame", "silhouettes"), optional=())
-    got = []
-    for s in range(5):
-        got += pr.add("frame", s, ("old", s))
-    got += pr.add("silhouettes", 0, ("old", 0))
-    for s in range(3):  # the camera restarted
-        got += pr.add("frame", s, ("new", s))
-    for s in range(1, 5):  # the old stream's silhouettes complete the old stream's sets
-        got += pr.add("silhouettes", s, ("old", s))
+def replay(pr: SeqSynchronizer, fast: str, slow: str, slow_old: int) -> list[PairedSet]:
+    """Both inputs play seqs 0..4 of an old stream ("old", seq), then restart ("new", seq); the
+    ``fast`` one restarts before the ``slow`` one has delivered more than seq 0 of the old one.
+    """
+    got = pr.add(fast, 0, ("old", 0))
+    for s in range(1, 5):
+        got += pr.add(fast, s, ("old", s))
+    got += pr.add(slow, 0, ("old", 0))
+    for s in range(3):  # the fast input restarted
+        got += pr.add(fast, s, ("new", s))
+    for s in range(1, slow_old):  # the old stream's tail on the slow input
+        got += pr.add(slow, s, ("old", s))
     for s in range(3):
-        got += pr.add("silhouettes", s, ("new", s))
+        got += pr.add(slow, s, ("new", s))
+    return got
+
+
+def test_restart_never_pairs_the_old_stream_with_the_new_one() -> None:
+    # tracker: frames (the anchor) restart first, the slower silhouettes still deliver the old tail
+    pr = sync(required=("frame", "silhouettes"), optional=())
+    got = replay(pr, "frame", "silhouettes", 5)
     assert [(p.seq, p.restart) for p in got] == [(s, False) for s in range(5)] + [(0, True), (1, False), (2, False)]
-    for p in got:
-        assert p["frame"][0] == p["silhouettes"][0] and p["frame"][1] == p["silhouettes"][1] == p.seq
+    assert all(p["frame"] == p["silhouettes"] == (p["frame"][0], p.seq) for p in got)
     assert pr.stats.restarts == 1 and pr.stats.dropped == 0 and pr.stats.late == 0
 
 
 def test_an_input_that_restarts_before_the_anchor_joins_the_new_stream_when_the_anchor_restarts() -> None:
     # labeller: camera frames (optional) restart long before the silhouettes (the anchor) do
     pr = sync(optional=("frame",))
-    got = []
-    for s in range(5):
-        got += pr.add("frame", s, ("old", s))
-    got += pr.add("silhouettes", 0, ("old", 0))
-    for s in range(3):  # the camera restarted
-        got += pr.add("frame", s, ("new", s))
-    for s in range(1, 4):  # the old stream's silhouettes end at 3
-        got += pr.add("silhouettes", s, ("old", s))
-    for s in range(3):
-        got += pr.add("silhouettes", s, ("new", s))
+    got = replay(pr, "frame", "silhouettes", 4)  # the old silhouettes end at 3
     assert [(p.seq, p.restart) for p in got] == [(s, False) for s in range(4)] + [(0, True), (1, False), (2, False)]
     assert all(p["frame"] == p["silhouettes"] == (p["frame"][0], p.seq) for p in got)
     assert pr.stats.dropped == 1 and pr.stats.partial == 0  # old frame 4 never got its silhouettes

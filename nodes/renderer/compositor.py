@@ -5,8 +5,10 @@ expected at all), or when a partner with a higher ``seq`` shows that this frame'
 come (topics arrive in order), or after ``timeout`` seconds, or when more than ``max_pending``
 frames wait: the runtime's seq synchroniser (:mod:`counterpart.bus.pairing`, frame required,
 partner optional) decides, driven here rather than declared on the node because a frame first
-waits for the graph's camera (``wait_camera``) and only then for its partner. With ``adaptive`` waiting a frame does not wait at all while the partners are late:
-when the median delay of the recent partners (partner arrival minus its frame's arrival; a partner
+waits for the graph's camera (``wait_camera``) and only then for its partner.
+
+With ``adaptive`` waiting a frame does not wait at all while the partners are late: when the
+median delay of the recent partners (partner arrival minus its frame's arrival; a partner
 that never came counts as infinitely late) exceeds ``timeout``, waiting would only add latency to
 every frame, so each frame renders at once with the newest partner. The delays are measured on
 every frame, waited for or not, so waiting resumes as soon as the partners keep up again.
@@ -15,7 +17,7 @@ Overlays (silhouettes, pose, signals) never hold a frame back: each uses the mes
 ``seq`` when there is one, else the newest older one (an overlay a frame late is better than a
 flickering one). A frame whose partner did not come shows the newest older partner.
 
-No bus here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
+No processes here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
 """
 
 from __future__ import annotations
