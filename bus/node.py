@@ -48,7 +48,7 @@ import zmq
 from counterpart.messages import EndOfStream, NodeStats, TopicStats
 
 from .endpoints import TopicEndpoints, ipc_endpoints, standalone_dir
-from .pairing import PairedSet, Pairing, SeqSynchronizer
+from .pairing import PairedSet, Pairing, PairingStats, SeqSynchronizer
 from .params import Param, resolve_params
 from .transport import LATEST, POLICIES, RELIABLE, Publisher, Subscriber
 
@@ -170,6 +170,11 @@ class Node:
         if handler is None:
             raise NotImplementedError(f"{type(self).__name__} has no on_message or on_{port}")
         handler(msg)
+
+    @property
+    def pairing_stats(self) -> PairingStats | None:
+        """The counters of the paired inputs (None without ``pairing``): also in the stats' figures."""
+        return self._sync.stats if self._sync is not None else None
 
     def on_paired(self, paired: PairedSet) -> None:
         """Handle one set of the paired inputs (``paired[port]``; None for an optional one missing)."""

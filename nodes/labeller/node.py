@@ -466,7 +466,7 @@ class Labeller(Node):
             )
 
     def on_end(self) -> None:
-        st = self._sync.stats
+        st = self.pairing_stats
         missing = ", ".join(f"{n} without {p}" for p, n in st.missing.items() if n)
         self.log.info(
             "labelled %d frames (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back from 3D "
