@@ -182,7 +182,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     import counterpart.nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
-    from counterpart.bus.cli_demo import ensure_models
+    from counterpart.apps.demo import ensure_models
 
     ensure_models()
     work = Path(tempfile.mkdtemp(prefix="e2e-"))

@@ -217,7 +217,7 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="bench-faults-"))
     result: dict[str, object] = {"load_avg_1min": round(os.getloadavg()[0], 2)}
     try:
-        from counterpart.bus.cli_demo import ensure_models
+        from counterpart.apps.demo import ensure_models
 
         progress("default models (built once, cached)...")
         ensure_models()

@@ -9,7 +9,7 @@ person's 14 ground-truth joints (float32 metres, as in ``tracker.Pose3D``) and t
 pitch of their ground-truth pose vector (``head_turn`` / ``head_nod`` of ``counterpart.body.pose``, which the
 labeller node reads from ``TrackedBody.pose``). ``--noise-mm`` adds white Gaussian noise of that
 standard deviation to every joint coordinate and ``--noise-deg`` to both head angles (default 0:
-a perfect tracker). ``--source constructed`` uses ``counterpart.nodes.labeller.synthetic.conversation``
+a perfect tracker). ``--source constructed`` uses ``counterpart.sim.planted_signals.conversation``
 (geometry with planted nods, shakes, turns, sway; head yaw, no pitch). The JSON says which.
 
 Seeds: the reported sequences are ``--seeds`` (default 20-39, 120 s each). The detector's
@@ -90,13 +90,13 @@ import cv2
 import numpy as np
 import pandas as pd
 from counterpart.body.pose import DOF_INDEX
-from counterpart.nodes.labeller import synthetic
 from counterpart.nodes.labeller.face import load_face_cascade
 from counterpart.nodes.labeller.gaze import gaze_accuracy
 from counterpart.nodes.labeller.head_motion import HeadMotionParams
 from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller, label_pair_3d
 from counterpart.nodes.labeller.mining import mine_rules, mine_transactions, turn_transactions
 from counterpart.nodes.labeller.signals import SIGNALS
+from counterpart.sim import planted_signals as synthetic
 from counterpart.sim.face import FaceClip, conversation_face_clip, gesture_face_clip
 from counterpart.sim.scenarios import PLANTED_RULES, SIGNAL_INDEX, SIGNAL_NAMES, conversation
 
@@ -565,7 +565,7 @@ def main() -> int:
             "simulator conversation, ground-truth joints (float32) + pose head_turn/head_nod"
             f", noise {a.noise_mm:g} mm / {a.noise_deg:g} deg"
             if a.source == "sim"
-            else "constructed geometry (counterpart.nodes.labeller.synthetic), joints + head yaw"
+            else "constructed geometry (counterpart.sim.planted_signals), joints + head yaw"
         ),
         "seeds": a.seeds,
         "duration_s": a.duration,

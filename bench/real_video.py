@@ -21,7 +21,7 @@ Each clip goes through the real command (six node processes, the lockstep graph
 
 Tracking accuracy (``--pck-clips``, default the same clips; ``--no-pck`` skips it): each clip is
 tracked offline without the bus, configured as the lockstep graph configures its nodes
-(``counterpart.nodes.tracker.offline.track_video``: both sides, the default motion prior, 10 layers x 256
+(``counterpart.apps.tracking.track_video``: both sides, the default motion prior, 10 layers x 256
 particles, the background fitted on the first 20 frames, the camera the calibration node publishes
 when given no file), and its joints projected with the camera the run recorded. They are compared
 with the reference keypoints ``../shared/data/ut_interaction/keypoints/<stem>.npz`` (MediaPipe,
@@ -274,7 +274,7 @@ def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     """Track one clip offline and gather what the PCK needs: the projected estimates, the boxes,
     the reference and which of its joints count; plus timings and the excluded frames.
     """
-    from counterpart.nodes.tracker.offline import track_video
+    from counterpart.apps.tracking import track_video
     from counterpart.nodes.tracker.prior import resolve_prior
 
     t0 = time.monotonic()

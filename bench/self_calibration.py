@@ -204,7 +204,7 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000) -
 
 def real_figures(clips: list[Path]) -> dict[str, Any]:
     """Per clip the estimate of ``counterpart calibrate``; the spread across the clips."""
-    from counterpart.nodes.calibration.offline import calibrate_video
+    from counterpart.apps.calibration import calibrate_video
 
     per: dict[str, Any] = {}
     for clip in clips:

@@ -65,7 +65,7 @@ from counterpart.nodes.silhouette.backends import make_subtractor
 from counterpart.nodes.silhouette.background import SHADOW
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.nodes.silhouette.regions import clean_mask
-from counterpart.nodes.silhouette.synthetic import two_person_sequence
+from counterpart.sim.flat_scenes import two_person_sequence
 
 VTEST = os.environ.get("COUNTERPART_VTEST", "/work/shared/data/video/vtest.avi")
 SHARED = os.environ.get("COUNTERPART_SHARED_DATA") or os.path.join(

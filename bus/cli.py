@@ -11,25 +11,26 @@ import importlib
 import os
 import sys
 
-#: command -> (module, one-line help)
-COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": ("counterpart.bus.cli_demo", "the whole graph end to end on the built-in scene, your video or a camera"),
+from . import plugins
+
+#: the runtime's own commands: command -> (module, one-line help)
+RUNTIME_COMMANDS: dict[str, tuple[str, str]] = {
     "launch": ("counterpart.bus.cli_launch", "run a graph from a launch file"),
     "run": ("counterpart.bus.cli_run", "run one node alone"),
     "node": ("counterpart.bus.cli_introspect", "list the nodes of a running launch"),
     "topic": ("counterpart.bus.cli_introspect", "list, echo or measure the rate of topics of a running launch"),
-    "mine": ("counterpart.nodes.labeller.cli_mine", "mine listener-response association rules from label streams"),
-    "learn": ("counterpart.bus.cli_learn", "train a model file (tracker-prior, responder, avatar)"),
-    "respond": ("counterpart.nodes.responder.cli_respond", "offline: generate the partner for one person's trajectory"),
-    "silhouettes": ("counterpart.nodes.silhouette.cli_extract", "offline: the people's silhouettes of a video file"),
-    "calibrate": (
-        "counterpart.nodes.calibration.cli_calibrate",
-        "offline: the camera of a video file, estimated from the people in it",
-    ),
-    "track": ("counterpart.nodes.tracker.cli_track", "offline: the 3D body of the people of a video file"),
-    "sim": ("counterpart.sim.cli", "render a simulated two-person scene with ground truth"),
     "bag": ("counterpart.bus.cli_bag", "record, play, inspect and export bags"),
 }
+
+
+def commands() -> dict[str, str]:
+    """Every command's module: the runtime's, then those the installed packages declare
+    (entry points ``counterpart.commands``: the applications demo, track, learn, ...).
+    """
+    found = {name: module for name, (module, _) in RUNTIME_COMMANDS.items()}
+    for name, ep in plugins.declared(plugins.COMMANDS).items():
+        found.setdefault(name, ep.value)
+    return found
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -38,10 +39,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         prog="counterpart", description="Counterpart: virtual interaction partners on a node graph."
     )
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
-    for name, (module, help_) in COMMANDS.items():
+    for name, module in commands().items():
+        mod = importlib.import_module(module) if command is None or name == command else None
+        help_ = RUNTIME_COMMANDS[name][1] if name in RUNTIME_COMMANDS else getattr(mod, "HELP", None)
         p = sub.add_parser(name, help=help_, description=help_)
-        if command is None or name == command:
-            mod = importlib.import_module(module)
+        if mod is not None:
             add = getattr(mod, f"add_arguments_{name}", None) or mod.add_arguments
             add(p)
         p.set_defaults(_module=module, _command=name)
@@ -66,10 +68,11 @@ def main(argv: list[str] | None = None) -> None:
             )
             sys.exit(0 if asked else 2)
         sys.exit(run_standalone(argv[1], argv[2:]))
-    command = argv[0] if argv and argv[0] in COMMANDS else ""
+    known = commands()
+    command = argv[0] if argv and argv[0] in known else None  # None: the overview, every command's help
     ap = build_parser(command)
     if not command and argv and argv[0] not in ("-h", "--help"):
-        ap.error(f"unknown command {argv[0]!r}; commands: {', '.join(COMMANDS)}")
+        ap.error(f"unknown command {argv[0]!r}; commands: {', '.join(known)}")
     args = ap.parse_args(argv)
     if not getattr(args, "command", None):
         ap.print_help()

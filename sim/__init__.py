@@ -3,7 +3,11 @@
 Modules: ``counterpart.sim.scenarios`` (seeded motion and labels), ``counterpart.sim.motion`` (keyframes, reaching),
 ``counterpart.sim.capture`` (BVH pairs as scenarios), ``counterpart.sim.appearance`` and ``counterpart.sim.render`` (video frames and
 ground truth), ``counterpart.sim.stream`` (``open_stream``, what the camera node opens for ``sim:NAME``),
-``counterpart.sim.dataset`` (trajectories for training, no rendering), ``counterpart.sim.cli`` (``counterpart sim``).
+``counterpart.sim.dataset`` (trajectories for training, no rendering), ``counterpart.sim.listener`` (one person
+rendered alone), ``counterpart.sim.cli`` (``counterpart sim``).
+
+Nodes reach the simulator through its entry point (``counterpart.bus.plugins.simulator``), never by
+importing it; the functions below are that interface.
 """
 
 from __future__ import annotations
@@ -23,3 +27,17 @@ def open_stream(
     from counterpart.sim.stream import open_stream as _open
 
     return _open(scenario, seed=seed, width=width, height=height, fps=fps, **kw)
+
+
+def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any):  # noqa: ANN201
+    """See ``counterpart.sim.scenarios.make_scenario`` (imported lazily)."""
+    from counterpart.sim.scenarios import make_scenario as _make
+
+    return _make(name, seed=seed, fps=fps, **kw)
+
+
+def listener_recording(seconds: float = 60.0, seed: int = 0, interested: bool = True, empty_s: float = 1.6):  # noqa: ANN201
+    """See ``counterpart.sim.listener.listener_recording`` (imported lazily)."""
+    from counterpart.sim.listener import listener_recording as _listener
+
+    return _listener(seconds, seed=seed, interested=interested, empty_s=empty_s)

@@ -31,6 +31,9 @@ import cv2
 import numpy as np
 from counterpart.sim.scenarios import EMOTIONS, SCENARIOS
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "render a simulated two-person scene with ground truth"
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scenario", default="handshake", help=f"one of {', '.join(SCENARIOS)}, cmu")

@@ -145,7 +145,7 @@ def test_too_short_a_recording_and_a_signal_that_never_occurs_say_what_is_missin
 
 @pytest.mark.slow  # the masks are cut out in two worker processes
 def test_learn_avatar_from_a_video_file(recorded, tmp_path: Path, capsys) -> None:
-    from counterpart.nodes.responder import cli_avatar
+    from counterpart.apps import learn_avatar as cli_avatar
 
     rec, labels, video = recorded
     lab = tmp_path / "labels.npz"

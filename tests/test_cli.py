@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import pytest
-from counterpart.bus.cli import COMMANDS
+from counterpart.bus import plugins
+from counterpart.bus.cli import RUNTIME_COMMANDS, commands
 
 from tests.launching import REPO, kill_tree, read_jsonl, wait_for
 
@@ -25,17 +27,35 @@ def cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) -> s
     )
 
 
-@pytest.mark.parametrize("command", sorted(COMMANDS))
+@pytest.mark.parametrize("command", sorted(commands()))
 def test_every_command_has_help(command: str) -> None:
     res = cli(command, "--help")
     assert res.returncode == 0, res.stderr
     assert "usage: counterpart" in res.stdout
 
 
-@pytest.mark.parametrize("command", sorted(COMMANDS))
+@pytest.mark.parametrize("command", sorted(commands()))
 def test_every_command_is_in_the_readme(command: str) -> None:
     readme = (REPO / "README.md").read_text(encoding="utf-8")
     assert f"`counterpart {command}" in readme, f"README.md documents no `counterpart {command} ...`"
+
+
+def test_the_command_is_assembled_from_the_runtime_and_the_declared_applications() -> None:
+    declared = plugins.declared(plugins.COMMANDS)
+    assert {"demo", "track", "silhouettes", "calibrate", "respond", "learn", "mine", "sim"} <= set(declared)
+    assert all(ep.value.startswith(("counterpart.apps.", "counterpart.sim.")) for ep in declared.values())
+    res = cli("--help")
+    listed = set(re.findall(r"^    (\w+)\s", res.stdout, flags=re.M))
+    assert listed == set(RUNTIME_COMMANDS) | set(declared), res.stdout
+    learn = cli("learn", "--help")
+    assert all(t in learn.stdout for t in plugins.declared(plugins.LEARN_TARGETS)), learn.stdout
+
+
+def test_an_undeclared_plugin_is_named_with_the_declared_ones() -> None:
+    with pytest.raises(
+        plugins.PluginError, match=r"no installed package declares 'nope' in counterpart.learn \(declared: "
+    ):
+        plugins.load(plugins.LEARN_TARGETS, "nope")
 
 
 def test_unknown_command_is_named() -> None:

@@ -214,7 +214,7 @@ def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
     """A stand-in tracker that publishes every other frame's pose: the frames between are labelled
     from the silhouettes, which the node says once and counts.
     """
-    from counterpart.nodes.silhouette.synthetic import two_person_sequence
+    from counterpart.sim.flat_scenes import two_person_sequence
 
     from tests.test_labeller_node import EMPTY, TRAIN, N, sink
 

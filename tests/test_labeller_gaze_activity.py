@@ -12,7 +12,7 @@ from counterpart.nodes.labeller.face import FaceSignalDetector, find_face_cascad
 from counterpart.nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_accuracy, gaze_at_other
 from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller, label_pair_3d
 from counterpart.nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN
-from counterpart.nodes.labeller.synthetic import conversation, standing_pose
+from counterpart.sim.planted_signals import conversation, standing_pose
 
 from tests.shared_data import VTEST
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from counterpart.nodes.labeller import cli_mine
+from counterpart.apps import mine as cli_mine
 from counterpart.nodes.labeller.mining import (
     LabelStreams,
     Rule,
@@ -25,7 +25,7 @@ from counterpart.nodes.labeller.mining import (
     write_rules,
 )
 from counterpart.nodes.labeller.signals import UNKNOWN
-from counterpart.nodes.labeller.synthetic import planted_label_streams
+from counterpart.sim.planted_signals import planted_label_streams
 from mlxtend.frequent_patterns import apriori, association_rules
 from mlxtend.preprocessing import TransactionEncoder
 

@@ -15,7 +15,7 @@ from counterpart.messages.tracker import TrackedBody
 from counterpart.nodes.labeller.labeller import SocialLabeller
 from counterpart.nodes.labeller.node import observations, signals_message
 from counterpart.nodes.labeller.signals import SIGNALS
-from counterpart.nodes.silhouette.synthetic import two_person_sequence
+from counterpart.sim.flat_scenes import two_person_sequence
 
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 from tests.pose_source import facing

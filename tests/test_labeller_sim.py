@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from counterpart.apps import mine as cli_mine
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.messages import Pose3D, Silhouettes
 from counterpart.messages.tracker import TrackedBody
-from counterpart.nodes.labeller import cli_mine
 from counterpart.nodes.labeller.head_motion import HeadMotionParams, head_motion
 from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller
 from counterpart.nodes.labeller.mining import mine_transactions, read_rules, turn_transactions

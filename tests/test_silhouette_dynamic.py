@@ -15,7 +15,7 @@ from counterpart.nodes.silhouette.backends import make_subtractor
 from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
-from counterpart.nodes.silhouette.synthetic import textured_background
+from counterpart.sim.flat_scenes import textured_background
 
 from tests.shared_data import DATA
 

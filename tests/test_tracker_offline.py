@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from counterpart.nodes.tracker.offline import track_video
+from counterpart.apps.tracking import track_video
 from counterpart.nodes.tracker.prior import MotionPrior, train_prior
 from counterpart.sim.cli import open_writer
 from counterpart.sim.stream import open_stream

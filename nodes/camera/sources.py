@@ -19,7 +19,6 @@ device and says what to check.
 from __future__ import annotations
 
 import glob
-import importlib
 import logging
 import os
 import time
@@ -30,6 +29,7 @@ from urllib.parse import parse_qsl
 
 import cv2
 import numpy as np
+from counterpart.bus.plugins import PluginError, simulator
 
 log = logging.getLogger(__name__)
 
@@ -475,11 +475,9 @@ def open_simulator(
     """
     uri = f"sim:{scenario}"
     try:
-        sim = importlib.import_module("counterpart.sim")
-    except ImportError as exc:
-        raise SourceError(
-            f"source '{uri}': the simulator package 'counterpart.sim' cannot be imported ({exc})"
-        ) from None
+        sim = simulator()
+    except (ImportError, PluginError) as exc:
+        raise SourceError(f"source '{uri}': the simulator cannot be loaded ({exc})") from None
     open_stream = getattr(sim, "open_stream", None)
     if not callable(open_stream):
         raise SourceError(

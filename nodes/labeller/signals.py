@@ -14,6 +14,8 @@ Label arrays are ``int8``; score arrays are ``float64``.
 from __future__ import annotations
 
 import numpy as np
+from counterpart.body.skeleton import JOINT_INDEX as JOINT_INDEX  # the project's joint order, re-exported
+from counterpart.body.skeleton import JOINTS as JOINTS
 
 #: the signals the labeller reports, in this order
 SIGNALS: tuple[str, ...] = ("nod", "shake", "gaze_at_other", "activity", "talking", "laughing")
@@ -21,24 +23,6 @@ SIGNALS: tuple[str, ...] = ("nod", "shake", "gaze_at_other", "activity", "talkin
 #: label value for "the input cannot support this signal"
 UNKNOWN: int = -1
 
-#: joint order used across the project (14 joints, metres, world frame Y up, facing +Z at yaw 0)
-JOINTS: tuple[str, ...] = (
-    "head",
-    "neck",
-    "l_shoulder",
-    "l_elbow",
-    "l_wrist",
-    "r_shoulder",
-    "r_elbow",
-    "r_wrist",
-    "l_hip",
-    "l_knee",
-    "l_ankle",
-    "r_hip",
-    "r_knee",
-    "r_ankle",
-)
-JOINT_INDEX: dict[str, int] = {name: i for i, name in enumerate(JOINTS)}
 
 #: the torso joints used for activity (head and limbs excluded)
 TORSO_JOINTS: tuple[str, ...] = ("l_shoulder", "r_shoulder", "l_hip", "r_hip")

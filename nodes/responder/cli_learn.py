@@ -13,6 +13,9 @@ import time
 
 from .models import MODEL_NAMES, save_model
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "an interaction model of the responder"
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     # the video-texture avatar learns from a video of a person: 'counterpart learn avatar'

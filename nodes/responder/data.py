@@ -35,7 +35,9 @@ def sim_trajectories(
     ``max_frames`` crops long scenarios (conversations run 30 s) to keep training fast; extra keyword
     arguments (``emotion``, ``strength``, ``initiator``) go to the scenario generators.
     """
-    from counterpart.sim.scenarios import make_scenario  # the simulator is only needed to build training data
+    from counterpart.bus.plugins import simulator  # the simulator is only needed to build training data
+
+    make_scenario = simulator().make_scenario
 
     out = []
     for name in scenarios:

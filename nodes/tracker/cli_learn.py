@@ -12,6 +12,9 @@ import sys
 
 from .prior import DEFAULT_TRAINING, default_prior_path, train_prior
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "the tracker's motion prior (PCA + HMM of poses)"
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(

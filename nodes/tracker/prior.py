@@ -320,11 +320,11 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
     for src in sources:
         src = str(src)
         if src.startswith("sim:"):
-            from counterpart.sim.scenarios import make_scenario
+            from counterpart.bus.plugins import simulator
 
             name, _, query = src[4:].partition("?")
             seed = int(query.split("=", 1)[1]) if query.startswith("seed=") else 0
-            sc = make_scenario(name, seed=seed, fps=fps)
+            sc = simulator().make_scenario(name, seed=seed, fps=fps)
             seqs += [sc.poses_a, sc.poses_b]
             names += [f"{src}#a", f"{src}#b"]
             continue

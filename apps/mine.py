@@ -31,6 +31,9 @@ from counterpart.nodes.labeller.mining import (
     write_rules,
 )
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "mine listener-response association rules from label streams"
+
 SCENARIOS = ("interested", "not_interested")
 
 

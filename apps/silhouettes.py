@@ -13,8 +13,10 @@ import argparse
 import sys
 
 from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
+from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 
-from .backends import BACKEND_NAMES
+#: the one-line help of this command in `counterpart --help`
+HELP = "offline: the people's silhouettes of a video file"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -38,7 +40,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from .pipeline import extract_video
+    from counterpart.nodes.silhouette.pipeline import extract_video
 
     if not positive(args, ("train_frames", "max_frames"), "silhouettes"):
         return 2

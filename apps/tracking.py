@@ -16,10 +16,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.pose import DOF
-
-from .init import PlacementError
-from .prior import MotionPrior
-from .tracker import SIDES, Tracker, people_problem
+from counterpart.nodes.tracker.init import PlacementError
+from counterpart.nodes.tracker.prior import MotionPrior
+from counterpart.nodes.tracker.tracker import SIDES, Tracker, people_problem
 
 if TYPE_CHECKING:
     from counterpart.nodes.silhouette.pipeline import FrameResult

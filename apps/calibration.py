@@ -14,9 +14,8 @@ from collections.abc import Callable
 from typing import Any
 
 from counterpart.body.camera import Camera
-
-from .estimate import CalibrationConfig, CameraEstimate
-from .observe import PeopleObservations, SceneFrames
+from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate
+from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]

@@ -1,7 +1,7 @@
 """``counterpart track VIDEO --out poses.npz``: offline 3D tracking of a video file.
 
 The silhouette node's background model and the tracker's annealed particle filter, frame by frame,
-without the bus (``counterpart.nodes.tracker.offline.track_video``); the layout of the output file is in its
+without the bus (``counterpart.apps.tracking.track_video``); the layout of the output file is in its
 docstring. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
 Exit code 0 on success, 2 on bad input, 130 when interrupted.
 """
@@ -14,9 +14,11 @@ import sys
 from counterpart.body.camera import Camera, load_camera_file
 from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
+from counterpart.nodes.tracker.prior import resolve_prior
+from counterpart.nodes.tracker.tracker import SIDES
 
-from .prior import resolve_prior
-from .tracker import SIDES
+#: the one-line help of this command in `counterpart --help`
+HELP = "offline: the 3D body of the people of a video file"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -65,7 +67,7 @@ def load_camera(path: str) -> Camera:
 
 
 def main(args: argparse.Namespace) -> int:
-    from .offline import track_video
+    from .tracking import track_video
 
     if not positive(args, ("layers", "particles", "train_frames", "max_frames"), "track"):
         return 2

@@ -1,5 +1,5 @@
-"""Constructed inputs with known truth, for tests and bench/labeller.py until the simulator's
-conversation scenario (with labelled signals) exists.
+"""Constructed joint streams with planted social signals and known truth: fixtures for the labeller's
+tests and bench/labeller.py (the simulator's conversation scenarios give rendered, labelled ones).
 
 - :func:`standing_pose`: a (14,3) standing skeleton in the project joint order.
 - :func:`conversation`: two people facing each other with planted nods, shakes, torso sway and
@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from counterpart.nodes.labeller.signals import JOINT_INDEX, JOINTS
+from counterpart.body.skeleton import JOINT_INDEX, JOINTS
 
 _STAND = np.array(
     [

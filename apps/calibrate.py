@@ -2,7 +2,7 @@
 the people in it.
 
 Focal length, tilt, roll and height above the ground from the heads and feet of the upright people
-(``counterpart.nodes.calibration.offline.calibrate_video``), printed with their uncertainty (one standard
+(``counterpart.apps.calibration.calibrate_video``), printed with their uncertainty (one standard
 deviation); the file is a calibration every node and command that takes a camera reads
 (``calibration.file``, ``counterpart demo --camera``, ``counterpart track --camera``). Progress goes
 to stderr; the last stdout line is a JSON summary. Exit code 0 on success, 2 on bad input (or too
@@ -15,6 +15,9 @@ import argparse
 import sys
 
 from counterpart.bus.cli_offline import FrameProgress, positive, run_offline
+
+#: the one-line help of this command in `counterpart --help`
+HELP = "offline: the camera of a video file, estimated from the people in it"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -38,8 +41,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
 
-    from .estimate import CalibrationConfig
-    from .offline import calibrate_video, camera_file_text
+    from counterpart.nodes.calibration.estimate import CalibrationConfig
+
+    from .calibration import calibrate_video, camera_file_text
 
     if not positive(args, ("train_frames", "max_frames"), "calibrate"):
         return 2

@@ -17,6 +17,9 @@ from typing import Any
 
 from counterpart.bus.cli_offline import run_offline
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "a video-texture avatar from a recording of a person"
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--video", required=True, metavar="PERSON.avi", help="the recording of the person")
@@ -63,9 +66,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"[learn avatar] {msg}", file=sys.stderr, flush=True)
 
     def work() -> dict[str, Any]:
-        from .avatar_recording import video_recording
-        from .models import save_model
-        from .video_texture import VideoTextureConfig, fit_recording
+        from counterpart.apps.avatar_video import video_recording
+        from counterpart.nodes.responder.models import save_model
+        from counterpart.nodes.responder.video_texture import VideoTextureConfig, fit_recording
 
         if args.train_frames < 2 or args.workers < 1:
             raise ValueError("--train-frames must be at least 2 and --workers at least 1")

@@ -1,6 +1,6 @@
 """Small synthetic scenes with ground truth for tests and benchmarks of the silhouette node.
 
-Not the project simulator (``sim/``): a textured static background with sensor noise, two
+Not the rendered scenarios of ``counterpart.sim.scenarios``: a textured static background with sensor noise, two
 flat-coloured figures that walk towards each other, shake hands (their regions merge) and step
 back, each casting a shadow on the ground that darkens the background by a constant factor
 (same chromaticity, as Horprasert et al. assume). Frames are uint8 BGR.

@@ -16,6 +16,9 @@ import sys
 import numpy as np
 from counterpart.body.trajectory import TwoPersonTrajectory
 
+#: the one-line help of this command in `counterpart --help`
+HELP = "offline: generate the partner for one person's trajectory"
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--model", required=True, help="model file, or default:dual-hmm / default:listener")
@@ -46,7 +49,7 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
 
 
 def main(args: argparse.Namespace) -> int:
-    from .models import load_default, load_model
+    from counterpart.nodes.responder.models import load_default, load_model
 
     try:
         if args.model.startswith("default:"):

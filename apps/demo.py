@@ -21,7 +21,10 @@ import logging
 import sys
 from pathlib import Path
 
-from .run_summary import RunSummary, read_stats, stats_json, stats_table, summarise
+from counterpart.bus.run_summary import RunSummary, read_stats, stats_json, stats_table, summarise
+
+#: the one-line help of this command in `counterpart --help`
+HELP = "the whole graph end to end on the built-in scene, your video or a camera"
 
 #: the responder's models offered on the live page, built before the graph starts
 RESPONDER_MODELS = ("dual-hmm", "joint-shape", "listener", "emotion")
@@ -127,11 +130,11 @@ def report(run_dir: Path, out: Path) -> RunSummary:
 
 
 def main(args: argparse.Namespace) -> int:
-    from .cli_launch import load_checked
-    from .launchfile import LaunchError
-    from .params import ParamError
-    from .runner import setup_logging
-    from .supervisor import Launcher, prune_run_dirs
+    from counterpart.bus.cli_launch import load_checked
+    from counterpart.bus.launchfile import LaunchError
+    from counterpart.bus.params import ParamError
+    from counterpart.bus.runner import setup_logging
+    from counterpart.bus.supervisor import Launcher, prune_run_dirs
 
     setup_logging("demo")
     log = logging.getLogger("demo")
