@@ -29,8 +29,10 @@ follows the anchor into the new epoch when its own seq goes back, so the old str
 an input that has not restarted yet still complete the old stream's sets and never mix with the new
 stream's messages of the same seq. An input that goes back before the anchor does is held aside
 (up to ``max_ahead`` messages): if the anchor restarts too, its messages join the new stream; if it
-comes back past where it was instead, they were only stragglers and count as ``late`` (or complete
-a set still waiting), and the pairing goes on as before.
+comes back past where it was instead, they were only stragglers and count as ``late`` (or fill a
+gap in a set still waiting), and the pairing goes on as before. (So an input is taken to restart
+ahead of the anchor only while its new stream stays below where its old one ended: inputs of one
+camera restart within a few frames of each other.)
 """
 
 from __future__ import annotations
@@ -247,7 +249,9 @@ class SeqSynchronizer:
         if not straggler:
             self._last[port] = seq
         key = (self._epoch[port], seq)
-        if key <= self._decided and key not in self._pending:
+        held = self._pending.get(key)
+        # a straggler only fills a gap: it never replaces what its set has
+        if (key <= self._decided and held is None) or (straggler and held is not None and port in held.msgs):
             self.stats.late += 1
             return
         s = self._pending.setdefault(key, _Set())

@@ -167,6 +167,10 @@ def test_a_straggler_that_goes_back_alone_is_late_and_pairing_goes_on() -> None:
     got += pr.add("partner", 6, 6)
     assert [(p.seq, p["partner"], p.restart) for p in got] == [(s, s, False) for s in range(7)]
     assert pr.stats.late == 1 and pr.stats.restarts == 0
+    # a stray copy of a partner that waits for its frame never replaces it
+    got = pr.add("partner", 8, 8) + pr.add("partner", 8, "copy") + pr.add("partner", 9, 9)
+    got += pr.add("frame", 7, 7) + pr.add("frame", 8, 8)
+    assert [(p.seq, p["partner"]) for p in got] == [(7, None), (8, 8)] and pr.stats.late == 2
 
 
 def test_timeout_gives_up_on_optional_inputs_from_the_arrival_of_the_required_ones() -> None:
