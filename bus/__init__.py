@@ -1,6 +1,20 @@
-"""The runtime: nodes, publish/subscribe, launch files, supervisor, bags and the CLI."""
+"""The runtime: nodes, publish/subscribe, pairing by seq, launch files, supervisor, bags and the CLI."""
 
 from .node import LATEST, RELIABLE, Input, Node, Output, stats_topic
+from .pairing import PairedSet, Pairing, PairingStats, SeqSynchronizer
 from .params import Param, ParamError
 
-__all__ = ["Node", "Input", "Output", "Param", "ParamError", "RELIABLE", "LATEST", "stats_topic"]
+__all__ = [
+    "Node",
+    "Input",
+    "Output",
+    "Param",
+    "ParamError",
+    "Pairing",
+    "PairedSet",
+    "PairingStats",
+    "SeqSynchronizer",
+    "RELIABLE",
+    "LATEST",
+    "stats_topic",
+]

@@ -11,6 +11,16 @@ A processing node::
         def on_message(self, port, msg):
             self.publish("out", replace(msg, value=msg.value * self.p["gain"]))
 
+Inputs paired by ``seq`` (:mod:`.pairing`, as ROS's message_filters synchronisers) are declared with
+``pairing``; the node then gets one :meth:`Node.on_paired` per set instead of their messages::
+
+    class Tracker(Node):
+        inputs = {"frame": Input(Frame), "silhouettes": Input(Silhouettes)}
+        pairing = Pairing(required=("frame", "silhouettes"), max_ahead=50)
+
+        def on_paired(self, s):
+            self.publish("pose", track(s["frame"], s["silhouettes"]))
+
 A source node has no inputs and overrides :meth:`Node.generate`, publishing until its data ends
 (then end of stream goes out on every output and the process exits 0) or ``self.stopping`` is set.
 
@@ -38,6 +48,7 @@ import zmq
 from counterpart.messages import EndOfStream, NodeStats, TopicStats
 
 from .endpoints import TopicEndpoints, ipc_endpoints, standalone_dir
+from .pairing import PairedSet, Pairing, PairingStats, SeqSynchronizer
 from .params import Param, resolve_params
 from .transport import LATEST, POLICIES, RELIABLE, Publisher, Subscriber
 
@@ -96,18 +107,28 @@ class _PortStats:
 
 class Node:
     """Base class of every node process. Subclasses set ``inputs``, ``outputs``, ``params`` and
-    override :meth:`setup`, :meth:`on_message` (or ``on_<port>``), :meth:`on_end`, :meth:`generate`.
+    override :meth:`setup`, :meth:`on_message` (or ``on_<port>``), :meth:`on_paired`, :meth:`on_end`,
+    :meth:`generate`.
     """
 
     inputs: ClassVar[dict[str, Input]] = {}
     outputs: ClassVar[dict[str, Output]] = {}
     params: ClassVar[dict[str, Param]] = {}
+    #: inputs paired by seq and the policy for late and missing messages (None: every message alone)
+    pairing: ClassVar[Pairing | None] = None
 
     # ------------------------------------------------------------------ declared ports and params
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
         """The ports for the given (validated) parameters. Override when they depend on parameters."""
         return dict(cls.inputs), dict(cls.outputs)
+
+    @classmethod
+    def paired_inputs(cls, params: dict[str, Any]) -> Pairing | None:
+        """The pairing for the given (validated) parameters: ``pairing`` without the inputs that
+        :meth:`ports` leaves out. Override when the policy depends on parameters.
+        """
+        return cls.pairing.restrict(list(cls.ports(params)[0])) if cls.pairing is not None else None
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
@@ -138,6 +159,7 @@ class Node:
         self.exit_code = 0
         #: the node's own figures, published in its stats (NodeStats.figures): see :meth:`tally`
         self.figures: dict[str, float] = {}
+        self._sync: SeqSynchronizer | None = None
 
     def setup(self) -> None:
         """Called once after the sockets are up, before any message. Load models here."""
@@ -149,8 +171,19 @@ class Node:
             raise NotImplementedError(f"{type(self).__name__} has no on_message or on_{port}")
         handler(msg)
 
+    @property
+    def pairing_stats(self) -> PairingStats | None:
+        """The counters of the paired inputs (None without ``pairing``): also in the stats' figures."""
+        return self._sync.stats if self._sync is not None else None
+
+    def on_paired(self, paired: PairedSet) -> None:
+        """Handle one set of the paired inputs (``paired[port]``; None for an optional one missing)."""
+        raise NotImplementedError(f"{type(self).__name__} declares paired inputs and must implement on_paired()")
+
     def on_end(self) -> None:
-        """Called once when every input has ended, before end of stream goes out downstream."""
+        """Called once when every input has ended (after the last paired set), before end of stream
+        goes out downstream.
+        """
 
     def on_timer(self) -> None:
         """Called about every ``timer_period`` seconds when the class sets it (not None)."""
@@ -253,6 +286,8 @@ class Node:
             )
             self._out_stats[port] = _PortStats()
         self._latched = [self._out[p] for p in outputs if outputs[p].latched]
+        pairing = self.paired_inputs(self.p)
+        self._sync = SeqSynchronizer(pairing) if pairing is not None else None
 
     def _close(self) -> None:
         for s in self._in.values():
@@ -291,6 +326,8 @@ class Node:
         for sub in self._in.values():
             for k, v in sub.bad.items():
                 errors[k] = errors.get(k, 0) + v
+        if self._sync is not None:  # what the pairing delivered, dropped and found late
+            self.figures.update(self._sync.stats.figures())
         proc = self._proc_ms
         self._proc_ms = []
         msg = NodeStats(
@@ -343,6 +380,9 @@ class Node:
             timeout = 100
             if self.timer_period is not None:
                 timeout = max(0, min(timeout, int((next_timer - time.monotonic()) * 1000)))
+            deadline = self._sync.next_deadline() if self._sync is not None else None
+            if deadline is not None:
+                timeout = max(0, min(timeout, int((deadline - time.monotonic()) * 1000) + 1))
             ready = dict(poller.poll(timeout))
             due = [owners[s] for s in ready] + [p for p, sub in self._in.items() if sub.pending]
             for port in dict.fromkeys(due):
@@ -350,8 +390,11 @@ class Node:
                 msg = sub.receive()
                 if msg is None:
                     continue
+                paired = self._sync is not None and port in self._sync.ports
                 if isinstance(msg, EndOfStream):
                     self.log.debug("end of stream on %s", port)
+                    if paired:  # an input that ended holds no set back
+                        self._on_sets(self._sync.end(port))
                     continue
                 st = self._in_stats[port]
                 st.period_count += 1
@@ -359,10 +402,15 @@ class Node:
                 if stamp:
                     st.latencies.append((time.monotonic_ns() - stamp) / 1e6)
                 t0 = time.perf_counter()
-                self.on_message(port, msg)
+                if paired:
+                    self._on_sets(self._sync.add(port, msg.seq, msg))
+                else:
+                    self.on_message(port, msg)
                 self._proc_ms.append((time.perf_counter() - t0) * 1e3)
                 if not self._running:
                     self._mark_running()
+            if self._sync is not None and self._sync.timeout is not None:
+                self._on_sets(self._sync.poll())
             if self.timer_period is not None and time.monotonic() >= next_timer:
                 self.on_timer()
                 next_timer = time.monotonic() + self.timer_period
@@ -372,6 +420,10 @@ class Node:
             if self._parent_gone():
                 self.log.warning("launcher is gone; stopping")
                 self.stopping = True
+
+    def _on_sets(self, sets: list[PairedSet]) -> None:
+        for s in sets:
+            self.on_paired(s)
 
     def _send_eos(self, reason: str) -> None:
         # This node reads nothing more: leave every input first. Two nodes feeding each other (the
@@ -399,6 +451,8 @@ class Node:
             if self._in:
                 self._loop()
                 if not self.stopping:
+                    if self._sync is not None:  # what still waits goes out with what it has
+                        self._on_sets(self._sync.flush())
                     self.on_end()
             else:
                 self.generate()
@@ -463,4 +517,15 @@ def load_spec(path: str | Path) -> dict[str, Any]:
         return json.load(f)
 
 
-__all__ = ["Node", "Input", "Output", "Param", "RELIABLE", "LATEST", "stats_topic", "standalone_spec"]
+__all__ = [
+    "Node",
+    "Input",
+    "Output",
+    "Param",
+    "Pairing",
+    "PairedSet",
+    "RELIABLE",
+    "LATEST",
+    "stats_topic",
+    "standalone_spec",
+]

@@ -1,5 +1,5 @@
-"""The labeller node: seq pairing (no processes), message conversion, and real graphs
-camera -> silhouette -> [pose stand-in] -> labeller -> recording sinks.
+"""The labeller node: message conversion, and real graphs camera -> silhouette -> [pose stand-in] ->
+labeller -> recording sinks (its seq pairing alone: tests/test_bus_pairing.py).
 """
 
 from __future__ import annotations
@@ -14,7 +14,6 @@ from counterpart.messages.silhouette import PersonShape
 from counterpart.messages.tracker import TrackedBody
 from counterpart.nodes.labeller.labeller import SocialLabeller
 from counterpart.nodes.labeller.node import observations, signals_message
-from counterpart.nodes.labeller.pairing import SeqPairer
 from counterpart.nodes.labeller.signals import SIGNALS
 from counterpart.sim.flat_scenes import two_person_sequence
 
@@ -22,115 +21,6 @@ from tests.launching import REPO, read_jsonl, run_launch, write_launch
 from tests.pose_source import facing
 
 GAZE, TALK, LAUGH, ACT, NOD = (SIGNALS.index(s) for s in ("gaze_at_other", "talking", "laughing", "activity", "nod"))
-
-
-# ---------------------------------------------------------------------------------------- pairing
-def released(items) -> list[tuple[int, list[str], bool]]:
-    return [(p.seq, sorted(p.msgs), p.restart) for p in items]
-
-
-def test_pairing_waits_for_every_port_then_releases_in_order() -> None:
-    pr = SeqPairer(["silhouettes", "pose"], "silhouettes")
-    assert pr.add("silhouettes", 0, "s0") == []
-    assert pr.add("silhouettes", 1, "s1") == []
-    out = pr.add("pose", 0, "p0")
-    assert released(out) == [(0, ["pose", "silhouettes"], False)] and out[0].msgs == {"silhouettes": "s0", "pose": "p0"}
-    assert released(pr.add("pose", 1, "p1")) == [(1, ["pose", "silhouettes"], False)]
-    # the pose may also come first
-    assert pr.add("pose", 2, "p2") == [] and pr.pending == [2]
-    assert [p.msgs for p in pr.add("silhouettes", 2, "s2")] == [{"pose": "p2", "silhouettes": "s2"}]
-    assert pr.pending == [] and pr.stats.incomplete == 0
-
-
-def test_pairing_falls_back_when_a_pose_never_comes_and_drops_frames_without_silhouettes() -> None:
-    pr = SeqPairer(["silhouettes", "pose"], "silhouettes")
-    got = []
-    got += pr.add("pose", 0, "p0")
-    got += pr.add("silhouettes", 0, "s0")
-    got += pr.add("silhouettes", 1, "s1")  # pose 1 will never come
-    got += pr.add("silhouettes", 2, "s2")
-    assert released(got) == [(0, ["pose", "silhouettes"], False)] and pr.pending == [1, 2]
-    got += pr.add("pose", 2, "p2")  # a newer pose: frame 1 is decided without it
-    assert released(got)[1:] == [(1, ["silhouettes"], False), (2, ["pose", "silhouettes"], False)]
-    got += pr.add("pose", 3, "p3")  # silhouettes 3 never come
-    got += pr.add("pose", 4, "p4")
-    got += pr.add("silhouettes", 4, "s4")
-    assert [p.seq for p in got] == [0, 1, 2, 4]
-    assert pr.stats.unpaired == 1 and pr.stats.missing == {"silhouettes": 0, "pose": 1} and pr.stats.released == 4
-
-
-def test_pairing_bounded_by_max_pending_late_messages_and_end_of_a_port() -> None:
-    pr = SeqPairer(["silhouettes", "pose"], "silhouettes", max_pending=3)
-    got = []
-    for s in range(6):  # the pose topic stalls
-        got += pr.add("silhouettes", s, f"s{s}")
-    assert [p.seq for p in got] == [0, 1, 2] and pr.pending == [3, 4, 5]
-    assert all(p.msgs.keys() == {"silhouettes"} for p in got) and pr.stats.forced == 3
-    assert pr.add("pose", 1, "p1") == [] and pr.stats.late == 1  # its frame went out already
-    out = pr.end("pose")  # the tracker is gone: nothing to wait for
-    assert [p.seq for p in out] == [3, 4, 5]
-    assert released(pr.add("silhouettes", 6, "s6")) == [(6, ["silhouettes"], False)]
-    assert pr.flush() == []
-
-
-def test_pairing_side_messages_ahead_wait_for_the_required_port_up_to_max_ahead() -> None:
-    # camera frames come long before their silhouettes: they wait, nothing is forced out
-    pr = SeqPairer(["silhouettes", "frame"], "silhouettes", max_pending=2, max_ahead=5)
-    for s in range(7):
-        assert pr.add("frame", s, f"f{s}") == []
-    assert pr.pending == list(range(7)) and pr.stats.forced == 0
-    assert [p.msgs for p in pr.add("silhouettes", 0, "s0")] == [{"frame": "f0", "silhouettes": "s0"}]
-    assert pr.add("frame", 7, "f7") == [] and pr.add("frame", 8, "f8") == []  # 8 frames ahead: 1 goes
-    assert pr.pending == list(range(2, 9)) and pr.stats.overflow == 1
-    assert released(pr.add("silhouettes", 1, "s1")) == [(1, ["silhouettes"], False)]
-    assert released(pr.add("silhouettes", 2, "s2")) == [(2, ["frame", "silhouettes"], False)]
-    assert pr.stats.missing == {"silhouettes": 0, "frame": 1} and pr.stats.unpaired == 0
-
-
-def test_pairing_restart_flags_the_first_frame_of_the_new_stream() -> None:
-    pr = SeqPairer(["silhouettes"], "silhouettes")
-    got = []
-    for s in (0, 1, 2, 0, 1):
-        got += pr.add("silhouettes", s, s)
-    assert released(got) == [
-        (0, ["silhouettes"], False),
-        (1, ["silhouettes"], False),
-        (2, ["silhouettes"], False),
-        (0, ["silhouettes"], True),
-        (1, ["silhouettes"], False),
-    ]
-    assert pr.stats.restarts == 1
-
-
-def test_pairing_random_interleavings_match_the_exact_pairs() -> None:
-    rng = np.random.default_rng(7)
-    for trial in range(200):
-        n = int(rng.integers(1, 40))
-        have = {
-            port: sorted(rng.choice(n, int(rng.integers(0, n + 1)), replace=False).tolist())
-            for port in ("silhouettes", "pose", "frame")
-        }
-        streams = {port: [(port, s) for s in seqs] for port, seqs in have.items()}
-        pr = SeqPairer(list(streams), "silhouettes", max_pending=10_000)
-        got = []
-        while any(streams.values()):  # merge the three in-order streams at random
-            port = rng.choice([p for p, q in streams.items() if q])
-            _, s = streams[port].pop(0)
-            got += pr.add(port, s, (port, s))
-        got += pr.flush()
-        assert [p.seq for p in got] == have["silhouettes"], trial
-        for p in got:
-            assert set(p.msgs) == {port for port, seqs in have.items() if p.seq in seqs}, trial
-            assert all(m == (port, p.seq) for port, m in p.msgs.items()), trial
-
-
-def test_pairing_rejects_bad_setup() -> None:
-    with pytest.raises(ValueError, match="required port 'silhouettes'"):
-        SeqPairer(["pose"], "silhouettes")
-    with pytest.raises(ValueError, match="max_pending"):
-        SeqPairer(["silhouettes"], "silhouettes", max_pending=0)
-    with pytest.raises(KeyError, match="unknown port 'frame'"):
-        SeqPairer(["silhouettes"], "silhouettes").add("frame", 0, None)
 
 
 # ------------------------------------------------------------------------------------- conversion

@@ -1,6 +1,7 @@
 """The labeller node: social signals per person and frame (Okwechime et al.) on topic ``signals``.
 
-Inputs, paired by ``seq`` (:class:`~counterpart.nodes.labeller.pairing.SeqPairer`):
+Inputs, paired by ``seq`` (the runtime's :class:`~counterpart.bus.pairing.Pairing`; its counters are the
+``paired_*`` figures of the node's stats):
 
 * ``silhouettes`` (required): the 2D fallback (head reference point, centroid, height, spline) and
   each person's box for the face search;
@@ -11,7 +12,7 @@ Inputs, paired by ``seq`` (:class:`~counterpart.nodes.labeller.pairing.SeqPairer
   (faces tracked, nods/shakes and talking/laughing from them) and for the stream's frame rate
   (``Frame.fps``), which sets every window in frames unless ``fps`` is given.
 
-Every released frame gives one SocialSignals with the seq and stamp of its silhouettes, one
+Every frame paired gives one SocialSignals with the seq and stamp of its silhouettes, one
 PersonSignals per person (``source``: the input nod/shake came from, ``face``, ``3d`` or ``2d``;
 a face that belongs to no silhouette is a person of its own, id 1000 + slot); what the input cannot
 support is UNKNOWN (-1), never guessed. The node's stats count the sources (``source_face``,
@@ -27,16 +28,16 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from counterpart.body.pose import DOF, DOF_INDEX
-from counterpart.bus import Input, Node, Output, Param, ParamError
+from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import Frame, Pose3D, Silhouettes, SocialSignals
 from counterpart.messages.labeller import PersonSignals
 
 from .labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
-from .pairing import Paired, SeqPairer
 from .signals import SIGNALS
 
 #: the highest frame rate taken from a stream's Frame messages (Hz); above it the message is not believed
@@ -203,6 +204,8 @@ class Labeller(Node):
         "frame": Input(Frame, doc="camera image for talking/laughing; only with use_face"),
     }
     outputs = {"signals": Output(SocialSignals, "one per frame with silhouettes; seq and stamp of that frame")}
+    # a frame whose pose or camera image never comes is labelled without it
+    pairing = Pairing(required=("silhouettes",), optional=("pose", "frame"))
     params = {
         "fps": Param(
             float,
@@ -341,11 +344,15 @@ class Labeller(Node):
             ins["frame"] = cls.inputs["frame"]
         return ins, dict(cls.outputs)
 
+    @classmethod
+    def paired_inputs(cls, params: dict[str, Any]) -> Pairing | None:
+        pairing = super().paired_inputs(params)
+        return replace(pairing, max_pending=params["max_pending"], max_ahead=params["max_ahead"]) if pairing else None
+
     def setup(self) -> None:
         p = self.p
         self.labeller: SocialLabeller | None = None
         self.fps = p["fps"] or 25.0  # until the stream says
-        self.pairer = SeqPairer(list(self.ports(p)[0]), "silhouettes", p["max_pending"], p["max_ahead"])
         self.last_seq = -1
         self.sources = {"face": 0, "3d": 0, "2d": 0}
         self._warned_ctrl = False
@@ -429,17 +436,8 @@ class Labeller(Node):
             )
         return None
 
-    def on_message(self, port: str, msg: Any) -> None:
-        for item in self.pairer.add(port, msg.seq, msg):
-            self._label(item)
-        # a side input that ended (tracker gone) must not hold frames back
-        for other, sub in self._in.items():
-            if sub.ended and other != port:
-                for item in self.pairer.end(other):
-                    self._label(item)
-
-    def _label(self, item: Paired) -> None:
-        frame: Frame | None = item.msgs.get("frame")
+    def on_paired(self, item: PairedSet) -> None:
+        frame: Frame | None = item.get("frame")
         lab = self._rate(frame)
         if item.restart:
             self.log.info("seq went back to %d: the stream restarted; forgetting every person", item.seq)
@@ -448,7 +446,7 @@ class Labeller(Node):
             lab.skip(item.seq - self.last_seq - 1)
         self.last_seq = item.seq
         sil: Silhouettes = item.msgs["silhouettes"]
-        obs, sides = observations(sil, item.msgs.get("pose"))
+        obs, sides = observations(sil, item.get("pose"))
         odd = [np.shape(p.ctrl) for p in sil.people if np.size(p.ctrl) and np.shape(p.ctrl) != (ACTIVITY_CTRL, 2)]
         if odd and not self._warned_ctrl:
             self._warned_ctrl = True
@@ -475,12 +473,12 @@ class Labeller(Node):
                 self._fallback(item, ps.id)
         self.publish("signals", out)
 
-    def _fallback(self, item: Paired, pid: int) -> None:
+    def _fallback(self, item: PairedSet, pid: int) -> None:
         """A person labelled from their silhouette although the tracker is subscribed: counted, and
         said once per reason.
         """
         self.tally("fallback_3d_to_2d")
-        pose = item.msgs.get("pose")
+        pose = item.get("pose")
         if pose is None:
             why = (
                 "no pose message for this frame (it came late or was dropped; labeller.max_pending sets how "
@@ -501,21 +499,19 @@ class Labeller(Node):
             )
 
     def on_end(self) -> None:
-        for item in self.pairer.flush():
-            self._label(item)
-        st = self.pairer.stats
+        st = self.pairing_stats
         missing = ", ".join(f"{n} without {p}" for p, n in st.missing.items() if n)
         self.log.info(
             "labelled %d frames (%s; people: %d from 3D, %d from 2D, %d from faces; %d fell back from 3D "
             "to 2D); %d dropped without silhouettes, %d released early, %d side messages over max_ahead, "
             "%d late messages, %d restarts; frame rate %g fps",
-            st.released,
+            st.delivered,
             missing or "every input present",
             self.sources["3d"],
             self.sources["2d"],
             self.sources["face"],
             int(self.figures.get("fallback_3d_to_2d", 0)),
-            st.unpaired,
+            st.dropped,
             st.forced,
             st.overflow,
             st.late,

@@ -3,8 +3,12 @@
 Frames are the clock. A frame is rendered once its partner has arrived (when a partner is
 expected at all), or when a partner with a higher ``seq`` shows that this frame's partner will not
 come (topics arrive in order), or after ``timeout`` seconds, or when more than ``max_pending``
-frames wait. With ``adaptive`` waiting a frame does not wait at all while the partners are late:
-when the median delay of the recent partners (partner arrival minus its frame's arrival; a partner
+frames wait: the runtime's seq synchroniser (:mod:`counterpart.bus.pairing`, frame required,
+partner optional) decides, driven here rather than declared on the node because a frame first
+waits for the graph's camera (``wait_camera``) and only then for its partner.
+
+With ``adaptive`` waiting a frame does not wait at all while the partners are late: when the
+median delay of the recent partners (partner arrival minus its frame's arrival; a partner
 that never came counts as infinitely late) exceeds ``timeout``, waiting would only add latency to
 every frame, so each frame renders at once with the newest partner. The delays are measured on
 every frame, waited for or not, so waiting resumes as soon as the partners keep up again.
@@ -13,7 +17,7 @@ Overlays (silhouettes, pose, signals) never hold a frame back: each uses the mes
 ``seq`` when there is one, else the newest older one (an overlay a frame late is better than a
 flickering one). A frame whose partner did not come shows the newest older partner.
 
-No bus here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
+No processes here: :class:`Compositor` takes messages and returns images, so it runs in a notebook.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from typing import Any
 import cv2
 import numpy as np
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size
+from counterpart.bus.pairing import PairedSet, Pairing, SeqSynchronizer
 
 from . import draw
 from .avatar import AvatarPainter
@@ -123,7 +128,7 @@ class Compositor:
         overlays: overlay name (:data:`OVERLAYS`) -> on/off.
         timeout: seconds a frame waits for its partner at most (from the frame's arrival).
         max_pending: frames held at most; beyond it the oldest renders without waiting.
-        history: messages kept per side topic.
+        history: messages kept per side topic (and partners kept ahead of their frames).
         adaptive: skip the wait while the recent partners came later than ``timeout`` (module doc).
         wait_camera: hold frames until :meth:`set_camera` gives the graph's camera for their size
             (the calibration node's camera_info), so that nothing is drawn with another one.
@@ -150,7 +155,18 @@ class Compositor:
         unknown = sorted(set(self.overlays) - set(OVERLAYS))
         if unknown:
             raise ValueError(f"unknown overlay(s) {unknown}; expected some of {list(OVERLAYS)}")
-        self.pending: OrderedDict[int, tuple[Any, float]] = OrderedDict()
+        #: frames with their arrival time (s), waiting for the graph's camera before they are paired
+        self.pending: deque[tuple[Any, float]] = deque()
+        self.sync = SeqSynchronizer(
+            Pairing(
+                ("frame",),
+                ("partner",) if self.want_partner else (),
+                max_pending=self.max_pending,
+                max_ahead=self.history,
+                timeout=self.timeout,
+            )
+        )
+        self._paired: list[PairedSet] = []  # sets the pairing gave out, not rendered yet
         self.partners = _History(self.history)
         self.side = {k: _History(self.history) for k in ("silhouettes", "pose", "signals")}
         self.stats: dict[str, Any] = {}
@@ -176,7 +192,7 @@ class Compositor:
     def add_frame(self, msg: Any, now: float | None = None) -> None:
         now = time.monotonic() if now is None else now
         seq = int(msg.seq)
-        self.pending[seq] = (msg, now)
+        self.pending.append((msg, now))
         self._max_frame_seq = max(self._max_frame_seq, seq)
         if seq > self.partners.max_seq:  # else its partner came first: on time, already counted
             self._unresolved[seq] = now
@@ -195,6 +211,8 @@ class Compositor:
             if seq > self._max_frame_seq:  # ahead of its frame: on time
                 self._record_delay(0.0)
         self.partners.add(msg)
+        if self.want_partner:
+            self._paired += self.sync.add("partner", seq, msg)
 
     def _record_delay(self, delay: float) -> None:
         self.delays.append(delay)
@@ -239,26 +257,19 @@ class Compositor:
         """
         now = time.monotonic() if now is None else now
         self._resolve_overdue(now)
-        out = []
+        # while the partners come late, waiting would only delay every frame (module doc)
+        self.sync.timeout = 0.0 if self.adaptive and self.partners_late else self.timeout
         while self.pending:
-            seq, (frame, t) = next(iter(self.pending.items()))
+            frame, t = self.pending[0]
             if self.wait_camera and not flush and _size(frame) not in self._cams:
                 break
-            partner = self.partners.exact(seq) if self.want_partner else None
-            done = (
-                not self.want_partner
-                or partner is not None
-                or self.partners.max_seq > seq
-                or flush
-                or now - t >= self.timeout
-                or (self.adaptive and self.partners_late)
-            )
-            forced = not done and len(self.pending) > self.max_pending
-            if not (done or forced):
-                break
-            self.counts["forced"] += forced
-            del self.pending[seq]
-            out.append(self._bundle(frame, partner))
+            self.pending.popleft()
+            self._paired += self.sync.add("frame", int(frame.seq), frame, now=t)
+            self._paired += self.sync.poll(now)  # a frame that waited for the camera may be past its timeout
+        self._paired += self.sync.flush() if flush else self.sync.poll(now)
+        self.counts["forced"] = self.sync.stats.forced
+        out = [self._bundle(s["frame"], s["partner"] if self.want_partner else None) for s in self._paired]
+        self._paired = []
         return out
 
     def _bundle(self, frame: Any, partner: Any) -> Bundle:

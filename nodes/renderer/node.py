@@ -298,6 +298,7 @@ class Renderer(Node):
             self.video.write(image, f.fps)
             self.figures["video_fps"] = self.video.fps
         self.figures.update({k: float(v) for k, v in self.comp.counts.items()})
+        self.figures.update(self.comp.sync.stats.figures())
         # the first second (background learnt, tracks started) is left out of the settled figures
         t = f.seq / f.fps if f.fps > 0 else f.source_time
         if t >= SETTLE_S:

@@ -7,18 +7,21 @@ Run in a graph (``run: counterpart.nodes.tracker``) or alone::
 Each person named in ``people`` (a side of the frame, as the silhouette node labels them) has its
 own :class:`counterpart.nodes.tracker.tracker.Tracker`. A frame with nobody in view gives a Pose3D with no
 people (the tracks wait); a merged region is still tracked, with the mask the silhouette node
-split by its labels. A frame whose partner message never comes is dropped once it is
-``max_pending`` frames old.
+split by its labels. Frame and silhouettes are paired by seq by the runtime
+(:class:`~counterpart.bus.pairing.Pairing`): a frame whose partner message never comes is dropped
+once the other input went past it, or once ``max_pending`` frames wait (the ``paired_*`` figures
+of the node's stats count them).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import cv2
 import numpy as np
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
-from counterpart.bus import Input, Node, Output, Param, ParamError
+from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .prior import resolve_prior
@@ -60,6 +63,7 @@ class TrackerNode(Node):
         "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)"),
     }
     outputs = {"pose": Output(Pose3D, "one per frame: the tracked people (empty when nobody is in view)")}
+    pairing = Pairing(required=("frame", "silhouettes"), max_pending=1)
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
@@ -104,6 +108,10 @@ class TrackerNode(Node):
         ins = {k: v for k, v in cls.inputs.items() if k != "camera_info" or params["camera_info"]}
         return ins, dict(cls.outputs)
 
+    @classmethod
+    def paired_inputs(cls, params: dict[str, Any]) -> Pairing | None:
+        return replace(super().paired_inputs(params), max_ahead=params["max_pending"])
+
     def setup(self) -> None:
         if self.p["prior"] == "default":
             self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
@@ -113,8 +121,6 @@ class TrackerNode(Node):
         self.cameras = CameraSchedule()
         self.camera: Camera | None = None  # the one the trackers use
         self.trackers: dict[str, Tracker] = {}
-        self.frames: dict[int, Frame] = {}
-        self.sils: dict[int, Silhouettes] = {}
         self.paired: dict[int, tuple[Frame, Silhouettes]] = {}  # waiting for the camera of their size
         self.warned: set[str] = set()
 
@@ -154,13 +160,9 @@ class TrackerNode(Node):
         self.cameras.add(camera, msg.seq)  # a refined camera holds from its seq on
         self._drain()
 
-    def on_frame(self, msg: Frame) -> None:
-        self.frames[msg.seq] = msg
-        self._pair(msg.seq)
-
-    def on_silhouettes(self, msg: Silhouettes) -> None:
-        self.sils[msg.seq] = msg
-        self._pair(msg.seq)
+    def on_paired(self, paired: PairedSet) -> None:
+        self.paired[paired.seq] = (paired["frame"], paired["silhouettes"])
+        self._drain()
 
     def on_end(self) -> None:
         if self.paired:  # the camera never came: one empty pose per frame keeps downstream in step
@@ -175,14 +177,6 @@ class TrackerNode(Node):
         n = self.figures.get("regions_not_tracked", 0)
         if n:
             self.log.warning("%d person region(s) could not be tracked (see the first warning)", n)
-
-    def _pair(self, seq: int) -> None:
-        if seq in self.frames and seq in self.sils:
-            self.paired[seq] = (self.frames.pop(seq), self.sils.pop(seq))
-            self._drain()
-        for pending in (self.frames, self.sils):
-            for old in [s for s in pending if s < seq - self.p["max_pending"]]:
-                del pending[old]
 
     def _drain(self) -> None:
         """Track the paired frames in seq order, as far as the camera of their size is known; beyond
