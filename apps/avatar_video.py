@@ -16,6 +16,7 @@ from collections.abc import Sequence
 
 import cv2
 import numpy as np
+
 from counterpart.nodes.responder.avatar_recording import Progress, Recording, crop_recording, person_piece
 
 #: grey levels (largest channel, 3x3 smoothed) a pixel of the person's region must differ from the

@@ -22,6 +22,7 @@ import time
 
 import mlxtend
 import pandas as pd
+
 from counterpart.nodes.labeller.mining import (
     build_transactions,
     compare_scenarios,

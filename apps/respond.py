@@ -14,6 +14,7 @@ import argparse
 import sys
 
 import numpy as np
+
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.messages import EMOTIONS, INTEREST_LEVELS
 

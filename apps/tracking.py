@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
 from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.pose import DOF
 from counterpart.nodes.tracker.init import PlacementError

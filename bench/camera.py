@@ -30,6 +30,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import yaml
+
 from counterpart.bus import Input, Node, Param
 from counterpart.messages import Frame
 

@@ -54,6 +54,7 @@ from pathlib import Path
 import numpy as np
 import psutil
 import yaml
+
 from counterpart.bus.bag import BagReader
 
 REPO = Path(__file__).resolve().parents[1]

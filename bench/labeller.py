@@ -100,6 +100,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 import pandas as pd
+
 from counterpart.body.pose import DOF_INDEX
 from counterpart.nodes.labeller.face import load_face_cascade
 from counterpart.nodes.labeller.gaze import gaze_accuracy

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame

@@ -65,6 +65,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 
 import cv2
 import numpy as np
+
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 
 DATA = (

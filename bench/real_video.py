@@ -77,17 +77,18 @@ from typing import Any
 
 import cv2
 import numpy as np
-from counterpart.body.camera import Camera
-from counterpart.body.kinematics import forward_kinematics
-from counterpart.body.pose import neutral_pose
-from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX
-from counterpart.nodes.responder.frames import actor_frame
 from real_partner import (  # bench/ is on sys.path as a script
     interaction_class,
     partner_clip,
     partner_figures,
 )
 from real_silhouettes import VIS, reference_collapsed
+
+from counterpart.body.camera import Camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX
+from counterpart.nodes.responder.frames import actor_frame
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"

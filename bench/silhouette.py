@@ -63,6 +63,7 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 
 import cv2
 import numpy as np
+
 from counterpart.body.spline import oriented_boundary, spline_distance
 from counterpart.nodes.silhouette.backends import make_subtractor
 from counterpart.nodes.silhouette.background import SHADOW

@@ -14,6 +14,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
+
 from counterpart.sim.scenarios import SCENARIOS  # noqa: E402
 from counterpart.sim.stream import open_stream  # noqa: E402
 

@@ -35,6 +35,7 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINTS
 
 CMU_SCALE: float = 0.0254 / 0.45

@@ -23,6 +23,7 @@ limb direction ``Rx(-f) Rz(p) (0,-1,0) = (sin p, -cos p cos f, cos p sin f)``.
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.kinematics import rot_x, rot_z
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, BodyDims

@@ -36,6 +36,7 @@ Every function is vectorised over the leading N axis (no Python loop over poses)
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.body.skeleton import (
     ANCHOR_INDEX,

@@ -36,6 +36,7 @@ matrices are in ``counterpart.body.kinematics``.
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 DOF_NAMES: tuple[str, ...] = (

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import cone_endpoints
 from counterpart.body.skeleton import N_SEGMENTS, BodyDims

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.bvh import CMU_SCALE, bvh_to_joints14, read_bvh
 from counterpart.body.skeleton import JOINTS, N_JOINTS
 

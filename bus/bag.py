@@ -40,13 +40,14 @@ from pathlib import Path
 from typing import IO, Any, NamedTuple
 
 import numpy as np
-from counterpart.messages import REGISTRY, decode, describe, encode
-from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
 from mcap.exceptions import EndOfFile, McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
+
+from counterpart.messages import REGISTRY, decode, describe, encode
+from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
 
 ENCODING = "counterpart-msgpack"
 PROFILE = "counterpart"

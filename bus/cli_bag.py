@@ -117,6 +117,7 @@ def _err(msg: str) -> int:
 
 def record(args: argparse.Namespace) -> int:
     import zmq
+
     from counterpart.messages import EndOfStream
 
     from .bag import BagWriter

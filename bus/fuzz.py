@@ -36,6 +36,7 @@ from typing import Any
 import msgpack
 import numpy as np
 import zmq
+
 from counterpart.messages import REGISTRY, EndOfStream, encode
 from counterpart.messages.codec import ALLOWED_DTYPES
 from counterpart.messages.core import field_types

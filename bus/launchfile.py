@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+
 from counterpart.messages import by_name, schema_id
 
 from .endpoints import TopicEndpoints, ipc_endpoints, tcp_endpoints

@@ -45,6 +45,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 import zmq
+
 from counterpart.messages import EndOfStream, NodeStats, TopicStats
 
 from .endpoints import TopicEndpoints, ipc_endpoints, standalone_dir

@@ -21,6 +21,7 @@ from time import monotonic as _monotonic
 from typing import Any
 
 import zmq
+
 from counterpart.messages import REGISTRY, EndOfStream, encode, schema_id
 from counterpart.messages.codec import (
     DEFAULT_LIMITS,

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.kinematics import frames
 from counterpart.body.skeleton import ANCHOR_INDEX, BodyDims
 

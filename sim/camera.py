@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.camera import Camera
 
 #: metres above the head joint (the head's centre) that the image must include: the crown and hair

@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 
 import numpy as np
+
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
 from counterpart.body.kinematics import lowest_point
 from counterpart.body.pose import DOF_INDEX

@@ -29,6 +29,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.messages import EMOTIONS
 from counterpart.sim.scenarios import SCENARIOS
 

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+
 from counterpart.body.pose import DOF_INDEX
 from counterpart.sim.scenarios import SIGNAL_INDEX, conversation
 

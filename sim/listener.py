@@ -6,6 +6,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.pose import DOF_INDEX
 
 from .render import Renderer

@@ -18,6 +18,7 @@ sampled at ``fps`` frames per second.
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.ik import inverse_kinematics
 from counterpart.body.kinematics import forward_kinematics, lowest_point
 from counterpart.body.pose import DOF, DOF_INDEX, clip_to_limits

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINT_INDEX, JOINTS
 
 _STAND = np.array(

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera, default_camera
 from counterpart.sim.appearance import Appearance, PartTable, body_clouds, part_table, random_appearance
 from counterpart.sim.scenarios import Scenario

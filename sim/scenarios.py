@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.kinematics import forward_kinematics, frames
 from counterpart.body.pose import DOF_INDEX, clip_to_limits, neutral_pose
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, JOINT_INDEX, BodyDims

@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.sim.render import FrameTruth, Renderer

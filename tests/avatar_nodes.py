@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
 from counterpart.bus import Node, Output, Param

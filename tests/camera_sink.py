@@ -9,6 +9,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
 from counterpart.bus import Input, Node, Param
 from counterpart.messages import Frame
 

@@ -7,13 +7,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
+
 from counterpart.body.camera import default_camera
 from counterpart.bus import Node, Output, Param
 from counterpart.messages import Frame, Pose3D, Silhouettes
 from counterpart.messages.silhouette import PersonShape
 from counterpart.messages.tracker import TrackedBody
 from counterpart.nodes.responder.shapes import silhouette_track
-
 from tests.renderer_nodes import scene_frame
 from tests.responder_fixtures import planted_pair
 

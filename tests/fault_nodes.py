@@ -5,7 +5,6 @@ from __future__ import annotations
 import time
 
 from counterpart.bus import Input, Node, Output, Param
-
 from tests.graph_nodes import Number
 
 

@@ -17,12 +17,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 import zmq
+
 from counterpart.bus import registry
 from counterpart.bus.bag import BagReader
 from counterpart.bus.fuzz import FuzzTarget, run_fuzz
 from counterpart.bus.transport import LATEST, Subscriber
 from counterpart.messages import NodeStats
-
 from tests.launching import REPO, kill_tree, start_launch, wait_for, write_launch
 
 #: frames per second of the camera under test (a 25 fps clip played twice as fast)

@@ -8,6 +8,7 @@ import time
 from dataclasses import replace
 
 import numpy as np
+
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import message
 

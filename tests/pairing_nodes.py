@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param
-
 from tests.graph_nodes import Number
 
 

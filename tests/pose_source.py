@@ -9,6 +9,7 @@ consumer sees the pose topic skip frames, as a tracker that gives up on a frame 
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Pose3D, Silhouettes
 from counterpart.messages.tracker import TrackedBody

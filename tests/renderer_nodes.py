@@ -9,6 +9,7 @@ import time
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
 from counterpart.bus import LATEST, RELIABLE, Input, Node, Output, Param

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
 from counterpart.body.trajectory import TwoPersonTrajectory

@@ -8,7 +8,6 @@ import time
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Control, Partner, Pose3D
 from counterpart.messages.tracker import TrackedBody
-
 from tests.responder_fixtures import planted_pair
 
 

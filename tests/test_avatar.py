@@ -10,6 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
+
 from counterpart.body.camera import default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
@@ -20,8 +23,6 @@ from counterpart.nodes.responder.avatar_recording import sim_recording
 from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import load_model, save_model
 from counterpart.nodes.responder.video_texture import STATE_SIGNALS, RecordingError, VideoTexture, fit_recording
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
 
 SECONDS = 14.0
 

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.responder.avatar_recording import sim_recording
 from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import load_model, save_model
 from counterpart.nodes.responder.video_texture import fit_recording
-
 from tests.launching import read_jsonl, run_launch, write_launch
 
 FRAMES, NOD_FROM = 90, 30

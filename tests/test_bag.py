@@ -20,12 +20,12 @@ import cv2
 import numpy as np
 import pytest
 import yaml
+
 from counterpart.bus.bag import BagReader, BagWriter, decode_fields, pack_parts, unpack_parts
 from counterpart.bus.bag_nodes import Player, Recorder
 from counterpart.bus.cli_bag import export_bag
 from counterpart.bus.params import ParamError
 from counterpart.messages import Frame, encode
-
 from tests.graph_nodes import Number
 
 REPO = Path(__file__).resolve().parents[1]
@@ -450,6 +450,7 @@ def test_player_paces_loops_and_resends_exact_parts(
     import threading
 
     import zmq
+
     from counterpart.bus.endpoints import TopicEndpoints
     from counterpart.bus.node import standalone_spec
     from counterpart.bus.transport import Subscriber

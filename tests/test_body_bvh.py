@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
+
 from counterpart.body.bvh import CMU_SCALE, CMU_TO_JOINTS14, bvh_to_joints14, read_bvh
 from counterpart.body.skeleton import JOINT_INDEX, JOINTS
-
 from tests.shared_data import CMU as DATA
 
 CMU_A, CMU_B = DATA / "18_01.bvh", DATA / "19_01.bvh"

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose

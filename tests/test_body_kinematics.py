@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+
 from counterpart.body.camera import default_camera
 from counterpart.body.kinematics import (
     anchor_points,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.body.spline import (
     combined_shape_vector,
     design_matrix,

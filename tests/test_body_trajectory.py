@@ -4,11 +4,11 @@ import json
 
 import numpy as np
 import pytest
+
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import JOINTS
 from counterpart.body.trajectory import FORMAT_VERSION, TwoPersonTrajectory
-
 from tests.shared_data import CMU as DATA
 
 

@@ -17,9 +17,9 @@ import numpy as np
 import psutil
 import pytest
 import zmq
+
 from counterpart.bus.endpoints import tcp_endpoints
 from counterpart.messages import EndOfStream, encode_frames
-
 from tests.graph_nodes import Number
 from tests.launching import (
     REPO,

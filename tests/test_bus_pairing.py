@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from counterpart.bus import PairedSet, Pairing, SeqSynchronizer
 
+from counterpart.bus import PairedSet, Pairing, SeqSynchronizer
 from tests.launching import read_jsonl, run_launch, write_launch
 
 

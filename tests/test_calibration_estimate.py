@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
 from counterpart.nodes.calibration.lines import find_families

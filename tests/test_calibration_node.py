@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from counterpart.body.camera import Camera, camera_for_size, default_camera
 
+from counterpart.body.camera import Camera, camera_for_size, default_camera
 from tests.launching import read_jsonl, run_launch, write_launch
 
 W, H = 200, 150  # the simulator rendered at another size than its own 320x240

@@ -15,9 +15,9 @@ import cv2
 import numpy as np
 import pytest
 import yaml
+
 from counterpart.nodes.camera.node import EXIT_SOURCE_ERROR
 from counterpart.nodes.camera.sources import video_devices
-
 from tests.camera_sink import VTEST, cv2_frames, write_video
 
 REPO = Path(__file__).resolve().parents[1]

@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.bus import ParamError
 from counterpart.nodes.camera.node import Camera
 from counterpart.nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size
@@ -23,7 +24,6 @@ from counterpart.nodes.camera.sources import (
     read_with_retry,
     video_devices,
 )
-
 from tests.camera_sink import VTEST, cv2_frames, write_video
 
 

@@ -5,6 +5,7 @@ subscriber (counterpart.body.camera.CameraSchedule), and the tracker's tracks go
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.camera import Camera, CameraSchedule, default_camera
 from counterpart.body.raster import rasterise_silhouettes
 from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig

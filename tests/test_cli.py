@@ -10,9 +10,9 @@ import tempfile
 from pathlib import Path
 
 import pytest
+
 from counterpart.bus import plugins
 from counterpart.bus.cli import RUNTIME_COMMANDS, commands
-
 from tests.launching import REPO, kill_tree, read_jsonl, wait_for
 
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from counterpart.body.camera import camera_for_size, load_camera_file
 
+from counterpart.body.camera import camera_for_size, load_camera_file
 from tests.launching import REPO
 
 

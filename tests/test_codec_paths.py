@@ -14,6 +14,7 @@ from typing import Any
 import msgpack
 import numpy as np
 import pytest
+
 from counterpart.messages import REGISTRY, Control, DecodeError, Frame, Partner, codec, decode, encode
 from counterpart.messages.core import field_types
 

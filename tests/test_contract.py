@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+
 from counterpart.body.camera import default_camera
 from counterpart.messages import EMOTIONS, INTERACTION_MODELS, INTEREST_LEVELS, SPEAKERS
 from counterpart.nodes.responder.avatar_recording import sim_recording
@@ -25,7 +26,6 @@ from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import save_model
 from counterpart.nodes.responder.shapes import trajectory_shapes
 from counterpart.nodes.responder.video_texture import fit_recording
-
 from tests.launching import read_jsonl, start_launch, stop_launch, wait_for, write_launch
 from tests.responder_fixtures import planted_pair
 
@@ -156,6 +156,7 @@ def test_a_name_outside_the_contract_is_refused_by_the_page(live: dict[str, Any]
 
 def test_control_refuses_a_name_outside_the_contract_when_made_and_when_decoded() -> None:
     import msgpack
+
     from counterpart.messages import Control, DecodeError, decode, encode
 
     for key, value in (

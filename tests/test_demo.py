@@ -14,8 +14,8 @@ from pathlib import Path
 
 import cv2
 import pytest
-from counterpart.bus.launchfile import check, find_launch_file, load
 
+from counterpart.bus.launchfile import check, find_launch_file, load
 from tests.launching import REPO
 
 

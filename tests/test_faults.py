@@ -23,13 +23,13 @@ import numpy as np
 import psutil
 import pytest
 import zmq
+
 from counterpart.bus.bag_nodes import Recorder
 from counterpart.bus.endpoints import RunDirError, ipc_endpoints, private_dir
 from counterpart.bus.logs import BURST, WINDOW_S, RepeatFilter
 from counterpart.bus.supervisor import prune_run_dirs
 from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
 from counterpart.messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
-
 from tests.faulting import fuzz_silhouette_and_labeller, recorder_stalls_camera
 from tests.graph_nodes import Number
 from tests.launching import REPO, descendants, kill_tree, read_jsonl, start_launch, wait_for, write_launch

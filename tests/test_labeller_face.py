@@ -10,6 +10,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.bus import ParamError
 from counterpart.nodes.labeller.face import find_face_cascade, load_face_cascade
 from counterpart.nodes.labeller.face_track import FaceTracker, FaceTrackParams
@@ -17,7 +18,6 @@ from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation,
 from counterpart.nodes.labeller.node import Labeller, make_labeller
 from counterpart.nodes.labeller.signals import SIGNALS, UNKNOWN
 from counterpart.sim.face import FaceClip, gesture_face_clip
-
 from tests.launching import read_jsonl, run_launch, write_launch
 
 pytestmark = pytest.mark.skipif(
@@ -269,7 +269,6 @@ def test_fallback_from_3d_to_2d_said_once_and_counted(tmp_path: Path) -> None:
     from the silhouettes, which the node says once and counts.
     """
     from counterpart.sim.flat_scenes import two_person_sequence
-
     from tests.test_labeller_node import EMPTY, TRAIN, N, sink
 
     seq = two_person_sequence(n_frames=N - EMPTY, size=(120, 160), empty_frames=EMPTY)

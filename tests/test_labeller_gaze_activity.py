@@ -7,13 +7,13 @@ import warnings
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.nodes.labeller.activity import ActivityDetector, activity_2d, activity_3d
 from counterpart.nodes.labeller.face import FaceSignalDetector, find_face_cascade, load_face_cascade
 from counterpart.nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_accuracy, gaze_at_other
 from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller, label_pair_3d
 from counterpart.nodes.labeller.signals import JOINT_INDEX, SIGNALS, UNKNOWN
 from counterpart.sim.planted_signals import conversation, standing_pose
-
 from tests.shared_data import VTEST
 
 FPS = 25.0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.labeller.head_motion import (
     HeadMotionDetector,
     HeadMotionDetector2D,

@@ -9,6 +9,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from mlxtend.frequent_patterns import apriori, association_rules
+from mlxtend.preprocessing import TransactionEncoder
+
 from counterpart.apps import mine as cli_mine
 from counterpart.nodes.labeller.mining import (
     LabelStreams,
@@ -26,8 +29,6 @@ from counterpart.nodes.labeller.mining import (
 )
 from counterpart.nodes.labeller.signals import UNKNOWN
 from counterpart.sim.planted_signals import planted_label_streams
-from mlxtend.frequent_patterns import apriori, association_rules
-from mlxtend.preprocessing import TransactionEncoder
 
 
 def _events(rng: np.random.Generator, t: int, n: int, length: int) -> np.ndarray:

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+
 from counterpart.messages import Pose3D, Silhouettes
 from counterpart.messages.silhouette import PersonShape
 from counterpart.messages.tracker import TrackedBody
@@ -16,7 +17,6 @@ from counterpart.nodes.labeller.labeller import SocialLabeller
 from counterpart.nodes.labeller.node import observations, signals_message
 from counterpart.nodes.labeller.signals import SIGNALS
 from counterpart.sim.flat_scenes import two_person_sequence
-
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 from tests.pose_source import facing
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+
 from counterpart.apps import mine as cli_mine
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.messages import Pose3D, Silhouettes

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from counterpart.bus.launchfile import LaunchError, check, load
 
+from counterpart.bus.launchfile import LaunchError, check, load
 from tests.launching import run_launch, write_launch
 
 N = "tests.graph_nodes:"

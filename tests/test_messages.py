@@ -6,6 +6,7 @@ import msgpack
 import numpy as np
 import pytest
 import zmq
+
 from counterpart.messages import (
     DecodeError,
     EndOfStream,

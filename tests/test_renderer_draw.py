@@ -7,6 +7,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.body.camera import camera_for_size, default_camera
 from counterpart.body.raster import rasterise_cones
 from counterpart.messages import (
@@ -26,7 +27,6 @@ from counterpart.nodes.renderer import draw
 from counterpart.nodes.renderer.compositor import Bundle, Compositor
 from counterpart.nodes.renderer.controls import parse_control
 from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames
-
 from tests.renderer_nodes import partner_joints, scene_frame
 
 CAM = default_camera(320, 240)

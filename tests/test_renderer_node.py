@@ -9,13 +9,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.body.camera import default_camera
 from counterpart.bus.launchfile import LaunchError, check, load
 from counterpart.messages import Frame, Partner
 from counterpart.nodes.renderer import draw
 from counterpart.nodes.renderer.compositor import Compositor
 from counterpart.nodes.renderer.video import count_frames
-
 from tests.camera_sink import cv2_frames
 from tests.launching import read_jsonl, run_launch, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints, scene_frame

@@ -18,9 +18,9 @@ from typing import Any
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.body.camera import default_camera
 from counterpart.nodes.renderer import draw
-
 from tests.launching import descendants, read_jsonl, start_launch, stop_launch, wait_for, write_launch
 from tests.renderer_nodes import partner_joints
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_world
 from counterpart.nodes.responder.models import MODEL_VERSION, ModelVersionError, load_model, save_model
-
 from tests.responder_fixtures import mpjpe_mm, planted_pair
 
 
@@ -53,8 +53,9 @@ def test_viterbi_trellis_decoding_is_also_faithful(model: DualHMM) -> None:
 
 
 def test_placement_correction_forest_arrays_predict_as_scikit_learn() -> None:
-    from counterpart.nodes.responder.placement_correction import ForestArrays
     from sklearn.ensemble import ExtraTreesRegressor
+
+    from counterpart.nodes.responder.placement_correction import ForestArrays
 
     rng = np.random.default_rng(0)
     X = rng.normal(size=(2000, 5))
@@ -86,8 +87,9 @@ def test_model_file_round_trip_and_version_error(model: DualHMM, tmp_path) -> No
 
 
 def test_phased_trajectories_get_time_ordered_states() -> None:
-    from counterpart.nodes.responder.hmm_blocks import init_ordered
     from hmmlearn.hmm import GaussianHMM
+
+    from counterpart.nodes.responder.hmm_blocks import init_ordered
 
     # the ordered start: states shared out between the phases by frames, along time within each
     rng = np.random.default_rng(0)

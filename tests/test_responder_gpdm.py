@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.responder.data import sim_trajectories
 from counterpart.nodes.responder.gpdm import GPDM, reach
 from counterpart.nodes.responder.models import load_model, save_model
-
 from tests.launching import read_jsonl, run_launch, write_launch
 
 SMALL = dict(points=300, num_inducing=15, n_centres=30, max_iters=40, dyn_points=200, support=1500)

@@ -6,6 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
+
 from counterpart.body.camera import default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose

@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.emotion import EmotionModel
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import save_model
-
 from tests.launching import read_jsonl, run_launch, write_launch
 from tests.responder_fixtures import planted_pair
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
 from counterpart.nodes.responder.staging import Stage, StageConfig
-
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES, make_subtractor
 from counterpart.nodes.silhouette.background import (
     BACKGROUND,

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.silhouette.backends import make_subtractor
 from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW, HorprasertBackground, ShadowConfig
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
 from counterpart.sim.flat_scenes import textured_background
-
 from tests.shared_data import DATA
 
 H, W = 240, 320

@@ -8,8 +8,8 @@ from typing import Any
 import cv2
 import numpy as np
 import pytest
-from counterpart.sim.flat_scenes import SyntheticSequence, two_person_sequence
 
+from counterpart.sim.flat_scenes import SyntheticSequence, two_person_sequence
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 
 EMPTY_FRAMES = 15

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.silhouette.background import (
     BACKGROUND,
     FOREGROUND,
@@ -19,7 +20,6 @@ from counterpart.nodes.silhouette.background import (
 )
 from counterpart.nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
-
 from tests.shared_data import DATA
 from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W
 from tests.test_silhouette_background import person_mask as ellipse

@@ -6,11 +6,11 @@ import os
 
 import numpy as np
 import pytest
+
 from counterpart.body.spline import evaluate_closed_bspline
 from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW
 from counterpart.nodes.silhouette.pipeline import FrameResult, SilhouetteExtractor, extract_video
 from counterpart.sim.flat_scenes import two_person_sequence
-
 from tests.shared_data import VTEST
 
 

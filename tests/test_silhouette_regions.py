@@ -5,9 +5,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask
-
 from tests.shared_data import DATA
 
 UT = DATA / "ut_interaction"

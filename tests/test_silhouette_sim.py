@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.nodes.silhouette.background import FOREGROUND, GhostConfig, HorprasertBackground
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.sim.stream import open_stream

@@ -10,6 +10,7 @@ import os
 import cv2
 import numpy as np
 import pytest
+
 from counterpart.body.raster import rasterise_silhouettes
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.sim import cli

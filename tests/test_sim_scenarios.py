@@ -6,6 +6,7 @@ import os
 
 import numpy as np
 import pytest
+
 from counterpart.body.kinematics import forward_kinematics, lowest_point
 from counterpart.body.pose import DOF_INDEX, within_limits
 from counterpart.body.skeleton import JOINT_INDEX as J

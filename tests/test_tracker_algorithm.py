@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF, LOWER, UPPER, YAW, neutral_pose

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from counterpart.bus import Node, Output, Param
 from counterpart.messages import Frame, PersonShape, Silhouettes
-
 from tests.launching import read_jsonl, run_launch, write_launch
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from counterpart.apps.tracking import track_video
 from counterpart.nodes.tracker.prior import MotionPrior, train_prior
 from counterpart.sim.cli import open_writer

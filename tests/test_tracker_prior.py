@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from counterpart.body.pose import DOF, LOWER, UPPER, YAW
 from counterpart.nodes.tracker import cli_learn
 from counterpart.nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
-
 from tests.shared_data import DATA
 
 

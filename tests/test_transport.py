@@ -7,10 +7,10 @@ import time
 from pathlib import Path
 
 import zmq
+
 from counterpart.bus.endpoints import ipc_endpoints
 from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
 from counterpart.messages import EndOfStream
-
 from tests.graph_nodes import Number
 
 

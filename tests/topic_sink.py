@@ -22,6 +22,7 @@ import time
 from typing import Any
 
 import numpy as np
+
 from counterpart.bus import Input, Node, Param
 from counterpart.messages import schema_id
 

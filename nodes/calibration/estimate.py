@@ -37,9 +37,10 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from counterpart.body.camera import Camera
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
+
+from counterpart.body.camera import Camera
 
 from .lines import LineFamilies, segment_angles
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import CameraInfo, Frame, Silhouettes

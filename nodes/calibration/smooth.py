@@ -9,6 +9,7 @@ the offset), so the projections every node makes change smoothly however the est
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.camera import Camera
 
 from .estimate import CalibrationConfig, CameraEstimate, rotation

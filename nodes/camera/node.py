@@ -20,6 +20,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
+
 from counterpart.bus import Node, Output, Param, ParamError
 from counterpart.messages import Frame
 

@@ -29,6 +29,7 @@ from urllib.parse import parse_qsl
 
 import cv2
 import numpy as np
+
 from counterpart.bus.plugins import PluginError, simulator
 
 log = logging.getLogger(__name__)

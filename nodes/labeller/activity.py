@@ -20,8 +20,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from counterpart.nodes.labeller.signals import JOINT_INDEX, UNKNOWN, threshold_labels
 from numpy.lib.stride_tricks import sliding_window_view
+
+from counterpart.nodes.labeller.signals import JOINT_INDEX, UNKNOWN, threshold_labels
 
 _TORSO_IDX = np.array([JOINT_INDEX[j] for j in ("l_shoulder", "r_shoulder", "l_hip", "r_hip")])
 

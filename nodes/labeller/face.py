@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
 from counterpart.nodes.labeller.signals import UNKNOWN
 
 Box = tuple[int, int, int, int]  # x, y, w, h in pixels

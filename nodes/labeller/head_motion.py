@@ -54,8 +54,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from counterpart.nodes.labeller.signals import UNKNOWN, threshold_labels
 from numpy.lib.stride_tricks import sliding_window_view
+
+from counterpart.nodes.labeller.signals import UNKNOWN, threshold_labels
 
 #: channel order inside the detectors: (nod_a, nod_b, shake_a, shake_b); from positions these are
 #: (up, forward, lateral, 0), from the tracker's angles (pitch_radius * pitch, 0, 0,

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
 from counterpart.nodes.labeller.activity import ActivityDetector, activity_3d
 from counterpart.nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade, to_gray
 from counterpart.nodes.labeller.face_track import FaceTrack, FaceTracker, FaceTrackParams

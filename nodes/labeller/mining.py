@@ -35,9 +35,10 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from counterpart.nodes.labeller.signals import UNKNOWN, labels_to_bool
 from mlxtend.frequent_patterns import apriori, association_rules, fpgrowth
 from numpy.lib.stride_tricks import sliding_window_view
+
+from counterpart.nodes.labeller.signals import UNKNOWN, labels_to_bool
 
 SPEAKER_PREFIX = "S:"
 LISTENER_PREFIX = "L:"

@@ -32,6 +32,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import Frame, Pose3D, Silhouettes, SocialSignals

@@ -14,6 +14,7 @@ Label arrays are ``int8``; score arrays are ``float64``.
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINT_INDEX as JOINT_INDEX  # the project's joint order, re-exported
 from counterpart.body.skeleton import JOINTS as JOINTS
 

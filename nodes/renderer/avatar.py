@@ -18,6 +18,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.body.avatar_frames import AvatarFrames, load_avatar_frames
 from counterpart.body.camera import Camera
 

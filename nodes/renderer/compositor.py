@@ -29,6 +29,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size
 from counterpart.bus.pairing import PairedSet, Pairing, SeqSynchronizer
 

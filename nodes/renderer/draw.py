@@ -24,6 +24,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
 from counterpart.body.kinematics import cone_endpoints

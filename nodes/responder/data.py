@@ -14,6 +14,7 @@ import os
 from collections.abc import Callable, Sequence
 
 import numpy as np
+
 from counterpart.body.trajectory import TwoPersonTrajectory
 
 #: the simulator's interaction types (counterpart.sim.scenarios.SCENARIOS), in a fixed order

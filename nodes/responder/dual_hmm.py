@@ -49,6 +49,7 @@ from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .conditioning import ConditionalGaussians

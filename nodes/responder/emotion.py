@@ -30,10 +30,11 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from scipy.optimize import minimize
+
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.messages import EMOTIONS
-from scipy.optimize import minimize
 
 from .frames import actor_frame, to_local, to_world
 

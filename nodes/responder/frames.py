@@ -15,6 +15,7 @@ on where the pair stands or which way it faces.
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINT_INDEX
 
 _LH, _RH = JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]

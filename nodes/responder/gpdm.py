@@ -44,6 +44,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.messages import EMOTIONS

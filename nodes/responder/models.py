@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+
 from counterpart.messages import INTERACTION_MODELS
 
 MODEL_FORMAT = "counterpart.responder.model"

@@ -18,6 +18,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import (
     EMOTIONS,

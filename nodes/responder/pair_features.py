@@ -16,8 +16,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from counterpart.body.trajectory import TwoPersonTrajectory
 from sklearn.decomposition import PCA
+
+from counterpart.body.trajectory import TwoPersonTrajectory
 
 from .frames import actor_frame, to_local, to_world
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINT_INDEX
 
 #: (shoulder, elbow, wrist) joint indices of each arm

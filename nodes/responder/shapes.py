@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.camera import Camera, default_camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
 from counterpart.body.raster import rasterise_silhouettes

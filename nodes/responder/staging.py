@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.skeleton import JOINT_INDEX
 
 from .frames import actor_frame

@@ -6,6 +6,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.trajectory import TwoPersonTrajectory
 from counterpart.messages import EMOTIONS
 

@@ -45,9 +45,10 @@ from typing import Any
 
 import cv2
 import numpy as np
-from counterpart.body.avatar_frames import AvatarFrames
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
+
+from counterpart.body.avatar_frames import AvatarFrames
 
 #: the labels that define a frame's social state (pruning and signal-set subgraphs)
 STATE_SIGNALS: tuple[str, ...] = ("gaze_at_other", "talking", "laughing")

@@ -23,6 +23,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera, camera_param_problem
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Frame, Silhouettes

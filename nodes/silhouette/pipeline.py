@@ -16,6 +16,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.spline import silhouette_spline
 

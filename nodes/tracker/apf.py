@@ -26,6 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from counterpart.body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 LogLikelihood = Callable[[np.ndarray], np.ndarray]

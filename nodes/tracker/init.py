@@ -10,6 +10,7 @@ the left person faces +X, the right one -X), spread widely because a silhouette 
 from __future__ import annotations
 
 import numpy as np
+
 from counterpart.body.camera import Camera
 from counterpart.body.pose import DOF, clip_to_limits, neutral_pose
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims

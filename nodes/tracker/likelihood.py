@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import anchor_points
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims

@@ -20,6 +20,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from counterpart.body.pose import DOF, YAW, clip_to_limits, wrap_angle
 
 VERSION = 1

@@ -27,6 +27,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF, YAW, wrap_angle
