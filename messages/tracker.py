@@ -9,11 +9,27 @@ from .core import EMPTY, message, struct
 
 @struct
 class TrackedBody:
-    """One tracked person: ``joints`` (14, 3) float32 metres in the world frame (counterpart.body.skeleton.JOINTS
-    order, Y up), ``pose`` and ``best_pose`` (DOF,) float64 pose vectors (body.pose), the weighted
-    mean and the best particle; ``ess`` effective sample size of the final weighted particle set
-    (un-annealed weights, before resampling: 1 to the particle count); ``log_likelihood``
-    of the mean pose; ``lost`` when the track collapsed and is re-initialising.
+    """One tracked person.
+
+    Attributes
+    ----------
+    id : int
+        Track identifier.
+    side : str
+        Side of the frame the person stands on (``"left"``, ``"right"`` or ``"centre"``).
+    joints : ndarray of shape (14, 3)
+        float32, metres in the world frame (counterpart.body.skeleton.JOINTS order, Y up).
+    pose : ndarray of shape (DOF,)
+        float64 pose vector (body.pose), the weighted mean of the particles.
+    best_pose : ndarray of shape (DOF,)
+        float64 pose vector (body.pose) of the best particle.
+    ess : float
+        Effective sample size of the final weighted particle set (un-annealed weights, before
+        resampling: 1 to the particle count).
+    log_likelihood : float
+        Log-likelihood of the mean pose.
+    lost : bool
+        True when the track collapsed and is re-initialising.
     """
 
     id: int = 0
@@ -28,8 +44,15 @@ class TrackedBody:
 
 @message("tracker.Pose3D", 1)
 class Pose3D:
-    """The tracked people of one frame; ``fps`` the source's frame rate (the frame's, 0: unknown),
-    so that consumers of poses alone (the responder) know the time between frames.
+    """The tracked people of one frame.
+
+    Attributes
+    ----------
+    people : list of TrackedBody
+        The tracked people.
+    fps : float
+        The source's frame rate (the frame's; 0: unknown), so that consumers of poses alone (the
+        responder) know the time between frames.
     """
 
     people: list[TrackedBody] = ()

@@ -26,8 +26,22 @@ from counterpart.nodes.labeller.signals import UNKNOWN
 
 
 def facing_yaw_from_shoulders(l_shoulder: np.ndarray, r_shoulder: np.ndarray) -> np.ndarray:
-    """Body yaw (rad, about +Y, 0 faces +Z) from shoulders (...,3) metres. Returns (...,); nan
-    where the shoulders coincide in the ground plane.
+    """Body yaw from the shoulders.
+
+    Parameters
+    ----------
+    l_shoulder, r_shoulder : ndarray of shape (..., 3)
+        Left and right shoulder positions, metres, world frame (Y up).
+
+    Returns
+    -------
+    ndarray of shape (...,)
+        Yaw in radians about +Y (0 faces +Z); nan where the shoulders coincide in the ground plane.
+
+    Raises
+    ------
+    ValueError
+        If the shoulders' last axis is not of length 3.
     """
     s = np.asarray(l_shoulder, dtype=np.float64) - np.asarray(r_shoulder, dtype=np.float64)
     if s.shape[-1] != 3:
@@ -37,13 +51,34 @@ def facing_yaw_from_shoulders(l_shoulder: np.ndarray, r_shoulder: np.ndarray) ->
 
 
 def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Wrap radians to (-pi, pi]."""
+    """Wrap radians to (-pi, pi].
+
+    Parameters
+    ----------
+    a : array_like of float
+        Angles, radians, any shape.
+
+    Returns
+    -------
+    ndarray of float64
+        The angles wrapped to (-pi, pi], same shape as ``a``.
+    """
     return np.pi - np.mod(np.pi - np.asarray(a, dtype=np.float64), 2 * np.pi)
 
 
 @dataclass(frozen=True)
 class GazeResult:
-    """score (T,) in [0,1], label (T,) int8 (1 at the other / 0 away / UNKNOWN), delta (T,) rad."""
+    """Per-frame gaze at the other person.
+
+    Attributes
+    ----------
+    score : ndarray of shape (T,)
+        ``(1 + cos(delta)) / 2``, in [0, 1].
+    label : ndarray of shape (T,)
+        int8: 1 at the other, 0 away, UNKNOWN.
+    delta : ndarray of shape (T,)
+        Gaze yaw minus target yaw, radians, wrapped to (-pi, pi].
+    """
 
     score: np.ndarray
     label: np.ndarray
@@ -60,11 +95,29 @@ def gaze_at_other(
 ) -> GazeResult:
     """Per-frame gaze at the other person.
 
-    head, l_shoulder, r_shoulder, other: (T,3) or (3,) metres (other: the other person's head or any
-    target point). head_yaw_rel: head yaw relative to the torso (rad, positive turns towards the
-    person's left), (T,) or scalar, or None (head faces where the shoulders face). threshold: the
-    largest |delta| (rad) still counted as "at the other". Frames with a missing (nan) input, or the
-    other person at the own head's position, are UNKNOWN.
+    Frames with a missing (nan) input, or the other person at the own head's position, are UNKNOWN.
+
+    Parameters
+    ----------
+    head, l_shoulder, r_shoulder : ndarray of shape (T, 3) or (3,)
+        Own head and shoulder positions, metres, world frame.
+    other : ndarray of shape (T, 3) or (3,)
+        The other person's head or any target point, metres, world frame.
+    head_yaw_rel : ndarray of shape (T,) or float or None, default=None
+        Head yaw relative to the torso, radians, positive turns towards the person's left; None: the
+        head faces where the shoulders face.
+    threshold : float, default=radians(30)
+        The largest ``|delta|`` (radians) still counted as "at the other"; in (0, pi).
+
+    Returns
+    -------
+    GazeResult
+        Per-frame score, label and delta.
+
+    Raises
+    ------
+    ValueError
+        If ``threshold`` is not in (0, pi), or the positions are not (T, 3).
     """
     if not 0 < threshold < np.pi:
         raise ValueError(f"threshold must be in (0, pi) radians, got {threshold}")
@@ -88,7 +141,21 @@ def gaze_at_other(
 
 def gaze_accuracy(pred: np.ndarray, truth: np.ndarray) -> float:
     """Fraction of frames where ``pred == truth``, over frames where both are known (not UNKNOWN).
-    Returns nan if no frame is known in both.
+
+    Parameters
+    ----------
+    pred, truth : ndarray of shape (T,)
+        Predicted and true labels (1, 0 or UNKNOWN).
+
+    Returns
+    -------
+    float
+        The accuracy in [0, 1]; nan if no frame is known in both.
+
+    Raises
+    ------
+    ValueError
+        If ``pred`` and ``truth`` differ in shape.
     """
     pred = np.asarray(pred)
     truth = np.asarray(truth)

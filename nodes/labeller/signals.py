@@ -35,7 +35,17 @@ UNKNOWN_VALUE: tuple[float, int] = (float("nan"), UNKNOWN)
 def threshold_labels(score: np.ndarray, threshold: float) -> np.ndarray:
     """Labels from scores: ``1`` where ``score >= threshold``, ``0`` below, UNKNOWN where nan.
 
-    score: any shape, float. Returns int8 of the same shape.
+    Parameters
+    ----------
+    score : array_like of float
+        Scores, any shape; ``nan`` where the signal is unknown.
+    threshold : float
+        Presence threshold.
+
+    Returns
+    -------
+    ndarray of int8
+        Labels, same shape as ``score``.
     """
     score = np.asarray(score, dtype=np.float64)
     lab = (score >= threshold).astype(np.int8)
@@ -48,6 +58,21 @@ def labels_to_bool(labels: np.ndarray) -> np.ndarray:
 
     UNKNOWN counts as "not observed present", which can only lower supports and confidences of
     rules that involve the signal; it never invents a co-occurrence.
+
+    Parameters
+    ----------
+    labels : array_like of int or bool
+        Labels ``1``, ``0`` or UNKNOWN, any shape; a bool array is returned as is.
+
+    Returns
+    -------
+    ndarray of bool
+        True where the label is ``1``, same shape as ``labels``.
+
+    Raises
+    ------
+    ValueError
+        If a label is not ``1``, ``0`` or UNKNOWN.
     """
     labels = np.asarray(labels)
     if labels.dtype == bool:

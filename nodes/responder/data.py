@@ -32,8 +32,28 @@ def sim_trajectories(
 ) -> list[TwoPersonTrajectory]:
     """Simulated interactions (joints only, no rendering), one per (scenario, seed).
 
-    ``max_frames`` crops long scenarios (conversations run 30 s) to keep training fast; extra keyword
-    arguments (``emotion``, ``strength``, ``initiator``) go to the scenario generators.
+    Parameters
+    ----------
+    scenarios : sequence of str, default=SIM_SCENARIOS
+        Simulator scenario names, each one of ``SIM_SCENARIOS``.
+    seeds : sequence of int, default=range(6)
+        Seeds, one interaction per scenario and seed.
+    fps : float, default=25.0
+        Frame rate, frames per second.
+    max_frames : int or None, default=400
+        Crops long scenarios (conversations run 30 s) to keep training fast; None or 0: no crop.
+    **kw : object
+        Extra keyword arguments (``emotion``, ``strength``, ``initiator``) for the scenario generators.
+
+    Returns
+    -------
+    list of TwoPersonTrajectory
+        One trajectory per (scenario, seed), scenarios in the outer loop.
+
+    Raises
+    ------
+    ValueError
+        If a scenario name is unknown.
     """
     from counterpart.bus.plugins import simulator  # the simulator is only needed to build training data
 
@@ -54,7 +74,31 @@ def sim_trajectories(
 def load_data(
     specs: Sequence[str], seeds: Sequence[int] = range(6), fps: float = 25.0, progress: Progress | None = None
 ) -> list[TwoPersonTrajectory]:
-    """Trajectories for every spec (see the module docstring), resampled to ``fps``."""
+    """Trajectories for every spec (see the module docstring), resampled to ``fps``.
+
+    Parameters
+    ----------
+    specs : sequence of str
+        Data specs: ``PATH.npz``, ``A.bvh:B.bvh``, ``sim`` or ``sim:NAME,NAME``.
+    seeds : sequence of int, default=range(6)
+        Simulator seeds, for the ``sim`` specs.
+    fps : float, default=25.0
+        Frame rate of the returned trajectories, frames per second.
+    progress : callable or None, default=None
+        Called with a line of text before each spec is read.
+
+    Returns
+    -------
+    list of TwoPersonTrajectory
+        The trajectories, in the order of ``specs``.
+
+    Raises
+    ------
+    FileNotFoundError
+        If a trajectory or BVH file does not exist.
+    ValueError
+        If no spec gives data, a BVH pair is malformed or a simulator scenario is unknown.
+    """
     say = progress or (lambda s: None)
     out: list[TwoPersonTrajectory] = []
     for spec in specs:
@@ -90,7 +134,18 @@ def _split_bvh_pair(spec: str) -> tuple[str, str]:
 
 
 def summary(trajs: Sequence[TwoPersonTrajectory]) -> dict[str, object]:
-    """A JSON-able summary of training data for model metadata."""
+    """A JSON-able summary of training data for model metadata.
+
+    Parameters
+    ----------
+    trajs : sequence of TwoPersonTrajectory
+        The training data.
+
+    Returns
+    -------
+    dict
+        ``sequences`` (count), ``frames`` (total), ``fps`` (median) and ``labels`` (count per label).
+    """
     labels: dict[str, int] = {}
     for t in trajs:
         labels[t.label] = labels.get(t.label, 0) + 1

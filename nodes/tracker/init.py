@@ -28,7 +28,18 @@ class PlacementError(ValueError):
 
 
 def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
-    """(H, W) bool -> (x, y, w, h) pixels of the foreground, or None when it is empty."""
+    """Bounding box of the foreground of a mask.
+
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W)
+        bool foreground mask.
+
+    Returns
+    -------
+    tuple of int (x, y, w, h) or None
+        Bounding box in pixels, or None when the mask is empty.
+    """
     ys, xs = np.nonzero(mask)
     if len(xs) == 0:
         return None
@@ -38,9 +49,28 @@ def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
 def place_from_bbox(
     bbox: tuple[int, int, int, int], camera: Camera, base: BodyDims = DEFAULT_DIMS
 ) -> tuple[np.ndarray, float]:
-    """Ground position (3,) metres and stature (metres, clamped to 1.4-2.1) from a bbox (x, y, w, h).
+    """Ground position and stature of a person from its bounding box.
 
-    Raises PlacementError when the bbox bottom lies above the horizon (no ground point).
+    Parameters
+    ----------
+    bbox : tuple of int (x, y, w, h)
+        The person's bounding box, pixels.
+    camera : Camera
+        The camera that saw the person.
+    base : BodyDims, default=DEFAULT_DIMS
+        Body dimensions (unused by the placement itself).
+
+    Returns
+    -------
+    ground : ndarray of shape (3,)
+        Ground point under the bbox's bottom centre, metres, world frame.
+    height : float
+        Stature, metres, clamped to 1.4-2.1.
+
+    Raises
+    ------
+    PlacementError
+        When the bbox bottom lies at or above the horizon (no ground point).
     """
     x, y, w, h = bbox
     u = x + 0.5 * (w - 1)
@@ -66,9 +96,40 @@ def initial_particles(
     base: BodyDims = DEFAULT_DIMS,
     spread: float = 1.0,
 ) -> tuple[np.ndarray, BodyDims]:
-    """Particles (n, 28) for a new track and the body dimensions scaled to the measured stature.
+    """Particles for a new track and the body dimensions scaled to the measured stature.
 
     The first particle is the un-jittered guess; the rest are spread by ``INIT_STD * spread``.
+
+    Parameters
+    ----------
+    bbox : tuple of int (x, y, w, h)
+        The person's bounding box, pixels.
+    side : str
+        Side of the frame the person stands on, a key of ``SIDE_YAW`` (sets the heading).
+    camera : Camera
+        The camera that saw the person.
+    n : int
+        Number of particles.
+    rng : numpy.random.Generator
+        Source of the jitter.
+    base : BodyDims, default=DEFAULT_DIMS
+        Body dimensions scaled to the measured stature.
+    spread : float, default=1.0
+        Multiplier of ``INIT_STD``.
+
+    Returns
+    -------
+    particles : ndarray of shape (n, 28)
+        Pose vectors (body.pose), clipped to the joint limits.
+    dims : BodyDims
+        ``base`` scaled to the measured stature.
+
+    Raises
+    ------
+    ValueError
+        If ``side`` is not a key of ``SIDE_YAW``.
+    PlacementError
+        When the bbox bottom lies at or above the horizon.
     """
     if side not in SIDE_YAW:
         raise ValueError(f"side={side!r}: expected one of {sorted(SIDE_YAW)}")
@@ -88,7 +149,12 @@ class LostDetector:
     """Declares a track lost when its best image cost stays above ``threshold`` (a likelihood
     collapse: the model no longer covers the silhouette) for ``patience`` frames in a row.
 
-    ``update(cost)`` takes the image cost (S_r + S_e + S_c of the best particle, 0 best, 3 worst).
+    Parameters
+    ----------
+    threshold : float, default=0.9
+        Image cost above which a frame counts as bad.
+    patience : int, default=3
+        Number of bad frames in a row after which the track is lost.
     """
 
     def __init__(self, threshold: float = 0.9, patience: int = 3) -> None:
@@ -97,6 +163,18 @@ class LostDetector:
         self.bad = 0
 
     def update(self, cost: float) -> bool:
+        """Count one frame and say whether the track is lost.
+
+        Parameters
+        ----------
+        cost : float
+            Image cost of the best particle (S_r + S_e + S_c, 0 best, 3 worst); non-finite counts as bad.
+
+        Returns
+        -------
+        bool
+            True when the last ``patience`` frames were all bad.
+        """
         self.bad = self.bad + 1 if (not np.isfinite(cost) or cost > self.threshold) else 0
         return self.bad >= self.patience
 
