@@ -23,9 +23,12 @@ from .lines import LineFamilies, detect_segments, find_families
 class PeopleObservations:
     """Head/foot points of upright people over time, for frames of one size.
 
-    Args:
-        width, height: frame size, pixels.
-        max_observations: bound of the store (see the module docstring).
+    Parameters
+    ----------
+    width, height : int
+        Frame size, pixels.
+    max_observations : int, default=1500
+        Bound of the store (see the module docstring).
     """
 
     def __init__(self, width: int, height: int, max_observations: int = 1500) -> None:
@@ -42,7 +45,20 @@ class PeopleObservations:
         return self._rows[-1][5] - self._rows[0][5] if self._rows else 0.0
 
     def add(self, people: Iterable[Any], time_s: float) -> int:
-        """Add the usable people of one frame seen at ``time_s`` seconds; returns how many."""
+        """Add the usable people of one frame.
+
+        Parameters
+        ----------
+        people : iterable
+            Person regions (anything with ``id``, ``bbox``, ``ctrl``, ``ref_point``, ``merged``).
+        time_s : float
+            Time the frame was seen, seconds.
+
+        Returns
+        -------
+        int
+            How many of ``people`` were usable and added.
+        """
         n = 0
         for p in people:
             if not usable(p.bbox, *self.size, merged=bool(p.merged)):
@@ -58,15 +74,38 @@ class PeopleObservations:
         return n
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(N, 2) heads, (N, 2) feet (pixels), (N,) person ids, (N,) times (seconds)."""
+        """The observations as arrays.
+
+        Returns
+        -------
+        head : ndarray of shape (N, 2)
+            Head points, pixels.
+        foot : ndarray of shape (N, 2)
+            Foot points, pixels.
+        track : ndarray of shape (N,)
+            int64 person ids.
+        time : ndarray of shape (N,)
+            Times, seconds.
+        """
         a = np.array(self._rows, np.float64).reshape(-1, 6)
         return a[:, 0:2], a[:, 2:4], a[:, 4].astype(np.int64), a[:, 5]
 
     def estimate(
         self, config: CalibrationConfig | None = None, lines: LineFamilies | None = None
     ) -> CameraEstimate | None:
-        """The camera from what was gathered so far (and the scene's ``lines``); None with too few
-        observations.
+        """The camera from what was gathered so far (and the scene's ``lines``).
+
+        Parameters
+        ----------
+        config : CalibrationConfig or None, default=None
+            Estimation settings; None: the defaults.
+        lines : LineFamilies or None, default=None
+            The scene's straight-line families, if known.
+
+        Returns
+        -------
+        CameraEstimate or None
+            The estimate; None with too few observations.
         """
         head, foot, track, t = self.arrays()
         return estimate_camera(head, foot, track, self.size, t, config or CalibrationConfig(), lines)
@@ -77,6 +116,13 @@ class SceneFrames:
     ``every``, up to ``keep`` of them, with the boxes of the people on them. :meth:`families` takes
     the per-pixel median of the frames (people who move are gone from it) and leaves out the
     segments on any person's box.
+
+    Parameters
+    ----------
+    every : int, default=8
+        Keep frames whose number is a multiple of this.
+    keep : int, default=9
+        The most frames kept.
     """
 
     def __init__(self, every: int = 8, keep: int = 9) -> None:
@@ -86,11 +132,30 @@ class SceneFrames:
         self._families: LineFamilies | None = None
 
     def wants(self, index: int) -> bool:
-        """Whether frame number ``index`` is one to :meth:`add`."""
+        """Whether frame number ``index`` is one to :meth:`add`.
+
+        Parameters
+        ----------
+        index : int
+            Frame number.
+
+        Returns
+        -------
+        bool
+            True while fewer than ``keep`` frames are kept and ``index`` is a multiple of ``every``.
+        """
         return len(self.frames) < self.keep and index % self.every == 0
 
     def add(self, frame: np.ndarray, people: Iterable[Any]) -> None:
-        """Keep a frame (H, W[, 3]) uint8 and its people (anything with ``bbox``)."""
+        """Keep a frame and its people (ignored once ``keep`` frames are kept).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W) or (H, W, 3)
+            uint8 image.
+        people : iterable
+            The people on the frame (anything with ``bbox``, (x, y, w, h) pixels).
+        """
         if len(self.frames) >= self.keep:
             return
         self.frames.append(np.asarray(frame))
@@ -98,7 +163,13 @@ class SceneFrames:
         self._families = None
 
     def families(self) -> LineFamilies | None:
-        """The line families of the frames kept so far (None before the first frame)."""
+        """The line families of the frames kept so far.
+
+        Returns
+        -------
+        LineFamilies or None
+            The families; None before the first frame.
+        """
         if not self.frames:
             return None
         if self._families is None:

@@ -29,10 +29,10 @@ class ForestArrays:
 
     Parameters
     ----------
-    feature, threshold, left, right : (n_trees, n_nodes) arrays
+    feature, threshold, left, right : ndarray of shape (n_trees, n_nodes)
         Split feature index, threshold, child nodes (-1 at a leaf). A sample goes left where
         x[feature] <= threshold.
-    value : (n_trees, n_nodes, n_out) array
+    value : ndarray of shape (n_trees, n_nodes, n_out)
         The node means; the prediction is the mean over trees of the leaf values.
     """
 
@@ -45,7 +45,18 @@ class ForestArrays:
 
     @classmethod
     def from_sklearn(cls, forest: Any) -> ForestArrays:
-        """A fitted scikit-learn forest regressor (``estimators_`` of trees) -> its arrays."""
+        """The arrays of a fitted scikit-learn forest regressor.
+
+        Parameters
+        ----------
+        forest : sklearn.ensemble forest regressor
+            Fitted (``estimators_`` of trees).
+
+        Returns
+        -------
+        ForestArrays
+            The forest's trees, padded to the largest node count.
+        """
         trees = [e.tree_ for e in forest.estimators_]
         n, d = max(t.node_count for t in trees), trees[0].value.shape[1]
         F, L, R = (
@@ -61,7 +72,14 @@ class ForestArrays:
         return cls(F, th, L, R, V)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The arrays of a model file (``feature``, ``threshold``, ``left``, ``right``, ``value``)."""
+        """The arrays of a model file.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``feature``, ``threshold``, ``left``, ``right`` (int32 or float64, (n_trees, n_nodes)) and
+            ``value`` ((n_trees, n_nodes, n_out)).
+        """
         return {
             "feature": self.feature.astype(np.int32),
             "threshold": self.threshold,
@@ -71,7 +89,18 @@ class ForestArrays:
         }
 
     def predict(self, x: np.ndarray) -> np.ndarray:
-        """(d,) features -> (n_out,) the forest's mean prediction; all trees walked together."""
+        """The forest's mean prediction; all trees walked together.
+
+        Parameters
+        ----------
+        x : ndarray of shape (d,)
+            Features of one sample.
+
+        Returns
+        -------
+        ndarray of shape (n_out,)
+            The mean over trees of the leaf values.
+        """
         # scikit-learn splits on float32 features: compare the same rounded values
         x = np.asarray(x, np.float32).astype(np.float64)
         idx = np.zeros(len(self._rows), np.intp)
@@ -85,8 +114,25 @@ class ForestArrays:
 
 
 def fit_forest(X: np.ndarray, Y: np.ndarray, trees: int, leaf: int, random_state: int) -> ForestArrays:
-    """Extremely randomised trees (``trees`` of them, leaves of at least ``leaf`` frames) fitted to
-    features X (F, d) and placement errors Y (F, 2) metres.
+    """Extremely randomised trees fitted to placement errors.
+
+    Parameters
+    ----------
+    X : ndarray of shape (F, d)
+        Features of each frame.
+    Y : ndarray of shape (F, 2)
+        Placement errors (true minus generated ground position x, z), metres.
+    trees : int
+        Number of trees.
+    leaf : int
+        Least number of frames in a leaf.
+    random_state : int
+        Seed of the forest.
+
+    Returns
+    -------
+    ForestArrays
+        The fitted forest.
     """
     from sklearn.ensemble import ExtraTreesRegressor
 
@@ -95,7 +141,20 @@ def fit_forest(X: np.ndarray, Y: np.ndarray, trees: int, leaf: int, random_state
 
 
 def deal_folds(labels: Sequence[str], folds: int) -> np.ndarray:
-    """(S,) fold of each training sequence: each label's sequences dealt round the folds in turn."""
+    """Fold of each training sequence: each label's sequences dealt round the folds in turn.
+
+    Parameters
+    ----------
+    labels : sequence of str
+        Label of each of the S training sequences.
+    folds : int
+        Number of folds.
+
+    Returns
+    -------
+    ndarray of shape (S,)
+        int fold of each sequence, in ``0 .. folds - 1``.
+    """
     labels = np.asarray(labels)
     fold = np.zeros(len(labels), int)
     for g in np.unique(labels):
@@ -109,7 +168,7 @@ class CorrectionFeatures:
 
     Parameters
     ----------
-    label_member : (L, N) array
+    label_member : ndarray of shape (L, N)
         1 where state k belongs to label l, else 0 (fixed per model).
     fps : float
         Frames per second of the sequence.
@@ -138,14 +197,20 @@ class CorrectionFeatures:
 
         Parameters
         ----------
-        pos : (2,) array
+        pos : ndarray of shape (2,)
             The model's placement (x, z, observed frame, metres).
-        z_k : (N,) array
+        z_k : ndarray of shape (N,)
             Each state's conditional distance z (metres, observed frame).
-        posterior : (N,) array
+        posterior : ndarray of shape (N,)
             The state posterior.
         speed : float
             The observed person's ground speed, m/s.
+
+        Returns
+        -------
+        ndarray of shape (2 + 3 L + 4,)
+            The placement, the label masses (L,), the motion summaries (4,), the labels' distances z
+            (L,) and their differences to the placement's z (L,).
         """
         self._n_seen += 1
         self._speeds = (self._speeds + [speed])[-_SPEED_FRAMES:]
