@@ -75,7 +75,14 @@ ANCHOR_INDEX: dict[str, int] = {name: i for i, name in enumerate(ANCHORS)}
 class Segment(NamedTuple):
     """One truncated cone: from anchor ``start`` (radius ``r_start``) to ``end`` (``r_end``).
 
-    ``r_start``/``r_end`` name fields of :class:`BodyDims`.
+    Attributes
+    ----------
+    name : str
+        Segment name.
+    start, end : str
+        Names of the anchors (``ANCHORS``) at the cone's two ends.
+    r_start, r_end : str
+        Names of the :class:`BodyDims` fields that give the radii at ``start`` and ``end``.
     """
 
     name: str
@@ -114,10 +121,24 @@ class BodyDims:
     """Body dimensions in metres. The default is an adult of 1.75 m.
 
     Lengths follow anthropometric proportions of stature (Drillis & Contini): hip joints at
-    0.53 h, knees at 0.285 h, shoulders at 0.82 h, eyes at 0.936 h. ``height`` is the stature
-    (sole to crown) in the neutral standing pose.
+    0.53 h, knees at 0.285 h, shoulders at 0.82 h, eyes at 0.936 h.
 
-    Lengths: joint to joint along each bone. Radii (``r_*``): radius of the cone at that place.
+    Parameters
+    ----------
+    height : float, default=1.75
+        The stature (sole to crown) in the neutral standing pose, metres.
+    ankle_height, shin, thigh, hip_width, torso_length, shoulder_width, shoulder_drop, \
+neck_to_head, head_half_height, upper_arm, forearm, hand_length, foot_length, chest_drop, \
+torso_bottom_drop : float
+        Lengths, metres: joint to joint along each bone (each field's comment names its ends).
+    r_chin, r_crown, r_neck, r_neck_top, r_shoulders, r_chest, r_pelvis, r_upper_arm, r_elbow, \
+r_wrist, r_hand, r_thigh, r_knee, r_ankle, r_toe : float
+        Radii (``r_*``), metres: radius of the cone at that place.
+
+    Raises
+    ------
+    ValueError
+        If a field is not a finite length >= 0, or ``height`` is not > 0.
     """
 
     height: float = 1.75
@@ -163,7 +184,23 @@ class BodyDims:
             raise ValueError(f"BodyDims.height={self.height!r}: must be > 0 metres")
 
     def scaled(self, height: float) -> BodyDims:
-        """The same proportions scaled uniformly to stature ``height`` (metres)."""
+        """The same proportions scaled uniformly to a stature.
+
+        Parameters
+        ----------
+        height : float
+            The new stature, metres.
+
+        Returns
+        -------
+        BodyDims
+            Every length and radius multiplied by ``height / self.height``.
+
+        Raises
+        ------
+        ValueError
+            If ``height`` is not a positive finite number.
+        """
         if not np.isfinite(height) or height <= 0:
             raise ValueError(f"height={height!r}: must be a positive number of metres")
         k = float(height) / self.height
@@ -175,7 +212,13 @@ class BodyDims:
         return self.ankle_height + self.shin + self.thigh
 
     def segment_radii(self) -> np.ndarray:
-        """(16, 2) float64 cone radii in metres, in ``SEGMENTS`` order: (start, end)."""
+        """Cone radii of every segment.
+
+        Returns
+        -------
+        ndarray of shape (16, 2)
+            float64 radii in metres, in ``SEGMENTS`` order: (start, end).
+        """
         return np.array([[getattr(self, s.r_start), getattr(self, s.r_end)] for s in SEGMENTS])
 
 

@@ -44,16 +44,35 @@ class HorprasertSubtractor:
 
     The first ``train_frames`` frames are collected (no foreground is reported for them) and the
     model is fitted on them, robustly by default because people may already be in view, and with
-    ``people_aware`` (default) around the people that ``detector`` (default
-    ``people.PeopleDetector()``, OpenCV's HOG people detector) finds in them, so that people who
+    ``people_aware`` around the people that ``detector`` finds in them, so that people who
     stand still through training are not learnt as the room (``people.fit_around_people``);
     after that each frame is classified and then blended into the model (``update``).
     ``fit(frames)`` instead trains at once, e.g. from a recording of the empty scene.
-    ``dynamic`` (default True): a ``samples.SampleConsensus`` model (ViBe-like sample sets with a
-    blink-adapted radius, ``sample_params`` its parameters) sits beside the statistics, and a pixel
-    they call foreground is background when its colour is one the pixel has shown as background
-    before (leaves, water, flicker); the shadow and highlight classes are the statistics' own.
-    Other keyword parameters go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
+
+    Parameters
+    ----------
+    train_frames : int, default=30
+        Number of frames collected before the model is fitted; at least 2.
+    robust : bool, default=True
+        Fit robustly (people may already be in view).
+    people_aware : bool, default=True
+        With ``robust``, fit around the people the detector finds (``people.fit_around_people``).
+    detector : object or None, default=None
+        People detector; None: ``people.PeopleDetector()``, OpenCV's HOG people detector.
+    dynamic : bool, default=True
+        A ``samples.SampleConsensus`` model (ViBe-like sample sets with a blink-adapted radius) sits
+        beside the statistics, and a pixel they call foreground is background when its colour is one
+        the pixel has shown as background before (leaves, water, flicker); the shadow and highlight
+        classes are the statistics' own.
+    sample_params : dict or None, default=None
+        Parameters of the ``samples.SampleConsensus`` model.
+    **model_params : Any
+        Go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
+
+    Raises
+    ------
+    ValueError
+        If ``train_frames < 2`` or a model or sample parameter is unknown or invalid.
     """
 
     name = "horprasert"
@@ -92,9 +111,22 @@ class HorprasertSubtractor:
         return self.model.is_fitted
 
     def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> HorprasertSubtractor:
-        """Fit the model on training frames (N, H, W, 3) uint8 BGR. Robust (people may be in view)
-        and ``people_aware``: the people are detected and the room around them learnt
-        (``people.fit_around_people``); robust alone: the per-pixel median.
+        """Fit the model on training frames.
+
+        Robust (people may be in view) and ``people_aware``: the people are detected and the room
+        around them learnt (``people.fit_around_people``); robust alone: the per-pixel median.
+
+        Parameters
+        ----------
+        frames : ndarray of shape (N, H, W, 3) or list of ndarray of shape (H, W, 3)
+            uint8 BGR training frames.
+        robust : bool or None, default=None
+            Fit robustly; None: the ``robust`` given at construction.
+
+        Returns
+        -------
+        HorprasertSubtractor
+            self, fitted.
         """
         stack = as_frame_stack(frames)
         robust = self.robust if robust is None else robust
@@ -119,6 +151,23 @@ class HorprasertSubtractor:
         return self
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
+        """Classify a frame and learn from it (collect it while training).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame.
+
+        Returns
+        -------
+        ndarray of shape (H, W)
+            bool foreground mask; all False while training frames are still being collected.
+
+        Raises
+        ------
+        ValueError
+            If ``frame`` is not uint8 (H, W, 3).
+        """
         if not self.model.is_fitted:
             if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
                 raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
@@ -141,7 +190,18 @@ class HorprasertSubtractor:
 
 class OpenCVSubtractor:
     """Any ``cv2.BackgroundSubtractor``; its 255 / 127 / 0 output becomes FOREGROUND / SHADOW /
-    BACKGROUND. ``learning_rate`` is passed to ``apply`` (-1: the subtractor's own schedule).
+    BACKGROUND.
+
+    Parameters
+    ----------
+    name : str
+        Backend name.
+    subtractor : cv2.BackgroundSubtractor
+        The OpenCV subtractor.
+    provides_shadows : bool
+        Whether the subtractor labels shadows (127).
+    learning_rate : float, default=-1.0
+        Passed to ``apply`` (-1: the subtractor's own schedule).
     """
 
     def __init__(self, name: str, subtractor: Any, provides_shadows: bool, learning_rate: float = -1.0) -> None:
@@ -160,6 +220,23 @@ class OpenCVSubtractor:
         return self.labels is not None
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
+        """Classify a frame and learn from it.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame.
+
+        Returns
+        -------
+        ndarray of shape (H, W)
+            bool foreground mask.
+
+        Raises
+        ------
+        ValueError
+            If ``frame`` is not a uint8 (H, W, 3) array.
+        """
         if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8 or frame.ndim != 3:
             raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {getattr(frame, 'shape', None)}")
         raw = self.subtractor.apply(frame, learningRate=self.learning_rate)
@@ -178,14 +255,29 @@ def _create(name: str, fn: Callable[..., Any], params: dict[str, Any]) -> Any:
 
 
 def make_subtractor(name: str, **params: Any) -> Subtractor:
-    """Build a background subtractor by name (one of ``BACKEND_NAMES``).
+    """Build a background subtractor by name.
 
-    ``horprasert``: our ``HorprasertSubtractor`` (params: train_frames, robust and any
-    ``HorprasertBackground`` parameter). ``mog2`` / ``knn``: cv2.createBackgroundSubtractorMOG2 /
-    KNN with ``detectShadows=True`` unless given (params: OpenCV's keyword names, e.g. history,
-    varThreshold, dist2Threshold; plus learning_rate). ``cnt`` / ``gsoc``:
-    cv2.bgsegm.createBackgroundSubtractorCNT / GSOC (no shadow class). Raises ValueError for an
-    unknown name or parameter.
+    Parameters
+    ----------
+    name : str
+        One of ``BACKEND_NAMES`` (any case). ``horprasert``: our ``HorprasertSubtractor``.
+        ``mog2`` / ``knn``: cv2.createBackgroundSubtractorMOG2 / KNN with ``detectShadows=True``
+        unless given. ``cnt`` / ``gsoc``: cv2.bgsegm.createBackgroundSubtractorCNT / GSOC (no shadow
+        class).
+    **params : Any
+        ``horprasert``: train_frames, robust and any ``HorprasertBackground`` parameter; the OpenCV
+        backends: OpenCV's keyword names (e.g. history, varThreshold, dist2Threshold) plus
+        learning_rate.
+
+    Returns
+    -------
+    Subtractor
+        The subtractor.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name or parameter, or when ``cnt`` / ``gsoc`` lack cv2.bgsegm.
     """
     key = name.lower() if isinstance(name, str) else name
     if key not in BACKEND_NAMES:
