@@ -31,20 +31,59 @@ ARM_DOFS: dict[str, list[int]] = {
 
 
 def min_jerk(tau: np.ndarray) -> np.ndarray:
-    """Minimum-jerk profile on [0, 1] (Flash & Hogan 1985), clipped outside."""
+    """Minimum-jerk profile on [0, 1] (Flash & Hogan 1985), clipped outside.
+
+    Parameters
+    ----------
+    tau : ndarray
+        Normalised time, any shape; clipped to [0, 1].
+
+    Returns
+    -------
+    ndarray
+        ``10 tau^3 - 15 tau^4 + 6 tau^5``, in [0, 1], same shape as ``tau``.
+    """
     t = np.clip(tau, 0.0, 1.0)
     return t * t * t * (10.0 - 15.0 * t + 6.0 * t * t)
 
 
 def ramp(times: np.ndarray, t0: float, t1: float) -> np.ndarray:
-    """(T,) 0 before ``t0``, 1 after ``t1``, minimum-jerk in between (seconds)."""
+    """0 before ``t0``, 1 after ``t1``, minimum-jerk in between.
+
+    Parameters
+    ----------
+    times : ndarray of shape (T,)
+        Sample times, seconds.
+    t0, t1 : float
+        Start and end of the rise, seconds; ``t1 <= t0``: a step at ``t0``.
+
+    Returns
+    -------
+    ndarray of shape (T,)
+        float64 in [0, 1].
+    """
     if t1 <= t0:
         return (times >= t0).astype(np.float64)
     return min_jerk((times - t0) / (t1 - t0))
 
 
 def window(times: np.ndarray, t0: float, t1: float, edge: float) -> np.ndarray:
-    """(T,) smooth plateau: rises over ``edge`` s from ``t0``, falls over ``edge`` s to ``t1``."""
+    """Smooth plateau: rises over ``edge`` s from ``t0``, falls over ``edge`` s to ``t1``.
+
+    Parameters
+    ----------
+    times : ndarray of shape (T,)
+        Sample times, seconds.
+    t0, t1 : float
+        Start of the rise and end of the fall, seconds.
+    edge : float
+        Duration of the rise and of the fall, seconds.
+
+    Returns
+    -------
+    ndarray of shape (T,)
+        float64 in [0, 1].
+    """
     return ramp(times, t0, t0 + edge) * (1.0 - ramp(times, t1 - edge, t1))
 
 
@@ -53,6 +92,16 @@ class Track:
 
     Keys must be added in increasing time. ``set(t, name=value, ...)`` copies the previous key
     and changes the named DOFs (``counterpart.body.pose.DOF_NAMES``), so a key only says what moves.
+
+    Parameters
+    ----------
+    P0 : ndarray of shape (DOF,)
+        The pose at time 0 (``counterpart.body.pose`` layout, radians and metres).
+
+    Raises
+    ------
+    ValueError
+        If ``P0`` is not of shape (DOF,).
     """
 
     def __init__(self, P0: np.ndarray) -> None:
@@ -71,6 +120,25 @@ class Track:
         return self.times[-1]
 
     def key(self, t: float, P: np.ndarray) -> Track:
+        """Add a key.
+
+        Parameters
+        ----------
+        t : float
+            Time of the key, seconds; not before the last key.
+        P : ndarray of shape (DOF,)
+            The pose at ``t``.
+
+        Returns
+        -------
+        Track
+            self, for chaining.
+
+        Raises
+        ------
+        ValueError
+            If ``t`` is before the last key.
+        """
         if t < self.times[-1] - 1e-9:
             raise ValueError(f"Track.key: time {t:.3f} s is before the last key at {self.times[-1]:.3f} s")
         self.times.append(float(t))
@@ -78,6 +146,25 @@ class Track:
         return self
 
     def set(self, t: float, **dofs: float) -> Track:
+        """Add a key: the previous key with the named DOFs changed.
+
+        Parameters
+        ----------
+        t : float
+            Time of the key, seconds; not before the last key.
+        **dofs : float
+            New values of DOFs by name (``counterpart.body.pose.DOF_NAMES``), radians or metres.
+
+        Returns
+        -------
+        Track
+            self, for chaining.
+
+        Raises
+        ------
+        ValueError
+            If a DOF name is unknown or ``t`` is before the last key.
+        """
         P = self.last
         for name, v in dofs.items():
             if name not in DOF_INDEX:
@@ -86,10 +173,22 @@ class Track:
         return self.key(t, P)
 
     def hold(self, t: float) -> Track:
+        """Add a key at ``t`` (seconds) repeating the last pose; returns self."""
         return self.key(t, self.last)
 
     def sample(self, times: np.ndarray) -> np.ndarray:
-        """(T,) seconds -> (T, DOF) poses; before the first / after the last key: held."""
+        """Poses at the given times; before the first / after the last key: held.
+
+        Parameters
+        ----------
+        times : ndarray of shape (T,)
+            Sample times, seconds.
+
+        Returns
+        -------
+        ndarray of shape (T, DOF)
+            The interpolated poses.
+        """
         kt = np.asarray(self.times)
         kp = np.stack(self.poses)
         i = np.clip(np.searchsorted(kt, times, side="right") - 1, 0, len(kt) - 1)
@@ -101,7 +200,26 @@ class Track:
 
 
 def smooth_noise(rng: np.random.Generator, n: int, fps: float, cutoff_hz: float, k: int = 1) -> np.ndarray:
-    """(n, k) low-pass Gaussian noise of unit standard deviation (Gaussian-kernel smoothed)."""
+    """Low-pass Gaussian noise of unit standard deviation (Gaussian-kernel smoothed).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the noise.
+    n : int
+        Number of samples.
+    fps : float
+        Sample rate, frames per second.
+    cutoff_hz : float
+        Cut-off frequency of the smoothing, Hz.
+    k : int, default=1
+        Number of independent channels.
+
+    Returns
+    -------
+    ndarray of shape (n, k)
+        The noise, each channel of unit standard deviation.
+    """
     sigma = max(fps / (2 * np.pi * cutoff_hz), 1e-3)
     half = int(np.ceil(3 * sigma))
     x = rng.standard_normal((n + 2 * half, k))
@@ -113,8 +231,24 @@ def smooth_noise(rng: np.random.Generator, n: int, fps: float, cutoff_hz: float,
 
 
 def oscillation(times: np.ndarray, t0: float, t1: float, freq_hz: float, phase: float = 0.0) -> np.ndarray:
-    """(T,) ``sin(2 pi f (t - t0) + phase)`` under a Hann window on [t0, t1] (0 outside), so the
+    """``sin(2 pi f (t - t0) + phase)`` under a Hann window on [t0, t1] (0 outside), so the
     movement starts and ends at rest.
+
+    Parameters
+    ----------
+    times : ndarray of shape (T,)
+        Sample times, seconds.
+    t0, t1 : float
+        Start and end of the window, seconds.
+    freq_hz : float
+        Oscillation frequency ``f``, Hz.
+    phase : float, default=0.0
+        Phase at ``t0``, radians.
+
+    Returns
+    -------
+    ndarray of shape (T,)
+        float64 in [-1, 1].
     """
     inside = (times >= t0) & (times <= t1)
     d = max(t1 - t0, 1e-9)
@@ -127,8 +261,25 @@ def add_gait(P: np.ndarray, fps: float, dims: BodyDims, amp: float = 1.0, arms: 
 
     The gait phase advances with the distance walked (one cycle per stride of ``0.75 * height``
     metres: two steps), and its amplitude follows the walking speed (full at >= 0.5 m/s), so feet
-    barely slide and the legs rest when the pelvis stops. ``arms`` (T,) in [0, 1] scales the
-    counter-swing of the arms (0 where the arms are busy). Returns a new (T, DOF) array.
+    barely slide and the legs rest when the pelvis stops.
+
+    Parameters
+    ----------
+    P : ndarray of shape (T, DOF)
+        Poses (``counterpart.body.pose`` layout).
+    fps : float
+        Frame rate, frames per second.
+    dims : BodyDims
+        Body dimensions (the stride follows ``dims.height``).
+    amp : float, default=1.0
+        Multiplier of the swing amplitude.
+    arms : ndarray of shape (T,) or None, default=None
+        In [0, 1], scales the counter-swing of the arms (0 where the arms are busy); None: full swing.
+
+    Returns
+    -------
+    ndarray of shape (T, DOF)
+        A new array; ``P`` is not changed.
     """
     P = P.copy()
     xz = P[:, [0, 2]]
@@ -150,7 +301,20 @@ def add_gait(P: np.ndarray, fps: float, dims: BodyDims, amp: float = 1.0, arms: 
 
 
 def ground(P: np.ndarray, dims: BodyDims) -> np.ndarray:
-    """Poses with ``root_y`` shifted so that the lowest body point of every frame is at y = 0."""
+    """Poses with ``root_y`` shifted so that the lowest body point of every frame is at y = 0.
+
+    Parameters
+    ----------
+    P : ndarray of shape (T, DOF)
+        Poses (``counterpart.body.pose`` layout).
+    dims : BodyDims
+        Body dimensions.
+
+    Returns
+    -------
+    ndarray of shape (T, DOF)
+        A new array; ``P`` is not changed.
+    """
     P = P.copy()
     P[:, DOF_INDEX["root_y"]] -= lowest_point(P, dims)
     return P
@@ -163,19 +327,32 @@ def _unit(v: np.ndarray) -> np.ndarray:
 def reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray, reach_frac: float = 0.985) -> np.ndarray:
     """Arm angles that put the ``side`` ("l"/"r") wrist on ``target``.
 
-    Args:
-        P: (T, DOF) poses (the rest of the body is kept).
-        dims: body dimensions.
-        side: "l" or "r" (the person's own side).
-        target: (T, 3) or (3,) wrist targets, metres, world frame.
-        reach_frac: targets farther than this fraction of the arm length are pulled in along the
-            shoulder-target line (the arm then points at them, nearly straight).
+    The elbow is placed in the plane of the shoulder-target line and a "down and outwards" pole,
+    the way people hold their elbows when they reach.
+
+    Parameters
+    ----------
+    P : ndarray of shape (T, DOF)
+        Poses (the rest of the body is kept).
+    dims : BodyDims
+        Body dimensions.
+    side : {"l", "r"}
+        The person's own side.
+    target : ndarray of shape (T, 3) or (3,)
+        Wrist targets, metres, world frame.
+    reach_frac : float, default=0.985
+        Targets farther than this fraction of the arm length are pulled in along the
+        shoulder-target line (the arm then points at them, nearly straight).
 
     Returns
     -------
-        (T, 4) shoulder_flex, shoulder_abd, shoulder_rot, elbow_flex (radians). The elbow is
-        placed in the plane of the shoulder-target line and a "down and outwards" pole, the way
-        people hold their elbows when they reach.
+    ndarray of shape (T, 4)
+        shoulder_flex, shoulder_abd, shoulder_rot, elbow_flex, radians.
+
+    Raises
+    ------
+    ValueError
+        If ``side`` is not "l" or "r".
     """
     if side not in ("l", "r"):
         raise ValueError(f"reach: side={side!r}; use 'l' or 'r'")
@@ -204,7 +381,26 @@ def reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray, reach_fr
 
 
 def apply_reach(P: np.ndarray, dims: BodyDims, side: str, target: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    """Blend the ``reach`` solution into the ``side`` arm by ``weight`` (T,) in [0, 1]."""
+    """Blend the ``reach`` solution into the ``side`` arm by a per-frame weight.
+
+    Parameters
+    ----------
+    P : ndarray of shape (T, DOF)
+        Poses.
+    dims : BodyDims
+        Body dimensions.
+    side : {"l", "r"}
+        The person's own side.
+    target : ndarray of shape (T, 3) or (3,)
+        Wrist targets, metres, world frame.
+    weight : ndarray of shape (T,)
+        Blend weight in [0, 1] (0: the pose as is, 1: the reach solution).
+
+    Returns
+    -------
+    ndarray of shape (T, DOF)
+        A new array, clipped to the joint limits.
+    """
     P = P.copy()
     w = np.asarray(weight, dtype=np.float64)
     on = w > 1e-6
