@@ -31,15 +31,21 @@ _SHIFT = 4  # fixed-point bits for sub-pixel accurate OpenCV drawing
 def project_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
     """Project cones to image trapezoids.
 
-    Args:
-        ends: (N, S, 2, 3) cone end centres, metres (from ``cone_endpoints``).
-        radii: (S, 2) or (N, S, 2) end radii, metres.
-        camera: the camera.
+    Parameters
+    ----------
+    ends : ndarray of shape (N, S, 2, 3)
+        Cone end centres, metres (from ``cone_endpoints``).
+    radii : ndarray of shape (S, 2) or (N, S, 2)
+        End radii, metres.
+    camera : Camera
+        The camera.
 
     Returns
     -------
-        centres: (N, S, 2, 2) pixel positions of the two end centres.
-        half_widths: (N, S, 2) projected radii in pixels (NaN behind the camera).
+    centres : ndarray of shape (N, S, 2, 2)
+        Pixel positions of the two end centres.
+    half_widths : ndarray of shape (N, S, 2)
+        Projected radii in pixels (NaN behind the camera).
     """
     centres = camera.project(ends)
     z = camera.depth(ends)
@@ -63,10 +69,22 @@ def cone_outline_points_from_cones(
 ) -> np.ndarray:
     """Points along the two long sides of every projected cone.
 
+    Parameters
+    ----------
+    ends : ndarray of shape (N, S, 2, 3)
+        Cone end centres, metres (from ``cone_endpoints``).
+    radii : ndarray of shape (S, 2) or (N, S, 2)
+        End radii, metres.
+    camera : Camera
+        The camera.
+    per_side : int, default=4
+        Points on each side of each cone.
+
     Returns
     -------
-        (N, S * 2 * per_side, 2) pixels, ordered cone-major, then side (+normal, -normal), then
-        position along the axis at fractions (k + 0.5) / per_side.
+    ndarray of shape (N, S * 2 * per_side, 2)
+        Pixels, ordered cone-major, then side (+normal, -normal), then position along the axis at
+        fractions (k + 0.5) / per_side.
     """
     centres, rho = project_cones(ends, radii, camera)
     n = _image_normals(centres)  # (N,S,2)
@@ -79,9 +97,23 @@ def cone_outline_points_from_cones(
 
 
 def cone_outline_points(P: np.ndarray, dims: BodyDims, camera: Camera, per_side: int = 4) -> np.ndarray:
-    """(N, DOF) poses -> (N, 16 * 2 * per_side, 2) pixel samples on the cone outlines.
+    """Pixel samples on the cone outlines of N poses. Vectorised over N.
 
-    See ``cone_outline_points_from_cones`` for the ordering. Vectorised over N.
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF)
+        Poses.
+    dims : BodyDims
+        Body dimensions.
+    camera : Camera
+        The camera.
+    per_side : int, default=4
+        Points on each side of each cone.
+
+    Returns
+    -------
+    ndarray of shape (N, 16 * 2 * per_side, 2)
+        Pixels; see ``cone_outline_points_from_cones`` for the ordering.
     """
     ends, radii = cone_endpoints(P, dims)
     return cone_outline_points_from_cones(ends, radii, camera, per_side)
@@ -92,10 +124,24 @@ def cone_interior_points_from_cones(
 ) -> np.ndarray:
     """Grid of points inside every projected cone.
 
+    Parameters
+    ----------
+    ends : ndarray of shape (N, S, 2, 3)
+        Cone end centres, metres (from ``cone_endpoints``).
+    radii : ndarray of shape (S, 2) or (N, S, 2)
+        End radii, metres.
+    camera : Camera
+        The camera.
+    n_along : int, default=4
+        Grid points along each cone's axis.
+    n_across : int, default=3
+        Grid points across each cone.
+
     Returns
     -------
-        (N, S * n_along * n_across, 2) pixels, ordered cone-major, then along the axis at
-        fractions (k + 0.5) / n_along, then across at (2 j + 1) / n_across - 1 of the half-width.
+    ndarray of shape (N, S * n_along * n_across, 2)
+        Pixels, ordered cone-major, then along the axis at fractions (k + 0.5) / n_along, then
+        across at (2 j + 1) / n_across - 1 of the half-width.
     """
     centres, rho = project_cones(ends, radii, camera)
     n = _image_normals(centres)
@@ -110,7 +156,26 @@ def cone_interior_points_from_cones(
 def cone_interior_points(
     P: np.ndarray, dims: BodyDims, camera: Camera, n_along: int = 4, n_across: int = 3
 ) -> np.ndarray:
-    """(N, DOF) poses -> (N, 16 * n_along * n_across, 2) pixel samples inside the cones."""
+    """Pixel samples inside the cones of N poses.
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF)
+        Poses.
+    dims : BodyDims
+        Body dimensions.
+    camera : Camera
+        The camera.
+    n_along : int, default=4
+        Grid points along each cone's axis.
+    n_across : int, default=3
+        Grid points across each cone.
+
+    Returns
+    -------
+    ndarray of shape (N, 16 * n_along * n_across, 2)
+        Pixels; see ``cone_interior_points_from_cones`` for the ordering.
+    """
     ends, radii = cone_endpoints(P, dims)
     return cone_interior_points_from_cones(ends, radii, camera, n_along, n_across)
 
@@ -118,12 +183,19 @@ def cone_interior_points(
 def cone_rims(ends: np.ndarray, radii: np.ndarray, n_rim: int = 12) -> np.ndarray:
     """3D points on the two end circles of every cone.
 
-    Args:
-        ends: (N, S, 2, 3) metres; radii: (S, 2) or (N, S, 2) metres.
+    Parameters
+    ----------
+    ends : ndarray of shape (N, S, 2, 3)
+        Cone end centres, metres.
+    radii : ndarray of shape (S, 2) or (N, S, 2)
+        End radii, metres.
+    n_rim : int, default=12
+        Points on each circle.
 
     Returns
     -------
-        (N, S, 2, n_rim, 3) metres.
+    ndarray of shape (N, S, 2, n_rim, 3)
+        Metres.
     """
     axis = ends[..., 1, :] - ends[..., 0, :]
     length = np.linalg.norm(axis, axis=-1, keepdims=True)
@@ -148,8 +220,25 @@ def _hull_polygons(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: i
 
 
 def rasterise_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: int = 12) -> np.ndarray:
-    """(N, S, 2, 3) cones -> (N, H, W) bool silhouettes (union of the convex hulls of each
-    cone's projected rims). Cones with any point behind the camera are skipped.
+    """Silhouettes of cones: the union of the convex hulls of each cone's projected rims.
+
+    Cones with any point behind the camera are skipped.
+
+    Parameters
+    ----------
+    ends : ndarray of shape (N, S, 2, 3)
+        Cone end centres, metres.
+    radii : ndarray of shape (S, 2) or (N, S, 2)
+        End radii, metres.
+    camera : Camera
+        The camera (its image is H x W).
+    n_rim : int, default=12
+        Points on each rim circle.
+
+    Returns
+    -------
+    ndarray of shape (N, H, W)
+        bool silhouettes.
     """
     uv = _hull_polygons(ends, radii, camera, n_rim)
     out = np.zeros((uv.shape[0], camera.height, camera.width), dtype=np.uint8)
@@ -163,8 +252,22 @@ def rasterise_cones(ends: np.ndarray, radii: np.ndarray, camera: Camera, n_rim: 
 
 
 def rasterise_silhouettes(P: np.ndarray, dims: BodyDims, camera: Camera) -> np.ndarray:
-    """(N, DOF) poses -> (N, H, W) bool silhouettes of the 16 cones. For a few poses
-    (a Python loop over poses and cones draws with OpenCV).
+    """Silhouettes of the 16 cones of a few poses (a Python loop over poses and cones draws with
+    OpenCV).
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF)
+        Poses.
+    dims : BodyDims
+        Body dimensions.
+    camera : Camera
+        The camera (its image is H x W).
+
+    Returns
+    -------
+    ndarray of shape (N, H, W)
+        bool silhouettes.
     """
     ends, radii = cone_endpoints(P, dims)
     return rasterise_cones(ends, radii, camera)
@@ -173,10 +276,31 @@ def rasterise_silhouettes(P: np.ndarray, dims: BodyDims, camera: Camera) -> np.n
 def render_edge_maps(
     P: np.ndarray, dims: BodyDims, camera: Camera, mode: str = "silhouette", thickness: int = 1
 ) -> np.ndarray:
-    """(N, DOF) poses -> (N, H, W) bool edge maps.
+    """Edge maps of N poses.
 
-    mode "silhouette": the outer boundary of the union silhouette (what an edge detector sees
-    against a plain background). mode "cones": every cone's outline, hidden parts included.
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF)
+        Poses.
+    dims : BodyDims
+        Body dimensions.
+    camera : Camera
+        The camera (its image is H x W).
+    mode : {"silhouette", "cones"}, default="silhouette"
+        "silhouette": the outer boundary of the union silhouette (what an edge detector sees
+        against a plain background). "cones": every cone's outline, hidden parts included.
+    thickness : int, default=1
+        Edge thickness, pixels.
+
+    Returns
+    -------
+    ndarray of shape (N, H, W)
+        bool edge maps.
+
+    Raises
+    ------
+    ValueError
+        If ``mode`` is neither "silhouette" nor "cones".
     """
     if mode == "silhouette":
         sil = rasterise_silhouettes(P, dims, camera).astype(np.uint8)
