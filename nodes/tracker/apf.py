@@ -42,16 +42,24 @@ class Estimate:
 
     Attributes
     ----------
-        mean: (DOF,) weighted mean pose of the last layer (yaw: circular mean).
-        best: (DOF,) highest-likelihood particle of the last layer.
-        ess: effective sample size 1 / sum(pi^2) of the last layer's particles weighted by the
-            un-annealed log-likelihood (beta = 1), before resampling: between 1 (one particle holds
-            all the posterior mass) and N.
-        log_likelihood: log-likelihood of the best particle.
-        particles: (N, DOF) the resampled set carried to the next frame.
-        betas: (M,) chosen exponents per layer.
-        survival: (M,) achieved survival rates D per layer.
-        n_evals: likelihood evaluations spent on this frame.
+    mean : ndarray of shape (DOF,)
+        Weighted mean pose of the last layer (yaw: circular mean).
+    best : ndarray of shape (DOF,)
+        Highest-likelihood particle of the last layer.
+    ess : float
+        Effective sample size 1 / sum(pi^2) of the last layer's particles weighted by the
+        un-annealed log-likelihood (beta = 1), before resampling: between 1 (one particle holds
+        all the posterior mass) and N.
+    log_likelihood : float
+        Log-likelihood of the best particle.
+    particles : ndarray of shape (N, DOF)
+        The resampled set carried to the next frame.
+    betas : ndarray of shape (M,)
+        Chosen exponents per layer.
+    survival : ndarray of shape (M,)
+        Achieved survival rates D per layer.
+    n_evals : int
+        Likelihood evaluations spent on this frame.
     """
 
     mean: np.ndarray
@@ -71,7 +79,20 @@ def _normalised(ll: np.ndarray, beta: float) -> np.ndarray:
 
 
 def survival_rate(ll: np.ndarray, beta: float) -> float:
-    """D = 1 / (N sum pi^2) of weights pi ~ exp(beta * ll) (Deutscher eq. 11)."""
+    """D = 1 / (N sum pi^2) of weights pi ~ exp(beta * ll) (Deutscher eq. 11).
+
+    Parameters
+    ----------
+    ll : ndarray of shape (N,)
+        Log-likelihoods of the particles.
+    beta : float
+        The annealing exponent.
+
+    Returns
+    -------
+    float
+        The survival rate D, in [1/N, 1].
+    """
     w = _normalised(ll, beta)
     return float(1.0 / (len(ll) * np.dot(w, w)))
 
@@ -84,8 +105,31 @@ def choose_beta(
     D(beta) falls monotonically from 1 (beta = 0) towards 1/N, so a bracketing search on log beta
     finds it: each of ``rounds`` rounds evaluates D at ``grid`` points of the bracket at once (one
     (grid, N) array) and keeps the cell where D crosses ``survival``; 5 rounds of 16 pin log beta
-    to about 1e-5. When the log-likelihoods are all equal every beta gives D = 1 and ``hi`` is
-    returned.
+    to about 1e-5.
+
+    Parameters
+    ----------
+    ll : ndarray of shape (N,)
+        Log-likelihoods of the particles.
+    survival : float
+        Target survival rate, in (0, 1).
+    lo, hi : float, default=1e-3, 1e6
+        Bracket of beta; ``lo`` is returned when even it survives too few, ``hi`` when even it
+        survives too many.
+    rounds : int, default=5
+        Rounds of the bracketing search.
+    grid : int, default=16
+        Points of the bracket evaluated per round.
+
+    Returns
+    -------
+    float
+        beta. When the log-likelihoods are all equal every beta gives D = 1 and ``hi`` is returned.
+
+    Raises
+    ------
+    ValueError
+        If ``survival`` is not in (0, 1).
     """
     if not 0 < survival < 1:
         raise ValueError(f"survival={survival!r}: the target survival rate must lie in (0, 1)")
@@ -109,7 +153,20 @@ def choose_beta(
 
 
 def systematic_resample(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """(N,) normalised weights -> (N,) indices, systematic resampling (one uniform draw)."""
+    """Systematic resampling (one uniform draw).
+
+    Parameters
+    ----------
+    w : ndarray of shape (N,)
+        Normalised weights.
+    rng : numpy.random.Generator
+        Source of the uniform draw.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        Indices of the resampled particles.
+    """
     N = len(w)
     positions = (rng.random() + np.arange(N)) / N
     idx = np.searchsorted(np.cumsum(w), positions)
@@ -117,14 +174,40 @@ def systematic_resample(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 
 def weighted_mean_pose(P: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """(N, DOF), (N,) -> (DOF,) weighted mean with the yaw averaged on the circle."""
+    """Weighted mean with the yaw averaged on the circle.
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF)
+        Poses.
+    w : ndarray of shape (N,)
+        Normalised weights.
+
+    Returns
+    -------
+    ndarray of shape (DOF,)
+        The mean pose.
+    """
     m = w @ P
     m[YAW] = np.arctan2(w @ np.sin(P[:, YAW]), w @ np.cos(P[:, YAW]))
     return m
 
 
 def weighted_std(P: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """(N, DOF), (N,) -> (DOF,) weighted standard deviation per DOF (yaw on the circle)."""
+    """Weighted standard deviation per DOF (yaw on the circle).
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF)
+        Poses.
+    w : ndarray of shape (N,)
+        Normalised weights.
+
+    Returns
+    -------
+    ndarray of shape (DOF,)
+        Standard deviations, metres / radians.
+    """
     m = weighted_mean_pose(P, w)
     d = P - m
     d[:, YAW] = wrap_angle(d[:, YAW])
@@ -132,7 +215,22 @@ def weighted_std(P: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 def initial_set(particles: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:
-    """(K, DOF) poses -> (n, DOF) within joint limits, drawn with replacement when K != n."""
+    """A particle set of size ``n`` within joint limits, drawn with replacement when K != n.
+
+    Parameters
+    ----------
+    particles : ndarray of shape (K, DOF)
+        Poses (any shape reshaping to (K, DOF)).
+    n : int
+        Size of the set.
+    rng : numpy.random.Generator
+        Source of the draws.
+
+    Returns
+    -------
+    ndarray of shape (n, DOF)
+        The set, clipped to the joint limits.
+    """
     particles = clip_to_limits(np.asarray(particles, dtype=np.float64).reshape(-1, DOF))
     if len(particles) != n:
         particles = particles[rng.integers(0, len(particles), n)]
@@ -142,16 +240,30 @@ def initial_set(particles: np.ndarray, n: int, rng: np.random.Generator) -> np.n
 class AnnealedParticleFilter:
     """Annealed particle filter over 28-DOF poses.
 
-    Args:
-        n_layers: annealing layers M per frame (Deutscher: 10).
-        n_particles: N particles per layer.
-        survival: target survival rate alpha of every layer (Deutscher: 0.5).
-        diffusion: noise std as a fraction of the weighted particle spread after resampling.
-        shrink: factor by which the diffusion shrinks each layer (Deutscher's alpha_m schedule).
-        max_std: (DOF,) cap on the diffusion std (metres / radians); default 0.1 m and 0.35 rad.
-        min_std: (DOF,) floor of the diffusion std before shrinking (default ``MIN_STD``); the
-            tracker keeps it low so that the spread of the set, not the floor, sets the search.
-        seed: seed or Generator of the filter's random numbers.
+    Parameters
+    ----------
+    n_layers : int, default=10
+        Annealing layers M per frame (Deutscher: 10).
+    n_particles : int, default=256
+        N particles per layer; at least 2.
+    survival : float, default=0.5
+        Target survival rate alpha of every layer (Deutscher: 0.5), in (0, 1).
+    diffusion : float, default=0.6
+        Noise std as a fraction of the weighted particle spread after resampling.
+    shrink : float, default=0.85
+        Factor by which the diffusion shrinks each layer (Deutscher's alpha_m schedule).
+    max_std : ndarray of shape (DOF,) or None, default=None
+        Cap on the diffusion std (metres / radians); None: 0.1 m and 0.35 rad.
+    min_std : ndarray of shape (DOF,) or None, default=None
+        Floor of the diffusion std before shrinking (None: ``MIN_STD``); the tracker keeps it low
+        so that the spread of the set, not the floor, sets the search.
+    seed : int or numpy.random.Generator or None, default=0
+        Seed or Generator of the filter's random numbers.
+
+    Raises
+    ------
+    ValueError
+        If ``n_layers < 1``, ``n_particles < 2`` or ``survival`` is not in (0, 1).
     """
 
     def __init__(
@@ -182,7 +294,13 @@ class AnnealedParticleFilter:
         self.particles: np.ndarray | None = None
 
     def initialise(self, particles: np.ndarray) -> None:
-        """Set the particle set (K, DOF), K resampled to N if it differs."""
+        """Set the particle set, K resampled to N if it differs.
+
+        Parameters
+        ----------
+        particles : ndarray of shape (K, DOF)
+            Initial poses.
+        """
         self.particles = initial_set(particles, self.n_particles, self.rng)
 
     def step(
@@ -193,13 +311,29 @@ class AnnealedParticleFilter:
         min_std: np.ndarray | None = None,
         max_std: np.ndarray | None = None,
     ) -> Estimate:
-        """Run one frame: predict, then ``n_layers`` (default ``self.n_layers``) annealing layers.
+        """Run one frame: predict, then the annealing layers.
 
-        Args:
-            log_likelihood: (N, DOF) -> (N,) log w(Z, x) of this frame's observation.
-            predict_fn: (N, DOF), rng -> (N, DOF) dynamics applied to last frame's particles.
-            min_std, max_std: (DOF,) diffusion bounds of this step only (default: the filter's);
-                a first search from a rough initial guess needs a wider one.
+        Parameters
+        ----------
+        log_likelihood : callable
+            (N, DOF) poses -> (N,) log w(Z, x) of this frame's observation.
+        predict_fn : callable or None, default=None
+            (N, DOF) poses, rng -> (N, DOF): dynamics applied to last frame's particles; None: none.
+        n_layers : int or None, default=None
+            Annealing layers of this step; None: ``self.n_layers``.
+        min_std, max_std : ndarray of shape (DOF,) or None, default=None
+            Diffusion bounds of this step only (None: the filter's); a first search from a rough
+            initial guess needs a wider one.
+
+        Returns
+        -------
+        Estimate
+            The frame's estimate.
+
+        Raises
+        ------
+        RuntimeError
+            If called before :meth:`initialise`.
         """
         lo = self.min_std if min_std is None else np.asarray(min_std)
         hi = self.max_std if max_std is None else np.asarray(max_std)
@@ -239,15 +373,27 @@ class ParticleFilter:
 
     With ``n_particles = n_layers x N`` of the annealed filter it spends the same number of
     likelihood evaluations per frame; it is the baseline of Deutscher et al.'s comparison.
+
+    Parameters
+    ----------
+    n_particles : int, default=2560
+        Number of particles; at least 2.
+    survival : float or None, default=0.5
+        The likelihood exponent is chosen per frame for this survival rate (the fairest
+        single-layer baseline: the same weighting as one annealing layer); None weights by the raw
+        likelihood exp(l) as in CONDENSATION.
+    seed : int or numpy.random.Generator or None, default=0
+        Seed or Generator of the filter's random numbers.
+
+    Raises
+    ------
+    ValueError
+        If ``n_particles < 2``.
     """
 
     def __init__(
         self, n_particles: int = 2560, survival: float | None = 0.5, seed: int | np.random.Generator | None = 0
     ) -> None:
-        """``survival``: the likelihood exponent is chosen per frame for this survival rate (the
-        fairest single-layer baseline: the same weighting as one annealing layer); None weights by
-        the raw likelihood exp(l) as in CONDENSATION.
-        """
         self.survival = survival
         if n_particles < 2:
             raise ValueError(f"n_particles={n_particles}: need at least two particles")
@@ -256,7 +402,13 @@ class ParticleFilter:
         self.particles: np.ndarray | None = None
 
     def initialise(self, particles: np.ndarray) -> None:
-        """Set the particle set (K, DOF), K resampled to N if it differs."""
+        """Set the particle set, K resampled to N if it differs.
+
+        Parameters
+        ----------
+        particles : ndarray of shape (K, DOF)
+            Initial poses.
+        """
         self.particles = initial_set(particles, self.n_particles, self.rng)
 
     def step(
@@ -267,8 +419,26 @@ class ParticleFilter:
         min_std: np.ndarray | None = None,
         max_std: np.ndarray | None = None,
     ) -> Estimate:
-        """Predict, weight by exp(log-likelihood), estimate, resample (one layer: ``n_layers`` and
-        the diffusion bounds are accepted for the annealed filter's interface and unused).
+        """Predict, weight by exp(log-likelihood), estimate, resample.
+
+        Parameters
+        ----------
+        log_likelihood : callable
+            (N, DOF) poses -> (N,) log w(Z, x) of this frame's observation.
+        predict_fn : callable or None, default=None
+            (N, DOF) poses, rng -> (N, DOF): dynamics applied to last frame's particles; None: none.
+        n_layers, min_std, max_std : object
+            Accepted for the annealed filter's interface and unused (one layer, no diffusion).
+
+        Returns
+        -------
+        Estimate
+            The frame's estimate.
+
+        Raises
+        ------
+        RuntimeError
+            If called before :meth:`initialise`.
         """
         if self.particles is None:
             raise RuntimeError("ParticleFilter.step before initialise(particles)")
