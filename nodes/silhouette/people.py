@@ -59,13 +59,23 @@ class PeopleDetector:
 
     Parameters
     ----------
-    hit_threshold : SVM margin a window must pass (``detectMultiScale``'s hitThreshold); lower
-        finds more people and more clutter.
-    min_score : smallest grouped detection weight kept.
-    scale : step between the pyramid's scales.
-    stride : window step, pixels (multiple of 8, the HOG cell).
-    pad_frac : padding added on every side, as a fraction of the frame height, with the frame's
-        median colour (a replicated or mirrored border draws false edges).
+    hit_threshold : float, default=0.0
+        SVM margin a window must pass (``detectMultiScale``'s hitThreshold); lower finds more
+        people and more clutter.
+    min_score : float, default=0.3
+        Smallest grouped detection weight kept.
+    scale : float, default=1.05
+        Step between the pyramid's scales; > 1.
+    stride : int, default=8
+        Window step, pixels (multiple of 8, the HOG cell).
+    pad_frac : float, default=0.15
+        Padding added on every side, as a fraction of the frame height, with the frame's median
+        colour (a replicated or mirrored border draws false edges); in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``scale``, ``stride`` or ``pad_frac`` is out of range.
     """
 
     def __init__(
@@ -91,10 +101,25 @@ class PeopleDetector:
         self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
 
     def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """People in a uint8 BGR frame (H, W, 3).
+        """People in a frame.
 
-        Returns (boxes (K, 4) int32 (x, y, w, h) of each person, clipped to the frame, and their
-        detector scores (K,) float32). A box is the person's part of the detection window.
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame.
+
+        Returns
+        -------
+        boxes : ndarray of shape (K, 4)
+            int32 (x, y, w, h) pixels of each person, clipped to the frame: the person's part of the
+            detection window.
+        scores : ndarray of shape (K,)
+            float32 detector scores.
+
+        Raises
+        ------
+        ValueError
+            If ``frame`` is not uint8 (H, W, 3).
         """
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
             raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
@@ -128,9 +153,20 @@ class PeopleDetector:
 
 
 def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
-    """Fraction of the pixels of box (x, y, w, h) in frames (N, H, W, 3) uint8 whose colour (any
-    channel) differs by more than ``_MOVED_GREY`` grey levels from its temporal median in at least
-    one frame.
+    """Fraction of the pixels of a box whose colour (any channel) differs by more than
+    ``_MOVED_GREY`` grey levels from its temporal median in at least one frame.
+
+    Parameters
+    ----------
+    frames : ndarray of shape (N, H, W, 3)
+        uint8 frames.
+    box : ndarray of shape (4,)
+        (x, y, w, h) pixels.
+
+    Returns
+    -------
+    float
+        The fraction in [0, 1]; 0 for an empty box.
     """
     x, y, w, h = (int(v) for v in box)
     blk = frames[:, y : y + h, x : x + w].astype(np.int16)
@@ -211,8 +247,21 @@ def _feet_bands(boxes: np.ndarray) -> np.ndarray:
 
 
 def box_mask(shape: tuple[int, int], boxes: np.ndarray, grow: float = 0.0) -> np.ndarray:
-    """(H, W) bool, True inside any of the boxes (K, 4) (x, y, w, h), each grown on every side by
-    ``grow`` times its height (pixels, clipped to the image).
+    """Mask of the inside of boxes, each grown on every side by ``grow`` times its height.
+
+    Parameters
+    ----------
+    shape : tuple of int (H, W)
+        Image size, pixels.
+    boxes : ndarray of shape (K, 4)
+        (x, y, w, h) pixels.
+    grow : float, default=0.0
+        Growth on every side as a fraction of each box's height.
+
+    Returns
+    -------
+    ndarray of shape (H, W)
+        bool, True inside any of the grown boxes (clipped to the image).
     """
     h, w = shape
     out = np.zeros((h, w), bool)
@@ -236,22 +285,29 @@ def fit_around_people(
 
     Parameters
     ----------
-    model : the background model to fit (its parameters are kept).
-    frames : (N, H, W, 3) uint8 BGR training frames, N >= 2.
-    detector : people detector (default ``PeopleDetector()``).
-    detect_every : the detector runs on every this many-th frame (and the last). A frame is
-        searched for people in the boxes found within this many frames of it, and in any other
-        box whose content it shares (someone standing there still: the detector misses people
-        now and then, in a turn or with an arm across the body), but not where a walker was.
-    box_grow : the first fit leaves out each box grown by this fraction of its height.
-    person_grow : the second fit leaves out each person's pixels grown by this fraction of their
-        box height (the model's outline of a person misses a blurred rim).
+    model : HorprasertBackground
+        The background model to fit (its parameters are kept).
+    frames : ndarray of shape (N, H, W, 3) or list of ndarray of shape (H, W, 3)
+        uint8 BGR training frames, N >= 2.
+    detector : PeopleDetector or None, default=None
+        People detector; None: ``PeopleDetector()``.
+    detect_every : int, default=5
+        The detector runs on every this many-th frame (and the last). A frame is searched for
+        people in the boxes found within this many frames of it, and in any other box whose
+        content it shares (someone standing there still: the detector misses people now and then,
+        in a turn or with an arm across the body), but not where a walker was.
+    box_grow : float, default=0.05
+        The first fit leaves out each box grown by this fraction of its height.
+    person_grow : float, default=0.03
+        The second fit leaves out each person's pixels grown by this fraction of their box height
+        (the model's outline of a person misses a blurred rim).
 
     Returns
     -------
-    (N, H, W) bool, the samples left out of the final fit (the people found; their boxes when
-    no one stood still long enough to need the second fit). With no one detected it is all False
-    and the fit is the plain robust one.
+    ndarray of shape (N, H, W)
+        bool, the samples left out of the final fit (the people found; their boxes when no one
+        stood still long enough to need the second fit). With no one detected it is all False and
+        the fit is the plain robust one.
     """
     stack = as_frame_stack(frames)
     n, h, w = stack.shape[:3]
