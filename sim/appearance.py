@@ -47,12 +47,16 @@ HAIR_COLOURS: tuple[tuple[float, float, float], ...] = (
 class Appearance:
     """One person's look.
 
-    Attributes
+    Parameters
     ----------
-        skin, hair, shirt, trousers, shoes: BGR colours in [0, 255].
-        hair_style: "short", "long" or "none".
-        long_sleeves: shirt sleeves down to the wrists (else forearms show skin).
-        girth: radius scale of limbs and torso width (about 0.9-1.3).
+    skin, hair, shirt, trousers, shoes : tuple of float (B, G, R)
+        BGR colours in [0, 255].
+    hair_style : {"short", "long", "none"}, default="short"
+        Hair style.
+    long_sleeves : bool, default=True
+        Shirt sleeves down to the wrists (else forearms show skin).
+    girth : float, default=1.0
+        Radius scale of limbs and torso width (about 0.9-1.3).
     """
 
     skin: tuple[float, float, float]
@@ -74,7 +78,18 @@ def _vivid(rng: np.random.Generator) -> tuple[float, float, float]:
 
 
 def random_appearance(rng: np.random.Generator) -> Appearance:
-    """A seeded random look (draws a fixed number of values from ``rng``)."""
+    """A seeded random look (draws a fixed number of values from ``rng``).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Source of the random values.
+
+    Returns
+    -------
+    Appearance
+        The look.
+    """
     skin = SKIN_TONES[int(rng.integers(len(SKIN_TONES)))]
     hair = HAIR_COLOURS[int(rng.integers(len(HAIR_COLOURS)))]
     shirt = _vivid(rng)
@@ -123,12 +138,16 @@ _PELVIS_LOFT = ((0.08, 0.15, 0.1), (0.0, 0.165, 0.11), (-0.1, 0.15, 0.1))
 class PartTable:
     """The parts of one person, in drawing-tie order.
 
-    Attributes
+    Parameters
     ----------
-        names: M part names (highlights end in "+lit").
-        colours: (M, 3) BGR.
-        base: (M,) index of the part a highlight belongs to (its own index for base parts).
-        casts_shadow: (M,) bool (highlights cast none).
+    names : tuple of str
+        M part names (highlights end in "+lit").
+    colours : ndarray of shape (M, 3)
+        float32 BGR colours in [0, 255].
+    base : ndarray of shape (M,)
+        Index of the part a highlight belongs to (its own index for base parts).
+    casts_shadow : ndarray of shape (M,)
+        bool (highlights cast none).
     """
 
     names: tuple[str, ...]
@@ -197,7 +216,18 @@ def _loft(origin: np.ndarray, R: np.ndarray, levels: list[tuple[float, float, fl
 
 
 def part_table(app: Appearance) -> PartTable:
-    """The part names and colours of a person with appearance ``app`` (see ``body_clouds``)."""
+    """The part names and colours of a person (see ``body_clouds``).
+
+    Parameters
+    ----------
+    app : Appearance
+        The person's look.
+
+    Returns
+    -------
+    PartTable
+        The parts, in the order of ``body_clouds``.
+    """
     names, cols, base, shadow = [], [], [], []
     colour = {
         "skin": app.skin,
@@ -233,16 +263,22 @@ def part_table(app: Appearance) -> PartTable:
 def body_clouds(P: np.ndarray, dims: BodyDims, app: Appearance, lit_dir: np.ndarray | None = None) -> np.ndarray:
     """Surface point clouds of every part of ``part_table(app)``.
 
-    Args:
-        P: (N, 28) poses.
-        dims: body dimensions (sizes scale with ``dims.height / 1.75``).
-        app: appearance.
-        lit_dir: (N, 3) or (3,) unit direction from the body towards where highlights go (light
-            and camera); default straight up.
+    Parameters
+    ----------
+    P : ndarray of shape (N, 28)
+        Poses.
+    dims : BodyDims
+        Body dimensions (sizes scale with ``dims.height / 1.75``).
+    app : Appearance
+        The person's look.
+    lit_dir : ndarray of shape (N, 3) or (3,) or None, default=None
+        Unit direction from the body towards where highlights go (light and camera); None:
+        straight up.
 
     Returns
     -------
-        (N, M, N_POINTS, 3) metres, parts in ``part_table(app).names`` order.
+    ndarray of shape (N, M, N_POINTS, 3)
+        Metres, world frame, parts in ``part_table(app).names`` order.
     """
     pts, R = frames(P, dims)
     N = pts.shape[0]
