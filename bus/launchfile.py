@@ -58,6 +58,34 @@ class LaunchError(ValueError):
 
 @dataclass
 class NodeDecl:
+    """One node as a launch file declares it (see the module docstring for the keys).
+
+    Attributes
+    ----------
+    name : str
+        Node name.
+    run : str
+        Module (or ``module:Class``) holding the node.
+    file : str
+        The launch file that declares it.
+    params : dict
+        Node parameters.
+    remap : dict of str to str
+        Port -> topic (default: topic = port name).
+    policy : str or None
+        Default queue policy of every input; None: the node's own.
+    input_policies : dict of str to str
+        Per-input queue policy.
+    restart : {"never", "on-failure", "always"}
+        Restart policy.
+    max_restarts : int
+        Most restarts.
+    required : bool
+        Its exit stops the graph with its exit code.
+    wait_subscribers : dict of str to int
+        Extra reliable subscribers to await per output port (other launchers).
+    """
+
     name: str
     run: str
     file: str
@@ -73,7 +101,30 @@ class NodeDecl:
 
 @dataclass
 class Graph:
-    """A checked graph: nodes with resolved classes, ports, topics and endpoints."""
+    """A checked graph: nodes with resolved classes, ports, topics and endpoints.
+
+    Attributes
+    ----------
+    file : str
+        The launch file.
+    nodes : dict of str to NodeDecl
+        The nodes by name, includes' nodes too.
+    transport : {"ipc", "tcp"}
+        Transport of the topics.
+    host : str
+        tcp: the host to bind.
+    port_base : int
+        tcp: first port; each topic takes three.
+    fixed_endpoints : dict of str to str
+        Fixed tcp endpoints of chosen topics.
+    external : dict of str to dict
+        Topics published by another launcher: ``type``, ``endpoint``, ``file``, ``publisher``.
+    barrier_timeout : float
+        Seconds given to the startup barrier.
+    classes, params, ports_in, ports_out, topics : dict
+        Filled by :func:`check`: each node's class, validated parameters, input and output ports, and
+        each topic's ``type``, ``publisher``, ``subscribers`` and publishing ``node``.
+    """
 
     file: str
     nodes: dict[str, NodeDecl]
@@ -91,16 +142,38 @@ class Graph:
     topics: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def input_topic(self, node: str, port: str) -> str:
+        """The topic that input ``port`` of ``node`` subscribes to (its remap, else the port name)."""
         return self.nodes[node].remap.get(port, port)
 
     def output_topic(self, node: str, port: str) -> str:
+        """The topic that output ``port`` of ``node`` publishes on (its remap, else the port name; the
+        statistics port: the node's statistics topic).
+        """
         if port == STATS_PORT:
             return self.nodes[node].remap.get(port, stats_topic(node))
         return self.nodes[node].remap.get(port, port)
 
 
 def find_launch_file(name: str | Path, relative_to: Path | None = None) -> Path:
-    """A launch file by path, relative to an including file, or by name in the ``launch`` package."""
+    """A launch file by path, relative to an including file, or by name in the ``launch`` package.
+
+    Parameters
+    ----------
+    name : str or Path
+        File name or path.
+    relative_to : Path or None, default=None
+        Folder of the including file, searched before the working directory.
+
+    Returns
+    -------
+    Path
+        The file found.
+
+    Raises
+    ------
+    LaunchError
+        If no such file exists in any of these places.
+    """
     p = Path(name)
     tries = [p] if p.is_absolute() else ([relative_to / p] if relative_to else []) + [Path.cwd() / p]
     for t in tries:
@@ -133,8 +206,29 @@ def load(
     replace: dict[str, str] | None = None,
     _seen: tuple[Path, ...] = (),
 ) -> Graph:
-    """Read a launch file (and its includes), apply ``--set node.param=value`` and
-    ``--replace node=module``. The result still needs :func:`check`.
+    """Read a launch file (and its includes) and apply the command line's overrides.
+
+    The result still needs :func:`check`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The launch file (see :func:`find_launch_file`).
+    sets : dict or None, default=None
+        ``--set node.param=value`` overrides: ``"NODE.PARAM"`` -> value (a string is read as YAML).
+    replace : dict of str to str or None, default=None
+        ``--replace node=module`` overrides: node name -> module.
+
+    Returns
+    -------
+    Graph
+        The unchecked graph.
+
+    Raises
+    ------
+    LaunchError
+        On a missing file, invalid YAML, an include cycle, an unknown or invalid key, a node defined
+        twice or an override naming no node.
     """
     file_path = find_launch_file(path)
     file = str(file_path)
@@ -267,7 +361,22 @@ def _apply_overrides(graph: Graph, sets: dict[str, Any], replace: dict[str, str]
 
 def check(graph: Graph) -> Graph:
     """Resolve every node class, validate parameters, and check that every input has a publisher
-    of the same message type. Raises LaunchError naming file, node and key.
+    of the same message type.
+
+    Parameters
+    ----------
+    graph : Graph
+        A graph from :func:`load`; filled in place.
+
+    Returns
+    -------
+    Graph
+        ``graph``, checked.
+
+    Raises
+    ------
+    LaunchError
+        Naming file, node and key.
     """
     publishers: dict[str, tuple[str, str, type]] = {}
     for name, decl in graph.nodes.items():
@@ -358,7 +467,20 @@ def check(graph: Graph) -> Graph:
 
 
 def endpoints_for(graph: Graph, run_dir: Path) -> dict[str, TopicEndpoints]:
-    """Every topic's endpoints: fixed or external tcp ones, else ipc in the run dir or tcp ports."""
+    """Every topic's endpoints: fixed or external tcp ones, else ipc in the run dir or tcp ports.
+
+    Parameters
+    ----------
+    graph : Graph
+        A checked graph.
+    run_dir : Path
+        The run directory (ipc sockets).
+
+    Returns
+    -------
+    dict of str to TopicEndpoints
+        Endpoints by topic.
+    """
     out: dict[str, TopicEndpoints] = {}
     port = graph.port_base
     for topic in sorted(graph.topics):
@@ -375,12 +497,37 @@ def endpoints_for(graph: Graph, run_dir: Path) -> dict[str, TopicEndpoints]:
 
 
 def stats_dir(run_dir: Path) -> Path:
-    """The folder of a run where each node keeps its newest statistics (``NODE.json``)."""
+    """The folder of a run where each node keeps its newest statistics (``NODE.json``).
+
+    Parameters
+    ----------
+    run_dir : Path
+        The run directory.
+
+    Returns
+    -------
+    Path
+        ``run_dir / "stats"``.
+    """
     return Path(run_dir) / "stats"
 
 
 def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
-    """The JSON spec each node process is started with."""
+    """The JSON spec each node process is started with.
+
+    Parameters
+    ----------
+    graph : Graph
+        A checked graph.
+    run_dir : Path
+        The run directory.
+
+    Returns
+    -------
+    dict of str to dict
+        Spec by node name: name, module, params, inputs and outputs (topics, endpoints, policies,
+        subscribers to await), statistics file.
+    """
     eps = endpoints_for(graph, run_dir)
     specs = {}
     for name, decl in graph.nodes.items():
