@@ -51,6 +51,11 @@ def find_face_cascade() -> str | None:
     Looked for, in order: ``$COUNTERPART_FACE_CASCADE``; OpenCV's bundled data
     (``cv2.data.haarcascades``, shipped by the 4.x wheels; the 5.0 wheels ship no cascade files);
     the usual system folders (Debian/Ubuntu ``opencv-data``, Homebrew).
+
+    Returns
+    -------
+    str or None
+        The first existing file, or None.
     """
     cands = []
     env = os.environ.get(CASCADE_ENV)
@@ -64,9 +69,23 @@ def find_face_cascade() -> str | None:
 
 
 def load_face_cascade(path: str | None = None) -> cv2.CascadeClassifier:
-    """Load the Haar cascade at ``path`` (default: :func:`find_face_cascade`).
+    """Load a Haar cascade.
 
-    Raises FileNotFoundError saying where it looked and how to provide the file.
+    Parameters
+    ----------
+    path : str or None, default=None
+        The cascade file; None: :func:`find_face_cascade`.
+
+    Returns
+    -------
+    cv2.CascadeClassifier
+        The loaded cascade.
+
+    Raises
+    ------
+    FileNotFoundError
+        When no file is found (saying where it looked and how to provide the file) or the file is
+        not a cascade.
     """
     path = path or find_face_cascade()
     if path is None:
@@ -82,7 +101,23 @@ def load_face_cascade(path: str | None = None) -> cv2.CascadeClassifier:
 
 
 def to_gray(image: np.ndarray) -> np.ndarray:
-    """(H,W) uint8 gray or (H,W,3) uint8 BGR -> (H,W) uint8 gray."""
+    """Gray version of an image.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W) or (H, W, 3)
+        uint8 gray or BGR.
+
+    Returns
+    -------
+    ndarray of shape (H, W)
+        uint8 gray (``image`` itself when already gray).
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not uint8 or not of one of these shapes.
+    """
     img = np.asarray(image)
     if img.dtype != np.uint8:
         raise ValueError(f"image must be uint8, got {img.dtype}")
@@ -96,9 +131,23 @@ def to_gray(image: np.ndarray) -> np.ndarray:
 def detect_face(
     gray: np.ndarray, cascade: cv2.CascadeClassifier, min_face_px: int = 24, roi: Box | None = None
 ) -> Box | None:
-    """Largest frontal face (x, y, w, h) in pixels of the full image, or None.
+    """Largest frontal face in an image.
 
-    gray: (H,W) uint8. roi: optional search region (x, y, w, h), e.g. the person's silhouette box.
+    Parameters
+    ----------
+    gray : ndarray of shape (H, W)
+        uint8 gray image.
+    cascade : cv2.CascadeClassifier
+        The face cascade.
+    min_face_px : int, default=24
+        Smallest face size searched for, pixels.
+    roi : tuple of int (x, y, w, h) or None, default=None
+        Search region, pixels, e.g. the person's silhouette box; None: the whole image.
+
+    Returns
+    -------
+    tuple of int (x, y, w, h) or None
+        The face box in pixels of the full image, or None.
     """
     x0 = y0 = 0
     if roi is not None:
@@ -115,9 +164,22 @@ def detect_face(
 
 
 def mouth_patch(gray: np.ndarray, face: Box, patch_size: tuple[int, int] = (32, 16)) -> np.ndarray | None:
-    """Lower third of the face box, middle two thirds of its width, resampled to patch_size
-    (width, height) and divided by its mean intensity. Returns (h, w) float32 or None if the region
-    leaves the image.
+    """Lower third of the face box, middle two thirds of its width, resampled and divided by its
+    mean intensity.
+
+    Parameters
+    ----------
+    gray : ndarray of shape (H, W)
+        uint8 gray image.
+    face : tuple of int (x, y, w, h)
+        Face box, pixels.
+    patch_size : tuple of int (w, h), default=(32, 16)
+        Size of the resampled patch, pixels.
+
+    Returns
+    -------
+    ndarray of shape (h, w) or None
+        float32 patch, or None if the region leaves the image.
     """
     x, y, w, h = face
     mx0, mx1 = x + w // 6, x + w - w // 6
@@ -139,9 +201,23 @@ UPPER_DY, UPPER_W, UPPER_H = -0.1, 0.6, 0.22
 def subpix_patch(
     gray: np.ndarray, center: tuple[float, float], size: tuple[float, float], patch_size: tuple[int, int]
 ) -> np.ndarray | None:
-    """The region of ``size`` (w, h) px centred at the sub-pixel ``center`` (x, y) px of gray
-    (H,W) uint8, resampled to ``patch_size`` (w, h) and divided by its mean: (h, w) float32, or
-    None when the region leaves the image.
+    """A region at a sub-pixel position, resampled and divided by its mean.
+
+    Parameters
+    ----------
+    gray : ndarray of shape (H, W)
+        uint8 gray image.
+    center : tuple of float (x, y)
+        Centre of the region, pixels (sub-pixel).
+    size : tuple of float (w, h)
+        Size of the region, pixels.
+    patch_size : tuple of int (w, h)
+        Size of the resampled patch, pixels.
+
+    Returns
+    -------
+    ndarray of shape (h, w) or None
+        float32 patch, or None when the region leaves the image.
     """
     w, h = size
     cx, cy = center
@@ -155,18 +231,41 @@ def subpix_patch(
 
 @dataclass(frozen=True)
 class FaceParams:
-    """fps: Hz. window_s: averaging window (s). min_face_px: smallest face width accepted (px).
-    talk_energy, laugh_energy: motion energies (mean |diff| of mean-normalised patches) of the
-    talking and laughing thresholds. laugh_extent: vertical extent fraction for laughing.
-    min_valid: fraction of the window that must hold measurements. detect_every: run the cascade
-    every n frames and reuse the last box in between. talk_energy_tracked, laugh_energy_tracked:
-    the thresholds of a tracked face's stabilised mouth energy above its upper face's
-    (:meth:`FaceSignalDetector.update_track`), in the same unit (laughing from the energy alone).
-    talk_gap_s: a tracked face talks (laughs) at the window's centre frame only when its mouth
-    moved (a frame's energy >= ``talk_energy_tracked``) within ``talk_gap_s`` seconds before it
-    and within as long after it: pauses between syllables and words shorter than that are
-    bridged, and the label does not spread past the first and last syllable (the window's mean
-    alone spreads it by up to half a window). At most half the window; 0: off.
+    """Settings of the talking and laughing detector.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz; > 0.
+    window_s : float, default=1.0
+        Averaging window, seconds.
+    min_face_px : int, default=24
+        Smallest face width accepted, pixels; at least 12.
+    talk_energy, laugh_energy : float, default=0.04, 0.10
+        Motion energies (mean |diff| of mean-normalised patches) of the talking and laughing
+        thresholds; > 0.
+    laugh_extent : float, default=0.3
+        Vertical extent fraction for laughing; > 0.
+    min_valid : float, default=0.5
+        Fraction of the window that must hold measurements.
+    detect_every : int, default=1
+        Run the cascade every n frames and reuse the last box in between; at least 1.
+    patch_size : tuple of int (w, h), default=(32, 16)
+        Size of the resampled mouth patch, pixels.
+    talk_energy_tracked, laugh_energy_tracked : float, default=0.008, 0.05
+        The thresholds of a tracked face's stabilised mouth energy above its upper face's
+        (:meth:`FaceSignalDetector.update_track`), in the same unit (laughing from the energy alone).
+    talk_gap_s : float, default=0.45
+        A tracked face talks (laughs) at the window's centre frame only when its mouth moved (a
+        frame's energy >= ``talk_energy_tracked``) within ``talk_gap_s`` seconds before it and within
+        as long after it: pauses between syllables and words shorter than that are bridged, and the
+        label does not spread past the first and last syllable (the window's mean alone spreads it by
+        up to half a window). At most half the window; 0: off.
+
+    Raises
+    ------
+    ValueError
+        If a setting is out of its range.
     """
 
     fps: float
@@ -210,8 +309,16 @@ class FaceSignalDetector:
 
     ``update(image, roi=None, face_box=None) -> (talk_score, talking, laugh_score, laughing)``;
     both labels are UNKNOWN on any frame without a face of at least ``min_face_px``, and until
-    ``min_valid`` of the window holds measurements. ``face_box`` bypasses the detector (a box from
-    another face tracker); ``roi`` restricts the search (e.g. to this person's silhouette box).
+    ``min_valid`` of the window holds measurements.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz.
+    cascade : cv2.CascadeClassifier or None, default=None
+        The face cascade; None: loaded by :func:`load_face_cascade` when first needed.
+    **params : object
+        The other fields of :class:`FaceParams`.
     """
 
     def __init__(self, fps: float, cascade: cv2.CascadeClassifier | None = None, **params: object) -> None:
@@ -255,11 +362,30 @@ class FaceSignalDetector:
     def update(
         self, image: np.ndarray, roi: Box | None = None, face_box: Box | None = None
     ) -> tuple[float, int, float, int]:
-        """image: (H,W) uint8 gray or (H,W,3) uint8 BGR. Returns
-        (talk_score, talking, laugh_score, laughing); scores nan where labels are UNKNOWN.
+        """Talking and laughing of one frame.
 
         The mouth patch comes from the detected (or given) box as it is: no stabilisation, no
         reference patch. :meth:`update_track` is the stabilised form for a tracked face.
+
+        Parameters
+        ----------
+        image : ndarray of shape (H, W) or (H, W, 3)
+            uint8 gray or BGR frame.
+        roi : tuple of int (x, y, w, h) or None, default=None
+            Restricts the search, pixels (e.g. to this person's silhouette box).
+        face_box : tuple of int (x, y, w, h) or None, default=None
+            Bypasses the detector (a box from another face tracker), pixels.
+
+        Returns
+        -------
+        talk_score : float
+            Mean motion energy over the window / ``talk_energy``; nan where the label is UNKNOWN.
+        talking : int
+            1, 0 or UNKNOWN.
+        laugh_score : float
+            ``min(energy / laugh_energy, extent / laugh_extent)``; nan where the label is UNKNOWN.
+        laughing : int
+            1, 0 or UNKNOWN.
         """
         p = self.params
         gray = to_gray(image)
@@ -276,14 +402,33 @@ class FaceSignalDetector:
         return self._step(patch, None)
 
     def update_track(self, gray: np.ndarray, center: np.ndarray, size: float) -> tuple[float, int, float, int]:
-        """Talking/laughing of a tracked face (:class:`counterpart.nodes.labeller.face_track.FaceTrack`):
-        gray (H,W) uint8; center (2,) its head point (px); size its smoothed width (px).
+        """Talking/laughing of a tracked face (:class:`counterpart.nodes.labeller.face_track.FaceTrack`).
 
         The mouth patch is cut at the sub-pixel position of the tracked point, which follows the
         face's features (so it does not slide with the detector's jitter), and its motion energy
         is taken *above* that of a patch of the upper face (eyes and brows) cut the same way: head
         motion, residual misalignment, lighting flicker and sensor noise move both; speech moves
         the mouth only. A still, silent face scores about 0.
+
+        Parameters
+        ----------
+        gray : ndarray of shape (H, W)
+            uint8 gray frame.
+        center : ndarray of shape (2,)
+            The face's head point (x, y), pixels.
+        size : float
+            The face's smoothed width, pixels.
+
+        Returns
+        -------
+        talk_score : float
+            Window-mean energy / ``talk_energy_tracked``; nan where the label is UNKNOWN.
+        talking : int
+            1, 0 or UNKNOWN.
+        laugh_score : float
+            Window-mean energy / ``laugh_energy_tracked``; nan where the label is UNKNOWN.
+        laughing : int
+            1, 0 or UNKNOWN.
         """
         self._box = (int(center[0] - size / 2), int(center[1] - size / 2), int(size), int(size))
         if size < self.params.min_face_px:
