@@ -111,6 +111,20 @@ class Calibration(Node):
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The ports for the given parameters: ``silhouettes`` only when estimating without a file.
+
+        Parameters
+        ----------
+        params : dict
+            The node's validated parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The input ports by name.
+        outputs : dict of str to Output
+            The output ports by name.
+        """
         estimating = params["estimate"] and not params["file"]
         return {k: v for k, v in cls.inputs.items() if k != "silhouettes" or estimating}, dict(cls.outputs)
 
@@ -127,6 +141,13 @@ class Calibration(Node):
         self.images: dict[int, np.ndarray] = {}
 
     def on_frame(self, msg: Frame) -> None:
+        """Publish the camera when the frames change size; keep the frames the scene's lines need.
+
+        Parameters
+        ----------
+        msg : Frame
+            A frame of the camera (its size, fps and image).
+        """
         self.fps = float(msg.fps or 0.0)
         shape = msg.image.shape
         size = (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
@@ -161,6 +182,14 @@ class Calibration(Node):
         )
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
+        """Gather the frame's people, and every ``every`` frames publish the camera moved towards a
+        credible estimate.
+
+        Parameters
+        ----------
+        msg : Silhouettes
+            The people in view of one frame, with the frame's size.
+        """
         size = (int(msg.width), int(msg.height))
         if min(size) <= 0:
             return
