@@ -168,6 +168,26 @@ class Renderer(Node):
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        """The node's parameters, validated, with the checks that involve several of them.
+
+        Parameters
+        ----------
+        given : dict
+            The parameters as given.
+        where : str, default=""
+            Prefix of the error messages (e.g. the launch file and node).
+
+        Returns
+        -------
+        dict
+            Every parameter, defaults filled in.
+
+        Raises
+        ------
+        ParamError
+            If ``snapshot_every`` is set without ``snapshot_dir``, ``camera`` is given with
+            ``camera_info``, or ``models`` names no known interaction model.
+        """
         p = super().validate_params(given, where)
         prefix = f"{where}: " if where else ""
         if p["snapshot_every"] and not p["snapshot_dir"]:
@@ -185,6 +205,20 @@ class Renderer(Node):
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The ports for the given parameters (see the module docstring).
+
+        Parameters
+        ----------
+        params : dict
+            The node's validated parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The input ports by name.
+        outputs : dict of str to Output
+            The output ports by name.
+        """
         ins = dict(cls.inputs)
         if params["partner"]:
             ins["partner"] = Input(Partner, RELIABLE, "the partner of each frame (paired by seq)")
@@ -231,6 +265,15 @@ class Renderer(Node):
                 Path(p["port_file"]).write_text(f"{self.server.port}\n")
 
     def on_message(self, port: str, msg: Any) -> None:
+        """Hand a message to the compositor, then render the frames that are ready.
+
+        Parameters
+        ----------
+        port : str
+            The input port it came on.
+        msg : Any
+            The message.
+        """
         if port == "frame":
             self.comp.add_frame(msg)
         elif port == "partner":
