@@ -71,26 +71,47 @@ FACE = 2
 class HeadMotionParams:
     """Parameters of nod/shake detection.
 
-    fps: frames per second of the input (Hz). window_s: FFT window length (s), 1.5-2 s is typical.
-    band_hz: (low, high) frequency band of nods and shakes (Hz). nod_floor_m / shake_floor_m:
-    amplitude floors (m) of head-point motion under which it is scaled down; pitch_floor_m /
-    yaw_floor_m: the same for the arcs of the tracker's head angles (nods are smaller movements than
-    shakes: a 5-10 degree nod moves the head centre 1.5-3 cm, a 15-20 degree shake the face 3 cm). threshold: score threshold of the label.
-    head_radius_m: converts a head yaw (rad) to the arc the face travels about the neck's vertical
-    axis (m). pitch_radius_m: converts a head pitch (rad) to the arc the head centre travels about
-    the neck joint (m; the neck-to-head distance), so angle and head-point nods share a scale.
-    nod_median_s / shake_median_s: width (s) of the running median whose residual is analysed, on
-    the nod / shake channels (0: no median stage); movements that go one way and stay are removed,
-    back-and-forth ones up to about this long kept. face_nod_floor / face_shake_floor: the
-    amplitude floors of a tracked face's head point (:class:`HeadMotionDetectorFace`), in units
-    of the face's own width (a 10 degree nod moves the eyes about 0.15 face widths, a 5 degree
-    one 0.075; detector jitter left after tracking is about 0.005; a body bouncing on its knees
-    moves the face about 0.03).
-    local_s / event_on / event_off: localisation of an event inside its window (see
-    :meth:`_Spectral.local`): the width (s) of the moving mean of band-passed motion energy, and
-    the hysteresis thresholds on the local amplitude as a fraction of the window's largest local
-    amplitude (an event is a run of frames >= event_off that reaches event_on).
-    ``event_on`` 0 labels every frame of a detected window (no localisation).
+    Parameters
+    ----------
+    fps : float
+        Frames per second of the input, Hz; > 0.
+    window_s : float, default=1.6
+        FFT window length, seconds; 1.5-2 s is typical (at least 8 frames).
+    band_hz : tuple of float (low, high), default=(1.0, 4.0)
+        Frequency band of nods and shakes, Hz; must hold an FFT bin.
+    nod_floor_m, shake_floor_m : float, default=0.01
+        Amplitude floors (m) of head-point motion under which it is scaled down.
+    pitch_floor_m, yaw_floor_m : float, default=0.005, 0.0075
+        The same for the arcs of the tracker's head angles (nods are smaller movements than
+        shakes: a 5-10 degree nod moves the head centre 1.5-3 cm, a 15-20 degree shake the face 3 cm).
+    threshold : float, default=0.5
+        Score threshold of the label, in (0, 1].
+    head_radius_m : float, default=0.1
+        Converts a head yaw (rad) to the arc the face travels about the neck's vertical axis (m).
+    pitch_radius_m : float, default=0.18
+        Converts a head pitch (rad) to the arc the head centre travels about the neck joint (m; the
+        neck-to-head distance), so angle and head-point nods share a scale.
+    nod_median_s, shake_median_s : float, default=1.0, 0.44
+        Width (s) of the running median whose residual is analysed, on the nod / shake channels
+        (0: no median stage); movements that go one way and stay are removed, back-and-forth ones
+        up to about this long kept.
+    face_nod_floor, face_shake_floor : float, default=0.06
+        The amplitude floors of a tracked face's head point (:class:`HeadMotionDetectorFace`), in
+        units of the face's own width (a 10 degree nod moves the eyes about 0.15 face widths, a 5
+        degree one 0.075; detector jitter left after tracking is about 0.005; a body bouncing on its
+        knees moves the face about 0.03).
+    local_s : float, default=0.25
+        Localisation of an event inside its window (see :meth:`_Spectral.local`): the width (s) of
+        the moving mean of band-passed motion energy.
+    event_on, event_off : float, default=0.6, 0.3
+        The hysteresis thresholds on the local amplitude as a fraction of the window's largest local
+        amplitude (an event is a run of frames >= event_off that reaches event_on). ``event_on`` 0
+        labels every frame of a detected window (no localisation).
+
+    Raises
+    ------
+    ValueError
+        If a parameter is out of its range (the message names it).
     """
 
     fps: float
@@ -165,7 +186,18 @@ class HeadMotionParams:
                 )
 
     def median_k(self, seconds: float) -> int:
-        """A running-median width in frames (odd; 1 = no median stage)."""
+        """A running-median width in frames.
+
+        Parameters
+        ----------
+        seconds : float
+            The width in seconds (0: no median stage).
+
+        Returns
+        -------
+        int
+            The width in frames, odd; 1 = no median stage.
+        """
         return (max(int(round(seconds * self.fps)), 1) | 1) if seconds > 0 else 1
 
     @property
@@ -290,21 +322,46 @@ class _Spectral:
 
 
 def localise_labels(score: np.ndarray, inside: np.ndarray, p: HeadMotionParams) -> np.ndarray:
-    """(T,) window scores and (T,) centre-in-event flags (:meth:`_Spectral.scores`) -> (T,) int8
-    labels: 1 where the frame's window is detected (``score >= threshold``) and the frame is part
-    of the window's event; UNKNOWN where the score is nan. The streaming detectors give the same.
+    """Labels of frames from their windows' scores and events. The streaming detectors give the same.
+
+    Parameters
+    ----------
+    score : ndarray of shape (T,)
+        Window scores (:meth:`_Spectral.scores`), nan where unknown.
+    inside : ndarray of shape (T,)
+        Centre-in-event flags (:meth:`_Spectral.scores`), 1.0 or 0.0.
+    p : HeadMotionParams
+        The parameters (``threshold``).
+
+    Returns
+    -------
+    ndarray of shape (T,)
+        int8 labels: 1 where the frame's window is detected (``score >= threshold``) and the frame
+        is part of the window's event; UNKNOWN where the score is nan; else 0.
     """
     lab = threshold_labels(score, p.threshold)
     return np.where(lab == 1, (inside > 0).astype(np.int8), lab).astype(np.int8)
 
 
 def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Windows (..., C, N) with missing samples (nan in any channel) before their centre ``N // 2`` filled with the
-    next known sample of their channel (as if the head had held still until it was seen), and
-    (...,) bool: the windows with a missing sample from the centre on (unknown; filled with 0).
+    """Windows with missing samples before their centre filled.
 
     A track that was lost is then scored again once half a window has been seen since (its
     centre frame known), instead of a whole window, and the first half's gap adds no motion.
+
+    Parameters
+    ----------
+    win : ndarray of shape (..., C, N)
+        Channel windows; nan (in any channel) where a sample is missing.
+
+    Returns
+    -------
+    filled : ndarray of shape (..., C, N)
+        The windows with missing samples before their centre ``N // 2`` filled with the next known
+        sample of their channel (as if the head had held still until it was seen); those from the
+        centre on filled with 0.
+    bad : ndarray of shape (...,)
+        bool: the windows with a missing sample from the centre on (unknown).
     """
     miss = np.isnan(win).any(axis=-2)  # (..., N): a sample is missing when any channel is
     if not miss.any():
@@ -318,11 +375,23 @@ def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def oscillation_residual(win: np.ndarray, k: int) -> np.ndarray:
-    """``win - running_median(win, k)`` along the last axis (windows (..., N), any unit).
+    """``win - running_median(win, k)`` along the last axis.
 
-    The median of width ``k`` (odd) is centred; the window's end samples are replicated ``k // 2``
-    times so every sample has a full neighbourhood (a monotone window stays monotone, so its
-    residual is exactly 0). ``k <= 1`` returns ``win`` unchanged. Vectorised over all leading axes.
+    The median is centred; the window's end samples are replicated ``k // 2`` times so every sample
+    has a full neighbourhood (a monotone window stays monotone, so its residual is exactly 0).
+    Vectorised over all leading axes.
+
+    Parameters
+    ----------
+    win : ndarray of shape (..., N)
+        Windows, any unit.
+    k : int
+        Median width in frames, odd; ``k <= 1`` returns ``win`` unchanged.
+
+    Returns
+    -------
+    ndarray of shape (..., N)
+        The residual, in the unit of ``win``.
     """
     if k <= 1:
         return win
@@ -332,7 +401,20 @@ def oscillation_residual(win: np.ndarray, k: int) -> np.ndarray:
 
 
 def facing_vectors(facing_yaw: np.ndarray | float, t: int) -> tuple[np.ndarray, np.ndarray]:
-    """Forward and left unit vectors (T,3) for a facing yaw (rad, about +Y, 0 faces +Z)."""
+    """Forward and left unit vectors for a facing yaw.
+
+    Parameters
+    ----------
+    facing_yaw : ndarray of shape (T,) or float
+        Yaw, radians about +Y, 0 faces +Z.
+    t : int
+        Number of frames T.
+
+    Returns
+    -------
+    forward, left : ndarray of shape (T, 3)
+        Unit vectors in the ground plane.
+    """
     yaw = np.broadcast_to(np.asarray(facing_yaw, dtype=np.float64), (t,))
     s, c = np.sin(yaw), np.cos(yaw)
     z = np.zeros_like(s)
@@ -372,8 +454,30 @@ def head_channels_3d(
     ``head_pitch`` the nod channels (pitch_radius_m * pitch, 0); a given angle replaces the position channels of its
     kind (see the module docstring).
 
-    head, neck: (T,3) world positions (m, Y up). facing_yaw: (T,) or scalar body yaw (rad, 0 faces
-    +Z); None means 0. head_yaw, head_pitch: (T,) radians (any zero; unwrapped here) or None.
+    Parameters
+    ----------
+    head, neck : ndarray of shape (T, 3)
+        World positions, metres, Y up.
+    facing_yaw : ndarray of shape (T,) or float or None, default=None
+        Body yaw, radians, 0 faces +Z; None means 0.
+    head_yaw : ndarray of shape (T,) or None, default=None
+        Head yaw relative to the torso, radians (any zero; unwrapped here).
+    head_radius_m : float, default=0.1
+        Radius converting the head yaw to an arc, metres.
+    head_pitch : ndarray of shape (T,) or None, default=None
+        Head pitch relative to the torso, radians (any zero; unwrapped here).
+    pitch_radius_m : float, default=0.18
+        Radius converting the head pitch to an arc, metres.
+
+    Returns
+    -------
+    ndarray of shape (T, 4)
+        The channels (nod_a, nod_b, shake_a, shake_b), metres.
+
+    Raises
+    ------
+    ValueError
+        If ``head`` and ``neck`` are not both (T, 3), or an angle is not (T,).
     """
     head = np.asarray(head, dtype=np.float64)
     neck = np.asarray(neck, dtype=np.float64)
@@ -408,10 +512,28 @@ def head_channels_2d(
     """Channels (T,4) from image points: the silhouette's head reference point relative to a body
     reference point (e.g. the silhouette centroid), converted to metres by the person's height.
 
-    head_px, ref_px: (T,2) pixels (x right, y down). height_px: (T,) or scalar silhouette height in
-    pixels. Image up is the nod channel, image x the lateral (shake) channel; depth is not seen, so
+    Image up is the nod channel, image x the lateral (shake) channel; depth is not seen, so
     the forward and yaw channels are 0. Crude: a shake that only rotates the head moves the top of the
     head very little in the image, so 2D shakes are found only when they move the head sideways.
+
+    Parameters
+    ----------
+    head_px, ref_px : ndarray of shape (T, 2)
+        Head and body reference points, pixels (x right, y down).
+    height_px : ndarray of shape (T,) or float
+        Silhouette height, pixels; frames where it is not > 0 are missing (nan).
+    person_height_m : float, default=1.7
+        The person's height, metres.
+
+    Returns
+    -------
+    ndarray of shape (T, 4)
+        The channels (nod_a, nod_b, shake_a, shake_b), metres.
+
+    Raises
+    ------
+    ValueError
+        If ``head_px`` and ``ref_px`` are not both (T, 2).
     """
     head_px = np.asarray(head_px, dtype=np.float64)
     ref_px = np.asarray(ref_px, dtype=np.float64)
@@ -431,7 +553,15 @@ def head_channels_2d(
 
 @dataclass(frozen=True)
 class HeadMotionResult:
-    """Per-frame nod/shake scores (T,) in [0,1] (nan = unknown) and int8 labels (1/0/UNKNOWN)."""
+    """Per-frame nod/shake scores and labels.
+
+    Attributes
+    ----------
+    nod_score, shake_score : ndarray of shape (T,)
+        Scores in [0, 1] (nan = unknown).
+    nod, shake : ndarray of shape (T,)
+        int8 labels (1 / 0 / UNKNOWN).
+    """
 
     nod_score: np.ndarray
     nod: np.ndarray
@@ -449,8 +579,29 @@ def scores_from_channels(
 
     Frame ``t`` is scored from window ``[t-N+1, t]`` (causal) or ``[t-N//2, t-N//2+N)`` (center);
     the samples before the sequence count as missing (:func:`fill_window_start`: a window is scored
-    once its centre sample is), later frames without a full window are UNKNOWN. angles: (nod
-    channels from the tracker's pitch, shake channels from its yaw), which picks the amplitude floors.
+    once its centre sample is), later frames without a full window are UNKNOWN.
+
+    Parameters
+    ----------
+    channels : ndarray of shape (T, 4)
+        The channels (nod_a, nod_b, shake_a, shake_b), metres (or face widths).
+    params : HeadMotionParams
+        The parameters.
+    center : bool, default=False
+        Centred (offline) windows instead of causal ones.
+    angles : tuple of bool, default=(False, False)
+        (nod channels from the tracker's pitch, shake channels from its yaw), which picks the
+        amplitude floors.
+
+    Returns
+    -------
+    HeadMotionResult
+        (T,) scores and labels.
+
+    Raises
+    ------
+    ValueError
+        If ``channels`` is not (T, 4).
     """
     ch = np.asarray(channels, dtype=np.float64)
     if ch.ndim != 2 or ch.shape[1] != 4:
@@ -486,12 +637,30 @@ def head_motion(
 ) -> HeadMotionResult:
     """Nod and shake over a whole 3D trajectory.
 
-    head, neck: (T,3) metres, world Y up. fps: Hz. window_s: FFT window (s). facing_yaw: body yaw
-    (T,) or scalar, rad (e.g. from :func:`counterpart.nodes.labeller.gaze.facing_yaw_from_shoulders`); None = 0.
-    head_yaw, head_pitch: optional (T,) head yaw / pitch relative to the torso (rad) from the
-    tracker's pose (:func:`head_channels_3d`). center: centred (offline) windows instead of causal
-    ones. Other keyword parameters go to :class:`HeadMotionParams`.
-    Returns :class:`HeadMotionResult` of (T,) arrays.
+    Parameters
+    ----------
+    head, neck : ndarray of shape (T, 3)
+        Metres, world frame, Y up.
+    fps : float
+        Frame rate, Hz.
+    window_s : float, default=1.6
+        FFT window, seconds.
+    facing_yaw : ndarray of shape (T,) or float or None, default=None
+        Body yaw, radians (e.g. from :func:`counterpart.nodes.labeller.gaze.facing_yaw_from_shoulders`);
+        None = 0.
+    head_yaw : ndarray of shape (T,) or None, default=None
+        Head yaw relative to the torso (rad) from the tracker's pose (:func:`head_channels_3d`).
+    center : bool, default=False
+        Centred (offline) windows instead of causal ones.
+    head_pitch : ndarray of shape (T,) or None, default=None
+        Head pitch relative to the torso (rad) from the tracker's pose.
+    **params : object
+        Other fields of :class:`HeadMotionParams`.
+
+    Returns
+    -------
+    HeadMotionResult
+        (T,) scores and labels.
     """
     p = HeadMotionParams(fps=fps, window_s=window_s, **params)  # type: ignore[arg-type]
     ch = head_channels_3d(head, neck, facing_yaw, head_yaw, p.head_radius_m, head_pitch, p.pitch_radius_m)
@@ -508,7 +677,30 @@ def head_motion_2d(
     person_height_m: float = 1.7,
     **params: object,
 ) -> HeadMotionResult:
-    """Nod and shake from the silhouette's head reference point (pixels); see :func:`head_channels_2d`."""
+    """Nod and shake from the silhouette's head reference point (pixels); see :func:`head_channels_2d`.
+
+    Parameters
+    ----------
+    head_px, ref_px : ndarray of shape (T, 2)
+        Head and body reference points, pixels (x right, y down).
+    height_px : ndarray of shape (T,) or float
+        Silhouette height, pixels.
+    fps : float
+        Frame rate, Hz.
+    window_s : float, default=1.6
+        FFT window, seconds.
+    center : bool, default=False
+        Centred (offline) windows instead of causal ones.
+    person_height_m : float, default=1.7
+        The person's height, metres.
+    **params : object
+        Other fields of :class:`HeadMotionParams`.
+
+    Returns
+    -------
+    HeadMotionResult
+        (T,) scores and labels.
+    """
     p = HeadMotionParams(fps=fps, window_s=window_s, **params)  # type: ignore[arg-type]
     ch = head_channels_2d(head_px, ref_px, height_px, person_height_m)
     return scores_from_channels(ch, p, center)
@@ -533,7 +725,13 @@ class _StreamingChannels:
         self._count = 0
 
     def push(self, sample: np.ndarray) -> None:
-        """Append a (4,) sample without scoring (nan for a missing frame)."""
+        """Append a sample without scoring.
+
+        Parameters
+        ----------
+        sample : ndarray of shape (4,)
+            The channels (nod_a, nod_b, shake_a, shake_b) of one frame (nan for a missing frame).
+        """
         n = self.params.n
         self._buf[:, self._i] = sample
         self._buf[:, self._i + n] = sample
@@ -541,7 +739,19 @@ class _StreamingChannels:
         self._count += 1
 
     def score(self) -> tuple[float, int, float, int]:
-        """(nod_score, nod, shake_score, shake) of the window ending at the newest sample."""
+        """Scores and labels of the window ending at the newest sample.
+
+        Returns
+        -------
+        nod_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        nod : int
+            1, 0 or UNKNOWN.
+        shake_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        shake : int
+            1, 0 or UNKNOWN.
+        """
         n = self.params.n
         if self._count < n - n // 2:  # the window's centre not seen yet
             return float("nan"), UNKNOWN, float("nan"), UNKNOWN
@@ -563,6 +773,17 @@ class HeadMotionDetector(_StreamingChannels):
     Gives exactly the values of :func:`head_motion` with ``center=False`` frame by frame; cost per
     update is one (4,N) real FFT.
 
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz.
+    window_s : float, default=1.6
+        FFT window, seconds.
+    **params : object
+        Other fields of :class:`HeadMotionParams`.
+
+    Examples
+    --------
     >>> det = HeadMotionDetector(fps=25.0, window_s=1.6)
     >>> nod_score, nod, shake_score, shake = det.update(head_xyz, neck_xyz)
     """
@@ -588,12 +809,35 @@ class HeadMotionDetector(_StreamingChannels):
         head_yaw: float | None = None,
         head_pitch: float | None = None,
     ) -> tuple[float, int, float, int]:
-        """head_xyz, neck_xyz: (3,) metres (nan if missing). facing_yaw: body yaw (rad) or None
-        (= 0). head_yaw, head_pitch: the tracker's head angles relative to the torso (rad) or None
-        (see :func:`head_channels_3d`). Returns (nod_score, nod, shake_score, shake).
+        """Add one frame and score the window that ends at it.
 
         An angle given on some frames and not on others restarts the windows at every change (the
         channels change kind), so give an angle on every frame or never.
+
+        Parameters
+        ----------
+        head_xyz, neck_xyz : ndarray of shape (3,)
+            Metres, world frame (nan if missing).
+        facing_yaw : float or None, default=None
+            Body yaw, radians; None = 0.
+        head_yaw, head_pitch : float or None, default=None
+            The tracker's head angles relative to the torso, radians (see :func:`head_channels_3d`).
+
+        Returns
+        -------
+        nod_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        nod : int
+            1, 0 or UNKNOWN.
+        shake_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        shake : int
+            1, 0 or UNKNOWN.
+
+        Raises
+        ------
+        ValueError
+            If ``head_xyz`` or ``neck_xyz`` is not (3,).
         """
         h = np.asarray(head_xyz, dtype=np.float64)
         nk = np.asarray(neck_xyz, dtype=np.float64)
@@ -622,6 +866,17 @@ class HeadMotionDetector(_StreamingChannels):
 class HeadMotionDetector2D(_StreamingChannels):
     """Streaming nod/shake from the silhouette's head reference point (pixels), scaled by the
     person's height in pixels; see :func:`head_channels_2d` for what it can and cannot see.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz.
+    window_s : float, default=1.6
+        FFT window, seconds.
+    person_height_m : float, default=1.7
+        The person's height, metres.
+    **params : object
+        Other fields of :class:`HeadMotionParams`.
     """
 
     def __init__(self, fps: float, window_s: float = 1.6, person_height_m: float = 1.7, **params: object) -> None:
@@ -629,8 +884,30 @@ class HeadMotionDetector2D(_StreamingChannels):
         self.person_height_m = person_height_m
 
     def update(self, head_px: np.ndarray, ref_px: np.ndarray, height_px: float) -> tuple[float, int, float, int]:
-        """head_px, ref_px: (2,) pixels; height_px: silhouette height (pixels).
-        Returns (nod_score, nod, shake_score, shake).
+        """Add one frame and score the window that ends at it.
+
+        Parameters
+        ----------
+        head_px, ref_px : ndarray of shape (2,)
+            Head and body reference points, pixels.
+        height_px : float
+            Silhouette height, pixels (not > 0: a missing frame).
+
+        Returns
+        -------
+        nod_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        nod : int
+            1, 0 or UNKNOWN.
+        shake_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        shake : int
+            1, 0 or UNKNOWN.
+
+        Raises
+        ------
+        ValueError
+            If ``head_px`` or ``ref_px`` is not (2,).
         """
         h = np.asarray(head_px, dtype=np.float64)
         r = np.asarray(ref_px, dtype=np.float64)
@@ -647,6 +924,15 @@ class HeadMotionDetectorFace(_StreamingChannels):
     divided by the face width of that frame (so a face that slowly grows as the person leans in
     adds no motion), image up for nods, image x for shakes. Floors: ``face_nod_floor`` /
     ``face_shake_floor`` (face widths).
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz.
+    window_s : float, default=1.6
+        FFT window, seconds.
+    **params : object
+        Other fields of :class:`HeadMotionParams`.
     """
 
     def __init__(self, fps: float, window_s: float = 1.6, **params: object) -> None:
@@ -661,8 +947,30 @@ class HeadMotionDetectorFace(_StreamingChannels):
         self._pos = np.zeros(2)
 
     def update(self, center_px: np.ndarray, size_px: float) -> tuple[float, int, float, int]:
-        """center_px: (2,) head point (px, y down); size_px: face width (px) > 0.
-        Returns (nod_score, nod, shake_score, shake).
+        """Add one frame and score the window that ends at it.
+
+        Parameters
+        ----------
+        center_px : ndarray of shape (2,)
+            Head point, pixels (y down).
+        size_px : float
+            Face width, pixels; > 0.
+
+        Returns
+        -------
+        nod_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        nod : int
+            1, 0 or UNKNOWN.
+        shake_score : float
+            In [0, 1]; nan where the label is UNKNOWN.
+        shake : int
+            1, 0 or UNKNOWN.
+
+        Raises
+        ------
+        ValueError
+            If ``center_px`` is not (2,) or ``size_px`` is not > 0.
         """
         c = np.asarray(center_px, dtype=np.float64)
         if c.shape != (2,) or not size_px > 0:
