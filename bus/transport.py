@@ -244,6 +244,15 @@ class Publisher:
         self.send_parts(parts)
 
     def send_parts(self, parts: Sequence[Any], eos: bool = False) -> None:
+        """Send an encoded message on the sockets that have subscribers (all of them for an end of stream).
+
+        Parameters
+        ----------
+        parts : sequence
+            The encoded message: [header, buffers...].
+        eos : bool, default=False
+            It is an end of stream: also sent under ``EOS_PREFIX`` on the reliable socket.
+        """
         if not self._barrier_done:
             self.wait_for_subscribers()
             self._barrier_done = True
@@ -281,6 +290,17 @@ class Publisher:
                     return
 
     def send_eos(self, node: str, seq: int, reason: str = "end") -> None:
+        """Send an ``EndOfStream`` on every socket.
+
+        Parameters
+        ----------
+        node : str
+            The publishing node's name.
+        seq : int
+            Sequence number of the message.
+        reason : str, default="end"
+            Why the stream ends.
+        """
         parts = encode(EndOfStream(stamp=time.monotonic_ns(), seq=seq, node=node, reason=reason), counter=self.count)
         self.count += 1
         self._eos_parts = parts
