@@ -314,6 +314,18 @@ class ImageFolderSource:
         log.warning("%s: skipped%s", why, "" if self.undecodable == 1 else f" ({self.undecodable} so far)")
 
     def skip(self, n: int) -> int:
+        """Drop ``n`` frames without reading them.
+
+        Parameters
+        ----------
+        n : int
+            Frames to drop.
+
+        Returns
+        -------
+        int
+            Frames dropped (fewer at the end).
+        """
         done = min(n, len(self.files) - self._index)
         self._index += done
         return done
@@ -554,6 +566,18 @@ class SimulatorSource:
         return ok, frame, t
 
     def skip(self, n: int) -> int:
+        """Drop ``n`` frames without reading them.
+
+        Parameters
+        ----------
+        n : int
+            Frames to drop.
+
+        Returns
+        -------
+        int
+            Frames dropped (fewer at the end).
+        """
         done = min(n, self.frame_count - self._index)
         self._index += done
         return done

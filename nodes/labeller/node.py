@@ -383,6 +383,26 @@ class Labeller(Node):
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        """Check the parameters as :class:`Node` does, and that they make a labeller at ``fps`` (or,
+        when the rate comes from the stream, at 25 and 29.97 fps).
+
+        Parameters
+        ----------
+        given : dict
+            The parameters given (launch file and overrides).
+        where : str, default=""
+            Where they come from, prefixed to error messages.
+
+        Returns
+        -------
+        dict
+            Every parameter, defaults filled in.
+
+        Raises
+        ------
+        ParamError
+            Naming the parameters that do not fit together.
+        """
         p = super().validate_params(given, where)
         # the windows in frames must be long enough for their detectors, at the given rate or, when
         # it comes from the stream, at the common ones
@@ -396,6 +416,21 @@ class Labeller(Node):
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The inputs these parameters use: ``pose`` with ``use_tracker``, ``frame`` with ``use_face``
+        or ``fps`` 0 (the rate from the stream).
+
+        Parameters
+        ----------
+        params : dict
+            The checked parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The inputs subscribed.
+        outputs : dict of str to Output
+            The outputs.
+        """
         ins = {"silhouettes": cls.inputs["silhouettes"]}
         if params["use_tracker"]:
             ins["pose"] = cls.inputs["pose"]
