@@ -34,6 +34,13 @@ SERVE_MODELS = tuple(m for m in INTERACTION_MODELS if m not in RESPONDER_MODELS)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the ``demo`` options to ``p``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     src = p.add_mutually_exclusive_group()
     src.add_argument("--input", metavar="FILE", help="run on your own video file instead of the built-in scene")
     src.add_argument("--live", action="store_true", help="use the V4L2 camera (launch/live.yaml)")
@@ -67,6 +74,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def ensure_models(serve: bool = False) -> None:
     """Build the default model files the graph loads (and, with ``serve``, those the live page
     offers), when they are not cached yet.
+
+    Parameters
+    ----------
+    serve : bool, default=False
+        Also build the models the live page offers.
     """
     from counterpart.nodes.responder.models import load_default
     from counterpart.nodes.tracker.prior import default_prior_path, load_default_prior
@@ -79,7 +91,24 @@ def ensure_models(serve: bool = False) -> None:
 
 
 def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:
-    """A grid of ``n`` frames spread over ``video``, each stamped with its frame number."""
+    """Write a grid of ``n`` frames spread over ``video``, each stamped with its frame number.
+
+    Parameters
+    ----------
+    video : Path
+        The video file.
+    out : Path
+        The image file to write.
+    n : int, default=12
+        Number of frames (fewer when the video has fewer).
+    cols : int, default=4
+        Frames per row.
+
+    Returns
+    -------
+    bool
+        True when the image was written; False when the video has no frames or writing failed.
+    """
     import cv2
     import numpy as np
 
@@ -117,7 +146,20 @@ def _graph_file(args: argparse.Namespace) -> tuple[str, list[str]]:
 
 
 def report(run_dir: Path, out: Path) -> RunSummary:
-    """Print the run's summary and per-node statistics; write them to ``OUT/demo_stats.json``."""
+    """Print the run's summary and per-node statistics; write them to ``OUT/demo_stats.json``.
+
+    Parameters
+    ----------
+    run_dir : Path
+        The launch's run directory.
+    out : Path
+        The output folder ``OUT``.
+
+    Returns
+    -------
+    RunSummary
+        The run's summary.
+    """
     stats = read_stats(run_dir)
     summary = summarise(stats)
     print("\n".join(summary.lines()))
@@ -131,6 +173,19 @@ def report(run_dir: Path, out: Path) -> RunSummary:
 
 
 def main(args: argparse.Namespace) -> int:
+    """``counterpart demo``: run the graph, then write the video's contact sheet and the statistics.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed ``demo`` options.
+
+    Returns
+    -------
+    int
+        Exit status: 0 ok; 2 bad options or launch file; the graph's exit code, or 1 when no video
+        was written or the run summary reports a problem.
+    """
     from counterpart.bus.cli_launch import load_checked
     from counterpart.bus.launchfile import LaunchError
     from counterpart.bus.params import ParamError

@@ -39,7 +39,13 @@ SCENARIOS = ("interested", "not_interested")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the ``mine`` options to ``parser``."""
+    """Add the ``mine`` options to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser.
+    """
     parser.add_argument(
         "--interested",
         nargs="+",
@@ -83,7 +89,18 @@ def _log(msg: str) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    """Run the mining; returns the process exit code (0 ok, 2 bad input)."""
+    """Run the mining.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed ``mine`` options.
+
+    Returns
+    -------
+    int
+        The process exit code (0 ok, 2 bad input).
+    """
     t0 = time.perf_counter()
     names: tuple[str, ...] | None = None
     fps_seen: set[float] = set()

@@ -15,8 +15,16 @@ from typing import Any
 
 
 class FrameProgress:
-    """A ``progress(done, declared)`` callback that prints ``[label] frame i/N, x fps`` on stderr at
-    most every ``every`` seconds (N left out when the file declares no frame count).
+    """A ``progress(done, declared)`` callback that prints ``[label] frame i/N, x fps`` on stderr.
+
+    N is left out when the file declares no frame count.
+
+    Parameters
+    ----------
+    label : str
+        Name printed in brackets.
+    every : float, default=2.0
+        Least time between two lines, seconds.
     """
 
     def __init__(self, label: str, every: float = 2.0) -> None:
@@ -40,7 +48,17 @@ class FrameProgress:
 
 
 def add_video_arguments(p: argparse.ArgumentParser, out_help: str, max_frames_help: str) -> None:
-    """The arguments of a command over one video file: ``video``, ``--out``, ``--train-frames``, ``--max-frames``."""
+    """Add the arguments of a command over one video file: ``video``, ``--out``, ``--train-frames``, ``--max-frames``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    out_help : str
+        Help text of ``--out``.
+    max_frames_help : str
+        Help text of ``--max-frames``.
+    """
     p.add_argument("video", help="the video file (anything OpenCV decodes)")
     p.add_argument("--out", required=True, help=out_help)
     p.add_argument(
@@ -53,7 +71,22 @@ def add_video_arguments(p: argparse.ArgumentParser, out_help: str, max_frames_he
 
 
 def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> bool:
-    """True when every named option that is set is at least 1, else prints which is not."""
+    """Check that every named option that is set is at least 1.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments.
+    names : tuple of str
+        Attribute names of the options to check.
+    command : str
+        The command's name, for the message.
+
+    Returns
+    -------
+    bool
+        True when all are at least 1, else False after printing which is not on stderr.
+    """
     for name in names:
         value = getattr(args, name)
         if value is not None and value < 1:
@@ -63,8 +96,22 @@ def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> 
 
 
 def run_offline(command: str, out: str, work: Callable[[], dict[str, Any]]) -> int:
-    """Run ``work`` (it writes ``out``): print its summary as JSON and return 0; 2 with the reason on
-    a ValueError or OSError; 130 on Ctrl-C, saying whether ``out`` holds the frames done.
+    """Run ``work`` (it writes ``out``) and print its summary as JSON.
+
+    Parameters
+    ----------
+    command : str
+        The command's name, for messages.
+    out : str
+        The output path ``work`` writes.
+    work : callable
+        Does the work and returns a JSON-serialisable summary.
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success; 2 with the reason on a ValueError or OSError; 130 on Ctrl-C,
+        saying whether ``out`` holds the frames done.
     """
     try:
         summary = work()

@@ -23,13 +23,24 @@ _LOOKAT_KEYS = ("eye", "target", "fov_deg", "width", "height")
 class Camera:
     """Pinhole camera.
 
-    Attributes
+    Parameters
     ----------
-        fx, fy: focal lengths in pixels.
-        cx, cy: principal point in pixels.
-        width, height: image size in pixels.
-        R: (3, 3) world-to-camera rotation.
-        t: (3,) world-to-camera translation, metres (``X_c = R X_w + t``).
+    fx, fy : float
+        Focal lengths in pixels (> 0).
+    cx, cy : float
+        Principal point in pixels.
+    width, height : int
+        Image size in pixels (positive integers).
+    R : ndarray of shape (3, 3), default=identity
+        World-to-camera rotation.
+    t : ndarray of shape (3,), default=zeros
+        World-to-camera translation, metres (``X_c = R X_w + t``).
+
+    Raises
+    ------
+    ValueError
+        If ``R`` is not a rotation, ``t`` does not have 3 elements, a focal length is not
+        positive or the image size is not a positive integer.
     """
 
     fx: float
@@ -67,8 +78,30 @@ class Camera:
     # -- construction -------------------------------------------------------------------------
     @classmethod
     def look_at(cls, eye: Any, target: Any, fov_deg: float, width: int, height: int) -> Camera:
-        """Camera at ``eye`` (metres) looking at ``target``, horizontal field of view ``fov_deg``,
-        square pixels, principal point at the image centre, world +Y up in the image.
+        """Camera at ``eye`` looking at ``target``, square pixels, principal point at the image centre,
+        world +Y up in the image.
+
+        Parameters
+        ----------
+        eye : array-like of shape (3,)
+            Camera centre, metres, world frame.
+        target : array-like of shape (3,)
+            Point looked at, metres, world frame.
+        fov_deg : float
+            Horizontal field of view, degrees, in (0, 180).
+        width, height : int
+            Image size in pixels.
+
+        Returns
+        -------
+        Camera
+            The camera, with no roll.
+
+        Raises
+        ------
+        ValueError
+            If ``fov_deg`` is out of range, ``eye`` and ``target`` coincide, or the view is straight
+            up or down.
         """
         eye = np.asarray(eye, dtype=np.float64)
         target = np.asarray(target, dtype=np.float64)
@@ -99,17 +132,47 @@ class Camera:
         return np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1.0]])
 
     def to_camera(self, X: np.ndarray) -> np.ndarray:
-        """(..., 3) world points -> (..., 3) camera coordinates, metres."""
+        """World points to camera coordinates.
+
+        Parameters
+        ----------
+        X : ndarray of shape (..., 3)
+            World points, metres.
+
+        Returns
+        -------
+        ndarray of shape (..., 3)
+            Camera coordinates, metres.
+        """
         return np.asarray(X, dtype=np.float64) @ self.R.T + self.t
 
     def depth(self, X: np.ndarray) -> np.ndarray:
-        """(..., 3) world points -> (...) depth z_c along the optical axis, metres."""
+        """Depth of world points along the optical axis.
+
+        Parameters
+        ----------
+        X : ndarray of shape (..., 3)
+            World points, metres.
+
+        Returns
+        -------
+        ndarray of shape (...)
+            Depth ``z_c``, metres.
+        """
         return np.asarray(X, dtype=np.float64) @ self.R[2] + self.t[2]
 
     def project(self, X: np.ndarray) -> np.ndarray:
-        """(..., 3) world points (metres) -> (..., 2) pixels (u, v).
+        """Project world points to pixels.
 
-        Points at depth <= 1 mm (on or behind the camera) give NaN.
+        Parameters
+        ----------
+        X : ndarray of shape (..., 3)
+            World points, metres.
+
+        Returns
+        -------
+        ndarray of shape (..., 2)
+            Pixels (u, v); NaN for points at depth <= 1 mm (on or behind the camera).
         """
         Xc = self.to_camera(X)
         z = Xc[..., 2]
@@ -117,7 +180,18 @@ class Camera:
         return np.stack([self.fx * Xc[..., 0] / zs + self.cx, self.fy * Xc[..., 1] / zs + self.cy], axis=-1)
 
     def rays(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Pixel coordinates (...) -> (..., 3) unit viewing directions in the world frame."""
+        """Viewing directions of pixels.
+
+        Parameters
+        ----------
+        u, v : ndarray of shape (...)
+            Pixel coordinates.
+
+        Returns
+        -------
+        ndarray of shape (..., 3)
+            Unit viewing directions in the world frame.
+        """
         u = np.asarray(u, dtype=np.float64)
         v = np.asarray(v, dtype=np.float64)
         d = np.stack([(u - self.cx) / self.fx, (v - self.cy) / self.fy, np.ones_like(u)], axis=-1)
@@ -125,9 +199,20 @@ class Camera:
         return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
     def ground_point(self, u: np.ndarray, v: np.ndarray, ground_y: float = 0.0) -> np.ndarray:
-        """Back-project pixels (...) onto the plane y = ground_y: (..., 3) metres.
+        """Back-project pixels onto the plane y = ground_y.
 
-        NaN where the ray does not hit the plane in front of the camera (at or above the horizon).
+        Parameters
+        ----------
+        u, v : ndarray of shape (...)
+            Pixel coordinates.
+        ground_y : float, default=0.0
+            Height of the plane, metres.
+
+        Returns
+        -------
+        ndarray of shape (..., 3)
+            Points on the plane, metres, world frame; NaN where the ray does not hit the plane in
+            front of the camera (at or above the horizon).
         """
         d = self.rays(u, v)
         c = self.centre
@@ -137,7 +222,18 @@ class Camera:
         return c + s[..., None] * d
 
     def in_image(self, uv: np.ndarray) -> np.ndarray:
-        """(..., 2) pixels -> (...) bool, inside the image bounds (NaN is outside)."""
+        """Whether pixels are inside the image bounds.
+
+        Parameters
+        ----------
+        uv : ndarray of shape (..., 2)
+            Pixels (u, v).
+
+        Returns
+        -------
+        ndarray of shape (...), dtype bool
+            True inside the image bounds (NaN is outside).
+        """
         uv = np.asarray(uv)
         return (
             (uv[..., 0] >= -0.5)
@@ -148,7 +244,13 @@ class Camera:
 
     # -- parameters ---------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """Plain dict (floats, ints, nested lists) for launch files and message metadata."""
+        """Plain dict (floats, ints, nested lists) for launch files and message metadata.
+
+        Returns
+        -------
+        dict
+            Keys ``fx, fy, cx, cy, width, height, R, t``.
+        """
         return {
             "fx": self.fx,
             "fy": self.fy,
@@ -162,8 +264,23 @@ class Camera:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Camera:
-        """Inverse of ``to_dict``. Also accepts the look-at form
-        ``{eye: [x, y, z], target: [x, y, z], fov_deg, width, height}``.
+        """Inverse of ``to_dict``.
+
+        Parameters
+        ----------
+        d : dict
+            The ``to_dict`` form, or the look-at form
+            ``{eye: [x, y, z], target: [x, y, z], fov_deg, width, height}``.
+
+        Returns
+        -------
+        Camera
+            The camera.
+
+        Raises
+        ------
+        ValueError
+            If ``d`` is not a mapping, or has unknown or missing keys.
         """
         if not isinstance(d, dict):
             raise ValueError(f"camera parameters must be a mapping, got {type(d).__name__}")
@@ -180,7 +297,24 @@ class Camera:
 
 
 def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "") -> Any:
-    """The ``messages.CameraInfo`` of a camera (the calibration node publishes it)."""
+    """The ``messages.CameraInfo`` of a camera (the calibration node publishes it).
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera.
+    stamp : int, default=0
+        Message time stamp.
+    seq : int, default=0
+        Message sequence number.
+    source : str, default=""
+        Message source name.
+
+    Returns
+    -------
+    messages.CameraInfo
+        The camera's intrinsics and extrinsics as a message.
+    """
     from counterpart.messages import CameraInfo
 
     return CameraInfo(
@@ -199,7 +333,23 @@ def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "
 
 
 def camera_from_info(info: Any) -> Camera:
-    """The Camera of a ``messages.CameraInfo``; ValueError naming what is wrong in it."""
+    """The Camera of a ``messages.CameraInfo``.
+
+    Parameters
+    ----------
+    info : messages.CameraInfo
+        The message.
+
+    Returns
+    -------
+    Camera
+        The camera.
+
+    Raises
+    ------
+    ValueError
+        Naming what is wrong in the message.
+    """
     if np.size(info.R) != 9 or np.size(info.t) != 3:
         raise ValueError(f"camera info: R must hold 9 values and t 3, got {np.size(info.R)} and {np.size(info.t)}")
     return Camera(
@@ -215,8 +365,22 @@ def camera_from_info(info: Any) -> Camera:
 
 
 def load_camera_file(path: str) -> Camera:
-    """A Camera from a JSON or YAML calibration file (``Camera.to_dict`` or the look-at form);
-    ValueError naming the file and the bad key.
+    """A Camera from a JSON or YAML calibration file (``Camera.to_dict`` or the look-at form).
+
+    Parameters
+    ----------
+    path : str
+        The calibration file.
+
+    Returns
+    -------
+    Camera
+        The camera.
+
+    Raises
+    ------
+    ValueError
+        Naming the file and the bad key, or why the file cannot be read.
     """
     import yaml
 
@@ -239,6 +403,16 @@ def default_camera(width: int = 320, height: int = 240) -> Camera:
     """The simulator's default view: camera 1.6 m high, 4 m in front of the origin (+Z),
     looking at (0, 0.9, 0), 55 degrees horizontal field of view. Two people of 1.75 m standing
     1 m apart around the origin (and up to about 3 m apart, from z = -1 to +1) are fully in view.
+
+    Parameters
+    ----------
+    width, height : int, default=320, 240
+        Image size in pixels.
+
+    Returns
+    -------
+    Camera
+        The default camera.
     """
     return Camera.look_at((0.0, 1.6, 4.0), (0.0, 0.9, 0.0), 55.0, width, height)
 
@@ -246,10 +420,26 @@ def default_camera(width: int = 320, height: int = 240) -> Camera:
 def camera_for_size(calibration: Camera | None, width: int, height: int) -> Camera:
     """The one camera every node uses for frames of ``width`` x ``height`` pixels.
 
-    None: :func:`default_camera` at that size (square pixels, the same 55 degrees across the
-    width for every aspect ratio). A calibration for that size is used as it is; one for another
-    size of the same aspect ratio (within 1%) is scaled uniformly (the same camera at another
-    resolution). Raises ValueError for another aspect ratio, which no scaling makes right.
+    A calibration for that size is used as it is; one for another size of the same aspect ratio
+    (within 1%) is scaled uniformly (the same camera at another resolution).
+
+    Parameters
+    ----------
+    calibration : Camera or None
+        The calibrated camera; None: :func:`default_camera` at that size (square pixels, the same
+        55 degrees across the width for every aspect ratio).
+    width, height : int
+        Frame size in pixels.
+
+    Returns
+    -------
+    Camera
+        The camera for that frame size.
+
+    Raises
+    ------
+    ValueError
+        For another aspect ratio, which no scaling makes right.
     """
     if calibration is None:
         return default_camera(width, height)
@@ -287,7 +477,15 @@ class CameraSchedule:
         self._by_size: dict[tuple[int, int], list[tuple[int, Camera]]] = {}
 
     def add(self, camera: Camera, from_seq: int = 0) -> None:
-        """``camera`` for frames of its size from ``from_seq`` on (replaces one from the same seq)."""
+        """Use ``camera`` for frames of its size from ``from_seq`` on (replaces one from the same seq).
+
+        Parameters
+        ----------
+        camera : Camera
+            The camera.
+        from_seq : int, default=0
+            First frame sequence number it holds for.
+        """
         entries = [e for e in self._by_size.get((camera.width, camera.height), []) if e[0] != from_seq]
         entries.append((int(from_seq), camera))
         entries.sort(key=lambda e: e[0])
@@ -297,7 +495,20 @@ class CameraSchedule:
         return size in self._by_size
 
     def get(self, size: tuple[int, int], seq: int | None = None) -> Camera | None:
-        """The camera for frame ``seq`` of ``size`` (None: the newest); None when none has come."""
+        """The camera for frame ``seq`` of ``size``.
+
+        Parameters
+        ----------
+        size : tuple of (int, int)
+            Frame (width, height) in pixels.
+        seq : int or None, default=None
+            Frame sequence number; None: the newest camera.
+
+        Returns
+        -------
+        Camera or None
+            The camera; None when none has come for that size.
+        """
         entries = self._by_size.get(size)
         if not entries:
             return None
@@ -308,8 +519,17 @@ class CameraSchedule:
 
 
 def camera_param_problem(value: dict[str, Any]) -> str | None:
-    """For node parameters: None when ``value`` is empty (use the default camera) or a valid
-    calibration for :meth:`Camera.from_dict`, else the error naming the bad key.
+    """Check a camera node parameter.
+
+    Parameters
+    ----------
+    value : dict
+        Calibration for :meth:`Camera.from_dict`; empty: use the default camera.
+
+    Returns
+    -------
+    str or None
+        None when ``value`` is empty or a valid calibration, else the error naming the bad key.
     """
     if not value:
         return None

@@ -53,13 +53,25 @@ class TwoPersonTrajectory:
 
     Attributes
     ----------
-        a, b: (T, 14, 3) float32 metres.
-        fps: frames per second.
-        label: interaction name.
-        signals_a, signals_b: optional (T, K) per-frame signal labels.
-        signal_names: K names (empty without signals).
-        phase: optional (T,) int phase index.
-        meta: free-form JSON-serialisable dict.
+    a, b : ndarray of shape (T, 14, 3), dtype float32
+        Joint positions of person A and B, metres, world frame.
+    fps : float
+        Frames per second (> 0).
+    label : str, default=""
+        Interaction name.
+    signals_a, signals_b : ndarray of shape (T, K) or None, default=None
+        Per-frame signal labels (uint8, else float32); both or neither.
+    signal_names : tuple of str, default=()
+        The K signal names (empty without signals).
+    phase : ndarray of shape (T,), dtype int32, or None, default=None
+        Per-frame phase index.
+    meta : dict, default={}
+        Free-form JSON-serialisable provenance.
+
+    Raises
+    ------
+    ValueError
+        Naming the field, when :meth:`validate` finds it malformed.
     """
 
     a: np.ndarray
@@ -77,7 +89,18 @@ class TwoPersonTrajectory:
 
     # -- checks -------------------------------------------------------------------------------
     def validate(self, source: str = "TwoPersonTrajectory") -> None:
-        """Coerce dtypes and check shapes; ValueError naming ``source`` and the field."""
+        """Coerce dtypes and check shapes.
+
+        Parameters
+        ----------
+        source : str, default="TwoPersonTrajectory"
+            Name of where the data came from (a file path), for the error messages.
+
+        Raises
+        ------
+        ValueError
+            Naming ``source`` and the field that is malformed.
+        """
 
         def err(key: str, msg: str) -> ValueError:
             return ValueError(f"{source}: key {key!r}: {msg}")
@@ -145,7 +168,13 @@ class TwoPersonTrajectory:
 
     # -- I/O ----------------------------------------------------------------------------------
     def save(self, path: str | os.PathLike) -> None:
-        """Write a compressed ``.npz`` in the documented format (numpy adds ``.npz`` if absent)."""
+        """Write a compressed ``.npz`` in the documented format.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file (numpy adds ``.npz`` if absent).
+        """
         arrays: dict[str, Any] = {
             "format_version": np.int64(FORMAT_VERSION),
             "a": self.a,
@@ -167,7 +196,22 @@ class TwoPersonTrajectory:
     def load(cls, path: str | os.PathLike) -> TwoPersonTrajectory:
         """Read a file written by ``save`` or by hand in the documented format.
 
-        Raises ValueError naming the file and key for anything missing or malformed.
+        Parameters
+        ----------
+        path : str or path-like
+            The ``.npz`` file.
+
+        Returns
+        -------
+        TwoPersonTrajectory
+            The trajectory.
+
+        Raises
+        ------
+        FileNotFoundError
+            If the file does not exist.
+        ValueError
+            Naming the file and key for anything missing or malformed.
         """
         path = os.fspath(path)
         try:
@@ -209,8 +253,23 @@ class TwoPersonTrajectory:
 
     # -- transforms ---------------------------------------------------------------------------
     def resample(self, fps: float) -> TwoPersonTrajectory:
-        """Resample to ``fps`` over the same time span: joints by linear interpolation, signals
-        and phase by nearest earlier-or-equal frame (labels must not be blended).
+        """Resample over the same time span: joints by linear interpolation, signals and phase by
+        nearest earlier-or-equal frame (labels must not be blended).
+
+        Parameters
+        ----------
+        fps : float
+            The new frame rate, frames per second (> 0).
+
+        Returns
+        -------
+        TwoPersonTrajectory
+            A new trajectory of ``floor(duration * fps) + 1`` frames.
+
+        Raises
+        ------
+        ValueError
+            If ``fps`` is not a positive number.
         """
         if not (np.isfinite(fps) and fps > 0):
             raise ValueError(f"resample: fps={fps!r}; expected frames per second > 0")
@@ -248,13 +307,30 @@ class TwoPersonTrajectory:
     ) -> TwoPersonTrajectory:
         """Two BVH files of one take (same world frame and clock) -> trajectory.
 
-        Args:
-            path_a, path_b: the two people's BVH files.
-            fps: resample to this rate (e.g. 25.0), or keep the files' rate (None).
-            label: interaction name.
-            scale: metres per BVH unit (CMU default).
-            drop_first: drop frame 0 (CMU T-pose).
-            mapping: BVH joint names for our 14 (default ``counterpart.body.bvh.CMU_TO_JOINTS14``).
+        Parameters
+        ----------
+        path_a, path_b : str or path-like
+            The two people's BVH files.
+        fps : float or None, default=None
+            Resample to this rate (e.g. 25.0), or keep the files' rate (None).
+        label : str, default=""
+            Interaction name.
+        scale : float, default=CMU_SCALE
+            Metres per BVH unit (CMU default).
+        drop_first : bool, default=True
+            Drop frame 0 (CMU T-pose).
+        mapping : dict of str to str or None, default=None
+            BVH joint names for our 14 (default ``counterpart.body.bvh.CMU_TO_JOINTS14``).
+
+        Returns
+        -------
+        TwoPersonTrajectory
+            The trajectory, cut to the shorter file's frame count.
+
+        Raises
+        ------
+        ValueError
+            If the two files' frame times differ.
         """
         ba, bb = read_bvh(path_a, scale), read_bvh(path_b, scale)
         if abs(ba.frame_time - bb.frame_time) > 1e-6:

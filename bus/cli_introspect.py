@@ -20,6 +20,16 @@ from . import registry
 def quiet_broken_pipe(main: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
     """``main`` ending quietly when its reader goes away (``counterpart topic list | head``), as
     command-line tools do, instead of with a BrokenPipeError traceback.
+
+    Parameters
+    ----------
+    main : callable
+        A command's entry point taking the parsed arguments and returning the exit status.
+
+    Returns
+    -------
+    callable
+        The wrapped entry point; it returns 1 on a broken pipe.
     """
 
     @functools.wraps(main)
@@ -41,11 +51,25 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 
 def add_arguments_node(p: argparse.ArgumentParser) -> None:
+    """Add the ``counterpart node`` actions (``list``) to ``p``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     sub = p.add_subparsers(dest="action", required=True)
     _common(sub.add_parser("list", help="nodes, pids, restarts and ports"))
 
 
 def add_arguments_topic(p: argparse.ArgumentParser) -> None:
+    """Add the ``counterpart topic`` actions (``list``, ``echo``, ``hz``) to ``p``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     sub = p.add_subparsers(dest="action", required=True)
     _common(sub.add_parser("list", help="topics with their types, publishers and subscribers"))
     e = sub.add_parser("echo", help="print messages of a topic (arrays summarised)")
@@ -62,6 +86,18 @@ def add_arguments_topic(p: argparse.ArgumentParser) -> None:
 
 @quiet_broken_pipe
 def main_node(args: argparse.Namespace) -> int:
+    """``counterpart node list``: print the launch's nodes, pids, restarts and ports.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments (``run``).
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 1 when the launch's registry cannot be read.
+    """
     try:
         reg = registry.read(args.run)
     except registry.RegistryError as exc:
@@ -77,7 +113,19 @@ def main_node(args: argparse.Namespace) -> int:
 
 
 def summarise(value: Any) -> Any:
-    """A JSON-able view of a message: arrays become their dtype, shape and a few statistics."""
+    """A JSON-able view of a message: arrays become their dtype, shape and a few statistics.
+
+    Parameters
+    ----------
+    value : Any
+        A message, or a field of one (arrays, dataclasses, lists, tuples, dicts, bytes, scalars).
+
+    Returns
+    -------
+    Any
+        The same structure with arrays as ``{dtype, shape, min, max, mean[, values]}`` and bytes as
+        ``"<n bytes>"``.
+    """
     if isinstance(value, np.ndarray):
         info: dict[str, Any] = {"dtype": str(value.dtype), "shape": list(value.shape)}
         if value.size and value.dtype.kind in "biuf":
@@ -111,6 +159,20 @@ def _subscriber(args: argparse.Namespace):
 
 @quiet_broken_pipe
 def main_topic(args: argparse.Namespace) -> int:
+    """``counterpart topic list|echo|hz``: list the topics, print a topic's messages or its rate.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments (``action``, ``run``, and ``topic``, ``count``, ``timeout``,
+        ``window``, ``reports`` as the action takes them).
+
+    Returns
+    -------
+    int
+        Exit status: 0 when done, at the end of the stream or after the counts asked for; 1 when the
+        launch's registry cannot be read, the launch is not running, or ``echo`` timed out.
+    """
     try:
         if args.action == "list":
             reg = registry.read(args.run)

@@ -78,11 +78,41 @@ class Publisher:
     at most ``barrier_timeout`` seconds: a short stream could otherwise end before a slow-starting
     lossy subscriber connects, and that one would wait for an end of stream it never gets.
 
-    ``latched``: the last message sent is sent again to every ``latest`` subscriber that joins later
-    (ROS's latched topics), once :meth:`poll_subscriptions` or a send sees it join. A lossy subscriber
-    that connects after a rare message (a run-time control), or restarts, still gets the one in force;
-    the subscribers already there get it twice. Reliable subscribers are not sent it again: the
-    startup barrier gives them every message once. The parts are kept by reference.
+    Parameters
+    ----------
+    ctx : zmq.Context
+        The ZeroMQ context.
+    topic : str
+        The topic's name.
+    endpoints : TopicEndpoints
+        Addresses of the reliable, latest and (optional) queued sockets, bound here.
+    expected : int, default=0
+        Reliable subscribers awaited before the first send.
+    expected_latest : int, default=0
+        Lossy subscribers (waiting for the end of stream) awaited before the first send.
+    hwm : int, default=16
+        Send high-water mark of the reliable socket, messages.
+    latest_hwm : int, default=2
+        Send high-water mark of the latest socket, messages.
+    queued_hwm : int, default=64
+        Send high-water mark of the queued socket, messages.
+    barrier_timeout : float, default=30.0
+        Longest wait for the expected subscribers, seconds.
+    should_stop : callable, default=lambda: False
+        Returns True when the node is asked to stop (ends waits early).
+    latched : bool, default=False
+        The last message sent is sent again to every ``latest`` subscriber that joins later (ROS's
+        latched topics), once :meth:`poll_subscriptions` or a send sees it join. A lossy subscriber
+        that connects after a rare message (a run-time control), or restarts, still gets the one in
+        force; the subscribers already there get it twice. Reliable subscribers are not sent it again:
+        the startup barrier gives them every message once. The parts are kept by reference.
+
+    Attributes
+    ----------
+    count : int
+        Messages sent (the send counter).
+    subscribers : int
+        Reliable subscribers connected now.
     """
 
     def __init__(
@@ -187,6 +217,11 @@ class Publisher:
     def wait_for_subscribers(self) -> bool:
         """Block until ``expected`` reliable and ``expected_latest`` lossy subscribers are connected
         (or timeout/stop).
+
+        Returns
+        -------
+        bool
+            True when the barrier is passed; False on timeout or stop.
         """
         deadline = time.monotonic() + self.barrier_timeout
         while not self._barrier_passed and not self._barrier_met():
@@ -197,12 +232,27 @@ class Publisher:
         return True
 
     def send(self, msg: Any) -> None:
-        """Encode once, send on both sockets."""
+        """Encode once, send on both sockets.
+
+        Parameters
+        ----------
+        msg : Any
+            A registered message.
+        """
         parts = encode(msg, counter=self.count)
         self.count += 1
         self.send_parts(parts)
 
     def send_parts(self, parts: Sequence[Any], eos: bool = False) -> None:
+        """Send an encoded message on the sockets that have subscribers (all of them for an end of stream).
+
+        Parameters
+        ----------
+        parts : sequence
+            The encoded message: [header, buffers...].
+        eos : bool, default=False
+            It is an end of stream: also sent under ``EOS_PREFIX`` on the reliable socket.
+        """
         if not self._barrier_done:
             self.wait_for_subscribers()
             self._barrier_done = True
@@ -240,6 +290,17 @@ class Publisher:
                     return
 
     def send_eos(self, node: str, seq: int, reason: str = "end") -> None:
+        """Send an ``EndOfStream`` on every socket.
+
+        Parameters
+        ----------
+        node : str
+            The publishing node's name.
+        seq : int
+            Sequence number of the message.
+        reason : str, default="end"
+            Why the stream ends.
+        """
         parts = encode(EndOfStream(stamp=time.monotonic_ns(), seq=seq, node=node, reason=reason), counter=self.count)
         self.count += 1
         self._eos_parts = parts
@@ -253,6 +314,16 @@ class Publisher:
         A subscriber that connects after end of stream went out (a node still starting when its
         source failed at once) gets it again: it would otherwise wait for an end that never comes,
         and this publisher for its confirmation.
+
+        Parameters
+        ----------
+        timeout : float
+            Longest wait, seconds.
+
+        Returns
+        -------
+        bool
+            True when every reliable subscriber has left; False on timeout or stop.
         """
         deadline = time.monotonic() + timeout
         resend = self._read_subscriptions()
@@ -278,6 +349,11 @@ class Publisher:
     def close(self, linger_ms: int = -1) -> None:
         """Close; by default wait (in ``Context.term``) until reliable subscribers got everything.
         Dead subscribers do not hold this up: ZeroMQ drops the pipes of closed peers.
+
+        Parameters
+        ----------
+        linger_ms : int, default=-1
+            Linger of the reliable socket, milliseconds (-1: until delivered).
         """
         self.reliable.close(linger=linger_ms)
         self.latest.close(linger=0)
@@ -287,7 +363,17 @@ class Publisher:
 
 @dataclass(frozen=True)
 class RawMessage:
-    """A received message left encoded: ``parts`` = [header, buffers...] as received."""
+    """A received message left encoded.
+
+    Attributes
+    ----------
+    topic : str
+        The topic it came on.
+    parts : list
+        [header, buffers...] as received.
+    header : dict
+        The decoded header (``s`` the schema, ``f`` the scalar fields).
+    """
 
     topic: str
     parts: list[Any]
@@ -314,6 +400,25 @@ _EOS_SCHEMA = EndOfStream.__schema_id__
 def decode_raw(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
     """Check the header and the number of buffers, leave the arrays encoded; the schema need not be
     registered. End of stream is decoded as usual so that subscribers see the end.
+
+    Parameters
+    ----------
+    parts : sequence
+        The multipart message without its topic: [header, buffers...].
+    limits : Limits, default=DEFAULT_LIMITS
+        Size limits the codec enforces.
+
+    Returns
+    -------
+    msg : RawMessage or EndOfStream
+        The message.
+    counter : int or None
+        The publisher's send counter, when the header carries one.
+
+    Raises
+    ------
+    DecodeError
+        If the header is bad or the buffers do not match it.
     """
     header = read_header(parts[0], limits)
     if header["s"] == _EOS_SCHEMA:
@@ -337,6 +442,53 @@ class Subscriber:
     publishing the topic (``forged_eos``), and a send counter that jumps further ahead than the
     publisher can have sent since the last message (``bad_counter``: a forged counter must not turn
     into billions of drops). A counter that goes back is a restarted publisher: counting starts again.
+
+    Parameters
+    ----------
+    ctx : zmq.Context
+        The ZeroMQ context.
+    topic : str
+        The topic's name.
+    endpoints : TopicEndpoints
+        The publisher's socket addresses.
+    policy : str, default=RELIABLE
+        Queue policy, one of ``POLICIES``.
+    hwm : int, default=16
+        Receive high-water mark of a reliable subscriber, messages.
+    limits : Limits, default=DEFAULT_LIMITS
+        Size limits the codec enforces.
+    on_bad : callable or None, default=None
+        Called as ``on_bad(kind, detail)`` the first time each kind of bad message occurs.
+    untyped : bool, default=False
+        Messages of schemas not registered here arrive as UntypedMessage instead of being dropped
+        (tools that show any topic).
+    raw : bool, default=False
+        Messages arrive as :class:`RawMessage`, header checked but arrays left undecoded (recorders).
+    msg_type : type or None, default=None
+        The only message class accepted (None: any).
+    publisher : str or None, default=None
+        The node name an end of stream must carry (None: any, for topics whose publisher is not
+        known here).
+    queue : int, default=0
+        Latest policy only: keep up to this many messages in order instead of only the newest, read
+        from the publisher's queued socket (recorders that must never hold a publisher back but
+        should lose nothing while they keep up); what overflows is counted in ``drops``.
+
+    Attributes
+    ----------
+    count : int
+        Data messages received.
+    drops : int
+        Messages lost (lossy policy, counted from the send counter).
+    bad : dict of str to int
+        Decode failures per kind.
+    ended : bool
+        End of stream has been received.
+
+    Raises
+    ------
+    ValueError
+        If ``policy`` is not one of ``POLICIES``.
     """
 
     def __init__(
@@ -354,15 +506,6 @@ class Subscriber:
         publisher: str | None = None,
         queue: int = 0,
     ) -> None:
-        """``untyped``: messages of schemas not registered here arrive as UntypedMessage instead of
-        being dropped (tools that show any topic); ``raw``: messages arrive as :class:`RawMessage`,
-        header checked but arrays left undecoded (recorders). ``msg_type``: the only message class
-        accepted (None: any); ``publisher``: the node name an end of stream must carry (None: any,
-        for topics whose publisher is not known here). ``queue`` (latest policy only): keep up to
-        this many messages in order instead of only the newest, read from the publisher's queued
-        socket (recorders that must never hold a publisher back but should lose nothing while they
-        keep up); what overflows is counted in ``drops``.
-        """
         if policy not in POLICIES:
             raise ValueError(f"queue policy {policy!r}: expected one of {', '.join(POLICIES)}")
         self.topic = topic
@@ -478,6 +621,13 @@ class Subscriber:
         return self._pending_eos is not None
 
     def receive(self) -> Any | None:
+        """The next message (reliable) or the newest one (latest).
+
+        Returns
+        -------
+        Any or None
+            The message (an ``EndOfStream`` once, at the end), or None when nothing is ready.
+        """
         if self.eos_socket is not None and self._pending_eos is None and self.eos_socket.poll(0, zmq.POLLIN):
             frames = self.eos_socket.recv_multipart(copy=False)
             msg = self._decode(frames, track=False)

@@ -38,6 +38,13 @@ HELP = "render a simulated two-person scene with ground truth"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the ``sim`` options to ``p``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.add_argument("--scenario", default="handshake", help=f"one of {', '.join(SCENARIOS)}, cmu")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", help="output folder (created)")
@@ -61,7 +68,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def open_writer(path: str, fps: float, size: tuple[int, int]) -> tuple[cv2.VideoWriter, str]:
-    """A cv2 writer for ``path``: FFV1 (lossless) if available, else MJPG. Returns (writer, codec)."""
+    """A cv2 writer for ``path``: FFV1 (lossless) if available, else MJPG.
+
+    Parameters
+    ----------
+    path : str
+        The ``.avi`` file to write.
+    fps : float
+        Frames per second.
+    size : tuple of (int, int)
+        Frame (width, height), pixels.
+
+    Returns
+    -------
+    writer : cv2.VideoWriter
+        The opened writer.
+    codec : str
+        ``"FFV1"`` or ``"MJPG"``.
+
+    Raises
+    ------
+    RuntimeError
+        If OpenCV can write neither codec.
+    """
     for codec in ("FFV1", "MJPG"):
         w = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*codec), float(fps), size)
         if w.isOpened():
@@ -71,7 +100,22 @@ def open_writer(path: str, fps: float, size: tuple[int, int]) -> tuple[cv2.Video
 
 
 def contact_sheet(frames: list[np.ndarray], numbers: list[int], cols: int = 4) -> np.ndarray:
-    """Grid of frames (same size), each stamped with its frame number."""
+    """Grid of frames, each stamped with its frame number.
+
+    Parameters
+    ----------
+    frames : list of ndarray of shape (H, W, 3), dtype uint8
+        BGR frames, all the same size.
+    numbers : list of int
+        The frame numbers stamped on them.
+    cols : int, default=4
+        Frames per row (the last row is padded with black).
+
+    Returns
+    -------
+    ndarray of shape (rows * H, cols * W, 3), dtype uint8
+        The grid.
+    """
     tiles = []
     for f, n in zip(frames, numbers):
         t = f.copy()
@@ -84,7 +128,22 @@ def contact_sheet(frames: list[np.ndarray], numbers: list[int], cols: int = 4) -
 
 
 def render_to_folder(stream: Any, out: str, progress: bool = True) -> dict[str, str]:
-    """Render every frame of ``stream`` (a ``counterpart.sim.stream.SimStream``) into ``out``; returns paths."""
+    """Render every frame of ``stream`` into ``out``.
+
+    Parameters
+    ----------
+    stream : counterpart.sim.stream.SimStream
+        The simulated stream.
+    out : str
+        The output folder (created).
+    progress : bool, default=True
+        Print progress lines on stderr.
+
+    Returns
+    -------
+    dict of str to str
+        Paths written, by kind: ``video``, ``truth``, ``trajectory``, ``sheet``.
+    """
     os.makedirs(out, exist_ok=True)
     T = stream.n_frames
     W, H = stream.size
@@ -144,6 +203,18 @@ def render_to_folder(stream: Any, out: str, progress: bool = True) -> dict[str, 
 
 
 def main(args: argparse.Namespace) -> int:
+    """``counterpart sim``: list the scenarios, or render one into ``--out``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed ``sim`` options.
+
+    Returns
+    -------
+    int
+        Exit status: 0 ok, 2 bad input.
+    """
     if args.list:
         for name, fn in SCENARIOS.items():
             print(f"{name:13s} {(fn.__doc__ or '').strip().splitlines()[0]}")

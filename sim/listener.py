@@ -18,8 +18,25 @@ class ListenerRecording:
     """The right person of a ``conversation`` (who listens and nods half of the time and talks the
     other half) in view alone, after ``n_empty`` frames of the empty room.
 
-    labels: (T, K) int8 of the listener, -1 during the empty start, named ``names``; fps: frames per
-    second; size: (width, height) px.
+    Parameters
+    ----------
+    scenario : Scenario
+        The conversation with the speaker moved out of view and the empty start prepended.
+    n_empty : int
+        Frames of the empty room at the start.
+    labels : ndarray of shape (T, K), dtype int8
+        The listener's labels, -1 during the empty start, named ``names``.
+    names : tuple of str
+        The K label names.
+    seed : int
+        Seed of the renderer.
+
+    Attributes
+    ----------
+    fps : float
+        Frames per second.
+    size : tuple of (int, int)
+        Image (width, height), pixels.
     """
 
     scenario: Scenario
@@ -43,7 +60,15 @@ class ListenerRecording:
         return int(self.scenario.poses_a.shape[0])
 
     def frames(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        """(BGR image (H, W, 3) uint8, the listener's exact mask (H, W) bool) of every frame."""
+        """Render every frame.
+
+        Yields
+        ------
+        image : ndarray of shape (H, W, 3), dtype uint8
+            The BGR frame.
+        mask : ndarray of shape (H, W), dtype bool
+            The listener's exact mask.
+        """
         for i in range(len(self)):
             img, truth = self._renderer.render(i)
             yield img, truth.masks[1]
@@ -52,7 +77,24 @@ class ListenerRecording:
 def listener_recording(
     seconds: float = 60.0, seed: int = 0, interested: bool = True, empty_s: float = 1.6
 ) -> ListenerRecording:
-    """A ``conversation`` of ``seconds`` whose speaker is out of view, after ``empty_s`` s of the empty room."""
+    """A ``conversation`` whose speaker is out of view, after an empty room.
+
+    Parameters
+    ----------
+    seconds : float, default=60.0
+        Length of the conversation, seconds.
+    seed : int, default=0
+        Seed of the scenario and the renderer.
+    interested : bool, default=True
+        Whether the listener is interested (the scenario's ``interested``).
+    empty_s : float, default=1.6
+        Seconds of the empty room before the listener comes into view.
+
+    Returns
+    -------
+    ListenerRecording
+        The recording.
+    """
     sc = make_scenario(
         "conversation", seed=seed, duration=seconds, emotion="neutral", strength=0.0, interested=interested
     )

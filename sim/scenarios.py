@@ -84,7 +84,25 @@ PLANTED_RULES: tuple[dict[str, Any], ...] = (
 
 @dataclass(frozen=True)
 class Style:
-    """Emotional style: multipliers of speed (1/duration) and amplitude, offsets in radians."""
+    """Emotional style: multipliers of speed (1/duration) and amplitude, offsets in radians.
+
+    Parameters
+    ----------
+    emotion : str, default="neutral"
+        One of ``EMOTIONS``.
+    strength : float, default=0.0
+        Strength in [0, 1].
+    speed : float, default=1.0
+        Speed multiplier (1/duration).
+    amp : float, default=1.0
+        Amplitude multiplier.
+    head_down : float, default=0.0
+        Head pitch offset, radians.
+    slump : float, default=0.0
+        Torso slump offset, radians.
+    bounce : float, default=0.0
+        Knee bounce at 2.2 Hz: peak hip flexion, radians (the knees twice that).
+    """
 
     emotion: str = "neutral"
     strength: float = 0.0
@@ -96,7 +114,25 @@ class Style:
 
 
 def style(emotion: str, strength: float) -> Style:
-    """The :class:`Style` of ``emotion`` (one of ``EMOTIONS``) at ``strength`` in [0, 1]."""
+    """The :class:`Style` of an emotion at a strength.
+
+    Parameters
+    ----------
+    emotion : str
+        One of ``EMOTIONS``.
+    strength : float
+        Strength in [0, 1].
+
+    Returns
+    -------
+    Style
+        The style.
+
+    Raises
+    ------
+    ValueError
+        If ``emotion`` is unknown or ``strength`` is outside [0, 1].
+    """
     if emotion not in EMOTIONS:
         raise ValueError(f"emotion={emotion!r}: use one of {EMOTIONS}")
     s = float(strength)
@@ -117,14 +153,22 @@ class Scenario:
 
     Attributes
     ----------
-        poses_a, poses_b: (T, 28) float64 pose vectors (``counterpart.body.pose``), radians and metres.
-        dims_a, dims_b: body dimensions.
-        fps: frames per second; frame t is at t / fps seconds.
-        label: interaction name ("handshake", ...).
-        phase: (T,) int32 phase codes (``PHASES``).
-        signals_a, signals_b: (T, 5) int8, columns ``signal_names``, 1/0/-1 (unknown).
-        signal_names: ``SIGNAL_NAMES``.
-        meta: seed, emotion, strength, initiator ("a"/"b"), interested, and scenario details.
+    poses_a, poses_b : ndarray of shape (T, 28), dtype float64
+        Pose vectors (``counterpart.body.pose``), radians and metres.
+    dims_a, dims_b : BodyDims
+        Body dimensions.
+    fps : float
+        Frames per second; frame t is at t / fps seconds.
+    label : str
+        Interaction name ("handshake", ...).
+    phase : ndarray of shape (T,), dtype int32
+        Phase codes (``PHASES``).
+    signals_a, signals_b : ndarray of shape (T, 5), dtype int8
+        Signal labels, columns ``signal_names``, 1/0/-1 (unknown).
+    signal_names : tuple of str, default=SIGNAL_NAMES
+        The signal names.
+    meta : dict, default={}
+        Seed, emotion, strength, initiator ("a"/"b"), interested, and scenario details.
     """
 
     poses_a: np.ndarray
@@ -149,13 +193,35 @@ class Scenario:
         return np.arange(self.n_frames) / self.fps
 
     def joints(self) -> np.ndarray:
-        """(T, 2, 14, 3) joint positions of A and B, metres."""
+        """Joint positions of A and B.
+
+        Returns
+        -------
+        ndarray of shape (T, 2, 14, 3)
+            Joints, metres, world frame.
+        """
         return np.stack(
             [forward_kinematics(self.poses_a, self.dims_a), forward_kinematics(self.poses_b, self.dims_b)], axis=1
         )
 
     def crop(self, n: int) -> Scenario:
-        """The first ``n`` frames."""
+        """The first ``n`` frames.
+
+        Parameters
+        ----------
+        n : int
+            Frames kept (at least 1).
+
+        Returns
+        -------
+        Scenario
+            A new scenario (arrays are views).
+
+        Raises
+        ------
+        ValueError
+            If ``n`` < 1.
+        """
         n = int(n)
         if n < 1:
             raise ValueError(f"crop: n={n}; need at least one frame")
@@ -174,7 +240,13 @@ class Scenario:
         )
 
     def to_trajectory(self) -> TwoPersonTrajectory:
-        """The ``counterpart.body.trajectory`` form (joints, signals as float32 with -1 unknown, phase)."""
+        """The ``counterpart.body.trajectory`` form.
+
+        Returns
+        -------
+        TwoPersonTrajectory
+            Joints, signals as float32 with -1 unknown, phase; body dimensions in ``meta``.
+        """
         X = self.joints()
         meta = dict(self.meta)
         meta["dims_a"] = _dims_dict(self.dims_a)
@@ -404,7 +476,31 @@ def handshake(
     hand_dy: float = 0.0,
 ) -> Scenario:
     """Two people walk up to each other, shake right hands (pumping), let go and step back.
-    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet.
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second (> 0).
+    emotion : str or None, default=None
+        One of ``EMOTIONS`` (None: drawn from the seed).
+    strength : float or None, default=None
+        Emotion strength in [0, 1] (None: drawn from the seed in [0.2, 1]).
+    initiator : str or None, default=None
+        ``"a"`` (left person) or ``"b"`` (right person) (None: drawn from the seed).
+    hand_dy : float, default=0.0
+        Raises (lowers, < 0) the height where the hands meet, metres.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``fps``, ``emotion``, ``strength`` or ``initiator`` is invalid.
     """
     c = _context("handshake", seed, fps, emotion, strength, initiator)
     return _meeting(c, kind="handshake", hand_dy=hand_dy)
@@ -419,7 +515,31 @@ def high_five(
     hand_dy: float = 0.0,
 ) -> Scenario:
     """Two people walk up, raise their right hands and slap them together above head height.
-    ``hand_dy`` (m) raises (lowers, < 0) the height where the hands meet.
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second (> 0).
+    emotion : str or None, default=None
+        One of ``EMOTIONS`` (None: drawn from the seed).
+    strength : float or None, default=None
+        Emotion strength in [0, 1] (None: drawn from the seed in [0.2, 1]).
+    initiator : str or None, default=None
+        ``"a"`` (left person) or ``"b"`` (right person) (None: drawn from the seed).
+    hand_dy : float, default=0.0
+        Raises (lowers, < 0) the height where the hands meet, metres.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``fps``, ``emotion``, ``strength`` or ``initiator`` is invalid.
     """
     c = _context("high_five", seed, fps, emotion, strength, initiator)
     return _meeting(c, kind="high_five", hand_dy=hand_dy)
@@ -434,6 +554,29 @@ def pull(
 ) -> Scenario:
     """The initiator takes the other's right hand and pulls: steps back leaning back, the other is
     drawn forward a step, leaning in; then they let go.
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second (> 0).
+    emotion : str or None, default=None
+        One of ``EMOTIONS`` (None: drawn from the seed).
+    strength : float or None, default=None
+        Emotion strength in [0, 1] (None: drawn from the seed in [0.2, 1]).
+    initiator : str or None, default=None
+        ``"a"`` (left person) or ``"b"`` (right person) (None: drawn from the seed).
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``fps``, ``emotion``, ``strength`` or ``initiator`` is invalid.
     """
     c = _context("pull", seed, fps, emotion, strength, initiator)
     return _meeting(c, kind="pull")
@@ -511,6 +654,29 @@ def push(
 ) -> Scenario:
     """The initiator walks up and pushes the other on the chest with both hands; the pushed person
     recoils: leans back, arms flung out, head snapping back, stumbling backwards a few steps.
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second (> 0).
+    emotion : str or None, default=None
+        One of ``EMOTIONS`` (None: drawn from the seed).
+    strength : float or None, default=None
+        Emotion strength in [0, 1] (None: drawn from the seed in [0.2, 1]).
+    initiator : str or None, default=None
+        ``"a"`` (left person) or ``"b"`` (right person) (None: drawn from the seed).
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``fps``, ``emotion``, ``strength`` or ``initiator`` is invalid.
     """
     c = _context("push", seed, fps, emotion, strength, initiator)
     I, O = c.init, c.other
@@ -587,7 +753,31 @@ def wave(
     strength: float | None = None,
     initiator: str | None = None,
 ) -> Scenario:
-    """The initiator takes a step, raises the right hand and waves; the other waves back."""
+    """The initiator takes a step, raises the right hand and waves; the other waves back.
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second (> 0).
+    emotion : str or None, default=None
+        One of ``EMOTIONS`` (None: drawn from the seed).
+    strength : float or None, default=None
+        Emotion strength in [0, 1] (None: drawn from the seed in [0.2, 1]).
+    initiator : str or None, default=None
+        ``"a"`` (left person) or ``"b"`` (right person) (None: drawn from the seed).
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``fps``, ``emotion``, ``strength`` or ``initiator`` is invalid.
+    """
     c = _context("wave", seed, fps, emotion, strength, initiator)
     g = DOF_INDEX
     half = float(c.rng.uniform(0.9, 1.3))
@@ -670,6 +860,34 @@ def conversation(
     the speaker, looks away more often when not ``interested``, and answers the speaker's nods and
     shakes by the ``PLANTED_RULES``. Spontaneous listener nods (0.03/s) fall only where no planted
     response can. The initiator speaks first.
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second (> 0).
+    emotion : str or None, default=None
+        One of ``EMOTIONS`` (None: drawn from the seed).
+    strength : float or None, default=None
+        Emotion strength in [0, 1] (None: drawn from the seed in [0.2, 1]).
+    initiator : str or None, default=None
+        ``"a"`` (left person) or ``"b"`` (right person) (None: drawn from the seed).
+    interested : bool or None, default=None
+        Whether the listener is interested (None: drawn from the seed).
+    duration : float, default=30.0
+        Length, seconds (> 1).
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``duration`` is not over 1 s, or ``fps``, ``emotion``, ``strength`` or ``initiator`` is
+        invalid.
     """
     c = _context("conversation", seed, fps, emotion, strength, initiator)
     rng = c.rng
@@ -765,7 +983,30 @@ SCENARIOS: dict[str, Callable[..., Scenario]] = {
 
 
 def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Scenario:
-    """Generate scenario ``name`` (one of ``SCENARIOS``; "cmu" needs ``bvh_a``/``bvh_b``)."""
+    """Generate a scenario.
+
+    Parameters
+    ----------
+    name : str
+        One of ``SCENARIOS``, or ``"cmu"`` (a BVH pair: ``bvh_a``/``bvh_b`` in ``kw``, default the
+        shared CMU pair).
+    seed : int, default=0
+        Seed of every random choice.
+    fps : float, default=25.0
+        Frames per second.
+    **kw
+        Further arguments of the generator.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is unknown.
+    """
     if name == "cmu":
         a, b = kw.pop("bvh_a", None), kw.pop("bvh_b", None)
         if a is None or b is None:
@@ -779,7 +1020,24 @@ def make_scenario(name: str, seed: int = 0, fps: float = 25.0, **kw: Any) -> Sce
 
 
 def scenario_from_bvh(path_a: str, path_b: str, fps: float = 25.0, label: str = "handshake", seed: int = 0) -> Scenario:
-    """A BVH pair as a scenario; see ``counterpart.sim.capture.scenario_from_bvh``."""
+    """A BVH pair as a scenario; see ``counterpart.sim.capture.scenario_from_bvh``.
+
+    Parameters
+    ----------
+    path_a, path_b : str
+        The two people's BVH files.
+    fps : float, default=25.0
+        Frames per second.
+    label : str, default="handshake"
+        Interaction name.
+    seed : int, default=0
+        Seed.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
+    """
     from counterpart.sim.capture import scenario_from_bvh as _from_bvh
 
     return _from_bvh(path_a, path_b, fps=fps, label=label, seed=seed)

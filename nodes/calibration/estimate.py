@@ -49,24 +49,38 @@ from .lines import LineFamilies, segment_angles
 class CalibrationConfig:
     """Priors and noise model of :func:`estimate_camera`.
 
-    Attributes
+    Parameters
     ----------
-        person_height, person_height_std: prior on an adult's stature, metres (mean, std).
-        fov_deg: centre of the weak prior on the horizontal field of view (the default camera's).
-        focal_log_std: std of that prior on log f (0.35: 40-75 degrees within about one std).
-        roll_std_deg: std of the prior on roll, degrees.
-        pixel_noise: std of a head point along the image vertical, as a share of the person's pixel
-            height (posture, the outline's top and bottom).
-        lateral_noise: its std across (people lean: walking, reaching to each other).
-        min_tilt_deg, max_tilt_deg: bounds of the tilt (a camera level or looking down; people
-            leaning towards each other otherwise read as a camera looking up).
-        min_pixel_noise: the least std of a head point, pixels.
-        correlation_s: seconds over which one person's observations are counted as one.
-        min_observations: fewer usable observations give no estimate.
-        line_noise_px, min_line_noise_deg: std of a scene segment's direction: this many pixels
-            across its length, at least this many degrees.
-        grid_tilt_deg, grid_fov_deg: start values tried (the best ``n_starts`` are refined).
-        n_starts: refined starts.
+    person_height, person_height_std : float, default=1.70, 0.09
+        Prior on an adult's stature, metres (mean, std).
+    fov_deg : float, default=55.0
+        Centre of the weak prior on the horizontal field of view, degrees (the default camera's).
+    focal_log_std : float, default=0.35
+        Std of that prior on log f (0.35: 40-75 degrees within about one std).
+    roll_std_deg : float, default=10.0
+        Std of the prior on roll, degrees.
+    pixel_noise : float, default=0.05
+        Std of a head point along the image vertical, as a share of the person's pixel height
+        (posture, the outline's top and bottom).
+    lateral_noise : float, default=0.10
+        Its std across (people lean: walking, reaching to each other), same share.
+    max_tilt_deg, min_tilt_deg : float, default=80.0, -5.0
+        Bounds of the tilt, degrees (a camera level or looking down; people leaning towards each
+        other otherwise read as a camera looking up).
+    min_pixel_noise : float, default=1.0
+        The least std of a head point, pixels.
+    correlation_s : float, default=1.0
+        Seconds over which one person's observations are counted as one.
+    min_observations : int, default=20
+        Fewer usable observations give no estimate.
+    line_noise_px, min_line_noise_deg : float, default=1.5, 0.5
+        Std of a scene segment's direction: this many pixels across its length, at least this many
+        degrees.
+    grid_tilt_deg, grid_fov_deg : tuple of float
+        Start values tried, degrees (the best ``n_starts`` are refined); default tilts -5 to 50 in
+        steps of 5, fields of view 30 to 95.
+    n_starts : int, default=3
+        Refined starts.
     """
 
     person_height: float = 1.70
@@ -94,25 +108,43 @@ class CameraEstimate:
 
     Attributes
     ----------
-        focal: focal length, pixels (fx = fy), for frames of ``width`` x ``height``.
-        tilt_deg: downward pitch of the optical axis, degrees; ``roll_deg`` about it, degrees.
-        height: camera centre above the ground, metres.
-        focal_std: relative std of the focal length; ``tilt_std_deg``, ``roll_std_deg`` degrees;
-            ``height_std`` relative std of the height.
-        distance: horizontal distance from the camera to the median foot position, metres (the
-            world origin is put there, as in the simulator's scene).
-        offset_x: lateral position of the median foot position, metres (camera frame).
-        people_heights: (K,) estimated statures of the people, metres.
-        n_observations, n_people: head/foot pairs and people used; ``inliers`` share of them
-            within 3 std of the model.
-        depth_spread: how far the people moved in depth (:func:`depth_spread`: the spread of a
-            person's foot rows over its pixel height; 0 when everyone stays at one depth). People all at one depth show
-            the vertical vanishing point only, not the horizon: focal length and tilt are then
-            left to the priors and the lean of the people.
-        horizon_segments: scene segments of horizontal families whose vanishing point is within
-            five image widths of the centre (they place the horizon; lines parallel to the image
-            show its direction only).
-        width, height_px: the frame size it holds for.
+    focal : float
+        Focal length, pixels (fx = fy), for frames of ``width`` x ``height_px``.
+    tilt_deg : float
+        Downward pitch of the optical axis, degrees.
+    roll_deg : float
+        Roll about the optical axis, degrees.
+    height : float
+        Camera centre above the ground, metres.
+    focal_std : float
+        Relative std of the focal length.
+    tilt_std_deg, roll_std_deg : float
+        Std of the tilt and the roll, degrees.
+    height_std : float
+        Relative std of the height.
+    distance : float
+        Horizontal distance from the camera to the median foot position, metres (the world origin
+        is put there, as in the simulator's scene).
+    offset_x : float
+        Lateral position of the median foot position, metres (camera frame).
+    people_heights : tuple of float
+        The K estimated statures of the people, metres.
+    n_observations : int
+        Head/foot pairs used.
+    n_people : int
+        People used.
+    inliers : float
+        Share of the observations within 3 std of the model.
+    width, height_px : int
+        The frame size it holds for, pixels.
+    depth_spread : float, default=0.0
+        How far the people moved in depth (:func:`depth_spread`: the spread of a person's foot rows
+        over its pixel height; 0 when everyone stays at one depth). People all at one depth show the
+        vertical vanishing point only, not the horizon: focal length and tilt are then left to the
+        priors and the lean of the people.
+    horizon_segments : int, default=0
+        Scene segments of horizontal families whose vanishing point is within five image widths of
+        the centre (they place the horizon; lines parallel to the image show its direction only).
     """
 
     focal: float
@@ -140,8 +172,13 @@ class CameraEstimate:
         return float(np.degrees(2 * np.arctan(self.width / (2 * self.focal))))
 
     def camera(self) -> Camera:
-        """The estimate as a ``counterpart.body.camera.Camera``: world Y up, the ground y = 0, the camera
-        looking along -Z at the people, the world origin under their median position.
+        """The estimate as a camera: world Y up, the ground y = 0, the camera looking along -Z at the
+        people, the world origin under their median position.
+
+        Returns
+        -------
+        Camera
+            The ``counterpart.body.camera.Camera``.
         """
         R = rotation(np.radians(self.tilt_deg), np.radians(self.roll_deg))
         centre = np.array([-self.offset_x, self.height, self.distance])
@@ -157,7 +194,13 @@ class CameraEstimate:
         )
 
     def summary(self) -> dict[str, Any]:
-        """Plain figures for printing and JSON (degrees, metres, pixels)."""
+        """Plain figures for printing and JSON (degrees, metres, pixels).
+
+        Returns
+        -------
+        dict
+            Every field (statures rounded to mm) and ``fov_deg``.
+        """
         d = asdict(self)
         d["people_heights"] = [round(h, 3) for h in self.people_heights]
         d["fov_deg"] = self.fov_deg
@@ -175,8 +218,19 @@ class CameraEstimate:
 
 
 def rotation(tilt: float, roll: float) -> np.ndarray:
-    """(3, 3) world-to-camera rotation of a camera looking along -Z, pitched down by ``tilt`` and
-    rolled by ``roll`` (radians) about its optical axis; as ``Camera.look_at`` for roll 0.
+    """World-to-camera rotation of a camera looking along -Z; as ``Camera.look_at`` for roll 0.
+
+    Parameters
+    ----------
+    tilt : float
+        Downward pitch, radians.
+    roll : float
+        Roll about the optical axis, radians.
+
+    Returns
+    -------
+    ndarray of shape (3, 3)
+        The rotation.
     """
     s, c = np.sin(tilt), np.cos(tilt)
     R0 = np.array([[1.0, 0.0, 0.0], [0.0, -c, s], [0.0, -s, -c]])
@@ -191,7 +245,23 @@ def head_foot(bbox: Any, ctrl: np.ndarray | None, ref_point: np.ndarray | None) 
     Head: the reference point at the top of the head (``ref_point``; the middle of the bbox top
     without it), on the region's upper edge. Foot: the region's lower edge, at the mean x of the
     outline's control points in its lowest tenth (between the feet; the bbox middle without an
-    outline). Returns ((2,) head, (2,) foot).
+    outline).
+
+    Parameters
+    ----------
+    bbox : sequence of 4 numbers
+        The region's box (x, y, w, h), pixels.
+    ctrl : ndarray of shape (n, 2) or None
+        The outline's control points, pixels (used with 3 or more).
+    ref_point : ndarray of shape (2,) or None
+        The reference point at the top of the head, pixels.
+
+    Returns
+    -------
+    head : ndarray of shape (2,)
+        Head point, pixels.
+    foot : ndarray of shape (2,)
+        Foot point, pixels.
     """
     x, y, w, h = (float(v) for v in bbox)
     top, bottom = y - 0.5, y + h - 0.5
@@ -209,6 +279,24 @@ def usable(
 ) -> bool:
     """Whether a region can serve as an upright person: whole (off the image borders), not shared
     with another person, tall enough, and taller than ``min_aspect`` times its width.
+
+    Parameters
+    ----------
+    bbox : sequence of 4 numbers
+        The region's box (x, y, w, h), pixels.
+    width, height : int
+        Frame size, pixels.
+    merged : bool, default=False
+        The region is shared with another person.
+    min_height : float, default=20.0
+        Least region height, pixels.
+    min_aspect : float, default=1.3
+        Least height over width.
+
+    Returns
+    -------
+    bool
+        True when usable.
     """
     x, y, w, h = (int(v) for v in bbox)
     return (
@@ -306,7 +394,18 @@ def _relative_heights(
 
 
 def estimate_camera(*args: Any, **kw: Any) -> CameraEstimate | None:
-    """:func:`fit_camera` on one BLAS thread (its matrices are small: more threads only contend)."""
+    """:func:`fit_camera` on one BLAS thread (its matrices are small: more threads only contend).
+
+    Parameters
+    ----------
+    *args, **kw
+        The arguments of :func:`fit_camera`.
+
+    Returns
+    -------
+    CameraEstimate or None
+        As :func:`fit_camera`.
+    """
     with threadpool_limits(1):
         return fit_camera(*args, **kw)
 
@@ -322,18 +421,31 @@ def fit_camera(
 ) -> CameraEstimate | None:
     """Estimate the camera from head and foot points of upright people.
 
-    Args:
-        head, foot: (N, 2) image points, pixels (top of the head, middle of the feet).
-        track: (N,) person identity of each observation (any integers).
-        size: (width, height) of the frames, pixels.
-        time_s: (N,) time of each observation, seconds (None: 25 frames per second in order).
-        config: priors and noise model.
-        lines: families of straight scene lines (``counterpart.nodes.calibration.lines``): the vertical ones
-            and the horizon of the horizontal ones join the fit (None: the people alone).
+    Parameters
+    ----------
+    head, foot : ndarray of shape (N, 2)
+        Image points, pixels (top of the head, middle of the feet).
+    track : ndarray of shape (N,)
+        Person identity of each observation (any integers).
+    size : tuple of (int, int)
+        (width, height) of the frames, pixels.
+    time_s : ndarray of shape (N,) or None, default=None
+        Time of each observation, seconds (None: 25 frames per second in order).
+    config : CalibrationConfig, default=CalibrationConfig()
+        Priors and noise model.
+    lines : LineFamilies or None, default=None
+        Families of straight scene lines (``counterpart.nodes.calibration.lines``): the vertical
+        ones and the horizon of the horizontal ones join the fit (None: the people alone).
 
     Returns
     -------
+    CameraEstimate or None
         The estimate, or None with fewer than ``config.min_observations`` observations.
+
+    Raises
+    ------
+    ValueError
+        If ``head``, ``foot`` and ``track`` differ in length.
     """
     head = np.asarray(head, np.float64).reshape(-1, 2)
     foot = np.asarray(foot, np.float64).reshape(-1, 2)
@@ -435,6 +547,18 @@ def fit_camera(
 def horizon_segments(lines: LineFamilies | None, size: tuple[int, int]) -> int:
     """Segments of the horizontal families whose vanishing point lies within five image widths of
     the image centre.
+
+    Parameters
+    ----------
+    lines : LineFamilies or None
+        The scene's line families.
+    size : tuple of (int, int)
+        (width, height) of the frames, pixels.
+
+    Returns
+    -------
+    int
+        Number of segments (0 without lines).
     """
     if lines is None or not len(lines.vp):
         return 0
@@ -450,7 +574,22 @@ def horizon_segments(lines: LineFamilies | None, size: tuple[int, int]) -> int:
 def depth_spread(foot_row: np.ndarray, pixel_height: np.ndarray, person: np.ndarray, min_views: int = 10) -> float:
     """How far the people moved in depth: for each person seen ``min_views`` times or more, the
     interquartile range of its foot's image row over its median pixel height; the largest of them.
-    (N,) pixels, (N,) pixels, (N,) ints from 0.
+
+    Parameters
+    ----------
+    foot_row : ndarray of shape (N,)
+        Image row of each observation's foot, pixels.
+    pixel_height : ndarray of shape (N,)
+        Each observation's pixel height.
+    person : ndarray of shape (N,), dtype int
+        Person index of each observation, from 0.
+    min_views : int, default=10
+        Least observations of a person for it to count.
+
+    Returns
+    -------
+    float
+        The largest spread (0 when no person has enough observations).
     """
     out = 0.0
     for j in range(int(person.max()) + 1 if len(person) else 0):

@@ -80,6 +80,25 @@ class Camera(Node):
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        """Check the parameters as :class:`Node` does, and that a live device is not asked to loop or skip.
+
+        Parameters
+        ----------
+        given : dict
+            The parameters given (launch file and overrides).
+        where : str, default=""
+            Where they come from, prefixed to error messages.
+
+        Returns
+        -------
+        dict
+            Every parameter, defaults filled in.
+
+        Raises
+        ------
+        ParamError
+            Naming the bad parameter.
+        """
         p = super().validate_params(given, where)
         prefix = f"{where}: " if where else ""
         scheme = parse_uri(p["source"])[0]

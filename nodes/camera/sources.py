@@ -63,7 +63,25 @@ class VideoFileSource:
     """A video file decoded by ``cv2.VideoCapture``, frame by frame, in file order.
 
     ``source_time`` of frame i is ``i / fps`` (seconds from the start of the file), so it is exact
-    and monotonic whatever the container's timestamps say. ``fps`` overrides the header's rate.
+    and monotonic whatever the container's timestamps say.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The video file.
+    fps : float or None, default=None
+        Frames per second; overrides the header's rate (None: the header's).
+
+    Attributes
+    ----------
+    fps : float
+        Frames per second once opened (0 when the header gives none and no override).
+    size : tuple of (int, int)
+        Frame (width, height), pixels, once opened.
+    frame_count : int or None
+        Frames the header declares (None when it declares none).
+    undecodable : int
+        Frames that failed to decode and were skipped.
     """
 
     live = False
@@ -168,7 +186,18 @@ class VideoFileSource:
         return None
 
     def skip(self, n: int) -> int:
-        """Drop ``n`` frames by decoding them (exact whatever the codec's keyframes); returns how many."""
+        """Drop ``n`` frames by decoding them (exact whatever the codec's keyframes).
+
+        Parameters
+        ----------
+        n : int
+            Frames to drop.
+
+        Returns
+        -------
+        int
+            Frames dropped (fewer at the end of the file).
+        """
         done = 0
         for _ in range(n):
             if self._pending is not None:
@@ -195,8 +224,27 @@ class VideoFileSource:
 class ImageFolderSource:
     """The images of a folder in sorted name order, as a video of ``fps`` frames per second.
 
-    ``pattern`` is one or more glob patterns joined by ``|`` (default ``*.png|*.jpg``). Images are
-    decoded as 8-bit BGR; every image must have the size of the first one.
+    Images are decoded as 8-bit BGR; every image must have the size of the first one.
+
+    Parameters
+    ----------
+    folder : str or path-like
+        The folder.
+    pattern : str, default="*.png|*.jpg"
+        One or more glob patterns joined by ``|``.
+    fps : float or None, default=None
+        Frames per second (None: 0, unknown).
+
+    Attributes
+    ----------
+    files : list of Path
+        The matching files, once opened.
+    size : tuple of (int, int)
+        Frame (width, height), pixels, once opened.
+    frame_count : int or None
+        Number of files, once opened.
+    undecodable : int
+        Images that failed to decode (or had another size) and were skipped.
     """
 
     live = False
@@ -266,6 +314,18 @@ class ImageFolderSource:
         log.warning("%s: skipped%s", why, "" if self.undecodable == 1 else f" ({self.undecodable} so far)")
 
     def skip(self, n: int) -> int:
+        """Drop ``n`` frames without reading them.
+
+        Parameters
+        ----------
+        n : int
+            Frames to drop.
+
+        Returns
+        -------
+        int
+            Frames dropped (fewer at the end).
+        """
         done = min(n, len(self.files) - self._index)
         self._index += done
         return done
@@ -279,7 +339,13 @@ class ImageFolderSource:
 
 # ------------------------------------------------------------------------------------ V4L2 devices
 def video_devices() -> list[str]:
-    """The ``/dev/video*`` device nodes present on this machine, sorted."""
+    """The ``/dev/video*`` device nodes present on this machine, sorted.
+
+    Returns
+    -------
+    list of str
+        Device paths, in numeric order.
+    """
     return sorted(glob.glob("/dev/video*"), key=lambda s: (len(s), s))
 
 
@@ -291,9 +357,26 @@ def read_with_retry(
 ) -> tuple[bool, Any]:
     """Call ``read()`` until it returns ``(True, x)``; after each failure wait the next of ``delays``.
 
-    Returns the first success, or ``(False, None)`` once every delay is used up. Live devices drop a
-    read now and then (USB hiccups, a driver restart); a short backoff rides over those, while a device
-    that is gone for good ends the stream in about 1.5 s instead of hanging.
+    Live devices drop a read now and then (USB hiccups, a driver restart); a short backoff rides over
+    those, while a device that is gone for good ends the stream in about 1.5 s instead of hanging.
+
+    Parameters
+    ----------
+    read : callable
+        Returns ``(ok, x)``.
+    delays : sequence of float, default=RETRY_DELAYS_S
+        Waits between tries, seconds.
+    sleep : callable, default=time.sleep
+        Waits a number of seconds.
+    what : str, default="device"
+        Name of what is read, for the log.
+
+    Returns
+    -------
+    ok : bool
+        True on success.
+    x : Any
+        The first success's value, or None once every delay is used up.
     """
     ok, x = read()
     if ok:
@@ -311,8 +394,31 @@ def read_with_retry(
 class V4L2Source:
     """A live V4L2 camera (``/dev/videoN`` or index N) through ``cv2.VideoCapture(..., CAP_V4L2)``.
 
-    ``width``, ``height``, ``fps`` (when given) are requested from the driver, which may pick the
-    nearest mode it supports; the attributes report what it delivers. ``source_time`` is 0 (live).
+    ``source_time`` is 0 (live).
+
+    Parameters
+    ----------
+    device : str or int
+        ``/dev/videoN``, or the index N.
+    width, height : int, default=0
+        Frame size requested from the driver, pixels (0: the driver's); it may pick the nearest
+        mode it supports.
+    fps : float or None, default=None
+        Frame rate requested from the driver (None: the driver's).
+    retry_delays : sequence of float, default=RETRY_DELAYS_S
+        Waits between read retries, seconds (:func:`read_with_retry`).
+
+    Attributes
+    ----------
+    fps : float
+        Frame rate the driver reports, once opened.
+    size : tuple of (int, int)
+        Frame (width, height) it delivers, pixels, once opened.
+
+    Raises
+    ------
+    SourceError
+        If ``device`` is neither ``/dev/...`` nor an index.
     """
 
     live = True
@@ -405,6 +511,20 @@ class SimulatorSource:
     """Adapter for any rendered stream: an object with ``render(i) -> (frame, time)``, ``n_frames``
     and ``fps``. ``frame`` is (H, W, 3) uint8 BGR (or (H, W) uint8, made BGR here); ``time`` is the
     scene time of frame i in seconds.
+
+    Parameters
+    ----------
+    stream : Any
+        The rendered stream.
+    uri : str, default="sim"
+        The source's URI, for messages.
+    fps : float or None, default=None
+        Frames per second (None: the stream's).
+
+    Raises
+    ------
+    SourceError
+        If ``stream`` lacks ``render``, ``n_frames`` or ``fps``.
     """
 
     live = False
@@ -446,6 +566,18 @@ class SimulatorSource:
         return ok, frame, t
 
     def skip(self, n: int) -> int:
+        """Drop ``n`` frames without reading them.
+
+        Parameters
+        ----------
+        n : int
+            Frames to drop.
+
+        Returns
+        -------
+        int
+            Frames dropped (fewer at the end).
+        """
         done = min(n, self.frame_count - self._index)
         self._index += done
         return done
@@ -471,8 +603,28 @@ def open_simulator(
         stream.fps        # float, frames per second
         stream.render(i)  # -> (image (H, W, 3) uint8 BGR, scene time of frame i in s)
 
-    ``width``/``height``/``fps`` are None when not requested (the scenario's own). ``options`` are
-    the URI's other query keys, passed through as strings.
+    Parameters
+    ----------
+    scenario : str
+        The scenario's name.
+    options : dict of str to str
+        The URI's query keys: ``seed``, ``width``, ``height``, ``fps`` override the arguments; the
+        others are passed through as strings.
+    fps : float or None
+        Frames per second (None or 0: the scenario's own).
+    width, height : int
+        Frame size, pixels (0: the scenario's own).
+
+    Returns
+    -------
+    SimulatorSource
+        The source (not yet opened).
+
+    Raises
+    ------
+    SourceError
+        If the simulator cannot be loaded, ``seed`` is not an integer, or the simulator refuses
+        the scenario or options.
     """
     uri = f"sim:{scenario}"
     try:
@@ -505,9 +657,28 @@ SCHEMES = ("file", "folder", "v4l2", "sim")
 
 
 def parse_uri(uri: str) -> tuple[str, str, dict[str, str]]:
-    """``uri`` -> (scheme, target, options). Schemes: ``file:PATH`` (or a plain path), ``folder:DIR``
-    (``?pattern=*.png``), ``v4l2:/dev/videoN`` (or a plain ``/dev/videoN``, or ``v4l2:N``),
-    ``sim:SCENARIO?seed=S&width=W&...``. Raises SourceError for an empty URI or unknown scheme.
+    """Split a source URI.
+
+    Parameters
+    ----------
+    uri : str
+        ``file:PATH`` (or a plain path), ``folder:DIR`` (``?pattern=*.png``), ``v4l2:/dev/videoN``
+        (or a plain ``/dev/videoN``, or ``v4l2:N``), ``sim:SCENARIO?seed=S&width=W&...``.
+
+    Returns
+    -------
+    scheme : str
+        One of ``SCHEMES``.
+    target : str
+        The path, device or scenario.
+    options : dict of str to str
+        The query keys (``folder`` and ``sim`` only).
+
+    Raises
+    ------
+    SourceError
+        For an empty URI, an unknown scheme, nothing after the scheme, or a folder option other
+        than ``pattern``.
     """
     if not isinstance(uri, str) or not uri.strip():
         raise SourceError("empty source; give a video file path, folder:DIR, v4l2:/dev/videoN or sim:SCENARIO")
@@ -535,9 +706,27 @@ def parse_uri(uri: str) -> tuple[str, str, dict[str, str]]:
 
 
 def make_source(uri: str, fps: float | None = None, width: int = 0, height: int = 0) -> FrameSource:
-    """A (not yet opened) source for ``uri`` (see :func:`parse_uri`). ``fps`` overrides the source's
-    frame rate (image folders need it: default 25); ``width``/``height`` are requested from devices
-    and the simulator (other sources are resized by the caller).
+    """A (not yet opened) source for ``uri``.
+
+    Parameters
+    ----------
+    uri : str
+        The source (see :func:`parse_uri`).
+    fps : float or None, default=None
+        Overrides the source's frame rate (image folders need it: default 25).
+    width, height : int, default=0
+        Frame size requested from devices and the simulator, pixels (other sources are resized by
+        the caller).
+
+    Returns
+    -------
+    FrameSource
+        The source.
+
+    Raises
+    ------
+    SourceError
+        If the URI is bad or the simulator cannot provide the stream.
     """
     scheme, target, options = parse_uri(uri)
     if scheme == "file":

@@ -32,8 +32,23 @@ UPPER_BODY_POINTS_32 = np.r_[np.arange(24, 32), np.arange(0, 9)]
 
 @dataclass(frozen=True)
 class ActivityParams:
-    """fps: Hz. window_s: window of the velocity statistics (s). lag_s: finite-difference step (s).
-    threshold: label threshold in torso lengths per second.
+    """Parameters of the activity score.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz (> 0).
+    window_s : float, default=1.0
+        Window of the velocity statistics, seconds (at least 2 frames).
+    lag_s : float, default=0.12
+        Finite-difference step, seconds.
+    threshold : float, default=0.15
+        Label threshold, torso lengths per second.
+
+    Raises
+    ------
+    ValueError
+        If ``fps`` is not positive or the window is under 2 frames.
     """
 
     fps: float
@@ -59,7 +74,25 @@ class ActivityParams:
 
 
 def torso_points_3d(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Torso points (T,4,3) and torso length (T,) from (T,14,3) joints (project joint order)."""
+    """Torso points and torso length from joints.
+
+    Parameters
+    ----------
+    joints : ndarray of shape (T, 14, 3)
+        Joints, metres, in the project joint order.
+
+    Returns
+    -------
+    points : ndarray of shape (T, 4, 3)
+        Shoulders and hips (l_shoulder, r_shoulder, l_hip, r_hip), metres.
+    torso : ndarray of shape (T,)
+        Mid-shoulder to mid-hip distance, metres.
+
+    Raises
+    ------
+    ValueError
+        If ``joints`` is not of shape (T, 14, 3).
+    """
     joints = np.asarray(joints, dtype=np.float64)
     if joints.ndim != 3 or joints.shape[1:] != (14, 3):
         raise ValueError(f"joints must be (T,14,3) metres in the project joint order, got {joints.shape}")
@@ -74,9 +107,27 @@ def activity_from_points(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Batch activity over a trajectory of points, vectorised over windows (causal).
 
-    points: (T,J,D) positions (any unit); scale: (T,) torso length in the same unit.
-    Returns (score (T,), label (T,) int8); the first ``W + lag - 1`` frames and windows with a missing
-    (nan) point are UNKNOWN.
+    Parameters
+    ----------
+    points : ndarray of shape (T, J, D)
+        Positions (any unit).
+    scale : ndarray of shape (T,)
+        Torso length in the same unit.
+    params : ActivityParams
+        Frame rate, window, lag and threshold.
+
+    Returns
+    -------
+    score : ndarray of shape (T,)
+        Activity, torso lengths per second; NaN where unknown.
+    label : ndarray of shape (T,), dtype int8
+        ``score >= threshold`` (1/0), UNKNOWN (-1) where the score is NaN.
+        The first ``W + lag - 1`` frames and windows with a missing (NaN) point are UNKNOWN.
+
+    Raises
+    ------
+    ValueError
+        If the shapes do not match.
     """
     pts = np.asarray(points, dtype=np.float64)
     sc = np.asarray(scale, dtype=np.float64)
@@ -97,7 +148,24 @@ def activity_from_points(
 
 
 def activity_3d(joints: np.ndarray, fps: float, **params: object) -> tuple[np.ndarray, np.ndarray]:
-    """Activity over (T,14,3) joints (metres). Returns (score (T,) torso lengths/s, label (T,))."""
+    """Activity over 3D joints.
+
+    Parameters
+    ----------
+    joints : ndarray of shape (T, 14, 3)
+        Joints, metres, in the project joint order.
+    fps : float
+        Frame rate, Hz.
+    **params
+        Other fields of :class:`ActivityParams` (``window_s``, ``lag_s``, ``threshold``).
+
+    Returns
+    -------
+    score : ndarray of shape (T,)
+        Activity, torso lengths per second; NaN where unknown.
+    label : ndarray of shape (T,), dtype int8
+        ``score >= threshold`` (1/0), UNKNOWN (-1) where the score is NaN.
+    """
     p = ActivityParams(fps=fps, **params)  # type: ignore[arg-type]
     pts, sc = torso_points_3d(joints)
     return activity_from_points(pts, sc, p)
@@ -106,9 +174,34 @@ def activity_3d(joints: np.ndarray, fps: float, **params: object) -> tuple[np.nd
 def activity_2d(
     control_points: np.ndarray, height_px: np.ndarray | float, fps: float, torso_fraction: float = 0.3, **params: object
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Activity from silhouette splines: control_points (T,32,2) pixels ordered from the top of the
-    head; height_px (T,) or scalar. Uses :data:`UPPER_BODY_POINTS_32`. Crude: arm gestures move the
-    outline as much as the torso does, and they count.
+    """Activity from silhouette splines, on :data:`UPPER_BODY_POINTS_32`.
+
+    Crude: arm gestures move the outline as much as the torso does, and they count.
+
+    Parameters
+    ----------
+    control_points : ndarray of shape (T, 32, 2)
+        Spline control points, pixels, ordered from the top of the head.
+    height_px : ndarray of shape (T,) or float
+        Silhouette height, pixels.
+    fps : float
+        Frame rate, Hz.
+    torso_fraction : float, default=0.3
+        Torso length as a fraction of the silhouette height.
+    **params
+        Other fields of :class:`ActivityParams` (``window_s``, ``lag_s``, ``threshold``).
+
+    Returns
+    -------
+    score : ndarray of shape (T,)
+        Activity, torso lengths per second; NaN where unknown.
+    label : ndarray of shape (T,), dtype int8
+        ``score >= threshold`` (1/0), UNKNOWN (-1) where the score is NaN.
+
+    Raises
+    ------
+    ValueError
+        If ``control_points`` is not of shape (T, 32, 2).
     """
     cp = np.asarray(control_points, dtype=np.float64)
     if cp.ndim != 3 or cp.shape[1:] != (32, 2):
@@ -123,6 +216,19 @@ class ActivityDetector:
 
     ``update(points (J,D), scale) -> (score, label)``; use :meth:`update_3d` for (14,3) joints and
     :meth:`update_2d` for a (32,2) silhouette spline.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz.
+    window_s : float, default=1.0
+        Window of the velocity statistics, seconds.
+    lag_s : float, default=0.12
+        Finite-difference step, seconds.
+    threshold : float, default=0.15
+        Label threshold, torso lengths per second.
+    torso_fraction : float, default=0.3
+        Torso length as a fraction of the silhouette height (2D).
     """
 
     def __init__(
@@ -149,7 +255,22 @@ class ActivityDetector:
         self._count = 0
 
     def update(self, points: np.ndarray, scale: float) -> tuple[float, int]:
-        """points: (J,D) torso points; scale: torso length (same unit). Returns (score, label)."""
+        """Add one frame.
+
+        Parameters
+        ----------
+        points : ndarray of shape (J, D)
+            Torso points (any unit).
+        scale : float
+            Torso length, same unit.
+
+        Returns
+        -------
+        score : float
+            Activity, torso lengths per second; NaN until the window is full or when unknown.
+        label : int
+            1/0, or UNKNOWN (-1).
+        """
         pts = np.asarray(points, dtype=np.float64)
         n = self._n
         if self._pts is None or self._pts.shape[1:] != pts.shape:
@@ -175,7 +296,25 @@ class ActivityDetector:
         return s, int(s >= p.threshold)
 
     def update_3d(self, joints: np.ndarray) -> tuple[float, int]:
-        """joints: (14,3) metres in the project joint order."""
+        """Add one frame of 3D joints.
+
+        Parameters
+        ----------
+        joints : ndarray of shape (14, 3)
+            Joints, metres, in the project joint order.
+
+        Returns
+        -------
+        score : float
+            Activity, torso lengths per second (NaN when unknown).
+        label : int
+            1/0, or UNKNOWN (-1).
+
+        Raises
+        ------
+        ValueError
+            If ``joints`` is not of shape (14, 3).
+        """
         j = np.asarray(joints, dtype=np.float64)
         if j.shape != (14, 3):
             raise ValueError(f"joints must be (14,3) metres, got {j.shape}")
@@ -184,7 +323,27 @@ class ActivityDetector:
         return self.update(pts, torso)
 
     def update_2d(self, control_points: np.ndarray, height_px: float) -> tuple[float, int]:
-        """control_points: (32,2) pixels from the top of the head; height_px: silhouette height."""
+        """Add one frame of a silhouette spline.
+
+        Parameters
+        ----------
+        control_points : ndarray of shape (32, 2)
+            Spline control points, pixels, from the top of the head.
+        height_px : float
+            Silhouette height, pixels.
+
+        Returns
+        -------
+        score : float
+            Activity, torso lengths per second (NaN when unknown).
+        label : int
+            1/0, or UNKNOWN (-1).
+
+        Raises
+        ------
+        ValueError
+            If ``control_points`` is not of shape (32, 2).
+        """
         cp = np.asarray(control_points, dtype=np.float64)
         if cp.shape != (32, 2):
             raise ValueError(f"control_points must be (32,2) pixels, got {cp.shape}")

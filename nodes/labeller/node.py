@@ -50,9 +50,18 @@ _HEAD_TURN, _HEAD_NOD = DOF_INDEX["head_turn"], DOF_INDEX["head_nod"]
 
 
 def head_angles(pose: np.ndarray) -> tuple[float | None, float | None]:
-    """(head_yaw, head_pitch) relative to the torso (rad) from a tracker's pose vector
-    (``counterpart.body.pose``: ``head_turn``, ``head_nod``); (None, None) when the pose is not a finite
-    (DOF,) vector (a tracker that publishes joints only).
+    """Head yaw and pitch relative to the torso from a tracker's pose vector.
+
+    Parameters
+    ----------
+    pose : ndarray of shape (DOF,)
+        The pose vector (``counterpart.body.pose``: ``head_turn``, ``head_nod``).
+
+    Returns
+    -------
+    head_yaw, head_pitch : float or None
+        Radians; (None, None) when the pose is not a finite (DOF,) vector (a tracker that publishes
+        joints only).
     """
     p = np.asarray(pose, dtype=np.float64)
     if p.shape != (DOF,) or not np.isfinite(p[[_HEAD_TURN, _HEAD_NOD]]).all():
@@ -68,6 +77,20 @@ def observations(sil: Silhouettes, pose: Pose3D | None) -> tuple[dict[int, Perso
     when it has one (:func:`head_angles`): shakes are head rotations that barely move the head
     joint, so they are seen in the yaw, not in the joints. Control points other than (32, 2) are left out (2D activity
     UNKNOWN), as are outlines the silhouette node could not trace.
+
+    Parameters
+    ----------
+    sil : Silhouettes
+        The silhouette node's message of the frame.
+    pose : Pose3D or None
+        The tracker's message of the same frame, when subscribed.
+
+    Returns
+    -------
+    obs : dict of int to PersonObservation
+        Per person id, what the inputs say about them.
+    sides : dict of int to str
+        Per person id, their side (``"left"`` / ``"right"``).
     """
     obs: dict[int, PersonObservation] = {}
     sides: dict[int, str] = {}
@@ -112,8 +135,27 @@ def signals_message(
     sides: dict[int, str],
     sources: dict[Any, str] | None = None,
 ) -> SocialSignals:
-    """One SocialSignals from ``SocialLabeller.update`` output, people in id order. sources:
-    ``SocialLabeller.sources`` (default: ``3d`` where the observation has joints, else ``2d``).
+    """One SocialSignals from ``SocialLabeller.update`` output, people in id order.
+
+    Parameters
+    ----------
+    seq : int
+        Message sequence number.
+    stamp : int
+        Message time stamp.
+    labels : dict
+        Per person id, signal name -> (score, label), as ``SocialLabeller.update`` returns it.
+    obs : dict of int to PersonObservation
+        Per person id, the observations labelled.
+    sides : dict of int to str
+        Per person id, their side (default ``"left"``).
+    sources : dict or None, default=None
+        ``SocialLabeller.sources`` (default: ``3d`` where the observation has joints, else ``2d``).
+
+    Returns
+    -------
+    SocialSignals
+        The message.
     """
     people = []
     for pid in sorted(labels):
@@ -168,8 +210,24 @@ _FIELD_NAMES = {
 
 
 def make_labeller(p: dict[str, Any], fps: float) -> SocialLabeller:
-    """The SocialLabeller of the node's parameters ``p`` at ``fps`` (Hz). Raises ParamError naming
-    the node parameters (and the frame rate) that do not fit together.
+    """The SocialLabeller of the node's parameters.
+
+    Parameters
+    ----------
+    p : dict
+        The node's checked parameters.
+    fps : float
+        Frame rate, Hz.
+
+    Returns
+    -------
+    SocialLabeller
+        The labeller.
+
+    Raises
+    ------
+    ParamError
+        Naming the node parameters (and the frame rate) that do not fit together.
     """
     groups: dict[str, dict[str, Any]] = {
         "head_params": {"band_hz": (p["band_low_hz"], p["band_high_hz"])},
@@ -325,6 +383,26 @@ class Labeller(Node):
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        """Check the parameters as :class:`Node` does, and that they make a labeller at ``fps`` (or,
+        when the rate comes from the stream, at 25 and 29.97 fps).
+
+        Parameters
+        ----------
+        given : dict
+            The parameters given (launch file and overrides).
+        where : str, default=""
+            Where they come from, prefixed to error messages.
+
+        Returns
+        -------
+        dict
+            Every parameter, defaults filled in.
+
+        Raises
+        ------
+        ParamError
+            Naming the parameters that do not fit together.
+        """
         p = super().validate_params(given, where)
         # the windows in frames must be long enough for their detectors, at the given rate or, when
         # it comes from the stream, at the common ones
@@ -338,6 +416,21 @@ class Labeller(Node):
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The inputs these parameters use: ``pose`` with ``use_tracker``, ``frame`` with ``use_face``
+        or ``fps`` 0 (the rate from the stream).
+
+        Parameters
+        ----------
+        params : dict
+            The checked parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The inputs subscribed.
+        outputs : dict of str to Output
+            The outputs.
+        """
         ins = {"silhouettes": cls.inputs["silhouettes"]}
         if params["use_tracker"]:
             ins["pose"] = cls.inputs["pose"]

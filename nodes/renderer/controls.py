@@ -22,12 +22,12 @@ def parse_control(data: Any, models: Sequence[str] = INTERACTION_MODELS) -> Cont
 
     Parameters
     ----------
-    data
+    data : Any
         The decoded JSON. Keys (all optional): ``model`` (one of ``models``), ``speaker`` (one of
         ``SPEAKERS``), ``interest`` (one of ``INTEREST_LEVELS``, a digit string accepted),
         ``emotion`` (one of ``EMOTIONS``), ``strength`` (number in [0, 1]), ``overlays`` (overlay
         name -> bool).
-    models
+    models : sequence of str, default=INTERACTION_MODELS
         The interaction models offered (a subset of ``INTERACTION_MODELS``).
 
     Returns
@@ -86,7 +86,18 @@ def parse_control(data: Any, models: Sequence[str] = INTERACTION_MODELS) -> Cont
 
 
 def control_to_json(msg: Control) -> dict[str, Any]:
-    """The set fields of a Control as a JSON-able dict."""
+    """The set fields of a Control as a JSON-able dict.
+
+    Parameters
+    ----------
+    msg : Control
+        The control.
+
+    Returns
+    -------
+    dict
+        The fields of ``CONTROL_KEYS`` that are not None.
+    """
     return {k: getattr(msg, k) for k in CONTROL_KEYS if getattr(msg, k) is not None}
 
 

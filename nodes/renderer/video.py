@@ -44,6 +44,20 @@ def _restore_opencv(level: int) -> None:
 def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
     """Whether OpenCV here writes ``fourcc`` into a ``suffix`` file that decodes back to ``n``
     frames (probed once per process, in a temporary folder).
+
+    Parameters
+    ----------
+    fourcc : str
+        The codec's four-character code, e.g. ``"avc1"``.
+    suffix : str
+        The file suffix, e.g. ``".mp4"``.
+    n : int, default=5
+        Frames (64 x 48 pixels) written in the probe.
+
+    Returns
+    -------
+    bool
+        True when the probe file decodes back to ``n`` frames.
     """
     key = f"{fourcc}{suffix}"
     if key in _PROBED:
@@ -68,7 +82,18 @@ def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
 
 
 def count_frames(path: str | os.PathLike) -> int:
-    """Frames that decode from the video at ``path`` (read through, not the header's count)."""
+    """Frames that decode from the video at ``path`` (read through, not the header's count).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The video file.
+
+    Returns
+    -------
+    int
+        Number of frames that decode (0 when the file does not open).
+    """
     cap = cv2.VideoCapture(str(path))
     n = 0
     try:
@@ -80,8 +105,25 @@ def count_frames(path: str | os.PathLike) -> int:
 
 
 def choose_codec(path: str | os.PathLike) -> tuple[str, Path]:
-    """The fourcc and the actual output path for a requested ``path``: ``.mp4`` gets H.264 when a
-    probe shows it works here, else the same name with ``.avi`` and MJPG; ``.avi`` gets MJPG.
+    """The fourcc and the actual output path for a requested ``path``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The requested file: ``.mp4`` gets H.264 when a probe shows it works here, else the same
+        name with ``.avi`` and MJPG; ``.avi`` gets MJPG.
+
+    Returns
+    -------
+    fourcc : str
+        The codec's four-character code.
+    path : Path
+        The file that will be written.
+
+    Raises
+    ------
+    ValueError
+        If the suffix is neither ``.mp4`` nor ``.avi``.
     """
     p = Path(path)
     suffix = p.suffix.lower()
@@ -100,15 +142,35 @@ def choose_codec(path: str | os.PathLike) -> tuple[str, Path]:
 class VideoWriter:
     """Writes BGR frames of one size to a video file, opened on the first frame.
 
-    ``path`` is the requested file; ``self.path`` the one written (``.avi`` when H.264 is not
-    available for ``.mp4``). ``close()`` is idempotent and must run for a playable file
-    (the node calls it at end of stream and in teardown).
+    ``close()`` is idempotent and must run for a playable file (the node calls it at end of stream
+    and in teardown).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The requested file (``.mp4`` or ``.avi``).
+    fps : float, default=25.0
+        Frames per second written into the file; 0 takes the rate the first :meth:`write` gives
+        (the stream's), or ``DEFAULT_FPS`` when that is unknown too.
+
+    Attributes
+    ----------
+    path : Path
+        The file written (``.avi`` when H.264 is not available for ``.mp4``).
+    fourcc : str
+        The codec used.
+    size : tuple of (int, int) or None
+        Frame (width, height), pixels, once the first frame is written.
+    frames : int
+        Frames written so far.
+
+    Raises
+    ------
+    ValueError
+        If ``fps`` is negative or the suffix is neither ``.mp4`` nor ``.avi``.
     """
 
     def __init__(self, path: str | os.PathLike, fps: float = 25.0) -> None:
-        """``fps``: frames per second written into the file; 0 takes the rate the first
-        :meth:`write` gives (the stream's), or ``DEFAULT_FPS`` when that is unknown too.
-        """
         if not fps >= 0:
             raise ValueError(f"video fps={fps!r}: must be > 0 frames per second, or 0 for the stream's")
         self.requested = Path(path)
@@ -120,9 +182,22 @@ class VideoWriter:
         self._closed = False
 
     def write(self, image: np.ndarray, stream_fps: float = 0.0) -> None:
-        """Append one (H, W, 3) uint8 BGR image (mono8 is converted). Every image must have the
-        size of the first. ``stream_fps``: the input's frame rate (0: unknown), used by a writer
-        made with ``fps=0`` when the file is opened on the first frame.
+        """Append one image.
+
+        Parameters
+        ----------
+        image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+            BGR image (mono8 is converted); every image must have the size of the first.
+        stream_fps : float, default=0.0
+            The input's frame rate (0: unknown), used by a writer made with ``fps=0`` when the file
+            is opened on the first frame.
+
+        Raises
+        ------
+        ValueError
+            If the writer is closed or the image's size differs from the first.
+        OSError
+            If the file cannot be opened for writing.
         """
         if self._closed:
             raise ValueError(f"video {self.path} is closed; no more frames can be written")
@@ -147,7 +222,13 @@ class VideoWriter:
         self.frames += 1
 
     def close(self) -> int:
-        """Finish the file; returns the number of frames written."""
+        """Finish the file.
+
+        Returns
+        -------
+        int
+            The number of frames written.
+        """
         if not self._closed:
             self._closed = True
             if self._writer is not None:
@@ -163,7 +244,25 @@ class VideoWriter:
 
 
 def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
-    """Save ``image`` as a PNG (folders created); OSError naming the path when it fails."""
+    """Save ``image`` as a PNG (folders created).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The PNG file.
+    image : ndarray of shape (H, W, 3) or (H, W)
+        The image, BGR or grey.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    OSError
+        Naming the path when writing fails.
+    """
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(p), image):
@@ -172,7 +271,27 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> Path:
 
 
 def encode_image(image: np.ndarray, ext: str = ".jpg", quality: int = 80) -> bytes:
-    """``image`` encoded as JPEG (``quality`` 1-100) or PNG bytes."""
+    """``image`` encoded as JPEG or PNG bytes.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W)
+        The image, BGR or grey.
+    ext : str, default=".jpg"
+        ``".jpg"`` or ``".png"``.
+    quality : int, default=80
+        JPEG quality, 1-100 (ignored for PNG).
+
+    Returns
+    -------
+    bytes
+        The encoded image.
+
+    Raises
+    ------
+    ValueError
+        If OpenCV cannot encode the image.
+    """
     params = [cv2.IMWRITE_JPEG_QUALITY, int(quality)] if ext == ".jpg" else []
     ok, buf = cv2.imencode(ext, image, params)
     if not ok:

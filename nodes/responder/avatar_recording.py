@@ -27,10 +27,24 @@ Progress = Callable[[str], None] | None
 class Recording:
     """A person's recording ready to learn from.
 
-    crops: (T, h, w, 3) uint8 BGR in one fixed box; masks: (T, h, w) bool; valid: (T,) frames with
-    the person found; labels: (T, K) int8 (1/0/-1) named ``names``; fps: frames per second;
-    box: (x, y, w, h) px of the crop in the original frames; facing: +1 the person faces the image's
-    right, -1 its left.
+    Attributes
+    ----------
+    crops : ndarray of shape (T, h, w, 3), dtype uint8
+        BGR crops in one fixed box.
+    masks : ndarray of shape (T, h, w), dtype bool
+        The person's masks in the crops.
+    valid : ndarray of shape (T,), dtype bool
+        Frames with the person found.
+    labels : ndarray of shape (T, K), dtype int8
+        Social labels (1/0/-1), named ``names``.
+    names : tuple of str
+        The K label names.
+    fps : float
+        Frames per second.
+    box : tuple of (int, int, int, int)
+        (x, y, w, h) of the crop in the original frames, pixels.
+    facing : float, default=-1.0
+        +1 the person faces the image's right, -1 its left.
     """
 
     crops: np.ndarray
@@ -44,11 +58,24 @@ class Recording:
 
 
 def crop_box(boxes: np.ndarray, size: tuple[int, int], margin: int = 4) -> tuple[int, int, int, int]:
-    """One box (x, y, w, h) px holding the person on (almost) every frame: the 2nd and 98th
-    percentiles of the per-frame boxes' edges (a few frames of a bad mask do not blow it up), widened
-    by ``margin`` px and clipped to the frame of ``size`` (W, H).
+    """One box holding the person on (almost) every frame.
 
-    boxes: (n, 4) per-frame boxes (x, y, w, h) px of the frames with the person.
+    The 2nd and 98th percentiles of the per-frame boxes' edges (a few frames of a bad mask do not
+    blow it up), widened by ``margin`` and clipped to the frame.
+
+    Parameters
+    ----------
+    boxes : ndarray of shape (n, 4)
+        Per-frame boxes (x, y, w, h), pixels, of the frames with the person.
+    size : tuple of (int, int)
+        Frame (W, H), pixels.
+    margin : int, default=4
+        Widening on every side, pixels.
+
+    Returns
+    -------
+    tuple of (int, int, int, int)
+        The box (x, y, w, h), pixels.
     """
     b = np.asarray(boxes, np.float64)
     W, H = size
@@ -64,9 +91,29 @@ def crop_recording(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int, int]]:
     """Crops in one box from per-frame pieces.
 
-    pieces: per frame None (nobody found) or (image (bh, bw, 3) uint8, mask (bh, bw) bool, bbox (x, y,
-    bw, bh) px) cut at the person's own box; size: (W, H) of the frames. Returns (crops (T, h, w, 3),
-    masks (T, h, w), valid (T,), box (x, y, w, h)).
+    Parameters
+    ----------
+    pieces : sequence of tuple or None
+        Per frame None (nobody found) or (image (bh, bw, 3) uint8, mask (bh, bw) bool, bbox
+        (x, y, bw, bh) pixels) cut at the person's own box.
+    size : tuple of (int, int)
+        Frame (W, H), pixels.
+
+    Returns
+    -------
+    crops : ndarray of shape (T, h, w, 3), dtype uint8
+        BGR crops in the common box.
+    masks : ndarray of shape (T, h, w), dtype bool
+        The person's masks in the crops.
+    valid : ndarray of shape (T,), dtype bool
+        Frames whose mask holds at least a quarter of the median mask area.
+    box : tuple of (int, int, int, int)
+        The common box (x, y, w, h), pixels.
+
+    Raises
+    ------
+    ValueError
+        If the person is found on no frame.
     """
     T = len(pieces)
     W, H = size
@@ -95,6 +142,21 @@ def crop_recording(
 def person_piece(
     frame: np.ndarray, mask: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]] | None:
+    """The piece of a frame cut at the person's own box, for :func:`crop_recording`.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        The BGR frame.
+    mask : ndarray of shape (H, W), dtype bool
+        The person's mask.
+
+    Returns
+    -------
+    tuple or None
+        (image (bh, bw, 3), mask (bh, bw), bbox (x, y, bw, bh) pixels), copies; None when the mask
+        is empty.
+    """
     ys, xs = np.nonzero(mask.any(axis=1)), np.nonzero(mask.any(axis=0))
     if not len(ys[0]):
         return None
@@ -115,9 +177,32 @@ def sim_recording(
     person out of view; the labels are those of the conversation), after ``empty_s`` seconds of the
     empty room. The simulator is reached through its entry point (``counterpart.bus.plugins``).
 
-    Returns (the recording with the simulator's exact masks and labels, the labels (T_video, K) of
-    every video frame: -1 during the empty start). ``video``: also write the frames there (Motion-JPEG
-    ``.avi``), as a camera would have recorded them.
+    Parameters
+    ----------
+    seconds : float, default=60.0
+        Length of the conversation, seconds.
+    seed : int, default=0
+        Seed of the simulator.
+    interested : bool, default=True
+        Whether the listener is interested.
+    empty_s : float, default=1.6
+        Seconds of the empty room at the start.
+    video : str or path-like or None, default=None
+        Also write the frames there (Motion-JPEG ``.avi``), as a camera would have recorded them.
+    say : callable or None, default=None
+        Progress callback taking a line of text.
+
+    Returns
+    -------
+    recording : Recording
+        The recording with the simulator's exact masks and labels.
+    labels : ndarray of shape (T_video, K), dtype int8
+        The labels of every video frame: -1 during the empty start.
+
+    Raises
+    ------
+    ValueError
+        If ``video`` cannot be written.
     """
     from counterpart.bus.plugins import simulator
 

@@ -28,8 +28,19 @@ _WRISTS = [w for _, _, w in ARMS]
 
 @dataclass(frozen=True)
 class ReachConfig:
-    """Distances (metres) between the model's wrist and the observed wrist: the pull starts at
-    ``r_engage`` and is complete at ``r_contact``.
+    """Distances between the model's wrist and the observed wrist at which the pull starts and ends.
+
+    Parameters
+    ----------
+    r_engage : float, default=0.45
+        Distance at which the pull starts (w = 0), metres.
+    r_contact : float, default=0.1
+        Distance at which the pull is complete (w = 1), metres; ``0 <= r_contact < r_engage``.
+
+    Raises
+    ------
+    ValueError
+        If not ``0 <= r_contact < r_engage``.
     """
 
     r_engage: float = 0.45
@@ -45,9 +56,24 @@ class ReachConfig:
 def two_bone_ik(
     shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray, target: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """New (elbow, wrist) (3,) each, metres: the wrist on ``target`` (or as near as the arm
-    reaches), both bone lengths kept, the elbow bent in the plane of the shoulder, the target and
-    the old elbow (the law of cosines in that plane).
+    """Put the wrist on ``target`` (or as near as the arm reaches), both bone lengths kept.
+
+    The elbow is bent in the plane of the shoulder, the target and the old elbow (the law of
+    cosines in that plane).
+
+    Parameters
+    ----------
+    shoulder, elbow, wrist : ndarray of shape (3,)
+        The arm's joints, metres, world frame; the shoulder stays fixed.
+    target : ndarray of shape (3,)
+        Where the wrist should go, metres, world frame.
+
+    Returns
+    -------
+    elbow : ndarray of shape (3,)
+        New elbow, metres.
+    wrist : ndarray of shape (3,)
+        New wrist, metres.
     """
     a = float(np.linalg.norm(elbow - shoulder))
     b = float(np.linalg.norm(wrist - elbow))
@@ -75,9 +101,23 @@ def two_bone_ik(
 
 
 def reach(observed: np.ndarray, partner: np.ndarray, config: ReachConfig = ReachConfig()) -> tuple[np.ndarray, float]:
-    """The partner (14, 3) with the hand nearest an observed hand pulled onto it; and the pull w.
+    """The partner with the hand nearest an observed hand pulled onto it; and the pull w.
 
-    observed, partner: (14, 3) world joints, metres. Returns (a new (14, 3) array, w in [0, 1]).
+    Parameters
+    ----------
+    observed : ndarray of shape (14, 3)
+        The observed person's joints, metres, world frame.
+    partner : ndarray of shape (14, 3)
+        The model's partner joints, metres, world frame.
+    config : ReachConfig, default=ReachConfig()
+        The engage and contact distances.
+
+    Returns
+    -------
+    partner : ndarray of shape (14, 3)
+        A new array, the dtype of ``partner``, with the pulled arm.
+    w : float
+        The pull, in [0, 1].
     """
     X = np.asarray(observed, np.float64)
     P = np.asarray(partner, np.float64).copy()
