@@ -51,13 +51,35 @@ _FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 
 def person_colour(pid: int) -> Colour:
-    """The overlay colour of person ``pid`` (cycled over :data:`PERSON_COLOURS`)."""
+    """The overlay colour of person ``pid`` (cycled over :data:`PERSON_COLOURS`).
+
+    Parameters
+    ----------
+    pid : int
+        The person's id.
+
+    Returns
+    -------
+    tuple of (int, int, int)
+        BGR colour.
+    """
     return PERSON_COLOURS[int(pid) % len(PERSON_COLOURS)]
 
 
 def partner_colour(emotion: str = "neutral", strength: float = 0.0) -> Colour:
-    """BGR colour of the partner: the neutral colour blended towards ``emotion``'s colour by
-    ``strength`` in [0, 1] (clipped); unknown emotions count as neutral.
+    """BGR colour of the partner: the neutral colour blended towards ``emotion``'s colour.
+
+    Parameters
+    ----------
+    emotion : str
+        A key of :data:`EMOTION_COLOURS`; unknown emotions count as neutral.
+    strength : float
+        Blend towards the emotion's colour, in [0, 1] (clipped; not finite: 0).
+
+    Returns
+    -------
+    tuple of (int, int, int)
+        BGR colour.
     """
     base = np.array(EMOTION_COLOURS["neutral"], np.float64)
     target = np.array(EMOTION_COLOURS.get(emotion, EMOTION_COLOURS["neutral"]), np.float64)
@@ -73,12 +95,22 @@ def partner_cones(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dimensions by ``counterpart.body.ik.dims_from_joints``; forward kinematics of both gives cones whose limb
     directions follow the joints, with head, hands and feet added.
 
-    Args:
-        joints: (14, 3) metres, world frame, ``counterpart.body.skeleton.JOINTS`` order.
+    Parameters
+    ----------
+    joints : ndarray of shape (14, 3)
+        Metres, world frame, ``counterpart.body.skeleton.JOINTS`` order.
 
     Returns
     -------
-        ends (16, 2, 3) metres (start and end centre of each cone), radii (16, 2) metres.
+    ends : ndarray of shape (16, 2, 3)
+        Start and end centre of each cone, metres, world frame.
+    radii : ndarray of shape (16, 2)
+        The matching radii, metres.
+
+    Raises
+    ------
+    ValueError
+        If the joints are not (14, 3) or not finite.
     """
     X = np.asarray(joints, np.float64)
     if X.shape != (N_JOINTS, 3):
@@ -107,7 +139,18 @@ def _quad_index(n_rim: int) -> np.ndarray:
 
 
 def default_light(camera: Camera) -> np.ndarray:
-    """(3,) unit world direction towards a light above, slightly right of and behind the camera."""
+    """The unit world direction towards a light above, slightly right of and behind the camera.
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera.
+
+    Returns
+    -------
+    ndarray of shape (3,)
+        The direction, world frame.
+    """
     d = camera.R.T @ np.array([0.3, -0.6, -1.0])
     return d / np.linalg.norm(d)
 
@@ -122,17 +165,34 @@ def cone_facets(
 ) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Visible facets of the cones, shaded and sorted far to near.
 
-    Args:
-        ends: (S, 2, 3) metres; radii: (S, 2) metres.
-        camera: projection.
-        light: (3,) world direction towards the light (default :func:`default_light`).
-        n_rim: facets around each cone.
-        ambient: shade of a facet turned away from the light, in [0, 1].
+    Parameters
+    ----------
+    ends : ndarray of shape (S, 2, 3)
+        Start and end centre of each cone, metres, world frame.
+    radii : ndarray of shape (S, 2)
+        The matching radii, metres.
+    camera : Camera
+        The projection.
+    light : ndarray of shape (3,) or None
+        World direction towards the light (default :func:`default_light`).
+    n_rim : int
+        Facets around each cone.
+    ambient : float
+        Shade of a facet turned away from the light, in [0, 1].
 
     Returns
     -------
-        polygons: list of (k, 2) float pixel polygons (4 corners for sides, n_rim for ends),
-        shade: (F,) intensities in [ambient, 1], depth: (F,) mean camera depth (m), far to near.
+    polygons : list of ndarray of shape (k, 2)
+        Float pixel polygons (4 corners for sides, n_rim for ends), far to near.
+    shade : ndarray of shape (F,)
+        Intensities in [ambient, 1].
+    depth : ndarray of shape (F,)
+        Mean camera depth, metres.
+
+    Raises
+    ------
+    ValueError
+        If ``ends`` is not (S, 2, 3) or ``radii`` not (S, 2).
     """
     ends = np.asarray(ends, np.float64)
     radii = np.asarray(radii, np.float64)
@@ -183,8 +243,36 @@ def draw_cones(
     n_rim: int = 16,
     ambient: float = 0.35,
 ) -> np.ndarray:
-    """Paint shaded truncated cones (S, 2, 3)/(S, 2) metres into ``image`` (H, W, 3) uint8 BGR,
-    far to near (see :func:`cone_facets`). Returns ``image``.
+    """Paint shaded truncated cones into ``image``, far to near (see :func:`cone_facets`).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    ends : ndarray of shape (S, 2, 3)
+        Start and end centre of each cone, metres, world frame.
+    radii : ndarray of shape (S, 2)
+        The matching radii, metres.
+    camera : Camera
+        The camera calibration of the image.
+    colour : tuple of (int, int, int)
+        BGR colour at full light.
+    light : ndarray of shape (3,) or None
+        World direction towards the light (default :func:`default_light`).
+    n_rim : int
+        Facets around each cone.
+    ambient : float
+        Shade of a facet turned away from the light, in [0, 1].
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     polys, shade, _ = cone_facets(ends, radii, camera, light, n_rim, ambient)
@@ -199,7 +287,31 @@ def draw_cones(
 def draw_partner_3d(
     image: np.ndarray, joints: np.ndarray, camera: Camera, colour: Colour = EMOTION_COLOURS["neutral"], **kw: Any
 ) -> np.ndarray:
-    """Draw a partner given by its (14, 3) joints (metres) as shaded cones. Returns ``image``."""
+    """Draw a partner given by its joints as shaded cones.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    joints : ndarray of shape (14, 3)
+        Metres, world frame (:func:`partner_cones`).
+    camera : Camera
+        The camera calibration of the image.
+    colour : tuple of (int, int, int)
+        BGR colour at full light.
+    **kw : Any
+        ``light``, ``n_rim``, ``ambient`` of :func:`draw_cones`.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If the joints are not (14, 3) and finite, or the image is not a writable (H, W, 3) uint8 array.
+    """
     ends, radii = partner_cones(joints)
     return draw_cones(image, ends, radii, camera, colour, **kw)
 
@@ -216,8 +328,30 @@ def draw_silhouette(
     outline: Colour | None = (40, 40, 40),
     thickness: int = 1,
 ) -> np.ndarray:
-    """Fill the closed B-spline of ``ctrl`` (n, 2) pixels with ``colour`` and outline it.
-    Returns ``image``.
+    """Fill the closed B-spline of ``ctrl`` with ``colour`` and outline it.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    ctrl : ndarray of shape (n, 2)
+        Control points, pixels.
+    colour : tuple of (int, int, int)
+        BGR fill colour.
+    outline : tuple of (int, int, int) or None
+        BGR outline colour (None: no outline).
+    thickness : int
+        Outline thickness, pixels (0: no outline).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If the control points are not finite, or the image is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     pts = closed_bspline(ctrl)
@@ -246,8 +380,33 @@ def draw_skeleton(
     thickness: int = 2,
     radius: int = 3,
 ) -> np.ndarray:
-    """Tracked skeleton: joints (14, 3) metres projected, bones as lines, the spine from the neck to
-    the mid-hip point, joints as dots. Joints behind the camera are left out. Returns ``image``.
+    """Tracked skeleton: joints projected, bones as lines, the spine from the neck to the mid-hip
+    point, joints as dots. Joints behind the camera are left out.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    joints : ndarray of shape (14, 3)
+        Metres, world frame.
+    camera : Camera
+        The camera calibration of the image.
+    colour : tuple of (int, int, int)
+        BGR colour.
+    thickness : int
+        Line thickness, pixels.
+    radius : int
+        Joint dot radius, pixels.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If the joints are not (14, 3), or the image is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     X = np.asarray(joints, np.float64)
@@ -275,8 +434,35 @@ def draw_spline_outline(
     label: str = "",
     show_ctrl: bool = True,
 ) -> np.ndarray:
-    """A person's B-spline boundary (n, 2) pixels as a closed curve, its control points as dots,
-    its reference point (top of the head) as a ring and an optional label above it.
+    """A person's B-spline boundary as a closed curve, its control points as dots, its reference
+    point (top of the head) as a ring and an optional label above it.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    ctrl : ndarray of shape (n, 2)
+        Control points, pixels.
+    colour : tuple of (int, int, int)
+        BGR colour.
+    thickness : int
+        Curve thickness, pixels.
+    ref_point : ndarray of shape (2,) or None
+        The reference point, pixels (None or not finite: not drawn).
+    label : str
+        Text above the reference point ('' : none).
+    show_ctrl : bool
+        Draw the control points.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     pts = closed_bspline(ctrl)
@@ -302,8 +488,29 @@ def put_text(
     thickness: int = 1,
     background: Colour | None = None,
 ) -> tuple[int, int]:
-    """Text with its baseline-left corner at ``org`` (pixels), optionally on a filled box.
-    Returns the text's (width, height) in pixels.
+    """Text with its baseline-left corner at ``org``, optionally on a filled box.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    text : str
+        The text.
+    org : tuple of (int, int)
+        Baseline-left corner, pixels.
+    colour : tuple of (int, int, int)
+        BGR text colour.
+    scale : float
+        Font scale.
+    thickness : int
+        Stroke thickness, pixels.
+    background : tuple of (int, int, int) or None
+        BGR colour of the box behind the text (None: no box).
+
+    Returns
+    -------
+    tuple of (int, int)
+        The text's (width, height) in pixels.
     """
     (w, h), base = cv2.getTextSize(text, _FONT, scale, thickness)
     x, y = org
