@@ -545,7 +545,24 @@ def _badge_boxes(
 def signal_badges_rect(
     image: np.ndarray, anchor: tuple[float, float], names: Sequence[str], scale: float | None = None
 ) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1) pixels that ``draw_signal_badges`` with the same arguments covers."""
+    """The box that ``draw_signal_badges`` with the same arguments covers.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        The image the badges go into (its size).
+    anchor : tuple of (float, float)
+        Top-left of the first badge, pixels.
+    names : sequence of str
+        The signals' names.
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.35).
+
+    Returns
+    -------
+    tuple of (int, int, int, int)
+        (x0, y0, x1, y1), pixels.
+    """
     scale = text_scale(image, 0.35) if scale is None else scale
     boxes = _badge_boxes(image.shape, anchor, names, scale)
     if not boxes:
@@ -568,8 +585,32 @@ def draw_signal_badges(
 ) -> np.ndarray:
     """Social-signal badges of one person: a row of small labelled boxes starting at ``anchor``
     (x, y pixels, top-left). Label 1 (present): a bright box; 0 (absent): a dark box; -1
-    (unknown): grey. ``scores`` (K,) in [0, 1], when given, draw a white bar along the bottom of
-    each known badge. Returns ``image``.
+    (unknown): grey.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    anchor : tuple of (float, float)
+        Top-left of the first badge, (x, y) pixels.
+    names : sequence of str of length K
+        The signals' names.
+    labels : ndarray of shape (K,)
+        1 (present), 0 (absent) or -1 (unknown).
+    scores : ndarray of shape (K,) or None
+        Scores in [0, 1]; when given, a white bar along the bottom of each known badge.
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.35).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If names and labels differ in number, or the image is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     scale = text_scale(image, 0.35) if scale is None else scale
@@ -600,6 +641,20 @@ def place_apart(rects: Sequence[tuple[int, int, int, int]], height: int, gap: in
     overlapping, placed in order: each box moves down below the boxes already placed that it would
     overlap, or, where that runs past ``height``, up above them (not past the top). Where no
     such place is free the last one tried is kept: the frame is too crowded.
+
+    Parameters
+    ----------
+    rects : sequence of tuple of (int, int, int, int)
+        Boxes (x0, y0, x1, y1), pixels, in placing order.
+    height : int
+        Image rows.
+    gap : int
+        Pixels kept between boxes.
+
+    Returns
+    -------
+    list of int
+        Vertical shift of each box, pixels (positive: down).
     """
     placed: list[tuple[int, int, int, int]] = []
     shifts = []
@@ -628,6 +683,16 @@ def stats_lines(stats: Mapping[str, Any]) -> list[str]:
     """One text line per node from its latest ``messages.NodeStats``: the rate (Hz) of its first
     output (else of its first input), input drops summed, the largest input latency (ms) and the
     mean handler time (ms).
+
+    Parameters
+    ----------
+    stats : mapping of str to NodeStats
+        Node name -> its latest statistics.
+
+    Returns
+    -------
+    list of str
+        One line per node, by name.
     """
     lines = []
     for node in sorted(stats):
@@ -641,15 +706,48 @@ def stats_lines(stats: Mapping[str, Any]) -> list[str]:
 
 
 def text_scale(image: np.ndarray, base: float) -> float:
-    """Font scale ``base`` for a 320-pixel-wide image, grown with wider images (up to 3x)."""
+    """Font scale ``base`` for a 320-pixel-wide image, grown with wider images (up to 3x).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, ...)
+        The image (its width).
+    base : float
+        Font scale at 320 pixels wide.
+
+    Returns
+    -------
+    float
+        The font scale.
+    """
     return base * float(np.clip(image.shape[1] / 320.0, 1.0, 3.0))
 
 
 def draw_stats(
     image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, int] = (4, 4), scale: float | None = None
 ) -> np.ndarray:
-    """Per-node statistics (:func:`stats_lines`) as text on a dark box, top-left at ``origin``;
-    ``scale`` None: :func:`text_scale` of 0.3.
+    """Per-node statistics (:func:`stats_lines`) as text on a dark box.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    stats : mapping of str to NodeStats
+        Node name -> its latest statistics.
+    origin : tuple of (int, int)
+        Top-left of the box, pixels.
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.3).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     scale = text_scale(image, 0.3) if scale is None else scale
@@ -669,8 +767,26 @@ def draw_stats(
 
 def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float | None = None) -> np.ndarray:
     """The run-time controls in force along the bottom edge: model, speaker, interest, emotion and
-    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1]);
-    ``scale`` None: :func:`text_scale` of 0.35.
+    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1]).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    controls : mapping of str to Any
+        ``model``, ``speaker``, ``interest``, ``emotion`` and ``strength`` (missing: '-' or 0).
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.35).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     scale = text_scale(image, 0.35) if scale is None else scale
@@ -699,8 +815,28 @@ def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float |
 def contact_sheet(
     frames: Iterable[np.ndarray], cols: int = 4, pad: int = 2, background: Colour = (0, 0, 0)
 ) -> np.ndarray:
-    """Tile images (each (H, W, 3) or (H, W) uint8) row by row into one BGR image, ``cols`` per
-    row with ``pad`` pixels between them; every tile is resized to the first one's size.
+    """Tile images row by row into one BGR image; every tile is resized to the first one's size.
+
+    Parameters
+    ----------
+    frames : iterable of ndarray
+        Images of shape (H, W, 3) or (H, W), dtype uint8.
+    cols : int
+        Tiles per row (>= 1).
+    pad : int
+        Pixels between tiles.
+    background : tuple of (int, int, int)
+        BGR colour of the padding.
+
+    Returns
+    -------
+    ndarray of shape (rows H + (rows - 1) pad, cols W + (cols - 1) pad, 3), dtype uint8
+        The sheet (fewer columns when fewer frames than ``cols`` are given).
+
+    Raises
+    ------
+    ValueError
+        Without frames, for ``cols`` < 1, or for a frame that is not uint8.
     """
     tiles = [np.asarray(f) for f in frames]
     if not tiles:
