@@ -37,4 +37,12 @@ class PersonSignals:
 
 @message("labeller.SocialSignals", 1)
 class SocialSignals:
+    """The social signals of the people in one frame.
+
+    Attributes
+    ----------
+    people : list of PersonSignals
+        One entry per person.
+    """
+
     people: list[PersonSignals] = ()

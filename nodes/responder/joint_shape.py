@@ -433,6 +433,15 @@ class JointShapeModel:
     )
 
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model for saving.
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            The fitted arrays, named without their trailing underscore.
+        config : dict of str to Any
+            The constructor's parameters and ``n_ctrl``, the control points per silhouette.
+        """
         config = {
             k: getattr(self, k)
             for k in (
@@ -453,6 +462,20 @@ class JointShapeModel:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> JointShapeModel:
+        """A fitted model from what :meth:`get_state` gave.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The fitted arrays, named without their trailing underscore.
+        config : dict of str to Any
+            The constructor's parameters and ``n_ctrl``.
+
+        Returns
+        -------
+        JointShapeModel
+            The fitted model, its CONDENSATION sample reset.
+        """
         c = dict(config)
         n = int(c.pop("n_ctrl"))
         m = cls(**c)
