@@ -30,8 +30,21 @@ def refine_matte(frame: np.ndarray, region: np.ndarray, background: np.ndarray, 
     chroma subsampling, so the background model calls them foreground: composited, they would
     surround the avatar with a halo of the recording room), with enclosed holes filled again.
 
-    frame: (H, W, 3) uint8; region: (H, W) bool; background: (H, W, 3) the background model's mean.
-    Returns (H, W) bool within ``region``.
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        The video frame.
+    region : ndarray of shape (H, W), dtype bool
+        The person's region found by the silhouette algorithm.
+    background : ndarray of shape (H, W, 3)
+        The background model's mean.
+    tau : float
+        Grey levels (largest channel, 3x3 smoothed) a pixel must differ from the background by to be kept.
+
+    Returns
+    -------
+    ndarray of shape (H, W), dtype bool
+        The matte, within ``region``.
     """
     from counterpart.nodes.silhouette.regions import clean_mask
 
@@ -43,9 +56,31 @@ def refine_matte(frame: np.ndarray, region: np.ndarray, background: np.ndarray, 
 def read_label_file(
     path: str | os.PathLike[str], person: str, required: Sequence[str] = ()
 ) -> tuple[np.ndarray, tuple[str, ...]]:
-    """(labels (T, K) int8, names) of ``person`` from a label file (``counterpart.nodes.labeller.mining.read_labels``:
-    ``.npz`` with signals_a/_b, or ``.csv``); ValueError naming each ``required`` signal that the file
-    lacks or that never occurs in it.
+    """The labels of ``person`` from a label file (``counterpart.nodes.labeller.mining.read_labels``:
+    ``.npz`` with signals_a/_b, or ``.csv``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The label file.
+    person : str
+        The person's id in the file.
+    required : sequence of str
+        Signals that must be among the labels and occur at least once.
+
+    Returns
+    -------
+    labels : ndarray of shape (T, K), dtype int8
+        The person's per-frame labels.
+    names : tuple of str of length K
+        The signals' names, in the order of the columns.
+
+    Raises
+    ------
+    ValueError
+        If the file has no such person.
+    RecordingError
+        Naming a ``required`` signal that the file lacks or that never occurs in it.
     """
     from counterpart.nodes.labeller.mining import read_labels
     from counterpart.nodes.responder.video_texture import RecordingError
@@ -139,12 +174,36 @@ def video_recording(
 ) -> Recording:
     """The recording of the one person in a video file (module docstring).
 
-    labels: a label file (else the labeller labels every frame); person: its person id; required:
-    signals that must occur (checked in the label file before the video is read); facing: the
-    way the person faces in the video (+1 right, -1 left); train_frames: first frames (the empty
-    room) the background is learnt from; workers: processes that cut the masks out, each from its
-    part of the video with its own copy of the background model (one when the labeller labels: its
-    windows run over the whole video).
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file.
+    labels : str or os.PathLike or None
+        A label file; None: the labeller labels every frame.
+    person : str
+        The person's id in the label file.
+    facing : float
+        The way the person faces in the video (+1 right, -1 left).
+    train_frames : int
+        First frames (the empty room) the background is learnt from.
+    workers : int
+        Processes that cut the masks out, each from its part of the video with its own copy of the
+        background model (one when the labeller labels: its windows run over the whole video).
+    required : sequence of str
+        Signals that must occur (checked in the label file before the video is read).
+    say : callable or None
+        Called with a line of progress text.
+
+    Returns
+    -------
+    Recording
+        The recording: cropped frames, masks, labels, fps and the person's facing.
+
+    Raises
+    ------
+    ValueError
+        When no frame decodes, the label file does not match the video's frame count or the person
+        is found on no frame (and for a bad label file, see :func:`read_label_file`).
     """
     from counterpart.nodes.labeller.signals import SIGNALS
     from counterpart.nodes.silhouette.pipeline import video_info

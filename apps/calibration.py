@@ -31,19 +31,35 @@ def calibrate_video(
 ) -> tuple[CameraEstimate, dict[str, Any]]:
     """Estimate the camera of a video from the people in it.
 
-    Args:
-        path: the video file.
-        max_frames: frames to use at most (None: all).
-        train_frames: first frames the background is fitted on (people may be in view).
-        config: priors and noise model of the estimate.
-        progress: called after every frame with (frames done, frames the file declares or 0).
-        silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file.
+    max_frames : int or None
+        Frames to use at most (None: all).
+    train_frames : int
+        First frames the background is fitted on (people may be in view).
+    config : CalibrationConfig or None
+        Priors and noise model of the estimate (None: the defaults).
+    progress : callable or None
+        Called after every frame with (frames done, frames the file declares or 0).
+    **silhouette_params : Any
+        Keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
 
     Returns
     -------
-        (the estimate, a summary: n_frames, observations, fps, frame_size [H, W]).
-    Raises FileNotFoundError / ValueError for a missing or undecodable video, and ValueError when
-    too few upright people were seen to estimate anything (the message says how many).
+    estimate : CameraEstimate
+        The camera estimate.
+    summary : dict
+        ``n_frames``, ``observations``, ``fps`` and ``frame_size`` [H, W] (pixels).
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing video.
+    ValueError
+        For an undecodable video, and when too few upright people were seen to estimate anything
+        (the message says how many).
     """
     from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
 
@@ -79,6 +95,20 @@ def calibrate_video(
 def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
     """A calibration file (YAML, ``Camera.to_dict``, which ``counterpart.body.camera.load_camera_file`` reads),
     with the estimate and its uncertainty as comments.
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera to write.
+    est : CameraEstimate
+        The estimate, written as comments (description and one-std uncertainties).
+    video : str
+        The video the camera was estimated from, named in the first comment.
+
+    Returns
+    -------
+    str
+        The file's text.
     """
     import yaml
 

@@ -49,21 +49,54 @@ from counterpart.body.skeleton import (
 
 
 def rot_x(a: np.ndarray) -> np.ndarray:
-    """(N,) radians -> (N, 3, 3) right-handed rotations about X."""
+    """(N,) radians -> (N, 3, 3) right-handed rotations about X.
+
+    Parameters
+    ----------
+    a : ndarray of shape (N,)
+        Angles, radians (any shape S gives shape S + (3, 3)).
+
+    Returns
+    -------
+    ndarray of shape (N, 3, 3)
+        The rotations.
+    """
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
     return np.stack([o, z, z, z, c, -s, z, s, c], axis=-1).reshape(*np.shape(a), 3, 3)
 
 
 def rot_y(a: np.ndarray) -> np.ndarray:
-    """(N,) radians -> (N, 3, 3) right-handed rotations about Y."""
+    """(N,) radians -> (N, 3, 3) right-handed rotations about Y.
+
+    Parameters
+    ----------
+    a : ndarray of shape (N,)
+        Angles, radians (any shape S gives shape S + (3, 3)).
+
+    Returns
+    -------
+    ndarray of shape (N, 3, 3)
+        The rotations.
+    """
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
     return np.stack([c, z, s, z, o, z, -s, z, c], axis=-1).reshape(*np.shape(a), 3, 3)
 
 
 def rot_z(a: np.ndarray) -> np.ndarray:
-    """(N,) radians -> (N, 3, 3) right-handed rotations about Z."""
+    """(N,) radians -> (N, 3, 3) right-handed rotations about Z.
+
+    Parameters
+    ----------
+    a : ndarray of shape (N,)
+        Angles, radians (any shape S gives shape S + (3, 3)).
+
+    Returns
+    -------
+    ndarray of shape (N, 3, 3)
+        The rotations.
+    """
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
     return np.stack([c, -s, z, s, c, z, z, z, o], axis=-1).reshape(*np.shape(a), 3, 3)
@@ -176,8 +209,25 @@ def _chain(P: np.ndarray, dims: BodyDims) -> tuple[np.ndarray, dict[str, Columns
 
 
 def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
-    """(N, DOF) or (DOF,) poses -> (N, len(ANCHORS), 3) anchor points, metres: ``frames``
-    without building the rotation matrices (the tracker's likelihood needs the points alone).
+    """Anchor points: ``frames`` without building the rotation matrices (the tracker's likelihood
+    needs the points alone).
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF) or (DOF,)
+        Poses (a single pose is treated as N = 1), metres and radians as in ``counterpart.body.pose``.
+    dims : BodyDims
+        Body dimensions, metres.
+
+    Returns
+    -------
+    ndarray of shape (N, len(ANCHORS), 3)
+        Anchor points, metres, world frame.
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not of shape (N, DOF) or (DOF,).
     """
     return _chain(_as_poses(P), dims)[0]
 
@@ -185,16 +235,25 @@ def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
 def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """All anchor points and segment frames.
 
-    Args:
-        P: (N, DOF) or (DOF,) poses.
-        dims: body dimensions.
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF) or (DOF,)
+        Poses (a single pose is treated as N = 1), metres and radians as in ``counterpart.body.pose``.
+    dims : BodyDims
+        Body dimensions, metres.
 
     Returns
     -------
-        points: (N, len(ANCHORS), 3) metres, the 14 joints then ``EXTRA_ANCHORS``.
-        rotations: name -> (N, 3, 3) world rotation of each body part's frame
-            ("pelvis", "torso", "head", "l_upper_arm", "l_forearm", "r_...", "l_thigh",
-            "l_shin", "r_...").
+    points : ndarray of shape (N, len(ANCHORS), 3)
+        Metres, world frame: the 14 joints then ``EXTRA_ANCHORS``.
+    rotations : dict of str to ndarray of shape (N, 3, 3)
+        Name -> world rotation of each body part's frame ("pelvis", "torso", "head", "l_upper_arm",
+        "l_forearm", "r_...", "l_thigh", "l_shin", "r_...").
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not of shape (N, DOF) or (DOF,).
     """
     pts, cols = _chain(_as_poses(P), dims)
     return pts, {name: np.stack(c, axis=-1) for name, c in cols.items()}
@@ -203,13 +262,22 @@ def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, di
 def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
     """Joint positions.
 
-    Args:
-        P: (N, DOF) poses (a single (DOF,) pose is treated as N = 1).
-        dims: body dimensions.
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF) or (DOF,)
+        Poses (a single pose is treated as N = 1), metres and radians as in ``counterpart.body.pose``.
+    dims : BodyDims
+        Body dimensions, metres.
 
     Returns
     -------
-        (N, 14, 3) float64 world positions in metres, in ``counterpart.body.skeleton.JOINTS`` order.
+    ndarray of shape (N, 14, 3), dtype float64
+        World positions in metres, in ``counterpart.body.skeleton.JOINTS`` order.
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not of shape (N, DOF) or (DOF,).
     """
     return frames(P, dims)[0][:, :N_JOINTS]
 
@@ -217,10 +285,24 @@ def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarr
 def cone_endpoints(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, np.ndarray]:
     """The 16 truncated cones of N poses.
 
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF) or (DOF,)
+        Poses (a single pose is treated as N = 1), metres and radians as in ``counterpart.body.pose``.
+    dims : BodyDims
+        Body dimensions, metres.
+
     Returns
     -------
-        ends: (N, 16, 2, 3) metres, start and end centre of each cone in ``SEGMENTS`` order.
-        radii: (16, 2) metres, the matching radii (same for every pose).
+    ends : ndarray of shape (N, 16, 2, 3)
+        Metres, world frame: start and end centre of each cone in ``SEGMENTS`` order.
+    radii : ndarray of shape (16, 2)
+        Metres: the matching radii (same for every pose).
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not of shape (N, DOF) or (DOF,).
     """
     pts = frames(P, dims)[0]
     return pts[:, SEGMENT_ANCHORS], dims.segment_radii()
@@ -231,6 +313,23 @@ def lowest_point(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
 
     The exact lowest point of a circular rim of radius r around axis a is at
     ``y_centre - r * sqrt(1 - a_y**2)``.
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, DOF) or (DOF,)
+        Poses (a single pose is treated as N = 1), metres and radians as in ``counterpart.body.pose``.
+    dims : BodyDims
+        Body dimensions, metres.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        The lowest y of each pose, metres.
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not of shape (N, DOF) or (DOF,).
     """
     ends, radii = cone_endpoints(P, dims)
     axis = ends[:, :, 1] - ends[:, :, 0]

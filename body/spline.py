@@ -44,7 +44,25 @@ def _basis(t: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def design_matrix(m: int, n: int) -> np.ndarray:
-    """(m, n) read-only matrix A with C(u_j) = A[j] @ P for u_j = j n / m, j = 0..m-1. Cached."""
+    """The read-only matrix A with C(u_j) = A[j] @ P for u_j = j n / m, j = 0..m-1. Cached.
+
+    Parameters
+    ----------
+    m : int
+        Curve samples (>= 1).
+    n : int
+        Control points (>= 4).
+
+    Returns
+    -------
+    ndarray of shape (m, n)
+        The design matrix (read-only).
+
+    Raises
+    ------
+    ValueError
+        If n < 4 or m < 1.
+    """
     if n < 4:
         raise ValueError(f"a closed cubic B-spline needs n >= 4 control points, got n={n}")
     if m < 1:
@@ -71,7 +89,25 @@ def _fit_operator(m: int, n: int) -> np.ndarray:
 
 
 def resample_closed(points: np.ndarray, m: int) -> np.ndarray:
-    """Resample a closed polyline (K, 2) at m points of equal arc length, starting at points[0]."""
+    """Resample a closed polyline at m points of equal arc length, starting at points[0].
+
+    Parameters
+    ----------
+    points : ndarray of shape (K, 2)
+        The closed polyline, pixels.
+    m : int
+        Points to return.
+
+    Returns
+    -------
+    ndarray of shape (m, 2), dtype float64
+        The resampled points, pixels.
+
+    Raises
+    ------
+    ValueError
+        If the boundary has zero length (all points coincide).
+    """
     p = np.asarray(points, np.float64).reshape(-1, 2)
     closed = np.vstack([p, p[:1]])
     seg = np.hypot(*np.diff(closed, axis=0).T)
@@ -88,11 +124,25 @@ def resample_closed(points: np.ndarray, m: int) -> np.ndarray:
 def fit_closed_bspline(points: np.ndarray, n: int = 32, resample: bool = True) -> np.ndarray:
     """Least-squares closed uniform cubic B-spline through an ordered closed boundary.
 
-    points : (M, 2) boundary, pixels, in traversal order; the curve starts (u = 0) at points[0].
-    n : number of control points (>= 4).
-    resample : resample the boundary at ``SAMPLES_PER_CTRL * n`` points of equal arc length first
-        (evenly spaced control points); False uses the given points as equally spaced samples.
-    Returns (n, 2) float64 control points.
+    Parameters
+    ----------
+    points : ndarray of shape (M, 2)
+        Boundary, pixels, in traversal order (M >= 3); the curve starts (u = 0) at points[0].
+    n : int
+        Number of control points (>= 4).
+    resample : bool
+        Resample the boundary at ``SAMPLES_PER_CTRL * n`` points of equal arc length first (evenly
+        spaced control points); False uses the given points as equally spaced samples.
+
+    Returns
+    -------
+    ndarray of shape (n, 2), dtype float64
+        Control points, pixels.
+
+    Raises
+    ------
+    ValueError
+        If ``points`` is not (M, 2) with M >= 3, n < 4, or fewer than n samples are given unresampled.
     """
     p = np.asarray(points, np.float64)
     if p.ndim != 2 or p.shape[1] != 2 or len(p) < 3:
@@ -105,7 +155,25 @@ def fit_closed_bspline(points: np.ndarray, n: int = 32, resample: bool = True) -
 
 
 def evaluate_closed_bspline(ctrl: np.ndarray, samples_per_span: int = 8) -> np.ndarray:
-    """Points on the curve at u = j / samples_per_span, j = 0..n*samples_per_span-1: (K, 2)."""
+    """Points on the curve at u = j / samples_per_span, j = 0..n*samples_per_span-1.
+
+    Parameters
+    ----------
+    ctrl : ndarray of shape (n, 2)
+        Control points (n >= 4), pixels.
+    samples_per_span : int
+        Curve points per span (>= 1).
+
+    Returns
+    -------
+    ndarray of shape (n * samples_per_span, 2), dtype float64
+        The curve points, pixels.
+
+    Raises
+    ------
+    ValueError
+        If ``ctrl`` is not (n, 2) with n >= 4 or ``samples_per_span`` < 1.
+    """
     c = np.asarray(ctrl, np.float64)
     if c.ndim != 2 or c.shape[1] != 2 or len(c) < 4:
         raise ValueError(f"ctrl must be (n, 2) with n >= 4, got shape {c.shape}")
@@ -115,10 +183,24 @@ def evaluate_closed_bspline(ctrl: np.ndarray, samples_per_span: int = 8) -> np.n
 
 
 def spline_distance(contour: np.ndarray, ctrl: np.ndarray, samples_per_span: int = 16) -> float:
-    """Mean distance (pixels) from each contour point (M, 2) to the closed spline curve.
+    """Mean distance from each contour point to the closed spline curve.
 
     The curve is evaluated densely and treated as a closed polyline; distances are exact
     point-to-segment distances.
+
+    Parameters
+    ----------
+    contour : ndarray of shape (M, 2)
+        Contour points, pixels.
+    ctrl : ndarray of shape (n, 2)
+        Control points, pixels.
+    samples_per_span : int
+        Curve points per span of the dense evaluation.
+
+    Returns
+    -------
+    float
+        The mean distance, pixels.
     """
     p = np.asarray(contour, np.float64).reshape(-1, 2)
     a = evaluate_closed_bspline(ctrl, samples_per_span)
@@ -157,10 +239,24 @@ def _up_axis(mask_u8: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
     """Outer boundary of the largest region of a mask, ordered as described in the module doc.
 
-    mask : (H, W) bool or 0/non-zero array.
-    ref_window : half-width of the search for the locally highest point, as a fraction of the
-        boundary length.
-    Returns (contour (K, 2) float64 starting at the reference point, ref_point (2,) float64).
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W)
+        Bool or 0/non-zero.
+    ref_window : float
+        Half-width of the search for the locally highest point, as a fraction of the boundary length.
+
+    Returns
+    -------
+    contour : ndarray of shape (K, 2), dtype float64
+        The boundary, pixels, starting at the reference point.
+    ref_point : ndarray of shape (2,), dtype float64
+        The reference point at the top of the head, pixels.
+
+    Raises
+    ------
+    ValueError
+        If the mask is not 2-D, is empty, or its region is too small for a boundary.
     """
     m = np.asarray(mask)
     if m.ndim != 2:
@@ -200,17 +296,58 @@ def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.nd
 
 
 def silhouette_spline(mask: np.ndarray, n: int = 32, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
-    """Closed B-spline of a silhouette's outer boundary: (ctrl (n, 2), ref_point (2,)), pixels.
+    """Closed B-spline of a silhouette's outer boundary.
 
     ctrl[0] belongs to the reference point at the top of the head; the order is counter-clockwise
-    on screen (see module doc). Raises ValueError for an empty mask.
+    on screen (see module doc).
+
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W)
+        Bool or 0/non-zero.
+    n : int
+        Number of control points (>= 4).
+    ref_window : float
+        Half-width of the search for the reference point, as a fraction of the boundary length.
+
+    Returns
+    -------
+    ctrl : ndarray of shape (n, 2), dtype float64
+        Control points, pixels.
+    ref_point : ndarray of shape (2,), dtype float64
+        The reference point, pixels.
+
+    Raises
+    ------
+    ValueError
+        For an empty mask (see :func:`oriented_boundary`).
     """
     contour, ref = oriented_boundary(mask, ref_window)
     return fit_closed_bspline(contour, n), ref
 
 
 def shape_vector(ctrl: np.ndarray, height: float, pos: np.ndarray) -> np.ndarray:
-    """(2n,) actor-centred, height-normalised control points [x0, y0, x1, y1, ...]."""
+    """Actor-centred, height-normalised control points.
+
+    Parameters
+    ----------
+    ctrl : ndarray of shape (n, 2)
+        Control points, pixels.
+    height : float
+        The person's height, pixels (> 0).
+    pos : ndarray of shape (2,)
+        The person's image position, pixels.
+
+    Returns
+    -------
+    ndarray of shape (2n,)
+        [x0, y0, x1, y1, ...] of (ctrl - pos) / height.
+
+    Raises
+    ------
+    ValueError
+        If ``ctrl`` is not (n, 2) or ``height`` is not > 0.
+    """
     c = np.asarray(ctrl, np.float64)
     if c.ndim != 2 or c.shape[1] != 2:
         raise ValueError(f"ctrl must be (n, 2), got shape {c.shape}")
@@ -234,8 +371,26 @@ def combined_shape_vector(
       [2n, 4n)      shape_vector(ctrl_b, height_b, pos_b)
       [4n, 4n + 2)  (pos_b - pos_a) / h_m                  relative separation
       4n + 2        log(height_b / height_a)               relative scale
-    pos is each person's image position (the pipeline uses the region centroid), height their
-    height in pixels. The vector is unchanged by a common image translation and scaling.
+    The vector is unchanged by a common image translation and scaling.
+
+    Parameters
+    ----------
+    ctrl_a, ctrl_b : ndarray of shape (n, 2)
+        Control points of person a and b, pixels.
+    height_a, height_b : float
+        Their heights, pixels.
+    pos_a, pos_b : ndarray of shape (2,)
+        Their image positions, pixels (the pipeline uses the region centroid).
+
+    Returns
+    -------
+    ndarray of shape (4n + 3,), dtype float64
+        The joint shape vector (layout above).
+
+    Raises
+    ------
+    ValueError
+        If the control points' shapes differ (or see :func:`shape_vector`).
     """
     ca, cb = np.asarray(ctrl_a), np.asarray(ctrl_b)
     if ca.shape != cb.shape:

@@ -36,7 +36,20 @@ def _nonempty(v: Any) -> str | None:
 
 
 def import_modules(modules: list[str], param: str = "modules") -> None:
-    """Import the modules that register message classes; ParamError naming the one that fails."""
+    """Import the modules that register message classes.
+
+    Parameters
+    ----------
+    modules : list of str
+        Dotted module names.
+    param : str
+        The node parameter that named them, for the error message.
+
+    Raises
+    ------
+    ParamError
+        Naming the module that fails to import.
+    """
     for name in modules:
         try:
             importlib.import_module(str(name))
@@ -55,6 +68,25 @@ class Recorder(Node):
 
     The bag is finished (summary and footer written) on end of stream and on every stop; a crash
     leaves it readable up to the last flush (at most ``flush_period`` seconds lost).
+
+    Parameters
+    ----------
+    path : str
+        Bag file to write (.mcap).
+    topics : list of str
+        Topics to record (at least one; not ``stats``).
+    compression : str
+        Chunk compression, one of ``COMPRESSIONS`` (default ``"zstd"``).
+    chunk_size : int
+        Bytes per chunk before it is written.
+    flush_period : float
+        Seconds between flushes (bounds what a crash loses).
+    overwrite : bool
+        Replace an existing file.
+    modules : list of str
+        Modules to import so that schemas are described from their classes.
+    queue : int
+        Latest policy: messages per topic kept while the recorder lags; the rest are dropped and counted.
     """
 
     params = {
@@ -132,10 +164,26 @@ class Player(Node):
 
     Outputs: one per recorded topic (after ``topics`` selection and ``remap``), named like the topic,
     typed by the recorded schema, which must be registered (name its module in ``modules``).
-    ``rate``: 1 real time, N for N times faster, 0 as fast as possible. ``lockstep``: ignore timing
-    and send as fast as the reliable subscribers take messages; run alone (not launched), it also
-    waits for one reliable subscriber per output before the first message. ``loop``: start again at
-    the end (until stopped). End of stream goes out at the end.
+    End of stream goes out at the end.
+
+    Parameters
+    ----------
+    path : str
+        Bag file to play.
+    rate : float
+        Playback speed: 1 real time, N for N times faster, 0 as fast as possible.
+    lockstep : bool
+        Ignore timing and send as fast as the reliable subscribers take messages, nothing dropped; run
+        alone (not launched), it also waits for one reliable subscriber per output before the first
+        message.
+    loop : bool
+        Start again at the end (until stopped).
+    topics : list of str
+        Recorded topics to play (default: all).
+    remap : dict of str to str
+        Recorded topic -> published topic.
+    modules : list of str
+        Modules to import so that the bag's message classes are registered.
     """
 
     params = {
@@ -150,7 +198,24 @@ class Player(Node):
 
     @classmethod
     def selection(cls, params: dict[str, Any]) -> dict[str, tuple[str, str]]:
-        """Recorded topic -> (published topic, schema id) for the given parameters."""
+        """The topics to play for the given parameters.
+
+        Parameters
+        ----------
+        params : dict of str to Any
+            The node's parameters (``path``, ``topics``, ``remap``).
+
+        Returns
+        -------
+        dict of str to tuple of (str, str)
+            Recorded topic -> (published topic, schema id).
+
+        Raises
+        ------
+        ParamError
+            If the bag does not exist or cannot be read, a selected or remapped topic is not in it, or
+            the published topics are not distinct (or one is ``stats``).
+        """
         path = Path(params["path"])
         if not path.is_file():
             raise ParamError(f"parameter 'path': bag {path} does not exist")

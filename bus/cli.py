@@ -26,6 +26,11 @@ RUNTIME_COMMANDS: dict[str, tuple[str, str]] = {
 def commands() -> dict[str, str]:
     """Every command's module: the runtime's, then those the installed packages declare
     (entry points ``counterpart.commands``: the applications demo, track, learn, ...).
+
+    Returns
+    -------
+    dict of str to str
+        Command name -> the dotted name of the module that runs it.
     """
     found = {name: module for name, (module, _) in RUNTIME_COMMANDS.items()}
     for name, ep in plugins.declared(plugins.COMMANDS).items():
@@ -34,7 +39,18 @@ def commands() -> dict[str, str]:
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The parser; only ``command``'s module is imported (all of them with None, for --help)."""
+    """The parser; only ``command``'s module is imported (all of them with None, for --help).
+
+    Parameters
+    ----------
+    command : str or None
+        The command whose module adds its arguments; None imports every command's module.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``counterpart`` parser with one subparser per command.
+    """
     ap = argparse.ArgumentParser(
         prog="counterpart", description="Counterpart: virtual interaction partners on a node graph."
     )
@@ -51,6 +67,13 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> None:
+    """Run the ``counterpart`` command; exits with the subcommand's status.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The command line without the program name; None reads ``sys.argv[1:]``.
+    """
     argv = sys.argv[1:] if argv is None else argv
     # like `python -m`: the user's own node modules in the working folder are importable
     if os.getcwd() not in sys.path:

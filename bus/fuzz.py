@@ -64,7 +64,17 @@ _DTYPES = sorted(ALLOWED_DTYPES)
 
 @dataclass(frozen=True)
 class Hostile:
-    """One multipart message (topic frame first) and whether a correct subscriber delivers it."""
+    """One multipart message (topic frame first) and whether a correct subscriber delivers it.
+
+    Parameters
+    ----------
+    kind : str
+        The kind of damage, one of :data:`KINDS`.
+    frames : list of bytes
+        The multipart message, topic frame first.
+    valid : bool
+        Whether a correct subscriber delivers it (else it drops and counts it as bad).
+    """
 
     kind: str
     frames: list[bytes]
@@ -75,6 +85,13 @@ class OddValues:
     """Values of declared field types that are well-formed on the wire but odd: extreme numbers,
     NaN, random strings, arrays of random dtype and shape (each side ``min_dim`` to 5), up to 30
     list items (people in a frame).
+
+    Parameters
+    ----------
+    rng : random.Random
+        The source of the values.
+    min_dim : int
+        The smallest side of arrays (the largest is 5).
     """
 
     def __init__(self, rng: random.Random, min_dim: int = 0) -> None:
@@ -82,7 +99,20 @@ class OddValues:
         self.min_dim = min_dim
 
     def value(self, tp: Any, depth: int = 0) -> Any:
-        """A value of declared type ``tp``."""
+        """A value of declared type ``tp``.
+
+        Parameters
+        ----------
+        tp : Any
+            A resolved field type.
+        depth : int
+            Nesting depth (long lists only at depth 0).
+
+        Returns
+        -------
+        Any
+            The value (None for a type it does not know).
+        """
         rng = self.rng
         origin, args = typing.get_origin(tp), typing.get_args(tp)
         if tp is bool:
@@ -114,7 +144,20 @@ class OddValues:
         return None
 
     def instance(self, cls: type, depth: int = 0) -> Any:
-        """An instance of message or struct class ``cls``, every field from :meth:`value`."""
+        """An instance of message or struct class ``cls``, every field from :meth:`value`.
+
+        Parameters
+        ----------
+        cls : type
+            A message or struct class.
+        depth : int
+            Nesting depth.
+
+        Returns
+        -------
+        Any
+            The instance (built past the class's own checks when they refuse the values).
+        """
         values = {name: self.value(tp, depth) for name, tp in field_types(cls).items()}
         try:
             return cls(**values)
@@ -150,8 +193,27 @@ def hostile_messages(
     topic: str, msg_type: type, n: int, publisher: str, seed: int = 0, min_dim: int = 0
 ) -> Iterator[Hostile]:
     """``n`` messages for ``topic`` (of ``msg_type``, published by node ``publisher``), cycling
-    through :data:`KINDS`; the valid ones carry the send counter a real publisher would. Arrays of
-    well-formed messages have sides of ``min_dim`` to 5.
+    through :data:`KINDS`; the valid ones carry the send counter a real publisher would.
+
+    Parameters
+    ----------
+    topic : str
+        The topic.
+    msg_type : type
+        The topic's message class.
+    n : int
+        Messages to yield.
+    publisher : str
+        The node that publishes the topic (forged end-of-stream messages name another).
+    seed : int
+        Seed of the random damage and contents.
+    min_dim : int
+        The smallest side of arrays of well-formed messages (the largest is 5).
+
+    Yields
+    ------
+    Hostile
+        One message and whether a correct subscriber delivers it.
     """
     rng = random.Random(seed)
     odd = OddValues(rng, min_dim)
@@ -225,6 +287,11 @@ def _oversize(t: bytes, head: dict[str, Any], rng: random.Random, big: bool) -> 
 class HostilePublisher:
     """An XPUB socket bound on a free loopback port (``endpoint``: where the node under test
     connects for its topic), sending without loss: every message sent reaches the subscriber.
+
+    Parameters
+    ----------
+    ctx : zmq.Context
+        The context the socket is made in.
     """
 
     def __init__(self, ctx: zmq.Context) -> None:
@@ -235,8 +302,19 @@ class HostilePublisher:
         self.endpoint: str = self.sock.getsockopt_string(zmq.LAST_ENDPOINT)
 
     def wait_subscriber(self, deadline: float, alive: Callable[[], bool]) -> bool:
-        """True once a subscriber has joined (before ``time.monotonic()`` reaches ``deadline``,
-        and while ``alive()``).
+        """Wait for a subscriber to join.
+
+        Parameters
+        ----------
+        deadline : float
+            When to give up, on the ``time.monotonic()`` clock, seconds.
+        alive : callable
+            Waiting goes on only while it returns True (the node's process still runs).
+
+        Returns
+        -------
+        bool
+            True once a subscriber has joined; False at the deadline or when ``alive()`` is False.
         """
         while time.monotonic() < deadline and alive():
             if self.sock.poll(100) and self.sock.recv()[:1] == b"\x01":
@@ -244,8 +322,19 @@ class HostilePublisher:
         return False
 
     def send(self, frames: list[bytes], deadline: float) -> None:
-        """Send one multipart message, waiting while the subscriber's queue is full (until
-        ``deadline``, on the ``time.monotonic()`` clock: TimeoutError).
+        """Send one multipart message, waiting while the subscriber's queue is full.
+
+        Parameters
+        ----------
+        frames : list of bytes
+            The multipart message, topic frame first.
+        deadline : float
+            How long to wait, on the ``time.monotonic()`` clock, seconds.
+
+        Raises
+        ------
+        TimeoutError
+            When the subscriber stopped reading past ``deadline``.
         """
         while True:
             try:
@@ -262,7 +351,29 @@ class HostilePublisher:
 
 @dataclass
 class FuzzTarget:
-    """One node input to fuzz: node ``node``'s port ``port`` takes topic ``topic`` of ``type_name``."""
+    """One node input to fuzz: node ``node``'s port ``port`` takes topic ``topic`` of ``type_name``.
+
+    Attributes
+    ----------
+    node : str
+        The node's name in the launch declarations.
+    port : str
+        The node's input port.
+    topic : str
+        The topic the port is remapped to.
+    type_name : str
+        The topic's message type, as in launch files (``camera.Frame``).
+    min_dim : int
+        The smallest side of arrays in well-formed messages (see OddValues).
+    sent : int
+        Messages sent.
+    valid : int
+        Of them, those a correct subscriber delivers.
+    received : int
+        Decoded and handed to the node, from its stats.
+    bad : int
+        Dropped and counted as bad, from its stats.
+    """
 
     node: str
     port: str
@@ -290,8 +401,29 @@ def run_fuzz(
     """Launch ``nodes`` (launch-file declarations, the targets' inputs remapped to their topics),
     send ``n`` hostile messages to each target (interleaved), then end the topics as their publisher
     would and wait for the graph to end (or ``timeout``). Fills each target's counts from its node's
-    last statistics (a node that crashed counted what it had until about a second before);
-    returns the launcher's exit code (None when it had to be killed) and its output.
+    last statistics (a node that crashed counted what it had until about a second before).
+
+    Parameters
+    ----------
+    nodes : dict of str to dict
+        Launch-file node declarations, the targets' inputs remapped to their topics.
+    targets : list of FuzzTarget
+        The inputs to fuzz; their counts are filled in.
+    n : int
+        Hostile messages per target.
+    workdir : Path
+        Folder for the launch file (``fuzz.yaml``) and the launcher's output (``fuzz.log``).
+    seed : int
+        Seed of the hostile messages.
+    timeout : float
+        Seconds for the whole run.
+
+    Returns
+    -------
+    code : int or None
+        The launcher's exit code (None when it had to be killed).
+    output : str
+        The launcher's output.
     """
     import yaml
 

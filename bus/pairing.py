@@ -64,6 +64,12 @@ class Pairing:
     timeout : float or None
         Seconds a set with every required message waits for the optional ones (None: as long as
         ``max_pending`` allows).
+
+    Raises
+    ------
+    ValueError
+        If there is no required input, an input is listed twice or as both required and optional,
+        ``max_pending`` < 1, ``max_ahead`` < 0 or ``timeout`` < 0.
     """
 
     required: tuple[str, ...]
@@ -95,8 +101,18 @@ class Pairing:
         return self.required + self.optional
 
     def restrict(self, ports: Sequence[str]) -> Pairing | None:
-        """The pairing of the inputs among ``ports`` (a node whose parameters leave some out);
-        None when a required one is not there.
+        """The pairing of the inputs among ``ports`` (a node whose parameters leave some out).
+
+        Parameters
+        ----------
+        ports : sequence of str
+            The input ports the node has.
+
+        Returns
+        -------
+        Pairing or None
+            The pairing without the optional inputs that are not there; None when a required one is
+            not there.
         """
         if not set(self.required) <= set(ports):
             return None
@@ -105,8 +121,16 @@ class Pairing:
 
 @dataclass(frozen=True)
 class PairedSet:
-    """One set that went out: ``seq``, ``msgs`` port -> message (None for an optional input that
-    did not deliver), ``restart`` True on the first set after the stream restarted.
+    """One set that went out.
+
+    Parameters
+    ----------
+    seq : int
+        The set's frame number.
+    msgs : dict of str to Any
+        Port -> message (None for an optional input that did not deliver).
+    restart : bool
+        True on the first set after the stream restarted.
     """
 
     seq: int
@@ -117,17 +141,45 @@ class PairedSet:
         return self.msgs[port]
 
     def get(self, port: str) -> Any:
-        """The message of ``port``, None when it did not deliver."""
+        """The message of ``port``.
+
+        Parameters
+        ----------
+        port : str
+            A paired input port.
+
+        Returns
+        -------
+        Any
+            Its message, None when it did not deliver.
+        """
         return self.msgs.get(port)
 
 
 @dataclass
 class PairingStats:
-    """Counters since start: sets delivered, of them with an optional input missing (``partial``),
-    dropped without a required message (decided without it, ``dropped``, or beyond ``max_ahead``,
-    ``overflow``), delivered early by ``max_pending`` (``forced``) or ``timeout`` (``timed_out``),
-    messages that came after their set was decided (``late``), stream restarts, and per port the
-    sets delivered without it (``missing``).
+    """Counters since start.
+
+    Attributes
+    ----------
+    delivered : int
+        Sets delivered.
+    partial : int
+        Sets delivered with an optional input missing.
+    dropped : int
+        Sets decided without a required message, dropped.
+    overflow : int
+        Sets (or held-aside messages) dropped beyond ``max_ahead``.
+    forced : int
+        Sets delivered early by ``max_pending``.
+    timed_out : int
+        Sets delivered early by ``timeout``.
+    late : int
+        Messages that came after their set was decided.
+    restarts : int
+        Stream restarts.
+    missing : dict of str to int
+        Per port, the sets delivered without it.
     """
 
     delivered: int = 0
@@ -141,7 +193,18 @@ class PairingStats:
     missing: dict[str, int] = field(default_factory=dict)
 
     def figures(self, prefix: str = "paired_") -> dict[str, float]:
-        """The counters as a node's stats figures (``paired_delivered``, ``paired_missing_pose``, ...)."""
+        """The counters as a node's stats figures.
+
+        Parameters
+        ----------
+        prefix : str
+            Put before every counter's name.
+
+        Returns
+        -------
+        dict of str to float
+            ``paired_delivered``, ``paired_missing_pose``, ...
+        """
         out = {f"{prefix}{k}": float(v) for k, v in vars(self).items() if k != "missing"}
         out.update({f"{prefix}missing_{p}": float(n) for p, n in self.missing.items()})
         return out
@@ -183,7 +246,26 @@ class SeqSynchronizer:
     def add(self, port: str, seq: int, msg: Any, now: float | None = None) -> list[PairedSet]:
         """Take one message of ``port``; return the sets it decides (possibly none), in order.
 
-        ``now``: its arrival (s, monotonic; default: now), from which ``timeout`` counts.
+        Parameters
+        ----------
+        port : str
+            A paired input port.
+        seq : int
+            The message's frame number.
+        msg : Any
+            The message.
+        now : float or None
+            Its arrival (s, monotonic; default: now), from which ``timeout`` counts.
+
+        Returns
+        -------
+        list of PairedSet
+            The sets now decided, in seq order (possibly none).
+
+        Raises
+        ------
+        KeyError
+            For a port that is not paired.
         """
         if port not in self._last:
             raise KeyError(f"unknown port {port!r}; paired ports: {', '.join(self.ports)}")
@@ -209,7 +291,23 @@ class SeqSynchronizer:
         return out
 
     def end(self, port: str) -> list[PairedSet]:
-        """``port`` ended (end of stream): it goes past every set; return the sets now decided."""
+        """``port`` ended (end of stream): it goes past every set.
+
+        Parameters
+        ----------
+        port : str
+            A paired input port.
+
+        Returns
+        -------
+        list of PairedSet
+            The sets now decided, in seq order (possibly none).
+
+        Raises
+        ------
+        KeyError
+            For a port that is not paired.
+        """
         if port not in self._last:
             raise KeyError(f"unknown port {port!r}; paired ports: {', '.join(self.ports)}")
         self._ended.add(port)  # what it held aside still joins the new stream if the anchor restarts
@@ -218,13 +316,30 @@ class SeqSynchronizer:
         return out
 
     def poll(self, now: float | None = None) -> list[PairedSet]:
-        """The sets whose wait for optional inputs ran past ``timeout`` at ``now`` (s, monotonic)."""
+        """The sets whose wait for optional inputs ran past ``timeout`` at ``now``.
+
+        Parameters
+        ----------
+        now : float or None
+            The time, s, monotonic (default: now).
+
+        Returns
+        -------
+        list of PairedSet
+            The sets now decided, in seq order (possibly none).
+        """
         out: list[PairedSet] = []
         self._drain(out, now=time.monotonic() if now is None else now)
         return out
 
     def flush(self) -> list[PairedSet]:
-        """Deliver everything pending with what it has (at the end of the stream)."""
+        """Deliver everything pending with what it has (at the end of the stream).
+
+        Returns
+        -------
+        list of PairedSet
+            Every pending set that holds its required messages, in seq order.
+        """
         for port in list(self._aside):
             self._stragglers(port)
         out: list[PairedSet] = []
@@ -238,7 +353,13 @@ class SeqSynchronizer:
         return [seq for _, seq in sorted(self._pending)]
 
     def next_deadline(self) -> float | None:
-        """When the oldest waiting set times out (s, monotonic); None without a timeout."""
+        """When the oldest waiting set times out.
+
+        Returns
+        -------
+        float or None
+            The time, s, monotonic; None without a timeout or a waiting set.
+        """
         if self.timeout is None:
             return None
         times = [s.since for s in self._pending.values() if s.since is not None]

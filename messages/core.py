@@ -46,7 +46,23 @@ def empty_array() -> np.ndarray:
 
 
 def schema_id(cls_or_msg: Any) -> str:
-    """The ``name/version`` id of a message class or instance."""
+    """The ``name/version`` id of a message class or instance.
+
+    Parameters
+    ----------
+    cls_or_msg : type or Any
+        A message class or a message.
+
+    Returns
+    -------
+    str
+        The schema id, ``name/version``.
+
+    Raises
+    ------
+    TypeError
+        If the class is not a registered message class.
+    """
     cls = cls_or_msg if isinstance(cls_or_msg, type) else type(cls_or_msg)
     try:
         return cls.__schema_id__
@@ -87,7 +103,18 @@ def _array_defaults(cls: type) -> None:
 
 
 def struct(cls: type[T]) -> type[T]:
-    """A frozen dataclass usable as a nested field type inside messages (no schema id of its own)."""
+    """A frozen dataclass usable as a nested field type inside messages (no schema id of its own).
+
+    Parameters
+    ----------
+    cls : type
+        The class to decorate.
+
+    Returns
+    -------
+    type
+        The frozen, keyword-only dataclass.
+    """
     _array_defaults(cls)
     dc = dataclasses.dataclass(frozen=True, kw_only=True)(cls)
     dc.__struct__ = True
@@ -95,7 +122,27 @@ def struct(cls: type[T]) -> type[T]:
 
 
 def message(name: str, version: int) -> Callable[[type[T]], type[T]]:
-    """Register a frozen dataclass as message ``name/version``."""
+    """Register a frozen dataclass as message ``name/version``.
+
+    Parameters
+    ----------
+    name : str
+        The message's name, e.g. ``"camera.Frame"``: non-empty, without '/'.
+    version : int
+        The schema version, >= 1.
+
+    Returns
+    -------
+    callable
+        The class decorator: it adds ``stamp`` and ``seq`` where the class lacks them, makes the class a
+        frozen, keyword-only dataclass and registers it in ``REGISTRY``.
+
+    Raises
+    ------
+    ValueError
+        For a bad name or version, and (from the decorator) when the schema id is registered twice by
+        different classes.
+    """
     if "/" in name or not name:
         raise ValueError(f"message name {name!r} must be non-empty and contain no '/'")
     if not isinstance(version, int) or version < 1:
@@ -117,7 +164,23 @@ def message(name: str, version: int) -> Callable[[type[T]], type[T]]:
 
 
 def lookup(sid: str) -> type:
-    """The message class registered under ``sid``; KeyError with the known ids otherwise."""
+    """The message class registered under ``sid``.
+
+    Parameters
+    ----------
+    sid : str
+        The schema id, ``name/version``.
+
+    Returns
+    -------
+    type
+        The message class.
+
+    Raises
+    ------
+    KeyError
+        For an unknown id (the message lists the known ids).
+    """
     try:
         return REGISTRY[sid]
     except KeyError:
@@ -128,6 +191,21 @@ def by_name(name: str) -> type:
     """Resolve a type name as written in launch files: ``camera.Frame`` or ``camera.Frame/1``.
 
     Without a version the highest registered version is returned.
+
+    Parameters
+    ----------
+    name : str
+        ``name`` or ``name/version``.
+
+    Returns
+    -------
+    type
+        The message class.
+
+    Raises
+    ------
+    KeyError
+        For an unknown name (the message lists the known ids).
     """
     if "/" in name:
         return lookup(name)
@@ -138,7 +216,18 @@ def by_name(name: str) -> type:
 
 
 def field_types(cls: type) -> dict[str, Any]:
-    """Resolved type hints of a message or struct class (cached on the class)."""
+    """Resolved type hints of a message or struct class (cached on the class).
+
+    Parameters
+    ----------
+    cls : type
+        A message or struct class.
+
+    Returns
+    -------
+    dict of str to Any
+        Field name -> resolved type, in field order.
+    """
     cached = cls.__dict__.get("__cp_hints__")
     if cached is None:
         module = sys.modules.get(cls.__module__)
@@ -151,7 +240,19 @@ def field_types(cls: type) -> dict[str, Any]:
 
 
 def describe(cls: type) -> dict[str, Any]:
-    """A JSON-able description of a message class (stored in bags so they are self-describing)."""
+    """A JSON-able description of a message class (stored in bags so they are self-describing).
+
+    Parameters
+    ----------
+    cls : type
+        A message or struct class.
+
+    Returns
+    -------
+    dict of str to Any
+        ``schema`` (the schema id, or the class name for a struct) and ``fields`` (field name -> type
+        name, as :func:`type_name` writes it).
+    """
     out: dict[str, Any] = {"schema": getattr(cls, "__schema_id__", cls.__qualname__), "fields": {}}
     for fname, tp in field_types(cls).items():
         out["fields"][fname] = type_name(tp)
@@ -159,6 +260,18 @@ def describe(cls: type) -> dict[str, Any]:
 
 
 def type_name(tp: Any) -> str:
+    """A readable name of a field type.
+
+    Parameters
+    ----------
+    tp : Any
+        A resolved type hint.
+
+    Returns
+    -------
+    str
+        Its name, e.g. ``list[int]``, ``str | None``, or ``struct Name{field: type, ...}`` for a struct.
+    """
     origin = typing.get_origin(tp)
     if origin is None:
         if dataclasses.is_dataclass(tp):
@@ -171,5 +284,17 @@ def type_name(tp: Any) -> str:
 
 
 def describe_struct(tp: type) -> str:
+    """A readable description of a struct class: its name and its fields' types.
+
+    Parameters
+    ----------
+    tp : type
+        A struct class.
+
+    Returns
+    -------
+    str
+        ``Name{field: type, ...}``.
+    """
     inner = ", ".join(f"{k}: {type_name(v)}" for k, v in field_types(tp).items())
     return f"{tp.__qualname__}{{{inner}}}"

@@ -27,14 +27,20 @@ HEAD_TOP = 0.16
 class RandomCameraConfig:
     """Ranges of the random camera (metres, degrees) and the framing.
 
-    Attributes
+    Parameters
     ----------
-        height: camera centre above the floor, metres (low, high).
-        tilt_deg: downward pitch of the optical axis, degrees (low, high).
-        fov_deg: horizontal field of view, degrees (low, high).
-        margin: share of the image size kept free at every border.
-        max_distance: farthest camera distance tried, metres from the people's centre.
-        tries: draws before giving up.
+    height : tuple of (float, float)
+        Camera centre above the floor, metres (low, high).
+    tilt_deg : tuple of (float, float)
+        Downward pitch of the optical axis, degrees (low, high).
+    fov_deg : tuple of (float, float)
+        Horizontal field of view, degrees (low, high).
+    margin : float
+        Share of the image size kept free at every border.
+    max_distance : float
+        Farthest camera distance tried, metres from the people's centre.
+    tries : int
+        Draws before giving up.
     """
 
     height: tuple[float, float] = (1.0, 3.0)
@@ -63,10 +69,27 @@ def frame_people(
     """The nearest camera of this height, tilt and field of view (no roll, looking along -Z) that
     keeps ``points`` in view; None when none within ``max_distance`` does.
 
-    Args:
-        points: (N, 3) world points (metres) that must be seen: the people's joints and head tops.
-        cam_height: metres above the floor y = 0; ``tilt_deg`` downward pitch; ``fov_deg`` horizontal.
-        width, height: image size in pixels; ``margin`` share of it kept free at each border.
+    Parameters
+    ----------
+    points : ndarray of shape (N, 3)
+        World points (metres) that must be seen: the people's joints and head tops.
+    cam_height : float
+        Camera centre above the floor y = 0, metres.
+    tilt_deg : float
+        Downward pitch of the optical axis, degrees.
+    fov_deg : float
+        Horizontal field of view, degrees.
+    width, height : int
+        Image size, pixels.
+    margin : float
+        Share of the image size kept free at each border.
+    max_distance : float
+        Farthest camera distance tried (in steps of 0.1 m from 1 m), metres from the points' centre.
+
+    Returns
+    -------
+    Camera or None
+        The nearest such camera, or None when none within ``max_distance`` keeps the points in view.
     """
     P = np.asarray(points, np.float64).reshape(-1, 3)
     centre = np.array([0.5 * (P[:, 0].min() + P[:, 0].max()), 0.0, 0.5 * (P[:, 2].min() + P[:, 2].max())])
@@ -82,8 +105,18 @@ def frame_people(
 
 
 def scene_points(joints: np.ndarray) -> np.ndarray:
-    """(T, P, J, 3) joints (metres) -> (N, 3) points to keep in view: every joint, the head tops
-    (``HEAD_TOP`` above each joint) and the floor under each joint.
+    """The points to keep in view: every joint, the head tops (``HEAD_TOP`` above each joint) and the
+    floor under each joint.
+
+    Parameters
+    ----------
+    joints : ndarray of shape (T, P, J, 3)
+        Joints of P people over T frames, metres, world frame.
+
+    Returns
+    -------
+    ndarray of shape (N, 3)
+        The points, metres (N = 3 T P J).
     """
     J = np.asarray(joints, np.float64).reshape(-1, 3)
     top = J + np.array([0.0, HEAD_TOP, 0.0])
@@ -98,11 +131,31 @@ def random_camera(
     height: int,
     config: RandomCameraConfig = RandomCameraConfig(),
 ) -> tuple[Camera, dict[str, float]]:
-    """A random camera that sees the people of ``joints`` ((T, P, J, 3) metres) fully.
+    """A random camera that sees the people of ``joints`` fully.
 
-    Returns the camera and its drawn parameters: ``height`` (m), ``tilt_deg``, ``fov_deg``,
-    ``distance`` (m, horizontal, from the camera to the people's centre). Raises ValueError when
-    ``config.tries`` draws find no feasible camera.
+    Parameters
+    ----------
+    joints : ndarray of shape (T, P, J, 3)
+        Joints of P people over T frames, metres, world frame.
+    rng : numpy.random.Generator
+        The source of the draws.
+    width, height : int
+        Image size, pixels.
+    config : RandomCameraConfig
+        Ranges of the draws and the framing.
+
+    Returns
+    -------
+    camera : Camera
+        The camera.
+    drawn : dict of str to float
+        Its drawn parameters: ``height`` (m), ``tilt_deg``, ``fov_deg``, ``distance`` (m, horizontal,
+        from the camera to the people's centre).
+
+    Raises
+    ------
+    ValueError
+        When ``config.tries`` draws find no feasible camera.
     """
     pts = scene_points(joints)
     for _ in range(config.tries):

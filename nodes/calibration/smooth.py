@@ -16,8 +16,18 @@ from .estimate import CalibrationConfig, CameraEstimate, rotation
 
 
 def camera_parameters(camera: Camera) -> np.ndarray:
-    """(6,) [log f, tilt, roll, log height, log distance, offset] of a camera looking roughly along -Z
-    with the ground y = 0 (the distance and offset are those of the world origin).
+    """The smoothed parameters of a camera looking roughly along -Z with the ground y = 0.
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera.
+
+    Returns
+    -------
+    ndarray of shape (6,)
+        [log f, tilt, roll, log height, log distance, offset]: f in pixels, tilt and roll in radians,
+        height and distance in metres (the distance and offset are those of the world origin).
     """
     R = camera.R
     tilt = float(np.arcsin(np.clip(-R[2, 1], -1, 1)))
@@ -27,7 +37,22 @@ def camera_parameters(camera: Camera) -> np.ndarray:
 
 
 def camera_from_parameters(p: np.ndarray, width: int, height: int) -> Camera:
-    """Inverse of :func:`camera_parameters` (principal point at the image centre, no yaw)."""
+    """Inverse of :func:`camera_parameters` (principal point at the image centre, no yaw).
+
+    Parameters
+    ----------
+    p : ndarray of shape (6,)
+        [log f, tilt, roll, log height, log distance, offset], as :func:`camera_parameters` gives.
+    width : int
+        Image width, pixels.
+    height : int
+        Image height, pixels.
+
+    Returns
+    -------
+    Camera
+        The camera.
+    """
     R = rotation(p[1], p[2])
     centre = np.array([-p[5], np.exp(p[3]), np.exp(p[4])])
     f = float(np.exp(p[0]))
@@ -47,6 +72,26 @@ def credible(
     or by scene lines converging on it (``horizon_segments``). Without it the lean of people
     reaching to each other passes for tilt. A tilt on the fit's lower bound is not credible either
     (a camera looking up: the sign of that lean).
+
+    Parameters
+    ----------
+    est : CameraEstimate
+        The estimate.
+    max_height_std : float
+        Largest standard deviation of the camera height.
+    max_focal_std : float
+        Largest standard deviation of the focal length.
+    max_tilt_std_deg : float
+        Largest standard deviation of the tilt, degrees.
+    min_depth_spread : float
+        Least ``est.depth_spread`` that shows the horizon (unless enough horizon segments do).
+    min_horizon_segments : int
+        Least ``est.horizon_segments`` that show the horizon (unless the depth spread does).
+
+    Returns
+    -------
+    bool
+        True when the estimate may move the published camera.
     """
     return (
         np.isfinite([est.height_std, est.focal_std, est.tilt_std_deg]).all()
@@ -62,9 +107,13 @@ def credible(
 class CameraSmoother:
     """The published camera, moved towards each estimate by bounded steps.
 
-    Args:
-        start: the camera published before any estimate (the default or a file's).
-        max_step: the bound per update (see the module docstring).
+    Parameters
+    ----------
+    start : Camera
+        The camera published before any estimate (the default or a file's).
+    max_step : float
+        The bound per update (see the module docstring): log units for the focal length, the height
+        and the distance; radians for tilt and roll; ``max_step`` times the distance for the offset.
     """
 
     def __init__(self, start: Camera, max_step: float = 0.03) -> None:
@@ -77,7 +126,18 @@ class CameraSmoother:
         return camera_from_parameters(self.params, *self.size)
 
     def step(self, est: CameraEstimate) -> Camera:
-        """Move towards ``est``; returns the camera to publish."""
+        """Move towards ``est``.
+
+        Parameters
+        ----------
+        est : CameraEstimate
+            The new estimate.
+
+        Returns
+        -------
+        Camera
+            The camera to publish.
+        """
         target = camera_parameters(est.camera())
         bound = np.full(6, self.max_step)
         bound[5] = self.max_step * np.exp(self.params[4])

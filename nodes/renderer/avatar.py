@@ -30,8 +30,12 @@ CROWN_M = 0.12
 
 
 class AvatarPainter:
-    """Draws avatar frames into images (module docstring). ``avatar_file``: use this file for every
-    partner instead of the one each message names ('' : the message's).
+    """Draws avatar frames into images (module docstring).
+
+    Parameters
+    ----------
+    avatar_file : str
+        Use this file for every partner instead of the one each message names ('' : the message's).
     """
 
     def __init__(self, avatar_file: str = "") -> None:
@@ -39,7 +43,18 @@ class AvatarPainter:
         self._stores: dict[str, AvatarFrames | None] = {}
 
     def frames(self, path: str) -> AvatarFrames | None:
-        """The frames of avatar file ``path`` (loaded once; None, logged once, when it cannot be read)."""
+        """The frames of an avatar file, loaded once.
+
+        Parameters
+        ----------
+        path : str
+            The avatar file.
+
+        Returns
+        -------
+        AvatarFrames or None
+            The frames; None (logged once) when the file cannot be read.
+        """
         if path not in self._stores:
             try:
                 self._stores[path] = load_avatar_frames(path)
@@ -49,9 +64,23 @@ class AvatarPainter:
         return self._stores[path]
 
     def draw(self, img: np.ndarray, partner: Any, cam: Camera) -> bool | None:
-        """Composite the partner's avatar frames into ``img`` (H, W, 3) uint8 BGR in place. Returns
-        whether any of it falls inside the picture, or None when there is nothing to draw it with (no
-        frames, no file, no placement), so the caller can fall back to another style.
+        """Composite the partner's avatar frames into ``img`` in place.
+
+        Parameters
+        ----------
+        img : ndarray of shape (H, W, 3), dtype uint8
+            The picture, BGR; drawn into.
+        partner : Any
+            The Partner message: ``joints`` (14, 3) metres, world frame, ``avatar_frames`` (frame
+            indices), ``avatar_weights`` (their cross-fade weights) and ``avatar_file``.
+        cam : Camera
+            The graph's camera.
+
+        Returns
+        -------
+        bool or None
+            Whether any of the avatar falls inside the picture, or None when there is nothing to draw it
+            with (no frames, no file, no placement), so the caller can fall back to another style.
         """
         idx = np.asarray(partner.avatar_frames).astype(np.int64).reshape(-1)
         w = np.asarray(partner.avatar_weights, np.float32).reshape(-1)

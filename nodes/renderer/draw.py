@@ -51,13 +51,35 @@ _FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 
 def person_colour(pid: int) -> Colour:
-    """The overlay colour of person ``pid`` (cycled over :data:`PERSON_COLOURS`)."""
+    """The overlay colour of person ``pid`` (cycled over :data:`PERSON_COLOURS`).
+
+    Parameters
+    ----------
+    pid : int
+        The person's id.
+
+    Returns
+    -------
+    tuple of (int, int, int)
+        BGR colour.
+    """
     return PERSON_COLOURS[int(pid) % len(PERSON_COLOURS)]
 
 
 def partner_colour(emotion: str = "neutral", strength: float = 0.0) -> Colour:
-    """BGR colour of the partner: the neutral colour blended towards ``emotion``'s colour by
-    ``strength`` in [0, 1] (clipped); unknown emotions count as neutral.
+    """BGR colour of the partner: the neutral colour blended towards ``emotion``'s colour.
+
+    Parameters
+    ----------
+    emotion : str
+        A key of :data:`EMOTION_COLOURS`; unknown emotions count as neutral.
+    strength : float
+        Blend towards the emotion's colour, in [0, 1] (clipped; not finite: 0).
+
+    Returns
+    -------
+    tuple of (int, int, int)
+        BGR colour.
     """
     base = np.array(EMOTION_COLOURS["neutral"], np.float64)
     target = np.array(EMOTION_COLOURS.get(emotion, EMOTION_COLOURS["neutral"]), np.float64)
@@ -73,12 +95,22 @@ def partner_cones(joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dimensions by ``counterpart.body.ik.dims_from_joints``; forward kinematics of both gives cones whose limb
     directions follow the joints, with head, hands and feet added.
 
-    Args:
-        joints: (14, 3) metres, world frame, ``counterpart.body.skeleton.JOINTS`` order.
+    Parameters
+    ----------
+    joints : ndarray of shape (14, 3)
+        Metres, world frame, ``counterpart.body.skeleton.JOINTS`` order.
 
     Returns
     -------
-        ends (16, 2, 3) metres (start and end centre of each cone), radii (16, 2) metres.
+    ends : ndarray of shape (16, 2, 3)
+        Start and end centre of each cone, metres, world frame.
+    radii : ndarray of shape (16, 2)
+        The matching radii, metres.
+
+    Raises
+    ------
+    ValueError
+        If the joints are not (14, 3) or not finite.
     """
     X = np.asarray(joints, np.float64)
     if X.shape != (N_JOINTS, 3):
@@ -107,7 +139,18 @@ def _quad_index(n_rim: int) -> np.ndarray:
 
 
 def default_light(camera: Camera) -> np.ndarray:
-    """(3,) unit world direction towards a light above, slightly right of and behind the camera."""
+    """The unit world direction towards a light above, slightly right of and behind the camera.
+
+    Parameters
+    ----------
+    camera : Camera
+        The camera.
+
+    Returns
+    -------
+    ndarray of shape (3,)
+        The direction, world frame.
+    """
     d = camera.R.T @ np.array([0.3, -0.6, -1.0])
     return d / np.linalg.norm(d)
 
@@ -122,17 +165,34 @@ def cone_facets(
 ) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Visible facets of the cones, shaded and sorted far to near.
 
-    Args:
-        ends: (S, 2, 3) metres; radii: (S, 2) metres.
-        camera: projection.
-        light: (3,) world direction towards the light (default :func:`default_light`).
-        n_rim: facets around each cone.
-        ambient: shade of a facet turned away from the light, in [0, 1].
+    Parameters
+    ----------
+    ends : ndarray of shape (S, 2, 3)
+        Start and end centre of each cone, metres, world frame.
+    radii : ndarray of shape (S, 2)
+        The matching radii, metres.
+    camera : Camera
+        The projection.
+    light : ndarray of shape (3,) or None
+        World direction towards the light (default :func:`default_light`).
+    n_rim : int
+        Facets around each cone.
+    ambient : float
+        Shade of a facet turned away from the light, in [0, 1].
 
     Returns
     -------
-        polygons: list of (k, 2) float pixel polygons (4 corners for sides, n_rim for ends),
-        shade: (F,) intensities in [ambient, 1], depth: (F,) mean camera depth (m), far to near.
+    polygons : list of ndarray of shape (k, 2)
+        Float pixel polygons (4 corners for sides, n_rim for ends), far to near.
+    shade : ndarray of shape (F,)
+        Intensities in [ambient, 1].
+    depth : ndarray of shape (F,)
+        Mean camera depth, metres.
+
+    Raises
+    ------
+    ValueError
+        If ``ends`` is not (S, 2, 3) or ``radii`` not (S, 2).
     """
     ends = np.asarray(ends, np.float64)
     radii = np.asarray(radii, np.float64)
@@ -183,8 +243,36 @@ def draw_cones(
     n_rim: int = 16,
     ambient: float = 0.35,
 ) -> np.ndarray:
-    """Paint shaded truncated cones (S, 2, 3)/(S, 2) metres into ``image`` (H, W, 3) uint8 BGR,
-    far to near (see :func:`cone_facets`). Returns ``image``.
+    """Paint shaded truncated cones into ``image``, far to near (see :func:`cone_facets`).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    ends : ndarray of shape (S, 2, 3)
+        Start and end centre of each cone, metres, world frame.
+    radii : ndarray of shape (S, 2)
+        The matching radii, metres.
+    camera : Camera
+        The camera calibration of the image.
+    colour : tuple of (int, int, int)
+        BGR colour at full light.
+    light : ndarray of shape (3,) or None
+        World direction towards the light (default :func:`default_light`).
+    n_rim : int
+        Facets around each cone.
+    ambient : float
+        Shade of a facet turned away from the light, in [0, 1].
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     polys, shade, _ = cone_facets(ends, radii, camera, light, n_rim, ambient)
@@ -199,7 +287,31 @@ def draw_cones(
 def draw_partner_3d(
     image: np.ndarray, joints: np.ndarray, camera: Camera, colour: Colour = EMOTION_COLOURS["neutral"], **kw: Any
 ) -> np.ndarray:
-    """Draw a partner given by its (14, 3) joints (metres) as shaded cones. Returns ``image``."""
+    """Draw a partner given by its joints as shaded cones.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    joints : ndarray of shape (14, 3)
+        Metres, world frame (:func:`partner_cones`).
+    camera : Camera
+        The camera calibration of the image.
+    colour : tuple of (int, int, int)
+        BGR colour at full light.
+    **kw : Any
+        ``light``, ``n_rim``, ``ambient`` of :func:`draw_cones`.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If the joints are not (14, 3) and finite, or the image is not a writable (H, W, 3) uint8 array.
+    """
     ends, radii = partner_cones(joints)
     return draw_cones(image, ends, radii, camera, colour, **kw)
 
@@ -216,8 +328,30 @@ def draw_silhouette(
     outline: Colour | None = (40, 40, 40),
     thickness: int = 1,
 ) -> np.ndarray:
-    """Fill the closed B-spline of ``ctrl`` (n, 2) pixels with ``colour`` and outline it.
-    Returns ``image``.
+    """Fill the closed B-spline of ``ctrl`` with ``colour`` and outline it.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    ctrl : ndarray of shape (n, 2)
+        Control points, pixels.
+    colour : tuple of (int, int, int)
+        BGR fill colour.
+    outline : tuple of (int, int, int) or None
+        BGR outline colour (None: no outline).
+    thickness : int
+        Outline thickness, pixels (0: no outline).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If the control points are not finite, or the image is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     pts = closed_bspline(ctrl)
@@ -246,8 +380,33 @@ def draw_skeleton(
     thickness: int = 2,
     radius: int = 3,
 ) -> np.ndarray:
-    """Tracked skeleton: joints (14, 3) metres projected, bones as lines, the spine from the neck to
-    the mid-hip point, joints as dots. Joints behind the camera are left out. Returns ``image``.
+    """Tracked skeleton: joints projected, bones as lines, the spine from the neck to the mid-hip
+    point, joints as dots. Joints behind the camera are left out.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    joints : ndarray of shape (14, 3)
+        Metres, world frame.
+    camera : Camera
+        The camera calibration of the image.
+    colour : tuple of (int, int, int)
+        BGR colour.
+    thickness : int
+        Line thickness, pixels.
+    radius : int
+        Joint dot radius, pixels.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If the joints are not (14, 3), or the image is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     X = np.asarray(joints, np.float64)
@@ -275,8 +434,35 @@ def draw_spline_outline(
     label: str = "",
     show_ctrl: bool = True,
 ) -> np.ndarray:
-    """A person's B-spline boundary (n, 2) pixels as a closed curve, its control points as dots,
-    its reference point (top of the head) as a ring and an optional label above it.
+    """A person's B-spline boundary as a closed curve, its control points as dots, its reference
+    point (top of the head) as a ring and an optional label above it.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    ctrl : ndarray of shape (n, 2)
+        Control points, pixels.
+    colour : tuple of (int, int, int)
+        BGR colour.
+    thickness : int
+        Curve thickness, pixels.
+    ref_point : ndarray of shape (2,) or None
+        The reference point, pixels (None or not finite: not drawn).
+    label : str
+        Text above the reference point ('' : none).
+    show_ctrl : bool
+        Draw the control points.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     pts = closed_bspline(ctrl)
@@ -302,8 +488,29 @@ def put_text(
     thickness: int = 1,
     background: Colour | None = None,
 ) -> tuple[int, int]:
-    """Text with its baseline-left corner at ``org`` (pixels), optionally on a filled box.
-    Returns the text's (width, height) in pixels.
+    """Text with its baseline-left corner at ``org``, optionally on a filled box.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    text : str
+        The text.
+    org : tuple of (int, int)
+        Baseline-left corner, pixels.
+    colour : tuple of (int, int, int)
+        BGR text colour.
+    scale : float
+        Font scale.
+    thickness : int
+        Stroke thickness, pixels.
+    background : tuple of (int, int, int) or None
+        BGR colour of the box behind the text (None: no box).
+
+    Returns
+    -------
+    tuple of (int, int)
+        The text's (width, height) in pixels.
     """
     (w, h), base = cv2.getTextSize(text, _FONT, scale, thickness)
     x, y = org
@@ -338,7 +545,24 @@ def _badge_boxes(
 def signal_badges_rect(
     image: np.ndarray, anchor: tuple[float, float], names: Sequence[str], scale: float | None = None
 ) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1) pixels that ``draw_signal_badges`` with the same arguments covers."""
+    """The box that ``draw_signal_badges`` with the same arguments covers.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        The image the badges go into (its size).
+    anchor : tuple of (float, float)
+        Top-left of the first badge, pixels.
+    names : sequence of str
+        The signals' names.
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.35).
+
+    Returns
+    -------
+    tuple of (int, int, int, int)
+        (x0, y0, x1, y1), pixels.
+    """
     scale = text_scale(image, 0.35) if scale is None else scale
     boxes = _badge_boxes(image.shape, anchor, names, scale)
     if not boxes:
@@ -361,8 +585,32 @@ def draw_signal_badges(
 ) -> np.ndarray:
     """Social-signal badges of one person: a row of small labelled boxes starting at ``anchor``
     (x, y pixels, top-left). Label 1 (present): a bright box; 0 (absent): a dark box; -1
-    (unknown): grey. ``scores`` (K,) in [0, 1], when given, draw a white bar along the bottom of
-    each known badge. Returns ``image``.
+    (unknown): grey.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    anchor : tuple of (float, float)
+        Top-left of the first badge, (x, y) pixels.
+    names : sequence of str of length K
+        The signals' names.
+    labels : ndarray of shape (K,)
+        1 (present), 0 (absent) or -1 (unknown).
+    scores : ndarray of shape (K,) or None
+        Scores in [0, 1]; when given, a white bar along the bottom of each known badge.
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.35).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If names and labels differ in number, or the image is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     scale = text_scale(image, 0.35) if scale is None else scale
@@ -393,6 +641,20 @@ def place_apart(rects: Sequence[tuple[int, int, int, int]], height: int, gap: in
     overlapping, placed in order: each box moves down below the boxes already placed that it would
     overlap, or, where that runs past ``height``, up above them (not past the top). Where no
     such place is free the last one tried is kept: the frame is too crowded.
+
+    Parameters
+    ----------
+    rects : sequence of tuple of (int, int, int, int)
+        Boxes (x0, y0, x1, y1), pixels, in placing order.
+    height : int
+        Image rows.
+    gap : int
+        Pixels kept between boxes.
+
+    Returns
+    -------
+    list of int
+        Vertical shift of each box, pixels (positive: down).
     """
     placed: list[tuple[int, int, int, int]] = []
     shifts = []
@@ -421,6 +683,16 @@ def stats_lines(stats: Mapping[str, Any]) -> list[str]:
     """One text line per node from its latest ``messages.NodeStats``: the rate (Hz) of its first
     output (else of its first input), input drops summed, the largest input latency (ms) and the
     mean handler time (ms).
+
+    Parameters
+    ----------
+    stats : mapping of str to NodeStats
+        Node name -> its latest statistics.
+
+    Returns
+    -------
+    list of str
+        One line per node, by name.
     """
     lines = []
     for node in sorted(stats):
@@ -434,15 +706,48 @@ def stats_lines(stats: Mapping[str, Any]) -> list[str]:
 
 
 def text_scale(image: np.ndarray, base: float) -> float:
-    """Font scale ``base`` for a 320-pixel-wide image, grown with wider images (up to 3x)."""
+    """Font scale ``base`` for a 320-pixel-wide image, grown with wider images (up to 3x).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, ...)
+        The image (its width).
+    base : float
+        Font scale at 320 pixels wide.
+
+    Returns
+    -------
+    float
+        The font scale.
+    """
     return base * float(np.clip(image.shape[1] / 320.0, 1.0, 3.0))
 
 
 def draw_stats(
     image: np.ndarray, stats: Mapping[str, Any], origin: tuple[int, int] = (4, 4), scale: float | None = None
 ) -> np.ndarray:
-    """Per-node statistics (:func:`stats_lines`) as text on a dark box, top-left at ``origin``;
-    ``scale`` None: :func:`text_scale` of 0.3.
+    """Per-node statistics (:func:`stats_lines`) as text on a dark box.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    stats : mapping of str to NodeStats
+        Node name -> its latest statistics.
+    origin : tuple of (int, int)
+        Top-left of the box, pixels.
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.3).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     scale = text_scale(image, 0.3) if scale is None else scale
@@ -462,8 +767,26 @@ def draw_stats(
 
 def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float | None = None) -> np.ndarray:
     """The run-time controls in force along the bottom edge: model, speaker, interest, emotion and
-    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1]);
-    ``scale`` None: :func:`text_scale` of 0.35.
+    a bar of the emotion strength (its filled length is ``strength`` of the bar, in [0, 1]).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image, drawn into in place.
+    controls : mapping of str to Any
+        ``model``, ``speaker``, ``interest``, ``emotion`` and ``strength`` (missing: '-' or 0).
+    scale : float or None
+        Font scale (None: :func:`text_scale` of 0.35).
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        ``image``.
+
+    Raises
+    ------
+    ValueError
+        If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
     scale = text_scale(image, 0.35) if scale is None else scale
@@ -492,8 +815,28 @@ def draw_controls(image: np.ndarray, controls: Mapping[str, Any], scale: float |
 def contact_sheet(
     frames: Iterable[np.ndarray], cols: int = 4, pad: int = 2, background: Colour = (0, 0, 0)
 ) -> np.ndarray:
-    """Tile images (each (H, W, 3) or (H, W) uint8) row by row into one BGR image, ``cols`` per
-    row with ``pad`` pixels between them; every tile is resized to the first one's size.
+    """Tile images row by row into one BGR image; every tile is resized to the first one's size.
+
+    Parameters
+    ----------
+    frames : iterable of ndarray
+        Images of shape (H, W, 3) or (H, W), dtype uint8.
+    cols : int
+        Tiles per row (>= 1).
+    pad : int
+        Pixels between tiles.
+    background : tuple of (int, int, int)
+        BGR colour of the padding.
+
+    Returns
+    -------
+    ndarray of shape (rows H + (rows - 1) pad, cols W + (cols - 1) pad, 3), dtype uint8
+        The sheet (fewer columns when fewer frames than ``cols`` are given).
+
+    Raises
+    ------
+    ValueError
+        Without frames, for ``cols`` < 1, or for a frame that is not uint8.
     """
     tiles = [np.asarray(f) for f in frames]
     if not tiles:

@@ -32,6 +32,11 @@ class ForwardFilter:
         "filter" (the posterior) or "viterbi" (the fixed-lag best path's state).
     lag : int
         Frames of the Viterbi trellis.
+
+    Raises
+    ------
+    ValueError
+        If ``decode`` is not one of ``DECODES``.
     """
 
     def __init__(self, startprob: np.ndarray, transmat: np.ndarray, decode: str = "filter", lag: int = 8) -> None:
@@ -50,8 +55,18 @@ class ForwardFilter:
         self._alphas: list[np.ndarray] = []
 
     def update(self, ll: np.ndarray) -> np.ndarray:
-        """One frame's (N,) state log-likelihoods -> (N,) state weights (sum 1): the posterior
-        (``decode="filter"``) or one on the fixed-lag best path's state (``"viterbi"``).
+        """One frame's state log-likelihoods -> state weights.
+
+        Parameters
+        ----------
+        ll : ndarray of shape (N,)
+            The frame's (tempered) state log-likelihoods.
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            State weights (sum 1): the posterior (``decode="filter"``) or one on the fixed-lag best
+            path's state (``"viterbi"``).
         """
         prior = self.log_pi if self.alpha is None else logsumexp(self.alpha[:, None] + self.log_A, axis=0)
         la = prior + ll

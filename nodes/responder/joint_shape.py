@@ -50,7 +50,20 @@ from .shapes import ShapeTrack, mirror_ctrl
 
 
 def combined_vectors(obs: ShapeTrack, par: ShapeTrack) -> np.ndarray:
-    """(T, 4n + 3) combined shape vectors (the layout of spline.combined_shape_vector), vectorised."""
+    """Combined shape vectors (the layout of spline.combined_shape_vector), vectorised.
+
+    Parameters
+    ----------
+    obs : ShapeTrack
+        The observed person's track: control points (T, n, 2), positions (T, 2) and heights (T,), pixels.
+    par : ShapeTrack
+        The partner's track, likewise.
+
+    Returns
+    -------
+    ndarray of shape (T, 4n + 3)
+        The combined shape vectors.
+    """
     n = obs.ctrl.shape[1]
     va = ((obs.ctrl - obs.pos[:, None]) / obs.height[:, None, None]).reshape(-1, 2 * n)
     vb = ((par.ctrl - par.pos[:, None]) / par.height[:, None, None]).reshape(-1, 2 * n)
@@ -65,7 +78,22 @@ def _mirrored(t: ShapeTrack) -> ShapeTrack:
 
 
 def hermite(p0: np.ndarray, m0: np.ndarray, p1: np.ndarray, m1: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Cubic Hermite interpolation, rows: p0, m0, p1, m1 (N, m), u (N,) in [0, 1] -> (N, m)."""
+    """Cubic Hermite interpolation, row by row.
+
+    Parameters
+    ----------
+    p0, p1 : ndarray of shape (N, m)
+        Start and end points.
+    m0, m1 : ndarray of shape (N, m)
+        Start and end tangents.
+    u : ndarray of shape (N,)
+        Interpolation parameter in [0, 1].
+
+    Returns
+    -------
+    ndarray of shape (N, m)
+        The interpolated points.
+    """
     u = u[:, None]
     u2, u3 = u * u, u * u * u
     return (2 * u3 - 3 * u2 + 1) * p0 + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * p1 + (u3 - u2) * m1
@@ -74,10 +102,50 @@ def hermite(p0: np.ndarray, m0: np.ndarray, p1: np.ndarray, m1: np.ndarray, u: n
 class JointShapeModel:
     """Johnson et al.'s joint behaviour model over two silhouettes (see the module docstring).
 
-    Parameters: ``energy`` PCA variance kept; ``n_states`` K; ``n_behaviours`` B; ``gamma`` decay
-    constant in (0, 1); ``deriv_weight`` w; ``n_hypotheses`` CONDENSATION sample size; ``sigma``
-    likelihood width (height-normalised units per coordinate); ``rate_noise`` std of the frame rate
-    of a hypothesis; ``both_roles``; ``random_state``.
+    Parameters
+    ----------
+    energy : float
+        PCA variance kept.
+    n_states : int
+        K, the state prototypes (>= 2).
+    n_behaviours : int
+        B, the behaviour prototypes (>= 2).
+    gamma : float
+        Decay constant, in (0, 1).
+    deriv_weight : float
+        w, the weight of the derivative in the state.
+    n_hypotheses : int
+        CONDENSATION sample size (>= 1).
+    sigma : float
+        Likelihood width (height-normalised units per coordinate).
+    rate_noise : float
+        Std of the frame rate of a hypothesis (frames per frame).
+    both_roles : bool
+        Train each pair both ways (each person as the observed one).
+    random_state : int
+        Seed of k-means and of the CONDENSATION sample.
+
+    Attributes
+    ----------
+    mean_ : ndarray of shape (4n + 3,)
+        PCA mean of the joint shapes.
+    components_ : ndarray of shape (m, 4n + 3)
+        PCA components.
+    keys_ : ndarray of shape (B, m)
+        Key shapes P_j.
+    key_velocity_ : ndarray of shape (B, m)
+        Key velocities D_j, per frame.
+    durations_ : ndarray of shape (B,)
+        Mean segment durations d_j, frames.
+    start_ : ndarray of shape (B,)
+        Start probabilities pi.
+    transitions_ : ndarray of shape (B, B + 1)
+        Transitions A, the last column the end state.
+
+    Raises
+    ------
+    ValueError
+        If ``gamma`` is not in (0, 1), or ``n_hypotheses`` < 1, ``n_states`` < 2 or ``n_behaviours`` < 2.
     """
 
     name = "joint-shape"
@@ -111,7 +179,22 @@ class JointShapeModel:
     # ------------------------------------------------------------------ learning
     @staticmethod
     def decay_vectors(states: np.ndarray, k: int, gamma: float) -> np.ndarray:
-        """Conditional decay operator over a state-prototype sequence (T,) -> (T, k) behaviour vectors."""
+        """Conditional decay operator over a state-prototype sequence.
+
+        Parameters
+        ----------
+        states : ndarray of shape (T,), dtype int
+            State prototype indices, in [0, k).
+        k : int
+            Number of state prototypes.
+        gamma : float
+            Decay constant, in (0, 1).
+
+        Returns
+        -------
+        ndarray of shape (T, k)
+            Behaviour vectors h_t.
+        """
         h = np.zeros((len(states), k))
         cur = np.zeros(k)
         for t, s in enumerate(states):  # a recursion over time; vectorised over prototypes
@@ -121,7 +204,23 @@ class JointShapeModel:
         return h
 
     def fit(self, pairs: Sequence[tuple[ShapeTrack, ShapeTrack]]) -> JointShapeModel:
-        """Learn from (observed, partner) shape tracks, A = left person as observed."""
+        """Learn from (observed, partner) shape tracks, A = left person as observed.
+
+        Parameters
+        ----------
+        pairs : sequence of tuple of (ShapeTrack, ShapeTrack)
+            (observed, partner) shape tracks of each training sequence.
+
+        Returns
+        -------
+        JointShapeModel
+            self, fitted.
+
+        Raises
+        ------
+        ValueError
+            If no pair has frames where both people are in view.
+        """
         seqs = []
         for a, b in pairs:
             roles = [(a, b), (_mirrored(b), _mirrored(a))] if self.both_roles else [(a, b)]
@@ -235,9 +334,29 @@ class JointShapeModel:
         self._tau[idx] = self._rng.random(k) * self.durations_[self._j[idx]]
 
     def step(self, ctrl: np.ndarray, height: float, pos: np.ndarray, mirrored: bool = False) -> np.ndarray:
-        """One frame: the observed person's control points (n, 2), height (px) and position (2,) px ->
-        the partner's control points (n, 2) pixels. ``mirrored`` for an observed person on the
-        right (the model was trained with the observed person on the left).
+        """One frame: the observed person's silhouette -> the partner's.
+
+        Parameters
+        ----------
+        ctrl : ndarray of shape (n, 2)
+            The observed person's control points, pixels.
+        height : float
+            The observed person's height, pixels (> 0).
+        pos : ndarray of shape (2,)
+            The observed person's position, pixels.
+        mirrored : bool
+            For an observed person on the right (the model was trained with the observed person on
+            the left).
+
+        Returns
+        -------
+        ndarray of shape (n, 2), dtype float32
+            The partner's control points, pixels.
+
+        Raises
+        ------
+        ValueError
+            If ``ctrl`` is not (n, 2) for this model's n, or ``height`` is not > 0.
         """
         c = np.asarray(ctrl, np.float64)
         n = self.n_ctrl_
@@ -279,7 +398,20 @@ class JointShapeModel:
         return out.astype(np.float32)
 
     def predict(self, observed: ShapeTrack, mirrored: bool = False) -> np.ndarray:
-        """A whole track frame by frame: (T, n, 2) partner control points (NaN where not valid)."""
+        """A whole track frame by frame.
+
+        Parameters
+        ----------
+        observed : ShapeTrack
+            The observed person's track of T frames.
+        mirrored : bool
+            For an observed person on the right (see :meth:`step`).
+
+        Returns
+        -------
+        ndarray of shape (T, n, 2), dtype float32
+            Partner control points, pixels (NaN where not valid).
+        """
         self.reset()
         out = np.full(observed.ctrl.shape, np.nan, np.float32)
         for t in np.flatnonzero(observed.valid):
@@ -301,6 +433,15 @@ class JointShapeModel:
     )
 
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model for saving.
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            The fitted arrays, named without their trailing underscore.
+        config : dict of str to Any
+            The constructor's parameters and ``n_ctrl``, the control points per silhouette.
+        """
         config = {
             k: getattr(self, k)
             for k in (
@@ -321,6 +462,20 @@ class JointShapeModel:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> JointShapeModel:
+        """A fitted model from what :meth:`get_state` gave.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The fitted arrays, named without their trailing underscore.
+        config : dict of str to Any
+            The constructor's parameters and ``n_ctrl``.
+
+        Returns
+        -------
+        JointShapeModel
+            The fitted model, its CONDENSATION sample reset.
+        """
         c = dict(config)
         n = int(c.pop("n_ctrl"))
         m = cls(**c)

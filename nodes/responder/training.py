@@ -16,7 +16,25 @@ Progress = Callable[[str], None] | None
 
 
 def default_training_data(name: str, progress: Progress = None) -> list[TwoPersonTrajectory]:
-    """The simulator data each default model is trained on (sized to train in well under 60 s)."""
+    """The simulator data each default model is trained on (sized to train in well under 60 s).
+
+    Parameters
+    ----------
+    name : str
+        The model: ``"dual-hmm"``, ``"joint-shape"``, ``"listener"``, ``"emotion"`` or ``"gpdm"``.
+    progress : callable or None
+        Called with a line of progress text.
+
+    Returns
+    -------
+    list of TwoPersonTrajectory
+        The simulated training trajectories.
+
+    Raises
+    ------
+    ValueError
+        For an unknown model name.
+    """
     say = progress or (lambda s: None)
     say(f"{name}: simulating training data")
     if name == "dual-hmm":
@@ -40,6 +58,18 @@ def gpdm_training_data(seeds: int = 8, max_frames: int = 250) -> list[TwoPersonT
     """The gpdm's default data: high fives and handshakes, neutral and each emotion at strengths 0.5
     and 1, the hands meeting 0.1 m lower, at, and 0.1 m higher than the simulator's own height in
     turn (2 x 7 x ``seeds`` trials, 112 by default).
+
+    Parameters
+    ----------
+    seeds : int
+        Simulator seeds per scenario and emotion setting.
+    max_frames : int
+        Frames per trial at most.
+
+    Returns
+    -------
+    list of TwoPersonTrajectory
+        The simulated trials.
     """
     out = []
     for e in EMOTIONS:
@@ -57,7 +87,25 @@ def gpdm_training_data(seeds: int = 8, max_frames: int = 250) -> list[TwoPersonT
 
 
 def speaker_listener(t: TwoPersonTrajectory) -> tuple[np.ndarray, np.ndarray]:
-    """(speaker labels, listener labels) (T, K) of a conversation: the speaker talks more."""
+    """The speaker's and the listener's signal labels of a conversation: the speaker talks more.
+
+    Parameters
+    ----------
+    t : TwoPersonTrajectory
+        The conversation, with ``signals_a`` and ``signals_b``.
+
+    Returns
+    -------
+    speaker : ndarray of shape (T, K)
+        The speaker's signal labels.
+    listener : ndarray of shape (T, K)
+        The listener's signal labels.
+
+    Raises
+    ------
+    ValueError
+        If the trajectory has no signals.
+    """
     if t.signals_a is None:
         raise ValueError(f"trajectory {t.label!r} has no signals: the listener model needs signals_a/_b")
     k = t.signal_names.index("talking") if "talking" in t.signal_names else None
@@ -66,7 +114,29 @@ def speaker_listener(t: TwoPersonTrajectory) -> tuple[np.ndarray, np.ndarray]:
 
 
 def train(name: str, data: Sequence[TwoPersonTrajectory], progress: Progress = None, **params: Any) -> Any:
-    """Fit model ``name`` on trajectories; ``params`` go to the model's constructor."""
+    """Fit model ``name`` on trajectories.
+
+    Parameters
+    ----------
+    name : str
+        The model: ``"dual-hmm"``, ``"joint-shape"``, ``"listener"``, ``"emotion"`` or ``"gpdm"``.
+    data : sequence of TwoPersonTrajectory
+        The training trajectories.
+    progress : callable or None
+        Called with a line of progress text.
+    **params : Any
+        Keyword parameters of the model's constructor.
+
+    Returns
+    -------
+    Any
+        The fitted model.
+
+    Raises
+    ------
+    ValueError
+        For an unknown model name.
+    """
     say = progress or (lambda s: None)
     if name == "dual-hmm":
         from .dual_hmm import DualHMM

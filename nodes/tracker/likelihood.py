@@ -53,15 +53,20 @@ def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
 class Observation:
     """One person in one frame, ready for the likelihood.
 
-    Attributes
+    Parameters
     ----------
-        fg: (H*W + 1,) float32 flattened foreground mask (1 person, 0 background), with a trailing
-            0 that out-of-image points read.
-        edge: (H*W + 1,) float32 flattened smoothed edge map in [0, 1], same layout.
-        cover_uv: (M, 2) float32 pixel positions of foreground samples for the coverage term.
-        width, height: image size in pixels.
-        cost: (2 (H*W + 1),) float32 per-pixel costs ``(1 - fg)^2`` then ``(1 - edge)^2`` (out of
-            the image: 1), so that S_r and S_e are one gather; None: derived from fg and edge.
+    fg : ndarray of shape (H*W + 1,), dtype float32
+        Flattened foreground mask (1 person, 0 background), with a trailing 0 that out-of-image
+        points read.
+    edge : ndarray of shape (H*W + 1,), dtype float32
+        Flattened smoothed edge map in [0, 1], same layout.
+    cover_uv : ndarray of shape (M, 2), dtype float32
+        Pixel positions of foreground samples for the coverage term.
+    width, height : int
+        Image size in pixels.
+    cost : ndarray of shape (2 (H*W + 1),), dtype float32, or None
+        Per-pixel costs ``(1 - fg)^2`` then ``(1 - edge)^2`` (out of the image: 1), so that S_r and
+        S_e are one gather; None: derived from fg and edge.
     """
 
     fg: np.ndarray
@@ -72,7 +77,13 @@ class Observation:
     cost: np.ndarray | None = None
 
     def cost_map(self) -> np.ndarray:
-        """The ``cost`` array (computed from fg and edge when it was not given)."""
+        """The ``cost`` array (computed from fg and edge when it was not given).
+
+        Returns
+        -------
+        ndarray of shape (2 (H*W + 1),), dtype float32
+            ``(1 - fg)^2`` then ``(1 - edge)^2``.
+        """
         if self.cost is not None:
             return self.cost
         return _cost_map(self.fg, self.edge)
@@ -93,16 +104,23 @@ def edge_map(
     """Deutscher's smoothed edge map: Canny edges within the dilated foreground, Gaussian blurred
     and scaled so that an edge pixel reads 1.
 
-    Args:
-        image: (H, W, 3) BGR or (H, W) gray uint8 frame, or None to use the mask's own boundary.
-        mask: (H, W) bool foreground of the tracked person.
-        canny: Canny hysteresis thresholds (grey levels).
-        dilate_px: how far outside the mask image edges still count (pixels).
-        blur_sigma: Gaussian sigma (pixels) of the smoothing that gives the cost a basin.
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8, or None
+        BGR or gray frame, or None to use the mask's own boundary.
+    mask : ndarray of shape (H, W), dtype bool
+        Foreground of the tracked person.
+    canny : tuple of (int, int)
+        Canny hysteresis thresholds (grey levels).
+    dilate_px : int
+        How far outside the mask image edges still count (pixels).
+    blur_sigma : float
+        Gaussian sigma (pixels) of the smoothing that gives the cost a basin.
 
     Returns
     -------
-        (H, W) float32 in [0, 1].
+    ndarray of shape (H, W), dtype float32
+        The edge map, in [0, 1].
     """
     m = mask.astype(np.uint8)
     k = np.ones((2 * dilate_px + 1, 2 * dilate_px + 1), np.uint8)
@@ -125,11 +143,28 @@ def make_observation(
 ) -> Observation:
     """Build the per-frame maps once (Deutscher: computed once per frame, read by every particle).
 
-    Args:
-        image: (H, W[, 3]) uint8 frame or None (edges from the mask boundary only).
-        mask: (H, W) bool or uint8 foreground of this person.
-        n_cover: foreground pixels sampled for the coverage term (0 disables it).
-        rng: generator for the coverage sample (default: seeded 0, so a frame maps the same way).
+    Parameters
+    ----------
+    image : ndarray of shape (H, W) or (H, W, 3), dtype uint8, or None
+        The frame, or None (edges from the mask boundary only).
+    mask : ndarray of shape (H, W), dtype bool or uint8
+        Foreground of this person.
+    n_cover : int
+        Foreground pixels sampled for the coverage term (0 disables it).
+    rng : numpy.random.Generator or None
+        Generator for the coverage sample (default: seeded 0, so a frame maps the same way).
+    **edge_kw
+        Keyword parameters of :func:`edge_map` (``canny``, ``dilate_px``, ``blur_sigma``).
+
+    Returns
+    -------
+    Observation
+        The frame's maps.
+
+    Raises
+    ------
+    ValueError
+        If the mask is not 2-D, or the image and the mask differ in size.
     """
     mask = np.asarray(mask).astype(bool)
     if mask.ndim != 2:
@@ -150,8 +185,24 @@ def make_observation(
 
 
 def pose_anchor_points(P: np.ndarray, dims: BodyDims) -> np.ndarray:
-    """(N, 28) poses -> (N, A, 3) float32 anchor points in metres (one forward kinematics, shared by
-    every camera's view); a clear error for a wrong shape.
+    """Anchor points of poses (one forward kinematics, shared by every camera's view).
+
+    Parameters
+    ----------
+    P : ndarray of shape (N, 28)
+        Poses (metres and radians, ``counterpart.body.pose``).
+    dims : BodyDims
+        Body dimensions, metres.
+
+    Returns
+    -------
+    ndarray of shape (N, A, 3), dtype float32
+        Anchor points, metres, world frame.
+
+    Raises
+    ------
+    ValueError
+        For poses of a wrong shape.
     """
     P = np.asarray(P, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 28:
@@ -236,13 +287,37 @@ class ConeLikelihood:
 
     # ---------------------------------------------------------------------------------------
     def project(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(N, 28) poses -> cone end centres (N, S, 2, 2) px, half-widths (N, S, 2) px, depth ok
-        (N,) bool (every anchor in front of the camera).
+        """Project the cones of poses into the image.
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses (metres and radians, ``counterpart.body.pose``).
+
+        Returns
+        -------
+        ends : ndarray of shape (N, S, 2, 2), dtype float32
+            Cone end centres, pixels.
+        half_widths : ndarray of shape (N, S, 2), dtype float32
+            Half-widths at the ends, pixels.
+        ok : ndarray of shape (N,), dtype bool
+            Every anchor in front of the camera.
         """
         return self._project(anchor_points(P, self.dims).astype(np.float32))
 
     def ground_cost(self, pts: np.ndarray) -> np.ndarray:
-        """(N, A, 3) anchor points, metres -> (N,) S_g in [0, 1] (see the class docstring)."""
+        """The ground-contact cost S_g (see :class:`LikelihoodConfig`).
+
+        Parameters
+        ----------
+        pts : ndarray of shape (N, A, 3)
+            Anchor points, metres.
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            S_g, in [0, 1].
+        """
         h = self.sole_height(pts)
         return np.minimum((h / np.float32(self.ground_sigma)) ** 2, np.float32(1.0))
 
@@ -260,10 +335,24 @@ class ConeLikelihood:
         return c, rho, ok
 
     def sample_points(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(N, 28) -> interior points (N, S*K_in, 2), outline points (N, S*K_out, 2) px, ok (N,).
+        """The sample points of poses' projected cones.
 
         Same points as ``counterpart.body.raster.cone_interior_points`` / ``cone_outline_points`` (trapezoid
         approximation of each projected cone), computed in one broadcast.
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses (metres and radians, ``counterpart.body.pose``).
+
+        Returns
+        -------
+        interior : ndarray of shape (N, S*K_in, 2), dtype float32
+            Interior points, pixels.
+        outline : ndarray of shape (N, S*K_out, 2), dtype float32
+            Outline points, pixels.
+        ok : ndarray of shape (N,), dtype bool
+            Every anchor in front of the camera.
         """
         c, rho, ok = self.project(P)
         u, v = self._points_uv(c, rho)
@@ -291,12 +380,26 @@ class ConeLikelihood:
         return uv[:, :, 0], uv[:, :, 1]
 
     def coverage_cost(self, c: np.ndarray, rho: np.ndarray, cover_uv: np.ndarray) -> np.ndarray:
-        """(N,) fraction of the M foreground samples outside every projected cone (capsule test:
+        """The fraction of the M foreground samples outside every projected cone, S_c (capsule test:
         distance to the cone's image axis below the interpolated half-width + 1 px).
 
         The projection of a sample q onto the axis and its squared distance come from 2 d.a and
         |d|^2 (d = q - c0), both linear in (q_x, q_y, 1): one matmul over cones x samples, then
         in-place arithmetic on the (N, S, M) arrays.
+
+        Parameters
+        ----------
+        c : ndarray of shape (N, S, 2, 2), dtype float32
+            Cone end centres, pixels.
+        rho : ndarray of shape (N, S, 2), dtype float32
+            Half-widths at the ends, pixels.
+        cover_uv : ndarray of shape (M, 2), dtype float32
+            Foreground samples, pixels.
+
+        Returns
+        -------
+        ndarray of shape (N,), dtype float32
+            S_c, in [0, 1] (0 without samples).
         """
         if cover_uv.shape[0] == 0:
             return np.zeros(c.shape[0], np.float32)
@@ -331,24 +434,78 @@ class ConeLikelihood:
         return 1.0 - covered.mean(axis=1, dtype=np.float32)
 
     def terms(self, P: np.ndarray, obs: Observation) -> np.ndarray:
-        """(N, 28) -> (N, 3) costs S_r, S_e, S_c, each in [0, 1]; poses behind the camera get 1."""
+        """The image costs of poses.
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses (metres and radians, ``counterpart.body.pose``).
+        obs : Observation
+            The frame's maps.
+
+        Returns
+        -------
+        ndarray of shape (N, 3)
+            S_r, S_e, S_c, each in [0, 1]; poses behind the camera get 1.
+        """
         return self.evaluate(P, obs)[0]
 
     def sole_height(self, pts: np.ndarray) -> np.ndarray:
-        """(N, A, 3) anchor points -> (N,) height of the lowest sole above the ground, metres."""
+        """Height of the lowest sole above the ground.
+
+        Parameters
+        ----------
+        pts : ndarray of shape (N, A, 3)
+            Anchor points, metres.
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            The height, metres.
+        """
         return (pts[:, _FOOT_ANCHORS, 1] - self.sole_offset).min(axis=1)
 
     def evaluate(self, P: np.ndarray, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
-        """(N, 28) -> image costs (N, 3) S_r, S_e, S_c and ground costs (N,) S_g from one forward
-        kinematics (``combine`` turns them into log-likelihoods).
+        """Image and ground costs from one forward kinematics (``combine`` turns them into
+        log-likelihoods).
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses (metres and radians, ``counterpart.body.pose``).
+        obs : Observation
+            The frame's maps.
+
+        Returns
+        -------
+        terms : ndarray of shape (N, 3), dtype float32
+            S_r, S_e, S_c.
+        ground : ndarray of shape (N,), dtype float32
+            S_g (0 when ``w_ground`` is 0).
+
+        Raises
+        ------
+        ValueError
+            For poses of a wrong shape.
         """
         pts = pose_anchor_points(P, self.dims)
         g = self.ground_cost(pts) if self.w_ground else np.zeros(len(pts), np.float32)
         return self.image_costs(pts, obs), g
 
     def image_costs(self, pts: np.ndarray, obs: Observation) -> np.ndarray:
-        """(N, A, 3) float32 anchor points (``pose_anchor_points``) -> (N, 3) S_r, S_e, S_c of this
-        camera's view; poses with an anchor behind the camera get 1.
+        """The image costs of this camera's view.
+
+        Parameters
+        ----------
+        pts : ndarray of shape (N, A, 3), dtype float32
+            Anchor points, metres (``pose_anchor_points``).
+        obs : Observation
+            The frame's maps of this view.
+
+        Returns
+        -------
+        ndarray of shape (N, 3)
+            S_r, S_e, S_c; poses with an anchor behind the camera get 1.
         """
         c, rho, ok = self._project(pts)
         u, v = self._points_uv(c, rho)
@@ -375,7 +532,20 @@ class ConeLikelihood:
         return self.combine(*self.evaluate(P, obs))
 
     def combine(self, terms: np.ndarray, ground: np.ndarray) -> np.ndarray:
-        """Image costs (N, 3) and ground costs (N,) of ``evaluate`` -> (N,) float64 log-likelihoods."""
+        """Log-likelihoods from the costs of ``evaluate``.
+
+        Parameters
+        ----------
+        terms : ndarray of shape (N, 3)
+            Image costs S_r, S_e, S_c.
+        ground : ndarray of shape (N,)
+            Ground costs S_g.
+
+        Returns
+        -------
+        ndarray of shape (N,), dtype float64
+            ``-gain * (w . [S_r, S_e, S_c] + w_ground S_g)``.
+        """
         return -self.gain * (terms @ np.asarray(self.w, np.float32) + self.w_ground * ground).astype(np.float64)
 
 
@@ -394,6 +564,11 @@ class MultiViewLikelihood:
         Body dimensions of the tracked person.
     config : LikelihoodConfig
         Every view's sample points and weights (:class:`ConeLikelihood`).
+
+    Raises
+    ------
+    ValueError
+        Without a camera.
     """
 
     def __init__(
@@ -405,8 +580,26 @@ class MultiViewLikelihood:
         self.dims = dims
 
     def evaluate(self, P: np.ndarray, obs: Sequence[Observation]) -> tuple[np.ndarray, np.ndarray]:
-        """(N, 28) poses, one Observation per camera -> image costs (N, 3) summed over the views
-        whose observation is not empty (0 <= each <= views seen), ground costs (N,).
+        """Image costs summed over the views, and ground costs.
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses (metres and radians, ``counterpart.body.pose``).
+        obs : sequence of Observation
+            One per camera.
+
+        Returns
+        -------
+        terms : ndarray of shape (N, 3), dtype float32
+            S_r, S_e, S_c summed over the views whose observation is not empty (0 <= each <= views seen).
+        ground : ndarray of shape (N,), dtype float32
+            S_g (once, from the reference view).
+
+        Raises
+        ------
+        ValueError
+            When the number of observations is not the number of cameras, or for poses of a wrong shape.
         """
         if len(obs) != len(self.views):
             raise ValueError(f"{len(obs)} observations for {len(self.views)} cameras; give one per camera")
@@ -424,7 +617,20 @@ class MultiViewLikelihood:
         return self.combine(*self.evaluate(P, obs))
 
     def combine(self, terms: np.ndarray, ground: np.ndarray) -> np.ndarray:
-        """Summed image costs (N, 3) and ground costs (N,) -> (N,) float64 log-likelihoods."""
+        """Log-likelihoods from the summed costs of ``evaluate``.
+
+        Parameters
+        ----------
+        terms : ndarray of shape (N, 3)
+            Summed image costs.
+        ground : ndarray of shape (N,)
+            Ground costs.
+
+        Returns
+        -------
+        ndarray of shape (N,), dtype float64
+            The log-likelihoods (``ConeLikelihood.combine``).
+        """
         return self.views[0].combine(terms, ground)
 
 

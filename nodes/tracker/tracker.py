@@ -41,9 +41,26 @@ from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
 @dataclass
 class TrackResult:
-    """One frame of one person: ``pose``/``best`` (28,), ``joints`` (14, 3) float32 metres of the
-    mean pose, ``ess``, ``log_likelihood`` (image term of the best particle), ``cost`` (its
-    S_r + S_e + S_c), ``lost`` and ``initialised`` (this frame started the track).
+    """One frame of one person.
+
+    Attributes
+    ----------
+    pose : ndarray of shape (28,)
+        The estimate: the weighted mean of the last layer (metres, radians).
+    best : ndarray of shape (28,)
+        The best particle.
+    joints : ndarray of shape (14, 3), dtype float32
+        Joints of the mean pose, metres, world frame.
+    ess : float
+        Effective sample size of the particle set.
+    log_likelihood : float
+        Image term of the best particle.
+    cost : float
+        Its S_r + S_e + S_c, per view seen (0 best, 3 worst).
+    lost : bool
+        The lost detector dropped the track on this frame.
+    initialised : bool
+        This frame started the track.
     """
 
     pose: np.ndarray
@@ -77,7 +94,18 @@ SIDES = ("left", "right")
 
 
 def people_problem(people: list) -> str | None:
-    """None when ``people`` names one or two distinct sides out of SIDES, else what is wrong."""
+    """Check a list of sides to track.
+
+    Parameters
+    ----------
+    people : list of str
+        The sides, out of SIDES.
+
+    Returns
+    -------
+    str or None
+        None when ``people`` names one or two distinct sides out of SIDES, else what is wrong.
+    """
     if not 1 <= len(people) <= 2 or any(s not in SIDES for s in people) or len(set(people)) != len(people):
         return f"{people!r}: expected one or two distinct sides out of {list(SIDES)}"
     return None
@@ -213,6 +241,13 @@ class Tracker:
         Body dimensions (default: scaled to the stature measured at initialisation).
     seed : int
         Seed of all random numbers.
+
+    Raises
+    ------
+    ValueError
+        If ``camera`` is not a Camera or a non-empty sequence of Cameras.
+    TypeError
+        If ``config`` is not a TrackerConfig.
     """
 
     def __init__(
@@ -268,6 +303,11 @@ class Tracker:
     def set_camera(self, camera: Camera) -> None:
         """A refined calibration of the same single view (the calibration node's estimate moving by
         small steps): the track goes on, projected with the new camera from the next frame.
+
+        Parameters
+        ----------
+        camera : Camera
+            The refined camera.
         """
         self.cameras, self.camera = [camera], camera
         self.likelihood = self._likelihood()
@@ -325,9 +365,9 @@ class Tracker:
 
         Parameters
         ----------
-        image : (H, W[, 3]) uint8 or None
+        image : ndarray of shape (H, W) or (H, W, 3), dtype uint8, or None
             The frame; with several cameras, a list of them in the cameras' order.
-        mask : (H, W) bool
+        mask : ndarray of shape (H, W), dtype bool
             This person's mask; with several cameras, a list of them in the cameras' order.
 
         Returns
@@ -335,6 +375,12 @@ class Tracker:
         TrackResult or None
             None (the track kept) when the reference view's mask is empty; another view with an
             empty mask (the person out of its sight) is left out of this frame's likelihood.
+
+        Raises
+        ------
+        ValueError
+            With several cameras, when the masks or frames are not one per camera; for a mask that
+            is not 2-D or a frame of another size than its mask.
         """
         obs = self._observations(image, mask)
         if obs[0].empty:
@@ -418,17 +464,25 @@ def track_sequence(
 ) -> dict[str, np.ndarray]:
     """Track one person offline.
 
-    Args:
-        frames: T images (H, W[, 3]) uint8, or None entries for mask-only tracking; with several
-            cameras each entry is a list of one image (or None) per camera.
-        masks: T (H, W) bool masks of the person (several cameras: T lists of one per camera).
-        camera: the camera, or the cameras; ``side`` and ``tracker_kw`` (``config``, ``prior``,
-            ``dims``, ``seed``) go to :class:`Tracker`.
+    Parameters
+    ----------
+    frames : iterable of ndarray or None
+        T images (H, W) or (H, W, 3) uint8, or None entries for mask-only tracking; with several
+        cameras each entry is a list of one image (or None) per camera.
+    masks : iterable of ndarray
+        T (H, W) bool masks of the person (several cameras: T lists of one per camera).
+    camera : Camera or sequence of Camera
+        The camera, or the cameras.
+    side : str
+        "left" / "right": the person's side of the frame (:class:`Tracker`).
+    **tracker_kw
+        ``config``, ``prior``, ``dims``, ``seed`` of :class:`Tracker`.
 
     Returns
     -------
-        dict with ``poses`` (T, 28), ``joints`` (T, 14, 3) float32 (NaN where nobody was in
-        view), ``ess`` (T,), ``log_likelihood`` (T,), ``lost`` (T,) bool, ``dims`` (BodyDims).
+    dict of str to Any
+        ``poses`` (T, 28), ``joints`` (T, 14, 3) float32 metres (NaN where nobody was in view),
+        ``ess`` (T,), ``log_likelihood`` (T,), ``lost`` (T,) bool, ``dims`` (BodyDims).
     """
     tr = Tracker(camera, side, **tracker_kw)
     poses, joints, ess, ll, lost = [], [], [], [], []
