@@ -20,8 +20,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def load_checked(file: str, sets: list[str] | None, replace: list[str] | None) -> Graph:
-    """The checked graph of launch file ``file`` with ``--set`` and ``--replace`` applied; also
-    checks that the folder for run directories is safe to use (LaunchError naming the problem).
+    """The checked graph of a launch file with ``--set`` and ``--replace`` applied; also
+    checks that the folder for run directories is safe to use.
+
+    Parameters
+    ----------
+    file : str
+        The launch file: a path, or a name in the launch/ folder.
+    sets : list of str or None
+        ``NODE.PARAM=VALUE`` overrides of node parameters.
+    replace : list of str or None
+        ``NODE=MODULE`` replacements of a node's module.
+
+    Returns
+    -------
+    Graph
+        The checked graph.
+
+    Raises
+    ------
+    LaunchError
+        Naming the problem, for a bad graph or a run-directory folder that cannot be used.
+    ParamError
+        For a malformed ``--set`` or ``--replace`` assignment.
     """
     graph = check(load(file, parse_assignments(sets, "--set"), parse_assignments(replace, "--replace")))
     try:
