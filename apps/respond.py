@@ -33,7 +33,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", interest: int = 3) -> np.ndarray:
-    """The partner's joints (T, 14, 3) for one person of ``traj`` (3D models: dual-hmm, gpdm, listener)."""
+    """The partner's joints for one person of ``traj`` (3D models: dual-hmm, gpdm, listener).
+
+    Parameters
+    ----------
+    model : object
+        A loaded model whose ``name`` is ``dual-hmm``, ``gpdm`` or ``listener``.
+    traj : TwoPersonTrajectory
+        The two-person trajectory; the listener model also needs its signals.
+    observed : {"a", "b"}, default="a"
+        The person fed to the model.
+    interest : int, default=3
+        The listener's interest level (listener model only).
+
+    Returns
+    -------
+    ndarray of shape (T, 14, 3)
+        The generated partner's joints, metres, world frame.
+
+    Raises
+    ------
+    ValueError
+        If the model does not generate 3D joints, or the listener model gets a file without signals.
+    """
     obs = traj.a if observed == "a" else traj.b
     name = getattr(model, "name", "")
     if name in ("dual-hmm", "gpdm"):
