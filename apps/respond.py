@@ -23,6 +23,13 @@ HELP = "offline: generate the partner for one person's trajectory"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``counterpart respond``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.add_argument("--model", required=True, help="model file, or default:dual-hmm / default:listener")
     p.add_argument("--input", required=True, help="two-person trajectory file (.npz)")
     p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
@@ -73,6 +80,18 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
 
 
 def main(args: argparse.Namespace) -> int:
+    """Run ``counterpart respond``: write the input's observed person and the generated partner.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit code: 0, or 2 for a bad model, input or option (the message goes to stderr).
+    """
     from counterpart.nodes.responder.models import load_default, load_model
 
     try:

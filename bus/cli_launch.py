@@ -13,6 +13,13 @@ from .runner import setup_logging
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``counterpart launch``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.add_argument("file", help="launch file: a path, or a name in the launch/ folder (demo.yaml)")
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
     p.add_argument("--replace", action="append", metavar="NODE=MODULE", help="run another module for a node")
@@ -53,6 +60,18 @@ def load_checked(file: str, sets: list[str] | None, replace: list[str] | None) -
 
 
 def main(args: argparse.Namespace) -> int:
+    """Run ``counterpart launch``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit code: 2 for a bad launch file or parameter, 0 after ``--check``, else the launcher's.
+    """
     from .supervisor import Launcher, prune_run_dirs
 
     setup_logging("launch")

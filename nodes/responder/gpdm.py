@@ -471,6 +471,16 @@ class GPDM:
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model as arrays and a configuration, for a model file.
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            The three layers' arrays, the dynamics GP, the initial state, the noise covariances,
+            the back-projection's support and the contact offset.
+        config : dict of str to Any
+            The :class:`GPDMConfig` fields, ``fps``, ``dyn_var`` and ``styles``.
+        """
         arrays = {**self.human_.arrays("human"), **self.partner_.arrays("partner"), **self.inter_.arrays("inter")}
         arrays.update(
             dyn_X=self.dyn_X_,
@@ -491,6 +501,20 @@ class GPDM:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> GPDM:
+        """The inverse of :meth:`get_state`.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The arrays of a model file.
+        config : dict of str to Any
+            Its configuration.
+
+        Returns
+        -------
+        GPDM
+            The fitted model, reset.
+        """
         c = dict(config)
         fps, dyn_var, styles = float(c.pop("fps")), float(c.pop("dyn_var")), list(c.pop("styles"))
         m = cls(**c)
