@@ -23,6 +23,13 @@ HELP = "offline: generate the partner for one person's trajectory"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``counterpart respond``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.add_argument("--model", required=True, help="model file, or default:dual-hmm / default:listener")
     p.add_argument("--input", required=True, help="two-person trajectory file (.npz)")
     p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
@@ -33,7 +40,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", interest: int = 3) -> np.ndarray:
-    """The partner's joints (T, 14, 3) for one person of ``traj`` (3D models: dual-hmm, gpdm, listener)."""
+    """The partner's joints for one person of ``traj`` (3D models: dual-hmm, gpdm, listener).
+
+    Parameters
+    ----------
+    model : object
+        A loaded model whose ``name`` is ``dual-hmm``, ``gpdm`` or ``listener``.
+    traj : TwoPersonTrajectory
+        The two-person trajectory; the listener model also needs its signals.
+    observed : {"a", "b"}, default="a"
+        The person fed to the model.
+    interest : int, default=3
+        The listener's interest level (listener model only).
+
+    Returns
+    -------
+    ndarray of shape (T, 14, 3)
+        The generated partner's joints, metres, world frame.
+
+    Raises
+    ------
+    ValueError
+        If the model does not generate 3D joints, or the listener model gets a file without signals.
+    """
     obs = traj.a if observed == "a" else traj.b
     name = getattr(model, "name", "")
     if name in ("dual-hmm", "gpdm"):
@@ -51,6 +80,18 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
 
 
 def main(args: argparse.Namespace) -> int:
+    """Run ``counterpart respond``: write the input's observed person and the generated partner.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit code: 0, or 2 for a bad model, input or option (the message goes to stderr).
+    """
     from counterpart.nodes.responder.models import load_default, load_model
 
     try:

@@ -35,8 +35,18 @@ JPEG_QUALITY = 90
 
 @dataclass(frozen=True)
 class CropGeometry:
-    """Where the person stands inside the crop: ``foot`` (x, y) px, ``height_px``, ``facing`` (+1 right,
-    -1 left), crop size ``h`` x ``w`` px.
+    """Where the person stands inside the crop.
+
+    Parameters
+    ----------
+    h, w : int
+        Crop size, pixels.
+    foot : tuple of (float, float)
+        The person's median foot point (x, y), crop pixels.
+    height_px : float
+        The person's median height, crop pixels.
+    facing : float
+        The way the person faces in the image: +1 right, -1 left.
     """
 
     h: int
@@ -47,8 +57,24 @@ class CropGeometry:
 
 
 def foot_and_height(masks: np.ndarray) -> tuple[tuple[float, float], float]:
-    """Median foot point (x, y) px (bottom row of the mask, centre of its pixels there) and median
-    height px of the person in (T, h, w) bool crops (frames with an empty mask left out).
+    """Median foot point and median height of the person in masked crops.
+
+    Parameters
+    ----------
+    masks : ndarray of shape (T, h, w), dtype bool
+        The person's masks (frames with an empty mask are left out).
+
+    Returns
+    -------
+    foot : tuple of (float, float)
+        Median foot point (x, y), pixels: the bottom of the mask, centre of its lowest tenth.
+    height : float
+        Median height of the person, pixels.
+
+    Raises
+    ------
+    ValueError
+        If no frame has the person in it.
     """
     masks = np.asarray(masks, bool)
     rows = masks.any(axis=2)
@@ -85,6 +111,24 @@ class AvatarFrames:
 
     Build with :meth:`encode` from crops and masks, or :meth:`from_arrays` / :func:`load_avatar_frames`
     from a file. :meth:`image` and :meth:`alpha` decode frame ``t``.
+
+    Parameters
+    ----------
+    jpeg : ndarray of shape (N,), dtype uint8
+        The JPEG streams one after another.
+    offsets : ndarray of shape (T + 1,), dtype int64
+        Where frame t's stream starts and ends.
+    masks : ndarray of shape (T, h, ceil(w / 8)), dtype uint8
+        The masks, ``np.packbits`` along x.
+    geometry : CropGeometry
+        Where the person stands inside the crop.
+    cache : int, default=16
+        Decoded frames kept.
+
+    Raises
+    ------
+    ValueError
+        If there are not T + 1 offsets for T masks.
     """
 
     def __init__(
@@ -106,8 +150,28 @@ class AvatarFrames:
     def encode(
         cls, crops: np.ndarray, masks: np.ndarray, facing: float = -1.0, quality: int = JPEG_QUALITY
     ) -> AvatarFrames:
-        """crops: (T, h, w, 3) uint8 BGR; masks: (T, h, w) bool; facing: +1 the person faces the
-        image's right, -1 its left.
+        """Frames from crops and masks.
+
+        Parameters
+        ----------
+        crops : ndarray of shape (T, h, w, 3), dtype uint8
+            BGR crops.
+        masks : ndarray of shape (T, h, w), dtype bool
+            The person's masks.
+        facing : float, default=-1.0
+            +1 the person faces the image's right, -1 its left.
+        quality : int, default=JPEG_QUALITY
+            JPEG quality, 0 to 100.
+
+        Returns
+        -------
+        AvatarFrames
+            The compressed frames.
+
+        Raises
+        ------
+        ValueError
+            If the shapes do not match, JPEG encoding fails or no mask has the person in it.
         """
         crops, masks = np.asarray(crops), np.asarray(masks, bool)
         if crops.ndim != 4 or crops.shape[:3] != masks.shape:
@@ -128,6 +192,13 @@ class AvatarFrames:
 
     # ----------------------------------------------------------------------------- persistence
     def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays to store in the ``.npz`` (module docstring for the layout).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``frames_jpeg``, ``frames_offsets``, ``frames_masks`` and ``frames_geometry``.
+        """
         g = self.geometry
         return {
             PREFIX + "jpeg": self.jpeg,
@@ -138,6 +209,23 @@ class AvatarFrames:
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray]) -> AvatarFrames:
+        """The frames from stored arrays, as :meth:`arrays` returns them.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            ``frames_jpeg``, ``frames_offsets``, ``frames_masks`` and ``frames_geometry``.
+
+        Returns
+        -------
+        AvatarFrames
+            The frames.
+
+        Raises
+        ------
+        ValueError
+            Naming the array that is missing.
+        """
         try:
             h, w, fx, fy, hp, facing = (float(v) for v in arrays[PREFIX + "geometry"])
             return cls(
@@ -169,21 +257,80 @@ class AvatarFrames:
         return img, alpha
 
     def image(self, t: int) -> np.ndarray:
-        """(h, w, 3) uint8 BGR of frame ``t`` (outside the person: the person's colours spread outwards)."""
+        """The image of a frame (outside the person: the person's colours spread outwards).
+
+        Parameters
+        ----------
+        t : int
+            Frame index.
+
+        Returns
+        -------
+        ndarray of shape (h, w, 3), dtype uint8
+            BGR image.
+
+        Raises
+        ------
+        IndexError
+            If ``t`` is out of range.
+        """
         return self._decode(t)[0]
 
     def alpha(self, t: int) -> np.ndarray:
-        """(h, w) float32 in [0, 1]: the person's (feathered) mask of frame ``t``."""
+        """The person's (feathered) mask of a frame.
+
+        Parameters
+        ----------
+        t : int
+            Frame index.
+
+        Returns
+        -------
+        ndarray of shape (h, w), dtype float32
+            Alpha in [0, 1].
+
+        Raises
+        ------
+        IndexError
+            If ``t`` is out of range.
+        """
         return self._decode(t)[1]
 
     def mask(self, t: int) -> np.ndarray:
-        """(h, w) bool: the person's mask of frame ``t`` as stored."""
+        """The person's mask of a frame as stored.
+
+        Parameters
+        ----------
+        t : int
+            Frame index.
+
+        Returns
+        -------
+        ndarray of shape (h, w), dtype bool
+            The mask.
+        """
         return np.unpackbits(self.masks[int(t)], axis=1, count=self.geometry.w).astype(bool)
 
 
 def load_avatar_frames(path: str | os.PathLike[str]) -> AvatarFrames:
-    """The frames of an avatar file (a video-texture model ``.npz``); ValueError naming the file when it
-    holds none.
+    """The frames of an avatar file (a video-texture model ``.npz``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The avatar file.
+
+    Returns
+    -------
+    AvatarFrames
+        Its frames.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ValueError
+        Naming the file, when it is not an avatar file or holds no frames.
     """
     p = os.fspath(path)
     if not os.path.isfile(p):

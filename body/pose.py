@@ -128,12 +128,39 @@ def _check(P: np.ndarray) -> np.ndarray:
 
 
 def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Angles (radians) wrapped into [-pi, pi)."""
+    """Angles wrapped into [-pi, pi).
+
+    Parameters
+    ----------
+    a : array_like
+        Angles, radians.
+
+    Returns
+    -------
+    ndarray
+        The angles in [-pi, pi), radians, of the shape of ``a``.
+    """
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def clip_to_limits(P: np.ndarray) -> np.ndarray:
-    """Clip poses (..., DOF) into [LOWER, UPPER]; the yaw is wrapped, not clipped. Returns a copy."""
+    """Clip poses into [LOWER, UPPER]; the yaw is wrapped, not clipped.
+
+    Parameters
+    ----------
+    P : ndarray of shape (..., DOF)
+        Pose vectors (metres for root_x/y/z, radians for the rest).
+
+    Returns
+    -------
+    ndarray of shape (..., DOF), dtype float64
+        A clipped copy.
+
+    Raises
+    ------
+    ValueError
+        If the last axis of ``P`` is not of length ``DOF``.
+    """
     P = _check(P)
     out = np.clip(P, LOWER, UPPER)
     out[..., YAW] = wrap_angle(P[..., YAW])
@@ -141,7 +168,23 @@ def clip_to_limits(P: np.ndarray) -> np.ndarray:
 
 
 def within_limits(P: np.ndarray) -> np.ndarray:
-    """Bool (...) : True where every DOF lies inside [LOWER, UPPER] (yaw always does)."""
+    """Where every DOF lies inside [LOWER, UPPER] (a finite yaw always does).
+
+    Parameters
+    ----------
+    P : ndarray of shape (..., DOF)
+        Pose vectors.
+
+    Returns
+    -------
+    ndarray of shape (...), dtype bool
+        True where the pose is within its limits.
+
+    Raises
+    ------
+    ValueError
+        If the last axis of ``P`` is not of length ``DOF``.
+    """
     P = _check(P)
     ok = (P >= LOWER) & (P <= UPPER)
     ok[..., YAW] = np.isfinite(P[..., YAW])
@@ -149,8 +192,21 @@ def within_limits(P: np.ndarray) -> np.ndarray:
 
 
 def neutral_pose(dims: BodyDims = DEFAULT_DIMS, x: float = 0.0, z: float = 0.0, yaw: float = 0.0) -> np.ndarray:
-    """(DOF,) relaxed standing pose: feet on y = 0, arms slightly away from the body, elbows
-    slightly bent, facing +Z rotated by ``yaw`` (radians), pelvis above (x, z) metres.
+    """Relaxed standing pose: feet on y = 0, arms slightly away from the body, elbows slightly bent.
+
+    Parameters
+    ----------
+    dims : BodyDims, default=DEFAULT_DIMS
+        Body dimensions (the pelvis height is ``dims.hip_height``).
+    x, z : float, default=0.0
+        Where the pelvis stands on the ground, metres.
+    yaw : float, default=0.0
+        Rotation of the facing from +Z, radians.
+
+    Returns
+    -------
+    ndarray of shape (DOF,)
+        The pose vector.
     """
     P = np.zeros(DOF)
     P[DOF_INDEX["root_x"]] = x

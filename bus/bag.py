@@ -64,14 +64,41 @@ _COUNT = struct.Struct("<I")
 
 
 def pack_parts(parts: Sequence[Any]) -> bytes:
-    """Pack wire parts (bytes, memoryviews, zmq frames, C-contiguous buffers) into one blob."""
+    """Pack wire parts into one blob (module docstring for the layout).
+
+    Parameters
+    ----------
+    parts : sequence of buffers
+        Bytes, memoryviews, zmq frames or C-contiguous buffers.
+
+    Returns
+    -------
+    bytes
+        The packed blob.
+    """
     views = [memoryview(p).cast("B") for p in parts]
     head = struct.pack(f"<I{len(views)}Q", len(views), *(v.nbytes for v in views))
     return b"".join([head, *views])
 
 
 def unpack_parts(data: bytes | memoryview) -> list[memoryview]:
-    """Inverse of :func:`pack_parts`: zero-copy views into ``data``. Raises ValueError on a bad blob."""
+    """Inverse of :func:`pack_parts`.
+
+    Parameters
+    ----------
+    data : bytes or memoryview
+        A packed blob.
+
+    Returns
+    -------
+    list of memoryview
+        Zero-copy views into ``data``, one per part.
+
+    Raises
+    ------
+    ValueError
+        On a bad blob (too short, or lengths that do not add up).
+    """
     buf = memoryview(data).cast("B")
     if buf.nbytes < _COUNT.size:
         raise ValueError(f"packed message of {buf.nbytes} bytes is shorter than its part count")
@@ -106,8 +133,20 @@ def _infer_type(value: Any, arrays: list[list[Any]]) -> str:
 
 
 def schema_description(sid: str, header: dict[str, Any] | None = None) -> dict[str, Any]:
-    """What a bag stores about schema ``sid``: :func:`counterpart.messages.describe` of the registered class, or a
-    description inferred from one wire ``header`` (``"inferred": true``) when the class is unknown.
+    """What a bag stores about a schema.
+
+    Parameters
+    ----------
+    sid : str
+        The schema id (``camera.Frame/1``).
+    header : dict of str to Any or None, default=None
+        One unpacked wire header, used when the class is not registered.
+
+    Returns
+    -------
+    dict of str to Any
+        :func:`counterpart.messages.describe` of the registered class, or a description inferred
+        from ``header`` (``"inferred": true``) when the class is unknown.
     """
     cls = REGISTRY.get(sid)
     if cls is not None:
@@ -130,10 +169,37 @@ def _header_stamp(header: dict[str, Any]) -> int:
 class BagWriter:
     """Write wire messages to an MCAP bag.
 
-    ``compression``: ``zstd`` (default), ``lz4`` or ``none``. ``chunk_size``: bytes of messages per
-    chunk before it is compressed and written. ``flush_period``: seconds after which the chunk in
-    progress is closed and flushed (on the next :meth:`write` or :meth:`tick`), which bounds what a
-    crash loses. ``overwrite``: replace an existing file instead of refusing.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag file (its folder is made).
+    compression : {"zstd", "lz4", "none"}, default="zstd"
+        Compression of the chunks.
+    chunk_size : int, default=DEFAULT_CHUNK_SIZE
+        Bytes of messages per chunk before it is compressed and written.
+    flush_period : float, default=DEFAULT_FLUSH_PERIOD
+        Seconds after which the chunk in progress is closed and flushed (on the next :meth:`write`
+        or :meth:`tick`), which bounds what a crash loses.
+    overwrite : bool, default=False
+        Replace an existing file instead of refusing.
+    metadata : dict of str to str or None, default=None
+        Added to the recording's ``counterpart`` metadata record.
+
+    Attributes
+    ----------
+    counts : dict of str to int
+        Messages written per topic.
+    count : int
+        Messages written.
+    bytes : int
+        Bytes of packed messages written (before compression).
+
+    Raises
+    ------
+    ValueError
+        For an unknown compression, ``chunk_size`` < 1 or ``flush_period`` <= 0.
+    FileExistsError
+        If the file exists and ``overwrite`` is False.
     """
 
     def __init__(
@@ -193,9 +259,25 @@ class BagWriter:
     def write(
         self, topic: str, parts: Sequence[Any], log_time: int | None = None, header: dict[str, Any] | None = None
     ) -> None:
-        """Record the wire parts ``[header, buffers...]`` of one message on ``topic``. ``log_time``:
-        receive time in ns (default: now, CLOCK_MONOTONIC). ``header``: the already unpacked header,
-        to save unpacking it again. Raises :class:`messages.DecodeError` for a malformed header.
+        """Record the wire parts of one message.
+
+        Parameters
+        ----------
+        topic : str
+            The topic.
+        parts : sequence of buffers
+            The wire parts ``[header, buffers...]``.
+        log_time : int or None, default=None
+            Receive time in ns (default: now, CLOCK_MONOTONIC).
+        header : dict of str to Any or None, default=None
+            The already unpacked header, to save unpacking it again.
+
+        Raises
+        ------
+        DecodeError
+            For a malformed header.
+        ValueError
+            If the bag is closed.
         """
         if self.closed:
             raise ValueError(f"bag {self.path} is closed")
@@ -219,7 +301,17 @@ class BagWriter:
         self.tick()
 
     def write_message(self, topic: str, msg: Any, log_time: int | None = None) -> None:
-        """Encode ``msg`` with the wire codec and record it."""
+        """Encode a message with the wire codec and record it.
+
+        Parameters
+        ----------
+        topic : str
+            The topic.
+        msg : Any
+            A registered message.
+        log_time : int or None, default=None
+            Receive time in ns (default: now, CLOCK_MONOTONIC).
+        """
         self.write(topic, encode(msg), log_time)
 
     def tick(self) -> None:
@@ -256,7 +348,23 @@ class BagWriter:
 
 
 class BagRecord(NamedTuple):
-    """One recorded message: wire ``parts`` (header + buffers) as read-only views."""
+    """One recorded message.
+
+    Attributes
+    ----------
+    topic : str
+        The topic.
+    log_time : int
+        Receive time, ns, CLOCK_MONOTONIC.
+    publish_time : int
+        The message's ``stamp``, ns.
+    sequence : int
+        The publisher's send counter (mod 2**32).
+    schema : str
+        The schema id.
+    parts : list of memoryview
+        Wire parts (header + buffers) as read-only views.
+    """
 
     topic: str
     log_time: int
@@ -294,6 +402,25 @@ class BagReader:
     After a full pass of :meth:`records` (or :meth:`messages`), ``complete`` tells whether the file
     ended with its footer and ``recovered`` how many messages were read; ``truncated`` is the reverse
     of ``complete``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag file.
+
+    Attributes
+    ----------
+    complete : bool or None
+        Whether the file ended with its footer (None before a pass).
+    recovered : int
+        Messages read.
+    error : str
+        Why reading stopped early, or "".
+
+    Raises
+    ------
+    FileNotFoundError
+        If the bag does not exist.
     """
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
@@ -322,7 +449,23 @@ class BagReader:
             self.error = f"unreadable record: {type(exc).__name__}: {exc}"
 
     def records(self, topics: Sequence[str] | None = None) -> Iterator[BagRecord]:
-        """Every message in file (= receive) order, optionally only those of ``topics``."""
+        """Every message in file (= receive) order.
+
+        Parameters
+        ----------
+        topics : sequence of str or None, default=None
+            Only these topics; None: all.
+
+        Yields
+        ------
+        BagRecord
+            One per message.
+
+        Raises
+        ------
+        ValueError
+            For a message on an undeclared channel.
+        """
         wanted = None if topics is None else set(topics)
         channels: dict[int, Channel] = {}
         schemas: dict[int, Schema] = {}
@@ -353,8 +496,23 @@ class BagReader:
     def messages(
         self, topics: Sequence[str] | None = None, decode_messages: bool = False
     ) -> Iterator[tuple[str, int, Any]]:
-        """``(topic, log_time, parts)`` per message, or ``(topic, log_time, message)`` with
-        ``decode_messages`` (the message classes must be registered: import their modules).
+        """Every message in file order, as wire parts or decoded.
+
+        Parameters
+        ----------
+        topics : sequence of str or None, default=None
+            Only these topics; None: all.
+        decode_messages : bool, default=False
+            Decode the messages (the message classes must be registered: import their modules).
+
+        Yields
+        ------
+        topic : str
+            The topic.
+        log_time : int
+            Receive time, ns.
+        parts_or_message : list of memoryview or Any
+            The wire parts, or the message with ``decode_messages``.
         """
         for r in self.records(topics):
             yield r.topic, r.log_time, (decode(r.parts) if decode_messages else r.parts)
@@ -414,8 +572,17 @@ class BagReader:
         return _Scan(channels, schemas, metadata), counts, start, end
 
     def topics(self) -> dict[str, str]:
-        """Topic -> schema id of every channel in the bag. A topic recorded with several schemas
-        raises ValueError (a player could not give it one type).
+        """The schema of every topic in the bag.
+
+        Returns
+        -------
+        dict of str to str
+            Topic -> schema id.
+
+        Raises
+        ------
+        ValueError
+            For a topic recorded with several schemas (a player could not give it one type).
         """
         scan, _, _, _ = self._scan()
         out: dict[str, str] = {}
@@ -427,9 +594,14 @@ class BagReader:
         return out
 
     def info(self) -> dict[str, Any]:
-        """Topics (type, count), schemas (their stored descriptions), message count, start and end
-        time (ns, CLOCK_MONOTONIC of the recording host), duration (s), size, compression,
-        recording metadata, and whether the file is complete.
+        """A summary of the bag.
+
+        Returns
+        -------
+        dict of str to Any
+            ``path``, ``size_bytes``, ``complete``, ``error``, ``messages`` (count), ``start_ns`` and
+            ``end_ns`` (CLOCK_MONOTONIC of the recording host), ``duration_s``, ``topics`` (type,
+            count), ``schemas`` (their stored descriptions) and ``metadata`` (of the recording).
         """
         scan, counts, start, end = self._scan()
         topics: dict[str, dict[str, Any]] = {}
@@ -465,8 +637,26 @@ class BagReader:
 
 
 def decode_fields(parts: Sequence[Any]) -> tuple[str, dict[str, Any]]:
-    """Decode wire parts without the message class: ``(schema id, fields)`` with arrays in place
-    (read-only views). Works for any bag, whatever was importable when it is read.
+    """Decode wire parts without the message class.
+
+    Works for any bag, whatever was importable when it is read.
+
+    Parameters
+    ----------
+    parts : sequence of buffers
+        Wire parts ``[header, buffers...]``.
+
+    Returns
+    -------
+    schema : str
+        The schema id.
+    fields : dict of str to Any
+        The fields, with arrays in place (read-only views).
+
+    Raises
+    ------
+    DecodeError
+        For a malformed header or arrays that do not match it.
     """
     header = read_header(parts[0], DEFAULT_LIMITS)
     specs = header.get("a", [])

@@ -13,6 +13,13 @@ from .runner import setup_logging
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``counterpart launch``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    """
     p.add_argument("file", help="launch file: a path, or a name in the launch/ folder (demo.yaml)")
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
     p.add_argument("--replace", action="append", metavar="NODE=MODULE", help="run another module for a node")
@@ -20,8 +27,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def load_checked(file: str, sets: list[str] | None, replace: list[str] | None) -> Graph:
-    """The checked graph of launch file ``file`` with ``--set`` and ``--replace`` applied; also
-    checks that the folder for run directories is safe to use (LaunchError naming the problem).
+    """The checked graph of a launch file with ``--set`` and ``--replace`` applied; also
+    checks that the folder for run directories is safe to use.
+
+    Parameters
+    ----------
+    file : str
+        The launch file: a path, or a name in the launch/ folder.
+    sets : list of str or None
+        ``NODE.PARAM=VALUE`` overrides of node parameters.
+    replace : list of str or None
+        ``NODE=MODULE`` replacements of a node's module.
+
+    Returns
+    -------
+    Graph
+        The checked graph.
+
+    Raises
+    ------
+    LaunchError
+        Naming the problem, for a bad graph or a run-directory folder that cannot be used.
+    ParamError
+        For a malformed ``--set`` or ``--replace`` assignment.
     """
     graph = check(load(file, parse_assignments(sets, "--set"), parse_assignments(replace, "--replace")))
     try:
@@ -32,6 +60,18 @@ def load_checked(file: str, sets: list[str] | None, replace: list[str] | None) -
 
 
 def main(args: argparse.Namespace) -> int:
+    """Run ``counterpart launch``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit code: 2 for a bad launch file or parameter, 0 after ``--check``, else the launcher's.
+    """
     from .supervisor import Launcher, prune_run_dirs
 
     setup_logging("launch")

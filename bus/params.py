@@ -18,8 +18,22 @@ _TYPE_NAMES = {int: "int", float: "float", str: "str", bool: "bool", list: "list
 
 @dataclass(frozen=True)
 class Param:
-    """A typed parameter. ``choices``, ``min`` and ``max`` are checked; ``check`` may raise or return
-    an error string (falsy for OK). ``default`` None with ``type`` set means optional.
+    """A typed parameter.
+
+    Parameters
+    ----------
+    type : type
+        The parameter's type (int, float, str, bool, list or dict).
+    default : Any, default=None
+        Its default; None with ``type`` set means optional.
+    doc : str, default=""
+        One line of help.
+    choices : tuple or None, default=None
+        The allowed values, checked.
+    min, max : float or None, default=None
+        The allowed range, checked.
+    check : callable or None, default=None
+        Called with the value; may raise or return an error string (falsy for OK).
     """
 
     type: type
@@ -31,6 +45,26 @@ class Param:
     check: Callable[[Any], str | None] | None = field(default=None, compare=False)
 
     def coerce(self, name: str, value: Any) -> Any:
+        """The value converted to ``type`` and checked.
+
+        Parameters
+        ----------
+        name : str
+            The parameter's name, for the error message.
+        value : Any
+            The given value; a string is parsed as YAML when ``type`` is not str.
+
+        Returns
+        -------
+        Any
+            The value of type ``type`` (None stays None).
+
+        Raises
+        ------
+        ParamError
+            Naming the parameter, for a value that cannot be parsed, of the wrong type, not one of
+            ``choices``, out of [``min``, ``max``] or refused by ``check``.
+        """
         tp = self.type
         if value is None:
             return None
@@ -63,8 +97,26 @@ class Param:
 
 
 def resolve_params(specs: Mapping[str, Param], given: Mapping[str, Any], where: str = "") -> dict[str, Any]:
-    """Defaults overlaid with ``given``; every value coerced and checked. Raises ParamError naming
-    ``where`` (e.g. ``demo.yaml: node 'tracker'``) and the parameter.
+    """Defaults overlaid with ``given``; every value coerced and checked.
+
+    Parameters
+    ----------
+    specs : Mapping of str to Param
+        The declared parameters.
+    given : Mapping of str to Any
+        The given values.
+    where : str, default=""
+        Where they come from, for the error message (e.g. ``demo.yaml: node 'tracker'``).
+
+    Returns
+    -------
+    dict of str to Any
+        Every declared parameter's value.
+
+    Raises
+    ------
+    ParamError
+        Naming ``where`` and the parameter, for an unknown parameter or a bad value.
     """
     prefix = f"{where}: " if where else ""
     unknown = sorted(set(given) - set(specs))
@@ -81,7 +133,25 @@ def resolve_params(specs: Mapping[str, Param], given: Mapping[str, Any], where: 
 
 
 def parse_assignments(items: list[str] | None, what: str = "--param") -> dict[str, Any]:
-    """``["a=1", "b=x"]`` -> ``{"a": "1", "b": "x"}`` (values are coerced later by type)."""
+    """``["a=1", "b=x"]`` -> ``{"a": "1", "b": "x"}`` (values are coerced later by type).
+
+    Parameters
+    ----------
+    items : list of str or None
+        ``KEY=VALUE`` assignments.
+    what : str, default="--param"
+        The option they come from, for the error message.
+
+    Returns
+    -------
+    dict of str to Any
+        Key -> value string.
+
+    Raises
+    ------
+    ParamError
+        For an item that is not ``KEY=VALUE``.
+    """
     out: dict[str, Any] = {}
     for item in items or []:
         key, sep, value = item.partition("=")

@@ -85,7 +85,22 @@ class Proc:
 
 
 class Launcher:
-    """Runs one checked :class:`Graph` until it ends, is stopped, or a required node exits."""
+    """Runs one checked :class:`Graph` until it ends, is stopped, or a required node exits.
+
+    Parameters
+    ----------
+    graph : Graph
+        The checked graph.
+    run_dir : Path or None, default=None
+        The run directory; None makes a new one.
+    env : dict of str to str or None, default=None
+        The nodes' environment; None: the launcher's own.
+
+    Attributes
+    ----------
+    procs : dict of str to Proc
+        The node processes by node name.
+    """
 
     def __init__(self, graph: Graph, run_dir: Path | None = None, env: dict[str, str] | None = None) -> None:
         self.graph = graph
@@ -221,7 +236,14 @@ class Launcher:
         self._stop_signal = signum
 
     def run(self) -> int:
-        """Start everything and supervise; returns the launcher's exit code."""
+        """Start everything and supervise.
+
+        Returns
+        -------
+        int
+            The launcher's exit code: 0 when all nodes exited 0, a failed node's exit code, or
+            128 + N when stopped by signal N.
+        """
         old = {s: signal.signal(s, self._on_signal) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
         self._link_latest()
         code = 0
@@ -327,8 +349,13 @@ def _external_endpoints(specs: dict[str, dict[str, Any]], topic: str) -> dict[st
 
 def prune_run_dirs(keep: int = 10) -> None:
     """Clean up after launchers that are gone (a SIGKILL leaves their run directories behind):
-    delete their run directories but the newest ``keep``, the sockets of those kept (their
+    delete their run directories but the newest ones, the sockets of those kept (their
     registries stay for ``counterpart node list --run``), and their temporary ``latest`` links.
+
+    Parameters
+    ----------
+    keep : int, default=10
+        Run directories of gone launchers kept (the newest).
     """
     base = base_dir()
     # another launcher may be pruning at the same time: what it removed first is simply gone

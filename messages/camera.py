@@ -9,12 +9,23 @@ from .core import EMPTY, message
 
 @message("camera.Frame", 1)
 class Frame:
-    """One video frame. ``image`` is (H, W, 3) uint8 BGR (encoding ``bgr8``) or (H, W) uint8 (``mono8``).
+    """One video frame.
 
-    ``stamp`` is CLOCK_MONOTONIC ns at capture (for a file: at read); ``seq`` counts from 0;
-    ``source_time`` is the position in the source in seconds (file time, or 0 for live devices);
-    ``fps`` the source's frame rate in frames per second (0: unknown), so that consumers (the video
-    the renderer writes, the labeller's analysis windows) follow the input rather than a default.
+    ``stamp`` is CLOCK_MONOTONIC ns at capture (for a file: at read); ``seq`` counts from 0.
+
+    Attributes
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+        BGR (encoding ``bgr8``) or grey (``mono8``) pixels.
+    encoding : str
+        ``bgr8`` or ``mono8``.
+    source : str
+        Where the frame comes from.
+    source_time : float
+        Position in the source in seconds (file time, or 0 for live devices).
+    fps : float
+        The source's frame rate in frames per second (0: unknown), so that consumers (the video
+        the renderer writes, the labeller's analysis windows) follow the input rather than a default.
     """
 
     image: np.ndarray = EMPTY
@@ -28,10 +39,23 @@ class Frame:
 class CameraInfo:
     """The calibration of the camera for frames of ``width`` x ``height`` pixels (as ROS's
     CameraInfo), published once (latched) by the calibration node so that every node projects
-    with the same camera. Pinhole, OpenCV convention, no distortion: ``fx, fy, cx, cy`` pixels;
-    ``R`` (3, 3) float64 world-to-camera rotation and ``t`` (3,) float64 translation in metres
-    (``X_c = R X_w + t``; world Y up, the ground plane y = 0). ``source``: where it comes from
-    (``default``, ``file:PATH``, ``estimated``); ``seq`` the frame it was made for.
+    with the same camera. Pinhole, OpenCV convention, no distortion: ``X_c = R X_w + t``; world Y up,
+    the ground plane y = 0. ``seq`` is the frame it was made for.
+
+    Attributes
+    ----------
+    width, height : int
+        Frame size in pixels.
+    fx, fy : float
+        Focal lengths in pixels.
+    cx, cy : float
+        Principal point in pixels.
+    R : ndarray of shape (3, 3), dtype float64
+        World-to-camera rotation.
+    t : ndarray of shape (3,), dtype float64
+        World-to-camera translation in metres.
+    source : str
+        Where it comes from (``default``, ``file:PATH``, ``estimated``).
     """
 
     width: int = 0

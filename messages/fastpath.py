@@ -59,6 +59,18 @@ class HeaderPacker(threading.local):
         self.packer = msgpack.Packer(use_bin_type=True)
 
     def __call__(self, head: dict[str, Any]) -> bytes:
+        """The packed header.
+
+        Parameters
+        ----------
+        head : dict of str to Any
+            The header.
+
+        Returns
+        -------
+        bytes
+            ``head`` packed by msgpack (binary type for bytes).
+        """
         return self.packer.pack(head)
 
 
@@ -66,17 +78,52 @@ pack_header = HeaderPacker()
 
 
 def unpack_header(buf: memoryview) -> Any:
-    """``msgpack.unpackb(buf, max_ext_len=16)`` with ext values as ``slice(code, data)``."""
+    """``msgpack.unpackb(buf, max_ext_len=16)`` with ext values as ``slice(code, data)``.
+
+    Parameters
+    ----------
+    buf : memoryview
+        A packed header.
+
+    Returns
+    -------
+    Any
+        The unpacked header.
+    """
     return msgpack.unpackb(buf, max_ext_len=16, ext_hook=slice)
 
 
 def unpacked_ref(code: int, index: int) -> slice:
-    """Array reference ``index`` (ext ``code``) as :func:`unpack_header` returns it."""
+    """An array reference as :func:`unpack_header` returns it.
+
+    Parameters
+    ----------
+    code : int
+        The msgpack ext code.
+    index : int
+        The index of the buffer referenced.
+
+    Returns
+    -------
+    slice
+        ``slice(code, data)``, data the index as 4 little-endian bytes.
+    """
     return slice(code, index.to_bytes(4, "little"))
 
 
 def is_flat(cls: type) -> bool:
-    """Every field of message class ``cls`` is declared a Python scalar or an ``np.ndarray``."""
+    """Every field of a message class is declared a Python scalar or an ``np.ndarray``.
+
+    Parameters
+    ----------
+    cls : type
+        A registered message class.
+
+    Returns
+    -------
+    bool
+        Whether every field's declared type is one of ``FLAT_SCALARS`` or ``np.ndarray``.
+    """
     return all(tp is np.ndarray or tp in FLAT_SCALARS for tp in field_types(cls).values())
 
 
@@ -90,11 +137,11 @@ def flat_encoder(cls: type, plain: Encoder, array_ref: Callable[[int], Any]) -> 
 
     Parameters
     ----------
-    cls
+    cls : type
         A registered message class for which :func:`is_flat` holds.
-    plain
+    plain : Encoder
         The plain encoder, for messages whose values are not all of the flat kinds.
-    array_ref
+    array_ref : callable
         The header's reference to buffer k (an msgpack ext value).
 
     Returns
@@ -143,11 +190,11 @@ def flat_decoder(cls: type, plain: Decoder, array_ref: Callable[[int], Any]) -> 
 
     Parameters
     ----------
-    cls
+    cls : type
         A registered message class for which :func:`is_flat` holds.
-    plain
+    plain : Decoder
         The plain builder, for headers whose values are not exactly as the fast encoder writes them.
-    array_ref
+    array_ref : callable
         The reference to buffer k as the header unpacker returns it.
 
     Returns

@@ -56,8 +56,19 @@ def _sphere(radii: tuple[float, float, float], n: int = 24) -> np.ndarray:
 
 
 def rotation(yaw: float, pitch: float) -> np.ndarray:
-    """(3,3) head rotation: ``pitch`` (rad, positive chin down) about x, then ``yaw`` (rad,
-    positive turns the face to the image's left) about y.
+    """Head rotation: ``pitch`` about x, then ``yaw`` about y.
+
+    Parameters
+    ----------
+    yaw : float
+        Radians, positive turns the face to the image's left.
+    pitch : float
+        Radians, positive chin down.
+
+    Returns
+    -------
+    ndarray of shape (3, 3)
+        The rotation matrix.
     """
     cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
     ry = np.array([[cy, 0.0, -sy], [0.0, 1.0, 0.0], [sy, 0.0, cy]])
@@ -67,7 +78,15 @@ def rotation(yaw: float, pitch: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class FaceLook:
-    """Colours (BGR 0-255) and the seed of the background texture."""
+    """Colours (BGR 0-255) and the seed of the background texture.
+
+    Parameters
+    ----------
+    skin, hair, lips, shirt : tuple of (float, float, float)
+        Colours, BGR 0-255.
+    background_seed : int, default=0
+        Seed of the background texture.
+    """
 
     skin: tuple[float, float, float] = (120.0, 150.0, 195.0)
     hair: tuple[float, float, float] = (30.0, 40.0, 55.0)
@@ -77,7 +96,18 @@ class FaceLook:
 
 
 def random_look(rng: np.random.Generator) -> FaceLook:
-    """A seeded skin tone (light to dark), hair, shirt and background."""
+    """A seeded skin tone (light to dark), hair, shirt and background.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The draws.
+
+    Returns
+    -------
+    FaceLook
+        The look.
+    """
     tone = float(rng.uniform(0.45, 1.0))
     skin = (125.0 * tone + 10, 155.0 * tone + 10, 200.0 * tone + 15)
     hair = tuple(float(v) * float(rng.uniform(0.2, 1.0)) for v in (40.0, 55.0, 75.0))
@@ -89,9 +119,23 @@ def random_look(rng: np.random.Generator) -> FaceLook:
 class FaceRenderer:
     """Draws one face per call (see the module docstring).
 
-    width, height: frame size (px). face_px: face width across the cheeks (px). noise: sensor
-    noise sigma (grey levels). center: (x, y) of the head centre at rest (px), default the frame's
-    centre a little above the middle.
+    Parameters
+    ----------
+    width, height : int, default=640, 360
+        Frame size, pixels (at least 64 each).
+    face_px : float, default=130.0
+        Face width across the cheeks, pixels (16 to the frame's smaller side).
+    look : FaceLook or None, default=None
+        Colours and background; None: the default look.
+    noise : float, default=2.5
+        Sensor noise sigma, grey levels.
+    center : tuple of (float, float) or None, default=None
+        (x, y) of the head centre at rest, pixels; None: the frame's centre a little above the middle.
+
+    Raises
+    ------
+    ValueError
+        For a frame smaller than 64 x 64 or a ``face_px`` out of range.
     """
 
     def __init__(
@@ -143,13 +187,31 @@ class FaceRenderer:
         light: float = 1.0,
         jpeg_quality: int = 0,
     ) -> np.ndarray:
-        """One frame, (H, W, 3) uint8 BGR.
+        """One frame.
 
-        yaw, pitch: head rotation (rad; see :func:`rotation`). mouth: jaw opening in [0, 1]
-        (1: about 2 cm). offset_px: head translation (x right, y down, px). smile: widens the
-        mouth, [0, 1]. rng: sensor noise (None: no noise). blink: eyelid closure in [0, 1] (1:
-        shut). light: brightness gain of the scene (slow illumination changes). jpeg_quality:
-        1-100 to pass the frame through JPEG compression (a camera's or a codec's artefacts), 0 not.
+        Parameters
+        ----------
+        yaw, pitch : float, default=0.0
+            Head rotation, radians (see :func:`rotation`).
+        mouth : float, default=0.0
+            Jaw opening in [0, 1] (1: about 2 cm).
+        offset_px : tuple of (float, float), default=(0.0, 0.0)
+            Head translation (x right, y down), pixels.
+        smile : float, default=0.0
+            Widens the mouth, [0, 1].
+        rng : numpy.random.Generator or None, default=None
+            Sensor noise draws (None: no noise).
+        blink : float, default=0.0
+            Eyelid closure in [0, 1] (1: shut).
+        light : float, default=1.0
+            Brightness gain of the scene (slow illumination changes).
+        jpeg_quality : int, default=0
+            1-100 to pass the frame through JPEG compression (a camera's or a codec's artefacts), 0 not.
+
+        Returns
+        -------
+        ndarray of shape (H, W, 3), dtype uint8
+            BGR frame.
         """
         lk = self.look
         img = self._background.copy()
@@ -242,9 +304,24 @@ def syllables(
     rng: np.random.Generator,
     rate_hz: tuple[float, float] = (3.0, 6.0),
 ) -> np.ndarray:
-    """(T,) jaw opening in [0, 1] of speech during the True frames of ``talking`` (T,) bool: raised-
-    cosine syllables of 0.1-0.25 s at ``rate_hz`` per second, amplitudes 0.35-1, a pause of
+    """Jaw opening of speech: raised-cosine syllables of 0.1-0.25 s, amplitudes 0.35-1, a pause of
     0.2-0.4 s now and then (between words); closed elsewhere.
+
+    Parameters
+    ----------
+    talking : ndarray of shape (T,), dtype bool
+        The frames of speech.
+    fps : float
+        Frames per second.
+    rng : numpy.random.Generator
+        The draws.
+    rate_hz : tuple of (float, float), default=(3.0, 6.0)
+        Range of the syllable rate, per second.
+
+    Returns
+    -------
+    ndarray of shape (T,)
+        Jaw opening in [0, 1].
     """
     t_n = talking.shape[0]
     out = np.zeros(t_n)
@@ -267,8 +344,23 @@ def syllables(
 
 
 def blinks(n: int, fps: float, rng: np.random.Generator, rate_hz: tuple[float, float] = (0.2, 0.4)) -> np.ndarray:
-    """(n,) eyelid closure in [0, 1]: blinks at a seeded rate of ``rate_hz`` per second (people
-    blink 10-25 times a minute), each 0.1-0.25 s, closing and opening as a raised cosine.
+    """Eyelid closure of blinks, each 0.1-0.25 s, closing and opening as a raised cosine.
+
+    Parameters
+    ----------
+    n : int
+        Frames.
+    fps : float
+        Frames per second.
+    rng : numpy.random.Generator
+        The draws.
+    rate_hz : tuple of (float, float), default=(0.2, 0.4)
+        Range of the seeded blink rate, per second (people blink 10-25 times a minute).
+
+    Returns
+    -------
+    ndarray of shape (n,)
+        Eyelid closure in [0, 1].
     """
     out = np.zeros(n)
     rate = float(rng.uniform(*rate_hz))
@@ -284,8 +376,24 @@ def blinks(n: int, fps: float, rng: np.random.Generator, rate_hz: tuple[float, f
 
 
 def lighting(n: int, fps: float, rng: np.random.Generator, depth: float = 0.08) -> np.ndarray:
-    """(n,) slow brightness gain around 1 (clouds, auto exposure): a sum of a few sinusoids of
-    periods 4-20 s, peak change about ``depth``.
+    """Slow brightness gain around 1 (clouds, auto exposure): a sum of a few sinusoids of
+    periods 4-20 s.
+
+    Parameters
+    ----------
+    n : int
+        Frames.
+    fps : float
+        Frames per second.
+    rng : numpy.random.Generator
+        The draws.
+    depth : float, default=0.08
+        Peak change, about.
+
+    Returns
+    -------
+    ndarray of shape (n,)
+        Brightness gain.
     """
     t = np.arange(n) / fps
     g = np.zeros(n)
@@ -296,10 +404,34 @@ def lighting(n: int, fps: float, rng: np.random.Generator, depth: float = 0.08) 
 
 @dataclass
 class FaceClip:
-    """A face video with per-frame truth. yaw, pitch: (T,) rad; mouth: (T,) jaw opening; offset:
-    (T, 2) px; truth: name -> (T,) bool ("nod", "shake", "talking", "laughing"). blink: (T,)
-    eyelid closure; light: (T,) scene brightness gain; jpeg_quality: per-frame JPEG compression
-    (0: none); see :meth:`FaceRenderer.render`.
+    """A face video with per-frame truth (see :meth:`FaceRenderer.render`).
+
+    Attributes
+    ----------
+    renderer : FaceRenderer
+        Draws the frames.
+    fps : float
+        Frames per second.
+    yaw, pitch : ndarray of shape (T,)
+        Head rotation, radians.
+    mouth : ndarray of shape (T,)
+        Jaw opening.
+    offset : ndarray of shape (T, 2)
+        Head translation, pixels.
+    truth : dict of str to ndarray of shape (T,), dtype bool
+        "nod", "shake", "talking", "laughing".
+    smile : ndarray of shape (T,) or None
+        Mouth widening (None: none).
+    seed : int
+        Seed of the sensor noise.
+    meta : dict of str to object
+        Where the clip comes from.
+    blink : ndarray of shape (T,) or None
+        Eyelid closure (None: none).
+    light : ndarray of shape (T,) or None
+        Scene brightness gain (None: 1).
+    jpeg_quality : int
+        Per-frame JPEG compression (0: none).
     """
 
     renderer: FaceRenderer
@@ -321,7 +453,18 @@ class FaceClip:
         return int(self.yaw.shape[0])
 
     def render(self, i: int) -> np.ndarray:
-        """Frame ``i`` (H, W, 3) uint8 BGR; the sensor noise of a frame depends on (seed, i) only."""
+        """One frame; its sensor noise depends on (seed, i) only.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+
+        Returns
+        -------
+        ndarray of shape (H, W, 3), dtype uint8
+            BGR frame.
+        """
         rng = np.random.default_rng([self.seed, 77, i])
         sm = 0.0 if self.smile is None else float(self.smile[i])
         return self.renderer.render(
@@ -362,10 +505,36 @@ def conversation_face_clip(
     person: str = "a",
     realistic: bool = True,
 ) -> FaceClip:
-    """Person ``person`` of ``counterpart.sim.scenarios.conversation(seed, fps, duration=duration)`` filmed
-    face-on (see the module docstring). face_px: face width (px), default seeded 100-170 at
-    640x360 (scaled with the frame height). realistic: blinks, slow lighting changes and JPEG
-    compression (:data:`JPEG_QUALITY`) on top of the sensor noise.
+    """One person of ``counterpart.sim.scenarios.conversation(seed, fps, duration=duration)`` filmed
+    face-on (see the module docstring).
+
+    Parameters
+    ----------
+    seed : int, default=0
+        Seed of the scenario and the clip.
+    fps : float, default=25.0
+        Frames per second.
+    duration : float, default=60.0
+        Length, seconds.
+    width, height : int, default=640, 360
+        Frame size, pixels.
+    face_px : float or None, default=None
+        Face width, pixels; None: seeded 100-170 at 640x360 (scaled with the frame height).
+    person : {"a", "b"}, default="a"
+        The person filmed.
+    realistic : bool, default=True
+        Blinks, slow lighting changes and JPEG compression (:data:`JPEG_QUALITY`) on top of the
+        sensor noise.
+
+    Returns
+    -------
+    FaceClip
+        The clip with the scenario's labels as truth.
+
+    Raises
+    ------
+    ValueError
+        For a ``person`` other than "a" or "b".
     """
     if person not in ("a", "b"):
         raise ValueError(f"person={person!r}: use 'a' or 'b'")
@@ -422,7 +591,33 @@ def gesture_face_clip(
     """A short clip of one behaviour throughout (after 1 s of rest): ``still``, ``nod`` (2 Hz,
     8 degrees), ``shake`` (2.5 Hz, 15 degrees), ``talk`` or ``laugh`` (mouth wide open at about
     5 per second, with a smile), for tests. Truth is True from the behaviour's start to its end.
-    realistic: as in :func:`conversation_face_clip`.
+
+    Parameters
+    ----------
+    kind : {"still", "nod", "shake", "talk", "laugh"}
+        The behaviour.
+    fps : float, default=25.0
+        Frames per second.
+    duration : float, default=6.0
+        Length, seconds.
+    seed : int, default=0
+        Seed of the clip.
+    width, height : int, default=640, 360
+        Frame size, pixels.
+    face_px : float, default=130.0
+        Face width, pixels.
+    realistic : bool, default=True
+        As in :func:`conversation_face_clip`.
+
+    Returns
+    -------
+    FaceClip
+        The clip.
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``kind``.
     """
     kinds = ("still", "nod", "shake", "talk", "laugh")
     if kind not in kinds:

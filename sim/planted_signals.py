@@ -42,14 +42,42 @@ UPPER = np.array([JOINT_INDEX[j] for j in JOINTS[:8]])
 
 
 def standing_pose(position: Sequence[float] = (0.0, 0.0, 0.0), yaw: float = 0.0) -> np.ndarray:
-    """(14,3) metres: a person standing at ``position`` (feet on y = 0) facing ``yaw`` (rad, 0 = +Z)."""
+    """A person standing (feet on y = 0), in the project joint order.
+
+    Parameters
+    ----------
+    position : sequence of float, default=(0.0, 0.0, 0.0)
+        Where the person stands, metres, world frame.
+    yaw : float, default=0.0
+        Facing, radians (0 = +Z).
+
+    Returns
+    -------
+    ndarray of shape (14, 3)
+        Joints, metres, world frame.
+    """
     c, s = np.cos(yaw), np.sin(yaw)
     rot = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])  # rotation about +Y: +Z -> (sin, 0, cos)
     return _STAND @ rot.T + np.asarray(position, dtype=np.float64)
 
 
 def rotate_about_y(points: np.ndarray, yaw: np.ndarray, pivot: np.ndarray) -> np.ndarray:
-    """Rotate (T,J,3) points about the vertical axis through (T,3) pivots by (T,) yaw (rad)."""
+    """Rotate points about the vertical axis through pivots.
+
+    Parameters
+    ----------
+    points : ndarray of shape (T, J, 3)
+        Points, metres.
+    yaw : ndarray of shape (T,)
+        Rotation per frame, radians.
+    pivot : ndarray of shape (T, 3)
+        Pivot per frame, metres.
+
+    Returns
+    -------
+    ndarray of shape (T, J, 3)
+        The rotated points, metres.
+    """
     c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
     d = points - pivot[:, None]
     x = c * d[..., 0] + s * d[..., 2]
@@ -59,8 +87,18 @@ def rotate_about_y(points: np.ndarray, yaw: np.ndarray, pivot: np.ndarray) -> np
 
 @dataclass(frozen=True)
 class Conversation:
-    """joints_a, joints_b: (T,14,3) m; head_yaw_a/b: (T,) head yaw relative to the torso (rad);
-    truth_a/b: name -> (T,) bool for "nod", "shake", "gaze_at_other", "activity" (sway or turning).
+    """Two people's joint streams with their planted signals' truth.
+
+    Parameters
+    ----------
+    fps : float
+        Frames per second.
+    joints_a, joints_b : ndarray of shape (T, 14, 3)
+        Joints, metres, world frame.
+    head_yaw_a, head_yaw_b : ndarray of shape (T,)
+        Head yaw relative to the torso, radians.
+    truth_a, truth_b : dict of str to ndarray of shape (T,), dtype bool
+        Truth of "nod", "shake", "gaze_at_other" and "activity" (sway or turning).
     """
 
     fps: float
@@ -132,11 +170,29 @@ def _person(
 def conversation(
     duration_s: float = 60.0, fps: float = 25.0, seed: int = 0, distance_m: float = 1.5, noise_m: float = 0.002
 ) -> Conversation:
-    """Two people ``distance_m`` apart facing each other (A at the origin facing +Z, B facing -Z),
+    """Two people facing each other (A at the origin facing +Z, B facing -Z),
     each with random nods (1.6-2.6 Hz, 2-3 cm), shakes (1.8-3 Hz, 20 degrees head yaw with 2 cm
     sideways head motion), turns away (70 degrees, whole body) and torso sway (5 cm, ~1 Hz), never
-    overlapping, plus Gaussian joint noise ``noise_m``. Truth of gaze_at_other is geometric:
+    overlapping, plus Gaussian joint noise. Truth of gaze_at_other is geometric:
     facing within 30 degrees of the other's head.
+
+    Parameters
+    ----------
+    duration_s : float, default=60.0
+        Length, seconds.
+    fps : float, default=25.0
+        Frames per second.
+    seed : int, default=0
+        Random seed.
+    distance_m : float, default=1.5
+        Distance between the two people, metres.
+    noise_m : float, default=0.002
+        Standard deviation of the Gaussian joint noise, metres.
+
+    Returns
+    -------
+    Conversation
+        The joint streams and their truth.
     """
     rng = np.random.default_rng(seed)
     t = int(round(duration_s * fps))
@@ -165,8 +221,34 @@ def planted_label_streams(
     frame with a rate drawn from ``base_rate``. For each planted rule ``(x, y, c)``, listener signal
     ``y`` is on at frame ``t + offset`` exactly when speaker signal ``x`` is on at ``t`` and a coin of
     probability ``c`` lands; ``y`` has no other source, so rule ``S:x -> L:y`` has confidence ``c`` in
-    expectation. Each listener signal may be planted by one rule only.
-    Returns (speaker, listener, names) with names "sig00", "sig01", ...
+    expectation.
+
+    Parameters
+    ----------
+    n_frames : int
+        Frames.
+    n_signals : int
+        Signals per stream.
+    rules : sequence of (int, int, float)
+        Planted rules ``(x, y, c)``; each listener signal may be planted by one rule only.
+    offset : int, default=10
+        Frames from a speaker signal to the listener's response.
+    base_rate : tuple of (float, float), default=(0.03, 0.12)
+        Range of the per-frame rates of the independent signals.
+    seed : int, default=0
+        Random seed.
+
+    Returns
+    -------
+    speaker, listener : ndarray of shape (n_frames, n_signals), dtype bool
+        The label streams.
+    names : list of str
+        Signal names "sig00", "sig01", ...
+
+    Raises
+    ------
+    ValueError
+        If a listener signal is planted by more than one rule.
     """
     ys = [y for _, y, _ in rules]
     if len(set(ys)) != len(ys):

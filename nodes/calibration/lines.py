@@ -26,12 +26,16 @@ import numpy as np
 class LineFamilies:
     """Scene line segments grouped by vanishing point.
 
-    Attributes
+    Parameters
     ----------
-        segments: (N, 4) float64 pixels, x1, y1, x2, y2.
-        family: (N,) int, the family of each segment (index into ``vertical`` and ``vp``).
-        vertical: (F,) bool, whether each family is the world's vertical.
-        vp: (F, 3) homogeneous vanishing points found (pixels; last coordinate 0 at infinity).
+    segments : ndarray of shape (N, 4), dtype float64
+        Pixels, x1, y1, x2, y2.
+    family : ndarray of shape (N,), dtype int
+        The family of each segment (index into ``vertical`` and ``vp``).
+    vertical : ndarray of shape (F,), dtype bool
+        Whether each family is the world's vertical.
+    vp : ndarray of shape (F, 3)
+        Homogeneous vanishing points found (pixels; last coordinate 0 at infinity).
     """
 
     segments: np.ndarray
@@ -45,8 +49,21 @@ class LineFamilies:
 
 
 def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: float = 20.0) -> np.ndarray:
-    """(N, 4) LSD segments of a BGR or grey uint8 image at least ``min_length`` pixels long, without
-    those whose midpoint lies in any of ``boxes`` ((x, y, w, h), grown by 10%: the people).
+    """LSD segments of an image, without those on the people.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+        BGR or grey image.
+    boxes : iterable of (x, y, w, h), default=()
+        Boxes in pixels (the people); segments whose midpoint lies in one, grown by 10%, are dropped.
+    min_length : float, default=20.0
+        Shortest segment kept, pixels.
+
+    Returns
+    -------
+    ndarray of shape (N, 4), dtype float64
+        Segments x1, y1, x2, y2, pixels.
     """
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
     found = cv2.createLineSegmentDetector().detect(grey)[0]
@@ -63,8 +80,19 @@ def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: fl
 
 
 def segment_angles(segments: np.ndarray, vp: np.ndarray) -> np.ndarray:
-    """(N,) sine of the angle between each segment and the line from its midpoint to each vanishing
-    point: ``vp`` (3,) for all, or (N, 3) one per segment (homogeneous; at infinity a direction).
+    """Sine of the angle between each segment and the line from its midpoint to its vanishing point.
+
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    vp : ndarray of shape (3,) or (N, 3)
+        Homogeneous vanishing point for all segments, or one per segment (at infinity a direction).
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        Signed sine of the angle.
     """
     d = segments[:, 2:] - segments[:, :2]
     mid = 0.5 * (segments[:, :2] + segments[:, 2:])
@@ -86,15 +114,31 @@ def find_families(
 ) -> LineFamilies:
     """Group segments by vanishing point (sequential RANSAC; see the module docstring).
 
-    Args:
-        segments: (N, 4) pixels.
-        centre_row: the principal point's row, pixels (the image's middle row).
-        max_families: vanishing points sought at most; each needs ``min_segments`` segments.
-        angle_deg: agreement of a segment with a vanishing point.
-        vertical_deg: a family whose length-weighted segments are within this of the image
-            vertical and whose vanishing point is below ``centre_row`` (or at infinity) is the
-            world's vertical (at most one: the steepest).
-        iters: pairs tried per vanishing point; ``seed`` of their draw.
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    centre_row : float
+        The principal point's row, pixels (the image's middle row).
+    max_families : int, default=3
+        Vanishing points sought at most.
+    angle_deg : float, default=1.5
+        Agreement of a segment with a vanishing point, degrees.
+    min_segments : int, default=5
+        Segments each family needs.
+    vertical_deg : float, default=25.0
+        A family whose length-weighted segments are within this of the image vertical (degrees) and
+        whose vanishing point is below ``centre_row`` (or at infinity) is the world's vertical (at
+        most one: the steepest).
+    iters : int, default=400
+        Pairs tried per vanishing point.
+    seed : int, default=0
+        Seed of their draw.
+
+    Returns
+    -------
+    LineFamilies
+        The segments that joined a family, their families and vanishing points.
     """
     rng = np.random.default_rng(seed)
     s = np.asarray(segments, np.float64).reshape(-1, 4)

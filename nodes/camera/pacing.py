@@ -28,8 +28,28 @@ _SLEEP_SLICE_S = 0.05
 
 
 class Pacer:
-    """Schedules frame k of a replay. ``fps`` frames per second of the footage, ``rate`` speed factor
-    (used by ``rate`` mode); ``clock`` returns seconds (monotonic).
+    """Schedules frame k of a replay.
+
+    Parameters
+    ----------
+    mode : str
+        One of ``PACING_MODES`` (module docstring).
+    fps : float, default=0.0
+        Frames per second of the footage (needed by ``realtime`` and ``rate``).
+    rate : float, default=1.0
+        Speed factor (used by ``rate`` mode).
+    clock : callable, default=time.monotonic
+        Returns seconds (monotonic).
+
+    Attributes
+    ----------
+    reanchors : int
+        Times a stall re-anchored the schedule.
+
+    Raises
+    ------
+    ValueError
+        For an unknown mode, a paced mode without ``fps`` > 0, or ``rate`` <= 0 in ``rate`` mode.
     """
 
     def __init__(
@@ -57,14 +77,36 @@ class Pacer:
         return self.period > 0
 
     def due(self, k: int) -> float | None:
-        """Monotonic time at which frame k is due, or None when unpaced (or before the first frame)."""
+        """Monotonic time at which frame k is due.
+
+        Parameters
+        ----------
+        k : int
+            Frame index.
+
+        Returns
+        -------
+        float or None
+            Seconds on the clock, or None when unpaced (or before the first frame).
+        """
         if not self.paced or self.t0 is None:
             return None
         return self.t0 + (k - self.k0) * self.period
 
     def wait(self, k: int, should_stop: Callable[[], bool] = lambda: False) -> bool:
-        """Sleep until frame k is due (the first call starts the schedule). Returns False when
-        ``should_stop()`` became true while waiting.
+        """Sleep until frame k is due (the first call starts the schedule).
+
+        Parameters
+        ----------
+        k : int
+            Frame index.
+        should_stop : callable, default=lambda: False
+            Polled while waiting.
+
+        Returns
+        -------
+        bool
+            False when ``should_stop()`` became true while waiting.
         """
         if not self.paced:
             return not should_stop()
@@ -86,11 +128,31 @@ class Pacer:
 
 
 def frames(source, start_frame: int = 0, loop: bool = False, max_frames: int = 0) -> Iterator[tuple[np.ndarray, float]]:
-    """Yield ``(image, source_time)`` from an opened source: skip ``start_frame`` frames, go back to
-    ``start_frame`` at the end when ``loop``, stop after ``max_frames`` (0: no limit).
+    """Yield the frames of an opened source.
 
-    Raises ValueError when ``start_frame`` is at or past the end of the source, or when ``loop`` is
-    asked of a live source.
+    Parameters
+    ----------
+    source : object
+        An opened source (``read``, ``rewind``, ``skip``, ``live``, ``uri``).
+    start_frame : int, default=0
+        Frames skipped at the start (and after each loop).
+    loop : bool, default=False
+        Go back to ``start_frame`` at the end.
+    max_frames : int, default=0
+        Stop after this many frames (0: no limit).
+
+    Yields
+    ------
+    image : ndarray
+        The frame.
+    source_time : float
+        Its position in the source, seconds.
+
+    Raises
+    ------
+    ValueError
+        When ``start_frame`` is at or past the end of the source (or the source cannot skip), or
+        when ``loop`` is asked of a live source.
     """
     if loop and getattr(source, "live", False):
         raise ValueError(f"loop: source {source.uri} is a live device and cannot loop")
@@ -122,6 +184,18 @@ class Prefetch:
     the previous frame, so a replay goes out at about the decoder's own rate. Exceptions raised by
     ``items`` are re-raised by ``__next__`` in order. :meth:`close` stops and joins the thread: call
     it before closing the source the items come from.
+
+    Parameters
+    ----------
+    items : iterator
+        The items.
+    depth : int, default=4
+        Items read ahead at most.
+
+    Raises
+    ------
+    ValueError
+        If ``depth`` < 1.
     """
 
     _END = object()
@@ -171,8 +245,19 @@ class Prefetch:
 
 
 def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple[int, int]:
-    """(width, height) of the output for a source of ``size`` pixels: both 0 keeps it, one of them
-    scales keeping the aspect ratio, both give that size exactly.
+    """The size of the output for a source.
+
+    Parameters
+    ----------
+    size : tuple of (int, int)
+        The source's (width, height), pixels.
+    width, height : int, default=0
+        Both 0 keeps the size, one of them scales keeping the aspect ratio, both give that size exactly.
+
+    Returns
+    -------
+    tuple of (int, int)
+        The output's (width, height), pixels.
     """
     w0, h0 = size
     if width and height:
@@ -185,8 +270,23 @@ def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple
 
 
 def convert(image: np.ndarray, size: tuple[int, int] | None = None, gray: bool = False) -> tuple[np.ndarray, str]:
-    """Resize (H, W, 3) uint8 BGR ``image`` to ``size`` = (width, height) pixels when it differs, and
-    make it (H, W) mono8 when ``gray``. Returns (image, encoding: ``bgr8`` or ``mono8``).
+    """Resize an image when its size differs and make it grey when asked.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), dtype uint8
+        BGR image.
+    size : tuple of (int, int) or None, default=None
+        The output's (width, height), pixels; None keeps it.
+    gray : bool, default=False
+        Make it (H, W) mono8.
+
+    Returns
+    -------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+        The converted image.
+    encoding : str
+        ``bgr8`` or ``mono8``.
     """
     if size is not None and (image.shape[1], image.shape[0]) != tuple(size):
         shrinking = size[0] * size[1] < image.shape[0] * image.shape[1]

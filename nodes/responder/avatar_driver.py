@@ -24,7 +24,25 @@ STATE_STRENGTH = 0.3
 
 
 def avatar_goals(texture: VideoTexture, behaviours: set[str], speaker: str, interest: int) -> dict[str, float]:
-    """Goal name -> strength for the texture graph from the listener's behaviours (module docstring)."""
+    """Goal name -> strength for the texture graph from the listener's behaviours (module docstring).
+
+    Parameters
+    ----------
+    texture : VideoTexture
+        The texture motion graph.
+    behaviours : set of str
+        The listener behaviours that are on (``nod``, ``shake``, ``gaze_at_other``, ...).
+    speaker : str
+        Who speaks: ``"partner"`` or ``"person"``.
+    interest : int
+        The user's interest level (2 and above: the listener looks at the speaker).
+
+    Returns
+    -------
+    dict of str to float
+        Goal strengths: 1 for each requested behaviour the graph has, ``STATE_STRENGTH`` for the
+        social state's goal.
+    """
     goals = {b: 1.0 for b in behaviours if texture.goal_index(b) >= 0 and b != "gaze_at_other"}
     wanted = {
         "talking": speaker == "partner",
@@ -46,10 +64,32 @@ def avatar_partner(
     interest: int,
     path: str | os.PathLike[str],
 ) -> dict[str, Any]:
-    """One frame of the avatar: the Partner fields (``joints`` (14, 3) metres: where the listener
-    stands, facing the speaker, for the renderer's place and scale; ``avatar_frames`` (n,) int32 and
-    ``avatar_weights`` (n,) float32: the recording frames to blend; ``avatar_file``; ``behaviour``:
-    the signals of the frame shown, or ``listen``).
+    """One frame of the avatar: the Partner fields.
+
+    Parameters
+    ----------
+    texture : VideoTexture
+        The texture motion graph.
+    listener : ListenerModel
+        The listener model; its ``interest`` is set to ``interest``.
+    speaking : Mapping of str to bool
+        The speaker's signals (used when the speaker is ``"person"``).
+    observed : ndarray of shape (14, 3) or None
+        The observed person's joints, metres.
+    speaker : str
+        Who speaks: ``"person"`` or ``"partner"``.
+    interest : int
+        The user's interest level.
+    path : str or os.PathLike
+        The avatar's recording.
+
+    Returns
+    -------
+    dict of str to Any
+        ``joints`` (14, 3) metres: where the listener stands, facing the speaker, for the renderer's
+        place and scale; ``avatar_frames`` (n,) int32 and ``avatar_weights`` (n,) float32: the
+        recording frames to blend; ``avatar_file``; ``behaviour``: the signals of the frame shown, or
+        ``listen``; ``confidence``.
     """
     listener.interest = interest
     joints = listener.step(speaking if speaker == "person" else {}, observed)

@@ -25,7 +25,22 @@ _LS, _RS = JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]
 def actor_frame(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Origin and heading of a person's frame.
 
-    X: (..., 14, 3) joints, metres. Returns (origin (..., 3) metres with y = 0, theta (...) radians).
+    Parameters
+    ----------
+    X : ndarray of shape (..., 14, 3)
+        Joints, metres, world frame (Y up).
+
+    Returns
+    -------
+    origin : ndarray of shape (..., 3)
+        The frame's origin in metres, with y = 0.
+    theta : ndarray of shape (...)
+        Heading angle in radians.
+
+    Raises
+    ------
+    ValueError
+        If ``X`` is not of shape (..., 14, 3).
     """
     X = np.asarray(X, np.float64)
     if X.shape[-2:] != (14, 3):
@@ -45,14 +60,44 @@ def _rot(theta: np.ndarray) -> np.ndarray:
 
 
 def to_local(Y: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """World points Y (..., J, 3) into the frame (origin (..., 3), theta (...)): (..., J, 3)."""
+    """World points into the frame.
+
+    Parameters
+    ----------
+    Y : ndarray of shape (..., J, 3)
+        World points, metres.
+    origin : ndarray of shape (..., 3)
+        The frame's origin, metres.
+    theta : ndarray of shape (...)
+        The frame's heading, radians.
+
+    Returns
+    -------
+    ndarray of shape (..., J, 3)
+        The points in the frame, metres.
+    """
     R = _rot(np.asarray(theta, np.float64))
     d = np.asarray(Y, np.float64) - np.asarray(origin, np.float64)[..., None, :]
     return np.einsum("...ji,...kj->...ki", R, d)  # R^T d per point
 
 
 def to_world(L: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Local points L (..., J, 3) of the frame back to world coordinates: (..., J, 3)."""
+    """Local points of the frame back to world coordinates.
+
+    Parameters
+    ----------
+    L : ndarray of shape (..., J, 3)
+        Points in the frame, metres.
+    origin : ndarray of shape (..., 3)
+        The frame's origin, metres.
+    theta : ndarray of shape (...)
+        The frame's heading, radians.
+
+    Returns
+    -------
+    ndarray of shape (..., J, 3)
+        World points, metres.
+    """
     R = _rot(np.asarray(theta, np.float64))
     return np.einsum("...ij,...kj->...ki", R, np.asarray(L, np.float64)) + np.asarray(origin, np.float64)[..., None, :]
 
@@ -60,7 +105,15 @@ def to_world(L: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> np.ndarray
 def relative_pair(observed: np.ndarray, partner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Both people in the observed person's frame, frame by frame.
 
-    observed, partner: (T, 14, 3) world metres. Returns (obs_local, partner_local), (T, 14, 3) each.
+    Parameters
+    ----------
+    observed, partner : ndarray of shape (T, 14, 3)
+        Joints, metres, world frame.
+
+    Returns
+    -------
+    obs_local, partner_local : ndarray of shape (T, 14, 3)
+        Both people in the observed person's frame, metres.
     """
     o, th = actor_frame(observed)
     return to_local(observed, o, th), to_local(partner, o, th)

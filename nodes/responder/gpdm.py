@@ -65,17 +65,40 @@ _NQ = 4  # placement numbers at the start of the partner block
 class GPDMConfig:
     """Latent sizes and training budget (the paper leaves them open).
 
-    q_h, q_p, q_z: latent dimensions of the human, partner and interaction layers; num_inducing:
-    inducing inputs per layer; n_centres: back-constraint centres; points: frames each GP-LVM is
-    fitted on (drawn at random from all training frames); dyn_points: transitions the dynamics GP
-    is fitted on; max_iters: L-BFGS iterations per layer; contact_m: hand distance (m) that counts
-    as contact; support: training frames the online back-projection weighs; bandwidth: its kernel
-    width on the human latent, in standard deviations of the training latents; process_gain:
-    multiplies the dynamics' held-out residual variance in the prediction's covariance, so that the
-    hand can move the latent point off the mean flow; smooth_s: time constant (s) of the low-pass
-    of the partner's joints in the world before the hand's reach (bandwidth, process_gain and
-    smooth_s chosen on simulator seeds 100-102, away from the training seeds 0-7 and the bench's
-    held-out 200-203); both_roles: train on A observed / B partner and the reverse; seed: the draws.
+    ``bandwidth``, ``process_gain`` and ``smooth_s`` were chosen on simulator seeds 100-102, away from
+    the training seeds 0-7 and the bench's held-out 200-203.
+
+    Parameters
+    ----------
+    q_h, q_p, q_z : int, default=2, 4, 4
+        Latent dimensions of the human, partner and interaction layers.
+    num_inducing : int, default=50
+        Inducing inputs per layer.
+    n_centres : int, default=80
+        Back-constraint centres.
+    points : int, default=1000
+        Frames each GP-LVM is fitted on (drawn at random from all training frames).
+    dyn_points : int, default=400
+        Transitions the dynamics GP is fitted on.
+    max_iters : int, default=175
+        L-BFGS iterations per layer.
+    contact_m : float, default=0.15
+        Hand distance that counts as contact, metres.
+    support : int, default=3000
+        Training frames the online back-projection weighs.
+    bandwidth : float, default=0.08
+        The back-projection's kernel width on the human latent, in standard deviations of the
+        training latents.
+    process_gain : float, default=10.0
+        Multiplies the dynamics' held-out residual variance in the prediction's covariance, so that
+        the hand can move the latent point off the mean flow.
+    smooth_s : float, default=1.5
+        Time constant of the low-pass of the partner's joints in the world before the hand's reach,
+        seconds.
+    both_roles : bool, default=True
+        Train on A observed / B partner and the reverse.
+    seed : int, default=0
+        Seed of the draws.
     """
 
     q_h: int = 2
@@ -96,7 +119,25 @@ class GPDMConfig:
 
 
 def style_vector(emotion: str, strength: float) -> np.ndarray:
-    """(3,) amounts of happy, sad, angry for ``emotion`` at ``strength`` in [0, 1] (neutral: zeros)."""
+    """The style vector of an emotion.
+
+    Parameters
+    ----------
+    emotion : str
+        One of ``EMOTIONS``.
+    strength : float
+        Its strength, in [0, 1].
+
+    Returns
+    -------
+    ndarray of shape (3,)
+        Amounts of happy, sad, angry (neutral: zeros).
+
+    Raises
+    ------
+    ValueError
+        For an unknown emotion or a strength outside [0, 1].
+    """
     if emotion not in EMOTIONS:
         raise ValueError(f"emotion={emotion!r}; choose one of {', '.join(EMOTIONS)}")
     if not 0.0 <= float(strength) <= 1.0:
@@ -108,7 +149,20 @@ def style_vector(emotion: str, strength: float) -> np.ndarray:
 
 
 def human_features(observed: np.ndarray, fps: float) -> np.ndarray:
-    """The human block (module docstring): observed joints (T, 14, 3) world metres -> (T, 8)."""
+    """The human block (module docstring).
+
+    Parameters
+    ----------
+    observed : ndarray of shape (T, 14, 3)
+        The observed person's joints, metres, world frame.
+    fps : float
+        Frames per second.
+
+    Returns
+    -------
+    ndarray of shape (T, 8)
+        Right wrist position (metres) and velocity (m/s) in their own frame, ground velocity x, z (m/s).
+    """
     o, th = actor_frame(observed)
     w = to_local(observed, o, th)[:, _RW]
     wv = np.diff(w, axis=0, prepend=w[:1]) * fps
@@ -116,7 +170,20 @@ def human_features(observed: np.ndarray, fps: float) -> np.ndarray:
 
 
 def partner_features(observed: np.ndarray, partner: np.ndarray, contact_m: float) -> np.ndarray:
-    """The partner block (module docstring): (T, 14, 3) each, world metres -> (T, 47)."""
+    """The partner block (module docstring).
+
+    Parameters
+    ----------
+    observed, partner : ndarray of shape (T, 14, 3)
+        Joints, metres, world frame.
+    contact_m : float
+        Right-hand distance that counts as contact, metres.
+
+    Returns
+    -------
+    ndarray of shape (T, 47)
+        Placement (4), the partner's own-frame joints (42, metres) and the contact indicator (1).
+    """
     o, th = actor_frame(observed)
     q, own = partner_placement(partner, o, th)
     touch = np.linalg.norm(observed[:, _RW] - partner[:, _RW], axis=-1) < contact_m
@@ -124,10 +191,25 @@ def partner_features(observed: np.ndarray, partner: np.ndarray, contact_m: float
 
 
 def reach(joints: np.ndarray, target: np.ndarray, weight: float) -> np.ndarray:
-    """Two-bone inverse kinematics of the right arm towards ``target`` (3,) world metres, blended by
-    ``weight`` in [0, 1]. The bone lengths are kept and the elbow stays in its bending plane; for a
-    target beyond 95% of the arm's length the whole body first steps towards it along the floor by
-    the shortfall (times ``weight``). Returns new joints (14, 3).
+    """Two-bone inverse kinematics of the right arm towards a target.
+
+    The bone lengths are kept and the elbow stays in its bending plane; for a target beyond 95% of
+    the arm's length the whole body first steps towards it along the floor by the shortfall (times
+    ``weight``).
+
+    Parameters
+    ----------
+    joints : ndarray of shape (14, 3)
+        Joints, metres, world frame.
+    target : ndarray of shape (3,)
+        Where the hand goes, metres, world frame.
+    weight : float
+        Blend in [0, 1] (0 returns ``joints`` itself).
+
+    Returns
+    -------
+    ndarray of shape (14, 3)
+        New joints, metres.
     """
     if weight <= 0:
         return joints
@@ -146,7 +228,24 @@ def reach(joints: np.ndarray, target: np.ndarray, weight: float) -> np.ndarray:
 
 
 class GPDM:
-    """The hierarchical GPDM responder (module docstring); ``step`` one frame at a time."""
+    """The hierarchical GPDM responder (module docstring); ``step`` one frame at a time.
+
+    Parameters
+    ----------
+    **params : Any
+        Fields of :class:`GPDMConfig`.
+
+    Attributes
+    ----------
+    style_ : ndarray of shape (3,)
+        The style variables (:meth:`set_style`).
+    posterior_ : ndarray of shape (1,)
+        The largest back-projection weight of the last frame (the node reports it as confidence).
+    contact_ : float
+        The predicted contact of the last frame, in [0, 1].
+    styles_ : list of str
+        The emotions seen in training.
+    """
 
     name = "gpdm"
 
@@ -158,8 +257,25 @@ class GPDM:
 
     # ------------------------------------------------------------------ fitting
     def fit(self, trajectories: Sequence[TwoPersonTrajectory], progress: Callable[[str], None] | None = None) -> GPDM:
-        """Learn the hierarchy from two-person trajectories (``meta['emotion']``, ``meta['strength']``
-        label each trial's style; missing: neutral). Progress messages go to ``progress``.
+        """Learn the hierarchy from two-person trajectories.
+
+        Parameters
+        ----------
+        trajectories : sequence of TwoPersonTrajectory
+            Training trials; ``meta['emotion']``, ``meta['strength']`` label each trial's style
+            (missing: neutral).
+        progress : callable or None, default=None
+            Receives progress messages.
+
+        Returns
+        -------
+        GPDM
+            self, fitted.
+
+        Raises
+        ------
+        ValueError
+            With no trajectories, or none of at least 3 frames.
         """
         from threadpoolctl import threadpool_limits
 
@@ -252,9 +368,22 @@ class GPDM:
 
     # ------------------------------------------------------------------ style
     def set_style(self, emotion: str, strength: float) -> None:
-        """Set the style variables from an emotion and its strength in [0, 1] (continuous). A style
-        the model never saw in training raises ValueError naming the styles it knows (neutral, no
-        style amount, is the content function itself and always available).
+        """Set the style variables from an emotion and its strength (continuous).
+
+        Neutral, no style amount, is the content function itself and always available.
+
+        Parameters
+        ----------
+        emotion : str
+            One of ``EMOTIONS``.
+        strength : float
+            Its strength, in [0, 1].
+
+        Raises
+        ------
+        ValueError
+            For a style the model never saw in training (naming the styles it knows), an unknown
+            emotion or a strength outside [0, 1].
         """
         if emotion in EMOTIONS and emotion != "neutral" and emotion not in self.styles_:
             raise ValueError(
@@ -277,7 +406,23 @@ class GPDM:
             self._r_sd = np.sqrt(np.diag(self.R_))
 
     def step(self, observed: np.ndarray) -> np.ndarray:
-        """One frame: the observed person's joints (14, 3) world metres -> the partner's (14, 3)."""
+        """One frame of the partner.
+
+        Parameters
+        ----------
+        observed : ndarray of shape (14, 3)
+            The observed person's joints, metres, world frame.
+
+        Returns
+        -------
+        ndarray of shape (14, 3), dtype float32
+            The partner's joints, metres, world frame.
+
+        Raises
+        ------
+        ValueError
+            If ``observed`` is not of shape (14, 3).
+        """
         X = np.asarray(observed, np.float64)
         if X.shape != (14, 3):
             raise ValueError(f"observed joints must be (14, 3) metres, got shape {X.shape}")
@@ -326,6 +471,16 @@ class GPDM:
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model as arrays and a configuration, for a model file.
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            The three layers' arrays, the dynamics GP, the initial state, the noise covariances,
+            the back-projection's support and the contact offset.
+        config : dict of str to Any
+            The :class:`GPDMConfig` fields, ``fps``, ``dyn_var`` and ``styles``.
+        """
         arrays = {**self.human_.arrays("human"), **self.partner_.arrays("partner"), **self.inter_.arrays("inter")}
         arrays.update(
             dyn_X=self.dyn_X_,
@@ -346,6 +501,20 @@ class GPDM:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> GPDM:
+        """The inverse of :meth:`get_state`.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The arrays of a model file.
+        config : dict of str to Any
+            Its configuration.
+
+        Returns
+        -------
+        GPDM
+            The fitted model, reset.
+        """
         c = dict(config)
         fps, dyn_var, styles = float(c.pop("fps")), float(c.pop("dyn_var")), list(c.pop("styles"))
         m = cls(**c)

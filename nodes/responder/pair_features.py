@@ -34,11 +34,11 @@ class WhitenedPCA:
 
     Parameters
     ----------
-    mean : (D,) array
+    mean : ndarray of shape (D,)
         The training mean.
-    components : (d, D) array
+    components : ndarray of shape (d, D)
         The principal axes C.
-    scale : (d,) array
+    scale : ndarray of shape (d,)
         The standard deviation along each axis (the whitening).
     """
 
@@ -47,33 +47,105 @@ class WhitenedPCA:
 
     @classmethod
     def fit(cls, X: np.ndarray, energy: float) -> WhitenedPCA:
-        """(T, D) samples -> the whitened PCA keeping the fraction ``energy`` of the variance."""
+        """The whitened PCA of samples.
+
+        Parameters
+        ----------
+        X : ndarray of shape (T, D)
+            Samples.
+        energy : float
+            The fraction of the variance kept, in (0, 1).
+
+        Returns
+        -------
+        WhitenedPCA
+            The fitted PCA.
+        """
         p = PCA(energy, whiten=True, svd_solver="full").fit(X)
         return cls(p.mean_, p.components_, np.sqrt(p.explained_variance_))
 
     def forward(self, x: np.ndarray) -> np.ndarray:
-        """(T, D) -> (T, d) whitened coordinates."""
+        """Samples to whitened coordinates.
+
+        Parameters
+        ----------
+        x : ndarray of shape (T, D)
+            Samples.
+
+        Returns
+        -------
+        ndarray of shape (T, d)
+            Whitened coordinates.
+        """
         return ((x - self.mean) @ self.components.T) / self.scale
 
     def inverse(self, z: np.ndarray) -> np.ndarray:
-        """(T, d) or (d,) whitened coordinates -> (T, D) or (D,) samples."""
+        """Whitened coordinates back to samples.
+
+        Parameters
+        ----------
+        z : ndarray of shape (T, d) or (d,)
+            Whitened coordinates.
+
+        Returns
+        -------
+        ndarray of shape (T, D) or (D,)
+            Samples.
+        """
         return self.mean + (z * self.scale) @ self.components
 
     def arrays(self, tag: str) -> dict[str, np.ndarray]:
-        """The arrays of a model file, named ``{tag}_mean``, ``{tag}_components``, ``{tag}_scale``."""
+        """The arrays of a model file.
+
+        Parameters
+        ----------
+        tag : str
+            Prefix of the names.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``{tag}_mean``, ``{tag}_components``, ``{tag}_scale``.
+        """
         return {f"{tag}_mean": self.mean, f"{tag}_components": self.components, f"{tag}_scale": self.scale}
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray], tag: str) -> WhitenedPCA:
-        """The inverse of :meth:`arrays`."""
+        """The inverse of :meth:`arrays`.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The arrays of a model file.
+        tag : str
+            Prefix of the names.
+
+        Returns
+        -------
+        WhitenedPCA
+            The PCA.
+        """
         return cls(arrays[f"{tag}_mean"], arrays[f"{tag}_components"], arrays[f"{tag}_scale"])
 
 
 def partner_placement(partner: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The partner relative to the observed frame (origin (T,3), theta (T,)).
+    """The partner relative to the observed frame.
 
-    Returns (placement (T, 4): partner frame origin x, z in the observed frame (metres) and
-    cos, sin of the relative heading; own (T, 14, 3): the partner's pose in their own frame).
+    Parameters
+    ----------
+    partner : ndarray of shape (T, 14, 3)
+        The partner's joints, metres, world frame.
+    origin : ndarray of shape (T, 3)
+        The observed frame's origin, metres.
+    theta : ndarray of shape (T,)
+        The observed frame's heading, radians.
+
+    Returns
+    -------
+    placement : ndarray of shape (T, 4)
+        The partner frame's origin x, z in the observed frame (metres) and cos, sin of the relative heading.
+    own : ndarray of shape (T, 14, 3)
+        The partner's pose in their own frame, metres.
     """
     po, pth = actor_frame(partner)
     rel_o = to_local(po[:, None, :], origin, theta)[:, 0]
@@ -82,10 +154,24 @@ def partner_placement(partner: np.ndarray, origin: np.ndarray, theta: np.ndarray
 
 
 def partner_velocity(partner: np.ndarray, theta: np.ndarray, fps: float) -> np.ndarray:
-    """The partner's ground velocity (T, 2) (x, z in m/s) in the observed frame of heading theta (T,).
+    """The partner's ground velocity in the observed frame.
 
     A backward difference, v_t = (r_t - r_{t-1}) fps (v_0 = 0), so that r_t = r_{t-1} + v_t / fps
     integrates it exactly.
+
+    Parameters
+    ----------
+    partner : ndarray of shape (T, 14, 3)
+        The partner's joints, metres, world frame.
+    theta : ndarray of shape (T,)
+        The observed frame's heading, radians.
+    fps : float
+        Frames per second.
+
+    Returns
+    -------
+    ndarray of shape (T, 2)
+        Velocity x, z, m/s.
     """
     po, _ = actor_frame(partner)
     d = np.diff(po, axis=0, prepend=po[:1]) * fps
@@ -93,21 +179,60 @@ def partner_velocity(partner: np.ndarray, theta: np.ndarray, fps: float) -> np.n
 
 
 def own_velocity(observed: np.ndarray, fps: float) -> np.ndarray:
-    """(T, 14, 3) world joints -> (T, 3) ground velocity (m/s) of the frame origin in its own frame."""
+    """Ground velocity of a person's frame origin in their own frame.
+
+    Parameters
+    ----------
+    observed : ndarray of shape (T, 14, 3)
+        Joints, metres, world frame.
+    fps : float
+        Frames per second.
+
+    Returns
+    -------
+    ndarray of shape (T, 3)
+        Velocity, m/s (backward difference, the first frame 0).
+    """
     o, th = actor_frame(observed)
     d = np.diff(o, axis=0, prepend=o[:1]) * fps
     return to_local(d[:, None, :], np.zeros_like(o), th)[:, 0]
 
 
 def ground_rot(theta: float) -> np.ndarray:
-    """(2, 2) rotation of ground vectors (x, z) from the frame of heading theta to the world."""
+    """Rotation of ground vectors (x, z) from a frame to the world.
+
+    Parameters
+    ----------
+    theta : float
+        The frame's heading, radians.
+
+    Returns
+    -------
+    ndarray of shape (2, 2)
+        The rotation.
+    """
     c, s = np.cos(theta), np.sin(theta)
     return np.array([[c, s], [-s, c]])
 
 
 def partner_world(q: np.ndarray, own: np.ndarray, origin: np.ndarray, theta: float) -> np.ndarray:
-    """Placement q (x, z, cos, sin) in the observed frame and the partner's own-frame joints (14, 3)
-    -> the partner's world joints (14, 3), metres.
+    """The partner's world joints from their placement and own-frame pose.
+
+    Parameters
+    ----------
+    q : ndarray of shape (4,) or more
+        Placement x, z (metres) and cos, sin of the relative heading, in the observed frame.
+    own : ndarray of shape (14, 3)
+        The partner's joints in their own frame, metres.
+    origin : ndarray of shape (3,)
+        The observed frame's origin, metres.
+    theta : float
+        The observed frame's heading, radians.
+
+    Returns
+    -------
+    ndarray of shape (14, 3)
+        The partner's world joints, metres.
     """
     p_origin = to_world(np.array([[q[0], 0.0, q[1]]]), origin, theta)[0]
     return to_world(own, p_origin, theta + np.arctan2(q[3], q[2]))
@@ -119,19 +244,19 @@ class RolePair:
 
     Attributes
     ----------
-    local : (T, 14, 3) array
+    local : ndarray of shape (T, 14, 3)
         The observed person's pose in their own actor frame, metres.
-    velocity : (T, 3) array
+    velocity : ndarray of shape (T, 3)
         The observed person's ground velocity in their own frame, m/s.
-    placement : (T, 4) array
+    placement : ndarray of shape (T, 4)
         The partner's placement in the observed frame (x, z metres; cos, sin of the relative heading).
-    partner_velocity : (T, 2) array
+    partner_velocity : ndarray of shape (T, 2)
         The partner's ground velocity in the observed frame, m/s.
-    own : (T, 14, 3) array
+    own : ndarray of shape (T, 14, 3)
         The partner's pose in their own actor frame, metres.
     label : str
         The interaction.
-    phase : (T,) array or None
+    phase : ndarray of shape (T,) or None
         The phase labels of the frames, where the trajectory has them.
     """
 
@@ -145,7 +270,20 @@ class RolePair:
 
 
 def role_pairs(trajectories: Sequence[TwoPersonTrajectory], both_roles: bool) -> list[RolePair]:
-    """Each trajectory as A observed / B partner, and (``both_roles``) also B observed / A partner."""
+    """Each trajectory as A observed / B partner, and also B observed / A partner.
+
+    Parameters
+    ----------
+    trajectories : sequence of TwoPersonTrajectory
+        Training trajectories.
+    both_roles : bool
+        Also take B as the observed person.
+
+    Returns
+    -------
+    list of RolePair
+        One per trajectory and role, in order.
+    """
     out = []
     for t in trajectories:
         roles = [(t.a, t.b), (t.b, t.a)] if both_roles else [(t.a, t.b)]
@@ -173,7 +311,7 @@ class PairEncoder:
     ----------
     pca_o, pca_p : WhitenedPCA
         The observed person's and the partner's own-pose PCA (42 -> d numbers).
-    place_mean, place_scale : (NQ,) arrays
+    place_mean, place_scale : ndarray of shape (NQ,)
         The standardisation of the partner's placement and ground velocity.
     velocity_weight : float
         Scale of the observed ground velocity (m/s) in the observed block (0 drops it).
@@ -193,8 +331,21 @@ class PairEncoder:
 
     @classmethod
     def fit(cls, pairs: Sequence[RolePair], energy: float, velocity_weight: float) -> PairEncoder:
-        """Fit both PCAs (keeping the fraction ``energy`` of each person's pose variance) and the
-        standardisation of the placement numbers to training pairs.
+        """Fit both PCAs and the standardisation of the placement numbers to training pairs.
+
+        Parameters
+        ----------
+        pairs : sequence of RolePair
+            Training pairs.
+        energy : float
+            The fraction of each person's pose variance the PCAs keep.
+        velocity_weight : float
+            Scale of the observed ground velocity (m/s) in the observed block (0 drops it).
+
+        Returns
+        -------
+        PairEncoder
+            The fitted encoder.
         """
         O, _, Q, P = _stack(pairs)
         # the placement (metres, cos/sin of the relative heading) and the partner's ground velocity
@@ -213,14 +364,38 @@ class PairEncoder:
         return len(self.pca_o.scale) + (3 if self.velocity_weight > 0 else 0)
 
     def observed(self, local: np.ndarray, velocity: np.ndarray) -> np.ndarray:
-        """(T, 14, 3) local pose and (T, 3) ground velocity m/s -> (T, d_o) observed block."""
+        """The observed block of frames.
+
+        Parameters
+        ----------
+        local : ndarray of shape (T, 14, 3)
+            The observed person's pose in their own frame, metres.
+        velocity : ndarray of shape (T, 3)
+            Their ground velocity, m/s.
+
+        Returns
+        -------
+        ndarray of shape (T, d_o)
+            The observed block.
+        """
         z = self.pca_o.forward(local.reshape(len(local), -1))
         if self.velocity_weight > 0:
             z = np.concatenate([z, velocity * self.velocity_weight], axis=1)
         return z
 
     def encode(self, pairs: Sequence[RolePair]) -> np.ndarray:
-        """Training pairs -> (sum T, d) their frames x = [o, p], in the pairs' order."""
+        """The frames x = [o, p] of training pairs, in the pairs' order.
+
+        Parameters
+        ----------
+        pairs : sequence of RolePair
+            Training pairs.
+
+        Returns
+        -------
+        ndarray of shape (sum T, d)
+            Their frames.
+        """
         O, V, Q, P = _stack(pairs)
         return np.concatenate(
             [
@@ -232,15 +407,49 @@ class PairEncoder:
         )
 
     def placement(self, zq: np.ndarray) -> np.ndarray:
-        """(..., NQ) standardised placement numbers -> metres, cos/sin and m/s."""
+        """Standardised placement numbers back to their units.
+
+        Parameters
+        ----------
+        zq : ndarray of shape (..., NQ)
+            Standardised placement numbers.
+
+        Returns
+        -------
+        ndarray of shape (..., NQ)
+            Metres, cos/sin and m/s.
+        """
         return zq * self.place_scale + self.place_mean
 
     def partner(self, q: np.ndarray, zp: np.ndarray, origin: np.ndarray, theta: float) -> np.ndarray:
-        """Placement q (x, z, cos, sin; metres) and PCA pose zp (d_p,) -> partner world joints (14, 3)."""
+        """The partner's world joints from their placement and PCA pose.
+
+        Parameters
+        ----------
+        q : ndarray of shape (4,) or more
+            Placement x, z (metres) and cos, sin of the relative heading, in the observed frame.
+        zp : ndarray of shape (d_p,)
+            The partner's PCA pose.
+        origin : ndarray of shape (3,)
+            The observed frame's origin, metres.
+        theta : float
+            The observed frame's heading, radians.
+
+        Returns
+        -------
+        ndarray of shape (14, 3)
+            The partner's world joints, metres.
+        """
         return partner_world(q, self.pca_p.inverse(zp).reshape(14, 3), origin, theta)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The arrays of a model file."""
+        """The arrays of a model file.
+
+        Returns
+        -------
+        dict of str to ndarray
+            The PCAs' arrays (``pca_o_*``, ``pca_p_*``), ``place_mean`` and ``place_scale``.
+        """
         return {
             **self.pca_o.arrays("pca_o"),
             **self.pca_p.arrays("pca_p"),
@@ -250,7 +459,20 @@ class PairEncoder:
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray], velocity_weight: float) -> PairEncoder:
-        """The inverse of :meth:`arrays`."""
+        """The inverse of :meth:`arrays`.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The arrays of a model file.
+        velocity_weight : float
+            Scale of the observed ground velocity (m/s) in the observed block (0 drops it).
+
+        Returns
+        -------
+        PairEncoder
+            The encoder.
+        """
         return cls(
             WhitenedPCA.from_arrays(arrays, "pca_o"),
             WhitenedPCA.from_arrays(arrays, "pca_p"),

@@ -40,7 +40,28 @@ _NECK, _HIPS = JOINT_INDEX["neck"], [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
 
 @dataclass(frozen=True)
 class StageConfig:
-    """Limits of the partner's placement (metres, metres per second)."""
+    """Limits of the partner's placement (metres, metres per second).
+
+    Parameters
+    ----------
+    min_distance_m, max_distance_m : float, default=0.5, 1.2
+        The range of the partner's ground distance from the observed person, metres.
+    max_speed_m_s : float, default=2.5
+        The most the partner's ground offset changes per second, metres per second.
+    max_ankle_m : float, default=0.3
+        The highest the lowest ankle may be above the ground plane, metres.
+    contact_m : float, default=0.2
+        A wrist within this distance of the partner's torso axis is a push, metres.
+    recoil_m : float, default=0.3
+        The distance a push adds, metres.
+    recoil_s : float, default=0.8
+        Time constant of the recoil's fading, seconds.
+
+    Raises
+    ------
+    ValueError
+        If the limits are inconsistent (min > max, negative values, non-positive speed or time constant).
+    """
 
     min_distance_m: float = 0.5
     max_distance_m: float = 1.2
@@ -103,6 +124,13 @@ class Stage:
     ----------
     config : StageConfig
         the limits.
+
+    Attributes
+    ----------
+    corrected : int
+        Frames on which the model's placement was moved.
+    pushes : int
+        Pushes the partner recoiled from.
     """
 
     def __init__(self, config: StageConfig = StageConfig()) -> None:
@@ -118,11 +146,19 @@ class Stage:
         self.pushes = 0  # pushes the partner recoiled from
 
     def __call__(self, observed: np.ndarray, partner: np.ndarray, dt: float) -> np.ndarray:
-        """The partner's joints (14, 3), world metres, moved rigidly to a valid place.
+        """The partner's joints, world metres, moved rigidly to a valid place.
 
-        observed, partner: (14, 3) world joints (metres, Y up, ground y = 0) of the observed person
-        and of the model's partner; dt: seconds since the last call (the speed limit is per second).
-        Returns a new (14, 3) array of partner's dtype.
+        Parameters
+        ----------
+        observed, partner : ndarray of shape (14, 3)
+            World joints (metres, Y up, ground y = 0) of the observed person and of the model's partner.
+        dt : float
+            Seconds since the last call (the speed limit is per second).
+
+        Returns
+        -------
+        ndarray of shape (14, 3)
+            A new array of ``partner``'s dtype, world metres.
         """
         c = self.config
         X = np.asarray(observed, np.float64)

@@ -98,10 +98,22 @@ _BLOCK_BYTES = 64 * 1024 * 1024
 
 
 def as_frame_stack(frames: np.ndarray | Iterable[np.ndarray]) -> np.ndarray:
-    """Return training frames as one contiguous (N, H, W, 3) uint8 array.
+    """Return training frames as one contiguous array.
 
-    ``frames`` is either such an array or an iterable of H x W x 3 uint8 BGR frames of one size.
-    Raises ValueError naming the offending frame when a shape or dtype does not fit.
+    Parameters
+    ----------
+    frames : ndarray of shape (N, H, W, 3), dtype uint8, or iterable of ndarray
+        Such an array, or an iterable of (H, W, 3) uint8 BGR frames of one size.
+
+    Returns
+    -------
+    ndarray of shape (N, H, W, 3), dtype uint8
+        The contiguous stack.
+
+    Raises
+    ------
+    ValueError
+        Naming the offending frame when a shape or dtype does not fit, or for no frames.
     """
     if isinstance(frames, np.ndarray):
         stack = frames
@@ -345,16 +357,21 @@ class HorprasertBackground:
 
     Attributes
     ----------
-    mean_ : (H, W, 3) float32
+    mean_ : ndarray of shape (H, W, 3), dtype float32
         Expected colour E, grey levels.
-    spread_ : (H, W, 3) float32
+    spread_ : ndarray of shape (H, W, 3), dtype float32
         Per-channel spread s, grey levels.
-    a_, b_ : (H, W) float32
+    a_, b_ : ndarray of shape (H, W), dtype float32
         RMS brightness / chromaticity distortion (eqs. 7, 8).
-    thresholds_ : dict
+    thresholds_ : dict of str to float
         tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo as fitted.
-    unseen_ : (H, W) bool
+    unseen_ : ndarray of shape (H, W), dtype bool
         Pixels no training sample showed (``fit(exclude=...)``), filled in.
+
+    Raises
+    ------
+    TypeError
+        If a configuration group is not of its config class.
     """
 
     def __init__(
@@ -393,7 +410,21 @@ class HorprasertBackground:
         """A model from flat parameters named as the configs' fields (``learning_rate=0.02``,
         ``shadow_ncc=0.4``, ...), each routed to its group; others go to their defaults.
 
-        Raises ValueError naming an unknown parameter and the valid names.
+        Parameters
+        ----------
+        **params : Any
+            Fields of ``ThresholdConfig``, ``AdaptationConfig``, ``ShadowConfig``, ``TrainingConfig``
+            and ``GhostConfig``.
+
+        Returns
+        -------
+        HorprasertBackground
+            The (unfitted) model.
+
+        Raises
+        ------
+        ValueError
+            Naming an unknown parameter and the valid names, or a config's bad value.
         """
         groups: dict[str, dict[str, Any]] = {name: {} for name in _CONFIGS}
         owner = {f.name: name for name, c in _CONFIGS.items() for f in fields(c)}
@@ -435,14 +466,15 @@ class HorprasertBackground:
 
         Parameters
         ----------
-        frames : (N, H, W, 3) uint8 BGR, N >= 2 (or an iterable of such frames)
-        robust : bool
+        frames : ndarray of shape (N, H, W, 3), dtype uint8, or iterable of ndarray
+            BGR training frames, N >= 2 (or an iterable of (H, W, 3) frames).
+        robust : bool, default=False
             False: the frames are empty of people; E and s are the sample mean and standard
             deviation (Horprasert eqs. 1-4). True: people may be present; E is the per-pixel
             temporal median and s = 1.4826 * MAD, and a, b and the thresholds use only the samples
             within ``robust_inlier_k`` spreads of the median. Pixels covered by a person in more
             than half of the frames cannot be recovered this way: pass ``exclude``.
-        exclude : (N, H, W) bool or None
+        exclude : ndarray of shape (N, H, W), dtype bool, or None, default=None
             True where a sample is known not to show the background (a detected person, see
             ``people.fit_around_people``). Every statistic then uses only the other samples; a
             pixel with fewer than ``min_free_frac`` of the frames left was not seen (someone stood
@@ -451,7 +483,14 @@ class HorprasertBackground:
 
         Returns
         -------
-        self
+        HorprasertBackground
+            self, fitted.
+
+        Raises
+        ------
+        ValueError
+            For fewer than 2 frames, frames or ``exclude`` of the wrong shape or dtype, an ``exclude``
+            that leaves no pixel to learn from, or thresholds that come out inconsistent.
         """
         stack = as_frame_stack(frames)
         if stack.shape[0] < 2:
@@ -602,17 +641,51 @@ class HorprasertBackground:
 
     # ------------------------------------------------------------------ per frame
     def distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Normalised distortions (alpha_hat, CD_hat), each (H, W) float32 (eqs. 5-8)."""
+        """Normalised distortions (eqs. 5-8).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame of the training size.
+
+        Returns
+        -------
+        alpha_hat, cd_hat : ndarray of shape (H, W), dtype float32
+            Normalised brightness and chromaticity distortions.
+
+        Raises
+        ------
+        RuntimeError
+            If the model is not fitted.
+        ValueError
+            For a frame of another shape or dtype.
+        """
         self._require_fitted()
         _check_frame(frame, self.shape)
         alpha, cd2, _ = self._distortions(frame)
         return (alpha - 1.0) / self.a_, np.sqrt(cd2) / self.b_
 
     def apply(self, frame: np.ndarray) -> np.ndarray:
-        """Classify each pixel of a uint8 BGR frame (H, W, 3).
+        """Classify each pixel of a frame (eq. 9).
 
-        Returns (H, W) uint8 labels: BACKGROUND 0, SHADOW 1, HIGHLIGHT 2, FOREGROUND 3 (eq. 9).
         Does not change the model; call ``update`` for that.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame of the training size.
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype uint8
+            Labels: BACKGROUND 0, SHADOW 1, HIGHLIGHT 2, FOREGROUND 3.
+
+        Raises
+        ------
+        RuntimeError
+            If the model is not fitted.
+        ValueError
+            For a frame of another shape or dtype.
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
@@ -697,6 +770,20 @@ class HorprasertBackground:
         foreground". a, b and the thresholds stay as trained. Foreground pixels follow the
         scene-wide drift (``_follow_global_drift``), and after a robust fit still foreground that
         matches the surrounding room is absorbed (``absorb_frames``).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame of the training size.
+        labels : ndarray of shape (H, W), dtype uint8
+            Its labels, as ``apply`` returns them.
+
+        Raises
+        ------
+        RuntimeError
+            If the model is not fitted.
+        ValueError
+            For a frame or labels of another shape.
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
@@ -853,13 +940,30 @@ class HorprasertBackground:
         return sel
 
     def apply_update(self, frame: np.ndarray) -> np.ndarray:
-        """``apply`` then ``update`` with its labels; returns the labels."""
+        """``apply`` then ``update`` with its labels.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame of the training size.
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype uint8
+            The labels of ``apply``.
+        """
         labels = self.apply(frame)
         self.update(frame, labels)
         return labels
 
     def get_params(self) -> dict[str, Any]:
-        """The constructor's parameters: the configuration groups by keyword (scikit-learn style)."""
+        """The constructor's parameters (scikit-learn style).
+
+        Returns
+        -------
+        dict of str to config
+            The configuration groups by keyword.
+        """
         return {name: getattr(self, name) for name in _CONFIGS}
 
     # ------------------------------------------------------------------ internals
