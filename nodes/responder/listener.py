@@ -329,7 +329,7 @@ class ListenerModel:
             Frame index (the oscillations' time is ``t / fps``).
         observed : ndarray of shape (14, 3) or None, default=None
             The speaker's joints, metres, world frame; the listener stands ``distance`` in front of
-            them. None: at x = 0.6 m facing -x.
+            them. None: at x = 0.6 m, z = 0, yaw -pi/2.
 
         Returns
         -------
