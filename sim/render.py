@@ -82,7 +82,7 @@ class Lighting:
 
 
 def random_lighting(rng: np.random.Generator) -> Lighting:
-    """A lighting drawn from ``rng``: light from above and behind the camera, tilted sideways.
+    """A lighting drawn from ``rng``: the light shines down, towards -z, tilted sideways in x.
 
     Parameters
     ----------
