@@ -30,7 +30,8 @@ def find_run(run: str | None = None) -> Path:
     Raises
     ------
     RegistryError
-        The base directory cannot be found, or the directory holds no ``registry.json``.
+        The per-user base directory is not safely the user's own, or the directory holds no
+        ``registry.json``.
     """
     try:
         path = Path(run) if run else base_dir() / "latest"

@@ -64,7 +64,7 @@ class SimStream:
     camera : Camera
         The camera.
     seed : int, default=0
-        Seed of the renderer (sensor noise).
+        Seeds the renderer (room, lighting, clothing and sensor noise).
     noise_sigma : float, default=2.0
         Sensor noise sigma, grey levels.
     n_frames : int or None, default=None
@@ -128,6 +128,11 @@ class SimStream:
             The image, BGR.
         time_s : float
             Scene time, seconds.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
         """
         frame, truth = self.renderer.render(i)
         return frame, truth.time_s
@@ -148,6 +153,11 @@ class SimStream:
             The image, BGR.
         truth : FrameTruth
             Its ground truth.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
         """
         return self.renderer.render(i, noise=noise)
 
@@ -163,6 +173,11 @@ class SimStream:
         -------
         FrameTruth
             Joints, masks, shadow and labels of the frame.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
         """
         return self.renderer.render(i, noise=False)[1]
 
@@ -178,6 +193,11 @@ class SimStream:
         -------
         ndarray of shape (H, W, 3), dtype uint8
             The background, BGR.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
         """
         return self.renderer.background(i)
 
