@@ -22,6 +22,13 @@ HELP = "offline: the 3D body of the people of a video file"
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the options of ``counterpart track`` to a parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The parser (of the subcommand).
+    """
     add_video_arguments(p, "output .npz (joints, poses, ess, ... per frame and side)", "track at most this many frames")
     p.add_argument(
         "--people",
@@ -51,7 +58,23 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def load_camera(path: str) -> Camera:
-    """A Camera from the ``--camera`` file; ValueError naming the option, the file and the bad key."""
+    """A Camera from the ``--camera`` file.
+
+    Parameters
+    ----------
+    path : str
+        The calibration file, JSON or YAML.
+
+    Returns
+    -------
+    Camera
+        The calibrated camera.
+
+    Raises
+    ------
+    ValueError
+        The file is unreadable or invalid; the message names the option, the file and the bad key.
+    """
     try:
         return load_camera_file(path)
     except ValueError as exc:
@@ -59,6 +82,18 @@ def load_camera(path: str) -> Camera:
 
 
 def main(args: argparse.Namespace) -> int:
+    """Track the video of ``args`` and write the output file, printing its summary as JSON.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    int
+        Exit code: 0 on success, 2 on bad input, 130 when interrupted.
+    """
     from .tracking import track_video
 
     if not positive(args, ("layers", "particles", "train_frames", "max_frames"), "track"):

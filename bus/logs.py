@@ -26,7 +26,15 @@ class _Kind:
 
 
 class RepeatFilter(logging.Filter):
-    """A handler filter letting ``burst`` records of each kind through per ``window`` seconds."""
+    """A handler filter letting ``burst`` records of each kind through per ``window`` seconds.
+
+    Parameters
+    ----------
+    burst : int, default=BURST
+        Records of one kind (logger, level, message template) let through per window.
+    window : float, default=WINDOW_S
+        Length of the window, seconds (monotonic clock).
+    """
 
     def __init__(self, burst: int = BURST, window: float = WINDOW_S) -> None:
         super().__init__()
@@ -35,6 +43,19 @@ class RepeatFilter(logging.Filter):
         self._kinds: dict[tuple[str, int, str], _Kind] = {}
 
     def filter(self, record: logging.LogRecord) -> bool:
+        """Whether to let ``record`` through; the first one of a kind after a window notes the ones held.
+
+        Parameters
+        ----------
+        record : logging.LogRecord
+            The record; its message is rewritten to say how many were held back when the previous
+            window of its kind held some.
+
+        Returns
+        -------
+        bool
+            True to log the record, False when its kind has used up its ``burst`` in this window.
+        """
         key = (record.name, record.levelno, str(record.msg))
         now = time.monotonic()
         kind = self._kinds.get(key)

@@ -61,7 +61,23 @@ EARLY_FAILURE_EOS_S = 0.5
 
 @dataclass(frozen=True)
 class Input:
-    """An input port. ``type`` is a message class, or None for any message (recorders, echo)."""
+    """An input port.
+
+    Parameters
+    ----------
+    type : type or None
+        A message class, or None for any message (recorders, echo).
+    policy : {"reliable", "latest"}, default="reliable"
+        Delivery policy of the subscription.
+    doc : str, default=""
+        What the port is for.
+    raw : bool, default=False
+        Deliver ``transport.RawMessage`` (header checked, arrays not decoded): recorders.
+    awaits_end : bool, default=True
+        Whether the node waits for this input's end of stream before it ends.
+    queue : int, default=0
+        With the ``latest`` policy, keep up to this many messages in order instead of the newest only.
+    """
 
     type: type | None
     policy: str = RELIABLE
@@ -77,7 +93,17 @@ class Input:
 
 @dataclass(frozen=True)
 class Output:
-    """An output port publishing messages of ``type``."""
+    """An output port publishing messages of ``type``.
+
+    Parameters
+    ----------
+    type : type
+        The message class.
+    doc : str, default=""
+        What the port is for.
+    latched : bool, default=False
+        Send the last message again to ``latest`` subscribers that join later.
+    """
 
     type: type
     doc: str = ""
@@ -87,6 +113,18 @@ class Output:
 
 
 def stats_topic(node_name: str) -> str:
+    """The topic of a node's statistics.
+
+    Parameters
+    ----------
+    node_name : str
+        The node's name.
+
+    Returns
+    -------
+    str
+        ``NODE/stats``.
+    """
     return f"{node_name}/stats"
 
 
@@ -110,6 +148,33 @@ class Node:
     """Base class of every node process. Subclasses set ``inputs``, ``outputs``, ``params`` and
     override :meth:`setup`, :meth:`on_message` (or ``on_<port>``), :meth:`on_paired`, :meth:`on_end`,
     :meth:`generate`.
+
+    Parameters
+    ----------
+    spec : dict of str to object
+        The node's wiring: ``name``, ``params``, ``inputs`` and ``outputs`` (port -> topic and
+        endpoints), and the launcher's options (``stats_file``, ``running_file``, ``supervised``,
+        timeouts).
+
+    Attributes
+    ----------
+    name : str
+        The node's name.
+    p : dict of str to object
+        The validated parameters.
+    log : logging.Logger
+        The node's logger.
+    stopping : bool
+        Set on SIGINT/SIGTERM (or when the launcher is gone): the loop ends.
+    exit_code : int
+        The process exit code.
+    figures : dict of str to float
+        The node's own figures, published in its stats (see :meth:`tally`).
+
+    Raises
+    ------
+    ParamError
+        A parameter of ``spec`` is unknown or invalid.
     """
 
     inputs: ClassVar[dict[str, Input]] = {}
@@ -121,18 +186,60 @@ class Node:
     # ------------------------------------------------------------------ declared ports and params
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
-        """The ports for the given (validated) parameters. Override when they depend on parameters."""
+        """The ports for the given (validated) parameters. Override when they depend on parameters.
+
+        Parameters
+        ----------
+        params : dict of str to object
+            The validated parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The input ports by name.
+        outputs : dict of str to Output
+            The output ports by name.
+        """
         return dict(cls.inputs), dict(cls.outputs)
 
     @classmethod
     def paired_inputs(cls, params: dict[str, Any]) -> Pairing | None:
         """The pairing for the given (validated) parameters: ``pairing`` without the inputs that
         :meth:`ports` leaves out. Override when the policy depends on parameters.
+
+        Parameters
+        ----------
+        params : dict of str to object
+            The validated parameters.
+
+        Returns
+        -------
+        Pairing or None
+            The pairing, or None when the node has none.
         """
         return cls.pairing.restrict(list(cls.ports(params)[0])) if cls.pairing is not None else None
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        """Defaults of ``params`` overlaid with ``given``, every value coerced and checked.
+
+        Parameters
+        ----------
+        given : dict of str to object
+            The parameters given.
+        where : str, default=""
+            Where they come from, named in an error (e.g. ``node 'tracker'``).
+
+        Returns
+        -------
+        dict of str to object
+            Every declared parameter's value.
+
+        Raises
+        ------
+        ParamError
+            An unknown parameter or a bad value.
+        """
         return resolve_params(cls.params, given, where)
 
     # ------------------------------------------------------------------------------ life cycle
@@ -166,7 +273,20 @@ class Node:
         """Called once after the sockets are up, before any message. Load models here."""
 
     def on_message(self, port: str, msg: Any) -> None:
-        """Handle one message on ``port``. Default: call ``self.on_<port>(msg)``."""
+        """Handle one message on ``port``. Default: call ``self.on_<port>(msg)``.
+
+        Parameters
+        ----------
+        port : str
+            The input port.
+        msg : object
+            The message.
+
+        Raises
+        ------
+        NotImplementedError
+            The node has no ``on_<port>`` (and does not override this method).
+        """
         handler = getattr(self, f"on_{port}", None)
         if handler is None:
             raise NotImplementedError(f"{type(self).__name__} has no on_message or on_{port}")
@@ -178,7 +298,18 @@ class Node:
         return self._sync.stats if self._sync is not None else None
 
     def on_paired(self, paired: PairedSet) -> None:
-        """Handle one set of the paired inputs (``paired[port]``; None for an optional one missing)."""
+        """Handle one set of the paired inputs.
+
+        Parameters
+        ----------
+        paired : PairedSet
+            The set: ``paired[port]`` is the message, None for an optional one missing.
+
+        Raises
+        ------
+        NotImplementedError
+            Always, unless a node with paired inputs overrides it.
+        """
         raise NotImplementedError(f"{type(self).__name__} declares paired inputs and must implement on_paired()")
 
     def on_end(self) -> None:
@@ -192,7 +323,13 @@ class Node:
     timer_period: ClassVar[float | None] = None
 
     def generate(self) -> None:
-        """Source nodes (no inputs) publish here until their data ends or ``self.stopping``."""
+        """Source nodes (no inputs) publish here until their data ends or ``self.stopping``.
+
+        Raises
+        ------
+        NotImplementedError
+            Always, unless a source node overrides it.
+        """
         raise NotImplementedError(f"{type(self).__name__} has no inputs and must implement generate()")
 
     def teardown(self) -> None:
@@ -200,6 +337,20 @@ class Node:
 
     # ------------------------------------------------------------------------------- publishing
     def publish(self, port: str, msg: Any) -> None:
+        """Publish a message on an output port.
+
+        Parameters
+        ----------
+        port : str
+            The output port.
+        msg : object
+            The message (of the port's type).
+
+        Raises
+        ------
+        KeyError
+            The node has no such output port.
+        """
         pub = self._out.get(port)
         if pub is None:
             raise KeyError(f"node {self.name!r} has no output port {port!r}; ports: {', '.join(self._out)}")
@@ -207,7 +358,22 @@ class Node:
         self._count_out(port, getattr(msg, "seq", -1))
 
     def publish_parts(self, port: str, parts: list[Any], seq: int = -1) -> None:
-        """Publish already encoded parts ``[header, buffers...]`` unchanged (bag players)."""
+        """Publish already encoded parts ``[header, buffers...]`` unchanged (bag players).
+
+        Parameters
+        ----------
+        port : str
+            The output port.
+        parts : list
+            The encoded parts.
+        seq : int, default=-1
+            The message's seq, for the node's last seq (-1: none).
+
+        Raises
+        ------
+        KeyError
+            The node has no such output port.
+        """
         pub = self._out.get(port)
         if pub is None:
             raise KeyError(f"node {self.name!r} has no output port {port!r}; ports: {', '.join(self._out)}")
@@ -217,6 +383,13 @@ class Node:
     def tally(self, name: str, n: float = 1) -> None:
         """Add ``n`` to the figure ``name`` (frames with people, regions not placed, ...), published
         with the node's stats so that a run's summary can say what the node's work gave.
+
+        Parameters
+        ----------
+        name : str
+            The figure.
+        n : float, default=1
+            The amount added.
         """
         self.figures[name] = self.figures.get(name, 0) + n
 
@@ -444,7 +617,13 @@ class Node:
                 )
 
     def run(self) -> int:
-        """Open sockets, set up, loop until end of stream or stop, send end of stream, clean up."""
+        """Open sockets, set up, loop until end of stream or stop, send end of stream, clean up.
+
+        Returns
+        -------
+        int
+            The process exit code, :attr:`exit_code`.
+        """
         _install_signal_handlers(self)
         self._open()
         try:
@@ -469,7 +648,15 @@ class Node:
     # ------------------------------------------------------------------------------- entry points
     @classmethod
     def main(cls, argv: list[str] | None = None) -> None:
-        """Run this node alone from the command line (``python -m counterpart.nodes.x --param k=v``)."""
+        """Run this node alone from the command line (``python -m counterpart.nodes.x --param k=v``).
+
+        Exits the process with the exit code of :func:`counterpart.bus.runner.run_standalone`.
+
+        Parameters
+        ----------
+        argv : list of str or None, default=None
+            The options; None for ``sys.argv[1:]``.
+        """
         from .runner import run_standalone
 
         sys.exit(run_standalone(cls, argv))
@@ -491,7 +678,33 @@ def _install_signal_handlers(node: Node) -> None:
 def standalone_spec(
     name: str, node_cls: type[Node], params: dict[str, Any], remap: dict[str, str], policy: dict[str, str]
 ) -> dict[str, Any]:
-    """Wiring for a node run alone: every topic in the shared standalone folder, no barrier."""
+    """Wiring for a node run alone: every topic in the shared standalone folder, no barrier.
+
+    Parameters
+    ----------
+    name : str
+        The node's name.
+    node_cls : type of Node
+        The node class.
+    params : dict of str to object
+        The parameters given.
+    remap : dict of str to str
+        Port -> topic, where it differs from the port's name (stats: ``NAME/stats``).
+    policy : dict of str to str
+        Input port -> delivery policy, where it differs from the port's own.
+
+    Returns
+    -------
+    dict of str to object
+        The spec: ``name``, ``params``, ``inputs`` and ``outputs``.
+
+    Raises
+    ------
+    ParamError
+        An unknown parameter or a bad value.
+    ValueError
+        A remapped port the node does not have, or an unknown policy.
+    """
     p = node_cls.validate_params(params, f"node {name!r}")
     inputs, outputs = node_cls.ports(p)
     root = standalone_dir()
@@ -514,6 +727,18 @@ def standalone_spec(
 
 
 def load_spec(path: str | Path) -> dict[str, Any]:
+    """A node's spec from the JSON file the launcher wrote.
+
+    Parameters
+    ----------
+    path : str or Path
+        The spec file.
+
+    Returns
+    -------
+    dict of str to object
+        The spec.
+    """
     with open(path) as f:
         return json.load(f)
 

@@ -22,12 +22,35 @@ class PluginError(LookupError):
 
 
 def declared(group: str) -> dict[str, EntryPoint]:
-    """The entry points of ``group`` by name, in the order the packages declare them."""
+    """The entry points of ``group`` by name, in the order the packages declare them.
+
+    Parameters
+    ----------
+    group : str
+        The entry-point group, e.g. :data:`COMMANDS`.
+
+    Returns
+    -------
+    dict of str to EntryPoint
+        The declared entry points by name.
+    """
     return {ep.name: ep for ep in entry_points(group=group)}
 
 
 def load(group: str, name: str) -> Any:
     """The object the entry point ``name`` of ``group`` names (imported now).
+
+    Parameters
+    ----------
+    group : str
+        The entry-point group, e.g. :data:`LEARN_TARGETS`.
+    name : str
+        The entry point's name in that group.
+
+    Returns
+    -------
+    object
+        The loaded object.
 
     Raises
     ------
@@ -52,6 +75,16 @@ def simulator() -> Any:
     Its interface: ``open_stream(scenario, seed, width, height, fps, **options)`` (frames, truth),
     ``make_scenario(name, seed, fps, **options)`` (poses, joints, labels of two people) and
     ``listener_recording(seconds, seed, interested, empty_s)`` (one person rendered alone with masks).
+
+    Returns
+    -------
+    module
+        The simulator's module, loaded from the ``builtin`` entry point of :data:`SIMULATOR`.
+
+    Raises
+    ------
+    PluginError
+        Counterpart is not installed, so the entry point is not declared.
     """
     return load(SIMULATOR, "builtin")
 

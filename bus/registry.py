@@ -15,7 +15,24 @@ class RegistryError(RuntimeError):
 
 
 def find_run(run: str | None = None) -> Path:
-    """The run directory given, or the newest launch's (``base_dir()/latest``)."""
+    """The run directory given, or the newest launch's (``base_dir()/latest``).
+
+    Parameters
+    ----------
+    run : str or None, default=None
+        A run directory; ``None`` or empty for the newest launch's.
+
+    Returns
+    -------
+    Path
+        The run directory, resolved.
+
+    Raises
+    ------
+    RegistryError
+        The per-user base directory is not safely the user's own, or the directory holds no
+        ``registry.json``.
+    """
     try:
         path = Path(run) if run else base_dir() / "latest"
     except RunDirError as exc:
@@ -28,6 +45,23 @@ def find_run(run: str | None = None) -> Path:
 
 
 def read(run: str | None = None) -> dict[str, Any]:
+    """The registry of a launch, with ``alive`` added: whether its launcher process still runs.
+
+    Parameters
+    ----------
+    run : str or None, default=None
+        A run directory; ``None`` or empty for the newest launch's.
+
+    Returns
+    -------
+    dict of str to object
+        The contents of ``registry.json`` and ``alive`` (bool).
+
+    Raises
+    ------
+    RegistryError
+        No launch found (see :func:`find_run`), or ``registry.json`` is unreadable.
+    """
     path = find_run(run)
     try:
         reg = json.loads((path / "registry.json").read_text())
@@ -50,6 +84,25 @@ def _alive(pid: int | None) -> bool:
 
 
 def topic_endpoints(reg: dict[str, Any], topic: str) -> TopicEndpoints:
+    """The endpoints of ``topic`` in a launch's registry.
+
+    Parameters
+    ----------
+    reg : dict of str to object
+        A registry, as :func:`read` returns it.
+    topic : str
+        The topic's name.
+
+    Returns
+    -------
+    TopicEndpoints
+        Where the topic is published.
+
+    Raises
+    ------
+    RegistryError
+        The launch has no topic of that name (or none with endpoints); the message lists its topics.
+    """
     info = reg["topics"].get(topic)
     if info is None or not info.get("endpoints"):
         raise RegistryError(f"no topic {topic!r} in the launch; topics: {', '.join(sorted(reg['topics']))}")

@@ -22,7 +22,19 @@ MISSING_WARN = 0.1
 
 
 def read_stats(run_dir: Path) -> dict[str, NodeStats]:
-    """Node name -> its last :class:`NodeStats`, for every node that wrote one in ``run_dir``."""
+    """Every node's last :class:`NodeStats`, for every node that wrote one in ``run_dir``.
+
+    Parameters
+    ----------
+    run_dir : Path
+        The launch's run directory.
+
+    Returns
+    -------
+    dict of str to NodeStats
+        Node name -> its last statistics; an unreadable file gives empty statistics whose
+        ``decode_errors`` say why.
+    """
     out: dict[str, NodeStats] = {}
     for path in sorted(stats_dir(run_dir).glob("*.json")):
         try:
@@ -37,7 +49,19 @@ def read_stats(run_dir: Path) -> dict[str, NodeStats]:
 
 @dataclass(frozen=True)
 class PortLoad:
-    """One input of a node: messages it handled of those offered to it (handled + dropped)."""
+    """One input of a node: messages it handled of those offered to it (handled + dropped).
+
+    Parameters
+    ----------
+    node : str
+        The node's name.
+    port : str
+        The input port.
+    handled : int
+        Messages the node handled on the port.
+    offered : int
+        Messages offered to it (handled + dropped).
+    """
 
     node: str
     port: str
@@ -47,7 +71,29 @@ class PortLoad:
 
 @dataclass(frozen=True)
 class RunSummary:
-    """The figures of one run. Shares are in [0, 1]; frame rates in frames per second (0: unknown)."""
+    """The figures of one run. Shares are in [0, 1]; frame rates in frames per second (0: unknown).
+
+    Parameters
+    ----------
+    frames_in : int, default=0
+        Frames the camera gave.
+    frames_with_people : int, default=0
+        Frames in which the silhouette node found people.
+    frames_out : int, default=0
+        Frames the renderer wrote.
+    partner_drawn : int, default=0
+        Output frames with a partner drawn.
+    frames_out_after_1s : int, default=0
+        Output frames after the first second of the stream.
+    partner_drawn_after_1s : int, default=0
+        Of those, the frames with a partner drawn.
+    fps_in : float, default=0.0
+        Frame rate of the source, frames per second.
+    fps_out : float, default=0.0
+        Frame rate of the output video, frames per second.
+    loads : list of PortLoad
+        The load of each node's clock input (:data:`CLOCK_PORTS`).
+    """
 
     frames_in: int = 0
     frames_with_people: int = 0
@@ -72,6 +118,13 @@ class RunSummary:
         return self.partner_drawn_after_1s / self.frames_out_after_1s if self.frames_out_after_1s else 0.0
 
     def to_json(self) -> dict[str, Any]:
+        """The figures as a JSON-ready dict (the shares rounded to 4 places, loads under ``handled``).
+
+        Returns
+        -------
+        dict of str to object
+            The figures by name.
+        """
         return {
             "frames_in": self.frames_in,
             "frames_with_people": self.frames_with_people,
@@ -85,7 +138,13 @@ class RunSummary:
         }
 
     def problem(self) -> str | None:
-        """Why the run failed its purpose (no partner at all), or None."""
+        """Why the run failed its purpose (no partner at all), or None.
+
+        Returns
+        -------
+        str or None
+            The reason, or None when a partner was drawn at least once.
+        """
         if self.frames_in == 0:
             return "the input gave no frames"
         if self.frames_out == 0:
@@ -100,7 +159,14 @@ class RunSummary:
         return None
 
     def warnings(self) -> list[str]:
-        """Lines a person should read: a partner missing on many frames, nodes that did not keep up."""
+        """Lines a person should read: a partner missing on many frames, nodes that did not keep up.
+
+        Returns
+        -------
+        list of str
+            One line per warning: the partner missing on more than :data:`MISSING_WARN` of the output
+            frames, and each input that handled fewer messages than it was offered.
+        """
         out = []
         missing = self.frames_out - self.partner_drawn
         if self.frames_out and missing > MISSING_WARN * self.frames_out:
@@ -118,7 +184,13 @@ class RunSummary:
         return out
 
     def lines(self) -> list[str]:
-        """The summary as a person reads it."""
+        """The summary as a person reads it.
+
+        Returns
+        -------
+        list of str
+            The lines of the summary.
+        """
         return [
             f"frames in:          {self.frames_in}" + (f" at {self.fps_in:.3g} fps" if self.fps_in else ""),
             f"frames with people: {self.frames_with_people}",
@@ -141,7 +213,24 @@ CLOCK_PORTS = {
 def summarise(
     stats: dict[str, NodeStats], camera: str = "camera", silhouette: str = "silhouette", renderer: str = "renderer"
 ) -> RunSummary:
-    """The run's figures from the nodes' last statistics (nodes named as in the demo's graphs)."""
+    """The run's figures from the nodes' last statistics (nodes named as in the demo's graphs).
+
+    Parameters
+    ----------
+    stats : dict of str to NodeStats
+        Every node's last statistics, as :func:`read_stats` returns them.
+    camera : str, default="camera"
+        The name of the camera node.
+    silhouette : str, default="silhouette"
+        The name of the silhouette node.
+    renderer : str, default="renderer"
+        The name of the renderer node.
+
+    Returns
+    -------
+    RunSummary
+        The figures; those of a node missing from ``stats`` are 0.
+    """
 
     def fig(node: str, name: str) -> float:
         st = stats.get(node)
@@ -169,7 +258,18 @@ def summarise(
 
 
 def stats_table(stats: dict[str, NodeStats]) -> str:
-    """A plain-text table: per node, messages in/out, rates, drops, latency and handler time."""
+    """A plain-text table: per node, messages in/out, rates, drops, latency and handler time.
+
+    Parameters
+    ----------
+    stats : dict of str to NodeStats
+        Every node's last statistics.
+
+    Returns
+    -------
+    str
+        The table, a header line then one line per node in name order.
+    """
     rows = [
         f"{'node':12s} {'in':>7s} {'out':>7s} {'in Hz':>7s} {'drops':>6s} {'lat ms':>7s} {'proc ms':>8s} {'bad':>4s}"
     ]
@@ -187,6 +287,18 @@ def stats_table(stats: dict[str, NodeStats]) -> str:
 
 
 def stats_json(stats: dict[str, NodeStats]) -> dict[str, Any]:
+    """Every node's statistics as JSON-ready dicts.
+
+    Parameters
+    ----------
+    stats : dict of str to NodeStats
+        Every node's last statistics.
+
+    Returns
+    -------
+    dict of str to dict
+        Node name -> its statistics (``counterpart.bus.cli_introspect.summarise``).
+    """
     from .cli_introspect import summarise as as_json
 
     return {name: as_json(st) for name, st in stats.items()}

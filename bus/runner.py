@@ -31,6 +31,17 @@ def moved_module(module_name: str) -> str | None:
 
     ``nodes.tracker`` is ``counterpart.nodes.tracker`` now; importing the old name from a source
     checkout would load a second copy of the project whose message classes are not the bus's.
+
+    Parameters
+    ----------
+    module_name : str
+        A module path, optionally ``module:Class``.
+
+    Returns
+    -------
+    str or None
+        ``counterpart.`` + ``module_name`` when its first part is an old top-level name and the new
+        module exists, else None.
     """
     mod_name = module_name.partition(":")[0]
     if mod_name.split(".")[0] not in _OLD_TOP_LEVEL:
@@ -48,6 +59,22 @@ def find_node_class(module_name: str) -> type[Node]:
 
     A module names its node with ``NODE = TheClass``, or defines exactly one Node subclass.
     A ``module:Class`` form picks a class explicitly.
+
+    Parameters
+    ----------
+    module_name : str
+        The ``run:`` module, ``module`` or ``module:Class``.
+
+    Returns
+    -------
+    type of Node
+        The node class.
+
+    Raises
+    ------
+    NodeLookupError
+        The module has an old top-level path, fails to import, does not exist, holds no (or not the
+        named) Node class, or defines several without ``NODE``.
     """
     new = moved_module(module_name)
     if new is not None:
@@ -92,6 +119,13 @@ def find_node_class(module_name: str) -> type[Node]:
 def setup_logging(name: str) -> None:
     """Log lines on stderr, prefixed with the time and ``name``; a line that repeats is rate-limited
     (:class:`counterpart.bus.logs.RepeatFilter`: a few per kind and 10 s, then a count).
+
+    The level comes from the ``COUNTERPART_LOG`` environment variable (default ``INFO``).
+
+    Parameters
+    ----------
+    name : str
+        The node's name, in every line's prefix.
     """
     level = os.environ.get("COUNTERPART_LOG", "INFO").upper()
     logging.basicConfig(
@@ -108,8 +142,18 @@ def setup_logging(name: str) -> None:
 
 
 def run_spec(spec: dict[str, Any]) -> int:
-    """Run a node from a launcher spec. Exit code: 0 after a clean end, 2 for bad parameters,
-    1 for an exception.
+    """Run a node from a launcher spec.
+
+    Parameters
+    ----------
+    spec : dict of str to object
+        The launcher's spec of the node (``name``, ``module``, parameters, ports).
+
+    Returns
+    -------
+    int
+        Exit code: the node's own after a clean end (0), 2 for bad parameters or a node class not
+        found, 1 for an exception, 130 when interrupted.
     """
     setup_logging(spec["name"])
     log = logging.getLogger(spec["name"])
@@ -129,7 +173,20 @@ def run_spec(spec: dict[str, Any]) -> int:
 
 
 def run_standalone(cls: type[Node] | str, argv: list[str] | None = None) -> int:
-    """``counterpart run MODULE --param k=v --remap port=topic --policy port=latest``."""
+    """``counterpart run MODULE --param k=v --remap port=topic --policy port=latest``.
+
+    Parameters
+    ----------
+    cls : type of Node or str
+        The node class, or its module path (``module`` or ``module:Class``).
+    argv : list of str or None, default=None
+        The command line's options; ``None`` for ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        Exit code: 2 for bad options or parameters, else as :func:`run_spec`.
+    """
     ap = argparse.ArgumentParser(prog="counterpart run", description="Run one node alone.")
     if isinstance(cls, str):
         module = cls

@@ -11,10 +11,28 @@ from .core import EMPTY, message, struct
 class PersonShape:
     """One person's silhouette in image pixels.
 
-    ``ctrl`` (n, 2) float32: control points of the closed uniform cubic B-spline of the boundary,
-    starting at the reference point at the top of the head; ``ref_point`` (2,) float32; ``centroid``
-    (2,) float32; ``bbox`` (x, y, w, h); ``height`` in pixels; ``merged`` when the region was shared
-    with another person in this frame (split by the previous shapes).
+    Attributes
+    ----------
+    id : int
+        The person's id.
+    side : str
+        The person's side of the frame (``"left"`` by default).
+    ctrl : ndarray of shape (n, 2), dtype float32
+        Control points of the closed uniform cubic B-spline of the boundary, starting at the
+        reference point at the top of the head, pixels.
+    ref_point : ndarray of shape (2,), dtype float32
+        The reference point, pixels.
+    centroid : ndarray of shape (2,), dtype float32
+        The region's centroid, pixels.
+    bbox : tuple of int
+        Bounding box ``(x, y, w, h)``, pixels.
+    height : float
+        Height in pixels.
+    area : int
+        Area, pixels.
+    merged : bool
+        True when the region was shared with another person in this frame (split by the previous
+        shapes).
     """
 
     id: int = 0
@@ -30,8 +48,18 @@ class PersonShape:
 
 @message("silhouette.Silhouettes", 1)
 class Silhouettes:
-    """The people of one frame. ``labels`` (H, W) uint8: 0 background, id + 1 per person (empty
-    when the node thins the mask out); ``width``/``height`` are the frame's size.
+    """The people of one frame.
+
+    Attributes
+    ----------
+    people : list of PersonShape
+        The people seen in the frame.
+    labels : ndarray of shape (H, W), dtype uint8
+        0 background, id + 1 per person; empty when the node thins the mask out.
+    width : int
+        The frame's width, pixels.
+    height : int
+        The frame's height, pixels.
     """
 
     people: list[PersonShape] = ()

@@ -43,7 +43,21 @@ _CHUNK = 32
 
 @dataclass(frozen=True)
 class Lighting:
-    """Light direction (unit, from the light towards the scene), gain drift and shadow strength."""
+    """Light direction, gain drift and shadow strength.
+
+    Parameters
+    ----------
+    direction : tuple of float
+        Unit vector (x, y, z) from the light towards the scene, world frame.
+    gain_amp : float
+        Amplitude a of the global gain's drift.
+    gain_period_s : float
+        Period of the drift, seconds.
+    gain_phase : float
+        Phase phi of the drift, radians.
+    shadow_factor : float
+        Factor applied to floor pixels in shadow (the same for all channels).
+    """
 
     direction: tuple[float, float, float]
     gain_amp: float
@@ -52,10 +66,34 @@ class Lighting:
     shadow_factor: float
 
     def gain(self, t: float) -> float:
+        """The global gain g(t) = 1 + a sin(2 pi t / period + phi).
+
+        Parameters
+        ----------
+        t : float
+            Scene time, seconds.
+
+        Returns
+        -------
+        float
+            The gain.
+        """
         return 1.0 + self.gain_amp * float(np.sin(2 * np.pi * t / self.gain_period_s + self.gain_phase))
 
 
 def random_lighting(rng: np.random.Generator) -> Lighting:
+    """A lighting drawn from ``rng``: the light shines down, towards -z, tilted sideways in x.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The random source.
+
+    Returns
+    -------
+    Lighting
+        Gain amplitude in [0.02, 0.04], period 15-40 s, shadow factor 0.55-0.7.
+    """
     d = np.array([rng.uniform(0.2, 0.5) * rng.choice([-1, 1]), -1.0, -rng.uniform(0.3, 0.6)])
     d /= np.linalg.norm(d)
     return Lighting(
@@ -77,10 +115,21 @@ def _noise_texture(rng: np.random.Generator, n: int, blur: float) -> np.ndarray:
 def make_background(camera: Camera, rng: np.random.Generator, wall_z: float = -2.5) -> tuple[np.ndarray, np.ndarray]:
     """Procedural room seen by ``camera``.
 
+    Parameters
+    ----------
+    camera : Camera
+        The camera.
+    rng : numpy.random.Generator
+        The random source of the room's colours and textures.
+    wall_z : float, default=-2.5
+        z of the wall plane, metres, world frame.
+
     Returns
     -------
-        bg: (H, W, 3) float32 BGR in [35, 235].
-        floor: (H, W) bool, pixels that see the floor (where shadows can fall).
+    bg : ndarray of shape (H, W, 3), dtype float32
+        The room, BGR in [35, 235].
+    floor : ndarray of shape (H, W), dtype bool
+        Pixels that see the floor (where shadows can fall).
     """
     H, W = camera.height, camera.width
     v, u = np.mgrid[0:H, 0:W].astype(np.float64)
@@ -136,14 +185,22 @@ class FrameTruth:
 
     Attributes
     ----------
-        joints3d: (2, 14, 3) metres, A then B.
-        joints2d: (2, 14, 2) pixels (u, v).
-        masks: (2, H, W) bool, visible pixels of A and B.
-        shadow: (H, W) bool, cast-shadow pixels on the floor not covered by a person.
-        signals: (2, K) int8 social signals (``Scenario.signal_names``).
-        phase: phase code (``counterpart.sim.scenarios.PHASES``).
-        label: interaction label.
-        time_s: scene time, seconds.
+    joints3d : ndarray of shape (2, 14, 3)
+        Joints, metres, world frame, A then B.
+    joints2d : ndarray of shape (2, 14, 2)
+        Projected joints, pixels (u, v).
+    masks : ndarray of shape (2, H, W), dtype bool
+        Visible pixels of A and B.
+    shadow : ndarray of shape (H, W), dtype bool
+        Cast-shadow pixels on the floor not covered by a person.
+    signals : ndarray of shape (2, K), dtype int8
+        Social signals (``Scenario.signal_names``).
+    phase : int
+        Phase code (``counterpart.sim.scenarios.PHASES``).
+    label : str
+        Interaction label.
+    time_s : float
+        Scene time, seconds.
     """
 
     joints3d: np.ndarray
@@ -159,12 +216,25 @@ class FrameTruth:
 class Renderer:
     """Renders one scenario; every frame is a pure function of (scenario, seed, frame index).
 
-    Args:
-        scenario: the motion.
-        camera: the camera (default ``counterpart.body.camera.default_camera(width, height)``).
-        seed: seeds the room, lighting, clothing and sensor noise.
-        noise_sigma: sensor noise standard deviation, grey levels.
-        appearances: the two people's looks (default: drawn from ``seed``).
+    Parameters
+    ----------
+    scenario : Scenario
+        The motion.
+    camera : Camera or None, default=None
+        The camera; None for ``counterpart.body.camera.default_camera(width, height)``.
+    seed : int, default=0
+        Seeds the room, lighting, clothing and sensor noise.
+    noise_sigma : float, default=2.0
+        Sensor noise standard deviation, grey levels.
+    appearances : tuple of (Appearance, Appearance) or None, default=None
+        The two people's looks; None draws them from ``seed``.
+    width, height : int, default=320, 240
+        Frame size of the default camera, pixels (unused with ``camera``).
+
+    Raises
+    ------
+    ValueError
+        A negative ``noise_sigma``, or more than 254 body parts in all.
     """
 
     def __init__(
@@ -211,10 +281,12 @@ class Renderer:
 
     @property
     def n_frames(self) -> int:
+        """Number of frames of the scenario."""
         return self.scenario.n_frames
 
     @property
     def size(self) -> tuple[int, int]:
+        """(width, height) of the frames, pixels."""
         return (self.camera.width, self.camera.height)
 
     # -- geometry, chunk by chunk ------------------------------------------------------------
@@ -265,6 +337,18 @@ class Renderer:
 
     # -- frames -------------------------------------------------------------------------------
     def time(self, i: int) -> float:
+        """Scene time of frame ``i``, seconds.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+
+        Returns
+        -------
+        float
+            ``i / fps``.
+        """
         return i / self.scenario.fps
 
     def _check(self, i: int) -> int:
@@ -276,12 +360,48 @@ class Renderer:
         return i
 
     def background(self, i: int) -> np.ndarray:
-        """(H, W, 3) uint8: the room at frame ``i``'s lighting, no people, no shadows, no noise."""
+        """The room at frame ``i``'s lighting, no people, no shadows, no noise.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+
+        Returns
+        -------
+        ndarray of shape (H, W, 3), dtype uint8
+            The background, BGR.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
+        """
         i = self._check(i)
         return np.clip(np.rint(self.bg * self.lighting.gain(self.time(i))), 0, 255).astype(np.uint8)
 
     def render(self, i: int, noise: bool = True) -> tuple[np.ndarray, FrameTruth]:
-        """Frame ``i``: (H, W, 3) uint8 BGR image and its ground truth."""
+        """Frame ``i`` and its ground truth.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+        noise : bool, default=True
+            Whether to add the sensor noise.
+
+        Returns
+        -------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            The image, BGR.
+        truth : FrameTruth
+            Its ground truth.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
+        """
         i = self._check(i)
         ids, cover, shade = self._draw(i)
         g = self.lighting.gain(self.time(i))

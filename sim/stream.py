@@ -57,12 +57,34 @@ def _parse_options(kw: dict[str, Any]) -> dict[str, Any]:
 class SimStream:
     """A rendered scenario, frame by frame (see the module docstring).
 
+    Parameters
+    ----------
+    scenario : Scenario
+        The motion and labels.
+    camera : Camera
+        The camera.
+    seed : int, default=0
+        Seeds the renderer (room, lighting, clothing and sensor noise).
+    noise_sigma : float, default=2.0
+        Sensor noise sigma, grey levels.
+    n_frames : int or None, default=None
+        Cap on the frame count; ``None`` for the whole scenario.
+
     Attributes
     ----------
-        scenario: the motion and labels.
-        renderer: the ``counterpart.sim.render.Renderer``.
-        camera: the camera.
-        n_frames, fps, size ((width, height) pixels).
+    scenario : Scenario
+        The motion and labels (cropped to ``n_frames``).
+    renderer : Renderer
+        The ``counterpart.sim.render.Renderer``.
+    camera : Camera
+        The camera.
+    seed : int
+        Seed of the renderer.
+
+    Raises
+    ------
+    ValueError
+        ``n_frames`` is below 1.
     """
 
     def __init__(
@@ -79,33 +101,109 @@ class SimStream:
 
     @property
     def n_frames(self) -> int:
+        """Number of frames."""
         return self.scenario.n_frames
 
     @property
     def fps(self) -> float:
+        """Frames per second."""
         return float(self.scenario.fps)
 
     @property
     def size(self) -> tuple[int, int]:
+        """(width, height) of the frames, pixels."""
         return (self.camera.width, self.camera.height)
 
     def render(self, i: int) -> tuple[np.ndarray, float]:
-        """Frame ``i``: ((H, W, 3) uint8 BGR, scene time in seconds)."""
+        """Frame ``i`` with sensor noise.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+
+        Returns
+        -------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            The image, BGR.
+        time_s : float
+            Scene time, seconds.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
+        """
         frame, truth = self.renderer.render(i)
         return frame, truth.time_s
 
     def render_with_truth(self, i: int, noise: bool = True) -> tuple[np.ndarray, FrameTruth]:
+        """Frame ``i`` and its ground truth.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+        noise : bool, default=True
+            Whether to add sensor noise.
+
+        Returns
+        -------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            The image, BGR.
+        truth : FrameTruth
+            Its ground truth.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
+        """
         return self.renderer.render(i, noise=noise)
 
     def truth(self, i: int) -> FrameTruth:
-        """Ground truth of frame ``i`` (renders it: the masks come from the drawing)."""
+        """Ground truth of frame ``i`` (renders it: the masks come from the drawing).
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+
+        Returns
+        -------
+        FrameTruth
+            Joints, masks, shadow and labels of the frame.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
+        """
         return self.renderer.render(i, noise=False)[1]
 
     def background(self, i: int) -> np.ndarray:
+        """The room at frame ``i``'s lighting, no people, no shadows, no noise.
+
+        Parameters
+        ----------
+        i : int
+            Frame index.
+
+        Returns
+        -------
+        ndarray of shape (H, W, 3), dtype uint8
+            The background, BGR.
+
+        Raises
+        ------
+        IndexError
+            ``i`` is outside the scenario's frames.
+        """
         return self.renderer.background(i)
 
     @property
     def trajectory(self) -> TwoPersonTrajectory:
+        """The two people's motion of the scenario."""
         return self.scenario.to_trajectory()
 
     def close(self) -> None:
@@ -120,9 +218,30 @@ def open_stream(
     fps: float | None = 25.0,
     **kw: Any,
 ) -> SimStream:
-    """Open a simulated scene. ``width``/``height``/``fps`` of None mean 320/240/25.
+    """Open a simulated scene.
 
-    Raises ValueError for an unknown scenario or option (the message lists the known ones).
+    Parameters
+    ----------
+    scenario : str, default="handshake"
+        The scenario's name.
+    seed : int, default=0
+        Seed of the scenario, the renderer and a random camera.
+    width, height : int or None, default=320, 240
+        Frame size, pixels; ``None`` means 320 / 240.
+    fps : float or None, default=25.0
+        Frames per second; ``None`` means 25.
+    **kw : object
+        The options of the module docstring (strings accepted as they come from a URI query).
+
+    Returns
+    -------
+    SimStream
+        The stream.
+
+    Raises
+    ------
+    ValueError
+        An unknown scenario or option, or a bad option value (the message lists the known ones).
     """
     opts = _parse_options(kw)
     width = int(width or 320)
@@ -144,5 +263,11 @@ def open_stream(
 
 
 def default_sequence() -> SimStream:
-    """The demo: handshake, seed 0, 320x240 at 25 fps."""
+    """The demo: handshake, seed 0, 320x240 at 25 fps.
+
+    Returns
+    -------
+    SimStream
+        The stream.
+    """
     return open_stream("handshake", seed=0)

@@ -64,13 +64,27 @@ BODY_FACES = 1.5
 class PersonObservation:
     """What is known about one person on one frame; any field may be None.
 
-    joints: (14,3) metres, project joint order, world Y up (tracker). head_yaw / head_pitch: head
-    yaw (rad, positive to the person's left) and pitch (rad, positive chin down) relative to the
-    torso, the ``head_turn`` / ``head_nod`` of the tracker's pose vector when it publishes one (see
-    :mod:`counterpart.nodes.labeller.head_motion`: they replace the head point for shakes / nods). head_px: silhouette
-    head reference point (2,) px; ref_px: body reference point (2,) px, e.g. the silhouette
-    centroid; height_px: silhouette height (px); control_points: (32,2) px spline from the top of
-    the head; box: (x, y, w, h) px region of the person in the image (face search region).
+    Parameters
+    ----------
+    joints : ndarray of shape (14, 3) or None
+        Joints, metres, project joint order, world frame Y up (tracker).
+    head_yaw : float or None
+        Head yaw relative to the torso, radians, positive to the person's left: the ``head_turn``
+        of the tracker's pose vector when it publishes one (see
+        :mod:`counterpart.nodes.labeller.head_motion`: it replaces the head point for shakes).
+    head_pitch : float or None
+        Head pitch relative to the torso, radians, positive chin down: the tracker's ``head_nod``
+        (it replaces the head point for nods).
+    head_px : ndarray of shape (2,) or None
+        Silhouette head reference point, pixels.
+    ref_px : ndarray of shape (2,) or None
+        Body reference point, pixels, e.g. the silhouette centroid.
+    height_px : float or None
+        Silhouette height, pixels.
+    control_points : ndarray of shape (32, 2) or None
+        Silhouette spline from the top of the head, pixels.
+    box : tuple of int or None
+        (x, y, w, h) region of the person in the image, pixels (face search region).
     """
 
     joints: np.ndarray | None = None
@@ -83,9 +97,11 @@ class PersonObservation:
     box: Box | None = None
 
     def has_3d(self) -> bool:
+        """Whether the joints are given and all finite."""
         return self.joints is not None and bool(np.isfinite(self.joints).all())
 
     def has_2d_head(self) -> bool:
+        """Whether the 2D head point, reference point and a positive height are given."""
         return (
             self.head_px is not None and self.ref_px is not None and self.height_px is not None and self.height_px > 0
         )
@@ -114,17 +130,36 @@ class _PersonState:
 class SocialLabeller:
     """Streaming labeller for any number of people.
 
-    fps: frame rate (Hz). head_window_s: FFT window of nod/shake (s). gaze_threshold: largest
-    angle (rad) between gaze and the direction to the other still counted as "at the other".
-    head_params / activity_params / face_params / track_params: extra keyword parameters of
-    :class:`~counterpart.nodes.labeller.head_motion.HeadMotionParams`, :class:`~counterpart.nodes.labeller.activity.ActivityDetector`,
-    :class:`~counterpart.nodes.labeller.face.FaceParams` and :class:`~counterpart.nodes.labeller.face_track.FaceTrackParams`.
-
     ``update(people, image=None, targets=None)`` -> ``{person_id: {signal: (score, label)}}`` with
-    every signal of :data:`SIGNALS`; after it, :attr:`sources` says per person which input gave
-    nod/shake (``face``, ``3d``, ``2d``, ``""`` for none), :attr:`faces` holds the face tracked
-    for each person that has one, and :attr:`absorbed` the ids of given people that were parts of
-    a face's person.
+    every signal of :data:`SIGNALS`.
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate, Hz.
+    head_window_s : float, default=1.6
+        FFT window of nod/shake, seconds.
+    gaze_threshold : float, default=radians(30)
+        Largest angle (radians) between gaze and the direction to the other still counted as
+        "at the other".
+    head_params : mapping of str to object or None, default=None
+        Extra keyword parameters of :class:`~counterpart.nodes.labeller.head_motion.HeadMotionParams`.
+    activity_params : mapping of str to object or None, default=None
+        Extra keyword parameters of :class:`~counterpart.nodes.labeller.activity.ActivityDetector`.
+    face_params : mapping of str to object or None, default=None
+        Extra keyword parameters of :class:`~counterpart.nodes.labeller.face.FaceParams`.
+    track_params : mapping of str to object or None, default=None
+        Extra keyword parameters of :class:`~counterpart.nodes.labeller.face_track.FaceTrackParams`.
+
+    Attributes
+    ----------
+    sources : dict of Hashable to str
+        After :meth:`update`, per person which input gave nod/shake (``face``, ``3d``, ``2d``,
+        ``""`` for none).
+    faces : dict of Hashable to FaceTrack
+        The face tracked for each person that has one.
+    absorbed : list of Hashable
+        The ids of given people that were parts of a face's person.
     """
 
     def __init__(
@@ -175,6 +210,16 @@ class SocialLabeller:
     def skip(self, n_frames: int = 1) -> None:
         """``n_frames`` frames are missing from the stream (dropped upstream): every person's
         windows restart at the next :meth:`update`, so that no window spans the gap.
+
+        Parameters
+        ----------
+        n_frames : int, default=1
+            Frames missing, >= 0.
+
+        Raises
+        ------
+        ValueError
+            A negative ``n_frames``.
         """
         if n_frames < 0:
             raise ValueError(f"n_frames must be >= 0, got {n_frames}")
@@ -199,9 +244,21 @@ class SocialLabeller:
     ) -> dict[Hashable, Labels]:
         """Label one frame.
 
-        people: person id -> :class:`PersonObservation`. image: the camera frame (uint8 gray or
-        BGR) for talking/laughing, or None. targets: person id -> (3,) world point the person's gaze
-        is judged against (e.g. the virtual partner); by default the nearest other person's head.
+        Parameters
+        ----------
+        people : mapping of Hashable to PersonObservation
+            Person id -> what is known about the person.
+        image : ndarray of shape (H, W) or (H, W, 3), dtype uint8, or None, default=None
+            The camera frame (gray or BGR) for talking/laughing, or None.
+        targets : mapping of Hashable to ndarray of shape (3,), or None, default=None
+            Person id -> the world point (metres) the person's gaze is judged against (e.g. the
+            virtual partner); by default the nearest other person's head.
+
+        Returns
+        -------
+        dict of Hashable to dict of str to (float, int)
+            Person id -> signal -> (score, label) for every signal of :data:`SIGNALS`; the people
+            are the given ones less those absorbed, plus faces of their own.
         """
         gray = None
         tracks: list[FaceTrack] = []
@@ -344,10 +401,32 @@ def label_pair_3d(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Offline batch labels of two tracked people looking at each other (vectorised over frames).
 
-    joints_a, joints_b: (T,14,3) metres. head_yaw_a/b, head_pitch_a/b: (T,) head angles relative to
-    the torso (rad) from the tracker's pose, or None. center: centred nod/shake windows (better timing offline;
-    activity windows stay causal). Returns (scores_a, labels_a, scores_b, labels_b), each (T, 6) in
-    :data:`SIGNALS` order; talking/laughing are UNKNOWN (no images).
+    Parameters
+    ----------
+    joints_a, joints_b : ndarray of shape (T, 14, 3)
+        The two people's joints, metres, world frame.
+    fps : float
+        Frame rate, Hz.
+    center : bool, default=True
+        Centred nod/shake windows (better timing offline; activity windows stay causal).
+    head_window_s : float, default=1.6
+        FFT window of nod/shake, seconds.
+    gaze_threshold : float, default=radians(30)
+        Largest angle (radians) between gaze and the direction to the other still counted as
+        "at the other".
+    head_yaw_a, head_yaw_b, head_pitch_a, head_pitch_b : ndarray of shape (T,) or None, default=None
+        Head angles relative to the torso, radians, from the tracker's pose, or None.
+
+    Returns
+    -------
+    scores_a, labels_a, scores_b, labels_b : ndarray of shape (T, 6)
+        Scores (float) and labels (int8) per frame in :data:`SIGNALS` order; talking/laughing are
+        UNKNOWN (no images).
+
+    Raises
+    ------
+    ValueError
+        ``joints_a`` is not of shape (T, 14, 3) or ``joints_b`` differs in shape.
     """
     ja = np.asarray(joints_a, dtype=np.float64)
     jb = np.asarray(joints_b, dtype=np.float64)

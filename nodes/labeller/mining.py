@@ -56,8 +56,24 @@ def _as_json(rule: Any) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class Rule:
-    """One association rule ``antecedent -> consequent``; items are "S:<signal>" / "L:<signal>",
-    sorted. Supports are fractions of transactions.
+    """One association rule ``antecedent -> consequent``.
+
+    Parameters
+    ----------
+    antecedent : tuple of str
+        Speaker items "S:<signal>", sorted.
+    consequent : tuple of str
+        Listener items "L:<signal>", sorted.
+    support : float
+        P(A and C), fraction of transactions.
+    confidence : float
+        P(C | A).
+    lift : float
+        confidence / P(C).
+    antecedent_support : float
+        P(A), fraction of transactions.
+    consequent_support : float
+        P(C), fraction of transactions.
     """
 
     antecedent: tuple[str, ...]
@@ -70,6 +86,7 @@ class Rule:
 
     @property
     def key(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """(antecedent, consequent): the rule whatever its figures."""
         return self.antecedent, self.consequent
 
     def __str__(self) -> str:
@@ -79,10 +96,29 @@ class Rule:
         )
 
     def to_dict(self) -> dict[str, Any]:
+        """The rule as a JSON-able dict (item tuples as lists).
+
+        Returns
+        -------
+        dict of str to object
+            Every field by name.
+        """
         return _as_json(self)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Rule:
+        """The inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : mapping of str to object
+            Every field by name.
+
+        Returns
+        -------
+        Rule
+            The rule.
+        """
         return cls(
             antecedent=tuple(d["antecedent"]),
             consequent=tuple(d["consequent"]),
@@ -112,12 +148,37 @@ def build_transactions(
 ) -> pd.DataFrame:
     """One-hot transactions (rows: speaker frames; columns "S:<name>" then "L:<name>"), bool.
 
-    speaker_labels: (T,K) bool (or 1/0/UNKNOWN int). listener_labels: (T,K') of the same recording
-    (same clock). names: the K speaker signal names (also the listener's unless listener_names).
-    offset: s, frames (>= 0). bag: b, frames (>= 0). See the module docstring for the bagging.
-    speaker_mask: optional (T,) bool: keep only the frames ``t`` where it is True, e.g. the frames
-    where this person holds the turn in a conversation whose speaker and listener swap roles
-    (:func:`turn_transactions`); the listener's bag may still reach past the mask.
+    See the module docstring for the bagging.
+
+    Parameters
+    ----------
+    speaker_labels : ndarray of shape (T, K)
+        The speaker's labels, bool (or 1/0/UNKNOWN int).
+    listener_labels : ndarray of shape (T, K')
+        The listener's labels of the same recording (same clock).
+    names : sequence of str, length K
+        The speaker signal names (also the listener's unless ``listener_names``).
+    offset : int, default=10
+        s, frames (>= 0).
+    bag : int, default=0
+        b, frames (>= 0).
+    listener_names : sequence of str or None, default=None
+        The K' listener signal names; None for ``names``.
+    speaker_mask : ndarray of shape (T,), dtype bool, or None, default=None
+        Keep only the frames ``t`` where it is True, e.g. the frames where this person holds the
+        turn in a conversation whose speaker and listener swap roles (:func:`turn_transactions`);
+        the listener's bag may still reach past the mask.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One bool row per kept speaker frame, columns "S:<name>" then "L:<name>".
+
+    Raises
+    ------
+    ValueError
+        Labels not 2D, streams of different lengths, names that do not match the columns or are not
+        unique, a negative offset or bag, or a mask of the wrong shape.
     """
     sp = _as_bool(speaker_labels, "speaker_labels")
     li = _as_bool(listener_labels, "listener_labels")
@@ -168,9 +229,28 @@ def turn_transactions(
     """Transactions of a two-person conversation whose people take turns: each person is the
     speaker on the frames where their ``talking`` label is 1 and the other is the listener there.
 
-    labels_a, labels_b: (T,K) labels of the two people (bool or 1/0/UNKNOWN); names: the K signal
-    names, which must include ``talking``. Returns the rows of both roles, pooled
-    (:func:`build_transactions` with ``speaker_mask``).
+    Parameters
+    ----------
+    labels_a, labels_b : ndarray of shape (T, K)
+        Labels of the two people (bool or 1/0/UNKNOWN).
+    names : sequence of str, length K
+        The signal names, which must include ``talking``.
+    talking : str, default="talking"
+        The signal that tells the speaker.
+    offset : int, default=10
+        s, frames (>= 0).
+    bag : int, default=0
+        b, frames (>= 0).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows of both roles, pooled (:func:`build_transactions` with ``speaker_mask``).
+
+    Raises
+    ------
+    ValueError
+        ``talking`` is not among ``names``, or as :func:`build_transactions`.
     """
     names = list(names)
     if talking not in names:
@@ -197,7 +277,19 @@ def _association_rules(freq: pd.DataFrame, n_transactions: int, min_confidence: 
 
 
 def rules_from_frame(rules: pd.DataFrame) -> list[Rule]:
-    """Keep speaker -> listener rules of an mlxtend rules table; sorted by confidence, support."""
+    """Keep speaker -> listener rules of an mlxtend rules table; sorted by confidence, support.
+
+    Parameters
+    ----------
+    rules : pandas.DataFrame
+        mlxtend's ``association_rules`` table (antecedents, consequents, supports, confidence, lift).
+
+    Returns
+    -------
+    list of Rule
+        The rules whose antecedent is all speaker items and consequent all listener items, by
+        confidence then support, largest first.
+    """
     out = []
     for a, c, sup, conf, lift, asup, csup in zip(
         rules["antecedents"],
@@ -230,6 +322,31 @@ def mine_transactions(
     the default because it is also the faster apriori on long, sparse transaction tables (measured
     0.16 s against 2.9 s on 45,000 x 54 items at min_support 0.005, mlxtend 0.25). Returns the
     speaker -> listener rules with ``support >= min_support`` and ``confidence >= min_confidence``.
+
+    Parameters
+    ----------
+    transactions : pandas.DataFrame
+        One-hot bool transactions, rows x items ("S:<name>", "L:<name>").
+    min_support : float, default=0.01
+        Least support of a rule, in (0, 1].
+    min_confidence : float, default=0.1
+        Least confidence of a rule, in [0, 1].
+    max_len : int or None, default=4
+        Most items in an itemset; None for no limit.
+    algorithm : {"apriori", "fpgrowth"}, default="apriori"
+        The frequent-itemset algorithm.
+    low_memory : bool, default=True
+        mlxtend apriori's ``low_memory`` (unused by FP-growth).
+
+    Returns
+    -------
+    list of Rule
+        The rules, as :func:`rules_from_frame` sorts them; empty when nothing is frequent.
+
+    Raises
+    ------
+    ValueError
+        ``min_support`` or ``min_confidence`` out of range, or an unknown algorithm.
     """
     if not 0 < min_support <= 1 or not 0 <= min_confidence <= 1:
         raise ValueError(
@@ -265,8 +382,36 @@ def mine_rules(
 ) -> list[Rule]:
     """Rules speaker signals -> listener response ``offset`` frames later, for one recording.
 
-    speaker_labels, listener_labels: (T,K) bool (or 1/0/UNKNOWN); names: K signal names.
     See :func:`build_transactions` and :func:`mine_transactions`.
+
+    Parameters
+    ----------
+    speaker_labels, listener_labels : ndarray of shape (T, K)
+        Labels of the speaker and the listener, bool (or 1/0/UNKNOWN).
+    names : sequence of str, length K
+        The signal names.
+    offset : int, default=10
+        s, frames (>= 0).
+    min_support : float, default=0.01
+        Least support of a rule, in (0, 1].
+    min_confidence : float, default=0.1
+        Least confidence of a rule, in [0, 1].
+    bag : int, default=0
+        b, frames (>= 0).
+    max_len : int or None, default=4
+        Most items in an itemset; None for no limit.
+    algorithm : {"apriori", "fpgrowth"}, default="apriori"
+        The frequent-itemset algorithm.
+
+    Returns
+    -------
+    list of Rule
+        The speaker -> listener rules.
+
+    Raises
+    ------
+    ValueError
+        Bad labels or parameters (see :func:`build_transactions` and :func:`mine_transactions`).
     """
     return mine_rules_sessions(
         [(speaker_labels, listener_labels)], names, offset, min_support, min_confidence, bag, max_len, algorithm
@@ -285,6 +430,25 @@ def mine_rules_sessions(
 ) -> list[Rule]:
     """Like :func:`mine_rules` over several recordings of one scenario: each
     ``(speaker_labels, listener_labels)`` pair is bagged on its own, then the transactions are pooled.
+
+    Parameters
+    ----------
+    sessions : sequence of (ndarray of shape (T, K), ndarray of shape (T, K))
+        (speaker_labels, listener_labels) per recording; T may differ between recordings.
+    names : sequence of str, length K
+        The signal names.
+    offset, min_support, min_confidence, bag, max_len, algorithm
+        As :func:`mine_rules`.
+
+    Returns
+    -------
+    list of Rule
+        The speaker -> listener rules of the pooled transactions.
+
+    Raises
+    ------
+    ValueError
+        No sessions, or bad labels or parameters.
     """
     if not sessions:
         raise ValueError("sessions is empty: give at least one (speaker_labels, listener_labels) pair")
@@ -294,8 +458,21 @@ def mine_rules_sessions(
 
 @dataclass(frozen=True)
 class RuleComparison:
-    """The same rule mined in two scenarios; ratio = confidence_a / confidence_b (Okwechime Table 2,
-    a = interested listener, b = not interested).
+    """The same rule mined in two scenarios (Okwechime Table 2, a = interested listener, b = not
+    interested).
+
+    Parameters
+    ----------
+    antecedent : tuple of str
+        Speaker items, sorted.
+    consequent : tuple of str
+        Listener items, sorted.
+    confidence_a, confidence_b : float
+        The rule's confidence in scenario a and b.
+    support_a, support_b : float
+        The rule's support in scenario a and b.
+    ratio : float
+        confidence_a / confidence_b.
     """
 
     antecedent: tuple[str, ...]
@@ -307,10 +484,29 @@ class RuleComparison:
     ratio: float
 
     def to_dict(self) -> dict[str, Any]:
+        """The comparison as a JSON-able dict (item tuples as lists).
+
+        Returns
+        -------
+        dict of str to object
+            Every field by name.
+        """
         return _as_json(self)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RuleComparison:
+        """The inverse of :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : mapping of str to object
+            Every field by name.
+
+        Returns
+        -------
+        RuleComparison
+            The comparison.
+        """
         return cls(
             tuple(d["antecedent"]),
             tuple(d["consequent"]),
@@ -325,6 +521,18 @@ class RuleComparison:
 def compare_scenarios(rules_a: Sequence[Rule], rules_b: Sequence[Rule]) -> list[RuleComparison]:
     """Pair rules with the same antecedent and consequent in both scenarios (rules found in only
     one are left out) and give the ratio of confidences; sorted by ratio, largest first.
+
+    Parameters
+    ----------
+    rules_a : sequence of Rule
+        The rules of scenario a (interested listener).
+    rules_b : sequence of Rule
+        The rules of scenario b (not interested).
+
+    Returns
+    -------
+    list of RuleComparison
+        The paired rules.
     """
     by_key = {r.key: r for r in rules_b}
     out = [
@@ -349,8 +557,18 @@ def compare_scenarios(rules_a: Sequence[Rule], rules_b: Sequence[Rule]) -> list[
 
 @dataclass(frozen=True)
 class RulesFile:
-    """Contents of a rules file: format version, the mining parameters, rules per scenario
-    (e.g. "interested", "not_interested") and the paired comparisons.
+    """Contents of a rules file.
+
+    Parameters
+    ----------
+    version : int
+        Format version.
+    params : dict of str to object
+        The mining parameters.
+    scenarios : dict of str to list of Rule
+        Rules per scenario (e.g. "interested", "not_interested").
+    comparisons : list of RuleComparison
+        The paired comparisons.
     """
 
     version: int
@@ -376,7 +594,19 @@ def write_rules(
                           "confidence_b": ..., "support_a": ..., "support_b": ..., "ratio": ...}]}
 
     where a rule is {"antecedent": ["S:nod"], "consequent": ["L:nod"], "support", "confidence",
-    "lift", "antecedent_support", "consequent_support"}.
+    "lift", "antecedent_support", "consequent_support"}. The file is written whole or not at all
+    (through a ``.tmp`` file).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file to write.
+    scenarios : mapping of str to sequence of Rule
+        Rules per scenario.
+    params : mapping of str to object
+        The mining parameters.
+    comparisons : sequence of RuleComparison, default=()
+        The paired comparisons.
     """
     doc = {
         "format": RULES_FORMAT,
@@ -393,7 +623,23 @@ def write_rules(
 
 
 def read_rules(path: str | os.PathLike[str]) -> RulesFile:
-    """Read a file written by :func:`write_rules`; ValueError if it is not one or is too new."""
+    """Read a file written by :func:`write_rules`.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The rules file.
+
+    Returns
+    -------
+    RulesFile
+        Its contents.
+
+    Raises
+    ------
+    ValueError
+        The file is not a rules file, or its version is not supported (too new).
+    """
     with open(path, encoding="utf-8") as f:
         doc = json.load(f)
     if not isinstance(doc, dict) or doc.get("format") != RULES_FORMAT:
@@ -417,8 +663,16 @@ def read_rules(path: str | os.PathLike[str]) -> RulesFile:
 
 @dataclass(frozen=True)
 class LabelStreams:
-    """Per-frame labels of the people of one recording: names (K,), people: id -> (T,K) int8
-    (1/0/UNKNOWN), fps (Hz) or None when the file does not say.
+    """Per-frame labels of the people of one recording.
+
+    Parameters
+    ----------
+    names : tuple of str, length K
+        The signal names.
+    people : dict of str to ndarray of shape (T, K), dtype int8
+        Person id -> labels (1/0/UNKNOWN).
+    fps : float or None, default=None
+        Frame rate, Hz, or None when the file does not say.
     """
 
     names: tuple[str, ...]
@@ -445,6 +699,21 @@ def read_labels_npz(path: str | os.PathLike[str]) -> LabelStreams:
     1/0/-1 integers, or float 1/0/-1 with nan for UNKNOWN), ``signal_names`` (K,) str and ``fps``
     (scalar) -- the keys of the project's two-person trajectory file (``counterpart.body.trajectory``); other
     keys are ignored.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The NPZ file.
+
+    Returns
+    -------
+    LabelStreams
+        People ``a`` and ``b``.
+
+    Raises
+    ------
+    ValueError
+        Missing keys, labels other than 1/0/UNKNOWN, or streams of wrong or different shapes.
     """
     with np.load(path, allow_pickle=False) as z:
         missing = [k for k in ("signals_a", "signals_b", "signal_names") if k not in z.files]
@@ -474,6 +743,22 @@ def read_labels_csv(path: str | os.PathLike[str]) -> LabelStreams:
     ``frame`` column and one column per signal name; one row per person and frame with values 1, 0
     or -1 (UNKNOWN; an empty cell is UNKNOWN too). Rows are ordered by ``frame`` when present, else
     kept in file order. Every person must have the same frames.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The CSV file.
+
+    Returns
+    -------
+    LabelStreams
+        The people by their ``person`` value.
+
+    Raises
+    ------
+    ValueError
+        No ``person`` column, no signal columns, labels other than 1/0/UNKNOWN, or people with
+        different numbers of frames.
     """
     fps = None
     with open(path, encoding="utf-8", newline="") as f:
@@ -503,7 +788,15 @@ def read_labels_csv(path: str | os.PathLike[str]) -> LabelStreams:
 
 
 def write_labels_csv(path: str | os.PathLike[str], streams: LabelStreams) -> None:
-    """Write :class:`LabelStreams` in the format :func:`read_labels_csv` reads."""
+    """Write :class:`LabelStreams` in the format :func:`read_labels_csv` reads.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The CSV file to write.
+    streams : LabelStreams
+        The labels; frames are numbered from 0.
+    """
     with open(path, "w", encoding="utf-8", newline="") as f:
         if streams.fps is not None:
             f.write(f"# fps={streams.fps:g}\n")
@@ -515,7 +808,23 @@ def write_labels_csv(path: str | os.PathLike[str], streams: LabelStreams) -> Non
 
 
 def read_labels(path: str | os.PathLike[str]) -> LabelStreams:
-    """Dispatch on the extension: ``.npz`` -> :func:`read_labels_npz`, ``.csv`` -> :func:`read_labels_csv`."""
+    """Dispatch on the extension: ``.npz`` -> :func:`read_labels_npz`, ``.csv`` -> :func:`read_labels_csv`.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The label file.
+
+    Returns
+    -------
+    LabelStreams
+        Its labels.
+
+    Raises
+    ------
+    ValueError
+        An extension other than ``.npz`` or ``.csv``, or a bad file.
+    """
     ext = os.path.splitext(os.fspath(path))[1].lower()
     if ext == ".npz":
         return read_labels_npz(path)

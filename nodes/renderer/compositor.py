@@ -42,7 +42,19 @@ OVERLAYS = ("skeleton", "splines", "signals", "stats", "controls")
 
 @dataclass
 class Bundle:
-    """Everything one output image is made of."""
+    """Everything one output image is made of.
+
+    Attributes
+    ----------
+    frame : messages.Frame
+        The camera frame.
+    partner : object or None
+        The partner message of the same seq, else the newest older one, or None.
+    silhouettes, pose, signals : object or None
+        The overlays' messages of the same seq, else the newest older ones, or None.
+    partner_exact : bool
+        Whether the partner's seq equals the frame's.
+    """
 
     frame: Any
     partner: Any = None
@@ -54,7 +66,21 @@ class Bundle:
 
 @dataclass
 class ControlState:
-    """The run-time controls in force (``None``: not set yet)."""
+    """The run-time controls in force (``None``: not set yet).
+
+    Attributes
+    ----------
+    model : str or None
+        The partner model.
+    speaker : str or None
+        The speaker.
+    interest : int or None
+        The listener's interest level.
+    emotion : str or None
+        The partner's emotion.
+    strength : float or None
+        The emotion's strength.
+    """
 
     model: str | None = None
     speaker: str | None = None
@@ -63,13 +89,26 @@ class ControlState:
     strength: float | None = None
 
     def update(self, msg: Any) -> None:
-        """Apply a ``messages.Control``: fields that are None stay as they are."""
+        """Apply a ``messages.Control``: fields that are None stay as they are.
+
+        Parameters
+        ----------
+        msg : messages.Control
+            The control message.
+        """
         for k in ("model", "speaker", "interest", "emotion", "strength"):
             v = getattr(msg, k, None)
             if v is not None:
                 setattr(self, k, v)
 
     def as_dict(self) -> dict[str, Any]:
+        """The controls by name.
+
+        Returns
+        -------
+        dict of str to object
+            ``model``, ``speaker``, ``interest``, ``emotion`` and ``strength``.
+        """
         return {
             "model": self.model,
             "speaker": self.speaker,
@@ -119,23 +158,57 @@ def _first(a: Any, b: Any) -> Any:
 class Compositor:
     """Pairs frames with partner, silhouettes, pose and signals by seq and draws them.
 
-    Args:
-        camera: calibration of the 3D partner and skeleton projection (``counterpart.body.camera.camera_for_size``
-            makes it the frame size's; None: the default camera at the frame size, as the tracker's).
-        want_partner: whether a partner topic is subscribed (else frames render at once).
-        style: ``cones`` (3D joints), ``silhouette`` (B-spline ctrl), ``avatar`` (the video-texture
-            avatar's frames, :mod:`.avatar`) or ``auto`` (what the partner message carries: avatar
-            frames first, then cones).
-        overlays: overlay name (:data:`OVERLAYS`) -> on/off.
-        timeout: seconds a frame waits for its partner at most (from the frame's arrival).
-        max_pending: frames held at most; beyond it the oldest renders without waiting.
-        history: messages kept per side topic (and partners kept ahead of their frames).
-        adaptive: skip the wait while the recent partners came later than ``timeout`` (module doc).
-        wait_camera: hold frames until :meth:`set_camera` gives the graph's camera for their size
-            (the calibration node's camera_info), so that nothing is drawn with another one.
-        delay_window: partners whose delays decide ``adaptive`` waiting.
-        avatar_file: the avatar file whose frames the video-texture partner shows ('': the one the
-            partner message names).
+    Parameters
+    ----------
+    camera : Camera or None, default=None
+        Calibration of the 3D partner and skeleton projection (``counterpart.body.camera.camera_for_size``
+        makes it the frame size's; None: the default camera at the frame size, as the tracker's).
+    want_partner : bool, default=True
+        Whether a partner topic is subscribed (else frames render at once).
+    style : {"auto", "cones", "silhouette", "avatar"}, default="auto"
+        ``cones`` (3D joints), ``silhouette`` (B-spline ctrl), ``avatar`` (the video-texture
+        avatar's frames, :mod:`.avatar`) or ``auto`` (what the partner message carries: avatar
+        frames first, then cones).
+    overlays : dict of str to bool, default=all on
+        Overlay name (:data:`OVERLAYS`) -> on/off.
+    timeout : float, default=0.5
+        Seconds a frame waits for its partner at most (from the frame's arrival).
+    max_pending : int, default=128
+        Frames held at most; beyond it the oldest renders without waiting.
+    history : int, default=64
+        Messages kept per side topic (and partners kept ahead of their frames).
+    adaptive : bool, default=False
+        Skip the wait while the recent partners came later than ``timeout`` (module doc).
+    delay_window : int, default=25
+        Partners whose delays decide ``adaptive`` waiting.
+    wait_camera : bool, default=False
+        Hold frames until :meth:`set_camera` gives the graph's camera for their size (the
+        calibration node's camera_info), so that nothing is drawn with another one.
+    avatar_file : str, default=""
+        The avatar file whose frames the video-texture partner shows ('': the one the partner
+        message names).
+
+    Attributes
+    ----------
+    counts : dict of str to int
+        Frames ``rendered``; with a partner of the same seq (``partner_exact``), an older one
+        (``partner_held``) or none (``partner_missing``); rendered without waiting out their
+        partner (``forced``); with a partner drawn inside the picture (``partner_drawn``).
+    delays : deque of float
+        The recent partners' delays, seconds (inf: the partner never came).
+    partners_late : bool
+        Whether the median delay exceeds ``timeout``.
+    partner_drawn : bool
+        Whether the last rendered frame shows a partner (inside the picture).
+    stats : dict of str to messages.NodeStats
+        The newest statistics per node.
+    controls : ControlState
+        The run-time controls in force.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``style`` or overlay name.
     """
 
     camera: Camera | None = None
@@ -191,6 +264,15 @@ class Compositor:
 
     # ---------------------------------------------------------------------------------- input
     def add_frame(self, msg: Any, now: float | None = None) -> None:
+        """Take a camera frame; it waits in :attr:`pending` until :meth:`ready` pairs it.
+
+        Parameters
+        ----------
+        msg : messages.Frame
+            The frame.
+        now : float or None, default=None
+            Its arrival, seconds (monotonic clock); None for now.
+        """
         now = time.monotonic() if now is None else now
         seq = int(msg.seq)
         self.pending.append((msg, now))
@@ -202,6 +284,15 @@ class Compositor:
                 self._record_delay(float("inf"))
 
     def add_partner(self, msg: Any, now: float | None = None) -> None:
+        """Take a partner message, recording the delays of the frames it settles.
+
+        Parameters
+        ----------
+        msg : object
+            The partner message (with ``seq``).
+        now : float or None, default=None
+            Its arrival, seconds (monotonic clock); None for now.
+        """
         seq = int(msg.seq)
         if seq > self.partners.max_seq:
             now = time.monotonic() if now is None else now
@@ -231,21 +322,48 @@ class Compositor:
             self._record_delay(float("inf"))
 
     def add_side(self, kind: str, msg: Any) -> None:
-        """``kind``: silhouettes, pose or signals."""
+        """Take an overlay's message.
+
+        Parameters
+        ----------
+        kind : {"silhouettes", "pose", "signals"}
+            The overlay topic.
+        msg : object
+            Its message (with ``seq``).
+        """
         self.side[kind].add(msg)
 
     def add_stats(self, msg: Any) -> None:
-        """Keep the newest ``messages.NodeStats`` per node."""
+        """Keep the newest ``messages.NodeStats`` per node.
+
+        Parameters
+        ----------
+        msg : messages.NodeStats
+            A node's statistics.
+        """
         self.stats[msg.node] = msg
 
     def set_camera(self, camera: Camera, from_seq: int = 0) -> None:
         """The graph's camera for frames of its size from ``from_seq`` on (camera_info, whose seq it
         is): every drawing uses it.
+
+        Parameters
+        ----------
+        camera : Camera
+            The graph's camera.
+        from_seq : int, default=0
+            The first frame seq it applies to.
         """
         self._cams.add(camera, from_seq)
 
     def set_control(self, msg: Any) -> None:
-        """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches)."""
+        """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches).
+
+        Parameters
+        ----------
+        msg : messages.Control
+            The control message; its ``overlays`` switch known overlays on or off.
+        """
         self.controls.update(msg)
         for k, v in (getattr(msg, "overlays", None) or {}).items():
             if k in OVERLAYS:
@@ -253,8 +371,19 @@ class Compositor:
 
     # --------------------------------------------------------------------------------- pairing
     def ready(self, now: float | None = None, flush: bool = False) -> list[Bundle]:
-        """Frames ready to render, oldest first, removed from the pending ones. ``flush``: all of
-        them (end of stream).
+        """Frames ready to render, oldest first, removed from the pending ones.
+
+        Parameters
+        ----------
+        now : float or None, default=None
+            The time, seconds (monotonic clock); None for now.
+        flush : bool, default=False
+            All of them (end of stream), without waiting for partners or the camera.
+
+        Returns
+        -------
+        list of Bundle
+            The frames with their partner and overlays.
         """
         now = time.monotonic() if now is None else now
         self._resolve_overdue(now)
@@ -285,7 +414,20 @@ class Compositor:
 
     # ------------------------------------------------------------------------------- drawing
     def camera_for(self, width: int, height: int, seq: int | None = None) -> Camera:
-        """The camera for frame ``seq`` (None: the newest) of that size."""
+        """The camera for frame ``seq`` (None: the newest) of that size.
+
+        Parameters
+        ----------
+        width, height : int
+            The frame size, pixels.
+        seq : int or None, default=None
+            The frame's seq; None for the newest camera.
+
+        Returns
+        -------
+        Camera
+            The graph's camera for that size, else ``camera`` fitted to it (kept from then on).
+        """
         cam = self._cams.get((width, height), seq)
         if cam is None:
             cam = camera_for_size(self.camera, width, height)
@@ -293,7 +435,23 @@ class Compositor:
         return cam
 
     def render(self, b: Bundle) -> np.ndarray:
-        """The composited (H, W, 3) uint8 BGR image of one bundle (a new array)."""
+        """The composited image of one bundle (a new array).
+
+        Parameters
+        ----------
+        b : Bundle
+            The frame with its partner and overlays.
+
+        Returns
+        -------
+        ndarray of shape (H, W, 3), dtype uint8
+            The image, BGR.
+
+        Raises
+        ------
+        ValueError
+            The frame's image is neither bgr8 nor mono8.
+        """
         img = np.asarray(b.frame.image)
         if img.ndim == 2:
             img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
@@ -326,7 +484,18 @@ class Compositor:
         return img
 
     def controls_shown(self, partner: Any) -> dict[str, Any]:
-        """The controls for the overlay: those set here, else what the partner says is in force."""
+        """The controls for the overlay: those set here, else what the partner says is in force.
+
+        Parameters
+        ----------
+        partner : object or None
+            The partner message drawn (its ``model``, ``emotion``, ``strength``), or None.
+
+        Returns
+        -------
+        dict of str to object
+            The controls by name (as :meth:`ControlState.as_dict`).
+        """
         shown = self.controls.as_dict()
         if partner is not None:
             shown["model"] = shown["model"] or partner.model or None

@@ -15,6 +15,23 @@ def build_default_avatar(
 ) -> tuple[Any, dict[str, Any]]:
     """(model, training summary): the listener of a simulated conversation (``sim_recording``) with the
     simulator's exact masks and labels, learnt with the default configuration.
+
+    Parameters
+    ----------
+    progress : callable of (str,) or None, default=None
+        Receives progress lines while recording and fitting; ``None`` reports nothing.
+    seconds : float, default=DEFAULT_SECONDS
+        Seconds of simulated conversation to record and learn from.
+    seed : int, default=0
+        Seed of the simulated conversation.
+
+    Returns
+    -------
+    model : object
+        The fitted video-texture model (``fit_recording``), required to hold a ``"nod"``.
+    summary : dict of str to object
+        ``source`` (str), ``frames`` (int, frames recorded), ``fps`` (frames per second) and
+        ``seconds`` (float, wall time of recording and fitting).
     """
     from .avatar_recording import sim_recording
     from .video_texture import fit_recording

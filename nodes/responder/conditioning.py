@@ -24,16 +24,22 @@ class ConditionalGaussians:
 
     Parameters
     ----------
-    means : (N, d) array
+    means : ndarray of shape (N, d)
         The states' means, encoded units (:class:`~counterpart.nodes.responder.pair_features.PairEncoder`).
-    covars : (N, d, d) array
+    covars : ndarray of shape (N, d, d)
         Their covariances.
     d_o : int
         Numbers in the observed block (the first d_o of d).
-    place_scale : (NQ,) array
-        The standardisation scale of the partner's placement numbers: the conditional covariances
-        of the ground position (``cov_pos``, (N, 2, 2) m^2) and velocity (``cov_vel``, (N, 2, 2)
-        (m/s)^2) are given in metres.
+    place_scale : ndarray of shape (NQ,)
+        The standardisation scale of the partner's placement numbers, so that ``cov_pos`` and
+        ``cov_vel`` are given in metres.
+
+    Attributes
+    ----------
+    cov_pos : ndarray of shape (N, 2, 2)
+        Each state's conditional covariance of the partner's ground position, m^2.
+    cov_vel : ndarray of shape (N, 2, 2)
+        Each state's conditional covariance of the partner's ground velocity, (m/s)^2.
     """
 
     def __init__(self, means: np.ndarray, covars: np.ndarray, d_o: int, place_scale: np.ndarray) -> None:
@@ -58,14 +64,35 @@ class ConditionalGaussians:
         self.cov_vel = cond[:, VEL][:, :, VEL] * np.outer(sc[VEL], sc[VEL])
 
     def obs_loglik(self, o: np.ndarray) -> np.ndarray:
-        """(d_o,) observed block -> (N,) log N(o; mu_o,k, S_oo,k)."""
+        """The observed block's log-likelihood under each state's marginal, log N(o; mu_o,k, S_oo,k).
+
+        Parameters
+        ----------
+        o : ndarray of shape (d_o,)
+            The observed block, encoded units.
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            Log-likelihood per state.
+        """
         d = o[None, :] - self.means[:, : self.d_o]
         maha = np.einsum("ni,nij,nj->n", d, self._inv_oo, d)
         return -0.5 * (maha + self._logdet_oo + self.d_o * np.log(2 * np.pi))
 
     def conditional(self, o: np.ndarray) -> np.ndarray:
-        """(d_o,) -> (N, d_p) E[p | o, s = k] for every state k, each dimension kept within
-        ``CLIP_SD`` standard deviations of the state's partner marginal.
+        """E[p | o, s = k] for every state k, each dimension kept within ``CLIP_SD`` standard deviations
+        of the state's partner marginal.
+
+        Parameters
+        ----------
+        o : ndarray of shape (d_o,)
+            The observed block, encoded units.
+
+        Returns
+        -------
+        ndarray of shape (N, d_p)
+            The partner block's conditional mean per state, encoded units.
         """
         d = o[None, :] - self.means[:, : self.d_o]
         cond = self.means[:, self.d_o :] + np.einsum("npo,no->np", self._gain, d)

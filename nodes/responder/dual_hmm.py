@@ -261,12 +261,34 @@ class DualHMMConfig:
     correction: CorrectionConfig = CorrectionConfig()
 
     def flat(self) -> dict[str, Any]:
-        """The settings under the model file's flat names (``n_states``, ``correction_folds``, ...)."""
+        """The settings under the model file's flat names (``n_states``, ``correction_folds``, ...).
+
+        Returns
+        -------
+        dict of str to object
+            Flat name -> value, for every setting.
+        """
         return {name: getattr(getattr(self, group), key) for name, (group, key) in _FLAT.items()}
 
     @classmethod
     def from_flat(cls, flat: dict[str, Any]) -> DualHMMConfig:
-        """The inverse of :meth:`flat`; missing names keep their defaults, an unknown one is an error."""
+        """The inverse of :meth:`flat`; missing names keep their defaults, an unknown one is an error.
+
+        Parameters
+        ----------
+        flat : dict of str to object
+            Flat name -> value.
+
+        Returns
+        -------
+        DualHMMConfig
+            The grouped settings.
+
+        Raises
+        ------
+        ValueError
+            An unknown name (the message lists the known ones), or a value a group rejects.
+        """
         unknown = sorted(set(flat) - set(_FLAT))
         if unknown:
             raise ValueError(f"unknown dual-hmm setting(s) {unknown}; known: {', '.join(_FLAT)}")
@@ -286,10 +308,32 @@ class DualHMM:
     config : DualHMMConfig
         The features, fitting, decoding, placement and correction settings.
 
-    Attributes (after :meth:`fit` or :meth:`from_state`): ``fps_``, ``encoder_`` (the features),
-    ``startprob_`` (N,), ``transmat_`` (N, N), ``means_`` (N, d), ``covars_`` (N, d, d),
-    ``block_labels_`` (N,) each state's interaction label, ``forest_`` (the placement correction, or
-    None) and, while generating, ``posterior_`` (N,) the state posterior of the last frame.
+    Attributes
+    ----------
+    fps_ : float
+        Frame rate of the training trajectories, frames per second (after :meth:`fit` or
+        :meth:`from_state`, as are the following).
+    encoder_ : PairEncoder
+        The features.
+    startprob_ : ndarray of shape (N,)
+        Start probabilities of the states.
+    transmat_ : ndarray of shape (N, N)
+        Transition matrix A.
+    means_ : ndarray of shape (N, d)
+        State means over [o, p], encoded units.
+    covars_ : ndarray of shape (N, d, d)
+        State covariances.
+    block_labels_ : ndarray of shape (N,)
+        Each state's interaction label.
+    forest_ : ForestArrays or None
+        The placement correction, or None.
+    posterior_ : ndarray of shape (N,) or None
+        While generating, the state posterior of the last frame.
+
+    Raises
+    ------
+    TypeError
+        ``config`` is not a :class:`DualHMMConfig`.
     """
 
     name = "dual-hmm"
@@ -311,6 +355,21 @@ class DualHMM:
 
         Runs with one BLAS thread: the matrices are small, and threads contending for a few busy
         cores made Baum-Welch several times slower.
+
+        Parameters
+        ----------
+        trajectories : sequence of TwoPersonTrajectory
+            The training pairs, joints in metres, all at one frame rate.
+
+        Returns
+        -------
+        DualHMM
+            This model, fitted.
+
+        Raises
+        ------
+        ValueError
+            No trajectories, or trajectories at different frame rates.
         """
         from threadpoolctl import threadpool_limits
 
@@ -408,7 +467,23 @@ class DualHMM:
         self.features_ = CorrectionFeatures(member, self.fps_)
 
     def step(self, observed: np.ndarray) -> np.ndarray:
-        """One frame: the observed person's joints (14, 3) world metres -> the partner's (14, 3)."""
+        """One frame: the partner of the observed person.
+
+        Parameters
+        ----------
+        observed : ndarray of shape (14, 3)
+            The observed person's joints, metres, world frame.
+
+        Returns
+        -------
+        ndarray of shape (14, 3), dtype float32
+            The partner's joints, metres, world frame.
+
+        Raises
+        ------
+        ValueError
+            ``observed`` is not of shape (14, 3).
+        """
         X = np.asarray(observed, np.float64)
         if X.shape != (14, 3):
             raise ValueError(f"observed joints must be (14, 3) metres, got shape {X.shape}")
@@ -442,7 +517,23 @@ class DualHMM:
         return vel
 
     def predict(self, observed: np.ndarray) -> np.ndarray:
-        """A whole sequence, frame by frame as online: (T, 14, 3) -> (T, 14, 3) partner, metres."""
+        """A whole sequence, frame by frame as online (the model is reset before and after).
+
+        Parameters
+        ----------
+        observed : ndarray of shape (T, 14, 3)
+            The observed person's joints, metres, world frame.
+
+        Returns
+        -------
+        ndarray of shape (T, 14, 3), dtype float32
+            The partner's joints, metres, world frame.
+
+        Raises
+        ------
+        ValueError
+            ``observed`` is not of shape (T, 14, 3).
+        """
         X = np.asarray(observed, np.float64)
         if X.ndim != 3 or X.shape[1:] != (14, 3):
             raise ValueError(f"observed must be (T, 14, 3) metres, got shape {X.shape}")
@@ -453,7 +544,16 @@ class DualHMM:
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        """The model file's arrays and its flat config (format version 4)."""
+        """The model file's arrays and its flat config (format version 4).
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            HMM parameters, the encoder's arrays, ``block_labels`` and the correction's
+            ``correction_*`` arrays when there is one.
+        config : dict of str to object
+            :meth:`DualHMMConfig.flat` with ``fps`` and ``d_o``.
+        """
         arrays = {
             "startprob": self.startprob_,
             "transmat": self.transmat_,
@@ -469,7 +569,20 @@ class DualHMM:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> DualHMM:
-        """A model from :meth:`get_state`'s arrays and flat config."""
+        """A model from :meth:`get_state`'s arrays and flat config.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            The arrays of :meth:`get_state`.
+        config : dict of str to object
+            The flat config of :meth:`get_state` (``d_o`` is ignored: derived again).
+
+        Returns
+        -------
+        DualHMM
+            The fitted model, reset.
+        """
         c = dict(config)
         fps = float(c.pop("fps"))
         c.pop("d_o")  # derived from the PCA and the velocity weight

@@ -52,7 +52,25 @@ _W = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
 
 
 def motion_features(X: np.ndarray, fps: float) -> np.ndarray:
-    """(T, 14, 3) metres world -> (len(FEATURES),) features (module docstring). T >= 4."""
+    """The motion features of the module docstring, in the order of ``FEATURES``.
+
+    Parameters
+    ----------
+    X : ndarray of shape (T, 14, 3)
+        One person's motion, metres, world frame; T >= 4.
+    fps : float
+        Frames per second.
+
+    Returns
+    -------
+    ndarray of shape (len(FEATURES),)
+        The features.
+
+    Raises
+    ------
+    ValueError
+        ``X`` is not of shape (T >= 4, 14, 3).
+    """
     X = np.asarray(X, np.float64)
     if X.ndim != 3 or X.shape[1:] != (14, 3) or len(X) < 4:
         raise ValueError(f"motion must be (T >= 4, 14, 3) metres, got shape {X.shape}")
@@ -72,8 +90,23 @@ def motion_features(X: np.ndarray, fps: float) -> np.ndarray:
 
 
 def rank_svm(D: np.ndarray, S: np.ndarray, C: float = 1.0, C_sim: float = 1.0) -> np.ndarray:
-    """Solve the ranking problem above: D (n_o, F) ordered differences (z_i - z_j, i ranked higher),
-    S (n_s, F) similar differences -> w (F,).
+    """Solve the ranking problem of the module docstring.
+
+    Parameters
+    ----------
+    D : ndarray of shape (n_o, F)
+        Ordered differences z_i - z_j, i ranked higher.
+    S : ndarray of shape (n_s, F)
+        Similar differences.
+    C : float, default=1.0
+        Weight of the ordered pairs' squared hinge.
+    C_sim : float, default=1.0
+        Weight of the similar pairs' squared score differences.
+
+    Returns
+    -------
+    ndarray of shape (F,)
+        The ranking weights w.
     """
     F = D.shape[1] if len(D) else S.shape[1]
 
@@ -88,7 +121,28 @@ def rank_svm(D: np.ndarray, S: np.ndarray, C: float = 1.0, C_sim: float = 1.0) -
 
 
 class EmotionModel:
-    """Relative-attribute strength of each emotion and the style modulation (module docstring)."""
+    """Relative-attribute strength of each emotion and the style modulation (module docstring).
+
+    Parameters
+    ----------
+    C : float, default=1.0
+        RankSVM weight of the ordered pairs.
+    C_sim : float, default=1.0
+        RankSVM weight of the similar pairs.
+    margin : float, default=0.1
+        Strength difference above which two motions form an ordered pair.
+    similar : float, default=0.03
+        Strength difference below which two motions form a similar pair.
+
+    Attributes
+    ----------
+    mu_, sd_ : ndarray of shape (F,)
+        Mean and standard deviation of the training features (the standardisation z).
+    w_ : ndarray of shape (len(EMOTIONS), F)
+        Ranking weights per emotion (zero for neutral and for emotions without ordered pairs).
+    k_speed_, k_amp_ : ndarray of shape (len(EMOTIONS),)
+        Style slopes of the log speed and log amplitude against strength.
+    """
 
     name = "emotion"
 
@@ -98,8 +152,23 @@ class EmotionModel:
     def fit(
         self, X: np.ndarray, emotions: Sequence[str], strengths: Sequence[float], groups: Sequence[str]
     ) -> EmotionModel:
-        """X (M, F) features; per motion its emotion, strength in [0, 1] (neutral: any, taken as 0)
-        and group (interaction label: pairs are only formed within a group).
+        """Learn the ranking functions and style slopes.
+
+        Parameters
+        ----------
+        X : ndarray of shape (M, F)
+            Features of M motions (:func:`motion_features`).
+        emotions : sequence of str, length M
+            Each motion's emotion, one of ``EMOTIONS``.
+        strengths : sequence of float, length M
+            Each motion's strength in [0, 1] (neutral: any, taken as 0).
+        groups : sequence of str, length M
+            Each motion's group (interaction label: pairs are only formed within a group).
+
+        Returns
+        -------
+        EmotionModel
+            This model, fitted.
         """
         X = np.asarray(X, float)
         emo = np.asarray(emotions)
@@ -137,6 +206,21 @@ class EmotionModel:
     def fit_trajectories(self, trajs: Sequence[TwoPersonTrajectory]) -> EmotionModel:
         """Learn from simulator-style trajectories whose ``meta`` has ``emotion`` and ``strength``
         (both people move in that style, so both are samples).
+
+        Parameters
+        ----------
+        trajs : sequence of TwoPersonTrajectory
+            The trajectories; the group of each is its ``label``, a missing strength is 0.
+
+        Returns
+        -------
+        EmotionModel
+            This model, fitted.
+
+        Raises
+        ------
+        ValueError
+            A trajectory has no ``meta["emotion"]``.
         """
         X, e, s, g = [], [], [], []
         for t in trajs:
@@ -157,11 +241,49 @@ class EmotionModel:
         return EMOTIONS.index(emotion)
 
     def rank(self, X: np.ndarray, emotion: str) -> np.ndarray:
-        """Ranking scores r_e (M,) of features X (M, F) (or (F,) -> scalar array) for ``emotion``."""
+        """Ranking scores r_e for ``emotion``.
+
+        Parameters
+        ----------
+        X : ndarray of shape (M, F) or (F,)
+            Features (:func:`motion_features`).
+        emotion : str
+            One of ``EMOTIONS``.
+
+        Returns
+        -------
+        ndarray of shape (M,) or ()
+            The scores (a scalar array for a single motion).
+
+        Raises
+        ------
+        ValueError
+            An unknown emotion.
+        """
         return ((np.asarray(X, float) - self.mu_) / self.sd_) @ self.w_[self._index(emotion)]
 
     def style_gains(self, emotion: str, strength: float) -> tuple[float, float]:
-        """(amplitude gain, playback rate) for an emotion at strength in [0, 1]."""
+        """The style gains of an emotion at a strength.
+
+        Parameters
+        ----------
+        emotion : str
+            One of ``EMOTIONS``.
+        strength : float
+            Strength in [0, 1].
+
+        Returns
+        -------
+        amp : float
+            Amplitude gain a(s) = exp(k_amp s).
+        rate : float
+            Playback rate v(s) = exp((k_speed - k_amp) s).
+
+        Raises
+        ------
+        ValueError
+            An unknown emotion or a strength outside [0, 1].
+        """
         if not 0.0 <= strength <= 1.0:
             raise ValueError(f"strength={strength!r}: must be in [0, 1]")
         e = self._index(emotion)
@@ -169,8 +291,27 @@ class EmotionModel:
         return amp, float(np.exp((self.k_speed_[e] - self.k_amp_[e]) * strength))
 
     def modulate(self, X: np.ndarray, emotion: str, strength: float) -> np.ndarray:
-        """A motion (T, 14, 3) metres restyled: time-warped by the playback rate (the motion runs
-        faster or slower, holding its last pose) and scaled about its mean pose. Returns (T, 14, 3).
+        """A motion restyled: time-warped by the playback rate (the motion runs faster or slower,
+        holding its last pose) and scaled about its mean pose.
+
+        Parameters
+        ----------
+        X : ndarray of shape (T, 14, 3)
+            The motion, metres, world frame.
+        emotion : str
+            One of ``EMOTIONS``.
+        strength : float
+            Strength in [0, 1].
+
+        Returns
+        -------
+        ndarray of shape (T, 14, 3), dtype float32
+            The restyled motion, metres, world frame.
+
+        Raises
+        ------
+        ValueError
+            An unknown emotion or a strength outside [0, 1].
         """
         X = np.asarray(X, np.float64)
         amp, rate = self.style_gains(emotion, strength)
@@ -187,6 +328,15 @@ class EmotionModel:
         return to_world(M + amp * (L - M), o, th).astype(np.float32)
 
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model as arrays and configuration, for saving.
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            ``w``, ``mu``, ``sd``, ``k_speed`` and ``k_amp``.
+        config : dict of str to object
+            The constructor's parameters.
+        """
         return (
             {"w": self.w_, "mu": self.mu_, "sd": self.sd_, "k_speed": self.k_speed_, "k_amp": self.k_amp_},
             {"C": self.C, "C_sim": self.C_sim, "margin": self.margin, "similar": self.similar},
@@ -194,6 +344,20 @@ class EmotionModel:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> EmotionModel:
+        """A fitted model from what :meth:`get_state` gave.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            ``w``, ``mu``, ``sd``, ``k_speed`` and ``k_amp``.
+        config : dict of str to object
+            The constructor's parameters.
+
+        Returns
+        -------
+        EmotionModel
+            The model.
+        """
         m = cls(**config)
         m.w_, m.mu_, m.sd_ = arrays["w"], arrays["mu"], arrays["sd"]
         m.k_speed_, m.k_amp_ = arrays["k_speed"], arrays["k_amp"]
@@ -201,8 +365,17 @@ class EmotionModel:
 
 
 class StyleFilter:
-    """Online amplitude gain about a running mean pose (time constant ``tau_s`` seconds) in the
-    person's own frame: L' = M + a (L - M), M <- M + (L - M) / (tau fps).
+    """Online amplitude gain about a running mean pose in the person's own frame:
+    L' = M + a (L - M), M <- M + (L - M) / (tau fps).
+
+    Parameters
+    ----------
+    model : EmotionModel or None
+        The fitted model giving the amplitude gain; None passes poses through.
+    fps : float, default=25.0
+        Frames per second of the poses.
+    tau_s : float, default=2.0
+        Time constant of the running mean pose, seconds.
     """
 
     def __init__(self, model: EmotionModel | None, fps: float = 25.0, tau_s: float = 2.0) -> None:
@@ -210,6 +383,22 @@ class StyleFilter:
         self.mean: np.ndarray | None = None
 
     def __call__(self, joints: np.ndarray, emotion: str, strength: float) -> np.ndarray:
+        """One frame restyled; every frame updates the running mean pose.
+
+        Parameters
+        ----------
+        joints : ndarray of shape (14, 3)
+            The pose, metres, world frame.
+        emotion : str
+            One of ``EMOTIONS``; ``"neutral"`` passes the pose through.
+        strength : float
+            Strength, clipped to [0, 1]; 0 or less passes the pose through.
+
+        Returns
+        -------
+        ndarray of shape (14, 3), dtype float32
+            The restyled pose, metres, world frame.
+        """
         X = np.asarray(joints, np.float64)
         o, th = actor_frame(X)
         L = to_local(X, o, th)

@@ -46,7 +46,25 @@ RuleTuple = tuple[tuple[str, ...], tuple[str, ...], float]
 
 
 def read_rules_file(path: str | os.PathLike[str]) -> tuple[dict[str, list[RuleTuple]], dict[str, Any]]:
-    """Scenario -> rules and the mining parameters, from a labeller rules file (JSON)."""
+    """Scenario -> rules and the mining parameters, from a labeller rules file (JSON).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The rules file (format ``counterpart.labeller.rules``, version 1).
+
+    Returns
+    -------
+    rules : dict of str to list of RuleTuple
+        Scenario -> its rules (antecedent items, consequent items, confidence).
+    params : dict of str to object
+        The mining parameters (e.g. ``offset`` in frames and ``fps``).
+
+    Raises
+    ------
+    ValueError
+        The file is unreadable, not a rules file, or of another version.
+    """
     try:
         with open(path, encoding="utf-8") as f:
             doc = json.load(f)
@@ -67,7 +85,23 @@ def count_rules(
     speaker: Sequence[np.ndarray], listener: Sequence[np.ndarray], names: Sequence[str], offset: int
 ) -> list[RuleTuple]:
     """Single-item rules S:x -> L:y from recordings: confidence = P(L:y at t + s | S:x at t) over
-    frames t (labels (T, K), 1 present; -1 unknown counts as absent).
+    frames t.
+
+    Parameters
+    ----------
+    speaker : sequence of ndarray of shape (T, K)
+        The speaker's labels per recording: 1 present; -1 unknown counts as absent.
+    listener : sequence of ndarray of shape (T, K)
+        The listener's labels of the same recordings.
+    names : sequence of str, length K
+        The signals' names.
+    offset : int
+        The response offset s, frames.
+
+    Returns
+    -------
+    list of RuleTuple
+        One rule per pair (x, y) seen together at least once.
     """
     K = len(names)
     joint, ante = np.zeros((K, K)), np.zeros(K)
@@ -89,9 +123,30 @@ def count_rules(
 class ListenerModel:
     """Chooses listener behaviour from rule confidences at an interest level (module docstring).
 
-    Parameters: ``offset_s`` response delay s (seconds; a rules file's ``offset``/``fps`` override
-    it); ``response_s`` how long a chosen behaviour lasts; ``distance`` metres from the speaker;
-    ``random_state``.
+    Parameters
+    ----------
+    offset_s : float, default=0.4
+        Response delay s, seconds (a rules file's ``offset``/``fps`` override it).
+    response_s : float, default=1.0
+        How long a chosen behaviour lasts, seconds.
+    distance : float, default=1.2
+        Distance from the speaker, metres.
+    fps : float, default=25.0
+        Frames per second of the steps.
+    random_state : int, default=0
+        Seed of the behaviour choices.
+
+    Attributes
+    ----------
+    rules_ : dict of str to list of RuleTuple
+        The rules per scenario, set by :meth:`fit`.
+    behaviour_ : str
+        What the listener does at the last step, behaviours joined by ``+`` (empty: none).
+
+    Raises
+    ------
+    ValueError
+        A negative ``offset_s``, or a ``response_s``, ``distance`` or ``fps`` not above 0.
     """
 
     name = "listener"
@@ -113,7 +168,25 @@ class ListenerModel:
 
     # ------------------------------------------------------------------ rules
     def fit(self, rules: Mapping[str, Sequence[RuleTuple]], params: Mapping[str, Any] | None = None) -> ListenerModel:
-        """Take the mined rules per scenario (``interested``/``not_interested``, or any one scenario)."""
+        """Take the mined rules per scenario (``interested``/``not_interested``, or any one scenario).
+
+        Parameters
+        ----------
+        rules : mapping of str to sequence of RuleTuple
+            Scenario -> its rules.
+        params : mapping of str to object or None, default=None
+            The mining parameters; ``offset`` (frames, at ``fps``) sets ``offset_s``.
+
+        Returns
+        -------
+        ListenerModel
+            This model, fitted and reset.
+
+        Raises
+        ------
+        ValueError
+            No rules.
+        """
         if not rules or not any(rules.values()):
             raise ValueError("ListenerModel.fit: no rules; mine some with 'counterpart mine' first")
         self.rules_ = {k: [(tuple(a), tuple(c), float(p)) for a, c, p in v] for k, v in rules.items()}
@@ -125,11 +198,46 @@ class ListenerModel:
 
     @classmethod
     def from_rules_file(cls, path: str | os.PathLike[str], **kw: Any) -> ListenerModel:
+        """A model fitted on a labeller rules file.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The rules file.
+        **kw : object
+            The constructor's parameters.
+
+        Returns
+        -------
+        ListenerModel
+            The fitted model.
+
+        Raises
+        ------
+        ValueError
+            The file is unreadable, not a rules file, or holds no rules.
+        """
         scen, params = read_rules_file(path)
         return cls(**kw).fit(scen, params)
 
     def confidences(self, interest: int) -> dict[tuple[tuple[str, ...], tuple[str, ...]], float]:
-        """Rule -> confidence at interest level 1-3 (the interpolation / gain of the module docstring)."""
+        """Rule -> confidence at an interest level (the interpolation / gain of the module docstring).
+
+        Parameters
+        ----------
+        interest : int
+            Interest level, 1, 2 or 3.
+
+        Returns
+        -------
+        dict of (tuple of str, tuple of str) to float
+            (antecedent items, consequent items) -> confidence.
+
+        Raises
+        ------
+        ValueError
+            An interest level other than 1, 2 or 3.
+        """
         if interest not in (1, 2, 3):
             raise ValueError(f"interest={interest!r}: the interest level is 1, 2 or 3")
         r = self.rules_
@@ -145,7 +253,19 @@ class ListenerModel:
         self, speaker_items: set[str] | Sequence[str], interest: int | None = None
     ) -> dict[str, float]:
         """Behaviour -> probability that the listener performs it, given the speaker's present signals
-        (``"nod"`` or ``"S:nod"``), by noisy-or over the matching rules.
+        by noisy-or over the matching rules.
+
+        Parameters
+        ----------
+        speaker_items : set or sequence of str
+            The speaker's present signals, ``"nod"`` or ``"S:nod"``.
+        interest : int or None, default=None
+            Interest level 1-3; None for the model's ``interest``.
+
+        Returns
+        -------
+        dict of str to float
+            Behaviour -> probability, for the behaviours of the matching rules.
         """
         items = {s if s.startswith("S:") else f"S:{s}" for s in speaker_items}
         miss: dict[str, float] = {}
@@ -165,8 +285,19 @@ class ListenerModel:
         self.behaviour_ = ""
 
     def step(self, speaker_signals: Mapping[str, bool], observed: np.ndarray | None = None) -> np.ndarray:
-        """One frame: the speaker's signals (name -> present) and optionally the speaker's joints (14, 3)
-        metres -> the listener's joints (14, 3) metres. ``behaviour_`` names what it does.
+        """One frame: the listener's response to the speaker. ``behaviour_`` names what it does.
+
+        Parameters
+        ----------
+        speaker_signals : mapping of str to bool
+            The speaker's signals, name -> present.
+        observed : ndarray of shape (14, 3) or None, default=None
+            The speaker's joints, metres, world frame; None places the listener at a fixed spot.
+
+        Returns
+        -------
+        ndarray of shape (14, 3), dtype float32
+            The listener's joints, metres, world frame.
         """
         now = {k for k, v in speaker_signals.items() if v}
         onsets = now - self._prev
@@ -188,7 +319,23 @@ class ListenerModel:
         return self.body(on, t, observed)
 
     def body(self, behaviours: set[str], t: int, observed: np.ndarray | None = None) -> np.ndarray:
-        """Listener joints (14, 3) for a set of behaviours at frame t, facing the speaker."""
+        """Listener joints for a set of behaviours at frame t, facing the speaker.
+
+        Parameters
+        ----------
+        behaviours : set of str
+            The behaviours performed (of ``BEHAVIOURS``).
+        t : int
+            Frame index (the oscillations' time is ``t / fps``).
+        observed : ndarray of shape (14, 3) or None, default=None
+            The speaker's joints, metres, world frame; the listener stands ``distance`` in front of
+            them. None: at x = 0.6 m, z = 0, yaw -pi/2.
+
+        Returns
+        -------
+        ndarray of shape (14, 3), dtype float32
+            The listener's joints, metres, world frame.
+        """
         if observed is not None:
             o, th = actor_frame(np.asarray(observed, np.float64))
             fwd = np.array([np.sin(th), np.cos(th)])
@@ -210,6 +357,15 @@ class ListenerModel:
 
     # ------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model as arrays and configuration, for saving.
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            Empty: the model has no arrays.
+        config : dict of str to object
+            The constructor's parameters and ``rules``.
+        """
         config = {
             "offset_s": self.offset_s,
             "response_s": self.response_s,
@@ -222,6 +378,20 @@ class ListenerModel:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> ListenerModel:
+        """A fitted model from what :meth:`get_state` gave.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            Unused.
+        config : dict of str to object
+            The constructor's parameters and ``rules``.
+
+        Returns
+        -------
+        ListenerModel
+            The model.
+        """
         c = dict(config)
         rules = c.pop("rules")
         return cls(**c).fit({k: [(tuple(a), tuple(cc), float(p)) for a, cc, p in v] for k, v in rules.items()})

@@ -21,8 +21,18 @@ from counterpart.body.trajectory import TwoPersonTrajectory
 
 @dataclass
 class ShapeTrack:
-    """One person's silhouette over T frames: ctrl (T, n, 2), pos (T, 2), height (T,), pixels;
-    valid (T,) bool (False where the person is out of view).
+    """One person's silhouette over T frames.
+
+    Attributes
+    ----------
+    ctrl : ndarray of shape (T, n, 2)
+        B-spline control points, pixels.
+    pos : ndarray of shape (T, 2)
+        Region centroid, pixels.
+    height : ndarray of shape (T,)
+        Height of the bounding box, pixels.
+    valid : ndarray of shape (T,), dtype bool
+        False where the person is out of view (the other fields are zero there).
     """
 
     ctrl: np.ndarray
@@ -32,7 +42,22 @@ class ShapeTrack:
 
 
 def silhouette_track(joints: np.ndarray, camera: Camera, n: int = 32) -> ShapeTrack:
-    """(T, 14, 3) joints (metres, world) -> the person's silhouette splines through ``camera``."""
+    """The person's silhouette splines through ``camera``.
+
+    Parameters
+    ----------
+    joints : ndarray of shape (T, 14, 3)
+        One person's joints, metres, world frame.
+    camera : Camera
+        The camera the person is rasterised through.
+    n : int, default=32
+        Control points per spline.
+
+    Returns
+    -------
+    ShapeTrack
+        The silhouette per frame; frames with fewer than 20 pixels of the person are not valid.
+    """
     from counterpart.body.spline import silhouette_spline  # the spline convention shared with the silhouette node
 
     X = np.asarray(joints, np.float64)
@@ -55,14 +80,39 @@ def silhouette_track(joints: np.ndarray, camera: Camera, n: int = 32) -> ShapeTr
 def trajectory_shapes(
     traj: TwoPersonTrajectory, camera: Camera | None = None, n: int = 32
 ) -> tuple[ShapeTrack, ShapeTrack]:
-    """Both people's silhouette tracks (A, B) of a trajectory; default camera 160 x 120 pixels."""
+    """Both people's silhouette tracks of a trajectory.
+
+    Parameters
+    ----------
+    traj : TwoPersonTrajectory
+        The two people's joints.
+    camera : Camera or None, default=None
+        The camera; ``None`` for the default camera at 160 x 120 pixels.
+    n : int, default=32
+        Control points per spline.
+
+    Returns
+    -------
+    a, b : ShapeTrack
+        The silhouette tracks of person A and person B.
+    """
     cam = camera or default_camera(160, 120)
     return silhouette_track(traj.a, cam, n), silhouette_track(traj.b, cam, n)
 
 
 def mirror_ctrl(ctrl: np.ndarray) -> np.ndarray:
-    """Mirror control points (..., n, 2) left-right (x -> -x) keeping the ordering convention: point
-    0 stays at the head, and the order is reversed so the curve stays counter-clockwise.
+    """Mirror control points left-right (x -> -x) keeping the ordering convention: point 0 stays at
+    the head, and the order is reversed so the curve stays counter-clockwise.
+
+    Parameters
+    ----------
+    ctrl : ndarray of shape (..., n, 2)
+        Control points, x relative to the mirror axis.
+
+    Returns
+    -------
+    ndarray of shape (..., n, 2), dtype float64
+        The mirrored control points (a copy).
     """
     c = np.asarray(ctrl, np.float64).copy()
     c[..., 0] *= -1

@@ -55,13 +55,27 @@ MERGE_KEEP_OVERLAP = 0.05
 class Person:
     """One person in one frame.
 
-    id : stable integer identity (>= 0); the label image uses id + 1.
-    side : "left" or "right": the image half of the centroid when first seen; never changes.
-    bbox : (x, y, w, h) pixels.  area : pixels.  centroid : (x, y) pixels.
-    height : bbox height, pixels.  merged : the region was shared with another person this frame
-        and split between them.
-    ctrl : (n, 2) B-spline control points (pixels) and ref_point (2,) the reference point at the
-        top of the head; filled in by the pipeline, None from the tracker alone.
+    Parameters
+    ----------
+    id : int
+        Stable identity (>= 0); the label image uses id + 1.
+    side : {"left", "right"}
+        The image half of the centroid when first seen; never changes.
+    bbox : tuple of int
+        (x, y, w, h), pixels.
+    area : int
+        Pixels.
+    centroid : tuple of float
+        (x, y), pixels.
+    height : float
+        Bbox height, pixels.
+    merged : bool, default=False
+        The region was shared with another person this frame and split between them.
+    ctrl : ndarray of shape (n, 2) or None, default=None
+        B-spline control points, pixels; filled in by the pipeline, None from the tracker alone.
+    ref_point : ndarray of shape (2,) or None, default=None
+        The reference point at the top of the head, pixels; filled in by the pipeline, None from
+        the tracker alone.
     """
 
     id: int
@@ -86,12 +100,31 @@ def clean_mask(
     fill_holes: bool = True,
     min_area: int = 0,
 ) -> np.ndarray:
-    """Clean a foreground mask (H, W) into solid regions; returns (H, W) bool.
+    """Clean a foreground mask into solid regions.
 
-    open_px / close_px : diameters (pixels) of the elliptical opening (removes speckle) and
-        closing (bridges small gaps, e.g. between a leg and the body); <= 1 skips the step.
-    fill_holes : fill every enclosed background hole (the outer contour is what we model).
-    min_area : drop connected regions (8-connected) smaller than this many pixels.
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W)
+        The foreground mask (non-zero: foreground).
+    open_px : int, default=3
+        Diameter (pixels) of the elliptical opening (removes speckle); <= 1 skips the step.
+    close_px : int, default=7
+        Diameter (pixels) of the elliptical closing (bridges small gaps, e.g. between a leg and the
+        body); <= 1 skips the step.
+    fill_holes : bool, default=True
+        Fill every enclosed background hole (the outer contour is what we model).
+    min_area : int, default=0
+        Drop connected regions (8-connected) smaller than this many pixels.
+
+    Returns
+    -------
+    ndarray of shape (H, W), dtype bool
+        The cleaned mask.
+
+    Raises
+    ------
+    ValueError
+        ``mask`` is not 2-D, or a negative ``open_px``, ``close_px`` or ``min_area``.
     """
     m = np.asarray(mask)
     if m.ndim != 2:
@@ -198,19 +231,26 @@ class PersonTracker:
 
     Parameters
     ----------
-    min_area : regions smaller than this (pixels) are ignored.
-    max_missed : frames a person may go unseen (occluded, left the view) before the track ends.
-    max_distance : gate of the Hungarian assignment: a region further than this many person
-        heights from a person's predicted centroid cannot be theirs.
+    min_area : int, default=50
+        Regions smaller than this (pixels) are ignored; >= 1.
+    max_missed : int, default=10
+        Frames a person may go unseen (occluded, left the view) before the track ends; >= 0.
+    max_distance : float, default=0.75
+        Gate of the Hungarian assignment: a region further than this many person heights from a
+        person's predicted centroid cannot be theirs.
         A person or a region may also stay unassigned (``UNMATCHED_COST`` each), so the
         assignment never pairs them up wrongly only to match everyone; regions left over
         that stand one above the other with an upright union are one new person
         (``group_stacked``).
-    size_weight : weight of |log(area ratio)| against the normalised distance in the cost.
-    min_overlap : fraction of a person's predicted pixels that must fall in a region for the
-        person to claim it; a region claimed by two or more people is a merge and is split.
-    velocity_smoothing : exponential smoothing factor of the per-frame velocity (0 = last step).
-    newcomer_growth : someone who stood still through the background model's training frames is
+    size_weight : float, default=0.5
+        Weight of |log(area ratio)| against the normalised distance in the cost.
+    min_overlap : float, default=0.2
+        Fraction of a person's predicted pixels that must fall in a region for the person to
+        claim it, in (0, 1]; a region claimed by two or more people is a merge and is split.
+    velocity_smoothing : float, default=0.5
+        Exponential smoothing factor of the per-frame velocity, in [0, 1) (0 = last step).
+    newcomer_growth : float, default=1.6
+        Someone who stood still through the background model's training frames is
         part of the background, and when they move they appear already touching their neighbour,
         in that neighbour's region. So, for an established person (seen ``NEWCOMER_MIN_AGE``
         frames, clear of the image border): a region ``newcomer_growth`` times their usual area
@@ -219,9 +259,19 @@ class PersonTracker:
         area, is split off as a new person. Their template is not updated from a region grown past
         ``NEWCOMER_FREEZE`` times the usual area, so that it keeps their own shape while the
         newcomer emerges (0 disables all of this).
-    min_upright : a region that no one claims starts a new person only when its height is at
+    newcomer_margin : float, default=0.1
+        Person heights beyond their predicted mask from which a newcomer's part starts; >= 0.
+    newcomer_min_frac : float, default=0.4
+        Least size of a newcomer's part, as a fraction of the person's usual area; > 0.
+    min_upright : float, default=1.0
+        A region that no one claims starts a new person only when its height is at
         least this many times its width (after ``group_stacked`` has joined the parts of one
         person): people stand upright, cars, barriers and ghost strips lie wide (0: any region).
+
+    Raises
+    ------
+    ValueError
+        A parameter out of its range.
     """
 
     def __init__(
@@ -277,10 +327,24 @@ class PersonTracker:
         return [t.id for t in self._tracks]
 
     def update(self, mask: np.ndarray) -> tuple[np.ndarray, list[Person]]:
-        """Track people in one cleaned foreground mask (H, W) bool.
+        """Track people in one cleaned foreground mask.
 
-        Returns (labels (H, W) int32 with 0 = background and id + 1 per person, the list of
-        people seen in this frame sorted by id).
+        Parameters
+        ----------
+        mask : ndarray of shape (H, W), dtype bool
+            The cleaned foreground mask (non-zero: foreground).
+
+        Returns
+        -------
+        labels : ndarray of shape (H, W), dtype int32
+            0 = background and id + 1 per person.
+        people : list of Person
+            The people seen in this frame, sorted by id.
+
+        Raises
+        ------
+        ValueError
+            ``mask`` is not 2-D.
         """
         m = np.asarray(mask)
         if m.ndim != 2:
@@ -645,12 +709,17 @@ def group_stacked(
     is no wider than ``max_aspect`` times its height (a standing person, seen from any side, is
     narrower than half their height; two people side by side are wider).
 
-    Args:
-        parts: (crop (h, w) bool, x0, y0) per region, pixels.
+    Parameters
+    ----------
+    parts : list of (ndarray of shape (h, w), int, int)
+        (crop (bool), x0, y0) per region, pixels.
+    max_aspect : float, default=0.45
+        Widest union, as a fraction of its height, that is one person.
 
     Returns
     -------
-        the groups' unions, in the same form.
+    list of (ndarray of shape (h, w), int, int)
+        The groups' unions, in the same form.
     """
     groups = list(parts)
     while True:
