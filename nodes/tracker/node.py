@@ -42,8 +42,22 @@ def _check_prior(v: str) -> str | None:
 
 
 def person_mask(shape: Any, labels: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """(H, W) bool mask of one PersonShape: its label where the silhouette node sent labels,
-    else the polygon of its B-spline control points.
+    """The mask of one PersonShape: its label where the silhouette node sent labels, else the polygon
+    of its B-spline control points.
+
+    Parameters
+    ----------
+    shape : PersonShape
+        The person (``id``, ``ctrl`` (n, 2) image pixels).
+    labels : ndarray of shape (H, W), dtype uint8
+        The silhouette node's label image (empty when it sent none).
+    size : tuple of int
+        (W, H) frame size, pixels, for the polygon.
+
+    Returns
+    -------
+    ndarray of shape (H, W), dtype bool
+        The person's pixels.
     """
     if labels.size:
         return labels == shape.id + 1
