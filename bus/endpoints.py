@@ -142,10 +142,29 @@ class TopicEndpoints:
     queued: str = ""
 
     def to_dict(self) -> dict[str, str]:
+        """The registry's form of the endpoints.
+
+        Returns
+        -------
+        dict of str to str
+            ``reliable``, ``latest`` and ``queued``.
+        """
         return {"reliable": self.reliable, "latest": self.latest, "queued": self.queued}
 
     @staticmethod
     def from_dict(d: dict[str, str]) -> TopicEndpoints:
+        """The endpoints from their registry form.
+
+        Parameters
+        ----------
+        d : dict of str to str
+            ``reliable``, ``latest`` and (optional) ``queued``, as :meth:`to_dict` writes.
+
+        Returns
+        -------
+        TopicEndpoints
+            The endpoints (``queued`` empty when absent).
+        """
         return TopicEndpoints(d["reliable"], d["latest"], d.get("queued", ""))
 
 
@@ -157,6 +176,25 @@ def _file_stem(topic: str) -> str:
 
 
 def ipc_endpoints(run_dir: Path, topic: str) -> TopicEndpoints:
+    """The unix-socket endpoints of a topic in a run directory.
+
+    Parameters
+    ----------
+    run_dir : Path
+        The run directory holding the sockets.
+    topic : str
+        The topic (characters unsafe in a file name replaced, long names shortened with a hash).
+
+    Returns
+    -------
+    TopicEndpoints
+        ``ipc://`` endpoints ``STEM.r``, ``STEM.l`` and ``STEM.q``.
+
+    Raises
+    ------
+    ValueError
+        When the socket path is too long for a unix socket.
+    """
     stem = _file_stem(topic)
     rel, lat = run_dir / f"{stem}.r", run_dir / f"{stem}.l"
     if len(str(rel)) > _IPC_MAX:

@@ -150,10 +150,36 @@ class GPLayer:
         return self.kernel(X, S) @ self.woodbury * self.y_sd + self.y_mean
 
     def arrays(self, prefix: str) -> dict[str, np.ndarray]:
+        """The layer's fields as float64 arrays, for a model file.
+
+        Parameters
+        ----------
+        prefix : str
+            Prefix of the keys (``PREFIX_FIELD``).
+
+        Returns
+        -------
+        dict of str to ndarray
+            One entry per field.
+        """
         return {f"{prefix}_{k}": np.asarray(v, np.float64) for k, v in self.__dict__.items()}
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray], prefix: str) -> GPLayer:
+        """The layer from :meth:`arrays`' entries.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            Entries as :meth:`arrays` writes them (others are ignored).
+        prefix : str
+            Prefix of the keys.
+
+        Returns
+        -------
+        GPLayer
+            The layer.
+        """
         kw: dict[str, Any] = {k: arrays[f"{prefix}_{k}"] for k in cls.__dataclass_fields__}
         for k in ("map_ls", "var", "noise"):
             kw[k] = float(kw[k])

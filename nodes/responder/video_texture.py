@@ -769,6 +769,15 @@ class VideoTexture:
 
     # ------------------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model for a model file (:func:`~counterpart.nodes.responder.models.save_model`).
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            The graph, eigenspace, labels, cluster members and (when attached) the frames.
+        config : dict
+            JSON-able configuration, frame rate, names, goals and step statistics.
+        """
         arrays = {
             "pca_mean": self.pca_mean_,
             "pca_components": self.pca_components_,
@@ -800,6 +809,20 @@ class VideoTexture:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> VideoTexture:
+        """The model from :meth:`get_state`'s output, reset to the first frame of its graph.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            As :meth:`get_state` returns them.
+        config : dict
+            As :meth:`get_state` returns it.
+
+        Returns
+        -------
+        VideoTexture
+            The fitted model.
+        """
         cfg = {k: tuple(v) if isinstance(v, list) else v for k, v in config["config"].items()}
         m = cls(VideoTextureConfig(**cfg))
         m.fps = float(config["fps"])

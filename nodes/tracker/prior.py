@@ -265,6 +265,13 @@ class MotionPrior:
 
     # -------------------------------------------------------------------------------- files
     def meta(self) -> dict[str, Any]:
+        """The metadata stored with the prior's arrays.
+
+        Returns
+        -------
+        dict
+            JSON-able version, kind, parameters, modelled DOFs, sources and frame count.
+        """
         return {
             "version": VERSION,
             "kind": "counterpart.tracker_prior",
