@@ -201,6 +201,7 @@ class Silhouette(Node):
     }
 
     def setup(self) -> None:
+        """Start without an extractor: one is made on the first frame, for its size and colour."""
         self.extractor: SilhouetteExtractor | None = None
         self.key: tuple[tuple[int, ...], bool] | None = None  # (frame size, mono) of the model
         self.found = 0
@@ -270,6 +271,14 @@ class Silhouette(Node):
         return ex.process(image)
 
     def on_frame(self, msg: Frame) -> None:
+        """Find the people of one frame and publish them (or hold the frame back while the background
+        is learnt, with ``replay_training``).
+
+        Parameters
+        ----------
+        msg : Frame
+            A bgr8 or mono8 frame; one that cannot be read gets a Silhouettes without people.
+        """
         self.frames += 1
         h, w = msg.image.shape[:2] if msg.image.ndim >= 2 else (0, 0)
         try:
@@ -335,6 +344,7 @@ class Silhouette(Node):
         )
 
     def on_end(self) -> None:
+        """Publish the frames still held back, and log how many frames had people."""
         self._release_held()
         self.log.info("people found in %d of %d frames", self.found, self.frames)
 
