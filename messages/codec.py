@@ -40,7 +40,26 @@ ALLOWED_DTYPES = frozenset(
 
 @dataclass(frozen=True)
 class Limits:
-    """Upper bounds enforced while decoding (bytes unless stated)."""
+    """Upper bounds enforced while decoding (bytes unless stated).
+
+    Parameters
+    ----------
+    max_header : int, default=1 << 20
+        Size of the msgpack header, bytes.
+    max_arrays : int, default=4096
+        Arrays of a message whose class is not known here (or holds ``Any`` fields); a known class
+        allows what its fields can hold (:func:`array_capacity`).
+    max_items : int, default=256
+        Items per list or dict counted for a known class's capacity (people per frame).
+    max_ndim : int, default=8
+        Rank of an array.
+    max_array_bytes : int, default=256 << 20
+        Size of one array, bytes.
+    max_total_bytes : int, default=512 << 20
+        Size of all arrays of a message, bytes.
+    max_container_len : int, default=1 << 16
+        Length of a string, list or map in the header when the header is larger than this.
+    """
 
     max_header: int = 1 << 20
     #: arrays of a message whose class is not known here (or holds ``Any`` fields); a known class
