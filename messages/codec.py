@@ -58,7 +58,7 @@ class Limits:
     max_total_bytes : int, default=512 << 20
         Size of all arrays of a message, bytes.
     max_container_len : int, default=1 << 16
-        Length of a string, list or map in the header when the header is larger than this.
+        Length of a list or map in the header (a header no larger than this is bounded by its own size).
     """
 
     max_header: int = 1 << 20
