@@ -67,17 +67,28 @@ class BVH:
 
     Attributes
     ----------
-        joint_names: J joint names in file order (End Sites excluded).
-        parents: (J,) int parent index, -1 for the root.
-        offsets: (J, 3) OFFSETs in file units.
-        channels: J tuples of channel names, e.g. ("Zrotation", "Yrotation", "Xrotation").
-        frame_time: seconds per frame.
-        motion: (T, C) float64 channel values (C = total channel count), file units / degrees.
-        end_site_names: E names, ``<parent>_End``.
-        end_site_parents: (E,) int joint index of each End Site's parent.
-        end_site_offsets: (E, 3) End Site OFFSETs in file units.
-        scale: metres per file unit, used by ``world_positions``.
-        path: the file it was read from.
+    joint_names : list of str
+        J joint names in file order (End Sites excluded).
+    parents : ndarray of shape (J,), dtype int
+        Parent index, -1 for the root.
+    offsets : ndarray of shape (J, 3)
+        OFFSETs in file units.
+    channels : list of tuple of str
+        J tuples of channel names, e.g. ("Zrotation", "Yrotation", "Xrotation").
+    frame_time : float
+        Seconds per frame.
+    motion : ndarray of shape (T, C), dtype float64
+        Channel values (C = total channel count), file units / degrees.
+    end_site_names : list of str
+        E names, ``<parent>_End``.
+    end_site_parents : ndarray of shape (E,), dtype int
+        Joint index of each End Site's parent.
+    end_site_offsets : ndarray of shape (E, 3)
+        End Site OFFSETs in file units.
+    scale : float
+        Metres per file unit, used by ``world_positions``.
+    path : str
+        The file it was read from.
     """
 
     joint_names: list[str]
@@ -106,7 +117,23 @@ class BVH:
         return list(self.joint_names) + list(self.end_site_names)
 
     def index(self, name: str) -> int:
-        """Column of ``name`` in ``all_names``; KeyError listing the names if absent."""
+        """Column of ``name`` in ``all_names``.
+
+        Parameters
+        ----------
+        name : str
+            A joint or End Site name.
+
+        Returns
+        -------
+        int
+            Its column in ``world_positions(True)``.
+
+        Raises
+        ------
+        KeyError
+            Listing the names, when ``name`` is absent.
+        """
         names = self.all_names
         if name not in names:
             raise KeyError(f"{name!r} is not a joint of {self.path or 'this BVH'}; joints: {names}")
@@ -123,6 +150,13 @@ class BVH:
         """World rotations (T, J, 3, 3) and positions (T, J, 3) in file units.
 
         Vectorised over frames; a loop over the J joints of the fixed hierarchy.
+
+        Returns
+        -------
+        rot : ndarray of shape (T, J, 3, 3)
+            World rotations.
+        pos : ndarray of shape (T, J, 3)
+            World positions, file units.
         """
         T, J = self.n_frames, len(self.joint_names)
         rot = np.empty((T, J, 3, 3))
@@ -150,8 +184,18 @@ class BVH:
         return rot, pos
 
     def world_positions(self, include_end_sites: bool = False) -> np.ndarray:
-        """(T, J, 3) world joint positions in metres (``* scale``); with ``include_end_sites``
-        (T, J + E, 3) with columns named by ``all_names``.
+        """World joint positions in metres (``* scale``).
+
+        Parameters
+        ----------
+        include_end_sites : bool, default=False
+            Append the End Sites after the joints.
+
+        Returns
+        -------
+        ndarray of shape (T, J, 3) or (T, J + E, 3)
+            Positions, metres, world frame; with ``include_end_sites`` the columns are named by
+            ``all_names``.
         """
         rot, pos = self.global_transforms()
         if include_end_sites and len(self.end_site_names):

@@ -40,6 +40,13 @@ RECORD_QUEUE = 64
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the ``record``, ``play``, ``info`` and ``export`` sub-commands and their options.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The ``counterpart bag`` parser.
+    """
     sub = p.add_subparsers(dest="action", required=True)
     r = sub.add_parser("record", help="record topics of a running launch to a bag")
     r.add_argument("-t", "--topic", action="append", default=[], metavar="TOPIC", help="topic to record (repeatable)")
@@ -104,6 +111,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 @quiet_broken_pipe
 def main(args: argparse.Namespace) -> int:
+    """Run the sub-command ``args.action``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        The sub-command's exit status.
+    """
     return {"record": record, "play": play, "info": info, "export": export}[args.action](args)
 
 
@@ -116,6 +135,18 @@ def _err(msg: str) -> int:
 
 
 def record(args: argparse.Namespace) -> int:
+    """``counterpart bag record``: record topics of a running launch to a bag (module docstring).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 1 with the error on stderr.
+    """
     import zmq
 
     from counterpart.messages import EndOfStream
@@ -237,6 +268,18 @@ def _progress(writer: Any, elapsed: float, subs: dict[str, Any]) -> None:
 
 
 def play(args: argparse.Namespace) -> int:
+    """``counterpart bag play``: publish a bag on the standalone endpoints (module docstring).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        Exit status: the player's, or 1 with the error on stderr.
+    """
     from .bag_nodes import Player
     from .node import standalone_spec
     from .params import parse_assignments
@@ -267,6 +310,18 @@ def play(args: argparse.Namespace) -> int:
 
 
 def info(args: argparse.Namespace) -> int:
+    """``counterpart bag info``: print a bag's topics, types, counts, time range and schemas.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 1 with the error on stderr.
+    """
     from .bag import BagReader
 
     try:
@@ -300,12 +355,34 @@ def info(args: argparse.Namespace) -> int:
 
 
 def safe_name(topic: str) -> str:
-    """A file name for a topic: characters other than letters, digits, ``_.-`` become ``_``."""
+    """A file name for a topic: characters other than letters, digits, ``_.-`` become ``_``.
+
+    Parameters
+    ----------
+    topic : str
+        Topic name.
+
+    Returns
+    -------
+    str
+        The file name (``_`` for an empty topic).
+    """
     return re.sub(r"[^A-Za-z0-9_.-]", "_", topic) or "_"
 
 
 def is_image(a: np.ndarray) -> bool:
-    """uint8 H x W or H x W x 3 with both sides at least ``MIN_IMAGE_SIDE`` pixels."""
+    """Whether an array is exported as an image.
+
+    Parameters
+    ----------
+    a : ndarray
+        A message's array.
+
+    Returns
+    -------
+    bool
+        True for uint8 H x W or H x W x 3 with both sides at least ``MIN_IMAGE_SIDE`` pixels.
+    """
     return (
         a.dtype == np.uint8
         and (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 3))
@@ -342,8 +419,29 @@ def _jsonable(value: Any, out_dir: Path, rel: str, stem: str, written: list[int]
 
 
 def export_bag(path: str | Path, out_dir: str | Path, topics: list[str] | None = None) -> dict[str, int]:
-    """Export a bag (see the module docstring); returns messages written per topic. Needs no message
-    class: fields are decoded from the self-describing wire header.
+    """Export a bag (see the module docstring). Needs no message class: fields are decoded from the
+    self-describing wire header.
+
+    Parameters
+    ----------
+    path : str or Path
+        The bag file.
+    out_dir : str or Path
+        Output folder (created when missing).
+    topics : list of str or None, default=None
+        Topics to export (None or empty: all).
+
+    Returns
+    -------
+    dict of str to int
+        Messages written per topic.
+
+    Raises
+    ------
+    ValueError
+        For topics not in the bag.
+    OSError
+        When an image cannot be written.
     """
     from .bag import BagReader, decode_fields
 
@@ -379,6 +477,18 @@ def export_bag(path: str | Path, out_dir: str | Path, topics: list[str] | None =
 
 
 def export(args: argparse.Namespace) -> int:
+    """``counterpart bag export``: write a bag's messages as JSON lines, ``.npy`` and ``.png`` files.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (:func:`add_arguments`).
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 1 with the error on stderr.
+    """
     try:
         counts = export_bag(args.file, args.output, args.topics or None)
     except (FileNotFoundError, ValueError, OSError) as exc:

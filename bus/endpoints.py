@@ -35,6 +35,21 @@ def private_dir(path: Path) -> Path:
     ``topic``, ``node`` and ``bag`` follow, so a folder owned by another user, a symbolic link, or a
     folder others may write to is refused (RunDirError); read and search bits for others on a
     folder of one's own are only taken away.
+
+    Parameters
+    ----------
+    path : Path
+        The folder (created with its parents when missing).
+
+    Returns
+    -------
+    Path
+        ``path``, mode 0700.
+
+    Raises
+    ------
+    RunDirError
+        For a symbolic link or non-folder, a folder owned by another user, or one others may write to.
     """
     path.mkdir(mode=0o700, parents=True, exist_ok=True)
     st = os.lstat(path)
@@ -62,6 +77,16 @@ def private_dir(path: Path) -> Path:
 def base_dir() -> Path:
     """Per-user folder holding run directories (``$COUNTERPART_HOME``, ``$XDG_RUNTIME_DIR/counterpart``
     or ``/tmp/counterpart-UID``), mode 0700 and the user's own (:func:`private_dir`).
+
+    Returns
+    -------
+    Path
+        The folder.
+
+    Raises
+    ------
+    RunDirError
+        As :func:`private_dir`.
     """
     env = os.environ.get("COUNTERPART_HOME")
     if env:
@@ -74,7 +99,13 @@ def base_dir() -> Path:
 
 
 def new_run_dir() -> Path:
-    """A fresh run directory, mode 0700, named by time and pid."""
+    """A fresh run directory, mode 0700, named by time and pid.
+
+    Returns
+    -------
+    Path
+        The new folder, under :func:`base_dir`.
+    """
     path = base_dir() / f"run-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
     path.mkdir(mode=0o700)
     os.chmod(path, 0o700)
@@ -82,14 +113,28 @@ def new_run_dir() -> Path:
 
 
 def standalone_dir() -> Path:
-    """Shared folder for nodes started alone (``counterpart run``) so they find each other by topic."""
+    """Shared folder for nodes started alone (``counterpart run``) so they find each other by topic.
+
+    Returns
+    -------
+    Path
+        ``base_dir() / standalone``, mode 0700.
+    """
     return private_dir(base_dir() / "standalone")
 
 
 @dataclass(frozen=True)
 class TopicEndpoints:
-    """The endpoints of one topic (what publishers bind and subscribers connect); ``queued`` is
-    empty in the registry of a launcher older than it.
+    """The endpoints of one topic (what publishers bind and subscribers connect).
+
+    Parameters
+    ----------
+    reliable : str
+        Endpoint of the reliable stream.
+    latest : str
+        Endpoint of the latest-only stream.
+    queued : str, default=""
+        Endpoint of the queued stream; empty in the registry of a launcher older than it.
     """
 
     reliable: str
@@ -97,10 +142,29 @@ class TopicEndpoints:
     queued: str = ""
 
     def to_dict(self) -> dict[str, str]:
+        """The registry's form of the endpoints.
+
+        Returns
+        -------
+        dict of str to str
+            ``reliable``, ``latest`` and ``queued``.
+        """
         return {"reliable": self.reliable, "latest": self.latest, "queued": self.queued}
 
     @staticmethod
     def from_dict(d: dict[str, str]) -> TopicEndpoints:
+        """The endpoints from their registry form.
+
+        Parameters
+        ----------
+        d : dict of str to str
+            ``reliable``, ``latest`` and (optional) ``queued``, as :meth:`to_dict` writes.
+
+        Returns
+        -------
+        TopicEndpoints
+            The endpoints (``queued`` empty when absent).
+        """
         return TopicEndpoints(d["reliable"], d["latest"], d.get("queued", ""))
 
 
@@ -112,6 +176,25 @@ def _file_stem(topic: str) -> str:
 
 
 def ipc_endpoints(run_dir: Path, topic: str) -> TopicEndpoints:
+    """The unix-socket endpoints of a topic in a run directory.
+
+    Parameters
+    ----------
+    run_dir : Path
+        The run directory holding the sockets.
+    topic : str
+        The topic (characters unsafe in a file name replaced, long names shortened with a hash).
+
+    Returns
+    -------
+    TopicEndpoints
+        ``ipc://`` endpoints ``STEM.r``, ``STEM.l`` and ``STEM.q``.
+
+    Raises
+    ------
+    ValueError
+        When the socket path is too long for a unix socket.
+    """
     stem = _file_stem(topic)
     rel, lat = run_dir / f"{stem}.r", run_dir / f"{stem}.l"
     if len(str(rel)) > _IPC_MAX:
@@ -120,7 +203,23 @@ def ipc_endpoints(run_dir: Path, topic: str) -> TopicEndpoints:
 
 
 def tcp_endpoints(address: str) -> TopicEndpoints:
-    """``tcp://host:port`` -> reliable on port, latest on port + 1, queued on port + 2."""
+    """The endpoints of a topic on TCP: reliable on port, latest on port + 1, queued on port + 2.
+
+    Parameters
+    ----------
+    address : str
+        ``tcp://HOST:PORT``.
+
+    Returns
+    -------
+    TopicEndpoints
+        The three endpoints.
+
+    Raises
+    ------
+    ValueError
+        For an address of another form, or a port out of range.
+    """
     m = re.fullmatch(r"tcp://([^:/]+):(\d+)", address)
     if not m:
         raise ValueError(f"tcp endpoint {address!r}: expected tcp://HOST:PORT")
@@ -133,6 +232,21 @@ def tcp_endpoints(address: str) -> TopicEndpoints:
 def bind_address(endpoint: str) -> str:
     """What a publisher binds for ``endpoint``: a named host is bound as given, ``*`` is refused
     unless spelled out as ``0.0.0.0`` (so nothing listens beyond loopback by accident).
+
+    Parameters
+    ----------
+    endpoint : str
+        A ZeroMQ endpoint.
+
+    Returns
+    -------
+    str
+        ``endpoint`` unchanged.
+
+    Raises
+    ------
+    ValueError
+        For ``tcp://*``.
     """
     if endpoint.startswith("tcp://*"):
         raise ValueError(f"endpoint {endpoint}: bind to an explicit host (127.0.0.1, or 0.0.0.0 to listen everywhere)")

@@ -40,7 +40,26 @@ ALLOWED_DTYPES = frozenset(
 
 @dataclass(frozen=True)
 class Limits:
-    """Upper bounds enforced while decoding (bytes unless stated)."""
+    """Upper bounds enforced while decoding (bytes unless stated).
+
+    Parameters
+    ----------
+    max_header : int, default=1 << 20
+        Size of the msgpack header, bytes.
+    max_arrays : int, default=4096
+        Arrays of a message whose class is not known here (or holds ``Any`` fields); a known class
+        allows what its fields can hold (:func:`array_capacity`).
+    max_items : int, default=256
+        Items per list or dict counted for a known class's capacity (people per frame).
+    max_ndim : int, default=8
+        Rank of an array.
+    max_array_bytes : int, default=256 << 20
+        Size of one array, bytes.
+    max_total_bytes : int, default=512 << 20
+        Size of all arrays of a message, bytes.
+    max_container_len : int, default=1 << 16
+        Length of a list or map in the header (a header no larger than this is bounded by its own size).
+    """
 
     max_header: int = 1 << 20
     #: arrays of a message whose class is not known here (or holds ``Any`` fields); a known class
@@ -57,7 +76,16 @@ DEFAULT_LIMITS = Limits()
 
 
 class DecodeError(ValueError):
-    """A received message that cannot be decoded; ``kind`` is a short category used for counting."""
+    """A received message that cannot be decoded.
+
+    Parameters
+    ----------
+    kind : str
+        Short category used for counting (``malformed``, ``oversized``, ``unknown_schema``, ``bad_array``,
+        ``bad_field``).
+    detail : str
+        What was wrong, for the log.
+    """
 
     def __init__(self, kind: str, detail: str) -> None:
         super().__init__(f"{kind}: {detail}")
@@ -74,7 +102,18 @@ _EXT_TYPES = (msgpack.ExtType, slice)
 
 
 def array_ref(index: int) -> msgpack.ExtType:
-    """The header's reference to buffer ``index``."""
+    """The header's reference to buffer ``index``.
+
+    Parameters
+    ----------
+    index : int
+        Position of the buffer among the message's arrays (0 = first buffer after the header).
+
+    Returns
+    -------
+    msgpack.ExtType
+        Ext type ``ARRAY_EXT`` holding ``index`` as 4 little-endian bytes.
+    """
     return msgpack.ExtType(ARRAY_EXT, index.to_bytes(4, "little"))
 
 
@@ -131,6 +170,12 @@ _DECODERS: dict[type, Callable[[dict[str, Any], list[np.ndarray]], Any]] = {}
 def use_fast_path(on: bool) -> None:
     """Take the shortcuts of :mod:`counterpart.messages.fastpath` (the default) or the plain path
     alone (the bus bench compares the two; the equivalence test runs both).
+
+    Parameters
+    ----------
+    on : bool
+        True: use the fast path where it applies; False: the plain encoder and decoder only. The cached
+        per-class encoders and decoders are cleared either way.
     """
     global FAST
     FAST = bool(on)
@@ -141,6 +186,23 @@ def use_fast_path(on: bool) -> None:
 def encode(msg: Any, counter: int | None = None) -> list[Any]:
     """Header bytes followed by one buffer per array (no topic frame): :func:`encode_plain`'s
     bytes, through the fast path where it applies.
+
+    Parameters
+    ----------
+    msg : object
+        An instance of a registered message class.
+    counter : int or None, default=None
+        The publisher's send count, for drop detection (None: not sent).
+
+    Returns
+    -------
+    list
+        The header bytes, then one buffer per array.
+
+    Raises
+    ------
+    TypeError
+        When ``msg`` is not an instance of a registered message class.
     """
     enc = _ENCODERS.get(type(msg))
     if enc is None:
@@ -152,7 +214,20 @@ def encode(msg: Any, counter: int | None = None) -> list[Any]:
 
 
 def encode_frames(topic: str | bytes, msg: Any) -> list[Any]:
-    """The full multipart message ``[topic, header, buffers...]``."""
+    """The full multipart message ``[topic, header, buffers...]``.
+
+    Parameters
+    ----------
+    topic : str or bytes
+        The topic frame (str is UTF-8 encoded).
+    msg : object
+        An instance of a registered message class.
+
+    Returns
+    -------
+    list
+        The topic bytes, the header bytes, then one buffer per array.
+    """
     t = topic.encode() if isinstance(topic, str) else topic
     return [t, *encode(msg)]
 
@@ -171,7 +246,27 @@ def _buffer(frame: Any) -> memoryview:
 
 
 def read_header(raw: Any, limits: Limits = DEFAULT_LIMITS) -> dict[str, Any]:
-    """Unpack and shape-check the msgpack header."""
+    """Unpack and shape-check the msgpack header.
+
+    Parameters
+    ----------
+    raw : zmq.Frame, bytes or memoryview
+        The header part as received.
+    limits : Limits, default=DEFAULT_LIMITS
+        Bounds on the header's size and its containers' lengths.
+
+    Returns
+    -------
+    dict
+        The header map: schema id ``"s"``, fields ``"f"``, array specs ``"a"`` (optional) and send
+        counter ``"n"`` (optional).
+
+    Raises
+    ------
+    DecodeError
+        ``oversized`` when the header exceeds ``limits.max_header`` bytes; ``malformed`` when it is not
+        valid msgpack or not a map with ``"s"``, ``"f"`` and (if present) a list ``"a"``.
+    """
     buf = _buffer(raw)
     size = buf.nbytes
     if size > limits.max_header:
@@ -210,7 +305,19 @@ _DTYPES = {d: np.dtype(d) for d in ALLOWED_DTYPES}
 def array_capacity(cls: type | None, limits: Limits = DEFAULT_LIMITS) -> int:
     """How many arrays a message of class ``cls`` can hold: its array fields, nested structs
     included, with ``limits.max_items`` items per list or dict (e.g. 1 + 256 people x 3 arrays for
-    ``silhouette.Silhouettes``); ``limits.max_arrays`` for an unknown class or ``Any`` fields.
+    ``silhouette.Silhouettes``).
+
+    Parameters
+    ----------
+    cls : type or None
+        The message class; None when it is not known here.
+    limits : Limits, default=DEFAULT_LIMITS
+        Supplies ``max_items`` (items per list or dict) and ``max_arrays``.
+
+    Returns
+    -------
+    int
+        The array capacity; ``limits.max_arrays`` for an unknown class or ``Any`` fields.
     """
     if cls is None:
         return limits.max_arrays
@@ -223,7 +330,22 @@ def array_capacity(cls: type | None, limits: Limits = DEFAULT_LIMITS) -> int:
 
 
 def check_array_count(n: int, cls: type | None, limits: Limits = DEFAULT_LIMITS) -> None:
-    """DecodeError ``oversized`` when a header names more arrays than a ``cls`` message can hold."""
+    """Check a header's array count against what a ``cls`` message can hold.
+
+    Parameters
+    ----------
+    n : int
+        Number of arrays the header names.
+    cls : type or None
+        The message class; None when it is not known here.
+    limits : Limits, default=DEFAULT_LIMITS
+        The bounds used by :func:`array_capacity`.
+
+    Raises
+    ------
+    DecodeError
+        ``oversized`` when ``n`` exceeds :func:`array_capacity` of ``cls``.
+    """
     cap = array_capacity(cls, limits)
     if n > cap:
         what = getattr(cls, "__schema_id__", "a message of an unknown type")
@@ -298,12 +420,52 @@ def _arrays(specs: list[Any], parts: Sequence[Any], limits: Limits, cls: type | 
 
 
 def decode(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> Any:
-    """Decode ``[header, buffers...]`` (no topic frame) into a message instance."""
+    """Decode ``[header, buffers...]`` (no topic frame) into a message instance.
+
+    Parameters
+    ----------
+    parts : sequence of zmq.Frame, bytes or memoryview
+        The header part, then one buffer per array.
+    limits : Limits, default=DEFAULT_LIMITS
+        Bounds enforced while decoding.
+
+    Returns
+    -------
+    object
+        An instance of the registered message class; its arrays are read-only views over the parts.
+
+    Raises
+    ------
+    DecodeError
+        As :func:`decode_counted`.
+    """
     return decode_counted(parts, limits)[0]
 
 
 def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
-    """Like :func:`decode`, also returning the publisher's send counter (None when absent)."""
+    """Like :func:`decode`, also returning the publisher's send counter.
+
+    Parameters
+    ----------
+    parts : sequence of zmq.Frame, bytes or memoryview
+        The header part, then one buffer per array.
+    limits : Limits, default=DEFAULT_LIMITS
+        Bounds enforced while decoding.
+
+    Returns
+    -------
+    msg : object
+        An instance of the registered message class.
+    counter : int or None
+        The publisher's send counter; None when absent.
+
+    Raises
+    ------
+    DecodeError
+        ``malformed`` (no header frame or a bad header), ``oversized``, ``unknown_schema`` (the schema is
+        not registered here), ``bad_array`` (array specs that do not match the buffers) or ``bad_field``
+        (a value the message class rejects).
+    """
     if len(parts) < 1:
         raise DecodeError("malformed", "no header frame")
     header = read_header(parts[0], limits)
@@ -328,7 +490,27 @@ def decode_counted(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
 
 
 def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[str, Any]:
-    """Decode a full multipart message into ``(topic, message)``."""
+    """Decode a full multipart message into ``(topic, message)``.
+
+    Parameters
+    ----------
+    frames : sequence of zmq.Frame, bytes or memoryview
+        The topic frame, the header, then one buffer per array.
+    limits : Limits, default=DEFAULT_LIMITS
+        Bounds enforced while decoding.
+
+    Returns
+    -------
+    topic : str
+        The topic.
+    msg : object
+        An instance of the registered message class.
+
+    Raises
+    ------
+    DecodeError
+        ``malformed`` for fewer than two frames or a topic that is not UTF-8; otherwise as :func:`decode`.
+    """
     if len(frames) < 2:
         raise DecodeError("malformed", f"{len(frames)} frame(s); need at least topic and header")
     try:
@@ -342,6 +524,13 @@ def decode_frames(frames: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tup
 class UntypedMessage:
     """A message whose schema is not registered in this process (introspection tools, bags):
     its fields as plain values, arrays resolved.
+
+    Parameters
+    ----------
+    schema : str
+        The schema id from the header.
+    fields : dict of str to object
+        The fields as plain values, array references replaced by read-only arrays.
     """
 
     schema: str
@@ -357,7 +546,27 @@ class UntypedMessage:
 
 
 def decode_any(parts: Sequence[Any], limits: Limits = DEFAULT_LIMITS) -> tuple[Any, int | None]:
-    """Decode typed when the schema is registered here, else as an :class:`UntypedMessage`."""
+    """Decode typed when the schema is registered here, else as an :class:`UntypedMessage`.
+
+    Parameters
+    ----------
+    parts : sequence of zmq.Frame, bytes or memoryview
+        The header part, then one buffer per array.
+    limits : Limits, default=DEFAULT_LIMITS
+        Bounds enforced while decoding.
+
+    Returns
+    -------
+    msg : object or UntypedMessage
+        The message instance, or an :class:`UntypedMessage` for a schema not registered here.
+    counter : int or None
+        The publisher's send counter; None when absent.
+
+    Raises
+    ------
+    DecodeError
+        As :func:`decode_counted`.
+    """
     if len(parts) < 1:
         raise DecodeError("malformed", "no header frame")
     header = read_header(parts[0], limits)
@@ -485,8 +694,18 @@ def _resolve_any(value: Any, arrays: list[np.ndarray]) -> Any:
 
 
 def array_index(value: Any) -> int | None:
-    """The buffer index of an array reference in a header from :func:`read_header`; None when
-    ``value`` is anything else.
+    """The buffer index of an array reference in a header from :func:`read_header`.
+
+    Parameters
+    ----------
+    value : object
+        A value from the header's fields: a ``msgpack.ExtType`` (plain path) or a ``slice`` (fast path)
+        for an array reference.
+
+    Returns
+    -------
+    int or None
+        The buffer index; None when ``value`` is anything else.
     """
     if type(value) is msgpack.ExtType:
         code, data = value

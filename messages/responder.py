@@ -23,21 +23,40 @@ INTEREST_LEVELS: tuple[int, ...] = (1, 2, 3)
 class Partner:
     """The generated partner for one frame.
 
-    ``joints`` (14, 3) float32 metres (world frame) for 3D models, empty otherwise; ``ctrl`` (n, 2)
-    float32 image pixels of the partner's B-spline silhouette for the joint-shape model, empty
-    otherwise; ``observed_id`` the silhouette/tracker id of the person it responds to; ``behaviour``
-    a short label of what it does (e.g. ``handshake``, ``nod``); ``emotion``/``strength`` the style
-    in force; ``confidence`` in [0, 1].
+    ``speaker`` and ``interest`` were added with defaults, as were the video-texture avatar's fields,
+    so senders and readers of the other fields are unaffected.
 
-    ``speaker`` and ``interest`` (added with defaults): the listener settings in force when the
-    partner was made ("" and 0 from senders that do not say), so that a reader sees every control
-    take effect.
-
-    The video-texture avatar (fields added with defaults, so senders and readers of the fields above
-    are unaffected): ``avatar_file`` the avatar file holding the recording's masked frames;
-    ``avatar_frames`` (n,) int32 indices of the recording frames to show, blended with
-    ``avatar_weights`` (n,) float32 summing to 1 (two frames during a cut's cross-fade); empty for
-    the other models. ``joints`` then says where the avatar stands (and so its scale).
+    Parameters
+    ----------
+    model : str, default=""
+        The model that made the partner.
+    joints : ndarray of shape (14, 3), dtype float32
+        Metres (world frame) for 3D models, empty otherwise; for the video-texture avatar, where it
+        stands (and so its scale).
+    ctrl : ndarray of shape (n, 2), dtype float32
+        Image pixels of the partner's B-spline silhouette for the joint-shape model, empty otherwise.
+    observed_id : int, default=-1
+        The silhouette/tracker id of the person it responds to.
+    behaviour : str, default=""
+        A short label of what it does (e.g. ``handshake``, ``nod``).
+    emotion : str, default="neutral"
+        The style in force.
+    strength : float, default=0.0
+        The style's strength in force.
+    confidence : float, default=0.0
+        Confidence in [0, 1].
+    avatar_file : str, default=""
+        The avatar file holding the recording's masked frames (video-texture avatar).
+    avatar_frames : ndarray of shape (n,), dtype int32
+        Indices of the recording frames to show (two during a cut's cross-fade); empty for the other
+        models.
+    avatar_weights : ndarray of shape (n,), dtype float32
+        Blend weights of ``avatar_frames``, summing to 1; empty for the other models.
+    speaker : str, default=""
+        The listener setting in force when the partner was made ("" from senders that do not say), so
+        that a reader sees every control take effect.
+    interest : int, default=0
+        The listener interest level in force (0 from senders that do not say).
     """
 
     model: str = ""
@@ -59,10 +78,26 @@ class Partner:
 class Control:
     """A run-time control from the web page or the CLI; None leaves a setting unchanged.
 
-    ``model``: one of ``INTERACTION_MODELS``; ``speaker``: one of ``SPEAKERS``; ``interest``: one of
-    ``INTEREST_LEVELS``; ``emotion``: one of ``EMOTIONS``; ``strength`` in [0, 1]; ``overlays``:
-    overlay name -> on/off for the renderer. Any other value raises ValueError naming the field and
-    what it takes, when the message is made and when it is decoded (a ``bad_field`` there).
+    Parameters
+    ----------
+    model : str or None, default=None
+        One of ``INTERACTION_MODELS``.
+    speaker : str or None, default=None
+        One of ``SPEAKERS``.
+    interest : int or None, default=None
+        One of ``INTEREST_LEVELS``.
+    emotion : str or None, default=None
+        One of ``EMOTIONS``.
+    strength : float or None, default=None
+        Style strength in [0, 1].
+    overlays : dict of str to bool or None, default=None
+        Overlay name -> on/off for the renderer.
+
+    Raises
+    ------
+    ValueError
+        For any other value, naming the field and what it takes, when the message is made and when it is
+        decoded (a ``bad_field`` there).
     """
 
     model: str | None = None

@@ -29,7 +29,18 @@ CMU_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def default_cmu_pair() -> tuple[str, str]:
-    """Paths of the CMU handshake pair in the shared data folder; FileNotFoundError if absent."""
+    """Paths of the CMU handshake pair in the shared data folder.
+
+    Returns
+    -------
+    path_a, path_b : str
+        The BVH files of subjects 18 and 19, trial 1.
+
+    Raises
+    ------
+    FileNotFoundError
+        When either file is absent.
+    """
     a, b = (os.path.normpath(os.path.join(CMU_DIR, f)) for f in ("18_01.bvh", "19_01.bvh"))
     for p in (a, b):
         if not os.path.exists(p):
@@ -46,7 +57,25 @@ def _rot_y(points: np.ndarray, angle: float) -> np.ndarray:
 def scenario_from_bvh(
     path_a: str | os.PathLike, path_b: str | os.PathLike, fps: float = 25.0, label: str = "handshake", seed: int = 0
 ) -> Scenario:
-    """A :class:`counterpart.sim.scenarios.Scenario` from two BVH files of one take (see the module docstring)."""
+    """A :class:`counterpart.sim.scenarios.Scenario` from two BVH files of one take (see the module docstring).
+
+    Parameters
+    ----------
+    path_a, path_b : str or os.PathLike
+        BVH files of the two people of one take.
+    fps : float, default=25.0
+        Frame rate of the scenario (Hz).
+    label : str, default="handshake"
+        Interaction label.
+    seed : int, default=0
+        Recorded in the scenario's metadata.
+
+    Returns
+    -------
+    Scenario
+        Poses, body dimensions, phases and social signals of both people, rotated so that they meet
+        along +X and centred on their meeting point.
+    """
     traj = TwoPersonTrajectory.from_bvh_pair(path_a, path_b, fps=fps, label=label)
     A, B = traj.a.astype(np.float64), traj.b.astype(np.float64)
     pa = 0.5 * (A[:, 8] + A[:, 11])

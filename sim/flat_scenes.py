@@ -16,9 +16,20 @@ import numpy as np
 
 @dataclass(frozen=True, eq=False)
 class SyntheticSequence:
-    """frames (N, H, W, 3) uint8 BGR; person_masks (N, 2, H, W) bool (person 0 starts on the
-    left); shadow_masks (N, H, W) bool (shadow pixels not covered by a person); background
-    (H, W, 3) float32 noise-free background; heights (2,) pixels.
+    """A synthetic image sequence with its ground truth.
+
+    Parameters
+    ----------
+    frames : ndarray of shape (N, H, W, 3), dtype uint8
+        BGR frames.
+    person_masks : ndarray of shape (N, 2, H, W), dtype bool
+        Each person's pixels (person 0 starts on the left).
+    shadow_masks : ndarray of shape (N, H, W), dtype bool
+        Shadow pixels not covered by a person.
+    background : ndarray of shape (H, W, 3), dtype float32
+        Noise-free background.
+    heights : ndarray of shape (2,)
+        The people's heights, pixels.
     """
 
     frames: np.ndarray
@@ -29,7 +40,18 @@ class SyntheticSequence:
 
 
 def textured_background(h: int, w: int) -> np.ndarray:
-    """(h, w, 3) float32 BGR background, 40..180 grey levels, chromaticity varying over the image."""
+    """A textured BGR background, 40..180 grey levels, chromaticity varying over the image.
+
+    Parameters
+    ----------
+    h, w : int
+        Image size, pixels.
+
+    Returns
+    -------
+    ndarray of shape (h, w, 3), dtype float32
+        The background.
+    """
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     return np.stack(
         [
@@ -42,7 +64,21 @@ def textured_background(h: int, w: int) -> np.ndarray:
 
 
 def draw_figure(mask: np.ndarray, cx: float, feet_y: int, height: float, arm: int = 0) -> None:
-    """Draw a standing figure (head, body, one horizontal arm of length ``arm`` px) into a uint8 mask."""
+    """Draw a standing figure (head, body, one horizontal arm) into a mask.
+
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W), dtype uint8
+        Drawn into in place (1 on the figure).
+    cx : float
+        Horizontal centre of the figure, pixels.
+    feet_y : int
+        Row of the feet, pixels.
+    height : float
+        Figure height, pixels.
+    arm : int, default=0
+        Arm length, pixels (negative: pointing left; 0: no arm).
+    """
     cx_i = int(round(cx))
     top = int(feet_y - height)
     head_r = max(3, int(height * 0.09))
@@ -64,7 +100,28 @@ def two_person_sequence(
     empty_frames: int = 0,
     seed: int = 0,
 ) -> SyntheticSequence:
-    """Two people meet, shake hands and part; ``empty_frames`` frames of the empty scene first."""
+    """Two people meet, shake hands and part.
+
+    Parameters
+    ----------
+    n_frames : int, default=60
+        Frames with the people.
+    size : tuple of int, default=(240, 320)
+        (H, W) pixels.
+    noise : float, default=2.5
+        Std of the Gaussian pixel noise, grey levels.
+    shadow_factor : float, default=0.6
+        Brightness factor of shadow pixels.
+    empty_frames : int, default=0
+        Frames of the empty scene first.
+    seed : int, default=0
+        Noise seed.
+
+    Returns
+    -------
+    SyntheticSequence
+        ``empty_frames + n_frames`` frames with their ground truth.
+    """
     h, w = size
     rng = np.random.default_rng(seed)
     bg = textured_background(h, w)

@@ -49,14 +49,35 @@ CONFIRM = 2
 class FaceTrackParams:
     """Parameters of face tracking.
 
-    fps: frame rate (Hz). min_face_px: smallest face width tracked (px). max_miss_s: longest run
-    of missed detections bridged by the flow (s). anchor_s: time constant of the pull of the head
-    point towards the detected box (s). size_s: time constant of the face size smoothing (s).
-    search_every_s: period of the whole-frame search for new faces while one is tracked (s).
-    max_faces: most faces tracked at once. n_points: optical-flow points per face. max_jump:
-    largest distance (face widths) from the tracked point at which a detection is taken as this
-    face (beyond it the track is ended and restarted there). max_flow_s: longest run of missed
-    detections bridged while the flow follows the face (s; at least ``max_miss_s``).
+    Parameters
+    ----------
+    fps : float
+        Frame rate (Hz), > 0.
+    min_face_px : int, default=40
+        Smallest face width tracked (px), at least ``HAAR_WINDOW_PX``.
+    max_miss_s : float, default=0.5
+        Longest run of missed detections bridged by the flow (s).
+    anchor_s : float, default=1.0
+        Time constant of the pull of the head point towards the detected box (s).
+    size_s : float, default=1.0
+        Time constant of the face size smoothing (s).
+    search_every_s : float, default=0.5
+        Period of the whole-frame search for new faces while one is tracked (s).
+    max_faces : int, default=2
+        Most faces tracked at once.
+    n_points : int, default=40
+        Optical-flow points per face (>= 8).
+    max_jump : float, default=0.5
+        Largest distance (face widths) from the tracked point at which a detection is taken as this face
+        (beyond it the track is ended and restarted there).
+    max_flow_s : float, default=2.0
+        Longest run of missed detections bridged while the flow follows the face (s; at least
+        ``max_miss_s``).
+
+    Raises
+    ------
+    ValueError
+        Naming the first parameter out of range.
     """
 
     fps: float
@@ -91,7 +112,18 @@ class FaceTrackParams:
                 raise ValueError(f"{name}={getattr(self, name)!r}: {why}")
 
     def alpha(self, seconds: float) -> float:
-        """Per-frame gain of a first-order smoother of time constant ``seconds``."""
+        """Per-frame gain of a first-order smoother.
+
+        Parameters
+        ----------
+        seconds : float
+            Time constant (s).
+
+        Returns
+        -------
+        float
+            ``1 - exp(-1 / (seconds * fps))``, in (0, 1).
+        """
         return float(1.0 - np.exp(-1.0 / (seconds * self.fps)))
 
     @property
@@ -110,11 +142,31 @@ _ids = count()
 
 @dataclass
 class FaceTrack:
-    """One tracked face. center: (2,) head point (px, x right, y down); size: smoothed face width
-    (px); box: the smoothed box (x, y, w, h) px, floats; detected: the last search found it;
-    missed: frames since the last detection (the search runs on every other frame while the flow
-    follows a confirmed face, so ``detected`` is that of the last search); age: frames since the track started; slot: its place
-    among the tracked faces; track_id: unique over the run.
+    """One tracked face.
+
+    Attributes
+    ----------
+    center : ndarray of shape (2,)
+        Head point (px, x right, y down).
+    size : float
+        Smoothed face width (px).
+    slot : int
+        Its place among the tracked faces.
+    track_id : int
+        Unique over the run.
+    detected : bool
+        The last search found it (the search runs on every other frame while the flow follows a
+        confirmed face, so this is that of the last search).
+    missed : int
+        Frames since the last detection.
+    age : int
+        Frames since the track started.
+    flow_ok : bool
+        The optical flow followed the face into this frame.
+    points : ndarray of shape (n, 1, 2), dtype float32
+        Optical-flow points (px).
+    box : tuple of float
+        The smoothed box (x, y, w, h) px.
     """
 
     center: np.ndarray
@@ -174,8 +226,14 @@ def _detect(
 class FaceTracker:
     """Tracks up to ``max_faces`` frontal faces through a video (see the module docstring).
 
-    ``update(gray) -> list[FaceTrack]`` per frame, gray (H, W) uint8; the tracks alive on this
-    frame, in slot order.
+    Call :meth:`update` once per frame.
+
+    Parameters
+    ----------
+    params : FaceTrackParams
+        Tracking parameters.
+    cascade : cv2.CascadeClassifier
+        The frontal face detector.
     """
 
     def __init__(self, params: FaceTrackParams, cascade: cv2.CascadeClassifier) -> None:
@@ -254,7 +312,18 @@ class FaceTracker:
         return f[i] if d[i] <= self.params.max_jump * w else None
 
     def update(self, gray: np.ndarray) -> list[FaceTrack]:
-        """Track the faces into frame ``gray`` (H, W) uint8; returns the live tracks."""
+        """Track the faces into a frame.
+
+        Parameters
+        ----------
+        gray : ndarray of shape (H, W), dtype uint8
+            The frame, grey.
+
+        Returns
+        -------
+        list of FaceTrack
+            The tracks alive on this frame, in slot order.
+        """
         p = self.params
         alive: list[FaceTrack] = []
         for tr in self.tracks:

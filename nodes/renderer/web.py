@@ -45,11 +45,29 @@ LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1", "[::1]")
 
 
 def page_html() -> str:
-    """The page template shipped in the package (``nodes/renderer/page.html``)."""
+    """The page template shipped in the package (``nodes/renderer/page.html``).
+
+    Returns
+    -------
+    str
+        The page's HTML.
+    """
     return resources.files(__package__).joinpath("page.html").read_text(encoding="utf-8")
 
 
 def is_loopback(host: str) -> bool:
+    """Whether a host name or address is loopback only.
+
+    Parameters
+    ----------
+    host : str
+        ``localhost`` or an IPv4/IPv6 address (brackets allowed).
+
+    Returns
+    -------
+    bool
+        True for ``localhost`` and loopback addresses; False for anything else, names included.
+    """
     if host in ("localhost",):
         return True
     try:
@@ -61,13 +79,21 @@ def is_loopback(host: str) -> bool:
 class LiveServer:
     """The web page of one renderer.
 
-    Args:
-        host, port: where to listen (port 0: a free port, see :attr:`port` after :meth:`start`).
-        on_control: called with the request's JSON object; returns the accepted control as a dict
-            or raises ValueError (answered 400). Runs in a server thread.
-        state: returns the JSON-able state for ``/state``.
-        stats: returns the JSON-able stats for ``/stats``.
-        jpeg_quality: 1-100 for the stream.
+    Parameters
+    ----------
+    host : str
+        Where to listen.
+    port : int
+        Port to listen on (0: a free port, see :attr:`port` after :meth:`start`).
+    on_control : callable
+        Called with the request's JSON object; returns the accepted control as a dict or raises
+        ValueError (answered 400). Runs in a server thread.
+    state : callable
+        Returns the JSON-able state for ``/state``.
+    stats : callable
+        Returns the JSON-able stats for ``/stats``.
+    jpeg_quality : int, default=80
+        JPEG quality of the stream, 1-100.
     """
 
     def __init__(
@@ -97,7 +123,18 @@ class LiveServer:
 
     # ------------------------------------------------------------------------------- life cycle
     def start(self) -> LiveServer:
-        """Bind and serve in a daemon thread. OSError (port in use, bad host) names the address."""
+        """Bind and serve in a daemon thread.
+
+        Returns
+        -------
+        LiveServer
+            self.
+
+        Raises
+        ------
+        OSError
+            Naming the address, when it cannot be bound (port in use, bad host).
+        """
         handler = type("Handler", (_Handler,), {"live": self})
         try:
             self.httpd = ThreadingHTTPServer((self.host, self.requested_port), handler)
@@ -133,13 +170,27 @@ class LiveServer:
 
     # ----------------------------------------------------------------------------------- frames
     def push(self, image: np.ndarray, seq: int) -> None:
-        """Make ``image`` (H, W, 3) uint8 BGR the newest frame (kept by reference: do not modify it)."""
+        """Make ``image`` the newest frame.
+
+        Parameters
+        ----------
+        image : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame, kept by reference: do not modify it.
+        seq : int
+            The frame's sequence number.
+        """
         with self.cond:
             self.image, self.seq = image, int(seq)
             self.cond.notify_all()
 
     def jpeg(self) -> tuple[int, bytes] | None:
-        """(seq, JPEG bytes) of the newest frame, encoded once per frame, or None before the first."""
+        """The newest frame as JPEG, encoded once per frame.
+
+        Returns
+        -------
+        tuple of (int, bytes) or None
+            (seq, JPEG bytes) of the newest frame, or None before the first.
+        """
         with self.cond:
             image, seq, cached = self.image, self.seq, self._jpeg
         if image is None:
@@ -153,7 +204,20 @@ class LiveServer:
         return seq, data
 
     def wait_newer(self, seq: int, timeout: float) -> bool:
-        """Wait until a frame newer than ``seq`` is pushed (True) or timeout/closing (False)."""
+        """Wait until a frame newer than ``seq`` is pushed.
+
+        Parameters
+        ----------
+        seq : int
+            Sequence number of the frame the caller has.
+        timeout : float
+            Longest wait, seconds.
+
+        Returns
+        -------
+        bool
+            True when a newer frame came; False on timeout or closing.
+        """
         with self.cond:
             self.cond.wait_for(lambda: self.seq != seq or self.closing, timeout)
             return self.seq != seq and not self.closing

@@ -27,7 +27,24 @@ import numpy as np
 
 
 def rbf(X: np.ndarray, Z: np.ndarray, lengthscale: np.ndarray | float, variance: float = 1.0) -> np.ndarray:
-    """Squared-exponential kernel matrix (N, M) of X (N, d) and Z (M, d), ARD lengthscales (d,) or scalar."""
+    """Squared-exponential kernel matrix.
+
+    Parameters
+    ----------
+    X : ndarray of shape (N, d)
+        First points.
+    Z : ndarray of shape (M, d)
+        Second points.
+    lengthscale : ndarray of shape (d,) or float
+        ARD lengthscales, or one for all dimensions.
+    variance : float, default=1.0
+        Kernel variance.
+
+    Returns
+    -------
+    ndarray of shape (N, M)
+        ``variance * exp(-0.5 |x - z|^2 / lengthscale^2)``.
+    """
     A, B = X / lengthscale, Z / lengthscale
     d2 = (A * A).sum(1)[:, None] + (B * B).sum(1)[None, :] - 2.0 * A @ B.T
     return variance * np.exp(-0.5 * np.maximum(d2, 0.0))
@@ -37,11 +54,28 @@ def rbf(X: np.ndarray, Z: np.ndarray, lengthscale: np.ndarray | float, variance:
 class GPLayer:
     """A fitted layer (module docstring), all numpy.
 
-    Attributes: y_mean, y_sd (D,) data standardisation; centres (B, D) standardised, map_ls the
-    back-constraint kernel's lengthscale and A (B, q) its weights; Z (M, q + n_s) inducing
-    inputs; ls (q,) and var the RBF's lengthscales and variance; style_w (n_s,) the style
-    weights w; woodbury (M, D) the sparse posterior's weights (mean = K(x*, Z) woodbury);
-    noise the Gaussian noise variance (standardised units).
+    Attributes
+    ----------
+    y_mean, y_sd : ndarray of shape (D,)
+        Data standardisation.
+    centres : ndarray of shape (B, D)
+        Back-constraint centres, standardised.
+    map_ls : float
+        The back-constraint kernel's lengthscale.
+    A : ndarray of shape (B, q)
+        The back-constraint kernel's weights.
+    Z : ndarray of shape (M, q + n_s)
+        Inducing inputs.
+    ls : ndarray of shape (q,)
+        The RBF's lengthscales.
+    var : float
+        The RBF's variance.
+    style_w : ndarray of shape (n_s,)
+        The style weights w.
+    woodbury : ndarray of shape (M, D)
+        The sparse posterior's weights (mean = K(x*, Z) woodbury).
+    noise : float
+        The Gaussian noise variance (standardised units).
     """
 
     y_mean: np.ndarray
@@ -61,12 +95,36 @@ class GPLayer:
         return int(self.A.shape[1])
 
     def project(self, Y: np.ndarray) -> np.ndarray:
-        """Back-projection: data (N, D) -> latent points (N, q)."""
+        """Back-projection of data to latent points.
+
+        Parameters
+        ----------
+        Y : ndarray of shape (N, D)
+            Data, data units.
+
+        Returns
+        -------
+        ndarray of shape (N, q)
+            Latent points.
+        """
         Yn = (np.atleast_2d(Y) - self.y_mean) / self.y_sd
         return rbf(Yn, self.centres, self.map_ls) @ self.A
 
     def kernel(self, X: np.ndarray, S: np.ndarray | None = None) -> np.ndarray:
-        """k([x, s], Z) (N, M) of eq. (1); S (N, n_s) style vectors (None: no style)."""
+        """k([x, s], Z) of eq. (1).
+
+        Parameters
+        ----------
+        X : ndarray of shape (N, q)
+            Latent points.
+        S : ndarray of shape (N, n_s) or None, default=None
+            Style vectors (None: no style).
+
+        Returns
+        -------
+        ndarray of shape (N, M)
+            Kernel between the inputs and the inducing inputs.
+        """
         q = self.q
         K = rbf(np.atleast_2d(X), self.Z[:, :q], self.ls, self.var)
         if len(self.style_w):
@@ -75,14 +133,53 @@ class GPLayer:
         return K
 
     def mean(self, X: np.ndarray, S: np.ndarray | None = None) -> np.ndarray:
-        """Posterior mean of the data (N, D), data units, at latent points X (N, q) and styles S."""
+        """Posterior mean of the data at latent points and styles.
+
+        Parameters
+        ----------
+        X : ndarray of shape (N, q)
+            Latent points.
+        S : ndarray of shape (N, n_s) or None, default=None
+            Style vectors (None: no style).
+
+        Returns
+        -------
+        ndarray of shape (N, D)
+            Posterior mean, data units.
+        """
         return self.kernel(X, S) @ self.woodbury * self.y_sd + self.y_mean
 
     def arrays(self, prefix: str) -> dict[str, np.ndarray]:
+        """The layer's fields as float64 arrays, for a model file.
+
+        Parameters
+        ----------
+        prefix : str
+            Prefix of the keys (``PREFIX_FIELD``).
+
+        Returns
+        -------
+        dict of str to ndarray
+            One entry per field.
+        """
         return {f"{prefix}_{k}": np.asarray(v, np.float64) for k, v in self.__dict__.items()}
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray], prefix: str) -> GPLayer:
+        """The layer from :meth:`arrays`' entries.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            Entries as :meth:`arrays` writes them (others are ignored).
+        prefix : str
+            Prefix of the keys.
+
+        Returns
+        -------
+        GPLayer
+            The layer.
+        """
         kw: dict[str, Any] = {k: arrays[f"{prefix}_{k}"] for k in cls.__dataclass_fields__}
         for k in ("map_ls", "var", "noise"):
             kw[k] = float(kw[k])
@@ -102,11 +199,35 @@ def fit_layer(
 ) -> GPLayer:
     """Fit a back-constrained sparse GP-LVM layer (module docstring) with GPy.
 
-    Y (N, D) data; q latent dimensions; S (N, n_s) fixed style amounts per point (None: no style);
-    ``num_inducing`` M; ``n_centres`` B back-constraint centres; ``max_iters`` L-BFGS iterations.
     Each dimension is standardised, its scale floored at a tenth of the largest. The back
     constraint starts at the PCA projection (least squares), the inducing inputs at random data
     points.
+
+    Parameters
+    ----------
+    Y : ndarray of shape (N, D)
+        Data.
+    q : int
+        Latent dimensions.
+    S : ndarray of shape (N, n_s) or None, default=None
+        Fixed style amounts per point (None: no style).
+    num_inducing : int, default=30
+        Inducing inputs M.
+    n_centres : int, default=80
+        Back-constraint centres B.
+    max_iters : int, default=200
+        L-BFGS iterations.
+    seed : int, default=0
+        Seed of the centre and inducing-input choice.
+    progress : callable or None, default=None
+        Called with a line of progress text.
+    name : str, default="layer"
+        Name of the layer in progress text.
+
+    Returns
+    -------
+    GPLayer
+        The fitted layer.
     """
     import GPy
 

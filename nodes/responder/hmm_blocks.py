@@ -26,8 +26,20 @@ import numpy as np
 
 @dataclass(frozen=True)
 class HMMParams:
-    """The joined HMM: ``startprob`` (N,), ``transmat`` (N, N), ``means`` (N, d), ``covars``
-    (N, d, d) in the encoded units, and ``block_labels`` (N,) the interaction label of each state.
+    """The joined HMM, in the encoded units.
+
+    Parameters
+    ----------
+    startprob : ndarray of shape (N,)
+        Start probabilities.
+    transmat : ndarray of shape (N, N)
+        Transition matrix.
+    means : ndarray of shape (N, d)
+        State means.
+    covars : ndarray of shape (N, d, d)
+        State covariances.
+    block_labels : ndarray of shape (N,)
+        The interaction label of each state.
     """
 
     startprob: np.ndarray
@@ -39,7 +51,17 @@ class HMMParams:
 
 @dataclass(frozen=True)
 class Block:
-    """One interaction label's fitted HMM and its share of the training sequences."""
+    """One interaction label's fitted HMM and its share of the training sequences.
+
+    Parameters
+    ----------
+    label : str
+        The interaction label.
+    hmm : hmmlearn GaussianHMM
+        The fitted model.
+    weight : float
+        The label's share of the training sequences.
+    """
 
     label: str
     hmm: Any
@@ -49,7 +71,25 @@ class Block:
 def new_hmm(n: int, d: int, n_iter: int, min_covar: float, random_state: int, ordered: bool) -> Any:
     """An unfitted hmmlearn ``GaussianHMM`` of ``n`` states over ``d`` numbers, full covariances.
 
-    ``ordered``: the caller sets the start (:func:`init_ordered`); else hmmlearn's k-means start.
+    Parameters
+    ----------
+    n : int
+        States.
+    d : int
+        Dimensions of the encoded frames.
+    n_iter : int
+        Baum-Welch iterations at most.
+    min_covar : float
+        Floor on the covariances' diagonal, also the ridge of the covariance prior.
+    random_state : int
+        Seed.
+    ordered : bool
+        True: the caller sets the start (:func:`init_ordered`); False: hmmlearn's k-means start.
+
+    Returns
+    -------
+    hmmlearn GaussianHMM
+        The unfitted model.
     """
     from hmmlearn.hmm import GaussianHMM
 
@@ -83,10 +123,14 @@ def init_ordered(
     hmm : hmmlearn GaussianHMM
         The block's model (``n_components`` states); its means, covariances, transitions and start
         probabilities are set.
-    seqs : list of (T_i, d) arrays
+    seqs : list of ndarray of shape (T_i, d)
         The block's sequences.
-    phases : list of (T_i,) arrays
+    phases : list of ndarray of shape (T_i,)
         Their frames' phase labels.
+    order_mix : float
+        Share of uniform mixed into the banded transitions and the start, in [0, 1].
+    min_covar : float
+        Added to the covariances' diagonal.
     """
     n, d = hmm.n_components, seqs[0].shape[1]
     names = sorted(set(np.concatenate(phases).tolist()))
@@ -120,6 +164,18 @@ def init_ordered(
 def phase_counts(labels: Sequence[str], phases: Sequence[np.ndarray | None]) -> dict[str, int]:
     """Each label's number of phases: the distinct phase labels of its sequences (one where any
     of them has none).
+
+    Parameters
+    ----------
+    labels : sequence of str
+        Each sequence's interaction label.
+    phases : sequence of ndarray or None
+        Each sequence's frames' phase labels, or None.
+
+    Returns
+    -------
+    dict of str to int
+        Label -> number of phases.
     """
     out = {}
     for g in sorted(set(labels)):
@@ -143,9 +199,9 @@ def fit_blocks(
 
     Parameters
     ----------
-    X : (sum T, d) array
+    X : ndarray of shape (sum T, d)
         The encoded frames of all sequences, one after the other.
-    lengths : (S,) int array
+    lengths : ndarray of shape (S,), dtype int
         The sequences' frame counts.
     labels, phases : sequences of S
         Each sequence's interaction label and its frames' phase labels (or None).
@@ -184,6 +240,20 @@ def join_blocks(blocks: Sequence[Block], min_covar: float, leak: float) -> HMMPa
     """One HMM from the labels' blocks: block-diagonal transitions (one block per interaction
     type), start probabilities weighted by the blocks' shares, and (more than one block) a
     ``leak`` towards the start distribution so that a changed interaction is picked up.
+
+    Parameters
+    ----------
+    blocks : sequence of Block
+        The labels' fitted blocks.
+    min_covar : float
+        Ridge added to every state's covariance so that each stays invertible.
+    leak : float
+        Share of the transitions towards the start distribution (more than one block), in [0, 1].
+
+    Returns
+    -------
+    HMMParams
+        The joined HMM, rows normalised.
     """
     N = sum(b.hmm.n_components for b in blocks)
     A = np.zeros((N, N))

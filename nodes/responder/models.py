@@ -47,7 +47,23 @@ class Storable(Protocol):
 
 
 def model_class(name: str) -> type:
-    """The class of model ``name`` (one of ``MODEL_NAMES``)."""
+    """The class of model ``name``.
+
+    Parameters
+    ----------
+    name : str
+        One of ``MODEL_NAMES``.
+
+    Returns
+    -------
+    type
+        The model class (imported on first use).
+
+    Raises
+    ------
+    ValueError
+        For an unknown model name.
+    """
     if name == "dual-hmm":
         from .dual_hmm import DualHMM
 
@@ -76,7 +92,22 @@ def model_class(name: str) -> type:
 
 
 def save_model(path: str | os.PathLike[str], model: Storable, training: dict[str, Any] | None = None) -> Path:
-    """Write ``model`` to ``path`` (``.npz`` appended if missing); returns the path written."""
+    """Write ``model`` to ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (``.npz`` appended if missing; its folder is created).
+    model : Storable
+        The model (``name``, ``get_state``).
+    training : dict or None, default=None
+        Summary of the training data, stored in the metadata.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     path = Path(path)
     if path.suffix != ".npz":
         path = path.with_name(path.name + ".npz")
@@ -96,7 +127,27 @@ def save_model(path: str | os.PathLike[str], model: Storable, training: dict[str
 
 
 def read_meta(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The metadata of a model file, checked for format and version."""
+    """The metadata of a model file, checked for format and version.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The model file.
+
+    Returns
+    -------
+    dict
+        The metadata: format, version, model, config, training.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ModelVersionError
+        For a file of another format version.
+    ValueError
+        For a file that is not a responder model.
+    """
     return _open(path)[1]
 
 
@@ -124,7 +175,29 @@ def _open(path: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], dict[str
 
 
 def load_model(path: str | os.PathLike[str], expected: str | None = None) -> Any:
-    """Load a model file; ``expected`` (a model name) is checked against the file's model."""
+    """Load a model file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The model file.
+    expected : str or None, default=None
+        A model name checked against the file's model (None: any).
+
+    Returns
+    -------
+    object
+        The model, its ``training_`` set from the metadata.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ModelVersionError
+        For a file of another format version.
+    ValueError
+        For a file that is not a responder model, or holds another model than ``expected``.
+    """
     arrays, meta = _open(path)
     name = meta.get("model")
     if expected is not None and name != expected:
@@ -135,19 +208,56 @@ def load_model(path: str | os.PathLike[str], expected: str | None = None) -> Any
 
 
 def models_dir() -> Path:
-    """Folder of the default models: ``$COUNTERPART_MODELS`` or ``~/.cache/counterpart/models``."""
+    """Folder of the default models: ``$COUNTERPART_MODELS`` or ``~/.cache/counterpart/models``.
+
+    Returns
+    -------
+    Path
+        The folder (it may not exist yet).
+    """
     env = os.environ.get("COUNTERPART_MODELS")
     return Path(env) if env else Path.home() / ".cache" / "counterpart" / "models"
 
 
 def default_model_path(name: str) -> Path:
-    """Where the default model ``name`` lives (it may not exist yet)."""
+    """Where the default model ``name`` lives (it may not exist yet).
+
+    Parameters
+    ----------
+    name : str
+        One of ``MODEL_NAMES``.
+
+    Returns
+    -------
+    Path
+        ``models_dir() / responder-NAME.npz``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown model name.
+    """
     model_class(name)  # validates the name
     return models_dir() / f"responder-{name}.npz"
 
 
 def build_default(name: str, progress: Callable[[str], None] | None = None) -> tuple[Any, dict[str, Any]]:
-    """Train model ``name`` on its default simulator data; returns (model, training summary)."""
+    """Train model ``name`` on its default simulator data.
+
+    Parameters
+    ----------
+    name : str
+        One of ``MODEL_NAMES``.
+    progress : callable or None, default=None
+        Called with a line of progress text.
+
+    Returns
+    -------
+    model : object
+        The trained model.
+    training : dict
+        Training summary.
+    """
     from .data import summary
     from .training import default_training_data, train
 
@@ -165,6 +275,18 @@ def build_default(name: str, progress: Callable[[str], None] | None = None) -> t
 def load_default(name: str, progress: Callable[[str], None] | None = None) -> Any:
     """The default model ``name``: loaded from :func:`default_model_path`, built from the simulator
     and saved there first when missing or of an older version.
+
+    Parameters
+    ----------
+    name : str
+        One of ``MODEL_NAMES``.
+    progress : callable or None, default=None
+        Called with a line of progress text.
+
+    Returns
+    -------
+    object
+        The model.
     """
     path = default_model_path(name)
     if path.exists():

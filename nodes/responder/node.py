@@ -114,6 +114,20 @@ class Responder(Node):
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The ports: each input only with its ``use_*`` parameter on.
+
+        Parameters
+        ----------
+        params : dict
+            Validated parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The input ports.
+        outputs : dict of str to Output
+            The output ports.
+        """
         use = {
             "pose": params["use_pose"],
             "silhouettes": params["use_silhouettes"],
@@ -123,6 +137,13 @@ class Responder(Node):
         return {k: v for k, v in cls.inputs.items() if use[k]}, dict(cls.outputs)
 
     def setup(self) -> None:
+        """Load the selected model and the emotion model, and set up staging and reaching.
+
+        Raises
+        ------
+        SystemExit
+            For staging or reach parameters the stage or reach configuration refuses.
+        """
         self.models: dict[str, Any] = {}
         self.model = self.p["model"]
         self.speaker, self.interest = self.p["speaker"], self.p["interest"]
@@ -169,6 +190,13 @@ class Responder(Node):
 
     # ------------------------------------------------------------------ inputs
     def on_control(self, msg: Control) -> None:
+        """Apply a run-time control; its None fields leave their settings unchanged.
+
+        Parameters
+        ----------
+        msg : Control
+            The control; a model that cannot be loaded is logged and not switched to.
+        """
         # every name in a Control is one of the contract's (the message refuses others when made
         # or decoded), and every one of them is a setting of this node
         if msg.model is not None and self._model(msg.model) is not None:
@@ -263,16 +291,38 @@ class Responder(Node):
         return side[0] if side else people[0]
 
     def on_pose(self, msg: Pose3D) -> None:
+        """Keep the latest poses; they drive the 3D models' partner.
+
+        Parameters
+        ----------
+        msg : Pose3D
+            Tracked 3D people.
+        """
         self.latest["pose"] = msg
         if self.model in ("dual-hmm", "listener", "video-texture", "gpdm"):
             self._emit(msg)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
+        """Keep the latest silhouettes; they drive the joint-shape model's partner.
+
+        Parameters
+        ----------
+        msg : Silhouettes
+            The people's B-spline silhouettes.
+        """
         self.latest["silhouettes"] = msg
         if self.model == "joint-shape":
             self._emit(msg)
 
     def on_signals(self, msg: SocialSignals) -> None:
+        """Keep the latest social signals; they drive the listener and video-texture models' partner when
+        the node has no pose input.
+
+        Parameters
+        ----------
+        msg : SocialSignals
+            The people's social signals.
+        """
         self.latest["signals"] = msg
         if self.model in ("listener", "video-texture") and "pose" not in self._in:
             self._emit(msg)

@@ -66,21 +66,47 @@ class RecordingError(ValueError):
 class VideoTextureConfig:
     """Parameters of the video texture (module docstring for their roles).
 
-    energy: PCA variance kept; feature_size: (w, h) px of the masked grey image and mask features;
-    window_s: similarity window, seconds; n_clusters: k of the k-medoids (0: one per
-    ``seconds_per_cluster`` of recording, 4-200); max_cluster_frames: frames clustered at most
-    (evenly spaced; all frames are then assigned); radius: quantile of the frames' distances to their
-    nearest medoid that is the cut-point radius of every cluster; max_members: cut points a cluster
-    keeps at most (its nearest; a person standing still would otherwise put thousands of frames in
-    one cluster and its jumps would cost the square of that);
-    max_jumps: jumps kept per cut point; markov_lag_s: lag of the cluster Markov chain, seconds;
-    kde_dims: eigenspace dimensions of the KDE; kde_frames: frames the KDE is fitted on at most;
-    beta: steering per frame of goal distance (log-weight); goal_slack: frames of detour allowed
-    on the way to a requested signal (strength >= 1); jump_cost: log-weight a jump pays
-    against playing on (without it the many jumps of a cut point outvote the one playback edge and
-    the avatar flickers between near-identical frames); crossfade: frames of a cut's
-    cross-fade; min_seconds: the shortest recording accepted; random_state: clustering and
-    synthesis seed.
+    Parameters
+    ----------
+    energy : float, default=0.98
+        PCA variance kept.
+    feature_size : tuple of int, default=(16, 32)
+        (w, h) px of the masked grey image and mask features.
+    window_s : float, default=0.25
+        Similarity window, seconds.
+    n_clusters : int, default=0
+        k of the k-medoids (0: one per ``seconds_per_cluster`` of recording, 4-200).
+    seconds_per_cluster : float, default=1.0
+        Seconds of recording per cluster when ``n_clusters`` is 0.
+    max_cluster_frames : int, default=2000
+        Frames clustered at most (evenly spaced; all frames are then assigned).
+    radius : float, default=0.75
+        Quantile of the frames' distances to their nearest medoid that is the cut-point radius of every
+        cluster.
+    max_members : int, default=100
+        Cut points a cluster keeps at most (its nearest; a person standing still would otherwise put
+        thousands of frames in one cluster and its jumps would cost the square of that).
+    max_jumps : int, default=12
+        Jumps kept per cut point.
+    markov_lag_s : float, default=0.25
+        Lag of the cluster Markov chain, seconds.
+    kde_dims : int, default=6
+        Eigenspace dimensions of the KDE.
+    kde_frames : int, default=1000
+        Frames the KDE is fitted on at most.
+    beta : float, default=1.0
+        Steering per frame of goal distance (log-weight).
+    jump_cost : float, default=6.0
+        Log-weight a jump pays against playing on (without it the many jumps of a cut point outvote the
+        one playback edge and the avatar flickers between near-identical frames).
+    goal_slack : float, default=0.0
+        Frames of detour allowed on the way to a requested signal (strength >= 1).
+    crossfade : int, default=3
+        Frames of a cut's cross-fade.
+    min_seconds : float, default=8.0
+        The shortest recording accepted, seconds.
+    random_state : int, default=0
+        Clustering and synthesis seed.
     """
 
     energy: float = 0.98
@@ -107,7 +133,19 @@ def appearance_features(crops: np.ndarray, masks: np.ndarray, size: tuple[int, i
     """Appearance feature of each masked, aligned frame: its grey image (background zero) and its
     mask, each resized to ``size`` (w, h) px by area averaging, concatenated.
 
-    crops: (T, h, w, 3) uint8 BGR; masks: (T, h, w) bool. Returns (T, 2 w h) float32 in [0, 1].
+    Parameters
+    ----------
+    crops : ndarray of shape (T, h, w, 3), dtype uint8
+        Aligned BGR crops of the person.
+    masks : ndarray of shape (T, h, w), dtype bool
+        The person's mask in each crop.
+    size : tuple of int, default=(16, 32)
+        (w, h) px of each resized image.
+
+    Returns
+    -------
+    ndarray of shape (T, 2 * w * h), dtype float32
+        Grey image then mask features per frame, in [0, 1].
     """
     crops, masks = np.asarray(crops), np.asarray(masks, bool)
     out = np.empty((len(crops), 2 * size[0] * size[1]), np.float32)
@@ -183,13 +221,39 @@ class _Synth:
 class VideoTexture:
     """A texture motion graph over one person's recording (module docstring).
 
-    After :meth:`fit`: ``pca_mean_``/``pca_components_`` (d, D), ``x_`` (T, d) eigenspace
-    coordinates, ``medoids_`` (k,) frame indices, ``members_`` list of cut-point arrays per cluster,
-    ``alive_`` (T,) frames of the graph, ``indptr_``/``indices_``/``logw_`` the graph's out-edges in
-    CSR form with their log-weights, ``goals_`` goal names and ``dist_`` (G, T) float32 graph
-    distances in frames to each goal (inf: unreachable), ``labels_`` (T, K) int8, ``names_``,
-    ``step_q95_`` (the recording's 95th percentile frame-to-frame distance in eigenspace),
-    ``frames`` the :class:`~counterpart.body.avatar_frames.AvatarFrames` when given.
+    Parameters
+    ----------
+    config : VideoTextureConfig or None, default=None
+        The texture's parameters (None: the defaults).
+
+    Attributes
+    ----------
+    pca_mean_ : ndarray of shape (D,)
+        Mean appearance feature.
+    pca_components_ : ndarray of shape (d, D)
+        Eigenspace basis.
+    x_ : ndarray of shape (T, d)
+        Eigenspace coordinates of each frame.
+    medoids_ : ndarray of shape (k,)
+        Frame indices of the cluster medoids.
+    members_ : list of ndarray
+        Cut-point frames per cluster.
+    alive_ : ndarray of shape (T,), dtype bool
+        Frames of the graph.
+    indptr_, indices_, logw_ : ndarray
+        The graph's out-edges in CSR form with their log-weights.
+    goals_ : list of str
+        Goal names.
+    dist_ : ndarray of shape (G, T), dtype float32
+        Graph distances in frames to each goal (inf: unreachable).
+    labels_ : ndarray of shape (T, K), dtype int8
+        Social labels of each frame (1 present, 0 absent, -1 unknown).
+    names_ : list of str
+        The K signal names.
+    step_q95_ : float
+        The recording's 95th percentile frame-to-frame distance in eigenspace.
+    frames : AvatarFrames or None
+        The :class:`~counterpart.body.avatar_frames.AvatarFrames` when given.
     """
 
     name = "video-texture"
@@ -215,11 +279,35 @@ class VideoTexture:
         """Learn the graph (on one BLAS thread: the matrices are small, and a second thread on a
         busy machine makes the eigendecomposition ten times slower, not faster).
 
-        features: (T, D) appearance features (:func:`appearance_features`); labels: (T, K) int8 social
-        labels (1 present, 0 absent, -1 unknown) named ``names``; fps: frames per second; valid:
-        (T,) frames where the person was found (default all); required: signals the avatar must be
-        able to show (RecordingError naming the missing one otherwise); frames: the recording's
-        masked frames, stored with the model.
+        Parameters
+        ----------
+        features : ndarray of shape (T, D)
+            Appearance features (:func:`appearance_features`).
+        labels : ndarray of shape (T, K), dtype int8
+            Social labels (1 present, 0 absent, -1 unknown) named ``names``.
+        names : sequence of str
+            The K signal names.
+        fps : float
+            Frames per second.
+        valid : ndarray of shape (T,), dtype bool, optional
+            Frames where the person was found (default all).
+        required : sequence of str, default=()
+            Signals the avatar must be able to show.
+        frames : AvatarFrames or None, default=None
+            The recording's masked frames, stored with the model.
+        progress : callable or None, default=None
+            Called with a line of progress text.
+
+        Returns
+        -------
+        VideoTexture
+            self, fitted.
+
+        Raises
+        ------
+        RecordingError
+            For a recording that cannot make an avatar, naming the cause (too short, a required signal
+            missing).
         """
         from threadpoolctl import threadpool_limits
 
@@ -546,7 +634,18 @@ class VideoTexture:
 
     # ---------------------------------------------------------------------------------- synthesis
     def reset(self, start: int | None = None) -> None:
-        """Start again at frame ``start`` (default: the first frame of the graph)."""
+        """Start again at frame ``start``.
+
+        Parameters
+        ----------
+        start : int or None, default=None
+            Recording frame to start at (None: the first frame of the graph).
+
+        Raises
+        ------
+        ValueError
+            When ``start`` is not in the texture motion graph.
+        """
         self._rng = np.random.default_rng(self.config.random_state)
         first = int(np.flatnonzero(self.alive_)[0]) if start is None else int(start)
         if not self.alive_[first]:
@@ -559,7 +658,18 @@ class VideoTexture:
         return self._s.cur
 
     def goal_index(self, name: str) -> int:
-        """Index of goal ``name`` in ``goals_``; -1 when the graph does not have it."""
+        """Index of goal ``name`` in ``goals_``.
+
+        Parameters
+        ----------
+        name : str
+            Goal name (a signal, or ``state:...``).
+
+        Returns
+        -------
+        int
+            The index; -1 when the graph does not have it.
+        """
         try:
             return self.goals_.index(name)
         except ValueError:
@@ -567,7 +677,17 @@ class VideoTexture:
 
     def state_goal(self, wanted: Mapping[str, bool]) -> str | None:
         """The signal-set subgraph closest to the wanted state (signal -> on): the most agreeing
-        signals, ties to the first; None when the graph has no state subgraphs.
+        signals, ties to the first.
+
+        Parameters
+        ----------
+        wanted : mapping of str to bool
+            Signal name -> on.
+
+        Returns
+        -------
+        str or None
+            The goal name ``state:...``; None when the graph has no state subgraphs.
         """
         best, score = None, -1
         for g in self.goals_:
@@ -582,9 +702,18 @@ class VideoTexture:
     def step(self, goals: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Advance one output frame.
 
-        goals: goal name (a signal such as ``nod``, or ``state:...``) -> strength >= 0; goals the
-        graph does not have are ignored. Returns (frames (n,) int32 recording frame indices,
-        weights (n,) float32 summing to 1): one frame, or two during a cut's cross-fade.
+        Parameters
+        ----------
+        goals : mapping of str to float, optional
+            Goal name (a signal such as ``nod``, or ``state:...``) -> strength >= 0; goals the graph does
+            not have are ignored.
+
+        Returns
+        -------
+        frames : ndarray of shape (n,), dtype int32
+            Recording frame indices: one frame, or two during a cut's cross-fade.
+        weights : ndarray of shape (n,), dtype float32
+            Blend weights of ``frames``, summing to 1.
         """
         s = self._s
         a, b = self.indptr_[s.cur], self.indptr_[s.cur + 1]
@@ -624,11 +753,31 @@ class VideoTexture:
         return np.array([nxt], np.int32), np.ones(1, np.float32)
 
     def labels_at(self, t: int) -> dict[str, bool]:
-        """The social signals of recording frame ``t`` (name -> on)."""
+        """The social signals of a recording frame.
+
+        Parameters
+        ----------
+        t : int
+            Recording frame index.
+
+        Returns
+        -------
+        dict of str to bool
+            Signal name -> on (label 1).
+        """
         return {n: bool(v == 1) for n, v in zip(self.names_, self.labels_[int(t)])}
 
     # ------------------------------------------------------------------------------ persistence
     def get_state(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """The fitted model for a model file (:func:`~counterpart.nodes.responder.models.save_model`).
+
+        Returns
+        -------
+        arrays : dict of str to ndarray
+            The graph, eigenspace, labels, cluster members and (when attached) the frames.
+        config : dict
+            JSON-able configuration, frame rate, names, goals and step statistics.
+        """
         arrays = {
             "pca_mean": self.pca_mean_,
             "pca_components": self.pca_components_,
@@ -660,6 +809,20 @@ class VideoTexture:
 
     @classmethod
     def from_state(cls, arrays: dict[str, np.ndarray], config: dict[str, Any]) -> VideoTexture:
+        """The model from :meth:`get_state`'s output, reset to the first frame of its graph.
+
+        Parameters
+        ----------
+        arrays : dict of str to ndarray
+            As :meth:`get_state` returns them.
+        config : dict
+            As :meth:`get_state` returns it.
+
+        Returns
+        -------
+        VideoTexture
+            The fitted model.
+        """
         cfg = {k: tuple(v) if isinstance(v, list) else v for k, v in config["config"].items()}
         m = cls(VideoTextureConfig(**cfg))
         m.fps = float(config["fps"])
@@ -683,6 +846,27 @@ def fit_recording(
 ) -> VideoTexture:
     """Learn an avatar from a :class:`~counterpart.nodes.responder.avatar_recording.Recording`: appearance
     features, the compressed masked frames and the texture motion graph.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (``crops``, ``masks``, ``facing``, ``labels``, ``names``, ``fps``, ``valid``).
+    config : VideoTextureConfig or None, default=None
+        The texture's parameters (None: the defaults).
+    required : sequence of str, default=()
+        Signals the avatar must be able to show.
+    progress : callable or None, default=None
+        Called with a line of progress text.
+
+    Returns
+    -------
+    VideoTexture
+        The fitted model, its frames attached.
+
+    Raises
+    ------
+    RecordingError
+        As :meth:`VideoTexture.fit`.
     """
     say = progress or (lambda s: None)
     model = VideoTexture(config)

@@ -42,7 +42,23 @@ MAX_LABEL = 255
 
 
 def as_bgr(image: np.ndarray) -> np.ndarray:
-    """uint8 (H, W, 3) BGR from a bgr8 (H, W, 3) or mono8 (H, W) / (H, W, 1) image."""
+    """A BGR image from a bgr8 or mono8 frame image.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3), (H, W) or (H, W, 1), dtype uint8
+        bgr8 or mono8 image, at least ``MIN_SIDE`` pixels on each side.
+
+    Returns
+    -------
+    ndarray of shape (H, W, 3), dtype uint8
+        BGR image (``image`` itself when it is already BGR).
+
+    Raises
+    ------
+    ValueError
+        For another dtype, a too small image or another shape.
+    """
     if image.dtype != np.uint8:
         raise ValueError(f"frame image must be uint8, got {image.dtype}")
     if image.ndim < 2 or min(image.shape[:2]) < MIN_SIDE:
@@ -55,7 +71,18 @@ def as_bgr(image: np.ndarray) -> np.ndarray:
 
 
 def person_shape(p: Person) -> PersonShape:
-    """The message form of one person (no outline: ``ctrl`` (0, 2) and ``ref_point`` NaN)."""
+    """The message form of one person.
+
+    Parameters
+    ----------
+    p : Person
+        A person from the extractor.
+
+    Returns
+    -------
+    PersonShape
+        The message form (no outline: ``ctrl`` (0, 2) and ``ref_point`` NaN).
+    """
     return PersonShape(
         id=int(p.id),
         side=p.side,
@@ -70,8 +97,19 @@ def person_shape(p: Person) -> PersonShape:
 
 
 def label_mask(labels: np.ndarray) -> tuple[np.ndarray, bool]:
-    """(H, W) uint8 mask from the extractor's int32 labels, and whether any id had to be clipped
-    (ids >= 255 share the value 255).
+    """A uint8 mask from the extractor's labels.
+
+    Parameters
+    ----------
+    labels : ndarray of shape (H, W), dtype int32
+        0 = background, person.id + 1 on each person's pixels.
+
+    Returns
+    -------
+    mask : ndarray of shape (H, W), dtype uint8
+        The labels, clipped to ``MAX_LABEL``.
+    clipped : bool
+        Whether any id had to be clipped (ids >= 255 share the value 255).
     """
     clipped = bool(labels.max(initial=0) > MAX_LABEL)
     return np.minimum(labels, MAX_LABEL).astype(np.uint8), clipped
@@ -163,6 +201,7 @@ class Silhouette(Node):
     }
 
     def setup(self) -> None:
+        """Start without an extractor: one is made on the first frame, for its size and colour."""
         self.extractor: SilhouetteExtractor | None = None
         self.key: tuple[tuple[int, ...], bool] | None = None  # (frame size, mono) of the model
         self.found = 0
@@ -232,6 +271,14 @@ class Silhouette(Node):
         return ex.process(image)
 
     def on_frame(self, msg: Frame) -> None:
+        """Find the people of one frame and publish them (or hold the frame back while the background
+        is learnt, with ``replay_training``).
+
+        Parameters
+        ----------
+        msg : Frame
+            A bgr8 or mono8 frame; one that cannot be read gets a Silhouettes without people.
+        """
         self.frames += 1
         h, w = msg.image.shape[:2] if msg.image.ndim >= 2 else (0, 0)
         try:
@@ -297,6 +344,7 @@ class Silhouette(Node):
         )
 
     def on_end(self) -> None:
+        """Publish the frames still held back, and log how many frames had people."""
         self._release_held()
         self.log.info("people found in %d of %d frames", self.found, self.frames)
 

@@ -41,6 +41,25 @@ def person_min_area(width: int, height: int, camera: Camera | None = None, max_d
     1/14 of the frame height tall, 17 px at 320x240 (76 px of area): people down to 20 px tall
     are kept with a margin, and the threshold follows the frame size and the lens rather than a
     fixed pixel count. h is at least ``MIN_PERSON_HEIGHT_PX`` (64 px of area) in small frames.
+
+    Parameters
+    ----------
+    width, height : int
+        Frame size, pixels.
+    camera : Camera or None, default=None
+        The camera (None: the default camera for the frame size).
+    max_distance_m : float, default=30.0
+        The farthest person to find, metres.
+
+    Returns
+    -------
+    int
+        Smallest person region, pixels (at least 1).
+
+    Raises
+    ------
+    ValueError
+        When ``max_distance_m`` is not > 0.
     """
     if max_distance_m <= 0:
         raise ValueError(f"max_distance_m must be > 0 metres, got {max_distance_m}")
@@ -53,13 +72,20 @@ def person_min_area(width: int, height: int, camera: Camera | None = None, max_d
 class FrameResult:
     """What the extractor found in one frame.
 
-    index : 0-based number of the frame in this extractor's stream.
-    labels : (H, W) int32, 0 = background, person.id + 1 on each person's pixels.
-    people : people seen in this frame, sorted by id, each with ``ctrl`` (n_ctrl, 2) and
-        ``ref_point`` (2,) in image pixels (None if the region was too small for an outline).
-    classes : (H, W) uint8 background-model classes of the raw pixels (background.BACKGROUND,
-        SHADOW, HIGHLIGHT, FOREGROUND), or None if the backend gives none.
-    ready : False while the background model is still learning (no people reported).
+    Parameters
+    ----------
+    index : int
+        0-based number of the frame in this extractor's stream.
+    labels : ndarray of shape (H, W), dtype int32
+        0 = background, person.id + 1 on each person's pixels.
+    people : list of Person
+        People seen in this frame, sorted by id, each with ``ctrl`` (n_ctrl, 2) and ``ref_point`` (2,)
+        in image pixels (None if the region was too small for an outline).
+    classes : ndarray of shape (H, W), dtype uint8, or None
+        Background-model classes of the raw pixels (background.BACKGROUND, SHADOW, HIGHLIGHT,
+        FOREGROUND), or None if the backend gives none.
+    ready : bool
+        False while the background model is still learning (no people reported).
     """
 
     index: int
@@ -74,21 +100,39 @@ class SilhouetteExtractor:
 
     Parameters
     ----------
-    backend : background subtractor name (see ``backends.BACKEND_NAMES``).
-    n_ctrl : control points per outline (>= 4).
-    min_area : smallest person region, pixels; None: ``person_min_area`` of the frame size,
-        ``camera`` and ``max_distance_m`` (a person 1.7 m tall that far away), set on the first
-        frame (for small, distant people: 76 px at 320x240 with the defaults).
-    camera : the camera (``counterpart.body.camera.Camera``, scaled to the frame size) for ``min_area=None``;
+    backend : str, default="horprasert"
+        Background subtractor name (see ``backends.BACKEND_NAMES``).
+    n_ctrl : int, default=32
+        Control points per outline (>= 4).
+    min_area : int or None, default=300
+        Smallest person region, pixels; None: ``person_min_area`` of the frame size, ``camera`` and
+        ``max_distance_m`` (a person 1.7 m tall that far away), set on the first frame (for small,
+        distant people: 76 px at 320x240 with the defaults).
+    camera : Camera or None, default=None
+        The camera (``counterpart.body.camera.Camera``, scaled to the frame size) for ``min_area=None``;
         None: the default camera.
-    max_distance_m : the farthest person to find, metres, for ``min_area=None``.
-    open_px, close_px, fill_holes : mask clean-up (``regions.clean_mask``).
-    shadows : shadow and highlight pixels count as background (True, the default) or as foreground
-        (False: for grey images, where chromaticity cannot tell a shadow from a darker person).
-    backend_params : keyword parameters of the subtractor (e.g. train_frames, learning_rate).
-    tracker_params : keyword parameters of ``PersonTracker`` other than min_area.
-    outlines : fit each person's B-spline outline (False: people without ``ctrl``/``ref_point``, for
-        callers that need the masks alone, such as learning an avatar; it saves most of the time).
+    max_distance_m : float, default=30.0
+        The farthest person to find, metres, for ``min_area=None``.
+    open_px, close_px : int, default=3, 7
+        Mask clean-up opening and closing sizes, pixels (``regions.clean_mask``).
+    fill_holes : bool, default=True
+        Fill holes in the mask (``regions.clean_mask``).
+    shadows : bool, default=True
+        Shadow and highlight pixels count as background (True) or as foreground (False: for grey images,
+        where chromaticity cannot tell a shadow from a darker person).
+    backend_params : dict or None, default=None
+        Keyword parameters of the subtractor (e.g. train_frames, learning_rate).
+    tracker_params : dict or None, default=None
+        Keyword parameters of ``PersonTracker`` other than min_area.
+    outlines : bool, default=True
+        Fit each person's B-spline outline (False: people without ``ctrl``/``ref_point``, for callers
+        that need the masks alone, such as learning an avatar; it saves most of the time).
+
+    Raises
+    ------
+    ValueError
+        For ``n_ctrl`` < 4, ``min_area`` < 1, ``max_distance_m`` <= 0, ``min_area`` in
+        ``tracker_params`` or an unknown tracker parameter.
     """
 
     def __init__(
@@ -136,7 +180,25 @@ class SilhouetteExtractor:
         self._auto_size: tuple[int, int] | None = None
 
     def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> SilhouetteExtractor:
-        """Train the Horprasert model now (e.g. on the first seconds of a recording)."""
+        """Train the Horprasert model now (e.g. on the first seconds of a recording).
+
+        Parameters
+        ----------
+        frames : ndarray of shape (N, H, W, 3) or list of ndarray of shape (H, W, 3), dtype uint8
+            BGR training frames.
+        robust : bool, default=True
+            Fit robustly (people may be in view).
+
+        Returns
+        -------
+        SilhouetteExtractor
+            self.
+
+        Raises
+        ------
+        ValueError
+            When the backend is not ``horprasert``.
+        """
         if not isinstance(self.subtractor, HorprasertSubtractor):
             raise ValueError(f"fit_background needs backend='horprasert', this extractor uses {self.backend!r}")
         self.subtractor.fit(frames, robust=robust)
@@ -152,8 +214,18 @@ class SilhouetteExtractor:
         self.tracker.reset()
 
     def learn(self, frame: np.ndarray) -> FrameResult:
-        """Feed one uint8 BGR frame (H, W, 3) to the background model only: no clean-up, no people,
-        no tracks (a stream's first frames, while an online backend is still warming up).
+        """Feed one frame to the background model only: no clean-up, no people, no tracks (a stream's
+        first frames, while an online backend is still warming up).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame.
+
+        Returns
+        -------
+        FrameResult
+            No people, ``ready`` False.
         """
         self.subtractor.apply(frame)
         index = self._index
@@ -161,7 +233,18 @@ class SilhouetteExtractor:
         return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], self.subtractor.labels, False)
 
     def process(self, frame: np.ndarray) -> FrameResult:
-        """Run the whole algorithm on one uint8 BGR frame (H, W, 3)."""
+        """Run the whole algorithm on one frame.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame.
+
+        Returns
+        -------
+        FrameResult
+            The frame's labels and people (none while the background model is not ready).
+        """
         fg = self.subtractor.apply(frame)
         classes = self.subtractor.labels
         if not self.shadows and classes is not None:
@@ -205,8 +288,26 @@ def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
 
 
 def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> np.ndarray:
-    """The first ``max_frames`` (None: all) frames of a video that decode, (N, H, W, 3) uint8 BGR.
-    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
+    """The first frames of a video that decode.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file.
+    max_frames : int or None, default=None
+        Frames to read at most (None: all).
+
+    Returns
+    -------
+    ndarray of shape (N, H, W, 3), dtype uint8
+        BGR frames.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ValueError
+        For one OpenCV cannot decode.
     """
     cap = _open_video(path)
     frames = []
@@ -224,8 +325,26 @@ def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> 
 
 
 def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
-    """(frame rate, frame count) a video file declares (0 where it declares none; the count is a
-    guide for progress, not a promise).
+    """The frame rate and frame count a video file declares.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file.
+
+    Returns
+    -------
+    fps : float
+        Declared frame rate, Hz (0 where it declares none).
+    n_frames : int
+        Declared frame count (0 where it declares none; a guide for progress, not a promise).
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ValueError
+        For one OpenCV cannot open.
     """
     cap = _open_video(path)
     try:
@@ -241,15 +360,40 @@ def iter_video(
     train_frames: int = 30,
     start: int = 0,
 ) -> Iterator[tuple[np.ndarray, FrameResult]]:
-    """Yield (frame (H, W, 3) uint8 BGR, ``extractor.process(frame)``) for every frame of a video.
+    """Yield each frame of a video with the extractor's result.
 
     With the Horprasert backend the background is first fitted (robustly: people may be in view)
     on the first ``train_frames`` frames, then the video is read again from its first frame, so
-    every frame gets a result. ``start``: the frames before it are skipped (read, not decoded nor
-    processed; counted exactly as a sequential reader counts them, which seeking is not for every
-    codec), so several processes can each take a part of one video. Raises FileNotFoundError for a
-    missing file and ValueError for one OpenCV cannot decode (fewer than 2 training frames, or no
-    frame at all).
+    every frame gets a result.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file.
+    extractor : SilhouetteExtractor
+        The extractor to run.
+    max_frames : int or None, default=None
+        Frames to process at most (None: all).
+    train_frames : int, default=30
+        Frames the Horprasert background is fitted on.
+    start : int, default=0
+        The frames before it are skipped (read, not decoded nor processed; counted exactly as a
+        sequential reader counts them, which seeking is not for every codec), so several processes can
+        each take a part of one video.
+
+    Yields
+    ------
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        BGR frame.
+    result : FrameResult
+        ``extractor.process(frame)``.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ValueError
+        For one OpenCV cannot decode (fewer than 2 training frames, or no frame at all).
     """
     cap = _open_video(path)
     if isinstance(extractor.subtractor, HorprasertSubtractor):
@@ -339,9 +483,32 @@ def extract_video(
       complete () bool: False when the run was interrupted (KeyboardInterrupt) or failed after
       some frames: the file then holds the frames done.
 
-    ``progress``, when given, is called after every frame with (frames done, frames the file
-    declares or 0). Returns a summary dict (n_frames, n_rows, max_people, fps, frame_size, out_npz).
-    Raises FileNotFoundError for a missing file and ValueError for one OpenCV cannot decode.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file.
+    out_npz : str or os.PathLike
+        The file to write.
+    max_frames : int or None, default=None
+        Frames to process at most (None: all).
+    train_frames : int, default=30
+        Frames the Horprasert background is fitted on.
+    progress : callable or None, default=None
+        Called after every frame with (frames done, frames the file declares or 0).
+    **params
+        Keyword parameters of :class:`SilhouetteExtractor`.
+
+    Returns
+    -------
+    dict
+        Summary: n_frames, n_rows, max_people, fps, frame_size, out_npz.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file.
+    ValueError
+        For one OpenCV cannot decode.
     """
     extractor = SilhouetteExtractor(**params)
     rows: list[tuple[int, Person]] = []

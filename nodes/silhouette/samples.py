@@ -47,31 +47,48 @@ class SampleConsensus:
 
     Parameters
     ----------
-    n_samples : colours kept per pixel (ViBe's N, 20 in the paper).
-    min_matches : samples that must lie within the radius for a match (#min, 2 in the paper).
-    radius, relative_radius, spread_k : matching radius
-        R = max(radius, spread_k * d(x)) + relative_radius * |S_k|_1 for sample S_k, L1 distance
-        over B, G, R in grey levels. d(x) is the pixel's own spread: the mean L1 distance between
-        a background observation and its samples (SuBSENSE's D_min idea), initialised from
-        consecutive training frames and followed at ``spread_rate`` on the pixels drawn for an
-        update. A clean camera on a plain wall gets a tight radius (a grey head in front of a
-        grey wall stays a person), leaves or compression noise a wide one. ViBe uses a fixed 20
-        on grey images; ``relative_radius`` (noise that grows with brightness) is 0 by default.
-    spread_rate : running-average rate of d(x), per update of the pixel (about every
-        ``subsampling`` frames).
-    max_radius_gain : largest R(x) / radius in blinking regions.
-    subsampling : 1 / probability of an update at each background pixel (phi, 16 in the paper).
-    blink_gain, blink_decay : rise of the blink level v(x) on a label switch and its decay per frame;
+    n_samples : int, default=20
+        Colours kept per pixel (ViBe's N, 20 in the paper).
+    min_matches : int, default=2
+        Samples that must lie within the radius for a match (#min, 2 in the paper), in [1, n_samples].
+    radius, relative_radius, spread_k : float, default=0.5, 0.025, 0.75
+        Matching radius R = max(radius, spread_k * d(x)) + relative_radius * |S_k|_1 for sample S_k,
+        L1 distance over B, G, R in grey levels. d(x) is the pixel's own spread: the mean L1 distance
+        between a background observation and its samples (SuBSENSE's D_min idea), initialised from
+        consecutive training frames and followed at ``spread_rate`` on the pixels drawn for an update.
+        A clean camera on a plain wall gets a tight radius (a grey head in front of a grey wall stays a
+        person), leaves or compression noise a wide one. ViBe uses a fixed 20 on grey images;
+        ``relative_radius`` models noise that grows with brightness.
+    spread_rate : float, default=0.1
+        Running-average rate of d(x), per update of the pixel (about every ``subsampling`` frames), in
+        (0, 1].
+    max_radius_gain : float, default=2.5
+        Largest R(x) / radius in blinking regions (>= 1).
+    subsampling : int, default=16
+        1 / probability of an update at each background pixel (phi, 16 in the paper).
+    blink_gain, blink_decay : float, default=0.1, 0.005
+        Rise of the blink level v(x) on a label switch and its decay per frame;
         R(x) = radius * (1 + v(x)), v(x) in [0, max_radius_gain - 1].
-    learn_blink : a pixel the statistics call foreground is learnt (and receives its neighbours'
-        colours) only where the blink level v(x) is at least this: in a dynamic region. Elsewhere
-        a person whose colour happens to match would be learnt and match better the next time.
-    random_state : seed of the random updates.
+    learn_blink : float, default=0.5
+        A pixel the statistics call foreground is learnt (and receives its neighbours' colours) only
+        where the blink level v(x) is at least this: in a dynamic region. Elsewhere a person whose colour
+        happens to match would be learnt and match better the next time.
+    random_state : int or None, default=0
+        Seed of the random updates.
 
-    Fitted attributes
-    -----------------
-    samples_ : (H * W, 3, n_samples) uint8, per pixel the B, G, R rows of its samples.  radius_ : (H, W) float32 radius gain 1 + v(x).
-    spread_ : (H, W) float32 d(x), grey levels (L1).
+    Attributes
+    ----------
+    samples_ : ndarray of shape (H * W, 3, n_samples), dtype uint8
+        Per pixel the B, G, R rows of its samples.
+    radius_ : ndarray of shape (H, W), dtype float32
+        Radius gain 1 + v(x).
+    spread_ : ndarray of shape (H, W), dtype float32
+        d(x), grey levels (L1).
+
+    Raises
+    ------
+    ValueError
+        For a parameter out of range, naming it.
     """
 
     def __init__(
@@ -126,25 +143,65 @@ class SampleConsensus:
 
     @property
     def radius_(self) -> np.ndarray:
-        """(H, W) float32 gain of the matching radius, R(x) / R (blink feedback)."""
+        """Gain of the matching radius, R(x) / R (blink feedback).
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype float32
+            1 + v(x).
+
+        Raises
+        ------
+        RuntimeError
+            When not fitted.
+        """
         if self.samples_ is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return (1.0 + self._blink).reshape(self._shape)
 
     @property
     def spread_(self) -> np.ndarray:
-        """(H, W) float32 spread d(x) of each pixel's background, mean L1 distance in grey levels."""
+        """Spread d(x) of each pixel's background.
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype float32
+            Mean L1 distance in grey levels.
+
+        Raises
+        ------
+        RuntimeError
+            When not fitted.
+        """
         if self.samples_ is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return self._spread.reshape(self._shape)
 
     def fit(self, frames: np.ndarray, background: np.ndarray, foreground: np.ndarray | None = None) -> SampleConsensus:
-        """Fill the sample sets from training frames (N, H, W, 3) uint8 BGR.
+        """Fill the sample sets from training frames.
 
-        Sample k comes from frame k mod N; where ``foreground`` (N, H, W) bool marks a pixel that
-        may not show the background in that frame (the statistical model's verdict), the
-        background colour ``background`` (H, W, 3) (e.g. Horprasert's E) is used instead, so no
-        one who walked through the training frames is remembered as background.
+        Sample k comes from frame k mod N; where ``foreground`` marks a pixel that may not show the
+        background in that frame (the statistical model's verdict), the background colour is used
+        instead, so no one who walked through the training frames is remembered as background.
+
+        Parameters
+        ----------
+        frames : ndarray of shape (N, H, W, 3), dtype uint8
+            BGR training frames.
+        background : ndarray of shape (H, W, 3)
+            Background colour (e.g. Horprasert's E), grey levels.
+        foreground : ndarray of shape (N, H, W), dtype bool, optional
+            Pixels that may not show the background in each frame.
+
+        Returns
+        -------
+        SampleConsensus
+            self, fitted.
+
+        Raises
+        ------
+        ValueError
+            For arrays of the wrong shape or dtype.
         """
         frames = np.asarray(frames)
         if frames.ndim != 4 or frames.shape[-1] != 3 or frames.dtype != np.uint8:
@@ -178,9 +235,26 @@ class SampleConsensus:
         return self
 
     def explained(self, frame: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """Whether each pixel of flat indices ``idx`` (K,) matches its sample set: (K,) bool.
+        """Whether each pixel of flat indices ``idx`` matches its sample set.
 
         ViBe's test: at least ``min_matches`` of the samples within L1 distance R(x) of the colour.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame.
+        idx : ndarray of shape (K,), dtype int
+            Flat pixel indices.
+
+        Returns
+        -------
+        ndarray of shape (K,), dtype bool
+            True where the colour matches the pixel's samples.
+
+        Raises
+        ------
+        RuntimeError
+            When not fitted.
         """
         if self.samples_ is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
@@ -203,10 +277,28 @@ class SampleConsensus:
     def apply(self, frame: np.ndarray, labels: np.ndarray) -> np.ndarray:
         """Veto the statistical model's foreground where the samples explain the colour, and learn.
 
-        ``labels`` (H, W) uint8 Horprasert classes of ``frame`` (H, W, 3) uint8 BGR; returns them
-        with FOREGROUND pixels that match their sample set turned to BACKGROUND (a new array).
-        Then the samples of BACKGROUND pixels are updated (ViBe's random, diffused update) and
+        After the veto the samples of BACKGROUND pixels are updated (ViBe's random, diffused update) and
         the blink levels (SuBSENSE feedback) follow the final foreground.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame, of the fitted size.
+        labels : ndarray of shape (H, W), dtype uint8
+            Horprasert classes of ``frame``.
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype uint8
+            The labels with FOREGROUND pixels that match their sample set turned to BACKGROUND (a new
+            array).
+
+        Raises
+        ------
+        RuntimeError
+            When not fitted.
+        ValueError
+            When ``frame`` or ``labels`` is not of the fitted size.
         """
         if self.samples_ is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")

@@ -42,8 +42,22 @@ def _check_prior(v: str) -> str | None:
 
 
 def person_mask(shape: Any, labels: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """(H, W) bool mask of one PersonShape: its label where the silhouette node sent labels,
-    else the polygon of its B-spline control points.
+    """The mask of one PersonShape: its label where the silhouette node sent labels, else the polygon
+    of its B-spline control points.
+
+    Parameters
+    ----------
+    shape : PersonShape
+        The person (``id``, ``ctrl`` (n, 2) image pixels).
+    labels : ndarray of shape (H, W), dtype uint8
+        The silhouette node's label image (empty when it sent none).
+    size : tuple of int
+        (W, H) frame size, pixels, for the polygon.
+
+    Returns
+    -------
+    ndarray of shape (H, W), dtype bool
+        The person's pixels.
     """
     if labels.size:
         return labels == shape.id + 1
@@ -95,6 +109,25 @@ class TrackerNode(Node):
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
+        """The node's parameters, checked, with the defaults filled in.
+
+        Parameters
+        ----------
+        given : dict
+            Parameters as given.
+        where : str, default=""
+            Where they were given, prefixed to error messages.
+
+        Returns
+        -------
+        dict
+            The resolved parameters.
+
+        Raises
+        ------
+        ParamError
+            For a bad parameter, or ``camera`` given while the camera comes from topic camera_info.
+        """
         p = super().validate_params(given, where)
         if p["camera_info"] and p["camera"]:
             prefix = f"{where}: " if where else ""
@@ -106,11 +139,37 @@ class TrackerNode(Node):
 
     @classmethod
     def ports(cls, params: dict[str, Any]) -> tuple[dict[str, Input], dict[str, Output]]:
+        """The ports: ``camera_info`` only with the ``camera_info`` parameter on.
+
+        Parameters
+        ----------
+        params : dict
+            Validated parameters.
+
+        Returns
+        -------
+        inputs : dict of str to Input
+            The input ports.
+        outputs : dict of str to Output
+            The output ports.
+        """
         ins = {k: v for k, v in cls.inputs.items() if k != "camera_info" or params["camera_info"]}
         return ins, dict(cls.outputs)
 
     @classmethod
     def paired_inputs(cls, params: dict[str, Any]) -> Pairing | None:
+        """The pairing of frames and silhouettes, keeping at most ``max_pending`` frames ahead.
+
+        Parameters
+        ----------
+        params : dict
+            Validated parameters.
+
+        Returns
+        -------
+        Pairing or None
+            The pairing.
+        """
         return replace(super().paired_inputs(params), max_ahead=params["max_pending"])
 
     def setup(self) -> None:
@@ -153,6 +212,13 @@ class TrackerNode(Node):
         return self.trackers[side]
 
     def on_camera_info(self, msg: CameraInfo) -> None:
+        """Take a camera (a refined one holds from its seq on) and track the frames waiting for it.
+
+        Parameters
+        ----------
+        msg : CameraInfo
+            The camera; one that cannot be read is dropped with a warning.
+        """
         try:
             camera = camera_from_info(msg)
         except ValueError as exc:
@@ -162,10 +228,20 @@ class TrackerNode(Node):
         self._drain()
 
     def on_paired(self, paired: PairedSet) -> None:
+        """Queue a frame with its silhouettes and track what the known cameras allow.
+
+        Parameters
+        ----------
+        paired : PairedSet
+            ``frame`` and ``silhouettes`` of one seq.
+        """
         self.paired[paired.seq] = (paired["frame"], paired["silhouettes"])
         self._drain()
 
     def on_end(self) -> None:
+        """Publish the frames still waiting for a camera without people, so that downstream stays in
+        step, and report the regions that could not be tracked.
+        """
         if self.paired:  # the camera never came: one empty pose per frame keeps downstream in step
             self.log.error(
                 "no camera_info came for %d frame(s); published them without people (is a calibration "

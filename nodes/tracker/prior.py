@@ -51,12 +51,44 @@ DEFAULT_TRAINING = tuple(
 class MotionPrior:
     """PCA + Gaussian HMM of joint angles, with a random walk for the rest.
 
-    Args:
-        n_states: HMM states (Zheng: 20-40).
-        energy: fraction of variance the PCA keeps.
-        hmm_weight: share of particles predicted from the HMM (the rest: random walk).
-        rw_scale: multiplier of the learned per-frame std of the random walk.
-        seed: seed of the HMM fit.
+    Parameters
+    ----------
+    n_states : int, default=30
+        HMM states (Zheng: 20-40), 1..500.
+    energy : float, default=0.95
+        Fraction of variance the PCA keeps, in (0, 1].
+    hmm_weight : float, default=0.2
+        Share of particles predicted from the HMM (the rest: random walk), in [0, 1].
+    rw_scale : float, default=1.5
+        Multiplier of the learned per-frame std of the random walk.
+    seed : int, default=0
+        Seed of the HMM fit.
+
+    Attributes
+    ----------
+    pca_mean : ndarray of shape (len(ANGLE_DOFS),)
+        Mean joint angles (radians).
+    components : ndarray of shape (d, len(ANGLE_DOFS))
+        PCA components.
+    startprob : ndarray of shape (K,)
+        HMM start probabilities.
+    transmat : ndarray of shape (K, K)
+        HMM transition matrix A.
+    means : ndarray of shape (K, d)
+        HMM state means in PCA coefficients.
+    covars : ndarray of shape (K, d, d)
+        HMM state covariances (floored to stay positive definite).
+    rw_std : ndarray of shape (28,)
+        Per-frame std of the random walk per DOF (metres, radians).
+    sources : list of str
+        Names of the training sequences.
+    n_frames : int
+        Training frames.
+
+    Raises
+    ------
+    ValueError
+        For ``n_states``, ``energy`` or ``hmm_weight`` out of range.
     """
 
     n_states: int = 30
@@ -93,7 +125,28 @@ class MotionPrior:
 
     # -------------------------------------------------------------------------------- learning
     def fit(self, sequences: list[np.ndarray], sources: Iterable[str] = (), progress: bool = False) -> MotionPrior:
-        """Fit PCA, HMM and random walk to pose sequences, each (T_i, 28) at the tracker's frame rate."""
+        """Fit PCA, HMM and random walk to pose sequences.
+
+        Parameters
+        ----------
+        sequences : list of ndarray of shape (T_i, 28)
+            Pose sequences at the tracker's frame rate, T_i >= 2.
+        sources : iterable of str, default=()
+            One name per sequence, kept in ``sources``.
+        progress : bool, default=False
+            Print progress to stderr.
+
+        Returns
+        -------
+        MotionPrior
+            self, fitted.
+
+        Raises
+        ------
+        ValueError
+            When no sequences are given, one has the wrong shape, or there are fewer than
+            ``2 * n_states`` frames.
+        """
         from hmmlearn.hmm import GaussianHMM
         from sklearn.decomposition import PCA
 
@@ -135,15 +188,53 @@ class MotionPrior:
         return self
 
     def to_latent(self, P: np.ndarray) -> np.ndarray:
-        """(N, 28) poses -> (N, d) PCA coefficients of the joint angles."""
+        """PCA coefficients of the poses' joint angles.
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses.
+
+        Returns
+        -------
+        ndarray of shape (N, d)
+            PCA coefficients of the joint angles.
+        """
         return (np.asarray(P)[..., ANGLE_DOFS] - self.pca_mean) @ self.components.T
 
     def from_latent(self, Y: np.ndarray) -> np.ndarray:
-        """(N, d) PCA coefficients -> (N, len(ANGLE_DOFS)) joint angles."""
+        """Joint angles from PCA coefficients.
+
+        Parameters
+        ----------
+        Y : ndarray of shape (N, d)
+            PCA coefficients.
+
+        Returns
+        -------
+        ndarray of shape (N, len(ANGLE_DOFS))
+            Joint angles (radians).
+        """
         return Y @ self.components + self.pca_mean
 
     def state_loglik(self, Y: np.ndarray) -> np.ndarray:
-        """(N, d) -> (N, K) log N(y | mu_k, S_k) of every state."""
+        """Log density log N(y | mu_k, S_k) of every state.
+
+        Parameters
+        ----------
+        Y : ndarray of shape (N, d)
+            PCA coefficients.
+
+        Returns
+        -------
+        ndarray of shape (N, K)
+            Log density of each row under each HMM state.
+
+        Raises
+        ------
+        RuntimeError
+            When the prior is not fitted.
+        """
         self._require()
         L = np.linalg.cholesky(self.covars)  # (K, d, d)
         diff = Y[:, None, :] - self.means[None]  # (N, K, d)
@@ -153,7 +244,18 @@ class MotionPrior:
         return -0.5 * ((z**2).sum(-1) + logdet + d * np.log(2 * np.pi))
 
     def predictor(self) -> PriorPredictor:
-        """A fresh per-track predictor (its own state posterior)."""
+        """A fresh per-track predictor (its own state posterior).
+
+        Returns
+        -------
+        PriorPredictor
+            A predictor over this prior.
+
+        Raises
+        ------
+        RuntimeError
+            When the prior is not fitted.
+        """
         self._require()
         return PriorPredictor(self)
 
@@ -163,6 +265,13 @@ class MotionPrior:
 
     # -------------------------------------------------------------------------------- files
     def meta(self) -> dict[str, Any]:
+        """The metadata stored with the prior's arrays.
+
+        Returns
+        -------
+        dict
+            JSON-able version, kind, parameters, modelled DOFs, sources and frame count.
+        """
         return {
             "version": VERSION,
             "kind": "counterpart.tracker_prior",
@@ -177,7 +286,23 @@ class MotionPrior:
         }
 
     def save(self, path: str | os.PathLike) -> Path:
-        """Write the ``.npz`` (arrays + ``meta`` JSON); returns the path."""
+        """Write the ``.npz`` (arrays + ``meta`` JSON).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write (its folder is created).
+
+        Returns
+        -------
+        Path
+            The path written.
+
+        Raises
+        ------
+        RuntimeError
+            When the prior is not fitted.
+        """
         self._require()
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -198,7 +323,25 @@ class MotionPrior:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> MotionPrior:
-        """Read a prior file; ValueError naming the file for another version or a missing key."""
+        """Read a prior file.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A file written by :meth:`save`.
+
+        Returns
+        -------
+        MotionPrior
+            The fitted prior.
+
+        Raises
+        ------
+        FileNotFoundError
+            When ``path`` does not exist.
+        ValueError
+            Naming the file, when it is not a tracker prior, is of another version or models other DOFs.
+        """
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(
@@ -234,6 +377,18 @@ class PriorPredictor:
 
     Call ``update(pose)`` with each frame's estimate, and use the object as
     ``predict_fn(particles (N, 28), rng) -> (N, 28)``.
+
+    Parameters
+    ----------
+    prior : MotionPrior
+        A fitted prior.
+
+    Attributes
+    ----------
+    alpha : ndarray of shape (K,)
+        Filtered HMM state posterior.
+    std : ndarray of shape (28,)
+        Random-walk std per DOF (``rw_std`` floored, times ``rw_scale``).
     """
 
     def __init__(self, prior: MotionPrior) -> None:
@@ -255,7 +410,18 @@ class PriorPredictor:
         self.alpha = self.prior.startprob.copy()
 
     def update(self, pose: np.ndarray) -> np.ndarray:
-        """Forward-algorithm step with the estimate ``pose`` (28,); returns the posterior (K,)."""
+        """Forward-algorithm step with the frame's estimate.
+
+        Parameters
+        ----------
+        pose : ndarray of shape (28,)
+            The frame's pose estimate.
+
+        Returns
+        -------
+        ndarray of shape (K,)
+            The filtered state posterior ``alpha``.
+        """
         ll = self.prior.state_loglik(self.prior.to_latent(np.asarray(pose)[None]))[0]
         a = np.log(np.maximum(self.alpha @ self.prior.transmat, 1e-300)) + ll
         a = np.exp(a - a.max())
@@ -263,17 +429,37 @@ class PriorPredictor:
         return self.alpha
 
     def predicted_states(self) -> np.ndarray:
-        """(K,) predicted state mixture of the next frame, alpha_t A."""
+        """Predicted state mixture of the next frame, alpha_t A.
+
+        Returns
+        -------
+        ndarray of shape (K,)
+            State weights.
+        """
         return self.alpha @ self.prior.transmat
 
     def log_prior(self, P: np.ndarray, resid_std: float = 0.15, uniform: float = 0.5) -> np.ndarray:
-        """(N, 28) poses -> (N,) log density of their joint angles under the prior, per angle DOF.
+        """Log density of the poses' joint angles under the prior, per angle DOF.
 
         ``log p(x) = log sum_k w_k N(y | mu_k, S_k) + log N(r | 0, resid_std^2 I)`` with y the PCA
         coefficients and r the residual off the PCA subspace (radians); the state weights w are
         the predicted mixture ``alpha_t A`` blended with ``uniform`` of a flat one (a wrong state
         estimate must not forbid a pose). Divided by ``len(ANGLE_DOFS)``; constants dropped.
         This is the pose prior p(x_t | x_{t-1}) of the posterior the annealing layers sharpen.
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Poses.
+        resid_std : float, default=0.15
+            Std of the residual off the PCA subspace (radians).
+        uniform : float, default=0.5
+            Weight of the flat state mixture blended with the predicted one, in [0, 1].
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            Log density per angle DOF, constants dropped.
         """
         A = np.asarray(P, dtype=np.float64)[:, ANGLE_DOFS]
         Y = (A - self.prior.pca_mean) @ self.prior.components.T  # (N, d)
@@ -314,7 +500,28 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
     A source is ``sim:NAME[?seed=S]`` (both people of a simulator scenario), a ``.bvh`` file (one
     person), a ``.npz`` two-person trajectory (``counterpart.body.trajectory``; both people through
     ``counterpart.body.ik.inverse_kinematics``) or a simulator ``truth.npz`` holding ``poses_a``/``poses_b``,
-    or a folder of such files. Returns the sequences and one name per sequence.
+    or a folder of such files.
+
+    Parameters
+    ----------
+    sources : iterable of str
+        Training sources as above.
+    fps : float, default=25.0
+        Frame rate of the returned sequences (Hz); files at other rates are resampled by nearest frames.
+
+    Returns
+    -------
+    seqs : list of ndarray of shape (T, 28)
+        Pose sequences.
+    names : list of str
+        One name per sequence (``#a``/``#b`` for the person of a two-person source).
+
+    Raises
+    ------
+    FileNotFoundError
+        When a source path does not exist.
+    ValueError
+        For a folder without ``.npz``/``.bvh`` files or a source of unknown kind.
     """
     seqs: list[np.ndarray] = []
     names: list[str] = []
@@ -375,7 +582,28 @@ def train_prior(
     seed: int = 0,
     progress: bool = False,
 ) -> MotionPrior:
-    """Load ``sources`` (see ``load_sequences``) and fit a MotionPrior."""
+    """Load ``sources`` (see ``load_sequences``) and fit a MotionPrior.
+
+    Parameters
+    ----------
+    sources : iterable of str
+        Training sources (see :func:`load_sequences`).
+    n_states : int, default=30
+        HMM states.
+    energy : float, default=0.95
+        Fraction of variance the PCA keeps.
+    fps : float, default=25.0
+        Frame rate the sequences are resampled to (Hz).
+    seed : int, default=0
+        Seed of the HMM fit.
+    progress : bool, default=False
+        Print progress to stderr.
+
+    Returns
+    -------
+    MotionPrior
+        The fitted prior.
+    """
     sources = list(sources)
     seqs, names = load_sequences(sources, fps)
     if progress:
@@ -384,7 +612,13 @@ def train_prior(
 
 
 def default_prior_path() -> Path:
-    """``$COUNTERPART_MODELS/tracker_prior.npz``, default ``~/.cache/counterpart/models/``."""
+    """``$COUNTERPART_MODELS/tracker_prior.npz``, default ``~/.cache/counterpart/models/``.
+
+    Returns
+    -------
+    Path
+        Path of the default prior file.
+    """
     root = os.environ.get("COUNTERPART_MODELS") or os.path.join(Path.home(), ".cache", "counterpart", "models")
     return Path(root) / "tracker_prior.npz"
 
@@ -392,6 +626,16 @@ def default_prior_path() -> Path:
 def load_default_prior(progress: bool = False) -> MotionPrior:
     """The default prior, trained from the simulator (``DEFAULT_TRAINING``) and cached when missing
     or of another version.
+
+    Parameters
+    ----------
+    progress : bool, default=False
+        Print progress to stderr while rebuilding.
+
+    Returns
+    -------
+    MotionPrior
+        The default prior.
     """
     path = default_prior_path()
     if path.exists():
@@ -406,7 +650,19 @@ def load_default_prior(progress: bool = False) -> MotionPrior:
 
 
 def resolve_prior(spec: str | None) -> MotionPrior | None:
-    """``"default"`` -> the default prior, ``"none"``/empty -> None (random walk only), else a path."""
+    """The prior a parameter names.
+
+    Parameters
+    ----------
+    spec : str or None
+        ``"default"``: the default prior; ``"none"``, empty or None: no prior (random walk only); else
+        the path of a prior file.
+
+    Returns
+    -------
+    MotionPrior or None
+        The prior, or None.
+    """
     if spec is None or spec in ("", "none"):
         return None
     if spec == "default":
