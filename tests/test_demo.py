@@ -77,6 +77,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("camera", "pacing"),
         ("renderer", "video"),
         ("renderer", "pair_timeout"),
+        ("labeller", "max_pending"),
         ("renderer", "adaptive_wait"),
         ("silhouette", "replay_training"),
         ("tracker", "people"),
