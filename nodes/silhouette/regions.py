@@ -49,6 +49,20 @@ STACK_MAX_BELOW = 1.0
 #: predicted pixels on it (``min_overlap`` otherwise): hidden in a hug, their template, of their
 #: shape before the people met, overlaps the merged region less and less as it changes shape
 MERGE_KEEP_OVERLAP = 0.05
+#: a left-over region with this share of its box in the box of a person's piece, and at most
+#: this share of their height tall, is a part of them (``PersonTracker._enclosing_owner``)
+ENCLOSED_SHARE = 0.8
+ENCLOSED_MAX_HEIGHT = 0.5
+#: colour in a merge (``PersonTracker._split`` with a frame): each person's colours are a
+#: histogram of ``COLOUR_LEVELS`` levels per BGR channel, taken while they are seen alone and kept
+#: as a running mean at ``COLOUR_RATE`` per frame (slow: a bad frame must not spoil it); a
+#: pixel's share of each claimant is its colour's posterior, averaged over a window of
+#: ``COLOUR_WINDOW`` pixels, and ``COLOUR_DISTANCE`` of the person's height away from their
+#: predicted mask costs as much as a factor e of colour odds
+COLOUR_LEVELS = 8
+COLOUR_RATE = 0.2
+COLOUR_WINDOW = 7
+COLOUR_DISTANCE = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,6 +185,7 @@ class _Track:
     usual_area: float = 0.0  # running mean of the template area (newcomer check)
     frozen: int = 0  # consecutive frames the template was kept through a growth (newcomer check)
     in_merge: bool = False  # the last observation was a piece of a merged region
+    colour: np.ndarray | None = None  # (COLOUR_LEVELS**3,) colour histogram, sums to 1
 
     def predicted_centroid(self) -> np.ndarray:
         return self.centroid + self.velocity
@@ -206,6 +221,7 @@ class _Regions:
     counts: np.ndarray
     frac_track: np.ndarray
     region_area: np.ndarray
+    image: np.ndarray | None = None  # (H, W) colour bin per pixel (``colour_bins``), or None
 
 
 #: a person's piece of this frame: (crop (h, w) bool, x0, y0, merged)
@@ -326,13 +342,16 @@ class PersonTracker:
         """Ids of the people currently tracked (seen, or unseen for at most max_missed frames)."""
         return [t.id for t in self._tracks]
 
-    def update(self, mask: np.ndarray) -> tuple[np.ndarray, list[Person]]:
+    def update(self, mask: np.ndarray, frame: np.ndarray | None = None) -> tuple[np.ndarray, list[Person]]:
         """Track people in one cleaned foreground mask.
 
         Parameters
         ----------
         mask : ndarray of shape (H, W), dtype bool
             The cleaned foreground mask (non-zero: foreground).
+        frame : ndarray of shape (H, W, 3), dtype uint8, or None, default=None
+            The frame the mask comes from (BGR): with it, a merged region is split by each
+            person's colours as well as their shapes (clothes differ where shapes overlap).
 
         Returns
         -------
@@ -349,7 +368,10 @@ class PersonTracker:
         m = np.asarray(mask)
         if m.ndim != 2:
             raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
-        frame = self._label_regions(m)
+        if frame is not None and (np.shape(frame) != (*m.shape, 3) or np.asarray(frame).dtype != np.uint8):
+            raise ValueError(f"frame must be (H, W, 3) uint8 like the mask {m.shape}, got {np.shape(frame)}")
+        bins = None if frame is None else colour_bins(frame)
+        frame = self._label_regions(m, bins)
         match = _Matching()
         self._split_merges(frame, match)
         self._assign_by_position(frame, match)
@@ -357,7 +379,7 @@ class PersonTracker:
         return self._commit(frame, match)
 
     # ------------------------------------------------------------------ the steps of update
-    def _label_regions(self, m: np.ndarray) -> _Regions:
+    def _label_regions(self, m: np.ndarray, bins: np.ndarray | None = None) -> _Regions:
         """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
         n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
@@ -385,6 +407,7 @@ class PersonTracker:
             counts=counts,
             frac_track=frac_track,
             region_area=stats[:, cv2.CC_STAT_AREA].astype(np.float64),
+            image=bins,
         )
 
     def _split_merges(self, frame: _Regions, match: _Matching) -> None:
@@ -394,7 +417,11 @@ class PersonTracker:
             return
         best = np.argmax(frame.frac_track, axis=1)
         need = np.array([MERGE_KEEP_OVERLAP if t.in_merge else self.min_overlap for t in tracks])
-        strong = frame.frac_track[np.arange(len(tracks)), best] >= need
+        # someone unseen since last frame who was not hidden in a merge has left or was a
+        # passing fragment: where they were, a person who walks there must not be split with them
+        # (someone hidden behind others was in a merge and keeps their claim)
+        back = np.array([t.missed == 0 or t.in_merge for t in tracks])
+        strong = (frame.frac_track[np.arange(len(tracks)), best] >= need) & back
         for r in frame.regions:
             claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
             if len(claim) >= 2:
@@ -404,7 +431,7 @@ class PersonTracker:
                 match.occluded.update(claim)
                 box = tuple(int(v) for v in frame.stats[r, :4])
                 match.within.update({i: box for i in claim})
-                for i, piece in self._split(frame.comp, frame.stats, r, [tracks[i] for i in claim]).items():
+                for i, piece in self._split(frame, r, [tracks[i] for i in claim]).items():
                     match.assigned[claim[i]] = (*piece, True)
 
     def _assign_by_position(self, frame: _Regions, match: _Matching) -> None:
@@ -459,6 +486,8 @@ class PersonTracker:
                 i = int(np.argmax(frac_region))
                 if frac_region[i] >= 0.5 and i in match.assigned:
                     owner = i
+            if owner < 0:
+                owner = self._enclosing_owner(crop, x0, y0, match)
             if owner >= 0:
                 match.assigned[owner] = (*_union(match.assigned[owner][:3], (crop, x0, y0)), match.assigned[owner][3])
             else:
@@ -496,6 +525,31 @@ class PersonTracker:
                 best, best_overlap = i, overlap
         return best
 
+    def _enclosing_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
+        """The index of the assigned track a small left-over region (crop (h, w), x0, y0) lies
+        within, or -1.
+
+        A raised arm, a turned head or a hand torn off a person by the background model comes out
+        as a small region of its own inside their outline's box, away from their template's
+        pixels; as a new "person" it would then claim a share of them in every merge that
+        follows. It is theirs when ``ENCLOSED_SHARE`` of its box lies in the box of their piece
+        of this frame and it is at most ``ENCLOSED_MAX_HEIGHT`` of their height tall: another
+        person inside someone's box is about as tall as them, or further back and smaller but
+        standing on the ground, below their middle (``_stacked_owner`` and the assignment see to
+        the people who stand one behind the other).
+        """
+        h, w = crop.shape
+        best, best_share = -1, 0.0
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            ox = min(x0 + w, px + pw) - max(x0, px)
+            oy = min(y0 + h, py + ph) - max(y0, py)
+            share = max(ox, 0) * max(oy, 0) / float(h * w)
+            height = max(self._tracks[i].height, float(ph))
+            if share >= ENCLOSED_SHARE and h <= ENCLOSED_MAX_HEIGHT * height and share > best_share:
+                best, best_share = i, share
+        return best
+
     def _commit(self, frame: _Regions, match: _Matching) -> tuple[np.ndarray, list[Person]]:
         """Update the tracks, start new ones, retire the long unseen; paint the labels."""
         h_img, w_img = frame.comp.shape
@@ -518,6 +572,8 @@ class PersonTracker:
             if t.frozen > NEWCOMER_PATIENCE:  # no newcomer after all: they did change size
                 t.frozen, t.usual_area = 0, float(crop.sum())
             person = self._observe(t, crop, x0, y0, merged, t.frozen > 0, match.within.get(i))
+            if not merged and t.frozen == 0 and frame.image is not None:
+                self._learn_colour(t, frame.image, crop, x0, y0)
             people.append(person)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
@@ -526,6 +582,8 @@ class PersonTracker:
         for crop, x0, y0 in match.fresh:
             t = self._new_track(crop, x0, y0, w_img)
             people.append(self._observe(t, crop, x0, y0, False))
+            if frame.image is not None:
+                self._learn_colour(t, frame.image, crop, x0, y0)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
         self._tracks = alive
@@ -558,12 +616,25 @@ class PersonTracker:
         return comp[y : y + h, x : x + w] == r, x, y
 
     @staticmethod
-    def _split(
-        comp: np.ndarray, stats: np.ndarray, r: int, claim: list[_Track]
-    ) -> dict[int, tuple[np.ndarray, int, int]]:
-        """Share region r between the claiming tracks; returns claim index -> (crop, x0, y0)."""
-        x, y, w, h = (int(v) for v in stats[r, :4])
-        region = comp[y : y + h, x : x + w] == r
+    def _learn_colour(t: _Track, bins: np.ndarray, crop: np.ndarray, x0: int, y0: int) -> None:
+        """Fold the colours of track t's own pixels (crop (h, w) at x0, y0; bins (H, W)) into
+        its histogram."""
+        h, w = crop.shape
+        hist = np.bincount(bins[y0 : y0 + h, x0 : x0 + w][crop], minlength=COLOUR_LEVELS**3).astype(np.float64)
+        hist /= max(hist.sum(), 1.0)
+        t.colour = hist if t.colour is None else t.colour + COLOUR_RATE * (hist - t.colour)
+
+    @staticmethod
+    def _split(frame: _Regions, r: int, claim: list[_Track]) -> dict[int, tuple[np.ndarray, int, int]]:
+        """Share region r between the claiming tracks; returns claim index -> (crop, x0, y0).
+
+        Each pixel goes to the claimant of least cost: the signed distance to their predicted
+        mask (negative inside, its depth) in units of ``COLOUR_DISTANCE`` of their height, less
+        the log-posterior of the pixel's colour under their histogram (equal priors, averaged
+        over a ``COLOUR_WINDOW`` square) when the frame and everyone's colours are known.
+        """
+        x, y, w, h = (int(v) for v in frame.stats[r, :4])
+        region = frame.comp[y : y + h, x : x + w] == r
         # Signed distance to each predicted mask: negative inside (depth), positive outside.
         signed = np.empty((len(claim), h, w), np.float32)
         for k, t in enumerate(claim):
@@ -571,6 +642,13 @@ class PersonTracker:
             outside = cv2.distanceTransform(1 - pred, cv2.DIST_L2, 5)
             inside = cv2.distanceTransform(pred, cv2.DIST_L2, 5)
             signed[k] = outside - inside
+        if frame.image is not None and all(t.colour is not None for t in claim):
+            scale = np.array([COLOUR_DISTANCE * max(t.height, 10.0) for t in claim], np.float32)
+            signed /= scale[:, None, None]
+            like = np.stack([t.colour for t in claim])[:, frame.image[y : y + h, x : x + w]] + 1e-4
+            post = like / like.sum(axis=0)
+            for k in range(len(claim)):
+                signed[k] -= cv2.blur(np.log(post[k]).astype(np.float32), (COLOUR_WINDOW, COLOUR_WINDOW))
         owner = np.argmin(signed, axis=0)
         pieces: dict[int, tuple[np.ndarray, int, int]] = {}
         for k in range(len(claim)):
@@ -663,6 +741,23 @@ class PersonTracker:
             height=float(crop.shape[0]),
             merged=merged,
         )
+
+
+def colour_bins(frame: np.ndarray) -> np.ndarray:
+    """Each pixel's colour bin for the people's colour histograms.
+
+    Parameters
+    ----------
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        BGR frame.
+
+    Returns
+    -------
+    ndarray of shape (H, W), dtype int64
+        ``COLOUR_LEVELS`` levels per channel, b * L^2 + g * L + r, in [0, L^3).
+    """
+    q = (np.asarray(frame) // (256 // COLOUR_LEVELS)).astype(np.int64)
+    return (q[..., 0] * COLOUR_LEVELS + q[..., 1]) * COLOUR_LEVELS + q[..., 2]
 
 
 def _crop_box(part: np.ndarray, x: int, y: int) -> tuple[np.ndarray, int, int]:
