@@ -258,7 +258,7 @@ class SilhouetteExtractor:
             self.tracker.min_area = person_min_area(frame.shape[1], frame.shape[0], self.camera, self.max_distance_m)
         # min_area 0: the tracker drops regions below min_area in its own labelling pass
         mask = clean_mask(fg, self.open_px, self.close_px, self.fill_holes, 0)
-        labels, people = self.tracker.update(mask, frame)
+        labels, people = self.tracker.update(mask)
         if self.outlines:
             people = [self._with_spline(labels, p) for p in people]
         return FrameResult(index, labels, people, classes, True)

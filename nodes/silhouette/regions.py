@@ -45,6 +45,13 @@ WALK_SPEED = 0.01
 STACK_OVERLAP = 0.5
 STACK_GAP = 0.35
 STACK_MAX_BELOW = 1.0
+#: widest union of a person and a region above them, as a share of its height, that is one
+#: person (``group_stacked``'s bound)
+STACK_UPRIGHT = 0.45
+#: a new region whose bottom is within this share of a tracked person's height of their feet'
+#: row, and shorter than this share of their height, is a part of someone (``_ground_owner``)
+FEET_ROW = 0.1
+FRAGMENT_HEIGHT = 0.4
 #: someone who was part of a merged region last frame still claims it with this share of their
 #: predicted pixels on it (``min_overlap`` otherwise): hidden in a hug, their template, of their
 #: shape before the people met, overlaps the merged region less and less as it changes shape
@@ -53,16 +60,6 @@ MERGE_KEEP_OVERLAP = 0.05
 #: this share of their height tall, is a part of them (``PersonTracker._enclosing_owner``)
 ENCLOSED_SHARE = 0.8
 ENCLOSED_MAX_HEIGHT = 0.5
-#: colour in a merge (``PersonTracker._split`` with a frame): each person's colours are a
-#: histogram of ``COLOUR_LEVELS`` levels per BGR channel, taken while they are seen alone and kept
-#: as a running mean at ``COLOUR_RATE`` per frame (slow: a bad frame must not spoil it); a
-#: pixel's share of each claimant is its colour's posterior, averaged over a window of
-#: ``COLOUR_WINDOW`` pixels, and ``COLOUR_DISTANCE`` of the person's height away from their
-#: predicted mask costs as much as a factor e of colour odds
-COLOUR_LEVELS = 8
-COLOUR_RATE = 0.2
-COLOUR_WINDOW = 7
-COLOUR_DISTANCE = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,7 +182,6 @@ class _Track:
     usual_area: float = 0.0  # running mean of the template area (newcomer check)
     frozen: int = 0  # consecutive frames the template was kept through a growth (newcomer check)
     in_merge: bool = False  # the last observation was a piece of a merged region
-    colour: np.ndarray | None = None  # (COLOUR_LEVELS**3,) colour histogram, sums to 1
 
     def predicted_centroid(self) -> np.ndarray:
         return self.centroid + self.velocity
@@ -221,7 +217,6 @@ class _Regions:
     counts: np.ndarray
     frac_track: np.ndarray
     region_area: np.ndarray
-    image: np.ndarray | None = None  # (H, W) colour bin per pixel (``colour_bins``), or None
 
 
 #: a person's piece of this frame: (crop (h, w) bool, x0, y0, merged)
@@ -342,16 +337,13 @@ class PersonTracker:
         """Ids of the people currently tracked (seen, or unseen for at most max_missed frames)."""
         return [t.id for t in self._tracks]
 
-    def update(self, mask: np.ndarray, frame: np.ndarray | None = None) -> tuple[np.ndarray, list[Person]]:
+    def update(self, mask: np.ndarray) -> tuple[np.ndarray, list[Person]]:
         """Track people in one cleaned foreground mask.
 
         Parameters
         ----------
         mask : ndarray of shape (H, W), dtype bool
             The cleaned foreground mask (non-zero: foreground).
-        frame : ndarray of shape (H, W, 3), dtype uint8, or None, default=None
-            The frame the mask comes from (BGR): with it, a merged region is split by each
-            person's colours as well as their shapes (clothes differ where shapes overlap).
 
         Returns
         -------
@@ -368,10 +360,7 @@ class PersonTracker:
         m = np.asarray(mask)
         if m.ndim != 2:
             raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
-        if frame is not None and (np.shape(frame) != (*m.shape, 3) or np.asarray(frame).dtype != np.uint8):
-            raise ValueError(f"frame must be (H, W, 3) uint8 like the mask {m.shape}, got {np.shape(frame)}")
-        bins = None if frame is None else colour_bins(frame)
-        frame = self._label_regions(m, bins)
+        frame = self._label_regions(m)
         match = _Matching()
         self._split_merges(frame, match)
         self._assign_by_position(frame, match)
@@ -379,7 +368,7 @@ class PersonTracker:
         return self._commit(frame, match)
 
     # ------------------------------------------------------------------ the steps of update
-    def _label_regions(self, m: np.ndarray, bins: np.ndarray | None = None) -> _Regions:
+    def _label_regions(self, m: np.ndarray) -> _Regions:
         """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
         n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
@@ -407,7 +396,6 @@ class PersonTracker:
             counts=counts,
             frac_track=frac_track,
             region_area=stats[:, cv2.CC_STAT_AREA].astype(np.float64),
-            image=bins,
         )
 
     def _split_merges(self, frame: _Regions, match: _Matching) -> None:
@@ -431,7 +419,7 @@ class PersonTracker:
                 match.occluded.update(claim)
                 box = tuple(int(v) for v in frame.stats[r, :4])
                 match.within.update({i: box for i in claim})
-                for i, piece in self._split(frame, r, [tracks[i] for i in claim]).items():
+                for i, piece in self._split(frame.comp, frame.stats, r, [tracks[i] for i in claim]).items():
                     match.assigned[claim[i]] = (*piece, True)
 
     def _assign_by_position(self, frame: _Regions, match: _Matching) -> None:
@@ -461,6 +449,8 @@ class PersonTracker:
                 split = None
                 if self._established(t, w_img, h_img) and frame.region_area[r] >= self.newcomer_growth * t.usual_area:
                     split = self._split_newcomer(frame.comp, frame.stats, r, t)
+                if split is not None and not self._emerging(split, t):
+                    split = None
                 if split is None:
                     match.assigned[free_t[a]] = (*self._region_crop(frame.comp, frame.stats, r), False)
                 else:
@@ -494,11 +484,41 @@ class PersonTracker:
                 unowned.append((crop, x0, y0))
         # a new person must look like one: a standing person, or two side by side, is taller than
         # wide; a car, a barrier, the strip of a ghost along a skirting board or a kerb is not
-        match.fresh += [g for g in group_stacked(unowned) if g[0].shape[0] >= self.min_upright * g[0].shape[1]]
+        for g in group_stacked(unowned):
+            if g[0].shape[0] < self.min_upright * g[0].shape[1]:
+                continue
+            owner = self._ground_owner(*g, match)
+            if owner is None:
+                match.fresh.append(g)
+            elif owner >= 0:
+                match.assigned[owner] = (*_union(match.assigned[owner][:3], g), match.assigned[owner][3])
+
+    def _ground_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int | None:
+        """Whether an upright left-over group (crop (h, w), x0, y0) is a whole new person (None),
+        a part of the assigned track whose index is returned, or a fragment of no one (-1).
+
+        People stand on the ground: someone whose feet are on the same image row as a tracked
+        person's (within ``FEET_ROW`` of their height) is about as far from the camera and so
+        about as tall. A group that ends there but is less than ``FRAGMENT_HEIGHT`` of their
+        height tall is a part of a person (a leg stepping back in a push, an arm), not a
+        person: it joins the person it lies beside (``STACK_GAP`` of their height at most
+        between them), or is dropped.
+        """
+        h, w = crop.shape
+        best, best_gap = None, np.inf
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            height = max(self._tracks[i].height, float(ph))
+            if not _shorter_on_same_row((crop, x0, y0), py + ph, height):
+                continue
+            gap = max(px - (x0 + w), x0 - (px + pw), 0)
+            if gap < best_gap:
+                best, best_gap = (i if gap <= STACK_GAP * height else -1), gap
+        return best
 
     def _stacked_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
-        """The index of the assigned track whose legs or feet a left-over region (crop (h, w), x0,
-        y0) is, or -1.
+        """The index of the assigned track whose legs or feet, or head and shoulders, a left-over
+        region (crop (h, w), x0, y0) is, or -1.
 
         Legs in trousers of the floor's colour come out as a region of their own below a gap;
         once the person has moved, it lies outside their predicted mask and would start a new
@@ -506,6 +526,12 @@ class PersonTracker:
         (``STACK_OVERLAP`` of its width), at most ``STACK_GAP`` of their height below it, and is
         no taller than ``STACK_MAX_BELOW`` of their height (someone standing nearer the camera,
         lower in the picture, is taller than the person further back).
+
+        Likewise the head and shoulders of someone whose upper body was given to the person they
+        touched (a push, a handshake) come out above their legs when the two part: a region above
+        a person, in their columns, at most ``STACK_GAP`` of their height above them and no taller
+        than them, whose union with them stands upright as one person does (``_upright_pair``),
+        is theirs.
         """
         h, w = crop.shape
         best, best_overlap = -1, 0
@@ -515,13 +541,15 @@ class PersonTracker:
             height = max(self._tracks[i].height, float(ph))
             gap = y0 - (py + ph)  # rows between them; < 0 where they share rows
             below = y0 + 0.5 * h > py + 0.5 * ph  # its middle in their lower half, or under them
-            if (
-                below
-                and overlap >= STACK_OVERLAP * w
-                and gap <= STACK_GAP * height
-                and h <= STACK_MAX_BELOW * height
-                and overlap > best_overlap
-            ):
+            if below:
+                stacked = gap <= STACK_GAP * height and h <= STACK_MAX_BELOW * height
+            else:
+                stacked = (
+                    py - (y0 + h) <= STACK_GAP * height
+                    and h <= height
+                    and _upright_pair((pc, px, py), (crop, x0, y0), STACK_UPRIGHT)
+                )
+            if stacked and overlap >= STACK_OVERLAP * w and overlap > best_overlap:
                 best, best_overlap = i, overlap
         return best
 
@@ -572,8 +600,6 @@ class PersonTracker:
             if t.frozen > NEWCOMER_PATIENCE:  # no newcomer after all: they did change size
                 t.frozen, t.usual_area = 0, float(crop.sum())
             person = self._observe(t, crop, x0, y0, merged, t.frozen > 0, match.within.get(i))
-            if not merged and t.frozen == 0 and frame.image is not None:
-                self._learn_colour(t, frame.image, crop, x0, y0)
             people.append(person)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
@@ -582,8 +608,6 @@ class PersonTracker:
         for crop, x0, y0 in match.fresh:
             t = self._new_track(crop, x0, y0, w_img)
             people.append(self._observe(t, crop, x0, y0, False))
-            if frame.image is not None:
-                self._learn_colour(t, frame.image, crop, x0, y0)
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
         self._tracks = alive
@@ -616,25 +640,12 @@ class PersonTracker:
         return comp[y : y + h, x : x + w] == r, x, y
 
     @staticmethod
-    def _learn_colour(t: _Track, bins: np.ndarray, crop: np.ndarray, x0: int, y0: int) -> None:
-        """Fold the colours of track t's own pixels (crop (h, w) at x0, y0; bins (H, W)) into
-        its histogram."""
-        h, w = crop.shape
-        hist = np.bincount(bins[y0 : y0 + h, x0 : x0 + w][crop], minlength=COLOUR_LEVELS**3).astype(np.float64)
-        hist /= max(hist.sum(), 1.0)
-        t.colour = hist if t.colour is None else t.colour + COLOUR_RATE * (hist - t.colour)
-
-    @staticmethod
-    def _split(frame: _Regions, r: int, claim: list[_Track]) -> dict[int, tuple[np.ndarray, int, int]]:
-        """Share region r between the claiming tracks; returns claim index -> (crop, x0, y0).
-
-        Each pixel goes to the claimant of least cost: the signed distance to their predicted
-        mask (negative inside, its depth) in units of ``COLOUR_DISTANCE`` of their height, less
-        the log-posterior of the pixel's colour under their histogram (equal priors, averaged
-        over a ``COLOUR_WINDOW`` square) when the frame and everyone's colours are known.
-        """
-        x, y, w, h = (int(v) for v in frame.stats[r, :4])
-        region = frame.comp[y : y + h, x : x + w] == r
+    def _split(
+        comp: np.ndarray, stats: np.ndarray, r: int, claim: list[_Track]
+    ) -> dict[int, tuple[np.ndarray, int, int]]:
+        """Share region r between the claiming tracks; returns claim index -> (crop, x0, y0)."""
+        x, y, w, h = (int(v) for v in stats[r, :4])
+        region = comp[y : y + h, x : x + w] == r
         # Signed distance to each predicted mask: negative inside (depth), positive outside.
         signed = np.empty((len(claim), h, w), np.float32)
         for k, t in enumerate(claim):
@@ -642,13 +653,6 @@ class PersonTracker:
             outside = cv2.distanceTransform(1 - pred, cv2.DIST_L2, 5)
             inside = cv2.distanceTransform(pred, cv2.DIST_L2, 5)
             signed[k] = outside - inside
-        if frame.image is not None and all(t.colour is not None for t in claim):
-            scale = np.array([COLOUR_DISTANCE * max(t.height, 10.0) for t in claim], np.float32)
-            signed /= scale[:, None, None]
-            like = np.stack([t.colour for t in claim])[:, frame.image[y : y + h, x : x + w]] + 1e-4
-            post = like / like.sum(axis=0)
-            for k in range(len(claim)):
-                signed[k] -= cv2.blur(np.log(post[k]).astype(np.float32), (COLOUR_WINDOW, COLOUR_WINDOW))
         owner = np.argmin(signed, axis=0)
         pieces: dict[int, tuple[np.ndarray, int, int]] = {}
         for k in range(len(claim)):
@@ -665,6 +669,22 @@ class PersonTracker:
             return False
         (x0, y0), (h, w) = t.origin, t.crop.shape
         return x0 > 1 and y0 > 1 and x0 + w < w_img - 1 and y0 + h < h_img - 1
+
+    @staticmethod
+    def _emerging(split: tuple[tuple[np.ndarray, int, int], tuple[np.ndarray, int, int]], t: _Track) -> bool:
+        """Whether the newcomer's piece of a grown region ((t's piece, the newcomer's piece), each
+        (crop, x0, y0)) can be a person: one who stood beside track t stands on the ground too,
+        their feet below t's middle, and is not much shorter than t when their feet are on t's
+        row (``_shorter_on_same_row``). What floats above t's middle is t's own head and
+        shoulders (given to someone t touched, back now); what is short on t's row is a leg
+        stepping out.
+        """
+        (mine, mx, my), (new, nx, ny) = split
+        top = min(my, ny)
+        feet = max(my + mine.shape[0], ny + new.shape[0])
+        if ny + new.shape[0] < 0.5 * (top + feet):
+            return False
+        return not _shorter_on_same_row(split[1], my + mine.shape[0], t.height)
 
     def _split_newcomer(
         self, comp: np.ndarray, stats: np.ndarray, r: int, t: _Track
@@ -743,21 +763,13 @@ class PersonTracker:
         )
 
 
-def colour_bins(frame: np.ndarray) -> np.ndarray:
-    """Each pixel's colour bin for the people's colour histograms.
-
-    Parameters
-    ----------
-    frame : ndarray of shape (H, W, 3), dtype uint8
-        BGR frame.
-
-    Returns
-    -------
-    ndarray of shape (H, W), dtype int64
-        ``COLOUR_LEVELS`` levels per channel, b * L^2 + g * L + r, in [0, L^3).
+def _shorter_on_same_row(part: tuple[np.ndarray, int, int], feet_row: float, height: float) -> bool:
+    """Whether a region (crop (h, w), x0, y0) ends within ``FEET_ROW`` of ``height`` of a
+    person's feet row (pixels) and is less than ``FRAGMENT_HEIGHT`` of their height tall: on
+    the ground as far away as they are, a whole person would be about as tall.
     """
-    q = (np.asarray(frame) // (256 // COLOUR_LEVELS)).astype(np.int64)
-    return (q[..., 0] * COLOUR_LEVELS + q[..., 1]) * COLOUR_LEVELS + q[..., 2]
+    h = part[0].shape[0]
+    return abs(part[2] + h - feet_row) <= FEET_ROW * height and h < FRAGMENT_HEIGHT * height
 
 
 def _crop_box(part: np.ndarray, x: int, y: int) -> tuple[np.ndarray, int, int]:
@@ -794,7 +806,7 @@ def _with_unmatched(cost: np.ndarray, unmatched: float) -> np.ndarray:
 
 
 def group_stacked(
-    parts: list[tuple[np.ndarray, int, int]], max_aspect: float = 0.45
+    parts: list[tuple[np.ndarray, int, int]], max_aspect: float = STACK_UPRIGHT
 ) -> list[tuple[np.ndarray, int, int]]:
     """Join first-sight regions that are parts of one standing person.
 
