@@ -907,7 +907,7 @@ class HorprasertBackground:
         if not ripe.any():
             return False
         ys, xs = np.divmod(idx[ripe], self.shape[1])
-        run = np.stack([r[ripe] for r in refs])  # (3, K') the runs' mean colours
+        run = refs[:, ripe]  # (3, K') the runs' mean colours
         sel = self._matches_surround(run, ys, xs, fg)
         if not sel.any():
             return False
@@ -917,30 +917,29 @@ class HorprasertBackground:
         self._still[ys, xs] = 0
         return True
 
-    def _advance_still_runs(self, frame: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    def _advance_still_runs(self, frame: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Extend or restart the still run of each foreground pixel (flat indices ``idx`` (K,)):
         a frame more than ``absorb_k`` spreads (any channel) from the run's mean colour restarts
         it. Runs off the foreground end. Returns the runs' lengths (K,) uint16 and their mean
-        colours, three (K,) float32 planes.
+        colours (3, K) float32.
         """
         still = self._still.reshape(-1)
         # Runs only live on foreground pixels (a few percent of the frame): work on those alone,
-        # one flat channel plane at a time (1-D gathers and scatters are the cheap ones).
+        # the three channels at once as (3, K) gathers.
         prev = still[idx]
         still.fill(0)
-        px = np.take(frame.reshape(-1, 3), idx, axis=0)  # (K, 3) uint8
-        obs = [px[:, c].astype(np.float32) for c in range(3)]
-        refs = [np.take(self._still_ref[c], idx) for c in range(3)]
-        dev = np.abs(obs[0] - refs[0]) * np.take(self._inv_s[0].reshape(-1), idx)
-        for c in (1, 2):
-            np.maximum(dev, np.abs(obs[c] - refs[c]) * np.take(self._inv_s[c].reshape(-1), idx), out=dev)
-        n = np.where((prev > 0) & (dev <= self.ghosts.absorb_k), prev + 1, 1).astype(np.uint16)
+        obs = np.take(frame.reshape(-1, 3), idx, axis=0).T.astype(np.float32)  # (3, K)
+        refs = np.take(self._still_ref, idx, axis=1)  # (3, K)
+        dev = np.abs(obs - refs)
+        dev *= np.take(self._inv_s.reshape(3, -1), idx, axis=1)
+        n = np.where((prev > 0) & (dev.max(axis=0) <= self.ghosts.absorb_k), prev + 1, 1).astype(np.uint16)
         still[idx] = n
         # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
         inv_n = 1.0 / n.astype(np.float32)
-        for c in range(3):
-            refs[c] += (obs[c] - refs[c]) * inv_n
-            self._still_ref[c][idx] = refs[c]
+        obs -= refs
+        obs *= inv_n
+        refs += obs
+        self._still_ref[:, idx] = refs
         return n, refs
 
     def _matches_surround(self, run: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
@@ -961,9 +960,22 @@ class HorprasertBackground:
         sx = np.minimum(xs * sw // w, sw - 1)
         cnt = frac[sy, sx]
         near = np.empty_like(run)
+        if h % 4 == 0:
+            # the three planes stacked as one (3 H, W) image: one product and one area resize
+            # (4 x 4 block means, which never straddle two planes) instead of three each
+            small3 = cv2.resize(
+                cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
+                (sw, 3 * sh),
+                interpolation=cv2.INTER_AREA,
+            )
+            smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
+        else:
+            smalls = [
+                cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
+                for c in range(3)
+            ]
         for c in range(3):
-            small = cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
-            near[c] = cv2.boxFilter(small, -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
+            near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
         near /= np.maximum(cnt, 1e-3)
         # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
         s_run = run.sum(axis=0) + 1.0
@@ -1023,17 +1035,22 @@ class HorprasertBackground:
         if spread_changed:
             np.divide(np.float32(1.0), self._var, out=self._inv_var)
             np.sqrt(self._inv_var, out=self._inv_s)
-        mu, w, den = self._mu, self._w, self._inv_den
-        np.multiply(mu, self._inv_var, out=w)
-        np.multiply(mu[0], w[0], out=den)
-        den += mu[1] * w[1]
-        den += mu[2] * w[2]
+        mu, w, den, inv_var = self._mu, self._w, self._inv_den, self._inv_var
+        # every frame, after ``update``: OpenCV's float ops into the model's own buffers
+        mul, add = cv2.multiply, cv2.add
+        for c in range(3):
+            mul(mu[c], inv_var[c], dst=w[c])
+        mul(mu[0], w[0], dst=den)
+        t = mul(mu[1], w[1])
+        add(den, t, dst=den)
+        add(den, mul(mu[2], w[2], dst=t), dst=den)
         # A black background pixel has no brightness direction: 1/den -> 0 makes alpha 0 there
         # and all of the observed colour shows up as chromaticity distortion.
-        black = den <= 1e-6
-        np.divide(1.0, np.maximum(den, 1e-6, out=den), out=den)
-        if black.any():
-            den[black] = 0.0
+        black = cv2.compare(den, 1e-6, cv2.CMP_LE)
+        cv2.max(den, 1e-6, dst=den)
+        cv2.divide(1.0, den, dst=den)
+        if cv2.countNonZero(black):
+            den[black > 0] = 0.0
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
