@@ -30,6 +30,9 @@ the cost per frame is small. Frames are uint8 BGR (H, W, 3).
 
 from __future__ import annotations
 
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
+
 import cv2
 import numpy as np
 
@@ -76,6 +79,11 @@ class SampleConsensus:
         happens to match would be learnt and match better the next time.
     random_state : int or None, default=0
         Seed of the random updates.
+    threaded : bool, default=True
+        Learn from a frame (the sample updates and the blink levels, which the veto of that frame
+        does not need) in a worker thread while the caller goes on with the frame; the next call
+        (and every attribute read) waits for it first, so the results are the same as without.
+        On two cores this hides most of the model's cost.
 
     Attributes
     ----------
@@ -106,6 +114,7 @@ class SampleConsensus:
         blink_decay: float = 0.005,
         learn_blink: float = 0.5,
         random_state: int | None = 0,
+        threaded: bool = True,
     ) -> None:
         if n_samples < 1:
             raise ValueError(f"n_samples must be >= 1, got {n_samples}")
@@ -135,12 +144,33 @@ class SampleConsensus:
         self.blink_decay = blink_decay
         self.learn_blink = learn_blink
         self.random_state = random_state
-        self.samples_: np.ndarray | None = None
+        self.threaded = threaded
+        self._samples: np.ndarray | None = None
         self._shape: tuple[int, int] = (0, 0)
+        self._pool: ThreadPoolExecutor | None = None
+        self._pending: Future | None = None
+
+    def _join(self) -> None:
+        """Wait for the last frame's learning step (see ``threaded``); re-raise its error."""
+        if self._pending is not None:
+            pending, self._pending = self._pending, None
+            pending.result()
+
+    def __getstate__(self) -> dict[str, Any]:
+        self._join()
+        state = self.__dict__.copy()
+        state["_pool"] = None
+        return state
+
+    @property
+    def samples_(self) -> np.ndarray | None:
+        """Per pixel the B, G, R rows of its samples, (H * W, 3, n_samples) uint8; None before ``fit``."""
+        self._join()
+        return self._samples
 
     @property
     def is_fitted(self) -> bool:
-        return self.samples_ is not None
+        return self._samples is not None
 
     @property
     def radius_(self) -> np.ndarray:
@@ -156,7 +186,8 @@ class SampleConsensus:
         RuntimeError
             When not fitted.
         """
-        if self.samples_ is None:
+        self._join()
+        if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return (1.0 + self._blink).reshape(self._shape)
 
@@ -174,7 +205,8 @@ class SampleConsensus:
         RuntimeError
             When not fitted.
         """
-        if self.samples_ is None:
+        self._join()
+        if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return self._spread.reshape(self._shape)
 
@@ -204,6 +236,7 @@ class SampleConsensus:
         ValueError
             For arrays of the wrong shape or dtype.
         """
+        self._join()
         frames = np.asarray(frames)
         if frames.ndim != 4 or frames.shape[-1] != 3 or frames.dtype != np.uint8:
             raise ValueError(f"frames must be (N, H, W, 3) uint8 BGR, got {frames.shape} {frames.dtype}")
@@ -225,7 +258,7 @@ class SampleConsensus:
             if foreground is not None:
                 s[np.asarray(foreground[j]).reshape(-1)] = flat_bg[np.asarray(foreground[j]).reshape(-1)]
             samples[:, :, k] = s
-        self.samples_ = samples
+        self._samples = samples
         # d(x): the mean L1 distance of one background observation from another; consecutive
         # training samples give it (noise and any motion of the background between frames)
         nxt = np.roll(samples, -1, axis=2).astype(np.int16)
@@ -257,12 +290,13 @@ class SampleConsensus:
         RuntimeError
             When not fitted.
         """
-        if self.samples_ is None:
+        self._join()
+        if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if idx.size == 0:
             return np.zeros(0, bool)
         n = self.n_samples
-        rows = np.take(self.samples_.reshape(-1, 3 * n), idx, axis=0)  # (K, 3 N) uint8
+        rows = np.take(self._samples.reshape(-1, 3 * n), idx, axis=0)  # (K, 3 N) uint8
         dist = _l1(rows, np.take(frame.reshape(-1, 3), idx, axis=0), n)  # (K, N)
         total = np.add(rows[:, :n], rows[:, n : 2 * n], dtype=np.int16)  # (K, N) |S_k|_1
         total += rows[:, 2 * n :]
@@ -303,29 +337,41 @@ class SampleConsensus:
         ValueError
             When ``frame`` or ``labels`` is not of the fitted size.
         """
-        if self.samples_ is None:
+        if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if frame.shape[:2] != self._shape or labels.shape != self._shape:
             raise ValueError(
                 f"frame and labels must be {self._shape} (the fitted size), got {frame.shape[:2]} and {labels.shape}"
             )
+        self._join()
         flat = labels.reshape(-1)
         idx = np.flatnonzero(flat == FOREGROUND)
         out = labels.copy()
-        # Learnt: what the statistics call background, and anything in a dynamic (blinking)
-        # region, where a colour seen again and again is background whichever model missed it.
-        # Elsewhere a person whose colour happens to match would be learnt, match better the
-        # next time, and spread.
-        learn = _Learnable(flat, self._blink, self.learn_blink)
         if idx.size:
             ok = self.explained(frame, idx)
             out.reshape(-1)[idx[ok]] = BACKGROUND
             fg_idx = idx[~ok]
         else:
             fg_idx = idx
-        self._update(frame, learn)
-        self._feedback(fg_idx)
+        if self.threaded:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sample-consensus")
+            # the caller may reuse its buffers once this returns: the worker learns from copies
+            self._pending = self._pool.submit(self._learn, frame.copy(), flat.copy(), fg_idx)
+        else:
+            self._learn(frame, flat, fg_idx)
         return out
+
+    def _learn(self, frame: np.ndarray, flat_labels: np.ndarray, fg_idx: np.ndarray) -> None:
+        """ViBe's update from ``frame`` (H, W, 3) with the statistics' flat labels (H * W,), then the
+        blink feedback of the final foreground ``fg_idx`` (flat indices).
+        """
+        # Learnt: what the statistics call background, and anything in a dynamic (blinking)
+        # region, where a colour seen again and again is background whichever model missed it.
+        # Elsewhere a person whose colour happens to match would be learnt, match better the
+        # next time, and spread.
+        self._update(frame, _Learnable(flat_labels, self._blink, self.learn_blink))
+        self._feedback(fg_idx)
 
     def _update(self, frame: np.ndarray, learn: _Learnable) -> None:
         """ViBe's conservative update: each pixel to ``learn`` (read at flat indices), with probability
@@ -368,7 +414,7 @@ class SampleConsensus:
         update, whose observed background colours are ``colours`` (M, 3) uint8.
         """
         n = self.n_samples
-        rows = np.take(self.samples_.reshape(-1, 3 * n), cand, axis=0)  # (M, 3 N) uint8
+        rows = np.take(self._samples.reshape(-1, 3 * n), cand, axis=0)  # (M, 3 N) uint8
         # sum over channels and samples at once: an exact integer sum, so the mean does not
         # depend on the layout or the order of the additions
         gap = cv2.reduce(cv2.absdiff(rows, np.repeat(colours, n, axis=1)), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)
@@ -381,7 +427,7 @@ class SampleConsensus:
         # three 1-D scatters into the flat array: numpy's 2-index scatter with a slice between
         # the indices is several times slower
         n = self.n_samples
-        flat = self.samples_.reshape(-1)
+        flat = self._samples.reshape(-1)
         at = pixels * (3 * n) + k
         for c in range(3):
             flat[at] = colours[:, c]
