@@ -30,13 +30,13 @@ the cost per frame is small. Frames are uint8 BGR (H, W, 3).
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 import cv2
 import numpy as np
 
 from .background import BACKGROUND, FOREGROUND
+from .deferred import DeferredStep
 
 #: opening that keeps solid foreground (not speckle) and the dilation around it, for the blinks
 _OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
@@ -147,25 +147,16 @@ class SampleConsensus:
         self.threaded = threaded
         self._samples: np.ndarray | None = None
         self._shape: tuple[int, int] = (0, 0)
-        self._pool: ThreadPoolExecutor | None = None
-        self._pending: Future | None = None
-
-    def _join(self) -> None:
-        """Wait for the last frame's learning step (see ``threaded``); re-raise its error."""
-        if self._pending is not None:
-            pending, self._pending = self._pending, None
-            pending.result()
+        self._deferred = DeferredStep("sample-consensus")
 
     def __getstate__(self) -> dict[str, Any]:
-        self._join()
-        state = self.__dict__.copy()
-        state["_pool"] = None
-        return state
+        self._deferred.join()  # before any array it writes is copied
+        return self.__dict__.copy()
 
     @property
     def samples_(self) -> np.ndarray | None:
         """Per pixel the B, G, R rows of its samples, (H * W, 3, n_samples) uint8; None before ``fit``."""
-        self._join()
+        self._deferred.join()
         return self._samples
 
     @property
@@ -186,7 +177,7 @@ class SampleConsensus:
         RuntimeError
             When not fitted.
         """
-        self._join()
+        self._deferred.join()
         if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return (1.0 + self._blink).reshape(self._shape)
@@ -205,7 +196,7 @@ class SampleConsensus:
         RuntimeError
             When not fitted.
         """
-        self._join()
+        self._deferred.join()
         if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         return self._spread.reshape(self._shape)
@@ -236,7 +227,7 @@ class SampleConsensus:
         ValueError
             For arrays of the wrong shape or dtype.
         """
-        self._join()
+        self._deferred.join()
         frames = np.asarray(frames)
         if frames.ndim != 4 or frames.shape[-1] != 3 or frames.dtype != np.uint8:
             raise ValueError(f"frames must be (N, H, W, 3) uint8 BGR, got {frames.shape} {frames.dtype}")
@@ -290,7 +281,7 @@ class SampleConsensus:
         RuntimeError
             When not fitted.
         """
-        self._join()
+        self._deferred.join()
         if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if idx.size == 0:
@@ -343,7 +334,7 @@ class SampleConsensus:
             raise ValueError(
                 f"frame and labels must be {self._shape} (the fitted size), got {frame.shape[:2]} and {labels.shape}"
             )
-        self._join()
+        self._deferred.join()
         flat = labels.reshape(-1)
         idx = np.flatnonzero(flat == FOREGROUND)
         out = labels.copy()
@@ -354,10 +345,8 @@ class SampleConsensus:
         else:
             fg_idx = idx
         if self.threaded:
-            if self._pool is None:
-                self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sample-consensus")
             # the caller may reuse its buffers once this returns: the worker learns from copies
-            self._pending = self._pool.submit(self._learn, frame.copy(), flat.copy(), fg_idx)
+            self._deferred.submit(self._learn, frame.copy(), flat.copy(), fg_idx)
         else:
             self._learn(frame, flat, fg_idx)
         return out
