@@ -5,12 +5,13 @@ points projected and perturbed by a pixel of noise.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import CalibrationConfig, estimate_camera, head_foot, rotation, usable
-from counterpart.nodes.calibration.lines import find_families
+from counterpart.nodes.calibration.lines import detect_segments, find_families
 from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
 
 W, H = 320, 240
@@ -186,3 +187,20 @@ def test_square_floor_lines_fix_the_focal_length_of_a_level_camera(tilt: float) 
     free = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(manhattan_std_deg=None), lines)
     assert abs(free.focal / cam.fx - 1) > 0.10, free.describe()
     assert free.focal_std > 1.5 * est.focal_std, free.describe()  # without the right angle: the prior's width
+
+
+def test_segments_on_a_person_are_dropped_and_lines_behind_them_kept() -> None:
+    # a floor line running behind a person's box is the horizon's evidence; an edge within the box is
+    # the person's own outline
+    img = np.full((H, W), 128, np.uint8)
+    cv2.rectangle(img, (0, 150), (W - 1, H - 1), 60, -1)  # floor meets wall along row 150, across the box
+    cv2.rectangle(img, (140, 60), (150, 130), 220, -1)  # an upright edge pair inside the box
+    box = (120, 50, 60, 120)
+    segs = detect_segments(img, [box])
+    horizontal = np.abs(segs[:, 3] - segs[:, 1]) < 2
+    assert horizontal.any() and (segs[horizontal][:, [0, 2]].max() - segs[horizontal][:, [0, 2]].min()) > 250
+    x, y, w, h = box
+    inside = (segs[:, [0, 2]] >= x).all(1) & (segs[:, [0, 2]] <= x + w).all(1)
+    inside &= (segs[:, [1, 3]] >= y).all(1) & (segs[:, [1, 3]] <= y + h).all(1)
+    assert not inside.any()
+    assert len(detect_segments(img)) > len(segs)  # without the box the person's edges are there
