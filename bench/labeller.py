@@ -89,7 +89,9 @@ Figures (last stdout line, one JSON object):
                        2.6 s (neither: still); ``verdicts_right`` counts the right ones. The face
                        floors, event_on/event_off/local_s, max_flow_s, talk thresholds and
                        talk_gap_s were set on the gesture clips and conversation seeds 301
-                       (25 fps) and 305 (29.97 fps), 45 s each, not on the reported seeds.
+                       (25 fps) and 305 (29.97 fps), 45 s each, not on the reported seeds; the
+                       localisation on the band's analytic envelope was chosen on seeds 301,
+                       302, 305 (both rates) and 303 (25 fps), 45 s each.
   mine_s               seconds to mine 45,000 frames x 27 speaker + 27 listener labels (synthetic
                        planted streams, rates 0.02-0.3, min_support 0.005, max_len 4);
                        mine_synthetic_recovered its planted rules found; --dense adds mine_s_dense
