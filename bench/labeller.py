@@ -57,7 +57,9 @@ Figures (last stdout line, one JSON object):
                        event F1 as above after removing the streaming latency (the lower of the
                        two frame rates); ``nod_precision``/``nod_recall``/``shake_precision``/
                        ``shake_recall``: frame precision and recall against the scenario's labels
-                       (the lower of the two rates; also as ``*_frame_precision`` per rate);
+                       (the lower of the two rates; also as ``*_frame_precision`` per rate; a
+                       rate whose clips hold no event of a kind has nan there, and the other
+                       rate's figure stands);
                        ``still_false_rate``: the share of a still face's frames labelled nod or
                        shake (the ``still`` verdict clips below, every known frame; the higher of
                        the two rates); ``talk_acc``: per-frame accuracy of talking (UNKNOWN
@@ -476,10 +478,16 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
         per[f"{fps:g}"]["laugh_recall"] = round(float(np.mean(shares["laugh"])), 4)
         per[f"{fps:g}"]["laugh_false_rate_talk"] = round(float(np.mean(shares["talk"])), 4)
     names = ("nod_f1", "shake_f1", "talk_acc", "nod_precision", "nod_recall", "shake_precision", "shake_recall")
-    worst: dict[str, object] = {k: min(per[f"{f:g}"][k] for f in FACE_FPS) for k in names}  # type: ignore[type-var]
-    worst["still_false_rate"] = max(per[f"{f:g}"]["still_false_rate"] for f in FACE_FPS)  # type: ignore[type-var]
-    worst["laugh_recall"] = min(per[f"{f:g}"]["laugh_recall"] for f in FACE_FPS)  # type: ignore[type-var]
-    worst["laugh_false_rate_talk"] = max(per[f"{f:g}"]["laugh_false_rate_talk"] for f in FACE_FPS)  # type: ignore[type-var]
+
+    def over_rates(key: str, pick: Callable[[list[float]], float]) -> float:
+        # a rate without any event of a kind has nan figures for it: the other rate's stand
+        vals = [float(per[f"{f:g}"][key]) for f in FACE_FPS]  # type: ignore[arg-type]
+        known = [v for v in vals if v == v]
+        return pick(known) if known else float("nan")
+
+    worst: dict[str, object] = {k: over_rates(k, min) for k in (*names, "laugh_recall")}
+    worst["still_false_rate"] = over_rates("still_false_rate", max)
+    worst["laugh_false_rate_talk"] = over_rates("laugh_false_rate_talk", max)
     return {
         **worst,
         "fps": round(fps_lab, 1),
