@@ -5,10 +5,11 @@ standing and talking become part of the background: later they come out as fragm
 room where they stood as ghosts. Here they are found first and kept out of the statistics:
 
 1. ``PeopleDetector``: OpenCV's shipped HOG people detector (Dalal & Triggs 2005, the default
-   SVM; no downloaded weights) on every training frame (it misses a still person on most
-   frames of some clips and finds them on a few: searching every fifth frame missed those). The frame is padded with its
-   median colour first, so that people whose head or feet touch the image border, the usual case
-   for an elevated camera close to the people, still fit the detector's window with its margins.
+   SVM; no downloaded weights) on every training frame: it misses a still person on most frames
+   of some clips and finds them on one or two, which a search of every fifth frame can miss. The
+   frame is padded with its median colour first, so that people whose head or feet touch the
+   image border, the usual case for an elevated camera close to the people, still fit the
+   detector's window with its margins.
 2. ``fit_around_people``: a first fit leaves the people's boxes out of the frames near those they
    were found in, and out of every frame that still shows a person who stands still
    (``HorprasertBackground.fit`` with ``exclude``; the room seen behind them in too few frames is
