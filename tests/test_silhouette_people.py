@@ -182,8 +182,9 @@ class SomeFramesDetector(BoxDetector):
 def test_a_still_person_the_detector_finds_between_every_fifth_frame_is_left_out(standing):
     """The detector finds the still person on two training frames only, 17 (0.9) and 18 (0.6),
     as OpenCV's did on a real clip (31_6_5: the man found on 17, 18, 28, 29 of 30). Searching
-    every frame finds him twice, surely once, and leaves him out of every frame; searching every
-    fifth frame (0, 5, .., 15, 20, ..) found nobody, and the median learnt him as the room.
+    the frames between every fifth one too finds him twice, surely once, and leaves him out of
+    every frame; every fifth frame alone (0, 5, .., 15, 20, ..) found nobody, and the median
+    learnt him as the room.
     """
     ys, xs = np.nonzero(person_mask(50.0))
     box = (xs.min() - 6, ys.min() - 6, xs.max() - xs.min() + 12, ys.max() - ys.min() + 12)

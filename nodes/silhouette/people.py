@@ -279,7 +279,7 @@ def fit_around_people(
     model: HorprasertBackground,
     frames: np.ndarray | list[np.ndarray],
     detector: PeopleDetector | None = None,
-    detect_every: int = 1,
+    detect_every: int = 5,
     box_grow: float = 0.05,
     person_grow: float = 0.03,
 ) -> np.ndarray:
@@ -293,9 +293,9 @@ def fit_around_people(
         uint8 BGR training frames, N >= 2.
     detector : PeopleDetector or None, default=None
         People detector; None: ``PeopleDetector()``.
-    detect_every : int, default=1
-        The detector runs on every this many-th frame (and the last); more than 1 saves its time
-        (about 0.1 s a frame at 400 x 300) but misses people it finds on a frame or two only. A frame is searched for
+    detect_every : int, default=5
+        The detector's boxes on every this many-th frame (and the last) are used; on the other
+        frames (searched too) only those of someone these frames did not show. A frame is searched for
         people in the boxes found within this many frames of it, and in any other box whose
         content it shares (someone standing there still: the detector misses people now and then,
         in a turn or with an arm across the body), but not where a walker was.
@@ -318,6 +318,15 @@ def fit_around_people(
     step = max(1, int(detect_every))
     at = sorted(set(range(0, n, step)) | {n - 1})
     found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores, moved)
+    # The frames between are searched too, for someone the schedule's frames did not show: the
+    # detector may find a still person on a frame or two only. Only those new boxes are kept (more
+    # boxes of the people already found would only widen the holes in the room).
+    known = [b for boxes, _, _ in found.values() for b in boxes]
+    for k in sorted(set(range(n)) - set(at)):
+        boxes, scores, moved = _confirmed(stack, *det.detect(stack[k]))
+        new = np.array([all(_iou(b, o) < 0.5 for o in known) for b in boxes], bool)
+        if new.any():
+            found[k] = (boxes[new], scores[new], moved[new])
     near = [_boxes_for(stack, j, found, step) for j in range(n)]
     if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)
