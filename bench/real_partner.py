@@ -52,7 +52,7 @@ from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
 from counterpart.nodes.responder.reach import reach
-from counterpart.nodes.responder.staging import Stage, silhouette_reach, stature
+from counterpart.nodes.responder.staging import Reach, Stage, silhouette_reach, stature
 
 VIS = 0.5
 HOLD_FRAMES = 15  # the responder node's default hold_frames
@@ -123,16 +123,14 @@ def silhouette_people(clip: Path) -> list[list[Any]]:
     return [list(result.people) for _, result in iter_video(clip, SilhouetteExtractor(), None, TRAIN_FRAMES)]
 
 
-def observed_reach(
-    people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float
-) -> tuple[float | None, float | None]:
-    """The observed person's silhouette extent towards the partner and its height, metres
+def observed_reach(people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float) -> Reach | None:
+    """What the observed person's silhouette says of their reach towards the partner
     (``silhouette_reach``), as the responder node finds it: the silhouette with the tracked
-    person's id, else the first on their side; (None, None) without one.
+    person's id, else the first on their side; None without one.
     """
     shape = next((q for q in people if q.id == person_id), None) or next((q for q in people if q.side == side), None)
     if shape is None or direction == 0.0:
-        return None, None
+        return None
     return silhouette_reach(shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl)
 
 
@@ -166,15 +164,13 @@ def staged_partner(
             continue
         other = others[t] if np.isfinite(others[t]).all() else None
         direction = stage.side or towards
-        reach_m, hand_y = (
+        silhouette = (
             observed_reach(people[t], int(ids[t]), SIDES[side], joints[t], direction)
             if people is not None and t < len(people)
-            else (None, None)
+            else None
         )
         dt = (t - last) / fps if last >= 0 else 1.0 / fps
-        staged = stage(
-            joints[t], model.step(joints[t]), dt, other=other, side=towards, reach_m=reach_m, hand_y_m=hand_y
-        )
+        staged = stage(joints[t], model.step(joints[t]), dt, other=other, side=towards, silhouette=silhouette)
         partner[t] = reach(joints[t], staged, offered=stage.offered_)[0]
         last = t
     return partner, observed, camera, fps

@@ -10,7 +10,7 @@ import pytest
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
-from counterpart.nodes.responder.staging import Stage, StageConfig, silhouette_reach
+from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 
@@ -176,29 +176,46 @@ def test_the_silhouette_says_how_far_and_how_high_a_hand_is_held_out() -> None:
     # a 1.7 m person 200 px tall; centroid at the body's middle; the arm 80 px beyond the body at 0.55 h
     ctrl = outline(100.0, 50.0, 200.0, 0.55, 80.0)
     box = (100, 50, int(ctrl[:, 0].max() - 100), 200)
-    reach_m, height_m = silhouette_reach(box, (125.0, 150.0), 1.0, 1.7, ctrl)
+    reach_m, height_m, centre_m = silhouette_reach(box, (125.0, 150.0), 1.0, 1.7, ctrl)
     assert reach_m == pytest.approx((25 + 80) / 200 * 1.7) and height_m == pytest.approx(0.55 * 1.7)
+    assert centre_m == pytest.approx(125 / 200 * 1.7)
     # arms down: the stride's foot reaches further than the body but is no reach; the body's edge is
     down = outline(100.0, 50.0, 200.0, None, 0.0)
-    reach_m, _ = silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7, down)
+    reach_m = silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7, down).extent_m
     assert reach_m == pytest.approx(25 / 200 * 1.7)
     # towards image left: the back of the body; without an outline, the box's edge and no height
-    assert silhouette_reach(box, (125.0, 150.0), -1.0, 1.7, ctrl)[0] == pytest.approx(25 / 200 * 1.7)
-    assert silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7)[1] is None
+    assert silhouette_reach(box, (125.0, 150.0), -1.0, 1.7, ctrl).extent_m == pytest.approx(25 / 200 * 1.7)
+    assert silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7).height_m is None
 
 
-def test_a_silhouette_reaching_onto_the_partner_is_a_push_and_a_hand_held_out_is_offered() -> None:
+def test_a_hand_held_out_is_offered_and_with_the_body_advancing_is_a_push() -> None:
     stage = Stage()
     obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)  # the tracked arms stay down
-    stage(obs, par, 0.04, side=1.0, reach_m=0.2)
+    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.2, None, 0.0))
     assert stage.offered_ is None and stage.pushes == 0
-    stage(obs, par, 0.04, side=1.0, reach_m=0.6, hand_y_m=1.0)  # a hand held out half way: offered
+    for _ in range(10):  # a hand held out, the body still: offered where the silhouette says
+        stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
     assert stage.pushes == 0
     np.testing.assert_allclose(stage.offered_, [0.6, 1.0, 2.0], atol=1e-6)
-    gaps = [float(np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, reach_m=0.8)) - ground(obs)))) for _ in range(5)]
-    assert stage.pushes == 1 and stage.offered_ is None  # reaching onto its chest: a push, no hand to take
-    # (nor the hand that pushed it while it steps back)
+    # a silhouette reaching further (merged with someone else's): met 0.7 of the way at most
+    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.85, 1.0, 0.0))
+    assert stage.pushes == 0
+    np.testing.assert_allclose(stage.offered_, [0.63, 1.0, 2.0], atol=1e-6)
+    # the same hand with the body advancing at 1 m/s (its silhouette's centre 4 cm a frame): a push
+    gaps = []
+    for k in range(1, 11):
+        gaps.append(
+            float(
+                np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k))) - ground(obs)))
+            )
+        )
+    assert stage.pushes == 1 and stage.offered_ is None  # no hand to take from someone pushing it
     assert gaps[-1] > 1.1 and max(np.diff([0.9, *gaps])) <= 0.1 + 1e-9
+    # a region merging (its centre jumping 0.5 m in a frame) is no advance
+    calm = Stage()
+    for k in range(10):
+        calm(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.5 * (k % 2)))
+    assert calm.pushes == 0
 
 
 def test_the_partner_takes_a_hand_held_out_within_its_reach_and_not_one_out_of_it() -> None:

@@ -255,20 +255,15 @@ class Responder(Node):
         people = list(getattr(self.latest.get("pose"), "people", ()))
         other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
         side = {"left": 1.0, "right": -1.0}.get(body.side, 0.0)
-        reach_m = hand_y = None
+        silhouette = None
         shapes = list(getattr(self.latest.get("silhouettes"), "people", ()))
         shape = next((q for q in shapes if q.id == body.id), None) or next(
             (q for q in shapes if q.side == body.side), None
         )
         direction = (self.stage.side if self.stage is not None else 0.0) or side
         if shape is not None and direction != 0.0:
-            reach_m, hand_y = silhouette_reach(shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl)
-        return {
-            "other": None if other is None else np.asarray(other.joints),
-            "side": side,
-            "reach_m": reach_m,
-            "hand_y_m": hand_y,
-        }
+            silhouette = silhouette_reach(shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl)
+        return {"other": None if other is None else np.asarray(other.joints), "side": side, "silhouette": silhouette}
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
         """The model's partner moved to where a partner stands beside the observed ``body`` (``stage``)

@@ -22,12 +22,14 @@ model's posture and gestures are kept:
    jumps), so the distance holds on every frame. The offset is relative to the observed person:
    where the tracker's estimate of the person jumps, the partner stays beside them in the picture
    rather than walking after them;
-3. the partner recoils when pushed: when the observed person's reach towards it comes within
-   ``contact_m`` of its torso axis (neck to mid-hip), its distance grows by ``recoil_m``, which then
-   fades with time constant ``recoil_s`` (the step back, then the return; still within the limits
-   and the speed of 1 and 2). The reach is the tracked wrists and elbows and, where the caller has
-   the person's silhouette, its extent towards the partner (:func:`silhouette_reach`): tracked arms
-   are the least reliable joints on real video, the silhouette's leading edge is not;
+3. the partner recoils when pushed: when the observed person's tracked wrists or elbows come
+   within ``contact_m`` of its torso axis (neck to mid-hip), or, where the caller has the person's
+   silhouette (:func:`silhouette_reach`), when it holds a hand out (its leading point ``offer_m``
+   from its centre) while its centre advances towards the partner at ``push_speed_m_s`` or more
+   (the torso and the arm forward together: tracked arms are the least reliable joints on real
+   video, a silhouette's outline is not), its distance grows by ``recoil_m``, held while the push
+   goes on, which then fades with time constant ``recoil_s`` (the step back, then the return; still within the limits and
+   the speed of 1 and 2). A hand held out without a push is offered (:attr:`Stage.offered_`);
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
@@ -35,6 +37,7 @@ model's posture and gestures are kept:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -52,6 +55,8 @@ _SHOULDERS = [JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]]
 ACROSS = np.array([1.0, 0.0])
 #: the heights of the arms (hips to shoulders, a little either way) as fractions of a person's height
 ARM_BAND = (0.35, 0.85)
+#: a silhouette centre moving faster than this is a region merging or splitting, not a body, m/s
+JUMP_M_S = 3.0
 #: crown of the head above the head joint (the head centre at eye level), metres, for a stature
 HEAD_TOP_M = 0.12
 
@@ -83,6 +88,16 @@ class StageConfig:
     offer_m : float, default=0.45
         A silhouette reaching this far towards the partner from its centre is a hand held out,
         metres (:attr:`Stage.offered_`).
+    meet_frac : float, default=0.7
+        A hand held out is met at most this fraction of the way to the partner (hands meet between
+        the two; a silhouette merged with someone else's reaches further than the hand).
+
+    push_speed_m_s : float, default=0.5
+        A silhouette holding a hand out (``offer_m``) whose centre advances towards the partner at
+        least this fast is a push (the torso and the arm forward together), metres per second.
+    advance_s : float, default=0.15
+        Time constant of the smoothing of that advance, seconds (steps faster than
+        ``JUMP_M_S``, a region merging or splitting, are left out).
 
     Raises
     ------
@@ -100,6 +115,9 @@ class StageConfig:
     beside: bool = True
     side_margin_m: float = 0.2
     offer_m: float = 0.45
+    meet_frac: float = 0.7
+    push_speed_m_s: float = 0.5
+    advance_s: float = 0.15
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -133,6 +151,25 @@ def stature(joints: np.ndarray) -> float:
     return float(X[JOINT_INDEX["head"], 1] - X[_ANKLES, 1].min() + HEAD_TOP_M)
 
 
+class Reach(NamedTuple):
+    """What a person's silhouette says of their reach towards the partner (:func:`silhouette_reach`).
+
+    Attributes
+    ----------
+    extent_m : float
+        How far the silhouette's leading point lies from its centre towards the partner, metres.
+    height_m : float or None
+        That point's height above the ground, metres (None: not known).
+    centre_m : float
+        The silhouette's centre across the view towards the partner, metres at the person's depth
+        from an arbitrary origin: only its changes mean anything (the body advancing).
+    """
+
+    extent_m: float
+    height_m: float | None
+    centre_m: float
+
+
 def silhouette_reach(
     bbox: tuple[float, float, float, float],
     centroid: tuple[float, float],
@@ -140,8 +177,9 @@ def silhouette_reach(
     stature_m: float,
     ctrl: np.ndarray | None = None,
     band: tuple[float, float] = ARM_BAND,
-) -> tuple[float, float | None]:
-    """How far a person's silhouette extends towards ``direction`` from its centre, and how high, metres.
+) -> Reach:
+    """How far a person's silhouette extends towards ``direction`` from its centre, how high, and where
+    its centre is, metres.
 
     The silhouette's leading point on that side (of its outline's control points at the heights
     of the arms, ``band``, the one furthest that way: a stride's foot or a turned head is not a
@@ -167,14 +205,12 @@ def silhouette_reach(
 
     Returns
     -------
-    reach_m : float
-        Metres (0 for an empty box).
-    height_m : float or None
-        The leading point's height above the ground, metres; None without an outline.
+    Reach
+        Metres (extent 0 for an empty box; height None without an outline).
     """
     x, y, w, h = (float(v) for v in bbox)
     if h <= 0:
-        return 0.0, None
+        return Reach(0.0, None, 0.0)
     pts = None if ctrl is None else np.asarray(ctrl, np.float64).reshape(-1, 2)
     if pts is not None:
         up = (y + h - pts[:, 1]) / h
@@ -184,7 +220,8 @@ def silhouette_reach(
         edge, height = float(tip[0]), (y + h - float(tip[1])) / h * stature_m
     else:
         edge, height = (x + w if direction > 0 else x), None
-    return max(direction * (edge - float(centroid[0])), 0.0) / h * stature_m, height
+    cx = float(centroid[0])
+    return Reach(max(direction * (edge - cx), 0.0) / h * stature_m, height, direction * cx / h * stature_m)
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -236,8 +273,7 @@ class Stage:
         Pushes the partner recoiled from.
     offered_ : ndarray of shape (3,) or None
         After a call: where the observed person holds out a hand towards the partner (their
-        silhouette reaching at least ``offer_m`` towards it, neither a push nor the hand that pushed
-        it while it steps back), world metres, at the height
+        silhouette reaching at least ``offer_m`` towards it, not a push), world metres, at the height
         of the silhouette's leading point (else of their tracked wrist nearest the partner) kept
         between their hips and shoulders; None when
         they hold none out (for :func:`.reach.reach`).
@@ -254,6 +290,8 @@ class Stage:
         self._side = 0.0  # the side across the view the partner stands on (+1: image right), 0: none yet
         self._recoil = 0.0  # metres added to the partner's distance by a push, fading
         self._touching = False
+        self._centre: float | None = None  # the silhouette's last centre across the view, metres
+        self._advance = 0.0  # its smoothed speed towards the partner, metres per second
         self.pushes = 0  # pushes the partner recoiled from
         self.offered_: np.ndarray | None = None
 
@@ -272,16 +310,30 @@ class Stage:
             self._side = float(np.sign(side)) or float(np.sign(model @ ACROSS))
         return self._side
 
-    def _touching_now(self, X: np.ndarray, P: np.ndarray, o: np.ndarray, p: np.ndarray, reach_m: float | None) -> bool:
-        """Whether the observed person's reach is on the partner where it stood (last frame's offset)."""
+    def _advancing(self, silhouette: Reach | None, dt: float) -> float:
+        """The silhouette centre's smoothed speed towards the partner, metres per second."""
+        if silhouette is None:
+            self._centre = None
+            return 0.0
+        if self._centre is not None and dt > 0:
+            v = (silhouette.centre_m - self._centre) / dt
+            if abs(v) <= JUMP_M_S:
+                a = 1.0 - float(np.exp(-dt / self.config.advance_s))
+                self._advance += a * (v - self._advance)
+        self._centre = silhouette.centre_m
+        return self._advance
+
+    def _touching_now(self, X: np.ndarray, P: np.ndarray, o: np.ndarray, p: np.ndarray, pushing: bool) -> bool:
+        """Whether the observed person's tracked arms are on the partner where it stood (last frame's
+        offset), or their silhouette pushes (``pushing``).
+        """
         if self._last is None:
             return False
         c = self.config
         at = np.zeros(3)
         at[[0, 2]] = o + self._last - p
         arms = (_segment_distance(X[_ARMS], P[_NECK] + at, P[_HIPS].mean(axis=0) + at) < c.contact_m).any()
-        edge = reach_m is not None and reach_m >= float(np.hypot(*self._last)) - c.contact_m
-        return bool(arms or edge)
+        return bool(arms or pushing)
 
     def __call__(
         self,
@@ -290,8 +342,7 @@ class Stage:
         dt: float,
         other: np.ndarray | None = None,
         side: float = 0.0,
-        reach_m: float | None = None,
-        hand_y_m: float | None = None,
+        silhouette: Reach | None = None,
     ) -> np.ndarray:
         """The partner's joints, world metres, moved rigidly to a valid place.
 
@@ -307,12 +358,10 @@ class Stage:
         side : float, default=0.0
             The side to stand on when no second person is tracked: +1 image right (world +X), -1
             left, 0 the model's.
-        reach_m : float or None, default=None
-            The observed person's silhouette extent towards the partner (:func:`silhouette_reach`),
-            metres; None: only their tracked arms are their reach.
-        hand_y_m : float or None, default=None
-            The height of that silhouette's leading point (:func:`silhouette_reach`), metres: the height
-            of a hand held out (None: their tracked wrist's).
+        silhouette : Reach or None, default=None
+            What the observed person's silhouette says of their reach towards the partner
+            (:func:`silhouette_reach`): a hand held out, and with the body advancing a push; None:
+            only their tracked arms are their reach.
 
         Returns
         -------
@@ -326,10 +375,15 @@ class Stage:
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
         self._recoil *= float(np.exp(-max(float(dt), 0.0) / c.recoil_s))
-        touching = self._touching_now(X, P, o, p, reach_m)
+        advance = self._advancing(silhouette, float(dt))
+        held_out = silhouette is not None and silhouette.extent_m >= c.offer_m
+        pushing = held_out and advance >= c.push_speed_m_s
+        touching = self._touching_now(X, P, o, p, pushing)
         if touching and not self._touching:
             self._recoil += c.recoil_m
             self.pushes += 1
+        elif touching:  # pushed on and on, it keeps its distance; the return starts when the push ends
+            self._recoil = max(self._recoil, c.recoil_m)
         self._touching = touching
         d = p - o
         r = float(np.hypot(*d))
@@ -346,12 +400,13 @@ class Stage:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
         self.offered_ = None
-        if reach_m is not None and reach_m >= c.offer_m and not touching and self._recoil < 0.1 * c.recoil_m:
+        if held_out and not touching:
             lo, hi = float(X[_HIPS, 1].mean()), float(X[_SHOULDERS, 1].mean())
             u = offset / max(float(np.hypot(*offset)), 1e-9)
             near = X[_WRISTS][int(np.argmax((X[_WRISTS][:, [0, 2]] - o) @ u))]
-            y = float(np.clip(near[1] if hand_y_m is None else hand_y_m, lo, hi))
-            self.offered_ = np.array([o[0] + reach_m * u[0], y, o[1] + reach_m * u[1]])
+            y = float(np.clip(near[1] if silhouette.height_m is None else silhouette.height_m, lo, hi))
+            out = min(silhouette.extent_m, c.meet_frac * float(np.hypot(*offset)))  # hands meet between the two
+            self.offered_ = np.array([o[0] + out * u[0], y, o[1] + out * u[1]])
         shift = np.zeros(3)
         shift[[0, 2]] = o + offset - p
         ankle = float(P[_ANKLES, 1].min())
