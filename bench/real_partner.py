@@ -125,10 +125,11 @@ def silhouette_people(clip: Path) -> list[list[Any]]:
 
 def observed_reach(people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float) -> Reach | None:
     """What the observed person's silhouette says of their reach towards the partner
-    (``silhouette_reach``), as the responder node finds it: the silhouette with the tracked
-    person's id, else the first on their side; None without one.
+    (``silhouette_reach``), as the responder node finds it: of the silhouettes on their side, the
+    one with the tracked person's id, else the first; None without one.
     """
-    shape = next((q for q in people if q.id == person_id), None) or next((q for q in people if q.side == side), None)
+    mine = [q for q in people if q.side == side]
+    shape = next((q for q in mine if q.id == person_id), mine[0] if mine else None)
     if shape is None or direction == 0.0:
         return None
     return silhouette_reach(shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl)

@@ -257,9 +257,8 @@ class Responder(Node):
         side = {"left": 1.0, "right": -1.0}.get(body.side, 0.0)
         silhouette = None
         shapes = list(getattr(self.latest.get("silhouettes"), "people", ()))
-        shape = next((q for q in shapes if q.id == body.id), None) or next(
-            (q for q in shapes if q.side == body.side), None
-        )
+        mine = [q for q in shapes if q.side == body.side]
+        shape = next((q for q in mine if q.id == body.id), mine[0] if mine else None)
         direction = (self.stage.side if self.stage is not None else 0.0) or side
         if shape is not None and direction != 0.0:
             silhouette = silhouette_reach(shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl)

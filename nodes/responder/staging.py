@@ -393,8 +393,8 @@ class Stage:
             if s != 0.0:
                 d = s * max(r, 1e-3) * ACROSS
         r = float(np.hypot(*d))
-        if r > 1e-6:
-            d = d * (r + self._recoil) / r
+        if r > 1e-6:  # the step back is from where it stands
+            d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
         offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
