@@ -10,6 +10,9 @@ partner is projected with the camera the tracking recorded. Figures:
   person (mid-hips on the floor, metres) lies in [0.5, 1.2] m;
 - ``partner_overlap``: share of frames with a partner whose projected box overlaps the observed
   person's reference box (MediaPipe keypoints of vis >= 0.5) by more than ``OVERLAP_IOU``;
+- ``partner_overlap_real``: for reference, the same share for the real second person's reference box
+  against the observed person's (on the same frames; where the two reference skeletons lie on one
+  person, ``reference_collapsed``, they are not counted as overlapping);
 - ``partner_in_picture``: share of frames with a partner of which some joint is inside the picture;
 - handshake clips (class 0, observed: the left person): at the moment the real hands meet (the
   frame where the two people's reference wrists are nearest), the pixel distance from the partner's
@@ -216,17 +219,25 @@ def partner_clip(
     if both.any():
         gap[both] = np.linalg.norm((actor_frame(partner[both])[0] - actor_frame(observed[both])[0])[:, [0, 2]], axis=1)
     uv = camera.project(np.where(has[:, None, None], partner, 0.0))
-    overlap = in_picture = 0
+    overlap = in_picture = real_overlap = 0
     for t in np.flatnonzero(has):
         in_picture += bool(camera.in_image(uv[t]).any())
         ref = _box(np.where((vis[t, side] >= VIS)[:, None], kp[t, side], np.nan))
         mine = _box(uv[t])
+        real = _box(np.where((vis[t, 1 - side] >= VIS)[:, None], kp[t, 1 - side], np.nan))
         overlap += ref is not None and mine is not None and _iou(ref, mine) > OVERLAP_IOU
+        real_overlap += (
+            ref is not None
+            and real is not None
+            and _iou(ref, real) > OVERLAP_IOU
+            and not reference_collapsed(kp[t], vis[t])
+        )
     out: dict[str, Any] = {
         "frames": int(has.sum()),
         "gap_n": int(both.sum()),
         "gap_ok": int(((gap >= MIN_M - 1e-6) & (gap <= MAX_M + 1e-6)).sum()),
         "overlap": int(overlap),
+        "real_overlap": int(real_overlap),
         "in_picture": int(in_picture),
         "label": label,
     }
@@ -252,6 +263,7 @@ def partner_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "partner_distance_ok": round(sum(r["gap_ok"] for r in rows) / max(sum(r["gap_n"] for r in rows), 1), 4),
         "partner_overlap": round(sum(r["overlap"] for r in rows) / max(frames, 1), 4),
+        "partner_overlap_real": round(sum(r.get("real_overlap", 0) for r in rows) / max(frames, 1), 4),
         "partner_in_picture": round(sum(r["in_picture"] for r in rows) / max(frames, 1), 4),
         "handshake_clips": len(hands),
         "handshake_hand_h": round(float(np.median(hands)), 3) if hands else None,
