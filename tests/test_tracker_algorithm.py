@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -212,3 +213,63 @@ def test_ess_is_that_of_the_final_weighted_set_not_fixed_by_the_annealing() -> N
     est = peaked.step(lambda X: -1e4 * np.sum((X - target) ** 2, axis=1))
     assert 1.0 <= est.ess < 3.0  # one particle holds nearly all the mass
     assert est.survival[-1] * 64 == pytest.approx(32.0, rel=0.05)  # while annealing kept half alive
+
+
+def _loose_clothing(masks: np.ndarray, seed: int = 0) -> np.ndarray:
+    """Masks as real footage gives them: the person's outline 10 px wider all round than the body
+    model's (loose clothing, a coat) with blotches of clothing the colour of the background
+    (8 x 8 px holes over a quarter of the frame).
+    """
+    rng = np.random.default_rng(seed)
+    out = []
+    for m in masks:
+        holes = rng.random((m.shape[0] // 8 + 1, m.shape[1] // 8 + 1)) < 0.25
+        holes = np.kron(holes, np.ones((8, 8), bool))[: m.shape[0], : m.shape[1]]
+        out.append(cv2.dilate(m.astype(np.uint8), np.ones((21, 21), np.uint8)).astype(bool) & ~holes)
+    return np.array(out)
+
+
+def test_loose_clothing_does_not_lose_a_track_that_fits() -> None:
+    # the outline the model draws misses the wider one of the mask (edge cost high, as on the real
+    # clips) while the body stays on the person: the track must go on
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:12]
+    masks = _loose_clothing(rasterise_silhouettes(P, sc.dims_a, CAM))
+    image = np.full(masks.shape[1:] + (3,), 128, np.uint8)  # no contrast: the mask's outline is the only edge
+    tr = Tracker(CAM, "left", SMALL, seed=0)
+    results = [tr.update(image, m) for m in masks]
+    truth = forward_kinematics(P, sc.dims_a)
+    err = np.array([np.linalg.norm(r.joints - t, axis=-1).mean() for r, t in zip(results, truth)])
+    costs = np.array([r.cost for r in results])
+    # three frames in a row above 0.9 in the full cost S_r + S_e + S_c: what dropped such tracks
+    run = np.convolve(costs > 0.9, np.ones(3), "valid").max()
+    assert run == 3, f"full costs {costs.round(2)}: the case must hold the full cost above 0.9"
+    assert not any(r.lost for r in results), f"lost with costs {costs.round(2)}"
+    assert err.max() < 0.35, f"joint errors {err.round(3)} m"
+
+
+def test_a_track_off_its_mask_is_lost_within_patience() -> None:
+    # the mask jumps to the mirror place across the frame (about 1 m away): the body lies off it
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:8]
+    masks = rasterise_silhouettes(P, sc.dims_a, CAM)
+    masks[4:] = masks[4:, :, ::-1]
+    tr = Tracker(CAM, "left", SMALL, seed=0)
+    lost = [tr.update(None, m).lost for m in masks]
+    assert lost[:4] == [False] * 4 and any(lost[4:7]), lost
+
+
+def test_an_arm_that_reaches_out_is_followed() -> None:
+    # a person seen from the side (as on the real clips) raises the near arm from hanging to
+    # pointing at the other person over 12 frames: the silhouette shows it clearly, and the
+    # tracked wrist must follow it out of the torso (a hanging arm's wrist is about 0.6 m away)
+    P = np.repeat(neutral_pose(DEFAULT_DIMS, x=-0.6, yaw=np.pi / 2)[None], 24, axis=0)
+    P[:, 16] = np.clip(np.arange(24) / 12, 0, 1) * 1.3  # r_shoulder_flex
+    P[:, 19] = 0.3  # r_elbow_flex
+    masks = rasterise_silhouettes(P, DEFAULT_DIMS, CAM)
+    wrist = forward_kinematics(P, DEFAULT_DIMS)[:, 7]
+    errs = []
+    for seed in range(3):
+        out = track_sequence([None] * len(P), masks, CAM, side="left", config=SMALL, seed=seed)
+        errs.append(np.linalg.norm(out["joints"][-8:, 7] - wrist[-8:], axis=-1).mean())
+    assert np.median(errs) < 0.3, f"wrist errors over the last 8 frames per seed {np.round(errs, 3)} m"

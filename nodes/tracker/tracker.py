@@ -30,7 +30,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
-from counterpart.body.pose import DOF, YAW, wrap_angle
+from counterpart.body.pose import DOF, DOF_INDEX, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 from .apf import AnnealedParticleFilter, Estimate, LogLikelihood, ParticleFilter
@@ -89,6 +89,13 @@ class _RandomWalk:
         return P + rng.normal(size=P.shape) * self.std * scale
 
 
+#: the eight arm angles (shoulder flex, abduction, rotation, elbow flex of each side)
+ARM_DOFS = np.arange(DOF_INDEX["l_shoulder_flex"], DOF_INDEX["r_elbow_flex"] + 1)
+#: the arm angles an arm proposal draws (``APFConfig.arm_proposals``): offsets from the first
+#: arm angle (shoulder flex) of an arm, and the uniform range of each, radians
+ARM_RANGE = ((0, -0.5, 2.2), (3, 0.0, 1.5))
+_ARM0 = (DOF_INDEX["l_shoulder_flex"], DOF_INDEX["r_shoulder_flex"])
+
 #: the sides of the frame a tracker can follow (as the silhouette node labels its people)
 SIDES = ("left", "right")
 
@@ -142,6 +149,14 @@ class APFConfig:
         Bounds of that std in multiples of the random walk's std per DOF (metres, radians).
     shrink : float
         Factor by which the diffusion shrinks per layer (1: it does not).
+    arm_proposals : float
+        Share of the predicted particles (and of a first search's) whose one arm is drawn afresh
+        over its range (``ARM_RANGE``) instead of from the random walk. An arm that swings out
+        to reach the other person (a handshake, a push) crosses poses the silhouette scores
+        worse than the hanging arm (half-raised, it lies on background): the walk and the
+        annealing's diffusion, local by design, never cross that valley, and the arm stayed
+        by the body; a proposal lands on the reaching arm and the annealing keeps it where the
+        silhouette shows one (0: none).
     """
 
     n_layers: int = 10
@@ -152,6 +167,7 @@ class APFConfig:
     min_std: float = 0.05
     max_std: float = 3.0
     shrink: float = 1.0
+    arm_proposals: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -192,12 +208,16 @@ class PosteriorConfig:
     resid_std : float
         Std (radians) of the joint angles off the prior's PCA subspace
         (``PriorPredictor.log_prior``).
+    arm_sigma : float
+        The temporal term's width for the eight arm angles (``ARM_DOFS``), in multiples of
+        ``temporal_sigma``.
     """
 
     w_temporal: float = 1.0
     temporal_sigma: float = 3.0
     w_prior: float = 0.5
     resid_std: float = 0.15
+    arm_sigma: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -327,10 +347,31 @@ class Tracker:
         centre = self.prev if centre is None else centre
         if centre is None or not post.w_temporal:
             return np.zeros(len(X))
-        sig = post.temporal_sigma * self.predictor.std if sig is None else sig
+        if sig is None:
+            sig = post.temporal_sigma * self.predictor.std
+            sig[ARM_DOFS] *= post.arm_sigma
         d = (X - centre) / sig
         d[:, YAW] = wrap_angle(X[:, YAW] - centre[YAW]) / sig[YAW]
         return -0.5 * post.w_temporal * (d * d).mean(axis=1)
+
+    def _propose_arms(self, P: np.ndarray) -> np.ndarray:
+        """Draw one arm of a share of the particles afresh (``APFConfig.arm_proposals``).
+
+        Parameters
+        ----------
+        P : ndarray of shape (N, 28)
+            Particles (changed in place).
+
+        Returns
+        -------
+        ndarray of shape (N, 28)
+            ``P``.
+        """
+        rows = np.flatnonzero(self.rng.random(len(P)) < self.config.apf.arm_proposals)
+        first = np.asarray(_ARM0)[self.rng.integers(0, 2, len(rows))]
+        for offset, lo, hi in ARM_RANGE:
+            P[rows, first + offset] = self.rng.uniform(lo, hi, len(rows))
+        return P
 
     def _pose_prior(self, X: np.ndarray) -> np.ndarray:
         post = self.config.posterior
@@ -415,11 +456,13 @@ class Tracker:
         if self.fixed_dims is None:
             self.dims = dims
             self.likelihood = self._likelihood()
+        guess = P0[0].copy()
+        P0[1:] = self._propose_arms(P0[1:])
         self.filter.initialise(P0)
         self.predictor.reset()
         wide = INIT_STD * init.spread
         return self.filter.step(
-            self._density(obs, P0[0], wide),
+            self._density(obs, guess, wide),
             None,
             n_layers=init.layers,
             min_std=init.min_std * wide,
@@ -430,7 +473,9 @@ class Tracker:
         """Go on with a running track: predict with the prior, then search."""
         apf = self.config.apf
         scale = 1.0 if apf.plain else apf.predict_scale
-        return self.filter.step(self._density(obs), lambda P, rng: self.predictor(P, rng, scale=scale))
+        return self.filter.step(
+            self._density(obs), lambda P, rng: self._propose_arms(self.predictor(P, rng, scale=scale))
+        )
 
     def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
         """Score the estimate's best particle, update the prior's posterior and the lost detector."""
@@ -439,7 +484,8 @@ class Tracker:
         image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
         self.prev = est.mean.copy()
-        lost = self.lost_detector.update(cost)
+        # the silhouette terms S_r + S_c alone decide a collapse (``LostDetector``)
+        lost = self.lost_detector.update(float(terms[0, [0, 2]].sum()) / sum(not o.empty for o in obs))
         if lost:
             self.reset()
         self.n_frames += 1
