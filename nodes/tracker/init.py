@@ -95,6 +95,7 @@ def initial_particles(
     rng: np.random.Generator,
     base: BodyDims = DEFAULT_DIMS,
     spread: float = 1.0,
+    towards: tuple[int, int, int, int] | None = None,
 ) -> tuple[np.ndarray, BodyDims]:
     """Particles for a new track and the body dimensions scaled to the measured stature.
 
@@ -116,6 +117,9 @@ def initial_particles(
         Body dimensions scaled to the measured stature.
     spread : float, default=1.0
         Multiplier of ``INIT_STD``.
+    towards : tuple of int (x, y, w, h) or None
+        The bounding box of the person this one interacts with: the heading faces that person's
+        ground point (``facing_yaw``) instead of the side's ``SIDE_YAW``.
 
     Returns
     -------
@@ -139,10 +143,45 @@ def initial_particles(
     # stands about half a hip width plus an ankle radius further along the line of sight.
     away = np.array([g[0] - camera.centre[0], 0.0, g[2] - camera.centre[2]])
     g = g + away / max(float(np.linalg.norm(away)), 1e-9) * (dims.hip_width / 2 + dims.r_ankle)
-    P0 = neutral_pose(dims, x=float(g[0]), z=float(g[2]), yaw=SIDE_YAW[side])
+    yaw = SIDE_YAW[side] if towards is None else facing_yaw(g, towards, camera, SIDE_YAW[side])
+    P0 = neutral_pose(dims, x=float(g[0]), z=float(g[2]), yaw=yaw)
     P = P0 + rng.normal(size=(n, DOF)) * INIT_STD * spread
     P[0] = P0
     return clip_to_limits(P), dims
+
+
+def facing_yaw(ground: np.ndarray, other: tuple[int, int, int, int], camera: Camera, default: float) -> float:
+    """The heading that faces another person: people who interact face each other.
+
+    Where the two stand at different depths, a silhouette cannot tell the person turned half
+    away from the camera from its mirror image turned half towards it (the same outline);
+    which one it is follows from where the other person stands: the nearer of the two faces
+    away from the camera, the farther one towards it.
+
+    Parameters
+    ----------
+    ground : ndarray of shape (3,)
+        This person's ground point, metres, world frame.
+    other : tuple of int (x, y, w, h)
+        The other person's bounding box, pixels.
+    camera : Camera
+        The camera that saw both.
+    default : float
+        The heading returned when the other person cannot be placed (radians).
+
+    Returns
+    -------
+    float
+        root_yaw (``body.pose``: 0 faces +Z), radians.
+    """
+    try:
+        g, _ = place_from_bbox(other, camera)
+    except PlacementError:
+        return default
+    d = g - ground
+    if np.hypot(d[0], d[2]) < 1e-3:
+        return default
+    return float(np.arctan2(d[0], d[2]))
 
 
 class LostDetector:
@@ -189,4 +228,12 @@ class LostDetector:
         self.bad = 0
 
 
-__all__ = ["SIDE_YAW", "INIT_STD", "bbox_from_mask", "place_from_bbox", "initial_particles", "LostDetector"]
+__all__ = [
+    "SIDE_YAW",
+    "INIT_STD",
+    "bbox_from_mask",
+    "place_from_bbox",
+    "facing_yaw",
+    "initial_particles",
+    "LostDetector",
+]

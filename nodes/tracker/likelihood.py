@@ -139,13 +139,7 @@ def edge_map(
 
 
 def make_observation(
-    image: np.ndarray | None,
-    mask: np.ndarray,
-    n_cover: int = 32,
-    rng: np.random.Generator | None = None,
-    n_reach: int = 32,
-    reach_frac: float = 0.12,
-    **edge_kw,
+    image: np.ndarray | None, mask: np.ndarray, n_cover: int = 32, rng: np.random.Generator | None = None, **edge_kw
 ) -> Observation:
     """Build the per-frame maps once (Deutscher: computed once per frame, read by every particle).
 
@@ -159,17 +153,6 @@ def make_observation(
         Foreground pixels sampled for the coverage term (0 disables it).
     rng : numpy.random.Generator or None
         Generator for the coverage sample (default: seeded 0, so a frame maps the same way).
-    n_reach : int
-        Further coverage samples drawn from the mask's pixels further than ``reach_frac`` x the
-        mask's height from its median column: a reaching arm, a kicking leg. Drawn among all the
-        mask's pixels, the few of an arm held out towards the other person (a handshake, a
-        push: a few percent of the mask) gave one or two samples, too few for S_c to pay for
-        the arm's move out of the torso, and the tracker left it hanging where the silhouette
-        showed it reaching (0: none).
-    reach_frac : float
-        The distance from the median column, as a fraction of the mask's height, beyond which a
-        pixel is a limb's away from the trunk (a trunk seen from the side is about 0.15 of the
-        stature wide, from the front 0.25).
     **edge_kw
         Keyword parameters of :func:`edge_map` (``canny``, ``dilate_px``, ``blur_sigma``).
 
@@ -195,9 +178,6 @@ def make_observation(
     rng = np.random.default_rng(0) if rng is None else rng
     if len(xs) and n_cover:
         pick = rng.choice(len(xs), size=min(n_cover, len(xs)), replace=False)
-        reach = np.flatnonzero(np.abs(xs - np.median(xs)) > reach_frac * (ys.max() - ys.min() + 1))
-        if len(reach) and n_reach:
-            pick = np.concatenate([pick, reach[rng.choice(len(reach), size=min(n_reach, len(reach)), replace=False)]])
         cover = np.stack([xs[pick], ys[pick]], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)

@@ -30,7 +30,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
-from counterpart.body.pose import DOF, DOF_INDEX, YAW, wrap_angle
+from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 from .apf import AnnealedParticleFilter, Estimate, LogLikelihood, ParticleFilter
@@ -89,13 +89,6 @@ class _RandomWalk:
         return P + rng.normal(size=P.shape) * self.std * scale
 
 
-#: the eight arm angles (shoulder flex, abduction, rotation, elbow flex of each side)
-ARM_DOFS = np.arange(DOF_INDEX["l_shoulder_flex"], DOF_INDEX["r_elbow_flex"] + 1)
-#: the arm angles an arm proposal draws (``APFConfig.arm_proposals``): offsets from the first
-#: arm angle (shoulder flex) of an arm, and the uniform range of each, radians
-ARM_RANGE = ((0, -0.5, 2.2), (3, 0.0, 1.5))
-_ARM0 = (DOF_INDEX["l_shoulder_flex"], DOF_INDEX["r_shoulder_flex"])
-
 #: the sides of the frame a tracker can follow (as the silhouette node labels its people)
 SIDES = ("left", "right")
 
@@ -149,14 +142,6 @@ class APFConfig:
         Bounds of that std in multiples of the random walk's std per DOF (metres, radians).
     shrink : float
         Factor by which the diffusion shrinks per layer (1: it does not).
-    arm_proposals : float
-        Share of the predicted particles (and of a first search's) whose one arm is drawn afresh
-        over its range (``ARM_RANGE``) instead of from the random walk. An arm that swings out
-        to reach the other person (a handshake, a push) crosses poses the silhouette scores
-        worse than the hanging arm (half-raised, it lies on background): the walk and the
-        annealing's diffusion, local by design, never cross that valley, and the arm stayed
-        by the body; a proposal lands on the reaching arm and the annealing keeps it where the
-        silhouette shows one (0: none).
     """
 
     n_layers: int = 10
@@ -167,7 +152,6 @@ class APFConfig:
     min_std: float = 0.05
     max_std: float = 3.0
     shrink: float = 1.0
-    arm_proposals: float = 0.1
 
 
 @dataclass(frozen=True)
@@ -208,16 +192,12 @@ class PosteriorConfig:
     resid_std : float
         Std (radians) of the joint angles off the prior's PCA subspace
         (``PriorPredictor.log_prior``).
-    arm_sigma : float
-        The temporal term's width for the eight arm angles (``ARM_DOFS``), in multiples of
-        ``temporal_sigma``.
     """
 
     w_temporal: float = 1.0
     temporal_sigma: float = 3.0
     w_prior: float = 0.5
     resid_std: float = 0.15
-    arm_sigma: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -347,31 +327,10 @@ class Tracker:
         centre = self.prev if centre is None else centre
         if centre is None or not post.w_temporal:
             return np.zeros(len(X))
-        if sig is None:
-            sig = post.temporal_sigma * self.predictor.std
-            sig[ARM_DOFS] *= post.arm_sigma
+        sig = post.temporal_sigma * self.predictor.std if sig is None else sig
         d = (X - centre) / sig
         d[:, YAW] = wrap_angle(X[:, YAW] - centre[YAW]) / sig[YAW]
         return -0.5 * post.w_temporal * (d * d).mean(axis=1)
-
-    def _propose_arms(self, P: np.ndarray) -> np.ndarray:
-        """Draw one arm of a share of the particles afresh (``APFConfig.arm_proposals``).
-
-        Parameters
-        ----------
-        P : ndarray of shape (N, 28)
-            Particles (changed in place).
-
-        Returns
-        -------
-        ndarray of shape (N, 28)
-            ``P``.
-        """
-        rows = np.flatnonzero(self.rng.random(len(P)) < self.config.apf.arm_proposals)
-        first = np.asarray(_ARM0)[self.rng.integers(0, 2, len(rows))]
-        for offset, lo, hi in ARM_RANGE:
-            P[rows, first + offset] = self.rng.uniform(lo, hi, len(rows))
-        return P
 
     def _pose_prior(self, X: np.ndarray) -> np.ndarray:
         post = self.config.posterior
@@ -400,7 +359,10 @@ class Tracker:
         return [make_observation(im, m, rng=self.rng) for im, m in zip(images, mask)]
 
     def update(
-        self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
+        self,
+        image: np.ndarray | None | Sequence[np.ndarray | None],
+        mask: np.ndarray | Sequence[np.ndarray],
+        towards: tuple[int, int, int, int] | None = None,
     ) -> TrackResult | None:
         """Track one frame (the steps of the module docstring).
 
@@ -410,6 +372,10 @@ class Tracker:
             The frame; with several cameras, a list of them in the cameras' order.
         mask : ndarray of shape (H, W), dtype bool
             This person's mask; with several cameras, a list of them in the cameras' order.
+        towards : tuple of int (x, y, w, h) or None
+            The bounding box, in the reference view, of the person this one interacts with:
+            a track that starts on this frame faces that person (``init.facing_yaw``); None:
+            the heading of the person's side of the frame.
 
         Returns
         -------
@@ -427,7 +393,7 @@ class Tracker:
         if obs[0].empty:
             return None
         start = not self.tracking
-        est = self._first_search(obs, mask) if start else self._follow(obs)
+        est = self._first_search(obs, mask, towards) if start else self._follow(obs)
         return self._finish(est, obs, start)
 
     def _density(
@@ -443,7 +409,12 @@ class Tracker:
 
         return loglik
 
-    def _first_search(self, obs: list[Observation], mask: np.ndarray | Sequence[np.ndarray]) -> Estimate:
+    def _first_search(
+        self,
+        obs: list[Observation],
+        mask: np.ndarray | Sequence[np.ndarray],
+        towards: tuple[int, int, int, int] | None = None,
+    ) -> Estimate:
         """Start a track: particles around the reference view's silhouette guess (the body scaled
         to its stature unless ``dims`` was given), searched with the first search's longer schedule.
         """
@@ -451,18 +422,16 @@ class Tracker:
         bbox = bbox_from_mask(np.asarray(ref_mask, bool))
         init = self.config.init
         P0, dims = initial_particles(
-            bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=init.spread
+            bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=init.spread, towards=towards
         )
         if self.fixed_dims is None:
             self.dims = dims
             self.likelihood = self._likelihood()
-        guess = P0[0].copy()
-        P0[1:] = self._propose_arms(P0[1:])
         self.filter.initialise(P0)
         self.predictor.reset()
         wide = INIT_STD * init.spread
         return self.filter.step(
-            self._density(obs, guess, wide),
+            self._density(obs, P0[0], wide),
             None,
             n_layers=init.layers,
             min_std=init.min_std * wide,
@@ -473,9 +442,7 @@ class Tracker:
         """Go on with a running track: predict with the prior, then search."""
         apf = self.config.apf
         scale = 1.0 if apf.plain else apf.predict_scale
-        return self.filter.step(
-            self._density(obs), lambda P, rng: self._propose_arms(self.predictor(P, rng, scale=scale))
-        )
+        return self.filter.step(self._density(obs), lambda P, rng: self.predictor(P, rng, scale=scale))
 
     def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
         """Score the estimate's best particle, update the prior's posterior and the lost detector."""
