@@ -19,7 +19,8 @@ theirs): the SHADOW class of the raw pixels against label 50, where the ground t
 Top-level key ``real``: one object per sequence.
 
 Speed beside MOG2: ``fps_320x240_2cores`` (ours) and ``fps_320x240_2cores_mog2`` (the same
-extractor with MOG2 as its backend), whole extractor with splines, two OpenCV threads, sim frames.
+extractor with MOG2 as its backend), whole extractor with splines, two OpenCV threads and our
+models' learning steps in worker threads (their default, ``threaded``), sim frames.
 ``--speed-only`` runs only the speed figures (run it alone on the machine: they are wall-clock
 medians); ``load_1min`` is the machine's load average when they were taken.
 
@@ -34,8 +35,8 @@ per start: *_empty_start, *_people_start), shadow_as_fg (fraction of truth shado
 published mask), spline_px (mean distance of the mask contour points to our fitted 32-point
 spline), id_swaps (handshake and push sequences, both starts: a published id mapped by overlap to
 person A in one frame and B in a later one), fps_320x240 (whole extractor: background, clean-up,
-tracking, splines, on the sim source, ``--threads`` OpenCV threads) and fps_768x576 (the same on
-vtest.avi, when present).
+tracking, splines, on the sim source, ``--threads`` OpenCV threads; with one, the learning steps
+run in line: a one-core figure) and fps_768x576 (the same on vtest.avi, when present).
 
 Per source (synthetic, vtest, sim), on the same frames:
   * ms per frame of background subtraction: ours (classify + model update) vs OpenCV MOG2 with
@@ -469,7 +470,10 @@ def _time_extractor(frames: np.ndarray) -> dict[str, Any]:
     frames (the algorithm is deterministic): measuring the splines between timed frames evicted the
     extractor's arrays from the caches and added about a fifth to its time, for work a node never does.
     """
-    ex = SilhouetteExtractor(backend="horprasert", backend_params={"train_frames": TRAIN_FRAMES})
+    # one OpenCV thread: a one-core figure, so the models' learning steps run in line too
+    threaded = cv2.getNumThreads() > 1
+    params = {"train_frames": TRAIN_FRAMES, "threaded": threaded, "sample_params": {"threaded": threaded}}
+    ex = SilhouetteExtractor(backend="horprasert", backend_params=params)
     times = []
     for f in frames:
         t0 = time.perf_counter()

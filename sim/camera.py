@@ -1,14 +1,22 @@
-"""Random cameras for the simulator: a camera of random height, tilt and field of view that keeps
-both people of a scenario fully in view (``open_stream(..., camera="random")``, ``counterpart sim
---camera random``).
+"""Random cameras for the simulator: a camera of random height, tilt, field of view and bearing
+that keeps both people of a scenario fully in view (``open_stream(..., camera="random")``,
+``counterpart sim --camera random``).
 
-The camera stands in front of the scene (+Z), centred on the people, with no roll; it looks down by
-the tilt. Height, tilt and horizontal field of view are drawn uniformly from their ranges
+The camera looks at the people's centre from the bearing ``azimuth`` (degrees about the vertical
+through that centre: 0 is straight in front of the scene, +Z, square-on to the line between the
+two people; positive turns towards +X), with no roll; it looks down by the tilt. Height, tilt,
+horizontal field of view and azimuth are drawn uniformly from their ranges
 (:class:`RandomCameraConfig`); the distance is then the smallest one (to 0.1 m) at which every
 joint of both people over the whole scenario, the top of the head included, projects inside the
 image with a margin. A draw for which no distance up to ``max_distance`` keeps the people in view
 (a camera low and steeply tilted with a narrow view sees no heads) is drawn again: the accepted
 cameras are uniform over the feasible part of the ranges.
+
+Why a bearing of -60 to +60 degrees: a camera filming two people is rarely square-on to the line
+between them (a room's corner camera, a camera on a shelf, a phone held by a third person), so the
+two stand at different depths; beyond about 60 degrees one person stands behind the other for much
+of an interaction (at 90 degrees the line between them points at the camera) and the interaction
+itself cannot be seen, which is not a view a user would film it from.
 """
 
 from __future__ import annotations
@@ -35,6 +43,9 @@ class RandomCameraConfig:
         Downward pitch of the optical axis, degrees (low, high).
     fov_deg : tuple of (float, float)
         Horizontal field of view, degrees (low, high).
+    azimuth_deg : tuple of (float, float)
+        Bearing of the camera about the people's centre, degrees (low, high); 0 is square-on to the
+        line between them (the module docstring says why -60 to 60).
     margin : float
         Share of the image size kept free at every border.
     max_distance : float
@@ -46,13 +57,14 @@ class RandomCameraConfig:
     height: tuple[float, float] = (1.0, 3.0)
     tilt_deg: tuple[float, float] = (0.0, 35.0)
     fov_deg: tuple[float, float] = (40.0, 75.0)
+    azimuth_deg: tuple[float, float] = (-60.0, 60.0)
     margin: float = 0.03
     max_distance: float = 25.0
     tries: int = 200
 
 
-def _camera_at(eye: np.ndarray, tilt: float, fov_deg: float, width: int, height: int) -> Camera:
-    direction = np.array([0.0, -np.sin(tilt), -np.cos(tilt)])
+def _camera_at(eye: np.ndarray, tilt: float, azimuth: float, fov_deg: float, width: int, height: int) -> Camera:
+    direction = np.array([-np.sin(azimuth) * np.cos(tilt), -np.sin(tilt), -np.cos(azimuth) * np.cos(tilt)])
     return Camera.look_at(eye, eye + direction, fov_deg, width, height)
 
 
@@ -65,9 +77,10 @@ def frame_people(
     height: int,
     margin: float = 0.03,
     max_distance: float = 25.0,
+    azimuth_deg: float = 0.0,
 ) -> Camera | None:
-    """The nearest camera of this height, tilt and field of view (no roll, looking along -Z) that
-    keeps ``points`` in view; None when none within ``max_distance`` does.
+    """The nearest camera of this height, tilt, field of view and bearing (no roll) that keeps
+    ``points`` in view; None when none within ``max_distance`` does.
 
     Parameters
     ----------
@@ -85,6 +98,9 @@ def frame_people(
         Share of the image size kept free at each border.
     max_distance : float
         Farthest camera distance tried (in steps of 0.1 m from 1 m), metres from the points' centre.
+    azimuth_deg : float, default=0.0
+        Bearing of the camera about the points' centre, degrees: 0 looks along -Z, positive puts
+        the camera towards +X.
 
     Returns
     -------
@@ -95,9 +111,11 @@ def frame_people(
     centre = np.array([0.5 * (P[:, 0].min() + P[:, 0].max()), 0.0, 0.5 * (P[:, 2].min() + P[:, 2].max())])
     lo = np.array([margin * width, margin * height]) - 0.5
     hi = np.array([(1 - margin) * width, (1 - margin) * height]) - 0.5
-    tilt = np.deg2rad(tilt_deg)
+    tilt, az = np.deg2rad(tilt_deg), np.deg2rad(azimuth_deg)
+    out = np.array([np.sin(az), 0.0, np.cos(az)])  # from the centre towards the camera
     for d in np.arange(1.0, max_distance + 1e-9, 0.1):
-        cam = _camera_at(np.array([centre[0], cam_height, centre[2] + d]), tilt, fov_deg, width, height)
+        eye = centre + d * out + [0.0, cam_height, 0.0]
+        cam = _camera_at(eye, tilt, az, fov_deg, width, height)
         uv = cam.project(P)
         if np.isfinite(uv).all() and (uv >= lo).all() and (uv <= hi).all():
             return cam
@@ -149,8 +167,9 @@ def random_camera(
     camera : Camera
         The camera.
     drawn : dict of str to float
-        Its drawn parameters: ``height`` (m), ``tilt_deg``, ``fov_deg``, ``distance`` (m, horizontal,
-        from the camera to the people's centre).
+        Its drawn parameters: ``height`` (m), ``tilt_deg``, ``fov_deg``, ``azimuth_deg`` (the bearing
+        about the people's centre), ``distance`` (m, horizontal, from the camera to the people's
+        centre), and the ranges they were drawn from (``azimuth_range_deg`` and the like).
 
     Raises
     ------
@@ -162,10 +181,22 @@ def random_camera(
         h = float(rng.uniform(*config.height))
         tilt = float(rng.uniform(*config.tilt_deg))
         fov = float(rng.uniform(*config.fov_deg))
-        cam = frame_people(pts, h, tilt, fov, width, height, config.margin, config.max_distance)
+        az = float(rng.uniform(*config.azimuth_deg))
+        cam = frame_people(pts, h, tilt, fov, width, height, config.margin, config.max_distance, az)
         if cam is not None:
+            xc = 0.5 * (pts[:, 0].min() + pts[:, 0].max())
             zc = 0.5 * (pts[:, 2].min() + pts[:, 2].max())
-            return cam, {"height": h, "tilt_deg": tilt, "fov_deg": fov, "distance": float(cam.centre[2] - zc)}
+            return cam, {
+                "height": h,
+                "tilt_deg": tilt,
+                "fov_deg": fov,
+                "azimuth_deg": az,
+                "distance": float(np.hypot(cam.centre[0] - xc, cam.centre[2] - zc)),
+                "height_range": list(config.height),
+                "tilt_range_deg": list(config.tilt_deg),
+                "fov_range_deg": list(config.fov_deg),
+                "azimuth_range_deg": list(config.azimuth_deg),
+            }
     raise ValueError(f"no camera in the ranges {config} keeps both people in view; widen the ranges")
 
 

@@ -62,7 +62,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         choices=("default", "random"),
         default="default",
         help="the simulator's default camera, or a random one drawn from the seed (height 1-3 m, tilt "
-        "0-35 degrees, horizontal field of view 40-75 degrees) that keeps both people in view",
+        "0-35 degrees, horizontal field of view 40-75 degrees, bearing -60 to 60 degrees about the pair) that "
+        "keeps both people in view",
     )
     p.add_argument("--list", action="store_true", help="list the scenarios and exit")
 

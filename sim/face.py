@@ -370,7 +370,8 @@ def blinks(n: int, fps: float, rng: np.random.Generator, rate_hz: tuple[float, f
         k = np.arange(int(np.ceil(d * fps)) + 1)
         idx = int(t * fps) + k
         ok = idx < n
-        out[idx[ok]] = np.maximum(out[idx[ok]], 0.5 * (1 - np.cos(2 * np.pi * np.clip(k / (d * fps), 0, 1))))[ok]
+        lid = 0.5 * (1 - np.cos(2 * np.pi * np.clip(k / (d * fps), 0, 1)))
+        out[idx[ok]] = np.maximum(out[idx[ok]], lid[ok])  # a blink may run past the clip's end
         t += d + float(rng.exponential(1.0 / rate))
     return out
 

@@ -10,7 +10,8 @@ sad, angry), ``strength`` (0-1), ``initiator`` (a/b), ``interested`` (conversati
 ``duration`` (conversation, seconds), ``frames`` (cap the frame count), ``noise`` (sensor noise
 sigma, grey levels), ``bvh_a``/``bvh_b`` (scenario "cmu"), ``camera`` (``default``: the camera of
 ``counterpart.body.camera.default_camera``; ``random``: a camera of random height 1-3 m, tilt 0-35 degrees and
-horizontal field of view 40-75 degrees drawn from the seed that keeps both people in view,
+horizontal field of view 40-75 degrees and bearing -60 to 60 degrees about the pair (0: square-on to
+the line between them) drawn from the seed that keeps both people in view,
 ``counterpart.sim.camera.random_camera``; its drawn parameters are in ``stream.scenario.meta["camera"]``).
 """
 

@@ -5,12 +5,13 @@ points projected and perturbed by a pixel of noise.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from counterpart.body.camera import Camera
-from counterpart.nodes.calibration.estimate import estimate_camera, head_foot, rotation, usable
-from counterpart.nodes.calibration.lines import find_families
+from counterpart.nodes.calibration.estimate import CalibrationConfig, estimate_camera, head_foot, rotation, usable
+from counterpart.nodes.calibration.lines import detect_segments, find_families
 from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
 
 W, H = 320, 240
@@ -124,12 +125,18 @@ def _across(cam: Camera, seed: int):
     return np.array(heads), np.array(feet), np.array(ids), np.tile(np.arange(100) / 10.0, 2)
 
 
-def _floor(cam: Camera, seed: int) -> np.ndarray:
-    """(N, 4) segments of a floor of planks along the view with joints across it (0.5 px noise)."""
+def _floor(cam: Camera, seed: int, yaw_deg: float = 0.0) -> np.ndarray:
+    """(N, 4) segments of a floor of planks along the view with joints across it (0.5 px noise), the
+    floor turned by ``yaw_deg`` about the vertical.
+    """
     rng = np.random.default_rng(seed)
     ends = [([x, 0, z], [x, 0, z + 0.4]) for x in np.arange(-2, 2.01, 0.4) for z in np.arange(-2, 1, 0.5)]
     ends += [([-1.5, 0, z], [1.5, 0, z]) for z in np.arange(-2, 1, 0.5)]
-    s = np.array([np.r_[cam.project(np.array(a, float)), cam.project(np.array(b, float))] for a, b in ends])
+    c, si = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
+    turn = np.array([[c, 0.0, si], [0.0, 1.0, 0.0], [-si, 0.0, c]])
+    s = np.array(
+        [np.r_[cam.project(turn @ np.array(a, float)), cam.project(turn @ np.array(b, float))] for a, b in ends]
+    )
     s += rng.normal(0, 0.5, s.shape)
     inside = (
         np.isfinite(s).all(1)
@@ -163,3 +170,37 @@ def test_people_walking_in_depth_show_the_horizon() -> None:
     assert not credible(
         estimate_camera(*_across(cam, seed=1)[:3], (W, H), _across(cam, seed=1)[3]), 0.2, 0.5, 8.0, 0.12
     )
+
+
+@pytest.mark.parametrize("tilt", [2.0, 6.0])
+def test_square_floor_lines_fix_the_focal_length_of_a_level_camera(tilt: float) -> None:
+    # a camera nearly level, seeing a floor laid out square at 30 degrees to it: the two plank
+    # directions' vanishing points are at right angles through the camera, which fixes the focal
+    # length where the people (at one depth) cannot
+    cam = _camera(1.2, tilt, 60.0, distance=6.0)
+    heads, feet, ids, t = _across(cam, seed=3)
+    lines = find_families(_floor(cam, seed=4, yaw_deg=30.0), (H - 1) / 2)
+    assert lines.n_horizontal >= 2
+    est = estimate_camera(heads, feet, ids, (W, H), t, lines=lines)
+    assert abs(est.focal / cam.fx - 1) < 0.10 and est.focal_std < 0.2, est.describe()
+    assert abs(est.tilt_deg - tilt) < 2.0, est.describe()
+    free = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(manhattan_std_deg=None), lines)
+    assert abs(free.focal / cam.fx - 1) > 0.10, free.describe()
+    assert free.focal_std > 1.5 * est.focal_std, free.describe()  # without the right angle: the prior's width
+
+
+def test_segments_on_a_person_are_dropped_and_lines_behind_them_kept() -> None:
+    # a floor line running behind a person's box is the horizon's evidence; an edge within the box is
+    # the person's own outline
+    img = np.full((H, W), 128, np.uint8)
+    cv2.rectangle(img, (0, 150), (W - 1, H - 1), 60, -1)  # floor meets wall along row 150, across the box
+    cv2.rectangle(img, (140, 60), (150, 130), 220, -1)  # an upright edge pair inside the box
+    box = (120, 50, 60, 120)
+    segs = detect_segments(img, [box])
+    horizontal = np.abs(segs[:, 3] - segs[:, 1]) < 2
+    assert horizontal.any() and (segs[horizontal][:, [0, 2]].max() - segs[horizontal][:, [0, 2]].min()) > 250
+    x, y, w, h = box
+    inside = (segs[:, [0, 2]] >= x).all(1) & (segs[:, [0, 2]] <= x + w).all(1)
+    inside &= (segs[:, [1, 3]] >= y).all(1) & (segs[:, [1, 3]] <= y + h).all(1)
+    assert not inside.any()
+    assert len(detect_segments(img)) > len(segs)  # without the box the person's edges are there

@@ -124,6 +124,31 @@ def test_sample_consensus_validates_and_learns_only_background() -> None:
     assert (model.samples_ == 100).all()
 
 
+def test_learning_in_worker_threads_gives_the_same_labels_and_models() -> None:
+    # the leaves blink (so the blink levels and the learning of dynamic pixels are exercised), a
+    # person walks in; the caller overwrites its frame buffer as soon as each call returns
+    runs = []
+    for threaded in (True, False):
+        rng = np.random.default_rng(3)
+        sub = make_subtractor(
+            "horprasert", train_frames=20, robust=False, threaded=threaded, sample_params={"threaded": threaded}
+        )
+        buf = np.empty((H, W, 3), np.uint8)
+        labels = []
+        for k in range(45):
+            buf[:] = frame(rng, (20 + 4 * k, 120, 30, 80) if k >= 25 else None)
+            sub.apply(buf)
+            buf[:] = 0
+            labels.append(sub.labels.copy())
+        runs.append((np.stack(labels), sub.samples.samples_.copy(), sub.samples.radius_.copy(), sub.model.mean_.copy()))
+    (lab_t, smp_t, rad_t, mean_t), (lab_s, smp_s, rad_s, mean_s) = runs
+    assert (lab_t[20:] == FOREGROUND).any(axis=(1, 2)).sum() >= 20
+    assert np.array_equal(lab_t, lab_s)
+    assert np.array_equal(smp_t, smp_s)
+    assert np.array_equal(rad_t, rad_s) and rad_t.max() > 1.0
+    assert np.array_equal(mean_t, mean_s)
+
+
 def test_min_area_scales_with_the_frame_and_the_camera() -> None:
     small = person_min_area(320, 240)
     assert person_min_area(640, 480) == pytest.approx(4 * small, rel=0.05)

@@ -81,6 +81,11 @@ class CalibrationConfig:
         steps of 5, fields of view 30 to 95.
     n_starts : int, default=3
         Refined starts.
+    manhattan_std_deg : float or None, default=3.0
+        Std of the prior that two horizontal line families run at right angles on the ground, degrees
+        (rooms, streets and buildings are mostly laid out square: Coughlan & Yuille's "Manhattan
+        world"); with two such families it fixes the focal length even with the camera level, where
+        people alone cannot. The robust loss lets a scene that is not square go. None: no such prior.
     """
 
     person_height: float = 1.70
@@ -100,6 +105,7 @@ class CalibrationConfig:
     grid_tilt_deg: tuple[float, ...] = tuple(np.arange(-5.0, 50.1, 5.0).tolist())
     grid_fov_deg: tuple[float, ...] = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 95.0)
     n_starts: int = 3
+    manhattan_std_deg: float | None = 3.0
 
 
 @dataclass(frozen=True)
@@ -361,7 +367,18 @@ def _residuals(
     if lines is None or not len(lines.segments):
         return np.concatenate([r, priors])
     rl = segment_angles(lines.segments, _vanishing_points(x, n_people, lines, size)) / line_scale
-    return np.concatenate([r, priors, rl])
+    return np.concatenate([r, priors, rl, _manhattan(x[4 + n_people :], cfg.manhattan_std_deg)])
+
+
+def _manhattan(phi: np.ndarray, std_deg: float | None) -> np.ndarray:
+    """(P,) residuals of the right-angle prior over the P pairs of ground directions ``phi`` (radians):
+    sin(2 (phi_i - phi_j)) / (2 sigma), zero for square or parallel pairs, about the angle off square
+    over sigma near it.
+    """
+    if std_deg is None or len(phi) < 2:
+        return np.zeros(0)
+    i, j = np.triu_indices(len(phi), 1)
+    return np.sin(2 * (phi[i] - phi[j])) / (2 * np.radians(std_deg))
 
 
 def _directions(x: np.ndarray, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:

@@ -94,9 +94,9 @@ class Calibration(Node):
             min=1e-4,
             max=1.0,
         ),
-        "max_height_std": Param(float, 0.2, "estimate: used only when the height's relative std is below", min=0.0),
-        "max_focal_std": Param(float, 0.5, "estimate: ... and the focal length's relative std", min=0.0),
-        "max_tilt_std_deg": Param(float, 8.0, "estimate: ... and the tilt's std, degrees", min=0.0),
+        "max_height_std": Param(float, 0.15, "estimate: used only when the height's relative std is below", min=0.0),
+        "max_focal_std": Param(float, 0.2, "estimate: ... and the focal length's relative std", min=0.0),
+        "max_tilt_std_deg": Param(float, 3.0, "estimate: ... and the tilt's std, degrees", min=0.0),
         "min_depth_spread": Param(
             float,
             0.12,

@@ -22,11 +22,13 @@ small nod. So the box is not the head point. Each tracked face instead carries:
 
 While a face is tracked it is searched for only around its last position (one face width
 around it, at the scale of its size: cheap); the whole frame is searched, at the scale that makes
-``min_face_px`` the cascade's 24 px window, when no face is tracked and every ``search_every_s``
-seconds otherwise (new faces). Tracks are numbered by slot (0 .. ``max_faces`` - 1): a face that is
-lost and found again takes the lowest free slot, with a new ``track_id``. A new face must be
-detected again on each of its next ``CONFIRM`` frames, or it is dropped (most false detections
-on a textured background are not found twice running).
+``min_face_px`` the cascade's 24 px window, every ``search_every_s`` seconds, whether or not a
+face is tracked (a first face and new ones: a face that appears waits up to that long to be
+found, and a stream without a face costs a whole-frame search only that often). Tracks are
+numbered by slot (0 .. ``max_faces`` - 1): a face that is lost and found again takes the lowest
+free slot, with a new ``track_id``. A new face must be detected again on each of its next
+``CONFIRM`` frames, or it is dropped (most false detections on a textured background are not
+found twice running).
 """
 
 from __future__ import annotations
@@ -62,7 +64,7 @@ class FaceTrackParams:
     size_s : float, default=1.0
         Time constant of the face size smoothing (s).
     search_every_s : float, default=0.5
-        Period of the whole-frame search for new faces while one is tracked (s).
+        Period of the whole-frame search for new faces (s), with or without a tracked face.
     max_faces : int, default=2
         Most faces tracked at once.
     n_points : int, default=40

@@ -230,6 +230,12 @@ class _Spectral:
         in_band = (freqs >= lo) & (freqs <= hi)
         self.band = wt * in_band
         self.band_pass = in_band.astype(np.float64)
+        # the band's analytic signal on the full FFT (Gabor 1946): in-band positive frequencies
+        # doubled (a Nyquist bin kept once), negative ones dropped; its modulus is the envelope
+        an = 2.0 * self.band_pass
+        if n % 2 == 0:
+            an[-1] = self.band_pass[-1]
+        self.analytic = np.concatenate([an, np.zeros(n - an.shape[0])])
         sw2 = float(np.sum(self.w**2))
         # floors: [nod, shake] x [head point (m), angle arc (m), tracked face (face widths)]
         self.e_floor = (
@@ -293,8 +299,12 @@ class _Spectral:
         """(..., 4, N) zero-mean oscillation residuals -> (..., 2) float, 1.0 where the window's
         centre sample is part of the (nod, shake) event in the window, else 0.0 (see :meth:`scores`).
 
-        The residual is band-passed with the FFT (no taper: the window's ends keep their weight),
-        its energy summed over each channel pair and averaged over ``local_k`` frames, giving the
+        The residual is band-passed with the FFT (no taper: the window's ends keep their weight)
+        into its analytic signal ``z = x_b + i H(x_b)`` (``H`` the Hilbert transform, Gabor 1946),
+        whose squared modulus ``|z|^2`` is the instantaneous energy of the oscillation without the
+        ripple at twice its frequency that ``x_b^2`` has (``x_b^2`` drops to 0 at every zero
+        crossing, so a threshold on it cuts into an event's weak first and last swings). The
+        energies are summed over each channel pair and averaged over ``local_k`` frames, giving the
         local amplitude ``a_j = sqrt(E_j / max_j E_j)`` relative to the window's largest. The centre
         is in the event when it lies in a run of positions with ``a >= event_off`` that reaches
         ``a >= event_on`` somewhere (hysteresis both ways in time: the window sees the centre's past
@@ -304,8 +314,8 @@ class _Spectral:
         if p.event_on <= 0:
             return np.ones((*res.shape[:-2], 2))
         n, k = p.n, p.local_k
-        xb = np.fft.irfft(np.fft.rfft(res, axis=-1) * self.band_pass, n, axis=-1)
-        e2 = xb**2
+        z = np.fft.ifft(np.fft.fft(res, axis=-1) * self.analytic, axis=-1)
+        e2 = z.real**2 + z.imag**2
         e = np.stack([e2[..., 0, :] + e2[..., 1, :], e2[..., 2, :] + e2[..., 3, :]], axis=-2)  # (..., 2, N)
         c = np.cumsum(np.concatenate([np.zeros((*e.shape[:-1], 1)), e], axis=-1), axis=-1)
         mov = c[..., k:] - c[..., :-k]  # (..., 2, P): k * mean energy around position j + k // 2

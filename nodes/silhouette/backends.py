@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
+from .deferred import DeferredStep
 from .people import fit_around_people
 from .samples import SampleConsensus
 
@@ -66,6 +67,11 @@ class HorprasertSubtractor:
         classes are the statistics' own.
     sample_params : dict or None, default=None
         Parameters of the ``samples.SampleConsensus`` model.
+    threaded : bool, default=True
+        Blend each frame into the model (``HorprasertBackground.update``, which that frame's labels
+        do not need) in a worker thread while the caller goes on with the labels; the next frame
+        (and a read of ``model``) waits for it first, so the results are the same as without. On
+        two cores this hides most of the update's cost.
     **model_params : Any
         Go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
 
@@ -86,12 +92,13 @@ class HorprasertSubtractor:
         detector: Any = None,
         dynamic: bool = True,
         sample_params: dict[str, Any] | None = None,
+        threaded: bool = True,
         **model_params: Any,
     ) -> None:
         if train_frames < 2:
             raise ValueError(f"horprasert: train_frames must be >= 2, got {train_frames}")
         try:
-            self.model = HorprasertBackground.from_params(**model_params)
+            self._model = HorprasertBackground.from_params(**model_params)
         except ValueError as exc:
             raise ValueError(f"horprasert: {exc}") from None
         self.train_frames = train_frames
@@ -105,10 +112,22 @@ class HorprasertSubtractor:
         self.labels: np.ndarray | None = None
         self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
+        self.threaded = threaded
+        self._deferred = DeferredStep("horprasert-update")
+
+    @property
+    def model(self) -> HorprasertBackground:
+        """The statistical model, once the last frame's update is done."""
+        self._deferred.join()
+        return self._model
+
+    def __getstate__(self) -> dict[str, Any]:
+        self._deferred.join()  # before any array it writes is copied
+        return self.__dict__.copy()
 
     @property
     def ready(self) -> bool:
-        return self.model.is_fitted
+        return self._model.is_fitted
 
     def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> HorprasertSubtractor:
         """Fit the model on training frames.
@@ -176,14 +195,22 @@ class HorprasertSubtractor:
                 self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
                 return np.zeros(frame.shape[:2], bool)
             self.fit(self._buffer)
-        labels = self.model.apply(frame)
+        if self.threaded:
+            # the worker reads the frame after this returns, when the caller may have reused it;
+            # the same copy goes to apply, whose per-frame terms update reuses (they are keyed
+            # by the frame object)
+            frame = frame.copy()
+        labels = self._model.apply(frame)
         if self.samples is not None:
             vetoed = self.samples.apply(frame, labels)
             if self._unseen_fg is not None:
                 # no veto where the room was filled in (see ``HorprasertBackground.unseen_``)
                 cv2.max(vetoed, cv2.bitwise_and(labels, self._unseen_fg), dst=vetoed)
             labels = vetoed
-        self.model.update(frame, labels)
+        if self.threaded:
+            self._deferred.submit(self._model.update, frame, labels.copy())
+        else:
+            self._model.update(frame, labels)
         self.labels = labels
         return labels == FOREGROUND
 

@@ -713,49 +713,90 @@ class HorprasertBackground:
 
     def _verify_shadow_texture(self, planes: list[np.ndarray], labels: np.ndarray) -> None:
         """Relabel, in place, SHADOW pixels (H, W) that are textured and do not correlate with the
-        background's texture as FOREGROUND (see the module docstring). Local means over a
-        ``shadow_window`` box: NCC = (m(IE) - m(I) m(E)) / sqrt(var(I) var(E)) on grey levels.
+        background's texture as FOREGROUND (see the module docstring). Local moments over a
+        ``shadow_window`` box of the window's shadow pixels: NCC = (m(IE) - m(I) m(E)) /
+        sqrt(var(I) var(E)) on grey levels (Jacques, Jung & Musse 2005, eq. 4).
+
+        Over the window's shadow pixels only: at a shadow's edge the lit pixels beside it would
+        make the ratio of frame to background a step, and the correlation low.
         """
-        sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
-        if cv2.countNonZero(sh) == 0:
+        is_sh = labels == SHADOW
+        idx = np.flatnonzero(is_sh)  # on bool: several times faster than on the uint8 mask
+        if idx.size == 0:
             return
-        # only the box around the shadow pixels (and half a window) is filtered: in most frames
-        # the shadows lie at people's feet
+        sh = is_sh.view(np.uint8)
         r = self.shadows.shadow_window // 2
-        x, y, bw, bh = cv2.boundingRect(sh)
         h, w = sh.shape
-        x0, y0, x1, y1 = max(x - r, 0), max(y - r, 0), min(x + bw + r, w), min(y + bh + r, h)
-        win = (slice(y0, y1), slice(x0, x1))
-        k = (self.shadows.shadow_window, self.shadows.shadow_window)
-        grey = planes[0][win] + planes[1][win]
-        grey += planes[2][win]
+        if idx.size * (2 * r + 1) ** 2 > h * w:
+            # shadow over much of the frame (a change of light): filtering the frame is cheaper
+            # than gathering each pixel's window
+            bad = self._shadow_texture_mismatch(planes, sh)
+            labels[bad] = FOREGROUND
+            return
+        # The shadow pixels are a few percent of the frame (and speckle): each one's window is
+        # gathered from frames padded as the box filter would (BORDER_REFLECT), the background's
+        # texture first, and the frame's only where that is textured (a few hundred pixels).
+        wp = w + 2 * r
+        ys, xs = np.divmod(idx, w)
+        off = (np.arange(2 * r + 1)[:, None] * wp + np.arange(2 * r + 1)[None, :]).reshape(-1)
+        win = (ys * wp + xs)[:, None] + off[None, :]  # (K, window) flat indices into the padded frame
+
+        def gather(a: np.ndarray, at: np.ndarray) -> np.ndarray:
+            return np.take(cv2.copyMakeBorder(a, r, r, r, r, cv2.BORDER_REFLECT).reshape(-1), at)
+
+        m = gather(sh, win).astype(np.float32)  # (K, window) 1 on shadow pixels
         mu = self._mu
-        e = mu[0][win] + mu[1][win]
-        e += mu[2][win]
-        # Over the window's shadow pixels only: at a shadow's edge the lit pixels beside it would
-        # make the ratio of frame to background a step, and the correlation low.
-        shw = sh[win]
-        m = cv2.bitwise_and(shw, 1).astype(np.float32)
+        e = gather(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), win)
+        # row sums as einsum: numpy's reductions over short rows cost several times more
+        inv_n = 1.0 / np.maximum(np.einsum("ij->i", m), 1.0)
+        em = e * m
+        me = np.einsum("ij->i", em) * inv_n
+        ve = np.einsum("ij,ij->i", em, e) * inv_n - me * me
+        # noise of the grey sum (3 channels): its variance is the sum of the channel variances
+        var = self._var.reshape(3, -1)
+        floor = (var[0][idx] + var[1][idx] + var[2][idx]) * np.float32(self.shadows.shadow_texture_k**2)
+        textured = ve > floor
+        if not textured.any():
+            # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
+            return
+        win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
+        grey = gather(cv2.add(cv2.add(planes[0], planes[1]), planes[2]), win)
+        gm = grey * m
+        mi = np.einsum("ij->i", gm) * inv_n
+        vi = np.einsum("ij,ij->i", gm, grey) * inv_n - mi * mi
+        cov = np.einsum("ij,ij->i", gm, e) * inv_n - mi * me
+        ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
+        labels.reshape(-1)[idx[textured][ncc < self.shadows.shadow_ncc]] = FOREGROUND
+
+    def _shadow_texture_mismatch(self, planes: list[np.ndarray], sh: np.ndarray) -> np.ndarray:
+        """The texture test of ``_verify_shadow_texture`` with box filters over the frame, for
+        shadow ``sh`` (H, W) 0 / 1 over much of it; returns the pixels to relabel (H, W) bool.
+        """
+        k = (self.shadows.shadow_window, self.shadows.shadow_window)
+        grey = planes[0] + planes[1]
+        grey += planes[2]
+        mu = self._mu
+        e = mu[0] + mu[1]
+        e += mu[2]
+        m = sh.astype(np.float32)
         box = lambda a: cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)  # noqa: E731
         inv_n = 1.0 / np.maximum(box(m), 1.0)
         em = e * m
         me = box(em) * inv_n
         ve = box(em * e) * inv_n - me * me
-        # noise of the grey sum (3 channels): its variance is the sum of the channel variances
         var = self._var
-        floor = var[0][win] + var[1][win]
-        floor += var[2][win]
+        floor = var[0] + var[1]
+        floor += var[2]
         floor *= np.float32(self.shadows.shadow_texture_k**2)
-        textured = (shw > 0) & (ve > floor)
+        textured = (sh > 0) & (ve > floor)
         if not textured.any():
-            # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
-            return
+            return textured
         gm = grey * m
         mi = box(gm) * inv_n
         vi = box(gm * grey) * inv_n - mi * mi
         cov = box(gm * e) * inv_n - mi * me
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        labels[win][textured & (ncc < self.shadows.shadow_ncc)] = FOREGROUND
+        return textured & (ncc < self.shadows.shadow_ncc)
 
     def update(self, frame: np.ndarray, labels: np.ndarray) -> None:
         """Blend the frame into the model, never where ``labels == FOREGROUND``.
@@ -866,7 +907,7 @@ class HorprasertBackground:
         if not ripe.any():
             return False
         ys, xs = np.divmod(idx[ripe], self.shape[1])
-        run = np.stack([r[ripe] for r in refs])  # (3, K') the runs' mean colours
+        run = refs[:, ripe]  # (3, K') the runs' mean colours
         sel = self._matches_surround(run, ys, xs, fg)
         if not sel.any():
             return False
@@ -876,30 +917,29 @@ class HorprasertBackground:
         self._still[ys, xs] = 0
         return True
 
-    def _advance_still_runs(self, frame: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    def _advance_still_runs(self, frame: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Extend or restart the still run of each foreground pixel (flat indices ``idx`` (K,)):
         a frame more than ``absorb_k`` spreads (any channel) from the run's mean colour restarts
         it. Runs off the foreground end. Returns the runs' lengths (K,) uint16 and their mean
-        colours, three (K,) float32 planes.
+        colours (3, K) float32.
         """
         still = self._still.reshape(-1)
         # Runs only live on foreground pixels (a few percent of the frame): work on those alone,
-        # one flat channel plane at a time (1-D gathers and scatters are the cheap ones).
+        # the three channels at once as (3, K) gathers.
         prev = still[idx]
         still.fill(0)
-        px = np.take(frame.reshape(-1, 3), idx, axis=0)  # (K, 3) uint8
-        obs = [px[:, c].astype(np.float32) for c in range(3)]
-        refs = [np.take(self._still_ref[c], idx) for c in range(3)]
-        dev = np.abs(obs[0] - refs[0]) * np.take(self._inv_s[0].reshape(-1), idx)
-        for c in (1, 2):
-            np.maximum(dev, np.abs(obs[c] - refs[c]) * np.take(self._inv_s[c].reshape(-1), idx), out=dev)
-        n = np.where((prev > 0) & (dev <= self.ghosts.absorb_k), prev + 1, 1).astype(np.uint16)
+        obs = np.take(frame.reshape(-1, 3), idx, axis=0).T.astype(np.float32)  # (3, K)
+        refs = np.take(self._still_ref, idx, axis=1)  # (3, K)
+        dev = np.abs(obs - refs)
+        dev *= np.take(self._inv_s.reshape(3, -1), idx, axis=1)
+        n = np.where((prev > 0) & (dev.max(axis=0) <= self.ghosts.absorb_k), prev + 1, 1).astype(np.uint16)
         still[idx] = n
         # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
         inv_n = 1.0 / n.astype(np.float32)
-        for c in range(3):
-            refs[c] += (obs[c] - refs[c]) * inv_n
-            self._still_ref[c][idx] = refs[c]
+        obs -= refs
+        obs *= inv_n
+        refs += obs
+        self._still_ref[:, idx] = refs
         return n, refs
 
     def _matches_surround(self, run: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
@@ -920,9 +960,22 @@ class HorprasertBackground:
         sx = np.minimum(xs * sw // w, sw - 1)
         cnt = frac[sy, sx]
         near = np.empty_like(run)
+        if h % 4 == 0:
+            # the three planes stacked as one (3 H, W) image: one product and one area resize
+            # (4 x 4 block means, which never straddle two planes) instead of three each
+            small3 = cv2.resize(
+                cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
+                (sw, 3 * sh),
+                interpolation=cv2.INTER_AREA,
+            )
+            smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
+        else:
+            smalls = [
+                cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
+                for c in range(3)
+            ]
         for c in range(3):
-            small = cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
-            near[c] = cv2.boxFilter(small, -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
+            near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
         near /= np.maximum(cnt, 1e-3)
         # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
         s_run = run.sum(axis=0) + 1.0
@@ -982,17 +1035,22 @@ class HorprasertBackground:
         if spread_changed:
             np.divide(np.float32(1.0), self._var, out=self._inv_var)
             np.sqrt(self._inv_var, out=self._inv_s)
-        mu, w, den = self._mu, self._w, self._inv_den
-        np.multiply(mu, self._inv_var, out=w)
-        np.multiply(mu[0], w[0], out=den)
-        den += mu[1] * w[1]
-        den += mu[2] * w[2]
+        mu, w, den, inv_var = self._mu, self._w, self._inv_den, self._inv_var
+        # every frame, after ``update``: OpenCV's float ops into the model's own buffers
+        mul, add = cv2.multiply, cv2.add
+        for c in range(3):
+            mul(mu[c], inv_var[c], dst=w[c])
+        mul(mu[0], w[0], dst=den)
+        t = mul(mu[1], w[1])
+        add(den, t, dst=den)
+        add(den, mul(mu[2], w[2], dst=t), dst=den)
         # A black background pixel has no brightness direction: 1/den -> 0 makes alpha 0 there
         # and all of the observed colour shows up as chromaticity distortion.
-        black = den <= 1e-6
-        np.divide(1.0, np.maximum(den, 1e-6, out=den), out=den)
-        if black.any():
-            den[black] = 0.0
+        black = cv2.compare(den, 1e-6, cv2.CMP_LE)
+        cv2.max(den, 1e-6, dst=den)
+        cv2.divide(1.0, den, dst=den)
+        if cv2.countNonZero(black):
+            den[black > 0] = 0.0
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
@@ -1017,20 +1075,24 @@ class HorprasertBackground:
         # S = sum_c I_c E_c / s_c^2, alpha = S / sum_c (E_c / s_c)^2 (eq. 5). Expanding the square
         # of eq. 6, CD^2 = sum_c ((I_c - alpha E_c) / s_c)^2 = sum_c I_c^2 / s_c^2 - alpha S: six
         # array passes fewer than forming the three differences.
-        s = planes[0] * w[0]
-        s += planes[1] * w[1]
-        s += planes[2] * w[2]
-        alpha = s * self._inv_den
-        cd2 = planes[0] * planes[0]
-        cd2 *= inv_var[0]
+        # OpenCV's float ops (the same IEEE products and sums as numpy's) into reused buffers:
+        # fewer whole-frame temporaries, which cost more than the arithmetic
+        mul, add = cv2.multiply, cv2.add
+        s = mul(planes[0], w[0])
+        t = mul(planes[1], w[1])
+        add(s, t, dst=s)
+        add(s, mul(planes[2], w[2], dst=t), dst=s)
+        alpha = mul(s, self._inv_den)
+        cd2 = mul(planes[0], planes[0])
+        mul(cd2, inv_var[0], dst=cd2)
         for c in (1, 2):
-            t = planes[c] * planes[c]
-            t *= inv_var[c]
-            cd2 += t
-        s *= alpha
-        cd2 -= s
+            mul(planes[c], planes[c], dst=t)
+            mul(t, inv_var[c], dst=t)
+            add(cd2, t, dst=cd2)
+        mul(s, alpha, dst=s)
+        cv2.subtract(cd2, s, dst=cd2)
         # float32 rounding of the difference can dip just below 0 where the colour matches exactly
-        np.maximum(cd2, 0.0, out=cd2)
+        cv2.max(cd2, 0.0, dst=cd2)
         return alpha, cd2, planes
 
     def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:

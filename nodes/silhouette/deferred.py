@@ -1,0 +1,75 @@
+"""A learning step run in a worker thread while the caller goes on, joined before the next one.
+
+A background model's update from frame t (blending it into the model, ViBe's sample updates)
+is not needed for frame t's labels, only for frame t + 1's. ``DeferredStep.submit`` runs it in a
+single worker thread and returns at once, so on two cores it overlaps the rest of the caller's
+work on frame t (clean-up, tracking, splines); ``join`` waits for it and re-raises its error.
+The owner joins before each new step and before any read of the state the step writes, so the
+results are those of running the steps in line. Before a fork every pending step is joined,
+and a child process starts its own worker.
+"""
+
+from __future__ import annotations
+
+import os
+import weakref
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
+
+_LIVE: weakref.WeakSet[DeferredStep] = weakref.WeakSet()
+
+
+class DeferredStep:
+    """One deferred call at a time in a worker thread (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Prefix of the worker thread's name.
+    """
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._pool: ThreadPoolExecutor | None = None
+        self._pid = -1
+        self._pending: Future | None = None
+        _LIVE.add(self)
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> None:
+        """Run ``fn(*args)`` in the worker, after the previous call has finished.
+
+        Parameters
+        ----------
+        fn : callable
+            The step; it must not touch anything the caller changes before the next ``join``.
+        *args : Any
+            Its arguments.
+        """
+        self.join()
+        if self._pool is None or self._pid != os.getpid():
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=self.name)
+            self._pid = os.getpid()
+        self._pending = self._pool.submit(fn, *args)
+
+    def join(self) -> None:
+        """Wait for the pending call, if any; re-raise its exception."""
+        if self._pending is not None:
+            pending, self._pending = self._pending, None
+            pending.result()
+
+    def __getstate__(self) -> dict[str, Any]:
+        self.join()
+        return {"name": self.name, "_pool": None, "_pid": -1, "_pending": None}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        _LIVE.add(self)
+
+
+def _join_all() -> None:
+    for step in list(_LIVE):
+        step.join()
+
+
+os.register_at_fork(before=_join_all)
