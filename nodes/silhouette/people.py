@@ -321,12 +321,19 @@ def fit_around_people(
     # The frames between are searched too, for someone the schedule's frames did not show: the
     # detector may find a still person on a frame or two only. Only those new boxes are kept (more
     # boxes of the people already found would only widen the holes in the room).
+    # Walkers need none of them (the median copes), so a new box is kept only for a still person.
     known = [b for boxes, _, _ in found.values() for b in boxes]
+    extra: dict[int, _Found] = {}
     for k in sorted(set(range(n)) - set(at)):
         boxes, scores, moved = _confirmed(stack, *det.detect(stack[k]))
         new = np.array([all(_iou(b, o) < 0.5 for o in known) for b in boxes], bool)
         if new.any():
-            found[k] = (boxes[new], scores[new], moved[new])
+            extra[k] = (boxes[new], scores[new], moved[new])
+    every = {**found, **extra}
+    for k, (boxes, scores, moved) in extra.items():
+        still = np.array([_still_person(every, k, *f) for f in zip(boxes, scores, moved)], bool)
+        if still.any():
+            found[k] = (boxes[still], scores[still], moved[still])
     near = [_boxes_for(stack, j, found, step) for j in range(n)]
     if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)
