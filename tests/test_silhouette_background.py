@@ -244,7 +244,7 @@ def test_dark_clothes_inside_a_body_are_foreground_cast_shadows_stay_shadows():
     assert class_fractions(on, person_mask(110.0) & ~band)[FOREGROUND] > 0.99
 
 
-@pytest.mark.parametrize("bad", [{"span_px": -1}, {"foot_fraction": 1.0}, {"foot_fraction": -0.1}])
+@pytest.mark.parametrize("bad", [{"span_px": -1}, {"foot_fraction": 1.0}, {"foot_fraction": -0.1}, {"edge_px": -1}])
 def test_body_shadow_config_rejects_bad_values(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         BodyShadowConfig(**bad)

@@ -32,16 +32,22 @@ class BodyShadowConfig:
     foot_fraction : float, default=0.2
         The lowest part of a region's foreground extent, as a fraction of its height, where
         shadows stay shadows (the feet touch their own cast shadow there); in [0, 1).
+    edge_px : int, default=0
+        Also take back the shadow pixels within this many pixels of foreground (a person's
+        blurred, darker rim), above the feet band too; 0: none.
     """
 
     span_px: int = 15
     foot_fraction: float = 0.2
+    edge_px: int = 0
 
     def __post_init__(self) -> None:
         if self.span_px < 0:
             raise ValueError(f"body shadow span_px must be >= 0 (0: off), got {self.span_px}")
         if not 0.0 <= self.foot_fraction < 1.0:
             raise ValueError(f"body shadow foot_fraction must be in [0, 1), got {self.foot_fraction}")
+        if self.edge_px < 0:
+            raise ValueError(f"body shadow edge_px must be >= 0 (0: none), got {self.edge_px}")
 
 
 def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndarray:
@@ -63,6 +69,9 @@ def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndar
         return labels
     fg = cv2.compare(labels, FOREGROUND, cv2.CMP_EQ)
     closed = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, np.ones((config.span_px, 1), np.uint8))
+    if config.edge_px:
+        side = 2 * config.edge_px + 1
+        cv2.max(closed, cv2.dilate(fg, np.ones((side, side), np.uint8)), dst=closed)
     cand = np.flatnonzero((labels.ravel() == SHADOW) & (closed.ravel() != 0))
     if cand.size == 0:
         return labels
@@ -78,7 +87,7 @@ def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndar
     np.minimum.at(top, fg_comp, fg_row)
     np.maximum.at(bottom, fg_comp, fg_row)
     c = comp_flat[cand]
-    # a candidate has foreground above and below, so its region has foreground: bottom >= top
+    # a candidate touches or is enclosed by foreground, so its region has some: bottom >= top
     above_feet = (bottom[c] - cand // w) > config.foot_fraction * (bottom[c] - top[c] + 1)
     if not above_feet.any():
         return labels
