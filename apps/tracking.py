@@ -153,7 +153,9 @@ def _track_frame(
             continue
         row["ids"][k] = person.id
         try:
-            r = trackers[side].update(frame, result.labels == person.id + 1)
+            other = next((p for p in result.people if p.side != side and p.side in SIDES), None)
+            towards = tuple(other.bbox) if other is not None else None
+            r = trackers[side].update(frame, result.labels == person.id + 1, towards)
         except PlacementError:  # one bad region is one bad frame: counted in the file, the run goes on
             row["not_placed"][k] = True
             continue

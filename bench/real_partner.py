@@ -10,6 +10,9 @@ partner is projected with the camera the tracking recorded. Figures:
   person (mid-hips on the floor, metres) lies in [0.5, 1.2] m;
 - ``partner_overlap``: share of frames with a partner whose projected box overlaps the observed
   person's reference box (MediaPipe keypoints of vis >= 0.5) by more than ``OVERLAP_IOU``;
+- ``partner_overlap_real``: for reference, the same share for the real second person's reference box
+  against the observed person's (on the same frames; where the two reference skeletons lie on one
+  person, ``reference_collapsed``, they are not counted as overlapping);
 - ``partner_in_picture``: share of frames with a partner of which some joint is inside the picture;
 - handshake clips (class 0, observed: the left person): at the moment the real hands meet (the
   frame where the two people's reference wrists are nearest), the pixel distance from the partner's
@@ -20,22 +23,39 @@ partner is projected with the camera the tracking recorded. Figures:
   other's shoulders and hips): the partner's ground distance from the observed person, its largest
   value in the second after that moment minus its value then (metres): ``push_back_m`` (median) and
   ``push_moves_back`` (share of clips where it grows by at least ``BACK_M``).
+
+The moment of the interaction is looked for only on frames where the two reference skeletons are
+two people (``real_silhouettes.reference_collapsed``): where both lie on one person, a wrist is
+"on the other's torso" by construction (8 of the 10 push clips had their moment there, often
+seconds after the push).
+
+Alone (``python bench/real_partner.py [--tracks DIR] [--clips all|N]``) it runs on the handshake
+and push clips of ``../shared/data/ut_interaction/set1``, tracking each clip as
+``bench/real_video.py`` does (``track_video``, the lockstep graph's configuration) unless ``DIR``
+holds its ``CLIP-track.npz`` already (tracks it writes go there too); the last stdout line is one
+JSON object: the figures above for the report split (clips whose first number is odd) at the
+top level, the tune split (even) under ``tune``, per-clip rows under ``per_clip``.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import sys
+import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from real_silhouettes import reference_collapsed  # bench/ is on sys.path as a script
 
 from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
 from counterpart.nodes.responder.reach import reach
-from counterpart.nodes.responder.staging import Stage
+from counterpart.nodes.responder.staging import Reach, Stage, silhouette_reach, stature
 
 VIS = 0.5
 HOLD_FRAMES = 15  # the responder node's default hold_frames
@@ -72,6 +92,9 @@ def contact(kp: np.ndarray, vis: np.ndarray, h: np.ndarray, label: int) -> tuple
     (the pusher) is observed. None when the reference never shows the joints needed.
     """
     seen = (vis >= VIS) & np.isfinite(kp).all(axis=-1)
+    # both reference skeletons on one person: there the reference cannot say where the people are
+    # (nor, their wrists on each other's torso by construction, when they touch)
+    seen &= ~np.array([reference_collapsed(kp[t], vis[t]) for t in range(len(kp))], dtype=bool)[:, None, None]
     # frames without a reference height (a joint missing) cannot say how near the people are
     scale = np.where(np.isfinite(h).all(axis=1), np.maximum(h.mean(axis=1), 1.0), np.nan)
     if label == HANDSHAKE:
@@ -89,9 +112,40 @@ def contact(kp: np.ndarray, vis: np.ndarray, h: np.ndarray, label: int) -> tuple
     return None if best is None else best[1:]
 
 
-def staged_partner(track_npz: Path, side: int) -> tuple[np.ndarray, np.ndarray, Camera, float]:
+#: frames the silhouette background is learnt on, as the lockstep graph and bench/real_video.py do
+TRAIN_FRAMES = 20
+SIDES = ("left", "right")
+
+
+def silhouette_people(clip: Path) -> list[list[Any]]:
+    """The silhouette node's people on every frame of ``clip`` (``iter_video``, default extractor,
+    the background learnt on ``TRAIN_FRAMES`` frames as the tracker's input is made).
+    """
+    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
+
+    return [list(result.people) for _, result in iter_video(clip, SilhouetteExtractor(), None, TRAIN_FRAMES)]
+
+
+def observed_reach(people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float) -> Reach | None:
+    """What the observed person's silhouette says of their reach towards the partner
+    (``silhouette_reach``), as the responder node finds it: of the silhouettes on their side, the
+    one with the tracked person's id, else the first; None without one.
+    """
+    mine = [q for q in people if q.side == side]
+    shape = next((q for q in mine if q.id == person_id), mine[0] if mine else None)
+    if shape is None or direction == 0.0:
+        return None
+    return silhouette_reach(shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl)
+
+
+def staged_partner(
+    track_npz: Path, side: int, people: list[list[Any]] | None = None
+) -> tuple[np.ndarray, np.ndarray, Camera, float]:
     """The partner the responder node would draw for the tracked ``side`` of a ``track_video`` file.
 
+    As the node: the other tracked side is the real second person (``other``), the observed
+    side's name gives the side to stand on, and the observed person's silhouette on each frame
+    (``people``, from ``silhouette_people``; None: none) their reach and offered hand.
     Returns partner (T, 14, 3) world metres (NaN: none), observed (T, 14, 3) (NaN: lost or
     missing), the camera of the tracking, and the clip's fps.
     """
@@ -99,18 +153,29 @@ def staged_partner(track_npz: Path, side: int) -> tuple[np.ndarray, np.ndarray, 
     camera = Camera.from_dict(json.loads(str(d["camera"])))
     fps = float(d["fps"])
     joints, lost = d["joints"][:, side].astype(np.float64), d["lost"][:, side]
+    others = np.where(d["lost"][:, 1 - side, None, None], np.nan, d["joints"][:, 1 - side].astype(np.float64))
+    ids = d["ids"][:, side]
     model, stage = load_default("dual-hmm"), Stage()
     model.reset()
     partner = np.full_like(joints, np.nan)
     observed = np.where(lost[:, None, None], np.nan, joints)
+    towards = 1.0 if side == 0 else -1.0  # the left person's partner stands to their right (world +X)
     last = -(10**9)
     for t in range(len(joints)):
         if lost[t] or not np.isfinite(joints[t]).all():
             if t - last <= HOLD_FRAMES:
                 partner[t] = partner[last]
             continue
-        staged = stage(joints[t], model.step(joints[t]), (t - last) / fps if last >= 0 else 1.0 / fps)
-        partner[t] = reach(joints[t], staged)[0]
+        other = others[t] if np.isfinite(others[t]).all() else None
+        direction = stage.side or towards
+        silhouette = (
+            observed_reach(people[t], int(ids[t]), SIDES[side], joints[t], direction)
+            if people is not None and t < len(people)
+            else None
+        )
+        dt = (t - last) / fps if last >= 0 else 1.0 / fps
+        staged = stage(joints[t], model.step(joints[t]), dt, other=other, side=towards, silhouette=silhouette)
+        partner[t] = reach(joints[t], staged, offered=stage.offered_)[0]
         last = t
     return partner, observed, camera, fps
 
@@ -128,15 +193,24 @@ def _iou(a: np.ndarray, b: np.ndarray) -> float:
     return inter / union if union > 0 else 0.0
 
 
-def partner_clip(clip: Path, track_npz: Path, kp: np.ndarray, vis: np.ndarray, h: np.ndarray) -> dict[str, Any]:
+def partner_clip(
+    clip: Path,
+    track_npz: Path,
+    kp: np.ndarray,
+    vis: np.ndarray,
+    h: np.ndarray,
+    people: list[list[Any]] | None = None,
+) -> dict[str, Any]:
     """The partner's figures on one clip (counts, to pool; and the clip's interaction figure).
 
-    kp (T, 2, 14, 2), vis (T, 2, 14), h (T, 2): the reference over the frames scored.
+    kp (T, 2, 14, 2), vis (T, 2, 14), h (T, 2): the reference over the frames scored; people:
+    the silhouette node's people per frame (None: found here with ``silhouette_people``).
     """
     label = interaction_class(clip)
     moment = contact(kp, vis, h, label) if label in (HANDSHAKE, PUSH) else None
     side = moment[1] if moment is not None and label == PUSH else 0
-    partner, observed, camera, fps = staged_partner(track_npz, side)
+    people = silhouette_people(clip) if people is None else people
+    partner, observed, camera, fps = staged_partner(track_npz, side, people)
     n = min(len(partner), len(kp))
     partner, observed = partner[:n], observed[:n]
     has = np.isfinite(partner).all(axis=(1, 2))
@@ -145,17 +219,25 @@ def partner_clip(clip: Path, track_npz: Path, kp: np.ndarray, vis: np.ndarray, h
     if both.any():
         gap[both] = np.linalg.norm((actor_frame(partner[both])[0] - actor_frame(observed[both])[0])[:, [0, 2]], axis=1)
     uv = camera.project(np.where(has[:, None, None], partner, 0.0))
-    overlap = in_picture = 0
+    overlap = in_picture = real_overlap = 0
     for t in np.flatnonzero(has):
         in_picture += bool(camera.in_image(uv[t]).any())
         ref = _box(np.where((vis[t, side] >= VIS)[:, None], kp[t, side], np.nan))
         mine = _box(uv[t])
+        real = _box(np.where((vis[t, 1 - side] >= VIS)[:, None], kp[t, 1 - side], np.nan))
         overlap += ref is not None and mine is not None and _iou(ref, mine) > OVERLAP_IOU
+        real_overlap += (
+            ref is not None
+            and real is not None
+            and _iou(ref, real) > OVERLAP_IOU
+            and not reference_collapsed(kp[t], vis[t])
+        )
     out: dict[str, Any] = {
         "frames": int(has.sum()),
         "gap_n": int(both.sum()),
         "gap_ok": int(((gap >= MIN_M - 1e-6) & (gap <= MAX_M + 1e-6)).sum()),
         "overlap": int(overlap),
+        "real_overlap": int(real_overlap),
         "in_picture": int(in_picture),
         "label": label,
     }
@@ -181,6 +263,7 @@ def partner_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "partner_distance_ok": round(sum(r["gap_ok"] for r in rows) / max(sum(r["gap_n"] for r in rows), 1), 4),
         "partner_overlap": round(sum(r["overlap"] for r in rows) / max(frames, 1), 4),
+        "partner_overlap_real": round(sum(r.get("real_overlap", 0) for r in rows) / max(frames, 1), 4),
         "partner_in_picture": round(sum(r["in_picture"] for r in rows) / max(frames, 1), 4),
         "handshake_clips": len(hands),
         "handshake_hand_h": round(float(np.median(hands)), 3) if hands else None,
@@ -189,3 +272,62 @@ def partner_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "push_back_m": round(float(np.nanmedian(backs)), 3) if backs and np.isfinite(backs).any() else None,
         "push_moves_back": round(float(np.mean([x >= BACK_M for x in backs])), 3) if backs else None,
     }
+
+
+def main() -> None:
+    """The partner's figures on the handshake and push clips (see the module); one JSON line."""
+    import real_video as rv  # bench/ is on sys.path as a script; imported here, it imports this module
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--tracks", type=Path, default=None, help="folder of track_video files CLIP-track.npz to reuse")
+    ap.add_argument("--clips", default="all", help="'all' or how many of the handshake and push clips")
+    args = ap.parse_args()
+    if not rv.CLIPS.is_dir():
+        sys.exit(f"bench/real_partner.py: {rv.CLIPS} not found (the shared data, see ../shared/data/README.md)")
+    clips = [c for c in rv.clip_list("all") if interaction_class(c) in (HANDSHAKE, PUSH)]
+    clips = clips if args.clips == "all" else clips[: int(args.clips)]
+    work = args.tracks or Path(tempfile.mkdtemp(prefix="cp-partner-"))
+    work.mkdir(parents=True, exist_ok=True)
+    rows: dict[str, dict[str, Any]] = {}
+    for clip in clips:
+        t0 = time.monotonic()
+        track = work / f"{clip.stem}-track.npz"
+        if not track.exists():
+            from counterpart.apps.tracking import track_video
+            from counterpart.nodes.tracker.prior import resolve_prior
+
+            track_video(
+                clip,
+                track,
+                people=rv.SIDES,
+                camera=None,
+                prior=resolve_prior("default"),
+                layers=rv.LAYERS,
+                particles=rv.PARTICLES,
+                train_frames=rv.TRAIN_FRAMES,
+            )
+        ref = np.load(rv.KEYPOINTS / f"{clip.stem}.npz")
+        n = min(len(np.load(track)["joints"]), len(ref["kp"]))
+        kp, vis = ref["kp"][:n].astype(np.float64), ref["vis"][:n]
+        rows[clip.stem] = partner_clip(clip, track, kp, vis, rv.reference_height(kp))
+        print(f"partner {clip.stem}: {rows[clip.stem]} ({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
+    splits = {s: [rows[c.stem] for c in clips if rv.split_of(c) == s] for s in ("report", "tune")}
+    result: dict[str, Any] = {
+        "split": "report: clips whose first number is odd (top level); tune: even",
+        **(partner_figures(splits["report"]) if splits["report"] else {}),
+        "tune": partner_figures(splits["tune"]) if splits["tune"] else None,
+        "per_clip": {  # NaN / inf (no figure: the person lost at that moment) as null
+            k: {
+                f: r[f] if np.isfinite(r[f]) else None
+                for f in ("label", "hand_h", "back_m", "overlap", "frames")
+                if f in r
+            }
+            for k, r in rows.items()
+        },
+        "tracks": str(work),
+    }
+    print(json.dumps(result))
+
+
+if __name__ == "__main__":
+    main()

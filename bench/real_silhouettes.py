@@ -32,6 +32,9 @@ least ``MIN_VISIBLE`` reference keypoints of visibility >= 0.5 on that frame:
 * ``extra_people``: mean number of reported people per frame that hold the keypoints of neither
   scored person (ghosts, fragments, passers-by: the clips have other people walking at their edges
   now and then, so it is not 0 even for a perfect method);
+* ``keypoint_coverage_person``: the same for each reference person on their own (person 0, 1;
+  None where never scored); ``person_clips_covered``: the share of (clip, person) pairs scored
+  whose coverage is at least ``PERSON_COVERAGE`` (the issue asks it of each person);
 * ``fit_s``: seconds per ``fit_background`` call; ``fps``: frames per second of ``process``.
 
 Where the misses are: ``misses`` counts the missed person-frames by cause (``miss_cause``):
@@ -177,6 +180,7 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
         lab[inside_img] = labels[xy[inside_img, 1], xy[inside_img, 0]]
         n = len(xy)
         out["kp_total"] += n
+        out[f"kp_total_{k}"] = n
         counts = np.bincount(lab, minlength=1)
         counts[0] = 0
         # their region for coverage: the one with their side that holds most of their keypoints
@@ -184,6 +188,7 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
         if own:
             r_own = max(own, key=lambda r: counts[r])
             out["kp_inside"] += int(counts[r_own])
+            out[f"kp_inside_{k}"] = int(counts[r_own])
         best = int(np.argmax(counts))
         found = best > 0 and counts[best] >= 0.5 * n and side_of.get(best) == SIDES[k] and best not in chosen
         if not found:
@@ -232,12 +237,29 @@ def run_clip(path: Path, ours: bool, train_frames: int) -> dict[str, Any]:
     return tot
 
 
+#: the issue's bar for each person's keypoint coverage (``person_clips_covered``)
+PERSON_COVERAGE = 0.9
+
+
+def _person_coverage(counts: dict[str, Any], k: int) -> float | None:
+    """Share of reference person k's visible keypoints inside their own region, from summed
+    counts; None where they were never scored.
+    """
+    n = counts.get(f"kp_total_{k}", 0)
+    return round(counts.get(f"kp_inside_{k}", 0) / n, 4) if n else None
+
+
 def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     s = {k: sum(r.get(k, 0) for r in rows) for k in set().union(*rows)}
+    # each person of each clip on their own (the issue's "each person's keypoints")
+    per_person = [_person_coverage(r, k) for r in rows for k in range(2)]
+    covered = [c >= PERSON_COVERAGE for c in per_person if c is not None]
     ordered = s["scored"] - s["reversed"]
     return {
         "people_found": round(s["found"] / max(s["scored"], 1), 4),
         "keypoint_coverage": round(s["kp_inside"] / max(s["kp_total"], 1), 4),
+        "keypoint_coverage_person": [_person_coverage(s, k) for k in range(2)],
+        "person_clips_covered": round(float(np.mean(covered)), 4) if covered else None,
         "extra_people": round((s["reported"] - s["matched"]) / max(s["scored"], 1), 3),
         "reference_collapsed": round(s["collapsed"] / max(s["collapsed"] + s["scored"], 1), 3),
         "reference_reversed": round(s["reversed"] / max(s["scored"], 1), 4),
@@ -286,7 +308,10 @@ def main(argv: list[str] | None = None) -> int:
                 rows[m].append(r)
                 line[m] = summarise([r])
             report["clips"][p.stem] = {
-                m: {k: line[m][k] for k in ("people_found", "keypoint_coverage", "extra_people", "misses")}
+                m: {
+                    k: line[m][k]
+                    for k in ("people_found", "keypoint_coverage", "keypoint_coverage_person", "extra_people", "misses")
+                }
                 for m in methods
             }
             print(p.stem, json.dumps(report["clips"][p.stem]), flush=True)
@@ -300,6 +325,7 @@ def main(argv: list[str] | None = None) -> int:
             "extra_people",
             "people_found_reference_ordered",
             "reference_reversed",
+            "person_clips_covered",
             "misses",
             "fps",
             "fit_s",

@@ -47,7 +47,8 @@ person 0 the left one at frame 0) on every frame the video decodes:
   ``pck_details`` per split also gives the figures with the two sides matched to the reference
   people per frame by the smaller mean pixel distance (people and the reference's crops can swap
   when they touch), per clip figures, the template, and the seconds per clip of the tracking and
-  of the silhouette pass (``track_s``, ``box_s``).
+  of the silhouette pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20,
+  pck10_box, pck20_box, joints scored].
 
 Camera calibration from the people (``--calib-seeds``, default 50; 0 skips it): ``calib_height_err``,
 ``calib_tilt_err_deg``, ``calib_focal_err`` (medians of the absolute errors) and ``calib_within``
@@ -59,7 +60,7 @@ default camera's, the true head/foot points', the share the calibration node wou
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
-[--pck-clips all|N] [--no-pck]``. Last stdout line: one JSON object.
+[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-demo]``. Last stdout line: one JSON object.
 """
 
 from __future__ import annotations
@@ -72,6 +73,8 @@ import sys
 import tempfile
 import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -87,7 +90,7 @@ from real_silhouettes import VIS, reference_collapsed
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import neutral_pose
-from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX
+from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_JOINTS
 from counterpart.nodes.responder.frames import actor_frame
 
 REPO = Path(__file__).resolve().parents[1]
@@ -343,18 +346,37 @@ def pck_figures(rows: list[dict[str, Any]], template: np.ndarray, per_frame: boo
     return out
 
 
-def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
-    """The tracking-accuracy part: the top-level figures (report split), ``tune`` and ``pck_details``."""
+def pck_by_joint(rows: list[dict[str, Any]], template: np.ndarray) -> dict[str, list[float]]:
+    """Per joint of the reference, pooled over the clips' rows (``pck_clip``): [pck10, pck20,
+    pck10_box, pck20_box, joints scored], as ``pck_figures`` defines them (sides as tracked).
+    """
+    n = np.zeros(N_JOINTS)
+    hits = np.zeros((4, N_JOINTS))
+    for r in rows:
+        for i, e in enumerate((r["est"], template_pixels(template, r["boxes"]))):
+            d = np.linalg.norm(e - r["kp"], axis=-1)
+            for k, a in enumerate(ALPHAS):
+                hits[2 * i + k] += (r["scored"] & (d < a * r["h"][..., None])).sum(axis=(0, 1))
+        n += r["scored"].sum(axis=(0, 1))
+    return {name: [*np.round(hits[:, j] / max(n[j], 1), 3).tolist(), int(n[j])] for j, name in enumerate(JOINTS)}
+
+
+def run_pck(clips: list[Path], work: Path, jobs: int = 1) -> dict[str, Any]:
+    """The tracking-accuracy part: the top-level figures (report split), ``tune`` and ``pck_details``;
+    ``jobs`` clips tracked at once in worker processes (each clip's run is seeded: the figures
+    do not depend on it).
+    """
     rows: dict[str, dict[str, Any]] = {}
-    for clip in clips:
-        rows[clip.stem] = pck_clip(clip, work)
-        r = rows[clip.stem]
-        print(
-            f"pck {clip.stem}: track {r['track_s']:.1f} s, boxes {r['box_s']:.1f} s, "
-            f"{r['collapsed']}/{r['frames']} frames excluded",
-            file=sys.stderr,
-            flush=True,
-        )
+    with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
+        done = pool.map(pck_clip, clips, [work] * len(clips)) if pool else (pck_clip(c, work) for c in clips)
+        for clip, r in zip(clips, done):
+            rows[clip.stem] = r
+            print(
+                f"pck {clip.stem}: track {r['track_s']:.1f} s, boxes {r['box_s']:.1f} s, "
+                f"{r['collapsed']}/{r['frames']} frames excluded",
+                file=sys.stderr,
+                flush=True,
+            )
     splits = {s: [rows[c.stem] for c in clips if split_of(c) == s] for s in ("tune", "report")}
     # learnt on the tune clips only, so that the report split's baseline has not seen its clips
     learn = splits["tune"] or list(rows.values())
@@ -391,7 +413,10 @@ def run_pck(clips: list[Path], work: Path) -> dict[str, Any]:
             "pck_clips": len(split_rows),
             **partner_figures([r["partner"] for r in split_rows]),
         }
-        details[split] = {"per_frame_matching": pck_figures(split_rows, template, True)}
+        details[split] = {
+            "per_frame_matching": pck_figures(split_rows, template, True),
+            "by_joint": pck_by_joint(split_rows, template),
+        }
         if split == "report":
             result.update(figs)
         else:
@@ -490,6 +515,7 @@ def main() -> None:
         help="only clips of these interaction classes in the tracking part, e.g. '0,5' (handshake, push)",
     )
     ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
+    ap.add_argument("--jobs", type=int, default=1, help="clips of the tracking part tracked at once (processes)")
     ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
     ap.add_argument(
         "--calib-seeds",
@@ -507,7 +533,7 @@ def main() -> None:
         pck = clip_list(args.pck_clips or args.clips)
         if args.pck_classes:
             pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
-        result.update(run_pck(pck, work))
+        result.update(run_pck(pck, work, args.jobs))
     if args.calib_seeds:  # the camera from the people: simulator truth, and the spread on these clips
         from self_calibration import real_figures, sim_figures
 

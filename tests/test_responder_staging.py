@@ -10,7 +10,7 @@ import pytest
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
-from counterpart.nodes.responder.staging import Stage, StageConfig
+from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 
@@ -48,13 +48,34 @@ def test_a_partner_on_top_of_the_person_steps_out_along_the_persons_facing() -> 
 def test_the_partner_walks_round_the_person_instead_of_jumping() -> None:
     stage = Stage(StageConfig(max_speed_m_s=2.5))
     obs = person(0.0, 2.0)
-    stage(obs, person(0.8, 2.0), 0.04)
-    # the model flips the partner to the other side of the person: it moves 0.1 m per 1/25 s
-    offsets = [ground(stage(obs, person(-0.8, 2.0), 0.04)) - ground(obs) for _ in range(30)]
+    stage(obs, person(0.8, 2.0), 0.04, other=person(1.0, 2.0))
+    # the real second person goes round to the other side of the person: it moves 0.1 m per 1/25 s
+    offsets = [ground(stage(obs, person(0.8, 2.0), 0.04, other=person(-1.0, 2.0))) - ground(obs) for _ in range(30)]
     steps = np.linalg.norm(np.diff([[0.8, 0.0], *offsets], axis=0), axis=1)
     assert steps.max() <= 0.1 + 1e-9
     assert all(0.5 - 1e-9 <= np.hypot(*o) <= 1.2 + 1e-9 for o in offsets)
     assert offsets[-1] == pytest.approx([-0.8, 0.0], abs=1e-6)
+
+
+def test_the_partner_keeps_its_side_when_the_model_flips_or_the_other_person_wavers() -> None:
+    stage = Stage()
+    obs = person(0.0, 2.0)
+    stage(obs, person(0.8, 2.0), 0.04, other=person(1.0, 2.0))
+    out = [ground(stage(obs, person(-0.8, 2.0), 0.04, other=person(-0.1, 2.0))) - ground(obs) for _ in range(20)]
+    assert all(o[0] == pytest.approx(0.8) for o in out)  # 0.1 m across: within side_margin_m, no change
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_the_partner_stands_beside_the_person_across_the_view_not_in_front_or_behind(side: float) -> None:
+    # the model puts the partner 0.9 m in front of the person (towards the camera, +Z): in the
+    # picture it would cover them; the stage puts it at their depth, on the side given
+    obs = person(0.3, 1.0)
+    out = Stage()(obs, person(0.3, 1.9, np.pi), 0.04, side=side)
+    d = ground(out) - ground(obs)
+    assert d == pytest.approx([side * 0.9, 0.0], abs=1e-6)
+    # with a second person tracked, their side wins over the one given
+    out = Stage()(obs, person(0.3, 1.9, np.pi), 0.04, other=person(0.3 - side, 1.4), side=side)
+    assert (ground(out) - ground(obs)) == pytest.approx([-side * 0.9, 0.0], abs=1e-6)
 
 
 def test_the_partner_stays_beside_a_person_whose_estimate_jumps() -> None:
@@ -136,3 +157,76 @@ def test_the_partner_steps_back_when_a_hand_pushes_its_chest_and_then_returns() 
     assert max(gaps) > 0.9 and np.all(np.diff(gaps[:3]) > 0) and max(np.diff([0.7, *gaps])) <= 0.1 + 1e-9
     later = [gap(obs, stage(obs, par, 0.04)) for _ in range(100)]
     assert later[-1] == pytest.approx(0.7, abs=0.01)  # the push fades: back where the model puts it
+
+
+def outline(x0: float, top: float, height: float, arm_at: float | None, arm_px: float) -> np.ndarray:
+    """Control points (n, 2) of a standing person's outline facing image right: a 0.25 h wide body
+    from ``x0``, a stride's foot 0.2 h ahead at the floor, and an arm held out ``arm_px`` beyond the
+    body at ``arm_at`` of the height above the floor (None: arms down).
+    """
+    w, floor = 0.25 * height, top + height
+    pts = [[x0, top], [x0 + w, top], [x0 + w, top + 0.5 * height], [x0 + w, floor - 0.1 * height]]
+    pts += [[x0 + w + 0.2 * height, floor], [x0, floor], [x0, top + 0.5 * height]]
+    if arm_at is not None:
+        pts.insert(2, [x0 + w + arm_px, floor - arm_at * height])
+    return np.array(pts, np.float64)
+
+
+def test_the_silhouette_says_how_far_and_how_high_a_hand_is_held_out() -> None:
+    # a 1.7 m person 200 px tall; centroid at the body's middle; the arm 80 px beyond the body at 0.55 h
+    ctrl = outline(100.0, 50.0, 200.0, 0.55, 80.0)
+    box = (100, 50, int(ctrl[:, 0].max() - 100), 200)
+    reach_m, height_m, centre_m = silhouette_reach(box, (125.0, 150.0), 1.0, 1.7, ctrl)
+    assert reach_m == pytest.approx((25 + 80) / 200 * 1.7) and height_m == pytest.approx(0.55 * 1.7)
+    assert centre_m == pytest.approx(125 / 200 * 1.7)
+    # arms down: the stride's foot reaches further than the body but is no reach; the body's edge is
+    down = outline(100.0, 50.0, 200.0, None, 0.0)
+    reach_m = silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7, down).extent_m
+    assert reach_m == pytest.approx(25 / 200 * 1.7)
+    # towards image left: the back of the body; without an outline, the box's edge and no height
+    assert silhouette_reach(box, (125.0, 150.0), -1.0, 1.7, ctrl).extent_m == pytest.approx(25 / 200 * 1.7)
+    assert silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7).height_m is None
+
+
+def test_a_hand_held_out_is_offered_and_with_the_body_advancing_is_a_push() -> None:
+    stage = Stage()
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)  # the tracked arms stay down
+    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.2, None, 0.0))
+    assert stage.offered_ is None and stage.pushes == 0
+    for _ in range(10):  # a hand held out, the body still: offered where the silhouette says
+        stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
+    assert stage.pushes == 0
+    np.testing.assert_allclose(stage.offered_, [0.6, 1.0, 2.0], atol=1e-6)
+    # a silhouette reaching further (merged with someone else's): met 0.7 of the way at most
+    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.85, 1.0, 0.0))
+    assert stage.pushes == 0
+    np.testing.assert_allclose(stage.offered_, [0.63, 1.0, 2.0], atol=1e-6)
+    # the same hand with the body advancing at 1 m/s (its silhouette's centre 4 cm a frame): a push
+    gaps = []
+    for k in range(1, 11):
+        gaps.append(
+            float(
+                np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k))) - ground(obs)))
+            )
+        )
+    assert stage.pushes == 1 and stage.offered_ is None  # no hand to take from someone pushing it
+    assert gaps[-1] > 1.1 and max(np.diff([0.9, *gaps])) <= 0.1 + 1e-9
+    # a region merging (its centre jumping 0.5 m in a frame) is no advance
+    calm = Stage()
+    for k in range(10):
+        calm(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.5 * (k % 2)))
+    assert calm.pushes == 0
+
+
+def test_the_partner_takes_a_hand_held_out_within_its_reach_and_not_one_out_of_it() -> None:
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
+    hand = np.array([0.6, 1.15, 2.0])
+    met, pull = reach(obs, par, offered=hand)
+    assert pull == 1.0
+    assert min(np.linalg.norm(met[[4, 7]] - hand, axis=1)) < 1e-5
+    arm = [4, 3] if np.linalg.norm(met[4] - hand) < 1e-5 else [7, 6]  # its bones are kept
+    np.testing.assert_allclose(
+        np.linalg.norm(met[arm[0]] - met[arm[1]]), np.linalg.norm(par[arm[0]] - par[arm[1]]), atol=1e-6
+    )
+    far, pull = reach(obs, par, offered=np.array([-1.5, 1.0, 2.0]))  # 2.4 m away: the model's hands as they are
+    assert pull == 0.0 and np.array_equal(far, par)

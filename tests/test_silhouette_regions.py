@@ -313,3 +313,76 @@ def test_legs_apart_from_the_body_stay_with_the_person():
         assert [p.id for p in people] == [0], k
         if k >= 10:
             assert labels[170, cx] == 1 and people[0].bbox[3] >= 130
+
+
+def test_a_track_gone_since_last_frame_takes_no_share_of_who_walks_there():
+    """A passer-by's feet at the top edge are tracked for a while, then leave the view; a
+    person who walks through where they stood keeps their whole region (UT-Interaction 26_5_2:
+    the stale track took the person's shoulder in every 'merge' that followed, as a third id).
+    """
+    tracker = PersonTracker(min_area=50)
+    for k in range(32):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 90 + 5 * k, 150)  # their head reaches the feet's place at k = 21
+        if k < 20:
+            cv2.rectangle(m, (200, 30), (222, 58), 1, -1)  # the passer-by's feet, then gone
+        labels, people = tracker.update(m.astype(bool))
+        assert people[0].id == 0 and not people[0].merged, k
+        if k >= 20:
+            assert [p.id for p in people] == [0] and people[0].area == int(m.sum()), k
+
+
+def test_a_hand_torn_off_inside_a_persons_box_is_theirs():
+    """A small region inside a person's outline box (a hand or the top of a raised arm cut off
+    by the background model) is part of them, not a new person.
+    """
+    tracker = PersonTracker(min_area=30)
+    for k in range(12):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 150, 150, arm=45)
+        if k >= 4:
+            cv2.rectangle(m, (185, 60), (193, 75), 1, -1)  # a raised hand above the arm
+        labels, people = tracker.update(m.astype(bool))
+        assert [p.id for p in people] == [0], k
+        assert labels[68, 189] == (1 if k >= 4 else 0), k
+
+
+def test_head_and_shoulders_back_above_the_legs_join_the_person():
+    """After a push a person's upper body was given to the other; when the two part it comes
+    out as a region above their legs, and again when it grows out of the region: both times it
+    is theirs, not a new person (UT-Interaction 35_7_0).
+    """
+    tracker = PersonTracker(min_area=50)
+    for k in range(40):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 100, 150)
+        if 10 <= k < 25:
+            m[:95] = 0  # only the legs are seen: the rows 40-95 went to someone else
+        if k == 25:
+            m[95:101] = 0  # the upper body comes back apart from the legs first
+        labels, people = tracker.update(m.astype(bool))
+        assert [p.id for p in people] == [0], k
+        assert labels[60, 100] == (0 if 10 <= k < 25 else 1), k
+
+
+def test_a_leg_stepping_out_is_not_a_new_person_a_child_beside_them_is():
+    """A short region on a person's feet row beside them (a leg stepping back in a push, cut
+    off from the body) is theirs: someone as far from the camera would be as tall. A person
+    half as tall standing there is a new person.
+    """
+    tracker = PersonTracker(min_area=50)
+    for k in range(40):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 150, 160)
+        if k >= 30:
+            cv2.rectangle(m, (100, 140), (112, 190), 1, -1)  # a leg, 50 px of a 160 px person
+        labels, people = tracker.update(m.astype(bool))
+        assert [p.id for p in people] == [0], k
+    child = PersonTracker(min_area=50)
+    for k in range(40):
+        m = np.zeros((H, W), np.uint8)
+        draw_person(m, 150, 160)
+        if k >= 30:
+            draw_person(m, 90, 80)
+        _, people = child.update(m.astype(bool))
+    assert [p.id for p in people] == [0, 1]

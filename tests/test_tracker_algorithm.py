@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -11,7 +12,7 @@ from counterpart.body.pose import DOF, LOWER, UPPER, YAW, neutral_pose
 from counterpart.body.raster import cone_interior_points, cone_outline_points, rasterise_silhouettes, render_edge_maps
 from counterpart.body.skeleton import DEFAULT_DIMS
 from counterpart.nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
-from counterpart.nodes.tracker.init import bbox_from_mask, place_from_bbox
+from counterpart.nodes.tracker.init import bbox_from_mask, facing_yaw, place_from_bbox
 from counterpart.nodes.tracker.likelihood import ConeLikelihood, MultiViewLikelihood, make_observation
 from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig, track_sequence
 from counterpart.sim.scenarios import make_scenario
@@ -212,3 +213,62 @@ def test_ess_is_that_of_the_final_weighted_set_not_fixed_by_the_annealing() -> N
     est = peaked.step(lambda X: -1e4 * np.sum((X - target) ** 2, axis=1))
     assert 1.0 <= est.ess < 3.0  # one particle holds nearly all the mass
     assert est.survival[-1] * 64 == pytest.approx(32.0, rel=0.05)  # while annealing kept half alive
+
+
+def _loose_clothing(masks: np.ndarray, seed: int = 0) -> np.ndarray:
+    """Masks as real footage gives them: the person's outline 10 px wider all round than the body
+    model's (loose clothing, a coat) with blotches of clothing the colour of the background
+    (8 x 8 px holes over a quarter of the frame).
+    """
+    rng = np.random.default_rng(seed)
+    out = []
+    for m in masks:
+        holes = rng.random((m.shape[0] // 8 + 1, m.shape[1] // 8 + 1)) < 0.25
+        holes = np.kron(holes, np.ones((8, 8), bool))[: m.shape[0], : m.shape[1]]
+        out.append(cv2.dilate(m.astype(np.uint8), np.ones((21, 21), np.uint8)).astype(bool) & ~holes)
+    return np.array(out)
+
+
+def test_loose_clothing_does_not_lose_a_track_that_fits() -> None:
+    # the outline the model draws misses the wider one of the mask (edge cost high, as on the real
+    # clips) while the body stays on the person: the track must go on
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:12]
+    masks = _loose_clothing(rasterise_silhouettes(P, sc.dims_a, CAM))
+    image = np.full(masks.shape[1:] + (3,), 128, np.uint8)  # no contrast: the mask's outline is the only edge
+    tr = Tracker(CAM, "left", SMALL, seed=0)
+    results = [tr.update(image, m) for m in masks]
+    truth = forward_kinematics(P, sc.dims_a)
+    err = np.array([np.linalg.norm(r.joints - t, axis=-1).mean() for r, t in zip(results, truth)])
+    costs = np.array([r.cost for r in results])
+    # three frames in a row above 0.9 in the full cost S_r + S_e + S_c: what dropped such tracks
+    run = np.convolve(costs > 0.9, np.ones(3), "valid").max()
+    assert run == 3, f"full costs {costs.round(2)}: the case must hold the full cost above 0.9"
+    assert not any(r.lost for r in results), f"lost with costs {costs.round(2)}"
+    assert err.max() < 0.35, f"joint errors {err.round(3)} m"
+
+
+def test_a_track_off_its_mask_is_lost_within_patience() -> None:
+    # the mask jumps to the mirror place across the frame (about 1 m away): the body lies off it
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:8]
+    masks = rasterise_silhouettes(P, sc.dims_a, CAM)
+    masks[4:] = masks[4:, :, ::-1]
+    tr = Tracker(CAM, "left", SMALL, seed=0)
+    lost = [tr.update(None, m).lost for m in masks]
+    assert lost[:4] == [False] * 4 and any(lost[4:7]), lost
+
+
+def test_a_track_starts_facing_the_other_person() -> None:
+    # two people at different depths: the nearer (left) one faces the farther one, half away
+    # from the camera; the other's box gives that heading, which the silhouette alone leaves
+    # open between it and its mirror image (half towards the camera)
+    a = neutral_pose(DEFAULT_DIMS, x=-0.5, z=0.4)
+    b = neutral_pose(DEFAULT_DIMS, x=0.5, z=-0.4)
+    box_a, box_b = (bbox_from_mask(rasterise_silhouettes(p[None], DEFAULT_DIMS, CAM)[0]) for p in (a, b))
+    g_a, _ = place_from_bbox(box_a, CAM)
+    assert abs(facing_yaw(g_a, box_b, CAM, np.pi / 2) - np.arctan2(1.0, -0.8)) < 0.1
+    # and a track started with that box searches around it
+    tr = Tracker(CAM, "left", TINY, seed=0)
+    r = tr.update(None, rasterise_silhouettes(a[None], DEFAULT_DIMS, CAM)[0], towards=box_b)
+    assert abs(r.pose[YAW] - np.arctan2(1.0, -0.8)) < 0.35

@@ -34,7 +34,7 @@ from counterpart.messages import (
 
 from .emotion import StyleFilter
 from .reach import ReachConfig, reach
-from .staging import Stage, StageConfig
+from .staging import Stage, StageConfig, silhouette_reach, stature
 
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
@@ -95,6 +95,26 @@ class Responder(Node):
         ),
         "max_distance_m": Param(float, 1.2, "farthest the partner stands from the observed person (m)", min=0.0),
         "max_speed_m_s": Param(float, 2.5, "fastest the partner's placement moves (m/s)", min=0.01),
+        "beside": Param(
+            bool,
+            True,
+            "the partner stands beside the observed person across the camera's view, at their depth, on "
+            "the real second person's side (else towards the middle of the picture); false: in the model's direction",
+        ),
+        "contact_m": Param(
+            float,
+            0.2,
+            "the observed person's reach (tracked arms, or their silhouette's extent with use_silhouettes) "
+            "this near the partner's torso axis is a push (m)",
+            min=0.0,
+        ),
+        "offer_m": Param(
+            float,
+            0.45,
+            "a silhouette reaching this far towards the partner from its centre is a hand held out, which "
+            "the partner takes when within its arm's reach (m; needs use_silhouettes)",
+            min=0.0,
+        ),
         "recoil_m": Param(
             float,
             0.3,
@@ -163,7 +183,10 @@ class Responder(Node):
                         self.p["min_distance_m"],
                         self.p["max_distance_m"],
                         self.p["max_speed_m_s"],
+                        contact_m=self.p["contact_m"],
                         recoil_m=self.p["recoil_m"],
+                        beside=self.p["beside"],
+                        offer_m=self.p["offer_m"],
                     )
                 )
             if self.p["reach_m"] > 0:
@@ -224,21 +247,41 @@ class Responder(Node):
         if self.stage is not None:
             self.stage.reset()
 
-    def _staged(self, observed: np.ndarray, joints: np.ndarray, driver: Any) -> np.ndarray:
-        """The model's partner moved to where a partner stands (``stage``) and its hand onto the
-        observed hand it comes near (``reach_m``); both counted when they act.
+    def _scene(self, body: Any) -> dict[str, Any]:
+        """What the stage knows of the scene besides the observed ``body`` (a TrackedBody): the real
+        second person tracked in the same poses, the side to stand on (towards the middle of the
+        picture), and the observed person's silhouette extent towards the partner.
         """
+        people = list(getattr(self.latest.get("pose"), "people", ()))
+        other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
+        side = {"left": 1.0, "right": -1.0}.get(body.side, 0.0)
+        silhouette = None
+        shapes = list(getattr(self.latest.get("silhouettes"), "people", ()))
+        mine = [q for q in shapes if q.side == body.side]
+        shape = next((q for q in mine if q.id == body.id), mine[0] if mine else None)
+        direction = (self.stage.side if self.stage is not None else 0.0) or side
+        if shape is not None and direction != 0.0:
+            silhouette = silhouette_reach(shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl)
+        return {"other": None if other is None else np.asarray(other.joints), "side": side, "silhouette": silhouette}
+
+    def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
+        """The model's partner moved to where a partner stands beside the observed ``body`` (``stage``)
+        and its hand onto the observed hand it comes near or that is held out (``reach_m``); both
+        counted when they act.
+        """
+        offered = None
         if self.stage is not None:
             fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
             gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
             before = self.stage.corrected, self.stage.pushes
-            joints = self.stage(observed, joints, gap / fps)
+            joints = self.stage(body.joints, joints, gap / fps, **self._scene(body))
+            offered = self.stage.offered_
             if self.stage.corrected > before[0]:
                 self.tally("partner_placed")
             if self.stage.pushes > before[1]:
                 self.tally("pushes")
         if self.reach is not None:
-            joints, pull = reach(observed, joints, self.reach)
+            joints, pull = reach(body.joints, joints, self.reach, offered)
             if pull > 0:
                 self.tally("hand_reached")
         return joints
@@ -269,7 +312,7 @@ class Responder(Node):
             os.path.abspath(file),
         )  # the renderer may run from another folder
         if body is not None:  # the avatar stands where a partner stands, as the listener's body does
-            fields["joints"] = self._staged(body.joints, fields["joints"], self.latest["pose"])
+            fields["joints"] = self._staged(body, fields["joints"], self.latest["pose"])
         return dict(fields, observed_id=-1 if body is None else body.id)
 
     def _gpdm_style(self, m: Any) -> None:
@@ -363,7 +406,7 @@ class Responder(Node):
                 self.tally("observed_switches")
             if self.model == "gpdm":  # the style is the model's own input (Taubert et al.), not a filter
                 self._gpdm_style(m)
-            joints = self._staged(body.joints, m.step(body.joints), driver)
+            joints = self._staged(body, m.step(body.joints), driver)
             if self.model == "dual-hmm":
                 joints = self.style(joints, self.emotion, self.strength)
             out.update(joints=joints, observed_id=body.id, behaviour="respond", confidence=float(np.max(m.posterior_)))
@@ -377,7 +420,7 @@ class Responder(Node):
                 speaking = {n: bool(v == 1) for n, v in zip(person.names, np.asarray(person.labels))}
             joints = m.step(speaking, None if body is None else body.joints)
             if body is not None and np.shape(joints) == (14, 3):
-                joints = self._staged(body.joints, joints, self.latest["pose"])
+                joints = self._staged(body, joints, self.latest["pose"])
             out.update(
                 joints=self.style(joints, self.emotion, self.strength),
                 observed_id=-1 if body is None else body.id,

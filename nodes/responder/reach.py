@@ -11,6 +11,12 @@ two-bone inverse kinematics of the partner's arm (shoulder fixed, bone lengths k
 d the distance between the model's wrist W and the nearest observed wrist H (metres). w grows
 smoothly from 0 at ``r_engage`` to 1 at ``r_contact``, so the hand is never thrown across; beyond
 reach of the shoulder the arm stretches towards the target without leaving its shoulder.
+
+A hand the observed person holds out (``offered``: where their silhouette says it is,
+:attr:`.staging.Stage.offered_`; tracked wrists are the least reliable joints on real video) is
+taken by the partner's arm whose shoulder is nearer, with d the distance of the hand beyond that
+arm's length from its shoulder: a hand within the partner's reach is met (w = 1), whatever the
+model's arm was doing.
 """
 
 from __future__ import annotations
@@ -100,7 +106,12 @@ def two_bone_ik(
     return new_elbow, new_wrist
 
 
-def reach(observed: np.ndarray, partner: np.ndarray, config: ReachConfig = ReachConfig()) -> tuple[np.ndarray, float]:
+def reach(
+    observed: np.ndarray,
+    partner: np.ndarray,
+    config: ReachConfig = ReachConfig(),
+    offered: np.ndarray | None = None,
+) -> tuple[np.ndarray, float]:
     """The partner with the hand nearest an observed hand pulled onto it; and the pull w.
 
     Parameters
@@ -111,6 +122,9 @@ def reach(observed: np.ndarray, partner: np.ndarray, config: ReachConfig = Reach
         The model's partner joints, metres, world frame.
     config : ReachConfig, default=ReachConfig()
         The engage and contact distances.
+    offered : ndarray of shape (3,) or None, default=None
+        A hand the observed person holds out, metres, world frame (see the module): it is met
+        before the tracked wrists are looked at.
 
     Returns
     -------
@@ -121,6 +135,16 @@ def reach(observed: np.ndarray, partner: np.ndarray, config: ReachConfig = Reach
     """
     X = np.asarray(observed, np.float64)
     P = np.asarray(partner, np.float64).copy()
+    if offered is not None and np.isfinite(offered).all():
+        goal = np.asarray(offered, np.float64)
+        arm = int(np.argmin([np.linalg.norm(P[s] - goal) for s, _, _ in ARMS]))
+        s, e, wr = ARMS[arm]
+        length = float(np.linalg.norm(P[e] - P[s]) + np.linalg.norm(P[wr] - P[e]))
+        beyond = max(float(np.linalg.norm(goal - P[s])) - length, 0.0)
+        w = float(np.clip((config.r_engage - beyond) / (config.r_engage - config.r_contact), 0.0, 1.0))
+        if w > 0.0:
+            P[e], P[wr] = two_bone_ik(P[s], P[e], P[wr], P[wr] + w * (goal - P[wr]))
+            return P.astype(np.asarray(partner).dtype), w
     d = np.linalg.norm(P[_WRISTS][:, None] - X[_WRISTS][None], axis=-1)  # (partner arm, observed wrist)
     arm, hand = np.unravel_index(int(np.argmin(d)), d.shape)
     w = float(np.clip((config.r_engage - d[arm, hand]) / (config.r_engage - config.r_contact), 0.0, 1.0))

@@ -1,4 +1,4 @@
-"""Where the generated partner stands: on the ground, at a partner's distance, never jumping.
+"""Where the generated partner stands: beside the observed person, at a partner's distance, never jumping.
 
 An interaction model places the partner relative to the observed person's frame
 (:mod:`.frames`); on real tracking that frame is noisy (a person bending over turns their
@@ -7,18 +7,29 @@ for the training pairs can then put the partner inside the observed person or me
 :class:`Stage` corrects the generated pose as a whole, a rigid move on the ground plane, so the
 model's posture and gestures are kept:
 
-1. the partner's ground offset from the observed person, p - o (p, o the mid-hips dropped to the
-   floor, :func:`.frames.actor_frame`), is clipped to a length in [``min_distance_m``,
-   ``max_distance_m``] (along the observed person's facing when p lies on o);
+1. the partner stands beside the observed person as the camera sees them (``beside``): its ground
+   offset from the person, p - o (p, o the mid-hips dropped to the floor,
+   :func:`.frames.actor_frame`), is taken across the camera's view, at the person's depth (every
+   camera of the project looks along -Z with no yaw, :mod:`counterpart.body.camera`, so "across"
+   is the world X axis and image right is +X). Its side is where the real second person stands
+   when one is tracked (``other``; it changes only when they are more than ``side_margin_m`` on
+   the other side), else the side the caller gives (the observed person's side of the picture:
+   the partner stands towards the middle), else the model's. Not beside: the model's direction.
+   Its length is the model's ground distance clipped to [``min_distance_m``, ``max_distance_m``]
+   (along the observed person's facing when p lies on o and nothing gives a side);
 2. that offset changes by at most ``max_speed_m_s`` times the time between frames, in polar
    coordinates about the person (the partner walks round them, never through them; it never
    jumps), so the distance holds on every frame. The offset is relative to the observed person:
    where the tracker's estimate of the person jumps, the partner stays beside them in the picture
    rather than walking after them;
-3. the partner recoils when pushed: when a wrist of the observed person comes within
-   ``contact_m`` of the partner's torso axis (neck to mid-hip) the partner's distance grows by
-   ``recoil_m``, which then fades with time constant ``recoil_s`` (the step back, then the
-   return; still within the limits and the speed of 1 and 2);
+3. the partner recoils when pushed: when the observed person's tracked wrists or elbows come
+   within ``contact_m`` of its torso axis (neck to mid-hip), or, where the caller has the person's
+   silhouette (:func:`silhouette_reach`), when it holds a hand out (its leading point ``offer_m``
+   from its centre) while its centre advances towards the partner at ``push_speed_m_s`` or more
+   (the torso and the arm forward together: tracked arms are the least reliable joints on real
+   video, a silhouette's outline is not), its distance grows by ``recoil_m``, held while the push
+   goes on, which then fades with time constant ``recoil_s`` (the step back, then the return; still within the limits and
+   the speed of 1 and 2). A hand held out without a push is offered (:attr:`Stage.offered_`);
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
@@ -26,6 +37,7 @@ model's posture and gestures are kept:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -34,13 +46,24 @@ from counterpart.body.skeleton import JOINT_INDEX
 from .frames import actor_frame
 
 _ANKLES = [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
+_ARMS = [JOINT_INDEX[j] for j in ("l_elbow", "r_elbow", "l_wrist", "r_wrist")]
 _WRISTS = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
 _NECK, _HIPS = JOINT_INDEX["neck"], [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
+_SHOULDERS = [JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]]
+#: the ground direction (x, z) across the camera's view, image right: every camera of the project
+#: looks along -Z with no yaw (body.camera.Camera.look_at from +Z, calibration.estimate.rotation)
+ACROSS = np.array([1.0, 0.0])
+#: the heights of the arms (hips to shoulders, a little either way) as fractions of a person's height
+ARM_BAND = (0.35, 0.85)
+#: a silhouette centre moving faster than this is a region merging or splitting, not a body, m/s
+JUMP_M_S = 3.0
+#: crown of the head above the head joint (the head centre at eye level), metres, for a stature
+HEAD_TOP_M = 0.12
 
 
 @dataclass(frozen=True)
 class StageConfig:
-    """Limits of the partner's placement (metres, metres per second).
+    """Limits of the partner's placement and its responses (metres, metres per second, seconds).
 
     Parameters
     ----------
@@ -51,11 +74,30 @@ class StageConfig:
     max_ankle_m : float, default=0.3
         The highest the lowest ankle may be above the ground plane, metres.
     contact_m : float, default=0.2
-        A wrist within this distance of the partner's torso axis is a push, metres.
+        A reach of the observed person within this distance of the partner's torso axis is a push, metres.
     recoil_m : float, default=0.3
         The distance a push adds, metres.
     recoil_s : float, default=0.8
         Time constant of the recoil's fading, seconds.
+    beside : bool, default=True
+        Stand beside the observed person across the camera's view, at their depth (False: in the
+        model's direction).
+    side_margin_m : float, default=0.2
+        How far on the other side of the observed person the real second person must be before the
+        partner changes side, metres.
+    offer_m : float, default=0.45
+        A silhouette reaching this far towards the partner from its centre is a hand held out,
+        metres (:attr:`Stage.offered_`).
+    meet_frac : float, default=0.7
+        A hand held out is met at most this fraction of the way to the partner (hands meet between
+        the two; a silhouette merged with someone else's reaches further than the hand).
+
+    push_speed_m_s : float, default=0.5
+        A silhouette holding a hand out (``offer_m``) whose centre advances towards the partner at
+        least this fast is a push (the torso and the arm forward together), metres per second.
+    advance_s : float, default=0.15
+        Time constant of the smoothing of that advance, seconds (steps faster than
+        ``JUMP_M_S``, a region merging or splitting, are left out).
 
     Raises
     ------
@@ -70,6 +112,12 @@ class StageConfig:
     contact_m: float = 0.2
     recoil_m: float = 0.3
     recoil_s: float = 0.8
+    beside: bool = True
+    side_margin_m: float = 0.2
+    offer_m: float = 0.45
+    meet_frac: float = 0.7
+    push_speed_m_s: float = 0.5
+    advance_s: float = 0.15
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -82,6 +130,98 @@ class StageConfig:
             raise ValueError(
                 f"contact_m={self.contact_m}, recoil_m={self.recoil_m} must be >= 0 and recoil_s={self.recoil_s} > 0"
             )
+        if self.side_margin_m < 0 or self.offer_m < 0:
+            raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
+
+
+def stature(joints: np.ndarray) -> float:
+    """A body's height, metres: its head joint above its lowest ankle plus the crown (``HEAD_TOP_M``).
+
+    Parameters
+    ----------
+    joints : ndarray of shape (14, 3)
+        World joints, metres, Y up.
+
+    Returns
+    -------
+    float
+        Metres.
+    """
+    X = np.asarray(joints, np.float64)
+    return float(X[JOINT_INDEX["head"], 1] - X[_ANKLES, 1].min() + HEAD_TOP_M)
+
+
+class Reach(NamedTuple):
+    """What a person's silhouette says of their reach towards the partner (:func:`silhouette_reach`).
+
+    Attributes
+    ----------
+    extent_m : float
+        How far the silhouette's leading point lies from its centre towards the partner, metres.
+    height_m : float or None
+        That point's height above the ground, metres (None: not known).
+    centre_m : float
+        The silhouette's centre across the view towards the partner, metres at the person's depth
+        from an arbitrary origin: only its changes mean anything (the body advancing).
+    """
+
+    extent_m: float
+    height_m: float | None
+    centre_m: float
+
+
+def silhouette_reach(
+    bbox: tuple[float, float, float, float],
+    centroid: tuple[float, float],
+    direction: float,
+    stature_m: float,
+    ctrl: np.ndarray | None = None,
+    band: tuple[float, float] = ARM_BAND,
+) -> Reach:
+    """How far a person's silhouette extends towards ``direction`` from its centre, how high, and where
+    its centre is, metres.
+
+    The silhouette's leading point on that side (of its outline's control points at the heights
+    of the arms, ``band``, the one furthest that way: a stride's foot or a turned head is not a
+    reach; without an outline, the box's edge), from the region's centroid column, over the box's height,
+    times the person's stature: an arm held out or a body leaning in moves it, whatever the
+    tracked arm does. Its height is the point's height above the box's bottom (the feet) the
+    same way. Pixels across and down scale alike at the person's depth, so no camera is needed.
+
+    Parameters
+    ----------
+    bbox : tuple of float
+        The silhouette's box ``(x, y, w, h)``, pixels.
+    centroid : tuple of float
+        The region's centroid ``(x, y)``, pixels.
+    direction : float
+        +1: towards image right (world +X), -1: towards image left.
+    stature_m : float
+        The person's height, metres (:func:`stature`).
+    ctrl : ndarray of shape (n, 2) or None, default=None
+        The outline's B-spline control points, pixels (None or empty: the box's edge).
+    band : tuple of float, default=ARM_BAND
+        The heights a reach is looked for at, fractions of the box's height above its bottom.
+
+    Returns
+    -------
+    Reach
+        Metres (extent 0 for an empty box; height None without an outline).
+    """
+    x, y, w, h = (float(v) for v in bbox)
+    if h <= 0:
+        return Reach(0.0, None, 0.0)
+    pts = None if ctrl is None else np.asarray(ctrl, np.float64).reshape(-1, 2)
+    if pts is not None:
+        up = (y + h - pts[:, 1]) / h
+        pts = pts[(up >= band[0]) & (up <= band[1])]
+    if pts is not None and len(pts):
+        tip = pts[int(np.argmax(direction * pts[:, 0]))]
+        edge, height = float(tip[0]), (y + h - float(tip[1])) / h * stature_m
+    else:
+        edge, height = (x + w if direction > 0 else x), None
+    cx = float(centroid[0])
+    return Reach(max(direction * (edge - cx), 0.0) / h * stature_m, height, direction * cx / h * stature_m)
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -131,6 +271,12 @@ class Stage:
         Frames on which the model's placement was moved.
     pushes : int
         Pushes the partner recoiled from.
+    offered_ : ndarray of shape (3,) or None
+        After a call: where the observed person holds out a hand towards the partner (their
+        silhouette reaching at least ``offer_m`` towards it, not a push), world metres, at the height
+        of the silhouette's leading point (else of their tracked wrist nearest the partner) kept
+        between their hips and shoulders; None when
+        they hold none out (for :func:`.reach.reach`).
     """
 
     def __init__(self, config: StageConfig = StageConfig()) -> None:
@@ -141,11 +287,63 @@ class Stage:
     def reset(self) -> None:
         """Forget the last placement (another person observed, or a new stream)."""
         self._last: np.ndarray | None = None  # the last ground offset from the observed person
+        self._side = 0.0  # the side across the view the partner stands on (+1: image right), 0: none yet
         self._recoil = 0.0  # metres added to the partner's distance by a push, fading
         self._touching = False
+        self._centre: float | None = None  # the silhouette's last centre across the view, metres
+        self._advance = 0.0  # its smoothed speed towards the partner, metres per second
         self.pushes = 0  # pushes the partner recoiled from
+        self.offered_: np.ndarray | None = None
 
-    def __call__(self, observed: np.ndarray, partner: np.ndarray, dt: float) -> np.ndarray:
+    @property
+    def side(self) -> float:
+        """The side across the view the partner stands on: +1 image right (world +X), -1 left, 0 not yet placed."""
+        return self._side
+
+    def _choose_side(self, o: np.ndarray, other: np.ndarray | None, side: float, model: np.ndarray) -> float:
+        """The side across the view (+1 / -1) the partner stands on; see the module's step 1."""
+        if other is not None and np.isfinite(other).all():
+            across = float((actor_frame(np.asarray(other, np.float64))[0][[0, 2]] - o) @ ACROSS)
+            if self._side == 0.0 or (np.sign(across) != self._side and abs(across) > self.config.side_margin_m):
+                self._side = float(np.sign(across)) or self._side
+        if self._side == 0.0:
+            self._side = float(np.sign(side)) or float(np.sign(model @ ACROSS))
+        return self._side
+
+    def _advancing(self, silhouette: Reach | None, dt: float) -> float:
+        """The silhouette centre's smoothed speed towards the partner, metres per second."""
+        if silhouette is None:
+            self._centre = None
+            return 0.0
+        if self._centre is not None and dt > 0:
+            v = (silhouette.centre_m - self._centre) / dt
+            if abs(v) <= JUMP_M_S:
+                a = 1.0 - float(np.exp(-dt / self.config.advance_s))
+                self._advance += a * (v - self._advance)
+        self._centre = silhouette.centre_m
+        return self._advance
+
+    def _touching_now(self, X: np.ndarray, P: np.ndarray, o: np.ndarray, p: np.ndarray, pushing: bool) -> bool:
+        """Whether the observed person's tracked arms are on the partner where it stood (last frame's
+        offset), or their silhouette pushes (``pushing``).
+        """
+        if self._last is None:
+            return False
+        c = self.config
+        at = np.zeros(3)
+        at[[0, 2]] = o + self._last - p
+        arms = (_segment_distance(X[_ARMS], P[_NECK] + at, P[_HIPS].mean(axis=0) + at) < c.contact_m).any()
+        return bool(arms or pushing)
+
+    def __call__(
+        self,
+        observed: np.ndarray,
+        partner: np.ndarray,
+        dt: float,
+        other: np.ndarray | None = None,
+        side: float = 0.0,
+        silhouette: Reach | None = None,
+    ) -> np.ndarray:
         """The partner's joints, world metres, moved rigidly to a valid place.
 
         Parameters
@@ -154,6 +352,16 @@ class Stage:
             World joints (metres, Y up, ground y = 0) of the observed person and of the model's partner.
         dt : float
             Seconds since the last call (the speed limit is per second).
+        other : ndarray of shape (14, 3) or None, default=None
+            The real second person's joints where one is tracked (world metres): the partner stands
+            on their side of the observed person.
+        side : float, default=0.0
+            The side to stand on when no second person is tracked: +1 image right (world +X), -1
+            left, 0 the model's.
+        silhouette : Reach or None, default=None
+            What the observed person's silhouette says of their reach towards the partner
+            (:func:`silhouette_reach`): a hand held out, and with the body advancing a push; None:
+            only their tracked arms are their reach.
 
         Returns
         -------
@@ -167,25 +375,38 @@ class Stage:
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
         self._recoil *= float(np.exp(-max(float(dt), 0.0) / c.recoil_s))
-        touching = False
-        if self._last is not None:  # the hands against the partner where it stands (last frame's offset)
-            at = np.zeros(3)
-            at[[0, 2]] = o + self._last - p
-            touching = bool(
-                (_segment_distance(X[_WRISTS], P[_NECK] + at, P[_HIPS].mean(axis=0) + at) < c.contact_m).any()
-            )
+        advance = self._advancing(silhouette, float(dt))
+        held_out = silhouette is not None and silhouette.extent_m >= c.offer_m
+        pushing = held_out and advance >= c.push_speed_m_s
+        touching = self._touching_now(X, P, o, p, pushing)
         if touching and not self._touching:
             self._recoil += c.recoil_m
             self.pushes += 1
+        elif touching:  # pushed on and on, it keeps its distance; the return starts when the push ends
+            self._recoil = max(self._recoil, c.recoil_m)
         self._touching = touching
         d = p - o
         r = float(np.hypot(*d))
-        if r > 1e-6:
-            d = d * (r + self._recoil) / r
+        if c.beside:
+            s = self._choose_side(o, other, side, d)
+            # the model's distance across the view; along the person's facing when nothing gives a side
+            if s != 0.0:
+                d = s * max(r, 1e-3) * ACROSS
+        r = float(np.hypot(*d))
+        if r > 1e-6:  # the step back is from where it stands
+            d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
         offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
+        self.offered_ = None
+        if held_out and not touching:
+            lo, hi = float(X[_HIPS, 1].mean()), float(X[_SHOULDERS, 1].mean())
+            u = offset / max(float(np.hypot(*offset)), 1e-9)
+            near = X[_WRISTS][int(np.argmax((X[_WRISTS][:, [0, 2]] - o) @ u))]
+            y = float(np.clip(near[1] if silhouette.height_m is None else silhouette.height_m, lo, hi))
+            out = min(silhouette.extent_m, c.meet_frac * float(np.hypot(*offset)))  # hands meet between the two
+            self.offered_ = np.array([o[0] + out * u[0], y, o[1] + out * u[1]])
         shift = np.zeros(3)
         shift[[0, 2]] = o + offset - p
         ankle = float(P[_ANKLES, 1].min())

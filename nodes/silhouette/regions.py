@@ -45,10 +45,21 @@ WALK_SPEED = 0.01
 STACK_OVERLAP = 0.5
 STACK_GAP = 0.35
 STACK_MAX_BELOW = 1.0
+#: widest union of a person and a region above them, as a share of its height, that is one
+#: person (``group_stacked``'s bound)
+STACK_UPRIGHT = 0.45
+#: a new region whose bottom is within this share of a tracked person's height of their feet'
+#: row, and shorter than this share of their height, is a part of someone (``_ground_owner``)
+FEET_ROW = 0.1
+FRAGMENT_HEIGHT = 0.4
 #: someone who was part of a merged region last frame still claims it with this share of their
 #: predicted pixels on it (``min_overlap`` otherwise): hidden in a hug, their template, of their
 #: shape before the people met, overlaps the merged region less and less as it changes shape
 MERGE_KEEP_OVERLAP = 0.05
+#: a left-over region with this share of its box in the box of a person's piece, and at most
+#: this share of their height tall, is a part of them (``PersonTracker._enclosing_owner``)
+ENCLOSED_SHARE = 0.8
+ENCLOSED_MAX_HEIGHT = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -394,7 +405,11 @@ class PersonTracker:
             return
         best = np.argmax(frame.frac_track, axis=1)
         need = np.array([MERGE_KEEP_OVERLAP if t.in_merge else self.min_overlap for t in tracks])
-        strong = frame.frac_track[np.arange(len(tracks)), best] >= need
+        # someone unseen since last frame who was not hidden in a merge has left or was a
+        # passing fragment: where they were, a person who walks there must not be split with them
+        # (someone hidden behind others was in a merge and keeps their claim)
+        back = np.array([t.missed == 0 or t.in_merge for t in tracks])
+        strong = (frame.frac_track[np.arange(len(tracks)), best] >= need) & back
         for r in frame.regions:
             claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
             if len(claim) >= 2:
@@ -434,6 +449,8 @@ class PersonTracker:
                 split = None
                 if self._established(t, w_img, h_img) and frame.region_area[r] >= self.newcomer_growth * t.usual_area:
                     split = self._split_newcomer(frame.comp, frame.stats, r, t)
+                if split is not None and not self._emerging(split, t):
+                    split = None
                 if split is None:
                     match.assigned[free_t[a]] = (*self._region_crop(frame.comp, frame.stats, r), False)
                 else:
@@ -459,17 +476,49 @@ class PersonTracker:
                 i = int(np.argmax(frac_region))
                 if frac_region[i] >= 0.5 and i in match.assigned:
                     owner = i
+            if owner < 0:
+                owner = self._enclosing_owner(crop, x0, y0, match)
             if owner >= 0:
                 match.assigned[owner] = (*_union(match.assigned[owner][:3], (crop, x0, y0)), match.assigned[owner][3])
             else:
                 unowned.append((crop, x0, y0))
         # a new person must look like one: a standing person, or two side by side, is taller than
         # wide; a car, a barrier, the strip of a ghost along a skirting board or a kerb is not
-        match.fresh += [g for g in group_stacked(unowned) if g[0].shape[0] >= self.min_upright * g[0].shape[1]]
+        for g in group_stacked(unowned):
+            if g[0].shape[0] < self.min_upright * g[0].shape[1]:
+                continue
+            owner = self._ground_owner(*g, match)
+            if owner is None:
+                match.fresh.append(g)
+            elif owner >= 0:
+                match.assigned[owner] = (*_union(match.assigned[owner][:3], g), match.assigned[owner][3])
+
+    def _ground_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int | None:
+        """Whether an upright left-over group (crop (h, w), x0, y0) is a whole new person (None),
+        a part of the assigned track whose index is returned, or a fragment of no one (-1).
+
+        People stand on the ground: someone whose feet are on the same image row as a tracked
+        person's (within ``FEET_ROW`` of their height) is about as far from the camera and so
+        about as tall. A group that ends there but is less than ``FRAGMENT_HEIGHT`` of their
+        height tall is a part of a person (a leg stepping back in a push, an arm), not a
+        person: it joins the person it lies beside (``STACK_GAP`` of their height at most
+        between them), or is dropped.
+        """
+        h, w = crop.shape
+        best, best_gap = None, np.inf
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            height = max(self._tracks[i].height, float(ph))
+            if not _shorter_on_same_row((crop, x0, y0), py + ph, height):
+                continue
+            gap = max(px - (x0 + w), x0 - (px + pw), 0)
+            if gap < best_gap:
+                best, best_gap = (i if gap <= STACK_GAP * height else -1), gap
+        return best
 
     def _stacked_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
-        """The index of the assigned track whose legs or feet a left-over region (crop (h, w), x0,
-        y0) is, or -1.
+        """The index of the assigned track whose legs or feet, or head and shoulders, a left-over
+        region (crop (h, w), x0, y0) is, or -1.
 
         Legs in trousers of the floor's colour come out as a region of their own below a gap;
         once the person has moved, it lies outside their predicted mask and would start a new
@@ -477,6 +526,12 @@ class PersonTracker:
         (``STACK_OVERLAP`` of its width), at most ``STACK_GAP`` of their height below it, and is
         no taller than ``STACK_MAX_BELOW`` of their height (someone standing nearer the camera,
         lower in the picture, is taller than the person further back).
+
+        Likewise the head and shoulders of someone whose upper body was given to the person they
+        touched (a push, a handshake) come out above their legs when the two part: a region above
+        a person, in their columns, at most ``STACK_GAP`` of their height above them and no taller
+        than them, whose union with them stands upright as one person does (``_upright_pair``),
+        is theirs.
         """
         h, w = crop.shape
         best, best_overlap = -1, 0
@@ -486,14 +541,41 @@ class PersonTracker:
             height = max(self._tracks[i].height, float(ph))
             gap = y0 - (py + ph)  # rows between them; < 0 where they share rows
             below = y0 + 0.5 * h > py + 0.5 * ph  # its middle in their lower half, or under them
-            if (
-                below
-                and overlap >= STACK_OVERLAP * w
-                and gap <= STACK_GAP * height
-                and h <= STACK_MAX_BELOW * height
-                and overlap > best_overlap
-            ):
+            if below:
+                stacked = gap <= STACK_GAP * height and h <= STACK_MAX_BELOW * height
+            else:
+                stacked = (
+                    py - (y0 + h) <= STACK_GAP * height
+                    and h <= height
+                    and _upright_pair((pc, px, py), (crop, x0, y0), STACK_UPRIGHT)
+                )
+            if stacked and overlap >= STACK_OVERLAP * w and overlap > best_overlap:
                 best, best_overlap = i, overlap
+        return best
+
+    def _enclosing_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
+        """The index of the assigned track a small left-over region (crop (h, w), x0, y0) lies
+        within, or -1.
+
+        A raised arm, a turned head or a hand torn off a person by the background model comes out
+        as a small region of its own inside their outline's box, away from their template's
+        pixels; as a new "person" it would then claim a share of them in every merge that
+        follows. It is theirs when ``ENCLOSED_SHARE`` of its box lies in the box of their piece
+        of this frame and it is at most ``ENCLOSED_MAX_HEIGHT`` of their height tall: another
+        person inside someone's box is about as tall as them, or further back and smaller but
+        standing on the ground, below their middle (``_stacked_owner`` and the assignment see to
+        the people who stand one behind the other).
+        """
+        h, w = crop.shape
+        best, best_share = -1, 0.0
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            ox = min(x0 + w, px + pw) - max(x0, px)
+            oy = min(y0 + h, py + ph) - max(y0, py)
+            share = max(ox, 0) * max(oy, 0) / float(h * w)
+            height = max(self._tracks[i].height, float(ph))
+            if share >= ENCLOSED_SHARE and h <= ENCLOSED_MAX_HEIGHT * height and share > best_share:
+                best, best_share = i, share
         return best
 
     def _commit(self, frame: _Regions, match: _Matching) -> tuple[np.ndarray, list[Person]]:
@@ -588,6 +670,22 @@ class PersonTracker:
         (x0, y0), (h, w) = t.origin, t.crop.shape
         return x0 > 1 and y0 > 1 and x0 + w < w_img - 1 and y0 + h < h_img - 1
 
+    @staticmethod
+    def _emerging(split: tuple[tuple[np.ndarray, int, int], tuple[np.ndarray, int, int]], t: _Track) -> bool:
+        """Whether the newcomer's piece of a grown region ((t's piece, the newcomer's piece), each
+        (crop, x0, y0)) can be a person: one who stood beside track t stands on the ground too,
+        their feet below t's middle, and is not much shorter than t when their feet are on t's
+        row (``_shorter_on_same_row``). What floats above t's middle is t's own head and
+        shoulders (given to someone t touched, back now); what is short on t's row is a leg
+        stepping out.
+        """
+        (mine, mx, my), (new, nx, ny) = split
+        top = min(my, ny)
+        feet = max(my + mine.shape[0], ny + new.shape[0])
+        if ny + new.shape[0] < 0.5 * (top + feet):
+            return False
+        return not _shorter_on_same_row(split[1], my + mine.shape[0], t.height)
+
     def _split_newcomer(
         self, comp: np.ndarray, stats: np.ndarray, r: int, t: _Track
     ) -> tuple[tuple[np.ndarray, int, int], tuple[np.ndarray, int, int]] | None:
@@ -665,6 +763,15 @@ class PersonTracker:
         )
 
 
+def _shorter_on_same_row(part: tuple[np.ndarray, int, int], feet_row: float, height: float) -> bool:
+    """Whether a region (crop (h, w), x0, y0) ends within ``FEET_ROW`` of ``height`` of a
+    person's feet row (pixels) and is less than ``FRAGMENT_HEIGHT`` of their height tall: on
+    the ground as far away as they are, a whole person would be about as tall.
+    """
+    h = part[0].shape[0]
+    return abs(part[2] + h - feet_row) <= FEET_ROW * height and h < FRAGMENT_HEIGHT * height
+
+
 def _crop_box(part: np.ndarray, x: int, y: int) -> tuple[np.ndarray, int, int]:
     """A non-empty mask (h, w) placed at (x, y) -> (its bbox crop, x0, y0)."""
     ys, xs = np.nonzero(part)
@@ -699,7 +806,7 @@ def _with_unmatched(cost: np.ndarray, unmatched: float) -> np.ndarray:
 
 
 def group_stacked(
-    parts: list[tuple[np.ndarray, int, int]], max_aspect: float = 0.45
+    parts: list[tuple[np.ndarray, int, int]], max_aspect: float = STACK_UPRIGHT
 ) -> list[tuple[np.ndarray, int, int]]:
     """Join first-sight regions that are parts of one standing person.
 

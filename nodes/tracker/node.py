@@ -301,7 +301,8 @@ class TrackerNode(Node):
                         f"frame {frame.seq}: {side} person merged with another; "
                         "tracking the part the silhouette node assigned to it",
                     )
-                r = tr.update(image, mask)
+                other = next((s for s in sil.people if s.side != side and s.side in SIDES), None)
+                r = tr.update(image, mask, tuple(other.bbox) if other is not None else None)
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
                 self._warn_once(f"error:{side}", f"frame {frame.seq}: {side} person not tracked: {exc}")

@@ -359,7 +359,10 @@ class Tracker:
         return [make_observation(im, m, rng=self.rng) for im, m in zip(images, mask)]
 
     def update(
-        self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
+        self,
+        image: np.ndarray | None | Sequence[np.ndarray | None],
+        mask: np.ndarray | Sequence[np.ndarray],
+        towards: tuple[int, int, int, int] | None = None,
     ) -> TrackResult | None:
         """Track one frame (the steps of the module docstring).
 
@@ -369,6 +372,10 @@ class Tracker:
             The frame; with several cameras, a list of them in the cameras' order.
         mask : ndarray of shape (H, W), dtype bool
             This person's mask; with several cameras, a list of them in the cameras' order.
+        towards : tuple of int (x, y, w, h) or None
+            The bounding box, in the reference view, of the person this one interacts with:
+            a track that starts on this frame faces that person (``init.facing_yaw``); None:
+            the heading of the person's side of the frame.
 
         Returns
         -------
@@ -386,7 +393,7 @@ class Tracker:
         if obs[0].empty:
             return None
         start = not self.tracking
-        est = self._first_search(obs, mask) if start else self._follow(obs)
+        est = self._first_search(obs, mask, towards) if start else self._follow(obs)
         return self._finish(est, obs, start)
 
     def _density(
@@ -402,7 +409,12 @@ class Tracker:
 
         return loglik
 
-    def _first_search(self, obs: list[Observation], mask: np.ndarray | Sequence[np.ndarray]) -> Estimate:
+    def _first_search(
+        self,
+        obs: list[Observation],
+        mask: np.ndarray | Sequence[np.ndarray],
+        towards: tuple[int, int, int, int] | None = None,
+    ) -> Estimate:
         """Start a track: particles around the reference view's silhouette guess (the body scaled
         to its stature unless ``dims`` was given), searched with the first search's longer schedule.
         """
@@ -410,7 +422,7 @@ class Tracker:
         bbox = bbox_from_mask(np.asarray(ref_mask, bool))
         init = self.config.init
         P0, dims = initial_particles(
-            bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=init.spread
+            bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=init.spread, towards=towards
         )
         if self.fixed_dims is None:
             self.dims = dims
@@ -439,7 +451,8 @@ class Tracker:
         image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
         self.prev = est.mean.copy()
-        lost = self.lost_detector.update(cost)
+        # the silhouette terms S_r + S_c alone decide a collapse (``LostDetector``)
+        lost = self.lost_detector.update(float(terms[0, [0, 2]].sum()) / sum(not o.empty for o in obs))
         if lost:
             self.reset()
         self.n_frames += 1
