@@ -93,7 +93,10 @@ Figures (last stdout line, one JSON object):
                        talk_gap_s were set on the gesture clips and conversation seeds 301
                        (25 fps) and 305 (29.97 fps), 45 s each, not on the reported seeds; the
                        localisation on the band's analytic envelope was chosen on seeds 301,
-                       302, 305 (both rates) and 303 (25 fps), 45 s each.
+                       302, 305 (both rates) and 303 (25 fps), 45 s each; the nod's rotation
+                       cue (the face's features relative to the top of the head, unit gain)
+                       on seeds 303, 304 (sad: small nods of a head pitched down) and 311,
+                       312 (happy: a knee bounce), 25 fps, 30 s each.
   mine_s               seconds to mine 45,000 frames x 27 speaker + 27 listener labels (synthetic
                        planted streams, rates 0.02-0.3, min_support 0.005, max_len 4);
                        mine_synthetic_recovered its planted rules found; --dense adds mine_s_dense

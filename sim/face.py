@@ -72,7 +72,10 @@ def rotation(yaw: float, pitch: float) -> np.ndarray:
     """
     cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
     ry = np.array([[cy, 0.0, -sy], [0.0, 1.0, 0.0], [sy, 0.0, cy]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, sp], [0.0, -sp, cp]])
+    # y up, z towards the camera: chin down takes the front of the face (z > 0) down, as the
+    # body's ``head_nod`` does (the opposite sign drew a chin-down head looking up, and a nod's
+    # rotation then cancelled the head joint's own dip at the eyes)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]])
     return ry @ rx
 
 

@@ -22,6 +22,7 @@ from counterpart.nodes.silhouette.background import (
     ShadowConfig,
     ThresholdConfig,
 )
+from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig
 
 H, W = 120, 160
 YY, XX = np.mgrid[0:H, 0:W]
@@ -211,3 +212,39 @@ def test_flat_parameters_are_routed_to_their_config_groups():
         ShadowConfig(shadow_window=4)
     with pytest.raises(TypeError, match="adaptation must be a AdaptationConfig"):
         HorprasertBackground(adaptation={"learning_rate": 0.02})
+
+
+def test_dark_clothes_inside_a_body_are_foreground_cast_shadows_stay_shadows():
+    # a belt-high band of the person as dark as a shadow with the room's chromaticity (dark
+    # trousers on a grey room), a cast shadow at the feet and one far off on the floor
+    band = person_mask(110.0) & (YY >= 56) & (YY < 66)
+    feet = np.zeros((H, W), bool)
+    feet[86:106, 112:146] = True
+    feet &= ~person_mask(110.0)
+    far = np.zeros((H, W), bool)
+    far[SHADOW_BOX] = True
+
+    def run(config: BodyShadowConfig | None) -> np.ndarray:
+        sub = make_subtractor("horprasert", train_frames=20, body_shadow=config)
+        rng = np.random.default_rng(7)
+        for _ in range(20):
+            sub.apply(render(rng))
+        f = render(rng, person_x=110.0, shadow=True).astype(np.float32)
+        f[feet] = BG[feet] * 0.6
+        f[band] = BG[band] * 0.6
+        sub.apply(np.clip(np.rint(f), 0, 255).astype(np.uint8))
+        return sub.labels
+
+    off = run(None)  # the default: the statistics' own labels
+    assert class_fractions(off, band)[SHADOW] > 0.9
+    on = run(BodyShadowConfig())
+    assert class_fractions(on, band)[FOREGROUND] > 0.95
+    assert class_fractions(on, feet)[SHADOW] > 0.95
+    assert class_fractions(on, far)[SHADOW] > 0.95
+    assert class_fractions(on, person_mask(110.0) & ~band)[FOREGROUND] > 0.99
+
+
+@pytest.mark.parametrize("bad", [{"span_px": -1}, {"foot_fraction": 1.0}, {"foot_fraction": -0.1}, {"edge_px": -1}])
+def test_body_shadow_config_rejects_bad_values(bad):
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        BodyShadowConfig(**bad)

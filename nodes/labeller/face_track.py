@@ -9,6 +9,13 @@ small nod. So the box is not the head point. Each tracked face instead carries:
   forward-backward check (Bouguet 2000); the point moves by the median displacement of the points
   that pass. A still face gives a still point (sub-pixel noise), a nod or shake moves it by the
   motion of the features;
+- **the features' motion relative to the head's outline** (``tilt``): a nod rotates the head, so
+  the eyes and nose move up and down over the skull while the top of the head (hair against the
+  background, high above the neck's pivot) hardly moves with the rotation; a body bouncing on its
+  knees or leaning moves both alike. The top edge's vertical shift is one Lucas-Kanade step
+  (Lucas and Kanade 1981) on the row profile of a strip above the face (:func:`outline_shift`);
+  ``tilt`` accumulates the features' downward motion minus it (px), a rotation cue that a
+  translation of the whole head leaves still;
 - **a slow pull towards the detections**: every detected box pulls the point by
   ``1 - exp(-1 / (anchor_s * fps))`` of the difference, so the flow's drift is corrected over about
   ``anchor_s`` seconds while the box's frame-to-frame jitter is attenuated by about
@@ -45,6 +52,9 @@ HAAR_WINDOW_PX = 24
 ROI_FACE_PX = 64
 #: frames after its first detection on which a new face must be detected again to be kept
 CONFIRM = 2
+#: the strip whose row profile follows the top of the head, in face widths from the head point:
+#: from OUTLINE_TOP to OUTLINE_BOTTOM above it, OUTLINE_W wide (the hairline and the head's top edge)
+OUTLINE_TOP, OUTLINE_BOTTOM, OUTLINE_W = 0.95, 0.45, 0.5
 
 
 @dataclass(frozen=True)
@@ -165,6 +175,10 @@ class FaceTrack:
         Frames since the track started.
     flow_ok : bool
         The optical flow followed the face into this frame.
+    tilt : float
+        The features' downward motion relative to the head's top edge, accumulated since the track
+        started (px; see the module docstring): moves with a nod's rotation, not with the head's
+        translation.
     points : ndarray of shape (n, 1, 2), dtype float32
         Optical-flow points (px).
     box : tuple of float
@@ -179,6 +193,7 @@ class FaceTrack:
     missed: int = 0
     age: int = 0
     flow_ok: bool = False
+    tilt: float = 0.0
     points: np.ndarray = field(default_factory=lambda: np.empty((0, 1, 2), np.float32))
 
     @property
@@ -223,6 +238,42 @@ def _detect(
     f[:, 0] += x0
     f[:, 1] += y0
     return f
+
+
+def outline_shift(prev: np.ndarray, gray: np.ndarray, center: np.ndarray, size: float) -> float | None:
+    """Vertical shift of the top of a head between two frames.
+
+    The strip ``OUTLINE_W`` face widths wide, from ``OUTLINE_TOP`` to ``OUTLINE_BOTTOM`` face widths
+    above the head point (cut at the image's edges), is averaged over its columns in both frames;
+    one Lucas-Kanade step on the two row profiles ``p0, p1`` gives the shift
+    ``dy = -sum(g (p1 - p0)) / sum(g^2)`` with ``g`` the mean profile's gradient (Lucas and Kanade
+    1981, eq. 2 in one dimension): the strongest horizontal edges (the head's top against the
+    background, the hairline) weigh most.
+
+    Parameters
+    ----------
+    prev, gray : ndarray of shape (H, W), dtype uint8
+        The previous and the current frame.
+    center : ndarray of shape (2,)
+        The head point in the current frame (x, y), px.
+    size : float
+        The face width, px.
+
+    Returns
+    -------
+    float or None
+        The shift (px, image down), or None when the strip is under 8 rows or columns or flat.
+    """
+    x0, x1 = max(0, int(center[0] - OUTLINE_W / 2 * size)), min(gray.shape[1], int(center[0] + OUTLINE_W / 2 * size))
+    y0 = max(0, int(center[1] - OUTLINE_TOP * size))
+    y1 = min(gray.shape[0], int(center[1] - OUTLINE_BOTTOM * size))
+    if x1 - x0 < 8 or y1 - y0 < 8:
+        return None
+    p0 = prev[y0:y1, x0:x1].mean(axis=1, dtype=np.float64)
+    p1 = gray[y0:y1, x0:x1].mean(axis=1, dtype=np.float64)
+    g = np.gradient(0.5 * (p0 + p1))
+    gg = float(g @ g)
+    return -float(g @ (p1 - p0)) / gg if gg > 1e-6 else None
 
 
 class FaceTracker:
@@ -333,6 +384,9 @@ class FaceTracker:
             tr.flow_ok = d is not None
             if d is not None:
                 tr.center = tr.center + d
+                top = outline_shift(self._prev, gray, tr.center, tr.size)  # type: ignore[arg-type]
+                if top is not None:
+                    tr.tilt += float(d[1]) - top
             # the pull towards the detections is slow, so a confirmed face that the flow follows is
             # searched for on every other frame only (half the cost); a miss counts its frames
             attempt = d is None or tr.age < CONFIRM or tr.missed > 0 or tr.age % 2 == 1

@@ -932,8 +932,12 @@ class HeadMotionDetectorFace(_StreamingChannels):
     """Streaming nod/shake from a tracked face's head point (:mod:`counterpart.nodes.labeller.face_track`),
     in units of the face's own width: the channels integrate the point's frame-to-frame motion
     divided by the face width of that frame (so a face that slowly grows as the person leans in
-    adds no motion), image up for nods, image x for shakes. Floors: ``face_nod_floor`` /
-    ``face_shake_floor`` (face widths).
+    adds no motion), image up for nods, image x for shakes. The second nod channel is the face's
+    rotation cue (:attr:`counterpart.nodes.labeller.face_track.FaceTrack.tilt`: its features' motion
+    relative to the top of the head, in face widths, up), which a nod moves and a translation of the
+    whole head (a knee bounce, a lean) does not: so a small nod of a tilted head scores above the
+    floor that keeps a bouncing face still. Floors: ``face_nod_floor`` / ``face_shake_floor`` (face
+    widths).
 
     Parameters
     ----------
@@ -949,14 +953,14 @@ class HeadMotionDetectorFace(_StreamingChannels):
         super().__init__(HeadMotionParams(fps=fps, window_s=window_s, **params))  # type: ignore[arg-type]
         self._angles = (FACE, FACE)
         self._last: np.ndarray | None = None
-        self._pos = np.zeros(2)
+        self._pos = np.zeros(3)
 
     def reset(self) -> None:
         super().reset()
         self._last = None
-        self._pos = np.zeros(2)
+        self._pos = np.zeros(3)
 
-    def update(self, center_px: np.ndarray, size_px: float) -> tuple[float, int, float, int]:
+    def update(self, center_px: np.ndarray, size_px: float, tilt_px: float = 0.0) -> tuple[float, int, float, int]:
         """Add one frame and score the window that ends at it.
 
         Parameters
@@ -965,6 +969,9 @@ class HeadMotionDetectorFace(_StreamingChannels):
             Head point, pixels (y down).
         size_px : float
             Face width, pixels; > 0.
+        tilt_px : float, default=0.0
+            The face's accumulated rotation cue (:attr:`counterpart.nodes.labeller.face_track.FaceTrack.tilt`,
+            px, down); a constant (the default) adds nothing.
 
         Returns
         -------
@@ -985,8 +992,9 @@ class HeadMotionDetectorFace(_StreamingChannels):
         c = np.asarray(center_px, dtype=np.float64)
         if c.shape != (2,) or not size_px > 0:
             raise ValueError(f"center_px must be (2,) pixels and size_px > 0, got {c.shape}, {size_px}")
+        c = np.append(c, float(tilt_px))
         if self._last is not None:
             self._pos += (c - self._last) / size_px
         self._last = c
-        self.push(np.array([-self._pos[1], 0.0, self._pos[0], 0.0]))
+        self.push(np.array([-self._pos[1], -self._pos[2], self._pos[0], 0.0]))
         return self.score()

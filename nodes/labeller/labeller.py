@@ -292,7 +292,7 @@ class SocialLabeller:
                     st.headf.reset()
                     st.face.reset()
                     st.track_id = face.track_id
-                ns, n, ss, s = st.headf.update(face.center, face.size)
+                ns, n, ss, s = st.headf.update(face.center, face.size, face.tilt)
                 res["nod"], res["shake"] = (ns, n), (ss, s)
             elif j is not None:
                 yaw = float(facing_yaw_from_shoulders(j[_LS], j[_RS]))

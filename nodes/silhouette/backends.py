@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
+from .body_shadow import BodyShadowConfig, reclaim_body_shadow
 from .deferred import DeferredStep
 from .people import fit_around_people
 from .samples import SampleConsensus
@@ -72,6 +73,10 @@ class HorprasertSubtractor:
         do not need) in a worker thread while the caller goes on with the labels; the next frame
         (and a read of ``model``) waits for it first, so the results are the same as without. On
         two cores this hides most of the update's cost.
+    body_shadow : BodyShadowConfig or None, default=None
+        Which shadow labels inside a body (dark clothes, hair) are published as foreground
+        (``body_shadow.reclaim_body_shadow``); None: none (off). The model learns from the labels
+        before this step.
     **model_params : Any
         Go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
 
@@ -93,6 +98,7 @@ class HorprasertSubtractor:
         dynamic: bool = True,
         sample_params: dict[str, Any] | None = None,
         threaded: bool = True,
+        body_shadow: BodyShadowConfig | None = None,
         **model_params: Any,
     ) -> None:
         if train_frames < 2:
@@ -113,6 +119,7 @@ class HorprasertSubtractor:
         self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
         self.threaded = threaded
+        self.body_shadow = BodyShadowConfig(span_px=0) if body_shadow is None else body_shadow
         self._deferred = DeferredStep("horprasert-update")
 
     @property
@@ -211,6 +218,7 @@ class HorprasertSubtractor:
             self._deferred.submit(self._model.update, frame, labels.copy())
         else:
             self._model.update(frame, labels)
+        labels = reclaim_body_shadow(labels, self.body_shadow)
         self.labels = labels
         return labels == FOREGROUND
 

@@ -30,6 +30,7 @@ from counterpart.messages import Frame, Silhouettes
 from counterpart.messages.silhouette import PersonShape
 
 from .backends import BACKEND_NAMES
+from .body_shadow import BodyShadowConfig
 from .pipeline import FrameResult, SilhouetteExtractor
 from .regions import Person
 
@@ -187,6 +188,15 @@ class Silhouette(Node):
             min=-1.0,
             max=1.0,
         ),
+        "body_shadow_px": Param(
+            int,
+            0,
+            "horprasert: a shadow pixel with foreground above and below it within this many "
+            "rows, above the lowest fifth of its region, is foreground (dark clothes and hair, "
+            "not a cast shadow); 0: off; 15 was tuned on the CDnet tune halves",
+            min=0,
+            max=1000,
+        ),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -227,6 +237,7 @@ class Silhouette(Node):
                 "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
                 "dynamic": p["dynamic"],
                 "shadow_ncc": p["shadow_ncc"],
+                "body_shadow": BodyShadowConfig(span_px=p["body_shadow_px"]),
             }
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
