@@ -11,9 +11,10 @@ foot's viewing ray meets the ground at G_i; the head predicted at G_i + H_k e_y 
 t_hat_i. Minimised over (log f, theta, rho, log h_c, log H_1..H_K)::
 
     sum_i rho(|t_hat_i - t_i|^2 / (w_i sigma_i)^2)                              (head reprojection)
-    + sum_k ((log H_k - log H0) / s_H)^2 + ((log f - log f0) / s_f)^2 + (rho / s_rho)^2   (priors)
+    + sum_k rho(((log H_k - log H0) / s_H)^2) + ((log f - log f0) / s_f)^2 + (rho / s_rho)^2   (priors)
 
-rho is a robust loss (soft L1: raised arms, merged or cut regions are outliers), sigma_i a share of
+rho is a robust loss (soft L1: raised arms, merged or cut regions are outliers, and so is a
+"person" whose stature is far from the prior: a fragment or a ghost), sigma_i a share of
 the person's pixel height, and w_i = sqrt(c_k) with c_k the observations of person k per
 correlation time (consecutive frames of one person are not independent views). The head residual
 holds both cues of the literature at once: its direction across the head-foot line is the vertical
@@ -363,16 +364,38 @@ def _residuals(
     line_scale: np.ndarray | None = None,
 ) -> np.ndarray:
     r = ((_project_heads(x[: 4 + n_people], head, foot, track, size) - head) / scale).ravel()
-    priors = np.concatenate(
-        [
-            (x[4 : 4 + n_people] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height),
-            [(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)],
-        ]
+    statures = (x[4 : 4 + n_people] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height)
+    # the camera's priors stay Gaussian; a stature's stays robust (a fragment of a person, or a
+    # ghost, tracked as a person of its own must not set the scale)
+    camera = _gaussian_under_soft_l1(
+        np.array([(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)])
     )
+    priors = np.concatenate([statures, camera])
     if lines is None or not len(lines.segments):
         return np.concatenate([r, priors])
     rl = segment_angles(lines.segments, _vanishing_points(x, n_people, lines, size)) / line_scale
     return np.concatenate([r, priors, rl, _manhattan(x[4 + n_people :], cfg.manhattan_std_deg)])
+
+
+def _gaussian_under_soft_l1(q: np.ndarray) -> np.ndarray:
+    """Residuals whose soft-L1 loss is ``q**2``: a Gaussian prior kept Gaussian in a robust fit.
+
+    ``least_squares`` applies its loss to every residual; a prior's would then grow only linearly
+    far from its centre, and a fit could leave it by many standard deviations (a focal length 25
+    times the prior's) for a small gain on the data. With ``rho(z) = 2 (sqrt(1 + z) - 1)``,
+    ``r = q sqrt(1 + q**2 / 4)`` gives ``rho(r**2) = q**2``.
+
+    Parameters
+    ----------
+    q : ndarray of shape (n,)
+        Prior residuals in standard deviations.
+
+    Returns
+    -------
+    ndarray of shape (n,)
+        The residuals to hand to the robust fit.
+    """
+    return q * np.sqrt(1.0 + 0.25 * q * q)
 
 
 def _manhattan(phi: np.ndarray, std_deg: float | None) -> np.ndarray:
