@@ -55,7 +55,7 @@ from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
 from counterpart.nodes.responder.reach import reach
-from counterpart.nodes.responder.staging import Reach, Stage, silhouette_reach, stature
+from counterpart.nodes.responder.staging import Reach, Stage, across_view, silhouette_reach, stature
 
 VIS = 0.5
 HOLD_FRAMES = 15  # the responder node's default hold_frames
@@ -159,7 +159,8 @@ def staged_partner(
     model.reset()
     partner = np.full_like(joints, np.nan)
     observed = np.where(lost[:, None, None], np.nan, joints)
-    towards = 1.0 if side == 0 else -1.0  # the left person's partner stands to their right (world +X)
+    towards = 1.0 if side == 0 else -1.0  # the left person's partner stands to their right (image right)
+    across = across_view(camera.R)  # the responder node's camera_info
     last = -(10**9)
     for t in range(len(joints)):
         if lost[t] or not np.isfinite(joints[t]).all():
@@ -174,7 +175,9 @@ def staged_partner(
             else None
         )
         dt = (t - last) / fps if last >= 0 else 1.0 / fps
-        staged = stage(joints[t], model.step(joints[t]), dt, other=other, side=towards, silhouette=silhouette)
+        staged = stage(
+            joints[t], model.step(joints[t]), dt, other=other, side=towards, silhouette=silhouette, across=across
+        )
         partner[t] = reach(joints[t], staged, offered=stage.offered_)[0]
         last = t
     return partner, observed, camera, fps

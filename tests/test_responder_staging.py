@@ -7,10 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from counterpart.body.camera import Camera
+from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
-from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach
+from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, across_view, silhouette_reach
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 
@@ -76,6 +78,25 @@ def test_the_partner_stands_beside_the_person_across_the_view_not_in_front_or_be
     # with a second person tracked, their side wins over the one given
     out = Stage()(obs, person(0.3, 1.9, np.pi), 0.04, other=person(0.3 - side, 1.4), side=side)
     assert (ground(out) - ground(obs)) == pytest.approx([-side * 0.9, 0.0], abs=1e-6)
+
+
+@pytest.mark.parametrize("bearing_deg", [0.0, 40.0, -60.0])
+def test_the_partner_stands_beside_the_person_as_a_turned_camera_sees_them(bearing_deg: float) -> None:
+    # a camera 4 m away at a bearing round the person (the simulator's random cameras turn up to 60
+    # degrees): the partner stands at the person's depth in that camera, to the right in its picture
+    obs = person(0.0, 0.0)
+    b = np.deg2rad(bearing_deg)
+    cam = Camera.look_at([4.0 * np.sin(b), 1.6, 4.0 * np.cos(b)], [0.0, 0.9, 0.0], 55.0, 320, 240)
+    out = Stage()(obs, person(0.0, 0.8, np.pi), 0.04, side=1.0, across=across_view(cam.R))
+    hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
+    depth = cam.depth(np.stack([out[hips].mean(0), obs[hips].mean(0)]))
+    assert depth[0] == pytest.approx(depth[1], abs=1e-6)
+    assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(0.8, abs=1e-6)
+    u = cam.project(np.stack([out[hips].mean(0), obs[hips].mean(0)]))[:, 0]
+    assert u[0] - u[1] > 30.0  # image right, clear of the person
+    if bearing_deg:  # world X (a camera without yaw) would put it in front of or behind them in this view
+        old = Stage()(obs, person(0.0, 0.8, np.pi), 0.04, side=1.0)
+        assert abs(cam.depth(old[hips].mean(0)[None])[0] - depth[1]) > 0.3
 
 
 def test_the_partner_stays_beside_a_person_whose_estimate_jumps() -> None:

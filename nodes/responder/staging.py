@@ -9,9 +9,10 @@ model's posture and gestures are kept:
 
 1. the partner stands beside the observed person as the camera sees them (``beside``): its ground
    offset from the person, p - o (p, o the mid-hips dropped to the floor,
-   :func:`.frames.actor_frame`), is taken across the camera's view, at the person's depth (every
-   camera of the project looks along -Z with no yaw, :mod:`counterpart.body.camera`, so "across"
-   is the world X axis and image right is +X). Its side is where the real second person stands
+   :func:`.frames.actor_frame`), is taken across the camera's view, at the person's depth: along
+   the ground direction of the camera's x axis (``across``, :func:`across_view`; image right is
+   +``across``), world X when the caller has no camera (a camera looking along -Z with no yaw,
+   as the default one, :mod:`counterpart.body.camera`). Its side is where the real second person stands
    when one is tracked (``other``; it changes only when they are more than ``side_margin_m`` on
    the other side), else the side the caller gives (the observed person's side of the picture:
    the partner stands towards the middle), else the model's. Not beside: the model's direction.
@@ -50,8 +51,8 @@ _ARMS = [JOINT_INDEX[j] for j in ("l_elbow", "r_elbow", "l_wrist", "r_wrist")]
 _WRISTS = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
 _NECK, _HIPS = JOINT_INDEX["neck"], [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
 _SHOULDERS = [JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]]
-#: the ground direction (x, z) across the camera's view, image right: every camera of the project
-#: looks along -Z with no yaw (body.camera.Camera.look_at from +Z, calibration.estimate.rotation)
+#: the ground direction (x, z) across the camera's view, image right, without a camera: that of a
+#: camera looking along -Z with no yaw (the default camera, calibration.estimate.rotation)
 ACROSS = np.array([1.0, 0.0])
 #: the heights of the arms (hips to shoulders, a little either way) as fractions of a person's height
 ARM_BAND = (0.35, 0.85)
@@ -132,6 +133,28 @@ class StageConfig:
             )
         if self.side_margin_m < 0 or self.offer_m < 0:
             raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
+
+
+def across_view(R: np.ndarray) -> np.ndarray:
+    """The ground direction across a camera's view, towards image right.
+
+    The camera's x axis in world coordinates is the first row of its world-to-camera rotation
+    (``X_c = R X_w + t``); dropped onto the ground plane (world Y up) it is the direction along
+    which a point moves right in the picture at constant depth, whatever the camera's yaw.
+
+    Parameters
+    ----------
+    R : ndarray of shape (3, 3)
+        World-to-camera rotation.
+
+    Returns
+    -------
+    ndarray of shape (2,)
+        Unit ground vector (x, z); ``ACROSS`` for a camera whose x axis is vertical (rolled 90 degrees).
+    """
+    x = np.asarray(R, np.float64).reshape(3, 3)[0, [0, 2]]
+    n = float(np.hypot(*x))
+    return x / n if n > 1e-6 else ACROSS.copy()
 
 
 def stature(joints: np.ndarray) -> float:
@@ -300,14 +323,16 @@ class Stage:
         """The side across the view the partner stands on: +1 image right (world +X), -1 left, 0 not yet placed."""
         return self._side
 
-    def _choose_side(self, o: np.ndarray, other: np.ndarray | None, side: float, model: np.ndarray) -> float:
+    def _choose_side(
+        self, o: np.ndarray, other: np.ndarray | None, side: float, model: np.ndarray, across: np.ndarray
+    ) -> float:
         """The side across the view (+1 / -1) the partner stands on; see the module's step 1."""
         if other is not None and np.isfinite(other).all():
-            across = float((actor_frame(np.asarray(other, np.float64))[0][[0, 2]] - o) @ ACROSS)
+            across = float((actor_frame(np.asarray(other, np.float64))[0][[0, 2]] - o) @ across)
             if self._side == 0.0 or (np.sign(across) != self._side and abs(across) > self.config.side_margin_m):
                 self._side = float(np.sign(across)) or self._side
         if self._side == 0.0:
-            self._side = float(np.sign(side)) or float(np.sign(model @ ACROSS))
+            self._side = float(np.sign(side)) or float(np.sign(model @ across))
         return self._side
 
     def _advancing(self, silhouette: Reach | None, dt: float) -> float:
@@ -343,6 +368,7 @@ class Stage:
         other: np.ndarray | None = None,
         side: float = 0.0,
         silhouette: Reach | None = None,
+        across: np.ndarray | None = None,
     ) -> np.ndarray:
         """The partner's joints, world metres, moved rigidly to a valid place.
 
@@ -362,6 +388,9 @@ class Stage:
             What the observed person's silhouette says of their reach towards the partner
             (:func:`silhouette_reach`): a hand held out, and with the body advancing a push; None:
             only their tracked arms are their reach.
+        across : ndarray of shape (2,) or None, default=None
+            The ground direction (x, z) across the camera's view towards image right
+            (:func:`across_view` of the camera's rotation); None: ``ACROSS``, the default camera's.
 
         Returns
         -------
@@ -388,10 +417,11 @@ class Stage:
         d = p - o
         r = float(np.hypot(*d))
         if c.beside:
-            s = self._choose_side(o, other, side, d)
+            u = ACROSS if across is None else np.asarray(across, np.float64)
+            s = self._choose_side(o, other, side, d, u)
             # the model's distance across the view; along the person's facing when nothing gives a side
             if s != 0.0:
-                d = s * max(r, 1e-3) * ACROSS
+                d = s * max(r, 1e-3) * u
         r = float(np.hypot(*d))
         if r > 1e-6:  # the step back is from where it stands
             d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
