@@ -37,7 +37,7 @@ from counterpart.messages import (
 
 from .emotion import StyleFilter
 from .reach import ReachConfig, reach
-from .staging import Stage, StageConfig, across_view, silhouette_reach, stature
+from .staging import Stage, StageConfig, silhouette_reach, stature
 
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
@@ -286,8 +286,8 @@ class Responder(Node):
     def _scene(self, body: Any, seq: int) -> dict[str, Any]:
         """What the stage knows of the scene besides the observed ``body`` (a TrackedBody) on frame
         ``seq``: the real second person tracked in the same poses, the side to stand on (towards the
-        middle of the picture), the observed person's silhouette extent towards the partner, and the
-        direction across the camera's view.
+        middle of the picture), the observed person's silhouette extent towards the partner and its
+        box (theirs alone, not merged), and the graph's camera.
         """
         people = list(getattr(self.latest.get("pose"), "people", ()))
         other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
@@ -298,13 +298,15 @@ class Responder(Node):
         shape = next((q for q in mine if q.id == body.id), mine[0] if mine else None)
         direction = (self.stage.side if self.stage is not None else 0.0) or side
         if shape is not None and direction != 0.0:
-            silhouette = silhouette_reach(shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl)
-        camera = self._camera(seq)
+            silhouette = silhouette_reach(
+                shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl, touching=shape.merged
+            )
         return {
             "other": None if other is None else np.asarray(other.joints),
             "side": side,
             "silhouette": silhouette,
-            "across": None if camera is None else across_view(camera.R),
+            "camera": self._camera(seq),
+            "box": None if shape is None or shape.merged else tuple(shape.bbox),
         }
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
