@@ -107,6 +107,10 @@ class StageConfig:
     push_touch : bool, default=True
         A silhouette push needs the silhouette to touch someone else's (:attr:`Reach.touching`):
         a pusher walks in with the arm out well before the hand lands.
+    hand_frac : float, default=0.6
+        The height of a hand held out while the silhouette touches someone else's, fraction of the
+        person's stature above their lowest ankle (where the regions were split, the outline's tip
+        says nothing of the hand's height); 0: the outline's tip as elsewhere.
     recoil_speed_m_s : float, default=0.75
         How fast the partner steps back when pushed, metres per second (the return is the fading,
         ``recoil_s``).
@@ -135,6 +139,7 @@ class StageConfig:
     advance_s: float = 0.15
     clear_iou: float = 0.15
     push_touch: bool = True
+    hand_frac: float = 0.6
     recoil_speed_m_s: float = 0.75
 
     def __post_init__(self) -> None:
@@ -527,7 +532,10 @@ class Stage:
             lo, hi = float(X[_HIPS, 1].mean()), float(X[_SHOULDERS, 1].mean())
             u = offset / max(float(np.hypot(*offset)), 1e-9)
             near = X[_WRISTS][int(np.argmax((X[_WRISTS][:, [0, 2]] - o) @ u))]
-            y = float(np.clip(near[1] if silhouette.height_m is None else silhouette.height_m, lo, hi))
+            y = near[1] if silhouette.height_m is None else silhouette.height_m
+            if silhouette.touching and c.hand_frac > 0:  # the outline's tip is where the regions were split
+                y = c.hand_frac * stature(X) + float(X[_ANKLES, 1].min())
+            y = float(np.clip(y, lo, hi))
             out = min(silhouette.extent_m, c.meet_frac * float(np.hypot(*offset)))  # hands meet between the two
             self.offered_ = np.array([o[0] + out * u[0], y, o[1] + out * u[1]])
         shift = np.zeros(3)
