@@ -12,7 +12,7 @@ from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
-from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach
+from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach, stature
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 
@@ -250,6 +250,11 @@ def test_a_hand_held_out_is_offered_and_with_the_body_advancing_is_a_push() -> N
     stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.85, 1.0, 0.0))
     assert stage.pushes == 0
     np.testing.assert_allclose(stage.offered_, [0.63, 1.0, 2.0], atol=1e-6)
+    # touching someone else's silhouette, the outline's tip is where the regions were split: the hand
+    # is offered at hand_frac (0.6) of the person's stature, whatever the tip's height
+    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 0.5, 0.0, True))
+    assert stage.pushes == 0
+    assert stage.offered_[1] == pytest.approx(0.6 * stature(obs) + obs[[10, 13], 1].min())
 
     # the same hand with the body advancing at 1 m/s (its silhouette's centre 4 cm a frame): a pusher
     # walking in, no push until the hand lands (their silhouette touches someone else's)
