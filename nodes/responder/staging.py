@@ -18,7 +18,8 @@ model's posture and gestures are kept:
    the partner stands towards the middle), else the model's. Not beside: the model's direction.
    Its length is the model's ground distance clipped to [``min_distance_m``, ``max_distance_m``]
    (along the observed person's facing when p lies on o and nothing gives a side). With the
-   camera and the observed person's silhouette box (``box``, not merged with another person's), it
+   camera and the observed person's silhouette box (``box``; a region shared with another person's
+   is split, the split box is theirs), it
    then grows, within ``max_distance_m``, as little as makes the partner's projected box overlap
    that box by at most ``clear_iou`` (intersection over union): the tracked person's place is off
    by decimetres on real video, their silhouette is where the picture shows them;
@@ -32,9 +33,13 @@ model's posture and gestures are kept:
    silhouette (:func:`silhouette_reach`), when it holds a hand out (its leading point ``offer_m``
    from its centre) while its centre advances towards the partner at ``push_speed_m_s`` or more
    (the torso and the arm forward together: tracked arms are the least reliable joints on real
-   video, a silhouette's outline is not), its distance grows by ``recoil_m``, held while the push
-   goes on, which then fades with time constant ``recoil_s`` (the step back, then the return; still within the limits and
-   the speed of 1 and 2). A hand held out without a push is offered (:attr:`Stage.offered_`);
+   video, a silhouette's outline is not) and, with ``push_touch``, the silhouette touches someone
+   else's (:attr:`Reach.touching`: a pusher walks in with the arm out well before the hand lands),
+   its distance grows by ``recoil_m`` at ``recoil_speed_m_s``, held while the push goes on, which
+   then fades with time constant ``recoil_s`` (the step back, then the return; still within the
+   limits and the speed of 1 and 2). A hand held out without a push is offered
+   (:attr:`Stage.offered_`), at the height of the silhouette's tip, or at ``hand_frac`` of the
+   person's stature where the silhouette touches someone else's;
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
