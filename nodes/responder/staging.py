@@ -525,8 +525,8 @@ class Stage:
         if r > 1e-6:  # the step back is from where it stands
             d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
         offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
-        if camera is not None and box is not None:
-            r = float(np.hypot(*offset))
+        r = float(np.hypot(*offset))
+        if camera is not None and box is not None and r > 1e-6:
             lengths = np.linspace(r, max(r, c.max_distance_m), 8)
             offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou)
         if self._last is not None:
