@@ -4,7 +4,8 @@ Inputs (each optional by parameter, so a graph without a tracker still validates
 (tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
 ``signals`` (labeller.SocialSignals, ``use_signals``), ``control`` (control.Control, latest
 policy, a side input that does not hold the node open) and ``camera_info`` (camera.CameraInfo, the
-calibration node's, ``camera_info``; a side input too: the partner stands across that camera's view). The model in force decides which input
+calibration node's, ``camera_info``; a side input too: the partner stands across that camera's view,
+clear of the observed person's silhouette in its picture). The model in force decides which input
 drives the output: dual-hmm, gpdm, listener and video-texture produce one Partner per ``pose``
 (listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
 ``silhouettes``; the others are
@@ -79,7 +80,8 @@ class Responder(Node):
             bool,
             False,
             "subscribe to 'camera_info' (the calibration node's camera): the partner stands across that "
-            "camera's view; false: across the view of a camera looking along -Z with no yaw (the default camera's)",
+            "camera's view and, with use_silhouettes, clear of the observed person's silhouette in its picture; "
+            "false: across the view of a camera looking along -Z with no yaw (the default camera's)",
         ),
         "speaker": Param(str, "person", "who speaks (listener model)", choices=SPEAKERS),
         "interest": Param(int, 3, "listener interest level", choices=INTEREST_LEVELS),
