@@ -954,28 +954,31 @@ class HorprasertBackground:
         sh, sw = max(1, h // 4), max(1, w // 4)
         k = max(5, (h // 32) | 1)
         bgm = (~fg).view(np.uint8)
-        support = cv2.resize(bgm.astype(np.float32), (sw, sh), interpolation=cv2.INTER_AREA)
-        frac = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)
-        sy = np.minimum(ys * sh // h, sh - 1)
-        sx = np.minimum(xs * sw // w, sw - 1)
-        cnt = frac[sy, sx]
-        near = np.empty_like(run)
-        if h % 4 == 0:
-            # the three planes stacked as one (3 H, W) image: one product and one area resize
-            # (4 x 4 block means, which never straddle two planes) instead of three each
-            small3 = cv2.resize(
-                cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
-                (sw, 3 * sh),
-                interpolation=cv2.INTER_AREA,
-            )
-            smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
+        if h % 4 == 0 and w % 4 == 0:
+            cnt, near = _surround_near_candidates(self._mu, bgm, ys // 4, xs // 4, k)
         else:
-            smalls = [
-                cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
-                for c in range(3)
-            ]
-        for c in range(3):
-            near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
+            support = cv2.resize(bgm.astype(np.float32), (sw, sh), interpolation=cv2.INTER_AREA)
+            frac = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)
+            sy = np.minimum(ys * sh // h, sh - 1)
+            sx = np.minimum(xs * sw // w, sw - 1)
+            cnt = frac[sy, sx]
+            near = np.empty_like(run)
+            if h % 4 == 0:
+                # the three planes stacked as one (3 H, W) image: one product and one area resize
+                # (4 x 4 block means, which never straddle two planes) instead of three each
+                small3 = cv2.resize(
+                    cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
+                    (sw, 3 * sh),
+                    interpolation=cv2.INTER_AREA,
+                )
+                smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
+            else:
+                smalls = [
+                    cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
+                    for c in range(3)
+                ]
+            for c in range(3):
+                near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
         near /= np.maximum(cnt, 1e-3)
         # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
         s_run = run.sum(axis=0) + 1.0
@@ -1098,6 +1101,57 @@ class HorprasertBackground:
     def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
         z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
         return z.max(axis=0) <= self.training.robust_inlier_k
+
+
+def _surround_near_candidates(
+    mu: np.ndarray, bgm: np.ndarray, sy: np.ndarray, sx: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The background support and E sums around candidate cells, for ``_matches_surround`` with
+    frames whose sides are multiples of 4.
+
+    On the 4 x 4 block means (``cv2.INTER_AREA`` at an exact factor of 4: each cell from its own
+    block) of the background mask ``bgm`` and of E times it, a k x k normalised box filter
+    (``BORDER_REFLECT``) read at the candidates' cells. Only the cells within k // 2 of a
+    candidate's are computed: the candidates (a still person or a ghost) cover a small part of
+    the frame. The box filter of float32 input sums in float64, exactly for grey levels, so a
+    cell's value does not depend on the crop (and a crop edge on the frame's edge reflects as the
+    frame's does).
+
+    Parameters
+    ----------
+    mu : ndarray of shape (3, H, W), dtype float32
+        E planes, grey levels; H and W multiples of 4.
+    bgm : ndarray of shape (H, W), dtype uint8
+        1 on background pixels, 0 on foreground.
+    sy, sx : ndarray of shape (K,), dtype int
+        The candidates' cells (pixel row and column // 4).
+    k : int
+        Box side, cells (odd).
+
+    Returns
+    -------
+    cnt : ndarray of shape (K,), dtype float32
+        Fraction of background pixels around each candidate.
+    near : ndarray of shape (3, K), dtype float32
+        Sum of E over those pixels, per channel, over the same area (divide by ``cnt``).
+    """
+    sh, sw = mu.shape[1] // 4, mu.shape[2] // 4
+    r = k // 2
+    y0, y1 = max(0, int(sy.min()) - r), min(sh, int(sy.max()) + r + 1)
+    x0, x1 = max(0, int(sx.min()) - r), min(sw, int(sx.max()) + r + 1)
+    ch, cw = y1 - y0, x1 - x0
+    crop = bgm[4 * y0 : 4 * y1, 4 * x0 : 4 * x1]
+    support = cv2.resize(crop.astype(np.float32), (cw, ch), interpolation=cv2.INTER_AREA)
+    cy, cx = sy - y0, sx - x0
+    cnt = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)[cy, cx]
+    # the three planes stacked as one (3 ch, cw) image: one product and one area resize (block
+    # means never straddle two planes)
+    prod = np.multiply(mu[:, 4 * y0 : 4 * y1, 4 * x0 : 4 * x1], crop, dtype=np.float32)
+    small3 = cv2.resize(prod.reshape(3 * 4 * ch, 4 * cw), (cw, 3 * ch), interpolation=cv2.INTER_AREA)
+    near = np.empty((3, sy.size), np.float32)
+    for c in range(3):
+        near[c] = cv2.boxFilter(small3[c * ch : (c + 1) * ch], -1, (k, k), borderType=cv2.BORDER_REFLECT)[cy, cx]
+    return cnt, near
 
 
 def _float_planes(frame: np.ndarray) -> list[np.ndarray]:
