@@ -399,6 +399,8 @@ class HorprasertBackground:
         # (frame, its alpha, its float32 channel planes) of the last apply
         self._last_alpha: tuple[np.ndarray, np.ndarray, list[np.ndarray]] | None = None
         self._w: np.ndarray | None = None
+        # (H + 2 r, W + 2 r) float32 grey sum of E, reflect-padded by r = shadow_window // 2
+        self._e_pad: np.ndarray | None = None
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
@@ -745,8 +747,7 @@ class HorprasertBackground:
             return np.take(cv2.copyMakeBorder(a, r, r, r, r, cv2.BORDER_REFLECT).reshape(-1), at)
 
         m = gather(sh, win).astype(np.float32)  # (K, window) 1 on shadow pixels
-        mu = self._mu
-        e = gather(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), win)
+        e = np.take(self._e_pad, win)
         # row sums as einsum: numpy's reductions over short rows cost several times more
         inv_n = 1.0 / np.maximum(np.einsum("ij->i", m), 1.0)
         em = e * m
@@ -760,7 +761,13 @@ class HorprasertBackground:
             # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
             return
         win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
-        grey = gather(cv2.add(cv2.add(planes[0], planes[1]), planes[2]), win)
+        # the frame's grey levels at those windows only, read from the unpadded planes at the
+        # reflected pixels (the same sums as over the padded frame)
+        py, px = np.divmod(win, wp)
+        at = _reflect(py - r, h) * w + _reflect(px - r, w)
+        flat = [p.reshape(-1) for p in planes]
+        grey = np.take(flat[0], at) + np.take(flat[1], at)
+        grey += np.take(flat[2], at)
         gm = grey * m
         mi = np.einsum("ij->i", gm) * inv_n
         vi = np.einsum("ij,ij->i", gm, grey) * inv_n - mi * mi
@@ -1054,6 +1061,11 @@ class HorprasertBackground:
         cv2.divide(1.0, den, dst=den)
         if cv2.countNonZero(black):
             den[black > 0] = 0.0
+        if self.shadows.shadow_ncc > -1.0:
+            # the texture test's background grey levels, padded as its windows read them: E is
+            # fixed until the next update, so this runs with the update (in its worker thread)
+            r = self.shadows.shadow_window // 2
+            self._e_pad = cv2.copyMakeBorder(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), r, r, r, r, cv2.BORDER_REFLECT)
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
@@ -1101,6 +1113,13 @@ class HorprasertBackground:
     def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
         z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
         return z.max(axis=0) <= self.training.robust_inlier_k
+
+
+def _reflect(i: np.ndarray, n: int) -> np.ndarray:
+    """Indices ``i`` (any shape, int) into an axis of length ``n``, out-of-range ones mirrored as
+    ``cv2.BORDER_REFLECT`` pads (-1 -> 0, n -> n - 1; at most n beyond either end).
+    """
+    return np.where(i < 0, -1 - i, np.where(i >= n, 2 * n - 1 - i, i))
 
 
 def _surround_near_candidates(

@@ -257,6 +257,7 @@ class SampleConsensus:
         self._spread = gap[:, : max(1, min(n, self.n_samples) - 1)].mean(axis=1)
         self._blink = np.zeros(h * w, np.float32)
         self._prev_fg = np.zeros(h * w, np.uint8)
+        self._prev_idx = np.zeros(0, np.int64)  # flat indices of the nonzero pixels of _prev_fg
         return self
 
     def explained(self, frame: np.ndarray, idx: np.ndarray) -> np.ndarray:
@@ -435,16 +436,29 @@ class SampleConsensus:
         fg = np.zeros((h, w), np.uint8)
         fg.reshape(-1)[fg_idx] = 1
         prev = self._prev_fg.reshape(h, w)
-        # OpenCV's 0 / 255 masks and masked float ops: whole-frame passes, kept few and cheap
-        blink = cv2.compare(fg, prev, cv2.CMP_NE)
-        solid = cv2.dilate(cv2.morphologyEx(prev, cv2.MORPH_OPEN, _OPEN), _NEAR)
-        cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
-        self._prev_fg = fg.reshape(-1)
         v = self._blink.reshape(h, w)
         np.subtract(v, np.float32(self.blink_decay), out=v)
-        cv2.add(v, float(np.float32(self.blink_gain + self.blink_decay)), dst=v, mask=blink)
-        cv2.min(v, float(np.float32(self.max_radius_gain - 1.0)), dst=v)
+        # Switches happen only on this or the last frame's foreground: the masks are worked out
+        # on their bounding box, with a margin of zeros wider than the opening's reach (outside
+        # it the opening is 0, as the erosion's and dilation's borders take it to be)
+        both = np.concatenate((fg_idx, self._prev_idx))
+        if both.size:
+            ys, xs = np.divmod(both, w)
+            m = 4
+            y0, y1 = max(0, int(ys.min()) - m), min(h, int(ys.max()) + m + 1)
+            x0, x1 = max(0, int(xs.min()) - m), min(w, int(xs.max()) + m + 1)
+            fg_c, prev_c = fg[y0:y1, x0:x1], prev[y0:y1, x0:x1]
+            # OpenCV's 0 / 255 masks and masked float ops
+            blink = cv2.compare(fg_c, prev_c, cv2.CMP_NE)
+            solid = cv2.dilate(cv2.morphologyEx(prev_c, cv2.MORPH_OPEN, _OPEN), _NEAR)
+            cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
+            vc = v[y0:y1, x0:x1]
+            cv2.add(vc, float(np.float32(self.blink_gain + self.blink_decay)), dst=vc, mask=blink)
+            # only the levels raised here can pass the top
+            cv2.min(vc, float(np.float32(self.max_radius_gain - 1.0)), dst=vc)
         cv2.max(v, 0.0, dst=v)
+        self._prev_fg = fg.reshape(-1)
+        self._prev_idx = fg_idx
 
 
 def _l1(rows: np.ndarray, colours: np.ndarray, n: int) -> np.ndarray:
