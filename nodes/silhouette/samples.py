@@ -307,7 +307,7 @@ class SampleConsensus:
         """Veto the statistical model's foreground where the samples explain the colour, and learn.
 
         After the veto the samples of BACKGROUND pixels are updated (ViBe's random, diffused update) and
-        the blink levels (SuBSENSE feedback) follow the final foreground.
+        the blink levels (SuBSENSE feedback) follow the final foreground: ``veto`` then ``learn``.
 
         Parameters
         ----------
@@ -329,6 +329,35 @@ class SampleConsensus:
         ValueError
             When ``frame`` or ``labels`` is not of the fitted size.
         """
+        out, fg_idx = self.veto(frame, labels)
+        self.learn(frame, labels, fg_idx)
+        return out
+
+    def veto(self, frame: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The first half of ``apply``: the labels with the explained foreground turned to
+        BACKGROUND, without learning.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame, of the fitted size.
+        labels : ndarray of shape (H, W), dtype uint8
+            Horprasert classes of ``frame``.
+
+        Returns
+        -------
+        out : ndarray of shape (H, W), dtype uint8
+            The vetoed labels (a new array).
+        fg_idx : ndarray of shape (K,), dtype int
+            Flat indices of the FOREGROUND pixels left, for ``learn``.
+
+        Raises
+        ------
+        RuntimeError
+            When not fitted.
+        ValueError
+            When ``frame`` or ``labels`` is not of the fitted size.
+        """
         if self._samples is None:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if frame.shape[:2] != self._shape or labels.shape != self._shape:
@@ -336,21 +365,49 @@ class SampleConsensus:
                 f"frame and labels must be {self._shape} (the fitted size), got {frame.shape[:2]} and {labels.shape}"
             )
         self._deferred.join()
-        flat = labels.reshape(-1)
-        idx = np.flatnonzero(flat == FOREGROUND)
+        idx = np.flatnonzero(labels.reshape(-1) == FOREGROUND)
         out = labels.copy()
         if idx.size:
             ok = self.explained(frame, idx)
             out.reshape(-1)[idx[ok]] = BACKGROUND
-            fg_idx = idx[~ok]
-        else:
-            fg_idx = idx
+            return out, idx[~ok]
+        return out, idx
+
+    def learn(self, frame: np.ndarray, labels: np.ndarray, fg_idx: np.ndarray, copy: bool = True) -> None:
+        """The second half of ``apply``: learn from the frame, in the worker thread when ``threaded``.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame, of the fitted size.
+        labels : ndarray of shape (H, W), dtype uint8
+            Horprasert classes of ``frame`` (before the veto).
+        fg_idx : ndarray of shape (K,), dtype int
+            The foreground left after the veto, as ``veto`` returns it.
+        copy : bool, default=True
+            The worker learns from copies of ``frame`` and ``labels``; False when the caller
+            changes neither of them again.
+        """
+        flat = labels.reshape(-1)
         if self.threaded:
             # the caller may reuse its buffers once this returns: the worker learns from copies
-            self._deferred.submit(self._learn, frame.copy(), flat.copy(), fg_idx)
+            if copy:
+                frame, flat = frame.copy(), flat.copy()
+            self._deferred.submit(self._learn, frame, flat, fg_idx)
         else:
             self._learn(frame, flat, fg_idx)
-        return out
+
+    def share_worker(self, step: DeferredStep) -> None:
+        """Learn in ``step``'s worker thread, after the calls it was given before (see
+        ``deferred.DeferredStep``).
+
+        Parameters
+        ----------
+        step : DeferredStep
+            The step whose worker runs this model's learning.
+        """
+        self._deferred.join()
+        self._deferred = DeferredStep("sample-consensus", share_with=step)
 
     def _learn(self, frame: np.ndarray, flat_labels: np.ndarray, fg_idx: np.ndarray) -> None:
         """ViBe's update from ``frame`` (H, W, 3) with the statistics' flat labels (H * W,), then the
