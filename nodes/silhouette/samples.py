@@ -311,23 +311,14 @@ class SampleConsensus:
 
         Parameters
         ----------
-        frame : ndarray of shape (H, W, 3), dtype uint8
-            BGR frame, of the fitted size.
-        labels : ndarray of shape (H, W), dtype uint8
-            Horprasert classes of ``frame``.
+        frame, labels : ndarray
+            As for ``veto``: the (H, W, 3) uint8 BGR frame and its (H, W) uint8 Horprasert classes.
 
         Returns
         -------
         ndarray of shape (H, W), dtype uint8
             The labels with FOREGROUND pixels that match their sample set turned to BACKGROUND (a new
-            array).
-
-        Raises
-        ------
-        RuntimeError
-            When not fitted.
-        ValueError
-            When ``frame`` or ``labels`` is not of the fitted size.
+            array). Errors: as ``veto``'s.
         """
         out, fg_idx = self.veto(frame, labels)
         self.learn(frame, labels, fg_idx)
