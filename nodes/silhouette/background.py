@@ -401,6 +401,7 @@ class HorprasertBackground:
         self._w: np.ndarray | None = None
         # (H + 2 r, W + 2 r) float32 grey sum of E, reflect-padded by r = shadow_window // 2
         self._e_pad: np.ndarray | None = None
+        self._pad_flat: np.ndarray | None = None  # padded flat index -> frame flat index (texture test)
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
@@ -763,8 +764,11 @@ class HorprasertBackground:
         win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
         # the frame's grey levels at those windows only, read from the unpadded planes at the
         # reflected pixels (the same sums as over the padded frame)
-        py, px = np.divmod(win, wp)
-        at = _reflect(py - r, h) * w + _reflect(px - r, w)
+        if self._pad_flat is None or self._pad_flat.size != (h + 2 * r) * wp:
+            # padded frame's flat index -> the unpadded frame's flat index that the padding copies
+            ry, rx = _reflect(np.arange(-r, h + r), h), _reflect(np.arange(-r, w + r), w)
+            self._pad_flat = (ry[:, None] * w + rx[None, :]).reshape(-1)
+        at = np.take(self._pad_flat, win)
         flat = [p.reshape(-1) for p in planes]
         grey = np.take(flat[0], at) + np.take(flat[1], at)
         grey += np.take(flat[2], at)
