@@ -58,7 +58,9 @@ import yaml
 from counterpart.bus.bag import BagReader
 
 REPO = Path(__file__).resolve().parents[1]
-REALTIME_TOPICS = ["rendered", "partner", "camera/stats"]
+#: the nodes whose processing time per frame the real-time runs report (``node_ms``, ``node_frac``)
+TIMED_NODES = ("silhouette", "tracker", "labeller", "responder", "renderer")
+REALTIME_TOPICS = ["rendered", "partner", "camera/stats", *(f"{n}/stats" for n in TIMED_NODES)]
 
 
 def run_graph(
@@ -147,6 +149,44 @@ def realtime_figures(bag: Path, warmup_s: float) -> dict[str, float]:
     }
 
 
+def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
+    """Per node of ``TIMED_NODES``, its figures from its stats messages (about one a second).
+
+    - ``ms``: its handlers' time per message it published (ms): the mean handler time of each period
+      (``NodeStats.proc_ms_mean``) times the messages its inputs delivered in that period, summed
+      over the run and divided by its outputs, so the time it spent per frame it processed;
+    - ``frac``: the messages it published per camera frame (the rest it dropped as stale);
+    - ``busy``: the share of the run's wall time it spent in its handlers (1: a whole core);
+    - the node's own figures where it has some that say how it kept up (the tracker's
+      ``particles`` and ``layers`` per person and frame, under its ``frame_budget``).
+    """
+    stats: dict[str, list] = {n: [] for n in TIMED_NODES}
+    for _, _, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
+        if m.node in stats:
+            stats[m.node].append(m)
+    out: dict[str, dict[str, float]] = {}
+    for name, msgs in stats.items():
+        if not msgs:
+            continue
+        msgs.sort(key=lambda m: m.uptime_s)
+        busy_ms, prev = 0.0, 0.0
+        for m in msgs:
+            period, prev = m.uptime_s - prev, m.uptime_s
+            busy_ms += m.proc_ms_mean * sum(t.rate_hz for t in m.inputs) * period
+        n_out = max((t.count for t in msgs[-1].outputs), default=0)
+        fig = {
+            "ms": round(busy_ms / max(n_out, 1), 1),
+            "frac": round(n_out / max(published, 1), 3),
+            "busy": round(busy_ms / 1e3 / max(msgs[-1].uptime_s, 1e-9), 3),
+        }
+        frames = msgs[-1].figures.get("budget_frames", 0)
+        if frames:
+            fig["particles"] = round(msgs[-1].figures["budget_particles"] / frames, 1)
+            fig["layers"] = round(msgs[-1].figures["budget_layers"] / frames, 2)
+        out[name] = fig
+    return out
+
+
 def partner_outputs(bag: Path) -> list[tuple]:
     out = []
     for _, _, msg in BagReader(bag).messages(["partner"], decode_messages=True):
@@ -163,9 +203,22 @@ def realtime(
     if launch_file == "replay.yaml":  # the demo renderer's pairing; only the queues differ
         sets.update({"renderer.pair_timeout": 0.1, "renderer.adaptive_wait": True})
     bag, wall, rss = run_graph(work, name, launch_file, sets, REALTIME_TOPICS)
-    figs = {**realtime_figures(bag, warmup), "rss_mb_total": round(rss, 1)}
+    figs: dict[str, object] = {**realtime_figures(bag, warmup), "rss_mb_total": round(rss, 1)}
+    figs["nodes"] = node_figures(bag, int(figs["published"]))
     print(f"{name}: {figs}  wall {wall:.1f} s  load {os.getloadavg()[0]:.2f}", file=sys.stderr)
     return figs
+
+
+def flat_node_figures(runs: list[dict[str, object]]) -> dict[str, float]:
+    """``<node>_ms`` and ``<node>_frac`` (and the tracker's ``tracker_particles`` /
+    ``tracker_layers``), medians over ``runs``, from each run's ``nodes``.
+    """
+    out: dict[str, float] = {}
+    for name in TIMED_NODES:
+        figs = [r["nodes"][name] for r in runs if name in r["nodes"]]
+        for k in figs[0] if figs else ():
+            out[f"{name}_{k}"] = round(float(np.median([f[k] for f in figs if k in f])), 3)
+    return out
 
 
 def main() -> None:
@@ -181,7 +234,16 @@ def main() -> None:
         metavar="CLIP",
         help="real video files, each also played in real time through the graph (two people tracked)",
     )
+    ap.add_argument("--no-lockstep", action="store_true", help="skip the two lockstep runs (quick looks)")
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=VALUE",
+        help="a parameter of the real-time runs (simulator and clips), as counterpart launch --set",
+    )
     args = ap.parse_args()
+    sets = {k: yaml.safe_load(v) for k, _, v in (s.partition("=") for s in args.set)}
     import counterpart.nodes.responder.node  # noqa: F401 (imported for its message types, to decode partners)
     from counterpart.apps.demo import ensure_models
 
@@ -193,9 +255,13 @@ def main() -> None:
         "realtime_graph": "launch/demo.yaml",
         "lockstep_graph": "launch/replay.yaml",
     }
-    runs = [realtime(work, f"rt-demo-{i}", "demo.yaml", args.frames, args.warmup) for i in range(args.repeats)]
+    if sets:
+        out["set"] = sets
+    runs = [realtime(work, f"rt-demo-{i}", "demo.yaml", args.frames, args.warmup, sets) for i in range(args.repeats)]
     for k in runs[0]:
-        out[k] = runs[0][k] if len(runs) == 1 else round(float(np.median([r[k] for r in runs])), 4)
+        if k != "nodes":
+            out[k] = runs[0][k] if len(runs) == 1 else round(float(np.median([r[k] for r in runs])), 4)
+    out.update(flat_node_figures(runs))
     if len(runs) > 1:
         out["runs"] = runs
     if not args.no_reliable:
@@ -214,20 +280,29 @@ def main() -> None:
                 "demo.yaml",
                 args.frames,
                 args.warmup,
-                {"camera.source": str(Path(c).resolve()), "camera.loop": True, "tracker.people": ["left", "right"]},
+                {
+                    **sets,
+                    "camera.source": str(Path(c).resolve()),
+                    "camera.loop": True,
+                    "tracker.people": ["left", "right"],
+                },
             )
             for c in args.input
         }
         out["real"] = real
-        for k in ("fps_sustained", "source_fps", "latency_p95_ms", "partner_frac"):
+        for k in ("fps_sustained", "source_fps", "latency_p95_ms", "partner_frac", "partner_age_p50_ms"):
             out[f"real_{k}"] = round(float(np.median([r[k] for r in real.values()])), 3)
+        out.update({f"real_{k}": v for k, v in flat_node_figures(list(real.values())).items()})
+        # the ratios the issue judges on a loaded machine: real clips against the simulator, same run
+        out["real_partner_frac_vs_sim"] = round(out["real_partner_frac"] / max(float(out["partner_frac"]), 1e-9), 3)
     partners = []
-    for i in range(2):
+    for i in range(0 if args.no_lockstep else 2):
         bag, wall, _ = run_graph(work, f"lockstep-{i}", "replay.yaml", {"camera.max_frames": args.frames}, ["partner"])
         partners.append(partner_outputs(bag))
         print(f"lockstep run {i}: {len(partners[-1])} partner messages in {wall:.1f} s", file=sys.stderr)
-    out["lockstep_partner_messages"] = len(partners[0])
-    out["lockstep_identical"] = bool(partners[0]) and partners[0] == partners[1]
+    if partners:
+        out["lockstep_partner_messages"] = len(partners[0])
+        out["lockstep_identical"] = bool(partners[0]) and partners[0] == partners[1]
     print(json.dumps(out))
 
 

@@ -25,6 +25,7 @@ class SimPeople(Node):
         "frames": Param(int, 6, "frames to publish", min=1),
         "hide_from": Param(int, -1, "publish no people from this frame on (-1: never)"),
         "merged": Param(bool, False, "flag the people as merged"),
+        "fps": Param(float, 0.0, "the frames' rate, Hz (0: unknown)", min=0.0),
     }
 
     def generate(self) -> None:
@@ -52,7 +53,7 @@ class SimPeople(Node):
                             merged=self.p["merged"],
                         )
                     )
-            self.publish("frame", Frame(stamp=stamp, seq=i, image=image))
+            self.publish("frame", Frame(stamp=stamp, seq=i, image=image, fps=self.p["fps"]))
             self.publish(
                 "silhouettes",
                 Silhouettes(

@@ -15,6 +15,7 @@ of the node's stats count them).
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 from typing import Any
 
@@ -25,6 +26,7 @@ from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, cam
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
+from .budget import BudgetConfig, FrameBudget
 from .prior import resolve_prior
 from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
@@ -102,6 +104,16 @@ class TrackerNode(Node):
             "default",
             "motion prior: 'default' (built from the simulator when missing), 'none' (random walk), or a .npz path",
             check=_check_prior,
+        ),
+        "frame_budget": Param(
+            float,
+            0.0,
+            "share of the frame interval (1/fps) the search of all people of a frame may take: "
+            "beyond it the layers, then the particles, are cut (to 3 and 32 at least; the cost per "
+            "particle measured as it runs; the means in the stats as budget_particles / budget_layers "
+            "over budget_frames); 0: always layers x particles",
+            min=0.0,
+            max=100.0,
         ),
         "seed": Param(int, 0, "seed of the particle filters"),
         "max_pending": Param(int, 50, "frames kept while waiting for the other input", min=1),
@@ -183,6 +195,7 @@ class TrackerNode(Node):
         self.trackers: dict[str, Tracker] = {}
         self.paired: dict[int, tuple[Frame, Silhouettes]] = {}  # waiting for the camera of their size
         self.warned: set[str] = set()
+        self.budget = FrameBudget(self.p["layers"], self.p["particles"], BudgetConfig(share=self.p["frame_budget"]))
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
         """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not come."""
@@ -288,12 +301,19 @@ class TrackerNode(Node):
     def _process(self, frame: Frame, sil: Silhouettes, image: np.ndarray | None, camera: Camera) -> None:
         size = (camera.width, camera.height)
         people: list[TrackedBody] = []
-        for side in self.p["people"]:
-            shape = next((s for s in sil.people if s.side == side), None)
-            if shape is None:
-                continue
+        in_view = [s for s in self.p["people"] if any(p.side == s for p in sil.people)]
+        layers, particles = self.budget.plan(len(in_view), frame.fps)
+        t0, evals, started = time.perf_counter(), 0, False
+        for side in in_view:
+            shape = next(s for s in sil.people if s.side == side)
             try:
                 tr = self._tracker(side, camera)
+                tr.filter.n_layers, tr.filter.n_particles = layers, particles
+                started |= not tr.tracking
+                evals += layers * particles
+                self.tally("budget_frames")
+                self.tally("budget_layers", layers)
+                self.tally("budget_particles", particles)
                 mask = person_mask(shape, sil.labels, size)
                 if shape.merged:
                     self._warn_once(
@@ -321,6 +341,8 @@ class TrackerNode(Node):
                     lost=bool(r.lost),
                 )
             )
+        if not started:  # a first search runs its own longer schedule: not a measure of the budget's
+            self.budget.record(time.perf_counter() - t0, evals)
         self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps, people=people))
 
 
