@@ -1,4 +1,4 @@
-"""End-to-end benchmark: the whole demo graph at 320x240 with the tracker at 10 x 256.
+"""End-to-end benchmark: the whole demo graph in real time (frames 320 wide, the tracker at 10 x 256 within a time budget per frame).
 
 Which graph is the real-time one: ``launch/demo.yaml``. Its inputs keep only the newest message
 (``latest``) except the renderer's frames (``reliable``): on a small machine the tracker (10 x 256)
@@ -7,7 +7,8 @@ latency of everything behind it, grows for as long as the video plays (measured 
 ``_reliable`` figures). With ``latest`` queues the tracker works on the newest frame and drops stale
 ones, the renderer draws every frame with the newest partner (waiting at most ``pair_timeout`` for
 the frame's own partner, and not at all while partners come later than that), so every frame is
-rendered and the latency stays bounded. ``launch/replay.yaml`` (lockstep, ``reliable``) is the
+rendered and the latency stays bounded; and the tracker cuts its layers, then particles, to fit each
+frame in the frame interval (``tracker.frame_budget``). ``launch/replay.yaml`` (lockstep, ``reliable``) is the
 deterministic graph: every frame through every node.
 
 1. Real time, ``demo.yaml``: the camera replays the simulator's handshake at 25 fps; a recorder takes
@@ -22,7 +23,12 @@ deterministic graph: every frame through every node.
    how far the partner trails the video; ``partner_frac``: partners computed per camera frame (the
    rest were dropped as stale by the slow nodes). ``rss_mb_total``: the peak summed RSS of the nodes.
    ``latency_*_steady_ms``: the same latencies without the first ``--warmup`` seconds, reported
-   beside the whole-run figures, never instead of them.
+   beside the whole-run figures, never instead of them. Per node (silhouette, tracker, labeller,
+   responder, renderer; from their stats, see ``node_figures``): ``<node>_ms`` its handler time per
+   frame it published, ``<node>_frac`` the frames it published per camera frame, ``<node>_busy``
+   the share of a core it used; ``tracker_particles`` / ``tracker_layers`` the mean search per
+   person and frame under the tracker's ``frame_budget``. The training of the silhouette node's
+   background (one long handler call) is in its ``silhouette_ms``.
 2. The same real-time run with ``replay.yaml``'s ``reliable`` queues (figures suffixed
    ``_reliable``): for comparison, why the real-time graph drops stale input.
 3. Lockstep (``replay.yaml``), twice with the same seeds: ``lockstep_identical`` when the partner
@@ -31,18 +37,23 @@ deterministic graph: every frame through every node.
 4. Real video (``--input CLIP ...``, e.g. UT-Interaction clips of ``../shared/data``): the same
    real-time graph on each clip at its own frame rate, looped to ``--frames`` frames, with both
    people tracked (``tracker.people=[left, right]``); per clip under ``real``, and
-   ``real_fps_sustained``, ``real_source_fps``, ``real_latency_p95_ms``, ``real_partner_frac`` (medians
-   over the clips) beside the simulator's figures of the same run.
+   ``real_fps_sustained``, ``real_source_fps``, ``real_latency_p95_ms``, ``real_partner_frac``,
+   ``real_partner_age_p50_ms`` and the per-node figures as ``real_<node>_*`` (medians over the clips)
+   beside the simulator's figures of the same run; ``real_partner_frac_vs_sim`` the ratio of the
+   two partner fractions (the figure to read on a loaded machine).
 
 The machine is shared: ``load_avg_1min`` is the load when the bench started; run it a few times.
 
-Usage: python bench/e2e.py [--frames N] [--repeats R] [--no-reliable]. Last stdout line: one JSON object
+Usage: python bench/e2e.py [--frames N] [--repeats R] [--no-reliable] [--no-lockstep] [--input CLIP ...]
+[--set NODE.PARAM=VALUE ...] (parameters of the real-time runs, e.g. ``--set camera.width=0 --set
+tracker.frame_budget=0`` for the graph without its speed settings). Last stdout line: one JSON object
 (with ``--repeats`` > 1 the real-time figures are medians over the repeats, each run's in ``runs``).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import subprocess
@@ -67,7 +78,8 @@ def run_graph(
     workdir: Path, name: str, launch_file: str, sets: dict[str, object], topics: list[str]
 ) -> tuple[Path, float, float]:
     """Launch ``launch/<launch_file>`` (plus a recorder of ``topics`` unless the file has one);
-    returns (bag, wall seconds, peak RSS MB of the nodes).
+    returns (bag, wall seconds, peak RSS MB of the nodes). The run's folder (each node's last stats
+    in ``stats/NODE.json``) is ``<bag without suffix>.home/latest``.
     """
     bag = workdir / f"{name}.mcap"
     rec = {"path": str(bag), "topics": topics, "overwrite": True}
@@ -85,7 +97,9 @@ def run_graph(
         doc["nodes"] = {"recorder": {"run": "counterpart.bus.bag_nodes:Recorder", "policy": "reliable", "params": rec}}
     launch = workdir / f"{name}.yaml"
     launch.write_text(yaml.safe_dump(doc))
-    env = {**os.environ, "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpe-", dir="/tmp"), "OMP_NUM_THREADS": "1"}
+    home = workdir / f"{name}.home"
+    home.mkdir(mode=0o700, exist_ok=True)
+    env = {**os.environ, "COUNTERPART_HOME": str(home), "OMP_NUM_THREADS": "1"}
     t0 = time.monotonic()
     proc = subprocess.Popen(
         [sys.executable, "-m", "counterpart.bus.cli", "launch", str(launch)],
@@ -160,29 +174,35 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
     - the node's own figures where it has some that say how it kept up (the tracker's
       ``particles`` and ``layers`` per person and frame, under its ``frame_budget``).
     """
-    stats: dict[str, list] = {n: [] for n in TIMED_NODES}
+    stats: dict[str, dict[int, dict]] = {n: {} for n in TIMED_NODES}
     for _, _, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
         if m.node in stats:
-            stats[m.node].append(m)
+            stats[m.node][m.seq] = dataclasses.asdict(m)
+    # the last word of each node, which the recorder may have missed as the graph stopped
+    for f in (bag.with_suffix(".home") / "latest" / "stats").glob("*.json"):
+        m = json.loads(f.read_text())
+        if m["node"] in stats:
+            stats[m["node"]][m["seq"]] = m
     out: dict[str, dict[str, float]] = {}
-    for name, msgs in stats.items():
+    for name, by_seq in stats.items():
+        msgs = [by_seq[k] for k in sorted(by_seq)]
         if not msgs:
             continue
-        msgs.sort(key=lambda m: m.uptime_s)
         busy_ms, prev = 0.0, 0.0
         for m in msgs:
-            period, prev = m.uptime_s - prev, m.uptime_s
-            busy_ms += m.proc_ms_mean * sum(t.rate_hz for t in m.inputs) * period
-        n_out = max((t.count for t in msgs[-1].outputs), default=0)
+            period, prev = m["uptime_s"] - prev, m["uptime_s"]
+            busy_ms += m["proc_ms_mean"] * sum(t["rate_hz"] for t in m["inputs"]) * period
+        last = msgs[-1]
+        n_out = max((t["count"] for t in last["outputs"]), default=0)
         fig = {
             "ms": round(busy_ms / max(n_out, 1), 1),
             "frac": round(n_out / max(published, 1), 3),
-            "busy": round(busy_ms / 1e3 / max(msgs[-1].uptime_s, 1e-9), 3),
+            "busy": round(busy_ms / 1e3 / max(last["uptime_s"], 1e-9), 3),
         }
-        frames = msgs[-1].figures.get("budget_frames", 0)
+        frames = last["figures"].get("budget_frames", 0)
         if frames:
-            fig["particles"] = round(msgs[-1].figures["budget_particles"] / frames, 1)
-            fig["layers"] = round(msgs[-1].figures["budget_layers"] / frames, 2)
+            fig["particles"] = round(last["figures"]["budget_particles"] / frames, 1)
+            fig["layers"] = round(last["figures"]["budget_layers"] / frames, 2)
         out[name] = fig
     return out
 
