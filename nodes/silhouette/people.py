@@ -198,7 +198,7 @@ class PrefetchDetector:
             self._pending[key] = self._pool.submit(self.detector.detect, frame.copy())
 
     def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """People in a frame, as ``PeopleDetector.detect`` (waiting for a submitted frame's result).
+        """People in a frame, waiting for a submitted frame's result.
 
         Parameters
         ----------
@@ -207,10 +207,8 @@ class PrefetchDetector:
 
         Returns
         -------
-        boxes : ndarray of shape (K, 4)
-            int32 (x, y, w, h) pixels of each person.
-        scores : ndarray of shape (K,)
-            float32 detector scores.
+        tuple of ndarray
+            ``(boxes (K, 4), scores (K,))``, as ``PeopleDetector.detect``.
         """
         fut = self._pending.pop(self._key(frame), None)
         return fut.result() if fut is not None else self.detector.detect(frame)
