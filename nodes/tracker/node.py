@@ -11,6 +11,12 @@ split by its labels. Frame and silhouettes are paired by seq by the runtime
 (:class:`~counterpart.bus.pairing.Pairing`): a frame whose partner message never comes is dropped
 once the other input went past it, or once ``max_pending`` frames wait (the ``paired_*`` figures
 of the node's stats count them).
+
+With ``frame_budget`` (the real-time graph, ``launch/demo.yaml``) the search of each frame is cut to
+fit the camera's frame interval (:class:`counterpart.nodes.tracker.budget.FrameBudget`: fewer
+annealing layers, then fewer particles, from the time the last frames took); the stats give the
+mean layers and particles per person and frame (``budget_layers``, ``budget_particles`` over
+``budget_frames``).
 """
 
 from __future__ import annotations
