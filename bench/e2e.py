@@ -28,7 +28,7 @@ deterministic graph: every frame through every node.
    frame it published, ``<node>_frac`` the frames it published per camera frame, ``<node>_busy``
    the share of a core it used; ``tracker_particles`` / ``tracker_layers`` the mean search per
    person and frame under the tracker's ``frame_budget``. The training of the silhouette node's
-   background (one long handler call) is in its ``silhouette_ms``.
+   background (one long handler call, ``silhouette_fit_ms``) is in its ``silhouette_ms`` too.
 2. The same real-time run with ``replay.yaml``'s ``reliable`` queues (figures suffixed
    ``_reliable``): for comparison, why the real-time graph drops stale input.
 3. Lockstep (``replay.yaml``), twice with the same seeds: ``lockstep_identical`` when the partner
@@ -172,7 +172,8 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
     - ``frac``: the messages it published per camera frame (the rest it dropped as stale);
     - ``busy``: the share of the run's wall time it spent in its handlers (1: a whole core);
     - the node's own figures where it has some that say how it kept up (the tracker's
-      ``particles`` and ``layers`` per person and frame, under its ``frame_budget``).
+      ``particles`` and ``layers`` per person and frame, under its ``frame_budget``; the silhouette
+      node's ``fit_ms``, the one handler call that learnt the background).
     """
     stats: dict[str, dict[int, dict]] = {n: {} for n in TIMED_NODES}
     for _, _, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
@@ -199,6 +200,8 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
             "frac": round(n_out / max(published, 1), 3),
             "busy": round(busy_ms / 1e3 / max(last["uptime_s"], 1e-9), 3),
         }
+        if "fit_ms" in last["figures"]:  # the silhouette node's background training, one call
+            fig["fit_ms"] = last["figures"]["fit_ms"]
         frames = last["figures"].get("budget_frames", 0)
         if frames:
             fig["particles"] = round(last["figures"]["budget_particles"] / frames, 1)

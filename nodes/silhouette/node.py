@@ -19,6 +19,7 @@ resolution) starts the background model and the people afresh.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import cv2
@@ -285,14 +286,17 @@ class Silhouette(Node):
         # learn during as many frames, so that every backend reports people from the same frame on
         if self.p["backend"] != "horprasert" and ex.n_frames < self.p["train_frames"] - 1:
             return ex.learn(image)
-        if self.prefetch is not None and not ex.subtractor.ready:
+        training = not ex.subtractor.ready
+        if training and self.prefetch is not None:
             # the people of the training frames are found while more come, not all after the last
             self.prefetch.submit(image)
-            result = ex.process(image)
-            if ex.subtractor.ready:
+        t0 = time.perf_counter()
+        result = ex.process(image)
+        if training and ex.subtractor.ready:  # this frame's call learnt the background
+            self.tally("fit_ms", round((time.perf_counter() - t0) * 1e3, 1))
+            if self.prefetch is not None:
                 self.prefetch.clear()
-            return result
-        return ex.process(image)
+        return result
 
     def on_frame(self, msg: Frame) -> None:
         """Find the people of one frame and publish them (or hold the frame back while the background
