@@ -1,4 +1,6 @@
-"""The tracker's time budget per frame: fewer layers, then particles, when frames come too fast."""
+"""The tracker node in real time: its time budget per frame (fewer layers, then particles, when
+frames come too fast), and silhouettes whose frame was dropped.
+"""
 
 from __future__ import annotations
 
@@ -65,12 +67,15 @@ def test_a_track_goes_on_when_its_particle_count_changes() -> None:
     assert err.mean() < 0.15, f"mean joint error {err.mean():.3f} m"
 
 
-def _run(tmp_path: Path, budget: float) -> tuple[list[dict], dict]:
-    out = tmp_path / f"pose{budget}.jsonl"
+def _run(tmp_path: Path, budget: float, drop_frames: tuple[int, ...] = ()) -> tuple[list[dict], dict]:
+    out = tmp_path / f"pose{budget}{drop_frames}.jsonl"
     doc = {
         "nodes": {
             # frames at 100 kHz: no search fits in 10 us, so a budget cuts to its floors
-            "source": {"run": "tests.test_tracker_node:SimPeople", "params": {"frames": 6, "fps": 1e5}},
+            "source": {
+                "run": "tests.test_tracker_node:SimPeople",
+                "params": {"frames": 6, "fps": 1e5, "drop_frames": list(drop_frames)},
+            },
             "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
             "tracker": {
                 "run": "counterpart.nodes.tracker",
@@ -86,7 +91,7 @@ def _run(tmp_path: Path, budget: float) -> tuple[list[dict], dict]:
             "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},
         }
     }
-    rc, log = run_launch(write_launch(tmp_path / f"graph{budget}.yaml", doc), timeout=90)
+    rc, log = run_launch(write_launch(tmp_path / f"graph{budget}{drop_frames}.yaml", doc), timeout=90)
     assert rc == 0, log
     run_dir = Path(re.search(r"run directory (\S+)", log).group(1))
     stats = json.loads((run_dir / "stats" / "tracker.json").read_text())
@@ -104,3 +109,15 @@ def test_the_node_cuts_its_search_to_the_budget_and_reports_it(tmp_path: Path) -
     # the first frames search in full (a first search, then the first measure); the rest at the floors
     assert figs["budget_frames"] == 12
     assert figs["budget_particles"] == 4 * 64 + 8 * 32 and figs["budget_layers"] == 4 * 4 + 8 * 3
+
+
+@pytest.mark.slow
+def test_silhouettes_whose_frame_was_dropped_are_tracked_on_their_mask(tmp_path: Path) -> None:
+    poses, figs = _run(tmp_path, 0.0, drop_frames=(2, 4))
+    assert [p["seq"] for p in poses] == list(range(6))
+    assert [len(p["people"]) for p in poses] == [2] * 6
+    assert figs["paired_partial"] == 2 and figs["paired_delivered"] == 6
+    # the mask alone still places the people: left of each other as on the other frames
+    for p in poses:
+        left, right = (np.array(b["joints"], float) for b in p["people"])
+        assert left[:, 0].mean() < right[:, 0].mean()
