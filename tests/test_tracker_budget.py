@@ -106,9 +106,10 @@ def test_the_node_cuts_its_search_to_the_budget_and_reports_it(tmp_path: Path) -
     assert figs["budget_frames"] == 12 and figs["budget_particles"] == 12 * 64 and figs["budget_layers"] == 12 * 4
     poses, figs = _run(tmp_path, 1.0)
     assert [len(p["people"]) for p in poses] == [2] * 6  # every frame still tracked
-    # the first frames search in full (a first search, then the first measure); the rest at the floors
+    # the first frame searches in full (nothing measured yet: its first search is the first measure);
+    # the rest at the floors
     assert figs["budget_frames"] == 12
-    assert figs["budget_particles"] == 4 * 64 + 8 * 32 and figs["budget_layers"] == 4 * 4 + 8 * 3
+    assert figs["budget_particles"] == 2 * 64 + 10 * 32 and figs["budget_layers"] == 2 * 4 + 10 * 3
 
 
 @pytest.mark.slow
