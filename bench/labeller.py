@@ -48,7 +48,7 @@ Figures (last stdout line, one JSON object):
   labeller_fps         frames per second per person of SocialLabeller.update, streaming, 3D input
                        with head angles, two people per frame (median of 3 runs); labeller_fps_2d
                        the same with silhouette (2D) input
-  face                 the face-video part (``--face-seeds``, default 20-22, ``--face-duration`` 60 s;
+  face                 the face-video part (``--face-seeds``, default 20-29, ``--face-duration`` 30 s;
                        ``--no-face`` skips it): person A of the simulator's conversations rendered
                        face-on at 640x360 (``counterpart.sim.face.conversation_face_clip``: nods, shakes,
                        look-aways and talking turns with the scenario's own labels) at 25 and
@@ -78,8 +78,12 @@ Figures (last stdout line, one JSON object):
                        on the clip's ground-truth head angles (a perfect tracker's
                        ``head_nod``/``head_turn``; centred windows), the ceiling the simulator's
                        truth allows (a shake planted on the way back from a look-away is hardly
-                       performed). ``per_seed``: recall, true frames, frames missed for want
-                       of a face and the pose-angle recall per clip (seed and frame rate).
+                       performed). ``per_seed``: recall, precision, true and predicted frames,
+                       frames missed for want of a face and the pose-angle recall per clip (seed
+                       and frame rate); ``nod_recall_min_seed``, ``nod_precision_min_seed``,
+                       ``shake_recall_min_seed``, ``shake_precision_min_seed``: the worst clip's
+                       figure over seeds and both rates (clips without a true, resp. predicted,
+                       frame of the kind have none), ``worst_seed`` which clip it is.
                        ``laugh_recall``: the share of frames labelled laughing on clips of a
                        laughing face, ``laugh_false_rate_talk`` on clips of a talking face
                        (``gesture_face_clip`` laugh / talk, the verdict seeds, frames from 2 s on;
@@ -96,7 +100,10 @@ Figures (last stdout line, one JSON object):
                        302, 305 (both rates) and 303 (25 fps), 45 s each; the nod's rotation
                        cue (the face's features relative to the top of the head, unit gain)
                        on seeds 303, 304 (sad: small nods of a head pitched down) and 311,
-                       312 (happy: a knee bounce), 25 fps, 30 s each.
+                       312 (happy: a knee bounce), 25 fps, 30 s each; taking the lateral motion
+                       in step with that cue out of the shake channel (a nod of a head turned
+                       aside), and its ridge, on seeds 301, 302, 303 and 305, both rates, 45 s
+                       each. Face seeds 300-319 are tuning seeds (the bench warns).
   mine_s               seconds to mine 45,000 frames x 27 speaker + 27 listener labels (synthetic
                        planted streams, rates 0.02-0.3, min_support 0.005, max_len 4);
                        mine_synthetic_recovered its planted rules found; --dense adds mine_s_dense
