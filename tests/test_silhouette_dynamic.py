@@ -9,6 +9,9 @@ every frame, so each of its pixels flips between the two colours.
 
 from __future__ import annotations
 
+import pickle
+import threading
+
 import numpy as np
 import pytest
 
@@ -147,6 +150,26 @@ def test_learning_in_worker_threads_gives_the_same_labels_and_models() -> None:
     assert np.array_equal(smp_t, smp_s)
     assert np.array_equal(rad_t, rad_s) and rad_t.max() > 1.0
     assert np.array_equal(mean_t, mean_s)
+
+
+def test_both_models_learn_in_one_worker_thread_and_a_pickled_copy_keeps_that() -> None:
+    # two learning steps a frame (the statistics' update, then the samples') in one spare thread:
+    # three threads would contend for two cores
+    rng = np.random.default_rng(5)
+    before = set(threading.enumerate())
+    sub = make_subtractor("horprasert", train_frames=10, robust=False)
+    for _ in range(14):
+        sub.apply(frame(rng))
+    new = set(threading.enumerate()) - before
+    assert [t.name.split("_")[0] for t in new] == ["horprasert-update"]
+    twin = pickle.loads(pickle.dumps(sub))
+    before = set(threading.enumerate())
+    for k in range(6):
+        f = frame(rng, (60 + 8 * k, 120, 30, 80))
+        assert np.array_equal(sub.apply(f), twin.apply(f))
+    assert len(set(threading.enumerate()) - before) == 1  # the copy's one worker
+    assert np.array_equal(sub.samples.samples_, twin.samples.samples_)
+    assert np.array_equal(sub.model.mean_, twin.model.mean_)
 
 
 def test_min_area_scales_with_the_frame_and_the_camera() -> None:

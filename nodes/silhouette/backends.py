@@ -121,6 +121,10 @@ class HorprasertSubtractor:
         self.threaded = threaded
         self.body_shadow = BodyShadowConfig(span_px=0) if body_shadow is None else body_shadow
         self._deferred = DeferredStep("horprasert-update")
+        if self.samples is not None:
+            # one worker thread learns for both models, the update first (the next frame's
+            # labels wait for it), the samples after (the next frame's veto waits for them)
+            self.samples.share_worker(self._deferred)
 
     @property
     def model(self) -> HorprasertBackground:
@@ -207,17 +211,21 @@ class HorprasertSubtractor:
             # the same copy goes to apply, whose per-frame terms update reuses (they are keyed
             # by the frame object)
             frame = frame.copy()
-        labels = self._model.apply(frame)
+        stats = self._model.apply(frame)
+        labels = stats
         if self.samples is not None:
-            vetoed = self.samples.apply(frame, labels)
+            labels, fg_idx = self.samples.veto(frame, stats)
             if self._unseen_fg is not None:
                 # no veto where the room was filled in (see ``HorprasertBackground.unseen_``)
-                cv2.max(vetoed, cv2.bitwise_and(labels, self._unseen_fg), dst=vetoed)
-            labels = vetoed
+                cv2.max(labels, cv2.bitwise_and(stats, self._unseen_fg), dst=labels)
         if self.threaded:
             self._deferred.submit(self._model.update, frame, labels.copy())
         else:
             self._model.update(frame, labels)
+        if self.samples is not None:
+            # the frame is this call's own copy when threaded, and the statistics' labels are
+            # not changed again: the samples' worker may read both as they are
+            self.samples.learn(frame, stats, fg_idx, copy=not self.threaded)
         labels = reclaim_body_shadow(labels, self.body_shadow)
         self.labels = labels
         return labels == FOREGROUND

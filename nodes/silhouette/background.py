@@ -399,6 +399,9 @@ class HorprasertBackground:
         # (frame, its alpha, its float32 channel planes) of the last apply
         self._last_alpha: tuple[np.ndarray, np.ndarray, list[np.ndarray]] | None = None
         self._w: np.ndarray | None = None
+        # (H + 2 r, W + 2 r) float32 grey sum of E, reflect-padded by r = shadow_window // 2
+        self._e_pad: np.ndarray | None = None
+        self._pad_flat: np.ndarray | None = None  # padded flat index -> frame flat index (texture test)
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
@@ -745,8 +748,7 @@ class HorprasertBackground:
             return np.take(cv2.copyMakeBorder(a, r, r, r, r, cv2.BORDER_REFLECT).reshape(-1), at)
 
         m = gather(sh, win).astype(np.float32)  # (K, window) 1 on shadow pixels
-        mu = self._mu
-        e = gather(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), win)
+        e = np.take(self._e_pad, win)
         # row sums as einsum: numpy's reductions over short rows cost several times more
         inv_n = 1.0 / np.maximum(np.einsum("ij->i", m), 1.0)
         em = e * m
@@ -760,7 +762,16 @@ class HorprasertBackground:
             # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
             return
         win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
-        grey = gather(cv2.add(cv2.add(planes[0], planes[1]), planes[2]), win)
+        # the frame's grey levels at those windows only, read from the unpadded planes at the
+        # reflected pixels (the same sums as over the padded frame)
+        if self._pad_flat is None or self._pad_flat.size != (h + 2 * r) * wp:
+            # padded frame's flat index -> the unpadded frame's flat index that the padding copies
+            ry, rx = _reflect(np.arange(-r, h + r), h), _reflect(np.arange(-r, w + r), w)
+            self._pad_flat = (ry[:, None] * w + rx[None, :]).reshape(-1)
+        at = np.take(self._pad_flat, win)
+        flat = [p.reshape(-1) for p in planes]
+        grey = np.take(flat[0], at) + np.take(flat[1], at)
+        grey += np.take(flat[2], at)
         gm = grey * m
         mi = np.einsum("ij->i", gm) * inv_n
         vi = np.einsum("ij,ij->i", gm, grey) * inv_n - mi * mi
@@ -954,28 +965,31 @@ class HorprasertBackground:
         sh, sw = max(1, h // 4), max(1, w // 4)
         k = max(5, (h // 32) | 1)
         bgm = (~fg).view(np.uint8)
-        support = cv2.resize(bgm.astype(np.float32), (sw, sh), interpolation=cv2.INTER_AREA)
-        frac = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)
-        sy = np.minimum(ys * sh // h, sh - 1)
-        sx = np.minimum(xs * sw // w, sw - 1)
-        cnt = frac[sy, sx]
-        near = np.empty_like(run)
-        if h % 4 == 0:
-            # the three planes stacked as one (3 H, W) image: one product and one area resize
-            # (4 x 4 block means, which never straddle two planes) instead of three each
-            small3 = cv2.resize(
-                cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
-                (sw, 3 * sh),
-                interpolation=cv2.INTER_AREA,
-            )
-            smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
+        if h % 4 == 0 and w % 4 == 0:
+            cnt, near = _surround_near_candidates(self._mu, bgm, ys // 4, xs // 4, k)
         else:
-            smalls = [
-                cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
-                for c in range(3)
-            ]
-        for c in range(3):
-            near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
+            support = cv2.resize(bgm.astype(np.float32), (sw, sh), interpolation=cv2.INTER_AREA)
+            frac = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)
+            sy = np.minimum(ys * sh // h, sh - 1)
+            sx = np.minimum(xs * sw // w, sw - 1)
+            cnt = frac[sy, sx]
+            near = np.empty_like(run)
+            if h % 4 == 0:
+                # the three planes stacked as one (3 H, W) image: one product and one area resize
+                # (4 x 4 block means, which never straddle two planes) instead of three each
+                small3 = cv2.resize(
+                    cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
+                    (sw, 3 * sh),
+                    interpolation=cv2.INTER_AREA,
+                )
+                smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
+            else:
+                smalls = [
+                    cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
+                    for c in range(3)
+                ]
+            for c in range(3):
+                near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
         near /= np.maximum(cnt, 1e-3)
         # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
         s_run = run.sum(axis=0) + 1.0
@@ -1051,6 +1065,11 @@ class HorprasertBackground:
         cv2.divide(1.0, den, dst=den)
         if cv2.countNonZero(black):
             den[black > 0] = 0.0
+        if self.shadows.shadow_ncc > -1.0:
+            # the texture test's background grey levels, padded as its windows read them: E is
+            # fixed until the next update, so this runs with the update (in its worker thread)
+            r = self.shadows.shadow_window // 2
+            self._e_pad = cv2.copyMakeBorder(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), r, r, r, r, cv2.BORDER_REFLECT)
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
@@ -1098,6 +1117,64 @@ class HorprasertBackground:
     def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
         z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
         return z.max(axis=0) <= self.training.robust_inlier_k
+
+
+def _reflect(i: np.ndarray, n: int) -> np.ndarray:
+    """Indices ``i`` (any shape, int) into an axis of length ``n``, out-of-range ones mirrored as
+    ``cv2.BORDER_REFLECT`` pads (-1 -> 0, n -> n - 1; at most n beyond either end).
+    """
+    return np.where(i < 0, -1 - i, np.where(i >= n, 2 * n - 1 - i, i))
+
+
+def _surround_near_candidates(
+    mu: np.ndarray, bgm: np.ndarray, sy: np.ndarray, sx: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The background support and E sums around candidate cells, for ``_matches_surround`` with
+    frames whose sides are multiples of 4.
+
+    On the 4 x 4 block means (``cv2.INTER_AREA`` at an exact factor of 4: each cell from its own
+    block) of the background mask ``bgm`` and of E times it, a k x k normalised box filter
+    (``BORDER_REFLECT``) read at the candidates' cells. Only the cells within k // 2 of a
+    candidate's are computed: the candidates (a still person or a ghost) cover a small part of
+    the frame. The box filter of float32 input sums in float64, exactly for grey levels, so a
+    cell's value does not depend on the crop (and a crop edge on the frame's edge reflects as the
+    frame's does).
+
+    Parameters
+    ----------
+    mu : ndarray of shape (3, H, W), dtype float32
+        E planes, grey levels; H and W multiples of 4.
+    bgm : ndarray of shape (H, W), dtype uint8
+        1 on background pixels, 0 on foreground.
+    sy, sx : ndarray of shape (K,), dtype int
+        The candidates' cells (pixel row and column // 4).
+    k : int
+        Box side, cells (odd).
+
+    Returns
+    -------
+    cnt : ndarray of shape (K,), dtype float32
+        Fraction of background pixels around each candidate.
+    near : ndarray of shape (3, K), dtype float32
+        Sum of E over those pixels, per channel, over the same area (divide by ``cnt``).
+    """
+    sh, sw = mu.shape[1] // 4, mu.shape[2] // 4
+    r = k // 2
+    y0, y1 = max(0, int(sy.min()) - r), min(sh, int(sy.max()) + r + 1)
+    x0, x1 = max(0, int(sx.min()) - r), min(sw, int(sx.max()) + r + 1)
+    ch, cw = y1 - y0, x1 - x0
+    crop = bgm[4 * y0 : 4 * y1, 4 * x0 : 4 * x1]
+    support = cv2.resize(crop.astype(np.float32), (cw, ch), interpolation=cv2.INTER_AREA)
+    cy, cx = sy - y0, sx - x0
+    cnt = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)[cy, cx]
+    # the three planes stacked as one (3 ch, cw) image: one product and one area resize (block
+    # means never straddle two planes)
+    prod = np.multiply(mu[:, 4 * y0 : 4 * y1, 4 * x0 : 4 * x1], crop, dtype=np.float32)
+    small3 = cv2.resize(prod.reshape(3 * 4 * ch, 4 * cw), (cw, 3 * ch), interpolation=cv2.INTER_AREA)
+    near = np.empty((3, sy.size), np.float32)
+    for c in range(3):
+        near[c] = cv2.boxFilter(small3[c * ch : (c + 1) * ch], -1, (k, k), borderType=cv2.BORDER_REFLECT)[cy, cx]
+    return cnt, near
 
 
 def _float_planes(frame: np.ndarray) -> list[np.ndarray]:

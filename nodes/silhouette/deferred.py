@@ -20,6 +20,26 @@ from typing import Any
 _LIVE: weakref.WeakSet[DeferredStep] = weakref.WeakSet()
 
 
+class _Worker:
+    """The single worker thread of one or more ``DeferredStep``: their calls run in it one after
+    another, in the order submitted. Started on first use, again in a forked child.
+    """
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._pool: ThreadPoolExecutor | None = None
+        self._pid = -1
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Future:
+        if self._pool is None or self._pid != os.getpid():
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=self.name)
+            self._pid = os.getpid()
+        return self._pool.submit(fn, *args)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"name": self.name, "_pool": None, "_pid": -1}
+
+
 class DeferredStep:
     """One deferred call at a time in a worker thread (see the module docstring).
 
@@ -27,12 +47,15 @@ class DeferredStep:
     ----------
     name : str
         Prefix of the worker thread's name.
+    share_with : DeferredStep or None, default=None
+        Run in that step's worker thread (after whatever it was given before) instead of a thread
+        of its own: two models' steps then take turns on one spare core rather than three
+        threads contending for two.
     """
 
-    def __init__(self, name: str) -> None:
+    def __init__(self, name: str, share_with: DeferredStep | None = None) -> None:
         self.name = name
-        self._pool: ThreadPoolExecutor | None = None
-        self._pid = -1
+        self._worker = _Worker(name) if share_with is None else share_with._worker
         self._pending: Future | None = None
         _LIVE.add(self)
 
@@ -47,10 +70,7 @@ class DeferredStep:
             Its arguments.
         """
         self.join()
-        if self._pool is None or self._pid != os.getpid():
-            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=self.name)
-            self._pid = os.getpid()
-        self._pending = self._pool.submit(fn, *args)
+        self._pending = self._worker.submit(fn, *args)
 
     def join(self) -> None:
         """Wait for the pending call, if any; re-raise its exception."""
@@ -60,7 +80,8 @@ class DeferredStep:
 
     def __getstate__(self) -> dict[str, Any]:
         self.join()
-        return {"name": self.name, "_pool": None, "_pid": -1, "_pending": None}
+        # a worker shared by two steps stays shared in the copy (pickle keeps shared references)
+        return {"name": self.name, "_worker": self._worker, "_pending": None}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)

@@ -257,6 +257,7 @@ class SampleConsensus:
         self._spread = gap[:, : max(1, min(n, self.n_samples) - 1)].mean(axis=1)
         self._blink = np.zeros(h * w, np.float32)
         self._prev_fg = np.zeros(h * w, np.uint8)
+        self._prev_idx = np.zeros(0, np.int64)  # flat indices of the nonzero pixels of _prev_fg
         return self
 
     def explained(self, frame: np.ndarray, idx: np.ndarray) -> np.ndarray:
@@ -306,7 +307,26 @@ class SampleConsensus:
         """Veto the statistical model's foreground where the samples explain the colour, and learn.
 
         After the veto the samples of BACKGROUND pixels are updated (ViBe's random, diffused update) and
-        the blink levels (SuBSENSE feedback) follow the final foreground.
+        the blink levels (SuBSENSE feedback) follow the final foreground: ``veto`` then ``learn``.
+
+        Parameters
+        ----------
+        frame, labels : ndarray
+            As for ``veto``: the (H, W, 3) uint8 BGR frame and its (H, W) uint8 Horprasert classes.
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype uint8
+            The labels with FOREGROUND pixels that match their sample set turned to BACKGROUND (a new
+            array). Errors: as ``veto``'s.
+        """
+        out, fg_idx = self.veto(frame, labels)
+        self.learn(frame, labels, fg_idx)
+        return out
+
+    def veto(self, frame: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The first half of ``apply``: the labels with the explained foreground turned to
+        BACKGROUND, without learning.
 
         Parameters
         ----------
@@ -317,9 +337,10 @@ class SampleConsensus:
 
         Returns
         -------
-        ndarray of shape (H, W), dtype uint8
-            The labels with FOREGROUND pixels that match their sample set turned to BACKGROUND (a new
-            array).
+        out : ndarray of shape (H, W), dtype uint8
+            The vetoed labels (a new array).
+        fg_idx : ndarray of shape (K,), dtype int
+            Flat indices of the FOREGROUND pixels left, for ``learn``.
 
         Raises
         ------
@@ -335,21 +356,49 @@ class SampleConsensus:
                 f"frame and labels must be {self._shape} (the fitted size), got {frame.shape[:2]} and {labels.shape}"
             )
         self._deferred.join()
-        flat = labels.reshape(-1)
-        idx = np.flatnonzero(flat == FOREGROUND)
+        idx = np.flatnonzero(labels.reshape(-1) == FOREGROUND)
         out = labels.copy()
         if idx.size:
             ok = self.explained(frame, idx)
             out.reshape(-1)[idx[ok]] = BACKGROUND
-            fg_idx = idx[~ok]
-        else:
-            fg_idx = idx
+            return out, idx[~ok]
+        return out, idx
+
+    def learn(self, frame: np.ndarray, labels: np.ndarray, fg_idx: np.ndarray, copy: bool = True) -> None:
+        """The second half of ``apply``: learn from the frame, in the worker thread when ``threaded``.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame, of the fitted size.
+        labels : ndarray of shape (H, W), dtype uint8
+            Horprasert classes of ``frame`` (before the veto).
+        fg_idx : ndarray of shape (K,), dtype int
+            The foreground left after the veto, as ``veto`` returns it.
+        copy : bool, default=True
+            The worker learns from copies of ``frame`` and ``labels``; False when the caller
+            changes neither of them again.
+        """
+        flat = labels.reshape(-1)
         if self.threaded:
             # the caller may reuse its buffers once this returns: the worker learns from copies
-            self._deferred.submit(self._learn, frame.copy(), flat.copy(), fg_idx)
+            if copy:
+                frame, flat = frame.copy(), flat.copy()
+            self._deferred.submit(self._learn, frame, flat, fg_idx)
         else:
             self._learn(frame, flat, fg_idx)
-        return out
+
+    def share_worker(self, step: DeferredStep) -> None:
+        """Learn in ``step``'s worker thread, after the calls it was given before (see
+        ``deferred.DeferredStep``).
+
+        Parameters
+        ----------
+        step : DeferredStep
+            The step whose worker runs this model's learning.
+        """
+        self._deferred.join()
+        self._deferred = DeferredStep("sample-consensus", share_with=step)
 
     def _learn(self, frame: np.ndarray, flat_labels: np.ndarray, fg_idx: np.ndarray) -> None:
         """ViBe's update from ``frame`` (H, W, 3) with the statistics' flat labels (H * W,), then the
@@ -435,16 +484,29 @@ class SampleConsensus:
         fg = np.zeros((h, w), np.uint8)
         fg.reshape(-1)[fg_idx] = 1
         prev = self._prev_fg.reshape(h, w)
-        # OpenCV's 0 / 255 masks and masked float ops: whole-frame passes, kept few and cheap
-        blink = cv2.compare(fg, prev, cv2.CMP_NE)
-        solid = cv2.dilate(cv2.morphologyEx(prev, cv2.MORPH_OPEN, _OPEN), _NEAR)
-        cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
-        self._prev_fg = fg.reshape(-1)
         v = self._blink.reshape(h, w)
         np.subtract(v, np.float32(self.blink_decay), out=v)
-        cv2.add(v, float(np.float32(self.blink_gain + self.blink_decay)), dst=v, mask=blink)
-        cv2.min(v, float(np.float32(self.max_radius_gain - 1.0)), dst=v)
+        # Switches happen only on this or the last frame's foreground: the masks are worked out
+        # on their bounding box, with a margin of zeros wider than the opening's reach (outside
+        # it the opening is 0, as the erosion's and dilation's borders take it to be)
+        both = np.concatenate((fg_idx, self._prev_idx))
+        if both.size:
+            ys, xs = np.divmod(both, w)
+            m = 4
+            y0, y1 = max(0, int(ys.min()) - m), min(h, int(ys.max()) + m + 1)
+            x0, x1 = max(0, int(xs.min()) - m), min(w, int(xs.max()) + m + 1)
+            fg_c, prev_c = fg[y0:y1, x0:x1], prev[y0:y1, x0:x1]
+            # OpenCV's 0 / 255 masks and masked float ops
+            blink = cv2.compare(fg_c, prev_c, cv2.CMP_NE)
+            solid = cv2.dilate(cv2.morphologyEx(prev_c, cv2.MORPH_OPEN, _OPEN), _NEAR)
+            cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
+            vc = v[y0:y1, x0:x1]
+            cv2.add(vc, float(np.float32(self.blink_gain + self.blink_decay)), dst=vc, mask=blink)
+            # only the levels raised here can pass the top
+            cv2.min(vc, float(np.float32(self.max_radius_gain - 1.0)), dst=vc)
         cv2.max(v, 0.0, dst=v)
+        self._prev_fg = fg.reshape(-1)
+        self._prev_idx = fg_idx
 
 
 def _l1(rows: np.ndarray, colours: np.ndarray, n: int) -> np.ndarray:
