@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from counterpart.nodes.silhouette.background import FOREGROUND, GhostConfig, HorprasertBackground
+from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.sim.stream import open_stream
 
@@ -186,3 +187,26 @@ def test_people_in_view_during_training_come_out_one_region_each(handshake_busy)
                 share = masks[k][:, sel].sum(axis=1)
                 assert share.max() >= 0.5 * sel.sum() or sel.sum() < 300, (k, p.id)
     assert counts and max(counts) == 2
+
+
+def test_a_merge_breaking_up_leaves_each_id_on_its_person():
+    """Push, seed 0, people in view from frame 0: A stands still through the training frames
+    (background), B walks up and pushes; when A moves, A's pixels join B's region and the tracks
+    share it. With dark clothes taken back from the shadow class (the node's ``body_shadow_px``)
+    the merge breaks up at frame 99 with B's track predicted across both pieces, slightly more
+    on A's: that weak overlap must not make B's track claim A's piece (an id swap, and B a new id).
+    """
+    frames, masks, _ = render("push", 0, frames=106)
+    ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN, "body_shadow": BodyShadowConfig()})
+    who: dict[int, set[int]] = {}
+    for k, f in enumerate(frames):
+        r = ex.process(f)
+        if k < TRAIN:
+            continue
+        for p in r.people:
+            mine = r.labels == p.id + 1
+            ov = [(mine & masks[k, j]).sum() for j in range(2)]
+            if max(ov) >= 0.3 * mine.sum():
+                who.setdefault(p.id, set()).add(int(np.argmax(ov)))
+    assert all(len(v) == 1 for v in who.values()), who
+    assert {1} in who.values()  # B is tracked
