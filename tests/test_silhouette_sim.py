@@ -115,13 +115,11 @@ def test_a_revealed_patch_of_room_is_absorbed_a_distinct_still_object_is_not():
     assert min(fg_still) > 0.95  # the red block never matches the room around it
 
 
-@pytest.mark.parametrize("scenario", ["handshake", "push"])
-def test_identities_through_contact_in_the_simulator(scenario):
-    """Empty room first, then the scene: each published id stays with the same true person (A or B)
-    through the contact, where the regions merge and are split.
+def people_of_ids(ex: SilhouetteExtractor, frames: np.ndarray, masks: np.ndarray) -> tuple[dict[int, set[int]], int]:
+    """Run the extractor; from frame TRAIN on, the true people (0: A, 1: B) each published id was
+    on (the one holding most of its pixels, when at least 30% of them), and the number of
+    person-frames published as part of a merge.
     """
-    frames, masks, _ = render(scenario, 1, empty=TRAIN)
-    ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN, "robust": False})
     who: dict[int, set[int]] = {}
     merged = 0
     for k, f in enumerate(frames):
@@ -134,6 +132,17 @@ def test_identities_through_contact_in_the_simulator(scenario):
             if max(ov) >= 0.3 * mine.sum():
                 who.setdefault(p.id, set()).add(int(np.argmax(ov)))
             merged += p.merged
+    return who, merged
+
+
+@pytest.mark.parametrize("scenario", ["handshake", "push"])
+def test_identities_through_contact_in_the_simulator(scenario):
+    """Empty room first, then the scene: each published id stays with the same true person (A or B)
+    through the contact, where the regions merge and are split.
+    """
+    frames, masks, _ = render(scenario, 1, empty=TRAIN)
+    ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN, "robust": False})
+    who, merged = people_of_ids(ex, frames, masks)
     # A fragment (an arm flung out in the push) may start a short extra track; no id ever
     # changes person, and the two first ids are the two people.
     assert all(len(v) == 1 for v in who.values()), who
@@ -198,15 +207,6 @@ def test_a_merge_breaking_up_leaves_each_id_on_its_person():
     """
     frames, masks, _ = render("push", 0, frames=106)
     ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN, "body_shadow": BodyShadowConfig()})
-    who: dict[int, set[int]] = {}
-    for k, f in enumerate(frames):
-        r = ex.process(f)
-        if k < TRAIN:
-            continue
-        for p in r.people:
-            mine = r.labels == p.id + 1
-            ov = [(mine & masks[k, j]).sum() for j in range(2)]
-            if max(ov) >= 0.3 * mine.sum():
-                who.setdefault(p.id, set()).add(int(np.argmax(ov)))
+    who, _ = people_of_ids(ex, frames, masks)
     assert all(len(v) == 1 for v in who.values()), who
     assert {1} in who.values()  # B is tracked
