@@ -25,8 +25,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--person-height",
         type=float,
-        default=1.70,
-        help="mean stature of the people, metres (the prior that sets the scale)",
+        default=1.75,
+        help="mean height of the people's outlines, hair and shoes included, metres (the prior that sets the scale)",
     )
     p.add_argument("--person-height-std", type=float, default=0.09, help="its standard deviation, metres")
 

@@ -75,7 +75,7 @@ def calibrate_video(
         if obs is None:
             shape = frame.shape[:2]
             obs = PeopleObservations(frame.shape[1], frame.shape[0], max_observations=4000)
-        obs.add(result.people, n / (fps or 25.0))
+        obs.add(result.people, n / (fps or 25.0), result.labels)
         if scene.wants(n):
             scene.add(frame, result.people)
         n += 1

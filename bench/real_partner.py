@@ -2,17 +2,21 @@
 
 Used by ``bench/real_video.py`` (its tracking part writes one ``track_video`` file per clip). For each
 clip the observed side's tracked joints go through the default dual-HMM and the responder node's
-stage (``counterpart.nodes.responder.staging.Stage``, the node's defaults) frame by frame as the responder node
+stage (``counterpart.nodes.responder.staging.Stage``, the node's defaults, with the tracking's camera
+as the demo graphs give the node its ``camera_info``) frame by frame as the responder node
 runs them, and its hand contact (``counterpart.nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
 partner is projected with the camera the tracking recorded. Figures:
 
 - ``partner_distance_ok``: share of frames with a partner whose ground distance from the observed
   person (mid-hips on the floor, metres) lies in [0.5, 1.2] m;
 - ``partner_overlap``: share of frames with a partner whose projected box overlaps the observed
-  person's reference box (MediaPipe keypoints of vis >= 0.5) by more than ``OVERLAP_IOU``;
-- ``partner_overlap_real``: for reference, the same share for the real second person's reference box
-  against the observed person's (on the same frames; where the two reference skeletons lie on one
-  person, ``reference_collapsed``, they are not counted as overlapping);
+  person's reference box (MediaPipe keypoints of vis >= 0.5) by more than ``OVERLAP_IOU``, over the
+  frames where the two reference skeletons are two people (where both lie on one person,
+  ``real_silhouettes.reference_collapsed``, the reference does not say where the observed person
+  is: on the push clips that is about half of the frames of the push);
+  ``partner_overlap_all``: the same over every frame with a partner, collapsed ones included;
+- ``partner_overlap_real``: for reference, the same share as ``partner_overlap`` for the real second
+  person's reference box against the observed person's (same frames);
 - ``partner_in_picture``: share of frames with a partner of which some joint is inside the picture;
 - handshake clips (class 0, observed: the left person): at the moment the real hands meet (the
   frame where the two people's reference wrists are nearest), the pixel distance from the partner's
@@ -22,7 +26,10 @@ partner is projected with the camera the tracking recorded. Figures:
 - push clips (class 5, observed: the pusher, the person whose reference wrist comes nearest the
   other's shoulders and hips): the partner's ground distance from the observed person, its largest
   value in the second after that moment minus its value then (metres): ``push_back_m`` (median) and
-  ``push_moves_back`` (share of clips where it grows by at least ``BACK_M``).
+  ``push_moves_back`` (share of clips where it grows by at least ``BACK_M``). Where the tracker
+  lost the observed person on that very frame, the moment is the last frame before it where they
+  are tracked, at most ``MOMENT_SLACK`` frames before (the node holds the partner through such a
+  dropout); a clip with none is a miss.
 
 The moment of the interaction is looked for only on frames where the two reference skeletons are
 two people (``real_silhouettes.reference_collapsed``): where both lie on one person, a wrist is
@@ -63,9 +70,13 @@ OVERLAP_IOU = 0.25
 HAND_H = 0.15
 BACK_M = 0.1
 MIN_M, MAX_M = 0.5, 1.2
+#: frames before the moment of a push whose gap stands for it where the observed person is lost then
+MOMENT_SLACK = 3
 WRISTS = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
 TORSO = [JOINT_INDEX[j] for j in ("l_shoulder", "r_shoulder", "l_hip", "r_hip")]
 HANDSHAKE, PUSH = 0, 5
+#: the stage has the graph's camera (the responder node's camera_info, as the demo graphs wire it)
+CAMERA = True
 
 
 def interaction_class(clip: Path) -> int:
@@ -126,16 +137,21 @@ def silhouette_people(clip: Path) -> list[list[Any]]:
     return [list(result.people) for _, result in iter_video(clip, SilhouetteExtractor(), None, TRAIN_FRAMES)]
 
 
-def observed_reach(people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float) -> Reach | None:
+def observed_reach(
+    people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float
+) -> tuple[Reach | None, tuple[float, float, float, float] | None]:
     """What the observed person's silhouette says of their reach towards the partner
-    (``silhouette_reach``), as the responder node finds it: of the silhouettes on their side, the
-    one with the tracked person's id, else the first; None without one.
+    (``silhouette_reach``) and its box where it is theirs alone (not merged), as the responder node
+    finds them: of the silhouettes on their side, the one with the tracked person's id, else the
+    first; None without one.
     """
     mine = [q for q in people if q.side == side]
     shape = next((q for q in mine if q.id == person_id), mine[0] if mine else None)
     if shape is None or direction == 0.0:
-        return None
-    return silhouette_reach(shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl)
+        return None, None
+    box = tuple(shape.bbox)  # a region shared with the other person is split: this box is theirs
+    touching = bool(getattr(shape, "merged", False))
+    return silhouette_reach(shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl, touching=touching), box
 
 
 def staged_partner(
@@ -159,7 +175,7 @@ def staged_partner(
     model.reset()
     partner = np.full_like(joints, np.nan)
     observed = np.where(lost[:, None, None], np.nan, joints)
-    towards = 1.0 if side == 0 else -1.0  # the left person's partner stands to their right (world +X)
+    towards = 1.0 if side == 0 else -1.0  # the left person's partner stands to their right (image right)
     last = -(10**9)
     for t in range(len(joints)):
         if lost[t] or not np.isfinite(joints[t]).all():
@@ -168,13 +184,22 @@ def staged_partner(
             continue
         other = others[t] if np.isfinite(others[t]).all() else None
         direction = stage.side or towards
-        silhouette = (
+        silhouette, box = (
             observed_reach(people[t], int(ids[t]), SIDES[side], joints[t], direction)
             if people is not None and t < len(people)
-            else None
+            else (None, None)
         )
         dt = (t - last) / fps if last >= 0 else 1.0 / fps
-        staged = stage(joints[t], model.step(joints[t]), dt, other=other, side=towards, silhouette=silhouette)
+        staged = stage(
+            joints[t],
+            model.step(joints[t]),
+            dt,
+            other=other,
+            side=towards,
+            silhouette=silhouette,
+            camera=camera if CAMERA else None,
+            box=box if CAMERA else None,
+        )
         partner[t] = reach(joints[t], staged, offered=stage.offered_)[0]
         last = t
     return partner, observed, camera, fps
@@ -219,24 +244,26 @@ def partner_clip(
     if both.any():
         gap[both] = np.linalg.norm((actor_frame(partner[both])[0] - actor_frame(observed[both])[0])[:, [0, 2]], axis=1)
     uv = camera.project(np.where(has[:, None, None], partner, 0.0))
-    overlap = in_picture = real_overlap = 0
+    overlap = overlap_all = in_picture = real_overlap = two = 0
     for t in np.flatnonzero(has):
         in_picture += bool(camera.in_image(uv[t]).any())
         ref = _box(np.where((vis[t, side] >= VIS)[:, None], kp[t, side], np.nan))
         mine = _box(uv[t])
         real = _box(np.where((vis[t, 1 - side] >= VIS)[:, None], kp[t, 1 - side], np.nan))
-        overlap += ref is not None and mine is not None and _iou(ref, mine) > OVERLAP_IOU
-        real_overlap += (
-            ref is not None
-            and real is not None
-            and _iou(ref, real) > OVERLAP_IOU
-            and not reference_collapsed(kp[t], vis[t])
-        )
+        # both reference skeletons on one person: the reference does not say where the observed one is
+        apart = not reference_collapsed(kp[t], vis[t])
+        hit = ref is not None and mine is not None and _iou(ref, mine) > OVERLAP_IOU
+        two += apart
+        overlap += hit and apart
+        overlap_all += hit
+        real_overlap += ref is not None and real is not None and _iou(ref, real) > OVERLAP_IOU and apart
     out: dict[str, Any] = {
         "frames": int(has.sum()),
         "gap_n": int(both.sum()),
         "gap_ok": int(((gap >= MIN_M - 1e-6) & (gap <= MAX_M + 1e-6)).sum()),
         "overlap": int(overlap),
+        "overlap_all": int(overlap_all),
+        "apart": int(two),
         "real_overlap": int(real_overlap),
         "in_picture": int(in_picture),
         "label": label,
@@ -248,6 +275,10 @@ def partner_clip(
         elif label == HANDSHAKE:
             out["hand_h"] = float("inf")  # no partner at the moment of the handshake: a miss
         if label == PUSH:
+            # the observed person lost by the tracker on that very frame (a dropout of a frame or two,
+            # through which the node holds the partner): the gap of the last frame before it
+            known = [k for k in range(t, max(t - MOMENT_SLACK, -1), -1) if np.isfinite(gap[k])]
+            t = known[0] if known else t
             after = gap[t : t + round(fps) + 1]
             out["back_m"] = (
                 float(np.nanmax(after) - gap[t]) if np.isfinite(gap[t]) and np.isfinite(after).any() else float("nan")
@@ -258,12 +289,14 @@ def partner_clip(
 def partner_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Pool ``partner_clip`` rows into the bench's figures."""
     frames = sum(r["frames"] for r in rows)
+    apart = sum(r["apart"] for r in rows)
     hands = [r["hand_h"] for r in rows if "hand_h" in r]
     backs = [r["back_m"] for r in rows if "back_m" in r]
     return {
         "partner_distance_ok": round(sum(r["gap_ok"] for r in rows) / max(sum(r["gap_n"] for r in rows), 1), 4),
-        "partner_overlap": round(sum(r["overlap"] for r in rows) / max(frames, 1), 4),
-        "partner_overlap_real": round(sum(r.get("real_overlap", 0) for r in rows) / max(frames, 1), 4),
+        "partner_overlap": round(sum(r["overlap"] for r in rows) / max(apart, 1), 4),
+        "partner_overlap_real": round(sum(r["real_overlap"] for r in rows) / max(apart, 1), 4),
+        "partner_overlap_all": round(sum(r["overlap_all"] for r in rows) / max(frames, 1), 4),
         "partner_in_picture": round(sum(r["in_picture"] for r in rows) / max(frames, 1), 4),
         "handshake_clips": len(hands),
         "handshake_hand_h": round(float(np.median(hands)), 3) if hands else None,

@@ -6,13 +6,15 @@ Simulator (``sim_figures``): per seed, the scenario ``SCENARIOS[seed % 6]`` seen
 bearing -60 to 60 degrees about the pair, so the two people stand at different depths),
 its first ``--seconds`` (3 s) through the silhouette node's extractor as the lockstep graph runs it
 (background fitted on the first 20 frames with the people in view, then every frame from the first),
-the head and foot points of the upright people and the lines of the scene, one estimate at the end:
+the head and foot points of the upright people (of the standing bodies in a region that is not one
+person too, from the frame's label image) and the lines of the scene, one estimate at the end:
 
 - ``calib_height_err`` (relative), ``calib_tilt_err_deg``, ``calib_focal_err`` (relative): medians
   over the seeds of the absolute errors; a seed without an estimate counts as an infinite error;
 - ``calib_within``: share of seeds with height within 10%, tilt within 3 degrees and focal length
   within 10%, all three; ``calib_within_height_tilt``: height and tilt within their limits (the
   focal length left out: at low tilt no view of people fixes it);
+- ``calib_estimated``: share of seeds with an estimate at all (enough views of whole upright people);
 - ``calib_credible``: share of seeds whose estimate the calibration node would publish (the horizon
   seen: ``counterpart.nodes.calibration.smooth.credible`` with the node's default bounds);
   ``calib_within_published``: share within the limits of the camera the graph ends up with (the
@@ -126,7 +128,7 @@ def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
     obs, scene = PeopleObservations(*stream.size), SceneFrames()
     for i, frame in enumerate(frames):
         result = extractor.process(frame)
-        obs.add(result.people, i / stream.fps)
+        obs.add(result.people, i / stream.fps, result.labels)
         if scene.wants(i):
             scene.add(frame, result.people)
     est = obs.estimate(lines=scene.families())
@@ -199,6 +201,7 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000) -
             ),
             4,
         ),
+        "calib_estimated": round(float(np.mean([r["estimate"] is not None for r in rows])), 4),
         "calib_credible": round(float(np.mean([r["credible"] for r in rows])), 4),
         "calib_within_published": summary([r["published"] for r in rows], "")["within"],
         "calib_truth_points": summary([r["truth_points"] for r in rows], ""),

@@ -1,32 +1,51 @@
-"""Nodes for the responder's launch test: a Pose3D source that sends a Control half way, a sink."""
+"""Nodes for the responder's launch test: a Pose3D source that sends a Control half way (and the
+graph's camera, as a calibration node does), a sink.
+"""
 
 from __future__ import annotations
 
 import json
 import time
 
+import numpy as np
+
+from counterpart.body.camera import Camera, camera_to_info
 from counterpart.bus import Input, Node, Output, Param
-from counterpart.messages import Control, Partner, Pose3D
+from counterpart.messages import CameraInfo, Control, Partner, Pose3D
 from counterpart.messages.tracker import TrackedBody
 from tests.responder_fixtures import planted_pair
 
 
+def bearing_camera(joints: np.ndarray, bearing_deg: float) -> Camera:
+    """A 320x240 camera 4 m from the body ``joints`` (14, 3) (their mean), 1.6 m high, at ``bearing_deg``
+    round them (0: looking along -Z, no yaw), looking at their mean.
+    """
+    mid = np.asarray(joints, np.float64).mean(axis=0)
+    b = np.deg2rad(bearing_deg)
+    return Camera.look_at(mid + [4.0 * np.sin(b), 1.6 - mid[1], 4.0 * np.cos(b)], mid, 55.0, 320, 240)
+
+
 class PoseSource(Node):
     """Publishes person A of a planted pair as Pose3D, ``frames`` frames; before frame
-    ``control_at`` it publishes a Control (angry, strength 1, listener model when ``switch``).
+    ``control_at`` it publishes a Control (angry, strength 1, listener model when ``switch``). With
+    each pose it publishes a camera 4 m from person A at ``bearing_deg`` round them (0: from +Z),
+    for frames from seq 0 (a source's ``generate`` does not serve late subscribers their latched
+    message, as a calibration node's loop does: sent on every frame, it reaches them).
     """
 
-    outputs = {"pose": Output(Pose3D), "control": Output(Control)}
+    outputs = {"pose": Output(Pose3D), "control": Output(Control), "camera_info": Output(CameraInfo, latched=True)}
     params = {
         "frames": Param(int, 60, "frames", min=1),
         "control_at": Param(int, 30, "frame of the control", min=0),
         "switch": Param(str, "", "model to switch to ('' keeps it)"),
         "gap_at": Param(int, -1, "first frame without the person (-1: none)"),
         "gap": Param(int, 0, "frames without the person from gap_at", min=0),
+        "bearing_deg": Param(float, 0.0, "the camera's bearing round person A, degrees"),
     }
 
     def generate(self) -> None:
         tr = planted_pair(7, T=self.p["frames"])
+        camera = bearing_camera(tr.a[0], self.p["bearing_deg"])
         for t in range(self.p["frames"]):
             if self.stopping:
                 return
@@ -47,6 +66,7 @@ class PoseSource(Node):
                 )
                 time.sleep(0.5)
             gone = 0 <= t - self.p["gap_at"] < self.p["gap"]
+            self.publish("camera_info", camera_to_info(camera, time.monotonic_ns()))
             self.publish(
                 "pose",
                 Pose3D(

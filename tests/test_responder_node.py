@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.emotion import EmotionModel
 from counterpart.nodes.responder.frames import actor_frame
@@ -14,6 +15,7 @@ from counterpart.nodes.responder.listener import ListenerModel
 from counterpart.nodes.responder.models import save_model
 from tests.launching import read_jsonl, run_launch, write_launch
 from tests.responder_fixtures import planted_pair
+from tests.responder_nodes import bearing_camera
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +38,7 @@ def models_dir(tmp_path_factory) -> Path:
     return d
 
 
-def graph(tmp: Path, switch: str = "", **source: int) -> Path:
+def graph(tmp: Path, switch: str = "", responder: dict | None = None, **source: float) -> Path:
     return write_launch(
         tmp / "g.yaml",
         {
@@ -48,7 +50,7 @@ def graph(tmp: Path, switch: str = "", **source: int) -> Path:
                 # a reliable control queue: the source waits for it to connect, so the control is never lost
                 "responder": {
                     "run": "counterpart.nodes.responder",
-                    "params": {"model": "dual-hmm", "hold_frames": 5},
+                    "params": {"model": "dual-hmm", "hold_frames": 5, **(responder or {})},
                     "inputs": {"control": {"policy": "reliable"}},
                 },
                 "sink": {"run": "tests.responder_nodes:PartnerSink", "params": {"path": str(tmp / "out.jsonl")}},
@@ -86,6 +88,25 @@ def test_partner_per_pose_and_control_takes_effect(tmp_path: Path, models_dir: P
     # the pair stands 1.3 m apart: the partner is staged at most max_distance_m (1.2 m) from A
     gap = np.linalg.norm((actor_frame(pred)[0] - actor_frame(truth.a)[0])[:, [0, 2]], axis=1)
     assert np.all((gap > 0.5 - 1e-4) & (gap < 1.2 + 1e-4)) and gap.max() > 1.15
+
+
+def test_the_partner_stands_across_the_view_of_the_graphs_camera(tmp_path: Path, models_dir: Path) -> None:
+    # the graph's camera looks at the pair from 50 degrees round: with camera_info the partner stands
+    # at the observed person's depth in that camera, to their right in its picture
+    g = graph(tmp_path, responder={"camera_info": True}, bearing_deg=50.0)
+    code, out = run_launch(g, timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
+    assert code == 0, out
+    rows = read_jsonl(tmp_path / "out.jsonl")
+    assert [r["seq"] for r in rows] == list(range(60))
+    truth = planted_pair(7, T=60)
+    cam = bearing_camera(truth.a[0], 50.0)
+    hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
+    # the camera is a side input: the last half of the frames, however late it came (the partner
+    # walks round at max_speed_m_s)
+    pred = np.array([r["joints"] for r in rows])[30:, hips].mean(axis=1)
+    obs = truth.a[30:, hips].mean(axis=1)
+    assert np.abs(cam.depth(pred) - cam.depth(obs)).max() < 0.05
+    assert np.all(cam.project(pred)[:, 0] - cam.project(obs)[:, 0] > 20.0)
 
 
 def test_the_partner_holds_through_a_short_dropout_of_the_observed_person(tmp_path: Path, models_dir: Path) -> None:

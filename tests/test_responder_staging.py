@@ -7,10 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from counterpart.body.camera import Camera
+from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
-from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach
+from counterpart.nodes.responder.staging import Reach, Stage, StageConfig, silhouette_reach, stature
 from tests.pose_source import facing
 from tests.responder_fixtures import planted_pair
 
@@ -76,6 +78,52 @@ def test_the_partner_stands_beside_the_person_across_the_view_not_in_front_or_be
     # with a second person tracked, their side wins over the one given
     out = Stage()(obs, person(0.3, 1.9, np.pi), 0.04, other=person(0.3 - side, 1.4), side=side)
     assert (ground(out) - ground(obs)) == pytest.approx([-side * 0.9, 0.0], abs=1e-6)
+
+
+@pytest.mark.parametrize("bearing_deg", [0.0, 40.0, -60.0])
+def test_the_partner_stands_beside_the_person_as_a_turned_camera_sees_them(bearing_deg: float) -> None:
+    # a camera 4 m away at a bearing round the person (the simulator's random cameras turn up to 60
+    # degrees): the partner stands at the person's depth in that camera, to the right in its picture
+    obs = person(0.0, 0.0)
+    b = np.deg2rad(bearing_deg)
+    cam = Camera.look_at([4.0 * np.sin(b), 1.6, 4.0 * np.cos(b)], [0.0, 0.9, 0.0], 55.0, 320, 240)
+    out = Stage()(obs, person(0.0, 0.8, np.pi), 0.04, side=1.0, camera=cam)
+    hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
+    depth = cam.depth(np.stack([out[hips].mean(0), obs[hips].mean(0)]))
+    assert depth[0] == pytest.approx(depth[1], abs=1e-6)
+    assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(0.8, abs=1e-6)
+    u = cam.project(np.stack([out[hips].mean(0), obs[hips].mean(0)]))[:, 0]
+    assert u[0] - u[1] > 30.0  # image right, clear of the person
+    if bearing_deg:  # world X (a camera without yaw) would put it in front of or behind them in this view
+        old = Stage()(obs, person(0.0, 0.8, np.pi), 0.04, side=1.0)
+        assert abs(cam.depth(old[hips].mean(0)[None])[0] - depth[1]) > 0.3
+
+
+def test_the_partner_keeps_clear_of_the_persons_silhouette_in_the_picture() -> None:
+    # the model puts the partner 0.5 m beside the person; their silhouette, an arm held out its way,
+    # reaches 0.6 m past their body: the partner stands further off, as little as clears it
+    cam = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
+    obs, par = person(0.0, 0.0, 0.0), person(0.5, 0.0, 0.0)  # both facing the camera: 0.5 m wide
+    uv = cam.project(obs)
+    x0, y0, x1, y1 = uv[:, 0].min(), uv[:, 1].min(), uv[:, 0].max(), uv[:, 1].max()
+    arm = cam.project(np.array([[0.6, 1.3, 0.0]]))[0, 0] - cam.project(np.array([[0.0, 1.3, 0.0]]))[0, 0]
+    box = (x0, y0, x1 - x0 + arm, y1 - y0)
+
+    def iou(P: np.ndarray) -> float:
+        q = cam.project(P)
+        a = np.r_[q.min(0), q.max(0)]
+        w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
+        h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
+        return w * h / ((a[2] - a[0]) * (a[3] - a[1]) + box[2] * box[3] - w * h)
+
+    assert iou(Stage()(obs, par, 0.04, side=1.0, camera=cam)) > 0.15  # the model's place covers the arm
+    out = Stage()(obs, par, 0.04, side=1.0, camera=cam, box=box)
+    gap = np.hypot(*(ground(out) - ground(obs)))
+    assert iou(out) <= 0.15 and 0.5 < gap < 1.2
+    # a box it cannot clear within max_distance_m (a silhouette 2 m wide): never further than the limit
+    box = (x0, y0, x1 - x0 + 2.6 * arm, y1 - y0)
+    out = Stage()(obs, par, 0.04, side=1.0, camera=cam, box=box)
+    assert iou(out) > 0.15 and 0.5 - 1e-9 <= np.hypot(*(ground(out) - ground(obs))) <= 1.2 + 1e-9
 
 
 def test_the_partner_stays_beside_a_person_whose_estimate_jumps() -> None:
@@ -176,9 +224,10 @@ def test_the_silhouette_says_how_far_and_how_high_a_hand_is_held_out() -> None:
     # a 1.7 m person 200 px tall; centroid at the body's middle; the arm 80 px beyond the body at 0.55 h
     ctrl = outline(100.0, 50.0, 200.0, 0.55, 80.0)
     box = (100, 50, int(ctrl[:, 0].max() - 100), 200)
-    reach_m, height_m, centre_m = silhouette_reach(box, (125.0, 150.0), 1.0, 1.7, ctrl)
+    reach_m, height_m, centre_m, touching = silhouette_reach(box, (125.0, 150.0), 1.0, 1.7, ctrl)
     assert reach_m == pytest.approx((25 + 80) / 200 * 1.7) and height_m == pytest.approx(0.55 * 1.7)
-    assert centre_m == pytest.approx(125 / 200 * 1.7)
+    assert centre_m == pytest.approx(125 / 200 * 1.7) and not touching
+    assert silhouette_reach(box, (125.0, 150.0), 1.0, 1.7, ctrl, touching=True).touching
     # arms down: the stride's foot reaches further than the body but is no reach; the body's edge is
     down = outline(100.0, 50.0, 200.0, None, 0.0)
     reach_m = silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7, down).extent_m
@@ -201,16 +250,29 @@ def test_a_hand_held_out_is_offered_and_with_the_body_advancing_is_a_push() -> N
     stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.85, 1.0, 0.0))
     assert stage.pushes == 0
     np.testing.assert_allclose(stage.offered_, [0.63, 1.0, 2.0], atol=1e-6)
-    # the same hand with the body advancing at 1 m/s (its silhouette's centre 4 cm a frame): a push
-    gaps = []
-    for k in range(1, 11):
-        gaps.append(
-            float(
-                np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k))) - ground(obs)))
-            )
-        )
+    # touching someone else's silhouette, the outline's tip is where the regions were split: the hand
+    # is offered at hand_frac (0.6) of the person's stature, whatever the tip's height
+    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 0.5, 0.0, True))
+    assert stage.pushes == 0
+    assert stage.offered_[1] == pytest.approx(0.6 * stature(obs) + obs[[10, 13], 1].min())
+
+    # the same hand with the body advancing at 1 m/s (its silhouette's centre 4 cm a frame): a pusher
+    # walking in, no push until the hand lands (their silhouette touches someone else's)
+    def gap(k: int, touching: bool) -> float:
+        out = stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k, touching))
+        return float(np.hypot(*(ground(out) - ground(obs))))
+
+    assert [gap(k, False) for k in range(1, 11)] == pytest.approx([0.9] * 10) and stage.pushes == 0
+    gaps = [gap(k, True) for k in range(11, 21)]
     assert stage.pushes == 1 and stage.offered_ is None  # no hand to take from someone pushing it
-    assert gaps[-1] > 1.1 and max(np.diff([0.9, *gaps])) <= 0.1 + 1e-9
+    # it steps back at recoil_speed_m_s (0.75 m/s: 3 cm a frame), up to the 0.3 m of the recoil
+    steps = np.diff([0.9, *gaps])
+    assert gaps[-1] == pytest.approx(1.2) and steps.max() <= 0.03 + 1e-9 and (steps[:9] > 0).all()
+    # without push_touch, the advance alone is a push (a graph whose silhouettes never merge)
+    eager = Stage(StageConfig(push_touch=False))
+    for k in range(10):
+        eager(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k))
+    assert eager.pushes == 1
     # a region merging (its centre jumping 0.5 m in a frame) is no advance
     calm = Stage()
     for k in range(10):

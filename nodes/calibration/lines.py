@@ -48,7 +48,9 @@ class LineFamilies:
         return int((~self.vertical).sum())
 
 
-def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: float = 20.0) -> np.ndarray:
+def detect_segments(
+    image: np.ndarray, boxes: Iterable[Any] = (), min_length: float = 20.0, scale: float = 0.6
+) -> np.ndarray:
     """LSD segments of an image, without those on the people.
 
     Parameters
@@ -62,6 +64,12 @@ def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: fl
         or a midpoint test cut most of them in the simulator's rooms.
     min_length : float, default=20.0
         Shortest segment kept, pixels.
+    scale : float, default=0.6
+        LSD's own resampling of the image before it looks for lines (its Gaussian sub-sampling, von
+        Gioi et al. 2010, section 4; OpenCV's default 0.8). Smaller scales smooth more: the faint,
+        aliased edges of a floor's boards receding from a low-resolution camera (320x240) come out
+        as long segments instead of broken pieces, and these give the ground's second vanishing
+        point (the horizon's position, and the focal length through the right-angle prior).
 
     Returns
     -------
@@ -69,7 +77,9 @@ def detect_segments(image: np.ndarray, boxes: Iterable[Any] = (), min_length: fl
         Segments x1, y1, x2, y2, pixels.
     """
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
-    found = cv2.createLineSegmentDetector().detect(grey)[0]
+    if not 0.0 < scale <= 1.0:
+        raise ValueError(f"scale must be in (0, 1], got {scale}")
+    found = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD, scale).detect(grey)[0]
     if found is None:
         return np.zeros((0, 4))
     s = found.reshape(-1, 4).astype(np.float64)

@@ -199,7 +199,8 @@ class Calibration(Node):
         # stream time, not the capture stamps: a file replayed in lockstep is read faster or slower
         # than it was filmed, and "seconds of people in view" means seconds of the video
         time_s = msg.seq / self.fps if self.fps > 0 else msg.stamp * 1e-9
-        self.tally("people_observed", self.observations.add(msg.people, time_s))
+        labels = msg.labels if np.shape(msg.labels) == (size[1], size[0]) else None
+        self.tally("people_observed", self.observations.add(msg.people, time_s, labels))
         image = self.images.pop(msg.seq, None)
         if image is not None and image.shape[:2] == (size[1], size[0]):
             self.scene.add(image, msg.people)

@@ -4,7 +4,12 @@ bench share.
 
 A person region (the silhouette node's ``PersonShape``, or ``counterpart.nodes.silhouette.regions.Person``:
 anything with ``id``, ``bbox``, ``ctrl``, ``ref_point``, ``merged``) gives one observation when it
-can be an upright person (``estimate.usable``). The store is bounded: past ``max_observations`` it
+can be an upright person (``estimate.usable``). A region that cannot because it is too wide (two
+people joined by an arm, a shadow or a faint line of the room; a person with an arm held out) gives
+the standing bodies in its pixels when the frame's label image is given (``upright.upright_parts``),
+each under an id of its own. A region shared between two tracks (``merged``) gives none: its pixels
+were split between them by their previous shapes, not by what they are now (on the tuning seeds
+its bodies made more estimates worse than better). The store is bounded: past ``max_observations`` it
 keeps every second observation of the older half, so a long run keeps its whole span at a lower
 density and each estimate costs about the same.
 """
@@ -18,6 +23,7 @@ import numpy as np
 
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
 from .lines import LineFamilies, detect_segments, find_families
+from .upright import upright_parts
 
 
 class PeopleObservations:
@@ -44,7 +50,7 @@ class PeopleObservations:
         """Seconds between the first and the last observation."""
         return self._rows[-1][5] - self._rows[0][5] if self._rows else 0.0
 
-    def add(self, people: Iterable[Any], time_s: float) -> int:
+    def add(self, people: Iterable[Any], time_s: float, labels: np.ndarray | None = None) -> int:
         """Add the usable people of one frame.
 
         Parameters
@@ -53,15 +59,24 @@ class PeopleObservations:
             Person regions (anything with ``id``, ``bbox``, ``ctrl``, ``ref_point``, ``merged``).
         time_s : float
             Time the frame was seen, seconds.
+        labels : ndarray of shape (H, W) or None, default=None
+            The frame's label image (0 background, id + 1 on each person's pixels); with it, a
+            region too wide for one upright person (not ``merged``) gives the standing bodies in it (id
+            ``-(8 id + k + 1)`` for its k-th body from the left). None or another size: not used.
 
         Returns
         -------
         int
-            How many of ``people`` were usable and added.
+            How many observations were added.
         """
         n = 0
+        with_labels = labels is not None and np.shape(labels) == (self.size[1], self.size[0])
         for p in people:
             if not usable(p.bbox, *self.size, merged=bool(p.merged)):
+                if with_labels and not p.merged:
+                    for k, (h, f) in enumerate(upright_parts(labels, int(p.id) + 1, p.bbox, self.size)):
+                        self._rows.append((h[0], h[1], f[0], f[1], -(8 * int(p.id) + k + 1), float(time_s)))
+                        n += 1
                 continue
             ctrl = p.ctrl if p.ctrl is not None and np.size(p.ctrl) else None
             ref = p.ref_point if p.ref_point is not None and np.size(p.ref_point) == 2 else None

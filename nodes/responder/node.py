@@ -2,8 +2,10 @@
 
 Inputs (each optional by parameter, so a graph without a tracker still validates): ``pose``
 (tracker.Pose3D, ``use_pose``), ``silhouettes`` (silhouette.Silhouettes, ``use_silhouettes``),
-``signals`` (labeller.SocialSignals, ``use_signals``) and ``control`` (control.Control, latest
-policy, a side input that does not hold the node open). The model in force decides which input
+``signals`` (labeller.SocialSignals, ``use_signals``), ``control`` (control.Control, latest
+policy, a side input that does not hold the node open) and ``camera_info`` (camera.CameraInfo, the
+calibration node's, ``camera_info``; a side input too: the partner stands across that camera's view,
+clear of the observed person's silhouette in its picture). The model in force decides which input
 drives the output: dual-hmm, gpdm, listener and video-texture produce one Partner per ``pose``
 (listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
 ``silhouettes``; the others are
@@ -19,12 +21,14 @@ from typing import Any
 
 import numpy as np
 
+from counterpart.body.camera import Camera, CameraSchedule, camera_from_info
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import (
     EMOTIONS,
     INTERACTION_MODELS,
     INTEREST_LEVELS,
     SPEAKERS,
+    CameraInfo,
     Control,
     Partner,
     Pose3D,
@@ -48,6 +52,10 @@ class Responder(Node):
         "silhouettes": Input(Silhouettes, doc="people's B-spline silhouettes"),
         "signals": Input(SocialSignals, doc="the people's social signals"),
         "control": Input(Control, policy="latest", doc="run-time controls", awaits_end=False),
+        # every refined camera is kept (they hold from their seq on); the calibration node sends few
+        "camera_info": Input(
+            CameraInfo, policy="latest", queue=64, doc="the graph's camera (latched)", awaits_end=False
+        ),
     }
     outputs = {"partner": Output(Partner, "the generated partner, one per frame of the driving input")}
     params = {
@@ -68,6 +76,13 @@ class Responder(Node):
         "use_silhouettes": Param(bool, False, "subscribe to 'silhouettes'"),
         "use_signals": Param(bool, False, "subscribe to 'signals'"),
         "use_control": Param(bool, True, "subscribe to 'control'"),
+        "camera_info": Param(
+            bool,
+            False,
+            "subscribe to 'camera_info' (the calibration node's camera): the partner stands across that "
+            "camera's view and, with use_silhouettes, clear of the observed person's silhouette in its picture; "
+            "false: across the view of a camera looking along -Z with no yaw (the default camera's)",
+        ),
         "speaker": Param(str, "person", "who speaks (listener model)", choices=SPEAKERS),
         "interest": Param(int, 3, "listener interest level", choices=INTEREST_LEVELS),
         "emotion": Param(str, "neutral", "partner emotion", choices=EMOTIONS),
@@ -153,6 +168,7 @@ class Responder(Node):
             "silhouettes": params["use_silhouettes"],
             "signals": params["use_signals"],
             "control": params["use_control"],
+            "camera_info": params["camera_info"],
         }
         return {k: v for k, v in cls.inputs.items() if use[k]}, dict(cls.outputs)
 
@@ -194,6 +210,8 @@ class Responder(Node):
         except ValueError as e:
             raise SystemExit(f"responder: {e}; set responder.min_distance_m, max_distance_m or reach_m") from None
         self._unseen: set[str] = set()  # styles the gpdm model never saw, already reported
+        self.cameras = CameraSchedule()  # the graph's cameras from camera_info, each from its seq on
+        self._view: tuple[int, int] | None = None  # the frame size of the newest camera_info
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -243,14 +261,35 @@ class Responder(Node):
             self.strength,
         )
 
+    def on_camera_info(self, msg: CameraInfo) -> None:
+        """Keep the graph's camera (a refined one holds from its seq on).
+
+        Parameters
+        ----------
+        msg : CameraInfo
+            The camera; one that cannot be read is dropped with a warning, and the last one holds.
+        """
+        try:
+            camera = camera_from_info(msg)
+        except ValueError as exc:
+            self.log.warning("camera_info dropped: %s", exc)
+            return
+        self.cameras.add(camera, msg.seq)
+        self._view = (camera.width, camera.height)
+
+    def _camera(self, seq: int) -> Camera | None:
+        """The graph's camera for frame ``seq``; None before any camera_info came."""
+        return None if self._view is None else self.cameras.get(self._view, seq)
+
     def _reset_stage(self) -> None:
         if self.stage is not None:
             self.stage.reset()
 
-    def _scene(self, body: Any) -> dict[str, Any]:
-        """What the stage knows of the scene besides the observed ``body`` (a TrackedBody): the real
-        second person tracked in the same poses, the side to stand on (towards the middle of the
-        picture), and the observed person's silhouette extent towards the partner.
+    def _scene(self, body: Any, seq: int) -> dict[str, Any]:
+        """What the stage knows of the scene besides the observed ``body`` (a TrackedBody) on frame
+        ``seq``: the real second person tracked in the same poses, the side to stand on (towards the
+        middle of the picture), the observed person's silhouette extent towards the partner and its
+        box (theirs alone, not merged), and the graph's camera.
         """
         people = list(getattr(self.latest.get("pose"), "people", ()))
         other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
@@ -261,8 +300,16 @@ class Responder(Node):
         shape = next((q for q in mine if q.id == body.id), mine[0] if mine else None)
         direction = (self.stage.side if self.stage is not None else 0.0) or side
         if shape is not None and direction != 0.0:
-            silhouette = silhouette_reach(shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl)
-        return {"other": None if other is None else np.asarray(other.joints), "side": side, "silhouette": silhouette}
+            silhouette = silhouette_reach(
+                shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl, touching=shape.merged
+            )
+        return {
+            "other": None if other is None else np.asarray(other.joints),
+            "side": side,
+            "silhouette": silhouette,
+            "camera": self._camera(seq),
+            "box": None if shape is None or shape.merged else tuple(shape.bbox),
+        }
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
         """The model's partner moved to where a partner stands beside the observed ``body`` (``stage``)
@@ -274,7 +321,7 @@ class Responder(Node):
             fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
             gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
             before = self.stage.corrected, self.stage.pushes
-            joints = self.stage(body.joints, joints, gap / fps, **self._scene(body))
+            joints = self.stage(body.joints, joints, gap / fps, **self._scene(body, driver.seq))
             offered = self.stage.offered_
             if self.stage.corrected > before[0]:
                 self.tally("partner_placed")

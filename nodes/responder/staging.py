@@ -9,14 +9,20 @@ model's posture and gestures are kept:
 
 1. the partner stands beside the observed person as the camera sees them (``beside``): its ground
    offset from the person, p - o (p, o the mid-hips dropped to the floor,
-   :func:`.frames.actor_frame`), is taken across the camera's view, at the person's depth (every
-   camera of the project looks along -Z with no yaw, :mod:`counterpart.body.camera`, so "across"
-   is the world X axis and image right is +X). Its side is where the real second person stands
+   :func:`.frames.actor_frame`), is taken across the camera's view, at the person's depth: along
+   the ground direction of the camera's x axis (:func:`across_view` of the caller's ``camera``;
+   image right is that way), world X when the caller has no camera (a camera looking along -Z with no yaw,
+   as the default one, :mod:`counterpart.body.camera`). Its side is where the real second person stands
    when one is tracked (``other``; it changes only when they are more than ``side_margin_m`` on
    the other side), else the side the caller gives (the observed person's side of the picture:
    the partner stands towards the middle), else the model's. Not beside: the model's direction.
    Its length is the model's ground distance clipped to [``min_distance_m``, ``max_distance_m``]
-   (along the observed person's facing when p lies on o and nothing gives a side);
+   (along the observed person's facing when p lies on o and nothing gives a side). With the
+   camera and the observed person's silhouette box (``box``; a region shared with another person's
+   is split, the split box is theirs), it
+   then grows, within ``max_distance_m``, as little as makes the partner's projected box overlap
+   that box by at most ``clear_iou`` (intersection over union): the tracked person's place is off
+   by decimetres on real video, their silhouette is where the picture shows them;
 2. that offset changes by at most ``max_speed_m_s`` times the time between frames, in polar
    coordinates about the person (the partner walks round them, never through them; it never
    jumps), so the distance holds on every frame. The offset is relative to the observed person:
@@ -27,9 +33,13 @@ model's posture and gestures are kept:
    silhouette (:func:`silhouette_reach`), when it holds a hand out (its leading point ``offer_m``
    from its centre) while its centre advances towards the partner at ``push_speed_m_s`` or more
    (the torso and the arm forward together: tracked arms are the least reliable joints on real
-   video, a silhouette's outline is not), its distance grows by ``recoil_m``, held while the push
-   goes on, which then fades with time constant ``recoil_s`` (the step back, then the return; still within the limits and
-   the speed of 1 and 2). A hand held out without a push is offered (:attr:`Stage.offered_`);
+   video, a silhouette's outline is not) and, with ``push_touch``, the silhouette touches someone
+   else's (:attr:`Reach.touching`: a pusher walks in with the arm out well before the hand lands),
+   its distance grows by ``recoil_m`` at ``recoil_speed_m_s``, held while the push goes on, which
+   then fades with time constant ``recoil_s`` (the step back, then the return; still within the
+   limits and the speed of 1 and 2). A hand held out without a push is offered
+   (:attr:`Stage.offered_`), at the height of the silhouette's tip, or at ``hand_frac`` of the
+   person's stature where the silhouette touches someone else's;
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
@@ -41,6 +51,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 
 from .frames import actor_frame
@@ -50,8 +61,8 @@ _ARMS = [JOINT_INDEX[j] for j in ("l_elbow", "r_elbow", "l_wrist", "r_wrist")]
 _WRISTS = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
 _NECK, _HIPS = JOINT_INDEX["neck"], [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
 _SHOULDERS = [JOINT_INDEX["l_shoulder"], JOINT_INDEX["r_shoulder"]]
-#: the ground direction (x, z) across the camera's view, image right: every camera of the project
-#: looks along -Z with no yaw (body.camera.Camera.look_at from +Z, calibration.estimate.rotation)
+#: the ground direction (x, z) across the camera's view, image right, without a camera: that of a
+#: camera looking along -Z with no yaw (the default camera, calibration.estimate.rotation)
 ACROSS = np.array([1.0, 0.0])
 #: the heights of the arms (hips to shoulders, a little either way) as fractions of a person's height
 ARM_BAND = (0.35, 0.85)
@@ -98,6 +109,19 @@ class StageConfig:
     advance_s : float, default=0.15
         Time constant of the smoothing of that advance, seconds (steps faster than
         ``JUMP_M_S``, a region merging or splitting, are left out).
+    push_touch : bool, default=True
+        A silhouette push needs the silhouette to touch someone else's (:attr:`Reach.touching`):
+        a pusher walks in with the arm out well before the hand lands.
+    hand_frac : float, default=0.6
+        The height of a hand held out while the silhouette touches someone else's, fraction of the
+        person's stature above their lowest ankle (where the regions were split, the outline's tip
+        says nothing of the hand's height); 0: the outline's tip as elsewhere.
+    recoil_speed_m_s : float, default=0.75
+        How fast the partner steps back when pushed, metres per second (the return is the fading,
+        ``recoil_s``).
+    clear_iou : float, default=0.15
+        With a camera and the observed person's silhouette box, the most the partner's projected
+        box may overlap that box (intersection over union) before it stands further away.
 
     Raises
     ------
@@ -118,6 +142,10 @@ class StageConfig:
     meet_frac: float = 0.7
     push_speed_m_s: float = 0.5
     advance_s: float = 0.15
+    clear_iou: float = 0.15
+    push_touch: bool = True
+    hand_frac: float = 0.6
+    recoil_speed_m_s: float = 0.75
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -130,8 +158,34 @@ class StageConfig:
             raise ValueError(
                 f"contact_m={self.contact_m}, recoil_m={self.recoil_m} must be >= 0 and recoil_s={self.recoil_s} > 0"
             )
+        if self.recoil_speed_m_s <= 0:
+            raise ValueError(f"recoil_speed_m_s={self.recoil_speed_m_s} must be > 0")
+        if not 0.0 <= self.clear_iou <= 1.0:
+            raise ValueError(f"clear_iou={self.clear_iou} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
             raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
+
+
+def across_view(R: np.ndarray) -> np.ndarray:
+    """The ground direction across a camera's view, towards image right.
+
+    The camera's x axis in world coordinates is the first row of its world-to-camera rotation
+    (``X_c = R X_w + t``); dropped onto the ground plane (world Y up) it is the direction along
+    which a point moves right in the picture at constant depth, whatever the camera's yaw.
+
+    Parameters
+    ----------
+    R : ndarray of shape (3, 3)
+        World-to-camera rotation.
+
+    Returns
+    -------
+    ndarray of shape (2,)
+        Unit ground vector (x, z); ``ACROSS`` for a camera whose x axis is vertical (rolled 90 degrees).
+    """
+    x = np.asarray(R, np.float64).reshape(3, 3)[0, [0, 2]]
+    n = float(np.hypot(*x))
+    return x / n if n > 1e-6 else ACROSS.copy()
 
 
 def stature(joints: np.ndarray) -> float:
@@ -163,11 +217,15 @@ class Reach(NamedTuple):
     centre_m : float
         The silhouette's centre across the view towards the partner, metres at the person's depth
         from an arbitrary origin: only its changes mean anything (the body advancing).
+    touching : bool, default=False
+        Whether the silhouette touches someone else's (its region was shared with another person's
+        and split, ``silhouette.Person.merged``).
     """
 
     extent_m: float
     height_m: float | None
     centre_m: float
+    touching: bool = False
 
 
 def silhouette_reach(
@@ -177,6 +235,7 @@ def silhouette_reach(
     stature_m: float,
     ctrl: np.ndarray | None = None,
     band: tuple[float, float] = ARM_BAND,
+    touching: bool = False,
 ) -> Reach:
     """How far a person's silhouette extends towards ``direction`` from its centre, how high, and where
     its centre is, metres.
@@ -202,6 +261,8 @@ def silhouette_reach(
         The outline's B-spline control points, pixels (None or empty: the box's edge).
     band : tuple of float, default=ARM_BAND
         The heights a reach is looked for at, fractions of the box's height above its bottom.
+    touching : bool, default=False
+        Whether the silhouette touches someone else's (``silhouette.Person.merged``).
 
     Returns
     -------
@@ -210,7 +271,7 @@ def silhouette_reach(
     """
     x, y, w, h = (float(v) for v in bbox)
     if h <= 0:
-        return Reach(0.0, None, 0.0)
+        return Reach(0.0, None, 0.0, touching)
     pts = None if ctrl is None else np.asarray(ctrl, np.float64).reshape(-1, 2)
     if pts is not None:
         up = (y + h - pts[:, 1]) / h
@@ -221,7 +282,7 @@ def silhouette_reach(
     else:
         edge, height = (x + w if direction > 0 else x), None
     cx = float(centroid[0])
-    return Reach(max(direction * (edge - cx), 0.0) / h * stature_m, height, direction * cx / h * stature_m)
+    return Reach(max(direction * (edge - cx), 0.0) / h * stature_m, height, direction * cx / h * stature_m, touching)
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -238,6 +299,58 @@ def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarr
     r = float(np.hypot(*d))
     u = d / r if r > 1e-6 else np.array([np.sin(facing), np.cos(facing)])
     return u * min(max(r, lo), hi)
+
+
+def _box_iou(boxes: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels."""
+    w = np.clip(np.minimum(boxes[:, 2], box[2]) - np.maximum(boxes[:, 0], box[0]), 0.0, None)
+    h = np.clip(np.minimum(boxes[:, 3], box[3]) - np.maximum(boxes[:, 1], box[1]), 0.0, None)
+    inter = w * h
+    union = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]) + (box[2] - box[0]) * (box[3] - box[1]) - inter
+    return np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+
+
+def clear_length(
+    partner: np.ndarray,
+    shift: np.ndarray,
+    u: np.ndarray,
+    lengths: np.ndarray,
+    camera: Camera,
+    box: tuple[float, float, float, float],
+    max_iou: float,
+) -> float:
+    """The first of ``lengths`` at which the partner's projected box overlaps ``box`` by at most ``max_iou``.
+
+    Parameters
+    ----------
+    partner : ndarray of shape (14, 3)
+        The partner's joints, world metres.
+    shift : ndarray of shape (2,)
+        Ground shift (x, z) that puts the partner at the observed person's place, metres.
+    u : ndarray of shape (2,)
+        Unit ground direction (x, z) from the observed person to the partner.
+    lengths : ndarray of shape (K,)
+        Candidate distances along ``u``, increasing, metres.
+    camera : Camera
+        The camera of the picture.
+    box : tuple of float
+        The observed person's silhouette box ``(x, y, w, h)``, pixels.
+    max_iou : float
+        Largest overlap allowed (intersection over union).
+
+    Returns
+    -------
+    float
+        That length, metres; the one of least overlap where none is clear enough.
+    """
+    g = shift[None] + lengths[:, None] * u[None]  # (K, 2)
+    X = np.asarray(partner, np.float64)[None] + np.stack([g[:, 0], np.zeros(len(g)), g[:, 1]], axis=1)[:, None]
+    uv = camera.project(X)  # (K, 14, 2)
+    boxes = np.concatenate([np.nanmin(uv, axis=1), np.nanmax(uv, axis=1)], axis=1)
+    x, y, w, h = (float(v) for v in box)
+    iou = np.nan_to_num(_box_iou(boxes, np.array([x, y, x + w, y + h])), nan=0.0)
+    ok = np.flatnonzero(iou <= max_iou)
+    return float(lengths[ok[0]] if len(ok) else lengths[int(np.argmin(iou))])
 
 
 def _walk(start: np.ndarray, goal: np.ndarray, limit: float) -> np.ndarray:
@@ -289,6 +402,7 @@ class Stage:
         self._last: np.ndarray | None = None  # the last ground offset from the observed person
         self._side = 0.0  # the side across the view the partner stands on (+1: image right), 0: none yet
         self._recoil = 0.0  # metres added to the partner's distance by a push, fading
+        self._recoil_goal = 0.0  # where the recoil is going: recoil_m on a push, fading after
         self._touching = False
         self._centre: float | None = None  # the silhouette's last centre across the view, metres
         self._advance = 0.0  # its smoothed speed towards the partner, metres per second
@@ -300,14 +414,16 @@ class Stage:
         """The side across the view the partner stands on: +1 image right (world +X), -1 left, 0 not yet placed."""
         return self._side
 
-    def _choose_side(self, o: np.ndarray, other: np.ndarray | None, side: float, model: np.ndarray) -> float:
+    def _choose_side(
+        self, o: np.ndarray, other: np.ndarray | None, side: float, model: np.ndarray, across: np.ndarray
+    ) -> float:
         """The side across the view (+1 / -1) the partner stands on; see the module's step 1."""
         if other is not None and np.isfinite(other).all():
-            across = float((actor_frame(np.asarray(other, np.float64))[0][[0, 2]] - o) @ ACROSS)
+            across = float((actor_frame(np.asarray(other, np.float64))[0][[0, 2]] - o) @ across)
             if self._side == 0.0 or (np.sign(across) != self._side and abs(across) > self.config.side_margin_m):
                 self._side = float(np.sign(across)) or self._side
         if self._side == 0.0:
-            self._side = float(np.sign(side)) or float(np.sign(model @ ACROSS))
+            self._side = float(np.sign(side)) or float(np.sign(model @ across))
         return self._side
 
     def _advancing(self, silhouette: Reach | None, dt: float) -> float:
@@ -343,6 +459,8 @@ class Stage:
         other: np.ndarray | None = None,
         side: float = 0.0,
         silhouette: Reach | None = None,
+        camera: Camera | None = None,
+        box: tuple[float, float, float, float] | None = None,
     ) -> np.ndarray:
         """The partner's joints, world metres, moved rigidly to a valid place.
 
@@ -362,6 +480,13 @@ class Stage:
             What the observed person's silhouette says of their reach towards the partner
             (:func:`silhouette_reach`): a hand held out, and with the body advancing a push; None:
             only their tracked arms are their reach.
+        camera : Camera or None, default=None
+            The camera of the picture: the partner stands across its view (:func:`across_view`);
+            None: across the view of a camera looking along -Z with no yaw (``ACROSS``).
+        box : tuple of float or None, default=None
+            The observed person's silhouette box ``(x, y, w, h)``, pixels, where it is theirs alone
+            (not merged with someone else's): with ``camera``, the partner keeps clear of it
+            (``clear_iou``); None: not known.
 
         Returns
         -------
@@ -374,28 +499,36 @@ class Stage:
         o3, facing = actor_frame(X)
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
-        self._recoil *= float(np.exp(-max(float(dt), 0.0) / c.recoil_s))
-        advance = self._advancing(silhouette, float(dt))
+        dt = max(float(dt), 0.0)
+        self._recoil_goal *= float(np.exp(-dt / c.recoil_s))
+        advance = self._advancing(silhouette, dt)
         held_out = silhouette is not None and silhouette.extent_m >= c.offer_m
-        pushing = held_out and advance >= c.push_speed_m_s
+        pushing = held_out and advance >= c.push_speed_m_s and (silhouette.touching or not c.push_touch)
         touching = self._touching_now(X, P, o, p, pushing)
         if touching and not self._touching:
-            self._recoil += c.recoil_m
+            self._recoil_goal += c.recoil_m
             self.pushes += 1
         elif touching:  # pushed on and on, it keeps its distance; the return starts when the push ends
-            self._recoil = max(self._recoil, c.recoil_m)
+            self._recoil_goal = max(self._recoil_goal, c.recoil_m)
         self._touching = touching
+        # the step back at recoil_speed_m_s; the return as the push fades
+        self._recoil = min(self._recoil_goal, self._recoil + c.recoil_speed_m_s * dt)
         d = p - o
         r = float(np.hypot(*d))
         if c.beside:
-            s = self._choose_side(o, other, side, d)
+            u = ACROSS if camera is None else across_view(camera.R)
+            s = self._choose_side(o, other, side, d, u)
             # the model's distance across the view; along the person's facing when nothing gives a side
             if s != 0.0:
-                d = s * max(r, 1e-3) * ACROSS
+                d = s * max(r, 1e-3) * u
         r = float(np.hypot(*d))
         if r > 1e-6:  # the step back is from where it stands
             d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
         offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
+        r = float(np.hypot(*offset))
+        if camera is not None and box is not None and r > 1e-6:
+            lengths = np.linspace(r, max(r, c.max_distance_m), 8)
+            offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
@@ -404,7 +537,10 @@ class Stage:
             lo, hi = float(X[_HIPS, 1].mean()), float(X[_SHOULDERS, 1].mean())
             u = offset / max(float(np.hypot(*offset)), 1e-9)
             near = X[_WRISTS][int(np.argmax((X[_WRISTS][:, [0, 2]] - o) @ u))]
-            y = float(np.clip(near[1] if silhouette.height_m is None else silhouette.height_m, lo, hi))
+            y = near[1] if silhouette.height_m is None else silhouette.height_m
+            if silhouette.touching and c.hand_frac > 0:  # the outline's tip is where the regions were split
+                y = c.hand_frac * stature(X) + float(X[_ANKLES, 1].min())
+            y = float(np.clip(y, lo, hi))
             out = min(silhouette.extent_m, c.meet_frac * float(np.hypot(*offset)))  # hands meet between the two
             self.offered_ = np.array([o[0] + out * u[0], y, o[1] + out * u[1]])
         shift = np.zeros(3)
