@@ -48,7 +48,7 @@ Figures (last stdout line, one JSON object):
   labeller_fps         frames per second per person of SocialLabeller.update, streaming, 3D input
                        with head angles, two people per frame (median of 3 runs); labeller_fps_2d
                        the same with silhouette (2D) input
-  face                 the face-video part (``--face-seeds``, default 20-22, ``--face-duration`` 60 s;
+  face                 the face-video part (``--face-seeds``, default 20-29, ``--face-duration`` 30 s;
                        ``--no-face`` skips it): person A of the simulator's conversations rendered
                        face-on at 640x360 (``counterpart.sim.face.conversation_face_clip``: nods, shakes,
                        look-aways and talking turns with the scenario's own labels) at 25 and
@@ -78,8 +78,12 @@ Figures (last stdout line, one JSON object):
                        on the clip's ground-truth head angles (a perfect tracker's
                        ``head_nod``/``head_turn``; centred windows), the ceiling the simulator's
                        truth allows (a shake planted on the way back from a look-away is hardly
-                       performed). ``per_seed``: recall, true frames, frames missed for want
-                       of a face and the pose-angle recall per clip (seed and frame rate).
+                       performed). ``per_seed``: recall, precision, true and predicted frames,
+                       frames missed for want of a face and the pose-angle recall per clip (seed
+                       and frame rate); ``nod_recall_min_seed``, ``nod_precision_min_seed``,
+                       ``shake_recall_min_seed``, ``shake_precision_min_seed``: the worst clip's
+                       figure over seeds and both rates (clips without a true, resp. predicted,
+                       frame of the kind have none), ``worst_seed`` which clip it is.
                        ``laugh_recall``: the share of frames labelled laughing on clips of a
                        laughing face, ``laugh_false_rate_talk`` on clips of a talking face
                        (``gesture_face_clip`` laugh / talk, the verdict seeds, frames from 2 s on;
@@ -96,7 +100,10 @@ Figures (last stdout line, one JSON object):
                        302, 305 (both rates) and 303 (25 fps), 45 s each; the nod's rotation
                        cue (the face's features relative to the top of the head, unit gain)
                        on seeds 303, 304 (sad: small nods of a head pitched down) and 311,
-                       312 (happy: a knee bounce), 25 fps, 30 s each.
+                       312 (happy: a knee bounce), 25 fps, 30 s each; taking the lateral motion
+                       in step with that cue out of the shake channel (a nod of a head turned
+                       aside), and its ridge, on seeds 301, 302, 303 and 305, both rates, 45 s
+                       each. Face seeds 300-319 are tuning seeds (the bench warns).
   mine_s               seconds to mine 45,000 frames x 27 speaker + 27 listener labels (synthetic
                        planted streams, rates 0.02-0.3, min_support 0.005, max_len 4);
                        mine_synthetic_recovered its planted rules found; --dense adds mine_s_dense
@@ -326,7 +333,8 @@ def bench_fps(c: Sequence, repeats: int = 3) -> tuple[float, float]:
 
 # ------------------------------------------------------------------------------ face video
 FACE_FPS = (25.0, 29.97)
-FACE_TUNING_SEEDS = (301, 305)
+#: face-part conversation seeds the face path's settings were chosen on (never reported)
+FACE_TUNING_SEEDS = range(300, 320)
 
 
 def face_labels(clip: FaceClip, lab: SocialLabeller | None = None) -> tuple[np.ndarray, list[str], float]:
@@ -366,6 +374,27 @@ def pose_angle_labels(clip: FaceClip) -> dict[str, np.ndarray]:
     return {"nod": r.nod == 1, "shake": r.shake == 1}
 
 
+def worst_seed_figures(per_seed: list[dict[str, object]]) -> dict[str, object]:
+    """The lowest per-clip nod/shake frame recall and precision over seeds and frame rates
+    (``*_min_seed``), with the clip it comes from (``worst_seed``); clips without a true (for
+    recall) or a predicted (for precision) frame of a kind have no figure and are skipped.
+    """
+    out: dict[str, object] = {}
+    where: dict[str, object] = {}
+    for k in ("nod", "shake"):
+        for fig in ("recall", "precision"):
+            rows = [r for r in per_seed if r[f"{k}_{fig}"] == r[f"{k}_{fig}"]]  # type: ignore[comparison-overlap]
+            key = f"{k}_{fig}_min_seed"
+            if not rows:
+                out[key] = float("nan")
+                continue
+            r = min(rows, key=lambda r: float(r[f"{k}_{fig}"]))  # type: ignore[arg-type]
+            out[key] = r[f"{k}_{fig}"]
+            where[key] = {"seed": r["seed"], "fps": r["fps"]}
+    out["worst_seed"] = where
+    return out
+
+
 def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | None = None) -> dict[str, object]:
     """The face-video figures (see the module docstring)."""
     cv2.setNumThreads(2)
@@ -392,9 +421,11 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
                 cnt[k + "_ref"].append(_frame_pr(ref[k], clip.truth[k]))
                 unknown = lab[lat:, SIGNALS.index(k)] == -1
                 cnt[k + "_unknown"].append(_frame_pr(unknown, tr))
-                m, _, t_ = cnt[k + "_fr"][-1]
+                m, p_, t_ = cnt[k + "_fr"][-1]
                 row[f"{k}_true_frames"] = t_
+                row[f"{k}_predicted_frames"] = p_
                 row[f"{k}_recall"] = round(m / t_, 4) if t_ else float("nan")
+                row[f"{k}_precision"] = round(m / p_, 4) if p_ else float("nan")
                 row[f"{k}_missed_no_face"] = cnt[k + "_unknown"][-1][0]
                 mr, _, tr_ = cnt[k + "_ref"][-1]
                 row[f"{k}_recall_pose_angles"] = round(mr / tr_, 4) if tr_ else float("nan")
@@ -489,6 +520,7 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
         return pick(known) if known else float("nan")
 
     worst: dict[str, object] = {k: over_rates(k, min) for k in (*names, "laugh_recall")}
+    worst.update(worst_seed_figures(per_seed))
     worst["still_false_rate"] = over_rates("still_false_rate", max)
     worst["laugh_false_rate_talk"] = over_rates("laugh_false_rate_talk", max)
     return {
@@ -614,8 +646,8 @@ def main() -> int:
     ap.add_argument("--noise-deg", type=float, default=0.0, help="head angle noise (sim source), degrees")
     ap.add_argument("--no-mining", action="store_true", help="skip the rule figures")
     ap.add_argument("--no-face", action="store_true", help="skip the face-video part")
-    ap.add_argument("--face-seeds", default="20-22", help="conversation seeds of the face part (not 301: tuning)")
-    ap.add_argument("--face-duration", type=float, default=60.0, help="seconds per face clip")
+    ap.add_argument("--face-seeds", default="20-29", help="conversation seeds of the face part (not 300-319: tuning)")
+    ap.add_argument("--face-duration", type=float, default=30.0, help="seconds per face clip")
     ap.add_argument("--face-verdict-seeds", default="0-2", help="seeds of the one-behaviour verdict clips")
     ap.add_argument(
         "--dense", action="store_true", help="also time mining on dense labels (mean rate ~0.27, min_support 0.01)"
@@ -697,6 +729,9 @@ def main() -> int:
         res["mine_s_dense"] = round(d["mine_s"], 3)
         res["mine_label_rate_dense"] = round(d["mine_label_rate"], 3)
     if not a.no_face:
+        face_tuned = sorted(set(_seeds(a.face_seeds)) & set(FACE_TUNING_SEEDS))
+        if face_tuned:
+            print(f"warning: face seeds {face_tuned} were used to choose the face path's settings", file=sys.stderr)
         res["face"] = face_part(_seeds(a.face_seeds), a.face_duration, _seeds(a.face_verdict_seeds))
     print(json.dumps(res))
     return 0

@@ -252,6 +252,49 @@ def test_short_shakes_labelled_to_their_weak_first_and_last_swings(fps: float) -
     assert hit / tr.sum() >= 0.85 and hit / pred.sum() >= 0.95, (hit / tr.sum(), hit / pred.sum())
 
 
+@pytest.mark.parametrize("fps", [25.0, 29.97])
+def test_a_turned_face_nod_moving_sideways_is_a_nod_and_a_shake_stays_a_shake(fps: float) -> None:
+    """Nods (2 Hz, Hann-enveloped, 0.8 s) of a face turned aside: the head point moves down by 0.06
+    and sideways by 0.15 face widths in step (the head's forward dip, partly across the image),
+    and the rotation cue ``tilt`` by 0.1: the nods are found (frame recall >= 0.8), no frame is a
+    shake. Before the lateral part in step with the cue was taken out of the shake channel, the
+    sideways motion scored as shakes (18-21 frames) and held the nods under the threshold (0-10 of
+    60-72 nod frames found). Shakes (2.5 Hz, 0.1 face widths) with a cue of noise only stay shakes
+    (recall >= 0.75: the same frames as with the shake channel left whole).
+    """
+    rng = np.random.default_rng(5)
+    t = np.arange(int(8 * fps)) / fps
+    size = 130.0
+
+    def gestures(hz: float) -> tuple[np.ndarray, np.ndarray]:
+        g = np.zeros(len(t))
+        on_any = np.zeros(len(t), bool)
+        for t0 in (1.5, 4.0, 6.0):
+            on = (t >= t0) & (t < t0 + 0.8)
+            env = 0.5 - 0.5 * np.cos(2 * np.pi * (t - t0) / 0.8)
+            g += np.where(on, env * np.sin(2 * np.pi * hz * (t - t0)), 0.0)
+            on_any |= on
+        return g, on_any
+
+    def run(x: np.ndarray, y: np.ndarray, tilt: np.ndarray) -> np.ndarray:
+        det = HeadMotionDetectorFace(fps)
+        xs, ys, cs = size * (np.stack([x, y, tilt]) + rng.normal(0.0, 0.003, (3, len(t))))
+        out = [det.update(np.array([320 + a, 180 + b]), size, c) for a, b, c in zip(xs, ys, cs)]
+        n = HeadMotionParams(fps).n
+        return np.array([(o[1], o[3]) for o in out])[n - 1 - n // 2 :] == 1  # the latency removed
+
+    nod, truth = gestures(2.0)
+    lab = run(-0.15 * nod, 0.06 * nod, 0.1 * nod)
+    tr = truth[: len(lab)]
+    assert not lab[:, 1].any()
+    assert (lab[:, 0] & tr).sum() >= 0.8 * tr.sum() and (lab[:, 0] & tr).sum() >= 0.9 * lab[:, 0].sum()
+    shake, truth = gestures(2.5)
+    lab = run(0.1 * shake, 0.0 * shake, 0.0 * shake)
+    tr = truth[: len(lab)]
+    assert not lab[:, 0].any()
+    assert (lab[:, 1] & tr).sum() >= 0.75 * tr.sum() and (lab[:, 1] & tr).sum() >= 0.95 * lab[:, 1].sum()
+
+
 def test_a_face_seen_again_is_labelled_after_half_a_window() -> None:
     """After a reset (a face track that starts again) the labels come once the window's centre is
     seen, half a window later, not a whole one: a nod that starts 0.3 s after the restart is found.

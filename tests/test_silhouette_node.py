@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -119,6 +121,10 @@ def test_lockstep_one_silhouettes_per_frame_people_match_truth(tmp_path: Path, s
                 )
                 unmerged += 1
     assert unmerged >= 40
+    # the one call that learnt the background is timed in the node's stats (bench/e2e.py reads it)
+    run_dir = Path(re.search(r"run directory (\S+)", text).group(1))
+    figures = json.loads((run_dir / "stats" / "silhouette.json").read_text())["figures"]
+    assert figures["fit_ms"] > 0
 
 
 def test_mono8_frames_without_shadows_and_thinned_mask(tmp_path: Path) -> None:

@@ -18,7 +18,7 @@ from counterpart.nodes.silhouette.background import (
     HorprasertBackground,
     _median_mad,
 )
-from counterpart.nodes.silhouette.people import PeopleDetector, box_mask, fit_around_people
+from counterpart.nodes.silhouette.people import PeopleDetector, PrefetchDetector, box_mask, fit_around_people
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 from tests.shared_data import DATA
 from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W
@@ -250,6 +250,27 @@ def test_hog_detector_finds_both_standing_people_on_real_footage(ut_clip):
         c = kp[0, k][vis[0, k] >= 0.5].mean(axis=0)
         inside = [(x <= c[0] <= x + w and y <= c[1] <= y + h) for x, y, w, h in boxes]
         assert any(inside), f"person {k} at {c} not in {boxes.tolist()}"
+
+
+def test_prefetched_detections_are_the_detectors_frame_for_frame(ut_clip):
+    """Frames submitted as they come are detected in a worker thread; the fit asks for copies of
+    them (the model stacks its training frames) and gets the same boxes as a detector run then.
+    """
+    frames = ut_clip[0][:6]
+    pre = PrefetchDetector()
+    for f in frames[:4]:
+        pre.submit(f)
+    assert len(pre._pending) == len({f.tobytes() for f in frames[:4]})  # a repeated frame once
+    direct = PeopleDetector()
+    for f in np.stack(frames):  # copies, and two frames never submitted
+        (b1, s1), (b2, s2) = pre.detect(f), direct.detect(f)
+        np.testing.assert_array_equal(b1, b2)
+        np.testing.assert_array_equal(s1, s2)
+        assert len(b1) >= 2
+    assert not pre._pending  # each result handed over once
+    pre.submit(frames[0])
+    pre.clear()
+    assert not pre._pending
 
 
 def test_real_people_standing_from_the_first_frame_are_found_whole(ut_clip):

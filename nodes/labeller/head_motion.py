@@ -282,6 +282,8 @@ class _Spectral:
         )
         win = win - win.mean(axis=-1, keepdims=True)
         spec = np.fft.rfft(win * self.w, axis=-1)
+        if angles[1] == FACE:
+            win, spec = without_pitch_leak(win, spec, self.band, self.e_floor[0, FACE])
         pw = spec.real**2 + spec.imag**2  # (..., 4, F)
         total = pw @ self.wt  # (..., 4)
         band = pw @ self.band  # (..., 4)
@@ -351,6 +353,55 @@ def localise_labels(score: np.ndarray, inside: np.ndarray, p: HeadMotionParams) 
     """
     lab = threshold_labels(score, p.threshold)
     return np.where(lab == 1, (inside > 0).astype(np.int8), lab).astype(np.int8)
+
+
+def without_pitch_leak(
+    win: np.ndarray, spec: np.ndarray, band: np.ndarray, ridge: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """A tracked face's windows with the lateral motion that moves in step with the nod's rotation
+    cue taken out of the shake channel.
+
+    A nod of a head turned to the side moves the face sideways in the image as well as down: the
+    head dips forward about the neck, and its forward is then partly across the image (at 40
+    degrees of yaw the sideways part is about two thirds of the dip). That sideways motion has a
+    nod's frequency, so it scored as a shake and, in the score's denominator, pushed the nod under
+    its threshold. A rotation about the neck's vertical axis (a shake) leaves the rotation cue
+    (:attr:`counterpart.nodes.labeller.face_track.FaceTrack.tilt`, channel ``nod_b``) still, so
+    the part of the lateral channel ``x`` proportional to the cue ``c`` is removed:
+    ``x - beta c`` with the least-squares gain over the band's frequencies,
+    ``beta = sum_k b_k Re(X_k conj(C_k)) / sum_k b_k |C_k|^2`` (``X``, ``C`` the windowed
+    spectra, ``b`` the band's Parseval weights, ``ridge`` added to the denominator). The fit is
+    made in the band, where nods and shakes are (both channels accumulate frame-to-frame motion, so
+    their noise is a random walk, strong below the band). The band holds few frequencies, so a
+    plain least-squares fit to a cue that is only noise would take out a chance share of a real
+    shake; the ridge, the band energy of a nod at the face's amplitude floor, gives a cue well under
+    that floor (not a rotation the detector would count) little weight.
+
+    Parameters
+    ----------
+    win : ndarray of shape (..., 4, N)
+        Zero-mean oscillation residuals of the channels (nod_a, nod_b, shake_a, shake_b), face widths.
+    spec : ndarray of shape (..., 4, F)
+        Their real FFTs after the taper, ``F = N // 2 + 1``.
+    band : ndarray of shape (F,)
+        The band's one-sided Parseval weights (0 outside the band).
+    ridge : float, default=0.0
+        Added to the cue's band energy in the gain's denominator, (face widths)^2.
+
+    Returns
+    -------
+    win, spec : ndarray
+        Copies with ``shake_a`` (and its spectrum) replaced by ``x - beta c``.
+    """
+    c, x = spec[..., _NOD_CHANNELS[1], :], spec[..., _SHAKE_CHANNELS[0], :]
+    cc = (c.real**2 + c.imag**2) @ band + ridge
+    xc = (x.real * c.real + x.imag * c.imag) @ band
+    with np.errstate(invalid="ignore", divide="ignore"):
+        beta = np.where(cc > 0, xc / cc, 0.0)[..., None]
+    win, spec = win.copy(), spec.copy()
+    win[..., _SHAKE_CHANNELS[0], :] -= beta * win[..., _NOD_CHANNELS[1], :]
+    spec[..., _SHAKE_CHANNELS[0], :] -= beta * c
+    return win, spec
 
 
 def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -936,7 +987,9 @@ class HeadMotionDetectorFace(_StreamingChannels):
     rotation cue (:attr:`counterpart.nodes.labeller.face_track.FaceTrack.tilt`: its features' motion
     relative to the top of the head, in face widths, up), which a nod moves and a translation of the
     whole head (a knee bounce, a lean) does not: so a small nod of a tilted head scores above the
-    floor that keeps a bouncing face still. Floors: ``face_nod_floor`` / ``face_shake_floor`` (face
+    floor that keeps a bouncing face still. The lateral motion in step with that cue (a nod of a
+    head turned aside, which moves the face across the image too) is taken out of the shake
+    channel (:func:`without_pitch_leak`). Floors: ``face_nod_floor`` / ``face_shake_floor`` (face
     widths).
 
     Parameters

@@ -19,6 +19,7 @@ resolution) starts the background model and the people afresh.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import cv2
@@ -31,6 +32,7 @@ from counterpart.messages.silhouette import PersonShape
 
 from .backends import BACKEND_NAMES
 from .body_shadow import BodyShadowConfig
+from .people import PrefetchDetector
 from .pipeline import FrameResult, SilhouetteExtractor
 from .regions import Person
 
@@ -220,6 +222,9 @@ class Silhouette(Node):
         #: frames held back while the background is learnt (replay_training), with their images
         self.held: list[tuple[Frame, np.ndarray, bool]] = []
         self.replay = self.p["replay_training"] and self.p["backend"] == "horprasert"
+        #: the people detector of the training frames, started on each as it comes (horprasert,
+        #: robust and people_aware; None otherwise)
+        self.prefetch: PrefetchDetector | None = None
 
     def _warn_once(self, kind: str, text: str, *args: Any) -> None:
         if kind not in self._warned:
@@ -230,7 +235,9 @@ class Silhouette(Node):
         p = self.p
         backend_params: dict[str, Any] = {}
         if p["backend"] == "horprasert":
+            self.prefetch = PrefetchDetector() if p["robust"] and p["people_aware"] else None
             backend_params = {
+                "detector": self.prefetch,
                 "train_frames": p["train_frames"],
                 "robust": p["robust"],
                 "people_aware": p["people_aware"],
@@ -279,7 +286,17 @@ class Silhouette(Node):
         # learn during as many frames, so that every backend reports people from the same frame on
         if self.p["backend"] != "horprasert" and ex.n_frames < self.p["train_frames"] - 1:
             return ex.learn(image)
-        return ex.process(image)
+        training = not ex.subtractor.ready
+        if training and self.prefetch is not None:
+            # the people of the training frames are found while more come, not all after the last
+            self.prefetch.submit(image)
+        t0 = time.perf_counter()
+        result = ex.process(image)
+        if training and ex.subtractor.ready:  # this frame's call learnt the background
+            self.tally("fit_ms", round((time.perf_counter() - t0) * 1e3, 1))
+            if self.prefetch is not None:
+                self.prefetch.clear()
+        return result
 
     def on_frame(self, msg: Frame) -> None:
         """Find the people of one frame and publish them (or hold the frame back while the background

@@ -24,6 +24,9 @@ Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h) int.
 
 from __future__ import annotations
 
+import hashlib
+from concurrent.futures import Future, ThreadPoolExecutor
+
 import cv2
 import numpy as np
 
@@ -152,6 +155,67 @@ class PeopleDetector:
         boxes = np.stack([x0, y0, x1 - x0, y1 - y0], axis=1).round().astype(np.int32)
         ok = (boxes[:, 2] > 0) & (boxes[:, 3] > 0)
         return boxes[ok], scores[ok]
+
+
+class PrefetchDetector:
+    """A people detector that starts on each training frame as it comes (``submit``), in a worker
+    thread, so that a live graph finds the people of its training frames while the frames are
+    still coming instead of all at once after the last one (OpenCV lets go of the GIL while it
+    detects). ``detect`` of a frame submitted before waits for its result; of another, it detects
+    at once. The results are those of the wrapped detector, frame for frame.
+
+    Parameters
+    ----------
+    detector : PeopleDetector or None, default=None
+        The detector; None: ``PeopleDetector()``.
+    """
+
+    def __init__(self, detector: PeopleDetector | None = None) -> None:
+        self.detector = detector or PeopleDetector()
+        self._pool: ThreadPoolExecutor | None = None
+        #: frame content digest -> its detection
+        self._pending: dict[bytes, Future] = {}
+
+    @staticmethod
+    def _key(frame: np.ndarray) -> bytes:
+        # by content: the background model stacks copies of the frames it was given
+        return hashlib.blake2b(np.ascontiguousarray(frame).data, digest_size=16).digest() + bytes(
+            str(frame.shape), "ascii"
+        )
+
+    def submit(self, frame: np.ndarray) -> None:
+        """Start the detection of one frame in the worker thread.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame (copied).
+        """
+        key = self._key(frame)
+        if key not in self._pending:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="people")
+            self._pending[key] = self._pool.submit(self.detector.detect, frame.copy())
+
+    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """People in a frame, waiting for a submitted frame's result.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame.
+
+        Returns
+        -------
+        tuple of ndarray
+            ``(boxes (K, 4), scores (K,))``, as ``PeopleDetector.detect``.
+        """
+        fut = self._pending.pop(self._key(frame), None)
+        return fut.result() if fut is not None else self.detector.detect(frame)
+
+    def clear(self) -> None:
+        """Forget the frames submitted and not asked for (detections still running finish unread)."""
+        self._pending.clear()
 
 
 def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:

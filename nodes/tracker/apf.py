@@ -341,6 +341,8 @@ class AnnealedParticleFilter:
             raise RuntimeError("AnnealedParticleFilter.step before initialise(particles)")
         M = self.n_layers if n_layers is None else int(n_layers)
         P = self.particles
+        if len(P) != self.n_particles:  # the count was changed (a time budget): the set redrawn to it
+            P = initial_set(P, self.n_particles, self.rng)
         if predict_fn is not None:
             P = clip_to_limits(predict_fn(P, self.rng))
         betas, surv = np.empty(M), np.empty(M)

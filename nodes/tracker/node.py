@@ -8,13 +8,21 @@ Each person named in ``people`` (a side of the frame, as the silhouette node lab
 own :class:`counterpart.nodes.tracker.tracker.Tracker`. A frame with nobody in view gives a Pose3D with no
 people (the tracks wait); a merged region is still tracked, with the mask the silhouette node
 split by its labels. Frame and silhouettes are paired by seq by the runtime
-(:class:`~counterpart.bus.pairing.Pairing`): a frame whose partner message never comes is dropped
-once the other input went past it, or once ``max_pending`` frames wait (the ``paired_*`` figures
-of the node's stats count them).
+(:class:`~counterpart.bus.pairing.Pairing`): a frame whose silhouettes never come is dropped once
+the silhouettes went past it, or once ``max_pending`` frames wait; silhouettes whose frame never
+comes (a real-time queue dropped it) are tracked on their mask alone (the ``paired_*`` figures of
+the node's stats count both: ``paired_dropped``, ``paired_partial``).
+
+With ``frame_budget`` (the real-time graph, ``launch/demo.yaml``) the search of each frame is cut to
+fit the camera's frame interval (:class:`counterpart.nodes.tracker.budget.FrameBudget`: fewer
+annealing layers, then fewer particles, from the time the last frames took); the stats give the
+mean layers and particles per person and frame (``budget_layers``, ``budget_particles`` over
+``budget_frames``).
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 from typing import Any
 
@@ -25,6 +33,7 @@ from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, cam
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
+from .budget import BudgetConfig, FrameBudget
 from .prior import resolve_prior
 from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
@@ -78,7 +87,11 @@ class TrackerNode(Node):
         "camera_info": Input(CameraInfo, doc="the graph's camera (the calibration node's; latched)"),
     }
     outputs = {"pose": Output(Pose3D, "one per frame: the tracked people (empty when nobody is in view)")}
-    pairing = Pairing(required=("frame", "silhouettes"), max_pending=1)
+    # the frame is optional: in real time its queue keeps only the newest, and a frame it dropped
+    # while the tracker was busy leaves the silhouettes that come for it later without their frame;
+    # they are tracked on the mask alone (no edge term) rather than not at all (``paired_partial``
+    # counts them). In lockstep every frame comes, so every set is whole.
+    pairing = Pairing(required=("silhouettes",), optional=("frame",), max_pending=4)
     params = {
         "layers": Param(int, 10, "annealing layers per frame", min=1, max=100),
         "particles": Param(int, 256, "particles per layer", min=8, max=100000),
@@ -102,6 +115,16 @@ class TrackerNode(Node):
             "default",
             "motion prior: 'default' (built from the simulator when missing), 'none' (random walk), or a .npz path",
             check=_check_prior,
+        ),
+        "frame_budget": Param(
+            float,
+            0.0,
+            "share of the frame interval (1/fps) the search of all people of a frame may take: "
+            "beyond it the layers, then the particles, are cut (to 3 and 32 at least; the cost per "
+            "particle measured as it runs; the means in the stats as budget_particles / budget_layers "
+            "over budget_frames); 0: always layers x particles",
+            min=0.0,
+            max=100.0,
         ),
         "seed": Param(int, 0, "seed of the particle filters"),
         "max_pending": Param(int, 50, "frames kept while waiting for the other input", min=1),
@@ -181,8 +204,11 @@ class TrackerNode(Node):
         self.cameras = CameraSchedule()
         self.camera: Camera | None = None  # the one the trackers use
         self.trackers: dict[str, Tracker] = {}
-        self.paired: dict[int, tuple[Frame, Silhouettes]] = {}  # waiting for the camera of their size
+        #: waiting for the camera of their size (the frame None where it was dropped)
+        self.paired: dict[int, tuple[Frame | None, Silhouettes]] = {}
         self.warned: set[str] = set()
+        self.fps = 0.0  # the camera's frame rate, from the newest frame
+        self.budget = FrameBudget(self.p["layers"], self.p["particles"], BudgetConfig(share=self.p["frame_budget"]))
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
         """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not come."""
@@ -233,9 +259,12 @@ class TrackerNode(Node):
         Parameters
         ----------
         paired : PairedSet
-            ``frame`` and ``silhouettes`` of one seq.
+            ``silhouettes`` of one seq, with its ``frame`` (None when the frame was dropped).
         """
-        self.paired[paired.seq] = (paired["frame"], paired["silhouettes"])
+        frame, sil = paired.get("frame"), paired["silhouettes"]
+        if frame is not None:
+            self.fps = frame.fps
+        self.paired[paired.seq] = (frame, sil)
         self._drain()
 
     def on_end(self) -> None:
@@ -249,8 +278,7 @@ class TrackerNode(Node):
                 len(self.paired),
             )
             for seq in sorted(self.paired):
-                frame, _ = self.paired.pop(seq)
-                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
+                self._publish_empty(self.paired.pop(seq)[1])
         n = self.figures.get("regions_not_tracked", 0)
         if n:
             self.log.warning("%d person region(s) could not be tracked (see the first warning)", n)
@@ -261,7 +289,7 @@ class TrackerNode(Node):
         """
         for seq in sorted(self.paired):
             frame, sil = self.paired[seq]
-            image = frame.image if frame.image.size else None
+            image = frame.image if frame is not None and frame.image.size else None
             size = (
                 sil.width or (image.shape[1] if image is not None else 0),
                 sil.height or (image.shape[0] if image is not None else 0),
@@ -276,36 +304,47 @@ class TrackerNode(Node):
                 return
             del self.paired[seq]
             if camera is None:
-                self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps))
+                self._publish_empty(sil)
             else:
-                self._process(frame, sil, image, camera)
+                self._process(sil, image, camera)
+
+    def _publish_empty(self, sil: Silhouettes) -> None:
+        """A pose without people for the frame of ``sil`` (nobody could be placed)."""
+        self.publish("pose", Pose3D(stamp=sil.stamp, seq=sil.seq, fps=self.fps))
 
     def _warn_once(self, key: str, text: str) -> None:
         if key not in self.warned:
             self.warned.add(key)
             self.log.warning("%s (further ones are only counted in the stats)", text)
 
-    def _process(self, frame: Frame, sil: Silhouettes, image: np.ndarray | None, camera: Camera) -> None:
+    def _process(self, sil: Silhouettes, image: np.ndarray | None, camera: Camera) -> None:
         size = (camera.width, camera.height)
         people: list[TrackedBody] = []
-        for side in self.p["people"]:
-            shape = next((s for s in sil.people if s.side == side), None)
-            if shape is None:
-                continue
+        in_view = [s for s in self.p["people"] if any(p.side == s for p in sil.people)]
+        layers, particles = self.budget.plan(len(in_view), self.fps)
+        t0, evals = time.perf_counter(), 0
+        for side in in_view:
+            shape = next(s for s in sil.people if s.side == side)
             try:
                 tr = self._tracker(side, camera)
+                tr.filter.n_layers, tr.filter.n_particles = layers, particles
+                # a track's first search runs its own, longer schedule
+                evals += (layers if tr.tracking else tr.config.init.layers) * particles
+                self.tally("budget_frames")
+                self.tally("budget_layers", layers)
+                self.tally("budget_particles", particles)
                 mask = person_mask(shape, sil.labels, size)
                 if shape.merged:
                     self._warn_once(
                         "merged",
-                        f"frame {frame.seq}: {side} person merged with another; "
+                        f"frame {sil.seq}: {side} person merged with another; "
                         "tracking the part the silhouette node assigned to it",
                     )
                 other = next((s for s in sil.people if s.side != side and s.side in SIDES), None)
                 r = tr.update(image, mask, tuple(other.bbox) if other is not None else None)
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
-                self._warn_once(f"error:{side}", f"frame {frame.seq}: {side} person not tracked: {exc}")
+                self._warn_once(f"error:{side}", f"frame {sil.seq}: {side} person not tracked: {exc}")
                 continue
             if r is None:
                 continue
@@ -321,7 +360,8 @@ class TrackerNode(Node):
                     lost=bool(r.lost),
                 )
             )
-        self.publish("pose", Pose3D(stamp=frame.stamp, seq=frame.seq, fps=frame.fps, people=people))
+        self.budget.record(time.perf_counter() - t0, evals)
+        self.publish("pose", Pose3D(stamp=sil.stamp, seq=sil.seq, fps=self.fps, people=people))
 
 
 NODE = TrackerNode

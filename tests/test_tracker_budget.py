@@ -1,0 +1,124 @@
+"""The tracker node in real time: its time budget per frame (fewer layers, then particles, when
+frames come too fast), and silhouettes whose frame was dropped.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from counterpart.body.camera import default_camera
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.raster import rasterise_silhouettes
+from counterpart.nodes.tracker.budget import BudgetConfig, FrameBudget
+from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig
+from counterpart.sim.scenarios import make_scenario
+from tests.launching import run_launch, write_launch
+
+
+def test_no_budget_or_no_measure_keeps_the_full_search() -> None:
+    off = FrameBudget(10, 256, BudgetConfig(share=0.0))
+    off.record(1.0, 100)  # far too slow, but no budget
+    assert off.plan(2, 30.0) == (10, 256)
+    on = FrameBudget(10, 256, BudgetConfig(share=1.0))
+    assert on.plan(2, 30.0) == (10, 256)  # nothing measured yet
+    on.record(1.0, 100)
+    assert on.plan(2, 0.0) == (10, 256)  # the frame rate unknown
+
+
+def test_the_plan_fits_the_measured_cost_layers_first_then_particles() -> None:
+    b = FrameBudget(10, 256, BudgetConfig(share=1.0))
+    b.record(0.1, 10_000)  # 10 us per likelihood evaluation: 3333 fit in a frame at 30 fps
+    assert b.plan(1, 30.0) == (10, 256)
+    layers, n = b.plan(2, 30.0)  # 1666 per person: fewer layers, all particles
+    assert n == 256 and 3 <= layers < 10 and 2 * layers * n * 1e-5 <= 1 / 30
+    layers, n = b.plan(8, 30.0)  # 416 per person: the layers at their floor, then fewer particles
+    assert layers == 3 and 32 <= n < 256 and 8 * layers * n * 1e-5 <= 1 / 30
+    assert b.plan(1000, 30.0) == (3, 32)  # never below the floors
+    assert FrameBudget(2, 16, BudgetConfig(share=1.0)).plan(1, 30.0) == (2, 16)
+
+
+def test_the_plan_converges_to_what_fits_beside_a_fixed_overhead() -> None:
+    # a frame costs 5 ms of maps plus 20 us per evaluation; 1/25 s allows (40 - 5) / 0.02 = 1750
+    b = FrameBudget(10, 256, BudgetConfig(share=1.0))
+    for _ in range(60):
+        layers, n = b.plan(1, 25.0)
+        b.record(0.005 + 20e-6 * layers * n, layers * n)
+    assert (layers, n) == (6, 256)  # whole layers: 1536 of the 1750 that fit
+
+
+def test_a_track_goes_on_when_its_particle_count_changes() -> None:
+    cam = default_camera()
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:16]
+    masks = rasterise_silhouettes(P, sc.dims_a, cam)
+    tr = Tracker(cam, "left", TrackerConfig(apf=APFConfig(n_layers=5, n_particles=128)), seed=0)
+    joints = []
+    for i, mask in enumerate(masks):
+        tr.filter.n_particles = (128, 32, 64)[i % 3]
+        r = tr.update(None, mask)
+        assert len(tr.filter.particles) == tr.filter.n_particles
+        joints.append(r.joints)
+    err = np.linalg.norm(np.array(joints) - forward_kinematics(P, sc.dims_a), axis=-1).mean(axis=1)
+    assert err.mean() < 0.15, f"mean joint error {err.mean():.3f} m"
+
+
+def _run(tmp_path: Path, budget: float, drop_frames: tuple[int, ...] = ()) -> tuple[list[dict], dict]:
+    out = tmp_path / f"pose{budget}{drop_frames}.jsonl"
+    doc = {
+        "nodes": {
+            # frames at 100 kHz: no search fits in 10 us, so a budget cuts to its floors
+            "source": {
+                "run": "tests.test_tracker_node:SimPeople",
+                "params": {"frames": 6, "fps": 1e5, "drop_frames": list(drop_frames)},
+            },
+            "calibration": {"run": "counterpart.nodes.calibration", "policy": "reliable"},
+            "tracker": {
+                "run": "counterpart.nodes.tracker",
+                "policy": "reliable",
+                "params": {
+                    "layers": 4,
+                    "particles": 64,
+                    "prior": "none",
+                    "people": ["left", "right"],
+                    "frame_budget": budget,
+                },
+            },
+            "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},
+        }
+    }
+    rc, log = run_launch(write_launch(tmp_path / f"graph{budget}{drop_frames}.yaml", doc), timeout=90)
+    assert rc == 0, log
+    run_dir = Path(re.search(r"run directory (\S+)", log).group(1))
+    stats = json.loads((run_dir / "stats" / "tracker.json").read_text())
+    poses = [json.loads(line) for line in out.read_text().splitlines()]
+    return [p for p in poses if p.get("type") == "tracker.Pose3D/1"], stats["figures"]
+
+
+@pytest.mark.slow
+def test_the_node_cuts_its_search_to_the_budget_and_reports_it(tmp_path: Path) -> None:
+    poses, figs = _run(tmp_path, 0.0)
+    assert [len(p["people"]) for p in poses] == [2] * 6
+    assert figs["budget_frames"] == 12 and figs["budget_particles"] == 12 * 64 and figs["budget_layers"] == 12 * 4
+    poses, figs = _run(tmp_path, 1.0)
+    assert [len(p["people"]) for p in poses] == [2] * 6  # every frame still tracked
+    # the first frame searches in full (nothing measured yet: its first search is the first measure);
+    # the rest at the floors
+    assert figs["budget_frames"] == 12
+    assert figs["budget_particles"] == 2 * 64 + 10 * 32 and figs["budget_layers"] == 2 * 4 + 10 * 3
+
+
+@pytest.mark.slow
+def test_silhouettes_whose_frame_was_dropped_are_tracked_on_their_mask(tmp_path: Path) -> None:
+    poses, figs = _run(tmp_path, 0.0, drop_frames=(2, 4))
+    assert [p["seq"] for p in poses] == list(range(6))
+    assert [len(p["people"]) for p in poses] == [2] * 6
+    assert figs["paired_partial"] == 2 and figs["paired_delivered"] == 6
+    # the mask alone still places the people: left of each other as on the other frames
+    for p in poses:
+        left, right = (np.array(b["joints"], float) for b in p["people"])
+        assert left[:, 0].mean() < right[:, 0].mean()
