@@ -248,3 +248,22 @@ def test_dark_clothes_inside_a_body_are_foreground_cast_shadows_stay_shadows():
 def test_body_shadow_config_rejects_bad_values(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         BodyShadowConfig(**bad)
+
+
+def test_a_black_background_pixel_has_no_brightness_direction() -> None:
+    # a dead-black patch (a screen that is off, a clipped shadow): alpha is 0 there, so black
+    # stays background, and any colour that appears on it is chromaticity, foreground
+    rng = np.random.default_rng(11)
+    frames = np.stack([render(rng) for _ in range(20)])
+    frames[:, 10:30, 100:140] = 0
+    model = HorprasertBackground().fit(frames, robust=False)
+    still = frames[-1].copy()
+    lit = still.copy()
+    lit[15:25, 110:130] = 120
+    labels = model.apply(still)
+    assert (labels[10:30, 100:140] == BACKGROUND).all()
+    labels = model.apply(lit)
+    assert (labels[15:25, 110:130] == FOREGROUND).all()
+    assert np.isfinite(model._inv_den).all() and (model._inv_den[10:30, 100:140] == 0.0).all()
+    model.update(lit, labels)  # the per-frame terms are made again after each update
+    assert (model.apply(still)[10:30, 100:140] == BACKGROUND).all()

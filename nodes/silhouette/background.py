@@ -1060,10 +1060,14 @@ class HorprasertBackground:
         add(den, mul(mu[2], w[2], dst=t), dst=den)
         # A black background pixel has no brightness direction: 1/den -> 0 makes alpha 0 there
         # and all of the observed colour shows up as chromaticity distortion.
-        black = cv2.compare(den, 1e-6, cv2.CMP_LE)
-        cv2.max(den, 1e-6, dst=den)
-        cv2.divide(1.0, den, dst=den)
-        if cv2.countNonZero(black):
+        # (one pass finds whether there is any: almost never, and then the clamp is a no-op;
+        # numpy's 1 / x is the same IEEE quotient as OpenCV's and several times faster)
+        if cv2.minMaxLoc(den)[0] > 1e-6:
+            np.divide(np.float32(1.0), den, out=den)
+        else:
+            black = cv2.compare(den, 1e-6, cv2.CMP_LE)
+            cv2.max(den, 1e-6, dst=den)
+            cv2.divide(1.0, den, dst=den)
             den[black > 0] = 0.0
         if self.shadows.shadow_ncc > -1.0:
             # the texture test's background grey levels, padded as its windows read them: E is
