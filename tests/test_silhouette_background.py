@@ -235,9 +235,9 @@ def test_dark_clothes_inside_a_body_are_foreground_cast_shadows_stay_shadows():
         sub.apply(np.clip(np.rint(f), 0, 255).astype(np.uint8))
         return sub.labels
 
-    off = run(None)  # the default: the statistics' own labels
+    off = run(BodyShadowConfig(span_px=0))  # off: the statistics' own labels
     assert class_fractions(off, band)[SHADOW] > 0.9
-    on = run(BodyShadowConfig())
+    on = run(None)  # the default
     assert class_fractions(on, band)[FOREGROUND] > 0.95
     assert class_fractions(on, feet)[SHADOW] > 0.95
     assert class_fractions(on, far)[SHADOW] > 0.95

@@ -75,8 +75,8 @@ class HorprasertSubtractor:
         two cores this hides most of the update's cost.
     body_shadow : BodyShadowConfig or None, default=None
         Which shadow labels inside a body (dark clothes, hair) are published as foreground
-        (``body_shadow.reclaim_body_shadow``); None: none (off). The model learns from the labels
-        before this step.
+        (``body_shadow.reclaim_body_shadow``); None: ``BodyShadowConfig()`` (the node's default),
+        ``BodyShadowConfig(span_px=0)``: none. The model learns from the labels before this step.
     **model_params : Any
         Go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
 
@@ -119,7 +119,7 @@ class HorprasertSubtractor:
         self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
         self.threaded = threaded
-        self.body_shadow = BodyShadowConfig(span_px=0) if body_shadow is None else body_shadow
+        self.body_shadow = BodyShadowConfig() if body_shadow is None else body_shadow
         self._deferred = DeferredStep("horprasert-update")
         if self.samples is not None:
             # one worker thread learns for both models, the update first (the next frame's

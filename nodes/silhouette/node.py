@@ -192,7 +192,7 @@ class Silhouette(Node):
         ),
         "body_shadow_px": Param(
             int,
-            0,
+            15,
             "horprasert: a shadow pixel with foreground above and below it within this many "
             "rows, above the lowest fifth of its region, is foreground (dark clothes and hair, "
             "not a cast shadow); 0: off; 15 was tuned on the CDnet tune halves",

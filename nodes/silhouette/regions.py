@@ -409,7 +409,14 @@ class PersonTracker:
         # passing fragment: where they were, a person who walks there must not be split with them
         # (someone hidden behind others was in a merge and keeps their claim)
         back = np.array([t.missed == 0 or t.in_merge for t in tracks])
-        strong = (frame.frac_track[np.arange(len(tracks)), best] >= need) & back
+        top = frame.frac_track[np.arange(len(tracks)), best]
+        second = np.sort(frame.frac_track, axis=1)[:, -2] if frame.frac_track.shape[1] > 1 else np.zeros(len(tracks))
+        # A merge breaking up: the prediction of a track that was in it (its share of the merged
+        # region, pulled toward the others) lies on several of the pieces. A weak overlap, under
+        # min_overlap and not twice its next-best region's, says nothing about which piece is
+        # theirs: it is no claim, and position and size decide (``_assign_by_position``).
+        decisive = (top >= self.min_overlap) | (top >= 2 * second)
+        strong = (top >= need) & back & decisive
         for r in frame.regions:
             claim = [i for i in range(len(tracks)) if strong[i] and best[i] == r]
             if len(claim) >= 2:
