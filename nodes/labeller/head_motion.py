@@ -25,7 +25,10 @@ and the hold after it, a slow drift) and removes back-and-forth movement shorter
 frames, so the residual keeps nods and shakes but not head turns. The nod channels use
 ``nod_median_s`` = 1 s, one period of the band's lowest frequency, so that slow nods pass whole;
 the shake channels a shorter ``shake_median_s`` = 0.44 s, so that a quick glance away and back (a
-single excursion of half a second or more) is followed by the median and not taken for a shake. The residual has its window mean
+single excursion of half a second or more) is followed by the median and not taken for a shake. A
+quicker glance stays in the residual but swings to one side only, where a shake swings both ways:
+a window whose smaller lateral excursion is under ``shake_swing`` times its larger one
+(:func:`two_sided_swing`) has shake score 0. The residual has its window mean
 removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
 energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
@@ -107,6 +110,10 @@ class HeadMotionParams:
         The hysteresis thresholds on the local amplitude as a fraction of the window's largest local
         amplitude (an event is a run of frames >= event_off that reaches event_on). ``event_on`` 0
         labels every frame of a detected window (no localisation).
+    shake_swing : float, default=0.2
+        The least ratio (unitless, in [0, 1]) of a window's smaller to its larger lateral excursion
+        about the head's rest (:func:`two_sided_swing`): a shake swings both ways, a quick glance
+        aside and back only one, so a window under it has shake score 0. 0 turns the test off.
 
     Raises
     ------
@@ -131,6 +138,7 @@ class HeadMotionParams:
     local_s: float = 0.25
     event_on: float = 0.6
     event_off: float = 0.3
+    shake_swing: float = 0.2
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -171,6 +179,11 @@ class HeadMotionParams:
             raise ValueError(
                 f"event_on and event_off must satisfy 0 <= event_off <= event_on <= 1 (fractions of "
                 f"the window's largest local amplitude; event_on 0: no localisation), got event_on={self.event_on}, event_off={self.event_off}"
+            )
+        if not 0 <= self.shake_swing <= 1:
+            raise ValueError(
+                f"shake_swing must be in [0, 1] (the smaller lateral excursion over the larger; 0: no test), "
+                f"got {self.shake_swing}"
             )
         if not self.local_s > 0 or 2 * (self.local_k // 2) + 1 > n:
             raise ValueError(
@@ -292,6 +305,9 @@ class _Spectral:
         shake_b = band[..., _SHAKE_CHANNELS[0]] + band[..., _SHAKE_CHANNELS[1]]
         nod = nod_b / np.maximum(e_all, self.e_floor[0, int(angles[0])])
         shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
+        if p.shake_swing > 0:
+            lateral = win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :]
+            shake = np.where(two_sided_swing(lateral) >= p.shake_swing, shake, 0.0)
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
         local = self.local(win)
@@ -402,6 +418,36 @@ def without_pitch_leak(
     win[..., _SHAKE_CHANNELS[0], :] -= beta * win[..., _NOD_CHANNELS[1], :]
     spec[..., _SHAKE_CHANNELS[0], :] -= beta * c
     return win, spec
+
+
+def two_sided_swing(res: np.ndarray) -> np.ndarray:
+    """How evenly a window's motion swings to both sides of the head's rest: the smaller of its
+    two excursions over the larger.
+
+    A shake is an oscillation: the face swings out, back past its rest and out again (at least two
+    direction reversals). A quick glance aside and back (out and back in a third of a second, shorter
+    than the shake channels' running median, so its residual keeps it, see :func:`oscillation_residual`)
+    has a nod-band spectrum too, but goes to one side only. The rest is the window's median (the
+    residual of a held head; a glance occupies a few of the window's samples), the excursions
+    ``u = max_n x_n - med`` and ``d = med - min_n x_n``, the ratio ``min(u, d) / max(u, d)``:
+    about 1 for a shake, about 0 for a glance.
+
+    Parameters
+    ----------
+    res : ndarray of shape (..., N)
+        Oscillation residuals of the lateral motion (any unit).
+
+    Returns
+    -------
+    ndarray of shape (...,)
+        The ratio in [0, 1]; 0 for a window without motion.
+    """
+    med = np.median(res, axis=-1)
+    up = res.max(axis=-1) - med
+    down = med - res.min(axis=-1)
+    hi = np.maximum(up, down)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(hi > 0, np.minimum(up, down) / hi, 0.0)
 
 
 def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -179,6 +179,7 @@ def signals_message(
 _GROUPED: dict[str, tuple[str, str]] = {
     "nod_median_s": ("head_params", "nod_median_s"),
     "shake_median_s": ("head_params", "shake_median_s"),
+    "shake_swing": ("head_params", "shake_swing"),
     "head_threshold": ("head_params", "threshold"),
     "nod_floor_m": ("head_params", "nod_floor_m"),
     "shake_floor_m": ("head_params", "shake_floor_m"),
@@ -284,6 +285,14 @@ class Labeller(Node):
             max=60.0,
         ),
         "shake_median_s": Param(float, 0.44, "the same for the shake channels (s)", min=0.0, max=60.0),
+        "shake_swing": Param(
+            float,
+            0.2,
+            "least ratio of a window's smaller to larger lateral excursion (unitless; 0: no test): "
+            "a shake swings both ways, a quick glance aside and back one",
+            min=0.0,
+            max=1.0,
+        ),
         "band_low_hz": Param(float, 1.0, "lowest frequency of nods and shakes (Hz)", min=0.0),
         "band_high_hz": Param(float, 4.0, "highest frequency of nods and shakes (Hz)", min=0.0),
         "head_threshold": Param(
