@@ -281,22 +281,26 @@ def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_te
     assert (on[cast] == SHADOW).mean() > 0.9
 
 
-def test_the_leg_step_leaves_a_background_that_was_never_seen_alone():
+def test_the_leg_step_leaves_unseen_background_and_wide_shadows_alone():
     # where the room was filled in (someone stood there through training) its texture is a
-    # guess: a flat shadow hanging from foreground there stays a shadow
+    # guess: a flat shadow hanging from foreground there stays a shadow; so does one wider than
+    # a leg
     rng = np.random.default_rng(6)
     background = rng.uniform(300, 420, (60, 40)).astype(np.float32)
     frame = np.clip(rng.normal(70.0, 2.0, (60, 40, 3)), 0, 255).astype(np.uint8)  # flat trousers
     lab = np.zeros((60, 40), np.uint8)
     lab[5:30, 10:30] = FOREGROUND
-    lab[30:50, 10:30] = SHADOW  # down to the shoes: one region
-    lab[50:55, 10:30] = FOREGROUND
+    lab[30:50, 14:20] = SHADOW  # a leg down to the shoe: one region
+    lab[50:55, 14:20] = FOREGROUND
     config = BodyShadowConfig()
-    assert (reclaim_body_shadow(lab, config, frame, background)[30:33, 10:30] == FOREGROUND).all()
+    assert (reclaim_body_shadow(lab, config, frame, background)[30:33, 14:20] == FOREGROUND).all()
     unseen = np.zeros((60, 40), bool)
     unseen[28:40] = True
-    assert (reclaim_body_shadow(lab, config, frame, background, unseen)[30:33, 10:30] == SHADOW).all()
-    assert (reclaim_body_shadow(lab, config)[30:33, 10:30] == SHADOW).all()  # no frame: no leg step
+    assert (reclaim_body_shadow(lab, config, frame, background, unseen)[30:33, 14:20] == SHADOW).all()
+    assert (reclaim_body_shadow(lab, config)[30:33, 14:20] == SHADOW).all()  # no frame: no leg step
+    wide = lab.copy()
+    wide[30:50, 2:38] = SHADOW  # spreading over the floor wider than a leg: a cast shadow
+    assert (reclaim_body_shadow(wide, config, frame, background)[30:33, 14:20] == SHADOW).all()
 
 
 @pytest.mark.parametrize(
@@ -309,6 +313,7 @@ def test_the_leg_step_leaves_a_background_that_was_never_seen_alone():
         {"leg_ncc": 1.5},
         {"leg_depth": 0.0},
         {"leg_foot": 1.0},
+        {"leg_width": 0.0},
         {"leg_window": 4},
     ],
 )

@@ -13,8 +13,9 @@ foreground:
 * Legs: grey trousers below a foreground torso are shadow from the hips to the shoes, longer than
   any closing that leaves cast shadows alone. A shadow pixel that hangs from foreground (the
   foreground is straight above it in its column, with only shadow between, at most
-  ``leg_depth`` of the region's foreground height below it), above the lowest ``leg_foot`` of
-  the foreground's extent, and whose neighbourhood does not keep the background's texture (normalised cross-correlation of
+  ``leg_depth`` of the region's foreground height below it), in a run of shadow along its row
+  no wider than ``leg_width`` of that height, above the lowest ``leg_foot`` of the foreground's
+  extent, and whose neighbourhood does not keep the background's texture (normalised cross-correlation of
   grey levels over the shadow pixels of a ``leg_window`` square under ``leg_ncc``; Jacques, Jung &
   Musse 2005, eq. 4), is a leg. A cast shadow is the floor, darker: it keeps the floor's pattern
   and correlates with it, trousers do not. Unlike the model's own texture test this one does not
@@ -52,6 +53,9 @@ class BodyShadowConfig:
     leg_depth : float, default=0.1
         How far below the foreground above it a hanging shadow pixel may be, as a fraction of its
         region's foreground height; in (0, 1].
+    leg_width : float, default=0.15
+        The widest run of shadow along its row that a leg pixel may lie in, as a fraction of its
+        region's foreground height (a leg is narrow; a cast shadow on the floor spreads).
     leg_foot : float, default=0.05
         The lowest part of a region's foreground extent, as a fraction of its height, where no
         shadow is a leg (the shoes stand in their cast shadow); in [0, 1).
@@ -64,6 +68,7 @@ class BodyShadowConfig:
     edge_px: int = 0
     leg_ncc: float = 0.5
     leg_depth: float = 0.1
+    leg_width: float = 0.15
     leg_foot: float = 0.05
     leg_window: int = 7
 
@@ -78,6 +83,8 @@ class BodyShadowConfig:
             raise ValueError(f"body shadow leg_ncc must be in [-1, 1] (-1: no leg step), got {self.leg_ncc}")
         if not 0.0 < self.leg_depth <= 1.0:
             raise ValueError(f"body shadow leg_depth must be in (0, 1], got {self.leg_depth}")
+        if self.leg_width <= 0.0:
+            raise ValueError(f"body shadow leg_width must be > 0, got {self.leg_width}")
         if not 0.0 <= self.leg_foot < 1.0:
             raise ValueError(f"body shadow leg_foot must be in [0, 1), got {self.leg_foot}")
         if self.leg_window < 3 or self.leg_window % 2 == 0:
@@ -187,6 +194,15 @@ def _legs(
     hang &= bottom[c] - ys > config.leg_foot * height
     if unseen is not None:
         hang &= ~unseen.ravel()[flat]
+    if not hang.any():
+        return flat[:0]
+    # the width of the run of shadow each lies in along its row: runs ending at or after it
+    # counted from the left, plus from the right, less itself
+    run = np.cumsum(s, axis=1, dtype=np.int32)
+    left = run - np.maximum.accumulate(np.where(s, 0, run), axis=1)
+    run = np.cumsum(s[:, ::-1], axis=1, dtype=np.int32)
+    right = (run - np.maximum.accumulate(np.where(s[:, ::-1], 0, run), axis=1))[:, ::-1]
+    hang &= left[ys, lx] + right[ys, lx] - 1 <= config.leg_width * height
     if not hang.any():
         return flat[:0]
     ys, xs, flat = ys[hang], xs[hang], flat[hang]
