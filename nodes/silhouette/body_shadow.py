@@ -146,7 +146,7 @@ def reclaim_body_shadow(
     # a candidate touches or is enclosed by foreground, so its region has some: bottom >= top
     take = [cand[(bottom[c] - cand // w) > config.foot_fraction * (bottom[c] - top[c] + 1)]]
     if legs:
-        take.append(_legs(fg, sh, comp_flat, top, bottom, frame, background, unseen, config))
+        take.append(_legs(fg, sh, comp, top, bottom, frame, background, unseen, config))
     idx = np.concatenate(take)
     if idx.size == 0:
         return labels
@@ -168,67 +168,76 @@ def _legs(
 ) -> np.ndarray:
     """Flat indices of the shadow pixels that are legs (see the module docstring).
 
-    ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H*W,) region labels of fg | sh; ``top``,
-    ``bottom``: (n,) each region's first and last foreground row (-1 / H where it has none).
+    ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
+    ``bottom``: (n,) each region's first and last foreground row. Each region that has a shadow pixel straight below foreground is
+    worked on its own box (a few per frame): a leg is a run of shadow down a column from the
+    foreground, and a run along a row, so both lie in one region.
     """
     h, w = fg.shape
-    ys, xs = np.nonzero(sh)
-    if ys.size == 0:
-        return ys
-    # one pass down the columns of the shadow's box, from the top of the frame to its lowest row:
-    # the last foreground row above each pixel and the last row neither foreground nor shadow
-    y1 = int(ys.max()) + 1
-    x0, x1 = int(xs.min()), int(xs.max()) + 1
-    rows = np.arange(h, dtype=np.int32)[:y1, None]
-    f = fg[:y1, x0:x1] != 0
-    s = sh[:y1, x0:x1] != 0
-    above = np.maximum.accumulate(np.where(f, rows, -1), axis=0)
-    gap = np.maximum.accumulate(np.where(f | s, -1, rows), axis=0)
-    lx = xs - x0
-    up = above[ys, lx]
-    flat = ys * w + xs
-    c = comp[flat]
-    height = bottom[c] - top[c] + 1
-    hang = (up > gap[ys, lx]) & (ys - up <= config.leg_depth * height)
-    # above the lowest rows of the foreground, where the shoes stand in their own cast shadow
-    hang &= bottom[c] - ys > config.leg_foot * height
-    if unseen is not None:
-        hang &= ~unseen.ravel()[flat]
-    if not hang.any():
-        return flat[:0]
-    # the width of the run of shadow each lies in along its row: runs ending at or after it
-    # counted from the left, plus from the right, less itself
-    run = np.cumsum(s, axis=1, dtype=np.int32)
-    left = run - np.maximum.accumulate(np.where(s, 0, run), axis=1)
-    run = np.cumsum(s[:, ::-1], axis=1, dtype=np.int32)
-    right = (run - np.maximum.accumulate(np.where(s[:, ::-1], 0, run), axis=1))[:, ::-1]
-    hang &= left[ys, lx] + right[ys, lx] - 1 <= config.leg_width * height
-    if not hang.any():
-        return flat[:0]
-    ys, xs, flat = ys[hang], xs[hang], flat[hang]
-    # normalised cross-correlation over the window's shadow pixels, on the candidates' box (with
-    # a margin of the window's half side: the same sums as over the whole frame)
+    start = np.zeros_like(sh)
+    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
+    pts = cv2.findNonZero(start)
+    if pts is None:
+        return np.empty(0, np.intp)
     r = config.leg_window // 2
-    by0, by1 = max(int(ys.min()) - r, 0), min(int(ys.max()) + r + 1, h)
-    bx0, bx1 = max(int(xs.min()) - r, 0), min(int(xs.max()) + r + 1, w)
-    m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
-    crop = frame[by0:by1, bx0:bx1].astype(np.float32)
-    grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
-    e = background[by0:by1, bx0:bx1]
-    # centred: the moments below are differences of float32 sums, exact enough only near zero
-    grey -= np.float32(grey.mean())
-    e = e - np.float32(e.mean())
     k = (config.leg_window, config.leg_window)
 
     def box(a: np.ndarray) -> np.ndarray:
         return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)
 
-    inv_n = 1.0 / np.maximum(box(m), 1.0)
-    em, gm = e * m, grey * m
-    me, mi = box(em) * inv_n, box(gm) * inv_n
-    ve = box(em * e) * inv_n - me * me
-    vi = box(gm * grey) * inv_n - mi * mi
-    cov = box(gm * e) * inv_n - mi * me
-    py, px = ys - by0, xs - bx0
-    ncc = cov[py, px] / np.sqrt(np.maximum(vi[py, px], 0.0) * np.maximum(ve[py, px], 0.0) + 1e-6)
-    return flat[ncc < config.leg_ncc]
+    out = []
+    for c in np.unique(comp[pts[:, 0, 1], pts[:, 0, 0]]):
+        # rows from the region's top foreground row to just above its lowest one
+        y0, y1 = int(top[c]), int(bottom[c])
+        if y1 <= y0:
+            continue
+        height = y1 - y0 + 1
+        cols = np.flatnonzero((comp[y0:y1] == c).any(axis=0))
+        x0, x1 = int(cols[0]), int(cols[-1]) + 1
+        inr = comp[y0:y1, x0:x1] == c
+        f = (fg[y0:y1, x0:x1] != 0) & inr
+        s = (sh[y0:y1, x0:x1] != 0) & inr
+        rows = np.arange(y1 - y0, dtype=np.int32)[:, None]
+        # down each column: the last foreground row above a pixel and the last row of neither
+        up = np.maximum.accumulate(np.where(f, rows, -1), axis=0)
+        gap = np.maximum.accumulate(np.where(f | s, -1, rows), axis=0)
+        hang = s & (up > gap) & (rows - up <= config.leg_depth * height)
+        # above the lowest rows of the foreground, where the shoes stand in their own cast shadow
+        hang &= (height - 1) - rows > config.leg_foot * height
+        if unseen is not None:
+            hang &= ~unseen[y0:y1, x0:x1]
+        if not hang.any():
+            continue
+        # the width of the run of shadow each lies in along its row: from the left, plus from
+        # the right, less itself
+        run = np.cumsum(s, axis=1, dtype=np.int32)
+        width = run - np.maximum.accumulate(np.where(s, 0, run), axis=1)
+        run = np.cumsum(s[:, ::-1], axis=1, dtype=np.int32)
+        width += (run - np.maximum.accumulate(np.where(s[:, ::-1], 0, run), axis=1))[:, ::-1]
+        hang &= width - 1 <= config.leg_width * height
+        ys, xs = np.nonzero(hang)
+        if ys.size == 0:
+            continue
+        ys += y0
+        xs += x0
+        # normalised cross-correlation over the window's shadow pixels (of any region), on the
+        # candidates' box with a margin of the window's half side: the sums over the whole frame
+        by0, by1 = max(int(ys.min()) - r, 0), min(int(ys.max()) + r + 1, h)
+        bx0, bx1 = max(int(xs.min()) - r, 0), min(int(xs.max()) + r + 1, w)
+        m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
+        crop = frame[by0:by1, bx0:bx1].astype(np.float32)
+        grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
+        e = background[by0:by1, bx0:bx1]
+        # centred: the moments below are differences of float32 sums, exact enough only near zero
+        grey -= np.float32(grey.mean())
+        e = e - np.float32(e.mean())
+        inv_n = 1.0 / np.maximum(box(m), 1.0)
+        em, gm = e * m, grey * m
+        me, mi = box(em) * inv_n, box(gm) * inv_n
+        ve = box(em * e) * inv_n - me * me
+        vi = box(gm * grey) * inv_n - mi * mi
+        cov = box(gm * e) * inv_n - mi * me
+        py, px = ys - by0, xs - bx0
+        ncc = cov[py, px] / np.sqrt(np.maximum(vi[py, px], 0.0) * np.maximum(ve[py, px], 0.0) + 1e-6)
+        out.append((ys * w + xs)[ncc < config.leg_ncc])
+    return np.concatenate(out) if out else np.empty(0, np.intp)
