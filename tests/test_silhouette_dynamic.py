@@ -316,3 +316,34 @@ def test_texture_test_beside_the_veto_gives_the_labels_and_models_of_the_veto_af
         assert np.array_equal(sub.samples.samples_, ref.samples.samples_)
         assert np.array_equal(sub.samples.radius_, ref.samples.radius_)
         assert np.array_equal(sub.model.mean_, ref.model.mean_)
+
+
+def test_the_match_test_reads_the_samples_as_they_are_after_learning() -> None:
+    """ViBe's test with the brightness-relative radius, worked out here from the public samples,
+    blink gain and spread, equals ``explained`` at every pixel after the lights went up and the
+    samples learnt the brighter room (``subsampling=1``: each draw covers the frame, with repeats).
+    """
+    rng = np.random.default_rng(11)
+    sc = SampleConsensus(subsampling=1, random_state=0, threaded=False)
+    sc.fit(np.stack([frame(rng, wind=False) for _ in range(20)]), ROOM)
+
+    def bright(person: tuple[int, int, int, int] | None = None, up: int = 60) -> np.ndarray:
+        return np.clip(frame(rng, person, wind=False).astype(np.int16) + up, 0, 255).astype(np.uint8)
+
+    for _ in range(12):
+        sc.apply(bright(), np.zeros((H, W), np.uint8))
+    # a little brighter still: the distances to the new samples lie near the radius, which
+    # grows with the samples' brightness
+    f = bright((170, 120, 30, 80), up=66)
+    rows = sc.samples_.astype(np.float64)  # (H * W, 3, N)
+    dist = np.abs(rows - f.reshape(-1, 3, 1)).sum(axis=1)
+    norm = rows.sum(axis=1)
+    gain = sc.radius_.reshape(-1, 1).astype(np.float64)
+    base = np.maximum(sc.radius, sc.spread_k * sc.spread_.reshape(-1, 1).astype(np.float64))
+    margin = dist / gain - sc.relative_radius * norm - base
+    want = (margin < 0).sum(axis=1) >= sc.min_matches
+    got = sc.explained(f, np.arange(H * W))
+    # float32 rounding in the model: only pixels within a hair of the radius may differ
+    close = (np.abs(margin) < 1e-3).any(axis=1)
+    assert np.array_equal(got[~close], want[~close])
+    assert want.sum() > 1000 and (~want).sum() > 1000
