@@ -696,24 +696,17 @@ class HorprasertBackground:
         return labels
 
     def classify(self, frame: np.ndarray) -> np.ndarray:
-        """The classes of eq. 9 before the shadows' texture test (``apply``'s first half).
+        """The classes of eq. 9 before the shadows' texture test: ``apply``'s first half.
 
         Parameters
         ----------
         frame : ndarray of shape (H, W, 3), dtype uint8
-            BGR frame of the training size.
+            BGR frame of the training size; the errors are ``apply``'s.
 
         Returns
         -------
         ndarray of shape (H, W), dtype uint8
-            Labels: BACKGROUND 0, SHADOW 1, HIGHLIGHT 2, FOREGROUND 3; textured shadows not yet checked.
-
-        Raises
-        ------
-        RuntimeError
-            If the model is not fitted.
-        ValueError
-            For a frame of another shape or dtype.
+            Labels as ``apply``'s, the textured shadows not yet checked (``shadow_texture_mismatch``).
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
