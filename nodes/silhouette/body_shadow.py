@@ -135,7 +135,7 @@ def reclaim_body_shadow(
     h, w = labels.shape
     n, comp = cv2.connectedComponents(cv2.bitwise_or(fg, sh), connectivity=8)
     comp_flat = comp.ravel()
-    fg_idx = np.flatnonzero(fg.ravel())
+    fg_idx = np.flatnonzero(labels.ravel() == FOREGROUND)  # on bool: several times faster than on fg's 0 / 255
     fg_comp = comp_flat[fg_idx]
     fg_row = fg_idx // w
     top = np.full(n, h, np.int64)
