@@ -38,8 +38,8 @@ model's posture and gestures are kept:
    and the hand was last seen held high (``push_height`` of the stature: a push lands on the chest,
    people walking in to shake hands hold the hand lower), its distance grows by ``recoil_m`` at
    ``recoil_speed_m_s``, on at that speed while the push goes on up to ``recoil_max_m`` (beyond
-   ``max_distance_m`` if need be: a partner at the limit still moves back), and once the step is
-   done and the push over it returns with time constant ``recoil_s`` (within the speed of 2).
+   ``max_distance_m`` if need be: a partner at the limit still moves back), and once the push is
+   over it returns with time constant ``recoil_s`` (within the speed of 2).
    A hand held out without a push is offered (:attr:`Stage.offered_`), at the height of the
    silhouette's tip, ``meet_frac`` of the way to the partner at most; where the silhouette touches
    someone else's (its tip is then where the regions were split, not the hand) at ``hand_frac`` of
@@ -102,9 +102,9 @@ class StageConfig:
     recoil_max_m : float, default=0.4
         The most a push that goes on moves the partner back, metres: it steps back on at
         ``recoil_speed_m_s`` while pushed, beyond ``max_distance_m`` if need be (a partner at the
-        limit still moves back), and returns once the step is done.
+        limit still moves back), and returns once the push is over.
     recoil_s : float, default=0.4
-        Time constant of the recoil's fading once the step back is done, seconds.
+        Time constant of the recoil's fading once the push is over, seconds.
     beside : bool, default=True
         Stand beside the observed person across the camera's view, at their depth (False: in the
         model's direction).
@@ -570,7 +570,7 @@ class Stage:
             self.pushes += 1
         elif touching:  # pushed on and on, it goes on stepping back; the return starts when the push ends
             self._recoil_goal = min(max(self._recoil_goal, c.recoil_m) + c.recoil_speed_m_s * dt, c.recoil_max_m)
-        elif self._recoil >= self._recoil_goal - 1e-9:  # the push over and the step back done: the return
+        else:  # the push over: the return
             self._recoil_goal *= float(np.exp(-dt / c.recoil_s))
         self._touching = touching
         # the step back at recoil_speed_m_s; the return as the push fades
