@@ -126,6 +126,33 @@ def test_the_partner_keeps_clear_of_the_persons_silhouette_in_the_picture() -> N
     assert iou(out) > 0.15 and 0.5 - 1e-9 <= np.hypot(*(ground(out) - ground(obs))) <= 1.2 + 1e-9
 
 
+def test_the_partner_keeps_most_of_itself_out_of_the_persons_silhouette() -> None:
+    # a box much larger than the partner's (a silhouette with an arm held out 0.6 m) keeps the union
+    # large wherever the partner stands: by intersection over union alone (clear_iou 1: off here) the
+    # partner stays inside it; with clear_inside (0.6) at most 0.6 of its own box lies inside
+    cam = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
+    obs, par = person(0.0, 0.0, 0.0), person(0.5, 0.0, 0.0)
+    uv = cam.project(obs)
+    x0, y0, x1, y1 = uv[:, 0].min(), uv[:, 1].min(), uv[:, 0].max(), uv[:, 1].max()
+    arm = cam.project(np.array([[0.6, 1.3, 0.0]]))[0, 0] - cam.project(np.array([[0.0, 1.3, 0.0]]))[0, 0]
+    box = (x0, y0, x1 - x0 + arm, y1 - y0)
+
+    def inside(P: np.ndarray) -> float:
+        q = cam.project(P)
+        a = np.r_[q.min(0), q.max(0)]
+        w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
+        h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
+        return w * h / ((a[2] - a[0]) * (a[3] - a[1]))
+
+    loose = Stage(StageConfig(clear_iou=1.0, clear_inside=1.0))(obs, par, 0.04, side=1.0, camera=cam, box=box)
+    out = Stage(StageConfig(clear_iou=1.0))(obs, par, 0.04, side=1.0, camera=cam, box=box)
+    gap = float(np.hypot(*(ground(out) - ground(obs))))
+    assert inside(loose) > 0.6 and inside(out) <= 0.6
+    assert np.hypot(*(ground(loose) - ground(obs))) < gap <= 1.2
+    with pytest.raises(ValueError, match="clear_inside"):
+        StageConfig(clear_inside=1.5)
+
+
 def test_the_partner_stays_beside_a_person_whose_estimate_jumps() -> None:
     stage = Stage()
     stage(person(0.0, 2.0), person(0.8, 2.0), 0.04)

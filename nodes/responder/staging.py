@@ -149,6 +149,8 @@ class StageConfig:
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
+    clear_inside : float, default=0.6
+        With them, the most of the partner's own projected box that may lie inside that box.
 
     Raises
     ------
@@ -171,6 +173,7 @@ class StageConfig:
     push_speed_m_s: float = 0.5
     advance_s: float = 0.15
     clear_iou: float = 0.15
+    clear_inside: float = 0.6
     push_touch: bool = True
     hand_frac: float = 0.66
     recoil_speed_m_s: float = 0.75
@@ -191,8 +194,8 @@ class StageConfig:
             )
         if self.recoil_speed_m_s <= 0:
             raise ValueError(f"recoil_speed_m_s={self.recoil_speed_m_s} must be > 0")
-        if not 0.0 <= self.clear_iou <= 1.0:
-            raise ValueError(f"clear_iou={self.clear_iou} must be in [0, 1]")
+        if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
+            raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
             raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
 
@@ -339,13 +342,17 @@ def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarr
     return u * min(max(r, lo), hi)
 
 
-def _box_iou(boxes: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels."""
+def _box_iou(boxes: np.ndarray, box: np.ndarray, inside: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels; with
+    ``inside`` also the share (K,) of each of ``boxes`` that lies in ``box``.
+    """
     w = np.clip(np.minimum(boxes[:, 2], box[2]) - np.maximum(boxes[:, 0], box[0]), 0.0, None)
     h = np.clip(np.minimum(boxes[:, 3], box[3]) - np.maximum(boxes[:, 1], box[1]), 0.0, None)
     inter = w * h
-    union = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]) + (box[2] - box[0]) * (box[3] - box[1]) - inter
-    return np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+    own = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
+    union = own + (box[2] - box[0]) * (box[3] - box[1]) - inter
+    iou = np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+    return (iou, np.where(own > 0, inter / np.maximum(own, 1e-12), 0.0)) if inside else iou
 
 
 def clear_length(
@@ -356,8 +363,10 @@ def clear_length(
     camera: Camera,
     box: tuple[float, float, float, float],
     max_iou: float,
+    max_inside: float = 1.0,
 ) -> float:
-    """The first of ``lengths`` at which the partner's projected box overlaps ``box`` by at most ``max_iou``.
+    """The first of ``lengths`` at which the partner's projected box overlaps ``box`` by at most ``max_iou``
+    and has at most ``max_inside`` of itself inside it.
 
     Parameters
     ----------
@@ -375,6 +384,9 @@ def clear_length(
         The observed person's silhouette box ``(x, y, w, h)``, pixels.
     max_iou : float
         Largest overlap allowed (intersection over union).
+    max_inside : float, default=1.0
+        Largest share of the partner's own box allowed inside ``box`` (a box much larger than the
+        partner's, a person with an arm held out, leaves the union large whatever the partner's place).
 
     Returns
     -------
@@ -386,9 +398,11 @@ def clear_length(
     uv = camera.project(X)  # (K, 14, 2)
     boxes = np.concatenate([np.nanmin(uv, axis=1), np.nanmax(uv, axis=1)], axis=1)
     x, y, w, h = (float(v) for v in box)
-    iou = np.nan_to_num(_box_iou(boxes, np.array([x, y, x + w, y + h])), nan=0.0)
-    ok = np.flatnonzero(iou <= max_iou)
-    return float(lengths[ok[0]] if len(ok) else lengths[int(np.argmin(iou))])
+    iou, inside = (np.nan_to_num(v, nan=0.0) for v in _box_iou(boxes, np.array([x, y, x + w, y + h]), inside=True))
+    # the worse of the two overlaps, as a share of its limit
+    score = np.maximum(iou / max(max_iou, 1e-9), inside / max(max_inside, 1e-9))
+    ok = np.flatnonzero(score <= 1.0)
+    return float(lengths[ok[0]] if len(ok) else lengths[int(np.argmin(score))])
 
 
 def _walk(start: np.ndarray, goal: np.ndarray, limit: float) -> np.ndarray:
@@ -600,7 +614,7 @@ class Stage:
         r = float(np.hypot(*offset))
         if camera is not None and box is not None and r > 1e-6:  # never inside the person in the picture
             lengths = np.linspace(r, max(r, c.max_distance_m), 8)
-            offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou)
+            offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou, c.clear_inside)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
