@@ -21,8 +21,9 @@ model's posture and gestures are kept:
    camera and the observed person's silhouette box (``box``; a region shared with another person's
    is split, the split box is theirs), it
    then grows, within ``max_distance_m``, as little as makes the partner's projected box overlap
-   that box by at most ``clear_iou`` (intersection over union): the tracked person's place is off
-   by decimetres on real video, their silhouette is where the picture shows them;
+   that box by at most ``clear_iou`` (intersection over union) with at most ``clear_inside`` of
+   its own box inside it: the tracked person's place is off by decimetres on real video, their
+   silhouette is where the picture shows them;
 2. that offset changes by at most ``max_speed_m_s`` times the time between frames, in polar
    coordinates about the person (the partner walks round them, never through them; it never
    jumps), so the distance holds on every frame. The offset is relative to the observed person:
@@ -150,7 +151,9 @@ class StageConfig:
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
     clear_inside : float, default=0.6
-        With them, the most of the partner's own projected box that may lie inside that box.
+        With a camera and the observed person's silhouette box, the most of the partner's own
+        projected box that may lie inside that box (a silhouette with an arm held out, or shared
+        with another person's, is so much larger than the partner that the union stays large).
 
     Raises
     ------
@@ -496,7 +499,7 @@ class Stage:
         chest, a hand to shake is held at the waist. True while not yet seen so.
         """
         if held_out and not silhouette.touching and silhouette.height_m is not None:
-            frac = (silhouette.height_m) / max(stature(X), 1e-6)
+            frac = silhouette.height_m / max(stature(X), 1e-6)
             self._height = frac if self._height is None else self._height + HEIGHT_RATE * (frac - self._height)
         return self._height is None or self._height >= self.config.push_height
 
