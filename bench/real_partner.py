@@ -102,7 +102,9 @@ def contact(kp: np.ndarray, vis: np.ndarray, h: np.ndarray, label: int) -> tuple
     kp (T, 2, 14, 2) pixels, vis (T, 2, 14), h (T, 2) heights (pixels). Handshake: the frame where
     the two people's wrists are nearest (over their mean height); the observed person is 0 (the
     left one). Push: the frame where one person's wrist is nearest the other's torso; that person
-    (the pusher) is observed. None when the reference never shows the joints needed.
+    (the pusher) is observed, unless the other is the one who walked towards them before it
+    (``advance``): a pushee's hands raised against the pusher lie on the pusher's torso too. None
+    when the reference never shows the joints needed.
     """
     seen = (vis >= VIS) & np.isfinite(kp).all(axis=-1)
     # both reference skeletons on one person: there the reference cannot say where the people are
