@@ -27,8 +27,8 @@ from typing import Any
 
 _LIVE: weakref.WeakSet[DeferredStep] = weakref.WeakSet()
 
-# seconds; 0.2 ms: the extractor's wall time per frame on two cores fell ~12% from the default 5 ms
-# (1 ms: ~7%; 0.05 ms: no better than 0.2 ms), see bench/silhouette.py's speed part
+# seconds: a thread back from a short call soon gets the GIL; 1 ms gained less and 0.05 ms no more
+# (bench/silhouette.py's two-core speed figures, ours beside MOG2)
 SWITCH_INTERVAL_S = 2e-4
 
 
