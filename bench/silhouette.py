@@ -14,7 +14,9 @@ was used to tune our model (``*_tune``); the figures (``f1_ours``, ``f1_mog2``, 
 ``f1_gsoc``) are those of the second half; ``f1_ours_auto_area``: ours with the minimum area
 from the frame size and camera (``min_area=None``, node ``min_area: 0``) instead of the node's
 300 px; ``f1_ours_no_body_shadow``: ours without taking the shadow labels inside a body (dark
-clothes, hair) back as foreground (node ``body_shadow_px: 0``; the default is 15). Ours with the node defaults has the sample-consensus model and the shadow texture test
+clothes, hair) back as foreground (node ``body_shadow_px: 0``; the default is 15);
+``f1_ours_no_legs``: ours without the leg step of that rule (node ``body_shadow_leg_ncc: -1``; the
+default is 0.5: a shadow hanging from foreground that does not keep the floor's texture is a leg). Ours with the node defaults has the sample-consensus model and the shadow texture test
 on (``dynamic: true, shadow_ncc: 0.4``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
 theirs): the SHADOW class of the raw pixels against label 50, where the ground truth marks shadows.
 Top-level key ``real``: one object per sequence.
@@ -94,6 +96,9 @@ AUTO_AREA = "horprasert-auto-area"
 #: ours without the shadow labels inside a body taken back as foreground (node ``body_shadow_px: 0``,
 #: ``body_shadow.BodyShadowConfig(span_px=0)``); reported as ``*_ours_no_body_shadow``
 NO_BODY_SHADOW = "horprasert-no-body-shadow"
+#: ours without the body-shadow rule's leg step (node ``body_shadow_leg_ncc: -1``,
+#: ``BodyShadowConfig(leg_ncc=-1)``); reported as ``*_ours_no_legs``
+NO_LEGS = "horprasert-no-legs"
 #: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
 GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
@@ -339,10 +344,9 @@ def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) 
     """See ``_evaluate_real``; ``backend`` AUTO_AREA is ours with ``min_area=None``."""
     if backend == AUTO_AREA:
         ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES})
-    elif backend == NO_BODY_SHADOW:
-        ex = SilhouetteExtractor(
-            backend_params={"train_frames": TRAIN_FRAMES, "body_shadow": BodyShadowConfig(span_px=0)}
-        )
+    elif backend in (NO_BODY_SHADOW, NO_LEGS):
+        config = BodyShadowConfig(span_px=0) if backend == NO_BODY_SHADOW else BodyShadowConfig(leg_ncc=-1.0)
+        ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN_FRAMES, "body_shadow": config})
     else:
         ex = SilhouetteExtractor(
             backend=backend, backend_params={"train_frames": TRAIN_FRAMES} if backend == "horprasert" else {}
@@ -413,18 +417,24 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
             "split": "tune: first half of the evaluated frames; figures: second half",
         }
         has_shadow = bool(np.any(gt[first - 1 :] == GT_SHADOW))
-        for b in (*REAL_BACKENDS, AUTO_AREA, NO_BODY_SHADOW):
+        for b in (*REAL_BACKENDS, AUTO_AREA, NO_BODY_SHADOW, NO_LEGS):
             t0 = time.perf_counter()
             ev = evaluate_real(frames, gt, first, b)
-            tag = {"horprasert": "ours", AUTO_AREA: "ours_auto_area", NO_BODY_SHADOW: "ours_no_body_shadow"}.get(b, b)
+            tag = {
+                "horprasert": "ours",
+                AUTO_AREA: "ours_auto_area",
+                NO_BODY_SHADOW: "ours_no_body_shadow",
+                NO_LEGS: "ours_no_legs",
+            }.get(b, b)
             for half, suffix in (("report", ""), ("tune", "_tune")):
                 c = ev[half]
                 row[f"f1_{tag}{suffix}"] = _f1_counts(c["tp"], c["fp"], c["fn"])
-                if has_shadow and b in ("horprasert", AUTO_AREA, NO_BODY_SHADOW, "mog2", "knn"):
+                if has_shadow and b in ("horprasert", AUTO_AREA, NO_BODY_SHADOW, NO_LEGS, "mog2", "knn"):
                     key = {
                         "horprasert": "shadow_f1",
                         AUTO_AREA: "shadow_f1_auto_area",
                         NO_BODY_SHADOW: "shadow_f1_no_body_shadow",
+                        NO_LEGS: "shadow_f1_no_legs",
                     }.get(b, f"shadow_f1_{b}")
                     row[key + suffix] = _f1_counts(c["sh_tp"], c["sh_fp"], c["sh_fn"])
             row[f"fps_{tag}"] = round(len(frames) / (time.perf_counter() - t0), 1)

@@ -249,8 +249,9 @@ def test_cdnet_f1_beats_mog2(seq: str) -> None:
     # frames by the report half), so the floor is below the bench's 0.90. busStation: the
     # short-trained model calls the glass doors' reflections shadow, and where they lie between
     # two people the body-shadow rule takes them back (0.801 without it, 0.792 with it; over the
-    # bench's whole report half the rule gains); pedestrians: 0.922 without it, 0.943 with it
-    assert ours >= {"pedestrians": 0.93, "busStation": 0.78}[seq], (ours, mog2)
+    # bench's whole report half the rule gains); pedestrians: 0.922 without it, 0.943 with it,
+    # 0.955 with its leg step (grey trousers below a torso; 0.7919 -> 0.7927 on busStation)
+    assert ours >= {"pedestrians": 0.95, "busStation": 0.78}[seq], (ours, mog2)
     assert ours > mog2, (ours, mog2)
 
 

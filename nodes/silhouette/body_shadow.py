@@ -2,12 +2,24 @@
 
 Horprasert's shadow class (a pixel darker than its background with the same chromaticity) also
 takes in dark trousers, hair and shirts on a grey room. A cast shadow lies on the ground or a wall
-BESIDE a person: at or below their feet, or off to one side. A shadow-labelled pixel that has
-foreground both above and below it within ``span_px`` rows (Serra's closing by a vertical line),
-and that lies above the lowest ``foot_fraction`` of the foreground's vertical extent in its
-connected region of foreground and shadow, is inside the body: it is relabelled foreground.
-The feet band keeps the floor shadow between and around the feet (the simulator's and CDnet's
-cast shadows lie there), and the closing keeps shadows beside the body.
+BESIDE a person: at or below their feet, or off to one side. Two steps take such labels back as
+foreground:
+
+* Enclosed: a shadow-labelled pixel that has foreground both above and below it within
+  ``span_px`` rows (Serra's closing by a vertical line), and that lies above the lowest
+  ``foot_fraction`` of the foreground's vertical extent in its connected region of foreground and
+  shadow, is inside the body. The feet band keeps the floor shadow between and around the feet,
+  and the closing keeps shadows beside the body.
+* Legs: grey trousers below a foreground torso are shadow from the hips to the shoes, longer than
+  any closing that leaves cast shadows alone. A shadow pixel that hangs from foreground (the
+  foreground is straight above it in its column, with only shadow between, at most
+  ``leg_depth`` of the region's foreground height below it), in a run of shadow along its row
+  no wider than ``leg_width`` of that height, above the lowest ``leg_foot`` of the foreground's
+  extent, and whose neighbourhood does not keep the background's texture (normalised cross-correlation of
+  grey levels over the shadow pixels of a ``leg_window`` square under ``leg_ncc``; Jacques, Jung &
+  Musse 2005, eq. 4), is a leg. A cast shadow is the floor, darker: it keeps the floor's pattern
+  and correlates with it, trousers do not. Unlike the model's own texture test this one does not
+  need a textured floor, because it is asked only where a body is straight above.
 """
 
 from __future__ import annotations
@@ -28,18 +40,37 @@ class BodyShadowConfig:
     ----------
     span_px : int, default=15
         Length in pixels of the vertical closing: a shadow pixel needs foreground above and below
-        it within this many rows (at 320x240; scale with the frame height). 0: off.
+        it within this many rows (at 320x240; scale with the frame height). 0: off (both steps).
     foot_fraction : float, default=0.2
         The lowest part of a region's foreground extent, as a fraction of its height, where
-        shadows stay shadows (the feet touch their own cast shadow there); in [0, 1).
+        enclosed shadows stay shadows (the feet touch their own cast shadow there); in [0, 1).
     edge_px : int, default=0
         Also take back the shadow pixels within this many pixels of foreground (a person's
         blurred, darker rim), above the feet band too; 0: none.
+    leg_ncc : float, default=0.5
+        A hanging shadow pixel whose neighbourhood correlates less than this with the
+        background's grey levels is a leg; in [-1, 1], -1: no leg step.
+    leg_depth : float, default=0.1
+        How far below the foreground above it a hanging shadow pixel may be, as a fraction of its
+        region's foreground height; in (0, 1].
+    leg_width : float, default=0.15
+        The widest run of shadow along its row that a leg pixel may lie in, as a fraction of its
+        region's foreground height (a leg is narrow; a cast shadow on the floor spreads).
+    leg_foot : float, default=0.05
+        The lowest part of a region's foreground extent, as a fraction of its height, where no
+        shadow is a leg (the shoes stand in their cast shadow); in [0, 1).
+    leg_window : int, default=7
+        Side of the square window of the correlation, pixels (odd, >= 3).
     """
 
     span_px: int = 15
     foot_fraction: float = 0.2
     edge_px: int = 0
+    leg_ncc: float = 0.5
+    leg_depth: float = 0.1
+    leg_width: float = 0.15
+    leg_foot: float = 0.05
+    leg_window: int = 7
 
     def __post_init__(self) -> None:
         if self.span_px < 0:
@@ -48,9 +79,25 @@ class BodyShadowConfig:
             raise ValueError(f"body shadow foot_fraction must be in [0, 1), got {self.foot_fraction}")
         if self.edge_px < 0:
             raise ValueError(f"body shadow edge_px must be >= 0 (0: none), got {self.edge_px}")
+        if not -1.0 <= self.leg_ncc <= 1.0:
+            raise ValueError(f"body shadow leg_ncc must be in [-1, 1] (-1: no leg step), got {self.leg_ncc}")
+        if not 0.0 < self.leg_depth <= 1.0:
+            raise ValueError(f"body shadow leg_depth must be in (0, 1], got {self.leg_depth}")
+        if self.leg_width <= 0.0:
+            raise ValueError(f"body shadow leg_width must be > 0, got {self.leg_width}")
+        if not 0.0 <= self.leg_foot < 1.0:
+            raise ValueError(f"body shadow leg_foot must be in [0, 1), got {self.leg_foot}")
+        if self.leg_window < 3 or self.leg_window % 2 == 0:
+            raise ValueError(f"body shadow leg_window must be odd and >= 3, got {self.leg_window}")
 
 
-def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndarray:
+def reclaim_body_shadow(
+    labels: np.ndarray,
+    config: BodyShadowConfig,
+    frame: np.ndarray | None = None,
+    background: np.ndarray | None = None,
+    unseen: np.ndarray | None = None,
+) -> np.ndarray:
     """Relabel the shadow pixels inside a body as foreground.
 
     Parameters
@@ -58,7 +105,15 @@ def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndar
     labels : ndarray of shape (H, W), uint8
         Class labels (``background`` codes). Not modified.
     config : BodyShadowConfig
-        The closing length and the feet band.
+        The closing length, the feet band and the leg step.
+    frame : ndarray of shape (H, W, 3), uint8, optional
+        The frame the labels are of; with ``background``, for the leg step (skipped without).
+    background : ndarray of shape (H, W), float32, optional
+        The background's grey level (sum of the three channels of its expected colour E) that
+        ``labels`` were classified against.
+    unseen : ndarray of shape (H, W), bool, optional
+        Pixels where the background was filled in, never seen (``HorprasertBackground.unseen_``):
+        its texture there is a guess, so the leg step leaves them alone.
 
     Returns
     -------
@@ -68,16 +123,17 @@ def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndar
     if config.span_px == 0:
         return labels
     fg = cv2.compare(labels, FOREGROUND, cv2.CMP_EQ)
+    sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
     closed = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, np.ones((config.span_px, 1), np.uint8))
     if config.edge_px:
         side = 2 * config.edge_px + 1
         cv2.max(closed, cv2.dilate(fg, np.ones((side, side), np.uint8)), dst=closed)
-    cand = np.flatnonzero((labels.ravel() == SHADOW) & (closed.ravel() != 0))
-    if cand.size == 0:
+    cand = np.flatnonzero((sh.ravel() != 0) & (closed.ravel() != 0))
+    legs = config.leg_ncc > -1.0 and frame is not None and background is not None
+    if cand.size == 0 and not legs:
         return labels
     h, w = labels.shape
-    body = cv2.bitwise_or(fg, cv2.compare(labels, SHADOW, cv2.CMP_EQ))
-    n, comp = cv2.connectedComponents(body, connectivity=8)
+    n, comp = cv2.connectedComponents(cv2.bitwise_or(fg, sh), connectivity=8)
     comp_flat = comp.ravel()
     fg_idx = np.flatnonzero(labels.ravel() == FOREGROUND)  # on bool: several times faster than on fg's 0 / 255
     fg_comp = comp_flat[fg_idx]
@@ -88,9 +144,100 @@ def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndar
     np.maximum.at(bottom, fg_comp, fg_row)
     c = comp_flat[cand]
     # a candidate touches or is enclosed by foreground, so its region has some: bottom >= top
-    above_feet = (bottom[c] - cand // w) > config.foot_fraction * (bottom[c] - top[c] + 1)
-    if not above_feet.any():
+    take = [cand[(bottom[c] - cand // w) > config.foot_fraction * (bottom[c] - top[c] + 1)]]
+    if legs:
+        take.append(_legs(fg, sh, comp, top, bottom, frame, background, unseen, config))
+    idx = np.concatenate(take)
+    if idx.size == 0:
         return labels
     out = labels.copy()
-    out.ravel()[cand[above_feet]] = FOREGROUND
+    out.ravel()[idx] = FOREGROUND
     return out
+
+
+def _legs(
+    fg: np.ndarray,
+    sh: np.ndarray,
+    comp: np.ndarray,
+    top: np.ndarray,
+    bottom: np.ndarray,
+    frame: np.ndarray,
+    background: np.ndarray,
+    unseen: np.ndarray | None,
+    config: BodyShadowConfig,
+) -> np.ndarray:
+    """Flat indices of the shadow pixels that are legs (see the module docstring).
+
+    ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
+    ``bottom``: (n,) each region's first and last foreground row. Each region that has a shadow pixel straight below foreground is
+    worked on its own box (a few per frame): a leg is a run of shadow down a column from the
+    foreground, and a run along a row, so both lie in one region.
+    """
+    h, w = fg.shape
+    start = np.zeros_like(sh)
+    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
+    pts = cv2.findNonZero(start)
+    if pts is None:
+        return np.empty(0, np.intp)
+    r = config.leg_window // 2
+    k = (config.leg_window, config.leg_window)
+
+    def box(a: np.ndarray) -> np.ndarray:
+        return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)
+
+    out = []
+    for c in np.unique(comp[pts[:, 0, 1], pts[:, 0, 0]]):
+        # rows from the region's top foreground row to just above its lowest one
+        y0, y1 = int(top[c]), int(bottom[c])
+        if y1 <= y0:
+            continue
+        height = y1 - y0 + 1
+        cols = np.flatnonzero((comp[y0:y1] == c).any(axis=0))
+        x0, x1 = int(cols[0]), int(cols[-1]) + 1
+        inr = comp[y0:y1, x0:x1] == c
+        f = (fg[y0:y1, x0:x1] != 0) & inr
+        s = (sh[y0:y1, x0:x1] != 0) & inr
+        rows = np.arange(y1 - y0, dtype=np.int32)[:, None]
+        # down each column: the last foreground row above a pixel and the last row of neither
+        up = np.maximum.accumulate(np.where(f, rows, -1), axis=0)
+        gap = np.maximum.accumulate(np.where(f | s, -1, rows), axis=0)
+        hang = s & (up > gap) & (rows - up <= config.leg_depth * height)
+        # above the lowest rows of the foreground, where the shoes stand in their own cast shadow
+        hang &= (height - 1) - rows > config.leg_foot * height
+        if unseen is not None:
+            hang &= ~unseen[y0:y1, x0:x1]
+        if not hang.any():
+            continue
+        # the width of the run of shadow each lies in along its row: from the left, plus from
+        # the right, less itself
+        run = np.cumsum(s, axis=1, dtype=np.int32)
+        width = run - np.maximum.accumulate(np.where(s, 0, run), axis=1)
+        run = np.cumsum(s[:, ::-1], axis=1, dtype=np.int32)
+        width += (run - np.maximum.accumulate(np.where(s[:, ::-1], 0, run), axis=1))[:, ::-1]
+        hang &= width - 1 <= config.leg_width * height
+        ys, xs = np.nonzero(hang)
+        if ys.size == 0:
+            continue
+        ys += y0
+        xs += x0
+        # normalised cross-correlation over the window's shadow pixels (of any region), on the
+        # candidates' box with a margin of the window's half side: the sums over the whole frame
+        by0, by1 = max(int(ys.min()) - r, 0), min(int(ys.max()) + r + 1, h)
+        bx0, bx1 = max(int(xs.min()) - r, 0), min(int(xs.max()) + r + 1, w)
+        m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
+        crop = frame[by0:by1, bx0:bx1].astype(np.float32)
+        grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
+        e = background[by0:by1, bx0:bx1]
+        # centred: the moments below are differences of float32 sums, exact enough only near zero
+        grey -= np.float32(grey.mean())
+        e = e - np.float32(e.mean())
+        inv_n = 1.0 / np.maximum(box(m), 1.0)
+        em, gm = e * m, grey * m
+        me, mi = box(em) * inv_n, box(gm) * inv_n
+        ve = box(em * e) * inv_n - me * me
+        vi = box(gm * grey) * inv_n - mi * mi
+        cov = box(gm * e) * inv_n - mi * me
+        py, px = ys - by0, xs - bx0
+        ncc = cov[py, px] / np.sqrt(np.maximum(vi[py, px], 0.0) * np.maximum(ve[py, px], 0.0) + 1e-6)
+        out.append((ys * w + xs)[ncc < config.leg_ncc])
+    return np.concatenate(out) if out else np.empty(0, np.intp)

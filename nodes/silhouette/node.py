@@ -199,6 +199,16 @@ class Silhouette(Node):
             min=0,
             max=1000,
         ),
+        "body_shadow_leg_ncc": Param(
+            float,
+            0.5,
+            "horprasert: a shadow pixel hanging from foreground (legs below a torso) whose "
+            "neighbourhood correlates less than this with the floor's grey levels is foreground "
+            "(trousers; a cast shadow keeps the floor's pattern); -1: off; 0.5 was tuned on the "
+            "CDnet tune halves",
+            min=-1.0,
+            max=1.0,
+        ),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -244,7 +254,7 @@ class Silhouette(Node):
                 "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
                 "dynamic": p["dynamic"],
                 "shadow_ncc": p["shadow_ncc"],
-                "body_shadow": BodyShadowConfig(span_px=p["body_shadow_px"]),
+                "body_shadow": BodyShadowConfig(span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"]),
             }
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
