@@ -185,13 +185,24 @@ def _legs(
     def box(a: np.ndarray) -> np.ndarray:
         return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)
 
+    # A leg pixel hangs below a start (shadow straight under foreground) of its region, at
+    # least one row down and at or below the start's row: regions too short for a one-row
+    # hang, and starts inside the feet band, have none (most regions of a frame: small blobs).
+    sy = pts[:, 0, 1]
+    sc = comp[sy, pts[:, 0, 0]]
+    height_s = bottom[sc] - top[sc] + 1
+    keep = (config.leg_depth * height_s >= 1) & (bottom[sc] - sy > config.leg_foot * height_s)
+    sy, sc = sy[keep], sc[keep]
+    if sc.size == 0:
+        return np.empty(0, np.intp)
+    first = np.full(top.shape, h, np.int64)
+    np.minimum.at(first, sc, sy)
     out = []
-    for c in np.unique(comp[pts[:, 0, 1], pts[:, 0, 0]]):
-        # rows from the region's top foreground row to just above its lowest one
-        y0, y1 = int(top[c]), int(bottom[c])
-        if y1 <= y0:
-            continue
-        height = y1 - y0 + 1
+    for c in np.unique(sc):
+        # rows from the foreground row above the region's first start to just above its lowest
+        # foreground row (the up / gap runs below need nothing above a start's own foreground)
+        y0, y1 = int(first[c]) - 1, int(bottom[c])
+        height = y1 - int(top[c]) + 1
         cols = np.flatnonzero((comp[y0:y1] == c).any(axis=0))
         x0, x1 = int(cols[0]), int(cols[-1]) + 1
         inr = comp[y0:y1, x0:x1] == c
@@ -203,7 +214,7 @@ def _legs(
         gap = np.maximum.accumulate(np.where(f | s, -1, rows), axis=0)
         hang = s & (up > gap) & (rows - up <= config.leg_depth * height)
         # above the lowest rows of the foreground, where the shoes stand in their own cast shadow
-        hang &= (height - 1) - rows > config.leg_foot * height
+        hang &= (y1 - y0) - rows > config.leg_foot * height
         if unseen is not None:
             hang &= ~unseen[y0:y1, x0:x1]
         if not hang.any():
