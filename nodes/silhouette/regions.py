@@ -147,9 +147,8 @@ def components_with_stats(mask: np.ndarray) -> tuple[int, np.ndarray, np.ndarray
     sy = np.bincount(lab, ys, minlength=n)
     stats = np.stack([x0, y0, x1 - x0 + 1, y1 - y0 + 1, area], axis=1).astype(np.int32)
     if area[0]:
-        # the rows and columns with a background pixel: those not wholly foreground
-        rows = np.flatnonzero(np.bincount(ys, minlength=h) < w)
-        cols = np.flatnonzero(np.bincount(xs, minlength=w) < h)
+        bg = m8 == 0
+        rows, cols = np.flatnonzero(bg.any(axis=1)), np.flatnonzero(bg.any(axis=0))
         stats[0, :4] = cols[0], rows[0], cols[-1] - cols[0] + 1, rows[-1] - rows[0] + 1
         sx[0] = h * (w * (w - 1) // 2) - sx[1:].sum()
         sy[0] = w * (h * (h - 1) // 2) - sy[1:].sum()
