@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
-from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask, components_with_stats
+from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask
 from tests.shared_data import DATA
 
 UT = DATA / "ut_interaction"
@@ -386,23 +386,3 @@ def test_a_leg_stepping_out_is_not_a_new_person_a_child_beside_them_is():
             draw_person(m, 90, 80)
         _, people = child.update(m.astype(bool))
     assert [p.id for p in people] == [0, 1]
-
-
-@pytest.mark.parametrize("case", ["empty", "full", "speckle", "sparse", "blobs", "uint8"])
-def test_components_with_stats_are_opencvs_labels_and_statistics(case: str) -> None:
-    rng = np.random.default_rng(3)
-    masks = {
-        "empty": np.zeros((24, 32), bool),
-        "full": np.ones((24, 32), bool),
-        "speckle": rng.random((60, 80)) > 0.5,
-        "sparse": rng.random((60, 80)) > 0.95,
-        "blobs": cv2.dilate((rng.random((120, 160)) > 0.998).astype(np.uint8), np.ones((15, 9), np.uint8)) > 0,
-        "uint8": (rng.random((40, 50)) > 0.7).astype(np.uint8) * 7,
-    }
-    m = masks[case]
-    want = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
-    got = components_with_stats(m)
-    assert got[0] == want[0]
-    for g, w in zip(got[1:], want[1:]):
-        assert g.dtype == w.dtype and g.shape == w.shape
-        np.testing.assert_array_equal(g, w)

@@ -104,65 +104,6 @@ def _disk(size: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
 
 
-def components_with_stats(mask: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
-    """``cv2.connectedComponentsWithStats(mask != 0, connectivity=8)``, the same four outputs.
-
-    OpenCV's statistics pass costs several times its labelling on a frame of a few regions; here
-    the labels come from ``cv2.connectedComponents`` (the same algorithm, the same numbering) and
-    the statistics from the foreground pixels alone, label 0's from their complement.
-
-    Parameters
-    ----------
-    mask : ndarray of shape (H, W)
-        Non-zero: foreground.
-
-    Returns
-    -------
-    n : int
-        Number of labels, 0 (background) included.
-    labels : ndarray of shape (H, W), int32
-        0 = background, 1..n-1 the 8-connected regions.
-    stats : ndarray of shape (n, 5), int32
-        Left, top, width, height (pixels) and area (pixels) per label (``cv2.CC_STAT_*``).
-    centroids : ndarray of shape (n, 2), float64
-        Mean x, y per label, pixels (NaN for an empty background).
-    """
-    m8 = mask.view(np.uint8) if mask.dtype == np.bool_ else (mask != 0).astype(np.uint8)
-    n, labels = cv2.connectedComponents(m8, connectivity=8)
-    h, w = labels.shape
-    idx = np.flatnonzero(m8)
-    lab = labels.ravel()[idx]
-    ys = idx // w
-    xs = idx - ys * w
-    area = np.bincount(lab, minlength=n)
-    area[0] = h * w - idx.size
-    x0, y0 = np.full(n, w, np.int64), np.full(n, h, np.int64)
-    x1, y1 = np.full(n, -1, np.int64), np.full(n, -1, np.int64)
-    np.minimum.at(x0, lab, xs)
-    np.maximum.at(x1, lab, xs)
-    np.minimum.at(y0, lab, ys)
-    np.maximum.at(y1, lab, ys)
-    # sums of integers below 2**53: exact in float64, as OpenCV's integer sums
-    sx = np.bincount(lab, xs, minlength=n)
-    sy = np.bincount(lab, ys, minlength=n)
-    stats = np.stack([x0, y0, x1 - x0 + 1, y1 - y0 + 1, area], axis=1).astype(np.int32)
-    if area[0]:
-        bg = m8 == 0
-        rows, cols = np.flatnonzero(bg.any(axis=1)), np.flatnonzero(bg.any(axis=0))
-        stats[0, :4] = cols[0], rows[0], cols[-1] - cols[0] + 1, rows[-1] - rows[0] + 1
-        sx[0] = h * (w * (w - 1) // 2) - sx[1:].sum()
-        sy[0] = w * (h * (h - 1) // 2) - sy[1:].sum()
-    else:
-        stats[0] = _EMPTY_STATS
-    with np.errstate(invalid="ignore"):
-        centroids = np.stack([sx / area, sy / area], axis=1)
-    return n, labels, stats, centroids
-
-
-#: OpenCV's statistics of a label without pixels (the background of an all-foreground mask)
-_EMPTY_STATS = cv2.connectedComponentsWithStats(np.ones((1, 1), np.uint8), connectivity=8)[2][0]
-
-
 def clean_mask(
     mask: np.ndarray,
     open_px: int = 3,
@@ -430,7 +371,7 @@ class PersonTracker:
     def _label_regions(self, m: np.ndarray) -> _Regions:
         """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
-        n, comp, stats, cents = components_with_stats(m)
+        n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
         regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
         tracks = self._tracks
         counts = np.zeros((len(tracks), n), np.int64)
