@@ -7,7 +7,8 @@ bearing -60 to 60 degrees about the pair, so the two people stand at different d
 its first ``--seconds`` (3 s) through the silhouette node's extractor as the lockstep graph runs it
 (background fitted on the first 20 frames with the people in view, then every frame from the first),
 the head and foot points of the upright people (of the standing bodies in a region that is not one
-person too, from the frame's label image) and the lines of the scene, one estimate at the end:
+person too, from the frame's label image; on a frame with neither, of the people detector's boxes)
+and the lines of the scene, one estimate at the end:
 
 - ``calib_height_err`` (relative), ``calib_tilt_err_deg``, ``calib_focal_err`` (relative): medians
   over the seeds of the absolute errors; a seed without an estimate counts as an infinite error;
@@ -58,8 +59,9 @@ from counterpart.body.camera import Camera, default_camera  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
 from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
 from counterpart.nodes.calibration.node import Calibration  # noqa: E402
-from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames  # noqa: E402
+from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people  # noqa: E402
 from counterpart.nodes.calibration.smooth import credible  # noqa: E402
+from counterpart.nodes.silhouette.people import PeopleDetector  # noqa: E402
 from counterpart.sim.camera import RandomCameraConfig  # noqa: E402
 
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -125,10 +127,11 @@ def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
     frames = [stream.render(i)[0] for i in range(stream.n_frames)]
     extractor = SilhouetteExtractor()
     extractor.fit_background(frames[:TRAIN_FRAMES], robust=True)
-    obs, scene = PeopleObservations(*stream.size), SceneFrames()
+    obs, scene, detector = PeopleObservations(*stream.size), SceneFrames(), PeopleDetector()
     for i, frame in enumerate(frames):
         result = extractor.process(frame)
-        obs.add(result.people, i / stream.fps, result.labels)
+        if obs.wants_detections(obs.add(result.people, i / stream.fps, result.labels)):
+            obs.add_detections(*detect_people(detector, frame), i / stream.fps)
         if scene.wants(i):
             scene.add(frame, result.people)
     est = obs.estimate(lines=scene.families())
