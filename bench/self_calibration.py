@@ -37,7 +37,7 @@ is not at the crop's centre, which the estimate assumes. Per clip, ``counterpart
 estimate; across the clips, the median and interquartile range of height, tilt and focal length
 (the spread across clips of one scene), and how many the node would publish.
 
-Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--clips 12|all|0]``; last stdout
+Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]``; last stdout
 line: one JSON object. ``bench/real_video.py`` reports the simulator figures under the same names.
 """
 
@@ -47,6 +47,8 @@ import argparse
 import json
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -179,21 +181,26 @@ def _finite(v: Any) -> Any:
     return None if isinstance(v, float) and not np.isfinite(v) else v
 
 
-def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000) -> dict[str, Any]:
-    """The simulator part (see the module docstring): the figures and the per-seed rows."""
+def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, jobs: int = 1) -> dict[str, Any]:
+    """The simulator part (see the module docstring): the figures and the per-seed rows (seeds in
+    ``jobs`` processes).
+    """
     rows = []
-    for seed in range(first_seed, first_seed + seeds):
-        t0 = time.monotonic()
-        r = sim_seed(seed, seconds)
-        rows.append(r)
-        e = r["errors"]
-        print(
-            f"[calib] seed {seed} {r['scenario']}: height {e['height']:.3f} tilt {e['tilt']:.2f} deg focal "
-            f"{e['focal']:.3f} (credible {r['credible']}, {r['observations']} obs, "
-            f"{time.monotonic() - t0:.1f} s)",
-            file=sys.stderr,
-            flush=True,
+    t0 = time.monotonic()
+    with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
+        done = (pool.map if pool is not None else map)(
+            sim_seed, range(first_seed, first_seed + seeds), [seconds] * seeds
         )
+        for r in done:
+            rows.append(r)
+            e = r["errors"]
+            print(
+                f"[calib] seed {r['seed']} {r['scenario']}: height {e['height']:.3f} tilt {e['tilt']:.2f} deg focal "
+                f"{e['focal']:.3f} (credible {r['credible']}, {r['observations']} obs, "
+                f"{time.monotonic() - t0:.1f} s in all)",
+                file=sys.stderr,
+                flush=True,
+            )
     out = {
         **summary([r["errors"] for r in rows], "calib_"),
         "calib_within_height_tilt": round(
@@ -285,9 +292,10 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=50, help="simulated scenes (default 50)")
     ap.add_argument("--first-seed", type=int, default=1000, help="first seed (0-49 were used for tuning)")
     ap.add_argument("--seconds", type=float, default=3.0, help="seconds of each scene used (default 3)")
+    ap.add_argument("--jobs", type=int, default=1, help="processes for the simulated scenes (default 1)")
     ap.add_argument("--clips", default="12", help="real clips: 'all', how many spread over set 1, or 0 (none)")
     args = ap.parse_args()
-    out = sim_figures(args.seeds, args.seconds, args.first_seed)
+    out = sim_figures(args.seeds, args.seconds, args.first_seed, args.jobs)
     from real_video import clip_list  # the same choice of clips as the demo bench
 
     clips = clip_list(args.clips) if args.clips != "0" and CLIPS.is_dir() else []
