@@ -131,3 +131,28 @@ def test_the_detector_sees_people_a_fifth_of_the_frame_tall(rows: int) -> None:
     frame = np.full((rows, rows * 4 // 3, 3), 128, np.uint8)
     boxes, scores = detect_people(PeopleDetector(), frame)
     assert boxes.shape == (0, 4) and scores.shape == (0,)
+
+
+@pytest.mark.parametrize("detect_frames", [0, 4])
+def test_the_node_sees_people_absorbed_into_the_background_through_the_detector(detect_frames: int) -> None:
+    # the calibration node in-process (its published messages collected instead of sent): frames of
+    # the tuning seed 47 conversation with silhouettes holding no person, as the background model
+    # leaves them there; the detector runs on ``detect_frames`` frames at most
+    from counterpart.messages import Frame, Silhouettes
+    from counterpart.nodes.calibration.node import Calibration
+    from counterpart.sim.stream import open_stream
+
+    stream = open_stream("conversation", seed=47, camera="random", frames=6)
+    node = Calibration({"name": "calibration", "params": {"estimate": True, "detect_frames": detect_frames}})
+    published: list[tuple[str, object]] = []
+    node.publish = lambda port, msg: published.append((port, msg))  # type: ignore[method-assign]
+    node.setup()
+    for i in range(6):
+        image = stream.render(i)[0]
+        node.on_frame(Frame(stamp=i, seq=i, image=image, fps=stream.fps))
+        node.on_silhouettes(Silhouettes(stamp=i, seq=i, people=[], width=W, height=H))
+    assert [p for p, _ in published] == ["camera_info"]  # the default camera, once
+    seen = node.figures.get("people_observed", 0)
+    assert node.observations is not None and node.observations.detections_run == detect_frames
+    assert (seen >= 2 * detect_frames - 1) if detect_frames else seen == 0, seen
+    assert len(node.images) <= 1  # frames are not kept once the detector's budget is spent
