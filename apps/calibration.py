@@ -2,8 +2,8 @@
 
 The same algorithms as the graph ``camera -> silhouette -> calibration``: the silhouette node's
 extractor (``counterpart.nodes.silhouette.pipeline.iter_video``: background fitted on the first frames, people
-with ids and outlines), the head and foot points of the upright people
-(``counterpart.nodes.calibration.observe``) and the estimate from all of them at once
+with ids and outlines), the head and foot points of the upright people (of the people detector's
+boxes on a frame without any: ``counterpart.nodes.calibration.observe``) and the estimate from all of them at once
 (``counterpart.nodes.calibration.estimate``), without the bus.
 """
 
@@ -15,7 +15,8 @@ from typing import Any
 
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate
-from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames
+from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people
+from counterpart.nodes.silhouette.people import PeopleDetector
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]
@@ -69,13 +70,15 @@ def calibrate_video(
     extractor = SilhouetteExtractor(**silhouette_params)
     obs: PeopleObservations | None = None
     scene = SceneFrames()
+    detector = PeopleDetector()
     n = 0
     shape = (0, 0)
     for frame, result in iter_video(path, extractor, max_frames, train_frames):
         if obs is None:
             shape = frame.shape[:2]
             obs = PeopleObservations(frame.shape[1], frame.shape[0], max_observations=4000)
-        obs.add(result.people, n / (fps or 25.0), result.labels)
+        if obs.wants_detections(obs.add(result.people, n / (fps or 25.0), result.labels)):
+            obs.add_detections(*detect_people(detector, frame), n / (fps or 25.0))
         if scene.wants(n):
             scene.add(frame, result.people)
         n += 1

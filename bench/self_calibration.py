@@ -7,7 +7,8 @@ bearing -60 to 60 degrees about the pair, so the two people stand at different d
 its first ``--seconds`` (3 s) through the silhouette node's extractor as the lockstep graph runs it
 (background fitted on the first 20 frames with the people in view, then every frame from the first),
 the head and foot points of the upright people (of the standing bodies in a region that is not one
-person too, from the frame's label image) and the lines of the scene, one estimate at the end:
+person too, from the frame's label image; on a frame with neither, of the people detector's boxes)
+and the lines of the scene, one estimate at the end:
 
 - ``calib_height_err`` (relative), ``calib_tilt_err_deg``, ``calib_focal_err`` (relative): medians
   over the seeds of the absolute errors; a seed without an estimate counts as an infinite error;
@@ -36,7 +37,7 @@ is not at the crop's centre, which the estimate assumes. Per clip, ``counterpart
 estimate; across the clips, the median and interquartile range of height, tilt and focal length
 (the spread across clips of one scene), and how many the node would publish.
 
-Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--clips 12|all|0]``; last stdout
+Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]``; last stdout
 line: one JSON object. ``bench/real_video.py`` reports the simulator figures under the same names.
 """
 
@@ -46,6 +47,8 @@ import argparse
 import json
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -58,8 +61,9 @@ from counterpart.body.camera import Camera, default_camera  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
 from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
 from counterpart.nodes.calibration.node import Calibration  # noqa: E402
-from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames  # noqa: E402
+from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people  # noqa: E402
 from counterpart.nodes.calibration.smooth import credible  # noqa: E402
+from counterpart.nodes.silhouette.people import PeopleDetector  # noqa: E402
 from counterpart.sim.camera import RandomCameraConfig  # noqa: E402
 
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -125,10 +129,11 @@ def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
     frames = [stream.render(i)[0] for i in range(stream.n_frames)]
     extractor = SilhouetteExtractor()
     extractor.fit_background(frames[:TRAIN_FRAMES], robust=True)
-    obs, scene = PeopleObservations(*stream.size), SceneFrames()
+    obs, scene, detector = PeopleObservations(*stream.size), SceneFrames(), PeopleDetector()
     for i, frame in enumerate(frames):
         result = extractor.process(frame)
-        obs.add(result.people, i / stream.fps, result.labels)
+        if obs.wants_detections(obs.add(result.people, i / stream.fps, result.labels)):
+            obs.add_detections(*detect_people(detector, frame), i / stream.fps)
         if scene.wants(i):
             scene.add(frame, result.people)
     est = obs.estimate(lines=scene.families())
@@ -176,21 +181,26 @@ def _finite(v: Any) -> Any:
     return None if isinstance(v, float) and not np.isfinite(v) else v
 
 
-def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000) -> dict[str, Any]:
-    """The simulator part (see the module docstring): the figures and the per-seed rows."""
+def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, jobs: int = 1) -> dict[str, Any]:
+    """The simulator part (see the module docstring): the figures and the per-seed rows (seeds in
+    ``jobs`` processes).
+    """
     rows = []
-    for seed in range(first_seed, first_seed + seeds):
-        t0 = time.monotonic()
-        r = sim_seed(seed, seconds)
-        rows.append(r)
-        e = r["errors"]
-        print(
-            f"[calib] seed {seed} {r['scenario']}: height {e['height']:.3f} tilt {e['tilt']:.2f} deg focal "
-            f"{e['focal']:.3f} (credible {r['credible']}, {r['observations']} obs, "
-            f"{time.monotonic() - t0:.1f} s)",
-            file=sys.stderr,
-            flush=True,
+    t0 = time.monotonic()
+    with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
+        done = (pool.map if pool is not None else map)(
+            sim_seed, range(first_seed, first_seed + seeds), [seconds] * seeds
         )
+        for r in done:
+            rows.append(r)
+            e = r["errors"]
+            print(
+                f"[calib] seed {r['seed']} {r['scenario']}: height {e['height']:.3f} tilt {e['tilt']:.2f} deg focal "
+                f"{e['focal']:.3f} (credible {r['credible']}, {r['observations']} obs, "
+                f"{time.monotonic() - t0:.1f} s in all)",
+                file=sys.stderr,
+                flush=True,
+            )
     out = {
         **summary([r["errors"] for r in rows], "calib_"),
         "calib_within_height_tilt": round(
@@ -282,9 +292,10 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=50, help="simulated scenes (default 50)")
     ap.add_argument("--first-seed", type=int, default=1000, help="first seed (0-49 were used for tuning)")
     ap.add_argument("--seconds", type=float, default=3.0, help="seconds of each scene used (default 3)")
+    ap.add_argument("--jobs", type=int, default=1, help="processes for the simulated scenes (default 1)")
     ap.add_argument("--clips", default="12", help="real clips: 'all', how many spread over set 1, or 0 (none)")
     args = ap.parse_args()
-    out = sim_figures(args.seeds, args.seconds, args.first_seed)
+    out = sim_figures(args.seeds, args.seconds, args.first_seed, args.jobs)
     from real_video import clip_list  # the same choice of clips as the demo bench
 
     clips = clip_list(args.clips) if args.clips != "0" and CLIPS.is_dir() else []

@@ -92,6 +92,10 @@ class CalibrationConfig:
         (rooms, streets and buildings are mostly laid out square: Coughlan & Yuille's "Manhattan
         world"); with two such families it fixes the focal length even with the camera level, where
         people alone cannot. The robust loss lets a scene that is not square go. None: no such prior.
+    min_person_views : int, default=5
+        A person (track id) seen fewer times is left out: more likely a passing false find (a
+        fragment of a region, a detector's box on the room) than a person, and its stature prior
+        would weigh as much as a real person's in setting the scale.
     """
 
     person_height: float = 1.75
@@ -112,6 +116,7 @@ class CalibrationConfig:
     grid_fov_deg: tuple[float, ...] = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 95.0)
     n_starts: int = 3
     manhattan_std_deg: float | None = 3.0
+    min_person_views: int = 5
 
 
 @dataclass(frozen=True)
@@ -498,6 +503,10 @@ def fit_camera(
     if not len(head) == len(foot) == len(track):
         raise ValueError(f"head, foot and track must have the same length, got {len(head)}, {len(foot)}, {len(track)}")
     ok = np.isfinite(head).all(1) & np.isfinite(foot).all(1) & (foot[:, 1] - head[:, 1] > 2)
+    # a person seen a few times only is more likely a passing false find (a fragment, a detector's
+    # box on the room) than a person, and its stature prior would weigh as much as a real one's
+    ids, count = np.unique(track[ok], return_counts=True)
+    ok &= np.isin(track, ids[count >= config.min_person_views])
     head, foot, track = head[ok], foot[ok], track[ok]
     time_s = (np.arange(len(ok)) / 25.0 if time_s is None else np.asarray(time_s, np.float64).reshape(-1))[ok]
     if len(head) < config.min_observations:

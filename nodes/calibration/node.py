@@ -8,7 +8,9 @@ at the frames' size (``counterpart.body.camera.camera_for_size``).
 With ``estimate: true`` and no file (the launch files set it) the node also takes the silhouette
 node's people and estimates the camera from them and from the straight lines of the scene
 (``counterpart.nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
-upright people against a prior on human height). Until an estimate is credible (people seen over
+upright people against a prior on human height; on a frame where the silhouettes hold no upright
+person, as when people standing still are absorbed into the background, from the people
+detector's boxes, on ``detect_frames`` frames at most). Until an estimate is credible (people seen over
 ``min_seconds``; uncertainties under the ``max_*_std`` bounds; the horizon seen, by people at
 different depths or by scene lines converging on it) the default camera stays; then the published
 camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
@@ -31,9 +33,10 @@ import numpy as np
 from counterpart.body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import CameraInfo, Frame, Silhouettes
+from counterpart.nodes.silhouette.people import PeopleDetector
 
 from .estimate import CameraEstimate
-from .observe import PeopleObservations, SceneFrames
+from .observe import PeopleObservations, SceneFrames, detect_people
 from .smooth import CameraSmoother, credible
 
 
@@ -107,6 +110,14 @@ class Calibration(Node):
         "min_horizon_segments": Param(
             int, 12, "estimate: ... this many scene segments converging on the horizon", min=0
         ),
+        "detect_frames": Param(
+            int,
+            60,
+            "estimate: on a frame whose silhouettes hold no upright person (people absorbed into the "
+            "background), the people detector's boxes give the heads and feet, on this many frames "
+            "at most (about 0.15 s of one core each); 0: never",
+            min=0,
+        ),
     }
 
     @classmethod
@@ -137,8 +148,9 @@ class Calibration(Node):
         self.n_sil = 0
         self.fps = 0.0  # the frames' rate (their fps field): the people's times are the stream's
         self.scene = SceneFrames()
-        #: frames kept for the scene's lines until their people come (seq -> image)
+        #: frames kept for the scene's lines and the people detector until their people come (seq -> image)
         self.images: dict[int, np.ndarray] = {}
+        self.detector = PeopleDetector() if self.p["estimate"] and self.p["detect_frames"] else None
 
     def on_frame(self, msg: Frame) -> None:
         """Publish the camera when the frames change size; keep the frames the scene's lines need.
@@ -153,7 +165,10 @@ class Calibration(Node):
         size = (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
         if size != self.size and min(size) > 0:
             self._new_size(size, msg.stamp, msg.seq)
-        if self.p["estimate"] and not self.p["file"] and self.scene.wants(msg.seq):
+        detecting = self.detector is not None and (
+            self.observations is None or self.observations.detections_run < self.observations.max_detections
+        )
+        if self.p["estimate"] and not self.p["file"] and (self.scene.wants(msg.seq) or detecting):
             self.images[msg.seq] = msg.image
             for old in sorted(self.images)[:-40]:
                 del self.images[old]
@@ -168,7 +183,7 @@ class Calibration(Node):
             self.log.error("parameter 'file': %s", exc)
             raise SystemExit(2) from None
         self.size = size
-        self.observations = PeopleObservations(*size)
+        self.observations = PeopleObservations(*size, max_detections=self.p["detect_frames"])
         self.scene = SceneFrames()
         self.smoother = CameraSmoother(camera, self.p["max_step"])
         source = f"file:{self.p['file']}" if self.p["file"] else "default"
@@ -200,9 +215,14 @@ class Calibration(Node):
         # than it was filmed, and "seconds of people in view" means seconds of the video
         time_s = msg.seq / self.fps if self.fps > 0 else msg.stamp * 1e-9
         labels = msg.labels if np.shape(msg.labels) == (size[1], size[0]) else None
-        self.tally("people_observed", self.observations.add(msg.people, time_s, labels))
+        added = self.observations.add(msg.people, time_s, labels)
         image = self.images.pop(msg.seq, None)
-        if image is not None and image.shape[:2] == (size[1], size[0]):
+        if image is not None and image.shape[:2] != (size[1], size[0]):
+            image = None
+        if image is not None and self.detector is not None and self.observations.wants_detections(added):
+            added += self.observations.add_detections(*detect_people(self.detector, image), time_s)
+        self.tally("people_observed", added)
+        if image is not None and self.scene.wants(msg.seq):
             self.scene.add(image, msg.people)
         self.n_sil += 1
         if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:

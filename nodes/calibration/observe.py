@@ -12,6 +12,15 @@ were split between them by their previous shapes, not by what they are now (on t
 its bodies made more estimates worse than better). The store is bounded: past ``max_observations`` it
 keeps every second observation of the older half, so a long run keeps its whole span at a lower
 density and each estimate costs about the same.
+
+People who barely move (a conversation) are absorbed into the background and give no region that
+can be an upright person. On a frame without any, the people detector's boxes give the head and
+foot points instead (:meth:`PeopleObservations.add_detections`: OpenCV's HOG people detector,
+``counterpart.nodes.silhouette.people.PeopleDetector``, which finds a person from its shape alone,
+moving or not). The detector's window holds a person at a fixed share of its height (Dalal & Triggs
+2005: a 96-pixel person in a 128-pixel window), so the head and the feet lie at fixed shares of its
+box (:data:`HEAD_IN_BOX`, :data:`FOOT_IN_BOX`); its smallest window is 128 pixels tall, so the
+frame is enlarged first (:func:`detect_people`) for people a fifth of a small frame's height.
 """
 
 from __future__ import annotations
@@ -19,11 +28,60 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
+import cv2
 import numpy as np
+
+from counterpart.nodes.silhouette.people import PeopleDetector
 
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
 from .lines import LineFamilies, detect_segments, find_families
 from .upright import upright_parts
+
+#: the head's and the feet's rows in a box of ``PeopleDetector.detect``, as shares of its height
+#: from its top: where the top and the bottom of a person's outline lie in it (measured on the
+#: simulator's tuning seeds 0-49 against the true crown and ankles, outline's excess added; the
+#: detector's training windows put them at 0.13 and 0.92 of such a box)
+HEAD_IN_BOX = 0.108
+FOOT_IN_BOX = 0.92
+#: height over width of a whole box of ``PeopleDetector.detect`` (its 64 x 128 window, of which a box
+#: is 0.8 of the width and 0.95 of the height)
+BOX_ASPECT = 2.375
+#: the least detector score a box needs to count as a person's view
+MIN_DETECTION_SCORE = 0.3
+#: ids of the detector's people start here (negated), apart from the silhouettes' ids and their bodies'
+DETECTION_ID = 1_000_000
+#: a detection continues a person seen this many frames before at most, when its centre is within
+#: this share of the box height of theirs and its height within this share of theirs
+TRACK_GAP_FRAMES = 10
+TRACK_SHARE = 0.3
+
+
+def detect_people(detector: PeopleDetector, frame: np.ndarray, smallest: float = 0.2) -> tuple[np.ndarray, np.ndarray]:
+    """People in a frame by the HOG detector, on the frame enlarged so that a person ``smallest`` of
+    its height tall fills the detector's smallest window.
+
+    Parameters
+    ----------
+    detector : PeopleDetector
+        The detector.
+    frame : ndarray of shape (H, W, 3)
+        uint8 BGR frame.
+    smallest : float, default=0.2
+        Height of the smallest person sought, as a share of the frame's height.
+
+    Returns
+    -------
+    boxes : ndarray of shape (K, 4)
+        float64 (x, y, w, h) of each person's box, pixels of ``frame``.
+    scores : ndarray of shape (K,)
+        Detector scores.
+    """
+    # the detector's window is 128 px for a 96 px person: enlarge the frame so that such a person
+    # comes out at least that tall
+    up = max(1.0, 96.0 / (smallest * frame.shape[0]))
+    big = frame if up == 1.0 else cv2.resize(frame, None, fx=up, fy=up, interpolation=cv2.INTER_LINEAR)
+    boxes, scores = detector.detect(big)
+    return np.asarray(boxes, np.float64).reshape(-1, 4) / up, np.asarray(scores, np.float64).reshape(-1)
 
 
 class PeopleObservations:
@@ -35,12 +93,21 @@ class PeopleObservations:
         Frame size, pixels.
     max_observations : int, default=1500
         Bound of the store (see the module docstring).
+    max_detections : int, default=60
+        Frames the people detector may be run on at most (:meth:`wants_detections`; it costs about
+        0.15 s of one core a frame).
     """
 
-    def __init__(self, width: int, height: int, max_observations: int = 1500) -> None:
+    def __init__(self, width: int, height: int, max_observations: int = 1500, max_detections: int = 60) -> None:
         self.size = (int(width), int(height))
         self.max_observations = int(max_observations)
+        self.max_detections = int(max_detections)
+        self.detections_run = 0
         self._rows: list[tuple[float, float, float, float, int, float]] = []
+        #: the detector's people last seen: (centre x, box height, id, frame number)
+        self._tracks: list[tuple[float, float, int, int]] = []
+        self._next_track = 0
+        self._frame = 0
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -70,6 +137,7 @@ class PeopleObservations:
             How many observations were added.
         """
         n = 0
+        self._frame += 1
         with_labels = labels is not None and np.shape(labels) == (self.size[1], self.size[0])
         for p in people:
             if not usable(p.bbox, *self.size, merged=bool(p.merged)):
@@ -83,10 +151,87 @@ class PeopleObservations:
             h, f = head_foot(p.bbox, ctrl, ref)
             self._rows.append((h[0], h[1], f[0], f[1], int(p.id), float(time_s)))
             n += 1
+        self._bound()
+        return n
+
+    def wants_detections(self, added: int) -> bool:
+        """Whether to run the people detector on the frame last given to :meth:`add`.
+
+        Parameters
+        ----------
+        added : int
+            What :meth:`add` returned for it.
+
+        Returns
+        -------
+        bool
+            True when it gave no observation and the detector has run on fewer than
+            ``max_detections`` frames.
+        """
+        return added == 0 and self.detections_run < self.max_detections
+
+    def add_detections(
+        self, boxes: np.ndarray, scores: np.ndarray, time_s: float, min_score: float = MIN_DETECTION_SCORE
+    ) -> int:
+        """Add the people detector's boxes of the frame last given to :meth:`add` (one where no
+        region could be an upright person).
+
+        A box counts when its score is ``min_score`` or more, it does not touch the left or right
+        border, and its head and foot points, at :data:`HEAD_IN_BOX` and :data:`FOOT_IN_BOX` of its
+        height in its middle column, are inside the frame (a box cut by the top or the bottom of the
+        frame has the height :data:`BOX_ASPECT` times its width: the detector's window reaches past
+        the frame where the person's head or feet are near its border). A box continues the detector's
+        person whose last box (at most ``TRACK_GAP_FRAMES`` frames before) is nearest in x within
+        ``TRACK_SHARE`` of the box height and of a height within that share; others start a new
+        person (ids ``-(DETECTION_ID + k)``).
+
+        Parameters
+        ----------
+        boxes : ndarray of shape (K, 4)
+            (x, y, w, h) pixels (:func:`detect_people`).
+        scores : ndarray of shape (K,)
+            Their scores.
+        time_s : float
+            Time the frame was seen, seconds.
+        min_score : float, default=MIN_DETECTION_SCORE
+            Least score.
+
+        Returns
+        -------
+        int
+            How many observations were added.
+        """
+        self.detections_run += 1
+        W, H = self.size
+        b = np.asarray(boxes, np.float64).reshape(-1, 4)
+        sc = np.asarray(scores, np.float64).reshape(-1)
+        x, y, w, h = b.T
+        # a box cut by the top or the bottom of the frame keeps its width, which gives its height
+        cut = (y <= 0) | (y + h >= H)
+        full = np.where(cut, BOX_ASPECT * w, h)
+        top = np.where(y <= 0, y + h - full, y)
+        ok = (sc >= min_score) & (x > 0) & (x + w < W) & (full >= 20)
+        ok &= (top + HEAD_IN_BOX * full > 0) & (top + FOOT_IN_BOX * full < H - 1)
+        recent = [t for t in self._tracks if self._frame - t[3] <= TRACK_GAP_FRAMES]
+        seen: list[tuple[float, float, int, int]] = []
+        for cx, y0, bh in zip(x[ok] + w[ok] / 2, top[ok], full[ok]):
+            near = [t for t in recent if abs(t[0] - cx) < TRACK_SHARE * bh and abs(t[1] - bh) < TRACK_SHARE * bh]
+            if near:
+                pid = min(near, key=lambda t: abs(t[0] - cx))[2]
+                recent = [t for t in recent if t[2] != pid]
+            else:
+                pid = -(DETECTION_ID + self._next_track)
+                self._next_track += 1
+            seen.append((float(cx), float(bh), pid, self._frame))
+            self._rows.append((cx, y0 + HEAD_IN_BOX * bh, cx, y0 + FOOT_IN_BOX * bh, pid, float(time_s)))
+        self._tracks = seen + recent
+        self._bound()
+        return len(seen)
+
+    def _bound(self) -> None:
         if len(self._rows) > self.max_observations:
             half = len(self._rows) // 2
             self._rows = self._rows[:half:2] + self._rows[half:]
-        return n
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The observations as arrays.
@@ -193,4 +338,4 @@ class SceneFrames:
         return self._families
 
 
-__all__ = ["PeopleObservations", "SceneFrames"]
+__all__ = ["FOOT_IN_BOX", "HEAD_IN_BOX", "PeopleObservations", "SceneFrames", "detect_people"]
