@@ -130,7 +130,10 @@ def reclaim_body_shadow(
         cv2.max(closed, cv2.dilate(fg, np.ones((side, side), np.uint8)), dst=closed)
     cand = np.flatnonzero((sh.ravel() != 0) & (closed.ravel() != 0))
     legs = config.leg_ncc > -1.0 and frame is not None and background is not None
-    if cand.size == 0 and not legs:
+    # the legs' starts: shadow pixels straight below foreground (none: no leg, and the
+    # regions need not be labelled for that step)
+    starts = _starts(fg, sh) if legs else None
+    if cand.size == 0 and starts is None:
         return labels
     h, w = labels.shape
     n, comp = cv2.connectedComponents(cv2.bitwise_or(fg, sh), connectivity=8)
@@ -145,8 +148,8 @@ def reclaim_body_shadow(
     c = comp_flat[cand]
     # a candidate touches or is enclosed by foreground, so its region has some: bottom >= top
     take = [cand[(bottom[c] - cand // w) > config.foot_fraction * (bottom[c] - top[c] + 1)]]
-    if legs:
-        take.append(_legs(fg, sh, comp, top, bottom, frame, background, unseen, config))
+    if starts is not None:
+        take.append(_legs(starts, fg, sh, comp, top, bottom, frame, background, unseen, config))
     idx = np.concatenate(take)
     if idx.size == 0:
         return labels
@@ -155,7 +158,18 @@ def reclaim_body_shadow(
     return out
 
 
+def _starts(fg: np.ndarray, sh: np.ndarray) -> np.ndarray | None:
+    """Shadow pixels straight below foreground, ``cv2.findNonZero``'s (K, 1, 2) x, y; None: none.
+
+    ``fg``, ``sh``: (H, W) 0/255 masks.
+    """
+    start = np.zeros_like(sh)
+    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
+    return cv2.findNonZero(start)
+
+
 def _legs(
+    pts: np.ndarray,
     fg: np.ndarray,
     sh: np.ndarray,
     comp: np.ndarray,
@@ -168,17 +182,12 @@ def _legs(
 ) -> np.ndarray:
     """Flat indices of the shadow pixels that are legs (see the module docstring).
 
-    ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
+    ``pts``: the starts (``_starts``); ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
     ``bottom``: (n,) each region's first and last foreground row. Each region that has a shadow pixel straight below foreground is
     worked on its own box (a few per frame): a leg is a run of shadow down a column from the
     foreground, and a run along a row, so both lie in one region.
     """
     h, w = fg.shape
-    start = np.zeros_like(sh)
-    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
-    pts = cv2.findNonZero(start)
-    if pts is None:
-        return np.empty(0, np.intp)
     r = config.leg_window // 2
     k = (config.leg_window, config.leg_window)
 
