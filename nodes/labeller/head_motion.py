@@ -26,9 +26,10 @@ frames, so the residual keeps nods and shakes but not head turns. The nod channe
 ``nod_median_s`` = 1 s, one period of the band's lowest frequency, so that slow nods pass whole;
 the shake channels a shorter ``shake_median_s`` = 0.44 s, so that a quick glance away and back (a
 single excursion of half a second or more) is followed by the median and not taken for a shake. A
-quicker glance stays in the residual but swings to one side only, where a shake swings both ways:
-a window whose smaller lateral excursion is under ``shake_swing`` times its larger one
-(:func:`two_sided_swing`) has shake score 0. The residual has its window mean
+quicker glance stays in the residual but is no oscillation: it swings against its largest
+excursion on one side only (an overshoot on its way back), where a shake swings back on both sides
+of it or makes a second full swing (:func:`counter_swings`): a window whose swings back are under
+``shake_swing`` on either side and under ``shake_swing_back`` on both has shake score 0. The residual has its window mean
 removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
 energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
@@ -110,10 +111,16 @@ class HeadMotionParams:
         The hysteresis thresholds on the local amplitude as a fraction of the window's largest local
         amplitude (an event is a run of frames >= event_off that reaches event_on). ``event_on`` 0
         labels every frame of a detected window (no localisation).
-    shake_swing : float, default=0.2
-        The least ratio (unitless, in [0, 1]) of a window's smaller to its larger lateral excursion
-        about the head's rest (:func:`two_sided_swing`): a shake swings both ways, a quick glance
-        aside and back only one, so a window under it has shake score 0. 0 turns the test off.
+    shake_swing : float, default=0.15
+        The least swing back against a window's largest lateral excursion on *each* side of it
+        (before and after, unitless fractions of the excursion about the head's rest,
+        :func:`counter_swings`) that makes it an oscillation: a shake swings back on both sides, a
+        glance aside and back (even one that overshoots the rest on its way back) on one side only.
+        0 turns the test off.
+    shake_swing_back : float, default=0.5
+        The least swing back on *one* side that makes the window an oscillation too (a second full
+        swing: a shake of two cycles, or a window that sees only part of a longer shake), unitless,
+        >= ``shake_swing``; a glance that overshoots by less is no shake.
 
     Raises
     ------
@@ -138,7 +145,8 @@ class HeadMotionParams:
     local_s: float = 0.25
     event_on: float = 0.6
     event_off: float = 0.3
-    shake_swing: float = 0.2
+    shake_swing: float = 0.15
+    shake_swing_back: float = 0.5
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -182,8 +190,14 @@ class HeadMotionParams:
             )
         if not 0 <= self.shake_swing <= 1:
             raise ValueError(
-                f"shake_swing must be in [0, 1] (the smaller lateral excursion over the larger; 0: no test), "
-                f"got {self.shake_swing}"
+                f"shake_swing must be in [0, 1] (the least swing back on each side of a shake's largest "
+                f"lateral excursion, a fraction of it; 0: no test), got {self.shake_swing}"
+            )
+        if not self.shake_swing <= self.shake_swing_back <= 2:
+            raise ValueError(
+                f"shake_swing_back must be in [shake_swing, 2] (the least swing back on one side of a "
+                f"shake's largest lateral excursion, a fraction of it), got {self.shake_swing_back} "
+                f"with shake_swing={self.shake_swing}"
             )
         if not self.local_s > 0 or 2 * (self.local_k // 2) + 1 > n:
             raise ValueError(
@@ -306,8 +320,9 @@ class _Spectral:
         nod = nod_b / np.maximum(e_all, self.e_floor[0, int(angles[0])])
         shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
         if p.shake_swing > 0:
-            lateral = win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :]
-            shake = np.where(two_sided_swing(lateral) >= p.shake_swing, shake, 0.0)
+            back = counter_swings(win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :])
+            swings = (back.min(axis=-1) >= p.shake_swing) | (back.max(axis=-1) >= p.shake_swing_back)
+            shake = np.where(swings, shake, 0.0)
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
         local = self.local(win)
@@ -420,17 +435,18 @@ def without_pitch_leak(
     return win, spec
 
 
-def two_sided_swing(res: np.ndarray) -> np.ndarray:
-    """How evenly a window's motion swings to both sides of the head's rest: the smaller of its
-    two excursions over the larger.
+def counter_swings(res: np.ndarray) -> np.ndarray:
+    """How far a window's motion swings back against its largest excursion, before and after it.
 
-    A shake is an oscillation: the face swings out, back past its rest and out again (at least two
-    direction reversals). A quick glance aside and back (out and back in a third of a second, shorter
-    than the shake channels' running median, so its residual keeps it, see :func:`oscillation_residual`)
-    has a nod-band spectrum too, but goes to one side only. The rest is the window's median (the
-    residual of a held head; a glance occupies a few of the window's samples), the excursions
-    ``u = max_n x_n - med`` and ``d = med - min_n x_n``, the ratio ``min(u, d) / max(u, d)``:
-    about 1 for a shake, about 0 for a glance.
+    A shake is an oscillation: its largest swing is flanked by swings the other way, on both sides
+    (at least two direction reversals around it: a Hann-enveloped shake of 1.5 cycles, the
+    shortest, swings about 0.25, -1, 0.25), or followed or preceded by a second full swing (one of
+    2 cycles: 0.15, -0.85, 0.85, -0.15; a window that sees only part of a longer shake: 0.85, -0.85).
+    A glance aside and back swings one way and reverses once; one that overshoots the rest on its
+    way back swings against itself on one side only (after it), by the overshoot's fraction of the
+    glance, and not before it. Excursions are about the head's rest, the window's median: with
+    ``x`` the residual less its median mirrored so that its largest excursion ``x_i = peak`` is
+    positive, ``before = max(0, max_{n < i} -x_n) / peak`` and ``after = max(0, max_{n > i} -x_n) / peak``.
 
     Parameters
     ----------
@@ -439,15 +455,19 @@ def two_sided_swing(res: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    ndarray of shape (...,)
-        The ratio in [0, 1]; 0 for a window without motion.
+    ndarray of shape (..., 2)
+        ``(before, after)``, unitless, >= 0 (at most about 1 for an oscillation); 0 for a window
+        without motion.
     """
-    med = np.median(res, axis=-1)
-    up = res.max(axis=-1) - med
-    down = med - res.min(axis=-1)
-    hi = np.maximum(up, down)
+    x = res - np.median(res, axis=-1, keepdims=True)
+    hi, lo = x.max(axis=-1), -x.min(axis=-1)
+    x = np.where((lo > hi)[..., None], -x, x)  # the largest excursion made positive
+    peak = np.maximum(hi, lo)[..., None]
+    i = np.argmax(x, axis=-1)[..., None]
+    pos = np.arange(x.shape[-1])
+    against = np.stack([np.where(pos < i, -x, 0.0).max(axis=-1), np.where(pos > i, -x, 0.0).max(axis=-1)], axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(hi > 0, np.minimum(up, down) / hi, 0.0)
+        return np.where(peak > 0, against / np.where(peak > 0, peak, 1.0), 0.0)
 
 
 def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

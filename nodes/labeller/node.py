@@ -180,6 +180,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "nod_median_s": ("head_params", "nod_median_s"),
     "shake_median_s": ("head_params", "shake_median_s"),
     "shake_swing": ("head_params", "shake_swing"),
+    "shake_swing_back": ("head_params", "shake_swing_back"),
     "head_threshold": ("head_params", "threshold"),
     "nod_floor_m": ("head_params", "nod_floor_m"),
     "shake_floor_m": ("head_params", "shake_floor_m"),
@@ -287,11 +288,20 @@ class Labeller(Node):
         "shake_median_s": Param(float, 0.44, "the same for the shake channels (s)", min=0.0, max=60.0),
         "shake_swing": Param(
             float,
-            0.2,
-            "least ratio of a window's smaller to larger lateral excursion (unitless; 0: no test): "
-            "a shake swings both ways, a quick glance aside and back one",
+            0.15,
+            "least swing back on each side of a window's largest lateral excursion, a fraction of it "
+            "(unitless; 0: no test): a shake swings back on both sides, a glance aside and back "
+            "(even one that overshoots on its way back) on one",
             min=0.0,
             max=1.0,
+        ),
+        "shake_swing_back": Param(
+            float,
+            0.5,
+            "least swing back on one side that makes a window a shake too (a second full swing; "
+            "unitless fraction of the largest excursion, >= shake_swing)",
+            min=0.0,
+            max=2.0,
         ),
         "band_low_hz": Param(float, 1.0, "lowest frequency of nods and shakes (Hz)", min=0.0),
         "band_high_hz": Param(float, 4.0, "highest frequency of nods and shakes (Hz)", min=0.0),
