@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from counterpart.bus import ParamError
-from counterpart.nodes.labeller.face import find_face_cascade, load_face_cascade
+from counterpart.nodes.labeller.face import PROFILE_CASCADE_NAME, find_face_cascade, load_face_cascade
 from counterpart.nodes.labeller.face_track import FaceTracker, FaceTrackParams
 from counterpart.nodes.labeller.head_motion import HeadMotionParams
 from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
@@ -118,6 +118,27 @@ def test_a_look_away_is_bridged_while_the_flow_follows_the_face() -> None:
         assert len(first) == 1
         same = all(x == first for x in ids[5:])
         assert same == kept, (max_flow_s, ids)
+
+
+@pytest.mark.skipif(find_face_cascade(PROFILE_CASCADE_NAME) is None, reason="no haarcascade_profileface.xml installed")
+def test_a_face_turned_aside_when_the_video_starts_is_found_by_its_profile() -> None:
+    """The head is turned 40 degrees aside for the first 1.6 s (past the frontal cascade's reach,
+    as the face of report seed 24 is) and then turns to the camera. With the profile cascade the
+    face is tracked (confirmed) within 0.8 s; with the frontal cascade alone only once it has
+    turned (after 1.6 s): the nods and talk of that time were UNKNOWN.
+    """
+    fps = 25.0
+    base = gesture_face_clip("still", fps=fps, duration=3.0, seed=5)
+    t = np.arange(base.n_frames) / fps
+    yaw = np.radians(40.0) * np.clip((2.0 - t) / 0.4, 0, 1)
+    clip = FaceClip(base.renderer, fps, yaw, base.pitch, base.mouth, base.offset, base.truth, seed=5)
+    cc = load_face_cascade()
+    first = {}
+    for name, profile in (("frontal", None), ("profile", load_face_cascade(name=PROFILE_CASCADE_NAME))):
+        tr = FaceTracker(FaceTrackParams(fps), cc, profile)
+        seen = [any(x.confirmed for x in tr.update(_gray(clip, i))) for i in range(clip.n_frames)]
+        first[name] = seen.index(True) / fps if any(seen) else np.inf
+    assert first["profile"] <= 0.8 and first["frontal"] >= 1.6, first
 
 
 def test_blinks_running_past_the_clip_end_are_cut() -> None:

@@ -190,6 +190,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "event_off": ("head_params", "event_off"),
     "event_local_s": ("head_params", "local_s"),
     "max_flow_s": ("track_params", "max_flow_s"),
+    "profile_faces": ("track_params", "profile_faces"),
     "min_face_px": ("track_params", "min_face_px"),
     "max_miss_s": ("track_params", "max_miss_s"),
     "anchor_s": ("track_params", "anchor_s"),
@@ -340,6 +341,11 @@ class Labeller(Node):
             "the same while the flow still follows the face's points (a look away) (s)",
             min=0.0,
             max=60.0,
+        ),
+        "profile_faces": Param(
+            bool,
+            True,
+            "look for faces turned aside with OpenCV's profile cascade where the frontal one finds none",
         ),
         "anchor_s": Param(
             float,
