@@ -26,10 +26,11 @@ frames, so the residual keeps nods and shakes but not head turns. The nod channe
 ``nod_median_s`` = 1 s, one period of the band's lowest frequency, so that slow nods pass whole;
 the shake channels a shorter ``shake_median_s`` = 0.44 s, so that a quick glance away and back (a
 single excursion of half a second or more) is followed by the median and not taken for a shake. A
-quicker glance stays in the residual but is no oscillation: it swings against its largest
-excursion on one side only (an overshoot on its way back), where a shake swings back on both sides
-of it or makes a second full swing (:func:`counter_swings`): a window whose swings back are under
-``shake_swing`` on either side and under ``shake_swing_back`` on both has shake score 0. The residual has its window mean
+quicker glance stays in the residual but is no oscillation: a shake swings back against its
+largest excursion, before it and after it, while a glance aside and back swings back only by how
+far it overshoots the rest on its way back (:func:`counter_swings`, on the lateral motion less its
+running median of the nod channels' width, which keeps a glance whole): a window whose swings back
+add up to under ``shake_swing`` of its largest excursion has shake score 0. The residual has its window mean
 removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
 energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
@@ -111,16 +112,11 @@ class HeadMotionParams:
         The hysteresis thresholds on the local amplitude as a fraction of the window's largest local
         amplitude (an event is a run of frames >= event_off that reaches event_on). ``event_on`` 0
         labels every frame of a detected window (no localisation).
-    shake_swing : float, default=0.15
-        The least swing back against a window's largest lateral excursion on *each* side of it
-        (before and after, unitless fractions of the excursion about the head's rest,
-        :func:`counter_swings`) that makes it an oscillation: a shake swings back on both sides, a
-        glance aside and back (even one that overshoots the rest on its way back) on one side only.
-        0 turns the test off.
-    shake_swing_back : float, default=0.5
-        The least swing back on *one* side that makes the window an oscillation too (a second full
-        swing: a shake of two cycles, or a window that sees only part of a longer shake), unitless,
-        >= ``shake_swing``; a glance that overshoots by less is no shake.
+    shake_swing : float, default=0.3
+        The least swing back against a window's largest lateral excursion, before and after it
+        together, as a fraction of that excursion (unitless, in [0, 2]; :func:`counter_swings`):
+        a shake is an oscillation and swings back by about 0.5-1.2, a glance aside and back only
+        by its overshoot of the rest, so a window under it has shake score 0. 0 turns the test off.
 
     Raises
     ------
@@ -145,8 +141,7 @@ class HeadMotionParams:
     local_s: float = 0.25
     event_on: float = 0.6
     event_off: float = 0.3
-    shake_swing: float = 0.15
-    shake_swing_back: float = 0.5
+    shake_swing: float = 0.3
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -188,16 +183,10 @@ class HeadMotionParams:
                 f"event_on and event_off must satisfy 0 <= event_off <= event_on <= 1 (fractions of "
                 f"the window's largest local amplitude; event_on 0: no localisation), got event_on={self.event_on}, event_off={self.event_off}"
             )
-        if not 0 <= self.shake_swing <= 1:
+        if not 0 <= self.shake_swing <= 2:
             raise ValueError(
-                f"shake_swing must be in [0, 1] (the least swing back on each side of a shake's largest "
-                f"lateral excursion, a fraction of it; 0: no test), got {self.shake_swing}"
-            )
-        if not self.shake_swing <= self.shake_swing_back <= 2:
-            raise ValueError(
-                f"shake_swing_back must be in [shake_swing, 2] (the least swing back on one side of a "
-                f"shake's largest lateral excursion, a fraction of it), got {self.shake_swing_back} "
-                f"with shake_swing={self.shake_swing}"
+                f"shake_swing must be in [0, 2] (the least swing back before and after a shake's largest "
+                f"lateral excursion together, a fraction of it; 0: no test), got {self.shake_swing}"
             )
         if not self.local_s > 0 or 2 * (self.local_k // 2) + 1 > n:
             raise ValueError(
@@ -300,6 +289,10 @@ class _Spectral:
         """
         p = self.p
         win, bad = fill_window_start(win)
+        # the swing test sees whole glances: under the shake median (about a glance's length) a
+        # glance keeps only its tip while an overshoot after it stays whole
+        lateral = win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :]
+        swing = oscillation_residual(lateral, p.median_k(p.nod_median_s)) if p.shake_swing > 0 else None
         win = np.concatenate(
             [
                 oscillation_residual(win[..., :2, :], p.median_k(p.nod_median_s)),
@@ -320,9 +313,7 @@ class _Spectral:
         nod = nod_b / np.maximum(e_all, self.e_floor[0, int(angles[0])])
         shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
         if p.shake_swing > 0:
-            back = counter_swings(win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :])
-            swings = (back.min(axis=-1) >= p.shake_swing) | (back.max(axis=-1) >= p.shake_swing_back)
-            shake = np.where(swings, shake, 0.0)
+            shake = np.where(counter_swings(swing).sum(axis=-1) >= p.shake_swing, shake, 0.0)  # type: ignore[arg-type]
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
         local = self.local(win)
@@ -438,26 +429,26 @@ def without_pitch_leak(
 def counter_swings(res: np.ndarray) -> np.ndarray:
     """How far a window's motion swings back against its largest excursion, before and after it.
 
-    A shake is an oscillation: its largest swing is flanked by swings the other way, on both sides
-    (at least two direction reversals around it: a Hann-enveloped shake of 1.5 cycles, the
-    shortest, swings about 0.25, -1, 0.25), or followed or preceded by a second full swing (one of
-    2 cycles: 0.15, -0.85, 0.85, -0.15; a window that sees only part of a longer shake: 0.85, -0.85).
-    A glance aside and back swings one way and reverses once; one that overshoots the rest on its
-    way back swings against itself on one side only (after it), by the overshoot's fraction of the
-    glance, and not before it. Excursions are about the head's rest, the window's median: with
-    ``x`` the residual less its median mirrored so that its largest excursion ``x_i = peak`` is
-    positive, ``before = max(0, max_{n < i} -x_n) / peak`` and ``after = max(0, max_{n > i} -x_n) / peak``.
+    A shake is an oscillation: its largest swing is flanked by swings the other way (a
+    Hann-enveloped shake of 1.5 cycles, the shortest the simulator plants, swings about 0.25, -1,
+    0.25; one of 2 cycles 0.15, -0.85, 0.85, -0.15), so the two add up to about 0.5-1.2 of it. A
+    glance aside and back reverses once; if it overshoots the rest on its way back it swings back
+    by the overshoot's fraction of the glance, after it only. Excursions are about the head's rest,
+    the window's median: with ``x`` the residual less its median, mirrored so that its largest
+    excursion ``x_i = peak`` is positive, ``before = max(0, max_{n < i} -x_n) / peak`` and
+    ``after = max(0, max_{n > i} -x_n) / peak``.
 
     Parameters
     ----------
     res : ndarray of shape (..., N)
-        Oscillation residuals of the lateral motion (any unit).
+        Oscillation residuals of the lateral motion (any unit), long enough a median that a glance
+        is kept whole (a median about as long as the glance keeps only its tip, and so makes an
+        overshoot after it look larger).
 
     Returns
     -------
     ndarray of shape (..., 2)
-        ``(before, after)``, unitless, >= 0 (at most about 1 for an oscillation); 0 for a window
-        without motion.
+        ``(before, after)``, unitless, >= 0; 0 for a window without motion.
     """
     x = res - np.median(res, axis=-1, keepdims=True)
     hi, lo = x.max(axis=-1), -x.min(axis=-1)

@@ -180,7 +180,6 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "nod_median_s": ("head_params", "nod_median_s"),
     "shake_median_s": ("head_params", "shake_median_s"),
     "shake_swing": ("head_params", "shake_swing"),
-    "shake_swing_back": ("head_params", "shake_swing_back"),
     "head_threshold": ("head_params", "threshold"),
     "nod_floor_m": ("head_params", "nod_floor_m"),
     "shake_floor_m": ("head_params", "shake_floor_m"),
@@ -289,18 +288,10 @@ class Labeller(Node):
         "shake_median_s": Param(float, 0.44, "the same for the shake channels (s)", min=0.0, max=60.0),
         "shake_swing": Param(
             float,
-            0.15,
-            "least swing back on each side of a window's largest lateral excursion, a fraction of it "
-            "(unitless; 0: no test): a shake swings back on both sides, a glance aside and back "
-            "(even one that overshoots on its way back) on one",
-            min=0.0,
-            max=1.0,
-        ),
-        "shake_swing_back": Param(
-            float,
-            0.5,
-            "least swing back on one side that makes a window a shake too (a second full swing; "
-            "unitless fraction of the largest excursion, >= shake_swing)",
+            0.3,
+            "least swing back against a window's largest lateral excursion, before and after it "
+            "together, a fraction of it (unitless; 0: no test): a shake swings back, a glance "
+            "aside and back only by its overshoot",
             min=0.0,
             max=2.0,
         ),
