@@ -29,8 +29,9 @@ single excursion of half a second or more) is followed by the median and not tak
 quicker glance stays in the residual but is no oscillation: a shake swings back against its
 largest excursion, before it and after it, while a glance aside and back swings back only by how
 far it overshoots the rest on its way back (:func:`counter_swings`, on the lateral motion less its
-running median of the nod channels' width, which keeps a glance whole): a window whose swings back
-add up to under ``shake_swing`` of its largest excursion has shake score 0. The residual has its window mean
+running median of width ``swing_median_s`` = 0.8 s, twice a quick glance, which keeps the glance
+whole): a window whose swings back add up to under ``shake_swing`` of its largest excursion has
+shake score 0. The residual has its window mean
 removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
 energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
@@ -117,6 +118,12 @@ class HeadMotionParams:
         together, as a fraction of that excursion (unitless, in [0, 2]; :func:`counter_swings`):
         a shake is an oscillation and swings back by about 0.5-1.2, a glance aside and back only
         by its overshoot of the rest, so a window under it has shake score 0. 0 turns the test off.
+    swing_median_s : float, default=0.8
+        Width (s) of the running median removed from the lateral motion before
+        :func:`counter_swings`: at least twice a quick glance (0.37 s), so that the glance is kept
+        whole (under a median about as long as the glance only its tip is left, and an overshoot
+        after it looks larger); shorter than a look-away, whose hold it follows (1 s let the ramps
+        of a look-away into the test).
 
     Raises
     ------
@@ -142,6 +149,7 @@ class HeadMotionParams:
     event_on: float = 0.6
     event_off: float = 0.3
     shake_swing: float = 0.3
+    swing_median_s: float = 0.8
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -193,7 +201,7 @@ class HeadMotionParams:
                 f"local_s must be > 0 s and its width in frames ({self.local_k}) at most the window's ({n}), "
                 f"got local_s={self.local_s} at {self.fps} fps"
             )
-        for name in ("nod_median_s", "shake_median_s"):
+        for name in ("nod_median_s", "shake_median_s", "swing_median_s"):
             v = getattr(self, name)
             if not v >= 0 or self.median_k(v) > n:
                 raise ValueError(
@@ -290,9 +298,9 @@ class _Spectral:
         p = self.p
         win, bad = fill_window_start(win)
         # the swing test sees whole glances: under the shake median (about a glance's length) a
-        # glance keeps only its tip while an overshoot after it stays whole
+        # glance keeps only its tip while an overshoot after it stays whole (swing_median_s)
         lateral = win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :]
-        swing = oscillation_residual(lateral, p.median_k(p.nod_median_s)) if p.shake_swing > 0 else None
+        swing = oscillation_residual(lateral, p.median_k(p.swing_median_s)) if p.shake_swing > 0 else None
         win = np.concatenate(
             [
                 oscillation_residual(win[..., :2, :], p.median_k(p.nod_median_s)),

@@ -180,6 +180,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "nod_median_s": ("head_params", "nod_median_s"),
     "shake_median_s": ("head_params", "shake_median_s"),
     "shake_swing": ("head_params", "shake_swing"),
+    "swing_median_s": ("head_params", "swing_median_s"),
     "head_threshold": ("head_params", "threshold"),
     "nod_floor_m": ("head_params", "nod_floor_m"),
     "shake_floor_m": ("head_params", "shake_floor_m"),
@@ -294,6 +295,14 @@ class Labeller(Node):
             "aside and back only by its overshoot",
             min=0.0,
             max=2.0,
+        ),
+        "swing_median_s": Param(
+            float,
+            0.8,
+            "running median removed from the lateral motion before the shake_swing test (s): at "
+            "least twice a quick glance, so that the glance is kept whole",
+            min=0.0,
+            max=60.0,
         ),
         "band_low_hz": Param(float, 1.0, "lowest frequency of nods and shakes (Hz)", min=0.0),
         "band_high_hz": Param(float, 4.0, "highest frequency of nods and shakes (Hz)", min=0.0),
