@@ -231,8 +231,15 @@ def _detect(
     x0: int = 0,
     y0: int = 0,
     scale_factor: float = 1.1,
+    mirror: bool = False,
 ) -> np.ndarray:
-    """Faces (K, 4) float (x, y, w, h) in full-image px of ``gray`` searched at ``scale``."""
+    """Faces (K, 4) float (x, y, w, h) in full-image px of ``gray`` searched at ``scale``; with
+    ``mirror`` searched in the mirror image (a profile cascade finds faces turned one way only),
+    the boxes mirrored back.
+    """
+    width = gray.shape[1]
+    if mirror:
+        gray = cv2.flip(gray, 1)
     if scale < 1.0:
         gray = cv2.resize(
             gray,
@@ -249,28 +256,11 @@ def _detect(
     if len(f) == 0:
         return np.empty((0, 4))
     f = np.asarray(f, dtype=np.float64) / scale
+    if mirror:
+        f[:, 0] = width - f[:, 0] - f[:, 2]
     f[:, 0] += x0
     f[:, 1] += y0
     return f
-
-
-def _detect_profiles(
-    gray: np.ndarray,
-    cascade: cv2.CascadeClassifier,
-    scale: float,
-    min_px: float,
-    max_px: float | None,
-    min_neighbors: int,
-    x0: int = 0,
-    y0: int = 0,
-) -> np.ndarray:
-    """Profile faces turned either way (K, 4) float (x, y, w, h) in full-image px: the profile
-    cascade (:func:`_detect`) on ``gray`` and on its mirror image, whose boxes are mirrored back.
-    """
-    a = _detect(gray, cascade, scale, min_px, max_px, min_neighbors, x0, y0)
-    b = _detect(cv2.flip(gray, 1), cascade, scale, min_px, max_px, min_neighbors, 0, y0)
-    b[:, 0] = x0 + gray.shape[1] - b[:, 0] - b[:, 2]
-    return np.concatenate([a, b])
 
 
 def outline_shift(prev: np.ndarray, gray: np.ndarray, center: np.ndarray, size: float) -> float | None:
@@ -375,6 +365,12 @@ class FaceTracker:
         tr.points = nxt[ok]
         return np.median(d, axis=0)
 
+    def _profiles(self, gray: np.ndarray, *args: float | None) -> np.ndarray:
+        """Profile faces turned either way: :func:`_detect` (arguments after the cascade) with the
+        profile cascade on ``gray`` and on its mirror image.
+        """
+        return np.concatenate([_detect(gray, self.profile, *args, mirror=m) for m in (False, True)])  # type: ignore[arg-type]
+
     def _around(self, gray: np.ndarray, tr: FaceTrack, profile: bool = False) -> tuple[np.ndarray | None, bool]:
         """The detection nearest the tracked point within ``max_jump`` face widths, or None; and
         whether it is a profile's (looked for, when ``profile``, where no frontal face is found).
@@ -390,7 +386,7 @@ class FaceTracker:
         f = _detect(gray[y0:y1, x0:x1], self.cascade, *args)
         profile = profile and len(f) == 0 and self.profile is not None
         if profile:
-            f = _detect_profiles(gray[y0:y1, x0:x1], self.profile, *args)  # type: ignore[arg-type]
+            f = self._profiles(gray[y0:y1, x0:x1], *args)
         if len(f) == 0:
             return None, False
         c = f[:, :2] + f[:, 2:] / 2
@@ -467,7 +463,7 @@ class FaceTracker:
         args = (min(1.0, HAAR_WINDOW_PX / p.min_face_px), p.min_face_px, None, 5)
         found = _detect(gray, self.cascade, *args)
         if len(found) == 0 and not self.tracks and self.profile is not None:
-            found = _detect_profiles(gray, self.profile, *args)
+            found = self._profiles(gray, *args)
         for f in sorted(found, key=lambda f: -f[2]):
             if len(self.tracks) >= p.max_faces:
                 break
