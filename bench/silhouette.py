@@ -23,7 +23,10 @@ Speed beside MOG2: ``fps_320x240_2cores`` (ours) and ``fps_320x240_2cores_mog2``
 extractor with MOG2 as its backend), whole extractor with splines, two OpenCV threads and our
 models' learning steps in a worker thread (their default, ``threaded``), sim frames; the two
 extractors take turns every ``SPEED_CHUNK`` frames, so a swing of the machine's load falls on
-both; ``fps_ratio_mog2`` is ours over MOG2's.
+both; ``fps_ratio_mog2`` is ours over MOG2's. ``cpu_ms_main_2cores`` / ``cpu_ms_process_2cores``
+(``*_mog2``: MOG2's): ms of CPU per frame of the calling thread and of the whole process in that
+run, from the threads' CPU clocks (load-robust, unlike the fps; the calling thread's CPU is the
+two-core rate's floor when the learning thread has a core of its own).
 ``--speed-only`` runs only the speed figures (run it alone on the machine: they are wall-clock
 medians); ``load_1min`` is the machine's load average when they were taken.
 
@@ -436,7 +439,11 @@ def speed_two_cores(frames: np.ndarray) -> dict[str, float]:
 
     After the training frames the two take turns every ``SPEED_CHUNK`` frames, each on its own
     frames in order, so a change of the machine's load in the middle of the run slows both; fps
-    is one over the median time per frame. ``ratio``: ours over MOG2's.
+    is one over the median time per frame. ``ratio``: ours over MOG2's. ``cpu_main_<name>`` and
+    ``cpu_process_<name>``: ms of CPU per frame of the calling thread (the critical path when the
+    worker thread has a core of its own) and of the whole process (all threads; a learning step
+    still running when a chunk ends counts in the next chunk, of either extractor), from the
+    threads' CPU clocks, which a loaded machine changes far less than the wall clock.
     """
     threads = cv2.getNumThreads()
     cv2.setNumThreads(2)
@@ -446,20 +453,37 @@ def speed_two_cores(frames: np.ndarray) -> dict[str, float]:
             "mog2": SilhouetteExtractor(backend="mog2"),
         }
         times: dict[str, list[float]] = {name: [] for name in exs}
+        cpu = {name: np.zeros(2) for name in exs}  # seconds: calling thread, process
         for ex in exs.values():
             for f in frames[:TRAIN_FRAMES]:
                 ex.process(f)
         for k0 in range(TRAIN_FRAMES, len(frames), SPEED_CHUNK):
             for name, ex in exs.items():
+                c0 = np.array([time.thread_time(), time.process_time()])
                 for f in frames[k0 : k0 + SPEED_CHUNK]:
                     t0 = time.perf_counter()
                     ex.process(f)
                     times[name].append(time.perf_counter() - t0)
+                cpu[name] += np.array([time.thread_time(), time.process_time()]) - c0
         out = {name: round(1.0 / float(np.median(t)), 1) for name, t in times.items()}
         out["ratio"] = round(out["ours"] / out["mog2"], 3)
+        for name, (main, proc) in cpu.items():
+            out[f"cpu_main_{name}"] = round(1e3 * main / len(times[name]), 3)
+            out[f"cpu_process_{name}"] = round(1e3 * proc / len(times[name]), 3)
         return out
     finally:
         cv2.setNumThreads(threads)
+
+
+def _cpu_figures(two: dict[str, float]) -> dict[str, float]:
+    """``speed_two_cores``'s CPU figures under the JSON's names: ``cpu_ms_main_2cores`` and
+    ``cpu_ms_process_2cores`` (ours), ``*_mog2`` (MOG2's).
+    """
+    return {
+        f"cpu_ms_{kind}_2cores{suffix}": two[f"cpu_{kind}_{name}"]
+        for name, suffix in (("ours", ""), ("mog2", "_mog2"))
+        for kind in ("main", "process")
+    }
 
 
 def _time_subtractor(name: str, frames: np.ndarray, truth: Source) -> dict[str, Any]:
@@ -573,6 +597,7 @@ def run(
         report["fps_320x240_2cores"] = two["ours"]
         report["fps_320x240_2cores_mog2"] = two["mog2"]
         report["fps_ratio_mog2"] = two["ratio"]
+        report.update(_cpu_figures(two))
     if real:
         ev_real = real_evaluation()
         if ev_real is not None:
@@ -601,6 +626,7 @@ def speed_report(n_frames: int) -> dict[str, Any]:
         "fps_320x240_2cores": two["ours"],
         "fps_320x240_2cores_mog2": two["mog2"],
         "fps_ratio_mog2": two["ratio"],
+        **_cpu_figures(two),
         "load_1min": [round(load0, 2), round(os.getloadavg()[0], 2)],
     }
 

@@ -17,6 +17,7 @@ import pytest
 
 from counterpart.nodes.silhouette.backends import make_subtractor
 from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW, HorprasertBackground, ShadowConfig
+from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
 from counterpart.sim.flat_scenes import textured_background
@@ -272,3 +273,77 @@ def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
         model = HorprasertBackground(shadows=ShadowConfig(shadow_ncc=ncc)).fit(train)
         assert (model.apply(shot(shadow))[inner] == SHADOW).mean() > 0.9
         assert (model.apply(shot(shirt))[inner] == want_shirt).mean() > 0.7
+
+
+def test_texture_test_beside_the_veto_gives_the_labels_and_models_of_the_veto_after_it() -> None:
+    """The subtractor runs the shadows' texture test (in the worker thread when threaded) beside the
+    samples' veto of the other foreground, then vetoes the pixels the test turned: labels, samples,
+    blink radius and statistics equal those of ``apply`` followed by ``veto`` and ``learn`` (the
+    order the steps depend on), on a textured floor where a dark shirt is turned from shadow.
+    """
+    rng = np.random.default_rng(3)
+    floor = np.repeat(np.repeat(rng.uniform(80, 200, (60, 80)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])
+    shirt_colour = 0.6 * floor[100:180, 100:160].mean(axis=(0, 1))
+
+    def shot(x: int | None = None) -> np.ndarray:
+        f = floor + rng.normal(0.0, 2.0, floor.shape)
+        if x is not None:
+            f[100:180, x : x + 60] = shirt_colour
+            f[100:180, x + 60 : x + 90] *= 0.6  # its cast shadow keeps the floor's pattern
+        return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+    train = [shot() for _ in range(20)]
+    frames = [shot(40 + 6 * k) for k in range(8)]
+    params = {"train_frames": 20, "robust": False, "body_shadow": BodyShadowConfig(span_px=0), "shadow_ncc": 0.4}
+    for threaded in (True, False):
+        sub = make_subtractor("horprasert", threaded=threaded, sample_params={"threaded": threaded}, **params)
+        for f in train:
+            sub.apply(f)
+        ref = pickle.loads(pickle.dumps(sub))
+        turned = 0
+        for f in frames:
+            model, samples = ref.model, ref.samples
+            raw = model.classify(f)
+            stats = model.apply(f)
+            turned += int(((raw == SHADOW) & (stats == FOREGROUND)).sum())
+            labels, fg_idx = samples.veto(f, stats)
+            model.update(f, labels)
+            samples.learn(f, stats, fg_idx)
+            sub.apply(f)
+            assert np.array_equal(sub.labels, labels)
+        assert turned > 1000  # the texture test did turn the shirt
+        assert (sub.labels[110:170, 100:130] == FOREGROUND).mean() > 0.6
+        assert np.array_equal(sub.samples.samples_, ref.samples.samples_)
+        assert np.array_equal(sub.samples.radius_, ref.samples.radius_)
+        assert np.array_equal(sub.model.mean_, ref.model.mean_)
+
+
+def test_the_match_test_reads_the_samples_as_they_are_after_learning() -> None:
+    """ViBe's test with the brightness-relative radius, worked out here from the public samples,
+    blink gain and spread, equals ``explained`` at every pixel after the lights went up and the
+    samples learnt the brighter room (``subsampling=1``: each draw covers the frame, with repeats).
+    """
+    rng = np.random.default_rng(11)
+    sc = SampleConsensus(subsampling=1, random_state=0, threaded=False)
+    sc.fit(np.stack([frame(rng, wind=False) for _ in range(20)]), ROOM)
+
+    def bright(person: tuple[int, int, int, int] | None = None, up: int = 60) -> np.ndarray:
+        return np.clip(frame(rng, person, wind=False).astype(np.int16) + up, 0, 255).astype(np.uint8)
+
+    for _ in range(12):
+        sc.apply(bright(), np.zeros((H, W), np.uint8))
+    # a little brighter still: the distances to the new samples lie near the radius, which
+    # grows with the samples' brightness
+    f = bright((170, 120, 30, 80), up=66)
+    rows = sc.samples_.astype(np.float64)  # (H * W, 3, N)
+    dist = np.abs(rows - f.reshape(-1, 3, 1)).sum(axis=1)
+    norm = rows.sum(axis=1)
+    gain = sc.radius_.reshape(-1, 1).astype(np.float64)
+    base = np.maximum(sc.radius, sc.spread_k * sc.spread_.reshape(-1, 1).astype(np.float64))
+    margin = dist / gain - sc.relative_radius * norm - base
+    want = (margin < 0).sum(axis=1) >= sc.min_matches
+    got = sc.explained(f, np.arange(H * W))
+    # float32 rounding in the model: only pixels within a hair of the radius may differ
+    close = (np.abs(margin) < 1e-3).any(axis=1)
+    assert np.array_equal(got[~close], want[~close])
+    assert want.sum() > 1000 and (~want).sum() > 1000

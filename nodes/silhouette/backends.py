@@ -211,10 +211,12 @@ class HorprasertSubtractor:
             # the same copy goes to apply, whose per-frame terms update reuses (they are keyed
             # by the frame object)
             frame = frame.copy()
-        stats = self._model.apply(frame)
-        labels = stats
-        if self.samples is not None:
-            labels, fg_idx = self.samples.veto(frame, stats)
+        if self.samples is None:
+            stats = self._model.apply(frame)
+            labels = stats
+        else:
+            stats = self._model.classify(frame)
+            labels, fg_idx = self._veto_and_texture_test(frame, stats)
             if self._unseen_fg is not None:
                 # no veto where the room was filled in (see ``HorprasertBackground.unseen_``)
                 cv2.max(labels, cv2.bitwise_and(stats, self._unseen_fg), dst=labels)
@@ -229,6 +231,38 @@ class HorprasertSubtractor:
         labels = reclaim_body_shadow(labels, self.body_shadow)
         self.labels = labels
         return labels == FOREGROUND
+
+    def _veto_and_texture_test(self, frame: np.ndarray, stats: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The statistics' texture test (``HorprasertBackground.shadow_texture_mismatch``) and the
+        samples' veto (``SampleConsensus.veto``) of ``stats``, the frame's classes before the
+        texture test; ``stats`` gets the texture test's FOREGROUND pixels in place.
+
+        The veto of the classes' own foreground does not depend on the texture test, which only
+        turns shadows into foreground: when threaded, the test runs in the worker thread while
+        this thread vetoes, and the few pixels it turns are vetoed after. The match of a pixel
+        does not depend on which other pixels are tested with it, so the labels are those of the
+        veto after the test.
+
+        Returns
+        -------
+        labels : ndarray of shape (H, W), dtype uint8
+            The vetoed labels (a new array).
+        fg_idx : ndarray of shape (K,), dtype int64
+            Ascending flat indices of their FOREGROUND pixels, for ``SampleConsensus.learn``.
+        """
+        if self.threaded:
+            self._deferred.submit(self._model.shadow_texture_mismatch, stats)
+            labels, fg_idx = self.samples.veto(frame, stats)
+            turned = self._deferred.join()
+        else:
+            turned = self._model.shadow_texture_mismatch(stats)
+            labels, fg_idx = self.samples.veto(frame, stats)
+        if turned.size:
+            stats.reshape(-1)[turned] = FOREGROUND
+            ok = self.samples.explained(frame, turned)
+            labels.reshape(-1)[turned] = np.where(ok, BACKGROUND, FOREGROUND)
+            fg_idx = np.sort(np.concatenate([fg_idx, turned[~ok]]))
+        return labels, fg_idx
 
 
 class OpenCVSubtractor:

@@ -671,7 +671,8 @@ class HorprasertBackground:
     def apply(self, frame: np.ndarray) -> np.ndarray:
         """Classify each pixel of a frame (eq. 9).
 
-        Does not change the model; call ``update`` for that.
+        Does not change the model; call ``update`` for that. The same as ``classify`` followed by
+        ``shadow_texture_mismatch`` with its pixels set to FOREGROUND.
 
         Parameters
         ----------
@@ -689,6 +690,23 @@ class HorprasertBackground:
             If the model is not fitted.
         ValueError
             For a frame of another shape or dtype.
+        """
+        labels = self.classify(frame)
+        labels.reshape(-1)[self.shadow_texture_mismatch(labels)] = FOREGROUND
+        return labels
+
+    def classify(self, frame: np.ndarray) -> np.ndarray:
+        """The classes of eq. 9 before the shadows' texture test: ``apply``'s first half.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame of the training size; the errors are ``apply``'s.
+
+        Returns
+        -------
+        ndarray of shape (H, W), dtype uint8
+            Labels as ``apply``'s, the textured shadows not yet checked (``shadow_texture_mismatch``).
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
@@ -710,32 +728,45 @@ class HorprasertBackground:
         )
         cv2.bitwise_or(fg, cv2.compare(alpha, self._alpha_max, cv2.CMP_GT), dst=fg)
         cv2.bitwise_or(labels, cv2.bitwise_and(fg, FOREGROUND), dst=labels)
-        if self.shadows.shadow_ncc > -1.0:
-            self._verify_shadow_texture(planes, labels)
         return labels
 
-    def _verify_shadow_texture(self, planes: list[np.ndarray], labels: np.ndarray) -> None:
-        """Relabel, in place, SHADOW pixels (H, W) that are textured and do not correlate with the
-        background's texture as FOREGROUND (see the module docstring). Local moments over a
-        ``shadow_window`` box of the window's shadow pixels: NCC = (m(IE) - m(I) m(E)) /
+    def shadow_texture_mismatch(self, labels: np.ndarray) -> np.ndarray:
+        """The SHADOW pixels of the last ``classify`` that are textured and do not correlate with the
+        background's texture (``apply``'s second half, see the module docstring). Local moments
+        over a ``shadow_window`` box of the window's shadow pixels: NCC = (m(IE) - m(I) m(E)) /
         sqrt(var(I) var(E)) on grey levels (Jacques, Jung & Musse 2005, eq. 4).
 
         Over the window's shadow pixels only: at a shadow's edge the lit pixels beside it would
-        make the ratio of frame to background a step, and the correlation low.
+        make the ratio of frame to background a step, and the correlation low. Reads ``labels`` and
+        the model and writes neither (the texture table's cache aside), so it may run in another
+        thread while the caller reads them too.
+
+        Parameters
+        ----------
+        labels : ndarray of shape (H, W), dtype uint8
+            The labels ``classify`` returned for the last frame.
+
+        Returns
+        -------
+        ndarray of shape (K,), dtype int64
+            Ascending flat indices of the pixels to relabel FOREGROUND (none when the test is off:
+            ``shadow_ncc`` -1).
         """
+        none = np.zeros(0, np.int64)
+        if self.shadows.shadow_ncc <= -1.0:
+            return none
+        planes = self._last_alpha[2]
         is_sh = labels == SHADOW
         idx = np.flatnonzero(is_sh)  # on bool: several times faster than on the uint8 mask
         if idx.size == 0:
-            return
+            return none
         sh = is_sh.view(np.uint8)
         r = self.shadows.shadow_window // 2
         h, w = sh.shape
         if idx.size * (2 * r + 1) ** 2 > h * w:
             # shadow over much of the frame (a change of light): filtering the frame is cheaper
             # than gathering each pixel's window
-            bad = self._shadow_texture_mismatch(planes, sh)
-            labels[bad] = FOREGROUND
-            return
+            return np.flatnonzero(self._shadow_texture_mismatch(planes, sh))
         # The shadow pixels are a few percent of the frame (and speckle): each one's window is
         # gathered from frames padded as the box filter would (BORDER_REFLECT), the background's
         # texture first, and the frame's only where that is textured (a few hundred pixels).
@@ -760,7 +791,7 @@ class HorprasertBackground:
         textured = ve > floor
         if not textured.any():
             # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
-            return
+            return none
         win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
         # the frame's grey levels at those windows only, read from the unpadded planes at the
         # reflected pixels (the same sums as over the padded frame)
@@ -777,10 +808,10 @@ class HorprasertBackground:
         vi = np.einsum("ij,ij->i", gm, grey) * inv_n - mi * mi
         cov = np.einsum("ij,ij->i", gm, e) * inv_n - mi * me
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        labels.reshape(-1)[idx[textured][ncc < self.shadows.shadow_ncc]] = FOREGROUND
+        return idx[textured][ncc < self.shadows.shadow_ncc]
 
     def _shadow_texture_mismatch(self, planes: list[np.ndarray], sh: np.ndarray) -> np.ndarray:
-        """The texture test of ``_verify_shadow_texture`` with box filters over the frame, for
+        """The texture test of ``shadow_texture_mismatch`` with box filters over the frame, for
         shadow ``sh`` (H, W) 0 / 1 over much of it; returns the pixels to relabel (H, W) bool.
         """
         k = (self.shadows.shadow_window, self.shadows.shadow_window)

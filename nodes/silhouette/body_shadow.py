@@ -79,7 +79,7 @@ def reclaim_body_shadow(labels: np.ndarray, config: BodyShadowConfig) -> np.ndar
     body = cv2.bitwise_or(fg, cv2.compare(labels, SHADOW, cv2.CMP_EQ))
     n, comp = cv2.connectedComponents(body, connectivity=8)
     comp_flat = comp.ravel()
-    fg_idx = np.flatnonzero(fg.ravel())
+    fg_idx = np.flatnonzero(labels.ravel() == FOREGROUND)  # on bool: several times faster than on fg's 0 / 255
     fg_comp = comp_flat[fg_idx]
     fg_row = fg_idx // w
     top = np.full(n, h, np.int64)

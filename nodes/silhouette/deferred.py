@@ -72,11 +72,18 @@ class DeferredStep:
         self.join()
         self._pending = self._worker.submit(fn, *args)
 
-    def join(self) -> None:
-        """Wait for the pending call, if any; re-raise its exception."""
+    def join(self) -> Any:
+        """Wait for the pending call, if any; re-raise its exception.
+
+        Returns
+        -------
+        Any
+            What the pending call returned (None when there was none).
+        """
         if self._pending is not None:
             pending, self._pending = self._pending, None
-            pending.result()
+            return pending.result()
+        return None
 
     def __getstate__(self) -> dict[str, Any]:
         self.join()

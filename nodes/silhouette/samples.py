@@ -146,6 +146,7 @@ class SampleConsensus:
         self.random_state = random_state
         self.threaded = threaded
         self._samples: np.ndarray | None = None
+        self._norms: np.ndarray | None = None  # (H * W, N) int16: |S_k|_1 of each sample, kept by _write
         self._shape: tuple[int, int] = (0, 0)
         self._deferred = DeferredStep("sample-consensus")
 
@@ -250,6 +251,10 @@ class SampleConsensus:
                 s[np.asarray(foreground[j]).reshape(-1)] = flat_bg[np.asarray(foreground[j]).reshape(-1)]
             samples[:, :, k] = s
         self._samples = samples
+        # |S_k|_1, for the match radius: kept here as samples are written (in the learning's
+        # worker thread) rather than summed again for each foreground pixel in the test
+        self._norms = np.add(samples[:, 0], samples[:, 1], dtype=np.int16)
+        self._norms += samples[:, 2]
         # d(x): the mean L1 distance of one background observation from another; consecutive
         # training samples give it (noise and any motion of the background between frames)
         nxt = np.roll(samples, -1, axis=2).astype(np.int16)
@@ -290,8 +295,7 @@ class SampleConsensus:
         n = self.n_samples
         rows = np.take(self._samples.reshape(-1, 3 * n), idx, axis=0)  # (K, 3 N) uint8
         dist = _l1(rows, np.take(frame.reshape(-1, 3), idx, axis=0), n)  # (K, N)
-        total = np.add(rows[:, :n], rows[:, n : 2 * n], dtype=np.int16)  # (K, N) |S_k|_1
-        total += rows[:, 2 * n :]
+        total = np.take(self._norms, idx, axis=0)  # (K, N) |S_k|_1
         # noise grows with brightness (shot noise, compression): R = R0 + rel * |S_k|_1, times
         # the blink gain; a dark pixel keeps a tight radius, where a fixed one would take a dark
         # shirt for a dark doorway. dist < R (1 + v) <=> dist / (1 + v) - rel |S_k| < R0.
@@ -467,6 +471,8 @@ class SampleConsensus:
         n = self.n_samples
         flat = self._samples.reshape(-1)
         at = pixels * (3 * n) + k
+        # a pixel drawn twice takes the last of its colours, in the samples and in the norms alike
+        self._norms.reshape(-1)[pixels * n + k] = np.add(colours[:, 0], colours[:, 1], dtype=np.int16) + colours[:, 2]
         for c in range(3):
             flat[at] = colours[:, c]
             at += n
