@@ -23,8 +23,10 @@ partner is projected with the camera the tracking recorded. Figures:
   nearer projected wrist to the observed person's reference wrist nearest the other person, over
   that person's reference height h: ``handshake_hand_h`` (median over clips) and
   ``handshake_hand_ok`` (share of clips within ``HAND_H`` h);
-- push clips (class 5, observed: the pusher, the person whose reference wrist comes nearest the
-  other's shoulders and hips): the partner's ground distance from the observed person, its largest
+- push clips (class 5, observed: the pusher: the moment is the frame where one person's reference
+  wrist comes nearest the other's shoulders and hips, and the pusher is that person unless the other
+  is the one who walked towards them over the ``PUSH_LEAD`` frames before (``advance``; in 29_5_5
+  the pushee's raised hands lie on the pusher's torso, the pusher walks 1.0 h in, the pushee stands)): the partner's ground distance from the observed person, its largest
   value in the second after that moment minus its value then (metres): ``push_back_m`` (median) and
   ``push_moves_back`` (share of clips where it grows by at least ``BACK_M``). Where the tracker
   lost the observed person on that very frame, the moment is the last frame before it where they
@@ -100,7 +102,9 @@ def contact(kp: np.ndarray, vis: np.ndarray, h: np.ndarray, label: int) -> tuple
     kp (T, 2, 14, 2) pixels, vis (T, 2, 14), h (T, 2) heights (pixels). Handshake: the frame where
     the two people's wrists are nearest (over their mean height); the observed person is 0 (the
     left one). Push: the frame where one person's wrist is nearest the other's torso; that person
-    (the pusher) is observed. None when the reference never shows the joints needed.
+    (the pusher) is observed, unless the other is the one who walked towards them before it
+    (``advance``): a pushee's hands raised against the pusher lie on the pusher's torso too. None
+    when the reference never shows the joints needed.
     """
     seen = (vis >= VIS) & np.isfinite(kp).all(axis=-1)
     # both reference skeletons on one person: there the reference cannot say where the people are
@@ -120,7 +124,33 @@ def contact(kp: np.ndarray, vis: np.ndarray, h: np.ndarray, label: int) -> tuple
         t = int(np.argmin(d))
         if np.isfinite(d[t]) and (best is None or d[t] < best[0]):
             best = (d[t], t, p, WRISTS[int(k[t])])
-    return None if best is None else best[1:]
+    if best is None:
+        return None
+    _, t, p, wrist = best
+    walked = advance(kp, h, t)
+    if walked is not None and walked[1 - p] > walked[p]:
+        # the other walked in: a pushee's hands raised against the pusher lie on the pusher's torso too
+        p = 1 - p
+        wrist = WRISTS[int(np.argmin(np.linalg.norm(kp[t, p, WRISTS] - kp[t, 1 - p, TORSO].mean(0), axis=-1)))]
+    return t, p, wrist
+
+
+#: frames before the moment of a push over which the pusher is the one who walked towards the other
+PUSH_LEAD = 30
+
+
+def advance(kp: np.ndarray, h: np.ndarray, t: int) -> np.ndarray | None:
+    """How far each reference person's mid-hips came towards the other's across the picture over the
+    ``PUSH_LEAD`` frames before frame ``t``, in their heights (2,); None where the hips are not seen then.
+
+    kp (T, 2, 14, 2) pixels, h (T, 2) heights (pixels).
+    """
+    a = max(t - PUSH_LEAD, 0)
+    hips = kp[[a, t]][:, :, TORSO[2:]].mean(axis=2)[..., 0]  # (2 frames, 2 people) x pixels
+    if not np.isfinite(hips).all() or not np.isfinite(h[t]).all():
+        return None
+    towards = np.sign(hips[1, 1] - hips[1, 0])  # +1: person 1 stands right of person 0
+    return np.array([hips[1, 0] - hips[0, 0], hips[0, 1] - hips[1, 1]]) * towards / np.maximum(h[t], 1.0)
 
 
 #: frames the silhouette background is learnt on, as the lockstep graph and bench/real_video.py do
@@ -141,8 +171,8 @@ def observed_reach(
     people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float
 ) -> tuple[Reach | None, tuple[float, float, float, float] | None]:
     """What the observed person's silhouette says of their reach towards the partner
-    (``silhouette_reach``) and its box where it is theirs alone (not merged), as the responder node
-    finds them: of the silhouettes on their side, the one with the tracked person's id, else the
+    (``silhouette_reach``) and its box (a region shared with the other person is split: theirs), as
+    the responder node finds them: of the silhouettes on their side, the one with the tracked person's id, else the
     first; None without one.
     """
     mine = [q for q in people if q.side == side]

@@ -99,31 +99,57 @@ def test_the_partner_stands_beside_the_person_as_a_turned_camera_sees_them(beari
         assert abs(cam.depth(old[hips].mean(0)[None])[0] - depth[1]) > 0.3
 
 
+CAM = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
+
+
+def arm_out_box(arm_m: float) -> tuple[float, float, float, float]:
+    """The silhouette box ``(x, y, w, h)`` in ``CAM`` of ``person(0, 0, 0)`` (facing the camera, 0.5 m
+    wide) with an arm held out ``arm_m`` past their body towards image right, pixels.
+    """
+    uv = CAM.project(person(0.0, 0.0, 0.0))
+    x0, y0, x1, y1 = uv[:, 0].min(), uv[:, 1].min(), uv[:, 0].max(), uv[:, 1].max()
+    arm = CAM.project(np.array([[arm_m, 1.3, 0.0]]))[0, 0] - CAM.project(np.array([[0.0, 1.3, 0.0]]))[0, 0]
+    return (x0, y0, x1 - x0 + arm, y1 - y0)
+
+
+def overlap(P: np.ndarray, box: tuple[float, float, float, float]) -> tuple[float, float]:
+    """Intersection over union of joints P's box in ``CAM`` with ``box``, and the share of P's box inside it."""
+    q = CAM.project(P)
+    a = np.r_[q.min(0), q.max(0)]
+    w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
+    h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
+    own = (a[2] - a[0]) * (a[3] - a[1])
+    return w * h / (own + box[2] * box[3] - w * h), w * h / own
+
+
 def test_the_partner_keeps_clear_of_the_persons_silhouette_in_the_picture() -> None:
     # the model puts the partner 0.5 m beside the person; their silhouette, an arm held out its way,
     # reaches 0.6 m past their body: the partner stands further off, as little as clears it
-    cam = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
     obs, par = person(0.0, 0.0, 0.0), person(0.5, 0.0, 0.0)  # both facing the camera: 0.5 m wide
-    uv = cam.project(obs)
-    x0, y0, x1, y1 = uv[:, 0].min(), uv[:, 1].min(), uv[:, 0].max(), uv[:, 1].max()
-    arm = cam.project(np.array([[0.6, 1.3, 0.0]]))[0, 0] - cam.project(np.array([[0.0, 1.3, 0.0]]))[0, 0]
-    box = (x0, y0, x1 - x0 + arm, y1 - y0)
-
-    def iou(P: np.ndarray) -> float:
-        q = cam.project(P)
-        a = np.r_[q.min(0), q.max(0)]
-        w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
-        h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
-        return w * h / ((a[2] - a[0]) * (a[3] - a[1]) + box[2] * box[3] - w * h)
-
-    assert iou(Stage()(obs, par, 0.04, side=1.0, camera=cam)) > 0.15  # the model's place covers the arm
-    out = Stage()(obs, par, 0.04, side=1.0, camera=cam, box=box)
+    box = arm_out_box(0.6)
+    assert overlap(Stage()(obs, par, 0.04, side=1.0, camera=CAM), box)[0] > 0.15  # the model's place covers the arm
+    out = Stage()(obs, par, 0.04, side=1.0, camera=CAM, box=box)
     gap = np.hypot(*(ground(out) - ground(obs)))
-    assert iou(out) <= 0.15 and 0.5 < gap < 1.2
+    assert overlap(out, box)[0] <= 0.15 and 0.5 < gap < 1.2
     # a box it cannot clear within max_distance_m (a silhouette 2 m wide): never further than the limit
-    box = (x0, y0, x1 - x0 + 2.6 * arm, y1 - y0)
-    out = Stage()(obs, par, 0.04, side=1.0, camera=cam, box=box)
-    assert iou(out) > 0.15 and 0.5 - 1e-9 <= np.hypot(*(ground(out) - ground(obs))) <= 1.2 + 1e-9
+    wide = arm_out_box(1.56)
+    out = Stage()(obs, par, 0.04, side=1.0, camera=CAM, box=wide)
+    assert overlap(out, wide)[0] > 0.15 and 0.5 - 1e-9 <= np.hypot(*(ground(out) - ground(obs))) <= 1.2 + 1e-9
+
+
+def test_the_partner_keeps_most_of_itself_out_of_the_persons_silhouette() -> None:
+    # a box much larger than the partner's (a silhouette with an arm held out 0.6 m) keeps the union
+    # large wherever the partner stands: by intersection over union alone (clear_iou 1: off here) the
+    # partner stays inside it; with clear_inside (0.6) at most 0.6 of its own box lies inside
+    obs, par = person(0.0, 0.0, 0.0), person(0.5, 0.0, 0.0)
+    box = arm_out_box(0.6)
+    loose = Stage(StageConfig(clear_iou=1.0, clear_inside=1.0))(obs, par, 0.04, side=1.0, camera=CAM, box=box)
+    out = Stage(StageConfig(clear_iou=1.0))(obs, par, 0.04, side=1.0, camera=CAM, box=box)
+    gap = float(np.hypot(*(ground(out) - ground(obs))))
+    assert overlap(loose, box)[1] > 0.6 and overlap(out, box)[1] <= 0.6
+    assert np.hypot(*(ground(loose) - ground(obs))) < gap <= 1.2
+    with pytest.raises(ValueError, match="clear_inside"):
+        StageConfig(clear_inside=1.5)
 
 
 def test_the_partner_stays_beside_a_person_whose_estimate_jumps() -> None:
@@ -237,46 +263,101 @@ def test_the_silhouette_says_how_far_and_how_high_a_hand_is_held_out() -> None:
     assert silhouette_reach((100, 50, 90, 200), (125.0, 150.0), 1.0, 1.7).height_m is None
 
 
-def test_a_hand_held_out_is_offered_and_with_the_body_advancing_is_a_push() -> None:
+def test_the_partner_stands_to_take_a_hand_held_out_and_meets_it_where_the_silhouette_says() -> None:
     stage = Stage()
     obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)  # the tracked arms stay down
     stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.2, None, 0.0))
     assert stage.offered_ is None and stage.pushes == 0
     for _ in range(10):  # a hand held out, the body still: offered where the silhouette says
-        stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
+        out = stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
     assert stage.pushes == 0
     np.testing.assert_allclose(stage.offered_, [0.6, 1.0, 2.0], atol=1e-6)
-    # a silhouette reaching further (merged with someone else's): met 0.7 of the way at most
+    # the partner stands to take it: 0.8 of its arm's length (0.505 m) beyond the hand, not where the model put it
+    assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(0.6 + 0.8 * 0.505, abs=1e-3)
+    # a model's partner at 0.7 m: the hand met 0.7 of the way to it at most (0.49 m), the partner steps out
+    near = Stage()
+    for _ in range(10):
+        out = near(obs, person(0.7, 2.0, -np.pi / 2), 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
+    np.testing.assert_allclose(near.offered_, [0.49, 1.0, 2.0], atol=1e-6)
+    assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(0.49 + 0.8 * 0.505, abs=1e-3)
+    # a silhouette reaching further: met 0.7 of the way to the model's partner (0.9 m) at most
     stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.85, 1.0, 0.0))
-    assert stage.pushes == 0
     np.testing.assert_allclose(stage.offered_, [0.63, 1.0, 2.0], atol=1e-6)
-    # touching someone else's silhouette, the outline's tip is where the regions were split: the hand
-    # is offered at hand_frac (0.6) of the person's stature, whatever the tip's height
-    stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 0.5, 0.0, True))
-    assert stage.pushes == 0
-    assert stage.offered_[1] == pytest.approx(0.6 * stature(obs) + obs[[10, 13], 1].min())
 
-    # the same hand with the body advancing at 1 m/s (its silhouette's centre 4 cm a frame): a pusher
-    # walking in, no push until the hand lands (their silhouette touches someone else's)
-    def gap(k: int, touching: bool) -> float:
-        out = stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k, touching))
+
+def test_a_hand_held_out_while_the_silhouettes_touch_is_met_between_the_two_at_a_handshakes_height() -> None:
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
+    ankle = obs[[10, 13], 1].min()
+    # the outline's tip is where the regions were split (1.1 m out, 0.5 m high): no hand there. The hand
+    # is met meet_touch (0.45) of the way to the real second person (1.1 m across the view) ...
+    stage = Stage()
+    stage(obs, par, 0.04, side=1.0, other=person(1.1, 2.0, -np.pi / 2), silhouette=Reach(1.1, 0.5, 0.0, True))
+    assert stage.pushes == 0
+    np.testing.assert_allclose(stage.offered_[[0, 2]], [0.45 * 1.1, 2.0], atol=1e-6)
+    # ... at hand_frac (0.66) of the person's stature, whatever the tip's height
+    assert stage.offered_[1] == pytest.approx(0.66 * stature(obs) + ankle)
+    # ... whose depth the tracker has 1 m off: across the view only
+    deep = Stage()
+    deep(obs, par, 0.04, side=1.0, other=person(1.1, 3.0, -np.pi / 2), silhouette=Reach(1.1, 0.5, 0.0, True))
+    np.testing.assert_allclose(deep.offered_[[0, 2]], [0.45 * 1.1, 2.0], atol=1e-6)
+    # without a second person, 0.45 of the way to the partner the model placed (0.9 m)
+    alone = Stage()
+    alone(obs, par, 0.04, side=1.0, silhouette=Reach(1.1, 0.5, 0.0, True))
+    np.testing.assert_allclose(alone.offered_[[0, 2]], [0.45 * 0.9, 2.0], atol=1e-6)
+
+
+def test_a_pusher_walking_in_with_a_hand_held_high_pushes_when_the_silhouettes_touch() -> None:
+    stage = Stage()
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
+
+    def gap(k: int, touching: bool, height: float = 1.4) -> float:
+        # the body advancing at 1 m/s (its silhouette's centre 4 cm a frame), a hand held out
+        out = stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, height, 0.04 * k, touching))
         return float(np.hypot(*(ground(out) - ground(obs))))
 
-    assert [gap(k, False) for k in range(1, 11)] == pytest.approx([0.9] * 10) and stage.pushes == 0
-    gaps = [gap(k, True) for k in range(11, 21)]
+    # a hand held out at the chest (1.4 m: 0.79 of the stature) walking in: no push until the hand
+    # lands (their silhouette touches someone else's)
+    [gap(k, False) for k in range(1, 11)]
+    assert stage.pushes == 0
+    gaps = [gap(k, True) for k in range(11, 31)]
     assert stage.pushes == 1 and stage.offered_ is None  # no hand to take from someone pushing it
-    # it steps back at recoil_speed_m_s (0.75 m/s: 3 cm a frame), up to the 0.3 m of the recoil
-    steps = np.diff([0.9, *gaps])
-    assert gaps[-1] == pytest.approx(1.2) and steps.max() <= 0.03 + 1e-9 and (steps[:9] > 0).all()
+    # pushed on, it steps back at recoil_speed_m_s (0.75 m/s: 3 cm a frame) up to recoil_max_m (0.4 m),
+    # beyond max_distance_m (1.2 m): a partner at the limit still moves back
+    steps = np.diff(gaps)
+    assert gaps[-1] == pytest.approx(0.9 + 0.4) and steps.max() <= 0.03 + 1e-9 and (steps[:12] > 0).all()
+    down = Reach(0.2, None, 0.04 * 31)
+    later = [
+        float(np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, silhouette=down)) - ground(obs)))) for _ in range(60)
+    ]
+    # the push over (the arm down), it returns
+    assert later[-1] == pytest.approx(0.9, abs=0.01) and max(later) <= 1.3 + 1e-9
+
+
+def test_people_walking_in_to_shake_hands_are_no_push() -> None:
+    # the same advance and touch with the hand held at the waist (1.0 m: 0.56 of the stature): no push
+    stage = Stage()
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
+    for k in range(1, 31):
+        stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k, k > 10))
+    assert stage.pushes == 0
+    # push_height 0: any hand advancing into a touch is a push
+    eager = Stage(StageConfig(push_height=0.0))
+    for k in range(1, 31):
+        eager(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k, k > 10))
+    assert eager.pushes == 1
+
+
+def test_without_push_touch_the_advance_alone_is_a_push_and_a_region_merging_is_none() -> None:
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
     # without push_touch, the advance alone is a push (a graph whose silhouettes never merge)
     eager = Stage(StageConfig(push_touch=False))
     for k in range(10):
-        eager(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k))
+        eager(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.4, 0.04 * k))
     assert eager.pushes == 1
     # a region merging (its centre jumping 0.5 m in a frame) is no advance
     calm = Stage()
     for k in range(10):
-        calm(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.5 * (k % 2)))
+        calm(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.4, 0.5 * (k % 2), True))
     assert calm.pushes == 0
 
 

@@ -10,6 +10,7 @@ every frame, so each of its pixels flips between the two colours.
 from __future__ import annotations
 
 import pickle
+import sys
 import threading
 
 import numpy as np
@@ -18,6 +19,7 @@ import pytest
 from counterpart.nodes.silhouette.backends import make_subtractor
 from counterpart.nodes.silhouette.background import FOREGROUND, SHADOW, HorprasertBackground, ShadowConfig
 from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig
+from counterpart.nodes.silhouette.deferred import SWITCH_INTERVAL_S, DeferredStep
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, person_min_area
 from counterpart.nodes.silhouette.samples import SampleConsensus
 from counterpart.sim.flat_scenes import textured_background
@@ -347,3 +349,20 @@ def test_the_match_test_reads_the_samples_as_they_are_after_learning() -> None:
     close = (np.abs(margin) < 1e-3).any(axis=1)
     assert np.array_equal(got[~close], want[~close])
     assert want.sum() > 1000 and (~want).sum() > 1000
+
+
+def test_a_learning_worker_lowers_the_switch_interval_and_never_raises_it() -> None:
+    """Python's default 5 ms switch interval made the caller's short calls queue behind the
+    worker's Python (see ``deferred``): the first step a worker runs lowers it to
+    ``SWITCH_INTERVAL_S``; an interval already lower is kept, and the step's result comes back.
+    """
+    before = sys.getswitchinterval()
+    try:
+        for start, expected in ((0.005, SWITCH_INTERVAL_S), (SWITCH_INTERVAL_S / 4, SWITCH_INTERVAL_S / 4)):
+            sys.setswitchinterval(start)
+            step = DeferredStep("switch-interval-test")
+            step.submit(sum, [1, 2, 3])
+            assert step.join() == 6
+            assert sys.getswitchinterval() == pytest.approx(expected)
+    finally:
+        sys.setswitchinterval(before)

@@ -289,7 +289,7 @@ class Responder(Node):
         """What the stage knows of the scene besides the observed ``body`` (a TrackedBody) on frame
         ``seq``: the real second person tracked in the same poses, the side to stand on (towards the
         middle of the picture), the observed person's silhouette extent towards the partner and its
-        box (theirs alone, not merged), and the graph's camera.
+        box, and the graph's camera.
         """
         people = list(getattr(self.latest.get("pose"), "people", ()))
         other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
@@ -308,7 +308,8 @@ class Responder(Node):
             "side": side,
             "silhouette": silhouette,
             "camera": self._camera(seq),
-            "box": None if shape is None or shape.merged else tuple(shape.bbox),
+            # a region shared with the other person is split: the box is this person's part (as bench/real_partner.py)
+            "box": None if shape is None else tuple(shape.bbox),
         }
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:

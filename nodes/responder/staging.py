@@ -21,8 +21,9 @@ model's posture and gestures are kept:
    camera and the observed person's silhouette box (``box``; a region shared with another person's
    is split, the split box is theirs), it
    then grows, within ``max_distance_m``, as little as makes the partner's projected box overlap
-   that box by at most ``clear_iou`` (intersection over union): the tracked person's place is off
-   by decimetres on real video, their silhouette is where the picture shows them;
+   that box by at most ``clear_iou`` (intersection over union) with at most ``clear_inside`` of
+   its own box inside it: the tracked person's place is off by decimetres on real video, their
+   silhouette is where the picture shows them;
 2. that offset changes by at most ``max_speed_m_s`` times the time between frames, in polar
    coordinates about the person (the partner walks round them, never through them; it never
    jumps), so the distance holds on every frame. The offset is relative to the observed person:
@@ -33,13 +34,19 @@ model's posture and gestures are kept:
    silhouette (:func:`silhouette_reach`), when it holds a hand out (its leading point ``offer_m``
    from its centre) while its centre advances towards the partner at ``push_speed_m_s`` or more
    (the torso and the arm forward together: tracked arms are the least reliable joints on real
-   video, a silhouette's outline is not) and, with ``push_touch``, the silhouette touches someone
+   video, a silhouette's outline is not), with ``push_touch`` the silhouette touches someone
    else's (:attr:`Reach.touching`: a pusher walks in with the arm out well before the hand lands),
-   its distance grows by ``recoil_m`` at ``recoil_speed_m_s``, held while the push goes on, which
-   then fades with time constant ``recoil_s`` (the step back, then the return; still within the
-   limits and the speed of 1 and 2). A hand held out without a push is offered
-   (:attr:`Stage.offered_`), at the height of the silhouette's tip, or at ``hand_frac`` of the
-   person's stature where the silhouette touches someone else's;
+   and the hand was last seen held high (``push_height`` of the stature: a push lands on the chest,
+   people walking in to shake hands hold the hand lower), its distance grows by ``recoil_m`` at
+   ``recoil_speed_m_s``, on at that speed while the push goes on up to ``recoil_max_m`` (beyond
+   ``max_distance_m`` if need be: a partner at the limit still moves back), and once the push is
+   over it returns with time constant ``recoil_s`` (within the speed of 2).
+   A hand held out without a push is offered (:attr:`Stage.offered_`), at the height of the
+   silhouette's tip, ``meet_frac`` of the way to the partner at most; where the silhouette touches
+   someone else's (its tip is then where the regions were split, not the hand) at ``hand_frac`` of
+   the person's stature, ``meet_touch`` of the way to the one they hold it out to (the real second
+   person across the view, else the partner). With ``step_in`` the partner stands to take it, its
+   arm's length (``STEP_REACH`` of it) beyond the hand;
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
@@ -68,6 +75,11 @@ ACROSS = np.array([1.0, 0.0])
 ARM_BAND = (0.35, 0.85)
 #: a silhouette centre moving faster than this is a region merging or splitting, not a body, m/s
 JUMP_M_S = 3.0
+#: a partner taking an offered hand stands at most this fraction of its arm's length beyond the hand
+#: (its shoulder is to the side and above the hand: the arm's length does not all go across)
+STEP_REACH = 0.8
+#: the share of the way the smoothed held-out hand's height moves to a new sighting per frame
+HEIGHT_RATE = 0.3
 #: crown of the head above the head joint (the head centre at eye level), metres, for a stature
 HEAD_TOP_M = 0.12
 
@@ -88,8 +100,12 @@ class StageConfig:
         A reach of the observed person within this distance of the partner's torso axis is a push, metres.
     recoil_m : float, default=0.3
         The distance a push adds, metres.
-    recoil_s : float, default=0.8
-        Time constant of the recoil's fading, seconds.
+    recoil_max_m : float, default=0.4
+        The most a push that goes on moves the partner back, metres: it steps back on at
+        ``recoil_speed_m_s`` while pushed, beyond ``max_distance_m`` if need be (a partner at the
+        limit still moves back), and returns once the push is over.
+    recoil_s : float, default=0.4
+        Time constant of the recoil's fading once the push is over, seconds.
     beside : bool, default=True
         Stand beside the observed person across the camera's view, at their depth (False: in the
         model's direction).
@@ -112,16 +128,32 @@ class StageConfig:
     push_touch : bool, default=True
         A silhouette push needs the silhouette to touch someone else's (:attr:`Reach.touching`):
         a pusher walks in with the arm out well before the hand lands.
-    hand_frac : float, default=0.6
+    hand_frac : float, default=0.66
         The height of a hand held out while the silhouette touches someone else's, fraction of the
         person's stature above their lowest ankle (where the regions were split, the outline's tip
         says nothing of the hand's height); 0: the outline's tip as elsewhere.
     recoil_speed_m_s : float, default=0.75
         How fast the partner steps back when pushed, metres per second (the return is the fading,
         ``recoil_s``).
+    meet_touch : float, default=0.45
+        Where the silhouette touches someone else's, the offered hand is met this fraction of the way
+        from the observed person to the one they hold it out to (the real second person where one is
+        tracked, else the partner): the outline's tip is then where the regions were split, not the hand.
+    step_in : bool, default=True
+        A partner taking an offered hand stands to take it: ``STEP_REACH`` of its arm's length beyond
+        the hand (stepping in from further, out from nearer), within the distance limits.
+    push_height : float, default=0.7
+        A silhouette push needs the hand held out to have been seen high, at this fraction of the
+        person's stature or above (smoothed, where the silhouette touched no one's: there its
+        outline's tip is the hand): a push lands on the chest, a hand to shake is held lower
+        (people walking in to shake hands are no push); 0: any height.
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
+    clear_inside : float, default=0.6
+        With a camera and the observed person's silhouette box, the most of the partner's own
+        projected box that may lie inside that box (a silhouette with an arm held out, or shared
+        with another person's, is so much larger than the partner that the union stays large).
 
     Raises
     ------
@@ -135,7 +167,8 @@ class StageConfig:
     max_ankle_m: float = 0.3
     contact_m: float = 0.2
     recoil_m: float = 0.3
-    recoil_s: float = 0.8
+    recoil_s: float = 0.4
+    recoil_max_m: float = 0.4
     beside: bool = True
     side_margin_m: float = 0.2
     offer_m: float = 0.45
@@ -143,9 +176,13 @@ class StageConfig:
     push_speed_m_s: float = 0.5
     advance_s: float = 0.15
     clear_iou: float = 0.15
+    clear_inside: float = 0.6
     push_touch: bool = True
-    hand_frac: float = 0.6
+    hand_frac: float = 0.66
     recoil_speed_m_s: float = 0.75
+    meet_touch: float = 0.45
+    step_in: bool = True
+    push_height: float = 0.7
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -160,8 +197,8 @@ class StageConfig:
             )
         if self.recoil_speed_m_s <= 0:
             raise ValueError(f"recoil_speed_m_s={self.recoil_speed_m_s} must be > 0")
-        if not 0.0 <= self.clear_iou <= 1.0:
-            raise ValueError(f"clear_iou={self.clear_iou} must be in [0, 1]")
+        if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
+            raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
             raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
 
@@ -285,6 +322,13 @@ def silhouette_reach(
     return Reach(max(direction * (edge - cx), 0.0) / h * stature_m, height, direction * cx / h * stature_m, touching)
 
 
+def _arm_length(joints: np.ndarray) -> float:
+    """The mean length of a body's arms, shoulder to elbow to wrist, metres; joints (14, 3)."""
+    X = np.asarray(joints, np.float64)
+    s, e, w = (X[[JOINT_INDEX[f"{k}_{j}"] for k in "lr"]] for j in ("shoulder", "elbow", "wrist"))
+    return float(np.mean(np.linalg.norm(e - s, axis=1) + np.linalg.norm(w - e, axis=1)))
+
+
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distances (N,) of points (N, 3) from the segment a-b (3,) each, metres."""
     ab = b - a
@@ -301,13 +345,17 @@ def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarr
     return u * min(max(r, lo), hi)
 
 
-def _box_iou(boxes: np.ndarray, box: np.ndarray) -> np.ndarray:
-    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels."""
+def _box_iou(boxes: np.ndarray, box: np.ndarray, inside: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels; with
+    ``inside`` also the share (K,) of each of ``boxes`` that lies in ``box``.
+    """
     w = np.clip(np.minimum(boxes[:, 2], box[2]) - np.maximum(boxes[:, 0], box[0]), 0.0, None)
     h = np.clip(np.minimum(boxes[:, 3], box[3]) - np.maximum(boxes[:, 1], box[1]), 0.0, None)
     inter = w * h
-    union = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]) + (box[2] - box[0]) * (box[3] - box[1]) - inter
-    return np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+    own = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
+    union = own + (box[2] - box[0]) * (box[3] - box[1]) - inter
+    iou = np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
+    return (iou, np.where(own > 0, inter / np.maximum(own, 1e-12), 0.0)) if inside else iou
 
 
 def clear_length(
@@ -318,8 +366,10 @@ def clear_length(
     camera: Camera,
     box: tuple[float, float, float, float],
     max_iou: float,
+    max_inside: float = 1.0,
 ) -> float:
-    """The first of ``lengths`` at which the partner's projected box overlaps ``box`` by at most ``max_iou``.
+    """The first of ``lengths`` at which the partner's projected box overlaps ``box`` by at most ``max_iou``
+    and has at most ``max_inside`` of itself inside it.
 
     Parameters
     ----------
@@ -337,6 +387,9 @@ def clear_length(
         The observed person's silhouette box ``(x, y, w, h)``, pixels.
     max_iou : float
         Largest overlap allowed (intersection over union).
+    max_inside : float, default=1.0
+        Largest share of the partner's own box allowed inside ``box`` (a box much larger than the
+        partner's, a person with an arm held out, leaves the union large whatever the partner's place).
 
     Returns
     -------
@@ -348,9 +401,11 @@ def clear_length(
     uv = camera.project(X)  # (K, 14, 2)
     boxes = np.concatenate([np.nanmin(uv, axis=1), np.nanmax(uv, axis=1)], axis=1)
     x, y, w, h = (float(v) for v in box)
-    iou = np.nan_to_num(_box_iou(boxes, np.array([x, y, x + w, y + h])), nan=0.0)
-    ok = np.flatnonzero(iou <= max_iou)
-    return float(lengths[ok[0]] if len(ok) else lengths[int(np.argmin(iou))])
+    iou, inside = (np.nan_to_num(v, nan=0.0) for v in _box_iou(boxes, np.array([x, y, x + w, y + h]), inside=True))
+    # the worse of the two overlaps, as a share of its limit
+    score = np.maximum(iou / max(max_iou, 1e-9), inside / max(max_inside, 1e-9))
+    ok = np.flatnonzero(score <= 1.0)
+    return float(lengths[ok[0]] if len(ok) else lengths[int(np.argmin(score))])
 
 
 def _walk(start: np.ndarray, goal: np.ndarray, limit: float) -> np.ndarray:
@@ -404,6 +459,7 @@ class Stage:
         self._recoil = 0.0  # metres added to the partner's distance by a push, fading
         self._recoil_goal = 0.0  # where the recoil is going: recoil_m on a push, fading after
         self._touching = False
+        self._height: float | None = None  # the held-out hand's smoothed height, fraction of the stature
         self._centre: float | None = None  # the silhouette's last centre across the view, metres
         self._advance = 0.0  # its smoothed speed towards the partner, metres per second
         self.pushes = 0  # pushes the partner recoiled from
@@ -425,6 +481,27 @@ class Stage:
         if self._side == 0.0:
             self._side = float(np.sign(side)) or float(np.sign(model @ across))
         return self._side
+
+    def _gap_to(self, o: np.ndarray, other: np.ndarray | None, offset: np.ndarray, u: np.ndarray) -> float:
+        """The distance (metres) from the observed person (``o``, (2,)) to the one they hold a hand out
+        to: the real second person where one is tracked (across the view, ``u`` (2,): a tracked depth
+        is off by far more than a place in the picture), else the partner (``offset``, (2,)); within
+        the partner's distance limits.
+        """
+        gap = float(np.hypot(*offset))
+        if other is not None and np.isfinite(other).all():
+            gap = abs(float((actor_frame(np.asarray(other, np.float64))[0][[0, 2]] - o) @ u))
+        return float(np.clip(gap, self.config.min_distance_m, self.config.max_distance_m))
+
+    def _held_high(self, silhouette: Reach | None, X: np.ndarray, held_out: bool) -> bool:
+        """Whether the hand the observed person holds out, as last seen apart from anyone else's silhouette
+        (there the outline's tip is the hand), is held high (``push_height``): a push lands on the
+        chest, a hand to shake is held at the waist. True while not yet seen so.
+        """
+        if held_out and not silhouette.touching and silhouette.height_m is not None:
+            frac = silhouette.height_m / max(stature(X), 1e-6)
+            self._height = frac if self._height is None else self._height + HEIGHT_RATE * (frac - self._height)
+        return self._height is None or self._height >= self.config.push_height
 
     def _advancing(self, silhouette: Reach | None, dt: float) -> float:
         """The silhouette centre's smoothed speed towards the partner, metres per second."""
@@ -500,48 +577,59 @@ class Stage:
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
         dt = max(float(dt), 0.0)
-        self._recoil_goal *= float(np.exp(-dt / c.recoil_s))
         advance = self._advancing(silhouette, dt)
         held_out = silhouette is not None and silhouette.extent_m >= c.offer_m
-        pushing = held_out and advance >= c.push_speed_m_s and (silhouette.touching or not c.push_touch)
+        high = self._held_high(silhouette, X, held_out)
+        pushing = held_out and advance >= c.push_speed_m_s and (silhouette.touching or not c.push_touch) and high
         touching = self._touching_now(X, P, o, p, pushing)
         if touching and not self._touching:
-            self._recoil_goal += c.recoil_m
+            self._recoil_goal = min(self._recoil_goal + c.recoil_m, c.recoil_max_m)
             self.pushes += 1
-        elif touching:  # pushed on and on, it keeps its distance; the return starts when the push ends
-            self._recoil_goal = max(self._recoil_goal, c.recoil_m)
+        elif touching:  # pushed on and on, it goes on stepping back; the return starts when the push ends
+            self._recoil_goal = min(max(self._recoil_goal, c.recoil_m) + c.recoil_speed_m_s * dt, c.recoil_max_m)
+        else:  # the push over: the return
+            self._recoil_goal *= float(np.exp(-dt / c.recoil_s))
         self._touching = touching
         # the step back at recoil_speed_m_s; the return as the push fades
         self._recoil = min(self._recoil_goal, self._recoil + c.recoil_speed_m_s * dt)
         d = p - o
         r = float(np.hypot(*d))
+        across = ACROSS if camera is None else across_view(camera.R)
         if c.beside:
-            u = ACROSS if camera is None else across_view(camera.R)
+            u = across
             s = self._choose_side(o, other, side, d, u)
             # the model's distance across the view; along the person's facing when nothing gives a side
             if s != 0.0:
                 d = s * max(r, 1e-3) * u
         r = float(np.hypot(*d))
-        if r > 1e-6:  # the step back is from where it stands
+        if r > 1e-6:  # the step back is from where it stands, beyond max_distance_m if need be
             d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
-        offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
+        offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m + min(self._recoil, c.recoil_max_m))
+        out = None  # how far out towards the partner the observed person holds a hand, metres
+        if held_out and not touching:
+            r = float(np.hypot(*offset))
+            out = min(silhouette.extent_m, c.meet_frac * r)  # hands meet between the two
+            if silhouette.touching:  # the outline's tip is where the regions were split, not the hand
+                out = c.meet_touch * self._gap_to(o, other, offset, across)
+            if c.step_in:  # the partner stands to take the hand: within its arm's reach, not on top of it
+                stand = out + STEP_REACH * _arm_length(P)
+                offset = offset * min(max(stand, c.min_distance_m), c.max_distance_m) / max(r, 1e-9)
         r = float(np.hypot(*offset))
-        if camera is not None and box is not None and r > 1e-6:
+        if camera is not None and box is not None and r > 1e-6:  # never inside the person in the picture
             lengths = np.linspace(r, max(r, c.max_distance_m), 8)
-            offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou)
+            offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou, c.clear_inside)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
         self.offered_ = None
-        if held_out and not touching:
+        if out is not None:
             lo, hi = float(X[_HIPS, 1].mean()), float(X[_SHOULDERS, 1].mean())
             u = offset / max(float(np.hypot(*offset)), 1e-9)
             near = X[_WRISTS][int(np.argmax((X[_WRISTS][:, [0, 2]] - o) @ u))]
             y = near[1] if silhouette.height_m is None else silhouette.height_m
-            if silhouette.touching and c.hand_frac > 0:  # the outline's tip is where the regions were split
+            if silhouette.touching and c.hand_frac > 0:
                 y = c.hand_frac * stature(X) + float(X[_ANKLES, 1].min())
             y = float(np.clip(y, lo, hi))
-            out = min(silhouette.extent_m, c.meet_frac * float(np.hypot(*offset)))  # hands meet between the two
             self.offered_ = np.array([o[0] + out * u[0], y, o[1] + out * u[1]])
         shift = np.zeros(3)
         shift[[0, 2]] = o + offset - p

@@ -7,17 +7,29 @@ work on frame t (clean-up, tracking, splines); ``join`` waits for it and re-rais
 The owner joins before each new step and before any read of the state the step writes, so the
 results are those of running the steps in line. Before a fork every pending step is joined,
 and a child process starts its own worker.
+
+Both threads run numpy and OpenCV calls, which release the GIL, between stretches of Python
+that hold it. A thread back from such a call waits for the GIL until the other thread's
+stretch ends, or until the interpreter's switch interval (5 ms by default) forces a hand-over:
+with the default, the caller's short calls queued behind the worker's Python and the two threads
+overlapped poorly. The first worker therefore lowers the process's switch interval to
+``SWITCH_INTERVAL_S`` (never raises it).
 """
 
 from __future__ import annotations
 
 import os
+import sys
 import weakref
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 _LIVE: weakref.WeakSet[DeferredStep] = weakref.WeakSet()
+
+# seconds: a thread back from a short call soon gets the GIL; 1 ms gained less and 0.05 ms no more
+# (bench/silhouette.py's two-core speed figures, ours beside MOG2)
+SWITCH_INTERVAL_S = 2e-4
 
 
 class _Worker:
@@ -32,6 +44,8 @@ class _Worker:
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> Future:
         if self._pool is None or self._pid != os.getpid():
+            if sys.getswitchinterval() > SWITCH_INTERVAL_S:
+                sys.setswitchinterval(SWITCH_INTERVAL_S)
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=self.name)
             self._pid = os.getpid()
         return self._pool.submit(fn, *args)
