@@ -67,8 +67,10 @@ Figures (last stdout line, one JSON object):
                        the two frame rates); ``fps``: frames per second of ``SocialLabeller.update``
                        on the 640x360 frames with face detection and tracking, OpenCV on two
                        threads (rendering excluded), next to ``fps_reference_haar_every_frame``
-                       (the plain cascade over each whole frame, the same frames) and the machine's
-                       load average. ``per_fps`` has every figure per frame rate,
+                       (the plain cascade over each whole frame, the same frames),
+                       ``fps_frontal_only`` (the labeller without the profile cascade,
+                       ``profile_faces`` off: what looking for faces turned aside costs) and the
+                       machine's load average. ``per_fps`` has every figure per frame rate,
                        with nod/shake frame recall and precision, ``still_nodshake_rate`` (the share
                        of frames more than 1 s from any true nod or shake that are labelled nod or
                        shake), ``face_known`` (the share of frames with a tracked face),
@@ -463,11 +465,14 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
     # speed: the labeller alone on pre-rendered 640x360 frames
     clip = conversation_face_clip(seed=seeds[0], fps=FACE_FPS[0], duration=20.0)
     imgs = [clip.render(i) for i in range(min(clip.n_frames, 400))]
-    lab = SocialLabeller(clip.fps)
-    t0 = time.perf_counter()
-    for img in imgs:
-        lab.update({}, image=img)
-    fps_lab = len(imgs) / (time.perf_counter() - t0)
+    fps_of = {}
+    for name, profile in (("profile", True), ("frontal", False)):
+        lab = SocialLabeller(clip.fps, track_params={"profile_faces": profile})
+        t0 = time.perf_counter()
+        for img in imgs:
+            lab.update({}, image=img)
+        fps_of[name] = len(imgs) / (time.perf_counter() - t0)
+    fps_lab = fps_of["profile"]
     # reference, same frames and threads: the plain cascade over the whole frame, every frame
     cascade = load_face_cascade()
     t0 = time.perf_counter()
@@ -527,6 +532,7 @@ def face_part(seeds: list[int], duration_s: float, verdict_seeds: list[int] | No
         **worst,
         "fps": round(fps_lab, 1),
         "fps_reference_haar_every_frame": round(fps_haar, 1),
+        "fps_frontal_only": round(fps_of["frontal"], 1),
         "load_avg_1min": round(os.getloadavg()[0], 2),
         "frame_size": [640, 360],
         "opencv_threads": 2,

@@ -35,6 +35,8 @@ from counterpart.nodes.labeller.signals import UNKNOWN
 Box = tuple[int, int, int, int]  # x, y, w, h in pixels
 
 CASCADE_NAME = "haarcascade_frontalface_default.xml"
+#: OpenCV's profile face cascade (faces turned to one side; the other side by mirroring the image)
+PROFILE_CASCADE_NAME = "haarcascade_profileface.xml"
 #: environment variable naming the cascade file when OpenCV does not ship it
 CASCADE_ENV = "COUNTERPART_FACE_CASCADE"
 _SYSTEM_DIRS = (
@@ -45,12 +47,17 @@ _SYSTEM_DIRS = (
 )
 
 
-def find_face_cascade() -> str | None:
-    """Path of the Viola-Jones frontal face cascade, or None if none is found.
+def find_face_cascade(name: str = CASCADE_NAME) -> str | None:
+    """Path of a Viola-Jones face cascade (by default the frontal one), or None if none is found.
 
-    Looked for, in order: ``$COUNTERPART_FACE_CASCADE``; OpenCV's bundled data
-    (``cv2.data.haarcascades``, shipped by the 4.x wheels; the 5.0 wheels ship no cascade files);
-    the usual system folders (Debian/Ubuntu ``opencv-data``, Homebrew).
+    Looked for, in order: ``$COUNTERPART_FACE_CASCADE`` (the frontal cascade only); OpenCV's
+    bundled data (``cv2.data.haarcascades``, shipped by the 4.x wheels; the 5.0 wheels ship no
+    cascade files); the usual system folders (Debian/Ubuntu ``opencv-data``, Homebrew).
+
+    Parameters
+    ----------
+    name : str, default=CASCADE_NAME
+        The cascade's file name (e.g. :data:`PROFILE_CASCADE_NAME`).
 
     Returns
     -------
@@ -59,22 +66,24 @@ def find_face_cascade() -> str | None:
     """
     cands = []
     env = os.environ.get(CASCADE_ENV)
-    if env:
+    if env and name == CASCADE_NAME:
         cands.append(env)
     data = getattr(getattr(cv2, "data", None), "haarcascades", None)
     if data:
-        cands.append(os.path.join(data, CASCADE_NAME))
-    cands += [os.path.join(d, CASCADE_NAME) for d in _SYSTEM_DIRS]
+        cands.append(os.path.join(data, name))
+    cands += [os.path.join(d, name) for d in _SYSTEM_DIRS]
     return next((c for c in cands if os.path.isfile(c)), None)
 
 
-def load_face_cascade(path: str | None = None) -> cv2.CascadeClassifier:
+def load_face_cascade(path: str | None = None, name: str = CASCADE_NAME) -> cv2.CascadeClassifier:
     """Load a Haar cascade.
 
     Parameters
     ----------
     path : str or None, default=None
-        The cascade file; None: :func:`find_face_cascade`.
+        The cascade file; None: :func:`find_face_cascade` of ``name``.
+    name : str, default=CASCADE_NAME
+        The cascade looked for when ``path`` is None.
 
     Returns
     -------
@@ -87,10 +96,10 @@ def load_face_cascade(path: str | None = None) -> cv2.CascadeClassifier:
         When no file is found (saying where it looked and how to provide the file) or the file is
         not a cascade.
     """
-    path = path or find_face_cascade()
+    path = path or find_face_cascade(name)
     if path is None:
         raise FileNotFoundError(
-            f"no {CASCADE_NAME} found (looked in ${CASCADE_ENV}, cv2.data.haarcascades and "
+            f"no {name} found (looked in ${CASCADE_ENV}, cv2.data.haarcascades and "
             f"{', '.join(_SYSTEM_DIRS)}); install OpenCV's cascade data (e.g. apt install "
             f"opencv-data, or an opencv-contrib-python-headless 4.x wheel) or set {CASCADE_ENV}"
         )

@@ -27,6 +27,16 @@ small nod. So the box is not the head point. Each tracked face instead carries:
   brows stay in view and trackable, and a nod or shake made then is still measured); only a
   longer miss ends the track.
 
+A face turned too far aside for the frontal cascade (a person who looks away when the video
+starts, or while a nod or shake is made) is looked for with OpenCV's profile cascade
+(``haarcascade_profileface.xml``, trained on faces turned one way; the mirrored image gives the
+other) where the frontal one finds nothing and the flow cannot carry the face: in the whole-frame
+search while no face is tracked, and around a new face being confirmed or a tracked face whose
+flow failed (the flow bridges a tracked face's look-away by itself, see ``max_flow_s``, so a
+look-away costs no profile search). A profile detection starts, confirms and keeps a track, but
+its box (the side of the head, not the face's front) pulls neither the face size nor, while the
+flow follows the face, the head point.
+
 While a face is tracked it is searched for only around its last position (one face width
 around it, at the scale of its size: cheap); the whole frame is searched, at the scale that makes
 ``min_face_px`` the cascade's 24 px window, every ``search_every_s`` seconds, whether or not a
@@ -85,6 +95,9 @@ class FaceTrackParams:
     max_flow_s : float, default=2.0
         Longest run of missed detections bridged while the flow follows the face (s; at least
         ``max_miss_s``).
+    profile_faces : bool, default=True
+        Look for faces turned aside with the profile cascade where the frontal one finds none
+        (:class:`FaceTracker`'s ``profile``).
 
     Raises
     ------
@@ -102,6 +115,7 @@ class FaceTrackParams:
     n_points: int = 40
     max_jump: float = 0.5
     max_flow_s: float = 2.0
+    profile_faces: bool = True
 
     def __post_init__(self) -> None:
         checks = {
@@ -167,10 +181,10 @@ class FaceTrack:
     track_id : int
         Unique over the run.
     detected : bool
-        The last search found it (the search runs on every other frame while the flow follows a
+        The last search found it with the frontal cascade (the search runs on every other frame while the flow follows a
         confirmed face, so this is that of the last search).
     missed : int
-        Frames since the last detection.
+        Frames since the last detection (frontal or profile).
     age : int
         Frames since the track started.
     flow_ok : bool
@@ -217,8 +231,15 @@ def _detect(
     x0: int = 0,
     y0: int = 0,
     scale_factor: float = 1.1,
+    mirror: bool = False,
 ) -> np.ndarray:
-    """Faces (K, 4) float (x, y, w, h) in full-image px of ``gray`` searched at ``scale``."""
+    """Faces (K, 4) float (x, y, w, h) in full-image px of ``gray`` searched at ``scale``; with
+    ``mirror`` searched in the mirror image (a profile cascade finds faces turned one way only),
+    the boxes mirrored back.
+    """
+    width = gray.shape[1]
+    if mirror:
+        gray = cv2.flip(gray, 1)
     if scale < 1.0:
         gray = cv2.resize(
             gray,
@@ -235,6 +256,8 @@ def _detect(
     if len(f) == 0:
         return np.empty((0, 4))
     f = np.asarray(f, dtype=np.float64) / scale
+    if mirror:
+        f[:, 0] = width - f[:, 0] - f[:, 2]
     f[:, 0] += x0
     f[:, 1] += y0
     return f
@@ -287,11 +310,16 @@ class FaceTracker:
         Tracking parameters.
     cascade : cv2.CascadeClassifier
         The frontal face detector.
+    profile : cv2.CascadeClassifier or None, default=None
+        The profile face detector, tried where the frontal one finds nothing; None: frontal faces only.
     """
 
-    def __init__(self, params: FaceTrackParams, cascade: cv2.CascadeClassifier) -> None:
+    def __init__(
+        self, params: FaceTrackParams, cascade: cv2.CascadeClassifier, profile: cv2.CascadeClassifier | None = None
+    ) -> None:
         self.params = params
         self.cascade = cascade
+        self.profile = profile
         self.tracks: list[FaceTrack] = []
         self._prev: np.ndarray | None = None
         self._frame = 0
@@ -337,32 +365,34 @@ class FaceTracker:
         tr.points = nxt[ok]
         return np.median(d, axis=0)
 
-    def _around(self, gray: np.ndarray, tr: FaceTrack) -> np.ndarray | None:
-        """The detection nearest the tracked point within ``max_jump`` face widths, or None."""
+    def _profiles(self, gray: np.ndarray, *args: float | None) -> np.ndarray:
+        """Profile faces turned either way: :func:`_detect` (arguments after the cascade) with the
+        profile cascade on ``gray`` and on its mirror image.
+        """
+        return np.concatenate([_detect(gray, self.profile, *args, mirror=m) for m in (False, True)])  # type: ignore[arg-type]
+
+    def _around(self, gray: np.ndarray, tr: FaceTrack, profile: bool = False) -> tuple[np.ndarray | None, bool]:
+        """The detection nearest the tracked point within ``max_jump`` face widths, or None; and
+        whether it is a profile's (looked for, when ``profile``, where no frontal face is found).
+        """
         w = tr.size
         m = 0.75 * w
         x0, y0 = max(0, int(tr.center[0] - w / 2 - m)), max(0, int(tr.center[1] - w / 2 - m))
         x1 = min(gray.shape[1], int(tr.center[0] + w / 2 + m))
         y1 = min(gray.shape[0], int(tr.center[1] + w / 2 + m))
         if x1 - x0 < HAAR_WINDOW_PX or y1 - y0 < HAAR_WINDOW_PX:
-            return None
-        f = _detect(
-            gray[y0:y1, x0:x1],
-            self.cascade,
-            min(1.0, ROI_FACE_PX / w),
-            max(self.params.min_face_px, 0.7 * w),
-            1.45 * w,
-            3,
-            x0,
-            y0,
-            1.1,
-        )
+            return None, False
+        args = (min(1.0, ROI_FACE_PX / w), max(self.params.min_face_px, 0.7 * w), 1.45 * w, 3, x0, y0)
+        f = _detect(gray[y0:y1, x0:x1], self.cascade, *args)
+        profile = profile and len(f) == 0 and self.profile is not None
+        if profile:
+            f = self._profiles(gray[y0:y1, x0:x1], *args)
         if len(f) == 0:
-            return None
+            return None, False
         c = f[:, :2] + f[:, 2:] / 2
         d = np.linalg.norm(c - tr.center, axis=1)
         i = int(np.argmin(d))
-        return f[i] if d[i] <= self.params.max_jump * w else None
+        return (f[i], profile) if d[i] <= self.params.max_jump * w else (None, False)
 
     def update(self, gray: np.ndarray) -> list[FaceTrack]:
         """Track the faces into a frame.
@@ -390,7 +420,9 @@ class FaceTracker:
             # the pull towards the detections is slow, so a confirmed face that the flow follows is
             # searched for on every other frame only (half the cost); a miss counts its frames
             attempt = d is None or tr.age < CONFIRM or tr.missed > 0 or tr.age % 2 == 1
-            det = self._around(gray, tr) if attempt else None
+            # a profile is looked for where the flow cannot carry the face or a new face is being
+            # confirmed; the flow bridges a look-away of a tracked face by itself (max_flow_s)
+            det, profile = self._around(gray, tr, d is None or tr.age < CONFIRM) if attempt else (None, False)
             tr.age += 1
             if not attempt:
                 pass
@@ -401,6 +433,12 @@ class FaceTracker:
                 # positives on a textured background rarely are
                 if tr.missed > (p.max_miss if d is None else p.max_flow_miss) or tr.age <= CONFIRM:
                     continue
+            elif profile:
+                # the face is there, turned aside: the track lives on; the box is the side of the
+                # head, so it carries the point only where the flow does not
+                tr.detected, tr.missed = False, 0
+                if d is None:
+                    tr.center = tr.center + max(self._a_pos, p.alpha(0.1)) * (det[:2] + det[2:] / 2 - tr.center)
             else:
                 tr.detected, tr.missed = True, 0
                 dc = det[:2] + det[2:] / 2
@@ -422,7 +460,10 @@ class FaceTracker:
     def _search(self, gray: np.ndarray) -> None:
         """Whole-frame search; faces away from every track start new tracks (largest first)."""
         p = self.params
-        found = _detect(gray, self.cascade, min(1.0, HAAR_WINDOW_PX / p.min_face_px), p.min_face_px, None, 5)
+        args = (min(1.0, HAAR_WINDOW_PX / p.min_face_px), p.min_face_px, None, 5)
+        found = _detect(gray, self.cascade, *args)
+        if len(found) == 0 and not self.tracks and self.profile is not None:
+            found = self._profiles(gray, *args)
         for f in sorted(found, key=lambda f: -f[2]):
             if len(self.tracks) >= p.max_faces:
                 break

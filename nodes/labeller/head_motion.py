@@ -26,9 +26,12 @@ frames, so the residual keeps nods and shakes but not head turns. The nod channe
 ``nod_median_s`` = 1 s, one period of the band's lowest frequency, so that slow nods pass whole;
 the shake channels a shorter ``shake_median_s`` = 0.44 s, so that a quick glance away and back (a
 single excursion of half a second or more) is followed by the median and not taken for a shake. A
-quicker glance stays in the residual but swings to one side only, where a shake swings both ways:
-a window whose smaller lateral excursion is under ``shake_swing`` times its larger one
-(:func:`two_sided_swing`) has shake score 0. The residual has its window mean
+quicker glance stays in the residual but is no oscillation: a shake swings back against its
+largest excursion, before it and after it, while a glance aside and back swings back only by how
+far it overshoots the rest on its way back (:func:`counter_swings`, on the lateral motion less its
+running median of width ``swing_median_s`` = 0.8 s, twice a quick glance, which keeps the glance
+whole): a window whose swings back add up to under ``shake_swing`` of its largest excursion has
+shake score 0. The residual has its window mean
 removed, is multiplied by a Hann window ``w`` and transformed with a real FFT. With one-sided
 energies ``P_k`` scaled by Parseval so that ``sum_k P_k = sum_n (w_n x_n)^2``, the scores are::
 
@@ -110,10 +113,17 @@ class HeadMotionParams:
         The hysteresis thresholds on the local amplitude as a fraction of the window's largest local
         amplitude (an event is a run of frames >= event_off that reaches event_on). ``event_on`` 0
         labels every frame of a detected window (no localisation).
-    shake_swing : float, default=0.2
-        The least ratio (unitless, in [0, 1]) of a window's smaller to its larger lateral excursion
-        about the head's rest (:func:`two_sided_swing`): a shake swings both ways, a quick glance
-        aside and back only one, so a window under it has shake score 0. 0 turns the test off.
+    shake_swing : float, default=0.3
+        The least swing back against a window's largest lateral excursion, before and after it
+        together, as a fraction of that excursion (unitless, in [0, 2]; :func:`counter_swings`):
+        a shake is an oscillation and swings back by about 0.5-1.2, a glance aside and back only
+        by its overshoot of the rest, so a window under it has shake score 0. 0 turns the test off.
+    swing_median_s : float, default=0.8
+        Width (s) of the running median removed from the lateral motion before
+        :func:`counter_swings`: at least twice a quick glance (0.37 s), so that the glance is kept
+        whole (under a median about as long as the glance only its tip is left, and an overshoot
+        after it looks larger); shorter than a look-away, whose hold it follows (1 s let the ramps
+        of a look-away into the test).
 
     Raises
     ------
@@ -138,7 +148,8 @@ class HeadMotionParams:
     local_s: float = 0.25
     event_on: float = 0.6
     event_off: float = 0.3
-    shake_swing: float = 0.2
+    shake_swing: float = 0.3
+    swing_median_s: float = 0.8
 
     def __post_init__(self) -> None:
         if not self.fps > 0:
@@ -180,17 +191,17 @@ class HeadMotionParams:
                 f"event_on and event_off must satisfy 0 <= event_off <= event_on <= 1 (fractions of "
                 f"the window's largest local amplitude; event_on 0: no localisation), got event_on={self.event_on}, event_off={self.event_off}"
             )
-        if not 0 <= self.shake_swing <= 1:
+        if not 0 <= self.shake_swing <= 2:
             raise ValueError(
-                f"shake_swing must be in [0, 1] (the smaller lateral excursion over the larger; 0: no test), "
-                f"got {self.shake_swing}"
+                f"shake_swing must be in [0, 2] (the least swing back before and after a shake's largest "
+                f"lateral excursion together, a fraction of it; 0: no test), got {self.shake_swing}"
             )
         if not self.local_s > 0 or 2 * (self.local_k // 2) + 1 > n:
             raise ValueError(
                 f"local_s must be > 0 s and its width in frames ({self.local_k}) at most the window's ({n}), "
                 f"got local_s={self.local_s} at {self.fps} fps"
             )
-        for name in ("nod_median_s", "shake_median_s"):
+        for name in ("nod_median_s", "shake_median_s", "swing_median_s"):
             v = getattr(self, name)
             if not v >= 0 or self.median_k(v) > n:
                 raise ValueError(
@@ -286,6 +297,10 @@ class _Spectral:
         """
         p = self.p
         win, bad = fill_window_start(win)
+        # the swing test sees whole glances: under the shake median (about a glance's length) a
+        # glance keeps only its tip while an overshoot after it stays whole (swing_median_s)
+        lateral = win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :]
+        swing = oscillation_residual(lateral, p.median_k(p.swing_median_s)) if p.shake_swing > 0 else None
         win = np.concatenate(
             [
                 oscillation_residual(win[..., :2, :], p.median_k(p.nod_median_s)),
@@ -306,8 +321,7 @@ class _Spectral:
         nod = nod_b / np.maximum(e_all, self.e_floor[0, int(angles[0])])
         shake = shake_b / np.maximum(e_all, self.e_floor[1, int(angles[1])])
         if p.shake_swing > 0:
-            lateral = win[..., _SHAKE_CHANNELS[0], :] + win[..., _SHAKE_CHANNELS[1], :]
-            shake = np.where(two_sided_swing(lateral) >= p.shake_swing, shake, 0.0)
+            shake = np.where(counter_swings(swing).sum(axis=-1) >= p.shake_swing, shake, 0.0)  # type: ignore[arg-type]
         nod = np.where(bad, np.nan, nod)
         shake = np.where(bad, np.nan, shake)
         local = self.local(win)
@@ -420,34 +434,39 @@ def without_pitch_leak(
     return win, spec
 
 
-def two_sided_swing(res: np.ndarray) -> np.ndarray:
-    """How evenly a window's motion swings to both sides of the head's rest: the smaller of its
-    two excursions over the larger.
+def counter_swings(res: np.ndarray) -> np.ndarray:
+    """How far a window's motion swings back against its largest excursion, before and after it.
 
-    A shake is an oscillation: the face swings out, back past its rest and out again (at least two
-    direction reversals). A quick glance aside and back (out and back in a third of a second, shorter
-    than the shake channels' running median, so its residual keeps it, see :func:`oscillation_residual`)
-    has a nod-band spectrum too, but goes to one side only. The rest is the window's median (the
-    residual of a held head; a glance occupies a few of the window's samples), the excursions
-    ``u = max_n x_n - med`` and ``d = med - min_n x_n``, the ratio ``min(u, d) / max(u, d)``:
-    about 1 for a shake, about 0 for a glance.
+    A shake is an oscillation: its largest swing is flanked by swings the other way (a
+    Hann-enveloped shake of 1.5 cycles, the shortest the simulator plants, swings about 0.25, -1,
+    0.25; one of 2 cycles 0.15, -0.85, 0.85, -0.15), so the two add up to about 0.5-1.2 of it. A
+    glance aside and back reverses once; if it overshoots the rest on its way back it swings back
+    by the overshoot's fraction of the glance, after it only. Excursions are about the head's rest,
+    the window's median: with ``x`` the residual less its median, mirrored so that its largest
+    excursion ``x_i = peak`` is positive, ``before = max(0, max_{n < i} -x_n) / peak`` and
+    ``after = max(0, max_{n > i} -x_n) / peak``.
 
     Parameters
     ----------
     res : ndarray of shape (..., N)
-        Oscillation residuals of the lateral motion (any unit).
+        Oscillation residuals of the lateral motion (any unit), long enough a median that a glance
+        is kept whole (a median about as long as the glance keeps only its tip, and so makes an
+        overshoot after it look larger).
 
     Returns
     -------
-    ndarray of shape (...,)
-        The ratio in [0, 1]; 0 for a window without motion.
+    ndarray of shape (..., 2)
+        ``(before, after)``, unitless, >= 0; 0 for a window without motion.
     """
-    med = np.median(res, axis=-1)
-    up = res.max(axis=-1) - med
-    down = med - res.min(axis=-1)
-    hi = np.maximum(up, down)
+    x = res - np.median(res, axis=-1, keepdims=True)
+    hi, lo = x.max(axis=-1), -x.min(axis=-1)
+    x = np.where((lo > hi)[..., None], -x, x)  # the largest excursion made positive
+    peak = np.maximum(hi, lo)[..., None]
+    i = np.argmax(x, axis=-1)[..., None]
+    pos = np.arange(x.shape[-1])
+    against = np.stack([np.where(pos < i, -x, 0.0).max(axis=-1), np.where(pos > i, -x, 0.0).max(axis=-1)], axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(hi > 0, np.minimum(up, down) / hi, 0.0)
+        return np.where(peak > 0, against / np.where(peak > 0, peak, 1.0), 0.0)
 
 
 def fill_window_start(win: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

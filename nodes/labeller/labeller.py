@@ -38,7 +38,14 @@ import cv2
 import numpy as np
 
 from counterpart.nodes.labeller.activity import ActivityDetector, activity_3d
-from counterpart.nodes.labeller.face import Box, FaceSignalDetector, load_face_cascade, to_gray
+from counterpart.nodes.labeller.face import (
+    PROFILE_CASCADE_NAME,
+    Box,
+    FaceSignalDetector,
+    find_face_cascade,
+    load_face_cascade,
+    to_gray,
+)
 from counterpart.nodes.labeller.face_track import FaceTrack, FaceTracker, FaceTrackParams
 from counterpart.nodes.labeller.gaze import facing_yaw_from_shoulders, gaze_at_other
 from counterpart.nodes.labeller.head_motion import (
@@ -201,6 +208,22 @@ class SocialLabeller:
                 warnings.warn(f"talking/laughing will be UNKNOWN: {e}", RuntimeWarning, stacklevel=3)
         return self._cascade
 
+    def _profile_cascade(self) -> cv2.CascadeClassifier | None:
+        """The profile face detector when ``track_params.profile_faces`` and OpenCV ships it, else
+        None (frontal faces only; said once).
+        """
+        if not self.track_params.profile_faces:
+            return None
+        path = find_face_cascade(PROFILE_CASCADE_NAME)
+        if path is None:
+            warnings.warn(
+                f"no {PROFILE_CASCADE_NAME} found: faces turned aside are not found (frontal faces only)",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+            return None
+        return load_face_cascade(path)
+
     def reset(self) -> None:
         """Forget every person and face."""
         self._people.clear()
@@ -265,7 +288,7 @@ class SocialLabeller:
         if image is not None and self._face_cascade() is not None:
             gray = to_gray(image)
             if self._tracker is None:
-                self._tracker = FaceTracker(self.track_params, self._cascade)  # type: ignore[arg-type]
+                self._tracker = FaceTracker(self.track_params, self._cascade, self._profile_cascade())  # type: ignore[arg-type]
             tracks = [t for t in self._tracker.update(gray) if t.confirmed]
         people, faces = self._attribute(people, tracks)
         self.faces = faces

@@ -180,6 +180,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "nod_median_s": ("head_params", "nod_median_s"),
     "shake_median_s": ("head_params", "shake_median_s"),
     "shake_swing": ("head_params", "shake_swing"),
+    "swing_median_s": ("head_params", "swing_median_s"),
     "head_threshold": ("head_params", "threshold"),
     "nod_floor_m": ("head_params", "nod_floor_m"),
     "shake_floor_m": ("head_params", "shake_floor_m"),
@@ -189,6 +190,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "event_off": ("head_params", "event_off"),
     "event_local_s": ("head_params", "local_s"),
     "max_flow_s": ("track_params", "max_flow_s"),
+    "profile_faces": ("track_params", "profile_faces"),
     "min_face_px": ("track_params", "min_face_px"),
     "max_miss_s": ("track_params", "max_miss_s"),
     "anchor_s": ("track_params", "anchor_s"),
@@ -287,11 +289,20 @@ class Labeller(Node):
         "shake_median_s": Param(float, 0.44, "the same for the shake channels (s)", min=0.0, max=60.0),
         "shake_swing": Param(
             float,
-            0.2,
-            "least ratio of a window's smaller to larger lateral excursion (unitless; 0: no test): "
-            "a shake swings both ways, a quick glance aside and back one",
+            0.3,
+            "least swing back against a window's largest lateral excursion, before and after it "
+            "together, a fraction of it (unitless; 0: no test): a shake swings back, a glance "
+            "aside and back only by its overshoot",
             min=0.0,
-            max=1.0,
+            max=2.0,
+        ),
+        "swing_median_s": Param(
+            float,
+            0.8,
+            "running median removed from the lateral motion before the shake_swing test (s): at "
+            "least twice a quick glance, so that the glance is kept whole",
+            min=0.0,
+            max=60.0,
         ),
         "band_low_hz": Param(float, 1.0, "lowest frequency of nods and shakes (Hz)", min=0.0),
         "band_high_hz": Param(float, 4.0, "highest frequency of nods and shakes (Hz)", min=0.0),
@@ -330,6 +341,11 @@ class Labeller(Node):
             "the same while the flow still follows the face's points (a look away) (s)",
             min=0.0,
             max=60.0,
+        ),
+        "profile_faces": Param(
+            bool,
+            True,
+            "look for faces turned aside with OpenCV's profile cascade where the frontal one finds none",
         ),
         "anchor_s": Param(
             float,
