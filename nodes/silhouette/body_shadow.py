@@ -130,7 +130,10 @@ def reclaim_body_shadow(
         cv2.max(closed, cv2.dilate(fg, np.ones((side, side), np.uint8)), dst=closed)
     cand = np.flatnonzero((sh.ravel() != 0) & (closed.ravel() != 0))
     legs = config.leg_ncc > -1.0 and frame is not None and background is not None
-    if cand.size == 0 and not legs:
+    # the legs' starts: shadow pixels straight below foreground (none: no leg, and the
+    # regions need not be labelled for that step)
+    starts = _starts(fg, sh) if legs else None
+    if cand.size == 0 and starts is None:
         return labels
     h, w = labels.shape
     n, comp = cv2.connectedComponents(cv2.bitwise_or(fg, sh), connectivity=8)
@@ -145,8 +148,8 @@ def reclaim_body_shadow(
     c = comp_flat[cand]
     # a candidate touches or is enclosed by foreground, so its region has some: bottom >= top
     take = [cand[(bottom[c] - cand // w) > config.foot_fraction * (bottom[c] - top[c] + 1)]]
-    if legs:
-        take.append(_legs(fg, sh, comp, top, bottom, frame, background, unseen, config))
+    if starts is not None:
+        take.append(_legs(starts, fg, sh, comp, top, bottom, frame, background, unseen, config))
     idx = np.concatenate(take)
     if idx.size == 0:
         return labels
@@ -155,7 +158,18 @@ def reclaim_body_shadow(
     return out
 
 
+def _starts(fg: np.ndarray, sh: np.ndarray) -> np.ndarray | None:
+    """Shadow pixels straight below foreground, ``cv2.findNonZero``'s (K, 1, 2) x, y; None: none.
+
+    ``fg``, ``sh``: (H, W) 0/255 masks.
+    """
+    start = np.zeros_like(sh)
+    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
+    return cv2.findNonZero(start)
+
+
 def _legs(
+    pts: np.ndarray,
     fg: np.ndarray,
     sh: np.ndarray,
     comp: np.ndarray,
@@ -168,30 +182,38 @@ def _legs(
 ) -> np.ndarray:
     """Flat indices of the shadow pixels that are legs (see the module docstring).
 
-    ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
+    ``pts``: the starts (``_starts``); ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
     ``bottom``: (n,) each region's first and last foreground row. Each region that has a shadow pixel straight below foreground is
     worked on its own box (a few per frame): a leg is a run of shadow down a column from the
     foreground, and a run along a row, so both lie in one region.
     """
     h, w = fg.shape
-    start = np.zeros_like(sh)
-    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
-    pts = cv2.findNonZero(start)
-    if pts is None:
-        return np.empty(0, np.intp)
     r = config.leg_window // 2
     k = (config.leg_window, config.leg_window)
 
-    def box(a: np.ndarray) -> np.ndarray:
-        return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)
+    def box(a: np.ndarray, at: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        # the window sums read at the candidates: the moments below are per pixel, so the same
+        # float32 values as on the whole box, at a fraction of the work
+        return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)[at]
 
+    # A leg pixel hangs below a start (shadow straight under foreground) of its region, at
+    # least one row down and at or below the start's row: regions too short for a one-row
+    # hang, and starts inside the feet band, have none (most regions of a frame: small blobs).
+    sy = pts[:, 0, 1]
+    sc = comp[sy, pts[:, 0, 0]]
+    height_s = bottom[sc] - top[sc] + 1
+    keep = (config.leg_depth * height_s >= 1) & (bottom[sc] - sy > config.leg_foot * height_s)
+    sy, sc = sy[keep], sc[keep]
+    if sc.size == 0:
+        return np.empty(0, np.intp)
+    first = np.full(top.shape, h, np.int64)
+    np.minimum.at(first, sc, sy)
     out = []
-    for c in np.unique(comp[pts[:, 0, 1], pts[:, 0, 0]]):
-        # rows from the region's top foreground row to just above its lowest one
-        y0, y1 = int(top[c]), int(bottom[c])
-        if y1 <= y0:
-            continue
-        height = y1 - y0 + 1
+    for c in np.unique(sc):
+        # rows from the foreground row above the region's first start to just above its lowest
+        # foreground row (the up / gap runs below need nothing above a start's own foreground)
+        y0, y1 = int(first[c]) - 1, int(bottom[c])
+        height = y1 - int(top[c]) + 1
         cols = np.flatnonzero((comp[y0:y1] == c).any(axis=0))
         x0, x1 = int(cols[0]), int(cols[-1]) + 1
         inr = comp[y0:y1, x0:x1] == c
@@ -203,7 +225,7 @@ def _legs(
         gap = np.maximum.accumulate(np.where(f | s, -1, rows), axis=0)
         hang = s & (up > gap) & (rows - up <= config.leg_depth * height)
         # above the lowest rows of the foreground, where the shoes stand in their own cast shadow
-        hang &= (height - 1) - rows > config.leg_foot * height
+        hang &= (y1 - y0) - rows > config.leg_foot * height
         if unseen is not None:
             hang &= ~unseen[y0:y1, x0:x1]
         if not hang.any():
@@ -231,13 +253,13 @@ def _legs(
         # centred: the moments below are differences of float32 sums, exact enough only near zero
         grey -= np.float32(grey.mean())
         e = e - np.float32(e.mean())
-        inv_n = 1.0 / np.maximum(box(m), 1.0)
+        at = (ys - by0, xs - bx0)
+        inv_n = 1.0 / np.maximum(box(m, at), 1.0)
         em, gm = e * m, grey * m
-        me, mi = box(em) * inv_n, box(gm) * inv_n
-        ve = box(em * e) * inv_n - me * me
-        vi = box(gm * grey) * inv_n - mi * mi
-        cov = box(gm * e) * inv_n - mi * me
-        py, px = ys - by0, xs - bx0
-        ncc = cov[py, px] / np.sqrt(np.maximum(vi[py, px], 0.0) * np.maximum(ve[py, px], 0.0) + 1e-6)
+        me, mi = box(em, at) * inv_n, box(gm, at) * inv_n
+        ve = box(em * e, at) * inv_n - me * me
+        vi = box(gm * grey, at) * inv_n - mi * mi
+        cov = box(gm * e, at) * inv_n - mi * me
+        ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
         out.append((ys * w + xs)[ncc < config.leg_ncc])
     return np.concatenate(out) if out else np.empty(0, np.intp)
