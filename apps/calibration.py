@@ -14,9 +14,9 @@ from collections.abc import Callable
 from typing import Any
 
 from counterpart.body.camera import Camera
+from counterpart.body.people_detector import PeopleDetector
 from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people
-from counterpart.nodes.silhouette.people import PeopleDetector
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]

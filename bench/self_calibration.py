@@ -58,12 +58,12 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from counterpart.body.camera import Camera, default_camera  # noqa: E402
+from counterpart.body.people_detector import PeopleDetector  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
 from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
 from counterpart.nodes.calibration.node import Calibration  # noqa: E402
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people  # noqa: E402
 from counterpart.nodes.calibration.smooth import credible  # noqa: E402
-from counterpart.nodes.silhouette.people import PeopleDetector  # noqa: E402
 from counterpart.sim.camera import RandomCameraConfig  # noqa: E402
 
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.calibration.estimate import CalibrationConfig, estimate_camera, rotation
 from counterpart.nodes.calibration.observe import (
@@ -17,7 +18,6 @@ from counterpart.nodes.calibration.observe import (
     SceneFrames,
     detect_people,
 )
-from counterpart.nodes.silhouette.people import PeopleDetector
 
 W, H = 320, 240
 

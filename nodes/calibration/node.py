@@ -31,9 +31,9 @@ from typing import Any
 import numpy as np
 
 from counterpart.body.camera import Camera, camera_for_size, camera_to_info, load_camera_file
+from counterpart.body.people_detector import PeopleDetector
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import CameraInfo, Frame, Silhouettes
-from counterpart.nodes.silhouette.people import PeopleDetector
 
 from .estimate import CameraEstimate
 from .observe import PeopleObservations, SceneFrames, detect_people

@@ -16,7 +16,7 @@ density and each estimate costs about the same.
 People who barely move (a conversation) are absorbed into the background and give no region that
 can be an upright person. On a frame without any, the people detector's boxes give the head and
 foot points instead (:meth:`PeopleObservations.add_detections`: OpenCV's HOG people detector,
-``counterpart.nodes.silhouette.people.PeopleDetector``, which finds a person from its shape alone,
+``counterpart.body.people_detector.PeopleDetector``, which finds a person from its shape alone,
 moving or not). The detector's window holds a person at a fixed share of its height (Dalal & Triggs
 2005: a 96-pixel person in a 128-pixel window), so the head and the feet lie at fixed shares of its
 box (:data:`HEAD_IN_BOX`, :data:`FOOT_IN_BOX`); its smallest window is 128 pixels tall, so the
@@ -31,7 +31,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from counterpart.nodes.silhouette.people import PeopleDetector
+from counterpart.body.people_detector import PeopleDetector
 
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
 from .lines import LineFamilies, detect_segments, find_families

@@ -1,0 +1,118 @@
+"""People found by their shape alone: OpenCV's shipped HOG people detector (Dalal & Triggs 2005).
+
+Shared by the silhouette node (people in view while the background is learnt) and the calibration
+node (head and foot points of people absorbed into the background), so it lives below the nodes.
+The default SVM ships with OpenCV; nothing is downloaded.
+
+Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h) int.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+__all__ = ["PeopleDetector"]
+
+#: the person inside a detection window of OpenCV's HOG people detector (trained on 64 x 128
+#: INRIA windows, the person about 96 pixels tall in the middle): (x0, y0, x1, y1) as fractions
+#: of the window, generous in x for arms held out
+_PERSON_IN_WINDOW = (0.1, 0.0, 0.9, 0.95)
+
+
+class PeopleDetector:
+    """OpenCV's HOG people detector (``cv2.HOGDescriptor_getDefaultPeopleDetector``).
+
+    Parameters
+    ----------
+    hit_threshold : float, default=0.0
+        SVM margin a window must pass (``detectMultiScale``'s hitThreshold); lower finds more
+        people and more clutter.
+    min_score : float, default=0.3
+        Smallest grouped detection weight kept.
+    scale : float, default=1.05
+        Step between the pyramid's scales; > 1.
+    stride : int, default=8
+        Window step, pixels (multiple of 8, the HOG cell).
+    pad_frac : float, default=0.15
+        Padding added on every side, as a fraction of the frame height, with the frame's median
+        colour (a replicated or mirrored border draws false edges); in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If ``scale``, ``stride`` or ``pad_frac`` is out of range.
+    """
+
+    def __init__(
+        self,
+        hit_threshold: float = 0.0,
+        min_score: float = 0.3,
+        scale: float = 1.05,
+        stride: int = 8,
+        pad_frac: float = 0.15,
+    ) -> None:
+        if scale <= 1.0:
+            raise ValueError(f"scale must be > 1, got {scale}")
+        if stride < 1 or stride % 8:
+            raise ValueError(f"stride must be a positive multiple of 8 pixels, got {stride}")
+        if not 0.0 <= pad_frac <= 1.0:
+            raise ValueError(f"pad_frac must be in [0, 1], got {pad_frac}")
+        self.hit_threshold = hit_threshold
+        self.min_score = min_score
+        self.scale = scale
+        self.stride = stride
+        self.pad_frac = pad_frac
+        self._hog = cv2.HOGDescriptor()
+        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+
+    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """People in a frame.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame.
+
+        Returns
+        -------
+        boxes : ndarray of shape (K, 4)
+            int32 (x, y, w, h) pixels of each person, clipped to the frame: the person's part of the
+            detection window.
+        scores : ndarray of shape (K,)
+            float32 detector scores.
+
+        Raises
+        ------
+        ValueError
+            If ``frame`` is not uint8 (H, W, 3).
+        """
+        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
+            raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
+        h, w = frame.shape[:2]
+        pad = int(round(self.pad_frac * h))
+        colour = [float(v) for v in np.median(frame[::4, ::4].reshape(-1, 3), axis=0)]
+        padded = cv2.copyMakeBorder(frame, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=colour)
+        if min(padded.shape[:2]) < 128 or padded.shape[1] < 64:
+            return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
+        rects, weights = self._hog.detectMultiScale(
+            padded,
+            hitThreshold=self.hit_threshold,
+            winStride=(self.stride, self.stride),
+            padding=(0, 0),
+            scale=self.scale,
+        )
+        rects = np.asarray(rects, np.float64).reshape(-1, 4)
+        scores = np.asarray(weights, np.float32).reshape(-1)
+        keep = scores >= self.min_score
+        rects, scores = rects[keep], scores[keep]
+        fx0, fy0, fx1, fy1 = _PERSON_IN_WINDOW
+        x0 = rects[:, 0] + fx0 * rects[:, 2] - pad
+        y0 = rects[:, 1] + fy0 * rects[:, 3] - pad
+        x1 = rects[:, 0] + fx1 * rects[:, 2] - pad
+        y1 = rects[:, 1] + fy1 * rects[:, 3] - pad
+        x0, x1 = np.clip(x0, 0, w), np.clip(x1, 0, w)
+        y0, y1 = np.clip(y0, 0, h), np.clip(y1, 0, h)
+        boxes = np.stack([x0, y0, x1 - x0, y1 - y0], axis=1).round().astype(np.int32)
+        ok = (boxes[:, 2] > 0) & (boxes[:, 3] > 0)
+        return boxes[ok], scores[ok]
