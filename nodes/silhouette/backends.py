@@ -222,7 +222,7 @@ class HorprasertSubtractor:
                 cv2.max(labels, cv2.bitwise_and(stats, self._unseen_fg), dst=labels)
         # the leg step compares with the background grey levels this frame was classified against:
         # the update replaces that array (it does not write into it), so it is taken before
-        grey = self._model._e_pad if self._model.shadows.shadow_ncc > -1.0 else None
+        grey = self._model.grey_
         if self.threaded:
             self._deferred.submit(self._model.update, frame, labels.copy())
         else:
@@ -231,9 +231,6 @@ class HorprasertSubtractor:
             # the frame is this call's own copy when threaded, and the statistics' labels are
             # not changed again: the samples' worker may read both as they are
             self.samples.learn(frame, stats, fg_idx, copy=not self.threaded)
-        if grey is not None:
-            r = (grey.shape[0] - frame.shape[0]) // 2
-            grey = grey[r : r + frame.shape[0], r : r + frame.shape[1]]
         labels = reclaim_body_shadow(labels, self.body_shadow, frame, grey, self._model.unseen_)
         self.labels = labels
         return labels == FOREGROUND

@@ -457,6 +457,17 @@ class HorprasertBackground:
         return np.moveaxis(np.sqrt(self._var), 0, -1)
 
     @property
+    def grey_(self) -> np.ndarray | None:
+        """(H, W) float32 sum of E's three channels, grey levels, as the shadow texture test reads
+        it; None when that test is off. ``update`` replaces the array rather than writing into it,
+        so one taken before an update stays the one the frame was classified against.
+        """
+        if self._e_pad is None:
+            return None
+        r = self.shadows.shadow_window // 2
+        return self._e_pad[r:-r, r:-r] if r else self._e_pad
+
+    @property
     def shape(self) -> tuple[int, int]:
         """(H, W) of the frames the model was fitted on."""
         self._require_fitted()
