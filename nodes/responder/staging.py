@@ -345,9 +345,9 @@ def _clip_length(d: np.ndarray, facing: float, lo: float, hi: float) -> np.ndarr
     return u * min(max(r, lo), hi)
 
 
-def _box_iou(boxes: np.ndarray, box: np.ndarray, inside: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels; with
-    ``inside`` also the share (K,) of each of ``boxes`` that lies in ``box``.
+def _box_overlap(boxes: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Intersection over union (K,) of boxes (K, 4) with one box (4,), each (x0, y0, x1, y1), pixels,
+    and the share (K,) of each of ``boxes`` that lies in ``box``.
     """
     w = np.clip(np.minimum(boxes[:, 2], box[2]) - np.maximum(boxes[:, 0], box[0]), 0.0, None)
     h = np.clip(np.minimum(boxes[:, 3], box[3]) - np.maximum(boxes[:, 1], box[1]), 0.0, None)
@@ -355,7 +355,7 @@ def _box_iou(boxes: np.ndarray, box: np.ndarray, inside: bool = False) -> np.nda
     own = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
     union = own + (box[2] - box[0]) * (box[3] - box[1]) - inter
     iou = np.where(union > 0, inter / np.maximum(union, 1e-12), 0.0)
-    return (iou, np.where(own > 0, inter / np.maximum(own, 1e-12), 0.0)) if inside else iou
+    return iou, np.where(own > 0, inter / np.maximum(own, 1e-12), 0.0)
 
 
 def clear_length(
@@ -401,7 +401,7 @@ def clear_length(
     uv = camera.project(X)  # (K, 14, 2)
     boxes = np.concatenate([np.nanmin(uv, axis=1), np.nanmax(uv, axis=1)], axis=1)
     x, y, w, h = (float(v) for v in box)
-    iou, inside = (np.nan_to_num(v, nan=0.0) for v in _box_iou(boxes, np.array([x, y, x + w, y + h]), inside=True))
+    iou, inside = (np.nan_to_num(v, nan=0.0) for v in _box_overlap(boxes, np.array([x, y, x + w, y + h])))
     # the worse of the two overlaps, as a share of its limit
     score = np.maximum(iou / max(max_iou, 1e-9), inside / max(max_inside, 1e-9))
     ok = np.flatnonzero(score <= 1.0)
