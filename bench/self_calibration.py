@@ -22,7 +22,13 @@ and the lines of the scene, one estimate at the end:
   estimate where credible, the default camera elsewhere);
 - ``calib_truth_points``: the same figures from the true head and foot points (the crown and the
   mid-ankle on the ground, from the simulator's joints) and no lines: the limit of the geometry of
-  people alone, whatever the silhouettes;
+  people alone, whatever the silhouettes; ``calib_truth_points_lines``: the true points with the
+  scene's lines as the estimate has them (the limit of the estimator's cues, whatever the
+  silhouettes);
+- ``calib_tilt_bands``: per band of the true tilt (0-10, 10-20, 20-35 degrees), the seeds in it and,
+  for the estimate, the true points and the true points with lines (``truth_``, ``truth_lines_``),
+  the share within all three limits, within the height and tilt limits, within the focal limit, and
+  the median focal error; the estimate's credible share;
 - the reference in the same run: the default camera's errors (``calib_default_*``), what the graph
   uses without calibration.
 
@@ -37,14 +43,18 @@ is not at the crop's centre, which the estimate assumes. Per clip, ``counterpart
 estimate; across the clips, the median and interquartile range of height, tilt and focal length
 (the spread across clips of one scene), and how many the node would publish.
 
-Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]``; last stdout
-line: one JSON object. ``bench/real_video.py`` reports the simulator figures under the same names.
+Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]
+[--inputs-cache DIR]``; last stdout line: one JSON object. ``--inputs-cache`` keeps each seed's costly
+inputs (:func:`sim_inputs`: the silhouettes' and the detector's observations, the lines, the truth) so
+that a change to the estimator alone is measured in seconds; it is stale once anything upstream of
+the estimate changes. ``bench/real_video.py`` reports the simulator figures under the same names.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import pickle
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -170,6 +180,7 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
     est = estimate_camera(head, foot, track, size, t, lines=inputs["lines"])
     th, tf, tk, tt = inputs["truth_points"]
     oracle = estimate_camera(th, tf, tk, size, tt)
+    oracle_lines = estimate_camera(th, tf, tk, size, tt, lines=inputs["lines"])
     ok = est is not None and credible(est, *BOUNDS.values())
     default = default_camera(*size)
     published = estimate_errors(est, truth) if ok else errors(default.centre[1], tilt_deg(default), default.fx, truth)
@@ -183,13 +194,27 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
         "credible": bool(ok),
         "published": published,
         "truth_points": estimate_errors(oracle, truth),
+        "truth_points_lines": estimate_errors(oracle_lines, truth),
         "default": errors(default.centre[1], tilt_deg(default), default.fx, truth),
     }
 
 
-def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
-    """One simulated scene, end to end: :func:`sim_row` of :func:`sim_inputs`."""
-    return sim_row(sim_inputs(seed, seconds))
+def sim_seed(seed: int, seconds: float, cache: str | None = None) -> dict[str, Any]:
+    """One simulated scene, end to end: :func:`sim_row` of :func:`sim_inputs` (kept in, or read from,
+    ``cache``/SEED_SECONDS.pkl when a folder is given).
+    """
+    if cache is None:
+        return sim_row(sim_inputs(seed, seconds))
+    path = Path(cache) / f"{seed}_{seconds:g}.pkl"
+    if path.is_file():
+        with path.open("rb") as fh:
+            inputs = pickle.load(fh)
+    else:
+        inputs = sim_inputs(seed, seconds)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("wb") as fh:
+            pickle.dump(inputs, fh)
+    return sim_row(inputs)
 
 
 def tilt_bands(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -206,7 +231,7 @@ def tilt_bands(rows: list[dict[str, Any]]) -> dict[str, Any]:
             out[key] = {"seeds": 0}
             continue
         v: dict[str, Any] = {"seeds": len(band)}
-        for name, prefix in (("errors", ""), ("truth_points", "truth_")):
+        for name, prefix in (("errors", ""), ("truth_points", "truth_"), ("truth_points_lines", "truth_lines_")):
             errs = [r[name] for r in band]
             v[f"{prefix}within"] = round(float(np.mean([within(e) for e in errs])), 4)
             v[f"{prefix}within_height_tilt"] = round(
@@ -225,15 +250,17 @@ def _finite(v: Any) -> Any:
     return None if isinstance(v, float) and not np.isfinite(v) else v
 
 
-def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, jobs: int = 1) -> dict[str, Any]:
+def sim_figures(
+    seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, jobs: int = 1, cache: str | None = None
+) -> dict[str, Any]:
     """The simulator part (see the module docstring): the figures and the per-seed rows (seeds in
-    ``jobs`` processes).
+    ``jobs`` processes; each seed's inputs kept in ``cache`` when a folder is given).
     """
     rows = []
     t0 = time.monotonic()
     with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
         done = (pool.map if pool is not None else map)(
-            sim_seed, range(first_seed, first_seed + seeds), [seconds] * seeds
+            sim_seed, range(first_seed, first_seed + seeds), [seconds] * seeds, [cache] * seeds
         )
         for r in done:
             rows.append(r)
@@ -259,6 +286,7 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, j
         "calib_credible": round(float(np.mean([r["credible"] for r in rows])), 4),
         "calib_within_published": summary([r["published"] for r in rows], "")["within"],
         "calib_truth_points": summary([r["truth_points"] for r in rows], ""),
+        "calib_truth_points_lines": summary([r["truth_points_lines"] for r in rows], ""),
         **summary([r["default"] for r in rows], "calib_default_"),
         "calib_seeds": seeds,
         "calib_first_seed": first_seed,
@@ -276,7 +304,11 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, j
     out["calib_within_tilt_under_10"] = summary([r["errors"] for r in low], "")["within"] if low else None
     out["calib_tilt_bands"] = tilt_bands(rows)
     out["calib_rows"] = [
-        {k: _finite(r[k]) for k in ("seed", "scenario", "camera", "errors", "credible", "truth_points")} for r in rows
+        {
+            k: _finite(r[k])
+            for k in ("seed", "scenario", "camera", "errors", "credible", "truth_points", "truth_points_lines")
+        }
+        for r in rows
     ]
     return out
 
@@ -339,8 +371,14 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=3.0, help="seconds of each scene used (default 3)")
     ap.add_argument("--jobs", type=int, default=1, help="processes for the simulated scenes (default 1)")
     ap.add_argument("--clips", default="12", help="real clips: 'all', how many spread over set 1, or 0 (none)")
+    ap.add_argument(
+        "--inputs-cache",
+        default=None,
+        help="folder keeping each seed's inputs (observations, lines, truth) for estimator-only changes; "
+        "stale once the silhouettes, the observations, the lines or the simulator change",
+    )
     args = ap.parse_args()
-    out = sim_figures(args.seeds, args.seconds, args.first_seed, args.jobs)
+    out = sim_figures(args.seeds, args.seconds, args.first_seed, args.jobs, args.inputs_cache)
     from real_video import clip_list  # the same choice of clips as the demo bench
 
     clips = clip_list(args.clips) if args.clips != "0" and CLIPS.is_dir() else []

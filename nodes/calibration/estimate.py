@@ -97,6 +97,10 @@ class CalibrationConfig:
         cost (half its robust chi-square) by more than this: segments that meet at a point that is
         not the image of one horizontal scene direction; one family at a time, the one whose leaving
         out gains most. None: keep every family.
+    max_stature_sd : float or None, default=3.0
+        A person whose fitted stature is further than this many prior stds from the prior's centre
+        is dropped and the camera fitted again (once; kept when the rest are too few): a fragment of
+        a person or a ghost, whose lowest point need not be on the ground. None: keep everyone.
     min_person_views : int, default=5
         A person (track id) seen fewer times is left out: more likely a passing false find (a
         fragment of a region, a detector's box on the room) than a person, and its stature prior
@@ -123,6 +127,7 @@ class CalibrationConfig:
     manhattan_std_deg: float | None = 3.0
     min_person_views: int = 5
     family_outlier_cost: float | None = 4.0
+    max_stature_sd: float | None = 3.0
 
 
 @dataclass(frozen=True)
@@ -624,6 +629,18 @@ def fit_camera(
             break
         best, lines = fit, (fewer if len(fewer.segments) else None)
     x = best.x
+    off = np.abs(x[4 : 4 + nk] - np.log(config.person_height)) / (config.person_height_std / config.person_height)
+    if (
+        config.max_stature_sd is not None
+        and (off > config.max_stature_sd).any()
+        and (off <= config.max_stature_sd).any()
+    ):
+        # a "person" of a stature far from any adult's is a fragment of one (a torso, a lower leg)
+        # or a ghost, whose lowest point need not be on the ground: fit again without it
+        keep = np.isin(k, np.flatnonzero(off <= config.max_stature_sd))
+        refit = fit_camera(head[keep], foot[keep], track[keep], size, time_s[keep], config, lines)
+        if refit is not None:
+            return refit
     J = best.jac
     m, n = J.shape
     r = best.fun[: 2 * len(head)].reshape(-1, 2) * np.sqrt(per[k])[:, None]  # per observation, in its own std
