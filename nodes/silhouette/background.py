@@ -67,6 +67,7 @@ Frames are uint8 BGR, H x W x 3; all arithmetic is float32 and vectorised over p
 from __future__ import annotations
 
 from collections.abc import Iterable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -1259,11 +1260,10 @@ def _median_mad(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.n
     # deviations from it are then whole, and exact, as the float32 halves they stand for.
     # Excluded samples become _EXCLUDED and sort last: the median of the c free ones is the mean
     # of the sorted values at (c - 1) // 2 and c // 2, gathered per pixel (no Python loop).
-    rows = max(1, int(_BLOCK_BYTES // (3 * n * w * 3 * 4)))
     med = np.zeros((h, w, 3), np.float32)
     mad = np.zeros((h, w, 3), np.float32)
-    for y0 in range(0, h, rows):
-        sl = slice(y0, y0 + rows)
+
+    def block(sl: slice) -> None:
         blk2 = stack[:, sl].astype(np.uint16)
         blk2 <<= 1
         out = np.broadcast_to(~free[:, sl, :, None], blk2.shape)
@@ -1280,6 +1280,12 @@ def _median_mad(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.n
         dev[out] = _EXCLUDED
         med[sl] = m2.astype(np.float32) * np.float32(0.25)
         mad[sl] = (_masked_median2(dev, c).astype(np.float32) * np.float32(0.125)) * _MAD_TO_SIGMA
+
+    # each pixel's median is its own: the row blocks (at least two) go to two threads, as numpy's
+    # sort lets go of the GIL
+    rows = max(1, min(int(_BLOCK_BYTES // (3 * n * w * 3 * 4)), -(-h // 2)))
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="fit") as pool:
+        list(pool.map(block, [slice(y0, y0 + rows) for y0 in range(0, h, rows)]))
     seen = count > 0
     med[~seen] = 0.0
     mad[~seen] = 0.0
@@ -1330,10 +1336,13 @@ def _fill_unseen(
     hole = unseen.astype(np.uint8)
     # radius: a few pixels of support around each point of the hole's front
     radius = 5
+    planes = [a[..., c] for a in (mean, spread) for c in range(3)]
+    # six independent fills, on two threads (OpenCV lets go of the GIL)
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="fit") as pool:
+        filled = list(pool.map(lambda p: cv2.inpaint(p, hole, radius, cv2.INPAINT_TELEA), planes))
     mean = mean.copy()
     spread = spread.copy()
     for c in range(3):
-        mean[..., c] = cv2.inpaint(mean[..., c], hole, radius, cv2.INPAINT_TELEA)
-        s = cv2.inpaint(spread[..., c], hole, radius, cv2.INPAINT_TELEA)
-        spread[..., c] = np.where(unseen, s * np.float32(spread_gain), spread[..., c])
+        mean[..., c] = filled[c]
+        spread[..., c] = np.where(unseen, filled[3 + c] * np.float32(spread_gain), spread[..., c])
     return mean, spread
