@@ -95,7 +95,7 @@ _GHOST_BRIGHTNESS = (0.7, 1.4)
 _UNSEEN_GHOST_CHROMA = 0.03
 _UNSEEN_GHOST_BRIGHTNESS = (0.88, 1.12)
 # An excluded sample in the robust median pass: above every (doubled) grey level or deviation.
-_EXCLUDED = np.iinfo(np.uint16).max
+_EXCLUDED = np.uint16(np.iinfo(np.uint16).max)
 # Bytes of float32 work memory per row block in the robust median pass.
 _BLOCK_BYTES = 64 * 1024 * 1024
 
@@ -1264,20 +1264,16 @@ def _median_mad(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.n
     mad = np.zeros((h, w, 3), np.float32)
 
     def block(sl: slice) -> None:
-        blk2 = stack[:, sl].astype(np.uint16)
+        blk2 = stack[:, sl].astype(np.int16)
         blk2 <<= 1
         out = np.broadcast_to(~free[:, sl, :, None], blk2.shape)
         c = np.broadcast_to(count[None, sl, :, None], (1, *blk2.shape[1:]))
-        vals = blk2.copy()
-        vals[out] = _EXCLUDED
-        m2 = _masked_median2(vals, c)  # 2 x 2 x the median: lo + hi of the doubled values
-        # the deviations in quarter grey levels: 4 |v - median| = |4 v - m2|
-        dev4 = blk2.astype(np.int32)
-        dev4 <<= 1
-        dev4 -= m2[None]
-        np.abs(dev4, out=dev4)
-        dev = dev4.astype(np.uint16)
-        dev[out] = _EXCLUDED
+        m2 = _masked_median2(np.where(out, _EXCLUDED, blk2.view(np.uint16)), c)  # lo + hi of the doubled values
+        # the deviations in quarter grey levels (within int16): 4 |v - median| = |4 v - m2|
+        blk2 <<= 1
+        blk2 -= m2.astype(np.int16)[None]
+        np.abs(blk2, out=blk2)
+        dev = np.where(out, _EXCLUDED, blk2.view(np.uint16))
         med[sl] = m2.astype(np.float32) * np.float32(0.25)
         mad[sl] = (_masked_median2(dev, c).astype(np.float32) * np.float32(0.125)) * _MAD_TO_SIGMA
 
