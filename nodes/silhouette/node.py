@@ -209,6 +209,14 @@ class Silhouette(Node):
             min=-1.0,
             max=1.0,
         ),
+        "fit_in_background": Param(
+            bool,
+            False,
+            "horprasert: learn the background from the training frames in a thread of its own, "
+            "publishing frames without people meanwhile, instead of in one long call that holds "
+            "up the frames behind it (for live graphs; which frames the fit overlaps depends on "
+            "timing, so lockstep replays leave it off)",
+        ),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -255,6 +263,7 @@ class Silhouette(Node):
                 "dynamic": p["dynamic"],
                 "shadow_ncc": p["shadow_ncc"],
                 "body_shadow": BodyShadowConfig(span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"]),
+                "fit_in_background": p["fit_in_background"] and not self.replay,
             }
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
@@ -297,7 +306,7 @@ class Silhouette(Node):
         if self.p["backend"] != "horprasert" and ex.n_frames < self.p["train_frames"] - 1:
             return ex.learn(image)
         training = not ex.subtractor.ready
-        if training and self.prefetch is not None:
+        if training and self.prefetch is not None and not getattr(ex.subtractor, "fitting", False):
             # the people of the training frames are found while more come, not all after the last
             self.prefetch.submit(image)
         t0 = time.perf_counter()
