@@ -243,6 +243,8 @@ class Silhouette(Node):
         #: the people detector of the training frames, started on each as it comes (horprasert,
         #: robust and people_aware; None otherwise)
         self.prefetch: PrefetchDetector | None = None
+        #: when the fit in the background (fit_in_background) was started, perf_counter seconds
+        self._fit_started: float | None = None
 
     def _warn_once(self, kind: str, text: str, *args: Any) -> None:
         if kind not in self._warned:
@@ -311,8 +313,15 @@ class Silhouette(Node):
             self.prefetch.submit(image)
         t0 = time.perf_counter()
         result = ex.process(image)
-        if training and ex.subtractor.ready:  # this frame's call learnt the background
-            self.tally("fit_ms", round((time.perf_counter() - t0) * 1e3, 1))
+        if training and self._fit_started is None and getattr(ex.subtractor, "fitting", False):
+            self._fit_started = t0  # this frame's call started the fit in the background
+        if training and ex.subtractor.ready:  # this frame's call learnt the background (or took it up)
+            now = time.perf_counter()
+            self.tally("fit_ms", round((now - t0) * 1e3, 1))
+            # from the last training frame to the first frame with the model: the fit's own time
+            # when it runs in the background, this call's when in line
+            self.tally("fit_elapsed_ms", round((now - (self._fit_started or t0)) * 1e3, 1))
+            self._fit_started = None
             if self.prefetch is not None:
                 self.prefetch.clear()
         return result
