@@ -34,6 +34,7 @@ from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, Para
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .budget import BudgetConfig, FrameBudget
+from .likelihood import frame_edges
 from .prior import resolve_prior
 from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
@@ -323,6 +324,8 @@ class TrackerNode(Node):
         in_view = [s for s in self.p["people"] if any(p.side == s for p in sil.people)]
         layers, particles = self.budget.plan(len(in_view), self.fps)
         t0, evals = time.perf_counter(), 0
+        # the frame's edges once for all its people
+        edges = frame_edges(image) if image is not None and len(in_view) > 1 else None
         for side in in_view:
             shape = next(s for s in sil.people if s.side == side)
             try:
@@ -341,7 +344,7 @@ class TrackerNode(Node):
                         "tracking the part the silhouette node assigned to it",
                     )
                 other = next((s for s in sil.people if s.side != side and s.side in SIDES), None)
-                r = tr.update(image, mask, tuple(other.bbox) if other is not None else None)
+                r = tr.update(image, mask, tuple(other.bbox) if other is not None else None, edges)
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
                 self._warn_once(f"error:{side}", f"frame {sil.seq}: {side} person not tracked: {exc}")

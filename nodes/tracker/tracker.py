@@ -339,12 +339,15 @@ class Tracker:
         return post.w_prior * self.predictor.log_prior(X, post.resid_std)
 
     def _observations(
-        self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
+        self,
+        image: np.ndarray | None | Sequence[np.ndarray | None],
+        mask: np.ndarray | Sequence[np.ndarray],
+        edges: np.ndarray | None = None,
     ) -> list[Observation]:
         """One Observation per camera from one frame and mask (one camera) or sequences of them."""
         n = len(self.cameras)
         if n == 1 and not _per_camera(mask, 1):
-            return [make_observation(image, mask, rng=self.rng)]
+            return [make_observation(image, mask, rng=self.rng, edges=edges)]
         if not _per_camera(mask, n):
             raise ValueError(
                 f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
@@ -363,6 +366,7 @@ class Tracker:
         image: np.ndarray | None | Sequence[np.ndarray | None],
         mask: np.ndarray | Sequence[np.ndarray],
         towards: tuple[int, int, int, int] | None = None,
+        edges: np.ndarray | None = None,
     ) -> TrackResult | None:
         """Track one frame (the steps of the module docstring).
 
@@ -376,6 +380,9 @@ class Tracker:
             The bounding box, in the reference view, of the person this one interacts with:
             a track that starts on this frame faces that person (``init.facing_yaw``); None:
             the heading of the person's side of the frame.
+        edges : ndarray of shape (H, W), dtype bool, or None
+            One camera only: the frame's Canny edges (``likelihood.frame_edges``) when the trackers
+            of several people of the frame share them; None: computed from ``image``.
 
         Returns
         -------
@@ -389,7 +396,7 @@ class Tracker:
             With several cameras, when the masks or frames are not one per camera; for a mask that
             is not 2-D or a frame of another size than its mask.
         """
-        obs = self._observations(image, mask)
+        obs = self._observations(image, mask, edges)
         if obs[0].empty:
             return None
         start = not self.tracking
