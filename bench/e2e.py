@@ -282,7 +282,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
     - ``frac``: the messages it published per camera frame (the rest it dropped as stale);
     - ``busy``: the share of the run's wall time it spent in its handlers (1: a whole core);
     - the node's own figures where it has some that say how it kept up (the tracker's
-      ``particles`` and ``layers`` per person and frame, under its ``frame_budget``; the silhouette
+      ``particles`` and ``layers`` per person and frame, under its ``frame_budget``, ``starts`` the
+      tracks it started (first searches) and ``search_cpu_ms`` the CPU time of its searches per
+      pose, its messaging aside; the silhouette
       node's ``fit_ms``, the one handler call that learnt the background).
     """
     stats: dict[str, dict[int, dict]] = {n: {} for n in TIMED_NODES}
@@ -316,6 +318,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
         if frames:
             fig["particles"] = round(last["figures"]["budget_particles"] / frames, 1)
             fig["layers"] = round(last["figures"]["budget_layers"] / frames, 2)
+            fig["starts"] = last["figures"].get("budget_starts", 0)
+        if "search_cpu_ms" in last["figures"]:  # the tracker's searches alone, per pose it published
+            fig["search_cpu_ms"] = round(last["figures"]["search_cpu_ms"] / max(n_out, 1), 1)
         out[name] = fig
     return out
 

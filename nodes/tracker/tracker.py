@@ -291,6 +291,8 @@ class Tracker:
         self.lost_detector = LostDetector()
         self.prev: np.ndarray | None = None
         self.n_frames = 0
+        #: (poses, image costs, ground costs) of the density's last evaluation
+        self._scored: tuple[np.ndarray, np.ndarray, np.ndarray] = (np.zeros((0, DOF)), np.zeros((0, 3)), np.zeros(0))
 
     @property
     def tracking(self) -> bool:
@@ -412,7 +414,10 @@ class Tracker:
         """
 
         def loglik(X: np.ndarray) -> np.ndarray:
-            return self.likelihood(X, obs) + self._temporal(X, centre, sig) + self._pose_prior(X)
+            terms, ground = self.likelihood.evaluate(X, obs)
+            # the last layer's costs: its best particle's are the frame's score (``_finish``)
+            self._scored = (X, terms, ground)
+            return self.likelihood.combine(terms, ground) + self._temporal(X, centre, sig) + self._pose_prior(X)
 
         return loglik
 
@@ -453,7 +458,12 @@ class Tracker:
 
     def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
         """Score the estimate's best particle, update the prior's posterior and the lost detector."""
-        terms, ground = self.likelihood.evaluate(est.best[None], obs)
+        X, terms, ground = self._scored
+        row = np.flatnonzero((X == est.best).all(axis=1))[:1]  # the best particle of the last layer
+        if len(row):
+            terms, ground = terms[row], ground[row]
+        else:  # not one of the particles scored last
+            terms, ground = self.likelihood.evaluate(est.best[None], obs)
         cost = float(terms.sum()) / sum(not o.empty for o in obs)  # per view seen: 0 best, 3 worst
         image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
