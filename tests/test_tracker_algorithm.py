@@ -13,7 +13,14 @@ from counterpart.body.raster import cone_interior_points, cone_outline_points, r
 from counterpart.body.skeleton import DEFAULT_DIMS
 from counterpart.nodes.tracker.apf import AnnealedParticleFilter, choose_beta, survival_rate
 from counterpart.nodes.tracker.init import bbox_from_mask, facing_yaw, place_from_bbox
-from counterpart.nodes.tracker.likelihood import ConeLikelihood, MultiViewLikelihood, make_observation
+from counterpart.nodes.tracker.likelihood import (
+    ConeLikelihood,
+    MultiViewLikelihood,
+    Observation,
+    edge_map,
+    frame_edges,
+    make_observation,
+)
 from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig, track_sequence
 from counterpart.sim.scenarios import make_scenario
 
@@ -82,6 +89,39 @@ def test_true_pose_scores_higher_than_perturbed_poses() -> None:
         assert L(Q[None], obs)[0] < L(P[None], obs)[0], f"DOF {dof}"
     # an empty mask is an empty observation, not an error
     assert make_observation(image, np.zeros_like(mask)).empty
+
+
+def test_observation_window_holds_the_whole_frames_maps() -> None:
+    P = _pose()
+    image, mask = _render(P)
+    # a second person's region and textured background: edges the window must leave out
+    image[:, : image.shape[1] // 4] = np.random.default_rng(2).integers(0, 255, (image.shape[0], image.shape[1] // 4))
+    obs = make_observation(image, mask)
+    H, W = mask.shape
+    assert 0 < obs.width * obs.height < W * H / 2  # the person's window, not the frame
+    full_edge = edge_map(image, mask)
+    win = np.zeros((H, W), bool)
+    win[obs.y0 : obs.y0 + obs.height, obs.x0 : obs.x0 + obs.width] = True
+    assert not full_edge[~win].any() and not mask[~win].any()
+    np.testing.assert_array_equal(obs.edge[:-1].reshape(obs.height, obs.width), full_edge[win].reshape(obs.height, -1))
+    np.testing.assert_array_equal(obs.fg[:-1].reshape(obs.height, obs.width), mask[win].reshape(obs.height, -1))
+    # the costs of poses read the same as from maps of the whole frame
+    whole = Observation(
+        np.append(mask.ravel(), False).astype(np.float32),
+        np.append(full_edge.ravel(), np.float32(0)),
+        obs.cover_uv,
+        W,
+        H,
+    )
+    rng = np.random.default_rng(5)
+    X = P[None] + rng.normal(size=(64, DOF)) * 0.2
+    X[:, 0] += rng.normal(size=64) * 0.5  # some poses reach out of the window
+    L = ConeLikelihood(CAM)
+    np.testing.assert_array_equal(L.terms(X, obs), L.terms(X, whole))
+    # the frame's edges computed once for several people give the same maps
+    shared = make_observation(image, mask, edges=frame_edges(image))
+    np.testing.assert_array_equal(shared.cost_map(), obs.cost_map())
+    np.testing.assert_array_equal(shared.cover_uv, obs.cover_uv)
 
 
 def test_beta_hits_survival_rate() -> None:

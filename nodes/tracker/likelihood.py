@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -53,20 +54,27 @@ def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
 class Observation:
     """One person in one frame, ready for the likelihood.
 
+    The maps cover a window of the image around the person (``make_observation``: the mask's
+    bounding box with a margin that holds every pixel of the smoothed edge map), so that they cost
+    a person's area rather than the frame's; outside the window, as outside the image, a point
+    reads no foreground and no edge.
+
     Parameters
     ----------
-    fg : ndarray of shape (H*W + 1,), dtype float32
-        Flattened foreground mask (1 person, 0 background), with a trailing 0 that out-of-image
-        points read.
-    edge : ndarray of shape (H*W + 1,), dtype float32
-        Flattened smoothed edge map in [0, 1], same layout.
+    fg : ndarray of shape (height*width + 1,), dtype float32
+        Flattened foreground mask of the window (1 person, 0 background), with a trailing 0 that
+        points outside the window read.
+    edge : ndarray of shape (height*width + 1,), dtype float32
+        Flattened smoothed edge map of the window in [0, 1], same layout.
     cover_uv : ndarray of shape (M, 2), dtype float32
-        Pixel positions of foreground samples for the coverage term.
+        Pixel positions (image coordinates) of foreground samples for the coverage term.
     width, height : int
-        Image size in pixels.
-    cost : ndarray of shape (2 (H*W + 1),), dtype float32, or None
-        Per-pixel costs ``(1 - fg)^2`` then ``(1 - edge)^2`` (out of the image: 1), so that S_r and
-        S_e are one gather; None: derived from fg and edge.
+        Size of the window, pixels.
+    cost : ndarray of shape (2 (height*width + 1),), dtype float32, or None
+        Per-pixel costs ``(1 - fg)^2`` then ``(1 - edge)^2`` (outside the window: 1), so that S_r
+        and S_e are one gather; None: derived from fg and edge.
+    x0, y0 : int
+        Image position of the window's top-left pixel (0, 0: the window is the image).
     """
 
     fg: np.ndarray
@@ -75,13 +83,15 @@ class Observation:
     width: int
     height: int
     cost: np.ndarray | None = None
+    x0: int = 0
+    y0: int = 0
 
     def cost_map(self) -> np.ndarray:
         """The ``cost`` array (computed from fg and edge when it was not given).
 
         Returns
         -------
-        ndarray of shape (2 (H*W + 1),), dtype float32
+        ndarray of shape (2 (height*width + 1),), dtype float32
             ``(1 - fg)^2`` then ``(1 - edge)^2``.
         """
         if self.cost is not None:
@@ -94,12 +104,39 @@ class Observation:
         return self.cover_uv.shape[0] == 0
 
 
+def frame_edges(image: np.ndarray, canny: tuple[int, int] = (40, 120)) -> np.ndarray:
+    """The Canny edges of a whole frame, which every person's :func:`edge_map` of that frame reads
+    (computed once per frame when several people are tracked on it).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+        BGR or gray frame.
+    canny : tuple of (int, int)
+        Canny hysteresis thresholds (grey levels).
+
+    Returns
+    -------
+    ndarray of shape (H, W), dtype bool
+        The edge pixels.
+    """
+    gray = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+    return cv2.Canny(gray, canny[0], canny[1]) > 0
+
+
+@lru_cache(maxsize=8)
+def _blur_peak(ksize: int, sigma: float) -> float:
+    """The blurred value of a lone edge pixel: the edge map's scale, so that an edge reads 1."""
+    return float(cv2.GaussianBlur(np.pad(np.ones((1, 1), np.float32), ksize), (ksize, ksize), sigma).max())
+
+
 def edge_map(
     image: np.ndarray | None,
     mask: np.ndarray,
     canny: tuple[int, int] = (40, 120),
     dilate_px: int = 5,
     blur_sigma: float = 1.5,
+    edges: np.ndarray | None = None,
 ) -> np.ndarray:
     """Deutscher's smoothed edge map: Canny edges within the dilated foreground, Gaussian blurred
     and scaled so that an edge pixel reads 1.
@@ -116,6 +153,9 @@ def edge_map(
         How far outside the mask image edges still count (pixels).
     blur_sigma : float
         Gaussian sigma (pixels) of the smoothing that gives the cost a basin.
+    edges : ndarray of shape (H, W), dtype bool, or None
+        The frame's Canny edges (:func:`frame_edges`) when already computed; then ``image`` and
+        ``canny`` are not read.
 
     Returns
     -------
@@ -127,21 +167,45 @@ def edge_map(
     region = cv2.dilate(m, k)
     # The mask boundary is always an edge of the person, even where the image contrast is low.
     boundary = m - cv2.erode(m, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0)
-    edges = boundary.astype(np.float32)
-    if image is not None:
-        gray = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-        e = cv2.Canny(gray, canny[0], canny[1]) > 0
-        edges = np.maximum(edges, (e & (region > 0)).astype(np.float32))
+    out = boundary.astype(np.float32)
+    if edges is None and image is not None:
+        edges = frame_edges(image, canny)
+    if edges is not None:
+        out = np.maximum(out, (edges & (region > 0)).astype(np.float32))
     ksize = int(2 * round(3 * blur_sigma) + 1)
-    sm = cv2.GaussianBlur(edges, (ksize, ksize), blur_sigma)
-    peak = cv2.GaussianBlur(np.pad(np.ones((1, 1), np.float32), ksize), (ksize, ksize), blur_sigma).max()
-    return np.clip(sm / peak, 0.0, 1.0)
+    sm = cv2.GaussianBlur(out, (ksize, ksize), blur_sigma)
+    return np.clip(sm / np.float32(_blur_peak(ksize, blur_sigma)), 0.0, 1.0)
+
+
+def _window(mask: np.ndarray, margin: int) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1): the bounding box of the mask's pixels grown by ``margin`` and clipped to
+    the image; (0, 0, 0, 0) for an empty mask.
+    """
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if not len(rows):
+        return 0, 0, 0, 0
+    H, W = mask.shape
+    return (
+        max(int(cols[0]) - margin, 0),
+        max(int(rows[0]) - margin, 0),
+        min(int(cols[-1]) + margin + 1, W),
+        min(int(rows[-1]) + margin + 1, H),
+    )
 
 
 def make_observation(
-    image: np.ndarray | None, mask: np.ndarray, n_cover: int = 32, rng: np.random.Generator | None = None, **edge_kw
+    image: np.ndarray | None,
+    mask: np.ndarray,
+    n_cover: int = 32,
+    rng: np.random.Generator | None = None,
+    edges: np.ndarray | None = None,
+    **edge_kw,
 ) -> Observation:
     """Build the per-frame maps once (Deutscher: computed once per frame, read by every particle).
+
+    The maps cover the mask's bounding box grown by a margin (``dilate_px`` + twice the blur's
+    radius + 1) beyond which the edge map and its smoothing read nothing but zeros, so the window's
+    maps hold the same values as maps of the whole frame would.
 
     Parameters
     ----------
@@ -153,6 +217,9 @@ def make_observation(
         Foreground pixels sampled for the coverage term (0 disables it).
     rng : numpy.random.Generator or None
         Generator for the coverage sample (default: seeded 0, so a frame maps the same way).
+    edges : ndarray of shape (H, W), dtype bool, or None
+        The frame's Canny edges (:func:`frame_edges`), when several people of one frame share them;
+        None: computed from ``image``.
     **edge_kw
         Keyword parameters of :func:`edge_map` (``canny``, ``dilate_px``, ``blur_sigma``).
 
@@ -164,24 +231,34 @@ def make_observation(
     Raises
     ------
     ValueError
-        If the mask is not 2-D, or the image and the mask differ in size.
+        If the mask is not 2-D, or the image or the edges and the mask differ in size.
     """
     mask = np.asarray(mask).astype(bool)
     if mask.ndim != 2:
         raise ValueError(f"mask has shape {mask.shape}; expected (H, W) foreground of one person")
     if image is not None and image.shape[:2] != mask.shape:
         raise ValueError(f"image {image.shape[:2]} and mask {mask.shape} differ in size")
-    H, W = mask.shape
-    fg = np.append(mask.ravel().astype(np.float32), np.float32(0))
-    edge = np.append(edge_map(image, mask, **edge_kw).ravel(), np.float32(0))
-    ys, xs = np.nonzero(mask)
+    if edges is not None and edges.shape != mask.shape:
+        raise ValueError(f"edges {edges.shape} and mask {mask.shape} differ in size")
+    if edges is None and image is not None:
+        edges = frame_edges(image, edge_kw.get("canny", (40, 120)))
+    dilate_px = int(edge_kw.get("dilate_px", 5))
+    radius = int(round(3 * edge_kw.get("blur_sigma", 1.5)))
+    x0, y0, x1, y1 = _window(mask, dilate_px + 2 * radius + 1)
+    win = mask[y0:y1, x0:x1]
+    fg = np.append(win.ravel().astype(np.float32), np.float32(0))
+    crop = None if edges is None else edges[y0:y1, x0:x1]
+    edge = np.zeros(1, np.float32)  # an empty mask: no window, every point reads nothing
+    if win.size:
+        edge = np.append(edge_map(None, win, edges=crop, **edge_kw).ravel(), np.float32(0))
+    ys, xs = np.nonzero(win)  # the mask's pixels in the same (row-major) order as over the whole mask
     rng = np.random.default_rng(0) if rng is None else rng
     if len(xs) and n_cover:
         pick = rng.choice(len(xs), size=min(n_cover, len(xs)), replace=False)
-        cover = np.stack([xs[pick], ys[pick]], axis=1).astype(np.float32)
+        cover = np.stack([xs[pick] + x0, ys[pick] + y0], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)
-    return Observation(fg, edge, cover, W, H, _cost_map(fg, edge))
+    return Observation(fg, edge, cover, x1 - x0, y1 - y0, _cost_map(fg, edge), x0, y0)
 
 
 def pose_anchor_points(P: np.ndarray, dims: BodyDims) -> np.ndarray:
@@ -513,6 +590,9 @@ class ConeLikelihood:
         k = self.n_in
         # one gather from the cost map: interior samples read (1 - fg)^2, outline ones (1 - edge)^2
         ui, vi = np.rint(u), np.rint(v)
+        if obs.x0 or obs.y0:  # to the window's pixels
+            ui -= np.float32(obs.x0)
+            vi -= np.float32(obs.y0)
         inside = (ui >= 0) & (ui < W) & (vi >= 0) & (vi < H)
         vi *= W
         vi += ui
@@ -637,6 +717,7 @@ class MultiViewLikelihood:
 __all__ = [
     "Observation",
     "edge_map",
+    "frame_edges",
     "make_observation",
     "ConeLikelihood",
     "LikelihoodConfig",

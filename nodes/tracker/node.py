@@ -17,7 +17,8 @@ With ``frame_budget`` (the real-time graph, ``launch/demo.yaml``) the search of 
 fit the camera's frame interval (:class:`counterpart.nodes.tracker.budget.FrameBudget`: fewer
 annealing layers, then fewer particles, from the time the last frames took); the stats give the
 mean layers and particles per person and frame (``budget_layers``, ``budget_particles`` over
-``budget_frames``).
+``budget_frames``), the tracks started (``budget_starts``: first searches, on the longer schedule)
+and the CPU time of the searches (``search_cpu_ms``, the node's messaging aside).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, Para
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .budget import BudgetConfig, FrameBudget
+from .likelihood import frame_edges
 from .prior import resolve_prior
 from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
 
@@ -322,7 +324,9 @@ class TrackerNode(Node):
         people: list[TrackedBody] = []
         in_view = [s for s in self.p["people"] if any(p.side == s for p in sil.people)]
         layers, particles = self.budget.plan(len(in_view), self.fps)
-        t0, evals = time.perf_counter(), 0
+        t0, cpu0, evals = time.perf_counter(), time.process_time(), 0
+        # the frame's edges once for all its people
+        edges = frame_edges(image) if image is not None and len(in_view) > 1 else None
         for side in in_view:
             shape = next(s for s in sil.people if s.side == side)
             try:
@@ -330,6 +334,7 @@ class TrackerNode(Node):
                 tr.filter.n_layers, tr.filter.n_particles = layers, particles
                 # a track's first search runs its own, longer schedule
                 evals += (layers if tr.tracking else tr.config.init.layers) * particles
+                self.tally("budget_starts", not tr.tracking)
                 self.tally("budget_frames")
                 self.tally("budget_layers", layers)
                 self.tally("budget_particles", particles)
@@ -341,7 +346,7 @@ class TrackerNode(Node):
                         "tracking the part the silhouette node assigned to it",
                     )
                 other = next((s for s in sil.people if s.side != side and s.side in SIDES), None)
-                r = tr.update(image, mask, tuple(other.bbox) if other is not None else None)
+                r = tr.update(image, mask, tuple(other.bbox) if other is not None else None, edges)
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
                 self._warn_once(f"error:{side}", f"frame {sil.seq}: {side} person not tracked: {exc}")
@@ -361,6 +366,7 @@ class TrackerNode(Node):
                 )
             )
         self.budget.record(time.perf_counter() - t0, evals)
+        self.tally("search_cpu_ms", (time.process_time() - cpu0) * 1e3)
         self.publish("pose", Pose3D(stamp=sil.stamp, seq=sil.seq, fps=self.fps, people=people))
 
 

@@ -291,6 +291,8 @@ class Tracker:
         self.lost_detector = LostDetector()
         self.prev: np.ndarray | None = None
         self.n_frames = 0
+        #: (poses, image costs, ground costs) of the density's last evaluation
+        self._scored: tuple[np.ndarray, np.ndarray, np.ndarray] = (np.zeros((0, DOF)), np.zeros((0, 3)), np.zeros(0))
 
     @property
     def tracking(self) -> bool:
@@ -339,12 +341,15 @@ class Tracker:
         return post.w_prior * self.predictor.log_prior(X, post.resid_std)
 
     def _observations(
-        self, image: np.ndarray | None | Sequence[np.ndarray | None], mask: np.ndarray | Sequence[np.ndarray]
+        self,
+        image: np.ndarray | None | Sequence[np.ndarray | None],
+        mask: np.ndarray | Sequence[np.ndarray],
+        edges: np.ndarray | None = None,
     ) -> list[Observation]:
         """One Observation per camera from one frame and mask (one camera) or sequences of them."""
         n = len(self.cameras)
         if n == 1 and not _per_camera(mask, 1):
-            return [make_observation(image, mask, rng=self.rng)]
+            return [make_observation(image, mask, rng=self.rng, edges=edges)]
         if not _per_camera(mask, n):
             raise ValueError(
                 f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
@@ -363,6 +368,7 @@ class Tracker:
         image: np.ndarray | None | Sequence[np.ndarray | None],
         mask: np.ndarray | Sequence[np.ndarray],
         towards: tuple[int, int, int, int] | None = None,
+        edges: np.ndarray | None = None,
     ) -> TrackResult | None:
         """Track one frame (the steps of the module docstring).
 
@@ -376,6 +382,9 @@ class Tracker:
             The bounding box, in the reference view, of the person this one interacts with:
             a track that starts on this frame faces that person (``init.facing_yaw``); None:
             the heading of the person's side of the frame.
+        edges : ndarray of shape (H, W), dtype bool, or None
+            One camera only: the frame's Canny edges (``likelihood.frame_edges``) when the trackers
+            of several people of the frame share them; None: computed from ``image``.
 
         Returns
         -------
@@ -389,7 +398,7 @@ class Tracker:
             With several cameras, when the masks or frames are not one per camera; for a mask that
             is not 2-D or a frame of another size than its mask.
         """
-        obs = self._observations(image, mask)
+        obs = self._observations(image, mask, edges)
         if obs[0].empty:
             return None
         start = not self.tracking
@@ -405,7 +414,10 @@ class Tracker:
         """
 
         def loglik(X: np.ndarray) -> np.ndarray:
-            return self.likelihood(X, obs) + self._temporal(X, centre, sig) + self._pose_prior(X)
+            terms, ground = self.likelihood.evaluate(X, obs)
+            # the last layer's costs: its best particle's are the frame's score (``_finish``)
+            self._scored = (X, terms, ground)
+            return self.likelihood.combine(terms, ground) + self._temporal(X, centre, sig) + self._pose_prior(X)
 
         return loglik
 
@@ -446,7 +458,12 @@ class Tracker:
 
     def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
         """Score the estimate's best particle, update the prior's posterior and the lost detector."""
-        terms, ground = self.likelihood.evaluate(est.best[None], obs)
+        X, terms, ground = self._scored
+        row = np.flatnonzero((X == est.best).all(axis=1))[:1]  # the best particle of the last layer
+        if len(row):
+            terms, ground = terms[row], ground[row]
+        else:  # not one of the particles scored last
+            terms, ground = self.likelihood.evaluate(est.best[None], obs)
         cost = float(terms.sum()) / sum(not o.empty for o in obs)  # per view seen: 0 best, 3 worst
         image_ll = float(self.likelihood.combine(terms, ground)[0])
         self.predictor.update(est.mean)
