@@ -173,7 +173,7 @@ def observed_reach(
     """What the observed person's silhouette says of their reach towards the partner
     (``silhouette_reach``) and its box (a region shared with the other person is split: theirs), as
     the responder node finds them: of the silhouettes on their side, the one with the tracked person's id, else the
-    first; None without one.
+    first (and the other person's region, ``nearest_other``); None without one.
     """
     mine = [q for q in people if q.side == side]
     shape = next((q for q in mine if q.id == person_id), mine[0] if mine else None)
@@ -181,7 +181,22 @@ def observed_reach(
         return None, None
     box = tuple(shape.bbox)  # a region shared with the other person is split: this box is theirs
     touching = bool(getattr(shape, "merged", False))
-    return silhouette_reach(shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl, touching=touching), box
+    other = nearest_other(people, side, shape.centroid)
+    reach = silhouette_reach(
+        shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl, touching=touching, other=other
+    )
+    return reach, box
+
+
+def nearest_other(people: list[Any], side: str, centroid: Any) -> tuple[float, float] | None:
+    """The centroid ``(x, y)`` (pixels) of the silhouette off the observed ``side`` nearest the observed
+    one's ``centroid`` across the picture (the other person's), as the responder node finds it; None without one.
+    """
+    theirs = [q for q in people if q.side != side]
+    if not theirs:
+        return None
+    q = min(theirs, key=lambda q: abs(float(q.centroid[0]) - float(centroid[0])))
+    return float(q.centroid[0]), float(q.centroid[1])
 
 
 def staged_partner(

@@ -69,6 +69,8 @@ from counterpart.sim.camera import RandomCameraConfig  # noqa: E402
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
 TRAIN_FRAMES = 20  # as launch/lockstep.yaml's silhouette node
 LIMITS = {"height": 0.10, "tilt": 3.0, "focal": 0.10}
+#: bands of the true tilt, degrees (from, to): at 0 people on a ground plane do not fix the focal length
+TILT_BANDS = ((0.0, 10.0), (10.0, 20.0), (20.0, 35.1))
 #: the calibration node's default bounds of a credible estimate
 BOUNDS = {
     k: Calibration.params[k].default
@@ -115,9 +117,10 @@ def summary(errs: list[dict[str, float]], prefix: str) -> dict[str, Any]:
     )
 
 
-def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
-    """One simulated scene: the estimate from its silhouettes, from its true head/foot points, and
-    the errors of each.
+def sim_inputs(seed: int, seconds: float) -> dict[str, Any]:
+    """What one simulated scene gives the estimator (the costly part of a seed): its silhouettes'
+    and detector's head/foot observations, the scene's line families, the true camera and the true
+    head/foot points.
     """
     from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
     from counterpart.sim.scenarios import SCENARIOS
@@ -136,36 +139,45 @@ def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
             obs.add_detections(*detect_people(detector, frame), i / stream.fps)
         if scene.wants(i):
             scene.add(frame, result.people)
-    est = obs.estimate(lines=scene.families())
     # the true points: the crown (11 cm over the head joint) over the mid-ankle put on the ground
     J = stream.scenario.joints()
     head = J[:, :, JOINT_INDEX["head"]] + [0.0, 0.11, 0.0]
     foot = 0.5 * (J[:, :, JOINT_INDEX["l_ankle"]] + J[:, :, JOINT_INDEX["r_ankle"]]) * [1.0, 0.0, 1.0]
     T = len(J)
-    oracle = estimate_camera(
-        truth.project(head).reshape(-1, 2),
-        truth.project(foot).reshape(-1, 2),
-        np.tile([0, 1], T),
-        stream.size,
-        np.repeat(np.arange(T) / stream.fps, 2),
-    )
-    ok = est is not None and credible(est, *BOUNDS.values())
-    published = (
-        estimate_errors(est, truth)
-        if ok
-        else errors(
-            default_camera(*stream.size).centre[1],
-            tilt_deg(default_camera(*stream.size)),
-            default_camera(*stream.size).fx,
-            truth,
-        )
-    )
-    default = default_camera(*stream.size)
     return {
         "seed": seed,
         "scenario": name,
-        "camera": stream.scenario.meta["camera"],
-        "observations": len(obs),
+        "camera_meta": stream.scenario.meta["camera"],
+        "truth": truth,
+        "size": stream.size,
+        "observations": obs.arrays(),
+        "lines": scene.families(),
+        "truth_points": (
+            truth.project(head).reshape(-1, 2),
+            truth.project(foot).reshape(-1, 2),
+            np.tile([0, 1], T),
+            np.repeat(np.arange(T) / stream.fps, 2),
+        ),
+    }
+
+
+def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
+    """One scene's estimate from its silhouettes, from its true head/foot points, and the errors of
+    each (``inputs``: :func:`sim_inputs`).
+    """
+    truth, size = inputs["truth"], inputs["size"]
+    head, foot, track, t = inputs["observations"]
+    est = estimate_camera(head, foot, track, size, t, lines=inputs["lines"])
+    th, tf, tk, tt = inputs["truth_points"]
+    oracle = estimate_camera(th, tf, tk, size, tt)
+    ok = est is not None and credible(est, *BOUNDS.values())
+    default = default_camera(*size)
+    published = estimate_errors(est, truth) if ok else errors(default.centre[1], tilt_deg(default), default.fx, truth)
+    return {
+        "seed": inputs["seed"],
+        "scenario": inputs["scenario"],
+        "camera": inputs["camera_meta"],
+        "observations": len(head),
         "estimate": est.summary() if est is not None else None,
         "errors": estimate_errors(est, truth),
         "credible": bool(ok),
@@ -173,6 +185,38 @@ def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
         "truth_points": estimate_errors(oracle, truth),
         "default": errors(default.centre[1], tilt_deg(default), default.fx, truth),
     }
+
+
+def sim_seed(seed: int, seconds: float) -> dict[str, Any]:
+    """One simulated scene, end to end: :func:`sim_row` of :func:`sim_inputs`."""
+    return sim_row(sim_inputs(seed, seconds))
+
+
+def tilt_bands(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per band of the true tilt (:data:`TILT_BANDS`): the seeds in it, and for the estimate and
+    for the true points (``truth_``) the share within all three limits, within the height and tilt
+    limits, and the median focal error: where the geometry of people gives out, and where the
+    estimator falls short of it.
+    """
+    out: dict[str, Any] = {}
+    for lo, hi in TILT_BANDS:
+        band = [r for r in rows if lo <= r["camera"]["tilt_deg"] < hi]
+        key = f"{lo:g}-{hi:g}"
+        if not band:
+            out[key] = {"seeds": 0}
+            continue
+        v: dict[str, Any] = {"seeds": len(band)}
+        for name, prefix in (("errors", ""), ("truth_points", "truth_")):
+            errs = [r[name] for r in band]
+            v[f"{prefix}within"] = round(float(np.mean([within(e) for e in errs])), 4)
+            v[f"{prefix}within_height_tilt"] = round(
+                float(np.mean([e["height"] <= LIMITS["height"] and e["tilt"] <= LIMITS["tilt"] for e in errs])), 4
+            )
+            v[f"{prefix}within_focal"] = round(float(np.mean([e["focal"] <= LIMITS["focal"] for e in errs])), 4)
+            v[f"{prefix}focal_err"] = _finite(round(float(np.median([e["focal"] for e in errs])), 4))
+        v["credible"] = round(float(np.mean([r["credible"] for r in band])), 4)
+        out[key] = v
+    return out
 
 
 def _finite(v: Any) -> Any:
@@ -230,6 +274,7 @@ def sim_figures(seeds: int = 50, seconds: float = 3.0, first_seed: int = 1000, j
     }
     low = [r for r in rows if r["camera"]["tilt_deg"] < 10.0]
     out["calib_within_tilt_under_10"] = summary([r["errors"] for r in low], "")["within"] if low else None
+    out["calib_tilt_bands"] = tilt_bands(rows)
     out["calib_rows"] = [
         {k: _finite(r[k]) for k in ("seed", "scenario", "camera", "errors", "credible", "truth_points")} for r in rows
     ]

@@ -11,7 +11,7 @@ import pytest
 
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import CalibrationConfig, estimate_camera, head_foot, rotation, usable
-from counterpart.nodes.calibration.lines import detect_segments, find_families
+from counterpart.nodes.calibration.lines import LineFamilies, detect_segments, find_families
 from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
 
 W, H = 320, 240
@@ -187,6 +187,30 @@ def test_square_floor_lines_fix_the_focal_length_of_a_level_camera(tilt: float) 
     free = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(manhattan_std_deg=None), lines)
     assert abs(free.focal / cam.fx - 1) > 0.10, free.describe()
     assert free.focal_std > 1.5 * est.focal_std, free.describe()  # without the right angle: the prior's width
+
+
+def test_a_family_of_segments_off_the_horizon_is_dropped() -> None:
+    # the square floor of a level camera, and a few segments (edges of several things) that meet at
+    # a point well above the horizon and to one side: taken as a ground direction, that point and
+    # a floor's make a horizon rolled and raised, and the right angle a focal length far off
+    cam = _camera(1.2, 3.0, 60.0, distance=6.0)
+    heads, feet, ids, t = _across(cam, seed=3)
+    floor = find_families(_floor(cam, seed=4, yaw_deg=30.0), (H - 1) / 2)
+    rng = np.random.default_rng(5)
+    point = np.array([W * 0.9, -0.6 * H])
+    mid = np.column_stack([rng.uniform(0.3 * W, 0.9 * W, 6), rng.uniform(0.55 * H, 0.9 * H, 6)])
+    u = (point - mid) / np.linalg.norm(point - mid, axis=1, keepdims=True)
+    stray = np.column_stack([mid - 15 * u, mid + 15 * u])
+    lines = LineFamilies(
+        np.vstack([floor.segments, stray]),
+        np.r_[floor.family, np.full(len(stray), len(floor.vp))],
+        np.r_[floor.vertical, False],
+        np.vstack([floor.vp, [point[0], point[1], 1.0]]),
+    )
+    est = estimate_camera(heads, feet, ids, (W, H), t, lines=lines)
+    assert abs(est.focal / cam.fx - 1) < 0.10 and abs(est.tilt_deg - 3.0) < 2.0, est.describe()
+    kept = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(family_outlier_cost=None), lines)
+    assert abs(kept.tilt_deg - 3.0) > 3.0 or abs(kept.focal / cam.fx - 1) > 0.2, kept.describe()
 
 
 def test_segments_on_a_person_are_dropped_and_lines_behind_them_kept() -> None:

@@ -53,6 +53,32 @@ def test_synthetic_handshake_two_people_with_outlines_ids_and_no_shadows(handsha
     assert merged_frames >= 15
 
 
+def test_a_fit_in_the_background_publishes_meanwhile_and_learns_the_same_background(handshake):
+    """With ``fit_in_background`` the frame that completes the training returns at once, the
+    frames that come while the fit runs have no people, and the fitted model is the one the fit
+    in line learns from the same frames; people are found once it is taken up.
+    """
+    frames = handshake.frames
+    inline = SilhouetteExtractor(backend_params={"train_frames": 20})
+    inline.fit_background(frames[:20])
+    bg = SilhouetteExtractor(backend_params={"train_frames": 20, "fit_in_background": True})
+    sub = bg.subtractor
+    for f in frames[:20]:
+        assert not bg.process(f).ready
+    assert sub.fitting and not sub.ready
+    r = bg.process(frames[20])  # the fit takes longer than a frame that it leaves alone
+    assert not r.ready and r.people == [] and not r.labels.any()
+    sub._fitting.result()  # the fit is done: the next frame takes its model up
+    for name in ("mean_", "spread_", "a_", "b_", "unseen_"):
+        np.testing.assert_array_equal(getattr(sub.model, name), getattr(inline.subtractor.model, name))
+    assert sub.model.thresholds_ == inline.subtractor.model.thresholds_
+    k = 21
+    r = bg.process(frames[k])
+    assert r.ready and not sub.fitting
+    found = [len(bg.process(f).people) for f in frames[k + 1 : k + 11]]
+    assert max(found) == 2
+
+
 @pytest.mark.parametrize("backend", ["mog2", "knn"])
 def test_opencv_backends_run_through_the_extractor(handshake, backend):
     ex = SilhouetteExtractor(backend=backend)

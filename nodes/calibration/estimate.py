@@ -92,6 +92,11 @@ class CalibrationConfig:
         (rooms, streets and buildings are mostly laid out square: Coughlan & Yuille's "Manhattan
         world"); with two such families it fixes the focal length even with the camera level, where
         people alone cannot. The robust loss lets a scene that is not square go. None: no such prior.
+    family_outlier_cost : float or None, default=4.0
+        A line family is dropped, and the camera fitted again, when leaving it out lowers the fit's
+        cost (half its robust chi-square) by more than this: segments that meet at a point that is
+        not the image of one horizontal scene direction; one family at a time, the one whose leaving
+        out gains most. None: keep every family.
     min_person_views : int, default=5
         A person (track id) seen fewer times is left out: more likely a passing false find (a
         fragment of a region, a detector's box on the room) than a person, and its stature prior
@@ -117,6 +122,7 @@ class CalibrationConfig:
     n_starts: int = 3
     manhattan_std_deg: float | None = 3.0
     min_person_views: int = 5
+    family_outlier_cost: float | None = 4.0
 
 
 @dataclass(frozen=True)
@@ -443,6 +449,74 @@ def _relative_heights(
     return -(ta * tb).sum(axis=1) / np.maximum((tb * tb).sum(axis=1), 1e-12)
 
 
+def _line_scale(lines: LineFamilies, config: CalibrationConfig) -> np.ndarray:
+    """(N,) std of each segment's direction residual (sine of an angle)."""
+    length = np.hypot(*(lines.segments[:, 2:] - lines.segments[:, :2]).T)
+    return np.maximum(config.line_noise_px / length, np.sin(np.radians(config.min_line_noise_deg)))
+
+
+def _solve(
+    head: np.ndarray,
+    foot: np.ndarray,
+    k: np.ndarray,
+    scale: np.ndarray,
+    size: tuple[int, int],
+    config: CalibrationConfig,
+    f0: float,
+    nk: int,
+    lines: LineFamilies | None,
+) -> Any:
+    """The robust fit from the best ``config.n_starts`` of the start grid: scipy's result with the
+    least cost, or None when no start puts every person above the ground.
+    """
+    if lines is not None and not len(lines.segments):
+        lines = None
+    line_scale = _line_scale(lines, config) if lines is not None else None
+    W, H = size
+    args = (head, foot, k, scale, size, config, f0, nk, lines, line_scale)
+    starts = []
+    for tilt in np.radians(config.grid_tilt_deg):
+        for fov in config.grid_fov_deg:
+            f = (W / 2.0) / np.tan(np.radians(fov) / 2)
+            h = _relative_heights(f, tilt, 0.0, head, foot, size)
+            hk = np.array([np.median(h[k == j]) for j in range(nk)])
+            if not (hk > 0.05).all():
+                continue
+            hc = config.person_height / np.exp(np.mean(np.log(hk)))
+            x0 = np.concatenate([[np.log(f), tilt, 0.0, np.log(hc)], np.log(hk * hc)])
+            if lines is not None:
+                x0 = np.concatenate([x0, _directions(x0, lines, size)])
+            r = _residuals(x0, *args)
+            starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), x0))
+    if not starts:
+        return None
+    starts.sort(key=lambda s: s[0])
+    best = None
+    for _, x0 in starts[: config.n_starts]:
+        lo = np.full(len(x0), -np.inf)
+        hi = np.full(len(x0), np.inf)
+        lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
+        x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
+        res = least_squares(
+            _residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
+        )
+        if best is None or res.cost < best.cost:
+            best = res
+    return best
+
+
+def _without_family(lines: LineFamilies, j: int) -> LineFamilies:
+    """``lines`` less family ``j`` (the later families renumbered)."""
+    keep = lines.family != j
+    family = lines.family[keep]
+    return LineFamilies(
+        lines.segments[keep],
+        family - (family > j),
+        np.delete(lines.vertical, j),
+        np.delete(lines.vp, j, axis=0),
+    )
+
+
 def estimate_camera(*args: Any, **kw: Any) -> CameraEstimate | None:
     """:func:`fit_camera` on one BLAS thread (its matrices are small: more threads only contend).
 
@@ -527,40 +601,28 @@ def fit_camera(
 
     if lines is not None and not len(lines.segments):
         lines = None
-    line_scale = None
-    if lines is not None:
-        length = np.hypot(*(lines.segments[:, 2:] - lines.segments[:, :2]).T)
-        line_scale = np.maximum(config.line_noise_px / length, np.sin(np.radians(config.min_line_noise_deg)))
     nk = len(ids)
-    args = (head, foot, k, scale, (W, H), config, f0, nk, lines, line_scale)
-    starts = []
-    for tilt in np.radians(config.grid_tilt_deg):
-        for fov in config.grid_fov_deg:
-            f = (W / 2.0) / np.tan(np.radians(fov) / 2)
-            h = _relative_heights(f, tilt, 0.0, head, foot, (W, H))
-            hk = np.array([np.median(h[k == j]) for j in range(len(ids))])
-            if not (hk > 0.05).all():
-                continue
-            hc = config.person_height / np.exp(np.mean(np.log(hk)))
-            x0 = np.concatenate([[np.log(f), tilt, 0.0, np.log(hc)], np.log(hk * hc)])
-            if lines is not None:
-                x0 = np.concatenate([x0, _directions(x0, lines, (W, H))])
-            r = _residuals(x0, *args)
-            starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), x0))
-    if not starts:
+    best = _solve(head, foot, k, scale, (W, H), config, f0, nk, lines)
+    if best is None:
         return None
-    starts.sort(key=lambda s: s[0])
-    best = None
-    for _, x0 in starts[: config.n_starts]:
-        lo = np.full(len(x0), -np.inf)
-        hi = np.full(len(x0), np.inf)
-        lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
-        x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
-        res = least_squares(
-            _residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
-        )
-        if best is None or res.cost < best.cost:
-            best = res
+    # a family of segments that is not a set of parallel scene lines (edges of several things that
+    # happen to meet, a family off the ground's horizon) drags the horizon to its point, and with two
+    # families any two points make a horizon: drop the family whose leaving out lowers the cost
+    # most, while that gain is over the bound (a likelihood-ratio test per family), and fit again
+    while lines is not None and config.family_outlier_cost is not None and len(lines.vp):
+        fits = [
+            (_solve(head, foot, k, scale, (W, H), config, f0, nk, fewer), fewer)
+            for fewer in (_without_family(lines, j) for j in range(len(lines.vp)))
+        ]
+        fits = [(fit, fewer) for fit, fewer in fits if fit is not None]
+        if not fits:
+            break
+        fit, fewer = min(fits, key=lambda v: v[0].cost)
+        # a fit that ends on the tilt's bound is one the rest contradicts (the people's lean taken
+        # for a camera looking up), not a better one
+        if best.cost - fit.cost <= config.family_outlier_cost or fit.x[1] <= np.radians(config.min_tilt_deg) + 1e-3:
+            break
+        best, lines = fit, (fewer if len(fewer.segments) else None)
     x = best.x
     J = best.jac
     m, n = J.shape

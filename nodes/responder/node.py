@@ -133,8 +133,9 @@ class Responder(Node):
         "recoil_m": Param(
             float,
             0.3,
-            "how far the partner steps back when a hand of the observed person touches "
-            "its chest (m, fading over about a second; 0: it does not recoil)",
+            "how far the partner gives way while the observed person pushes it (their hand on its chest, "
+            "or their silhouette driving a hand held out into someone), the room it keeps for its recoil "
+            "when the push is released (m, within max_distance_m; 0: it does not recoil)",
             min=0.0,
         ),
         "reach_m": Param(
@@ -300,8 +301,17 @@ class Responder(Node):
         shape = next((q for q in mine if q.id == body.id), mine[0] if mine else None)
         direction = (self.stage.side if self.stage is not None else 0.0) or side
         if shape is not None and direction != 0.0:
+            # the other person's region, nearest across the picture: a hand held out to them lies between the two
+            theirs = [q for q in shapes if q.side != body.side]
+            near = min(theirs, key=lambda q: abs(float(q.centroid[0]) - float(shape.centroid[0])), default=None)
             silhouette = silhouette_reach(
-                shape.bbox, shape.centroid, direction, stature(body.joints), shape.ctrl, touching=shape.merged
+                shape.bbox,
+                shape.centroid,
+                direction,
+                stature(body.joints),
+                shape.ctrl,
+                touching=shape.merged,
+                other=None if near is None else (float(near.centroid[0]), float(near.centroid[1])),
             )
         return {
             "other": None if other is None else np.asarray(other.joints),

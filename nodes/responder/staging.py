@@ -37,16 +37,23 @@ model's posture and gestures are kept:
    video, a silhouette's outline is not), with ``push_touch`` the silhouette touches someone
    else's (:attr:`Reach.touching`: a pusher walks in with the arm out well before the hand lands),
    and the hand was last seen held high (``push_height`` of the stature: a push lands on the chest,
-   people walking in to shake hands hold the hand lower), its distance grows by ``recoil_m`` at
-   ``recoil_speed_m_s``, on at that speed while the push goes on up to ``recoil_max_m`` (beyond
-   ``max_distance_m`` if need be: a partner at the limit still moves back), and once the push is
-   over it returns with time constant ``recoil_s`` (within the speed of 2).
-   A hand held out without a push is offered (:attr:`Stage.offered_`), at the height of the
-   silhouette's tip, ``meet_frac`` of the way to the partner at most; where the silhouette touches
-   someone else's (its tip is then where the regions were split, not the hand) at ``hand_frac`` of
-   the person's stature, ``meet_touch`` of the way to the one they hold it out to (the real second
-   person across the view, else the partner). With ``step_in`` the partner stands to take it, its
-   arm's length (``STEP_REACH`` of it) beyond the hand;
+   people walking in to shake hands hold the hand lower). As a pushed person does on real video,
+   it gives way while the push goes on (the pusher's hand held out on someone, their silhouette
+   touching another's, or driven on): its distance grows at ``yield_speed_m_s`` up to ``recoil_m``
+   from where the push landed; when the push is released it is thrown back, to ``recoil_max_m``
+   at ``recoil_speed_m_s``, and once there it returns with time constant ``recoil_s``. All of it
+   within ``max_distance_m``: a partner standing further than ``recoil_m`` inside the limit when
+   pushed stands where the push lands, with room to recoil.
+   A hand held out without a push (the silhouette reaching ``offer_m``, or having done so within
+   ``offer_hold_s``) is offered (:attr:`Stage.offered_`), at the height of the silhouette's tip,
+   ``meet_frac`` of the way to the partner at most; where the silhouette touches someone else's
+   (its tip is then where the regions were split, not the hand), with the camera, the person's box
+   and the other's region, where the picture says (``meet_touch`` of the way between the two
+   regions' centroids, ``hand_box_frac`` of the box's height above its bottom, at the person's
+   depth: the tracked places of the two are off by decimetres on real video), else at
+   ``hand_frac`` of the person's stature, ``meet_touch`` of the way to the one they hold it out to
+   (the real second person across the view, else the partner). With ``step_in`` the partner
+   stands to take it, its arm's length (``STEP_REACH`` of it) beyond the hand;
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float).
 """
@@ -99,13 +106,13 @@ class StageConfig:
     contact_m : float, default=0.2
         A reach of the observed person within this distance of the partner's torso axis is a push, metres.
     recoil_m : float, default=0.3
-        The distance a push adds, metres.
+        The most the partner gives way while pushed, metres, and the room it keeps for its recoil
+        within ``max_distance_m`` (0: it does not recoil).
     recoil_max_m : float, default=0.4
-        The most a push that goes on moves the partner back, metres: it steps back on at
-        ``recoil_speed_m_s`` while pushed, beyond ``max_distance_m`` if need be (a partner at the
-        limit still moves back), and returns once the push is over.
+        How far the partner is thrown back when the push is released, metres from where the push
+        landed, within ``max_distance_m``.
     recoil_s : float, default=0.4
-        Time constant of the recoil's fading once the push is over, seconds.
+        Time constant of the recoil's fading once the partner has been thrown back, seconds.
     beside : bool, default=True
         Stand beside the observed person across the camera's view, at their depth (False: in the
         model's direction).
@@ -133,8 +140,11 @@ class StageConfig:
         person's stature above their lowest ankle (where the regions were split, the outline's tip
         says nothing of the hand's height); 0: the outline's tip as elsewhere.
     recoil_speed_m_s : float, default=0.75
-        How fast the partner steps back when pushed, metres per second (the return is the fading,
-        ``recoil_s``).
+        How fast the partner is thrown back when the push is released, metres per second (the
+        return is the fading, ``recoil_s``).
+    yield_speed_m_s : float, default=0.2
+        How fast the partner gives way while the push goes on, metres per second (a pushed person
+        is thrown back mostly when the push is released).
     meet_touch : float, default=0.45
         Where the silhouette touches someone else's, the offered hand is met this fraction of the way
         from the observed person to the one they hold it out to (the real second person where one is
@@ -147,6 +157,14 @@ class StageConfig:
         person's stature or above (smoothed, where the silhouette touched no one's: there its
         outline's tip is the hand): a push lands on the chest, a hand to shake is held lower
         (people walking in to shake hands are no push); 0: any height.
+    offer_hold_s : float, default=0.3
+        A hand held out stays held out this long after the silhouette last reached ``offer_m``,
+        seconds (an outline's tip flickers about the limit while the hand stays out).
+    hand_box_frac : float, default=0.62
+        With a camera, the observed person's box and the other person's region, a hand held out while
+        the silhouettes touch lies at this fraction of the box's height above its bottom, ``meet_touch``
+        of the way between the two regions' centroids across the picture; 0: placed from the tracked
+        bodies (``hand_frac``) as without them.
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
@@ -183,6 +201,9 @@ class StageConfig:
     meet_touch: float = 0.45
     step_in: bool = True
     push_height: float = 0.7
+    yield_speed_m_s: float = 0.2
+    offer_hold_s: float = 0.3
+    hand_box_frac: float = 0.62
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -195,8 +216,14 @@ class StageConfig:
             raise ValueError(
                 f"contact_m={self.contact_m}, recoil_m={self.recoil_m} must be >= 0 and recoil_s={self.recoil_s} > 0"
             )
-        if self.recoil_speed_m_s <= 0:
-            raise ValueError(f"recoil_speed_m_s={self.recoil_speed_m_s} must be > 0")
+        if self.recoil_speed_m_s <= 0 or self.yield_speed_m_s < 0:
+            raise ValueError(
+                f"recoil_speed_m_s={self.recoil_speed_m_s} must be > 0 and yield_speed_m_s={self.yield_speed_m_s} >= 0"
+            )
+        if self.offer_hold_s < 0 or not 0.0 <= self.hand_box_frac <= 1.0:
+            raise ValueError(
+                f"offer_hold_s={self.offer_hold_s} must be >= 0 and hand_box_frac={self.hand_box_frac} in [0, 1]"
+            )
         if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
             raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
@@ -257,12 +284,19 @@ class Reach(NamedTuple):
     touching : bool, default=False
         Whether the silhouette touches someone else's (its region was shared with another person's
         and split, ``silhouette.Person.merged``).
+    centre_px : tuple of float or None, default=None
+        The region's centroid ``(x, y)``, pixels (None: not known).
+    other_px : tuple of float or None, default=None
+        The centroid ``(x, y)`` of the other person's region, pixels, where one is seen (None: none):
+        a hand held out to them while the regions touch lies between the two.
     """
 
     extent_m: float
     height_m: float | None
     centre_m: float
     touching: bool = False
+    centre_px: tuple[float, float] | None = None
+    other_px: tuple[float, float] | None = None
 
 
 def silhouette_reach(
@@ -273,6 +307,7 @@ def silhouette_reach(
     ctrl: np.ndarray | None = None,
     band: tuple[float, float] = ARM_BAND,
     touching: bool = False,
+    other: tuple[float, float] | None = None,
 ) -> Reach:
     """How far a person's silhouette extends towards ``direction`` from its centre, how high, and where
     its centre is, metres.
@@ -300,6 +335,8 @@ def silhouette_reach(
         The heights a reach is looked for at, fractions of the box's height above its bottom.
     touching : bool, default=False
         Whether the silhouette touches someone else's (``silhouette.Person.merged``).
+    other : tuple of float or None, default=None
+        The centroid ``(x, y)`` of the other person's region, pixels (None: none seen).
 
     Returns
     -------
@@ -308,7 +345,7 @@ def silhouette_reach(
     """
     x, y, w, h = (float(v) for v in bbox)
     if h <= 0:
-        return Reach(0.0, None, 0.0, touching)
+        return Reach(0.0, None, 0.0, touching, None, other)
     pts = None if ctrl is None else np.asarray(ctrl, np.float64).reshape(-1, 2)
     if pts is not None:
         up = (y + h - pts[:, 1]) / h
@@ -319,7 +356,42 @@ def silhouette_reach(
     else:
         edge, height = (x + w if direction > 0 else x), None
     cx = float(centroid[0])
-    return Reach(max(direction * (edge - cx), 0.0) / h * stature_m, height, direction * cx / h * stature_m, touching)
+    extent = max(direction * (edge - cx), 0.0) / h * stature_m
+    centre = (cx, float(centroid[1]))
+    return Reach(extent, height, direction * cx / h * stature_m, touching, centre, other)
+
+
+def touching_hand_px(
+    silhouette: Reach, box: tuple[float, float, float, float], meet: float, box_frac: float
+) -> tuple[float, float] | None:
+    """Where, in the picture, a person holds a hand out to the one whose silhouette theirs touches.
+
+    Hands held out to each other meet between the two people: ``meet`` of the way from the person's
+    region's centroid to the other's across the picture, at ``box_frac`` of the person's box height
+    above its bottom. Pixels need neither a tracked depth nor a body size (the tracked places of two
+    people are off by decimetres on real video), and where the regions were split the outline's tip
+    is the split, not the hand.
+
+    Parameters
+    ----------
+    silhouette : Reach
+        The person's reach, with ``centre_px`` and ``other_px`` (:func:`silhouette_reach`).
+    box : tuple of float
+        The person's silhouette box ``(x, y, w, h)``, pixels.
+    meet : float
+        Fraction of the way from the person's centroid to the other's.
+    box_frac : float
+        Fraction of the box's height above its bottom.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(u, v)`` pixels; None without both centroids or with an empty box.
+    """
+    if silhouette.centre_px is None or silhouette.other_px is None or float(box[3]) <= 0:
+        return None
+    u = float(silhouette.centre_px[0]) + meet * (float(silhouette.other_px[0]) - float(silhouette.centre_px[0]))
+    return u, float(box[1]) + float(box[3]) * (1.0 - box_frac)
 
 
 def _arm_length(joints: np.ndarray) -> float:
@@ -459,9 +531,12 @@ class Stage:
         self._recoil = 0.0  # metres added to the partner's distance by a push, fading
         self._recoil_goal = 0.0  # where the recoil is going: recoil_m on a push, fading after
         self._touching = False
+        self._pushed = False  # a push goes on (see __call__)
+        self._base = 0.0  # the partner's distance where the push landed, metres
         self._height: float | None = None  # the held-out hand's smoothed height, fraction of the stature
         self._centre: float | None = None  # the silhouette's last centre across the view, metres
         self._advance = 0.0  # its smoothed speed towards the partner, metres per second
+        self._since_offer = np.inf  # seconds since the silhouette last reached offer_m
         self.pushes = 0  # pushes the partner recoiled from
         self.offered_: np.ndarray | None = None
 
@@ -502,6 +577,39 @@ class Stage:
             frac = silhouette.height_m / max(stature(X), 1e-6)
             self._height = frac if self._height is None else self._height + HEIGHT_RATE * (frac - self._height)
         return self._height is None or self._height >= self.config.push_height
+
+    def _holding_out(self, silhouette: Reach | None, dt: float) -> bool:
+        """Whether the observed person holds a hand out towards the partner: their silhouette reaching
+        ``offer_m`` or more, or having done so within the last ``offer_hold_s`` (an outline's tip
+        flickers about the limit while the hand stays out).
+        """
+        if silhouette is None:
+            self._since_offer = np.inf
+            return False
+        self._since_offer = 0.0 if silhouette.extent_m >= self.config.offer_m else self._since_offer + dt
+        return self._since_offer <= self.config.offer_hold_s
+
+    def _hand_in_picture(
+        self, silhouette: Reach, camera: Camera | None, box: tuple[float, float, float, float] | None, X: np.ndarray
+    ) -> np.ndarray | None:
+        """Where a hand held out to the other person lies while the two silhouettes touch, world metres (3,):
+        :func:`touching_hand_px` back-projected to the depth of the observed person's hips; None without
+        the camera, the box or the other's region.
+        """
+        c = self.config
+        px = (
+            None
+            if box is None or c.hand_box_frac <= 0
+            else touching_hand_px(silhouette, box, c.meet_touch, c.hand_box_frac)
+        )
+        if camera is None or px is None:
+            return None
+        ray = camera.rays(np.array(px[0]), np.array(px[1]))
+        along = float(ray @ camera.R[2])
+        depth = float(camera.depth(X[_HIPS].mean(axis=0)))
+        if along <= 1e-6 or depth <= 1e-3:
+            return None
+        return camera.centre + depth / along * ray
 
     def _advancing(self, silhouette: Reach | None, dt: float) -> float:
         """The silhouette centre's smoothed speed towards the partner, metres per second."""
@@ -578,20 +686,26 @@ class Stage:
         o, p = o3[[0, 2]], p3[[0, 2]]
         dt = max(float(dt), 0.0)
         advance = self._advancing(silhouette, dt)
-        held_out = silhouette is not None and silhouette.extent_m >= c.offer_m
+        held_out = self._holding_out(silhouette, dt)
         high = self._held_high(silhouette, X, held_out)
         pushing = held_out and advance >= c.push_speed_m_s and (silhouette.touching or not c.push_touch) and high
         touching = self._touching_now(X, P, o, p, pushing)
-        if touching and not self._touching:
-            self._recoil_goal = min(self._recoil_goal + c.recoil_m, c.recoil_max_m)
-            self.pushes += 1
-        elif touching:  # pushed on and on, it goes on stepping back; the return starts when the push ends
-            self._recoil_goal = min(max(self._recoil_goal, c.recoil_m) + c.recoil_speed_m_s * dt, c.recoil_max_m)
-        else:  # the push over: the return
-            self._recoil_goal *= float(np.exp(-dt / c.recoil_s))
+        onset = touching and not self._pushed
+        self.pushes += onset
+        was_pushed = self._pushed
+        # the push goes on while the pusher holds the hand out on someone (their silhouette touching
+        # another's) or drives it on: a pusher's advance comes in bursts, regions merge and part
+        self._pushed = touching or (self._pushed and held_out and (silhouette.touching or advance >= c.push_speed_m_s))
+        if self._pushed:  # it gives way while pushed, up to recoil_m
+            self._recoil_goal = c.recoil_m
+            self._recoil = min(self._recoil + c.yield_speed_m_s * dt, max(c.recoil_m, self._recoil))
+        else:
+            if was_pushed:  # the push released: thrown back
+                self._recoil_goal = c.recoil_max_m if c.recoil_m > 0 else 0.0
+            elif self._recoil >= self._recoil_goal - 1e-6:  # landed: the return
+                self._recoil_goal *= float(np.exp(-dt / c.recoil_s))
+            self._recoil = min(self._recoil_goal, self._recoil + c.recoil_speed_m_s * dt)
         self._touching = touching
-        # the step back at recoil_speed_m_s; the return as the push fades
-        self._recoil = min(self._recoil_goal, self._recoil + c.recoil_speed_m_s * dt)
         d = p - o
         r = float(np.hypot(*d))
         across = ACROSS if camera is None else across_view(camera.R)
@@ -601,16 +715,19 @@ class Stage:
             # the model's distance across the view; along the person's facing when nothing gives a side
             if s != 0.0:
                 d = s * max(r, 1e-3) * u
-        r = float(np.hypot(*d))
-        if r > 1e-6:  # the step back is from where it stands, beyond max_distance_m if need be
-            d = d * (min(max(r, c.min_distance_m), c.max_distance_m) + self._recoil) / r
-        offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m + min(self._recoil, c.recoil_max_m))
+        offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
         out = None  # how far out towards the partner the observed person holds a hand, metres
+        hand = None  # where the hand is, world metres, where the picture says
         if held_out and not touching:
             r = float(np.hypot(*offset))
             out = min(silhouette.extent_m, c.meet_frac * r)  # hands meet between the two
             if silhouette.touching:  # the outline's tip is where the regions were split, not the hand
-                out = c.meet_touch * self._gap_to(o, other, offset, across)
+                hand = self._hand_in_picture(silhouette, camera, box, X)
+                out = (
+                    c.meet_touch * self._gap_to(o, other, offset, across)
+                    if hand is None
+                    else max(float((hand[[0, 2]] - o) @ offset) / max(r, 1e-9), 0.0)
+                )
             if c.step_in:  # the partner stands to take the hand: within its arm's reach, not on top of it
                 stand = out + STEP_REACH * _arm_length(P)
                 offset = offset * min(max(stand, c.min_distance_m), c.max_distance_m) / max(r, 1e-9)
@@ -618,11 +735,20 @@ class Stage:
         if camera is not None and box is not None and r > 1e-6:  # never inside the person in the picture
             lengths = np.linspace(r, max(r, c.max_distance_m), 8)
             offset = offset / r * clear_length(P, o - p, offset / r, lengths, camera, box, c.clear_iou, c.clear_inside)
+        r = float(np.hypot(*offset))
+        if onset and r > 1e-6:
+            # pushed, it steps back from where it stands, within max_distance_m: a partner near the
+            # limit stands where the push lands (the pusher's hand on its chest) with room to recoil
+            self._base = min(r, max(c.max_distance_m - c.recoil_m, c.min_distance_m))
+        if (self._pushed or self._recoil_goal > 0.01) and r > 1e-6:  # stepping back from where the push landed
+            offset = offset / r * min(self._base + self._recoil, c.max_distance_m)
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
         self.offered_ = None
-        if out is not None:
+        if hand is not None:
+            self.offered_ = hand
+        elif out is not None:
             lo, hi = float(X[_HIPS, 1].mean()), float(X[_SHOULDERS, 1].mean())
             u = offset / max(float(np.hypot(*offset)), 1e-9)
             near = X[_WRISTS][int(np.argmax((X[_WRISTS][:, [0, 2]] - o) @ u))]

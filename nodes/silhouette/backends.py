@@ -16,6 +16,7 @@ Shadows and highlights always count as background in the mask.
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Protocol
 
 import cv2
@@ -77,6 +78,12 @@ class HorprasertSubtractor:
         Which shadow labels inside a body (dark clothes, hair) are published as foreground
         (``body_shadow.reclaim_body_shadow``); None: ``BodyShadowConfig()`` (the node's default),
         ``BodyShadowConfig(span_px=0)``: none. The model learns from the labels before this step.
+    fit_in_background : bool, default=False
+        Fit on the collected training frames in a thread of its own and return at once: the
+        frames that come while it runs get no foreground (``ready`` False) and are not learnt; the
+        first frame after it has finished is classified. For a live graph, which then keeps
+        publishing through the training instead of stalling on one long call; the frames the
+        fit overlaps depend on timing, so replays that must repeat exactly leave it off.
     **model_params : Any
         Go to ``HorprasertBackground.from_params`` (the names of its configs' fields).
 
@@ -99,6 +106,7 @@ class HorprasertSubtractor:
         sample_params: dict[str, Any] | None = None,
         threaded: bool = True,
         body_shadow: BodyShadowConfig | None = None,
+        fit_in_background: bool = False,
         **model_params: Any,
     ) -> None:
         if train_frames < 2:
@@ -118,6 +126,8 @@ class HorprasertSubtractor:
         self.labels: np.ndarray | None = None
         self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
+        self.fit_in_background = fit_in_background
+        self._fitting: Future | None = None  # the fit running in the background, until collected
         self.threaded = threaded
         self.body_shadow = BodyShadowConfig() if body_shadow is None else body_shadow
         self._deferred = DeferredStep("horprasert-update")
@@ -133,12 +143,26 @@ class HorprasertSubtractor:
         return self._model
 
     def __getstate__(self) -> dict[str, Any]:
+        self._collect_fit()
         self._deferred.join()  # before any array it writes is copied
         return self.__dict__.copy()
 
     @property
     def ready(self) -> bool:
-        return self._model.is_fitted
+        return self._model.is_fitted and self._fitting is None
+
+    @property
+    def fitting(self) -> bool:
+        """Whether a background fit (``fit_in_background``) was started and its model is not in
+        use yet (it may have finished: the next frame takes it up).
+        """
+        return self._fitting is not None
+
+    def _collect_fit(self) -> None:
+        """Wait for a background fit, if any, and re-raise its error."""
+        if self._fitting is not None:
+            fut, self._fitting = self._fitting, None
+            fut.result()
 
     def fit(self, frames: np.ndarray | list[np.ndarray], robust: bool | None = None) -> HorprasertSubtractor:
         """Fit the model on training frames.
@@ -198,11 +222,24 @@ class HorprasertSubtractor:
         ValueError
             If ``frame`` is not uint8 (H, W, 3).
         """
+        if self._fitting is not None:
+            if not self._fitting.done():
+                self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
+                return np.zeros(frame.shape[:2], bool)
+            self._collect_fit()
         if not self.model.is_fitted:
             if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
                 raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
             self._buffer.append(frame.copy())
             if len(self._buffer) < self.train_frames:
+                self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
+                return np.zeros(frame.shape[:2], bool)
+            if self.fit_in_background:
+                # the model and the buffer are the fit's alone until it is collected: this thread
+                # only looks at the future until then
+                pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="horprasert-fit")
+                self._fitting = pool.submit(self.fit, self._buffer)
+                pool.shutdown(wait=False)
                 self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
                 return np.zeros(frame.shape[:2], bool)
             self.fit(self._buffer)

@@ -67,6 +67,7 @@ Frames are uint8 BGR, H x W x 3; all arithmetic is float32 and vectorised over p
 from __future__ import annotations
 
 from collections.abc import Iterable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -93,6 +94,8 @@ _GHOST_BRIGHTNESS = (0.7, 1.4)
 # is good to a few percent, while a grey shirt on a grey floor is within the wide limits above.
 _UNSEEN_GHOST_CHROMA = 0.03
 _UNSEEN_GHOST_BRIGHTNESS = (0.88, 1.12)
+# An excluded sample in the robust median pass: above every (doubled) grey level or deviation.
+_EXCLUDED = np.uint16(np.iinfo(np.uint16).max)
 # Bytes of float32 work memory per row block in the robust median pass.
 _BLOCK_BYTES = 64 * 1024 * 1024
 
@@ -573,8 +576,8 @@ class HorprasertBackground:
         count = np.zeros((h, w), np.float64)
         inliers = []
         for k, f in enumerate(stack):
-            alpha, cd2, _ = self._distortions(f)
-            inl = self._inlier_mask(f) if robust else None
+            alpha, cd2, planes = self._distortions(f)
+            inl = self._inlier_mask(planes) if robust else None
             if free is not None:
                 # an unseen pixel's few samples are compared with a filled-in E: they would
                 # inflate its a and b; it takes the typical ones instead
@@ -1160,9 +1163,16 @@ class HorprasertBackground:
         cv2.max(cd2, 0.0, dst=cd2)
         return alpha, cd2, planes
 
-    def _inlier_mask(self, frame: np.ndarray) -> np.ndarray:
-        z = np.abs(np.moveaxis(frame, -1, 0).astype(np.float32) - self._mu) * self._inv_s
-        return z.max(axis=0) <= self.training.robust_inlier_k
+    def _inlier_mask(self, planes: list[np.ndarray]) -> np.ndarray:
+        """(H, W) bool: every channel of the frame (its float32 planes, ``_distortions``'s) within
+        ``robust_inlier_k`` spreads of E.
+        """
+        # OpenCV's float ops (the same IEEE differences and products as numpy's), one plane at a time
+        z = cv2.multiply(cv2.absdiff(planes[0], self._mu[0]), self._inv_s[0])
+        t = np.empty_like(z)
+        for c in (1, 2):
+            cv2.max(z, cv2.multiply(cv2.absdiff(planes[c], self._mu[c], dst=t), self._inv_s[c], dst=t), dst=z)
+        return z <= np.float32(self.training.robust_inlier_k)
 
 
 def _reflect(i: np.ndarray, n: int) -> np.ndarray:
@@ -1246,37 +1256,48 @@ def _median_mad(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.n
             mad[y0 : y0 + rows] = np.median(np.abs(blk - m), axis=0) * _MAD_TO_SIGMA
         return med, mad, np.full((h, w), n, np.int64)
     count = free.sum(axis=0)
-    # Excluded samples become +inf and sort last: the median of the c free ones is then the mean
+    # In integers, twice the grey levels (uint16): the median of two middle values and the
+    # deviations from it are then whole, and exact, as the float32 halves they stand for.
+    # Excluded samples become _EXCLUDED and sort last: the median of the c free ones is the mean
     # of the sorted values at (c - 1) // 2 and c // 2, gathered per pixel (no Python loop).
-    rows = max(1, int(_BLOCK_BYTES // (3 * n * w * 3 * 4)))
     med = np.zeros((h, w, 3), np.float32)
     mad = np.zeros((h, w, 3), np.float32)
-    for y0 in range(0, h, rows):
-        sl = slice(y0, y0 + rows)
-        blk = stack[:, sl].astype(np.float32)
-        out = ~free[:, sl, :, None]
-        c = np.broadcast_to(count[None, sl, :, None], (1, *blk.shape[1:]))
-        m = _masked_median(np.where(out, np.inf, blk), c)
-        dev = np.where(out, np.inf, np.abs(blk - m[None]))
-        med[sl] = m
-        mad[sl] = _masked_median(dev, c) * _MAD_TO_SIGMA
+
+    def block(sl: slice) -> None:
+        blk2 = stack[:, sl].astype(np.int16)
+        blk2 <<= 1
+        out = np.broadcast_to(~free[:, sl, :, None], blk2.shape)
+        c = np.broadcast_to(count[None, sl, :, None], (1, *blk2.shape[1:]))
+        m2 = _masked_median2(np.where(out, _EXCLUDED, blk2.view(np.uint16)), c)  # lo + hi of the doubled values
+        # the deviations in quarter grey levels (within int16): 4 |v - median| = |4 v - m2|
+        blk2 <<= 1
+        blk2 -= m2.astype(np.int16)[None]
+        np.abs(blk2, out=blk2)
+        dev = np.where(out, _EXCLUDED, blk2.view(np.uint16))
+        med[sl] = m2.astype(np.float32) * np.float32(0.25)
+        mad[sl] = (_masked_median2(dev, c).astype(np.float32) * np.float32(0.125)) * _MAD_TO_SIGMA
+
+    # each pixel's median is its own: the row blocks (at least two) go to two threads, as numpy's
+    # sort lets go of the GIL
+    rows = max(1, min(int(_BLOCK_BYTES // (3 * n * w * 3 * 4)), -(-h // 2)))
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="fit") as pool:
+        list(pool.map(block, [slice(y0, y0 + rows) for y0 in range(0, h, rows)]))
     seen = count > 0
     med[~seen] = 0.0
     mad[~seen] = 0.0
     return med, mad, count
 
 
-def _masked_median(values: np.ndarray, count: np.ndarray) -> np.ndarray:
-    """Median along axis 0 of (N, ...) values whose excluded entries are +inf; ``count`` (1, ...)
-    the finite entries per position (>= 1 where the result is used).
+def _masked_median2(values: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """Twice the median along axis 0 of (N, ...) uint16 values whose excluded entries are
+    ``_EXCLUDED``: the sum (int32) of the sorted values at (c - 1) // 2 and c // 2, with ``count``
+    (1, ...) the c free entries per position (>= 1 where the result is used).
     """
     srt = np.sort(values, axis=0)
     last = values.shape[0] - 1
     lo = np.take_along_axis(srt, np.clip((count - 1) // 2, 0, last), axis=0)[0]
     hi = np.take_along_axis(srt, np.clip(count // 2, 0, last), axis=0)[0]
-    with np.errstate(invalid="ignore"):
-        out = 0.5 * (lo + hi)
-    return np.where(np.isfinite(out), out, 0.0).astype(np.float32)
+    return np.add(lo, hi, dtype=np.int32)
 
 
 def _mean_std(stack: np.ndarray, free: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -1311,10 +1332,13 @@ def _fill_unseen(
     hole = unseen.astype(np.uint8)
     # radius: a few pixels of support around each point of the hole's front
     radius = 5
+    planes = [a[..., c] for a in (mean, spread) for c in range(3)]
+    # six independent fills, on two threads (OpenCV lets go of the GIL)
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="fit") as pool:
+        filled = list(pool.map(lambda p: cv2.inpaint(p, hole, radius, cv2.INPAINT_TELEA), planes))
     mean = mean.copy()
     spread = spread.copy()
     for c in range(3):
-        mean[..., c] = cv2.inpaint(mean[..., c], hole, radius, cv2.INPAINT_TELEA)
-        s = cv2.inpaint(spread[..., c], hole, radius, cv2.INPAINT_TELEA)
-        spread[..., c] = np.where(unseen, s * np.float32(spread_gain), spread[..., c])
+        mean[..., c] = filled[c]
+        spread[..., c] = np.where(unseen, filled[3 + c] * np.float32(spread_gain), spread[..., c])
     return mean, spread

@@ -182,10 +182,15 @@ def _legs(
 ) -> np.ndarray:
     """Flat indices of the shadow pixels that are legs (see the module docstring).
 
-    ``pts``: the starts (``_starts``); ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W) region labels of fg | sh; ``top``,
-    ``bottom``: (n,) each region's first and last foreground row. Each region that has a shadow pixel straight below foreground is
-    worked on its own box (a few per frame): a leg is a run of shadow down a column from the
-    foreground, and a run along a row, so both lie in one region.
+    ``pts``: the starts (``_starts``); ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W)
+    region labels of fg | sh; ``top``, ``bottom``: (n,) each region's first and last foreground
+    row.
+
+    A leg is a run of shadow down a column from the foreground, and a run along a row: pixels
+    next to each other along a column or a row are in one region (of 8-connected fg | sh), so
+    both runs can be measured on the whole masks, over the rows the starts reach, and only the
+    limits are each region's (from its foreground height). The correlation is worked out for each
+    region on its own box (a few per frame).
     """
     h, w = fg.shape
     r = config.leg_window // 2
@@ -203,49 +208,57 @@ def _legs(
     sc = comp[sy, pts[:, 0, 0]]
     height_s = bottom[sc] - top[sc] + 1
     keep = (config.leg_depth * height_s >= 1) & (bottom[sc] - sy > config.leg_foot * height_s)
-    sy, sc = sy[keep], sc[keep]
+    sx, sy, sc = pts[keep, 0, 0], sy[keep], sc[keep]
     if sc.size == 0:
         return np.empty(0, np.intp)
-    first = np.full(top.shape, h, np.int64)
-    np.minimum.at(first, sc, sy)
+    # the rows from the foreground row above the first start to just above the lowest
+    # foreground row of the starts' regions (a hanging pixel lies above its region's feet band),
+    # in the columns of the starts (a hanging pixel's start is in its column)
+    y0, y1 = int(sy.min()) - 1, int(bottom[sc].max())
+    cols = np.unique(sx)
+    f = fg[y0:y1, cols] != 0
+    s = sh[y0:y1, cols] != 0
+    rows = np.arange(y1 - y0, dtype=np.int16)[:, None]
+    # down each column: the last foreground row above a pixel and the last row of neither
+    # (int16: rows of a frame; half the memory of int32 to scan)
+    up = np.maximum.accumulate(np.where(f, rows, np.int16(-1)), axis=0)
+    gap = np.maximum.accumulate(np.where(f | s, np.int16(-1), rows), axis=0)
+    hang = s & (up > gap)
+    if unseen is not None:
+        hang &= ~unseen[y0:y1, cols]
+    ys, xi = np.nonzero(hang)
+    if ys.size == 0:
+        return np.empty(0, np.intp)
+    xs = cols[xi]
+    c = comp[ys + y0, xs]
+    height = bottom[c] - top[c] + 1
+    # within the region's depth below the foreground above, and above its feet band
+    ok = (ys - up[ys, xi] <= config.leg_depth * height) & (bottom[c] - (ys + y0) > config.leg_foot * height)
+    ys, xs, c, height = ys[ok], xs[ok], c[ok], height[ok]
+    if ys.size == 0:
+        return np.empty(0, np.intp)
+    # the width of the run of shadow each lies in along its row: from the left, plus from the
+    # right, less itself (on the rows that hold one)
+    band = np.unique(ys)
+    sr = sh[band + y0] != 0
+    run = np.cumsum(sr, axis=1, dtype=np.int32)
+    width = run - np.maximum.accumulate(np.where(sr, 0, run), axis=1)
+    run = np.cumsum(sr[:, ::-1], axis=1, dtype=np.int32)
+    width += (run - np.maximum.accumulate(np.where(sr[:, ::-1], 0, run), axis=1))[:, ::-1]
+    ok = width[np.searchsorted(band, ys), xs] - 1 <= config.leg_width * height
+    ys, xs, c = ys[ok] + y0, xs[ok], c[ok]
+    if ys.size == 0:
+        return np.empty(0, np.intp)
     out = []
-    for c in np.unique(sc):
-        # rows from the foreground row above the region's first start to just above its lowest
-        # foreground row (the up / gap runs below need nothing above a start's own foreground)
-        y0, y1 = int(first[c]) - 1, int(bottom[c])
-        height = y1 - int(top[c]) + 1
-        cols = np.flatnonzero((comp[y0:y1] == c).any(axis=0))
-        x0, x1 = int(cols[0]), int(cols[-1]) + 1
-        inr = comp[y0:y1, x0:x1] == c
-        f = (fg[y0:y1, x0:x1] != 0) & inr
-        s = (sh[y0:y1, x0:x1] != 0) & inr
-        rows = np.arange(y1 - y0, dtype=np.int32)[:, None]
-        # down each column: the last foreground row above a pixel and the last row of neither
-        up = np.maximum.accumulate(np.where(f, rows, -1), axis=0)
-        gap = np.maximum.accumulate(np.where(f | s, -1, rows), axis=0)
-        hang = s & (up > gap) & (rows - up <= config.leg_depth * height)
-        # above the lowest rows of the foreground, where the shoes stand in their own cast shadow
-        hang &= (y1 - y0) - rows > config.leg_foot * height
-        if unseen is not None:
-            hang &= ~unseen[y0:y1, x0:x1]
-        if not hang.any():
-            continue
-        # the width of the run of shadow each lies in along its row: from the left, plus from
-        # the right, less itself
-        run = np.cumsum(s, axis=1, dtype=np.int32)
-        width = run - np.maximum.accumulate(np.where(s, 0, run), axis=1)
-        run = np.cumsum(s[:, ::-1], axis=1, dtype=np.int32)
-        width += (run - np.maximum.accumulate(np.where(s[:, ::-1], 0, run), axis=1))[:, ::-1]
-        hang &= width - 1 <= config.leg_width * height
-        ys, xs = np.nonzero(hang)
-        if ys.size == 0:
-            continue
-        ys += y0
-        xs += x0
+    # region by region, in the order of their labels, each one's pixels in raster order
+    order = np.argsort(c, kind="stable")
+    ys, xs, c = ys[order], xs[order], c[order]
+    cut = np.flatnonzero(np.diff(c)) + 1
+    for gy, gx in zip(np.split(ys, cut), np.split(xs, cut)):
         # normalised cross-correlation over the window's shadow pixels (of any region), on the
         # candidates' box with a margin of the window's half side: the sums over the whole frame
-        by0, by1 = max(int(ys.min()) - r, 0), min(int(ys.max()) + r + 1, h)
-        bx0, bx1 = max(int(xs.min()) - r, 0), min(int(xs.max()) + r + 1, w)
+        by0, by1 = max(int(gy.min()) - r, 0), min(int(gy.max()) + r + 1, h)
+        bx0, bx1 = max(int(gx.min()) - r, 0), min(int(gx.max()) + r + 1, w)
         m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
         crop = frame[by0:by1, bx0:bx1].astype(np.float32)
         grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
@@ -253,7 +266,7 @@ def _legs(
         # centred: the moments below are differences of float32 sums, exact enough only near zero
         grey -= np.float32(grey.mean())
         e = e - np.float32(e.mean())
-        at = (ys - by0, xs - bx0)
+        at = (gy - by0, gx - bx0)
         inv_n = 1.0 / np.maximum(box(m, at), 1.0)
         em, gm = e * m, grey * m
         me, mi = box(em, at) * inv_n, box(gm, at) * inv_n
@@ -261,5 +274,5 @@ def _legs(
         vi = box(gm * grey, at) * inv_n - mi * mi
         cov = box(gm * e, at) * inv_n - mi * me
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        out.append((ys * w + xs)[ncc < config.leg_ncc])
+        out.append((gy * w + gx)[ncc < config.leg_ncc])
     return np.concatenate(out) if out else np.empty(0, np.intp)

@@ -209,6 +209,14 @@ class Silhouette(Node):
             min=-1.0,
             max=1.0,
         ),
+        "fit_in_background": Param(
+            bool,
+            False,
+            "horprasert: learn the background from the training frames in a thread of its own, "
+            "publishing frames without people meanwhile, instead of in one long call that holds "
+            "up the frames behind it (for live graphs; which frames the fit overlaps depends on "
+            "timing, so lockstep replays leave it off)",
+        ),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -235,6 +243,8 @@ class Silhouette(Node):
         #: the people detector of the training frames, started on each as it comes (horprasert,
         #: robust and people_aware; None otherwise)
         self.prefetch: PrefetchDetector | None = None
+        #: when the fit in the background (fit_in_background) was started, perf_counter seconds
+        self._fit_started: float | None = None
 
     def _warn_once(self, kind: str, text: str, *args: Any) -> None:
         if kind not in self._warned:
@@ -255,6 +265,7 @@ class Silhouette(Node):
                 "dynamic": p["dynamic"],
                 "shadow_ncc": p["shadow_ncc"],
                 "body_shadow": BodyShadowConfig(span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"]),
+                "fit_in_background": p["fit_in_background"] and not self.replay,
             }
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
@@ -297,13 +308,20 @@ class Silhouette(Node):
         if self.p["backend"] != "horprasert" and ex.n_frames < self.p["train_frames"] - 1:
             return ex.learn(image)
         training = not ex.subtractor.ready
-        if training and self.prefetch is not None:
+        if training and self.prefetch is not None and not getattr(ex.subtractor, "fitting", False):
             # the people of the training frames are found while more come, not all after the last
             self.prefetch.submit(image)
         t0 = time.perf_counter()
         result = ex.process(image)
-        if training and ex.subtractor.ready:  # this frame's call learnt the background
-            self.tally("fit_ms", round((time.perf_counter() - t0) * 1e3, 1))
+        if training and self._fit_started is None and getattr(ex.subtractor, "fitting", False):
+            self._fit_started = t0  # this frame's call started the fit in the background
+        if training and ex.subtractor.ready:  # this frame's call learnt the background (or took it up)
+            now = time.perf_counter()
+            self.tally("fit_ms", round((now - t0) * 1e3, 1))
+            # from the last training frame to the first frame with the model: the fit's own time
+            # when it runs in the background, this call's when in line
+            self.tally("fit_elapsed_ms", round((now - (self._fit_started or t0)) * 1e3, 1))
+            self._fit_started = None
             if self.prefetch is not None:
                 self.prefetch.clear()
         return result
