@@ -287,7 +287,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
       ``particles`` and ``layers`` per person and frame, under its ``frame_budget``, ``starts`` the
       tracks it started (first searches) and ``search_cpu_ms`` the CPU time of its searches per
       pose, its messaging aside; the silhouette
-      node's ``fit_ms``, the one handler call that learnt the background).
+      node's ``fit_ms``, the one handler call that took up the learnt background, and
+      ``fit_elapsed_ms``, from its last training frame to its first frame with the background: the
+      same unless the fit runs in a thread of its own, ``silhouette.fit_in_background``).
     """
     stats: dict[str, dict[int, dict]] = {n: {} for n in TIMED_NODES}
     for _, _, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
@@ -314,8 +316,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
             "frac": round(n_out / max(published, 1), 3),
             "busy": round(busy_ms / 1e3 / max(last["uptime_s"], 1e-9), 3),
         }
-        if "fit_ms" in last["figures"]:  # the silhouette node's background training, one call
-            fig["fit_ms"] = last["figures"]["fit_ms"]
+        for k in ("fit_ms", "fit_elapsed_ms"):  # the silhouette node's background training
+            if k in last["figures"]:
+                fig[k] = last["figures"][k]
         frames = last["figures"].get("budget_frames", 0)
         if frames:
             fig["particles"] = round(last["figures"]["budget_particles"] / frames, 1)
