@@ -184,8 +184,8 @@ def cpu_figures(bag: Path, cpu: CpuSamples, warmup_s: float) -> dict[str, object
     """CPU time per frame in the steady state (after ``warmup_s``), which a loaded machine
     stretches far less than it stretches wall times.
 
-    Per node of ``TIMED_NODES``: its CPU time between its first stats message after the warm-up and
-    its last one, divided by the frames it published between them (``cpu_ms``: what one frame it
+    Per node of ``TIMED_NODES``: its CPU time between its first stats message after the warm-up (and
+    after its first frame) and its last one, divided by the frames it published between them (``cpu_ms``: what one frame it
     processed cost it). The other processes of the graph (camera, calibration; the bench's recorder
     aside) over the same span per camera frame. ``cpu_ms_per_frame``: the sum, what every frame
     through every node costs; ``cores_needed``: that times the camera's nominal frame rate, the
@@ -197,8 +197,10 @@ def cpu_figures(bag: Path, cpu: CpuSamples, warmup_s: float) -> dict[str, object
     per_node: dict[str, float] = {}
     span: list[int] = []
     for _, t, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
-        if t >= cut and m.node in TIMED_NODES:
-            n_out = max((o.count for o in m.outputs), default=0)
+        n_out = max((o.count for o in m.outputs), default=0)
+        # from its first frame on: a start that outlasts the warm-up (the silhouette node's
+        # background training, one long call) is not a frame's cost
+        if t >= cut and m.node in TIMED_NODES and n_out > 0:
             per_node.setdefault(m.node, []).append((t, n_out))
     out: dict[str, object] = {"nodes": {}}
     total = 0.0
@@ -285,7 +287,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
       ``particles`` and ``layers`` per person and frame, under its ``frame_budget``, ``starts`` the
       tracks it started (first searches) and ``search_cpu_ms`` the CPU time of its searches per
       pose, its messaging aside; the silhouette
-      node's ``fit_ms``, the one handler call that learnt the background).
+      node's ``fit_ms``, the one handler call that took up the learnt background, and
+      ``fit_elapsed_ms``, from its last training frame to its first frame with the background: the
+      same unless the fit runs in a thread of its own, ``silhouette.fit_in_background``).
     """
     stats: dict[str, dict[int, dict]] = {n: {} for n in TIMED_NODES}
     for _, _, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
@@ -312,8 +316,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
             "frac": round(n_out / max(published, 1), 3),
             "busy": round(busy_ms / 1e3 / max(last["uptime_s"], 1e-9), 3),
         }
-        if "fit_ms" in last["figures"]:  # the silhouette node's background training, one call
-            fig["fit_ms"] = last["figures"]["fit_ms"]
+        for k in ("fit_ms", "fit_elapsed_ms"):  # the silhouette node's background training
+            if k in last["figures"]:
+                fig[k] = last["figures"][k]
         frames = last["figures"].get("budget_frames", 0)
         if frames:
             fig["particles"] = round(last["figures"]["budget_particles"] / frames, 1)

@@ -83,7 +83,9 @@ class SceneSource(Node):
                     ),
                 )
             if p["rate"]:
-                t_next += 1.0 / p["rate"]
+                # a late frame starts the schedule again rather than bursting to catch up: on a
+                # loaded machine the rate drops below ``rate``, never above it
+                t_next = max(t_next + 1.0 / p["rate"], time.monotonic())
                 time.sleep(max(0.0, t_next - time.monotonic()))
 
 

@@ -151,8 +151,12 @@ def test_paced_replay_keeps_the_file_rate(tmp_path: Path, pacing: str, rate: flo
     assert code == 0, text
     got = frame_records(records)
     assert [r["seq"] for r in got] == list(range(24))
-    intervals = np.diff([r["stamp"] for r in got]) / 1e9
-    assert np.median(intervals) == pytest.approx(period_s, rel=0.2)
+    since_first = (np.array([r["stamp"] for r in got]) - got[0]["stamp"]) / 1e9
+    # never ahead of the file's schedule (up to the first frame's own lateness)...
+    assert np.all(since_first >= np.arange(24) * period_s - period_s / 2)
+    # ...and at its spacing: a loaded machine makes single frames late (the next one catches up),
+    # which moves the median interval a little, never to half the rate
+    assert 0.8 * period_s <= np.median(np.diff(since_first)) <= 1.5 * period_s
 
 
 def test_bad_parameter_is_refused_before_start(tmp_path: Path) -> None:

@@ -410,18 +410,22 @@ def test_a_pusher_walking_in_with_a_hand_held_high_pushes_when_the_silhouettes_t
     assert max(later) == pytest.approx(1.2) and later[-1] == pytest.approx(0.9, abs=0.01)
 
 
-def test_people_walking_in_to_shake_hands_are_no_push() -> None:
-    # the same advance and touch with the hand held at the waist (1.0 m: 0.56 of the stature): no push
-    stage = Stage()
+def test_people_walking_in_to_shake_hands_are_no_push_and_one_rushing_in_is() -> None:
+    # walking in at 0.7 m/s (2.8 cm a frame) into a touch with the hand held at the waist (1.0 m: 0.56 of
+    # the stature): no push
     obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
-    for k in range(1, 31):
-        stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k, k > 10))
-    assert stage.pushes == 0
+
+    def pushes(config: StageConfig, speed: float) -> int:
+        stage = Stage(config)
+        for k in range(1, 31):
+            stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, speed * 0.04 * k, k > 10))
+        return stage.pushes
+
+    assert pushes(StageConfig(), 0.7) == 0
     # push_height 0: any hand advancing into a touch is a push
-    eager = Stage(StageConfig(push_height=0.0))
-    for k in range(1, 31):
-        eager(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.04 * k, k > 10))
-    assert eager.pushes == 1
+    assert pushes(StageConfig(push_height=0.0), 0.7) == 1
+    # rushing in at 1.5 m/s (faster than push_rush_m_s): a push whatever the hand's height
+    assert pushes(StageConfig(), 1.5) == 1
 
 
 def test_without_push_touch_the_advance_alone_is_a_push_and_a_region_merging_is_none() -> None:

@@ -37,7 +37,8 @@ model's posture and gestures are kept:
    video, a silhouette's outline is not), with ``push_touch`` the silhouette touches someone
    else's (:attr:`Reach.touching`: a pusher walks in with the arm out well before the hand lands),
    and the hand was last seen held high (``push_height`` of the stature: a push lands on the chest,
-   people walking in to shake hands hold the hand lower). As a pushed person does on real video,
+   people walking in to shake hands hold the hand lower) or the centre advances at ``push_rush_m_s``
+   or more (faster than people come up to shake hands). As a pushed person does on real video,
    it gives way while the push goes on (the pusher's hand held out on someone, their silhouette
    touching another's, or driven on): its distance grows at ``yield_speed_m_s`` up to ``recoil_m``
    from where the push landed; when the push is released it is thrown back, to ``recoil_max_m``
@@ -157,6 +158,10 @@ class StageConfig:
         person's stature or above (smoothed, where the silhouette touched no one's: there its
         outline's tip is the hand): a push lands on the chest, a hand to shake is held lower
         (people walking in to shake hands are no push); 0: any height.
+    push_rush_m_s : float, default=1.0
+        A silhouette holding a hand out whose centre advances towards the partner at least this
+        fast is a push whatever the hand's height (``push_height``), metres per second: people come
+        up to shake hands more slowly.
     offer_hold_s : float, default=0.3
         A hand held out stays held out this long after the silhouette last reached ``offer_m``,
         seconds (an outline's tip flickers about the limit while the hand stays out).
@@ -202,6 +207,7 @@ class StageConfig:
     step_in: bool = True
     push_height: float = 0.7
     yield_speed_m_s: float = 0.2
+    push_rush_m_s: float = 1.0
     offer_hold_s: float = 0.3
     hand_box_frac: float = 0.62
 
@@ -688,7 +694,9 @@ class Stage:
         advance = self._advancing(silhouette, dt)
         held_out = self._holding_out(silhouette, dt)
         high = self._held_high(silhouette, X, held_out)
-        pushing = held_out and advance >= c.push_speed_m_s and (silhouette.touching or not c.push_touch) and high
+        # a hand held high driven in, or a body rushing in faster than people come up to shake hands
+        driven = (advance >= c.push_speed_m_s and high) or advance >= c.push_rush_m_s
+        pushing = held_out and driven and (silhouette.touching or not c.push_touch)
         touching = self._touching_now(X, P, o, p, pushing)
         onset = touching and not self._pushed
         self.pushes += onset
