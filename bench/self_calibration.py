@@ -24,9 +24,14 @@ and the lines of the scene, one estimate at the end:
   mid-ankle on the ground, from the simulator's joints) and no lines: the limit of the geometry of
   people alone, whatever the silhouettes; ``calib_truth_points_lines``: the true points with the
   scene's lines as the estimate has them (the limit of the estimator's cues, whatever the
-  silhouettes);
+  silhouettes); ``calib_room_lines`` and ``calib_truth_points_room_lines``: the estimate's
+  observations, and the true points, with the room's *true* line families (``bench/room_lines.py``:
+  every board edge, wall line and poster edge in view, from the simulator's geometry): how much of
+  the shortfall is the line detector and its grouping, and how much the geometry (few families in
+  view, far vanishing points);
 - ``calib_tilt_bands``: per band of the true tilt (0-10, 10-20, 20-35 degrees), the seeds in it and,
-  for the estimate, the true points and the true points with lines (``truth_``, ``truth_lines_``),
+  for the estimate, the true points, the true points with lines (``truth_``, ``truth_lines_``), and
+  the estimate and the true points with the room's true lines (``room_``, ``truth_room_``),
   the share within all three limits, within the height and tilt limits, within the focal limit, and
   the median focal error; the estimate's credible share;
 - the reference in the same run: the default camera's errors (``calib_default_*``), what the graph
@@ -67,10 +72,13 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from room_lines import room_lines  # noqa: E402
+
 from counterpart.body.camera import Camera, default_camera  # noqa: E402
 from counterpart.body.people_detector import PeopleDetector  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
 from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
+from counterpart.nodes.calibration.lines import scene_lines  # noqa: E402
 from counterpart.nodes.calibration.node import Calibration  # noqa: E402
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people  # noqa: E402
 from counterpart.nodes.calibration.smooth import credible  # noqa: E402
@@ -161,7 +169,7 @@ def sim_inputs(seed: int, seconds: float) -> dict[str, Any]:
         "truth": truth,
         "size": stream.size,
         "observations": obs.arrays(),
-        "lines": scene.families(),
+        "scene": (scene.image(), list(scene.boxes)),
         "truth_points": (
             truth.project(head).reshape(-1, 2),
             truth.project(foot).reshape(-1, 2),
@@ -177,10 +185,14 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
     """
     truth, size = inputs["truth"], inputs["size"]
     head, foot, track, t = inputs["observations"]
-    est = estimate_camera(head, foot, track, size, t, lines=inputs["lines"])
+    lines = scene_lines(*inputs["scene"])
+    est = estimate_camera(head, foot, track, size, t, lines=lines)
     th, tf, tk, tt = inputs["truth_points"]
     oracle = estimate_camera(th, tf, tk, size, tt)
-    oracle_lines = estimate_camera(th, tf, tk, size, tt, lines=inputs["lines"])
+    oracle_lines = estimate_camera(th, tf, tk, size, tt, lines=lines)
+    room = room_lines(truth, inputs["seed"])
+    room_est = estimate_camera(head, foot, track, size, t, lines=room)
+    oracle_room = estimate_camera(th, tf, tk, size, tt, lines=room)
     ok = est is not None and credible(est, *BOUNDS.values())
     default = default_camera(*size)
     published = estimate_errors(est, truth) if ok else errors(default.centre[1], tilt_deg(default), default.fx, truth)
@@ -195,6 +207,8 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
         "published": published,
         "truth_points": estimate_errors(oracle, truth),
         "truth_points_lines": estimate_errors(oracle_lines, truth),
+        "room_lines": estimate_errors(room_est, truth),
+        "truth_points_room_lines": estimate_errors(oracle_room, truth),
         "default": errors(default.centre[1], tilt_deg(default), default.fx, truth),
     }
 
@@ -231,7 +245,13 @@ def tilt_bands(rows: list[dict[str, Any]]) -> dict[str, Any]:
             out[key] = {"seeds": 0}
             continue
         v: dict[str, Any] = {"seeds": len(band)}
-        for name, prefix in (("errors", ""), ("truth_points", "truth_"), ("truth_points_lines", "truth_lines_")):
+        for name, prefix in (
+            ("errors", ""),
+            ("truth_points", "truth_"),
+            ("truth_points_lines", "truth_lines_"),
+            ("room_lines", "room_"),
+            ("truth_points_room_lines", "truth_room_"),
+        ):
             errs = [r[name] for r in band]
             v[f"{prefix}within"] = round(float(np.mean([within(e) for e in errs])), 4)
             v[f"{prefix}within_height_tilt"] = round(
@@ -287,6 +307,8 @@ def sim_figures(
         "calib_within_published": summary([r["published"] for r in rows], "")["within"],
         "calib_truth_points": summary([r["truth_points"] for r in rows], ""),
         "calib_truth_points_lines": summary([r["truth_points_lines"] for r in rows], ""),
+        "calib_room_lines": summary([r["room_lines"] for r in rows], ""),
+        "calib_truth_points_room_lines": summary([r["truth_points_room_lines"] for r in rows], ""),
         **summary([r["default"] for r in rows], "calib_default_"),
         "calib_seeds": seeds,
         "calib_first_seed": first_seed,
@@ -306,7 +328,17 @@ def sim_figures(
     out["calib_rows"] = [
         {
             k: _finite(r[k])
-            for k in ("seed", "scenario", "camera", "errors", "credible", "truth_points", "truth_points_lines")
+            for k in (
+                "seed",
+                "scenario",
+                "camera",
+                "errors",
+                "credible",
+                "truth_points",
+                "truth_points_lines",
+                "room_lines",
+                "truth_points_room_lines",
+            )
         }
         for r in rows
     ]

@@ -96,7 +96,9 @@ class CalibrationConfig:
         A line family is dropped, and the camera fitted again, when leaving it out lowers the fit's
         cost (half its robust chi-square) by more than this: segments that meet at a point that is
         not the image of one horizontal scene direction; one family at a time, the one whose leaving
-        out gains most. None: keep every family.
+        out gains most. None: keep every family. Not for the families of one square frame
+        (``LineFamilies.square``): found jointly, none is a chance meeting, and with their many
+        segments a true family that the people's lean disagrees with gains more than this.
     max_stature_sd : float or None, default=3.0
         A person whose fitted stature is further than this many prior stds from the prior's centre
         is dropped and the camera fitted again (once; kept when the rest are too few): a fragment of
@@ -614,7 +616,7 @@ def fit_camera(
     # happen to meet, a family off the ground's horizon) drags the horizon to its point, and with two
     # families any two points make a horizon: drop the family whose leaving out lowers the cost
     # most, while that gain is over the bound (a likelihood-ratio test per family), and fit again
-    while lines is not None and config.family_outlier_cost is not None and len(lines.vp):
+    while lines is not None and not lines.square and config.family_outlier_cost is not None and len(lines.vp):
         fits = [
             (_solve(head, foot, k, scale, (W, H), config, f0, nk, fewer), fewer)
             for fewer in (_without_family(lines, j) for j in range(len(lines.vp)))

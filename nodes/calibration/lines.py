@@ -2,9 +2,14 @@
 vanishing points (the ground's horizon, the vertical).
 
 Line segments of a frame (OpenCV's LSD, von Gioi et al. 2010), without those on the people, are
-grouped by the vanishing point they converge to (sequential RANSAC over pairs of segments,
-vectorised; a segment agrees with a vanishing point when the line from its midpoint to that point
-is within ``angle_deg`` of its own direction). A family whose segments are mostly steep (within
+grouped by the vanishing point they converge to (a segment agrees with a vanishing point when the
+line from its midpoint to that point is within ``angle_deg`` of its own direction).
+:func:`scene_lines` groups them by the three vanishing points of one square frame of the room (two
+ground directions at right angles and the vertical, searched jointly with the camera's focal length
+and tilt: :func:`find_manhattan_families`); one vanishing point at a time (:func:`find_families`,
+sequential RANSAC over pairs of segments) the floor's boards, the wall's lines and the texture's
+chance alignments made families several degrees off any direction of the room. The free grouping is
+kept for a scene that is not laid out square (the square frame groups much less of it). A family whose segments are mostly steep (within
 ``vertical_deg`` of the image vertical) is taken as the world's vertical; the others as horizontal
 directions, whose vanishing points lie on the horizon (the vanishing line of the ground plane).
 ``counterpart.nodes.calibration.estimate`` fits the camera to them together with the people: each horizontal
@@ -21,6 +26,12 @@ from typing import Any
 import cv2
 import numpy as np
 
+#: shortest segment :func:`scene_lines` keeps, pixels (short pieces of the floor's boards far away
+#: still agree with a vanishing point once the frame of three of them is searched jointly)
+MIN_LENGTH = 10.0
+#: the least share of the segment length grouped freely that the square frame must group
+MANHATTAN_SHARE = 0.8
+
 
 @dataclass(frozen=True)
 class LineFamilies:
@@ -36,12 +47,16 @@ class LineFamilies:
         Whether each family is the world's vertical.
     vp : ndarray of shape (F, 3)
         Homogeneous vanishing points found (pixels; last coordinate 0 at infinity).
+    square : bool, default=False
+        The families are the directions of one square frame, found jointly
+        (:func:`find_manhattan_families`): none of them is a chance meeting of segments.
     """
 
     segments: np.ndarray
     family: np.ndarray
     vertical: np.ndarray
     vp: np.ndarray
+    square: bool = False
 
     @property
     def n_horizontal(self) -> int:
@@ -203,4 +218,165 @@ def find_families(
     return LineFamilies(s[keep], family[keep], vertical, vp)
 
 
-__all__ = ["LineFamilies", "detect_segments", "find_families", "segment_angles"]
+def _frame_vps(f: np.ndarray, tilt: np.ndarray, yaw: np.ndarray, centre: tuple[float, float]) -> np.ndarray:
+    """(H, 3, 3) homogeneous vanishing points of the world's X, Z and vertical directions, rotated
+    by ``yaw`` about the vertical, for cameras of focal ``f`` (pixels) pitched down by ``tilt``
+    (radians), no roll; one row per hypothesis.
+    """
+    cx, cy = centre
+    st, ct = np.sin(tilt), np.cos(tilt)
+    sy, cyw = np.sin(yaw), np.cos(yaw)
+    # world-to-camera rotation of a camera looking along -Z, pitched down (as the estimate's)
+    # applied to X = (cos yaw, 0, sin yaw), Z = (-sin yaw, 0, cos yaw), Y = (0, 1, 0)
+    dirs = np.stack(
+        [
+            np.stack([cyw, st * sy, -ct * sy], -1),
+            np.stack([-sy, st * cyw, -ct * cyw], -1),
+            np.stack([np.zeros_like(tilt), -ct * np.ones_like(yaw), -st * np.ones_like(yaw)], -1),
+        ],
+        -2,
+    )  # (H, 3, 3) camera-frame directions
+    x, y, z = dirs[..., 0], dirs[..., 1], dirs[..., 2]
+    f = f[..., None]
+    return np.stack([f * x + cx * z, f * y + cy * z, z], -1)
+
+
+def _frame_score(segments: np.ndarray, vps: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Score of each hypothesis (length-weighted share of segments within ``tol`` (a sine) of one of
+    its three vanishing points, with a quadratic falloff) and, per hypothesis and segment, the
+    direction it agrees with best and the sine of that angle.
+    """
+    d = segments[:, 2:] - segments[:, :2]
+    length = np.linalg.norm(d, axis=1)
+    mid = 0.5 * (segments[:, :2] + segments[:, 2:])
+    to = vps[:, :, None, :2] - vps[:, :, None, 2:3] * mid[None, None]  # (H, 3, N, 2)
+    cross = d[None, None, :, 0] * to[..., 1] - d[None, None, :, 1] * to[..., 0]
+    sin = np.abs(cross) / np.maximum(length[None, None] * np.linalg.norm(to, axis=-1), 1e-12)
+    best = sin.min(axis=1)  # (H, N)
+    score = (np.clip(1.0 - (best / tol) ** 2, 0.0, None) * length[None]).sum(axis=1)
+    return score, sin
+
+
+def find_manhattan_families(
+    segments: np.ndarray,
+    size: tuple[int, int],
+    angle_deg: float = 1.5,
+    min_segments: int = 5,
+    tilt_deg: tuple[float, float] = (-5.0, 50.0),
+    fov_deg: tuple[float, float] = (30.0, 100.0),
+) -> LineFamilies:
+    """Group segments by the three vanishing points of one square frame of the scene (two
+    horizontal directions at right angles and the vertical; a "Manhattan world", Coughlan & Yuille
+    2003): the camera's focal length, tilt and the frame's yaw that explain the most segment
+    length, searched on a coarse grid and refined on a fine one, with no roll.
+
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    size : tuple of (int, int)
+        (width, height) of the image, pixels (the principal point at its centre).
+    angle_deg : float, default=1.5
+        Agreement of a segment with a vanishing point, degrees.
+    min_segments : int, default=5
+        Segments each family needs.
+    tilt_deg, fov_deg : tuple of (float, float)
+        Ranges searched: the camera's downward pitch and horizontal field of view, degrees.
+
+    Returns
+    -------
+    LineFamilies
+        The families found (the vertical last), their segments and vanishing points.
+    """
+    s = np.asarray(segments, np.float64).reshape(-1, 4)
+    W, H = int(size[0]), int(size[1])
+    centre = ((W - 1) / 2.0, (H - 1) / 2.0)
+    if len(s) < min_segments:
+        return LineFamilies(np.zeros((0, 4)), np.zeros(0, int), np.zeros(0, bool), np.zeros((0, 3)))
+
+    def grid(t: np.ndarray, v: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, ...]:
+        T, V, Y = (a.ravel() for a in np.meshgrid(t, v, y, indexing="ij"))
+        return T, (W / 2.0) / np.tan(V / 2), Y
+
+    def best_of(T: np.ndarray, F: np.ndarray, Y: np.ndarray, tol: float) -> tuple[float, float, float]:
+        scores = np.concatenate(
+            [
+                _frame_score(s, _frame_vps(F[i : i + 512], T[i : i + 512], Y[i : i + 512], centre), tol)[0]
+                for i in range(0, len(T), 512)
+            ]
+        )
+        i = int(np.argmax(scores))
+        return T[i], np.degrees(2 * np.arctan(W / 2.0 / F[i])), Y[i]
+
+    r = np.radians
+    t, v, y = best_of(
+        *grid(
+            r(np.arange(tilt_deg[0], tilt_deg[1] + 1e-9, 2.5)),
+            r(np.arange(fov_deg[0], fov_deg[1] + 1e-9, 5.0)),
+            r(np.arange(0.0, 90.0, 3.0)),
+        ),
+        np.sin(r(3 * angle_deg)),
+    )
+    t, v, y = best_of(
+        *grid(
+            np.arange(t - r(2.5), t + r(2.51), r(0.5)),
+            r(np.arange(max(fov_deg[0], v - 5.0), min(fov_deg[1], v + 5.0) + 1e-9, 1.0)),
+            np.arange(y - r(3.0), y + r(3.01), r(0.5)),
+        ),
+        np.sin(r(angle_deg)),
+    )
+    f = (W / 2.0) / np.tan(r(v) / 2)
+    vp = _frame_vps(np.array([f]), np.array([t]), np.array([y]), centre)[0]
+    _, sin = _frame_score(s, vp[None], np.sin(r(angle_deg)))
+    sin = sin[0]  # (3, N)
+    fam = np.argmin(sin, axis=0)
+    ok = sin[fam, np.arange(len(s))] < np.sin(r(angle_deg))
+    counts = np.bincount(fam[ok], minlength=3)
+    present = np.flatnonzero(counts >= min_segments)
+    ok &= np.isin(fam, present)
+    remap = np.full(3, -1)
+    remap[present] = np.arange(len(present))
+    vp = vp[present]
+    return LineFamilies(
+        s[ok], remap[fam[ok]], present == 2, vp / np.linalg.norm(vp, axis=1, keepdims=True), square=True
+    )
+
+
+def scene_lines(image: np.ndarray, boxes: Iterable[Any] = ()) -> LineFamilies:
+    """The line families of a view of the scene: its segments (:func:`detect_segments`, the
+    people's boxes out, down to ``MIN_LENGTH`` pixels) grouped by the three vanishing points of one
+    square frame (:func:`find_manhattan_families`); by :func:`find_families` instead when that
+    frame explains under ``MANHATTAN_SHARE`` of the segment length the latter groups (a scene
+    that is not laid out square).
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+        BGR or grey image (the median of a few frames: people who move are gone from it).
+    boxes : iterable of (x, y, w, h), default=()
+        The people's boxes, pixels.
+
+    Returns
+    -------
+    LineFamilies
+        The families.
+    """
+    H, W = image.shape[:2]
+    segments = detect_segments(image, boxes, min_length=MIN_LENGTH)
+    square = find_manhattan_families(segments, (W, H))
+    free = find_families(segments, (H - 1) / 2.0)
+    return square if _grouped_length(square) >= MANHATTAN_SHARE * _grouped_length(free) else free
+
+
+def _grouped_length(lines: LineFamilies) -> float:
+    return float(np.hypot(*(lines.segments[:, 2:] - lines.segments[:, :2]).T).sum()) if len(lines.segments) else 0.0
+
+
+__all__ = [
+    "LineFamilies",
+    "detect_segments",
+    "find_families",
+    "find_manhattan_families",
+    "scene_lines",
+    "segment_angles",
+]

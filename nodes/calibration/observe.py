@@ -34,7 +34,7 @@ import numpy as np
 from counterpart.body.people_detector import PeopleDetector
 
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
-from .lines import LineFamilies, detect_segments, find_families
+from .lines import LineFamilies, scene_lines
 from .upright import upright_parts
 
 #: the head's and the feet's rows in a box of ``PeopleDetector.detect``, as shares of its height
@@ -333,9 +333,20 @@ class SceneFrames:
         if not self.frames:
             return None
         if self._families is None:
-            image = np.median(np.stack(self.frames), axis=0).astype(np.uint8)
-            self._families = find_families(detect_segments(image, self.boxes), (image.shape[0] - 1) / 2.0)
+            self._families = scene_lines(self.image(), self.boxes)
         return self._families
+
+    def image(self) -> np.ndarray | None:
+        """The per-pixel median of the frames kept (people who move are gone from it).
+
+        Returns
+        -------
+        ndarray of shape (H, W) or (H, W, 3), dtype uint8, or None
+            The image; None before the first frame.
+        """
+        if not self.frames:
+            return None
+        return np.median(np.stack(self.frames), axis=0).astype(np.uint8)
 
 
 __all__ = ["FOOT_IN_BOX", "HEAD_IN_BOX", "PeopleObservations", "SceneFrames", "detect_people"]
