@@ -19,7 +19,8 @@ and the lines of the scene, one estimate at the end:
 - ``calib_credible``: share of seeds whose estimate the calibration node would publish (the horizon
   seen: ``counterpart.nodes.calibration.smooth.credible`` with the node's default bounds);
   ``calib_within_published``: share within the limits of the camera the graph ends up with (the
-  estimate where credible, the default camera elsewhere);
+  estimate where credible, the default camera elsewhere); ``calib_credible_wrong``: the seeds whose
+  estimate is credible but outside the limits (the graph publishes a wrong camera);
 - ``calib_truth_points``: the same figures from the true head and foot points (the crown and the
   mid-ankle on the ground, from the simulator's joints) and no lines: the limit of the geometry of
   people alone, whatever the silhouettes; ``calib_truth_points_lines``: the true points with the
@@ -305,6 +306,7 @@ def sim_figures(
         "calib_estimated": round(float(np.mean([r["estimate"] is not None for r in rows])), 4),
         "calib_credible": round(float(np.mean([r["credible"] for r in rows])), 4),
         "calib_within_published": summary([r["published"] for r in rows], "")["within"],
+        "calib_credible_wrong": [r["seed"] for r in rows if r["credible"] and not within(r["errors"])],
         "calib_truth_points": summary([r["truth_points"] for r in rows], ""),
         "calib_truth_points_lines": summary([r["truth_points_lines"] for r in rows], ""),
         "calib_room_lines": summary([r["room_lines"] for r in rows], ""),

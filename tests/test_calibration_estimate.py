@@ -172,6 +172,24 @@ def test_people_walking_in_depth_show_the_horizon() -> None:
     )
 
 
+def test_an_estimate_whose_halves_disagree_is_not_credible() -> None:
+    # people walking in depth; in the second half of the window their outlines read a quarter
+    # shorter (cut at the knees: a table in front, a posture): the whole window's estimate is off
+    # by a fifth in height with uncertainties as small as a good one's; its halves show it
+    cam = _camera(2.5, 20.0, 50.0)
+    heads, feet, ids, t = _walkers(cam, seed=20)
+    good = estimate_camera(heads, feet, ids, (W, H), t)
+    assert max(good.split_height, good.split_focal) < 0.02 and good.split_tilt_deg < 0.2
+    assert credible(good, 0.2, 0.5, 8.0, 0.12)
+    late = t > np.median(t)
+    heads[late, 1] += 0.25 * (feet[late, 1] - heads[late, 1])
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    assert abs(est.height / 2.5 - 1) > 0.15 and est.split_height > 0.10, est.describe()
+    assert not credible(est, 0.2, 0.5, 8.0, 0.12)
+    blind = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(split_halves=False))
+    assert blind.split_height == 0.0 and credible(blind, 0.2, 0.5, 8.0, 0.12)  # the uncertainty alone lets it pass
+
+
 @pytest.mark.parametrize("tilt", [2.0, 6.0])
 def test_square_floor_lines_fix_the_focal_length_of_a_level_camera(tilt: float) -> None:
     # a camera nearly level, seeing a floor laid out square at 30 degrees to it: the two plank

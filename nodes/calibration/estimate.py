@@ -34,7 +34,7 @@ Starts: a grid over tilt and field of view (vectorised), the best few refined by
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -107,6 +107,11 @@ class CalibrationConfig:
         A person (track id) seen fewer times is left out: more likely a passing false find (a
         fragment of a region, a detector's box on the room) than a person, and its stature prior
         would weigh as much as a real person's in setting the scale.
+    split_halves : bool, default=True
+        Fit the camera again on each half of the observations (split at their median time, the
+        scene's lines with both) and report how far each lands from the whole
+        (``CameraEstimate.split_*``): an estimate that the people's lean or a passing posture
+        carries moves between the halves, one that the scene and the people agree on does not.
     """
 
     person_height: float = 1.75
@@ -130,6 +135,7 @@ class CalibrationConfig:
     min_person_views: int = 5
     family_outlier_cost: float | None = 4.0
     max_stature_sd: float | None = 3.0
+    split_halves: bool = True
 
 
 @dataclass(frozen=True)
@@ -175,6 +181,10 @@ class CameraEstimate:
     horizon_segments : int, default=0
         Scene segments of horizontal families whose vanishing point is within five image widths of
         the centre (they place the horizon; lines parallel to the image show its direction only).
+    split_height, split_tilt_deg, split_focal : float, default=0.0
+        The largest difference between this estimate and the estimate from either half of the
+        observations in time (``CalibrationConfig.split_halves``): of the log height, of the tilt
+        (degrees) and of the log focal length; 0 for a half too short for an estimate of its own.
     """
 
     focal: float
@@ -195,6 +205,9 @@ class CameraEstimate:
     height_px: int
     depth_spread: float = 0.0
     horizon_segments: int = 0
+    split_height: float = 0.0
+    split_tilt_deg: float = 0.0
+    split_focal: float = 0.0
 
     @property
     def fov_deg(self) -> float:
@@ -657,6 +670,18 @@ def fit_camera(
     # the world origin under the people's median foot position
     d = np.column_stack([(foot - [(W - 1) / 2.0, (H - 1) / 2.0]) / f, np.ones(len(foot))]) @ rotation(tilt, roll)
     g = (hc / np.maximum(-d[:, 1], 1e-4))[:, None] * d
+    split = np.zeros(3)
+    if config.split_halves:
+        # the halves in time, each with the scene's lines: where they land off the whole, the people
+        # carry the estimate with something that changes over the window (a lean, a posture)
+        half = replace(config, split_halves=False)
+        for m in (time_s <= np.median(time_s), time_s > np.median(time_s)):
+            part = fit_camera(head[m], foot[m], track[m], size, time_s[m], half, lines)
+            if part is not None:
+                split = np.maximum(
+                    split,
+                    np.abs([np.log(part.height / hc), part.tilt_deg - np.degrees(tilt), np.log(part.focal / f)]),
+                )
     return CameraEstimate(
         focal=f,
         tilt_deg=float(np.degrees(tilt)),
@@ -676,6 +701,9 @@ def fit_camera(
         height_px=H,
         depth_spread=depth_spread(foot[:, 1], pix, k),
         horizon_segments=horizon_segments(lines, (W, H)),
+        split_height=float(split[0]),
+        split_tilt_deg=float(split[1]),
+        split_focal=float(split[2]),
     )
 
 

@@ -66,10 +66,12 @@ def credible(
     max_tilt_std_deg: float,
     min_depth_spread: float,
     min_horizon_segments: int = 12,
+    max_split: tuple[float, float, float] = (0.10, 1.5, 0.20),
 ) -> bool:
     """Whether an estimate is sure enough to move the published camera: its uncertainties under the
-    bounds, and the horizon seen, by people at different depths (``CameraEstimate.depth_spread``)
-    or by scene lines converging on it (``horizon_segments``). Without it the lean of people
+    bounds, the halves of its window in agreement with it, and the horizon seen, by people at
+    different depths (``CameraEstimate.depth_spread``) or by scene lines converging on it
+    (``horizon_segments``). Without it the lean of people
     reaching to each other passes for tilt. A tilt on the fit's lower bound is not credible either
     (a camera looking up: the sign of that lean).
 
@@ -87,6 +89,11 @@ def credible(
         Least ``est.depth_spread`` that shows the horizon (unless enough horizon segments do).
     min_horizon_segments : int
         Least ``est.horizon_segments`` that show the horizon (unless the depth spread does).
+    max_split : tuple of (float, float, float), default=(0.10, 1.5, 0.20)
+        Largest ``est.split_height``, ``split_tilt_deg`` and ``split_focal``: how far the estimates
+        from the two halves of the window may land from the whole (log height, degrees, log focal);
+        the uncertainty alone is too small where one cue (a line family, the right-angle prior)
+        fixes a parameter that the people disagree with.
 
     Returns
     -------
@@ -100,8 +107,11 @@ def credible(
         and est.tilt_std_deg <= max_tilt_std_deg
         and est.distance > 0
         and (est.depth_spread >= min_depth_spread or est.horizon_segments >= min_horizon_segments)
-        and est.tilt_deg > CalibrationConfig().min_tilt_deg + 0.5
-    )  # on its bound: the fit wanted further
+        and est.tilt_deg > CalibrationConfig().min_tilt_deg + 0.5  # on its bound: the fit wanted further
+        and est.split_height <= max_split[0]
+        and est.split_tilt_deg <= max_split[1]
+        and est.split_focal <= max_split[2]
+    )
 
 
 class CameraSmoother:
