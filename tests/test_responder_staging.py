@@ -402,6 +402,9 @@ def test_a_pusher_walking_in_with_a_hand_held_high_pushes_when_the_silhouettes_t
     # the pusher's burst of advance over, the hand still on the other person: the push goes on
     held = [gap(31, True) for _ in range(5)]
     assert stage.pushes == 1 and np.all(np.diff([gaps[-1], *held]) > 0)
+    # nor while the push goes on without the advance: a pushed partner reaching for the pushing hand
+    # would stand with its arm inside the pusher
+    assert stage.offered_ is None
     down = Reach(0.2, None, 0.04 * 31)
     later = [
         float(np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, silhouette=down)) - ground(obs)))) for _ in range(60)
