@@ -548,6 +548,11 @@ class Stage:
         self.offered_: np.ndarray | None = None
 
     @property
+    def pushed(self) -> bool:
+        """Whether a push goes on (after a call): the partner gives way and takes no hand."""
+        return self._pushed
+
+    @property
     def side(self) -> float:
         """The side across the view the partner stands on: +1 image right (world +X), -1 left, 0 not yet placed."""
         return self._side
