@@ -93,32 +93,37 @@ def test_where_real_hands_meet_the_picture_says_where_the_hand_is() -> None:
     assert np.median(errors) <= 0.15 and np.mean(np.array(errors) <= 0.15) >= 0.8
 
 
-def staged_gaps(name: str, side: str, direction: float) -> tuple[np.ndarray, Stage, int | None]:
+def staged_gaps(name: str, side: str, direction: float) -> tuple[np.ndarray, Stage, int | None, np.ndarray]:
     """The partner's ground distance (T,) from a standing observed person on ``side`` whose silhouettes
-    are the clip's, frame by frame; the stage; and the frame its first push landed (None: none).
+    are the clip's, frame by frame; the stage; the frame its first push landed (None: none); and
+    per frame (T, 2) whether a hand was offered to the partner and whether a push went on.
     """
     people, _, _ = clip(name)
     obs, par = facing(np.pi / 2), facing(-np.pi / 2) + [0.9 * direction, 0.0, 0.0]
     stage = Stage()
-    gaps, landed = [], None
+    gaps, landed, offered = [], None, []
     for t in range(len(people)):
         reach, _ = reach_of(people[t], side, obs, direction)
         out = stage(obs, par, 1.0 / FPS, side=direction, silhouette=reach)
         gaps.append(float(np.hypot(*(actor_frame(out)[0] - actor_frame(obs)[0])[[0, 2]])))
         landed = t if landed is None and stage.pushes else landed
-    return np.array(gaps), stage, landed
+        offered.append((stage.offered_ is not None, stage.pushed))
+    return np.array(gaps), stage, landed, np.array(offered)
 
 
 def test_a_real_push_moves_the_partner_back_within_the_range() -> None:
     # 16_3_5: the right person walks in and pushes the left one (the reference shows the other thrown back)
-    gaps, stage, landed = staged_gaps(PUSH, "right", -1.0)
+    gaps, stage, landed, offered = staged_gaps(PUSH, "right", -1.0)
     assert landed is not None
     assert gaps.min() >= 0.5 - 1e-9 and gaps.max() <= 1.2 + 1e-9
     # from where the push landed it moves back: at least 0.2 m within the 1.5 s after
     assert gaps[landed : landed + round(1.5 * FPS)].max() - gaps[landed] >= 0.2
+    # and takes no hand while the push goes on (the pusher's arm out on it): reaching for the pushing
+    # hand, its arm would lie inside the pusher
+    assert offered[:, 1].sum() >= 10 and not (offered[:, 0] & offered[:, 1]).any()
 
 
 def test_real_people_walking_in_to_shake_hands_do_not_push() -> None:
-    gaps, stage, _ = staged_gaps(HANDSHAKE, "left", 1.0)
-    assert stage.pushes == 0
+    gaps, stage, _, offered = staged_gaps(HANDSHAKE, "left", 1.0)
+    assert stage.pushes == 0 and offered[:, 0].any()  # the hand held out is taken
     assert gaps.min() >= 0.5 - 1e-9 and gaps.max() <= 1.2 + 1e-9

@@ -402,6 +402,9 @@ def test_a_pusher_walking_in_with_a_hand_held_high_pushes_when_the_silhouettes_t
     # the pusher's burst of advance over, the hand still on the other person: the push goes on
     held = [gap(31, True) for _ in range(5)]
     assert stage.pushes == 1 and np.all(np.diff([gaps[-1], *held]) > 0)
+    # nor while the push goes on without the advance: a pushed partner reaching for the pushing hand
+    # would stand with its arm inside the pusher
+    assert stage.offered_ is None
     down = Reach(0.2, None, 0.04 * 31)
     later = [
         float(np.hypot(*(ground(stage(obs, par, 0.04, side=1.0, silhouette=down)) - ground(obs)))) for _ in range(60)
@@ -426,6 +429,29 @@ def test_people_walking_in_to_shake_hands_are_no_push_and_one_rushing_in_is() ->
     assert pushes(StageConfig(push_height=0.0), 0.7) == 1
     # rushing in at 1.5 m/s (faster than push_rush_m_s): a push whatever the hand's height
     assert pushes(StageConfig(), 1.5) == 1
+
+
+def test_no_hand_is_taken_from_someone_rushing_in_or_from_a_pusher_while_thrown_back() -> None:
+    obs, par = person(0.0, 2.0), person(0.9, 2.0, -np.pi / 2)
+
+    def offered(stage: Stage, speed: float, k: int, touching: bool, height: float = 1.0) -> bool:
+        stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.6, height, speed * 0.04 * k, touching))
+        return stage.offered_ is not None
+
+    # a hand held out at the waist walking in at 0.3 m/s: offered; rushing in at 1.5 m/s (push_rush_m_s),
+    # or driven in at 0.7 m/s held at the chest (push_speed_m_s, push_height), not yet touching: none
+    # once the smoothed advance (advance_s) says so
+    walk, rush, drive = Stage(), Stage(), Stage()
+    assert all(offered(walk, 0.3, k, False) for k in range(1, 16))
+    assert not any([offered(rush, 1.5, k, False) for k in range(1, 16)][6:])
+    assert not any([offered(drive, 0.7, k, False, 1.4) for k in range(1, 16)][6:])
+    # the push lands and is released, the pusher's hand still out: the partner is thrown back and takes
+    # no hand until the recoil has faded
+    for k in range(16, 26):
+        offered(rush, 1.5, k, True)
+    assert rush.pushes == 1
+    after = [offered(rush, 0.0, 25, False) for _ in range(60)]
+    assert not any(after[:10]) and after[-1]
 
 
 def test_without_push_touch_the_advance_alone_is_a_push_and_a_region_merging_is_none() -> None:

@@ -46,7 +46,9 @@ model's posture and gestures are kept:
    within ``max_distance_m``: a partner standing further than ``recoil_m`` inside the limit when
    pushed stands where the push lands, with room to recoil.
    A hand held out without a push (the silhouette reaching ``offer_m``, or having done so within
-   ``offer_hold_s``) is offered (:attr:`Stage.offered_`), at the height of the silhouette's tip,
+   ``offer_hold_s``; none while a push goes on or the partner recoils from one, nor from someone
+   driving or rushing in as a pusher does, not yet touching: a partner reaching for a pushing hand
+   stands with its arm inside the pusher) is offered (:attr:`Stage.offered_`), at the height of the silhouette's tip,
    ``meet_frac`` of the way to the partner at most; where the silhouette touches someone else's
    (its tip is then where the regions were split, not the hand), with the camera, the person's box
    and the other's region, where the picture says (``meet_touch`` of the way between the two
@@ -547,6 +549,11 @@ class Stage:
         self.offered_: np.ndarray | None = None
 
     @property
+    def pushed(self) -> bool:
+        """Whether a push goes on (after a call): the partner gives way and takes no hand."""
+        return self._pushed
+
+    @property
     def side(self) -> float:
         """The side across the view the partner stands on: +1 image right (world +X), -1 left, 0 not yet placed."""
         return self._side
@@ -726,7 +733,7 @@ class Stage:
         offset = _clip_length(d, float(facing), c.min_distance_m, c.max_distance_m)
         out = None  # how far out towards the partner the observed person holds a hand, metres
         hand = None  # where the hand is, world metres, where the picture says
-        if held_out and not touching:
+        if held_out and not (self._pushed or driven or self._recoil_goal > 0.01):  # no pushing hand to take
             r = float(np.hypot(*offset))
             out = min(silhouette.extent_m, c.meet_frac * r)  # hands meet between the two
             if silhouette.touching:  # the outline's tip is where the regions were split, not the hand
