@@ -51,8 +51,9 @@ estimate; across the clips, the median and interquartile range of height, tilt a
 
 Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]
 [--inputs-cache DIR]``; last stdout line: one JSON object. ``--inputs-cache`` keeps each seed's costly
-inputs (:func:`sim_inputs`: the silhouettes' and the detector's observations, the lines, the truth) so
-that a change to the estimator alone is measured in seconds; it is stale once anything upstream of
+inputs (:func:`sim_inputs`: the silhouettes' and the detector's observations, the median view of the
+scene and the people's boxes on it, the truth) so that a change to the estimator or to the scene
+lines' detection and grouping is measured in seconds; it is stale once anything upstream of
 the estimate changes. ``bench/real_video.py`` reports the simulator figures under the same names.
 """
 
@@ -408,8 +409,8 @@ def main() -> None:
     ap.add_argument(
         "--inputs-cache",
         default=None,
-        help="folder keeping each seed's inputs (observations, lines, truth) for estimator-only changes; "
-        "stale once the silhouettes, the observations, the lines or the simulator change",
+        help="folder keeping each seed's inputs (observations, median view, truth) for changes to the estimator "
+        "or the lines; stale once the silhouettes, the observations or the simulator change",
     )
     args = ap.parse_args()
     out = sim_figures(args.seeds, args.seconds, args.first_seed, args.jobs, args.inputs_cache)
