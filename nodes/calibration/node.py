@@ -11,8 +11,9 @@ node's people and estimates the camera from them and from the straight lines of 
 upright people against a prior on human height; on a frame where the silhouettes hold no upright
 person, as when people standing still are absorbed into the background, from the people
 detector's boxes, on ``detect_frames`` frames at most). Until an estimate is credible (people seen over
-``min_seconds``; uncertainties under the ``max_*_std`` bounds; the horizon seen, by people at
-different depths or by scene lines converging on it) the default camera stays; then the published
+``min_seconds``; uncertainties under the ``max_*_std`` bounds; the estimates from the two halves
+of the window near the whole's; the horizon seen, by people at different depths or by scene lines
+converging on it) the default camera stays; then the published
 camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
 (``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
 (``lead`` frames after the frame it was estimated on: every subscriber switches at that frame,
