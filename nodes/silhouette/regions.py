@@ -104,13 +104,33 @@ def _disk(size: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
 
 
+def label_type(height: int, width: int) -> int:
+    """The OpenCV label type for the 8-connected regions of a ``height`` x ``width`` mask:
+    ``cv2.CV_16U`` where 16 bits hold every label, else ``cv2.CV_32S``.
+
+    OpenCV labels with 16-bit labels by the same algorithm, so to the same values, in less time,
+    and what reads the labels moves half the memory. A mask has at most
+    ceil(H / 2) ceil(W / 2) regions (one pixel in each 2 x 2 block): 16 bits hold them for frames
+    up to about 510 x 510.
+
+    Parameters
+    ----------
+    height, width : int
+        The mask's size, pixels.
+
+    Returns
+    -------
+    int
+        ``cv2.CV_16U`` or ``cv2.CV_32S``.
+    """
+    return cv2.CV_16U if ((height + 1) // 2) * ((width + 1) // 2) < 65535 else cv2.CV_32S
+
+
 def components_with_stats(m8: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """``cv2.connectedComponentsWithStats(m8, connectivity=8)`` with uint16 labels where they fit.
 
-    OpenCV labels a mask with 16-bit labels in a fraction of the time it takes with 32-bit ones,
-    by the same algorithm: the labels, stats and centroids are the same. An 8-connected mask of
-    H x W has at most ceil(H / 2) ceil(W / 2) regions (one pixel in each 2 x 2 block), so 16 bits
-    hold them when that is under 65535 (frames up to about 510 x 510); larger masks get 32 bits.
+    With ``label_type``'s labels: OpenCV computes the stats of 16-bit labels in a fraction of the
+    time it takes with 32-bit ones, and the labels, stats and centroids are the same.
 
     Parameters
     ----------
@@ -128,9 +148,7 @@ def components_with_stats(m8: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, 
     centroids : ndarray of shape (n, 2), dtype float64
         x, y of each label's centroid.
     """
-    h, w = m8.shape
-    ltype = cv2.CV_16U if ((h + 1) // 2) * ((w + 1) // 2) < 65535 else cv2.CV_32S
-    return cv2.connectedComponentsWithStats(m8, connectivity=8, ltype=ltype)
+    return cv2.connectedComponentsWithStats(m8, connectivity=8, ltype=label_type(*m8.shape))
 
 
 def clean_mask(
