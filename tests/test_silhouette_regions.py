@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
-from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask
+from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask, components_with_stats
 from tests.shared_data import DATA
 
 UT = DATA / "ut_interaction"
@@ -386,3 +386,21 @@ def test_a_leg_stepping_out_is_not_a_new_person_a_child_beside_them_is():
             draw_person(m, 90, 80)
         _, people = child.update(m.astype(bool))
     assert [p.id for p in people] == [0, 1]
+
+
+def test_components_with_stats_match_opencvs_32_bit_labelling() -> None:
+    rng = np.random.default_rng(3)
+    yy, xx = np.indices((240, 320))
+    masks = [(rng.random((240, 320)) < p).astype(np.uint8) for p in (0.02, 0.3, 0.6)]
+    masks.append(((yy % 2 == 0) & (xx % 2 == 0)).astype(np.uint8))  # the most regions a mask can have
+    for m in masks:
+        n, labels, stats, cents = components_with_stats(m)
+        ref = cv2.connectedComponentsWithStats(m, connectivity=8)
+        assert labels.dtype == np.uint16
+        assert n == ref[0]
+        np.testing.assert_array_equal(labels, ref[1])
+        np.testing.assert_array_equal(stats, ref[2])
+        np.testing.assert_array_equal(cents, ref[3])
+    big = ((np.indices((520, 520)).sum(axis=0) % 2) == 0).astype(np.uint8)
+    n, labels, _, _ = components_with_stats(big)
+    assert labels.dtype == np.int32 and n == cv2.connectedComponents(big, connectivity=8)[0]

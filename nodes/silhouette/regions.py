@@ -104,6 +104,53 @@ def _disk(size: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
 
 
+def label_type(height: int, width: int) -> int:
+    """The OpenCV label type for the 8-connected regions of a ``height`` x ``width`` mask:
+    ``cv2.CV_16U`` where 16 bits hold every label, else ``cv2.CV_32S``.
+
+    OpenCV labels with 16-bit labels by the same algorithm, so to the same values, in less time,
+    and what reads the labels moves half the memory. A mask has at most
+    ceil(H / 2) ceil(W / 2) regions (one pixel in each 2 x 2 block): 16 bits hold them for frames
+    up to about 510 x 510.
+
+    Parameters
+    ----------
+    height, width : int
+        The mask's size, pixels.
+
+    Returns
+    -------
+    int
+        ``cv2.CV_16U`` or ``cv2.CV_32S``.
+    """
+    return cv2.CV_16U if ((height + 1) // 2) * ((width + 1) // 2) < 65535 else cv2.CV_32S
+
+
+def components_with_stats(m8: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """``cv2.connectedComponentsWithStats(m8, connectivity=8)`` with uint16 labels where they fit.
+
+    With ``label_type``'s labels: OpenCV computes the stats of 16-bit labels in a fraction of the
+    time it takes with 32-bit ones, and the labels, stats and centroids are the same.
+
+    Parameters
+    ----------
+    m8 : ndarray of shape (H, W), dtype uint8
+        The mask (non-zero: foreground).
+
+    Returns
+    -------
+    n : int
+        Labels, background (0) included.
+    labels : ndarray of shape (H, W), dtype uint16 or int32
+        Region labels, 0 = background.
+    stats : ndarray of shape (n, 5), dtype int32
+        x, y, width, height, area of each label (``cv2.CC_STAT_*``).
+    centroids : ndarray of shape (n, 2), dtype float64
+        x, y of each label's centroid.
+    """
+    return cv2.connectedComponentsWithStats(m8, connectivity=8, ltype=label_type(*m8.shape))
+
+
 def clean_mask(
     mask: np.ndarray,
     open_px: int = 3,
@@ -154,7 +201,7 @@ def clean_mask(
             cv2.drawContours(out, contours, -1, 1, thickness=cv2.FILLED)
             m8 = out
         if min_area > 0:
-            n, labels, stats, _ = cv2.connectedComponentsWithStats(m8, connectivity=8)
+            n, labels, stats, _ = components_with_stats(m8)
             keep = stats[:, cv2.CC_STAT_AREA] >= min_area
             keep[0] = False
             m8 = keep[labels].view(np.uint8)
@@ -204,7 +251,7 @@ def _paste(track: _Track, x0: int, y0: int, h: int, w: int) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class _Regions:
-    """One mask's connected regions (``cv2.connectedComponentsWithStats``): comp (H, W) labels,
+    """One mask's connected regions (``components_with_stats``): comp (H, W) labels (uint16 or int32),
     stats (n, 5), cents (n, 2) x, y; regions the labels of those of at least min_area pixels;
     counts (T, n) pixels of each track's predicted mask in each region (0 for small regions),
     frac_track (T, n) the same over the track's area; region_area (n,) pixels.
@@ -371,7 +418,7 @@ class PersonTracker:
     def _label_regions(self, m: np.ndarray) -> _Regions:
         """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
-        n, comp, stats, cents = cv2.connectedComponentsWithStats((m != 0).astype(np.uint8), connectivity=8)
+        n, comp, stats, cents = components_with_stats((m != 0).astype(np.uint8))
         regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
         tracks = self._tracks
         counts = np.zeros((len(tracks), n), np.int64)
@@ -705,7 +752,7 @@ class PersonTracker:
         pred = _paste(t, x, y, h, w).astype(np.uint8)
         outside = cv2.distanceTransform(1 - pred, cv2.DIST_L2, 5)
         far = (region & (outside > self.newcomer_margin * t.height)).view(np.uint8)
-        n, comp_far, st, _ = cv2.connectedComponentsWithStats(far, connectivity=8)
+        n, comp_far, st, _ = components_with_stats(far)
         if n < 2:
             return None
         k = 1 + int(np.argmax(st[1:, cv2.CC_STAT_AREA]))
