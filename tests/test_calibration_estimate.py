@@ -11,7 +11,13 @@ import pytest
 
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import CalibrationConfig, estimate_camera, head_foot, rotation, usable
-from counterpart.nodes.calibration.lines import LineFamilies, detect_segments, find_families, scene_lines
+from counterpart.nodes.calibration.lines import (
+    LineFamilies,
+    detect_segments,
+    find_families,
+    find_manhattan_families,
+    scene_lines,
+)
 from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
 
 W, H = 320, 240
@@ -328,3 +334,29 @@ def test_the_camera_priors_stay_gaussian_in_the_robust_fit() -> None:
     r = _gaussian_under_soft_l1(q)
     np.testing.assert_allclose(2 * (np.sqrt(1 + r * r) - 1), q * q, rtol=1e-12)
     assert (np.sign(r) == np.sign(q)).all()
+
+
+def test_a_square_frame_sets_the_rotation_and_the_people_only_the_scale() -> None:
+    # a camera 25 degrees down seeing a square floor; two people at one depth leaning towards each
+    # other by 12 cm (reaching): in a joint fit that lean pulls the tilt and the focal length off
+    # the floor's; with the rotation from the floor alone, the people set the height only
+    cam = _camera(2.2, 25.0, 55.0, distance=5.0)
+    rng = np.random.default_rng(7)
+    heads, feet, ids = [], [], []
+    for p, (x0, stature) in enumerate([(-0.8, 1.68), (0.8, 1.80)]):
+        side = 1 if p else -1
+        for i in range(100):
+            g = np.array([x0 + 0.3 * side * np.sin(i / 20), 0.0, 0.0])
+            feet.append(cam.project(g) + rng.normal(0, 1, 2))
+            heads.append(cam.project(g + [-0.12 * side, stature, 0.0]) + rng.normal(0, 1, 2))
+            ids.append(p)
+    heads, feet, ids, t = np.array(heads), np.array(feet), np.array(ids), np.tile(np.arange(100) / 10.0, 2)
+    lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
+    assert lines.square and lines.n_horizontal == 2
+    est = estimate_camera(heads, feet, ids, (W, H), t, lines=lines)
+    joint = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(lines_first_focal_std=None), lines)
+    assert abs(est.tilt_deg - 25.0) < 2.0 and abs(est.focal / cam.fx - 1) < 0.10, est.describe()
+    assert abs(est.height / 2.2 - 1) < 0.10, est.describe()
+    assert abs(joint.tilt_deg - 25.0) + 10 * abs(joint.focal / cam.fx - 1) > 2 * (
+        abs(est.tilt_deg - 25.0) + 10 * abs(est.focal / cam.fx - 1)
+    ), joint.describe()

@@ -107,6 +107,17 @@ class CalibrationConfig:
         A person (track id) seen fewer times is left out: more likely a passing false find (a
         fragment of a region, a detector's box on the room) than a person, and its stature prior
         would weigh as much as a real person's in setting the scale.
+    lines_first_focal_std, lines_first_tilt_std_deg : float or None, default=1.0, 90.0
+        When the lines are the families of one square frame (``LineFamilies.square``) and they
+        alone fix the camera's rotation and focal length (a fit of the lines with the priors on
+        focal length, roll and the right angle, :func:`fit_lines`) to within this relative std of
+        the focal length and this std of the tilt (degrees), the camera is fitted in two stages:
+        tilt, roll and focal length from the lines, then the height and the statures from the
+        people with those fixed (the people's lean, which pulls a joint fit off the lines, then
+        moves the scale only); how far the joint fit lands from it counts, twice over, in the
+        ``split_*`` figures. The joint fit otherwise. The defaults take any square frame's fit (on
+        the simulator tighter bounds sent well-fixed frames to the joint fit). None: always the
+        joint fit.
     split_halves : bool, default=True
         Fit the camera again on each half of the observations (split at their median time, the
         scene's lines with both) and report how far each lands from the whole
@@ -135,6 +146,8 @@ class CalibrationConfig:
     min_person_views: int = 5
     family_outlier_cost: float | None = 4.0
     max_stature_sd: float | None = 3.0
+    lines_first_focal_std: float | None = 1.0
+    lines_first_tilt_std_deg: float = 90.0
     split_halves: bool = True
 
 
@@ -525,6 +538,119 @@ def _solve(
     return best
 
 
+@dataclass(frozen=True)
+class LinesCamera:
+    """The camera's rotation and focal length from the scene's lines alone (:func:`fit_lines`).
+
+    Attributes
+    ----------
+    x : ndarray of shape (3,)
+        (log f, tilt, roll): focal length in pixels, radians.
+    sd : ndarray of shape (3,)
+        Their stds (Gauss-Newton, times the reduced chi-square of the segments when over 1).
+    """
+
+    x: np.ndarray
+    sd: np.ndarray
+
+
+def _line_residuals(
+    y: np.ndarray, lines: LineFamilies, line_scale: np.ndarray, size: tuple[int, int], cfg: CalibrationConfig, f0: float
+) -> np.ndarray:
+    """Residuals of the lines-only fit over ``y`` = (log f, tilt, roll, phi_1..phi_Fh)."""
+    x = np.concatenate([y[:3], [0.0], y[3:]])
+    rl = segment_angles(lines.segments, _vanishing_points(x, 0, lines, size)) / line_scale
+    camera = _gaussian_under_soft_l1(
+        np.array([(y[0] - np.log(f0)) / cfg.focal_log_std, y[2] / np.radians(cfg.roll_std_deg)])
+    )
+    return np.concatenate([rl, _manhattan(y[3:], cfg.manhattan_std_deg), camera])
+
+
+def fit_lines(
+    lines: LineFamilies, size: tuple[int, int], config: CalibrationConfig = CalibrationConfig()
+) -> LinesCamera | None:
+    """The camera's focal length, tilt and roll from the scene's line families alone (their
+    vanishing points, the right angle between horizontal families, the priors on focal length and
+    roll), with their uncertainty from the segments' own scatter.
+
+    Parameters
+    ----------
+    lines : LineFamilies
+        The scene's families (``counterpart.nodes.calibration.lines``).
+    size : tuple of (int, int)
+        (width, height) of the frames, pixels.
+    config : CalibrationConfig, default=CalibrationConfig()
+        Priors and the segments' noise.
+
+    Returns
+    -------
+    LinesCamera or None
+        The fit, or None without segments or without a horizontal family.
+    """
+    if not len(lines.segments) or lines.n_horizontal == 0:
+        return None
+    W, H = int(size[0]), int(size[1])
+    f0 = (W / 2.0) / np.tan(np.radians(config.fov_deg) / 2)
+    line_scale = _line_scale(lines, config)
+    args = (lines, line_scale, (W, H), config, f0)
+    starts = []
+    for tilt in np.radians(config.grid_tilt_deg):
+        for fov in config.grid_fov_deg:
+            x0 = np.array([np.log((W / 2.0) / np.tan(np.radians(fov) / 2)), tilt, 0.0])
+            y0 = np.concatenate([x0, _directions(np.concatenate([x0, [0.0]]), lines, (W, H))])
+            r = _line_residuals(y0, *args)
+            starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), y0))
+    starts.sort(key=lambda v: v[0])
+    best = None
+    for _, y0 in starts[: config.n_starts]:
+        lo = np.full(len(y0), -np.inf)
+        hi = np.full(len(y0), np.inf)
+        lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
+        y0[1] = np.clip(y0[1], lo[1] + 1e-6, hi[1] - 1e-6)
+        res = least_squares(
+            _line_residuals, y0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
+        )
+        if best is None or res.cost < best.cost:
+            best = res
+    J = best.jac
+    m, n = J.shape
+    chi2 = 2 * best.cost / max(1, m - n)
+    try:
+        cov = np.linalg.inv(J.T @ J) * max(1.0, chi2)
+    except np.linalg.LinAlgError:
+        return None
+    return LinesCamera(best.x[:3].copy(), np.sqrt(np.abs(np.diag(cov)))[:3])
+
+
+def _solve_people(
+    head: np.ndarray,
+    foot: np.ndarray,
+    k: np.ndarray,
+    scale: np.ndarray,
+    size: tuple[int, int],
+    config: CalibrationConfig,
+    f0: float,
+    nk: int,
+    cam: np.ndarray,
+) -> Any:
+    """The robust fit of the height and the statures with (log f, tilt, roll) = ``cam`` fixed: scipy's
+    result with ``x`` the whole parameter vector, or None when the people are not above the ground.
+    """
+    h = _relative_heights(float(np.exp(cam[0])), cam[1], cam[2], head, foot, size)
+    hk = np.array([np.median(h[k == j]) for j in range(nk)])
+    if not (hk > 0.05).all():
+        return None
+    hc = config.person_height / np.exp(np.mean(np.log(hk)))
+    z0 = np.concatenate([[np.log(hc)], np.log(hk * hc)])
+
+    def fun(z: np.ndarray) -> np.ndarray:
+        return _residuals(np.concatenate([cam, z]), head, foot, k, scale, size, config, f0, nk)
+
+    res = least_squares(fun, z0, loss="soft_l1", method="trf", x_scale="jac", max_nfev=200)
+    res.x = np.concatenate([cam, res.x])
+    return res
+
+
 def _without_family(lines: LineFamilies, j: int) -> LineFamilies:
     """``lines`` less family ``j`` (the later families renumbered)."""
     keep = lines.family != j
@@ -622,14 +748,36 @@ def fit_camera(
     if lines is not None and not len(lines.segments):
         lines = None
     nk = len(ids)
-    best = _solve(head, foot, k, scale, (W, H), config, f0, nk, lines)
+    fixed = None
+    if lines is not None and lines.square and config.lines_first_focal_std is not None:
+        cam = fit_lines(lines, (W, H), config)
+        # the lines alone fix the rotation and the focal length: the people give the scale only
+        # (their lean would otherwise pull the rotation off the lines)
+        if (
+            cam is not None
+            and cam.sd[0] <= config.lines_first_focal_std
+            and np.degrees(cam.sd[1]) <= config.lines_first_tilt_std_deg
+        ):
+            fixed = cam
+    joint = _solve(head, foot, k, scale, (W, H), config, f0, nk, lines)
+    best = joint
+    if fixed is not None:
+        best = _solve_people(head, foot, k, scale, (W, H), config, f0, nk, fixed.x)
+        if best is None:
+            fixed, best = None, joint
     if best is None:
         return None
     # a family of segments that is not a set of parallel scene lines (edges of several things that
     # happen to meet, a family off the ground's horizon) drags the horizon to its point, and with two
     # families any two points make a horizon: drop the family whose leaving out lowers the cost
     # most, while that gain is over the bound (a likelihood-ratio test per family), and fit again
-    while lines is not None and not lines.square and config.family_outlier_cost is not None and len(lines.vp):
+    while (
+        fixed is None
+        and lines is not None
+        and not lines.square
+        and config.family_outlier_cost is not None
+        and len(lines.vp)
+    ):
         fits = [
             (_solve(head, foot, k, scale, (W, H), config, f0, nk, fewer), fewer)
             for fewer in (_without_family(lines, j) for j in range(len(lines.vp)))
@@ -666,11 +814,18 @@ def fit_camera(
     except np.linalg.LinAlgError:
         cov = np.full((n, n), np.inf)
     sd = np.sqrt(np.abs(np.diag(cov)))
+    if fixed is not None:
+        sd = np.concatenate([fixed.sd, sd])
     f, tilt, roll, hc = float(np.exp(x[0])), float(x[1]), float(x[2]), float(np.exp(x[3]))
     # the world origin under the people's median foot position
     d = np.column_stack([(foot - [(W - 1) / 2.0, (H - 1) / 2.0]) / f, np.ones(len(foot))]) @ rotation(tilt, roll)
     g = (hc / np.maximum(-d[:, 1], 1e-4))[:, None] * d
     split = np.zeros(3)
+    if fixed is not None and joint is not None:
+        # the two cues disagree by as much as the fit with the people lands off the lines alone;
+        # that difference is one draw of their disagreement, counted twice over against the
+        # halves' bounds
+        split = 2.0 * np.abs([joint.x[3] - x[3], np.degrees(joint.x[1] - x[1]), joint.x[0] - x[0]])
     if config.split_halves:
         # the halves in time, each with the scene's lines: where they land off the whole, the people
         # carry the estimate with something that changes over the window (a lean, a posture)
@@ -769,6 +924,8 @@ __all__ = [
     "depth_spread",
     "estimate_camera",
     "fit_camera",
+    "fit_lines",
+    "LinesCamera",
     "horizon_segments",
     "head_foot",
     "rotation",
