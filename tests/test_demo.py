@@ -86,6 +86,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("silhouette", "fit_in_background"),
         ("tracker", "frame_budget"),
         ("calibration", "detect_frames"),
+        ("calibration", "every"),
     }
     for name, decl in demo.nodes.items():
         other = replay.nodes[name]
