@@ -523,6 +523,28 @@ def _solve(
             starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), x0))
     if not starts:
         return None
+    return _refine_best(_residuals, starts, args, config)
+
+
+def _refine_best(fun: Any, starts: list[tuple[float, np.ndarray]], args: tuple, config: CalibrationConfig) -> Any:
+    """The best least-squares fit (soft L1) from the ``config.n_starts`` cheapest starts.
+
+    Parameters
+    ----------
+    fun : callable
+        Residuals ``fun(x, *args)``; ``x[1]`` is the tilt, radians, bounded to the config's range.
+    starts : list of (float, ndarray)
+        (cost, x0) of each start on the grid.
+    args : tuple
+        The residuals' other arguments.
+    config : CalibrationConfig
+        ``n_starts`` and the tilt's bounds.
+
+    Returns
+    -------
+    scipy.optimize.OptimizeResult
+        The refined fit of lowest cost.
+    """
     starts.sort(key=lambda s: s[0])
     best = None
     for _, x0 in starts[: config.n_starts]:
@@ -531,7 +553,7 @@ def _solve(
         lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
         x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
         res = least_squares(
-            _residuals, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
+            fun, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
         )
         if best is None or res.cost < best.cost:
             best = res
@@ -600,18 +622,7 @@ def fit_lines(
             y0 = np.concatenate([x0, _directions(np.concatenate([x0, [0.0]]), lines, (W, H))])
             r = _line_residuals(y0, *args)
             starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), y0))
-    starts.sort(key=lambda v: v[0])
-    best = None
-    for _, y0 in starts[: config.n_starts]:
-        lo = np.full(len(y0), -np.inf)
-        hi = np.full(len(y0), np.inf)
-        lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
-        y0[1] = np.clip(y0[1], lo[1] + 1e-6, hi[1] - 1e-6)
-        res = least_squares(
-            _line_residuals, y0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
-        )
-        if best is None or res.cost < best.cost:
-            best = res
+    best = _refine_best(_line_residuals, starts, args, config)
     J = best.jac
     m, n = J.shape
     chi2 = 2 * best.cost / max(1, m - n)
