@@ -117,16 +117,18 @@ def test_the_published_camera_moves_to_an_estimate_by_bounded_steps() -> None:
     np.testing.assert_allclose(prev, camera_parameters(est.camera()), atol=1e-6)
 
 
-def _across(cam: Camera, seed: int):
-    """Two people pacing across the view at one depth, leaning towards each other (3 cm)."""
+def _across(cam: Camera, seed: int, people=((-1.0, 1.65), (1.0, 1.78)), lean: float = 0.03):
+    """Two people (x, stature in metres) pacing across the view at one depth, leaning towards each
+    other by ``lean`` metres.
+    """
     rng = np.random.default_rng(seed)
     heads, feet, ids = [], [], []
-    for p, (x0, stature) in enumerate([(-1.0, 1.65), (1.0, 1.78)]):
+    for p, (x0, stature) in enumerate(people):
         side = 1 if p else -1
         for t in range(100):
             g = np.array([x0 + 0.3 * side * np.sin(t / 20), 0.0, 0.0])
             feet.append(cam.project(g) + rng.normal(0, 1, 2))
-            heads.append(cam.project(g + [-0.03 * side, stature, 0.0]) + rng.normal(0, 1, 2))
+            heads.append(cam.project(g + [-lean * side, stature, 0.0]) + rng.normal(0, 1, 2))
             ids.append(p)
     return np.array(heads), np.array(feet), np.array(ids), np.tile(np.arange(100) / 10.0, 2)
 
@@ -341,16 +343,7 @@ def test_a_square_frame_sets_the_rotation_and_the_people_only_the_scale() -> Non
     # other by 12 cm (reaching): in a joint fit that lean pulls the tilt and the focal length off
     # the floor's; with the rotation from the floor alone, the people set the height only
     cam = _camera(2.2, 25.0, 55.0, distance=5.0)
-    rng = np.random.default_rng(7)
-    heads, feet, ids = [], [], []
-    for p, (x0, stature) in enumerate([(-0.8, 1.68), (0.8, 1.80)]):
-        side = 1 if p else -1
-        for i in range(100):
-            g = np.array([x0 + 0.3 * side * np.sin(i / 20), 0.0, 0.0])
-            feet.append(cam.project(g) + rng.normal(0, 1, 2))
-            heads.append(cam.project(g + [-0.12 * side, stature, 0.0]) + rng.normal(0, 1, 2))
-            ids.append(p)
-    heads, feet, ids, t = np.array(heads), np.array(feet), np.array(ids), np.tile(np.arange(100) / 10.0, 2)
+    heads, feet, ids, t = _across(cam, 7, people=((-0.8, 1.68), (0.8, 1.80)), lean=0.12)
     lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
     assert lines.square and lines.n_horizontal == 2
     est = estimate_camera(heads, feet, ids, (W, H), t, lines=lines)
