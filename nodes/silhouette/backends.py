@@ -248,6 +248,8 @@ class HorprasertSubtractor:
             # the same copy goes to apply, whose per-frame terms update reuses (they are keyed
             # by the frame object)
             frame = frame.copy()
+        # the last frame's update (in the worker) writes the arrays the classes are computed from
+        self._deferred.join()
         if self.samples is None:
             stats = self._model.apply(frame)
             labels = stats
@@ -260,9 +262,10 @@ class HorprasertSubtractor:
         # the leg step compares with the background grey levels this frame was classified against:
         # the update replaces that array (it does not write into it), so it is taken before
         grey = self._model.grey_
-        if self.threaded:
+        if self.threaded and self._model.learns_next:
             self._deferred.submit(self._model.update, frame, labels.copy())
         else:
+            # in line too when the model does not learn from this frame (it only counts it)
             self._model.update(frame, labels)
         if self.samples is not None:
             # the frame is this call's own copy when threaded, and the statistics' labels are

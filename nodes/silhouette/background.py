@@ -191,17 +191,42 @@ class AdaptationConfig:
         keeps ``update`` about twice as fast.
     shadow_learning_rate : float, default 0.01
         Rate at SHADOW and HIGHLIGHT pixels (FOREGROUND: never).
+    update_every : int, default 2
+        The model learns from one frame in this many (the first after the fit, then every n-th), at
+        the rates 1 - (1 - r)^n that give the same decay per frame as r at every frame; the ghost
+        runs (``GhostConfig.absorb_frames``) count those frames alone. 1: every frame. With 2 the
+        update costs half as much per frame; lighting drift is followed as closely (its change over
+        two frames is far inside the brightness band).
     """
 
     learning_rate: float = 0.05
     spread_learning_rate: float = 0.0
     shadow_learning_rate: float = 0.01
+    update_every: int = 2
 
     def __post_init__(self) -> None:
         for name in ("learning_rate", "spread_learning_rate", "shadow_learning_rate"):
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
+        if self.update_every < 1:
+            raise ValueError(f"update_every must be >= 1 frame, got {self.update_every}")
+
+    def rate(self, name: str) -> float:
+        """The rate ``name`` (``learning_rate``, ``spread_learning_rate`` or ``shadow_learning_rate``)
+        per learnt frame: 1 - (1 - r)^update_every.
+
+        Parameters
+        ----------
+        name : str
+            The field.
+
+        Returns
+        -------
+        float
+            The rate, in [0, 1].
+        """
+        return 1.0 - (1.0 - float(getattr(self, name))) ** self.update_every
 
 
 @dataclass(frozen=True)
@@ -311,7 +336,8 @@ class GhostConfig:
     absorb_frames : int or None, default None
         A foreground pixel whose colour stays within ``absorb_k`` spreads of the colour it had
         when its still run began, for this many consecutive frames, is taken to be background that
-        a person uncovered and becomes the model's E there. None: 10 frames (0.4 s at 25 fps)
+        a person uncovered and becomes the model's E there (counted in the frames the model learns
+        from, ``AdaptationConfig.update_every``: one in that many, rounded up). None: 10 frames (0.4 s at 25 fps)
         after ``fit(robust=True)``, whose median can hold people who stood still in the training
         frames, and 0 (never) after a plain fit from empty frames, whose model is trusted. A still
         person is absorbed this way too; that is the price of learning with people in view.
@@ -397,6 +423,7 @@ class HorprasertBackground:
         self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
         self._unseen_u8: np.ndarray | None = None
         self.absorb_frames_: int = 0
+        self._updates = 0  # update calls since the fit (one in adaptation.update_every learns)
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
         self._still_ref: np.ndarray | None = None  # (3, H * W) float32 mean colour of that run
         # (frame, its alpha, its float32 channel planes) of the last apply
@@ -554,10 +581,12 @@ class HorprasertBackground:
         s2 = np.maximum(np.moveaxis(spread, -1, 0), self.training.min_spread).astype(np.float32) ** 2
         self._var = np.ascontiguousarray(s2)
         self._w = None
-        if self.ghosts.absorb_frames is None:
-            self.absorb_frames_ = _AUTO_ABSORB_FRAMES if robust else 0
-        else:
-            self.absorb_frames_ = int(self.ghosts.absorb_frames)
+        frames = (
+            (_AUTO_ABSORB_FRAMES if robust else 0) if self.ghosts.absorb_frames is None else self.ghosts.absorb_frames
+        )
+        # the runs count the frames learnt from: one in update_every
+        self.absorb_frames_ = -(-int(frames) // self.adaptation.update_every)
+        self._updates = 0  # update calls since the fit
         self._last_alpha = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
         self._still_ref = np.zeros((3, self._mu[0].size), np.float32)
@@ -866,7 +895,9 @@ class HorprasertBackground:
         a person's cast shadow this way is harmless, as shadow and background are both "not
         foreground". a, b and the thresholds stay as trained. Foreground pixels follow the
         scene-wide drift (``_follow_global_drift``), and after a robust fit still foreground that
-        matches the surrounding room is absorbed (``absorb_frames``).
+        matches the surrounding room is absorbed (``absorb_frames``). Only one call in
+        ``adaptation.update_every`` learns (``learns_next``), at the rates per learnt frame
+        (``AdaptationConfig.rate``); the others only count the frame.
 
         Parameters
         ----------
@@ -887,7 +918,12 @@ class HorprasertBackground:
         if labels.shape != self.shape:
             raise ValueError(f"labels must have shape {self.shape}, got {labels.shape}")
         labels = np.asarray(labels, np.uint8)  # apply's own labels pass through without a copy
-        lr, slr = self.adaptation.learning_rate, self.adaptation.spread_learning_rate
+        learns = self.learns_next
+        self._updates += 1
+        if not learns:
+            return
+        ad = self.adaptation
+        lr, slr = ad.rate("learning_rate"), ad.rate("spread_learning_rate")
         fg = labels == FOREGROUND
         # the foreground is a few percent of the frame: its flat indices serve both steps below
         fg_idx = np.flatnonzero(fg)
@@ -902,7 +938,7 @@ class HorprasertBackground:
             # where someone stood through training, a shade of the filled-in floor is more likely
             # their clothing than a shadow: learn only what is plainly background there
             cv2.bitwise_and(sh, self._unseen_u8, dst=sh)
-        k = self.adaptation.shadow_learning_rate / lr if lr > 0.0 else 0.0
+        k = ad.rate("shadow_learning_rate") / lr if lr > 0.0 else 0.0
         # cv2.accumulateWeighted is dst <- (1 - r) dst + r src under a mask, in place.
         last = self._last_alpha
         planes = last[2] if last is not None and last[0] is frame else _float_planes(frame)
@@ -923,6 +959,13 @@ class HorprasertBackground:
             self._follow_global_drift(frame, fg_idx, bg)
         self._refresh_colour_terms(spread_changed=slr > 0.0)
 
+    @property
+    def learns_next(self) -> bool:
+        """Whether the next ``update`` call learns from its frame (one in
+        ``adaptation.update_every``, from the first after the fit); the others only count.
+        """
+        return self._updates % self.adaptation.update_every == 0
+
     def _follow_global_drift(self, frame: np.ndarray, fg_idx: np.ndarray, bg: np.ndarray) -> None:
         """Foreground pixels are never blended in, so under a lighting drift the model behind a
         person who stands for seconds would lag, and the uncovered room would show as speckle.
@@ -938,7 +981,7 @@ class HorprasertBackground:
         if n_bg < 0.05 * bg.size:
             return
         g = float(cv2.mean(alpha, mask=bg)[0])
-        step = np.float32(1.0 + self.adaptation.learning_rate * (g - 1.0))
+        step = np.float32(1.0 + self.adaptation.rate("learning_rate") * (g - 1.0))
         if step != 1.0:
             for c in range(3):  # flat gathers beat a masked pass over the whole frame
                 mu = self._mu[c].reshape(-1)

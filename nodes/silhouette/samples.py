@@ -69,7 +69,12 @@ class SampleConsensus:
     max_radius_gain : float, default=2.5
         Largest R(x) / radius in blinking regions (>= 1).
     subsampling : int, default=16
-        1 / probability of an update at each background pixel (phi, 16 in the paper).
+        1 / probability of an update at each background pixel in a dynamic region (blink level
+        v(x) > 0: its label switched in the last frames), phi (16 in the paper).
+    quiet_subsampling : int, default=32
+        The same at the other (quiet) pixels, >= ``subsampling``: most of a frame, where the
+        statistics alone are right and the samples are only a veto; 32 halves the update's cost,
+        and a dynamic region, where the samples matter, still learns at 1 / ``subsampling``.
     blink_gain, blink_decay : float, default=0.1, 0.005
         Rise of the blink level v(x) on a label switch and its decay per frame;
         R(x) = radius * (1 + v(x)), v(x) in [0, max_radius_gain - 1].
@@ -110,6 +115,7 @@ class SampleConsensus:
         spread_rate: float = 0.1,
         max_radius_gain: float = 2.5,
         subsampling: int = 16,
+        quiet_subsampling: int = 32,
         blink_gain: float = 0.1,
         blink_decay: float = 0.005,
         learn_blink: float = 0.5,
@@ -126,6 +132,8 @@ class SampleConsensus:
             raise ValueError(f"max_radius_gain must be >= 1, got {max_radius_gain}")
         if subsampling < 1:
             raise ValueError(f"subsampling must be >= 1 (1 / update probability), got {subsampling}")
+        if quiet_subsampling < subsampling:
+            raise ValueError(f"quiet_subsampling must be >= subsampling={subsampling}, got {quiet_subsampling}")
         if blink_gain < 0 or blink_decay < 0:
             raise ValueError(f"blink_gain and blink_decay must be >= 0, got {blink_gain}, {blink_decay}")
         self.n_samples = n_samples
@@ -140,6 +148,7 @@ class SampleConsensus:
         self.spread_rate = spread_rate
         self.max_radius_gain = max_radius_gain
         self.subsampling = subsampling
+        self.quiet_subsampling = quiet_subsampling
         self.blink_gain = blink_gain
         self.blink_decay = blink_decay
         self.learn_blink = learn_blink
@@ -418,16 +427,23 @@ class SampleConsensus:
     def _update(self, frame: np.ndarray, learn: _Learnable) -> None:
         """ViBe's conservative update: each pixel to ``learn`` (read at flat indices), with probability
         1/phi, writes its colour over a random sample of its own and, independently, of a random
-        8-neighbour that is learnt too.
+        8-neighbour that is learnt too. phi is ``subsampling`` in dynamic regions (blink level > 0)
+        and ``quiet_subsampling`` elsewhere.
         """
         h, w = self._shape
         npx = h * w
-        m = max(1, npx // self.subsampling)
+        m = max(1, npx // self.quiet_subsampling)
         rng = self._rng
         px = frame.reshape(-1, 3)
+        # the dynamic region's pixels get draws of their own, up to a rate of 1 / subsampling
+        active = np.flatnonzero(self._blink > 0.0) if self.quiet_subsampling > self.subsampling else None
+        extra = 0.0 if active is None else active.size * (1.0 / self.subsampling - 1.0 / self.quiet_subsampling)
         for own in (True, False):
             # draw phi-subsampled candidates (with replacement: a pixel drawn twice is harmless)
             cand = rng.integers(0, npx, size=m)
+            if extra > 0.0:
+                more = int(extra) + int(rng.random() < extra - int(extra))
+                cand = np.concatenate([cand, active[rng.integers(0, active.size, size=more)]])
             cand = cand[learn[cand]]
             if cand.size == 0:
                 continue
