@@ -339,3 +339,30 @@ def test_a_black_background_pixel_has_no_brightness_direction() -> None:
     assert np.isfinite(model._inv_den).all() and (model._inv_den[10:30, 100:140] == 0.0).all()
     model.update(lit, labels)  # the per-frame terms are made again after each update
     assert (model.apply(still)[10:30, 100:140] == BACKGROUND).all()
+
+
+def test_update_every_learns_one_frame_in_n_at_the_same_decay_per_frame(empty_frames):
+    """With ``update_every`` 2 the model learns from the first frame of each pair, at the rate
+    1 - (1 - r)^2, so that after each pair E is where learning every frame puts it; the ghost
+    runs count the learnt frames (absorb_frames / 2).
+    """
+    rng = np.random.default_rng(5)
+    # each frame twice: learning from both of a pair at r is learning from the first at 1 - (1 - r)^2
+    frames = [f for f in (render(rng, gains=(1.02, 1.02, 1.02)) for _ in range(3)) for _ in range(2)]
+    every = HorprasertBackground(adaptation=AdaptationConfig(update_every=1)).fit(empty_frames, robust=True)
+    halves = HorprasertBackground().fit(empty_frames, robust=True)
+    assert halves.adaptation.update_every == 2
+    assert every.absorb_frames_ == 10 and halves.absorb_frames_ == 5
+    for k, f in enumerate(frames):
+        assert halves.learns_next == (k % 2 == 0)
+        before = halves.mean_.copy()
+        labels = every.apply_update(f)
+        halves.apply_update(f)
+        assert np.mean(labels == BACKGROUND) > 0.9
+        if k % 2:
+            # the skipped frame leaves E as it was; after the pair both models agree
+            np.testing.assert_array_equal(halves.mean_, before)
+            assert np.median(np.abs(halves.mean_ - every.mean_)) < 1e-3
+    assert np.abs(halves.mean_ - empty_frames.mean(axis=0)).max() > 0.5  # it did learn
+    with pytest.raises(ValueError, match="update_every"):
+        AdaptationConfig(update_every=0)

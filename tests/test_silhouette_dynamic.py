@@ -130,6 +130,28 @@ def test_sample_consensus_validates_and_learns_only_background() -> None:
     assert (model.samples_ == 100).all()
 
 
+def test_dynamic_regions_update_their_samples_twice_as_often_as_quiet_ones() -> None:
+    """``quiet_subsampling`` (2 x ``subsampling``) at quiet pixels, ``subsampling`` where the label
+    blinks: counted as the samples replaced by a new background colour.
+    """
+    h, w = 64, 64
+    sc = SampleConsensus(threaded=False, random_state=1)
+    assert sc.quiet_subsampling == 2 * sc.subsampling
+    sc.fit(np.full((20, h, w, 3), 100, np.uint8), np.full((h, w, 3), 100.0))
+    new = np.full((h, w, 3), 120, np.uint8)
+    yy, xx = np.mgrid[0:h, 0:w]
+    for k in range(80):
+        # single-pixel foreground speckle that switches every frame in the top rows: a blinking region
+        speckle = (yy < 24) & ((yy + xx + k) % 2 == 0)
+        labels = np.where(speckle, FOREGROUND, 0).astype(np.uint8)
+        sc.learn(new, labels, np.flatnonzero(speckle))
+    replaced = (sc.samples_.reshape(h, w, 3, -1)[..., 0, :] == 120).mean(axis=-1)
+    dynamic, quiet = replaced[2:22].mean(), replaced[34:].mean()
+    assert 1.6 < dynamic / quiet < 2.5, (dynamic, quiet)
+    with pytest.raises(ValueError, match="quiet_subsampling"):
+        SampleConsensus(subsampling=16, quiet_subsampling=8)
+
+
 def test_learning_in_worker_threads_gives_the_same_labels_and_models() -> None:
     # the leaves blink (so the blink levels and the learning of dynamic pixels are exercised), a
     # person walks in; the caller overwrites its frame buffer as soon as each call returns

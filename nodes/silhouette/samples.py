@@ -71,10 +71,11 @@ class SampleConsensus:
     subsampling : int, default=16
         1 / probability of an update at each background pixel in a dynamic region (blink level
         v(x) > 0: its label switched in the last frames), phi (16 in the paper).
-    quiet_subsampling : int, default=32
+    quiet_subsampling : int or None, default=None
         The same at the other (quiet) pixels, >= ``subsampling``: most of a frame, where the
-        statistics alone are right and the samples are only a veto; 32 halves the update's cost,
-        and a dynamic region, where the samples matter, still learns at 1 / ``subsampling``.
+        statistics alone are right and the samples are only a veto. None: twice ``subsampling``
+        (32), which halves the update's cost while a dynamic region, where the samples matter,
+        still learns at 1 / ``subsampling``.
     blink_gain, blink_decay : float, default=0.1, 0.005
         Rise of the blink level v(x) on a label switch and its decay per frame;
         R(x) = radius * (1 + v(x)), v(x) in [0, max_radius_gain - 1].
@@ -115,7 +116,7 @@ class SampleConsensus:
         spread_rate: float = 0.1,
         max_radius_gain: float = 2.5,
         subsampling: int = 16,
-        quiet_subsampling: int = 32,
+        quiet_subsampling: int | None = None,
         blink_gain: float = 0.1,
         blink_decay: float = 0.005,
         learn_blink: float = 0.5,
@@ -132,6 +133,8 @@ class SampleConsensus:
             raise ValueError(f"max_radius_gain must be >= 1, got {max_radius_gain}")
         if subsampling < 1:
             raise ValueError(f"subsampling must be >= 1 (1 / update probability), got {subsampling}")
+        if quiet_subsampling is None:
+            quiet_subsampling = 2 * subsampling
         if quiet_subsampling < subsampling:
             raise ValueError(f"quiet_subsampling must be >= subsampling={subsampling}, got {quiet_subsampling}")
         if blink_gain < 0 or blink_decay < 0:
