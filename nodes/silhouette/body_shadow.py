@@ -128,7 +128,7 @@ def reclaim_body_shadow(
     if config.edge_px:
         side = 2 * config.edge_px + 1
         cv2.max(closed, cv2.dilate(fg, np.ones((side, side), np.uint8)), dst=closed)
-    cand = np.flatnonzero((sh.ravel() != 0) & (closed.ravel() != 0))
+    cand = np.flatnonzero(cv2.bitwise_and(sh, closed).ravel())
     legs = config.leg_ncc > -1.0 and frame is not None and background is not None
     # the legs' starts: shadow pixels straight below foreground (none: no leg, and the
     # regions need not be labelled for that step)

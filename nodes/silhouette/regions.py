@@ -151,6 +151,15 @@ def components_with_stats(m8: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, 
     return cv2.connectedComponentsWithStats(m8, connectivity=8, ltype=label_type(*m8.shape))
 
 
+def _as_u8(m: np.ndarray) -> np.ndarray:
+    """A mask (H, W) (non-zero: set) as 0 / 1 uint8: a contiguous bool mask as a view of its bytes
+    (no pass over the frame), any other as a new array.
+    """
+    if m.dtype == bool and m.flags.c_contiguous:
+        return m.view(np.uint8)
+    return (m != 0).astype(np.uint8)
+
+
 def clean_mask(
     mask: np.ndarray,
     open_px: int = 3,
@@ -189,7 +198,9 @@ def clean_mask(
         raise ValueError(f"mask must be 2-D (H, W), got shape {m.shape}")
     if open_px < 0 or close_px < 0 or min_area < 0:
         raise ValueError(f"open_px, close_px and min_area must be >= 0, got {open_px}, {close_px}, {min_area}")
-    m8 = (m != 0).astype(np.uint8)
+    # a bool mask is read as its 0 / 1 bytes (no pass over the frame); the steps below write new arrays
+    m8 = _as_u8(m)
+    steps = open_px > 1 or close_px > 1 or fill_holes or min_area > 0
     if open_px > 1:
         m8 = cv2.morphologyEx(m8, cv2.MORPH_OPEN, _disk(open_px))
     if close_px > 1:
@@ -205,7 +216,8 @@ def clean_mask(
             keep = stats[:, cv2.CC_STAT_AREA] >= min_area
             keep[0] = False
             m8 = keep[labels].view(np.uint8)
-    return m8.astype(bool)
+    # 0 / 1 bytes of the steps' own arrays: viewed as bool (without a step: a copy of the input)
+    return m8.view(bool) if steps else m8.astype(bool)
 
 
 @dataclass
@@ -418,7 +430,7 @@ class PersonTracker:
     def _label_regions(self, m: np.ndarray) -> _Regions:
         """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
-        n, comp, stats, cents = components_with_stats((m != 0).astype(np.uint8))
+        n, comp, stats, cents = components_with_stats(_as_u8(m))
         regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
         tracks = self._tracks
         counts = np.zeros((len(tracks), n), np.int64)
