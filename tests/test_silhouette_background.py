@@ -342,9 +342,9 @@ def test_a_black_background_pixel_has_no_brightness_direction() -> None:
 
 
 def test_update_every_learns_one_frame_in_n_at_the_same_decay_per_frame(empty_frames):
-    """With ``update_every`` 2 the model learns from the first frame of each pair, at the rate
-    1 - (1 - r)^2, so that after each pair E is where learning every frame puts it; the ghost
-    runs count the learnt frames (absorb_frames / 2).
+    """With ``update_every`` 2 the model learns from the first frame of each pair, at the rate 2 r,
+    so that after each pair E is about where learning every frame at r puts it ((1 - r)^2 against
+    1 - 2 r: 0.25% of the step apart at r = 0.05); the ghost runs count the learnt frames.
     """
     rng = np.random.default_rng(5)
     # each frame twice: learning from both of a pair at r is learning from the first at 1 - (1 - r)^2
@@ -352,7 +352,7 @@ def test_update_every_learns_one_frame_in_n_at_the_same_decay_per_frame(empty_fr
     every = HorprasertBackground(adaptation=AdaptationConfig(update_every=1)).fit(empty_frames, robust=True)
     halves = HorprasertBackground().fit(empty_frames, robust=True)
     assert halves.adaptation.update_every == 2
-    assert every.absorb_frames_ == 10 and halves.absorb_frames_ == 5
+    assert every.absorb_frames_ == halves.absorb_frames_ == 10
     for k, f in enumerate(frames):
         assert halves.learns_next == (k % 2 == 0)
         before = halves.mean_.copy()
@@ -362,7 +362,9 @@ def test_update_every_learns_one_frame_in_n_at_the_same_decay_per_frame(empty_fr
         if k % 2:
             # the skipped frame leaves E as it was; after the pair both models agree
             np.testing.assert_array_equal(halves.mean_, before)
-            assert np.median(np.abs(halves.mean_ - every.mean_)) < 1e-3
+            gap = np.abs(halves.mean_ - every.mean_)
+            # (a few pixels near a class boundary may be classed apart and learnt at another rate)
+            assert np.median(gap) < 0.02 and np.percentile(gap, 99) < 0.1, (np.median(gap), np.percentile(gap, 99))
     assert np.abs(halves.mean_ - empty_frames.mean(axis=0)).max() > 0.5  # it did learn
     with pytest.raises(ValueError, match="update_every"):
         AdaptationConfig(update_every=0)

@@ -193,10 +193,11 @@ class AdaptationConfig:
         Rate at SHADOW and HIGHLIGHT pixels (FOREGROUND: never).
     update_every : int, default 2
         The model learns from one frame in this many (the first after the fit, then every n-th), at
-        the rates 1 - (1 - r)^n that give the same decay per frame as r at every frame; the ghost
-        runs (``GhostConfig.absorb_frames``) count those frames alone. 1: every frame. With 2 the
-        update costs half as much per frame; lighting drift is followed as closely (its change over
-        two frames is far inside the brightness band).
+        n times the rates (at most 1): behind a steady lighting drift it then lags, on the last
+        frame before it learns again, as far as learning every frame at r (and less on the others),
+        with about the same memory (1 - n r against (1 - r)^n over n frames). The ghost runs
+        (``GhostConfig.absorb_frames``) count the frames learnt from. 1: every frame. With 2 the
+        update costs half as much per frame.
     """
 
     learning_rate: float = 0.05
@@ -214,7 +215,7 @@ class AdaptationConfig:
 
     def rate(self, name: str) -> float:
         """The rate ``name`` (``learning_rate``, ``spread_learning_rate`` or ``shadow_learning_rate``)
-        per learnt frame: 1 - (1 - r)^update_every.
+        per learnt frame: update_every r, at most 1.
 
         Parameters
         ----------
@@ -226,7 +227,7 @@ class AdaptationConfig:
         float
             The rate, in [0, 1].
         """
-        return 1.0 - (1.0 - float(getattr(self, name))) ** self.update_every
+        return min(1.0, self.update_every * float(getattr(self, name)))
 
 
 @dataclass(frozen=True)
@@ -423,6 +424,7 @@ class HorprasertBackground:
         self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
         self._unseen_u8: np.ndarray | None = None
         self.absorb_frames_: int = 0
+        self._absorb_runs = 0  # absorb_frames_ in frames learnt from (one in adaptation.update_every)
         self._updates = 0  # update calls since the fit (one in adaptation.update_every learns)
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
         self._still_ref: np.ndarray | None = None  # (3, H * W) float32 mean colour of that run
@@ -585,7 +587,8 @@ class HorprasertBackground:
             (_AUTO_ABSORB_FRAMES if robust else 0) if self.ghosts.absorb_frames is None else self.ghosts.absorb_frames
         )
         # the runs count the frames learnt from: one in update_every
-        self.absorb_frames_ = -(-int(frames) // self.adaptation.update_every)
+        self.absorb_frames_ = int(frames)
+        self._absorb_runs = -(-self.absorb_frames_ // self.adaptation.update_every)
         self._updates = 0  # update calls since the fit
         self._last_alpha = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
@@ -1002,7 +1005,7 @@ class HorprasertBackground:
             self._still.fill(0)
             return False
         n, refs = self._advance_still_runs(frame, idx)
-        ripe = n >= self.absorb_frames_
+        ripe = n >= self._absorb_runs
         if not ripe.any():
             return False
         ys, xs = np.divmod(idx[ripe], self.shape[1])
