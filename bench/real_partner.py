@@ -4,7 +4,8 @@ Used by ``bench/real_video.py`` (its tracking part writes one ``track_video`` fi
 clip the observed side's tracked joints go through the default dual-HMM and the responder node's
 stage (``counterpart.nodes.responder.staging.Stage``, the node's defaults, with the tracking's camera
 as the demo graphs give the node its ``camera_info``) frame by frame as the responder node
-runs them, and its hand contact (``counterpart.nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
+runs them, then its arms and final clearance (``Stage.finish``: guarding while pushed, else the hand
+contact of ``counterpart.nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
 partner is projected with the camera the tracking recorded. Figures:
 
 - ``partner_distance_ok``: share of frames with a partner whose ground distance from the observed
@@ -63,7 +64,6 @@ from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
-from counterpart.nodes.responder.reach import reach
 from counterpart.nodes.responder.staging import Reach, Stage, silhouette_reach, stature
 
 VIS = 0.5
@@ -245,7 +245,7 @@ def staged_partner(
             camera=camera if CAMERA else None,
             box=box if CAMERA else None,
         )
-        partner[t] = reach(joints[t], staged, offered=stage.offered_)[0]
+        partner[t] = stage.finish(joints[t], staged)[0]  # its arms (guard or reach), kept clear last
         last = t
     return partner, observed, camera, fps
 
