@@ -4,7 +4,8 @@ Used by ``bench/real_video.py`` (its tracking part writes one ``track_video`` fi
 clip the observed side's tracked joints go through the default dual-HMM and the responder node's
 stage (``counterpart.nodes.responder.staging.Stage``, the node's defaults, with the tracking's camera
 as the demo graphs give the node its ``camera_info``) frame by frame as the responder node
-runs them, and its hand contact (``counterpart.nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
+runs them, then its arms and final clearance (``Stage.finish``: guarding while pushed, else the hand
+contact of ``counterpart.nodes.responder.reach``) (a lost or missing person: the partner holds for ``HOLD_FRAMES``, then none), and the
 partner is projected with the camera the tracking recorded. Figures:
 
 - ``partner_distance_ok``: share of frames with a partner whose ground distance from the observed
@@ -41,7 +42,8 @@ seconds after the push).
 Alone (``python bench/real_partner.py [--tracks DIR] [--clips all|N]``) it runs on the handshake
 and push clips of ``../shared/data/ut_interaction/set1``, tracking each clip as
 ``bench/real_video.py`` does (``track_video``, the lockstep graph's configuration) unless ``DIR``
-holds its ``CLIP-track.npz`` already (tracks it writes go there too); the last stdout line is one
+holds its ``CLIP-track.npz`` already (tracks it writes go there too; so do the silhouette node's people
+of each clip, ``CLIP-people.pkl``, the other slow part, reused alike); the last stdout line is one
 JSON object: the figures above for the report split (clips whose first number is odd) at the
 top level, the tune split (even) under ``tune``, per-clip rows under ``per_clip``.
 """
@@ -50,6 +52,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import pickle
 import sys
 import tempfile
 import time
@@ -63,7 +66,6 @@ from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
-from counterpart.nodes.responder.reach import reach
 from counterpart.nodes.responder.staging import Reach, Stage, silhouette_reach, stature
 
 VIS = 0.5
@@ -245,7 +247,7 @@ def staged_partner(
             camera=camera if CAMERA else None,
             box=box if CAMERA else None,
         )
-        partner[t] = reach(joints[t], staged, offered=stage.offered_)[0]
+        partner[t] = stage.finish(joints[t], staged)[0]  # its arms (guard or reach), kept clear last
         last = t
     return partner, observed, camera, fps
 
@@ -357,7 +359,12 @@ def main() -> None:
     import real_video as rv  # bench/ is on sys.path as a script; imported here, it imports this module
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--tracks", type=Path, default=None, help="folder of track_video files CLIP-track.npz to reuse")
+    ap.add_argument(
+        "--tracks",
+        type=Path,
+        default=None,
+        help="folder of track_video files CLIP-track.npz and silhouette people CLIP-people.pkl to reuse",
+    )
     ap.add_argument("--clips", default="all", help="'all' or how many of the handshake and push clips")
     args = ap.parse_args()
     if not rv.CLIPS.is_dir():
@@ -387,7 +394,12 @@ def main() -> None:
         ref = np.load(rv.KEYPOINTS / f"{clip.stem}.npz")
         n = min(len(np.load(track)["joints"]), len(ref["kp"]))
         kp, vis = ref["kp"][:n].astype(np.float64), ref["vis"][:n]
-        rows[clip.stem] = partner_clip(clip, track, kp, vis, rv.reference_height(kp))
+        # the silhouette node's people, the other slow part, cached beside the track
+        cached = work / f"{clip.stem}-people.pkl"
+        if not cached.exists():
+            cached.write_bytes(pickle.dumps(silhouette_people(clip)))
+        people = pickle.loads(cached.read_bytes())
+        rows[clip.stem] = partner_clip(clip, track, kp, vis, rv.reference_height(kp), people)
         print(f"partner {clip.stem}: {rows[clip.stem]} ({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
     splits = {s: [rows[c.stem] for c in clips if rv.split_of(c) == s] for s in ("report", "tune")}
     result: dict[str, Any] = {

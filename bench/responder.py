@@ -16,7 +16,7 @@ partner is generated and compared with the real one. Prints one JSON object as t
   step_ms               dual-hmm online step; train_s   dual-hmm default training time
   partner_err_staged_mm the partner error after the responder node's stage and hand contact
                         (counterpart.nodes.responder.staging: 0.5-1.2 m from the observed person, at most 2.5 m/s;
-                        nodes.responder.reach), as the graph draws it;
+                        nodes.responder.reach, Stage.finish: arms in while pushed), as the graph draws it;
                         the simulator's pairs walk up from further apart, where the stage holds
                         the partner nearer than the real one stood
   contact_err_mm        dual-hmm, the partner's right hand at the moment of contact (first frame of
@@ -54,7 +54,6 @@ from counterpart.nodes.responder.data import SIM_SCENARIOS, sim_trajectories  # 
 from counterpart.nodes.responder.emotion import motion_features  # noqa: E402
 from counterpart.nodes.responder.frames import actor_frame, relative_pair, to_local, to_world  # noqa: E402
 from counterpart.nodes.responder.pair_features import partner_placement  # noqa: E402
-from counterpart.nodes.responder.reach import reach  # noqa: E402
 from counterpart.nodes.responder.staging import Stage  # noqa: E402
 from counterpart.nodes.responder.training import default_training_data, train  # noqa: E402
 
@@ -198,7 +197,9 @@ def main() -> None:
             errs.append(e)
             stage = Stage()
             staged.append(
-                mpjpe(np.stack([reach(o_t, stage(o_t, p_t, 1.0 / t.fps))[0] for o_t, p_t in zip(obs, pred)]), par)
+                mpjpe(
+                    np.stack([stage.finish(o_t, stage(o_t, p_t, 1.0 / t.fps))[0] for o_t, p_t in zip(obs, pred)]), par
+                )
             )
             errs_c.append(e[t.phase == 1])
             o, th = actor_frame(obs)

@@ -324,24 +324,25 @@ class Responder(Node):
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
         """The model's partner moved to where a partner stands beside the observed ``body`` (``stage``)
-        and its hand onto the observed hand it comes near or that is held out (``reach_m``); both
-        counted when they act.
+        and its hand onto the observed hand it comes near or that is held out (``reach_m``), its arms
+        drawn in while pushed, clear of the person in the picture (``Stage.finish``); counted when they act.
         """
-        offered = None
+        pull = 0.0
         if self.stage is not None:
             fps = float(getattr(driver, "fps", 0.0) or DEFAULT_FPS)
             gap = driver.seq - self.last.seq if self.last is not None and self.last.seq < driver.seq else 1
             before = self.stage.corrected, self.stage.pushes
             joints = self.stage(body.joints, joints, gap / fps, **self._scene(body, driver.seq))
-            offered = self.stage.offered_
             if self.stage.corrected > before[0]:
                 self.tally("partner_placed")
             if self.stage.pushes > before[1]:
                 self.tally("pushes")
-        if self.reach is not None:
-            joints, pull = reach(body.joints, joints, self.reach, offered)
-            if pull > 0:
-                self.tally("hand_reached")
+            # its arms (guarding while pushed, else the hand contact with the hand offered), kept clear last
+            joints, pull = self.stage.finish(body.joints, joints, self.reach)
+        elif self.reach is not None:
+            joints, pull = reach(body.joints, joints, self.reach)
+        if pull > 0:
+            self.tally("hand_reached")
         return joints
 
     def _avatar(self, texture: Any, listener: Any) -> dict[str, Any]:

@@ -58,7 +58,14 @@ model's posture and gestures are kept:
    (the real second person across the view, else the partner). With ``step_in`` the partner
    stands to take it, its arm's length (``STEP_REACH`` of it) beyond the hand;
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
-   may hop, never sink into the floor or float).
+   may hop, never sink into the floor or float);
+5. then (:meth:`Stage.finish`) its arms: while a push goes on or it recoils from one it guards, its
+   arms drawn in before its chest (:func:`guard_arms`: a partner reaching for the pusher's hand has
+   its arm inside the pusher while it is thrown back); else its hand meets the hand offered or the
+   one it comes near (:func:`.reach.reach`). Last, as drawn (its arms set), it keeps clear of the
+   person's box in the picture (``clear_iou``, ``clear_inside``) whatever the speed limit left, its
+   body that is: an arm that took the other's hand is where the two touch. Not while pushed, where
+   the push places it (the pusher's arm is on it).
 """
 
 from __future__ import annotations
@@ -72,6 +79,7 @@ from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 
 from .frames import actor_frame
+from .reach import ARMS, ReachConfig, reach, two_bone_ik
 
 _ANKLES = [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
 _ARMS = [JOINT_INDEX[j] for j in ("l_elbow", "r_elbow", "l_wrist", "r_wrist")]
@@ -92,6 +100,12 @@ STEP_REACH = 0.8
 HEIGHT_RATE = 0.3
 #: crown of the head above the head joint (the head centre at eye level), metres, for a stature
 HEAD_TOP_M = 0.12
+#: a guarding arm's wrist (:func:`guard_arms`): this fraction of the way down the torso from the neck
+#: to the mid-hip, this fraction of the way from the body's midline out to its shoulder, and this far
+#: in front of the chest (metres)
+GUARD_DOWN, GUARD_OUT, GUARD_FRONT_M = 0.35, 0.5, 0.12
+#: the hand contact's distances where the caller gives none (:meth:`Stage.finish`)
+REACH = ReachConfig()
 
 
 @dataclass(frozen=True)
@@ -236,6 +250,40 @@ class StageConfig:
             raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
             raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
+
+
+def guard_arms(joints: np.ndarray, toward: np.ndarray) -> np.ndarray:
+    """The body with its arms drawn in before its chest, elbows down: how a pushed person holds them.
+
+    Each wrist goes ``GUARD_FRONT_M`` in front of the chest (towards ``toward``), ``GUARD_DOWN`` of the
+    way down the torso from the neck and ``GUARD_OUT`` of the way out to its shoulder; the elbow bends
+    below the shoulder (:func:`.reach.two_bone_ik`, bone lengths kept). A partner reaching for the one
+    who pushes it has its arm inside them while it is thrown back.
+
+    Parameters
+    ----------
+    joints : ndarray of shape (14, 3)
+        World joints, metres, Y up.
+    toward : ndarray of shape (2,)
+        Ground direction (x, z) the body faces (to the pusher); need not be unit.
+
+    Returns
+    -------
+    ndarray of shape (14, 3)
+        A new array of ``joints``' dtype, world metres; only the elbows and wrists moved.
+    """
+    X = np.asarray(joints, np.float64).copy()
+    n = float(np.hypot(*toward))
+    front = np.zeros(3) if n < 1e-9 else np.array([toward[0] / n, 0.0, toward[1] / n])
+    neck, hips = X[_NECK], X[_HIPS].mean(axis=0)
+    chest = neck + GUARD_DOWN * (hips - neck) + GUARD_FRONT_M * front
+    down = np.array([0.0, -1.0, 0.0])
+    for s, e, w in ARMS:
+        a, b = float(np.linalg.norm(X[e] - X[s])), float(np.linalg.norm(X[w] - X[e]))
+        # start from the arm hanging down, so the elbow bends below the shoulder
+        elbow, wrist = X[s] + a * down, X[s] + (a + b) * down
+        X[e], X[w] = two_bone_ik(X[s], elbow, wrist, chest + GUARD_OUT * (X[s] - neck))
+    return X.astype(np.asarray(joints).dtype)
 
 
 def across_view(R: np.ndarray) -> np.ndarray:
@@ -453,8 +501,8 @@ def clear_length(
 
     Parameters
     ----------
-    partner : ndarray of shape (14, 3)
-        The partner's joints, world metres.
+    partner : ndarray of shape (n, 3)
+        The partner's joints (all 14, or those that must keep clear), world metres.
     shift : ndarray of shape (2,)
         Ground shift (x, z) that puts the partner at the observed person's place, metres.
     u : ndarray of shape (2,)
@@ -547,11 +595,75 @@ class Stage:
         self._since_offer = np.inf  # seconds since the silhouette last reached offer_m
         self.pushes = 0  # pushes the partner recoiled from
         self.offered_: np.ndarray | None = None
+        self._scene: tuple[Camera | None, tuple[float, float, float, float] | None, np.ndarray] | None = None
 
     @property
     def pushed(self) -> bool:
         """Whether a push goes on (after a call): the partner gives way and takes no hand."""
         return self._pushed
+
+    @property
+    def guarding(self) -> bool:
+        """Whether the partner guards (after a call): a push goes on or it recoils from one; it takes no
+        hand and holds its arms in (:func:`guard_arms`).
+        """
+        return self._pushed or self._recoil_goal > 0.01
+
+    def finish(
+        self, observed: np.ndarray, staged: np.ndarray, reach_config: ReachConfig | None = REACH
+    ) -> tuple[np.ndarray, float]:
+        """The partner's arms and its final place, after a call (``staged``: what it returned).
+
+        While it guards (:attr:`guarding`) its arms are drawn in (:func:`guard_arms`), facing the
+        observed person; else its hand meets the hand offered (:attr:`offered_`) or the one it comes
+        near (:func:`.reach.reach`, with ``reach_config``; None: no reach). Last, with the call's
+        camera and the observed person's box, the partner as drawn keeps clear of that box
+        (``clear_iou``, ``clear_inside``, :func:`clear_length`): where its arms bring it into it, it
+        stands further away, within ``max_distance_m`` (its next placement walks on from there).
+
+        Parameters
+        ----------
+        observed : ndarray of shape (14, 3)
+            The observed person's world joints, metres (as given to the call).
+        staged : ndarray of shape (14, 3)
+            The partner the call returned, world metres.
+        reach_config : ReachConfig or None, default=REACH
+            The hand contact's distances; None: the model's arms are kept (guarding aside).
+
+        Returns
+        -------
+        partner : ndarray of shape (14, 3)
+            A new array of ``staged``'s dtype, world metres.
+        pull : float
+            The hand contact's pull in [0, 1] (0 while guarding or without reach).
+        """
+        P, pull = np.asarray(staged), 0.0
+        if self._last is None or self._scene is None:
+            return P.copy(), pull
+        if self.guarding:
+            P = guard_arms(P, -self._last)
+        elif reach_config is not None:
+            P, pull = reach(observed, P, reach_config, self.offered_)
+        # an arm that took the other's hand is where the two touch, not in them
+        keep = np.ones(len(P), dtype=bool)
+        for _, e, w in ARMS:
+            if pull > 0 and np.abs(np.asarray(P[w], np.float64) - np.asarray(staged[w], np.float64)).max() > 1e-9:
+                keep[[e, w]] = False
+        camera, box, o = self._scene
+        r = float(np.hypot(*self._last))
+        if camera is None or box is None or r <= 1e-6 or self.guarding:
+            return P.copy(), pull
+        c = self.config
+        u = self._last / r
+        p = actor_frame(np.asarray(P, np.float64))[0][[0, 2]]
+        lengths = np.linspace(r, max(r, c.max_distance_m), 8)
+        length = clear_length(P[keep], o - p, u, lengths, camera, box, c.clear_iou, c.clear_inside)
+        if length > r + 1e-9:
+            shift = np.zeros(3)
+            shift[[0, 2]] = (length - r) * u
+            P = (np.asarray(P, np.float64) + shift).astype(np.asarray(staged).dtype)
+            self._last = u * length
+        return P.copy(), pull
 
     @property
     def side(self) -> float:
@@ -760,6 +872,7 @@ class Stage:
         if self._last is not None:
             offset = _walk(self._last, offset, c.max_speed_m_s * max(float(dt), 0.0))
         self._last = offset
+        self._scene = (camera, box, o)  # for finish: the final clearance
         self.offered_ = None
         if hand is not None:
             self.offered_ = hand
