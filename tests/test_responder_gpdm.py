@@ -145,18 +145,17 @@ def test_the_responder_node_runs_the_gpdm_and_takes_the_style(model: GPDM, tmp_p
     k = angry.index(True)
     assert k <= 30 and all(angry[k:])
     # the node's output is the model's own for that observed sequence with the style switched at k,
-    # staged and given the hand contact as the node does (poses without a rate: 25 fps)
+    # staged, given its arms and kept clear as the node does (Stage.finish) (poses without a rate: 25 fps)
     from tests.responder_fixtures import planted_pair
 
     obs = planted_pair(7, T=60).a.astype(np.float32)  # as Pose3D carries it
-    from counterpart.nodes.responder.reach import reach
     from counterpart.nodes.responder.staging import Stage
 
     model.reset()
     stage, expect = Stage(), []
     for t, x in enumerate(obs):
         model.set_style("angry", 1.0) if t >= k else model.set_style("neutral", 0.0)
-        expect.append(reach(x, stage(x, model.step(x), 1 / 25))[0])
+        expect.append(stage.finish(x, stage(x, model.step(x), 1 / 25))[0])
     model.reset()
     got = np.array([r["joints"] for r in rows])
     bad = np.flatnonzero(np.abs(got - np.array(expect)).max(axis=(1, 2)) > 1e-4)
