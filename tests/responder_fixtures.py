@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF_INDEX, neutral_pose
 from counterpart.body.trajectory import TwoPersonTrajectory
@@ -35,3 +36,19 @@ def planted_pair(seed: int, T: int = 120, fps: float = 25.0) -> TwoPersonTraject
 def mpjpe_mm(x: np.ndarray, y: np.ndarray) -> float:
     """Mean per-joint position error in millimetres of (T, 14, 3) metres arrays."""
     return float(np.linalg.norm(np.asarray(x) - np.asarray(y), axis=-1).mean() * 1e3)
+
+
+#: the camera of the staging tests: the simulator's default, 320x240
+CAM = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
+
+
+def box_overlap(P: np.ndarray, box: tuple[float, float, float, float]) -> tuple[float, float]:
+    """Intersection over union of joints P's (n, 3) box in ``CAM`` with ``box`` ``(x, y, w, h)``, pixels,
+    and the share of P's box inside it.
+    """
+    q = CAM.project(P)
+    a = np.r_[q.min(0), q.max(0)]
+    w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
+    h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
+    own = (a[2] - a[0]) * (a[3] - a[1])
+    return w * h / (own + box[2] * box[3] - w * h), w * h / own

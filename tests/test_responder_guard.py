@@ -7,14 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import reach
 from counterpart.nodes.responder.staging import Stage, guard_arms
 from tests.pose_source import facing
+from tests.responder_fixtures import CAM, box_overlap
 
-CAM = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
 ARMS = [(JOINT_INDEX[f"{s}_shoulder"], JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]) for s in "lr"]
 NECK, HIPS = JOINT_INDEX["neck"], [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
 
@@ -34,16 +33,6 @@ def box_of(X: np.ndarray, right_m: float = 0.0) -> tuple[float, float, float, fl
     at = X[NECK]
     extra = CAM.project(np.array([at + [right_m, 0.0, 0.0]]))[0, 0] - CAM.project(at[None])[0, 0]
     return (x0, y0, x1 - x0 + extra, y1 - y0)
-
-
-def overlap(P: np.ndarray, box: tuple[float, float, float, float]) -> tuple[float, float]:
-    """Intersection over union of joints P's box in ``CAM`` with ``box``, and the share of P's box inside it."""
-    q = CAM.project(P)
-    a = np.r_[q.min(0), q.max(0)]
-    w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
-    h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
-    own = (a[2] - a[0]) * (a[3] - a[1])
-    return w * h / (own + box[2] * box[3] - w * h), w * h / own
 
 
 def bones(X: np.ndarray) -> np.ndarray:
@@ -91,18 +80,18 @@ def test_the_drawn_partner_keeps_clear_of_a_person_coming_at_it_faster_than_it_w
     obs, par = person(0.0, 0.0, 0.0), person(0.6, 0.0, 0.0)  # both facing the camera
     stage = Stage()
     first = stage.finish(obs, stage(obs, par, 0.04, side=1.0, camera=CAM, box=box_of(obs)), None)[0]
-    assert overlap(first, box_of(obs))[0] <= 0.15
+    assert box_overlap(first, box_of(obs))[0] <= 0.15
     # their silhouette grows 0.5 m its way in one frame (an arm swung out), faster than the partner walks
     box = box_of(obs, 0.5)
     staged = stage(obs, par, 0.01, side=1.0, camera=CAM, box=box)
-    iou, inside = overlap(staged, box)
+    iou, inside = box_overlap(staged, box)
     assert iou > 0.15 or inside > 0.6  # the speed limit left it in them
     out, _ = stage.finish(obs, staged, None)  # the model's arms (a hand taken is where two touch: not counted)
-    iou, inside = overlap(out, box)
+    iou, inside = box_overlap(out, box)
     assert iou <= 0.15 and inside <= 0.6  # as drawn, it is not
     gap = float(np.hypot(*(ground(out) - ground(obs))))
     assert gap <= 1.2 + 1e-9
     # and it walks on from there, not back into them
     again = stage(obs, par, 0.01, side=1.0, camera=CAM, box=box)
-    iou, inside = overlap(again, box)
+    iou, inside = box_overlap(again, box)
     assert iou <= 0.15 and inside <= 0.6

@@ -21,7 +21,7 @@ from counterpart.nodes.responder.staging import (
     touching_hand_px,
 )
 from tests.pose_source import facing
-from tests.responder_fixtures import planted_pair
+from tests.responder_fixtures import CAM, box_overlap, planted_pair
 
 
 def person(x: float, z: float, yaw: float = np.pi / 2) -> np.ndarray:
@@ -106,9 +106,6 @@ def test_the_partner_stands_beside_the_person_as_a_turned_camera_sees_them(beari
         assert abs(cam.depth(old[hips].mean(0)[None])[0] - depth[1]) > 0.3
 
 
-CAM = Camera.look_at([0.0, 1.6, 4.0], [0.0, 0.9, 0.0], 55.0, 320, 240)
-
-
 def arm_out_box(arm_m: float) -> tuple[float, float, float, float]:
     """The silhouette box ``(x, y, w, h)`` in ``CAM`` of ``person(0, 0, 0)`` (facing the camera, 0.5 m
     wide) with an arm held out ``arm_m`` past their body towards image right, pixels.
@@ -119,29 +116,19 @@ def arm_out_box(arm_m: float) -> tuple[float, float, float, float]:
     return (x0, y0, x1 - x0 + arm, y1 - y0)
 
 
-def overlap(P: np.ndarray, box: tuple[float, float, float, float]) -> tuple[float, float]:
-    """Intersection over union of joints P's box in ``CAM`` with ``box``, and the share of P's box inside it."""
-    q = CAM.project(P)
-    a = np.r_[q.min(0), q.max(0)]
-    w = max(0.0, min(a[2], box[0] + box[2]) - max(a[0], box[0]))
-    h = max(0.0, min(a[3], box[1] + box[3]) - max(a[1], box[1]))
-    own = (a[2] - a[0]) * (a[3] - a[1])
-    return w * h / (own + box[2] * box[3] - w * h), w * h / own
-
-
 def test_the_partner_keeps_clear_of_the_persons_silhouette_in_the_picture() -> None:
     # the model puts the partner 0.5 m beside the person; their silhouette, an arm held out its way,
     # reaches 0.6 m past their body: the partner stands further off, as little as clears it
     obs, par = person(0.0, 0.0, 0.0), person(0.5, 0.0, 0.0)  # both facing the camera: 0.5 m wide
     box = arm_out_box(0.6)
-    assert overlap(Stage()(obs, par, 0.04, side=1.0, camera=CAM), box)[0] > 0.15  # the model's place covers the arm
+    assert box_overlap(Stage()(obs, par, 0.04, side=1.0, camera=CAM), box)[0] > 0.15  # the model's place covers the arm
     out = Stage()(obs, par, 0.04, side=1.0, camera=CAM, box=box)
     gap = np.hypot(*(ground(out) - ground(obs)))
-    assert overlap(out, box)[0] <= 0.15 and 0.5 < gap < 1.2
+    assert box_overlap(out, box)[0] <= 0.15 and 0.5 < gap < 1.2
     # a box it cannot clear within max_distance_m (a silhouette 2 m wide): never further than the limit
     wide = arm_out_box(1.56)
     out = Stage()(obs, par, 0.04, side=1.0, camera=CAM, box=wide)
-    assert overlap(out, wide)[0] > 0.15 and 0.5 - 1e-9 <= np.hypot(*(ground(out) - ground(obs))) <= 1.2 + 1e-9
+    assert box_overlap(out, wide)[0] > 0.15 and 0.5 - 1e-9 <= np.hypot(*(ground(out) - ground(obs))) <= 1.2 + 1e-9
 
 
 def test_the_partner_keeps_most_of_itself_out_of_the_persons_silhouette() -> None:
@@ -153,7 +140,7 @@ def test_the_partner_keeps_most_of_itself_out_of_the_persons_silhouette() -> Non
     loose = Stage(StageConfig(clear_iou=1.0, clear_inside=1.0))(obs, par, 0.04, side=1.0, camera=CAM, box=box)
     out = Stage(StageConfig(clear_iou=1.0))(obs, par, 0.04, side=1.0, camera=CAM, box=box)
     gap = float(np.hypot(*(ground(out) - ground(obs))))
-    assert overlap(loose, box)[1] > 0.6 and overlap(out, box)[1] <= 0.6
+    assert box_overlap(loose, box)[1] > 0.6 and box_overlap(out, box)[1] <= 0.6
     assert np.hypot(*(ground(loose) - ground(obs))) < gap <= 1.2
     with pytest.raises(ValueError, match="clear_inside"):
         StageConfig(clear_inside=1.5)
