@@ -31,6 +31,9 @@ import numpy as np
 MIN_LENGTH = 10.0
 #: the least share of the segment length grouped freely that the square frame must group
 MANHATTAN_SHARE = 0.8
+#: LSD's resampling scales whose segments :func:`scene_lines` pools (:func:`detect_segments`): the
+#: previous single 0.6, and one each side of it (0.8 is OpenCV's default)
+LSD_SCALES = (0.45, 0.6, 0.8)
 
 
 @dataclass(frozen=True)
@@ -64,7 +67,10 @@ class LineFamilies:
 
 
 def detect_segments(
-    image: np.ndarray, boxes: Iterable[Any] = (), min_length: float = 20.0, scale: float = 0.6
+    image: np.ndarray,
+    boxes: Iterable[Any] = (),
+    min_length: float = 20.0,
+    scale: float | tuple[float, ...] = 0.6,
 ) -> np.ndarray:
     """LSD segments of an image, without those on the people.
 
@@ -79,12 +85,15 @@ def detect_segments(
         or a midpoint test cut most of them in the simulator's rooms.
     min_length : float, default=20.0
         Shortest segment kept, pixels.
-    scale : float, default=0.6
+    scale : float or tuple of float, default=0.6
         LSD's own resampling of the image before it looks for lines (its Gaussian sub-sampling, von
         Gioi et al. 2010, section 4; OpenCV's default 0.8). Smaller scales smooth more: the faint,
         aliased edges of a floor's boards receding from a low-resolution camera (320x240) come out
         as long segments instead of broken pieces, and these give the ground's second vanishing
         point (the horizon's position, and the focal length through the right-angle prior).
+        Several scales: the union of the segments found at each (a faint edge broken up by the
+        floor's grain at one scale comes out whole at another; an edge found at several scales is
+        counted at each, so it weighs more than one that only one scale sees).
 
     Returns
     -------
@@ -92,12 +101,14 @@ def detect_segments(
         Segments x1, y1, x2, y2, pixels.
     """
     grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
-    if not 0.0 < scale <= 1.0:
+    scales = (scale,) if np.isscalar(scale) else tuple(scale)
+    if not scales or not all(0.0 < v <= 1.0 for v in scales):
         raise ValueError(f"scale must be in (0, 1], got {scale}")
-    found = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD, scale).detect(grey)[0]
-    if found is None:
+    found = [cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD, float(v)).detect(grey)[0] for v in scales]
+    found = [f.reshape(-1, 4) for f in found if f is not None]
+    if not found:
         return np.zeros((0, 4))
-    s = found.reshape(-1, 4).astype(np.float64)
+    s = np.concatenate(found).astype(np.float64)
     s = s[np.hypot(s[:, 2] - s[:, 0], s[:, 3] - s[:, 1]) >= min_length]
     keep = np.ones(len(s), bool)
     for x, y, w, h in boxes:
@@ -344,7 +355,7 @@ def find_manhattan_families(
 
 def scene_lines(image: np.ndarray, boxes: Iterable[Any] = ()) -> LineFamilies:
     """The line families of a view of the scene: its segments (:func:`detect_segments`, the
-    people's boxes out, down to ``MIN_LENGTH`` pixels) grouped by the three vanishing points of one
+    people's boxes out, down to ``MIN_LENGTH`` pixels, pooled over ``LSD_SCALES``) grouped by the three vanishing points of one
     square frame (:func:`find_manhattan_families`); by :func:`find_families` instead when that
     frame explains under ``MANHATTAN_SHARE`` of the segment length the latter groups (a scene
     that is not laid out square).
@@ -362,7 +373,7 @@ def scene_lines(image: np.ndarray, boxes: Iterable[Any] = ()) -> LineFamilies:
         The families.
     """
     H, W = image.shape[:2]
-    segments = detect_segments(image, boxes, min_length=MIN_LENGTH)
+    segments = detect_segments(image, boxes, min_length=MIN_LENGTH, scale=LSD_SCALES)
     square = find_manhattan_families(segments, (W, H))
     free = find_families(segments, (H - 1) / 2.0)
     return square if _grouped_length(square) >= MANHATTAN_SHARE * _grouped_length(free) else free
