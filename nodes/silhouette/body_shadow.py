@@ -128,7 +128,8 @@ def reclaim_body_shadow(
     if config.edge_px:
         side = 2 * config.edge_px + 1
         cv2.max(closed, cv2.dilate(fg, np.ones((side, side), np.uint8)), dst=closed)
-    cand = np.flatnonzero(cv2.bitwise_and(sh, closed).ravel())
+    # nonzero of a bool array: several times faster than of the 0 / 255 bytes
+    cand = np.flatnonzero(cv2.bitwise_and(sh, closed).ravel() != 0)
     legs = config.leg_ncc > -1.0 and frame is not None and background is not None
     # the legs' starts: shadow pixels straight below foreground (none: no leg, and the
     # regions need not be labelled for that step)
@@ -240,7 +241,8 @@ def _legs(
         return np.empty(0, np.intp)
     # the width of the run of shadow each lies in along its row: from the left, plus from the
     # right, less itself (on the rows that hold one)
-    band = np.unique(ys)
+    # the rows that hold one, ascending (np.nonzero's ys are sorted; np.unique's sort costs more)
+    band = np.flatnonzero(np.bincount(ys))
     sr = sh[band + y0] != 0
     run = np.cumsum(sr, axis=1, dtype=np.int32)
     width = run - np.maximum.accumulate(np.where(sr, 0, run), axis=1)
