@@ -832,12 +832,15 @@ class PersonTracker:
         """Update track t from its piece (crop (h, w) bool at x0, y0) of this frame; ``within``:
         the bbox (x, y, w, h) of the merged region the piece comes from, if any.
         """
-        ys, xs = np.nonzero(crop)
-        c = np.array([xs.mean() + x0, ys.mean() + y0])
+        # the centroid from the pixel sums (whole numbers, exact in float64: the means of the
+        # pixels' coordinates to the last bit), without listing the pixels
+        mo = cv2.moments(crop.view(np.uint8), binaryImage=True)
+        area = int(mo["m00"])
+        c = np.array([mo["m10"] / mo["m00"] + x0, mo["m01"] / mo["m00"] + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
         # the split is uncertain) says little about where they are: keep the prediction then.
         # A grown region kept out of the template: its centroid is pulled by what joined it.
-        trusted = (not merged and not keep_template) or (merged and xs.size >= 0.5 * t.area)
+        trusted = (not merged and not keep_template) or (merged and area >= 0.5 * t.area)
         s = self.velocity_smoothing
         if trusted:
             if t.missed == 0:
@@ -857,7 +860,7 @@ class PersonTracker:
         t.in_merge = merged
         if not merged and not keep_template:
             t.crop, t.origin, t.offset = crop, np.array([x0, y0], np.int64), c - np.array([x0, y0])
-            t.area, t.height = int(xs.size), float(crop.shape[0])
+            t.area, t.height = area, float(crop.shape[0])
             t.usual_area = t.area if t.seen == 0 else t.usual_area + _USUAL_AREA_RATE * (t.area - t.usual_area)
         t.seen += 1
         t.missed = 0
@@ -865,7 +868,7 @@ class PersonTracker:
             id=t.id,
             side=t.side,
             bbox=(int(x0), int(y0), int(crop.shape[1]), int(crop.shape[0])),
-            area=int(xs.size),
+            area=area,
             centroid=(float(c[0]), float(c[1])),
             height=float(crop.shape[0]),
             merged=merged,
