@@ -309,6 +309,24 @@ def _median_view(name: str, seed: int) -> tuple[Camera, np.ndarray, list[tuple[i
     return stream.camera, np.median(np.stack(frames), axis=0).astype(np.uint8), boxes
 
 
+def test_segments_pooled_over_scales_are_the_union_of_each_scale() -> None:
+    # scene_lines pools LSD over several scales (an edge broken up at one scale comes out whole at
+    # another); the pool is every scale's segments, and an empty or out-of-range scale is refused
+    image = np.full((120, 160), 90, np.uint8)
+    for k in range(6):
+        cv2.line(image, (10 + 25 * k, 110), (60 + 8 * k, 15), 170, 1)
+    cv2.line(image, (5, 60), (155, 70), 30, 2)
+    one = [detect_segments(image, min_length=10.0, scale=v) for v in (0.45, 0.6, 0.8)]
+    pooled = detect_segments(image, min_length=10.0, scale=(0.45, 0.6, 0.8))
+    assert all(len(o) for o in one)
+    assert len(pooled) == sum(len(o) for o in one)
+    np.testing.assert_allclose(np.sort(pooled, axis=0), np.sort(np.concatenate(one), axis=0))
+    with pytest.raises(ValueError, match="scale"):
+        detect_segments(image, scale=())
+    with pytest.raises(ValueError, match="scale"):
+        detect_segments(image, scale=(0.6, 1.5))
+
+
 @pytest.mark.parametrize("name,seed", [("high_five", 1), ("pull", 9), ("handshake", 18)])
 def test_the_scene_lines_are_grouped_by_the_square_frame_of_the_room(name: str, seed: int) -> None:
     # tuning seeds (tilt 32, 17, 9 degrees): grouped one vanishing point at a time, floor boards,
