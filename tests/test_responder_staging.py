@@ -348,7 +348,7 @@ def test_a_hand_held_out_apart_is_met_at_the_outlines_tip_where_the_picture_show
     hips = obs[[JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]].mean(axis=0)
     arm = 0.8 * 0.505  # STEP_REACH of the partner's arm's length
     for model_gap in (0.5, 0.9):  # wherever the model put the partner
-        stage = Stage()
+        stage = Stage(StageConfig(tip_back=0.0))
         for _ in range(5):
             out = stage(obs, person(model_gap, 0.0, 0.0), 0.04, side=1.0, silhouette=shape, camera=CAM, box=box)
         # offered where the picture shows the hand, at the depth of the person's hips ...
@@ -363,6 +363,10 @@ def test_a_hand_held_out_apart_is_met_at_the_outlines_tip_where_the_picture_show
         # its hand on the tip, its body clear of the person's box
         iou, _ = box_overlap(drawn, box)
         assert iou <= StageConfig().clear_iou
+    # by default its wrist is met tip_back (0.07) of the stature short of the fingertips, towards the person
+    clasp = Stage()
+    clasp(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=shape, camera=CAM, box=box)
+    np.testing.assert_allclose(clasp.offered_ - stage.offered_, [-0.07 * stature(obs), 0.0, 0.0], atol=1e-6)
     # without the camera and the box: the tip is not placed in the picture (meet_frac of the model's distance)
     blind = Stage()
     blind(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=shape)

@@ -50,7 +50,7 @@ model's posture and gestures are kept:
    driving or rushing in as a pusher does, not yet touching: a partner reaching for a pushing hand
    stands with its arm inside the pusher) is offered (:attr:`Stage.offered_`): with the camera and the
    person's box where the outline's tip is in the picture (``tip_in_picture``, at the depth of the
-   person's hips: the tip is the hand), else at the height of the silhouette's tip, ``meet_frac`` of the
+   person's hips: the tip is the hand; ``tip_back`` short of it, where clasping wrists are), else at the height of the silhouette's tip, ``meet_frac`` of the
    way to the partner at most; where the silhouette touches someone else's
    (its tip is then where the regions were split, not the hand), with the camera, the person's box
    and the other's region, where the picture says (``meet_touch`` of the way between the two
@@ -194,6 +194,10 @@ class StageConfig:
         depth of the person's hips, up to ``meet_frac`` of ``max_distance_m`` out (the partner stands to
         take it there): the tracked body's place is off by decimetres on real video, and a hand met at
         ``meet_frac`` of the model's distance lies inside the arm held out. False: from the tracked body.
+    tip_back : float, default=0.07
+        With ``tip_in_picture``, the hand is met this fraction of the person's stature short of the
+        outline's tip, towards the person: the tip is the fingertips (on the real clips about 0.14 of
+        the height beyond the wrist), and clasping hands' wrists are about half that apart.
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
@@ -235,6 +239,7 @@ class StageConfig:
     offer_hold_s: float = 0.3
     hand_box_frac: float = 0.62
     tip_in_picture: bool = True
+    tip_back: float = 0.07
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -255,6 +260,8 @@ class StageConfig:
             raise ValueError(
                 f"offer_hold_s={self.offer_hold_s} must be >= 0 and hand_box_frac={self.hand_box_frac} in [0, 1]"
             )
+        if self.tip_back < 0:
+            raise ValueError(f"tip_back={self.tip_back} must be >= 0")
         if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
             raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
@@ -920,7 +927,8 @@ class Stage:
                 if tip is not None:
                     along = float((tip[[0, 2]] - o) @ offset) / max(r, 1e-9)
                     # the partner stands to take it wherever it is (step_in): not bound to its placement's distance
-                    out = min(max(along, 0.0), c.meet_frac * c.max_distance_m)
+                    # its wrist half a hand short of the fingertips, as clasping hands' are
+                    out = min(max(along - c.tip_back * stature(X), 0.0), c.meet_frac * c.max_distance_m)
                     hand = tip + (out - along) * np.array([offset[0], 0.0, offset[1]]) / max(r, 1e-9)
             else:  # the outline's tip is where the regions were split, not the hand
                 hand = self._hand_in_picture(silhouette, camera, box, X)
