@@ -50,8 +50,9 @@ model's posture and gestures are kept:
    driving or rushing in as a pusher does, not yet touching: a partner reaching for a pushing hand
    stands with its arm inside the pusher) is offered (:attr:`Stage.offered_`): with the camera and the
    person's box where the outline's tip is in the picture (``tip_in_picture``, at the depth of the
-   person's hips: the tip is the hand; ``tip_back`` short of it, where clasping wrists are), else at the height of the silhouette's tip, ``meet_frac`` of the
-   way to the partner at most; where the silhouette touches someone else's
+   person's hips: the tip is the hand; ``tip_back`` short of it, where clasping wrists are), else at
+   the height of the silhouette's tip, ``meet_frac`` of the way to the partner at most; where the
+   silhouette touches someone else's
    (its tip is then where the regions were split, not the hand), with the camera, the person's box
    and the other's region, where the picture says (``meet_touch`` of the way between the two
    regions' centroids, ``hand_box_frac`` of the box's height above its bottom, at the person's
@@ -196,8 +197,8 @@ class StageConfig:
         ``meet_frac`` of the model's distance lies inside the arm held out. False: from the tracked body.
     tip_back : float, default=0.07
         With ``tip_in_picture``, the hand is met this fraction of the person's stature short of the
-        outline's tip, towards the person: the tip is the fingertips (on the real clips about 0.14 of
-        the height beyond the wrist), and clasping hands' wrists are about half that apart.
+        outline's tip, towards the person: the tip is the fingertips, a hand's length beyond the wrist,
+        and clasping hands' wrists are about half a hand apart.
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
