@@ -69,6 +69,42 @@ def test_clean_mask_removes_speckle_fills_holes_and_drops_small_regions():
     assert kept[55, 205]
 
 
+def _clean_whole_frame(m: np.ndarray, open_px: int, close_px: int, fill_holes: bool, min_area: int) -> np.ndarray:
+    """``clean_mask``'s steps, each on the whole frame (the reference for its closing in a box)."""
+    m8 = m.astype(np.uint8)
+    for px, op in ((open_px, cv2.MORPH_OPEN), (close_px, cv2.MORPH_CLOSE)):
+        if px > 1:
+            m8 = cv2.morphologyEx(m8, op, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (px, px)))
+    if fill_holes:
+        contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        m8 = cv2.drawContours(np.zeros_like(m8), contours, -1, 1, thickness=cv2.FILLED)
+    if min_area:
+        _, labels, stats, _ = cv2.connectedComponentsWithStats(m8, connectivity=8)
+        keep = stats[:, cv2.CC_STAT_AREA] >= min_area
+        keep[0] = False
+        m8 = keep[labels]
+    return m8.astype(bool)
+
+
+def test_clean_mask_equals_the_steps_on_the_whole_frame():
+    # the closing and what follows it work in the box of the opened mask: the same pixels as on
+    # the whole frame, blobs touching the frame's edges and specks included
+    rng = np.random.default_rng(3)
+    for _ in range(400):
+        h, w = (int(v) for v in rng.integers(5, 50, 2))
+        m = rng.random((h, w)) < rng.choice([0.0, 0.02, 0.2])
+        for _ in range(int(rng.integers(0, 4))):
+            y, x = int(rng.integers(0, h)), int(rng.integers(0, w))
+            m[max(0, y - int(rng.integers(0, 6))) : y + int(rng.integers(1, 8)), max(0, x - 3) : x + 4] = True
+        args = (
+            int(rng.choice([0, 3])),
+            int(rng.choice([0, 3, 4, 7, 9])),
+            bool(rng.integers(0, 2)),
+            int(rng.choice([0, 5])),
+        )
+        np.testing.assert_array_equal(clean_mask(m, *args), _clean_whole_frame(m, *args), err_msg=str(args))
+
+
 def test_tracker_keeps_ids_through_a_handshake_merge():
     tracker = PersonTracker(min_area=100)
     seen_merged = 0

@@ -203,7 +203,13 @@ def clean_mask(
     steps = open_px > 1 or close_px > 1 or fill_holes or min_area > 0
     if open_px > 1:
         m8 = cv2.morphologyEx(m8, cv2.MORPH_OPEN, _disk(open_px))
-    if close_px > 1:
+    # the steps after the opening work on the box of what is left (the people, often half the
+    # frame or less) and paste it back: nothing outside that box is set by them
+    full, box = None, (0, 0, 0, 0)
+    if close_px > 1 and close_px % 2 == 1 and (box := cv2.boundingRect(m8))[2] > 0:
+        full = m8
+        m8, box = _close_in_box(m8, close_px, box)
+    elif close_px > 1:
         m8 = cv2.morphologyEx(m8, cv2.MORPH_CLOSE, _disk(close_px))
     if fill_holes or min_area > 0:
         contours, _ = cv2.findContours(m8, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
@@ -216,8 +222,45 @@ def clean_mask(
             keep = stats[:, cv2.CC_STAT_AREA] >= min_area
             keep[0] = False
             m8 = keep[labels].view(np.uint8)
+    if full is not None:
+        x, y, w, h = box
+        out = np.zeros_like(full)
+        out[y : y + h, x : x + w] = m8
+        m8 = out
     # 0 / 1 bytes of the steps' own arrays: viewed as bool (without a step: a copy of the input)
     return m8.view(bool) if steps else m8.astype(bool)
+
+
+def _close_in_box(
+    m8: np.ndarray, size: int, box: tuple[int, int, int, int]
+) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    """The closing of ``m8`` (H, W) uint8 by ``_disk(size)`` (odd ``size``) inside the box where it
+    can set pixels, given ``box`` (x, y, w, h), the bounding box of its non-zero pixels (not empty).
+
+    The closing by a symmetric disk of radius r = size // 2 sets nothing outside ``box`` but
+    next to the frame's edge: a pixel left of the box has a pixel r further left that the
+    dilation leaves unset, unless that pixel is off the frame, where the erosion reads set
+    pixels (OpenCV's default border). So the closing's box is ``box`` stretched to each edge of
+    the frame that it comes within r of. Inside that box the closing reads the dilation up to r
+    pixels out, which the foreground (all in ``box``) fixes within r pixels more: worked out on
+    ``box`` grown by r (clipped to the frame, whose edges stay the image's edges), it is the
+    closing of the whole frame.
+
+    Returns
+    -------
+    closed : ndarray of shape (h', w'), dtype uint8
+        The closing in the closing's box (a new array).
+    out_box : tuple of int
+        That box, x, y, w', h'.
+    """
+    x, y, w, h = box
+    r = size // 2
+    hh, ww = m8.shape
+    ox0, oy0 = (0 if x <= r else x), (0 if y <= r else y)
+    ox1, oy1 = (ww if x + w >= ww - r else x + w), (hh if y + h >= hh - r else y + h)
+    x0, y0, x1, y1 = max(x - r, 0), max(y - r, 0), min(x + w + r, ww), min(y + h + r, hh)
+    closed = cv2.morphologyEx(m8[y0:y1, x0:x1], cv2.MORPH_CLOSE, _disk(size))
+    return np.ascontiguousarray(closed[oy0 - y0 : oy1 - y0, ox0 - x0 : ox1 - x0]), (ox0, oy0, ox1 - ox0, oy1 - oy0)
 
 
 @dataclass
@@ -789,12 +832,15 @@ class PersonTracker:
         """Update track t from its piece (crop (h, w) bool at x0, y0) of this frame; ``within``:
         the bbox (x, y, w, h) of the merged region the piece comes from, if any.
         """
-        ys, xs = np.nonzero(crop)
-        c = np.array([xs.mean() + x0, ys.mean() + y0])
+        # the centroid from the pixel sums (whole numbers, exact in float64: the means of the
+        # pixels' coordinates to the last bit), without listing the pixels
+        mo = cv2.moments(crop.view(np.uint8), binaryImage=True)
+        area = int(mo["m00"])
+        c = np.array([mo["m10"] / mo["m00"] + x0, mo["m01"] / mo["m00"] + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
         # the split is uncertain) says little about where they are: keep the prediction then.
         # A grown region kept out of the template: its centroid is pulled by what joined it.
-        trusted = (not merged and not keep_template) or (merged and xs.size >= 0.5 * t.area)
+        trusted = (not merged and not keep_template) or (merged and area >= 0.5 * t.area)
         s = self.velocity_smoothing
         if trusted:
             if t.missed == 0:
@@ -814,7 +860,7 @@ class PersonTracker:
         t.in_merge = merged
         if not merged and not keep_template:
             t.crop, t.origin, t.offset = crop, np.array([x0, y0], np.int64), c - np.array([x0, y0])
-            t.area, t.height = int(xs.size), float(crop.shape[0])
+            t.area, t.height = area, float(crop.shape[0])
             t.usual_area = t.area if t.seen == 0 else t.usual_area + _USUAL_AREA_RATE * (t.area - t.usual_area)
         t.seen += 1
         t.missed = 0
@@ -822,7 +868,7 @@ class PersonTracker:
             id=t.id,
             side=t.side,
             bbox=(int(x0), int(y0), int(crop.shape[1]), int(crop.shape[0])),
-            area=int(xs.size),
+            area=area,
             centroid=(float(c[0]), float(c[1])),
             height=float(crop.shape[0]),
             merged=merged,
