@@ -17,6 +17,7 @@ from counterpart.nodes.responder.staging import (
     Stage,
     StageConfig,
     silhouette_reach,
+    silhouette_tip_px,
     stature,
     touching_hand_px,
 )
@@ -329,6 +330,47 @@ def test_a_hand_held_out_while_the_silhouettes_touch_is_met_where_the_picture_sh
     alone = Stage()
     alone(obs, par, 0.04, side=1.0, silhouette=shape._replace(other_px=None), camera=CAM, box=box)
     assert alone.offered_[0] == pytest.approx(0.45 * 0.9)
+
+
+def test_a_hand_held_out_apart_is_met_at_the_outlines_tip_where_the_picture_shows_it() -> None:
+    # the observed person as CAM sees them, an arm held out 45 px beyond the body at 0.6 of the height
+    obs = person(0.0, 0.0, 0.0)
+    uv = CAM.project(obs)
+    top, floor = float(uv[:, 1].min()), float(uv[:, 1].max())
+    height = floor - top
+    x0 = float(uv[:, 0].mean()) - 0.125 * height
+    ctrl = outline(x0, top, height, 0.6, 45.0)
+    box = (x0, top, float(ctrl[:, 0].max()) - x0, height)
+    shape = silhouette_reach(box, (x0 + 0.125 * height, top + 0.5 * height), 1.0, stature(obs), ctrl)
+    assert shape.extent_m > StageConfig().offer_m and not shape.touching
+    tip = (x0 + 0.25 * height + 45.0, floor - 0.6 * height)
+    assert silhouette_tip_px(shape, box, stature(obs), 1.0) == pytest.approx(tip)
+    hips = obs[[JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]].mean(axis=0)
+    arm = 0.8 * 0.505  # STEP_REACH of the partner's arm's length
+    for model_gap in (0.5, 0.9):  # wherever the model put the partner
+        stage = Stage(StageConfig(tip_back=0.0))
+        for _ in range(5):
+            out = stage(obs, person(model_gap, 0.0, 0.0), 0.04, side=1.0, silhouette=shape, camera=CAM, box=box)
+        # offered where the picture shows the hand, at the depth of the person's hips ...
+        np.testing.assert_allclose(CAM.project(stage.offered_[None])[0], tip, atol=1e-6)
+        assert CAM.depth(stage.offered_) == pytest.approx(float(CAM.depth(hips)))
+        # ... not drawn in to meet_frac of the model's distance: the partner stands to take it there
+        along = stage.offered_[0] - hips[0]
+        assert along > StageConfig().meet_frac * 0.5
+        assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(along + arm, abs=0.02)
+        drawn, pull = stage.finish(obs, out)
+        assert pull == 1.0 and min(np.linalg.norm(drawn[[4, 7]] - stage.offered_, axis=1)) < 1e-5
+        # its hand on the tip, its body clear of the person's box
+        iou, _ = box_overlap(drawn, box)
+        assert iou <= StageConfig().clear_iou
+    # by default its wrist is met tip_back (0.07) of the stature short of the fingertips, towards the person
+    clasp = Stage()
+    clasp(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=shape, camera=CAM, box=box)
+    np.testing.assert_allclose(clasp.offered_ - stage.offered_, [-0.07 * stature(obs), 0.0, 0.0], atol=1e-6)
+    # without the camera and the box: the tip is not placed in the picture (meet_frac of the model's distance)
+    blind = Stage()
+    blind(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=shape)
+    assert blind.offered_[0] == pytest.approx(min(shape.extent_m, 0.7 * 0.5))
 
 
 def test_a_hand_held_out_stays_offered_while_the_outline_flickers_about_the_limit() -> None:

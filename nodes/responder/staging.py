@@ -48,8 +48,11 @@ model's posture and gestures are kept:
    A hand held out without a push (the silhouette reaching ``offer_m``, or having done so within
    ``offer_hold_s``; none while a push goes on or the partner recoils from one, nor from someone
    driving or rushing in as a pusher does, not yet touching: a partner reaching for a pushing hand
-   stands with its arm inside the pusher) is offered (:attr:`Stage.offered_`), at the height of the silhouette's tip,
-   ``meet_frac`` of the way to the partner at most; where the silhouette touches someone else's
+   stands with its arm inside the pusher) is offered (:attr:`Stage.offered_`): with the camera and the
+   person's box where the outline's tip is in the picture (``tip_in_picture``, at the depth of the
+   person's hips: the tip is the hand; ``tip_back`` short of it, where clasping wrists are), else at
+   the height of the silhouette's tip, ``meet_frac`` of the way to the partner at most; where the
+   silhouette touches someone else's
    (its tip is then where the regions were split, not the hand), with the camera, the person's box
    and the other's region, where the picture says (``meet_touch`` of the way between the two
    regions' centroids, ``hand_box_frac`` of the box's height above its bottom, at the person's
@@ -186,6 +189,16 @@ class StageConfig:
         the silhouettes touch lies at this fraction of the box's height above its bottom, ``meet_touch``
         of the way between the two regions' centroids across the picture; 0: placed from the tracked
         bodies (``hand_frac``) as without them.
+    tip_in_picture : bool, default=True
+        With a camera and the observed person's box, a hand held out while the silhouette touches no
+        one else's lies where the outline's tip is in the picture (:func:`silhouette_tip_px`), at the
+        depth of the person's hips, up to ``meet_frac`` of ``max_distance_m`` out (the partner stands to
+        take it there): the tracked body's place is off by decimetres on real video, and a hand met at
+        ``meet_frac`` of the model's distance lies inside the arm held out. False: from the tracked body.
+    tip_back : float, default=0.07
+        With ``tip_in_picture``, the hand is met this fraction of the person's stature short of the
+        outline's tip, towards the person: the tip is the fingertips, a hand's length beyond the wrist,
+        and clasping hands' wrists are about half a hand apart.
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
@@ -226,6 +239,8 @@ class StageConfig:
     push_rush_m_s: float = 1.0
     offer_hold_s: float = 0.3
     hand_box_frac: float = 0.62
+    tip_in_picture: bool = True
+    tip_back: float = 0.07
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -246,6 +261,8 @@ class StageConfig:
             raise ValueError(
                 f"offer_hold_s={self.offer_hold_s} must be >= 0 and hand_box_frac={self.hand_box_frac} in [0, 1]"
             )
+        if self.tip_back < 0:
+            raise ValueError(f"tip_back={self.tip_back} must be >= 0")
         if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
             raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
@@ -448,6 +465,52 @@ def touching_hand_px(
         return None
     u = float(silhouette.centre_px[0]) + meet * (float(silhouette.other_px[0]) - float(silhouette.centre_px[0]))
     return u, float(box[1]) + float(box[3]) * (1.0 - box_frac)
+
+
+def silhouette_tip_px(
+    silhouette: Reach, box: tuple[float, float, float, float], stature_m: float, direction: float
+) -> tuple[float, float] | None:
+    """The outline's leading point towards the partner in the picture, as :func:`silhouette_reach` found it.
+
+    Inverts :func:`silhouette_reach`'s scaling: ``extent_m`` and ``height_m`` are pixels over the box's
+    height times ``stature_m``, so the point lies ``extent_m / stature_m`` box heights from the region's
+    centroid column towards ``direction`` and ``height_m / stature_m`` box heights above the box's bottom.
+
+    Parameters
+    ----------
+    silhouette : Reach
+        The person's reach (:func:`silhouette_reach`), with ``centre_px`` and ``height_m``.
+    box : tuple of float
+        The person's silhouette box ``(x, y, w, h)``, pixels (the one the reach was found in).
+    stature_m : float
+        The stature the reach was scaled with, metres.
+    direction : float
+        The side the reach was found towards: +1 image right, -1 image left.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(u, v)`` pixels; None without the centroid or the height, or with an empty box or stature.
+    """
+    h = float(box[3])
+    if silhouette.centre_px is None or silhouette.height_m is None or h <= 0 or stature_m <= 0:
+        return None
+    cx = float(silhouette.centre_px[0])
+    u = cx + float(np.sign(direction)) * silhouette.extent_m / stature_m * h
+    v = float(box[1]) + h - silhouette.height_m / stature_m * h
+    return u, v
+
+
+def _at_depth(camera: Camera, px: tuple[float, float], X: np.ndarray) -> np.ndarray | None:
+    """The point of pixel ``px`` ``(u, v)`` at the depth of the hips of the body X (14, 3), world metres
+    (3,); None where the ray does not go forward or the hips are behind the camera.
+    """
+    ray = camera.rays(np.array(px[0]), np.array(px[1]))
+    along = float(ray @ camera.R[2])
+    depth = float(camera.depth(X[_HIPS].mean(axis=0)))
+    if along <= 1e-6 or depth <= 1e-3:
+        return None
+    return camera.centre + depth / along * ray
 
 
 def _arm_length(joints: np.ndarray) -> float:
@@ -727,14 +790,26 @@ class Stage:
             if box is None or c.hand_box_frac <= 0
             else touching_hand_px(silhouette, box, c.meet_touch, c.hand_box_frac)
         )
-        if camera is None or px is None:
+        return None if camera is None or px is None else _at_depth(camera, px, X)
+
+    def _tip_in_picture(
+        self,
+        silhouette: Reach,
+        camera: Camera | None,
+        box: tuple[float, float, float, float] | None,
+        X: np.ndarray,
+        toward: np.ndarray,
+    ) -> np.ndarray | None:
+        """Where a hand held out apart from anyone else's silhouette lies, world metres (3,): the outline's
+        leading point towards the ground direction ``toward`` (2,) (:func:`silhouette_tip_px`)
+        back-projected to the depth of the observed person's hips; None without the camera, the box,
+        the outline's height or the region's centroid.
+        """
+        if camera is None or box is None or not self.config.tip_in_picture:
             return None
-        ray = camera.rays(np.array(px[0]), np.array(px[1]))
-        along = float(ray @ camera.R[2])
-        depth = float(camera.depth(X[_HIPS].mean(axis=0)))
-        if along <= 1e-6 or depth <= 1e-3:
-            return None
-        return camera.centre + depth / along * ray
+        direction = float(np.sign(toward @ across_view(camera.R)))
+        px = None if direction == 0.0 else silhouette_tip_px(silhouette, box, stature(X), direction)
+        return None if px is None else _at_depth(camera, px, X)
 
     def _advancing(self, silhouette: Reach | None, dt: float) -> float:
         """The silhouette centre's smoothed speed towards the partner, metres per second."""
@@ -848,7 +923,15 @@ class Stage:
         if held_out and not (self._pushed or driven or self._recoil_goal > 0.01):  # no pushing hand to take
             r = float(np.hypot(*offset))
             out = min(silhouette.extent_m, c.meet_frac * r)  # hands meet between the two
-            if silhouette.touching:  # the outline's tip is where the regions were split, not the hand
+            if not silhouette.touching:  # the outline's tip is the hand: where the picture shows it
+                tip = self._tip_in_picture(silhouette, camera, box, X, offset)
+                if tip is not None:
+                    along = float((tip[[0, 2]] - o) @ offset) / max(r, 1e-9)
+                    # the partner stands to take it wherever it is (step_in): not bound to its placement's distance
+                    # its wrist half a hand short of the fingertips, as clasping hands' are
+                    out = min(max(along - c.tip_back * stature(X), 0.0), c.meet_frac * c.max_distance_m)
+                    hand = tip + (out - along) * np.array([offset[0], 0.0, offset[1]]) / max(r, 1e-9)
+            else:  # the outline's tip is where the regions were split, not the hand
                 hand = self._hand_in_picture(silhouette, camera, box, X)
                 out = (
                     c.meet_touch * self._gap_to(o, other, offset, across)
