@@ -60,7 +60,8 @@ default camera's, the true head/foot points', the share the calibration node wou
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
-[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-demo]``. Last stdout line: one JSON object.
+[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-demo] [--tracks DIR]``
+(``--tracks``: keep the tracks, and reuse those already there). Last stdout line: one JSON object.
 """
 
 from __future__ import annotations
@@ -282,16 +283,17 @@ def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     from counterpart.nodes.tracker.prior import resolve_prior
 
     t0 = time.monotonic()
-    track_video(
-        clip,
-        work / f"{clip.stem}-track.npz",
-        people=SIDES,
-        camera=None,
-        prior=resolve_prior("default"),
-        layers=LAYERS,
-        particles=PARTICLES,
-        train_frames=TRAIN_FRAMES,
-    )
+    if not (work / f"{clip.stem}-track.npz").exists():  # ``--tracks``: a track kept from an earlier run is reused
+        track_video(
+            clip,
+            work / f"{clip.stem}-track.npz",
+            people=SIDES,
+            camera=None,
+            prior=resolve_prior("default"),
+            layers=LAYERS,
+            particles=PARTICLES,
+            train_frames=TRAIN_FRAMES,
+        )
     t1 = time.monotonic()
     boxes, box_ids = silhouette_boxes(clip)
     t2 = time.monotonic()
@@ -518,6 +520,13 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=1, help="clips of the tracking part tracked at once (processes)")
     ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
     ap.add_argument(
+        "--tracks",
+        type=Path,
+        help="folder to keep each clip's track_video file in (CLIP-track.npz; default: a new temporary "
+        "folder); a clip whose file is there already is not tracked again: its figures are then those of "
+        "the tracker that wrote it (for a change to the partner's staging or the figures, not the tracker)",
+    )
+    ap.add_argument(
         "--calib-seeds",
         type=int,
         default=50,
@@ -527,7 +536,8 @@ def main() -> None:
     if not CLIPS.is_dir():
         sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")
     clips = clip_list(args.clips)
-    work = Path(tempfile.mkdtemp(prefix="cp-real-"))
+    work = args.tracks or Path(tempfile.mkdtemp(prefix="cp-real-"))
+    work.mkdir(parents=True, exist_ok=True)
     result: dict[str, Any] = {} if args.no_demo else run_demos(clips, work, args.timeout, args.reference)
     if not args.no_pck:
         pck = clip_list(args.pck_clips or args.clips)
