@@ -46,8 +46,8 @@ person 0 the left one at frame 0) on every frame the video decodes:
   the top-level figures are the report split's, ``tune`` holds the same for the tune split;
   ``pck_details`` per split also gives the figures with the two sides matched to the reference
   people per frame by the smaller mean pixel distance (people and the reference's crops can swap
-  when they touch), per clip figures, the template, and the seconds per clip of the tracking and
-  of the silhouette pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20,
+  when they touch), per clip figures (with ``partner_overlap_frames``, the frames counted in
+  ``partner_overlap``), the template, and the seconds per clip of the tracking and of the silhouette pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20,
   pck10_box, pck20_box, joints scored].
 
 Camera calibration from the people (``--calib-seeds``, default 50; 0 skips it): ``calib_height_err``,
@@ -403,6 +403,7 @@ def run_pck(clips: list[Path], work: Path, jobs: int = 1) -> dict[str, Any]:
                 "split": split_of(CLIPS / f"{stem}.avi"),
                 **pck_figures([r], template, False),
                 **{k: r["partner"][k] for k in ("hand_h", "back_m") if k in r["partner"]},
+                "partner_overlap_frames": r["partner"]["overlap"],
             }
             for stem, r in rows.items()
         },
