@@ -47,8 +47,9 @@ person 0 the left one at frame 0) on every frame the video decodes:
   ``pck_details`` per split also gives the figures with the two sides matched to the reference
   people per frame by the smaller mean pixel distance (people and the reference's crops can swap
   when they touch), per clip figures (with ``partner_overlap_frames``, the frames counted in
-  ``partner_overlap``), the template, and the seconds per clip of the tracking and of the silhouette pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20,
-  pck10_box, pck20_box, joints scored].
+  ``partner_overlap``), the template, and the seconds per clip of the tracking and of the silhouette
+  pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20, pck10_box, pck20_box,
+  joints scored].
 
 Camera calibration from the people (``--calib-seeds``, default 50; 0 skips it): ``calib_height_err``,
 ``calib_tilt_err_deg``, ``calib_focal_err`` (medians of the absolute errors) and ``calib_within``
