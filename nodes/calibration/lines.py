@@ -355,10 +355,10 @@ def find_manhattan_families(
 
 def scene_lines(image: np.ndarray, boxes: Iterable[Any] = ()) -> LineFamilies:
     """The line families of a view of the scene: its segments (:func:`detect_segments`, the
-    people's boxes out, down to ``MIN_LENGTH`` pixels, pooled over ``LSD_SCALES``) grouped by the three vanishing points of one
-    square frame (:func:`find_manhattan_families`); by :func:`find_families` instead when that
-    frame explains under ``MANHATTAN_SHARE`` of the segment length the latter groups (a scene
-    that is not laid out square).
+    people's boxes out, down to ``MIN_LENGTH`` pixels, pooled over ``LSD_SCALES``) grouped by the
+    three vanishing points of one square frame (:func:`find_manhattan_families`); by
+    :func:`find_families` instead when that frame explains under ``MANHATTAN_SHARE`` of the segment
+    length the latter groups (a scene that is not laid out square).
 
     Parameters
     ----------
