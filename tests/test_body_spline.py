@@ -167,3 +167,48 @@ def test_combined_shape_vector_layout_and_invariance():
     np.testing.assert_allclose(vs[4 * n :], -v[4 * n :])
     with pytest.raises(ValueError, match="height"):
         combined_shape_vector(ca, 0.0, pa, cb, hb, pb)
+
+
+def test_up_axis_closed_form_matches_eigh() -> None:
+    """The closed-form principal axis equals np.linalg.eigh's on rotated ellipses, thin lines and
+    blobs: the same direction to 1e-9 and the same fallback to the vertical.
+    """
+    from counterpart.body.spline import _up_axis
+
+    rng = np.random.default_rng(0)
+    masks = [
+        ellipse(ax=int(rng.integers(3, 60)), ay=int(rng.integers(3, 90)), angle=float(rng.uniform(0, 180)))
+        for _ in range(150)
+    ]
+    masks += [rectangle(120, 20, 120, 200), rectangle(20, 120, 200, 120), circle(), person()]
+    n_vertical = 0
+    for m in masks:
+        m8 = m.view(np.uint8)
+        c, up = _up_axis(m8)
+        mo = cv2.moments(m8, binaryImage=True)
+        cov = np.array([[mo["mu20"], mo["mu11"]], [mo["mu11"], mo["mu02"]]]) / mo["m00"]
+        evals, evecs = np.linalg.eigh(cov)
+        d = evecs[:, 1]
+        if evals[1] < 1.1 * evals[0] or abs(d[1]) < np.sqrt(0.5):
+            ref = np.array([0.0, -1.0])
+            n_vertical += 1
+        else:
+            ref = d if d[1] < 0 else -d
+        np.testing.assert_allclose(up, ref, atol=1e-9)
+        np.testing.assert_allclose(c, [mo["m10"] / mo["m00"], mo["m01"] / mo["m00"]])
+    assert 0 < n_vertical < len(masks)  # both branches were exercised
+
+
+@pytest.mark.parametrize("dtype", [bool, np.uint8, np.int32])
+def test_oriented_boundary_reads_any_nonzero_mask_alike(dtype: type) -> None:
+    """A bool, a 0/255 uint8 and an int mask of one shape give the same boundary, and the uint8
+    mask is left as it was.
+    """
+    m = person()
+    ref_c, ref_p = oriented_boundary(m)
+    m2 = m.astype(dtype) * (255 if dtype is np.uint8 else 7) if dtype is not bool else m.copy()
+    before = m2.copy()
+    c, p = oriented_boundary(m2)
+    np.testing.assert_array_equal(c, ref_c)
+    np.testing.assert_array_equal(p, ref_p)
+    np.testing.assert_array_equal(m2, before)

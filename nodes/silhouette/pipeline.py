@@ -267,7 +267,7 @@ class SilhouetteExtractor:
         x, y, w, h = p.bbox
         # One pixel of margin so the outline of a region touching its bbox is traced closed.
         crop = np.zeros((h + 2, w + 2), bool)
-        crop[1:-1, 1:-1] = labels[y : y + h, x : x + w] == p.id + 1
+        np.equal(labels[y : y + h, x : x + w], p.id + 1, out=crop[1:-1, 1:-1])
         try:
             ctrl, ref = silhouette_spline(crop, self.n_ctrl)
         except ValueError:  # a sliver left by a split: no outline this frame
