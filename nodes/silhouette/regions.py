@@ -762,7 +762,14 @@ class PersonTracker:
             outside = cv2.distanceTransform(1 - pred, cv2.DIST_L2, 5)
             inside = cv2.distanceTransform(pred, cv2.DIST_L2, 5)
             signed[k] = outside - inside
-        owner = np.argmin(signed, axis=0)
+        # np.argmin(signed, axis=0) (the first claim on ties) in whole-plane passes: argmin along
+        # the stacked axis is a slow strided reduction
+        owner = np.zeros((h, w), np.intp)
+        best = signed[0]
+        for k in range(1, len(claim)):
+            closer = signed[k] < best
+            np.copyto(owner, k, where=closer)
+            best = np.where(closer, signed[k], best)
         pieces: dict[int, tuple[np.ndarray, int, int]] = {}
         for k in range(len(claim)):
             part = region & (owner == k)
@@ -886,9 +893,9 @@ def _shorter_on_same_row(part: tuple[np.ndarray, int, int], feet_row: float, hei
 
 def _crop_box(part: np.ndarray, x: int, y: int) -> tuple[np.ndarray, int, int]:
     """A non-empty mask (h, w) placed at (x, y) -> (its bbox crop, x0, y0)."""
-    ys, xs = np.nonzero(part)
-    y0, y1, x0, x1 = ys.min(), ys.max() + 1, xs.min(), xs.max() + 1
-    return part[y0:y1, x0:x1], x + int(x0), y + int(y0)
+    # OpenCV's bounding box of the set bytes: no index arrays
+    x0, y0, w, h = cv2.boundingRect(np.ascontiguousarray(part).view(np.uint8))
+    return part[y0 : y0 + h, x0 : x0 + w], x + x0, y + y0
 
 
 def _union(a: tuple[np.ndarray, int, int], b: tuple[np.ndarray, int, int]) -> tuple[np.ndarray, int, int]:
