@@ -168,6 +168,8 @@ def test_the_partner_stands_on_the_ground(lift: float) -> None:
 def test_bad_limits_are_refused_naming_them() -> None:
     with pytest.raises(ValueError, match="distance limits"):
         StageConfig(min_distance_m=1.5, max_distance_m=1.0)
+    with pytest.raises(ValueError, match="take_min_m"):
+        StageConfig(take_min_m=-0.1)
 
 
 def test_the_dual_hmm_gives_a_body_for_a_person_unlike_any_of_training() -> None:
@@ -301,11 +303,17 @@ def test_the_partner_stands_to_take_a_hand_held_out_and_meets_it_where_the_silho
     # the partner stands to take it: 0.8 of its arm's length (0.505 m) beyond the hand, not where the model put it
     assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(0.6 + 0.8 * 0.505, abs=1e-3)
     # a model's partner at 0.7 m: the hand met 0.7 of the way to it at most (0.49 m), the partner steps out
-    near = Stage()
+    # to an arm's length beyond it (take_min_m 0 here) ...
+    near = Stage(StageConfig(take_min_m=0.0))
     for _ in range(10):
         out = near(obs, person(0.7, 2.0, -np.pi / 2), 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
     np.testing.assert_allclose(near.offered_, [0.49, 1.0, 2.0], atol=1e-6)
     assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(0.49 + 0.8 * 0.505, abs=1e-3)
+    # ... and by default never nearer than take_min_m (1.0 m)
+    floor = Stage()
+    for _ in range(10):
+        out = floor(obs, person(0.7, 2.0, -np.pi / 2), 0.04, side=1.0, silhouette=Reach(0.6, 1.0, 0.0))
+    assert np.hypot(*(ground(out) - ground(obs))) == pytest.approx(1.0, abs=1e-3)
     # a silhouette reaching further: met 0.7 of the way to the model's partner (0.9 m) at most
     stage(obs, par, 0.04, side=1.0, silhouette=Reach(0.85, 1.0, 0.0))
     np.testing.assert_allclose(stage.offered_, [0.63, 1.0, 2.0], atol=1e-6)
@@ -371,6 +379,48 @@ def test_a_hand_held_out_apart_is_met_at_the_outlines_tip_where_the_picture_show
     blind = Stage()
     blind(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=shape)
     assert blind.offered_[0] == pytest.approx(min(shape.extent_m, 0.7 * 0.5))
+
+
+def test_a_partner_taking_a_hand_the_outline_ends_short_of_stays_out_of_the_arm_held_out() -> None:
+    # the observed person as CAM sees them; the outline holds only the upper arm (20 px beyond the body at
+    # 0.6 of the height, just over offer_m): the forearm and hand, another 0.15 h further, it missed (a
+    # sleeve like the background, an arm pointing)
+    obs = person(0.0, 0.0, 0.0)
+    uv = CAM.project(obs)
+    top, floor = float(uv[:, 1].min()), float(uv[:, 1].max())
+    height = floor - top
+    x0 = float(uv[:, 0].mean()) - 0.125 * height
+    ctrl = outline(x0, top, height, 0.6, 20.0)
+    box = (x0, top, float(ctrl[:, 0].max()) - x0, height)
+    shape = silhouette_reach(box, (x0 + 0.125 * height, top + 0.5 * height), 1.0, stature(obs), ctrl)
+    assert StageConfig().offer_m < shape.extent_m < 0.6 and not shape.touching
+    arm = (x0, top, box[2] + 0.15 * height, height)  # the person with the whole arm, as the picture shows them
+    drawn = {}
+    for take_min in (0.0, StageConfig().take_min_m):
+        stage = Stage(StageConfig(take_min_m=take_min))
+        for _ in range(10):
+            out = stage(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=shape, camera=CAM, box=box)
+        drawn[take_min], pull = stage.finish(obs, out)
+        assert pull == 1.0  # the hand the outline offers is taken either way
+    gap = {k: float(np.hypot(*(ground(v) - ground(obs)))) for k, v in drawn.items()}
+    # an arm's length beyond the outline's tip: no overlap with the outline's box, but inside the arm held out
+    assert gap[0.0] < 0.8 and box_overlap(drawn[0.0], box)[0] < 0.25
+    assert box_overlap(drawn[0.0], arm)[0] > 0.3
+    # never nearer than take_min_m (1 m): out of it (as real_partner.py counts an overlap, IoU over 0.25)
+    assert gap[1.0] == pytest.approx(1.0, abs=1e-3)
+    assert box_overlap(drawn[1.0], arm)[0] < 0.25
+    # a whole arm in the outline (45 px): an arm's length beyond its tip is further than take_min_m
+    whole = outline(x0, top, height, 0.6, 45.0)
+    wbox = (x0, top, float(whole[:, 0].max()) - x0, height)
+    wshape = silhouette_reach(wbox, (x0 + 0.125 * height, top + 0.5 * height), 1.0, stature(obs), whole)
+    far = []
+    for take_min in (0.0, 1.0):
+        stage = Stage(StageConfig(take_min_m=take_min))
+        for _ in range(10):
+            out = stage(obs, person(0.5, 0.0, 0.0), 0.04, side=1.0, silhouette=wshape, camera=CAM, box=wbox)
+        far.append(stage.finish(obs, out)[0])
+    np.testing.assert_allclose(far[0], far[1])
+    assert np.hypot(*(ground(far[1]) - ground(obs))) > 1.0
 
 
 def test_a_hand_held_out_stays_offered_while_the_outline_flickers_about_the_limit() -> None:

@@ -59,7 +59,9 @@ model's posture and gestures are kept:
    depth: the tracked places of the two are off by decimetres on real video), else at
    ``hand_frac`` of the person's stature, ``meet_touch`` of the way to the one they hold it out to
    (the real second person across the view, else the partner). With ``step_in`` the partner
-   stands to take it, its arm's length (``STEP_REACH`` of it) beyond the hand;
+   stands to take it, its arm's length (``STEP_REACH`` of it) beyond the hand, no nearer than
+   ``take_min_m`` (an outline that ends short of the hand, or at the split of a hug, would put it
+   inside the arm held out);
 4. the lowest ankle is brought into [0, ``max_ankle_m``] above the ground plane y = 0 (a partner
    may hop, never sink into the floor or float);
 5. then (:meth:`Stage.finish`) its arms: while a push goes on or it recoils from one it guards, its
@@ -171,7 +173,8 @@ class StageConfig:
         tracked, else the partner): the outline's tip is then where the regions were split, not the hand.
     step_in : bool, default=True
         A partner taking an offered hand stands to take it: ``STEP_REACH`` of its arm's length beyond
-        the hand (stepping in from further, out from nearer), within the distance limits.
+        the hand (stepping in from further, out from nearer), no nearer than ``take_min_m``, within the
+        distance limits.
     push_height : float, default=0.7
         A silhouette push needs the hand held out to have been seen high, at this fraction of the
         person's stature or above (smoothed, where the silhouette touched no one's: there its
@@ -199,6 +202,12 @@ class StageConfig:
         With ``tip_in_picture``, the hand is met this fraction of the person's stature short of the
         outline's tip, towards the person: the tip is the fingertips, a hand's length beyond the wrist,
         and clasping hands' wrists are about half a hand apart.
+    take_min_m : float, default=1.0
+        With ``step_in``, the nearest the partner stands to take an offered hand, metres (within the
+        distance limits): the outline may end short of the hand (a sleeve like the background, an arm
+        pointing) or at the split of two regions (arms round the other, a hug), and an arm's length
+        beyond that point is inside the arm held out. People shaking hands stand further apart than
+        this: there it changes nothing.
     clear_iou : float, default=0.15
         With a camera and the observed person's silhouette box, the most the partner's projected
         box may overlap that box (intersection over union) before it stands further away.
@@ -241,6 +250,7 @@ class StageConfig:
     hand_box_frac: float = 0.62
     tip_in_picture: bool = True
     tip_back: float = 0.07
+    take_min_m: float = 1.0
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -261,8 +271,8 @@ class StageConfig:
             raise ValueError(
                 f"offer_hold_s={self.offer_hold_s} must be >= 0 and hand_box_frac={self.hand_box_frac} in [0, 1]"
             )
-        if self.tip_back < 0:
-            raise ValueError(f"tip_back={self.tip_back} must be >= 0")
+        if self.tip_back < 0 or self.take_min_m < 0:
+            raise ValueError(f"tip_back={self.tip_back} and take_min_m={self.take_min_m} must be >= 0")
         if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
             raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
         if self.side_margin_m < 0 or self.offer_m < 0:
@@ -940,7 +950,9 @@ class Stage:
                 )
             if c.step_in:  # the partner stands to take the hand: within its arm's reach, not on top of it
                 stand = out + STEP_REACH * _arm_length(P)
-                offset = offset * min(max(stand, c.min_distance_m), c.max_distance_m) / max(r, 1e-9)
+                # never nearer than take_min_m: the outline may end short of the hand (an arm it missed) or at
+                # the split of two regions (arms round the other), where its arm's length would put it in the arm
+                offset = offset * min(max(stand, c.min_distance_m, c.take_min_m), c.max_distance_m) / max(r, 1e-9)
         r = float(np.hypot(*offset))
         if camera is not None and box is not None and r > 1e-6:  # never inside the person in the picture
             lengths = np.linspace(r, max(r, c.max_distance_m), 8)
