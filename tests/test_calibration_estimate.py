@@ -410,3 +410,20 @@ def test_an_edge_found_at_several_scales_counts_once_in_the_uncertainty() -> Non
     a, b = fit_lines(once, (W, H)), fit_lines(thrice, (W, H))
     assert np.all(np.abs(b.sd / a.sd - 1) < 0.1), (a.sd, b.sd)  # counted thrice: 0.64-0.83
     assert abs(b.x[1] - np.radians(25.0)) < 3 * b.sd[1] and abs(np.exp(b.x[0]) / cam.fx - 1) < 3 * b.sd[0]
+
+
+def test_a_far_vanishing_point_is_not_pulled_to_the_focal_prior() -> None:
+    # a wide camera (72 degrees) nearly square to a floor turned by 10 degrees: the planks' point
+    # is near the centre, the joints' far off to the side, and they fix the focal length weakly;
+    # the lines-only fit's own, wider prior lets them set it, where the people's prior (0.35) pulls
+    # it well towards 55 degrees
+    from counterpart.nodes.calibration.estimate import fit_lines
+
+    cam = _camera(2.8, 2.0, 72.0, distance=5.0)
+    lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=10.0), (W, H))
+    assert lines.n_horizontal == 2
+    wide = fit_lines(lines, (W, H))
+    tight = fit_lines(lines, (W, H), CalibrationConfig(lines_focal_log_std=0.35))
+    err = [abs(np.exp(c.x[0]) / cam.fx - 1) for c in (wide, tight)]
+    assert err[0] < 0.10 and err[1] > 2 * err[0], err
+    assert wide.sd[0] > tight.sd[0]  # and it says so: the focal length is less sure
