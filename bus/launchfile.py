@@ -25,6 +25,7 @@ Format (every key but ``nodes`` optional)::
         max_restarts: 5
         required: false                    # its exit stops the graph with its exit code
         wait_subscribers: {out: 1}         # extra reliable subscribers to await (other launchers)
+        nice: 10                           # lower CPU priority (0-19) for background work
 
 Every error is a :class:`LaunchError` naming the file, the node and the key.
 """
@@ -48,7 +49,20 @@ from .runner import NodeLookupError, find_node_class
 from .transport import POLICIES
 
 RESTART_POLICIES = ("never", "on-failure", "always")
-NODE_KEYS = {"run", "params", "remap", "policy", "inputs", "restart", "max_restarts", "required", "wait_subscribers"}
+NODE_KEYS = {
+    "run",
+    "params",
+    "remap",
+    "policy",
+    "inputs",
+    "restart",
+    "max_restarts",
+    "required",
+    "wait_subscribers",
+    "nice",
+}
+#: the niceness a launch file may give a node: lower priority only (raising it needs privileges)
+NICE_RANGE = (0, 19)
 TOP_KEYS = {"include", "policy", "transport", "host", "port_base", "endpoints", "external", "nodes", "barrier_timeout"}
 
 
@@ -84,6 +98,9 @@ class NodeDecl:
         Its exit stops the graph with its exit code.
     wait_subscribers : dict of str to int
         Extra reliable subscribers to await per output port (other launchers).
+    nice : int
+        Added to the process's niceness (0-19): a node whose work may wait (the calibration's
+        refinement) yields the cores to the ones that must keep up with the camera.
     """
 
     name: str
@@ -97,6 +114,7 @@ class NodeDecl:
     max_restarts: int = 5
     required: bool = False
     wait_subscribers: dict[str, int] = field(default_factory=dict)
+    nice: int = 0
 
 
 @dataclass
@@ -335,6 +353,16 @@ def _node_decl(file: str, name: str, body: dict[str, Any]) -> NodeDecl:
     decl.wait_subscribers = {
         str(k): int(v) for k, v in _mapping(body.get("wait_subscribers"), file, name, "wait_subscribers").items()
     }
+    nice = body.get("nice", 0)
+    if isinstance(nice, bool) or not isinstance(nice, int) or not NICE_RANGE[0] <= nice <= NICE_RANGE[1]:
+        raise _err(
+            file,
+            name,
+            "nice",
+            f"{nice!r} is not an integer in {NICE_RANGE[0]}..{NICE_RANGE[1]} (added to the node's niceness: "
+            "higher runs it at lower priority; a launcher cannot raise a node's priority)",
+        )
+    decl.nice = nice
     return decl
 
 

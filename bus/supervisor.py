@@ -7,6 +7,7 @@
   ``TERM_GRACE_S``: everything is gone within 5 s.
 - ``restart``: never / on-failure / always, with exponential backoff (0.5 s doubling to 10 s; the
   count resets after 30 s of healthy running) up to ``max_restarts``.
+- ``nice``: the node's process starts with its niceness raised by that much (lower priority).
 - A ``required`` node's exit stops the graph with its exit code (after a clean 0 exit, the rest of
   the graph gets ``DRAIN_S`` to finish on end of stream).
 - A node that fails before its first message (published or handled: the node then writes the
@@ -22,6 +23,7 @@
 from __future__ import annotations
 
 import ctypes
+import functools
 import json
 import logging
 import os
@@ -54,13 +56,15 @@ HEALTHY_S = 30.0
 _PR_SET_PDEATHSIG = 1
 
 
-def _child_setup() -> None:
-    """Runs in the child between fork and exec: die with the launcher."""
+def _child_setup(nice: int = 0) -> None:
+    """Runs in the child between fork and exec: die with the launcher; lower the priority by ``nice``."""
     try:
         libc = ctypes.CDLL("libc.so.6", use_errno=True)
         libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
     except OSError:
         pass
+    if nice:
+        os.nice(nice)
 
 
 @dataclass
@@ -70,6 +74,7 @@ class Proc:
     restart: str
     max_restarts: int
     required: bool
+    nice: int = 0
     popen: subprocess.Popen | None = None
     started: float = 0.0
     restarts: int = 0
@@ -124,6 +129,7 @@ class Launcher:
                 restart=decl.restart,
                 max_restarts=decl.max_restarts,
                 required=decl.required,
+                nice=decl.nice,
                 running_file=Path(spec["running_file"]),
             )
 
@@ -184,7 +190,9 @@ class Launcher:
 
     # ------------------------------------------------------------------------------- processes
     def _start(self, p: Proc) -> None:
-        p.popen = subprocess.Popen(p.cmd, env=self.env, start_new_session=True, preexec_fn=_child_setup)
+        p.popen = subprocess.Popen(
+            p.cmd, env=self.env, start_new_session=True, preexec_fn=functools.partial(_child_setup, p.nice)
+        )
         p.started = time.monotonic()
         p.next_start = None
         p.exit_code = None

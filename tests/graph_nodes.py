@@ -71,7 +71,7 @@ class Sink(Node):
 
     def setup(self) -> None:
         self.f = open(self.p["path"], "a", buffering=1)
-        self.f.write(json.dumps({"event": "start", "pid": os.getpid()}) + "\n")
+        self.f.write(json.dumps({"event": "start", "pid": os.getpid(), "nice": os.nice(0)}) + "\n")
 
     def on_in(self, msg: Number) -> None:
         if self.p["delay_ms"]:

@@ -71,6 +71,17 @@ def test_reliable_chain_delivers_every_message_in_order_and_ends_by_itself(tmp_p
     assert read_jsonl(tmp_path / "sink.jsonl")[-1] == {"event": "end", "drops": 0}
 
 
+def test_a_node_given_nice_runs_at_that_much_lower_priority(tmp_path: Path) -> None:
+    doc = chain(tmp_path, count=50)
+    doc["nodes"]["sink"]["nice"] = 7
+    f = write_launch(tmp_path / "g.yaml", doc)
+    code, out = run_launch(f, timeout=60)
+    assert code == 0, out
+    starts = [r for r in read_jsonl(tmp_path / "sink.jsonl") if r.get("event") == "start"]
+    assert [r["nice"] for r in starts] == [min(os.nice(0) + 7, 19)]
+    assert len(received(tmp_path / "sink.jsonl")) == 50
+
+
 def test_latest_policy_drops_under_a_slow_consumer_and_counts_the_drops(tmp_path: Path) -> None:
     doc = chain(tmp_path, count=600, delay_ms=20.0)
     doc["nodes"]["source"]["params"]["rate"] = 300.0

@@ -62,6 +62,8 @@ CASES = [
         "node 'sink': restart: 'maybe' is not one of never, on-failure, always",
     ),
     ("unknown key", with_node("sink", colour="red"), "node 'sink': colour: unknown key"),
+    ("negative nice", with_node("sink", nice=-5), "node 'sink': nice: -5 is not an integer in 0..19"),
+    ("nice not a number", with_node("sink", nice="low"), "node 'sink': nice: 'low' is not an integer in 0..19"),
     ("unknown top key", {**with_node("sink"), "nodez": {}}, "nodez: unknown key"),
     (
         "two publishers",

@@ -46,6 +46,16 @@ def cylinder(x: float, z: float, r: float = 0.15, y0: float = 0.3, y1: float = 1
 
 
 # ------------------------------------------------------------------------------------------ cones
+def test_partner_cones_of_a_held_partner_are_the_same_and_not_shared() -> None:
+    joints = partner_joints(3)
+    ends, radii = draw.partner_cones(joints)
+    ends[:] = 0.0  # a caller's changes must not reach the next frame's cones
+    again, radii_again = draw.partner_cones(joints.copy())
+    assert np.abs(again).max() > 0.5 and np.array_equal(radii, radii_again)
+    other, _ = draw.partner_cones(partner_joints(20))
+    assert not np.allclose(other, again)  # another pose, other cones
+
+
 def test_partner_pixels_cover_the_projected_cones_and_nothing_far_away() -> None:
     joints = partner_joints(0)
     ends, radii = draw.partner_cones(joints)
