@@ -373,3 +373,57 @@ def test_a_square_frame_sets_the_rotation_and_the_people_only_the_scale() -> Non
     assert abs(joint.tilt_deg - 25.0) + 10 * abs(joint.focal / cam.fx - 1) > 2 * (
         abs(est.tilt_deg - 25.0) + 10 * abs(est.focal / cam.fx - 1)
     ), joint.describe()
+
+
+def test_near_duplicate_segments_are_grouped_and_others_not() -> None:
+    # one edge as LSD finds it at several scales: whole, a pixel off, and broken in two halves; a
+    # parallel edge 5 px away, a collinear one further along it and a crossing one are other edges
+    from counterpart.nodes.calibration.lines import duplicate_groups, duplicate_weights
+
+    s = np.array(
+        [
+            [10.0, 50.0, 110.0, 60.0],  # the edge
+            [11.0, 51.0, 109.0, 60.6],  # a pixel off, a little shorter
+            [10.0, 50.5, 60.0, 55.3],  # its first half
+            [60.0, 55.2, 110.0, 60.4],  # its second half
+            [10.0, 55.5, 110.0, 65.5],  # parallel, 5 px away
+            [130.0, 62.0, 200.0, 69.0],  # collinear, further along
+            [50.0, 20.0, 70.0, 90.0],  # crossing
+        ]
+    )
+    g = duplicate_groups(s)
+    assert len(set(g[:4])) == 1 and len(set(g)) == 4
+    np.testing.assert_allclose(duplicate_weights(s), [0.25] * 4 + [1.0] * 3)
+    assert duplicate_groups(np.zeros((0, 4))).shape == (0,)
+
+
+def test_an_edge_found_at_several_scales_counts_once_in_the_uncertainty() -> None:
+    # each floor segment found three times (as at LSD's three scales: a fraction of a pixel apart)
+    # is the same evidence as found once: the lines' uncertainty must not shrink by sqrt(3)
+    from counterpart.nodes.calibration.estimate import fit_lines
+
+    cam = _camera(2.2, 25.0, 55.0, distance=5.0)
+    once = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
+    rng = np.random.default_rng(3)
+    seg = np.concatenate([once.segments + rng.normal(0, 0.2, once.segments.shape) for _ in range(3)])
+    thrice = LineFamilies(seg, np.tile(once.family, 3), once.vertical, once.vp, square=True)
+    a, b = fit_lines(once, (W, H)), fit_lines(thrice, (W, H))
+    assert np.all(np.abs(b.sd / a.sd - 1) < 0.1), (a.sd, b.sd)  # counted thrice: 0.64-0.83
+    assert abs(b.x[1] - np.radians(25.0)) < 3 * b.sd[1] and abs(np.exp(b.x[0]) / cam.fx - 1) < 3 * b.sd[0]
+
+
+def test_a_far_vanishing_point_is_not_pulled_to_the_focal_prior() -> None:
+    # a wide camera (72 degrees) nearly square to a floor turned by 10 degrees: the planks' point
+    # is near the centre, the joints' far off to the side, and they fix the focal length weakly;
+    # the lines-only fit's own, wider prior lets them set it, where the people's prior (0.35) pulls
+    # it well towards 55 degrees
+    from counterpart.nodes.calibration.estimate import fit_lines
+
+    cam = _camera(2.8, 2.0, 72.0, distance=5.0)
+    lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=10.0), (W, H))
+    assert lines.n_horizontal == 2
+    wide = fit_lines(lines, (W, H))
+    tight = fit_lines(lines, (W, H), CalibrationConfig(lines_focal_log_std=0.35))
+    err = [abs(np.exp(c.x[0]) / cam.fx - 1) for c in (wide, tight)]
+    assert err[0] < 0.10 and err[1] > 2 * err[0], err
+    assert wide.sd[0] > tight.sd[0]  # and it says so: the focal length is less sure

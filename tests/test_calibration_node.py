@@ -127,6 +127,9 @@ def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(tmp_path
         max_focal_std=10.0,
         max_tilt_std_deg=90.0,
         min_depth_spread=0.0,
+        max_split_height=10.0,
+        max_split_tilt_deg=90.0,
+        max_split_focal=10.0,
         max_step=0.02,
     )
     rc, log = run_launch(f, timeout=120)

@@ -27,7 +27,8 @@ decides it there, and the reported uncertainty of f is wide. The scale of the sc
 only from the human height prior: with K people it is known to about s_H / sqrt(K).
 
 Uncertainty: the covariance of the Gauss-Newton approximation at the solution, ``(J^T J)^-1`` of
-the normalised residuals (priors included), times the reduced chi-square when it exceeds 1.
+the normalised residuals (priors included), times the reduced chi-square when it exceeds 1; a group
+of near-duplicate scene segments (one edge found at several scales) counts once in it.
 Starts: a grid over tilt and field of view (vectorised), the best few refined by
 ``scipy.optimize.least_squares`` (trust region reflective).
 """
@@ -43,7 +44,7 @@ from threadpoolctl import threadpool_limits
 
 from counterpart.body.camera import Camera
 
-from .lines import LineFamilies, segment_angles
+from .lines import LineFamilies, duplicate_weights, segment_angles
 
 
 @dataclass(frozen=True)
@@ -123,6 +124,11 @@ class CalibrationConfig:
         scene's lines with both) and report how far each lands from the whole
         (``CameraEstimate.split_*``): an estimate that the people's lean or a passing posture
         carries moves between the halves, one that the scene and the people agree on does not.
+    lines_focal_log_std : float, default=0.5
+        Std of the prior on log f in the lines-only fit (:func:`fit_lines`), wider than
+        ``focal_log_std``: where one horizontal family's vanishing point is far off, the lines fix
+        the focal length weakly, and a prior as tight as the people's pulled their estimate
+        towards the prior's 55 degrees (chosen on the tuning seeds 0-49).
     """
 
     person_height: float = 1.75
@@ -149,6 +155,7 @@ class CalibrationConfig:
     lines_first_focal_std: float | None = 1.0
     lines_first_tilt_std_deg: float = 90.0
     split_halves: bool = True
+    lines_focal_log_std: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -583,7 +590,7 @@ def _line_residuals(
     x = np.concatenate([y[:3], [0.0], y[3:]])
     rl = segment_angles(lines.segments, _vanishing_points(x, 0, lines, size)) / line_scale
     camera = _gaussian_under_soft_l1(
-        np.array([(y[0] - np.log(f0)) / cfg.focal_log_std, y[2] / np.radians(cfg.roll_std_deg)])
+        np.array([(y[0] - np.log(f0)) / cfg.lines_focal_log_std, y[2] / np.radians(cfg.roll_std_deg)])
     )
     return np.concatenate([rl, _manhattan(y[3:], cfg.manhattan_std_deg), camera])
 
@@ -623,14 +630,43 @@ def fit_lines(
             r = _line_residuals(y0, *args)
             starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), y0))
     best = _refine_best(_line_residuals, starts, args, config)
-    J = best.jac
-    m, n = J.shape
-    chi2 = 2 * best.cost / max(1, m - n)
-    try:
-        cov = np.linalg.inv(J.T @ J) * max(1.0, chi2)
-    except np.linalg.LinAlgError:
+    weights = np.ones(len(best.fun))
+    weights[: len(lines.segments)] = duplicate_weights(lines.segments)
+    cov = _covariance(best, weights)
+    if cov is None:
         return None
     return LinesCamera(best.x[:3].copy(), np.sqrt(np.abs(np.diag(cov)))[:3])
+
+
+def _covariance(res: Any, weights: np.ndarray) -> np.ndarray | None:
+    """The Gauss-Newton covariance of a robust fit, each residual counted with its weight.
+
+    A group of near-duplicate segments (one edge found at several of LSD's scales) stays in the fit
+    whole, but counts once here (``weights`` 1 / its size, :func:`lines.duplicate_weights`): counted
+    several times, it would shrink the reported uncertainty by the square root of its size without
+    any more evidence.
+
+    Parameters
+    ----------
+    res : scipy.optimize.OptimizeResult
+        The fit (soft-L1 loss): ``jac`` (M, P), the loss-scaled Jacobian, and ``fun`` (M,), the
+        normalised residuals.
+    weights : ndarray of shape (M,)
+        Weight of each residual in the information and in the reduced chi-square.
+
+    Returns
+    -------
+    ndarray of shape (P, P) or None
+        ``(J^T W J)^-1`` times the weighted reduced chi-square where it exceeds 1; None where
+        ``J^T W J`` is singular.
+    """
+    J = res.jac * np.sqrt(weights)[:, None]
+    rho = 2.0 * (np.sqrt(1.0 + res.fun * res.fun) - 1.0)  # the soft-L1 loss of each residual
+    chi2 = float(weights @ rho) / max(1.0, float(weights.sum()) - J.shape[1])
+    try:
+        return np.linalg.inv(J.T @ J) * max(1.0, chi2)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def _solve_people(
@@ -770,12 +806,16 @@ def fit_camera(
             and np.degrees(cam.sd[1]) <= config.lines_first_tilt_std_deg
         ):
             fixed = cam
-    joint = _solve(head, foot, k, scale, (W, H), config, f0, nk, lines)
+    # next to the lines-first fit, the joint fit is the measure of how far the people pull off the
+    # lines (the split below): with the lines' own prior on the focal length, so that it does not
+    # count the two priors' difference as the people's
+    joint_config = replace(config, focal_log_std=config.lines_focal_log_std) if fixed is not None else config
+    joint = _solve(head, foot, k, scale, (W, H), joint_config, f0, nk, lines)
     best = joint
     if fixed is not None:
         best = _solve_people(head, foot, k, scale, (W, H), config, f0, nk, fixed.x)
         if best is None:
-            fixed, best = None, joint
+            fixed, best = None, _solve(head, foot, k, scale, (W, H), config, f0, nk, lines)
     if best is None:
         return None
     # a family of segments that is not a set of parallel scene lines (edges of several things that
@@ -815,14 +855,16 @@ def fit_camera(
         refit = fit_camera(head[keep], foot[keep], track[keep], size, time_s[keep], config, lines)
         if refit is not None:
             return refit
-    J = best.jac
-    m, n = J.shape
+    n = best.jac.shape[1]
     r = best.fun[: 2 * len(head)].reshape(-1, 2) * np.sqrt(per[k])[:, None]  # per observation, in its own std
     inlier = np.hypot(r[:, 0], r[:, 1]) < 3.0
-    chi2 = 2 * best.cost / max(1, m - n)
-    try:
-        cov = np.linalg.inv(J.T @ J) * max(1.0, chi2)
-    except np.linalg.LinAlgError:
+    weights = np.ones(len(best.fun))
+    if fixed is None and lines is not None:
+        # the joint fit's residuals: people (2N), statures (K), camera priors (2), then the segments
+        start = 2 * len(head) + nk + 2
+        weights[start : start + len(lines.segments)] = duplicate_weights(lines.segments)
+    cov = _covariance(best, weights)
+    if cov is None:
         cov = np.full((n, n), np.inf)
     sd = np.sqrt(np.abs(np.diag(cov)))
     if fixed is not None:

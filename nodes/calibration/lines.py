@@ -117,6 +117,77 @@ def detect_segments(
     return s[keep]
 
 
+def duplicate_groups(
+    segments: np.ndarray, angle_deg: float = 2.0, distance_px: float = 2.0, min_overlap: float = 0.5
+) -> np.ndarray:
+    """Groups of near-duplicate segments: the same edge found more than once (at several of LSD's
+    scales, or as both sides of a thin line), which are one observation of the scene, not several.
+
+    Two segments are near-duplicates when their directions are within ``angle_deg``, each one's
+    midpoint is within ``distance_px`` of the other's line, and they overlap along their direction
+    by at least ``min_overlap`` of the shorter; a group is a connected set of such pairs (an edge
+    broken up at one scale and whole at another is one group).
+
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    angle_deg : float, default=2.0
+        Largest angle between near-duplicates, degrees.
+    distance_px : float, default=2.0
+        Largest distance of a midpoint from the other segment's line, pixels.
+    min_overlap : float, default=0.5
+        Least overlap along the direction, as a share of the shorter segment.
+
+    Returns
+    -------
+    ndarray of shape (N,), dtype int
+        The group of each segment, 0 to G - 1.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    s = np.asarray(segments, np.float64).reshape(-1, 4)
+    n = len(s)
+    if n == 0:
+        return np.zeros(0, int)
+    d = s[:, 2:] - s[:, :2]
+    length = np.maximum(np.linalg.norm(d, axis=1), 1e-12)
+    u = d / length[:, None]
+    mid = 0.5 * (s[:, :2] + s[:, 2:])
+    i, j = np.triu_indices(n, 1)
+    parallel = np.abs(u[i, 0] * u[j, 1] - u[i, 1] * u[j, 0]) < np.sin(np.radians(angle_deg))
+    i, j = i[parallel], j[parallel]
+    dm = mid[j] - mid[i]
+    near = np.maximum(np.abs(u[i, 0] * dm[:, 1] - u[i, 1] * dm[:, 0]), np.abs(u[j, 0] * dm[:, 1] - u[j, 1] * dm[:, 0]))
+    i, j, dm = i[near < distance_px], j[near < distance_px], dm[near < distance_px]
+    # the other segment's extent along this one's direction, about this one's midpoint
+    along = (u[i] * dm).sum(axis=1)
+    half = 0.5 * length[j] * np.abs((u[i] * u[j]).sum(axis=1))
+    overlap = np.minimum(0.5 * length[i], along + half) - np.maximum(-0.5 * length[i], along - half)
+    dup = overlap >= min_overlap * np.minimum(length[i], length[j])
+    graph = coo_matrix((np.ones(int(dup.sum())), (i[dup], j[dup])), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def duplicate_weights(segments: np.ndarray) -> np.ndarray:
+    """Each segment's share of its group of near-duplicates (:func:`duplicate_groups`): one over the
+    group's size, so that a group counts once in an uncertainty however often its edge was found.
+
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+
+    Returns
+    -------
+    ndarray of shape (N,), dtype float64
+        Weights in (0, 1]; they sum to the number of groups.
+    """
+    g = duplicate_groups(segments)
+    return 1.0 / np.bincount(g)[g] if len(g) else np.zeros(0)
+
+
 def segment_angles(segments: np.ndarray, vp: np.ndarray) -> np.ndarray:
     """Sine of the angle between each segment and the line from its midpoint to its vanishing point.
 
@@ -386,6 +457,8 @@ def _grouped_length(lines: LineFamilies) -> float:
 __all__ = [
     "LineFamilies",
     "detect_segments",
+    "duplicate_groups",
+    "duplicate_weights",
     "find_families",
     "find_manhattan_families",
     "scene_lines",

@@ -12,7 +12,7 @@ upright people against a prior on human height; on a frame where the silhouettes
 person, as when people standing still are absorbed into the background, from the people
 detector's boxes, on ``detect_frames`` frames at most). Until an estimate is credible (people seen over
 ``min_seconds``; uncertainties under the ``max_*_std`` bounds; the estimates from the two halves
-of the window near the whole's; the horizon seen, by people at different depths or by scene lines
+of the window near the whole's, ``max_split_*``; the horizon seen, by people at different depths or by scene lines
 converging on it) the default camera stays; then the published
 camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
 (``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
@@ -111,6 +111,15 @@ class Calibration(Node):
         "min_horizon_segments": Param(
             int, 12, "estimate: ... this many scene segments converging on the horizon", min=0
         ),
+        "max_split_height": Param(
+            float,
+            0.10,
+            "estimate: ... and the estimates from the two halves of the window (and the people's pull "
+            "off the scene's lines) within this of the whole: log height",
+            min=0.0,
+        ),
+        "max_split_tilt_deg": Param(float, 1.5, "estimate: ... tilt, degrees", min=0.0),
+        "max_split_focal": Param(float, 0.20, "estimate: ... log focal length", min=0.0),
         "detect_frames": Param(
             int,
             60,
@@ -236,6 +245,7 @@ class Calibration(Node):
             self.p["max_tilt_std_deg"],
             self.p["min_depth_spread"],
             self.p["min_horizon_segments"],
+            (self.p["max_split_height"], self.p["max_split_tilt_deg"], self.p["max_split_focal"]),
         ):
             self.tally("estimates_not_credible")
             self.log.debug(
