@@ -427,3 +427,21 @@ def test_a_far_vanishing_point_is_not_pulled_to_the_focal_prior() -> None:
     err = [abs(np.exp(c.x[0]) / cam.fx - 1) for c in (wide, tight)]
     assert err[0] < 0.10 and err[1] > 2 * err[0], err
     assert wide.sd[0] > tight.sd[0]  # and it says so: the focal length is less sure
+
+
+def test_the_lines_fit_again_on_the_same_lines_is_the_same_and_not_shared() -> None:
+    # a re-estimate on unchanged scene frames fits the same lines again (taken from the last fits)
+    from counterpart.nodes.calibration import estimate
+
+    cam = _camera(2.2, 25.0, 55.0, distance=5.0)
+    lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
+    estimate._LINES_FITS.clear()
+    first = estimate.fit_lines(lines, (W, H))
+    kept = first.x.copy()
+    first.x[:] = 0.0  # a caller's changes must not reach the next estimate
+    again = estimate.fit_lines(lines, (W, H))
+    np.testing.assert_array_equal(again.x, kept)
+    estimate._LINES_FITS.clear()
+    np.testing.assert_array_equal(estimate.fit_lines(lines, (W, H)).x, kept)  # what a fresh fit gives
+    other = estimate.fit_lines(lines, (W + 40, H))  # another frame size is another fit
+    assert not np.array_equal(other.x, kept)

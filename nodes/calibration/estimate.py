@@ -618,6 +618,29 @@ def fit_lines(
     """
     if not len(lines.segments) or lines.n_horizontal == 0:
         return None
+    # the same lines are fitted again for every re-estimate while the scene's frames are unchanged,
+    # and within one estimate for each half of the window: the fit is their dearest part
+    key = (
+        tuple((a.dtype.str, a.shape, a.tobytes()) for a in (lines.segments, lines.family, lines.vertical, lines.vp)),
+        lines.square,
+        int(size[0]),
+        int(size[1]),
+        config,
+    )
+    fit = _LINES_FITS[key] if key in _LINES_FITS else _fit_lines(lines, size, config)
+    _LINES_FITS[key] = fit
+    while len(_LINES_FITS) > _LINES_FITS_KEPT:
+        _LINES_FITS.pop(next(iter(_LINES_FITS)))
+    return None if fit is None else LinesCamera(fit.x.copy(), fit.sd.copy())
+
+
+#: the last few lines-only fits, by their lines, frame size and config (:func:`fit_lines`)
+_LINES_FITS: dict[tuple[Any, ...], LinesCamera | None] = {}
+_LINES_FITS_KEPT = 8
+
+
+def _fit_lines(lines: LineFamilies, size: tuple[int, int], config: CalibrationConfig) -> LinesCamera | None:
+    """:func:`fit_lines` without the cache."""
     W, H = int(size[0]), int(size[1])
     f0 = (W / 2.0) / np.tan(np.radians(config.fov_deg) / 2)
     line_scale = _line_scale(lines, config)
