@@ -627,7 +627,8 @@ def fit_lines(
         int(size[1]),
         config,
     )
-    fit = _LINES_FITS[key] if key in _LINES_FITS else _fit_lines(lines, size, config)
+    # taken out and put back last: the least recently used fit goes first
+    fit = _LINES_FITS.pop(key) if key in _LINES_FITS else _fit_lines(lines, size, config)
     _LINES_FITS[key] = fit
     while len(_LINES_FITS) > _LINES_FITS_KEPT:
         _LINES_FITS.pop(next(iter(_LINES_FITS)))
