@@ -136,75 +136,112 @@ def _rz(R: Columns, c: np.ndarray, s: np.ndarray) -> Columns:
     return a0 * c + a1 * s, a1 * c - a0 * s, a2
 
 
-def _chain(P: np.ndarray, dims: BodyDims) -> tuple[np.ndarray, dict[str, Columns]]:
-    """The chain of the module docstring: anchor points (N, len(ANCHORS), 3) and the columns of
-    every body part's rotation.
+#: the limbs' DOFs, per side (left, right): the two sides' chains run as one batch of 2N rows
+_LIMB_DOFS = (
+    "shoulder_flex",
+    "shoulder_abd",
+    "shoulder_rot",
+    "elbow_flex",
+    "hip_flex",
+    "hip_abd",
+    "hip_rot",
+    "knee_flex",
+)
+_SIDE_DOFS = np.array([[DOF_INDEX[f"{sd}_{n}"] for n in _LIMB_DOFS] for sd in ("l", "r")], dtype=np.intp)
+#: the limbs' anchors, per side: (left index, right index)
+_SIDE_ANCHORS = {
+    n: np.array([ANCHOR_INDEX[f"l_{n}"], ANCHOR_INDEX[f"r_{n}"]], dtype=np.intp)
+    for n in ("shoulder", "elbow", "wrist", "hand_end", "hip", "knee", "ankle", "toe")
+}
+
+
+def _chain(P: np.ndarray, dims: BodyDims, rotations: bool = True) -> tuple[np.ndarray, dict[str, Columns]]:
+    """The chain of the module docstring: anchor points (N, len(ANCHORS), 3) and (with
+    ``rotations``) the columns of every body part's rotation.
+
+    The left and right limbs go through their chains as one batch of 2N rows (left rows, then
+    right), with the side's sign per row: the same operations on every row as one side at a time,
+    so the same numbers, at half the calls (the tracker's likelihood runs it on few poses many times
+    a frame, where the cost of a call, not of a pose, dominates).
     """
     d = dims
     C = np.cos(P)[:, :, None]  # (N, DOF, 1)
     S = np.sin(P)[:, :, None]
-    cs = {n: (C[:, i], S[:, i]) for n, i in DOF_INDEX.items()}
+    ix = DOF_INDEX
+
+    def cs(n: str) -> tuple[np.ndarray, np.ndarray]:
+        return C[:, ix[n]], S[:, ix[n]]
 
     def neg(n: str) -> tuple[np.ndarray, np.ndarray]:
-        c, s = cs[n]
-        return c, -s
+        return C[:, ix[n]], -S[:, ix[n]]
 
     N = len(P)
     z = np.zeros((N, 1))
-    c, s = cs["root_yaw"]
+    c, s = cs("root_yaw")
     R: dict[str, Columns] = {}
-    R["pelvis"] = _rz(
+    pel = R["pelvis"] = _rz(
         _rx(
             (
                 np.concatenate([c, z, -s], 1),
                 np.broadcast_to(np.array([0.0, 1.0, 0.0]), (N, 3)),
                 np.concatenate([s, z, c], 1),
             ),
-            *cs["root_pitch"],
+            *cs("root_pitch"),
         ),
         *neg("root_roll"),
     )
-    pel = R["pelvis"]
-    tor = R["torso"] = _rz(_rx(_ry(pel, *cs["torso_twist"]), *cs["torso_flex"]), *neg("torso_lateral"))
-    hed = R["head"] = _rz(_rx(_ry(tor, *cs["head_turn"]), *cs["head_nod"]), *neg("head_tilt"))
+    tor = R["torso"] = _rz(_rx(_ry(pel, *cs("torso_twist")), *cs("torso_flex")), *neg("torso_lateral"))
+    hed = R["head"] = _rz(_rx(_ry(tor, *cs("head_turn")), *cs("head_nod")), *neg("head_tilt"))
 
     pts = np.empty((N, len(ANCHORS), 3))
-    ix = ANCHOR_INDEX
+    ax = ANCHOR_INDEX
     pelvis = P[:, 0:3]
-    pts[:, ix["pelvis"]] = pelvis
+    pts[:, ax["pelvis"]] = pelvis
     neck = pelvis + d.torso_length * tor[1]
-    pts[:, ix["neck"]] = neck
-    pts[:, ix["chest"]] = neck - d.chest_drop * tor[1]
-    pts[:, ix["torso_bottom"]] = pelvis - d.torso_bottom_drop * tor[1]
+    pts[:, ax["neck"]] = neck
+    pts[:, ax["chest"]] = neck - d.chest_drop * tor[1]
+    pts[:, ax["torso_bottom"]] = pelvis - d.torso_bottom_drop * tor[1]
     head = neck + d.neck_to_head * hed[1]
-    pts[:, ix["head"]] = head
+    pts[:, ax["head"]] = head
     half = d.head_half_height * hed[1]
-    pts[:, ix["chin"]] = head - half
-    pts[:, ix["crown"]] = head + half
-    for sd, sign in (("l", 1.0), ("r", -1.0)):
-        # Arms and legs mirrored so that every positive angle means the same movement on both sides.
-        c, s = cs[f"{sd}_shoulder_abd"]
-        cr, sr = cs[f"{sd}_shoulder_rot"]
-        ua = R[f"{sd}_upper_arm"] = _ry(_rz(_rx(tor, *neg(f"{sd}_shoulder_flex")), c, sign * s), cr, -sign * sr)
-        fa = R[f"{sd}_forearm"] = _rx(ua, *neg(f"{sd}_elbow_flex"))
-        sh = neck + (sign * d.shoulder_width / 2) * tor[0] - d.shoulder_drop * tor[1]
-        el = sh - d.upper_arm * ua[1]
-        wr = el - d.forearm * fa[1]
-        pts[:, ix[f"{sd}_shoulder"]] = sh
-        pts[:, ix[f"{sd}_elbow"]] = el
-        pts[:, ix[f"{sd}_wrist"]] = wr
-        pts[:, ix[f"{sd}_hand_end"]] = wr - d.hand_length * fa[1]
-        c, s = cs[f"{sd}_hip_abd"]
-        cr, sr = cs[f"{sd}_hip_rot"]
-        th = R[f"{sd}_thigh"] = _ry(_rz(_rx(pel, *neg(f"{sd}_hip_flex")), c, sign * s), cr, -sign * sr)
-        sn = R[f"{sd}_shin"] = _rx(th, *cs[f"{sd}_knee_flex"])
-        hp = pelvis + (sign * d.hip_width / 2) * pel[0]
-        kn = hp - d.thigh * th[1]
-        an = kn - d.shin * sn[1]
-        pts[:, ix[f"{sd}_hip"]] = hp
-        pts[:, ix[f"{sd}_knee"]] = kn
-        pts[:, ix[f"{sd}_ankle"]] = an
-        pts[:, ix[f"{sd}_toe"]] = an - (d.ankle_height - d.r_toe) * sn[1] + d.foot_length * sn[2]
+    pts[:, ax["chin"]] = head - half
+    pts[:, ax["crown"]] = head + half
+
+    # Both sides at once, 2N rows. Arms and legs mirrored so that every positive angle means the
+    # same movement on both sides: sign +1 on the left rows, -1 on the right ones.
+    Cs = np.concatenate([C[:, _SIDE_DOFS[0]], C[:, _SIDE_DOFS[1]]])  # (2N, 8, 1)
+    Ss = np.concatenate([S[:, _SIDE_DOFS[0]], S[:, _SIDE_DOFS[1]]])
+    sign = np.repeat(np.array([1.0, -1.0]), N)[:, None]  # (2N, 1)
+    tor2 = tuple(np.concatenate([a, a]) for a in tor)
+    pel2 = tuple(np.concatenate([a, a]) for a in pel)
+    (c_sf, c_sa, c_sr, c_el, c_hf, c_ha, c_hr, c_kn) = (Cs[:, k] for k in range(8))
+    (s_sf, s_sa, s_sr, s_el, s_hf, s_ha, s_hr, s_kn) = (Ss[:, k] for k in range(8))
+    ua = _ry(_rz(_rx(tor2, c_sf, -s_sf), c_sa, sign * s_sa), c_sr, -sign * s_sr)
+    fa = _rx(ua, c_el, -s_el)
+    neck2 = np.concatenate([neck, neck])
+    sh = neck2 + (sign * d.shoulder_width / 2) * tor2[0] - d.shoulder_drop * tor2[1]
+    el = sh - d.upper_arm * ua[1]
+    wr = el - d.forearm * fa[1]
+    th = _ry(_rz(_rx(pel2, c_hf, -s_hf), c_ha, sign * s_ha), c_hr, -sign * s_hr)
+    sn = _rx(th, c_kn, s_kn)
+    hp = np.concatenate([pelvis, pelvis]) + (sign * d.hip_width / 2) * pel2[0]
+    kn = hp - d.thigh * th[1]
+    an = kn - d.shin * sn[1]
+    for name, x in (
+        ("shoulder", sh),
+        ("elbow", el),
+        ("wrist", wr),
+        ("hand_end", wr - d.hand_length * fa[1]),
+        ("hip", hp),
+        ("knee", kn),
+        ("ankle", an),
+        ("toe", an - (d.ankle_height - d.r_toe) * sn[1] + d.foot_length * sn[2]),
+    ):
+        pts[:, _SIDE_ANCHORS[name]] = x.reshape(2, N, 3).transpose(1, 0, 2)
+    if rotations:
+        for sd, rows in (("l", slice(0, N)), ("r", slice(N, 2 * N))):
+            for part, cols in (("upper_arm", ua), ("forearm", fa), ("thigh", th), ("shin", sn)):
+                R[f"{sd}_{part}"] = tuple(a[rows] for a in cols)
     return pts, R
 
 
@@ -229,7 +266,7 @@ def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
     ValueError
         If ``P`` is not of shape (N, DOF) or (DOF,).
     """
-    return _chain(_as_poses(P), dims)[0]
+    return _chain(_as_poses(P), dims, rotations=False)[0]
 
 
 def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -279,7 +316,7 @@ def forward_kinematics(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarr
     ValueError
         If ``P`` is not of shape (N, DOF) or (DOF,).
     """
-    return frames(P, dims)[0][:, :N_JOINTS]
+    return _chain(_as_poses(P), dims, rotations=False)[0][:, :N_JOINTS]
 
 
 def cone_endpoints(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, np.ndarray]:

@@ -22,33 +22,52 @@ from tests.launching import run_launch, write_launch
 
 def test_no_budget_or_no_measure_keeps_the_full_search() -> None:
     off = FrameBudget(10, 256, BudgetConfig(share=0.0))
-    off.record(1.0, 100)  # far too slow, but no budget
+    off.record(1.0, 1, 10, 256, 0.9)  # far too slow, but no budget
     assert off.plan(2, 30.0) == (10, 256)
     on = FrameBudget(10, 256, BudgetConfig(share=1.0))
     assert on.plan(2, 30.0) == (10, 256)  # nothing measured yet
-    on.record(1.0, 100)
+    on.record(1.0, 0, 0, 256, 0.0)  # nobody searched: nothing learnt
+    assert on.plan(2, 30.0) == (10, 256)
+    on.record(1.0, 1, 10, 256, 0.9)
     assert on.plan(2, 0.0) == (10, 256)  # the frame rate unknown
 
 
 def test_the_plan_fits_the_measured_cost_layers_first_then_particles() -> None:
     b = FrameBudget(10, 256, BudgetConfig(share=1.0))
-    b.record(0.1, 10_000)  # 10 us per likelihood evaluation: 3333 fit in a frame at 30 fps
+    # one person, 10 layers of 256 in 25.6 ms (10 us per particle, the layer cost proportional
+    # to the particles while one count was seen) and 1 ms of overhead: 1/30 s fits 12 such layers
+    b.record(0.0266, 1, 10, 256, 0.0256)
     assert b.plan(1, 30.0) == (10, 256)
-    layers, n = b.plan(2, 30.0)  # 1666 per person: fewer layers, all particles
-    assert n == 256 and 3 <= layers < 10 and 2 * layers * n * 1e-5 <= 1 / 30
-    layers, n = b.plan(8, 30.0)  # 416 per person: the layers at their floor, then fewer particles
-    assert layers == 3 and 32 <= n < 256 and 8 * layers * n * 1e-5 <= 1 / 30
+    layers, n = b.plan(2, 30.0)  # 15.7 ms of layers per person: fewer layers, all particles
+    assert n == 256 and layers == 6
+    layers, n = b.plan(8, 30.0)  # 3.2 ms per person: the layers at their floor, then fewer particles
+    assert layers == 3 and 32 <= n < 256 and 3 * n * 1e-5 <= 1 / 30 / 8 - 1e-3
     assert b.plan(1000, 30.0) == (3, 32)  # never below the floors
     assert FrameBudget(2, 16, BudgetConfig(share=1.0)).plan(1, 30.0) == (2, 16)
 
 
+def test_a_cost_per_layer_buys_fewer_layers_not_fewer_particles_than_it_seems() -> None:
+    # each layer of a person costs 2 ms of calls plus 10 us per particle; the overhead 3 ms
+    b = FrameBudget(10, 256, BudgetConfig(share=0.5))
+    for n in (256, 64):
+        b.record(2 * (0.003 + 10 * (0.002 + 1e-5 * n)), 2, 20, n, 2 * 10 * (0.002 + 1e-5 * n))
+    a, c = b.layer_cost()
+    assert a == pytest.approx(0.002) and c == pytest.approx(1e-5)
+    # two people at 30 fps: 1/60 s / 2 - 3 ms = 5.33 ms of layers each, 3 layers of 1.78 ms:
+    # (1.78 - 2) / 0.01 < 0 particles fit, so the floor; at 15 fps, 3 layers of 4.56 ms: 255
+    assert b.plan(2, 30.0) == (3, 32)
+    assert b.plan(2, 15.0) == (3, 255)
+
+
 def test_the_plan_converges_to_what_fits_beside_a_fixed_overhead() -> None:
-    # a frame costs 5 ms of maps plus 20 us per evaluation; 1/25 s allows (40 - 5) / 0.02 = 1750
+    # a frame costs 5 ms of maps plus 1 ms per layer plus 20 us per evaluation; 1/25 s allows
+    # (40 - 5) / (1 + 0.02 * 256) = 5.7 layers of 256
     b = FrameBudget(10, 256, BudgetConfig(share=1.0))
     for _ in range(60):
         layers, n = b.plan(1, 25.0)
-        b.record(0.005 + 20e-6 * layers * n, layers * n)
-    assert (layers, n) == (6, 256)  # whole layers: 1536 of the 1750 that fit
+        search = layers * (0.001 + 20e-6 * n)
+        b.record(0.005 + search, 1, layers, n, search)
+    assert (layers, n) == (5, 256)  # whole layers: 5 of the 5.7 that fit
 
 
 def test_a_track_goes_on_when_its_particle_count_changes() -> None:

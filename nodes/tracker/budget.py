@@ -5,17 +5,28 @@ Layers go first: at the same number of likelihood evaluations a few layers of ma
 track better than many layers of few (``bench/tracker.py``: at about 480 evaluations per frame,
 3 x 160 beats 5 x 96, 10 x 48 and 6 x 64), as too few particles per layer cannot cover the pose.
 
-The cost of a frame is taken as proportional to the likelihood evaluations it makes
-(``layers x particles`` per person tracked); the cost of one evaluation is learnt as the tracker
-runs (an exponential moving average of the measured wall time per evaluation, so it follows the
-load of the machine as well as the size of the frames). The per-frame overhead (observation maps,
-kinematics of the estimate) is folded into that cost: the fixed point of ``evals = budget / cost``
-with ``cost = (overhead + c * evals) / evals`` is ``evals = (budget - overhead) / c``, what fits.
+The budget holds the tracker node's whole handler per frame, in CPU time (the process's, so that a
+machine loaded by other processes does not make each frame look dearer, nor the tracker take more
+than its share of the cores when it is idle). The cost of a frame is modelled from what the node
+measures on each one::
+
+    seconds = people x overhead + layers run x (a + c x particles)
+
+``overhead``: everything but the annealing layers, per person tracked (the observation maps, the
+prediction, the estimate's kinematics, the frame's edges and the message, shared out); each layer
+of one person costs ``a`` (the calls: kinematics, projection, the annealing exponent, resampling,
+whose cost hardly depends on how many particles they carry at a real-time frame's few dozen) plus
+``c`` per particle. ``a`` and ``c`` are fitted to the mean layer cost measured at each particle
+count the tracker has run (the full search of the first frames, the plans since); with one count
+only, the layer cost is taken as proportional to the particles. Everything is learnt as the
+tracker runs (exponential moving averages), so it follows the load and the size of the people.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -25,8 +36,8 @@ class BudgetConfig:
     Parameters
     ----------
     share : float
-        Share of the frame interval (1 / fps) that the search of all people of a frame may take;
-        0: no budget (always ``layers x particles``).
+        Share of the frame interval (1 / fps) of CPU time that the handling of a frame (all its
+        people) may take; 0: no budget (always ``layers x particles``).
     min_layers : int
         The fewest annealing layers it cuts to before it cuts particles.
     min_particles : int
@@ -34,17 +45,20 @@ class BudgetConfig:
         leaves too few survivors per layer (half of them at Deutscher's survival rate) to cover
         a 28-DOF pose.
     smoothing : float
-        Weight of the newest measurement in the moving average of the cost, in (0, 1].
+        Weight of the newest measurement in the moving averages of the costs, in (0, 1].
+    counts_kept : int
+        Particle counts whose layer cost is kept for the fit of ``a`` and ``c`` (the most recent).
     """
 
     share: float = 0.0
     min_layers: int = 3
     min_particles: int = 32
     smoothing: float = 0.2
+    counts_kept: int = 8
 
 
 class FrameBudget:
-    """Layers and particles per person for the next frame, from the time the last frames took.
+    """Layers and particles per person for the next frame, from the CPU time the last frames took.
 
     Parameters
     ----------
@@ -56,8 +70,45 @@ class FrameBudget:
 
     def __init__(self, layers: int, particles: int, config: BudgetConfig) -> None:
         self.layers, self.particles, self.config = int(layers), int(particles), config
-        #: seconds per likelihood evaluation (None until a frame was measured)
-        self.cost_s: float | None = None
+        #: seconds per person and frame outside the annealing layers (None until measured)
+        self.overhead_s: float | None = None
+        #: particle count -> mean seconds of one annealing layer of one person at that count
+        self.layer_s: dict[int, float] = {}
+
+    def _ema(self, old: float | None, new: float) -> float:
+        a = self.config.smoothing
+        return new if old is None else (1 - a) * old + a * new
+
+    def layer_cost(self) -> tuple[float, float]:
+        """The layer cost model ``a + c x particles`` (seconds per layer of one person).
+
+        Returns
+        -------
+        a : float
+            Seconds per layer whatever its particles (>= 0).
+        c : float
+            Seconds per particle (> 0).
+
+        Raises
+        ------
+        ValueError
+            Before any layer was measured.
+        """
+        if not self.layer_s:
+            raise ValueError("no layer measured yet")
+        n = np.array(list(self.layer_s), np.float64)
+        t = np.array(list(self.layer_s.values()), np.float64)
+        if len(n) >= 2 and n.max() >= 1.5 * n.min():
+            c, a = np.polyfit(n, t, 1)
+            if c > 0 and a >= 0:
+                return float(a), float(c)
+            if c > 0:  # a negative intercept: the proportional model through the fit
+                return 0.0, float(t.sum() / n.sum())
+        # one count (or no slope seen): the cost taken as proportional to the particles; an
+        # overestimate of what more particles cost, an underestimate of what fewer save, so the
+        # plan moves by steps that each new measurement corrects
+        i = int(np.argmax(n))
+        return 0.0, float(t[i] / n[i])
 
     def plan(self, n_people: int, fps: float) -> tuple[int, int]:
         """The search of each person on the next frame.
@@ -78,29 +129,43 @@ class FrameBudget:
             ``particles`` only at ``min_layers`` layers.
         """
         cfg = self.config
-        if cfg.share <= 0 or fps <= 0 or n_people < 1 or self.cost_s is None:
+        if cfg.share <= 0 or fps <= 0 or n_people < 1 or self.overhead_s is None or not self.layer_s:
             return self.layers, self.particles
-        evals = cfg.share / fps / self.cost_s / n_people  # per person
-        if evals >= self.layers * self.particles:
+        a, c = self.layer_cost()
+        # CPU seconds each person's layers may take
+        avail = cfg.share / fps / n_people - self.overhead_s
+        full = a + c * self.particles
+        m = int(avail / full) if avail > 0 else 0
+        if m >= self.layers:
             return self.layers, self.particles
         min_m = min(cfg.min_layers, self.layers)
-        m = int(evals / self.particles)
         if m >= min_m:
             return m, self.particles
-        return min_m, max(min(cfg.min_particles, self.particles), int(evals / min_m))
+        n = int((avail / min_m - a) / c) if avail > 0 else 0
+        return min_m, max(min(cfg.min_particles, self.particles), min(n, self.particles))
 
-    def record(self, seconds: float, evals: int) -> None:
-        """Learn the cost from one frame's search.
+    def record(self, seconds: float, people: int, layers_run: int, particles: int, search_seconds: float) -> None:
+        """Learn the costs from one frame.
 
         Parameters
         ----------
         seconds : float
-            Its wall time, s.
-        evals : int
-            The likelihood evaluations it made (layers x particles x people); 0: nothing learnt.
+            CPU time of the whole frame, s.
+        people : int
+            People searched on it (0: nothing learnt).
+        layers_run : int
+            Annealing layers run, summed over its people (a first search runs its own, longer
+            schedule).
+        particles : int
+            Particles per layer.
+        search_seconds : float
+            CPU time of the layers (the searches), s; the rest of ``seconds`` is the overhead.
         """
-        if evals <= 0:
+        if people <= 0 or layers_run <= 0 or particles <= 0:
             return
-        c = seconds / evals
-        a = self.config.smoothing
-        self.cost_s = c if self.cost_s is None else (1 - a) * self.cost_s + a * c
+        self.overhead_s = self._ema(self.overhead_s, max(seconds - search_seconds, 0.0) / people)
+        key = int(particles)
+        old = self.layer_s.pop(key, None)  # re-inserted last: the dict runs from oldest to newest
+        self.layer_s[key] = self._ema(old, search_seconds / layers_run)
+        while len(self.layer_s) > self.config.counts_kept:
+            del self.layer_s[next(iter(self.layer_s))]

@@ -23,6 +23,7 @@ Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006), ``Tracker
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -291,6 +292,8 @@ class Tracker:
         self.lost_detector = LostDetector()
         self.prev: np.ndarray | None = None
         self.n_frames = 0
+        #: CPU seconds of the last frame's search (the prediction and the annealing layers)
+        self.search_cpu_s = 0.0
         #: (poses, image costs, ground costs) of the density's last evaluation
         self._scored: tuple[np.ndarray, np.ndarray, np.ndarray] = (np.zeros((0, DOF)), np.zeros((0, 3)), np.zeros(0))
 
@@ -402,7 +405,9 @@ class Tracker:
         if obs[0].empty:
             return None
         start = not self.tracking
+        cpu0 = time.process_time()
         est = self._first_search(obs, mask, towards) if start else self._follow(obs)
+        self.search_cpu_s = time.process_time() - cpu0
         return self._finish(est, obs, start)
 
     def _density(
