@@ -35,6 +35,8 @@ Every function is vectorised over the leading N axis (no Python loop over poses)
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from counterpart.body.pose import DOF, DOF_INDEX
@@ -155,7 +157,53 @@ _SIDE_ANCHORS = {
 }
 
 
-def _chain(P: np.ndarray, dims: BodyDims, rotations: bool = True) -> tuple[np.ndarray, dict[str, Columns]]:
+#: the lengths of BodyDims the chain reads
+_LENGTHS = (
+    "ankle_height",
+    "shin",
+    "thigh",
+    "hip_width",
+    "torso_length",
+    "shoulder_width",
+    "shoulder_drop",
+    "neck_to_head",
+    "head_half_height",
+    "upper_arm",
+    "forearm",
+    "hand_length",
+    "foot_length",
+    "chest_drop",
+    "torso_bottom_drop",
+    "r_toe",
+)
+
+
+class RowDims:
+    """Body dimensions per pose of a batch that holds several people's poses (their particles
+    evaluated at once): each length of :class:`BodyDims` the chain reads, as an (N, 1) array.
+
+    Parameters
+    ----------
+    dims : sequence of BodyDims
+        Each person's dimensions.
+    counts : sequence of int
+        Each person's poses, in the batch's order.
+    """
+
+    def __init__(self, dims: Sequence[BodyDims], counts: Sequence[int]) -> None:
+        for name in _LENGTHS:
+            setattr(self, name, np.repeat(np.array([getattr(d, name) for d in dims], np.float64), counts)[:, None])
+
+    def twice(self) -> RowDims:
+        """The same rows twice over (the chain's left and right limbs as one batch)."""
+        out = object.__new__(RowDims)
+        for name in _LENGTHS:
+            a = getattr(self, name)
+            setattr(out, name, np.concatenate([a, a]))
+        return out
+
+
+def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> tuple[np.ndarray, dict[str, Columns]]:
     """The chain of the module docstring: anchor points (N, len(ANCHORS), 3) and (with
     ``rotations``) the columns of every body part's rotation.
 
@@ -211,6 +259,7 @@ def _chain(P: np.ndarray, dims: BodyDims, rotations: bool = True) -> tuple[np.nd
     # same movement on both sides: sign +1 on the left rows, -1 on the right ones.
     Cs = np.concatenate([C[:, _SIDE_DOFS[0]], C[:, _SIDE_DOFS[1]]])  # (2N, 8, 1)
     Ss = np.concatenate([S[:, _SIDE_DOFS[0]], S[:, _SIDE_DOFS[1]]])
+    ds = dims.twice() if isinstance(dims, RowDims) else dims
     sign = np.repeat(np.array([1.0, -1.0]), N)[:, None]  # (2N, 1)
     tor2 = tuple(np.concatenate([a, a]) for a in tor)
     pel2 = tuple(np.concatenate([a, a]) for a in pel)
@@ -219,23 +268,23 @@ def _chain(P: np.ndarray, dims: BodyDims, rotations: bool = True) -> tuple[np.nd
     ua = _ry(_rz(_rx(tor2, c_sf, -s_sf), c_sa, sign * s_sa), c_sr, -sign * s_sr)
     fa = _rx(ua, c_el, -s_el)
     neck2 = np.concatenate([neck, neck])
-    sh = neck2 + (sign * d.shoulder_width / 2) * tor2[0] - d.shoulder_drop * tor2[1]
-    el = sh - d.upper_arm * ua[1]
-    wr = el - d.forearm * fa[1]
+    sh = neck2 + (sign * ds.shoulder_width / 2) * tor2[0] - ds.shoulder_drop * tor2[1]
+    el = sh - ds.upper_arm * ua[1]
+    wr = el - ds.forearm * fa[1]
     th = _ry(_rz(_rx(pel2, c_hf, -s_hf), c_ha, sign * s_ha), c_hr, -sign * s_hr)
     sn = _rx(th, c_kn, s_kn)
-    hp = np.concatenate([pelvis, pelvis]) + (sign * d.hip_width / 2) * pel2[0]
-    kn = hp - d.thigh * th[1]
-    an = kn - d.shin * sn[1]
+    hp = np.concatenate([pelvis, pelvis]) + (sign * ds.hip_width / 2) * pel2[0]
+    kn = hp - ds.thigh * th[1]
+    an = kn - ds.shin * sn[1]
     for name, x in (
         ("shoulder", sh),
         ("elbow", el),
         ("wrist", wr),
-        ("hand_end", wr - d.hand_length * fa[1]),
+        ("hand_end", wr - ds.hand_length * fa[1]),
         ("hip", hp),
         ("knee", kn),
         ("ankle", an),
-        ("toe", an - (d.ankle_height - d.r_toe) * sn[1] + d.foot_length * sn[2]),
+        ("toe", an - (ds.ankle_height - ds.r_toe) * sn[1] + ds.foot_length * sn[2]),
     ):
         pts[:, _SIDE_ANCHORS[name]] = x.reshape(2, N, 3).transpose(1, 0, 2)
     if rotations:
@@ -245,7 +294,7 @@ def _chain(P: np.ndarray, dims: BodyDims, rotations: bool = True) -> tuple[np.nd
     return pts, R
 
 
-def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
+def anchor_points(P: np.ndarray, dims: BodyDims | RowDims = DEFAULT_DIMS) -> np.ndarray:
     """Anchor points: ``frames`` without building the rotation matrices (the tracker's likelihood
     needs the points alone).
 
@@ -253,8 +302,8 @@ def anchor_points(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:
     ----------
     P : ndarray of shape (N, DOF) or (DOF,)
         Poses (a single pose is treated as N = 1), metres and radians as in ``counterpart.body.pose``.
-    dims : BodyDims
-        Body dimensions, metres.
+    dims : BodyDims or RowDims
+        Body dimensions, metres (RowDims: per pose, for a batch of several people's poses).
 
     Returns
     -------

@@ -22,7 +22,7 @@ Angles in radians, positions in metres (``counterpart.body.pose``). The yaw is a
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -71,6 +71,29 @@ class Estimate:
     betas: np.ndarray = field(default_factory=lambda: np.zeros(0))
     survival: np.ndarray = field(default_factory=lambda: np.zeros(0))
     n_evals: int = 0
+
+
+def run_steps(steps: Generator[np.ndarray, np.ndarray, Estimate], log_likelihood: LogLikelihood) -> Estimate:
+    """Drive a filter's :meth:`~AnnealedParticleFilter.steps` with a likelihood.
+
+    Parameters
+    ----------
+    steps : generator
+        The search (yields particles, is sent their log-likelihoods, returns the Estimate).
+    log_likelihood : callable
+        (N, DOF) poses -> (N,) log-likelihoods.
+
+    Returns
+    -------
+    Estimate
+        The search's estimate.
+    """
+    try:
+        P = next(steps)
+        while True:
+            P = steps.send(log_likelihood(P))
+    except StopIteration as stop:
+        return stop.value
 
 
 def _normalised(ll: np.ndarray, beta: float) -> np.ndarray:
@@ -349,6 +372,39 @@ class AnnealedParticleFilter:
         RuntimeError
             If called before :meth:`initialise`.
         """
+        return run_steps(self.steps(predict_fn, n_layers, min_std, max_std), log_likelihood)
+
+    def steps(
+        self,
+        predict_fn: PredictFn | None = None,
+        n_layers: int | None = None,
+        min_std: np.ndarray | None = None,
+        max_std: np.ndarray | None = None,
+    ) -> Generator[np.ndarray, np.ndarray, Estimate]:
+        """:meth:`step` as a generator, for a caller that evaluates the likelihood itself (of
+        several people's particles at once): it yields each layer's (N, DOF) particles, is sent
+        their (N,) log-likelihoods, and returns the Estimate.
+
+        Parameters
+        ----------
+        predict_fn, n_layers, min_std, max_std
+            As :meth:`step`.
+
+        Yields
+        ------
+        ndarray of shape (N, DOF)
+            The particles of the next layer to weigh.
+
+        Returns
+        -------
+        Estimate
+            The frame's estimate (``StopIteration.value``; :func:`run_steps` drives it).
+
+        Raises
+        ------
+        RuntimeError
+            If started before :meth:`initialise`.
+        """
         lo = self.min_std if min_std is None else np.asarray(min_std)
         hi = self.max_std if max_std is None else np.asarray(max_std)
         if self.particles is None:
@@ -362,7 +418,7 @@ class AnnealedParticleFilter:
         betas, surv = np.empty(M), np.empty(M)
         n_evals = 0
         for m in range(M):
-            ll = log_likelihood(P)
+            ll = yield P
             n_evals += len(P)
             beta = choose_beta(ll, self.survival)
             w = _normalised(ll, beta)
@@ -456,12 +512,43 @@ class ParticleFilter:
         RuntimeError
             If called before :meth:`initialise`.
         """
+        return run_steps(self.steps(predict_fn), log_likelihood)
+
+    def steps(
+        self,
+        predict_fn: PredictFn | None = None,
+        n_layers: int | None = None,
+        min_std: np.ndarray | None = None,
+        max_std: np.ndarray | None = None,
+    ) -> Generator[np.ndarray, np.ndarray, Estimate]:
+        """:meth:`step` as a generator (as :meth:`AnnealedParticleFilter.steps`: one layer).
+
+        Parameters
+        ----------
+        predict_fn, n_layers, min_std, max_std
+            As :meth:`step`.
+
+        Yields
+        ------
+        ndarray of shape (N, DOF)
+            The particles to weigh.
+
+        Returns
+        -------
+        Estimate
+            The frame's estimate.
+
+        Raises
+        ------
+        RuntimeError
+            If started before :meth:`initialise`.
+        """
         if self.particles is None:
             raise RuntimeError("ParticleFilter.step before initialise(particles)")
         P = self.particles
         if predict_fn is not None:
             P = clip_to_limits(predict_fn(P, self.rng))
-        ll = log_likelihood(P)
+        ll = yield P
         w = _normalised(ll, 1.0 if self.survival is None else choose_beta(ll, self.survival))
         b = int(np.argmax(ll))
         est = Estimate(
@@ -486,6 +573,7 @@ __all__ = [
     "choose_beta",
     "survival_rate",
     "systematic_resample",
+    "run_steps",
     "weighted_mean_pose",
     "weighted_std",
     "MIN_STD",

@@ -35,7 +35,7 @@ import cv2
 import numpy as np
 
 from counterpart.body.camera import Camera
-from counterpart.body.kinematics import anchor_points
+from counterpart.body.kinematics import RowDims, anchor_points
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
@@ -361,6 +361,8 @@ class ConeLikelihood:
         self.R = camera.R.astype(np.float32)
         self.tc = camera.t.astype(np.float32)
         self.n_evals = 0
+        #: (cover_uv, its centre, its (3, M) matmul operand, its squared norms) of the last frame
+        self._cover: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
 
     # ---------------------------------------------------------------------------------------
     def project(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -398,7 +400,12 @@ class ConeLikelihood:
         h = self.sole_height(pts)
         return np.minimum((h / np.float32(self.ground_sigma)) ** 2, np.float32(1.0))
 
-    def _project(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _project(self, pts: np.ndarray, fr: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px and the in-front test (N,) of anchor
+        points (N, A, 3); ``fr``: the focal length times the radii, (S, 2) or per pose (N, S, 2)
+        (None: this likelihood's body).
+        """
+        fr = self.f * self.radii if fr is None else fr
         Xc = pts @ self.R.T + self.tc
         z = Xc[..., 2]
         ok = (z > 0.05).all(axis=1)
@@ -408,7 +415,7 @@ class ConeLikelihood:
             axis=-1,
         ).astype(np.float32)
         c = uv[:, SEGMENT_ANCHORS]  # (N, S, 2, 2)
-        rho = self.f * self.radii * zi[:, SEGMENT_ANCHORS]  # (N, S, 2)
+        rho = fr * zi[:, SEGMENT_ANCHORS]  # (N, S, 2)
         return c, rho, ok
 
     def sample_points(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -480,9 +487,13 @@ class ConeLikelihood:
         """
         if cover_uv.shape[0] == 0:
             return np.zeros(c.shape[0], np.float32)
-        # coordinates relative to the samples' centre keep the float32 squares accurate
-        o = cover_uv.mean(axis=0)
-        q = cover_uv - o  # (M, 2)
+        if self._cover is None or self._cover[0] is not cover_uv:  # the samples' terms, once a frame
+            # coordinates relative to the samples' centre keep the float32 squares accurate
+            o = cover_uv.mean(axis=0)
+            q = cover_uv - o  # (M, 2)
+            G = np.concatenate([q.T, np.ones((1, len(q)), np.float32)]).astype(np.float32)  # (3, M)
+            self._cover = (cover_uv, o, G, (q * q).sum(axis=1))
+        _, o, G, qq = self._cover
         x0, y0 = c[:, :, 0, 0] - o[0], c[:, :, 0, 1] - o[1]  # (N, S)
         ax, ay = c[:, :, 1, 0] - c[:, :, 0, 0], c[:, :, 1, 1] - c[:, :, 0, 1]
         aa = np.maximum(ax * ax + ay * ay, np.float32(1e-6))
@@ -493,9 +504,8 @@ class ConeLikelihood:
                 np.stack([-2 * x0, -2 * y0, x0 * x0 + y0 * y0], axis=-1),
             ]
         ).astype(np.float32)
-        G = np.concatenate([q.T, np.ones((1, len(q)), np.float32)]).astype(np.float32)  # (3, M)
         pd2, d2 = F @ G  # 2 x (N, S, M)
-        d2 += (q * q).sum(axis=1)  # |d|^2
+        d2 += qq  # |d|^2
         # s = clip(d.a / |a|^2, 0, 1), the nearest axis point; |d - s a|^2 = |d|^2 - s (2 d.a - s |a|^2)
         s = np.multiply(pd2, (0.5 / aa)[..., None])
         np.clip(s, 0.0, 1.0, out=s)
@@ -714,7 +724,139 @@ class MultiViewLikelihood:
         return self.views[0].combine(terms, ground)
 
 
+def _same_view(a: ConeLikelihood, b: ConeLikelihood) -> bool:
+    """Both project through the same camera with the same sample points and weights."""
+    ca, cb = a.camera, b.camera
+    return (
+        a.config == b.config
+        and (ca.width, ca.height, ca.fx, ca.fy, ca.cx, ca.cy) == (cb.width, cb.height, cb.fx, cb.fy, cb.cx, cb.cy)
+        and np.array_equal(a.R, b.R)
+        and np.array_equal(a.tc, b.tc)
+    )
+
+
+class _Batch:
+    """The per-pose constants of :func:`evaluate_joint` for one set of people of one frame: each
+    person's body (kinematics, radii, soles), window and the place of its cost map in the maps
+    laid end to end.
+    """
+
+    def __init__(self, likelihoods: Sequence[MultiViewLikelihood], counts: list[int], o0: list[Observation]) -> None:
+        views = [lk.views[0] for lk in likelihoods]
+        # held, so that they are compared by identity (``serves``)
+        self.likelihoods, self.counts, self.obs = list(likelihoods), list(counts), list(o0)
+
+        def rows(per_person: list[np.ndarray]) -> np.ndarray:
+            return np.repeat(np.stack(per_person), counts, axis=0)
+
+        self.dims = RowDims([lk.dims for lk in likelihoods], counts)
+        self.sole_offset = rows([v.sole_offset for v in views])
+        self.fr = rows([v.f * v.radii for v in views])
+        maps = [o.cost_map() for o in o0]
+        self.maps = np.concatenate(maps)
+        # window position and size per pose, exact in float32 (pixels), as (N, 1, 1)
+        per = np.array([(o.x0, o.y0, o.width, o.height) for o in o0], np.float32)
+        self.x0, self.y0, self.W, self.H = (np.repeat(per[:, i], counts)[:, None, None] for i in range(4))
+        self.WH = self.W * self.H
+        size = np.array([o.width * o.height for o in o0], np.intp)
+        self.outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
+        self.base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
+
+    def serves(self, likelihoods: Sequence[MultiViewLikelihood], counts: list[int], o0: list[Observation]) -> bool:
+        """The same people (the same objects), particle counts and observations."""
+        return (
+            counts == self.counts
+            and len(likelihoods) == len(self.likelihoods)
+            and all(a is b for a, b in zip(likelihoods, self.likelihoods))
+            and all(a is b for a, b in zip(o0, self.obs))
+        )
+
+
+#: the newest _Batch (the layers of one frame reuse it)
+_BATCH: list[_Batch | None] = [None]
+
+
+def evaluate_joint(
+    likelihoods: Sequence[MultiViewLikelihood], poses: Sequence[np.ndarray], obs: Sequence[Sequence[Observation]]
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``MultiViewLikelihood.evaluate`` of several people of one frame at once.
+
+    The particles of all of them go through one forward kinematics (each with its own body, as
+    :class:`counterpart.body.kinematics.RowDims`), one projection, one set of sample points and
+    one gather from their cost maps laid end to end; only the coverage term runs per person (its
+    foreground samples differ). At the few dozen particles per person of a real-time frame the cost
+    of these calls, not of the particles, dominates, so two people cost little more than one. The
+    numbers are those of each person's own ``evaluate``, up to the rounding of the float32 matrix
+    products of a larger batch. People of several views, or of other cameras or settings, are
+    evaluated one by one.
+
+    Parameters
+    ----------
+    likelihoods : sequence of MultiViewLikelihood
+        Each person's observation model.
+    poses : sequence of ndarray of shape (N_i, 28)
+        Each person's particles.
+    obs : sequence of sequence of Observation
+        Each person's observations (one per camera).
+
+    Returns
+    -------
+    list of (terms, ground)
+        Each person's ``evaluate``: terms (N_i, 3) float32, ground (N_i,) float32.
+    """
+    views = [lk.views[0] for lk in likelihoods]
+    if (
+        len(likelihoods) < 2
+        or any(len(lk.views) != 1 for lk in likelihoods)
+        or any(o[0].empty for o in obs)
+        or not all(_same_view(views[0], v) for v in views[1:])
+    ):
+        return [lk.evaluate(P, o) for lk, P, o in zip(likelihoods, poses, obs)]
+    v0 = views[0]
+    counts = [len(P) for P in poses]
+    P = np.concatenate([np.asarray(p, dtype=np.float64) for p in poses])
+    if P.ndim != 2 or P.shape[1] != 28:
+        raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
+    o0 = [o[0] for o in obs]
+    # the per-pose constants, the same for every layer of the frame
+    b = _BATCH[0]
+    if b is None or not b.serves(likelihoods, counts, o0):
+        b = _BATCH[0] = _Batch(likelihoods, counts, o0)
+    pts = anchor_points(P, b.dims).astype(np.float32)
+    if v0.w_ground:
+        h = (pts[:, _FOOT_ANCHORS, 1] - b.sole_offset).min(axis=1)
+        ground = np.minimum((h / np.float32(v0.ground_sigma)) ** 2, np.float32(1.0))
+    else:
+        ground = np.zeros(len(pts), np.float32)
+    c, rho, ok = v0._project(pts, b.fr)
+    u, v = v0._points_uv(c, rho)
+    k = v0.n_in
+    ui, vi = np.rint(u), np.rint(v)
+    ui -= b.x0
+    vi -= b.y0
+    inside = (ui >= 0) & (ui < b.W) & (vi >= 0) & (vi < b.H)
+    vi *= b.W
+    vi += ui
+    idx = np.where(inside, vi, b.WH).astype(np.intp)
+    idx[:, :, k:] += b.outline
+    idx += b.base
+    cost = b.maps[idx]  # (N, S, K)
+    S_r = cost[:, :, :k].mean(axis=(1, 2))
+    S_e = cost[:, :, k:].mean(axis=(1, 2))
+    out, start = [], 0
+    for view, o, n in zip(views, o0, counts):
+        sl = slice(start, start + n)
+        start += n
+        S_c = view.coverage_cost(c[sl], rho[sl], o.cover_uv) if view.w[2] else np.zeros(n, np.float32)
+        terms = np.stack([S_r[sl], S_e[sl], S_c], axis=1)
+        terms[~ok[sl]] = 1.0
+        view.n_evals += n
+        out.append((terms, ground[sl]))
+    return out
+
+
 __all__ = [
+    "evaluate_joint",
     "Observation",
     "edge_map",
     "frame_edges",

@@ -40,7 +40,7 @@ from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, Tracked
 from .budget import BudgetConfig, FrameBudget
 from .likelihood import frame_edges
 from .prior import resolve_prior
-from .tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
+from .tracker import SIDES, APFConfig, Search, Tracker, TrackerConfig, people_problem, search_jointly
 
 
 def _check_prior(v: str) -> str | None:
@@ -332,9 +332,9 @@ class TrackerNode(Node):
         layers, particles = self.budget.plan(len(in_view), self.fps)
         # the budget holds the whole handler, in the process's CPU time (module budget)
         cpu0 = time.process_time()
-        searched, layers_run, layers_cpu = 0, 0, 0.0
         # the frame's edges once for all its people
         edges = frame_edges(image) if image is not None and len(in_view) > 1 else None
+        begun: list[tuple[str, Any, Tracker, Search, int]] = []
         for side in in_view:
             shape = next(s for s in sil.people if s.side == side)
             try:
@@ -354,14 +354,19 @@ class TrackerNode(Node):
                         "tracking the part the silhouette node assigned to it",
                     )
                 other = next((s for s in sil.people if s.side != side and s.side in SIDES), None)
-                r = tr.update(image, mask, tuple(other.bbox) if other is not None else None, edges)
+                search = tr.begin(image, mask, tuple(other.bbox) if other is not None else None, edges)
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
                 self._warn_once(f"error:{side}", f"frame {sil.seq}: {side} person not tracked: {exc}")
                 continue
-            if r is None:
-                continue
-            searched, layers_run, layers_cpu = searched + 1, layers_run + run, layers_cpu + tr.search_cpu_s
+            if search is not None:
+                begun.append((side, shape, tr, search, run))
+        # the people's searches side by side: their particles weighed at once, layer by layer
+        cpu1 = time.process_time()
+        ests = search_jointly([b[2] for b in begun], [b[3] for b in begun])
+        layers_cpu = time.process_time() - cpu1
+        for (side, shape, tr, search, _), est in zip(begun, ests):
+            r = tr.end(search, est)
             people.append(
                 TrackedBody(
                     id=shape.id,
@@ -374,6 +379,7 @@ class TrackerNode(Node):
                     lost=bool(r.lost),
                 )
             )
+        searched, layers_run = len(begun), sum(b[4] for b in begun)
         search_cpu = time.process_time() - cpu0
         self.publish("pose", Pose3D(stamp=sil.stamp, seq=sil.seq, fps=self.fps, people=people))
         cpu = time.process_time() - cpu0

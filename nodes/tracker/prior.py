@@ -405,6 +405,8 @@ class PriorPredictor:
         self._q0 = np.einsum("ki,ki->k", Smu, prior.means)  # (K,)
         self._logdet = 2 * np.log(np.diagonal(self._chol, axis1=1, axis2=2)).sum(-1)
         self.std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale
+        #: (alpha, uniform, log state weights) of ``log_prior``, for the frame's alpha
+        self._logw: tuple[np.ndarray, float, np.ndarray] | None = None
 
     def reset(self) -> None:
         self.alpha = self.prior.startprob.copy()
@@ -465,8 +467,10 @@ class PriorPredictor:
         Y = (A - self.prior.pca_mean) @ self.prior.components.T  # (N, d)
         R = A - (Y @ self.prior.components + self.prior.pca_mean)
         maha = (Y[:, :, None] * Y[:, None, :]).reshape(len(Y), -1) @ self._q2 + Y @ self._q1 + self._q0
-        w = (1 - uniform) * self.predicted_states() + uniform / len(self._logdet)
-        lk = np.log(np.maximum(w, 1e-300)) - 0.5 * (maha + self._logdet)  # (N, K)
+        if self._logw is None or self._logw[0] is not self.alpha or self._logw[1] != uniform:  # once a frame
+            w = (1 - uniform) * self.predicted_states() + uniform / len(self._logdet)
+            self._logw = (self.alpha, uniform, np.log(np.maximum(w, 1e-300)))
+        lk = self._logw[2] - 0.5 * (maha + self._logdet)  # (N, K)
         m = lk.max(axis=1)
         lse = m + np.log(np.exp(lk - m[:, None]).sum(axis=1))
         return (lse - 0.5 * np.einsum("ni,ni->n", R, R) / resid_std**2) / len(ANGLE_DOFS)

@@ -24,7 +24,7 @@ Per frame (Deutscher et al. 2000 with the prior of Zheng et al. 2006), ``Tracker
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Generator, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,9 +34,9 @@ from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
-from .apf import AnnealedParticleFilter, Estimate, LogLikelihood, ParticleFilter
+from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, run_steps
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
-from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, make_observation
+from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
 
@@ -72,6 +72,31 @@ class TrackResult:
     cost: float
     lost: bool
     initialised: bool
+
+
+@dataclass
+class Search:
+    """One person's search of one frame, begun (:meth:`Tracker.begin`) and not yet run.
+
+    Attributes
+    ----------
+    obs : list of Observation
+        The frame's observations, one per camera.
+    start : bool
+        The search starts the track (the first search's schedule).
+    steps : generator
+        The filter's ``steps``: yields (N, 28) particles, is sent their log-density
+        (:meth:`Tracker.posterior`), returns the Estimate.
+    centre, sig : ndarray of shape (28,) or None
+        The temporal term's centre and width on a track's first frame (None: around the previous
+        estimate).
+    """
+
+    obs: list[Observation]
+    start: bool
+    steps: Generator[np.ndarray, np.ndarray, Estimate]
+    centre: np.ndarray | None = None
+    sig: np.ndarray | None = None
 
 
 class _RandomWalk:
@@ -401,37 +426,97 @@ class Tracker:
             With several cameras, when the masks or frames are not one per camera; for a mask that
             is not 2-D or a frame of another size than its mask.
         """
+        search = self.begin(image, mask, towards, edges)
+        if search is None:
+            return None
+        cpu0 = time.process_time()
+        est = run_steps(search.steps, lambda X: self.posterior(search, X, *self.likelihood.evaluate(X, search.obs)))
+        self.search_cpu_s = time.process_time() - cpu0
+        return self.end(search, est)
+
+    def begin(
+        self,
+        image: np.ndarray | None | Sequence[np.ndarray | None],
+        mask: np.ndarray | Sequence[np.ndarray],
+        towards: tuple[int, int, int, int] | None = None,
+        edges: np.ndarray | None = None,
+    ) -> Search | None:
+        """:meth:`update` in parts, for a caller that weighs several people's particles at once
+        (``likelihood.evaluate_joint``): the frame's observations and the search, not yet run.
+        Drive ``steps`` (``apf.run_steps``) with the image costs of each yielded set through
+        :meth:`posterior`, then :meth:`end` with its Estimate.
+
+        Parameters
+        ----------
+        image, mask, towards, edges
+            As :meth:`update`.
+
+        Returns
+        -------
+        Search or None
+            The search; None (the track kept) when the reference view's mask is empty.
+
+        Raises
+        ------
+        ValueError
+            As :meth:`update`.
+        """
         obs = self._observations(image, mask, edges)
         if obs[0].empty:
             return None
-        start = not self.tracking
-        cpu0 = time.process_time()
-        est = self._first_search(obs, mask, towards) if start else self._follow(obs)
-        self.search_cpu_s = time.process_time() - cpu0
-        return self._finish(est, obs, start)
+        if self.tracking:
+            apf = self.config.apf
+            scale = 1.0 if apf.plain else apf.predict_scale
+            steps = self.filter.steps(lambda P, rng: self.predictor(P, rng, scale=scale))
+            return Search(obs, False, steps)
+        return self._first_search(obs, mask, towards)
 
-    def _density(
-        self, obs: list[Observation], centre: np.ndarray | None = None, sig: np.ndarray | None = None
-    ) -> LogLikelihood:
-        """The annealed density of this frame: (N, 28) poses -> (N,) image log-likelihood + the
-        temporal term (around ``centre`` with width ``sig`` on a first frame, else around the
-        previous estimate) + the prior's pose density.
+    def posterior(self, search: Search, X: np.ndarray, terms: np.ndarray, ground: np.ndarray) -> np.ndarray:
+        """The annealed density of the search's frame from the image costs of the poses.
+
+        Parameters
+        ----------
+        search : Search
+            The search (:meth:`begin`).
+        X : ndarray of shape (N, 28)
+            The poses it yielded.
+        terms, ground : ndarray
+            Their costs (``MultiViewLikelihood.evaluate``): (N, 3) and (N,).
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            The image log-likelihood + the temporal term + the prior's pose density.
         """
+        # the last layer's costs: its best particle's are the frame's score (``_finish``)
+        self._scored = (X, terms, ground)
+        return (
+            self.likelihood.combine(terms, ground) + self._temporal(X, search.centre, search.sig) + self._pose_prior(X)
+        )
 
-        def loglik(X: np.ndarray) -> np.ndarray:
-            terms, ground = self.likelihood.evaluate(X, obs)
-            # the last layer's costs: its best particle's are the frame's score (``_finish``)
-            self._scored = (X, terms, ground)
-            return self.likelihood.combine(terms, ground) + self._temporal(X, centre, sig) + self._pose_prior(X)
+    def end(self, search: Search, est: Estimate) -> TrackResult:
+        """Finish a search begun by :meth:`begin`.
 
-        return loglik
+        Parameters
+        ----------
+        search : Search
+            The search.
+        est : Estimate
+            What its steps returned.
+
+        Returns
+        -------
+        TrackResult
+            The frame's result, as :meth:`update`'s.
+        """
+        return self._finish(est, search.obs, search.start)
 
     def _first_search(
         self,
         obs: list[Observation],
         mask: np.ndarray | Sequence[np.ndarray],
         towards: tuple[int, int, int, int] | None = None,
-    ) -> Estimate:
+    ) -> Search:
         """Start a track: particles around the reference view's silhouette guess (the body scaled
         to its stature unless ``dims`` was given), searched with the first search's longer schedule.
         """
@@ -447,19 +532,8 @@ class Tracker:
         self.filter.initialise(P0)
         self.predictor.reset()
         wide = INIT_STD * init.spread
-        return self.filter.step(
-            self._density(obs, P0[0], wide),
-            None,
-            n_layers=init.layers,
-            min_std=init.min_std * wide,
-            max_std=init.max_std * wide,
-        )
-
-    def _follow(self, obs: list[Observation]) -> Estimate:
-        """Go on with a running track: predict with the prior, then search."""
-        apf = self.config.apf
-        scale = 1.0 if apf.plain else apf.predict_scale
-        return self.filter.step(self._density(obs), lambda P, rng: self.predictor(P, rng, scale=scale))
+        steps = self.filter.steps(None, n_layers=init.layers, min_std=init.min_std * wide, max_std=init.max_std * wide)
+        return Search(obs, True, steps, P0[0], wide)
 
     def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
         """Score the estimate's best particle, update the prior's posterior and the lost detector."""
@@ -488,6 +562,43 @@ class Tracker:
             lost,
             start,
         )
+
+
+def search_jointly(trackers: Sequence[Tracker], searches: Sequence[Search]) -> list[Estimate]:
+    """Run several people's searches of one frame side by side, each layer's particles of all of
+    them weighed at once (``likelihood.evaluate_joint``: one kinematics, projection and gather for
+    all, where one person's search makes the same calls for its particles alone).
+
+    Each search runs its own schedule (a first search's layers go on alone once the others are
+    done) and draws its own random numbers, so each person's estimate is the one its own
+    :meth:`Tracker.update` gives, up to the rounding of the batched image costs.
+
+    Parameters
+    ----------
+    trackers : sequence of Tracker
+        The people's trackers.
+    searches : sequence of Search
+        What their :meth:`Tracker.begin` returned, in the same order.
+
+    Returns
+    -------
+    list of Estimate
+        Each search's estimate (for :meth:`Tracker.end`).
+    """
+    ests: list[Estimate | None] = [None] * len(searches)
+    todo = {i: next(s.steps) for i, s in enumerate(searches)}  # the first layer's particles of each
+    while todo:
+        ids = list(todo)
+        costs = evaluate_joint(
+            [trackers[i].likelihood for i in ids], [todo[i] for i in ids], [searches[i].obs for i in ids]
+        )
+        for i, (terms, ground) in zip(ids, costs):
+            try:
+                todo[i] = searches[i].steps.send(trackers[i].posterior(searches[i], todo[i], terms, ground))
+            except StopIteration as stop:
+                ests[i] = stop.value
+                del todo[i]
+    return ests  # type: ignore[return-value]
 
 
 def track_sequence(
@@ -553,6 +664,8 @@ __all__ = [
     "PosteriorConfig",
     "LikelihoodConfig",
     "TrackResult",
+    "Search",
+    "search_jointly",
     "track_sequence",
     "SIDES",
     "people_problem",
