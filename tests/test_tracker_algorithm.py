@@ -21,7 +21,7 @@ from counterpart.nodes.tracker.likelihood import (
     frame_edges,
     make_observation,
 )
-from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig, track_sequence
+from counterpart.nodes.tracker.tracker import APFConfig, InitConfig, Tracker, TrackerConfig, track_sequence
 from counterpart.sim.scenarios import make_scenario
 
 CAM = default_camera()
@@ -312,3 +312,52 @@ def test_a_track_starts_facing_the_other_person() -> None:
     tr = Tracker(CAM, "left", TINY, seed=0)
     r = tr.update(None, rasterise_silhouettes(a[None], DEFAULT_DIMS, CAM)[0], towards=box_b)
     assert abs(r.pose[YAW] - np.arctan2(1.0, -0.8)) < 0.35
+
+
+def _two_people(n: int) -> tuple[Camera, list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """The camera, frames and both people's masks of the simulator's handshake (seed 3), every
+    other frame.
+    """
+    from counterpart.sim.stream import open_stream
+
+    stream = open_stream("handshake", seed=3, frames=2 * n)
+    frames, a, b = [], [], []
+    for i in range(0, 2 * n, 2):
+        image, truth = stream.render_with_truth(i)
+        frames.append(image)
+        a.append(truth.masks[0])
+        b.append(truth.masks[1])
+    return stream.camera, frames, a, b
+
+
+def test_two_people_searched_side_by_side_get_what_each_search_alone_gets() -> None:
+    from counterpart.nodes.tracker.likelihood import evaluate_joint
+    from counterpart.nodes.tracker.tracker import search_jointly
+
+    cam, frames, a, b = _two_people(6)
+
+    def pair() -> list[Tracker]:
+        # a first search of 6 layers beside running ones of 3: the two schedules differ on the start
+        cfg = TrackerConfig(apf=APFConfig(n_layers=3, n_particles=24), init=InitConfig(layers=6))
+        return [Tracker(cam, side, cfg, seed=s) for s, side in enumerate(("left", "right"))]
+
+    alone, joint = pair(), pair()
+    b[0] = np.zeros_like(b[0])  # the right person comes in a frame later: its start beside a running track
+    for i, image in enumerate(frames):
+        edges = frame_edges(image)
+        ra = [tr.update(image, m, None, edges) for tr, m in zip(alone, (a[i], b[i]))]
+        begun = [(tr, tr.begin(image, m, None, edges)) for tr, m in zip(joint, (a[i], b[i]))]
+        begun = [(tr, s) for tr, s in begun if s is not None]
+        ests = search_jointly([tr for tr, _ in begun], [s for _, s in begun])
+        rj = [tr.end(s, e) for (tr, s), e in zip(begun, ests)]
+        assert len(rj) == (1 if i == 0 else 2) and [r.initialised for r in rj] == [i == 0, i == 1][: len(rj)]
+        for x, y in zip([r for r in ra if r is not None], rj):
+            assert np.array_equal(x.joints, y.joints) and x.lost == y.lost and x.initialised == y.initialised
+        assert alone[0].dims != alone[1].dims  # each person's own body, scaled to its silhouette
+    # the joint image costs are each person's own, with its own body and maps
+    P = [np.repeat(tr.prev[None], 5, axis=0) + np.random.default_rng(0).normal(0, 0.05, (5, DOF)) for tr in joint]
+    obs = [[make_observation(frames[-1], m)] for m in (a[-1], b[-1])]
+    for (tj, gj), tr, p, o in zip(evaluate_joint([t.likelihood for t in joint], P, obs), joint, P, obs):
+        ts, gs = tr.likelihood.evaluate(p, o)
+        np.testing.assert_allclose(tj, ts, atol=1e-6)
+        np.testing.assert_allclose(gj, gs, atol=1e-6)
