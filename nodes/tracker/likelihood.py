@@ -487,38 +487,33 @@ class ConeLikelihood:
         """
         if cover_uv.shape[0] == 0:
             return np.zeros(c.shape[0], np.float32)
-        if self._cover is None or self._cover[0] is not cover_uv:  # the samples' terms, once a frame
+        o, G, qq = self.cover_terms(cover_uv)
+        return _coverage(c, rho, o[0], o[1], G, qq)
+
+    def cover_terms(self, cover_uv: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The coverage samples' own terms (computed once a frame).
+
+        Parameters
+        ----------
+        cover_uv : ndarray of shape (M, 2), dtype float32
+            Foreground samples, pixels (M >= 1).
+
+        Returns
+        -------
+        o : ndarray of shape (2,)
+            Their centre.
+        G : ndarray of shape (3, M), dtype float32
+            (x - o_x, y - o_y, 1) of each.
+        qq : ndarray of shape (M,)
+            Their squared distances to the centre.
+        """
+        if self._cover is None or self._cover[0] is not cover_uv:  # once a frame
             # coordinates relative to the samples' centre keep the float32 squares accurate
             o = cover_uv.mean(axis=0)
             q = cover_uv - o  # (M, 2)
             G = np.concatenate([q.T, np.ones((1, len(q)), np.float32)]).astype(np.float32)  # (3, M)
             self._cover = (cover_uv, o, G, (q * q).sum(axis=1))
-        _, o, G, qq = self._cover
-        x0, y0 = c[:, :, 0, 0] - o[0], c[:, :, 0, 1] - o[1]  # (N, S)
-        ax, ay = c[:, :, 1, 0] - c[:, :, 0, 0], c[:, :, 1, 1] - c[:, :, 0, 1]
-        aa = np.maximum(ax * ax + ay * ay, np.float32(1e-6))
-        # with d = q - c0: 2 d.a and |d|^2 - |q|^2 are linear in (qx, qy, 1): one matmul
-        F = np.stack(
-            [
-                np.stack([2 * ax, 2 * ay, -2 * (x0 * ax + y0 * ay)], axis=-1),
-                np.stack([-2 * x0, -2 * y0, x0 * x0 + y0 * y0], axis=-1),
-            ]
-        ).astype(np.float32)
-        pd2, d2 = F @ G  # 2 x (N, S, M)
-        d2 += qq  # |d|^2
-        # s = clip(d.a / |a|^2, 0, 1), the nearest axis point; |d - s a|^2 = |d|^2 - s (2 d.a - s |a|^2)
-        s = np.multiply(pd2, (0.5 / aa)[..., None])
-        np.clip(s, 0.0, 1.0, out=s)
-        tmp = np.multiply(s, aa[..., None])
-        np.subtract(pd2, tmp, out=tmp)
-        tmp *= s
-        d2 -= tmp  # squared distance to the axis
-        # + 1 px: a rasterised mask holds every pixel the body touches, the capsule test their centres
-        r = np.multiply(s, (rho[..., 1] - rho[..., 0])[..., None], out=tmp)
-        r += (rho[..., 0] + np.float32(1.0))[..., None]
-        r *= r
-        covered = (d2 <= r).any(axis=1)  # (N, M)
-        return 1.0 - covered.mean(axis=1, dtype=np.float32)
+        return self._cover[1:]
 
     def terms(self, P: np.ndarray, obs: Observation) -> np.ndarray:
         """The image costs of poses.
@@ -637,6 +632,40 @@ class ConeLikelihood:
             ``-gain * (w . [S_r, S_e, S_c] + w_ground S_g)``.
         """
         return -self.gain * (terms @ np.asarray(self.w, np.float32) + self.w_ground * ground).astype(np.float64)
+
+
+def _coverage(
+    c: np.ndarray, rho: np.ndarray, ox: np.ndarray, oy: np.ndarray, G: np.ndarray, qq: np.ndarray
+) -> np.ndarray:
+    """``ConeLikelihood.coverage_cost`` from the samples' terms (``cover_terms``): of one person
+    (``ox``, ``oy`` scalars, ``G`` (3, M), ``qq`` (M,)) or per pose of several people's (``ox``,
+    ``oy`` (N, 1), ``G`` (N, 3, M), ``qq`` (N, 1, M), the same M for all): (N,) S_c.
+    """
+    x0, y0 = c[:, :, 0, 0] - ox, c[:, :, 0, 1] - oy  # (N, S)
+    ax, ay = c[:, :, 1, 0] - c[:, :, 0, 0], c[:, :, 1, 1] - c[:, :, 0, 1]
+    aa = np.maximum(ax * ax + ay * ay, np.float32(1e-6))
+    # with d = q - c0: 2 d.a and |d|^2 - |q|^2 are linear in (qx, qy, 1): one matmul
+    F = np.stack(
+        [
+            np.stack([2 * ax, 2 * ay, -2 * (x0 * ax + y0 * ay)], axis=-1),
+            np.stack([-2 * x0, -2 * y0, x0 * x0 + y0 * y0], axis=-1),
+        ]
+    ).astype(np.float32)
+    pd2, d2 = F @ G  # 2 x (N, S, M)
+    d2 += qq  # |d|^2
+    # s = clip(d.a / |a|^2, 0, 1), the nearest axis point; |d - s a|^2 = |d|^2 - s (2 d.a - s |a|^2)
+    s = np.multiply(pd2, (0.5 / aa)[..., None])
+    np.clip(s, 0.0, 1.0, out=s)
+    tmp = np.multiply(s, aa[..., None])
+    np.subtract(pd2, tmp, out=tmp)
+    tmp *= s
+    d2 -= tmp  # squared distance to the axis
+    # + 1 px: a rasterised mask holds every pixel the body touches, the capsule test their centres
+    r = np.multiply(s, (rho[..., 1] - rho[..., 0])[..., None], out=tmp)
+    r += (rho[..., 0] + np.float32(1.0))[..., None]
+    r *= r
+    covered = (d2 <= r).any(axis=1)  # (N, M)
+    return 1.0 - covered.mean(axis=1, dtype=np.float32)
 
 
 class MultiViewLikelihood:
@@ -761,6 +790,13 @@ class _Batch:
         size = np.array([o.width * o.height for o in o0], np.intp)
         self.outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
         self.base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
+        # the coverage samples' terms per pose (ox, oy (N, 1), G (N, 3, M), qq (N, 1, M)), where
+        # every person has the same number M of them
+        self.cover: tuple[np.ndarray, ...] | None = None
+        if len({len(o.cover_uv) for o in o0}) == 1:
+            terms = [v.cover_terms(o.cover_uv) for v, o in zip(views, o0)]
+            o = rows([t[0] for t in terms])
+            self.cover = (o[:, 0:1], o[:, 1:2], rows([t[1] for t in terms]), rows([t[2] for t in terms])[:, None])
 
     def serves(self, likelihoods: Sequence[MultiViewLikelihood], counts: list[int], o0: list[Observation]) -> bool:
         """The same people (the same objects), particle counts and observations."""
@@ -783,8 +819,8 @@ def evaluate_joint(
 
     The particles of all of them go through one forward kinematics (each with its own body, as
     :class:`counterpart.body.kinematics.RowDims`), one projection, one set of sample points and
-    one gather from their cost maps laid end to end; only the coverage term runs per person (its
-    foreground samples differ). At the few dozen particles per person of a real-time frame the cost
+    one gather from their cost maps laid end to end, and one coverage test (each pose against its
+    person's foreground samples; per person where their numbers of samples differ). At the few dozen particles per person of a real-time frame the cost
     of these calls, not of the particles, dominates, so two people cost little more than one. The
     numbers are those of each person's own ``evaluate``, up to the rounding of the float32 matrix
     products of a larger batch. People of several views, or of other cameras or settings, are
@@ -843,11 +879,17 @@ def evaluate_joint(
     cost = b.maps[idx]  # (N, S, K)
     S_r = cost[:, :, :k].mean(axis=(1, 2))
     S_e = cost[:, :, k:].mean(axis=(1, 2))
+    if not v0.w[2]:
+        S_c_all = np.zeros(len(pts), np.float32)
+    elif b.cover is not None:  # the same number of coverage samples for all: one pass
+        S_c_all = _coverage(c, rho, *b.cover)
+    else:
+        S_c_all = None
     out, start = [], 0
     for view, o, n in zip(views, o0, counts):
         sl = slice(start, start + n)
         start += n
-        S_c = view.coverage_cost(c[sl], rho[sl], o.cover_uv) if view.w[2] else np.zeros(n, np.float32)
+        S_c = S_c_all[sl] if S_c_all is not None else view.coverage_cost(c[sl], rho[sl], o.cover_uv)
         terms = np.stack([S_r[sl], S_e[sl], S_c], axis=1)
         terms[~ok[sl]] = 1.0
         view.n_evals += n
