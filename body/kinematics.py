@@ -193,14 +193,18 @@ class RowDims:
     def __init__(self, dims: Sequence[BodyDims], counts: Sequence[int]) -> None:
         for name in _LENGTHS:
             setattr(self, name, np.repeat(np.array([getattr(d, name) for d in dims], np.float64), counts)[:, None])
+        self._twice: RowDims | None = None
 
     def twice(self) -> RowDims:
-        """The same rows twice over (the chain's left and right limbs as one batch)."""
-        out = object.__new__(RowDims)
-        for name in _LENGTHS:
-            a = getattr(self, name)
-            setattr(out, name, np.concatenate([a, a]))
-        return out
+        """The same rows twice over (the chain's left and right limbs as one batch), made once."""
+        if self._twice is None:
+            out = object.__new__(RowDims)
+            for name in _LENGTHS:
+                a = getattr(self, name)
+                setattr(out, name, np.concatenate([a, a]))
+            out._twice = None
+            self._twice = out
+        return self._twice
 
 
 def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> tuple[np.ndarray, dict[str, Columns]]:
