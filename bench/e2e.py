@@ -286,7 +286,9 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
     - the node's own figures where it has some that say how it kept up (the tracker's
       ``particles`` and ``layers`` per person and frame, under its ``frame_budget``, ``starts`` the
       tracks it started (first searches) and ``search_cpu_ms`` the CPU time of its searches per
-      pose, its messaging aside; the silhouette
+      pose, its messaging aside, ``layers_cpu_ms`` that of their annealing layers alone,
+      ``handler_cpu_ms`` that of its whole handler (what its ``frame_budget`` holds) and
+      ``over_frac`` the share of its poses whose handler overran that budget; the silhouette
       node's ``fit_ms``, the one handler call that took up the learnt background, and
       ``fit_elapsed_ms``, from its last training frame to its first frame with the background: the
       same unless the fit runs in a thread of its own, ``silhouette.fit_in_background``).
@@ -324,8 +326,13 @@ def node_figures(bag: Path, published: int) -> dict[str, dict[str, float]]:
             fig["particles"] = round(last["figures"]["budget_particles"] / frames, 1)
             fig["layers"] = round(last["figures"]["budget_layers"] / frames, 2)
             fig["starts"] = last["figures"].get("budget_starts", 0)
-        if "search_cpu_ms" in last["figures"]:  # the tracker's searches alone, per pose it published
-            fig["search_cpu_ms"] = round(last["figures"]["search_cpu_ms"] / max(n_out, 1), 1)
+        # the tracker's searches alone (its messaging aside), their annealing layers, and its whole
+        # handler, CPU ms per pose it published; the share of its frames that overran its budget
+        for k in ("search_cpu_ms", "layers_cpu_ms", "handler_cpu_ms"):
+            if k in last["figures"]:
+                fig[k] = round(last["figures"][k] / max(n_out, 1), 1)
+        if "budget_over" in last["figures"] and frames:
+            fig["over_frac"] = round(last["figures"]["budget_over"] / max(n_out, 1), 3)
         out[name] = fig
     return out
 

@@ -123,12 +123,15 @@ def test_the_node_cuts_its_search_to_the_budget_and_reports_it(tmp_path: Path) -
     poses, figs = _run(tmp_path, 0.0)
     assert [len(p["people"]) for p in poses] == [2] * 6
     assert figs["budget_frames"] == 12 and figs["budget_particles"] == 12 * 64 and figs["budget_layers"] == 12 * 4
+    assert figs["budget_over"] == 0  # no budget, nothing over it
+    assert 0 < figs["layers_cpu_ms"] < figs["search_cpu_ms"] < figs["handler_cpu_ms"]
     poses, figs = _run(tmp_path, 1.0)
     assert [len(p["people"]) for p in poses] == [2] * 6  # every frame still tracked
     # the first frame searches in full (nothing measured yet: its first search is the first measure);
     # the rest at the floors
     assert figs["budget_frames"] == 12
     assert figs["budget_particles"] == 2 * 64 + 10 * 32 and figs["budget_layers"] == 2 * 4 + 10 * 3
+    assert figs["budget_over"] == 6  # 10 us a frame: every one over it, the floors included
 
 
 @pytest.mark.slow

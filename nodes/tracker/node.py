@@ -20,7 +20,9 @@ particles, from the CPU time the last frames took); the stats give the mean laye
 per person and frame (``budget_layers``, ``budget_particles`` over ``budget_frames``), the tracks
 started (``budget_starts``: first searches, on the longer schedule) and CPU times summed over the
 frames: ``search_cpu_ms`` (the people's tracking, the node's messaging aside), ``layers_cpu_ms``
-(the annealing layers alone) and ``handler_cpu_ms`` (the whole frame, its message included).
+(the annealing layers alone) and ``handler_cpu_ms`` (the whole frame, its message included);
+``budget_over`` counts the frames whose handling took more than the budget (at the floors of the
+search, or on a track's first search).
 """
 
 from __future__ import annotations
@@ -387,6 +389,9 @@ class TrackerNode(Node):
         self.tally("search_cpu_ms", search_cpu * 1e3)
         self.tally("layers_cpu_ms", layers_cpu * 1e3)
         self.tally("handler_cpu_ms", cpu * 1e3)
+        share = self.budget.config.share
+        # frames whose handling overran the budget: at its floors, or on a track's first search
+        self.tally("budget_over", bool(share > 0 and self.fps > 0 and cpu > share / self.fps))
 
 
 NODE = TrackerNode
