@@ -33,7 +33,6 @@ from typing import Any
 
 import cv2
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, camera_from_info, camera_param_problem
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
@@ -216,9 +215,6 @@ class TrackerNode(Node):
         self.warned: set[str] = set()
         self.fps = 0.0  # the camera's frame rate, from the newest frame
         self.budget = FrameBudget(self.p["layers"], self.p["particles"], BudgetConfig(share=self.p["frame_budget"]))
-        # one BLAS thread: the likelihood's small matrix products gain nothing from more, and on
-        # busy cores the extra threads spun (at 3 x 256 per person, 2.6x the CPU time of one)
-        threadpool_limits(1)
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
         """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not come."""
