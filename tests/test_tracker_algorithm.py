@@ -332,7 +332,7 @@ def _two_people(n: int) -> tuple[Camera, list[np.ndarray], list[np.ndarray], lis
 
 def test_two_people_searched_side_by_side_get_what_each_search_alone_gets() -> None:
     from counterpart.nodes.tracker.likelihood import evaluate_joint
-    from counterpart.nodes.tracker.tracker import search_jointly
+    from counterpart.nodes.tracker.tracker import joints_jointly, search_jointly
 
     cam, frames, a, b = _two_people(6)
 
@@ -349,7 +349,8 @@ def test_two_people_searched_side_by_side_get_what_each_search_alone_gets() -> N
         begun = [(tr, tr.begin(image, m, None, edges)) for tr, m in zip(joint, (a[i], b[i]))]
         begun = [(tr, s) for tr, s in begun if s is not None]
         ests = search_jointly([tr for tr, _ in begun], [s for _, s in begun])
-        rj = [tr.end(s, e) for (tr, s), e in zip(begun, ests)]
+        joints = joints_jointly([tr for tr, _ in begun], ests)
+        rj = [tr.end(s, e, j) for (tr, s), e, j in zip(begun, ests, joints)]
         assert len(rj) == (1 if i == 0 else 2) and [r.initialised for r in rj] == [i == 0, i == 1][: len(rj)]
         for x, y in zip([r for r in ra if r is not None], rj):
             assert np.array_equal(x.joints, y.joints) and x.lost == y.lost and x.initialised == y.initialised

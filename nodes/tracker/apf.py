@@ -158,27 +158,51 @@ def choose_beta(
     if not 0 < survival < 1:
         raise ValueError(f"survival={survival!r}: the target survival rate must lie in (0, 1)")
     ll = np.asarray(ll, dtype=np.float64)
-    spread = float(ll.max() - ll.min())
+    top = ll.max()
+    spread = float(top - ll.min())
     if not np.isfinite(spread) or spread <= 0:
         return hi
-    if survival_rate(ll, lo) <= survival:
+    d = ll - top
+    n = len(d)
+
+    def rate(beta: float) -> float:  # survival_rate(ll, beta), sharing d
+        w = np.exp(beta * d)
+        w = w / w.sum()
+        return float(1.0 / (n * np.dot(w, w)))
+
+    if rate(lo) <= survival:
         return lo
-    if survival_rate(ll, hi) >= survival:
+    if rate(hi) >= survival:
         return hi
-    d = ll - ll.max()
     a, b = np.log(lo), np.log(hi)
     steps = _grid_steps(grid)
-    for _ in range(rounds):
-        # np.linspace(a, b, grid), without its argument handling (a call costs more than the
-        # arithmetic on the few hundred particles of a real-time frame); the same numbers
-        logb = steps * ((b - a) / (grid - 1))
-        logb += a
-        logb[-1] = b
-        w = np.exp(np.exp(logb)[:, None] * d)  # (grid, N)
-        D = w.sum(axis=1) ** 2 / (len(d) * (w * w).sum(axis=1))  # 1 / (N sum pi^2)
+    for r in range(rounds):
+        if r == 0:  # the whole bracket: the same grid every call
+            logb, betas = _first_grid(lo, hi, grid)
+        else:
+            # np.linspace(a, b, grid), without its argument handling (a call costs more than the
+            # arithmetic on the few hundred particles of a real-time frame); the same numbers
+            logb = steps * ((b - a) / (grid - 1))
+            logb += a
+            logb[-1] = b
+            betas = np.exp(logb)
+        w = np.exp(betas[:, None] * d)  # (grid, N)
+        D = w.sum(axis=1) ** 2 / (n * (w * w).sum(axis=1))  # 1 / (N sum pi^2)
         k = min(max(int(np.searchsorted(-D, -survival)), 1), grid - 1)  # D[k-1] > survival >= D[k]
         a, b = logb[k - 1], logb[k]
     return float(np.exp(0.5 * (a + b)))
+
+
+@lru_cache(maxsize=4)
+def _first_grid(lo: float, hi: float, grid: int) -> tuple[np.ndarray, np.ndarray]:
+    """``choose_beta``'s first grid over the whole bracket [lo, hi]: log beta and beta, read-only."""
+    a, b = np.log(lo), np.log(hi)
+    logb = _grid_steps(grid) * ((b - a) / (grid - 1))
+    logb += a
+    logb[-1] = b
+    betas = np.exp(logb)
+    logb.flags.writeable = betas.flags.writeable = False
+    return logb, betas
 
 
 @lru_cache(maxsize=4)

@@ -41,7 +41,16 @@ from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, Tracked
 from .budget import BudgetConfig, FrameBudget
 from .likelihood import frame_edges
 from .prior import resolve_prior
-from .tracker import SIDES, APFConfig, Search, Tracker, TrackerConfig, people_problem, search_jointly
+from .tracker import (
+    SIDES,
+    APFConfig,
+    Search,
+    Tracker,
+    TrackerConfig,
+    joints_jointly,
+    people_problem,
+    search_jointly,
+)
 
 
 def _check_prior(v: str) -> str | None:
@@ -363,8 +372,9 @@ class TrackerNode(Node):
         cpu1 = time.process_time()
         ests = search_jointly([b[2] for b in begun], [b[3] for b in begun])
         layers_cpu = time.process_time() - cpu1
-        for (side, shape, tr, search, _), est in zip(begun, ests):
-            r = tr.end(search, est)
+        joints = joints_jointly([b[2] for b in begun], ests)  # one kinematics for all the estimates
+        for (side, shape, tr, search, _), est, j in zip(begun, ests, joints):
+            r = tr.end(search, est, j)
             people.append(
                 TrackedBody(
                     id=shape.id,

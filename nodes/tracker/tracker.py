@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from counterpart.body.camera import Camera
-from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.kinematics import RowDims, anchor_points, forward_kinematics
 from counterpart.body.pose import DOF, YAW, wrap_angle
-from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
+from counterpart.body.skeleton import DEFAULT_DIMS, N_JOINTS, BodyDims
 
 from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, run_steps
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
@@ -494,7 +494,7 @@ class Tracker:
             self.likelihood.combine(terms, ground) + self._temporal(X, search.centre, search.sig) + self._pose_prior(X)
         )
 
-    def end(self, search: Search, est: Estimate) -> TrackResult:
+    def end(self, search: Search, est: Estimate, joints: np.ndarray | None = None) -> TrackResult:
         """Finish a search begun by :meth:`begin`.
 
         Parameters
@@ -503,13 +503,16 @@ class Tracker:
             The search.
         est : Estimate
             What its steps returned.
+        joints : ndarray of shape (14, 3), dtype float32, or None
+            The joints of ``est.mean`` with this tracker's body when the caller computed them (of
+            several people at once, :func:`joints_jointly`); None: computed here.
 
         Returns
         -------
         TrackResult
             The frame's result, as :meth:`update`'s.
         """
-        return self._finish(est, search.obs, search.start)
+        return self._finish(est, search.obs, search.start, joints)
 
     def _first_search(
         self,
@@ -535,7 +538,9 @@ class Tracker:
         steps = self.filter.steps(None, n_layers=init.layers, min_std=init.min_std * wide, max_std=init.max_std * wide)
         return Search(obs, True, steps, P0[0], wide)
 
-    def _finish(self, est: Estimate, obs: list[Observation], start: bool) -> TrackResult:
+    def _finish(
+        self, est: Estimate, obs: list[Observation], start: bool, joints: np.ndarray | None = None
+    ) -> TrackResult:
         """Score the estimate's best particle, update the prior's posterior and the lost detector."""
         X, terms, ground = self._scored
         row = np.flatnonzero((X == est.best).all(axis=1))[:1]  # the best particle of the last layer
@@ -555,7 +560,7 @@ class Tracker:
         return TrackResult(
             est.mean,
             est.best,
-            forward_kinematics(est.mean, self.dims)[0].astype(np.float32),
+            forward_kinematics(est.mean, self.dims)[0].astype(np.float32) if joints is None else joints,
             est.ess,
             image_ll,
             cost,
@@ -599,6 +604,29 @@ def search_jointly(trackers: Sequence[Tracker], searches: Sequence[Search]) -> l
                 ests[i] = stop.value
                 del todo[i]
     return ests  # type: ignore[return-value]
+
+
+def joints_jointly(trackers: Sequence[Tracker], ests: Sequence[Estimate]) -> list[np.ndarray]:
+    """The joints of several people's estimates (their means, each with its tracker's body) from one
+    forward kinematics: what each :meth:`Tracker.end` computes alone, the same numbers.
+
+    Parameters
+    ----------
+    trackers : sequence of Tracker
+        The people's trackers (after their searches: a first search sets the body).
+    ests : sequence of Estimate
+        Their searches' estimates.
+
+    Returns
+    -------
+    list of ndarray of shape (14, 3), dtype float32
+        Each person's joints, metres, for :meth:`Tracker.end`.
+    """
+    if not ests:
+        return []
+    means = np.stack([e.mean for e in ests])
+    pts = anchor_points(means, RowDims([t.dims for t in trackers], [1] * len(ests)))
+    return list(pts[:, :N_JOINTS].astype(np.float32))
 
 
 def track_sequence(
@@ -666,6 +694,7 @@ __all__ = [
     "TrackResult",
     "Search",
     "search_jointly",
+    "joints_jointly",
     "track_sequence",
     "SIDES",
     "people_problem",
