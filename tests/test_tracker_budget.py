@@ -14,7 +14,7 @@ import pytest
 from counterpart.body.camera import default_camera
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.raster import rasterise_silhouettes
-from counterpart.nodes.tracker.budget import BudgetConfig, FrameBudget
+from counterpart.nodes.tracker.budget import BudgetConfig, FrameBudget, StampRate
 from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig
 from counterpart.sim.scenarios import make_scenario
 from tests.launching import run_launch, write_launch
@@ -68,6 +68,15 @@ def test_the_plan_converges_to_what_fits_beside_a_fixed_overhead() -> None:
         search = layers * (0.001 + 20e-6 * n)
         b.record(0.005 + search, 1, layers, n, search)
     assert (layers, n) == (5, 256)  # whole layers: 5 of the 5.7 that fit
+
+
+def test_the_rate_of_the_stamps_stands_in_for_the_frames_rate() -> None:
+    r = StampRate()
+    assert r.update(10, 0) == 0.0 and r.update(10, 5_000_000_000) == 0.0  # no stamp; one frame
+    assert r.update(13, 5_100_000_000) == pytest.approx(30.0)  # three frames in 0.1 s
+    assert r.update(40, 6_000_000_000) == pytest.approx(30.0)
+    assert r.update(2, 7_000_000_000) == 0.0  # the stream started again: measured afresh
+    assert r.update(27, 8_000_000_000) == pytest.approx(25.0)
 
 
 def test_a_track_goes_on_when_its_particle_count_changes() -> None:

@@ -169,3 +169,39 @@ class FrameBudget:
         self.layer_s[key] = self._ema(old, search_seconds / layers_run)
         while len(self.layer_s) > self.config.counts_kept:
             del self.layer_s[next(iter(self.layer_s))]
+
+
+class StampRate:
+    """The frame rate of a stream from its messages' capture stamps and frame numbers: the tracker's
+    budget needs the camera's rate, which only the Frame carries, and in real time the frames are
+    the input a busy tracker loses first (a ``latest`` queue keeps the newest, which then waits for
+    silhouettes that come after the tracker has moved on), so that without it the budget would stay
+    off exactly while the tracker is too slow.
+    """
+
+    def __init__(self) -> None:
+        self.first: tuple[int, int] | None = None  # (seq, stamp ns)
+        self.fps = 0.0
+
+    def update(self, seq: int, stamp_ns: int) -> float:
+        """Take one message; the rate over everything seen since the first (or since a restart).
+
+        Parameters
+        ----------
+        seq : int
+            Its frame number.
+        stamp_ns : int
+            Its capture stamp, ns (0: none, ignored).
+
+        Returns
+        -------
+        float
+            Frames per second, 0 until two frames apart in time were seen.
+        """
+        if stamp_ns <= 0:
+            return self.fps
+        if self.first is None or seq < self.first[0] or stamp_ns < self.first[1]:  # first, or a restart
+            self.first, self.fps = (seq, stamp_ns), 0.0
+        elif seq > self.first[0] and stamp_ns > self.first[1]:
+            self.fps = (seq - self.first[0]) / ((stamp_ns - self.first[1]) / 1e9)
+        return self.fps

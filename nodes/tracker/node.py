@@ -38,7 +38,7 @@ from counterpart.body.camera import Camera, CameraSchedule, camera_for_size, cam
 from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, ParamError
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
-from .budget import BudgetConfig, FrameBudget
+from .budget import BudgetConfig, FrameBudget, StampRate
 from .likelihood import frame_edges
 from .prior import resolve_prior
 from .tracker import (
@@ -222,7 +222,9 @@ class TrackerNode(Node):
         #: waiting for the camera of their size (the frame None where it was dropped)
         self.paired: dict[int, tuple[Frame | None, Silhouettes]] = {}
         self.warned: set[str] = set()
-        self.fps = 0.0  # the camera's frame rate, from the newest frame
+        self.fps = 0.0  # the camera's frame rate, from the newest frame (or the silhouettes' stamps)
+        self.rate = StampRate()
+        self.fps_known = False  # a frame gave the rate
         self.budget = FrameBudget(self.p["layers"], self.p["particles"], BudgetConfig(share=self.p["frame_budget"]))
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
@@ -277,8 +279,11 @@ class TrackerNode(Node):
             ``silhouettes`` of one seq, with its ``frame`` (None when the frame was dropped).
         """
         frame, sil = paired.get("frame"), paired["silhouettes"]
-        if frame is not None:
-            self.fps = frame.fps
+        rate = self.rate.update(sil.seq, sil.stamp)
+        if frame is not None and frame.fps > 0:
+            self.fps, self.fps_known = frame.fps, True
+        elif not self.fps_known:  # no frame has come with its silhouettes yet: the rate of their stamps
+            self.fps = rate
         self.paired[paired.seq] = (frame, sil)
         self._drain()
 
