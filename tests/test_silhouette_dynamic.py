@@ -300,6 +300,62 @@ def test_shadow_texture_test_tells_a_dark_shirt_from_a_shadow() -> None:
         assert (model.apply(shot(shirt))[inner] == want_shirt).mean() > 0.7
 
 
+def test_texture_test_over_a_frame_in_shadow_checks_only_its_textured_pixels() -> None:
+    """When shadow covers much of the frame the background's texture is measured with box filters
+    over the frame, and the frame's side of the correlation only at the textured shadow pixels:
+    the pixels turned are those of the box filters over the whole frame (up to float32 rounding
+    at the threshold): the dark shirt, not the shadow over the rest of the floor.
+    """
+    import cv2
+
+    rng = np.random.default_rng(4)
+    floor = np.full((H, W, 3), 140.0, np.float32)
+    # a plain floor with a textured rug: only the rug's pixels are textured, too few to filter
+    # the whole frame for
+    rug = (slice(80, 108), slice(120, 156))
+    tex = np.repeat(np.repeat(rng.uniform(80, 200, (7, 9)), 4, 0), 4, 1)
+    floor[rug] = tex[..., None] * np.float32([0.9, 1.0, 1.1])
+
+    def shot(shirt: bool) -> np.ndarray:
+        f = 0.6 * floor + rng.normal(0.0, 2.0, floor.shape)
+        if shirt:
+            # plain, with the camera's noise (an exactly flat patch has no correlation to measure)
+            f[84:104, 124:148] = 0.6 * floor[84:104, 124:148].mean(axis=(0, 1)) + rng.normal(0.0, 2.0, (20, 24, 3))
+        return np.clip(np.rint(f), 0, 255).astype(np.uint8)
+
+    train = [np.clip(np.rint(floor + rng.normal(0.0, 2.0, floor.shape)), 0, 255).astype(np.uint8) for _ in range(20)]
+    model = HorprasertBackground(shadows=ShadowConfig(shadow_ncc=0.4)).fit(train)
+    f = shot(shirt=True)
+    labels = model.classify(f)
+    sh = labels == SHADOW
+    assert sh.mean() > 0.5  # the frame-wide path
+    got = model.shadow_texture_mismatch(labels)
+    # the reference: every moment by box filters over the frame
+    k = (7, 7)
+
+    def box(a: np.ndarray) -> np.ndarray:
+        return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)
+
+    fl = f.astype(np.float32)
+    grey = fl[..., 0] + fl[..., 1] + fl[..., 2]
+    e = model.grey_
+    m = sh.astype(np.float32)
+    inv_n = 1.0 / np.maximum(box(m), 1.0)
+    me, mi = box(e * m) * inv_n, box(grey * m) * inv_n
+    ve, vi = box(e * e * m) * inv_n - me * me, box(grey * grey * m) * inv_n - mi * mi
+    cov = box(grey * e * m) * inv_n - mi * me
+    ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
+    floor_var = (model.spread_**2).sum(axis=2) * model.shadows.shadow_texture_k**2
+    want = sh & (ve > floor_var) & (ncc < 0.4)
+    near = np.abs(ncc - 0.4) < 1e-3
+    mask = np.zeros(H * W, bool)
+    mask[got] = True
+    assert np.array_equal(mask.reshape(H, W)[~near], want[~near])
+    assert 0 < want.sum() and (sh & (ve > floor_var)).sum() * 49 < H * W  # the textured pixels alone
+    assert mask.reshape(H, W)[88:100, 128:144].mean() > 0.5
+    assert mask.sum() < 24 * 20
+
+
 def test_texture_test_beside_the_veto_gives_the_labels_and_models_of_the_veto_after_it() -> None:
     """The subtractor runs the shadows' texture test (in the worker thread when threaded) beside the
     samples' veto of the other foreground, then vetoes the pixels the test turned: labels, samples,
@@ -372,6 +428,44 @@ def test_the_match_test_reads_the_samples_as_they_are_after_learning() -> None:
     close = (np.abs(margin) < 1e-3).any(axis=1)
     assert np.array_equal(got[~close], want[~close])
     assert want.sum() > 1000 and (~want).sum() > 1000
+
+
+def test_the_sample_box_follows_the_samples_and_rules_out_only_pixels_that_match_none() -> None:
+    """``explained`` first rules out the pixels whose colour lies far from the box of their samples
+    (most of a person): after fitting and after learning with ``subsampling=1`` (every pixel
+    rewritten, some twice) each pixel's box is its samples' minimum and maximum, and the pixels
+    ruled out are among those with no sample within reach, while a person's pixels are tested.
+    """
+    from counterpart.nodes.silhouette.samples import _box_bytes
+
+    rng = np.random.default_rng(5)
+    sc = SampleConsensus(subsampling=1, random_state=0, threaded=False)
+    sc.fit(np.stack([frame(rng) for _ in range(20)]), ROOM)
+
+    def box_is_exact() -> bool:
+        b, s = _box_bytes(sc._box), sc.samples_
+        return bool(np.array_equal(b[:, :3], s.min(axis=2)) and np.array_equal(b[:, 4:7], s.max(axis=2)))
+
+    assert box_is_exact()
+    for _ in range(5):
+        sc.apply(frame(rng), np.zeros((H, W), np.uint8))
+    assert box_is_exact()
+    f = frame(rng, person=(100, 60, 40, 120))
+    rows = sc.samples_.astype(np.int32)
+    dist = np.abs(rows - f.reshape(-1, 3, 1)).sum(axis=1)  # (H * W, N)
+    reach = sc.radius_.reshape(-1, 1) * (
+        np.maximum(sc.radius, sc.spread_k * sc.spread_.reshape(-1, 1)) + sc.relative_radius * rows.sum(axis=1)
+    )
+    matches = (dist < reach + 1e-2).sum(axis=1) >= 1
+    b = _box_bytes(sc._box).astype(np.int32)
+    c = f.reshape(-1, 3).astype(np.int32)
+    lower = (np.maximum(b[:, :3] - c, 0) + np.maximum(c - b[:, 4:7], 0)).sum(axis=1)
+    assert (lower <= dist.min(axis=1)).all()
+    got = sc.explained(f, np.arange(H * W))
+    assert not (got & ~matches).any()
+    person = np.zeros((H, W), bool)
+    person[60:180, 100:140] = True
+    assert not got[person.reshape(-1)].any() and got[~person.reshape(-1)].mean() > 0.9
 
 
 def test_a_learning_worker_lowers_the_switch_interval_and_never_raises_it() -> None:

@@ -812,7 +812,7 @@ class HorprasertBackground:
         if idx.size * (2 * r + 1) ** 2 > h * w:
             # shadow over much of the frame (a change of light): filtering the frame is cheaper
             # than gathering each pixel's window
-            return np.flatnonzero(self._shadow_texture_mismatch(planes, sh))
+            return self._shadow_texture_mismatch(planes, sh)
         # The shadow pixels are a few percent of the frame (and speckle): each one's window is
         # gathered from frames padded as the box filter would (BORDER_REFLECT), the background's
         # texture first, and the frame's only where that is textured (a few hundred pixels).
@@ -839,9 +839,30 @@ class HorprasertBackground:
             # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
             return none
         win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
+        ncc = self._frame_ncc(planes, win, m, e, me, ve, inv_n)
+        return idx[textured][ncc < self.shadows.shadow_ncc]
+
+    def _frame_ncc(
+        self,
+        planes: list[np.ndarray],
+        win: np.ndarray,
+        m: np.ndarray,
+        e: np.ndarray,
+        me: np.ndarray,
+        ve: np.ndarray,
+        inv_n: np.ndarray,
+    ) -> np.ndarray:
+        """The texture test's correlation (K,) float32 at K pixels, from their windows ``win``
+        (K, window) flat indices into the frame padded by the window's half side, the shadow
+        indicator ``m`` and background grey levels ``e`` (K, window) float32 there, the
+        background's windowed mean ``me`` and variance ``ve`` (K,) and one over the shadow
+        count ``inv_n`` (K,).
+        """
+        h, w = planes[0].shape
+        r = self.shadows.shadow_window // 2
         # the frame's grey levels at those windows only, read from the unpadded planes at the
         # reflected pixels (the same sums as over the padded frame)
-        if self._pad_flat is None or self._pad_flat.size != (h + 2 * r) * wp:
+        if self._pad_flat is None or self._pad_flat.size != (h + 2 * r) * (w + 2 * r):
             # padded frame's flat index -> the unpadded frame's flat index that the padding copies
             ry, rx = _reflect(np.arange(-r, h + r), h), _reflect(np.arange(-r, w + r), w)
             self._pad_flat = (ry[:, None] * w + rx[None, :]).reshape(-1)
@@ -853,19 +874,15 @@ class HorprasertBackground:
         mi = np.einsum("ij->i", gm) * inv_n
         vi = np.einsum("ij,ij->i", gm, grey) * inv_n - mi * mi
         cov = np.einsum("ij,ij->i", gm, e) * inv_n - mi * me
-        ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        return idx[textured][ncc < self.shadows.shadow_ncc]
+        return cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
 
     def _shadow_texture_mismatch(self, planes: list[np.ndarray], sh: np.ndarray) -> np.ndarray:
         """The texture test of ``shadow_texture_mismatch`` with box filters over the frame, for
-        shadow ``sh`` (H, W) 0 / 1 over much of it; returns the pixels to relabel (H, W) bool.
+        shadow ``sh`` (H, W) 0 / 1 over much of it; returns the ascending flat indices of the
+        pixels to relabel (K,) int64.
         """
         k = (self.shadows.shadow_window, self.shadows.shadow_window)
-        grey = planes[0] + planes[1]
-        grey += planes[2]
-        mu = self._mu
-        e = mu[0] + mu[1]
-        e += mu[2]
+        e = self.grey_  # E's grey sum, the same sums as the sparse path's
         m = sh.astype(np.float32)
         box = lambda a: cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)  # noqa: E731
         inv_n = 1.0 / np.maximum(box(m), 1.0)
@@ -877,14 +894,33 @@ class HorprasertBackground:
         floor += var[2]
         floor *= np.float32(self.shadows.shadow_texture_k**2)
         textured = (sh > 0) & (ve > floor)
-        if not textured.any():
-            return textured
+        idx = np.flatnonzero(textured)
+        h, w = sh.shape
+        r = self.shadows.shadow_window // 2
+        if idx.size * (2 * r + 1) ** 2 <= h * w:
+            # Shadow over much of the frame, on a textured background at a few hundred pixels of
+            # it (a sunlit street: a person's shadow and the pavement's own dark patches): the
+            # frame's side of the correlation only there, from their windows, as the sparse path
+            # does. Its window sums agree with the box filter's to float32 rounding.
+            wp = w + 2 * r
+            ys, xs = np.divmod(idx, w)
+            off = (np.arange(2 * r + 1)[:, None] * wp + np.arange(2 * r + 1)[None, :]).reshape(-1)
+            win = (ys * wp + xs)[:, None] + off[None, :]
+            m_win = np.take(cv2.copyMakeBorder(m, r, r, r, r, cv2.BORDER_REFLECT).reshape(-1), win)
+            e_win = np.take(self._e_pad, win)  # E's grey sum, padded alike (``_refresh_colour_terms``)
+            at = (idx,)
+            ncc = self._frame_ncc(
+                planes, win, m_win, e_win, me.reshape(-1)[at], ve.reshape(-1)[at], inv_n.reshape(-1)[at]
+            )
+            return idx[ncc < self.shadows.shadow_ncc]
+        grey = planes[0] + planes[1]
+        grey += planes[2]
         gm = grey * m
         mi = box(gm) * inv_n
         vi = box(gm * grey) * inv_n - mi * mi
         cov = box(gm * e) * inv_n - mi * me
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
-        return textured & (ncc < self.shadows.shadow_ncc)
+        return np.flatnonzero(textured & (ncc < self.shadows.shadow_ncc))
 
     def update(self, frame: np.ndarray, labels: np.ndarray) -> None:
         """Blend the frame into the model, never where ``labels == FOREGROUND``.
