@@ -41,6 +41,10 @@ from .launchfile import Graph, node_specs, stats_dir
 
 log = logging.getLogger("launch")
 
+#: one BLAS / OpenMP thread in each node unless the environment sets another number: every node is a
+#: process of its own, so the graph is parallel already, and a pool of threads per process (numpy's
+#: BLAS sizes one to the machine's cores) spins on the cores the other nodes need
+ONE_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 INT_GRACE_S = 2.0
 TERM_GRACE_S = 1.5
 DRAIN_S = 10.0
@@ -111,6 +115,8 @@ class Launcher:
         self.graph = graph
         self.run_dir = run_dir or new_run_dir()
         self.env = dict(os.environ if env is None else env)
+        for name in ONE_THREAD_ENV:
+            self.env.setdefault(name, "1")
         self.procs: dict[str, Proc] = {}
         self._stop_signal: int | None = None
         self._int_grace = INT_GRACE_S

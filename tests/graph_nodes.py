@@ -71,7 +71,12 @@ class Sink(Node):
 
     def setup(self) -> None:
         self.f = open(self.p["path"], "a", buffering=1)
-        self.f.write(json.dumps({"event": "start", "pid": os.getpid(), "nice": os.nice(0)}) + "\n")
+        self.f.write(
+            json.dumps(
+                {"event": "start", "pid": os.getpid(), "nice": os.nice(0), "omp": os.environ.get("OMP_NUM_THREADS")}
+            )
+            + "\n"
+        )
 
     def on_in(self, msg: Number) -> None:
         if self.p["delay_ms"]:

@@ -82,6 +82,18 @@ def test_a_node_given_nice_runs_at_that_much_lower_priority(tmp_path: Path) -> N
     assert len(received(tmp_path / "sink.jsonl")) == 50
 
 
+def test_each_node_gets_one_blas_thread_unless_the_environment_sets_another(tmp_path: Path) -> None:
+    f = write_launch(tmp_path / "g.yaml", chain(tmp_path, count=5))
+    env = {
+        k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+    }
+    for given, seen in ((None, "1"), ("3", "3")):
+        code, out = run_launch(f, timeout=60, env=env if given is None else {**env, "OMP_NUM_THREADS": given})
+        assert code == 0, out
+        starts = [r for r in read_jsonl(tmp_path / "sink.jsonl") if r.get("event") == "start"]
+        assert starts[-1]["omp"] == seen  # (the sink appends: the last start is this run's)
+
+
 def test_latest_policy_drops_under_a_slow_consumer_and_counts_the_drops(tmp_path: Path) -> None:
     doc = chain(tmp_path, count=600, delay_ms=20.0)
     doc["nodes"]["source"]["params"]["rate"] = 300.0

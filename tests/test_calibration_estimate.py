@@ -346,6 +346,26 @@ def test_the_scene_lines_are_grouped_by_the_square_frame_of_the_room(name: str, 
     assert worst(find_families(detect_segments(image, boxes), (H - 1) / 2)) > 3.0
 
 
+def test_the_frame_search_angles_are_those_of_the_segments_and_the_vanishing_points() -> None:
+    # the square frame's grid search takes each segment's angle to a vanishing point from two matrix
+    # products; on random segments and points (finite, at infinity, near a midpoint) it is the sine
+    # of the angle between the segment and the line from its midpoint to the point
+    from counterpart.nodes.calibration.lines import _frame_sin2
+
+    rng = np.random.default_rng(3)
+    seg = rng.uniform(0, 320, (40, 4))
+    vps = np.concatenate([rng.normal(0, 400, (6, 3, 2)), rng.uniform(-1, 1, (6, 3, 1))], axis=-1)
+    vps[0, :, 2] = 0.0  # points at infinity: directions
+    mid = 0.5 * (seg[:, :2] + seg[:, 2:])
+    vps[1, 0] = [mid[5, 0] * 0.5 + 3.0, mid[5, 1] * 0.5, 0.5]  # 6 px from a midpoint
+    d = seg[:, 2:] - seg[:, :2]
+    to = vps[:, :, None, :2] - vps[:, :, None, 2:3] * mid
+    direct = np.abs(d[:, 0] * to[..., 1] - d[:, 1] * to[..., 0]) / (
+        np.linalg.norm(d, axis=1) * np.linalg.norm(to, axis=-1)
+    )
+    np.testing.assert_allclose(np.sqrt(_frame_sin2(seg, vps)), direct, atol=1e-9)
+
+
 def test_the_camera_priors_stay_gaussian_in_the_robust_fit() -> None:
     # least_squares puts every residual through its soft-L1 loss; the focal length's and the roll's
     # priors are handed over so that the loss gives back their square (a prior that grew only

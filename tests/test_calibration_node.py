@@ -5,12 +5,14 @@ on camera_info; a calibration file scaled to the frames, or refused by name when
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from counterpart.body.camera import Camera, camera_for_size, default_camera
+from counterpart.nodes.calibration.pacing import EstimatePacing, PacingConfig
 from tests.launching import read_jsonl, run_launch, write_launch
 
 W, H = 200, 150  # the simulator rendered at another size than its own 320x240
@@ -110,6 +112,17 @@ def _estimating_graph(tmp_path: Path, **params: object) -> tuple[Path, Path]:
     return write_launch(tmp_path / "graph.yaml", doc), out
 
 
+ALL_CREDIBLE = {
+    "max_height_std": 10.0,
+    "max_focal_std": 10.0,
+    "max_tilt_std_deg": 90.0,
+    "min_depth_spread": 0.0,
+    "max_split_height": 10.0,
+    "max_split_tilt_deg": 90.0,
+    "max_split_focal": 10.0,
+}
+
+
 @pytest.mark.slow
 def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(tmp_path: Path) -> None:
     # the two stay at one depth: nothing shows the horizon, so with the default bounds the default
@@ -121,17 +134,7 @@ def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(tmp_path
     assert "no credible camera estimate" in log
     # with every estimate taken as credible the published camera follows them, a bounded step at a time
     (tmp_path / "all").mkdir()
-    f, out = _estimating_graph(
-        tmp_path / "all",
-        max_height_std=10.0,
-        max_focal_std=10.0,
-        max_tilt_std_deg=90.0,
-        min_depth_spread=0.0,
-        max_split_height=10.0,
-        max_split_tilt_deg=90.0,
-        max_split_focal=10.0,
-        max_step=0.02,
-    )
+    f, out = _estimating_graph(tmp_path / "all", **ALL_CREDIBLE, max_step=0.02)
     rc, log = run_launch(f, timeout=120)
     assert rc == 0, log
     infos = _infos(out)
@@ -145,3 +148,34 @@ def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(tmp_path
         assert abs(tilt[1] - tilt[0]) <= 0.02 + 1e-9
     assert not np.allclose(cams[-1].project(np.zeros(3)), cams[0].project(np.zeros(3)), atol=0.5)
     assert "first estimate: focal" in log
+
+
+def test_the_estimates_wait_beyond_their_share_of_a_core_and_the_burst() -> None:
+    pacing = EstimatePacing(PacingConfig(share=0.1, burst_s=0.5))
+    assert pacing.due(2.0)  # the first: nothing spent yet
+    pacing.spend(0.9)
+    # 0.9 s spent: due once a tenth of the stream's seconds since the first call, plus 0.5, reach it
+    assert not pacing.due(3.0) and not pacing.due(5.9)
+    assert pacing.due(6.0)
+    pacing.spend(-1.0)  # a clock going back counts nothing
+    assert pacing.spent_s == pytest.approx(0.9)
+    never = EstimatePacing(PacingConfig())
+    never.spend(100.0)
+    assert never.due(0.0)  # share 0: no limit
+
+
+@pytest.mark.slow
+def test_a_deferred_estimate_still_moves_the_camera_towards_the_last_credible_one(tmp_path: Path) -> None:
+    # a hundredth of a core and no burst: after the first estimate every later one waits (a 3 s
+    # clip), yet the published camera goes on, a bounded step each time, towards that estimate
+    f, out = _estimating_graph(tmp_path, **ALL_CREDIBLE, max_step=0.02, cpu_share=0.01, cpu_burst_s=0.0)
+    rc, log = run_launch(f, timeout=120)
+    assert rc == 0, log
+    run_dir = Path(re.search(r"run directory (\S+)", log).group(1))
+    figures = json.loads((run_dir / "stats" / "calibration.json").read_text())["figures"]
+    assert figures["estimates"] == 1 and figures["estimates_deferred"] >= 3, figures
+    infos = _infos(out)
+    assert [i["source"] for i in infos] == ["default"] + ["estimated"] * (1 + figures["estimates_deferred"])
+    cams = [_camera(i) for i in infos[1:]]
+    steps = [abs(np.log(b.fx / a.fx)) + abs(np.log(b.centre[1] / a.centre[1])) for a, b in zip(cams, cams[1:])]
+    assert all(s <= 0.04 + 1e-9 for s in steps) and sum(steps) > 0.02, steps

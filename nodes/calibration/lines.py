@@ -323,20 +323,60 @@ def _frame_vps(f: np.ndarray, tilt: np.ndarray, yaw: np.ndarray, centre: tuple[f
     return np.stack([f * x + cx * z, f * y + cy * z, z], -1)
 
 
-def _frame_score(segments: np.ndarray, vps: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Score of each hypothesis (length-weighted share of segments within ``tol`` (a sine) of one of
-    its three vanishing points, with a quadratic falloff) and, per hypothesis and segment, the
-    direction it agrees with best and the sine of that angle.
+def _frame_sin2(segments: np.ndarray, vps: np.ndarray) -> np.ndarray:
+    """Squared sine of the angle between each segment and the direction from its midpoint to each
+    vanishing point.
+
+    The cross product and the squared distance of a segment's midpoint to a (homogeneous) point are
+    both linear in a few products of the point's coordinates, so all hypotheses are two matrix
+    products instead of a (H, 3, N, 2) array of directions.
+
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    vps : ndarray of shape (H, 3, 3)
+        Homogeneous vanishing points, three per hypothesis.
+
+    Returns
+    -------
+    ndarray of shape (H, 3, N)
+        sin^2 of each angle.
     """
     d = segments[:, 2:] - segments[:, :2]
-    length = np.linalg.norm(d, axis=1)
-    mid = 0.5 * (segments[:, :2] + segments[:, 2:])
-    to = vps[:, :, None, :2] - vps[:, :, None, 2:3] * mid[None, None]  # (H, 3, N, 2)
-    cross = d[None, None, :, 0] * to[..., 1] - d[None, None, :, 1] * to[..., 0]
-    sin = np.abs(cross) / np.maximum(length[None, None] * np.linalg.norm(to, axis=-1), 1e-12)
-    best = sin.min(axis=1)  # (H, N)
-    score = (np.clip(1.0 - (best / tol) ** 2, 0.0, None) * length[None]).sum(axis=1)
-    return score, sin
+    u = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)  # (N, 2) unit directions
+    m = 0.5 * (segments[:, :2] + segments[:, 2:])
+    px, py, w = vps[..., 0], vps[..., 1], vps[..., 2]
+    # u x (p - w m) = p_y u_x - p_x u_y - w (u_x m_y - u_y m_x)
+    cross = np.stack([px, py, w], -1) @ np.stack([-u[:, 1], u[:, 0], -(u[:, 0] * m[:, 1] - u[:, 1] * m[:, 0])])
+    # |p - w m|^2 = |p|^2 - 2 w p.m + w^2 |m|^2
+    dist2 = np.stack([px * px + py * py, -2 * w * px, -2 * w * py, w * w], -1) @ np.stack(
+        [np.ones(len(m)), m[:, 0], m[:, 1], (m * m).sum(axis=1)]
+    )
+    return cross * cross / np.maximum(dist2, 1e-24)
+
+
+def _frame_score(segments: np.ndarray, vps: np.ndarray, tol: float) -> np.ndarray:
+    """Score of each hypothesis: the length-weighted share of segments within ``tol`` (a sine) of one
+    of its three vanishing points, with a quadratic falloff.
+
+    Parameters
+    ----------
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    vps : ndarray of shape (H, 3, 3)
+        Homogeneous vanishing points, three per hypothesis.
+    tol : float
+        Sine of the largest angle that counts.
+
+    Returns
+    -------
+    ndarray of shape (H,)
+        The scores (pixels of segment length).
+    """
+    length = np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
+    best2 = _frame_sin2(segments, vps).min(axis=1)  # (H, N)
+    return np.clip(1.0 - best2 / (tol * tol), 0.0, None) @ length
 
 
 def find_manhattan_families(
@@ -383,7 +423,7 @@ def find_manhattan_families(
     def best_of(T: np.ndarray, F: np.ndarray, Y: np.ndarray, tol: float) -> tuple[float, float, float]:
         scores = np.concatenate(
             [
-                _frame_score(s, _frame_vps(F[i : i + 512], T[i : i + 512], Y[i : i + 512], centre), tol)[0]
+                _frame_score(s, _frame_vps(F[i : i + 512], T[i : i + 512], Y[i : i + 512], centre), tol)
                 for i in range(0, len(T), 512)
             ]
         )
@@ -409,8 +449,7 @@ def find_manhattan_families(
     )
     f = (W / 2.0) / np.tan(r(v) / 2)
     vp = _frame_vps(np.array([f]), np.array([t]), np.array([y]), centre)[0]
-    _, sin = _frame_score(s, vp[None], np.sin(r(angle_deg)))
-    sin = sin[0]  # (3, N)
+    sin = np.sqrt(_frame_sin2(s, vp[None])[0])  # (3, N)
     fam = np.argmin(sin, axis=0)
     ok = sin[fam, np.arange(len(s))] < np.sin(r(angle_deg))
     counts = np.bincount(fam[ok], minlength=3)

@@ -27,6 +27,7 @@ counterpart.nodes.calibration``) or alone::
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -38,6 +39,7 @@ from counterpart.messages import CameraInfo, Frame, Silhouettes
 
 from .estimate import CameraEstimate
 from .observe import PeopleObservations, SceneFrames, detect_people
+from .pacing import EstimatePacing, PacingConfig
 from .smooth import CameraSmoother, credible
 
 
@@ -82,6 +84,16 @@ class Calibration(Node):
             "(subscribes to silhouettes) and refine it while the graph runs",
         ),
         "every": Param(int, 10, "estimate: frames between two estimates", min=1),
+        "cpu_share": Param(
+            float,
+            0.0,
+            "estimate: share of one core the estimates may take on average (after cpu_burst_s at "
+            "once); an estimate due beyond it waits (counted as estimates_deferred); 0: no limit "
+            "(a lockstep replay stays deterministic)",
+            min=0.0,
+            max=1.0,
+        ),
+        "cpu_burst_s": Param(float, 3.0, "estimate: CPU seconds the first estimates may take at once", min=0.0),
         "lead": Param(
             int,
             25,
@@ -158,6 +170,7 @@ class Calibration(Node):
         self.n_sil = 0
         self.fps = 0.0  # the frames' rate (their fps field): the people's times are the stream's
         self.scene = SceneFrames()
+        self.pacing = EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"]))
         #: frames kept for the scene's lines and the people detector until their people come (seq -> image)
         self.images: dict[int, np.ndarray] = {}
         self.detector = PeopleDetector() if self.p["estimate"] and self.p["detect_frames"] else None
@@ -195,6 +208,7 @@ class Calibration(Node):
         self.size = size
         self.observations = PeopleObservations(*size, max_detections=self.p["detect_frames"])
         self.scene = SceneFrames()
+        self.pacing = EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"]))
         self.smoother = CameraSmoother(camera, self.p["max_step"])
         source = f"file:{self.p['file']}" if self.p["file"] else "default"
         self.publish("camera_info", camera_to_info(camera, stamp, seq, source))
@@ -237,7 +251,16 @@ class Calibration(Node):
         self.n_sil += 1
         if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:
             return
+        if not self.pacing.due(time_s):
+            # no new estimate, but the published camera goes on towards the last credible one at
+            # the usual pace (bounded steps: a few would otherwise take minutes)
+            self.tally("estimates_deferred")
+            if self.latest is not None:
+                self._step_towards(self.latest, msg)
+            return
+        cpu0 = time.thread_time()
         est = self.observations.estimate(lines=self.scene.families())
+        self.pacing.spend(time.thread_time() - cpu0)
         if est is None or not credible(
             est,
             self.p["max_height_std"],
@@ -256,6 +279,10 @@ class Calibration(Node):
             self.log.info("first estimate: %s", est.describe())
         self.latest = est
         self.tally("estimates")
+        self._step_towards(est, msg)
+
+    def _step_towards(self, est: CameraEstimate, msg: Silhouettes) -> None:
+        assert self.smoother is not None
         camera = self.smoother.step(est)
         self.figures.update(
             {
