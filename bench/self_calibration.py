@@ -7,7 +7,8 @@ bearing -60 to 60 degrees about the pair, so the two people stand at different d
 its first ``--seconds`` (3 s) through the silhouette node's extractor as the lockstep graph runs it
 (background fitted on the first 20 frames with the people in view, then every frame from the first),
 the head and foot points of the upright people (of the standing bodies in a region that is not one
-person too, from the frame's label image; on a frame with neither, of the people detector's boxes)
+person too, from the frame's label image; of the people detector's boxes on a frame with neither
+and on every third frame)
 and the lines of the scene, one estimate at the end:
 
 - ``calib_height_err`` (relative), ``calib_tilt_err_deg``, ``calib_focal_err`` (relative): medians

@@ -129,6 +129,11 @@ class CalibrationConfig:
         ``focal_log_std``: where one horizontal family's vanishing point is far off, the lines fix
         the focal length weakly, and a prior as tight as the people's pulled their estimate
         towards the prior's 55 degrees (chosen on the tuning seeds 0-49).
+    max_track_spread : float or None, default=0.15
+        A person (track id) whose log pixel heights scatter about a line in the foot row by more
+        than this (median absolute deviation) is left out: not one whole upright body but a
+        fragment whose lower edge stays while its top comes and goes (a whole person's scatter
+        is the posture's few per cent). None: keep every person.
     """
 
     person_height: float = 1.75
@@ -156,6 +161,7 @@ class CalibrationConfig:
     lines_first_tilt_std_deg: float = 90.0
     split_halves: bool = True
     lines_focal_log_std: float = 0.5
+    max_track_spread: float | None = 0.15
 
 
 @dataclass(frozen=True)
@@ -751,6 +757,49 @@ def estimate_camera(*args: Any, **kw: Any) -> CameraEstimate | None:
         return fit_camera(*args, **kw)
 
 
+def _inconsistent_tracks(
+    head: np.ndarray, foot: np.ndarray, track: np.ndarray, ok: np.ndarray, max_spread: float | None
+) -> np.ndarray:
+    """Ids of the tracks whose pixel heights do not follow their foot rows as one upright body's do.
+
+    On a ground plane a person's pixel height is nearly a linear function of its foot's row (the
+    farther, the higher in the image and the smaller), so the log pixel heights of a whole person
+    follow a line in the foot row to within the posture's few per cent. A fragment (a torso and an
+    arm whose lower edge stays put while the rest comes and goes) or a region that joins and leaves
+    other things does not: its heights scatter about that line.
+
+    Parameters
+    ----------
+    head, foot : ndarray of shape (N, 2)
+        Image points, pixels.
+    track : ndarray of shape (N,)
+        Person ids.
+    ok : ndarray of shape (N,), bool
+        The observations to look at.
+    max_spread : float or None
+        Largest median absolute deviation of the log pixel heights from the track's line; None:
+        no track is dropped.
+
+    Returns
+    -------
+    ndarray
+        The ids of the tracks to drop.
+    """
+    if max_spread is None:
+        return np.zeros(0, track.dtype)
+    bad = []
+    for k in np.unique(track[ok]):
+        m = ok & (track == k)
+        if m.sum() < 3:
+            continue
+        y = np.log(foot[m, 1] - head[m, 1])
+        A = np.column_stack([np.ones(m.sum()), foot[m, 1] - foot[m, 1].mean()])
+        r = y - A @ np.linalg.lstsq(A, y, rcond=None)[0]
+        if np.median(np.abs(r - np.median(r))) > max_spread:
+            bad.append(k)
+    return np.array(bad, track.dtype)
+
+
 def fit_camera(
     head: np.ndarray,
     foot: np.ndarray,
@@ -798,6 +847,7 @@ def fit_camera(
     # box on the room) than a person, and its stature prior would weigh as much as a real one's
     ids, count = np.unique(track[ok], return_counts=True)
     ok &= np.isin(track, ids[count >= config.min_person_views])
+    ok &= ~np.isin(track, _inconsistent_tracks(head, foot, track, ok, config.max_track_spread))
     head, foot, track = head[ok], foot[ok], track[ok]
     time_s = (np.arange(len(ok)) / 25.0 if time_s is None else np.asarray(time_s, np.float64).reshape(-1))[ok]
     if len(head) < config.min_observations:

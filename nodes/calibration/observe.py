@@ -14,8 +14,9 @@ keeps every second observation of the older half, so a long run keeps its whole 
 density and each estimate costs about the same.
 
 People who barely move (a conversation) are absorbed into the background and give no region that
-can be an upright person. On a frame without any, the people detector's boxes give the head and
-foot points instead (:meth:`PeopleObservations.add_detections`: OpenCV's HOG people detector,
+can be an upright person. On a frame without any, and on every few frames with one (a still person
+beside one who moves: their boxes on the upright regions left out), the people detector's boxes
+give the head and foot points (:meth:`PeopleObservations.add_detections`: OpenCV's HOG people detector,
 ``counterpart.body.people_detector.PeopleDetector``, which finds a person from its shape alone,
 moving or not). The detector's window holds a person at a fixed share of its height (Dalal & Triggs
 2005: a 96-pixel person in a 128-pixel window), so the head and the feet lie at fixed shares of its
@@ -96,12 +97,27 @@ class PeopleObservations:
     max_detections : int, default=60
         Frames the people detector may be run on at most (:meth:`wants_detections`; it costs about
         0.15 s of one core a frame).
+    detect_every : int or None, default=3
+        The detector also runs on every this many frames that do give an upright person (its boxes
+        on those people left out): a person who stands still beside one who moves is absorbed
+        into the background and gives no region, and is seen only through the detector. None:
+        only on frames without an upright person.
     """
 
-    def __init__(self, width: int, height: int, max_observations: int = 1500, max_detections: int = 60) -> None:
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        max_observations: int = 1500,
+        max_detections: int = 60,
+        detect_every: int | None = 3,
+    ) -> None:
         self.size = (int(width), int(height))
         self.max_observations = int(max_observations)
         self.max_detections = int(max_detections)
+        self.detect_every = None if detect_every is None else int(detect_every)
+        #: boxes (x, y, w, h) of the upright people of the frame last given to :meth:`add`
+        self._upright: list[tuple[float, float, float, float]] = []
         self.detections_run = 0
         self._rows: list[tuple[float, float, float, float, int, float]] = []
         #: the detector's people last seen: (centre x, box height, id, frame number)
@@ -138,6 +154,7 @@ class PeopleObservations:
         """
         n = 0
         self._frame += 1
+        self._upright = []
         with_labels = labels is not None and np.shape(labels) == (self.size[1], self.size[0])
         for p in people:
             if not usable(p.bbox, *self.size, merged=bool(p.merged)):
@@ -149,6 +166,7 @@ class PeopleObservations:
             ctrl = p.ctrl if p.ctrl is not None and np.size(p.ctrl) else None
             ref = p.ref_point if p.ref_point is not None and np.size(p.ref_point) == 2 else None
             h, f = head_foot(p.bbox, ctrl, ref)
+            self._upright.append(tuple(float(v) for v in p.bbox))
             self._rows.append((h[0], h[1], f[0], f[1], int(p.id), float(time_s)))
             n += 1
         self._bound()
@@ -165,10 +183,11 @@ class PeopleObservations:
         Returns
         -------
         bool
-            True when it gave no observation and the detector has run on fewer than
-            ``max_detections`` frames.
+            True when the detector has run on fewer than ``max_detections`` frames and the frame
+            gave no observation or is one of every ``detect_every``.
         """
-        return added == 0 and self.detections_run < self.max_detections
+        every = self.detect_every is not None and self._frame % self.detect_every == 0
+        return (added == 0 or every) and self.detections_run < self.max_detections
 
     def add_detections(
         self, boxes: np.ndarray, scores: np.ndarray, time_s: float, min_score: float = MIN_DETECTION_SCORE
@@ -212,6 +231,12 @@ class PeopleObservations:
         top = np.where(y <= 0, y + h - full, y)
         ok = (sc >= min_score) & (x > 0) & (x + w < W) & (full >= 20)
         ok &= (top + HEAD_IN_BOX * full > 0) & (top + FOOT_IN_BOX * full < H - 1)
+        # a box on an upright person of this frame: already seen, as a region
+        for ux, uy, uw, uh in self._upright:
+            ok &= ~(
+                (np.abs(x + w / 2 - (ux + uw / 2)) < 0.5 * np.maximum(w, uw))
+                & (np.abs(top + full / 2 - (uy + uh / 2)) < 0.5 * np.maximum(full, uh))
+            )
         recent = [t for t in self._tracks if self._frame - t[3] <= TRACK_GAP_FRAMES]
         seen: list[tuple[float, float, int, int]] = []
         for cx, y0, bh in zip(x[ok] + w[ok] / 2, top[ok], full[ok]):
