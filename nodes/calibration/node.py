@@ -17,7 +17,9 @@ converging on it) the default camera stays; then the published
 camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
 (``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
 (``lead`` frames after the frame it was estimated on: every subscriber switches at that frame,
-however late the message reaches it, so a lockstep replay stays deterministic). The tracker and the
+however late the message reaches it, so a lockstep replay stays deterministic); with ``cpu_share``
+(the real-time graph) the estimates take that share of a core on average after ``cpu_burst_s``, and
+between them the camera goes on stepping towards the last credible one. The tracker and the
 renderer subscribe to it, so the skeleton, the partner and the tracked body are all projected with
 the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
 counterpart.nodes.calibration``) or alone::
