@@ -35,7 +35,7 @@ import cv2
 import numpy as np
 
 from counterpart.body.camera import Camera
-from counterpart.body.kinematics import RowDims, anchor_points
+from counterpart.body.kinematics import anchor_points, row_dims
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
@@ -445,7 +445,14 @@ class ConeLikelihood:
         return pts[:, :, : self.n_in].reshape(N, -1, 2), pts[:, :, self.n_in :].reshape(N, -1, 2), ok
 
     def _points_uv(self, c: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples.
+        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples
+        (views of :meth:`_points`).
+        """
+        uv = self._points(c, rho)
+        return uv[:, :, 0], uv[:, :, 1]
+
+    def _points(self, c: np.ndarray, rho: np.ndarray) -> np.ndarray:
+        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> (N, S, 2, K): u then v of all samples.
 
         Each sample is c0 + s a + (r0 + s dr) t n (axis a, unit normal n, sample (s, t)): linear
         in (1, s, t, s t), so all of them are one (N S 2, 4) x (4, K) matmul.
@@ -460,8 +467,7 @@ class ConeLikelihood:
         r0, dr = rho[..., 0], rho[..., 1] - rho[..., 0]
         # point = c0 + s a + (r0 + s dr) t n, per axis sum_j F_j G_j over (1, s, t, s t)
         F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32)
-        uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
-        return uv[:, :, 0], uv[:, :, 1]
+        return (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
 
     def coverage_cost(self, c: np.ndarray, rho: np.ndarray, cover_uv: np.ndarray) -> np.ndarray:
         """The fraction of the M foreground samples outside every projected cone, S_c (capsule test:
@@ -778,7 +784,7 @@ class _Batch:
         def rows(per_person: list[np.ndarray]) -> np.ndarray:
             return np.repeat(np.stack(per_person), counts, axis=0)
 
-        self.dims = RowDims([lk.dims for lk in likelihoods], counts)
+        self.dims = row_dims(tuple(lk.dims for lk in likelihoods), tuple(counts))
         self.sole_offset = rows([v.sole_offset for v in views])
         self.fr = rows([v.f * v.radii for v in views])
         maps = [o.cost_map() for o in o0]
@@ -787,9 +793,16 @@ class _Batch:
         per = np.array([(o.x0, o.y0, o.width, o.height) for o in o0], np.float32)
         self.x0, self.y0, self.W, self.H = (np.repeat(per[:, i], counts)[:, None, None] for i in range(4))
         self.WH = self.W * self.H
+        # (x0, y0) and (W, H) per pose as (N, 1, 2, 1), against the samples' (N, S, 2, K) u and v
+        self.origin = np.stack([self.x0, self.y0], axis=2)
+        self.size = np.stack([self.W, self.H], axis=2)
         size = np.array([o.width * o.height for o in o0], np.intp)
-        self.outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
-        self.base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
+        outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
+        base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
+        # where each sample's cost map starts in the maps laid end to end: (N, 1, K)
+        k = views[0].n_in
+        self.offset = np.repeat(base, len(views[0].s), axis=2)
+        self.offset[:, :, k:] += outline
         # the coverage samples' terms per pose (ox, oy (N, 1), G (N, 3, M), qq (N, 1, M)), where
         # every person has the same number M of them
         self.cover: tuple[np.ndarray, ...] | None = None
@@ -841,23 +854,24 @@ def evaluate_joint(
         Each person's ``evaluate``: terms (N_i, 3) float32, ground (N_i,) float32.
     """
     views = [lk.views[0] for lk in likelihoods]
-    if (
-        len(likelihoods) < 2
-        or any(len(lk.views) != 1 for lk in likelihoods)
-        or any(o[0].empty for o in obs)
-        or not all(_same_view(views[0], v) for v in views[1:])
-    ):
-        return [lk.evaluate(P, o) for lk, P, o in zip(likelihoods, poses, obs)]
-    v0 = views[0]
     counts = [len(P) for P in poses]
+    o0 = [o[0] for o in obs]
+    # the per-pose constants, the same for every layer of the frame (made by its first layer, once
+    # the people are found to share a view)
+    b = _BATCH[0]
+    if b is None or not b.serves(likelihoods, counts, o0):
+        if (
+            len(likelihoods) < 2
+            or any(len(lk.views) != 1 for lk in likelihoods)
+            or any(o.empty for o in o0)
+            or not all(_same_view(views[0], v) for v in views[1:])
+        ):
+            return [lk.evaluate(P, o) for lk, P, o in zip(likelihoods, poses, obs)]
+        b = _BATCH[0] = _Batch(likelihoods, counts, o0)
+    v0 = views[0]
     P = np.concatenate([np.asarray(p, dtype=np.float64) for p in poses])
     if P.ndim != 2 or P.shape[1] != 28:
         raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
-    o0 = [o[0] for o in obs]
-    # the per-pose constants, the same for every layer of the frame
-    b = _BATCH[0]
-    if b is None or not b.serves(likelihoods, counts, o0):
-        b = _BATCH[0] = _Batch(likelihoods, counts, o0)
     pts = anchor_points(P, b.dims).astype(np.float32)
     if v0.w_ground:
         h = (pts[:, _FOOT_ANCHORS, 1] - b.sole_offset).min(axis=1)
@@ -865,17 +879,16 @@ def evaluate_joint(
     else:
         ground = np.zeros(len(pts), np.float32)
     c, rho, ok = v0._project(pts, b.fr)
-    u, v = v0._points_uv(c, rho)
     k = v0.n_in
-    ui, vi = np.rint(u), np.rint(v)
-    ui -= b.x0
-    vi -= b.y0
-    inside = (ui >= 0) & (ui < b.W) & (vi >= 0) & (vi < b.H)
-    vi *= b.W
-    vi += ui
-    idx = np.where(inside, vi, b.WH).astype(np.intp)
-    idx[:, :, k:] += b.outline
-    idx += b.base
+    # the samples' pixels in their person's window, u and v at once: (N, S, 2, K)
+    uv = np.rint(v0._points(c, rho))
+    uv -= b.origin
+    within = (uv >= 0) & (uv < b.size)
+    inside = within[:, :, 0] & within[:, :, 1]
+    flat = uv[:, :, 1] * b.W  # row-major pixel index (a new array: u and v share uv's memory)
+    flat += uv[:, :, 0]
+    idx = np.where(inside, flat, b.WH).astype(np.intp)
+    idx += b.offset
     cost = b.maps[idx]  # (N, S, K)
     S_r = cost[:, :, :k].mean(axis=(1, 2))
     S_e = cost[:, :, k:].mean(axis=(1, 2))
@@ -886,14 +899,19 @@ def evaluate_joint(
     else:
         S_c_all = None
     out, start = [], 0
+    if S_c_all is not None:  # every person's terms in one array, handed out as views
+        terms = np.stack([S_r, S_e, S_c_all], axis=1)
+        terms[~ok] = 1.0
     for view, o, n in zip(views, o0, counts):
         sl = slice(start, start + n)
         start += n
-        S_c = S_c_all[sl] if S_c_all is not None else view.coverage_cost(c[sl], rho[sl], o.cover_uv)
-        terms = np.stack([S_r[sl], S_e[sl], S_c], axis=1)
-        terms[~ok[sl]] = 1.0
+        if S_c_all is not None:
+            t = terms[sl]
+        else:
+            t = np.stack([S_r[sl], S_e[sl], view.coverage_cost(c[sl], rho[sl], o.cover_uv)], axis=1)
+            t[~ok[sl]] = 1.0
         view.n_evals += n
-        out.append((terms, ground[sl]))
+        out.append((t, ground[sl]))
     return out
 
 
