@@ -445,14 +445,7 @@ class ConeLikelihood:
         return pts[:, :, : self.n_in].reshape(N, -1, 2), pts[:, :, self.n_in :].reshape(N, -1, 2), ok
 
     def _points_uv(self, c: np.ndarray, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples
-        (views of :meth:`_points`).
-        """
-        uv = self._points(c, rho)
-        return uv[:, :, 0], uv[:, :, 1]
-
-    def _points(self, c: np.ndarray, rho: np.ndarray) -> np.ndarray:
-        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> (N, S, 2, K): u then v of all samples.
+        """Cone ends (N, S, 2, 2) px, half-widths (N, S, 2) px -> u, v (N, S, K) of all samples.
 
         Each sample is c0 + s a + (r0 + s dr) t n (axis a, unit normal n, sample (s, t)): linear
         in (1, s, t, s t), so all of them are one (N S 2, 4) x (4, K) matmul.
@@ -467,7 +460,8 @@ class ConeLikelihood:
         r0, dr = rho[..., 0], rho[..., 1] - rho[..., 0]
         # point = c0 + s a + (r0 + s dr) t n, per axis sum_j F_j G_j over (1, s, t, s t)
         F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32)
-        return (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
+        uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
+        return uv[:, :, 0], uv[:, :, 1]
 
     def coverage_cost(self, c: np.ndarray, rho: np.ndarray, cover_uv: np.ndarray) -> np.ndarray:
         """The fraction of the M foreground samples outside every projected cone, S_c (capsule test:
@@ -793,9 +787,6 @@ class _Batch:
         per = np.array([(o.x0, o.y0, o.width, o.height) for o in o0], np.float32)
         self.x0, self.y0, self.W, self.H = (np.repeat(per[:, i], counts)[:, None, None] for i in range(4))
         self.WH = self.W * self.H
-        # (x0, y0) and (W, H) per pose as (N, 1, 2, 1), against the samples' (N, S, 2, K) u and v
-        self.origin = np.stack([self.x0, self.y0], axis=2)
-        self.size = np.stack([self.W, self.H], axis=2)
         size = np.array([o.width * o.height for o in o0], np.intp)
         outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
         base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
@@ -880,14 +871,14 @@ def evaluate_joint(
         ground = np.zeros(len(pts), np.float32)
     c, rho, ok = v0._project(pts, b.fr)
     k = v0.n_in
-    # the samples' pixels in their person's window, u and v at once: (N, S, 2, K)
-    uv = np.rint(v0._points(c, rho))
-    uv -= b.origin
-    within = (uv >= 0) & (uv < b.size)
-    inside = within[:, :, 0] & within[:, :, 1]
-    flat = uv[:, :, 1] * b.W  # row-major pixel index (a new array: u and v share uv's memory)
-    flat += uv[:, :, 0]
-    idx = np.where(inside, flat, b.WH).astype(np.intp)
+    u, v = v0._points_uv(c, rho)
+    ui, vi = np.rint(u), np.rint(v)
+    ui -= b.x0
+    vi -= b.y0
+    inside = (ui >= 0) & (ui < b.W) & (vi >= 0) & (vi < b.H)
+    vi *= b.W
+    vi += ui
+    idx = np.where(inside, vi, b.WH).astype(np.intp)
     idx += b.offset
     cost = b.maps[idx]  # (N, S, K)
     S_r = cost[:, :, :k].mean(axis=(1, 2))
