@@ -145,15 +145,15 @@ def test_head_regions_of_people_tall_enough_for_a_face_or_cut_by_the_frame() -> 
     """A whole person whose box is too short for a face of min_face_px gives no region; a tall one
     the top half of its box, widened; one cut by the frame's bottom edge its whole box.
     """
-    shape = (240, 320)
+    shape = (480, 640)
     small = (20, 20, 30, int(BODY_FACE_RATIO * 40) - 1)  # a far person, feet in view
-    tall = (100, 10, 60, 220)  # feet at 229: in view
-    cut = (200, 100, 90, 140)  # reaches the bottom row: a close-up
+    tall = (100, 10, 60, 400)  # feet at 409: in view
+    cut = (200, 300, 90, 180)  # reaches the bottom row: a close-up
     assert head_regions([small], shape, 40) == []
     ((x0, y0, x1, y1),) = head_regions([tall], shape, 40)
-    assert x0 < 100 and x1 > 160 and y0 == 0 and 10 + 0.5 * 220 <= y1 < 10 + 0.6 * 220
+    assert x0 < 100 and x1 > 160 and y0 == 0 and 10 + 0.5 * 400 <= y1 < 10 + 0.6 * 400
     ((x0, y0, x1, y1),) = head_regions([cut], shape, 40)
-    assert x0 < 200 and x1 > 290 and y0 < 100 and y1 == 240
+    assert x0 < 200 and x1 > 290 and y0 < 300 and y1 == 480
 
 
 def test_new_faces_are_looked_for_in_the_head_regions_of_the_people_given() -> None:

@@ -70,9 +70,10 @@ HAAR_WINDOW_PX = 24
 ROI_FACE_PX = 64
 #: frames after its first detection on which a new face must be detected again to be kept
 CONFIRM = 2
-#: a face's width is at most this fraction's inverse of the height of the box of its person (a standing
-#: adult's is about 1/9 of it, a sitting one's or one whose legs the silhouette lost about 1/6)
-BODY_FACE_RATIO = 5.0
+#: a face (the cascade's box, about the head's width) is at most 1 / BODY_FACE_RATIO of the height of
+#: its person's box: a standing adult's head is about 1/7.5 of their height, their face box narrower
+#: still; a seated person's box, chair aside, is shorter, so theirs comes closer to it
+BODY_FACE_RATIO = 7.0
 #: the top share of a person's box that holds their head (standing, sitting, bending, arms raised)
 HEAD_SHARE = 0.5
 #: the strip whose row profile follows the top of the head, in face widths from the head point:
