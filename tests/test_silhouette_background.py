@@ -7,6 +7,7 @@ background never has, and a cast shadow that is the background times 0.6 (same c
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -21,6 +22,7 @@ from counterpart.nodes.silhouette.background import (
     HorprasertBackground,
     ShadowConfig,
     ThresholdConfig,
+    _surround_near_candidates,
 )
 from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig, reclaim_body_shadow
 
@@ -368,3 +370,34 @@ def test_update_every_learns_one_frame_in_n_at_the_same_decay_per_frame(empty_fr
     assert np.abs(halves.mean_ - empty_frames.mean(axis=0)).max() > 0.5  # it did learn
     with pytest.raises(ValueError, match="update_every"):
         AdaptationConfig(update_every=0)
+
+
+@pytest.mark.parametrize("shape", [(37, 42), (36, 42), (37, 40), (40, 44)])
+def test_ghost_surround_on_frames_whose_sides_are_not_multiples_of_4(shape):
+    """The surround of ghost candidates, worked out on crops around them, equals the same 4 x 4
+    block means and box filter over the whole frame extended to whole blocks by reflection, the
+    part cells at the far edges included; the side of a candidate's cell does not matter.
+    """
+    rng = np.random.default_rng(sum(shape))
+    h, w = shape
+    mu = rng.uniform(0.0, 255.0, (3, h, w)).astype(np.float32)
+    fg = rng.random((h, w)) < 0.4
+    k = 5
+    ph, pw = -(-h // 4) * 4 - h, -(-w // 4) * 4 - w
+
+    def whole(a: np.ndarray) -> np.ndarray:  # block means and box over the extended frame
+        a = cv2.copyMakeBorder(a, 0, ph, 0, pw, cv2.BORDER_REFLECT)
+        small = cv2.resize(a, (a.shape[1] // 4, a.shape[0] // 4), interpolation=cv2.INTER_AREA)
+        return cv2.boxFilter(small, -1, (k, k), borderType=cv2.BORDER_REFLECT)
+
+    bg = (~fg).astype(np.float32)
+    for ys, xs in [
+        (np.array([h - 1, 0]), np.array([w - 1, 5])),
+        (np.array([h - 1]), np.array([w // 2])),
+        (np.array([h // 2, h // 2 + 3]), np.array([w - 2, w - 1])),
+        (np.array([9]), np.array([9])),
+    ]:
+        cnt, near = _surround_near_candidates(mu, fg, ys // 4, xs // 4, k)
+        np.testing.assert_allclose(cnt, whole(bg)[ys // 4, xs // 4], rtol=1e-5, atol=1e-6)
+        for c in range(3):
+            np.testing.assert_allclose(near[c], whole(mu[c] * bg)[ys // 4, xs // 4], rtol=1e-5, atol=1e-3)

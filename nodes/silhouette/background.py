@@ -1077,7 +1077,8 @@ class HorprasertBackground:
         obs -= refs
         obs *= inv_n
         refs += obs
-        self._still_ref[:, idx] = refs
+        for c in range(3):  # a plane at a time: a third of the cost of one (3, K) fancy assignment
+            self._still_ref[c][idx] = refs[c]
         return n, refs
 
     def _matches_surround(self, run: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
@@ -1086,37 +1087,11 @@ class HorprasertBackground:
         (H, W) bool, compared in chromaticity and, loosely, brightness (tighter at ``unseen_``
         pixels). Returns (K,) bool.
         """
-        # The surround is a local average: computed at 1/4 resolution (16x fewer pixels) and
+        # The surround is a local average: computed on 4 x 4 block means (16x fewer pixels) and
         # read at the candidates only, as it only has to be smooth.
-        h, w = self.shape
-        sh, sw = max(1, h // 4), max(1, w // 4)
+        h = self.shape[0]
         k = max(5, (h // 32) | 1)
-        bgm = (~fg).view(np.uint8)
-        if h % 4 == 0 and w % 4 == 0:
-            cnt, near = _surround_near_candidates(self._mu, bgm, ys // 4, xs // 4, k)
-        else:
-            support = cv2.resize(bgm.astype(np.float32), (sw, sh), interpolation=cv2.INTER_AREA)
-            frac = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)
-            sy = np.minimum(ys * sh // h, sh - 1)
-            sx = np.minimum(xs * sw // w, sw - 1)
-            cnt = frac[sy, sx]
-            near = np.empty_like(run)
-            if h % 4 == 0:
-                # the three planes stacked as one (3 H, W) image: one product and one area resize
-                # (4 x 4 block means, which never straddle two planes) instead of three each
-                small3 = cv2.resize(
-                    cv2.multiply(self._mu.reshape(3 * h, w), cv2.repeat(bgm, 3, 1), dtype=cv2.CV_32F),
-                    (sw, 3 * sh),
-                    interpolation=cv2.INTER_AREA,
-                )
-                smalls = [small3[c * sh : (c + 1) * sh] for c in range(3)]
-            else:
-                smalls = [
-                    cv2.resize(cv2.multiply(self._mu[c], bgm, dtype=cv2.CV_32F), (sw, sh), interpolation=cv2.INTER_AREA)
-                    for c in range(3)
-                ]
-            for c in range(3):
-                near[c] = cv2.boxFilter(smalls[c], -1, (k, k), borderType=cv2.BORDER_REFLECT)[sy, sx]
+        cnt, near = _surround_near_candidates(self._mu, fg, ys // 4, xs // 4, k)
         near /= np.maximum(cnt, 1e-3)
         # Chromaticity (normalised colour) and brightness of the run's mean against the surround.
         s_run = run.sum(axis=0) + 1.0
@@ -1265,25 +1240,27 @@ def _reflect(i: np.ndarray, n: int) -> np.ndarray:
 
 
 def _surround_near_candidates(
-    mu: np.ndarray, bgm: np.ndarray, sy: np.ndarray, sx: np.ndarray, k: int
+    mu: np.ndarray, fg: np.ndarray, sy: np.ndarray, sx: np.ndarray, k: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The background support and E sums around candidate cells, for ``_matches_surround`` with
-    frames whose sides are multiples of 4.
+    """The background support and E sums around candidate cells, for ``_matches_surround``.
 
     On the 4 x 4 block means (``cv2.INTER_AREA`` at an exact factor of 4: each cell from its own
-    block) of the background mask ``bgm`` and of E times it, a k x k normalised box filter
+    block) of the background mask (not ``fg``) and of E times it, a k x k normalised box filter
     (``BORDER_REFLECT``) read at the candidates' cells. Only the cells within k // 2 of a
     candidate's are computed: the candidates (a still person or a ghost) cover a small part of
     the frame. The box filter of float32 input sums in float64, exactly for grey levels, so a
     cell's value does not depend on the crop (and a crop edge on the frame's edge reflects as the
-    frame's does).
+    frame's does). A side that is not a multiple of 4 ends in a part cell: the crop is extended
+    to whole blocks by reflecting its last rows or columns (``BORDER_REFLECT``), so the last
+    cell is the mean of its pixels and their mirror images; a full-frame area resize to a
+    non-integer factor instead costs several times the whole update (frames 237 rows high).
 
     Parameters
     ----------
     mu : ndarray of shape (3, H, W), dtype float32
-        E planes, grey levels; H and W multiples of 4.
-    bgm : ndarray of shape (H, W), dtype uint8
-        1 on background pixels, 0 on foreground.
+        E planes, grey levels.
+    fg : ndarray of shape (H, W), dtype bool
+        The foreground.
     sy, sx : ndarray of shape (K,), dtype int
         The candidates' cells (pixel row and column // 4).
     k : int
@@ -1296,18 +1273,25 @@ def _surround_near_candidates(
     near : ndarray of shape (3, K), dtype float32
         Sum of E over those pixels, per channel, over the same area (divide by ``cnt``).
     """
-    sh, sw = mu.shape[1] // 4, mu.shape[2] // 4
+    h, w = mu.shape[1:]
+    sh, sw = -(-h // 4), -(-w // 4)  # cells, the last one part of a block where a side is not a multiple of 4
     r = k // 2
     y0, y1 = max(0, int(sy.min()) - r), min(sh, int(sy.max()) + r + 1)
     x0, x1 = max(0, int(sx.min()) - r), min(sw, int(sx.max()) + r + 1)
     ch, cw = y1 - y0, x1 - x0
-    crop = bgm[4 * y0 : 4 * y1, 4 * x0 : 4 * x1]
+    # rows and columns short of whole blocks at the frame's far edges (0 unless the crop reaches them)
+    pb, pr = 4 * y1 - min(4 * y1, h), 4 * x1 - min(4 * x1, w)
+    crop = (~fg[4 * y0 : 4 * y1, 4 * x0 : 4 * x1]).view(np.uint8)  # 1 on the background
+    mus = mu[:, 4 * y0 : 4 * y1, 4 * x0 : 4 * x1]
+    if pb or pr:
+        crop = cv2.copyMakeBorder(crop, 0, pb, 0, pr, cv2.BORDER_REFLECT)
+        mus = np.stack([cv2.copyMakeBorder(m, 0, pb, 0, pr, cv2.BORDER_REFLECT) for m in mus])
     support = cv2.resize(crop.astype(np.float32), (cw, ch), interpolation=cv2.INTER_AREA)
     cy, cx = sy - y0, sx - x0
     cnt = cv2.boxFilter(support, -1, (k, k), borderType=cv2.BORDER_REFLECT)[cy, cx]
     # the three planes stacked as one (3 ch, cw) image: one product and one area resize (block
     # means never straddle two planes)
-    prod = np.multiply(mu[:, 4 * y0 : 4 * y1, 4 * x0 : 4 * x1], crop, dtype=np.float32)
+    prod = np.multiply(mus, crop, dtype=np.float32)
     small3 = cv2.resize(prod.reshape(3 * 4 * ch, 4 * cw), (cw, 3 * ch), interpolation=cv2.INTER_AREA)
     near = np.empty((3, sy.size), np.float32)
     for c in range(3):
