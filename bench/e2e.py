@@ -33,7 +33,10 @@ deterministic graph: every frame through every node.
    measured in CPU time (``cpu_figures``): ``<node>_cpu_ms`` the CPU time per frame each node
    processed, ``cpu_ms_per_frame`` their sum with the camera's and calibration's (every frame
    through every node) and ``cores_needed`` that times the camera's frame rate: the graph keeps up
-   on two idle cores when it is at most 2 (less the margin the scheduler needs). Per node (silhouette, tracker, labeller,
+   on two idle cores when it is at most 2 (less the margin the scheduler needs). The tracker's own
+   figures over the same span are suffixed ``_steady`` (``tracker_handler_cpu_ms_steady`` beside
+   ``tracker_cpu_ms``: the difference is what its process spends outside its handler; the
+   whole-run ``tracker_handler_cpu_ms`` also counts the start's empty poses). Per node (silhouette, tracker, labeller,
    responder, renderer; from their stats, see ``node_figures``): ``<node>_ms`` its handler time per
    frame it published, ``<node>_frac`` the frames it published per camera frame, ``<node>_busy``
    the share of a core it used; ``tracker_particles`` / ``tracker_layers`` the mean search per
@@ -190,27 +193,28 @@ def cpu_figures(bag: Path, cpu: CpuSamples, warmup_s: float) -> dict[str, object
     aside) over the same span per camera frame. ``cpu_ms_per_frame``: the sum, what every frame
     through every node costs; ``cores_needed``: that times the camera's nominal frame rate, the
     cores the graph needs to process every frame (two cores: at most 2 with the rest of the machine
-    idle).
+    idle). ``steady``: per node, its own figures over the same span (:func:`_steady_figures`).
     """
     log, stamp = _times(bag, "rendered")
     cut = stamp[0] + int(warmup_s * 1e9)
-    per_node: dict[str, float] = {}
+    per_node: dict[str, list[tuple[int, int, dict[str, float]]]] = {}
     span: list[int] = []
     for _, t, m in BagReader(bag).messages([f"{n}/stats" for n in TIMED_NODES], decode_messages=True):
         n_out = max((o.count for o in m.outputs), default=0)
         # from its first frame on: a start that outlasts the warm-up (the silhouette node's
         # background training, one long call) is not a frame's cost
         if t >= cut and m.node in TIMED_NODES and n_out > 0:
-            per_node.setdefault(m.node, []).append((t, n_out))
-    out: dict[str, object] = {"nodes": {}}
+            per_node.setdefault(m.node, []).append((t, n_out, m.figures))
+    out: dict[str, object] = {"nodes": {}, "steady": {}}
     total = 0.0
     for node, rows in per_node.items():
-        (ta, na), (tb, nb) = rows[0], rows[-1]
+        (ta, na, fa), (tb, nb, fb) = rows[0], rows[-1]
         ms = (_cpu_at(cpu, node, tb) - _cpu_at(cpu, node, ta)) * 1e3 / max(nb - na, 1)
         if nb > na and np.isfinite(ms):
             out["nodes"][node] = round(ms, 1)
             total += ms
             span += [ta, tb]
+            out["steady"][node] = _steady_figures(fa, fb, nb - na)
     others = sorted({k for _, c in cpu for k in c} - set(TIMED_NODES) - {"recorder"})
     if span:
         ta, tb = min(span), max(span)
@@ -223,6 +227,27 @@ def cpu_figures(bag: Path, cpu: CpuSamples, warmup_s: float) -> dict[str, object
     fps = next((m.fps for _, _, m in BagReader(bag).messages(["pose"], decode_messages=True) if m.fps > 0), 0.0)
     out["cpu_ms_per_frame"] = round(total, 1)
     out["cores_needed"] = round(total * fps / 1e3, 2)
+    return out
+
+
+def _steady_figures(fa: dict[str, float], fb: dict[str, float], n: int) -> dict[str, float]:
+    """The tracker's own figures over the span of its ``cpu_ms`` (stats ``fa`` to ``fb``, ``n`` poses
+    published between them), so that its handler's CPU time compares with its process's: the
+    whole-run figures of :func:`node_figures` also count the poses of the start, before the
+    background is learnt, when nobody is tracked and a pose costs next to nothing.
+    """
+    if "handler_cpu_ms" not in fb:
+        return {}
+    d = {k: fb.get(k, 0.0) - fa.get(k, 0.0) for k in fb}
+    out = {f"{k}_steady": round(d[k] / max(n, 1), 1) for k in ("search_cpu_ms", "layers_cpu_ms", "handler_cpu_ms")}
+    frames = d.get("budget_frames", 0.0)
+    if frames:
+        out["searches_steady"] = round(frames / max(n, 1), 2)  # people searched per pose
+        out["particles_steady"] = round(d["budget_particles"] / frames, 1)
+        out["layers_steady"] = round(d["budget_layers"] / frames, 2)
+        out["starts_steady"] = d.get("budget_starts", 0.0)
+    if "budget_over" in d:
+        out["over_frac_steady"] = round(d["budget_over"] / max(n, 1), 3)
     return out
 
 
@@ -358,6 +383,8 @@ def realtime(
     steady_cpu = cpu_figures(bag, cpu, warmup)
     for node, ms in steady_cpu.pop("nodes").items():
         figs["nodes"].setdefault(node, {})["cpu_ms"] = ms
+    for node, f in steady_cpu.pop("steady").items():
+        figs["nodes"].setdefault(node, {}).update(f)
     figs.update(steady_cpu)
     print(f"{name}: {figs}  wall {wall:.1f} s  load {os.getloadavg()[0]:.2f}", file=sys.stderr)
     return figs

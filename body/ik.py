@@ -124,6 +124,22 @@ def inverse_kinematics(X: np.ndarray) -> np.ndarray:
     return P
 
 
+#: the joint pairs whose distance :func:`dims_from_joints` measures
+_LENGTHS = (
+    ("l_hip", "l_knee"),
+    ("r_hip", "r_knee"),
+    ("l_knee", "l_ankle"),
+    ("r_knee", "r_ankle"),
+    ("l_hip", "r_hip"),
+    ("l_shoulder", "r_shoulder"),
+    ("neck", "head"),
+    ("l_shoulder", "l_elbow"),
+    ("r_shoulder", "r_elbow"),
+    ("l_elbow", "l_wrist"),
+    ("r_elbow", "r_wrist"),
+)
+
+
 def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     """Body dimensions fitted to joint positions (median bone lengths over frames).
 
@@ -138,9 +154,14 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
         head + half the head).
     """
     X = np.asarray(X, dtype=np.float64).reshape(-1, 14, 3)
+    # every bone's median length over the frames in one call (per bone, the small numpy calls
+    # cost more than the arithmetic: the renderer fits each partner it draws)
+    ends = np.array([(J[a], J[b]) for a, b in _LENGTHS])
+    med = np.median(np.linalg.norm(X[:, ends[:, 0]] - X[:, ends[:, 1]], axis=-1), axis=0)
+    lengths = dict(zip(_LENGTHS, med.tolist()))
 
     def length(a: str, b: str) -> float:
-        return float(np.median(np.linalg.norm(X[:, J[a]] - X[:, J[b]], axis=-1)))
+        return lengths[a, b]
 
     thigh = 0.5 * (length("l_hip", "l_knee") + length("r_hip", "r_knee"))
     shin = 0.5 * (length("l_knee", "l_ankle") + length("r_knee", "r_ankle"))

@@ -36,6 +36,7 @@ Every function is vectorised over the leading N axis (no Python loop over poses)
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import numpy as np
 
@@ -138,23 +139,29 @@ def _rz(R: Columns, c: np.ndarray, s: np.ndarray) -> Columns:
     return a0 * c + a1 * s, a1 * c - a0 * s, a2
 
 
-#: the limbs' DOFs, per side (left, right): the two sides' chains run as one batch of 2N rows
-_LIMB_DOFS = (
-    "shoulder_flex",
-    "shoulder_abd",
-    "shoulder_rot",
-    "elbow_flex",
-    "hip_flex",
-    "hip_abd",
-    "hip_rot",
-    "knee_flex",
+#: the limbs, in the order of their DOFs in ``body.pose`` (four each: the shoulder's or hip's
+#: flex, abd, rot, then the elbow's or knee's flex): their chains run as one batch of 4N rows
+_LIMBS = ("l_arm", "r_arm", "l_leg", "r_leg")
+_LIMB_DOF0 = DOF_INDEX["l_shoulder_flex"]
+assert [DOF_INDEX[n] for n in ("r_shoulder_flex", "l_hip_flex", "r_hip_flex", "r_knee_flex")] == [
+    _LIMB_DOF0 + 4,
+    _LIMB_DOF0 + 8,
+    _LIMB_DOF0 + 12,
+    DOF - 1,
+]
+#: the anchors of the limbs' chains, limb by limb, each from its root (shoulder, hip) outwards
+_LIMB_ANCHORS = np.array(
+    [
+        ANCHOR_INDEX[f"{sd}_{n}"]
+        for names, sides in (
+            (("shoulder", "elbow", "wrist", "hand_end"), "lr"),
+            (("hip", "knee", "ankle", "toe"), "lr"),
+        )
+        for sd in sides
+        for n in names
+    ],
+    dtype=np.intp,
 )
-_SIDE_DOFS = np.array([[DOF_INDEX[f"{sd}_{n}"] for n in _LIMB_DOFS] for sd in ("l", "r")], dtype=np.intp)
-#: the limbs' anchors, per side: (left index, right index)
-_SIDE_ANCHORS = {
-    n: np.array([ANCHOR_INDEX[f"l_{n}"], ANCHOR_INDEX[f"r_{n}"]], dtype=np.intp)
-    for n in ("shoulder", "elbow", "wrist", "hand_end", "hip", "knee", "ankle", "toe")
-}
 
 
 #: the lengths of BodyDims the chain reads
@@ -178,6 +185,31 @@ _LENGTHS = (
 )
 
 
+class _Limbs:
+    """The per-row constants of the limbs' batch of 4N rows (left arms, right arms, left legs,
+    right legs, N rows each), each as an (4N, 1) array or (arms or legs alone) (2N, 1): the side's
+    sign, the bones' lengths and the offsets of the roots, computed as the chain did per call.
+    """
+
+    def __init__(self, d: BodyDims | RowDims, n: int) -> None:
+        def rows(*per_limb: object) -> np.ndarray:
+            return np.concatenate([np.broadcast_to(np.asarray(v, np.float64), (n, 1)) for v in per_limb])
+
+        sign = np.repeat(np.array([1.0, -1.0]), n)[:, None]  # (2N, 1): +1 left, -1 right
+        self.sign = np.concatenate([sign, sign])  # (4N, 1)
+        self.neg_sign = -self.sign
+        # the elbow bends with -sin, the knee with +sin
+        self.bend = np.repeat(np.array([-1.0, 1.0]), 2 * n)[:, None]
+        self.shoulder = sign * rows(d.shoulder_width, d.shoulder_width) / 2  # (2N, 1)
+        self.shoulder_drop = rows(d.shoulder_drop, d.shoulder_drop)
+        self.hip = sign * rows(d.hip_width, d.hip_width) / 2
+        self.bone1 = rows(d.upper_arm, d.upper_arm, d.thigh, d.thigh)  # (4N, 1)
+        self.bone2 = rows(d.forearm, d.forearm, d.shin, d.shin)
+        self.hand = rows(d.hand_length, d.hand_length)  # (2N, 1)
+        self.toe_drop = rows(d.ankle_height - d.r_toe, d.ankle_height - d.r_toe)
+        self.foot = rows(d.foot_length, d.foot_length)
+
+
 class RowDims:
     """Body dimensions per pose of a batch that holds several people's poses (their particles
     evaluated at once): each length of :class:`BodyDims` the chain reads, as an (N, 1) array.
@@ -193,32 +225,62 @@ class RowDims:
     def __init__(self, dims: Sequence[BodyDims], counts: Sequence[int]) -> None:
         for name in _LENGTHS:
             setattr(self, name, np.repeat(np.array([getattr(d, name) for d in dims], np.float64), counts)[:, None])
-        self._twice: RowDims | None = None
+        self._limbs: _Limbs | None = None
 
-    def twice(self) -> RowDims:
-        """The same rows twice over (the chain's left and right limbs as one batch), made once."""
-        if self._twice is None:
-            out = object.__new__(RowDims)
-            for name in _LENGTHS:
-                a = getattr(self, name)
-                setattr(out, name, np.concatenate([a, a]))
-            out._twice = None
-            self._twice = out
-        return self._twice
+    def limbs(self) -> _Limbs:
+        """The limbs' batch constants of these rows, made once."""
+        if self._limbs is None:
+            self._limbs = _Limbs(self, len(self.thigh))
+        return self._limbs
+
+
+@lru_cache(maxsize=16)
+def row_dims(dims: tuple[BodyDims, ...], counts: tuple[int, ...]) -> RowDims:
+    """:class:`RowDims` of these people and counts, made once: a tracker calls the chain with the
+    same bodies and particle counts frame after frame (a body changes when its track starts).
+
+    Parameters
+    ----------
+    dims : tuple of BodyDims
+        Each person's dimensions.
+    counts : tuple of int
+        Each person's poses, in the batch's order.
+
+    Returns
+    -------
+    RowDims
+        The rows (shared: not to be changed).
+    """
+    return RowDims(dims, counts)
+
+
+@lru_cache(maxsize=16)
+def _body_limbs(d: BodyDims, n: int) -> _Limbs:
+    """The limbs' batch constants of one body for N poses (the likelihood calls the chain with
+    the same body and count many times a frame).
+    """
+    return _Limbs(d, n)
+
+
+@lru_cache(maxsize=16)
+def _pelvis_up(n: int) -> np.ndarray:
+    """(N, 3) rows (0, 1, 0), read-only: the pelvis's second column before its pitch and roll."""
+    return np.broadcast_to(np.array([0.0, 1.0, 0.0]), (n, 3))
 
 
 def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> tuple[np.ndarray, dict[str, Columns]]:
     """The chain of the module docstring: anchor points (N, len(ANCHORS), 3) and (with
     ``rotations``) the columns of every body part's rotation.
 
-    The left and right limbs go through their chains as one batch of 2N rows (left rows, then
-    right), with the side's sign per row: the same operations on every row as one side at a time,
-    so the same numbers, at half the calls (the tracker's likelihood runs it on few poses many times
-    a frame, where the cost of a call, not of a pose, dominates).
+    The four limbs go through their chains as one batch of 4N rows (left arms, right arms, left
+    legs, right legs), with the side's sign per row: the same operations on every row as one
+    limb at a time, so the same numbers, at a quarter of the calls (the tracker's likelihood runs
+    it on few poses many times a frame, where the cost of a call, not of a pose, dominates).
     """
     d = dims
-    C = np.cos(P)[:, :, None]  # (N, DOF, 1)
-    S = np.sin(P)[:, :, None]
+    N = len(P)
+    Cf, Sf = np.cos(P), np.sin(P)  # (N, DOF)
+    C, S = Cf[:, :, None], Sf[:, :, None]
     ix = DOF_INDEX
 
     def cs(n: str) -> tuple[np.ndarray, np.ndarray]:
@@ -227,19 +289,11 @@ def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> t
     def neg(n: str) -> tuple[np.ndarray, np.ndarray]:
         return C[:, ix[n]], -S[:, ix[n]]
 
-    N = len(P)
     z = np.zeros((N, 1))
     c, s = cs("root_yaw")
     R: dict[str, Columns] = {}
     pel = R["pelvis"] = _rz(
-        _rx(
-            (
-                np.concatenate([c, z, -s], 1),
-                np.broadcast_to(np.array([0.0, 1.0, 0.0]), (N, 3)),
-                np.concatenate([s, z, c], 1),
-            ),
-            *cs("root_pitch"),
-        ),
+        _rx((np.concatenate([c, z, -s], 1), _pelvis_up(N), np.concatenate([s, z, c], 1)), *cs("root_pitch")),
         *neg("root_roll"),
     )
     tor = R["torso"] = _rz(_rx(_ry(pel, *cs("torso_twist")), *cs("torso_flex")), *neg("torso_lateral"))
@@ -259,41 +313,33 @@ def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> t
     pts[:, ax["chin"]] = head - half
     pts[:, ax["crown"]] = head + half
 
-    # Both sides at once, 2N rows. Arms and legs mirrored so that every positive angle means the
-    # same movement on both sides: sign +1 on the left rows, -1 on the right ones.
-    Cs = np.concatenate([C[:, _SIDE_DOFS[0]], C[:, _SIDE_DOFS[1]]])  # (2N, 8, 1)
-    Ss = np.concatenate([S[:, _SIDE_DOFS[0]], S[:, _SIDE_DOFS[1]]])
-    ds = dims.twice() if isinstance(dims, RowDims) else dims
-    sign = np.repeat(np.array([1.0, -1.0]), N)[:, None]  # (2N, 1)
-    tor2 = tuple(np.concatenate([a, a]) for a in tor)
-    pel2 = tuple(np.concatenate([a, a]) for a in pel)
-    (c_sf, c_sa, c_sr, c_el, c_hf, c_ha, c_hr, c_kn) = (Cs[:, k] for k in range(8))
-    (s_sf, s_sa, s_sr, s_el, s_hf, s_ha, s_hr, s_kn) = (Ss[:, k] for k in range(8))
-    ua = _ry(_rz(_rx(tor2, c_sf, -s_sf), c_sa, sign * s_sa), c_sr, -sign * s_sr)
-    fa = _rx(ua, c_el, -s_el)
-    neck2 = np.concatenate([neck, neck])
-    sh = neck2 + (sign * ds.shoulder_width / 2) * tor2[0] - ds.shoulder_drop * tor2[1]
-    el = sh - ds.upper_arm * ua[1]
-    wr = el - ds.forearm * fa[1]
-    th = _ry(_rz(_rx(pel2, c_hf, -s_hf), c_ha, sign * s_ha), c_hr, -sign * s_hr)
-    sn = _rx(th, c_kn, s_kn)
-    hp = np.concatenate([pelvis, pelvis]) + (sign * ds.hip_width / 2) * pel2[0]
-    kn = hp - ds.thigh * th[1]
-    an = kn - ds.shin * sn[1]
-    for name, x in (
-        ("shoulder", sh),
-        ("elbow", el),
-        ("wrist", wr),
-        ("hand_end", wr - ds.hand_length * fa[1]),
-        ("hip", hp),
-        ("knee", kn),
-        ("ankle", an),
-        ("toe", an - (ds.ankle_height - ds.r_toe) * sn[1] + ds.foot_length * sn[2]),
-    ):
-        pts[:, _SIDE_ANCHORS[name]] = x.reshape(2, N, 3).transpose(1, 0, 2)
+    # The four limbs at once, 4N rows. Arms and legs mirrored so that every positive angle means
+    # the same movement on both sides: sign +1 on the left rows, -1 on the right ones.
+    lim = d.limbs() if isinstance(d, RowDims) else _body_limbs(d, N)
+    n2 = 2 * N
+    C4 = Cf[:, _LIMB_DOF0:].reshape(N, 4, 4).transpose(1, 0, 2).reshape(4 * N, 4, 1)
+    S4 = Sf[:, _LIMB_DOF0:].reshape(N, 4, 4).transpose(1, 0, 2).reshape(4 * N, 4, 1)
+    root = tuple(np.concatenate([t, t, p, p]) for t, p in zip(tor, pel))  # each limb's parent
+    (c1, c2, c3, c4), (s1, s2, s3, s4) = (C4[:, k] for k in range(4)), (S4[:, k] for k in range(4))
+    # upper arms and thighs, then forearms and shins
+    up = _ry(_rz(_rx(root, c1, -s1), c2, lim.sign * s2), c3, lim.neg_sign * s3)
+    lo = _rx(up, c4, lim.bend * s4)
+    # each limb's four anchors from its root outwards, (4 anchors, 4N rows, 3)
+    J = np.empty((4, 4 * N, 3))
+    arm, leg = J[0, :n2], J[0, n2:]
+    np.add(np.concatenate([neck, neck]), lim.shoulder * root[0][:n2], out=arm)
+    arm -= lim.shoulder_drop * root[1][:n2]
+    np.add(np.concatenate([pelvis, pelvis]), lim.hip * root[0][n2:], out=leg)
+    np.subtract(J[0], lim.bone1 * up[1], out=J[1])  # elbows, knees
+    np.subtract(J[1], lim.bone2 * lo[1], out=J[2])  # wrists, ankles
+    np.subtract(J[2, :n2], lim.hand * lo[1][:n2], out=J[3, :n2])  # hand ends
+    toe = np.subtract(J[2, n2:], lim.toe_drop * lo[1][n2:], out=J[3, n2:])
+    toe += lim.foot * lo[2][n2:]
+    pts[:, _LIMB_ANCHORS] = J.reshape(4, 4, N, 3).transpose(2, 1, 0, 3).reshape(N, 16, 3)
     if rotations:
-        for sd, rows in (("l", slice(0, N)), ("r", slice(N, 2 * N))):
-            for part, cols in (("upper_arm", ua), ("forearm", fa), ("thigh", th), ("shin", sn)):
+        for k, sd in enumerate("lr"):
+            for part, cols, at in (("upper_arm", up, 0), ("forearm", lo, 0), ("thigh", up, 2), ("shin", lo, 2)):
+                rows = slice((at + k) * N, (at + k + 1) * N)
                 R[f"{sd}_{part}"] = tuple(a[rows] for a in cols)
     return pts, R
 

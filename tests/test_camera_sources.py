@@ -277,6 +277,12 @@ def test_convert_resize_and_gray() -> None:
     )
     same, enc = convert(img, (80, 60))
     assert enc == "bgr8" and same is img
+    # a small shrink (less than 2 times) and an enlargement are interpolated, a larger shrink averaged
+    for size, interp in (((64, 48), cv2.INTER_LINEAR), ((160, 120), cv2.INTER_LINEAR), ((26, 20), cv2.INTER_AREA)):
+        out, _ = convert(img, size)
+        assert np.array_equal(out, cv2.resize(img, size, interpolation=interp)), size
+        other = cv2.INTER_AREA if interp == cv2.INTER_LINEAR else cv2.INTER_LINEAR
+        assert not np.array_equal(out, cv2.resize(img, size, interpolation=other)), size
 
 
 def test_prefetch_keeps_order_forwards_errors_and_stops() -> None:

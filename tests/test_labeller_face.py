@@ -13,7 +13,7 @@ import pytest
 
 from counterpart.bus import ParamError
 from counterpart.nodes.labeller.face import PROFILE_CASCADE_NAME, find_face_cascade, load_face_cascade
-from counterpart.nodes.labeller.face_track import FaceTracker, FaceTrackParams
+from counterpart.nodes.labeller.face_track import BODY_FACE_RATIO, FaceTracker, FaceTrackParams, head_regions
 from counterpart.nodes.labeller.head_motion import HeadMotionParams
 from counterpart.nodes.labeller.labeller import FACE_ID_BASE, PersonObservation, SocialLabeller
 from counterpart.nodes.labeller.node import Labeller, make_labeller
@@ -139,6 +139,50 @@ def test_a_face_turned_aside_when_the_video_starts_is_found_by_its_profile() -> 
         seen = [any(x.confirmed for x in tr.update(_gray(clip, i))) for i in range(clip.n_frames)]
         first[name] = seen.index(True) / fps if any(seen) else np.inf
     assert first["profile"] <= 0.8 and first["frontal"] >= 1.6, first
+
+
+def test_head_regions_of_people_tall_enough_for_a_face_or_cut_by_the_frame() -> None:
+    """A whole person whose box is too short for a face of min_face_px gives no region; a tall one
+    the top half of its box, widened; one cut by the frame's bottom edge its whole box.
+    """
+    shape = (480, 640)
+    small = (20, 20, 30, int(BODY_FACE_RATIO * 40) - 1)  # a far person, feet in view
+    tall = (100, 10, 60, 400)  # feet at 409: in view
+    cut = (200, 300, 90, 180)  # reaches the bottom row: a close-up
+    assert head_regions([small], shape, 40) == []
+    ((x0, y0, x1, y1),) = head_regions([tall], shape, 40)
+    assert x0 < 100 and x1 > 160 and y0 == 0 and 10 + 0.5 * 400 <= y1 < 10 + 0.6 * 400
+    ((x0, y0, x1, y1),) = head_regions([cut], shape, 40)
+    assert x0 < 200 and x1 > 290 and y0 < 300 and y1 == 480
+
+
+def test_new_faces_are_looked_for_in_the_head_regions_of_the_people_given() -> None:
+    """With people's boxes given, a face that appears in a person's head region is found on the next
+    search (every search_every_s); one outside every box (a person the silhouettes missed) only by
+    the whole-frame search, every full_search_every_s.
+    """
+    fps = 25.0
+    clip = gesture_face_clip("still", fps=fps, duration=2.0, seed=3, width=320, height=240, face_px=60)
+    cc = load_face_cascade()
+    ((fx, fy, fw, _),) = [(t.box) for t in _track(clip, cc)]
+    body = (int(fx - fw), int(fy - 0.2 * fw), int(3 * fw), 239 - int(fy - 0.2 * fw))  # to the bottom edge
+    elsewhere = (0, 0, 40, 239)  # a tall person at the left edge, far from the face
+    params = FaceTrackParams(fps, search_every_s=0.2, full_search_every_s=1.2)
+    first = {}
+    for name, boxes in (("in a head region", [body]), ("outside every box", [elsewhere])):
+        tr = FaceTracker(params, cc)
+        tr.update(np.zeros((240, 320), np.uint8), boxes)  # no face yet: the frame-0 search finds none
+        seen = [bool(tr.update(_gray(clip, i), boxes)) for i in range(1, clip.n_frames)]
+        first[name] = (seen.index(True) + 1) / fps if any(seen) else np.inf
+    assert first["in a head region"] <= 0.2 + 1e-9 and 0.2 < first["outside every box"] <= 1.2 + 1e-9, first
+
+
+def _track(clip: FaceClip, cascade: cv2.CascadeClassifier) -> list:
+    """The confirmed face tracks after the clip's first five frames, searched in the whole frame."""
+    tr = FaceTracker(FaceTrackParams(clip.fps), cascade)
+    for i in range(5):
+        tracks = tr.update(_gray(clip, i))
+    return [t for t in tracks if t.confirmed]
 
 
 def test_blinks_running_past_the_clip_end_are_cut() -> None:

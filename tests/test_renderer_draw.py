@@ -56,6 +56,31 @@ def test_partner_cones_of_a_held_partner_are_the_same_and_not_shared() -> None:
     assert not np.allclose(other, again)  # another pose, other cones
 
 
+def test_a_held_partner_is_painted_the_same_and_a_new_camera_or_colour_repaints_it() -> None:
+    """The facets of the partners last drawn are kept: drawing a held partner again paints the
+    same pixels as drawing it the first time (as :func:`draw.draw_cones` does), on any image;
+    another camera or colour is drawn as itself, not as the kept one.
+    """
+    joints = partner_joints(5)
+    ends, radii = draw.partner_cones(joints)
+    first = draw.draw_partner_3d(blank(), joints, CAM, (0, 200, 255))
+    assert np.array_equal(first, draw.draw_cones(blank(), ends, radii, CAM, (0, 200, 255)))
+    assert np.array_equal(draw.draw_partner_3d(blank(), joints.copy(), CAM, (0, 200, 255)), first)
+    bg = np.random.default_rng(0).integers(0, 255, (240, 320, 3), dtype=np.uint8)
+    assert np.array_equal(
+        draw.draw_partner_3d(bg.copy(), joints, CAM, (0, 200, 255)),
+        draw.draw_cones(bg.copy(), ends, radii, CAM, (0, 200, 255)),
+    )
+    moved = replace(CAM, t=CAM.t + np.array([0.3, 0.0, 0.0]))
+    want = draw.draw_cones(blank(), ends, radii, moved, (0, 200, 255))
+    assert not np.array_equal(want, first)
+    assert np.array_equal(draw.draw_partner_3d(blank(), joints, moved, (0, 200, 255)), want)
+    blue = draw.draw_partner_3d(blank(), joints, CAM, (255, 0, 0))
+    assert np.array_equal(blue, draw.draw_cones(blank(), ends, radii, CAM, (255, 0, 0)))
+    with pytest.raises(TypeError):
+        draw.draw_partner_3d(blank(), joints, CAM, (255, 0, 0), shade=0.5)
+
+
 def test_partner_pixels_cover_the_projected_cones_and_nothing_far_away() -> None:
     joints = partner_joints(0)
     ends, radii = draw.partner_cones(joints)

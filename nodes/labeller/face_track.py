@@ -38,10 +38,18 @@ its box (the side of the head, not the face's front) pulls neither the face size
 flow follows the face, the head point.
 
 While a face is tracked it is searched for only around its last position (one face width
-around it, at the scale of its size: cheap); the whole frame is searched, at the scale that makes
+around it, at the scale of its size: cheap); new faces are searched for, at the scale that makes
 ``min_face_px`` the cascade's 24 px window, every ``search_every_s`` seconds, whether or not a
 face is tracked (a first face and new ones: a face that appears waits up to that long to be
-found, and a stream without a face costs a whole-frame search only that often). Tracks are
+found, and a stream without a face costs a search only that often). Where the people in view are
+known (their boxes, e.g. the silhouettes'), that search looks only at their head regions
+(:func:`head_regions`): the top half of each box whose person is tall enough to have a face of
+``min_face_px`` (a face is at most ``1 / BODY_FACE_RATIO`` of its person's height), or the whole
+box of one cut by the frame's bottom edge (its height says nothing of its face's size); small
+people far from the camera cost nothing. The whole frame is then searched only every
+``full_search_every_s`` seconds (a face the boxes miss: a person absorbed into the background, a
+close-up whose motion gives only fragments), and every ``search_every_s`` where no boxes are
+known (no people, or a caller that gives none). Tracks are
 numbered by slot (0 .. ``max_faces`` - 1): a face that is lost and found again takes the lowest
 free slot, with a new ``track_id``. A new face must be detected again on each of its next
 ``CONFIRM`` frames, or it is dropped (most false detections on a textured background are not
@@ -62,6 +70,12 @@ HAAR_WINDOW_PX = 24
 ROI_FACE_PX = 64
 #: frames after its first detection on which a new face must be detected again to be kept
 CONFIRM = 2
+#: a face (the cascade's box, about the head's width) is at most 1 / BODY_FACE_RATIO of the height of
+#: its person's box: a standing adult's head is about 1/7.5 of their height, their face box narrower
+#: still; a seated person's box, chair aside, is shorter, so theirs comes closer to it
+BODY_FACE_RATIO = 7.0
+#: the top share of a person's box that holds their head (standing, sitting, bending, arms raised)
+HEAD_SHARE = 0.5
 #: the strip whose row profile follows the top of the head, in face widths from the head point:
 #: from OUTLINE_TOP to OUTLINE_BOTTOM above it, OUTLINE_W wide (the hairline and the head's top edge)
 OUTLINE_TOP, OUTLINE_BOTTOM, OUTLINE_W = 0.95, 0.45, 0.5
@@ -98,6 +112,10 @@ class FaceTrackParams:
     profile_faces : bool, default=True
         Look for faces turned aside with the profile cascade where the frontal one finds none
         (:class:`FaceTracker`'s ``profile``).
+    full_search_every_s : float, default=2.0
+        Period of the whole-frame search for new faces (s) while people's boxes are given to
+        :meth:`FaceTracker.update` (their head regions are searched every ``search_every_s``); at
+        least ``search_every_s``.
 
     Raises
     ------
@@ -116,6 +134,7 @@ class FaceTrackParams:
     max_jump: float = 0.5
     max_flow_s: float = 2.0
     profile_faces: bool = True
+    full_search_every_s: float = 2.0
 
     def __post_init__(self) -> None:
         checks = {
@@ -132,6 +151,10 @@ class FaceTrackParams:
             "n_points": (self.n_points >= 8, "must be >= 8"),
             "max_jump": (self.max_jump > 0, "must be > 0 face widths"),
             "max_flow_s": (self.max_flow_s >= self.max_miss_s, "must be >= max_miss_s (s)"),
+            "full_search_every_s": (
+                self.full_search_every_s >= self.search_every_s,
+                "must be >= search_every_s (s)",
+            ),
         }
         for name, (ok, why) in checks.items():
             if not ok:
@@ -263,6 +286,47 @@ def _detect(
     return f
 
 
+def head_regions(
+    boxes: list[tuple[float, float, float, float]], shape: tuple[int, ...], min_face_px: float
+) -> list[tuple[int, int, int, int]]:
+    """The image regions that can hold the face of min_face_px or more of a person with a known box.
+
+    A box whose bottom is inside the image holds the whole person (x, y, w, h): its face is at most
+    ``h / BODY_FACE_RATIO`` wide, so a box shorter than ``BODY_FACE_RATIO * min_face_px`` gives no
+    region, a taller one its top ``HEAD_SHARE``. A box cut by the image's bottom edge (the person
+    may go on below it: a close-up, someone near the camera) gives its whole self. Each region is
+    widened by half the largest face the box can hold to the sides and top (a head whose outline
+    the box missed), and cut at the image's edges.
+
+    Parameters
+    ----------
+    boxes : list of tuple of float
+        People's boxes (x, y, w, h), px.
+    shape : tuple of int
+        The image's shape (H, W, ...).
+    min_face_px : float
+        The smallest face looked for, px.
+
+    Returns
+    -------
+    list of tuple of int
+        Regions (x0, y0, x1, y1), px, end exclusive; each at least ``min_face_px`` a side.
+    """
+    img_h, img_w = shape[0], shape[1]
+    out = []
+    for x, y, w, h in boxes:
+        cut = y + h >= img_h - 1
+        if w <= 0 or h <= 0 or (not cut and h < BODY_FACE_RATIO * min_face_px):
+            continue
+        m = 0.5 * max(h, w) / BODY_FACE_RATIO if cut else 0.5 * h / BODY_FACE_RATIO
+        x0, x1 = max(0, int(x - m)), min(img_w, int(np.ceil(x + w + m)))
+        y0 = max(0, int(y - m))
+        y1 = min(img_h, int(np.ceil(y + (h if cut else HEAD_SHARE * h))))
+        if x1 - x0 >= min_face_px and y1 - y0 >= min_face_px:
+            out.append((x0, y0, x1, y1))
+    return out
+
+
 def outline_shift(prev: np.ndarray, gray: np.ndarray, center: np.ndarray, size: float) -> float | None:
     """Vertical shift of the top of a head between two frames.
 
@@ -326,6 +390,7 @@ class FaceTracker:
         self._a_pos = params.alpha(params.anchor_s)
         self._a_size = params.alpha(params.size_s)
         self._search_every = max(1, int(round(params.search_every_s * params.fps)))
+        self._full_every = max(1, int(round(params.full_search_every_s * params.fps)))
         self._lk = dict(
             winSize=(15, 15), maxLevel=2, criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
         )
@@ -394,13 +459,18 @@ class FaceTracker:
         i = int(np.argmin(d))
         return (f[i], profile) if d[i] <= self.params.max_jump * w else (None, False)
 
-    def update(self, gray: np.ndarray) -> list[FaceTrack]:
+    def update(self, gray: np.ndarray, boxes: list[tuple[float, float, float, float]] | None = None) -> list[FaceTrack]:
         """Track the faces into a frame.
 
         Parameters
         ----------
         gray : ndarray of shape (H, W), dtype uint8
             The frame, grey.
+        boxes : list of tuple of float or None, default=None
+            The boxes (x, y, w, h) px of the people in view, when known: new faces are searched
+            for in their head regions, and in the whole frame only every
+            ``full_search_every_s`` (see the module docstring); None or empty: in the whole frame
+            every ``search_every_s``.
 
         Returns
         -------
@@ -452,18 +522,26 @@ class FaceTracker:
             alive.append(tr)
         self.tracks = alive
         if len(self.tracks) < p.max_faces and self._frame % self._search_every == 0:
-            self._search(gray)
+            if not boxes or self._frame % self._full_every == 0:
+                self._search(gray)
+            else:
+                for region in head_regions(boxes, gray.shape, p.min_face_px):
+                    self._search(gray, region)
         self._prev = gray
         self._frame += 1
         return sorted(self.tracks, key=lambda t: t.slot)
 
-    def _search(self, gray: np.ndarray) -> None:
-        """Whole-frame search; faces away from every track start new tracks (largest first)."""
+    def _search(self, gray: np.ndarray, region: tuple[int, int, int, int] | None = None) -> None:
+        """Search of the whole frame or of a ``region`` (x0, y0, x1, y1) px of it; faces away from
+        every track start new tracks (largest first).
+        """
         p = self.params
-        args = (min(1.0, HAAR_WINDOW_PX / p.min_face_px), p.min_face_px, None, 5)
-        found = _detect(gray, self.cascade, *args)
+        x0, y0, x1, y1 = region or (0, 0, gray.shape[1], gray.shape[0])
+        part = gray[y0:y1, x0:x1]
+        args = (min(1.0, HAAR_WINDOW_PX / p.min_face_px), p.min_face_px, None, 5, x0, y0)
+        found = _detect(part, self.cascade, *args)
         if len(found) == 0 and not self.tracks and self.profile is not None:
-            found = self._profiles(gray, *args)
+            found = self._profiles(part, *args)
         for f in sorted(found, key=lambda f: -f[2]):
             if len(self.tracks) >= p.max_faces:
                 break

@@ -270,7 +270,9 @@ class SocialLabeller:
         Parameters
         ----------
         people : mapping of Hashable to PersonObservation
-            Person id -> what is known about the person.
+            Person id -> what is known about the person. Where every person has a ``box``, new
+            faces are searched for in their head regions (and in the whole frame only every
+            ``track_params.full_search_every_s``; see :mod:`counterpart.nodes.labeller.face_track`).
         image : ndarray of shape (H, W) or (H, W, 3), dtype uint8, or None, default=None
             The camera frame (gray or BGR) for talking/laughing, or None.
         targets : mapping of Hashable to ndarray of shape (3,), or None, default=None
@@ -289,7 +291,10 @@ class SocialLabeller:
             gray = to_gray(image)
             if self._tracker is None:
                 self._tracker = FaceTracker(self.track_params, self._cascade, self._profile_cascade())  # type: ignore[arg-type]
-            tracks = [t for t in self._tracker.update(gray) if t.confirmed]
+            # where every person's box is known, new faces are looked for in their head regions
+            boxes = [o.box for o in people.values()]
+            known = [b for b in boxes if b is not None] if boxes and None not in boxes else None
+            tracks = [t for t in self._tracker.update(gray, known) if t.confirmed]
         people, faces = self._attribute(people, tracks)
         self.faces = faces
         heads = {pid: np.asarray(o.joints, dtype=np.float64)[_H] for pid, o in people.items() if o.has_3d()}

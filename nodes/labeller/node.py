@@ -195,6 +195,7 @@ _GROUPED: dict[str, tuple[str, str]] = {
     "max_miss_s": ("track_params", "max_miss_s"),
     "anchor_s": ("track_params", "anchor_s"),
     "search_every_s": ("track_params", "search_every_s"),
+    "full_search_every_s": ("track_params", "full_search_every_s"),
     "max_faces": ("track_params", "max_faces"),
     "talk_window_s": ("face_params", "window_s"),
     "talk_energy": ("face_params", "talk_energy_tracked"),
@@ -355,7 +356,22 @@ class Labeller(Node):
             min=0.01,
             max=60.0,
         ),
-        "search_every_s": Param(float, 0.5, "period of the whole-frame search for new faces (s)", min=0.01, max=60.0),
+        "search_every_s": Param(
+            float,
+            0.5,
+            "period of the search for new faces (s): in the head regions of the people's silhouettes, "
+            "in the whole frame where there are none",
+            min=0.01,
+            max=60.0,
+        ),
+        "full_search_every_s": Param(
+            float,
+            2.0,
+            "period of the whole-frame search for new faces while there are silhouettes (s; at least "
+            "search_every_s): faces the silhouettes miss",
+            min=0.01,
+            max=600.0,
+        ),
         "max_faces": Param(int, 2, "most faces tracked at once", min=1, max=16),
         "talk_window_s": Param(
             float, 1.0, "averaging window of mouth motion for talking/laughing (s)", min=0.05, max=60.0

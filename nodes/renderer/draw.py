@@ -230,10 +230,12 @@ def cone_facets(
     normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
     facing = (normals * (eye - centroids)).sum(-1) > 0
     shade = ambient + (1.0 - ambient) * np.clip(normals @ l_dir, 0.0, None)
-    quad_px = camera.project(quads).reshape(-1, 4, 2)
-    cap_px = camera.project(rims).reshape(-1, n_rim, 2)
-    quad_z = camera.depth(quads).reshape(-1, 4).mean(-1)
-    cap_z = camera.depth(rims).reshape(-1, n_rim).mean(-1)
+    # the quads' corners are rim points: each rim point is projected once
+    rim_px, rim_z = camera.project(rims), camera.depth(rims)  # (S, 2, n, 2), (S, 2, n)
+    quad_px = rim_px[:, qi[..., 0], qi[..., 1]].reshape(-1, 4, 2)
+    cap_px = rim_px.reshape(-1, n_rim, 2)
+    quad_z = rim_z[:, qi[..., 0], qi[..., 1]].reshape(-1, 4).mean(-1)
+    cap_z = rim_z.reshape(-1, n_rim).mean(-1)
     depth = np.concatenate([quad_z, cap_z])
     finite = np.concatenate([np.isfinite(quad_px).all(axis=(1, 2)), np.isfinite(cap_px).all(axis=(1, 2))])
     keep = np.flatnonzero(facing & finite)
@@ -285,23 +287,57 @@ def draw_cones(
         If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
+    return _paint(image, _cone_fill(ends, radii, camera, colour, light, n_rim, ambient))
+
+
+#: the facets to paint: fixed-point polygon corners (K, 2) int32, each facet's first corner (F + 1
+#: offsets into them, the last one K) and colours (F BGR lists), far to near
+_Fill = tuple[np.ndarray, list[int], list[list[int]]]
+
+
+def _cone_fill(
+    ends: np.ndarray,
+    radii: np.ndarray,
+    camera: Camera,
+    colour: Colour,
+    light: np.ndarray | None,
+    n_rim: int,
+    ambient: float,
+) -> _Fill:
+    """What :func:`draw_cones` paints (see :data:`_Fill`), from :func:`cone_facets`."""
     polys, shade, _ = cone_facets(ends, radii, camera, light, n_rim, ambient)
     if not polys:
-        return image
+        return np.empty((0, 2), np.int32), [0], []
     # fixed point and colours of all facets at once: per facet, these small numpy calls cost more
     # than OpenCV's fill
     fixed = np.round(np.concatenate(polys) * _SCALE).astype(np.int32)
     starts = np.cumsum([0] + [len(p) for p in polys]).tolist()
     colours = np.clip(np.asarray(colour, np.float64) * shade[:, None], 0, 255).astype(np.int64).tolist()
+    return fixed, starts, colours
+
+
+def _paint(image: np.ndarray, fill: _Fill) -> np.ndarray:
+    """Paint the facets of ``fill`` (:data:`_Fill`) into ``image``, far to near; returns ``image``."""
+    fixed, starts, colours = fill
     for a, b, c in zip(starts[:-1], starts[1:], colours):
         cv2.fillConvexPoly(image, fixed[a:b], c, lineType=cv2.LINE_AA, shift=_SHIFT)
     return image
+
+
+#: the partners' facets last painted (:func:`draw_partner_3d`), by what they are made of
+_PARTNER_FILLS: dict[tuple, _Fill] = {}
+#: how many of them are kept (the renderer draws a held partner on every frame until the next one)
+_PARTNER_FILLS_KEPT = 4
 
 
 def draw_partner_3d(
     image: np.ndarray, joints: np.ndarray, camera: Camera, colour: Colour = EMOTION_COLOURS["neutral"], **kw: Any
 ) -> np.ndarray:
     """Draw a partner given by its joints as shaded cones.
+
+    The renderer draws a held partner on every frame until the next one comes: the facets of the
+    last few partners drawn (the same joints, camera, colour and shading) are kept, so that such a
+    frame only paints them.
 
     Parameters
     ----------
@@ -326,8 +362,38 @@ def draw_partner_3d(
     ValueError
         If the joints are not (14, 3) and finite, or the image is not a writable (H, W, 3) uint8 array.
     """
-    ends, radii = partner_cones(joints)
-    return draw_cones(image, ends, radii, camera, colour, **kw)
+    _check_image(image)
+    if set(kw) - {"light", "n_rim", "ambient"}:
+        raise TypeError(
+            f"draw_partner_3d: unexpected keyword arguments {sorted(set(kw) - {'light', 'n_rim', 'ambient'})}"
+        )
+    X = np.asarray(joints, np.float64)
+    light = kw.get("light")
+    key = (
+        X.tobytes(),
+        X.shape,
+        camera.fx,
+        camera.fy,
+        camera.cx,
+        camera.cy,
+        camera.width,
+        camera.height,
+        np.asarray(camera.R, np.float64).tobytes(),
+        np.asarray(camera.t, np.float64).tobytes(),
+        tuple(np.asarray(colour, np.float64).tolist()),
+        None if light is None else np.asarray(light, np.float64).tobytes(),
+        kw.get("n_rim", 16),
+        kw.get("ambient", 0.35),
+    )
+    fill = _PARTNER_FILLS.get(key)
+    if fill is None:
+        # a held partner (drawn on every frame until the next one comes) is projected and shaded once
+        ends, radii = partner_cones(X)
+        fill = _cone_fill(ends, radii, camera, colour, light, kw.get("n_rim", 16), kw.get("ambient", 0.35))
+        if len(_PARTNER_FILLS) >= _PARTNER_FILLS_KEPT:
+            del _PARTNER_FILLS[next(iter(_PARTNER_FILLS))]
+        _PARTNER_FILLS[key] = fill
+    return _paint(image, fill)
 
 
 # ------------------------------------------------------------------------- 2D silhouettes (splines)

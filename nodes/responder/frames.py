@@ -54,9 +54,13 @@ def actor_frame(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _rot(theta: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) rotations by ``theta`` (radians) about +Y, filled in place (the responder builds
+    several per frame: nested stacks cost more than the arithmetic).
+    """
     c, s = np.cos(theta), np.sin(theta)
-    z, o = np.zeros_like(c), np.ones_like(c)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
+    R = np.zeros((*np.shape(c), 3, 3))
+    R[..., 0, 0], R[..., 0, 2], R[..., 1, 1], R[..., 2, 0], R[..., 2, 2] = c, s, 1.0, -s, c
+    return R
 
 
 def to_local(Y: np.ndarray, origin: np.ndarray, theta: np.ndarray) -> np.ndarray:

@@ -42,6 +42,12 @@ class ForestArrays:
         self.feature, self.threshold = np.asarray(feature, np.intp), np.asarray(threshold, np.float64)
         self.left, self.right, self.value = np.asarray(left, np.intp), np.asarray(right, np.intp), np.asarray(value)
         self._rows = np.arange(len(self.feature))
+        # the trees' nodes in one flat array each (tree t's node k at t * n_nodes + k): one-dimensional
+        # takes cost less than the two-dimensional fancy indexing of each step
+        n = self.feature.shape[1] if self.feature.ndim == 2 else 0
+        self._base = self._rows * n
+        self._flat = (self.feature.ravel(), self.threshold.ravel(), self.left.ravel(), self.right.ravel())
+        self._flat_value = self.value.reshape(len(self.feature) * n, -1) if n else self.value
 
     @classmethod
     def from_sklearn(cls, forest: Any) -> ForestArrays:
@@ -103,14 +109,15 @@ class ForestArrays:
         """
         # scikit-learn splits on float32 features: compare the same rounded values
         x = np.asarray(x, np.float32).astype(np.float64)
-        idx = np.zeros(len(self._rows), np.intp)
+        feature, threshold, left_of, right_of = self._flat
+        node = self._base.copy()  # each tree's root, as a flat node index
         while True:
-            left = self.left[self._rows, idx]
+            left = left_of[node]
             inner = left >= 0
             if not inner.any():
-                return self.value[self._rows, idx].mean(0)
-            go_left = x[self.feature[self._rows, idx]] <= self.threshold[self._rows, idx]
-            idx = np.where(inner, np.where(go_left, left, self.right[self._rows, idx]), idx)
+                return self._flat_value[node].mean(0)
+            go_left = x[feature[node]] <= threshold[node]
+            node = np.where(inner, self._base + np.where(go_left, left, right_of[node]), node)
 
 
 def fit_forest(X: np.ndarray, Y: np.ndarray, trees: int, leaf: int, random_state: int) -> ForestArrays:

@@ -35,7 +35,7 @@ import cv2
 import numpy as np
 
 from counterpart.body.camera import Camera
-from counterpart.body.kinematics import RowDims, anchor_points
+from counterpart.body.kinematics import anchor_points, row_dims
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
@@ -778,7 +778,7 @@ class _Batch:
         def rows(per_person: list[np.ndarray]) -> np.ndarray:
             return np.repeat(np.stack(per_person), counts, axis=0)
 
-        self.dims = RowDims([lk.dims for lk in likelihoods], counts)
+        self.dims = row_dims(tuple(lk.dims for lk in likelihoods), tuple(counts))
         self.sole_offset = rows([v.sole_offset for v in views])
         self.fr = rows([v.f * v.radii for v in views])
         maps = [o.cost_map() for o in o0]
@@ -788,8 +788,12 @@ class _Batch:
         self.x0, self.y0, self.W, self.H = (np.repeat(per[:, i], counts)[:, None, None] for i in range(4))
         self.WH = self.W * self.H
         size = np.array([o.width * o.height for o in o0], np.intp)
-        self.outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
-        self.base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
+        outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
+        base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
+        # where each sample's cost map starts in the maps laid end to end: (N, 1, K)
+        k = views[0].n_in
+        self.offset = np.repeat(base, len(views[0].s), axis=2)
+        self.offset[:, :, k:] += outline
         # the coverage samples' terms per pose (ox, oy (N, 1), G (N, 3, M), qq (N, 1, M)), where
         # every person has the same number M of them
         self.cover: tuple[np.ndarray, ...] | None = None
@@ -841,23 +845,24 @@ def evaluate_joint(
         Each person's ``evaluate``: terms (N_i, 3) float32, ground (N_i,) float32.
     """
     views = [lk.views[0] for lk in likelihoods]
-    if (
-        len(likelihoods) < 2
-        or any(len(lk.views) != 1 for lk in likelihoods)
-        or any(o[0].empty for o in obs)
-        or not all(_same_view(views[0], v) for v in views[1:])
-    ):
-        return [lk.evaluate(P, o) for lk, P, o in zip(likelihoods, poses, obs)]
-    v0 = views[0]
     counts = [len(P) for P in poses]
+    o0 = [o[0] for o in obs]
+    # the per-pose constants, the same for every layer of the frame (made by its first layer, once
+    # the people are found to share a view)
+    b = _BATCH[0]
+    if b is None or not b.serves(likelihoods, counts, o0):
+        if (
+            len(likelihoods) < 2
+            or any(len(lk.views) != 1 for lk in likelihoods)
+            or any(o.empty for o in o0)
+            or not all(_same_view(views[0], v) for v in views[1:])
+        ):
+            return [lk.evaluate(P, o) for lk, P, o in zip(likelihoods, poses, obs)]
+        b = _BATCH[0] = _Batch(likelihoods, counts, o0)
+    v0 = views[0]
     P = np.concatenate([np.asarray(p, dtype=np.float64) for p in poses])
     if P.ndim != 2 or P.shape[1] != 28:
         raise ValueError(f"poses have shape {P.shape}; expected (N, 28)")
-    o0 = [o[0] for o in obs]
-    # the per-pose constants, the same for every layer of the frame
-    b = _BATCH[0]
-    if b is None or not b.serves(likelihoods, counts, o0):
-        b = _BATCH[0] = _Batch(likelihoods, counts, o0)
     pts = anchor_points(P, b.dims).astype(np.float32)
     if v0.w_ground:
         h = (pts[:, _FOOT_ANCHORS, 1] - b.sole_offset).min(axis=1)
@@ -865,8 +870,8 @@ def evaluate_joint(
     else:
         ground = np.zeros(len(pts), np.float32)
     c, rho, ok = v0._project(pts, b.fr)
-    u, v = v0._points_uv(c, rho)
     k = v0.n_in
+    u, v = v0._points_uv(c, rho)
     ui, vi = np.rint(u), np.rint(v)
     ui -= b.x0
     vi -= b.y0
@@ -874,8 +879,7 @@ def evaluate_joint(
     vi *= b.W
     vi += ui
     idx = np.where(inside, vi, b.WH).astype(np.intp)
-    idx[:, :, k:] += b.outline
-    idx += b.base
+    idx += b.offset
     cost = b.maps[idx]  # (N, S, K)
     S_r = cost[:, :, :k].mean(axis=(1, 2))
     S_e = cost[:, :, k:].mean(axis=(1, 2))
@@ -886,14 +890,19 @@ def evaluate_joint(
     else:
         S_c_all = None
     out, start = [], 0
+    if S_c_all is not None:  # every person's terms in one array, handed out as views
+        terms = np.stack([S_r, S_e, S_c_all], axis=1)
+        terms[~ok] = 1.0
     for view, o, n in zip(views, o0, counts):
         sl = slice(start, start + n)
         start += n
-        S_c = S_c_all[sl] if S_c_all is not None else view.coverage_cost(c[sl], rho[sl], o.cover_uv)
-        terms = np.stack([S_r[sl], S_e[sl], S_c], axis=1)
-        terms[~ok[sl]] = 1.0
+        if S_c_all is not None:
+            t = terms[sl]
+        else:
+            t = np.stack([S_r[sl], S_e[sl], view.coverage_cost(c[sl], rho[sl], o.cover_uv)], axis=1)
+            t[~ok[sl]] = 1.0
         view.n_evals += n
-        out.append((terms, ground[sl]))
+        out.append((t, ground[sl]))
     return out
 
 

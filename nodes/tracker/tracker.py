@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from counterpart.body.camera import Camera
-from counterpart.body.kinematics import RowDims, anchor_points, forward_kinematics
+from counterpart.body.kinematics import anchor_points, forward_kinematics, row_dims
 from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, N_JOINTS, BodyDims
 
@@ -625,7 +625,7 @@ def joints_jointly(trackers: Sequence[Tracker], ests: Sequence[Estimate]) -> lis
     if not ests:
         return []
     means = np.stack([e.mean for e in ests])
-    pts = anchor_points(means, RowDims([t.dims for t in trackers], [1] * len(ests)))
+    pts = anchor_points(means, row_dims(tuple(t.dims for t in trackers), (1,) * len(ests)))
     return list(pts[:, :N_JOINTS].astype(np.float32))
 
 
