@@ -78,7 +78,7 @@ def calibrate_video(
             shape = frame.shape[:2]
             obs = PeopleObservations(frame.shape[1], frame.shape[0], max_observations=4000)
         if obs.wants_detections(obs.add(result.people, n / (fps or 25.0), result.labels)):
-            obs.add_detections(*detect_people(detector, frame), n / (fps or 25.0))
+            obs.add_detections(*detect_people(detector, frame, obs.next_smallest), n / (fps or 25.0))
         if scene.wants(n):
             scene.add(frame, result.people)
         n += 1

@@ -157,7 +157,7 @@ def sim_inputs(seed: int, seconds: float) -> dict[str, Any]:
     for i, frame in enumerate(frames):
         result = extractor.process(frame)
         if obs.wants_detections(obs.add(result.people, i / stream.fps, result.labels)):
-            obs.add_detections(*detect_people(detector, frame), i / stream.fps)
+            obs.add_detections(*detect_people(detector, frame, obs.next_smallest), i / stream.fps)
         if scene.wants(i):
             scene.add(frame, result.people)
     # the true points: the crown (11 cm over the head joint) over the mid-ankle put on the ground

@@ -246,7 +246,9 @@ class Calibration(Node):
         if image is not None and image.shape[:2] != (size[1], size[0]):
             image = None
         if image is not None and self.detector is not None and self.observations.wants_detections(added):
-            added += self.observations.add_detections(*detect_people(self.detector, image), time_s)
+            added += self.observations.add_detections(
+                *detect_people(self.detector, image, self.observations.next_smallest), time_s
+            )
         self.tally("people_observed", added)
         if image is not None and self.scene.wants(msg.seq):
             self.scene.add(image, msg.people)
