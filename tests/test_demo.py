@@ -19,11 +19,11 @@ from counterpart.bus.launchfile import check, find_launch_file, load
 from tests.launching import REPO
 
 
-@pytest.mark.timeout(600)  # trains every default model first: about 30 s on two idle cores
-def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path) -> None:
+@pytest.mark.timeout(600)  # the session's first demo trains every default model first
+def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path, demo_models: Path) -> None:
     env = {
         **os.environ,
-        "COUNTERPART_MODELS": str(tmp_path / "models"),
+        "COUNTERPART_MODELS": str(demo_models),
         "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpd-", dir="/tmp"),
     }
     res = subprocess.run(
@@ -35,7 +35,7 @@ def test_demo_builds_models_runs_the_graph_and_writes_its_outputs(tmp_path: Path
         timeout=600,
     )
     assert res.returncode == 0, res.stderr[-3000:]
-    models = sorted(p.name for p in (tmp_path / "models").iterdir())
+    models = sorted(p.name for p in demo_models.iterdir())
     assert "tracker_prior.npz" in models and "responder-dual-hmm.npz" in models
     videos = [p for p in (tmp_path / "out").glob("demo.*") if p.suffix in (".mp4", ".avi")]
     assert len(videos) == 1

@@ -21,11 +21,11 @@ N_FRAMES = 30
 
 
 @pytest.fixture(scope="module")
-def env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
-    """One model cache for the module (the first demo builds the default models into it)."""
+def env(demo_models: Path) -> dict[str, str]:
+    """The session's model cache (the first demo builds the default models into it)."""
     return {
         **os.environ,
-        "COUNTERPART_MODELS": str(tmp_path_factory.mktemp("models")),
+        "COUNTERPART_MODELS": str(demo_models),
         "COUNTERPART_HOME": tempfile.mkdtemp(prefix="cpi-", dir="/tmp"),
     }
 
@@ -86,7 +86,7 @@ def _video_frames_and_fps(out: Path) -> tuple[int, float]:
     return n, fps
 
 
-@pytest.mark.timeout(600)  # the first demo of the module trains the default models: about 30 s
+@pytest.mark.timeout(600)  # the first demo of the session trains the default models
 def test_a_file_is_processed_frame_by_frame_and_written_at_its_own_rate(
     clip: Path, env: dict[str, str], tmp_path: Path
 ) -> None:
