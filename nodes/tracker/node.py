@@ -23,8 +23,8 @@ frames: ``search_cpu_ms`` (the people's tracking, the node's messaging aside), `
 (the annealing layers alone) and ``handler_cpu_ms`` (the whole frame, its message included);
 ``budget_over`` counts the frames whose handling took more than the budget (at the floors of the
 search, or on a track's first search). Under a budget a track's first search is spread over frames
-(``start_layers``): a start held the frame up for ~4 running frames' CPU (20 layers against 3 at the
-floors) and the real-time queues dropped the frames behind it.
+(``start_layers``): in one frame its 20 layers, against 3 at the budget's floors, held that frame up
+and the real-time queues dropped the frames behind it.
 """
 
 from __future__ import annotations
