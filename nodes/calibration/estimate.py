@@ -377,9 +377,9 @@ def _rotations(tilt: np.ndarray, roll: np.ndarray) -> np.ndarray:
     """(B, 3, 3) :func:`rotation` of each of the B (tilt, roll) pairs, radians."""
     s, c = np.sin(tilt), np.cos(tilt)
     sr, cr = np.sin(roll), np.cos(roll)
-    z, o = np.zeros_like(s), np.ones_like(s)
-    R0 = np.stack([o, z, z, z, -c, s, z, -s, -c], -1).reshape(-1, 3, 3)
-    Rz = np.stack([cr, -sr, z, sr, cr, z, z, z, o], -1).reshape(-1, 3, 3)
+    R0, Rz = np.zeros((2, len(s), 3, 3))
+    R0[:, 0, 0], R0[:, 1, 1], R0[:, 1, 2], R0[:, 2, 1], R0[:, 2, 2] = 1.0, -c, s, -s, -c
+    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = cr, -sr, sr, cr, 1.0
     return Rz @ R0
 
 
