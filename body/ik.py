@@ -53,19 +53,23 @@ def _yxz(R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _limb(
-    R_parent: np.ndarray, top: np.ndarray, mid: np.ndarray, end: np.ndarray, sign: float, knee: bool
+    R_parent: np.ndarray,
+    top: np.ndarray,
+    mid: np.ndarray,
+    end: np.ndarray,
+    sign: float | np.ndarray,
+    knee: bool | np.ndarray,
 ) -> tuple[np.ndarray, ...]:
-    """flex, abd, rot, bend of a limb top->mid->end under parent rotation (N,3,3)."""
+    """flex, abd, rot, bend of a limb top->mid->end under parent rotation (N,3,3); ``sign`` and
+    ``knee`` per row (N,) or for all rows.
+    """
     u = np.einsum("nji,nj->ni", R_parent, _unit(mid - top))  # parent frame
     p = np.arcsin(np.clip(u[:, 0], -1.0, 1.0))
     f = np.arctan2(u[:, 2], -u[:, 1])
     R_a = R_parent @ rot_x(-f) @ rot_z(p)
     w = np.einsum("nji,nj->ni", R_a, _unit(end - mid))
     bend = np.arccos(np.clip(-w[:, 1], -1.0, 1.0))
-    if knee:
-        beta = np.arctan2(-w[:, 0], -w[:, 2])
-    else:
-        beta = np.arctan2(w[:, 0], w[:, 2])
+    beta = np.where(knee, np.arctan2(-w[:, 0], -w[:, 2]), np.arctan2(w[:, 0], w[:, 2]))
     beta = np.where(np.sin(bend) > 1e-3, beta, 0.0)
     return f, sign * p, -sign * beta, bend
 
@@ -110,17 +114,25 @@ def inverse_kinematics(X: np.ndarray) -> np.ndarray:
     P[:, g["head_tilt"]] = np.arcsin(np.clip(d[:, 0], -1.0, 1.0))
     P[:, g["head_nod"]] = np.arctan2(d[:, 2], d[:, 1])
 
-    for side, sign in (("l", 1.0), ("r", -1.0)):
-        vals = _limb(
-            R_torso, X[:, J[f"{side}_shoulder"]], X[:, J[f"{side}_elbow"]], X[:, J[f"{side}_wrist"]], sign, knee=False
-        )
-        for name, v in zip(("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex"), vals):
-            P[:, g[f"{side}_{name}"]] = v
-        vals = _limb(
-            R_pelvis, X[:, J[f"{side}_hip"]], X[:, J[f"{side}_knee"]], X[:, J[f"{side}_ankle"]], sign, knee=True
-        )
-        for name, v in zip(("hip_flex", "hip_abd", "hip_rot", "knee_flex"), vals):
-            P[:, g[f"{side}_{name}"]] = v
+    # the four limbs as one batch of 4N rows (left arms, right arms, left legs, right legs), as
+    # kinematics._chain does: the same operations on every row, a quarter of the calls (the
+    # renderer fits every partner it draws, one at a time)
+    limbs = (("l", "shoulder", "elbow", "wrist"), ("r", "shoulder", "elbow", "wrist"))
+    limbs += (("l", "hip", "knee", "ankle"), ("r", "hip", "knee", "ankle"))
+    top, mid, end = (np.concatenate([X[:, J[f"{lb[0]}_{lb[k]}"]] for lb in limbs]) for k in (1, 2, 3))
+    vals = _limb(
+        np.concatenate([R_torso, R_torso, R_pelvis, R_pelvis]),
+        top,
+        mid,
+        end,
+        np.repeat([1.0, -1.0, 1.0, -1.0], N),
+        np.repeat([False, False, True, True], N),
+    )
+    names = (("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex"),) * 2
+    names += (("hip_flex", "hip_abd", "hip_rot", "knee_flex"),) * 2
+    for k, (lb, dofs) in enumerate(zip(limbs, names)):
+        for name, v in zip(dofs, vals):
+            P[:, g[f"{lb[0]}_{name}"]] = v[k * N : (k + 1) * N]
     return P
 
 
@@ -140,6 +152,13 @@ _LENGTHS = (
 )
 
 
+def _median0(a: np.ndarray) -> np.ndarray:
+    """The median over the first axis; of one frame, that frame's values as they are (which is what
+    ``np.median`` returns for them, at a fraction of its cost: the renderer fits one frame at a time).
+    """
+    return a[0] if len(a) == 1 else np.median(a, axis=0)
+
+
 def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     """Body dimensions fitted to joint positions (median bone lengths over frames).
 
@@ -157,7 +176,7 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     # every bone's median length over the frames in one call (per bone, the small numpy calls
     # cost more than the arithmetic: the renderer fits each partner it draws)
     ends = np.array([(J[a], J[b]) for a, b in _LENGTHS])
-    med = np.median(np.linalg.norm(X[:, ends[:, 0]] - X[:, ends[:, 1]], axis=-1), axis=0)
+    med = _median0(np.linalg.norm(X[:, ends[:, 0]] - X[:, ends[:, 1]], axis=-1))
     lengths = dict(zip(_LENGTHS, med.tolist()))
 
     def length(a: str, b: str) -> float:
@@ -168,7 +187,7 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     k = (thigh + shin) / (base.thigh + base.shin)
     out = base.scaled(base.height * k)
     pelvis = 0.5 * (X[:, J["l_hip"]] + X[:, J["r_hip"]])
-    torso = float(np.median(np.linalg.norm(X[:, J["neck"]] - pelvis, axis=-1)))
+    torso = float(_median0(np.linalg.norm(X[:, J["neck"]] - pelvis, axis=-1)))
     # Ankles are lowest while the foot is planted; a low percentile ignores the swing phase.
     ankle = float(np.percentile(X[:, [J["l_ankle"], J["r_ankle"]], 1], 5))
     ankle = max(ankle, 0.5 * out.ankle_height)
@@ -184,7 +203,7 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
         ankle_height=ankle,
     )
     sh = 0.5 * (X[:, J["l_shoulder"]] + X[:, J["r_shoulder"]])
-    drop = float(np.median(np.einsum("ni,ni->n", X[:, J["neck"]] - sh, _unit(X[:, J["neck"]] - pelvis))))
+    drop = float(_median0(np.einsum("ni,ni->n", X[:, J["neck"]] - sh, _unit(X[:, J["neck"]] - pelvis))))
     vals["shoulder_drop"] = max(drop, 0.0)
     vals["chest_drop"] = 0.5 * torso
     vals["height"] = ankle + shin + thigh + torso + vals["neck_to_head"] + out.head_half_height

@@ -301,3 +301,30 @@ def test_frames_follow_the_documented_matrix_chain() -> None:
     neck = P[:, :3] + tor @ np.array([0.0, dims.torso_length, 0.0])
     np.testing.assert_allclose(pts[:, J["neck"]], neck, atol=1e-12)
     np.testing.assert_allclose(anchor_points(P, dims), pts, atol=0)
+
+
+def test_inverse_kinematics_of_one_frame_is_the_batch_row_and_the_limbs_one_at_a_time() -> None:
+    # the four limbs go through ik._limb as one batch of rows, and dims_from_joints skips the median
+    # of a single frame: each must give the numbers of the per-limb, per-frame computation exactly
+    from counterpart.body.ik import _limb, _median0, dims_from_joints, inverse_kinematics
+
+    rng = np.random.default_rng(3)
+    X = forward_kinematics(random_poses(6, 4)) + rng.normal(0, 0.02, (6, 14, 3))
+    Q = inverse_kinematics(X)
+    for n in range(6):
+        assert np.array_equal(inverse_kinematics(X[n]), Q[n : n + 1])
+    # one limb at a time (scalar side and knee), under the torso and pelvis frames of the batch
+    R = rng.normal(size=(6, 3, 3))
+    top, mid, end = (X[:, JOINT_INDEX[j]] for j in ("l_hip", "l_knee", "l_ankle"))
+    for sign in (1.0, -1.0):
+        for knee in (False, True):
+            one = _limb(R, top, mid, end, sign, knee)
+            rows = _limb(
+                np.concatenate([R, R]), np.concatenate([top, top]), np.concatenate([mid, mid]),
+                np.concatenate([end, end]), np.full(12, sign), np.full(12, knee),
+            )  # fmt: skip
+            assert all(np.array_equal(a, b[6:]) for a, b in zip(one, rows))
+    lengths = np.linalg.norm(X[:1, :, None] - X[:1, None], axis=-1).reshape(1, -1)
+    assert np.array_equal(_median0(lengths), np.median(lengths, axis=0))
+    assert np.array_equal(_median0(lengths[:, :3].T), np.median(lengths[:, :3].T, axis=0))
+    assert dims_from_joints(X[2]).height > 1.0

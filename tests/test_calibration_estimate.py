@@ -537,3 +537,55 @@ def test_the_height_is_as_unsure_as_the_rotation_the_lines_give() -> None:
     assert err > 0.05, est.describe()  # the lines' horizon is off
     assert err > 2 * alone.height_std, alone.describe()  # held exact: sure of a wrong height
     assert err < 1.5 * est.height_std and est.height_std < 2 * err, est.describe()
+
+
+def test_the_batched_residuals_and_starts_are_the_single_ones_to_the_bit() -> None:
+    # the fits' finite differences and their grid of starts evaluate many parameter vectors in one
+    # vectorised call (estimate._Batched); each row must be the single call's arithmetic exactly, so
+    # that the Jacobian, the starts' order and the estimate do not move by a bit
+    from scipy.optimize import least_squares
+
+    from counterpart.nodes.calibration.estimate import (
+        _Batched,
+        _line_residuals,
+        _line_scale,
+        _relative_heights,
+        _residuals,
+    )
+
+    cam = _camera(2.2, 25.0, 55.0, distance=5.0)
+    heads, feet, ids, _ = _across(cam, 7, people=((-0.8, 1.68), (0.8, 1.80), (0.0, 1.7)), lean=0.05)
+    lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
+    cfg = CalibrationConfig()
+    scale = np.full((len(heads), 2), 3.0)
+    args = (heads, feet, ids, scale, (W, H), cfg, 300.0, 3, lines, _line_scale(lines, cfg))
+    rng = np.random.default_rng(0)
+    X = np.column_stack(
+        [
+            np.log(rng.uniform(200, 400, 9)),
+            rng.uniform(0.0, 0.6, 9),
+            rng.uniform(-0.05, 0.05, 9),
+            np.log(rng.uniform(1.5, 3.0, 9)),
+            np.log(rng.uniform(1.5, 1.9, (9, 3))),
+            rng.uniform(-np.pi, np.pi, (9, lines.n_horizontal)),
+        ]
+    )
+    batch = _residuals(X, *args)
+    assert batch.shape == (9, len(_residuals(X[0], *args)))
+    assert all(np.array_equal(batch[i], _residuals(X[i], *args)) for i in range(9))
+    no_lines = args[:8] + (None, None)
+    assert all(np.array_equal(_residuals(X[:, :7], *no_lines)[i], _residuals(X[i, :7], *no_lines)) for i in range(9))
+    Y = X[:, [0, 1, 2, 7, 8]]
+    largs = (lines, _line_scale(lines, cfg), (W, H), cfg, 300.0)
+    assert all(np.array_equal(_line_residuals(Y, *largs)[i], _line_residuals(Y[i], *largs)) for i in range(9))
+    h = _relative_heights(np.exp(X[:, 0]), X[:, 1], X[:, 2], heads, feet, (W, H))
+    assert all(
+        np.array_equal(h[i], _relative_heights(np.exp(X[i, 0]), X[i, 1], X[i, 2], heads, feet, (W, H)))
+        for i in range(9)
+    )
+    # scipy's own finite differences, one call per column, give the same fit to the bit
+    one = least_squares(_residuals, X[0], args=args, loss="soft_l1", x_scale="jac", max_nfev=30)
+    many = least_squares(
+        _residuals, X[0], args=args, loss="soft_l1", x_scale="jac", max_nfev=30, workers=_Batched(_residuals, args)
+    )
+    assert np.array_equal(one.x, many.x) and np.array_equal(one.jac, many.jac) and one.nfev == many.nfev

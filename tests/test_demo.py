@@ -88,6 +88,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("calibration", "detect_frames"),
         ("calibration", "every"),
         ("calibration", "cpu_share"),  # real time: the estimates' share of a core (lockstep: deterministic)
+        ("calibration", "cpu_burst_s"),
     }
     for name, decl in demo.nodes.items():
         other = replay.nodes[name]

@@ -469,3 +469,15 @@ def test_badges_show_only_signals_that_are_on_for_tracked_people_above_the_head(
         signals=SocialSignals(people=[replace(signals[0], labels=np.zeros(6, np.int8))]),
     )
     assert not changed(comp.render(off)).any()
+
+
+def test_the_partner_painted_is_its_facets_far_to_near_in_fixed_point() -> None:
+    # what _cone_fill gathers for the painting in one go is cone_facets' list of polygons, each in
+    # order, in fixed point, with its shade: a partner half out of the picture too (facets dropped)
+    for joints in (partner_joints(), partner_joints() + [1.4, 0.0, 0.0]):
+        ends, radii = draw.partner_cones(joints)
+        polys, shade, _ = draw.cone_facets(ends, radii, CAM)
+        fixed, starts, colours = draw._cone_fill(ends, radii, CAM, (200, 150, 100), None, 16, 0.35)
+        assert starts == np.cumsum([0] + [len(p) for p in polys]).tolist()
+        assert np.array_equal(fixed, np.round(np.concatenate(polys) * draw._SCALE).astype(np.int32))
+        assert colours == np.clip(np.array([200.0, 150.0, 100.0]) * shade[:, None], 0, 255).astype(int).tolist()

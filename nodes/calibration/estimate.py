@@ -381,38 +381,57 @@ def usable(
     )
 
 
+def _rotations(tilt: np.ndarray, roll: np.ndarray) -> np.ndarray:
+    """(B, 3, 3) :func:`rotation` of each of the B (tilt, roll) pairs, radians."""
+    s, c = np.sin(tilt), np.cos(tilt)
+    sr, cr = np.sin(roll), np.cos(roll)
+    R0, Rz = np.zeros((2, len(s), 3, 3))
+    R0[:, 0, 0], R0[:, 1, 1], R0[:, 1, 2], R0[:, 2, 1], R0[:, 2, 2] = 1.0, -c, s, -s, -c
+    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2] = cr, -sr, sr, cr, 1.0
+    return Rz @ R0
+
+
 def _project_heads(
     x: np.ndarray, head: np.ndarray, foot: np.ndarray, track: np.ndarray, size: tuple[int, int]
 ) -> np.ndarray:
-    """(N, 2) predicted head pixels for parameters ``x`` = (log f, tilt, roll, log h_c, log H_k...)."""
-    f, tilt, roll, hc = np.exp(x[0]), x[1], x[2], np.exp(x[3])
-    Hk = np.exp(x[4:])
+    """(N, 2) predicted head pixels for parameters ``x`` = (log f, tilt, roll, log h_c, log H_k...);
+    (B, N, 2) for B parameter vectors ``x`` of shape (B, 4 + K) at once (one vectorised call for all
+    of a finite-difference Jacobian's columns, :class:`_Batched`).
+    """
+    X = np.asarray(x, np.float64)
+    B = X.reshape(-1, X.shape[-1])
+    f, hc, Hk = np.exp(B[:, 0])[:, None, None], np.exp(B[:, 3])[:, None], np.exp(B[:, 4:])
     W, H = size
     c = np.array([(W - 1) / 2.0, (H - 1) / 2.0])
-    R = rotation(tilt, roll)
-    d = np.column_stack([(foot - c) / f, np.ones(len(foot))]) @ R  # world directions of the foot rays
-    down = np.maximum(-d[:, 1], 1e-4)  # at or above the horizon: far away
+    R = _rotations(B[:, 1], B[:, 2])
+    rays = np.concatenate([(foot - c) / f, np.ones((len(B), len(foot), 1))], axis=-1)
+    d = rays @ R  # world directions of the foot rays
+    down = np.maximum(-d[..., 1], 1e-4)  # at or above the horizon: far away
     s = hc / down
-    rel = s[:, None] * d  # G - C
-    rel[:, 1] += Hk[track]  # head - C
-    Xc = rel @ R.T
-    z = np.maximum(Xc[:, 2], 1e-3)
-    return f * Xc[:, :2] / z[:, None] + c
+    rel = s[..., None] * d  # G - C
+    rel[..., 1] += Hk[:, track]  # head - C
+    Xc = rel @ R.transpose(0, 2, 1)
+    z = np.maximum(Xc[..., 2], 1e-3)
+    return (f * Xc[..., :2] / z[..., None] + c).reshape(*X.shape[:-1], len(foot), 2)
 
 
 def _vanishing_points(x: np.ndarray, n_people: int, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
     """(N, 3) homogeneous vanishing point predicted for each scene segment: the image of the world
     vertical for the vertical family, of the direction (cos phi_j, 0, sin phi_j) for horizontal
-    family j (phi_j = x[4 + n_people + j]).
+    family j (phi_j = x[4 + n_people + j]); (B, N, 3) for B parameter vectors ``x`` (B, P).
     """
+    X = np.asarray(x, np.float64)
+    B = X.reshape(-1, X.shape[-1])
     W, H = size
-    f = np.exp(x[0])
-    KR = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]]) @ rotation(x[1], x[2])
-    phi = x[4 + n_people :]
-    dirs = np.zeros((len(lines.vertical), 3))
-    dirs[lines.vertical, 1] = 1.0
-    dirs[~lines.vertical, 0], dirs[~lines.vertical, 2] = np.cos(phi), np.sin(phi)
-    return (dirs @ KR.T)[lines.family]
+    K = np.zeros((len(B), 3, 3))
+    K[:, 0, 0] = K[:, 1, 1] = np.exp(B[:, 0])
+    K[:, 0, 2], K[:, 1, 2], K[:, 2, 2] = (W - 1) / 2.0, (H - 1) / 2.0, 1.0
+    KR = K @ _rotations(B[:, 1], B[:, 2])
+    phi = B[:, 4 + n_people :]
+    dirs = np.zeros((len(B), len(lines.vertical), 3))
+    dirs[:, lines.vertical, 1] = 1.0
+    dirs[:, ~lines.vertical, 0], dirs[:, ~lines.vertical, 2] = np.cos(phi), np.sin(phi)
+    return (dirs @ KR.transpose(0, 2, 1))[:, lines.family].reshape(*X.shape[:-1], len(lines.family), 3)
 
 
 def _residuals(
@@ -428,18 +447,25 @@ def _residuals(
     lines: LineFamilies | None = None,
     line_scale: np.ndarray | None = None,
 ) -> np.ndarray:
-    r = ((_project_heads(x[: 4 + n_people], head, foot, track, size) - head) / scale).ravel()
-    statures = (x[4 : 4 + n_people] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height)
+    """Normalised residuals (M,) of the fit at ``x`` (P,): the people's heads (2N), the statures (K),
+    the camera's priors (2), then the segments and the right angles; (B, M) for B vectors ``x`` (B, P).
+    """
+    X = np.asarray(x, np.float64)
+    B = X.reshape(-1, X.shape[-1])
+    r = ((_project_heads(B[:, : 4 + n_people], head, foot, track, size) - head) / scale).reshape(len(B), -1)
+    statures = (B[:, 4 : 4 + n_people] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height)
     # the camera's priors stay Gaussian; a stature's stays robust (a fragment of a person, or a
     # ghost, tracked as a person of its own must not set the scale)
     camera = _gaussian_under_soft_l1(
-        np.array([(x[0] - np.log(f0)) / cfg.focal_log_std, x[2] / np.radians(cfg.roll_std_deg)])
+        np.stack([(B[:, 0] - np.log(f0)) / cfg.focal_log_std, B[:, 2] / np.radians(cfg.roll_std_deg)], -1)
     )
-    priors = np.concatenate([statures, camera])
+    priors = np.concatenate([statures, camera], -1)
     if lines is None or not len(lines.segments):
-        return np.concatenate([r, priors])
-    rl = segment_angles(lines.segments, _vanishing_points(x, n_people, lines, size)) / line_scale
-    return np.concatenate([r, priors, rl, _manhattan(x[4 + n_people :], cfg.manhattan_std_deg)])
+        out = np.concatenate([r, priors], -1)
+    else:
+        rl = segment_angles(lines.segments, _vanishing_points(B, n_people, lines, size)) / line_scale
+        out = np.concatenate([r, priors, rl, _manhattan(B[:, 4 + n_people :], cfg.manhattan_std_deg)], -1)
+    return out.reshape(*X.shape[:-1], -1)
 
 
 def _gaussian_under_soft_l1(q: np.ndarray) -> np.ndarray:
@@ -466,41 +492,63 @@ def _gaussian_under_soft_l1(q: np.ndarray) -> np.ndarray:
 def _manhattan(phi: np.ndarray, std_deg: float | None) -> np.ndarray:
     """(P,) residuals of the right-angle prior over the P pairs of ground directions ``phi`` (radians):
     sin(2 (phi_i - phi_j)) / (2 sigma), zero for square or parallel pairs, about the angle off square
-    over sigma near it.
+    over sigma near it; (B, P) for B rows of directions ``phi``.
     """
-    if std_deg is None or len(phi) < 2:
-        return np.zeros(0)
-    i, j = np.triu_indices(len(phi), 1)
-    return np.sin(2 * (phi[i] - phi[j])) / (2 * np.radians(std_deg))
+    phi = np.asarray(phi)
+    if std_deg is None or phi.shape[-1] < 2:
+        return np.zeros((*phi.shape[:-1], 0))
+    i, j = np.triu_indices(phi.shape[-1], 1)
+    return np.sin(2 * (phi[..., i] - phi[..., j])) / (2 * np.radians(std_deg))
 
 
 def _directions(x: np.ndarray, lines: LineFamilies, size: tuple[int, int]) -> np.ndarray:
     """(Fh,) ground directions phi of the horizontal families' detected vanishing points under the
-    camera of ``x`` (their start values).
+    camera of ``x`` (their start values); (B, Fh) for B vectors ``x`` (B, P).
+    """
+    X = np.asarray(x, np.float64)
+    B = X.reshape(-1, X.shape[-1])
+    K = _intrinsics(np.exp(B[:, 0]), size)
+    d = np.linalg.solve(K, lines.vp[~lines.vertical].T).transpose(0, 2, 1) @ _rotations(B[:, 1], B[:, 2])
+    return np.arctan2(d[..., 2], d[..., 0]).reshape(*X.shape[:-1], -1)
+
+
+def _intrinsics(f: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """(B, 3, 3) camera matrices of the B focal lengths ``f`` (pixels), the principal point at the
+    centre of frames of ``size`` (width, height).
     """
     W, H = size
-    f = np.exp(x[0])
-    K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
-    d = np.linalg.solve(K, lines.vp[~lines.vertical].T).T @ rotation(x[1], x[2])
-    return np.arctan2(d[:, 2], d[:, 0])
+    K = np.zeros((len(f), 3, 3))
+    K[:, 0, 0] = K[:, 1, 1] = f
+    K[:, 0, 2], K[:, 1, 2], K[:, 2, 2] = (W - 1) / 2.0, (H - 1) / 2.0, 1.0
+    return K
 
 
 def _relative_heights(
-    f: float, tilt: float, roll: float, head: np.ndarray, foot: np.ndarray, size: tuple[int, int]
+    f: float | np.ndarray,
+    tilt: float | np.ndarray,
+    roll: float | np.ndarray,
+    head: np.ndarray,
+    foot: np.ndarray,
+    size: tuple[int, int],
 ) -> np.ndarray:
     """(N,) head heights over a camera of height 1: the point of the foot's vertical line nearest to
-    the head, in the algebraic sense ``t x (a + h b) = 0`` (a the foot's image, b the vertical's).
+    the head, in the algebraic sense ``t x (a + h b) = 0`` (a the foot's image, b the vertical's);
+    (B, N) for B cameras (``f``, ``tilt``, ``roll`` of shape (B,)).
     """
-    W, H = size
-    K = np.array([[f, 0, (W - 1) / 2.0], [0, f, (H - 1) / 2.0], [0, 0, 1.0]])
-    R = rotation(tilt, roll)
-    d = np.column_stack([(foot - K[:2, 2]) / f, np.ones(len(foot))]) @ R
-    s = 1.0 / np.maximum(-d[:, 1], 1e-4)
-    a = (s[:, None] * d) @ (K @ R).T  # foot, homogeneous pixels
-    b = np.broadcast_to(K @ R @ np.array([0.0, 1.0, 0.0]), a.shape)  # the vertical direction's image
+    single = np.ndim(f) == 0 and np.ndim(tilt) == 0 and np.ndim(roll) == 0
+    f, tilt, roll = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, np.float64)) for v in (f, tilt, roll)))
+    K = _intrinsics(f, size)
+    R = _rotations(tilt, roll)
+    ones = np.ones((len(f), len(foot), 1))
+    d = np.concatenate([(foot - K[0, :2, 2]) / f[:, None, None], ones], -1) @ R
+    s = 1.0 / np.maximum(-d[..., 1], 1e-4)
+    KR = K @ R
+    a = (s[..., None] * d) @ KR.transpose(0, 2, 1)  # foot, homogeneous pixels
+    b = np.broadcast_to(KR[:, None, :, 1], a.shape)  # the vertical direction's image
     t = np.column_stack([head, np.ones(len(head))])
     ta, tb = np.cross(t, a), np.cross(t, b)
-    return -(ta * tb).sum(axis=1) / np.maximum((tb * tb).sum(axis=1), 1e-12)
+    h = -(ta * tb).sum(axis=-1) / np.maximum((tb * tb).sum(axis=-1), 1e-12)
+    return h[0] if single else h
 
 
 def _line_scale(lines: LineFamilies, config: CalibrationConfig) -> np.ndarray:
@@ -528,23 +576,22 @@ def _solve(
     line_scale = _line_scale(lines, config) if lines is not None else None
     W, H = size
     args = (head, foot, k, scale, size, config, f0, nk, lines, line_scale)
-    starts = []
-    for tilt in np.radians(config.grid_tilt_deg):
-        for fov in config.grid_fov_deg:
-            f = (W / 2.0) / np.tan(np.radians(fov) / 2)
-            h = _relative_heights(f, tilt, 0.0, head, foot, size)
-            hk = np.array([np.median(h[k == j]) for j in range(nk)])
-            if not (hk > 0.05).all():
-                continue
-            hc = config.person_height / np.exp(np.mean(np.log(hk)))
-            x0 = np.concatenate([[np.log(f), tilt, 0.0, np.log(hc)], np.log(hk * hc)])
-            if lines is not None:
-                x0 = np.concatenate([x0, _directions(x0, lines, size)])
-            r = _residuals(x0, *args)
-            starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), x0))
-    if not starts:
+    # every start of the grid at once
+    tilt, fov = (v.ravel() for v in np.meshgrid(np.radians(config.grid_tilt_deg), config.grid_fov_deg, indexing="ij"))
+    f = (W / 2.0) / np.tan(np.radians(fov) / 2)
+    h = _relative_heights(f, tilt, np.zeros_like(tilt), head, foot, size)
+    hk = np.stack([np.median(h[:, k == j], axis=1) for j in range(nk)], -1)
+    above = (hk > 0.05).all(axis=1)
+    if not above.any():
         return None
-    return _refine_best(_residuals, starts, args, config)
+    f, tilt, hk = f[above], tilt[above], hk[above]
+    hc = config.person_height / np.exp(np.mean(np.log(hk), axis=1))
+    x0 = np.column_stack([np.log(f), tilt, np.zeros_like(f), np.log(hc), np.log(hk * hc[:, None])])
+    if lines is not None:
+        x0 = np.concatenate([x0, _directions(x0, lines, size)], -1)
+    r = _residuals(x0, *args)
+    cost = np.sum(2 * (np.sqrt(1 + r * r) - 1), axis=-1)
+    return _refine_best(_residuals, [(float(c), x) for c, x in zip(cost, x0)], args, config)
 
 
 def _refine_best(fun: Any, starts: list[tuple[float, np.ndarray]], args: tuple, config: CalibrationConfig) -> Any:
@@ -574,11 +621,42 @@ def _refine_best(fun: Any, starts: list[tuple[float, np.ndarray]], args: tuple, 
         lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
         x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
         res = least_squares(
-            fun, x0, args=args, bounds=(lo, hi), loss="soft_l1", method="trf", x_scale="jac", max_nfev=200
+            fun,
+            x0,
+            args=args,
+            bounds=(lo, hi),
+            loss="soft_l1",
+            method="trf",
+            x_scale="jac",
+            max_nfev=200,
+            workers=_Batched(fun, args),
         )
         if best is None or res.cost < best.cost:
             best = res
     return best
+
+
+class _Batched:
+    """``least_squares``' map for its finite differences: the residuals at all of a Jacobian's
+    perturbed parameter vectors in one vectorised call of ``fun`` (which takes (B, P) rows), where
+    scipy would call it once per parameter. Each row is the same arithmetic as the single call, so
+    the Jacobian, and the fit, are the same to the bit; the cost of a fit was mostly these calls'
+    overhead (a person's stature, a family's direction: one column each).
+
+    Parameters
+    ----------
+    fun : callable
+        Residuals ``fun(x, *args)``, (B, M) for x of shape (B, P).
+    args : tuple
+        Its other arguments.
+    """
+
+    def __init__(self, fun: Any, args: tuple) -> None:
+        self.fun, self.args = fun, args
+
+    def __call__(self, _single: Any, xs: Any) -> list[np.ndarray]:
+        X = np.array(list(xs), np.float64)
+        return list(self.fun(X, *self.args)) if len(X) else []
 
 
 @dataclass(frozen=True)
@@ -603,13 +681,17 @@ class LinesCamera:
 def _line_residuals(
     y: np.ndarray, lines: LineFamilies, line_scale: np.ndarray, size: tuple[int, int], cfg: CalibrationConfig, f0: float
 ) -> np.ndarray:
-    """Residuals of the lines-only fit over ``y`` = (log f, tilt, roll, phi_1..phi_Fh)."""
-    x = np.concatenate([y[:3], [0.0], y[3:]])
+    """Residuals of the lines-only fit over ``y`` = (log f, tilt, roll, phi_1..phi_Fh); (B, M) for B
+    rows ``y``.
+    """
+    Y = np.asarray(y, np.float64)
+    B = Y.reshape(-1, Y.shape[-1])
+    x = np.concatenate([B[:, :3], np.zeros((len(B), 1)), B[:, 3:]], -1)
     rl = segment_angles(lines.segments, _vanishing_points(x, 0, lines, size)) / line_scale
     camera = _gaussian_under_soft_l1(
-        np.array([(y[0] - np.log(f0)) / cfg.lines_focal_log_std, y[2] / np.radians(cfg.roll_std_deg)])
+        np.stack([(B[:, 0] - np.log(f0)) / cfg.lines_focal_log_std, B[:, 2] / np.radians(cfg.roll_std_deg)], -1)
     )
-    return np.concatenate([rl, _manhattan(y[3:], cfg.manhattan_std_deg), camera])
+    return np.concatenate([rl, _manhattan(B[:, 3:], cfg.manhattan_std_deg), camera], -1).reshape(*Y.shape[:-1], -1)
 
 
 def fit_lines(
@@ -665,13 +747,11 @@ def _fit_lines(lines: LineFamilies, size: tuple[int, int], config: CalibrationCo
     f0 = (W / 2.0) / np.tan(np.radians(config.fov_deg) / 2)
     line_scale = _line_scale(lines, config)
     args = (lines, line_scale, (W, H), config, f0)
-    starts = []
-    for tilt in np.radians(config.grid_tilt_deg):
-        for fov in config.grid_fov_deg:
-            x0 = np.array([np.log((W / 2.0) / np.tan(np.radians(fov) / 2)), tilt, 0.0])
-            y0 = np.concatenate([x0, _directions(np.concatenate([x0, [0.0]]), lines, (W, H))])
-            r = _line_residuals(y0, *args)
-            starts.append((float(np.sum(2 * (np.sqrt(1 + r * r) - 1))), y0))
+    tilt, fov = (v.ravel() for v in np.meshgrid(np.radians(config.grid_tilt_deg), config.grid_fov_deg, indexing="ij"))
+    x0 = np.column_stack([np.log((W / 2.0) / np.tan(np.radians(fov) / 2)), tilt, np.zeros_like(tilt)])
+    y0 = np.concatenate([x0, _directions(np.column_stack([x0, np.zeros_like(tilt)]), lines, (W, H))], -1)
+    r = _line_residuals(y0, *args)
+    starts = [(float(c), y) for c, y in zip(np.sum(2 * (np.sqrt(1 + r * r) - 1), axis=-1), y0)]
     best = _refine_best(_line_residuals, starts, args, config)
     weights = np.ones(len(best.fun))
     weights[: len(lines.segments)] = duplicate_weights(lines.segments)
@@ -734,9 +814,10 @@ def _solve_people(
     z0 = np.concatenate([[np.log(hc)], np.log(hk * hc)])
 
     def fun(z: np.ndarray) -> np.ndarray:
-        return _residuals(np.concatenate([cam, z]), head, foot, k, scale, size, config, f0, nk)
+        x = np.concatenate([np.broadcast_to(cam, (*np.shape(z)[:-1], len(cam))), z], -1)
+        return _residuals(x, head, foot, k, scale, size, config, f0, nk)
 
-    res = least_squares(fun, z0, loss="soft_l1", method="trf", x_scale="jac", max_nfev=200)
+    res = least_squares(fun, z0, loss="soft_l1", method="trf", x_scale="jac", max_nfev=200, workers=_Batched(fun, ()))
     res.x = np.concatenate([cam, res.x])
     return res
 

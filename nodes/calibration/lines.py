@@ -195,20 +195,22 @@ def segment_angles(segments: np.ndarray, vp: np.ndarray) -> np.ndarray:
     ----------
     segments : ndarray of shape (N, 4)
         Segments x1, y1, x2, y2, pixels.
-    vp : ndarray of shape (3,) or (N, 3)
-        Homogeneous vanishing point for all segments, or one per segment (at infinity a direction).
+    vp : ndarray of shape (3,), (N, 3) or (B, N, 3)
+        Homogeneous vanishing point for all segments, or one per segment (at infinity a direction);
+        or B such sets of one per segment.
 
     Returns
     -------
-    ndarray of shape (N,)
+    ndarray of shape (N,) or (B, N)
         Signed sine of the angle.
     """
     d = segments[:, 2:] - segments[:, :2]
     mid = 0.5 * (segments[:, :2] + segments[:, 2:])
-    vp = np.broadcast_to(vp, (len(segments), 3))
-    to = vp[:, :2] - vp[:, 2:3] * mid
-    cross = d[:, 0] * to[:, 1] - d[:, 1] * to[:, 0]
-    return cross / np.maximum(np.linalg.norm(d, axis=1) * np.linalg.norm(to, axis=1), 1e-12)
+    vp = np.asarray(vp)
+    vp = np.broadcast_to(vp, (*vp.shape[:-2], len(segments), 3))
+    to = vp[..., :2] - vp[..., 2:3] * mid
+    cross = d[:, 0] * to[..., 1] - d[:, 1] * to[..., 0]
+    return cross / np.maximum(np.linalg.norm(d, axis=1) * np.linalg.norm(to, axis=-1), 1e-12)
 
 
 def find_families(

@@ -27,7 +27,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
-from counterpart.body.kinematics import cone_endpoints
+from counterpart.body.kinematics import SEGMENT_ANCHORS, anchor_points
 from counterpart.body.raster import cone_rims
 from counterpart.body.skeleton import BONES, JOINT_INDEX, N_JOINTS
 from counterpart.body.spline import evaluate_closed_bspline
@@ -128,8 +128,9 @@ def _cones_of(joints: bytes) -> tuple[np.ndarray, np.ndarray]:
     """
     X = np.frombuffer(joints, np.float64).reshape(N_JOINTS, 3)
     P = inverse_kinematics(X)
-    ends, radii = cone_endpoints(P, dims_from_joints(X))
-    return ends[0], radii
+    dims = dims_from_joints(X)
+    # cone_endpoints' points, without the body parts' rotation matrices it also builds
+    return anchor_points(P, dims)[0, SEGMENT_ANCHORS], dims.segment_radii()
 
 
 @lru_cache(maxsize=8)
@@ -204,13 +205,25 @@ def cone_facets(
     ValueError
         If ``ends`` is not (S, 2, 3) or ``radii`` not (S, 2).
     """
+    quad_px, cap_px, keep, shade, depth = _facets(ends, radii, camera, light, n_rim, ambient)
+    nq = len(quad_px)
+    polys = [quad_px[i] if i < nq else cap_px[i - nq] for i in keep]
+    return polys, shade, depth
+
+
+def _facets(
+    ends: np.ndarray, radii: np.ndarray, camera: Camera, light: np.ndarray | None, n_rim: int, ambient: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`cone_facets` as arrays: the quads' (S n_rim, 4, 2) and the caps' (2 S, n_rim, 2) pixel
+    corners, the visible facets far to near (indices into the quads, then the caps), their shades
+    and their depths.
+    """
     ends = np.asarray(ends, np.float64)
     radii = np.asarray(radii, np.float64)
     if ends.ndim != 3 or ends.shape[1:] != (2, 3) or radii.shape != ends.shape[:2]:
         raise ValueError(f"cones: ends {ends.shape} must be (S, 2, 3) and radii {radii.shape} (S, 2)")
     l_dir = default_light(camera) if light is None else np.asarray(light, np.float64) / np.linalg.norm(light)
     rims = cone_rims(ends[None], radii, n_rim)[0]  # (S, 2, n, 3)
-    S = len(ends)
     eye = camera.centre
     # side facets
     qi = _quad_index(n_rim)
@@ -240,9 +253,22 @@ def cone_facets(
     finite = np.concatenate([np.isfinite(quad_px).all(axis=(1, 2)), np.isfinite(cap_px).all(axis=(1, 2))])
     keep = np.flatnonzero(facing & finite)
     keep = keep[np.argsort(-depth[keep], kind="stable")]
-    nq = S * n_rim
-    polys = [quad_px[i] if i < nq else cap_px[i - nq] for i in keep]
-    return polys, shade[keep], depth[keep]
+    return quad_px, cap_px, keep, shade[keep], depth[keep]
+
+
+def _facet_corners(quad_px: np.ndarray, cap_px: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The corners of the facets ``keep`` (indices into the quads, then the caps), in that order,
+    as one (K, 2) array, and each facet's first corner (F + 1 offsets, the last one K): what the
+    list of :func:`cone_facets` concatenates, without a Python step per facet.
+    """
+    n_rim = cap_px.shape[1]
+    corners = np.concatenate([quad_px.reshape(-1, 2), cap_px.reshape(-1, 2)])
+    nq = len(quad_px)
+    count = np.where(keep < nq, 4, n_rim)
+    first = np.where(keep < nq, 4 * keep, 4 * nq + n_rim * (keep - nq))
+    starts = np.concatenate([[0], np.cumsum(count)])
+    at = np.repeat(first - starts[:-1], count) + np.arange(starts[-1])
+    return corners[at], starts
 
 
 def draw_cones(
@@ -305,13 +331,14 @@ def _cone_fill(
     ambient: float,
 ) -> _Fill:
     """What :func:`draw_cones` paints (see :data:`_Fill`), from :func:`cone_facets`."""
-    polys, shade, _ = cone_facets(ends, radii, camera, light, n_rim, ambient)
-    if not polys:
+    quad_px, cap_px, keep, shade, _ = _facets(ends, radii, camera, light, n_rim, ambient)
+    if not len(keep):
         return np.empty((0, 2), np.int32), [0], []
     # fixed point and colours of all facets at once: per facet, these small numpy calls cost more
     # than OpenCV's fill
-    fixed = np.round(np.concatenate(polys) * _SCALE).astype(np.int32)
-    starts = np.cumsum([0] + [len(p) for p in polys]).tolist()
+    corners, starts = _facet_corners(quad_px, cap_px, keep)
+    fixed = np.round(corners * _SCALE).astype(np.int32)
+    starts = starts.tolist()
     colours = np.clip(np.asarray(colour, np.float64) * shade[:, None], 0, 255).astype(np.int64).tolist()
     return fixed, starts, colours
 
