@@ -262,6 +262,14 @@ class ShadowConfig:
         the foreground; 8 leaves them shadows.
     shadow_window : int, default 7
         Side of the square window of the texture test, pixels (odd, >= 3).
+    texture_prefilter : float, default 0.5
+        Only shadow pixels whose whole window of the background is textured too, its variance above
+        this fraction of the texture floor (``shadow_texture_k``), are tested: that variance only
+        changes when the model learns, so it is kept with the model and the test's windows are
+        gathered at those pixels alone, not box-filtered over the frame when shadow covers much of
+        it (a sunlit street, the real clips). The variance over a window's shadow pixels alone
+        exceeds the whole window's mostly at a shadow's edge; 0.5 keeps nearly every pixel that
+        the full test finds textured. 0: no prefilter (every shadow pixel tested).
     """
 
     min_shadow_brightness: float = 0.4
@@ -270,8 +278,11 @@ class ShadowConfig:
     shadow_ncc: float = 0.4
     shadow_texture_k: float = 8.0
     shadow_window: int = 7
+    texture_prefilter: float = 0.5
 
     def __post_init__(self) -> None:
+        if self.texture_prefilter < 0.0:
+            raise ValueError(f"texture_prefilter must be >= 0 (0: off), got {self.texture_prefilter}")
         if not 0.0 <= self.min_shadow_brightness < 1.0:
             raise ValueError(f"min_shadow_brightness must be in [0, 1), got {self.min_shadow_brightness}")
         if self.max_highlight_brightness <= 1.0:
@@ -434,6 +445,9 @@ class HorprasertBackground:
         # (H + 2 r, W + 2 r) float32 grey sum of E, reflect-padded by r = shadow_window // 2
         self._e_pad: np.ndarray | None = None
         self._pad_flat: np.ndarray | None = None  # padded flat index -> frame flat index (texture test)
+        # (H, W) bool: E's whole shadow_window is textured (``ShadowConfig.texture_prefilter``);
+        # None: no prefilter
+        self._bg_textured: np.ndarray | None = None
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
@@ -803,10 +817,12 @@ class HorprasertBackground:
             return none
         planes = self._last_alpha[2]
         is_sh = labels == SHADOW
-        idx = np.flatnonzero(is_sh)  # on bool: several times faster than on the uint8 mask
+        sh = is_sh.view(np.uint8)
+        # only where the background's whole window is textured (``texture_prefilter``)
+        tested = is_sh if self._bg_textured is None else is_sh & self._bg_textured
+        idx = np.flatnonzero(tested)  # on bool: several times faster than on the uint8 mask
         if idx.size == 0:
             return none
-        sh = is_sh.view(np.uint8)
         r = self.shadows.shadow_window // 2
         h, w = sh.shape
         if idx.size * (2 * r + 1) ** 2 > h * w:
@@ -894,6 +910,8 @@ class HorprasertBackground:
         floor += var[2]
         floor *= np.float32(self.shadows.shadow_texture_k**2)
         textured = (sh > 0) & (ve > floor)
+        if self._bg_textured is not None:
+            textured &= self._bg_textured
         idx = np.flatnonzero(textured)
         h, w = sh.shape
         r = self.shadows.shadow_window // 2
@@ -1175,7 +1193,24 @@ class HorprasertBackground:
             # the texture test's background grey levels, padded as its windows read them: E is
             # fixed until the next update, so this runs with the update (in its worker thread)
             r = self.shadows.shadow_window // 2
-            self._e_pad = cv2.copyMakeBorder(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), r, r, r, r, cv2.BORDER_REFLECT)
+            e = cv2.add(cv2.add(mu[0], mu[1]), mu[2])
+            self._e_pad = cv2.copyMakeBorder(e, r, r, r, r, cv2.BORDER_REFLECT)
+            self._bg_textured = self._background_textured(e) if self.shadows.texture_prefilter > 0.0 else None
+
+    def _background_textured(self, e: np.ndarray) -> np.ndarray:
+        """(H, W) bool: the variance of E's grey sum ``e`` (H, W) float32 over each pixel's whole
+        ``shadow_window`` exceeds ``texture_prefilter`` times the texture test's floor there.
+        """
+        k = (self.shadows.shadow_window, self.shadows.shadow_window)
+        # centred on the frame's mean: the variance is a difference of float32 means, exact
+        # enough only near zero
+        c = cv2.subtract(e, float(cv2.mean(e)[0]))
+        mean = cv2.boxFilter(c, -1, k, borderType=cv2.BORDER_REFLECT)
+        var = cv2.boxFilter(cv2.multiply(c, c), -1, k, borderType=cv2.BORDER_REFLECT)
+        var -= cv2.multiply(mean, mean)
+        floor = cv2.add(cv2.add(self._var[0], self._var[1]), self._var[2])
+        floor *= np.float32(self.shadows.shadow_texture_k**2 * self.shadows.texture_prefilter)
+        return var > floor
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_
