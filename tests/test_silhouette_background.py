@@ -283,6 +283,37 @@ def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_te
     assert (on[cast] == SHADOW).mean() > 0.9
 
 
+def test_leg_correlation_on_blocks_is_the_weighted_correlation_of_the_blocks_shadow_means():
+    """``leg_scale`` 2: at each candidate, the correlation of the 2 x 2 blocks' mean grey levels over
+    their shadow pixels, frame against background, weighted by those pixels' number, over the 3 x 3
+    blocks around the candidate's (brute force in float64, away from the box's edges).
+    """
+    from counterpart.nodes.silhouette.body_shadow import _block_ncc
+
+    rng = np.random.default_rng(3)
+    hh, ww = 24, 30
+    m = (rng.random((hh, ww)) < 0.7).astype(np.float32)
+    e = rng.normal(0.0, 20.0, (hh, ww)).astype(np.float32)
+    grey = (0.5 * e + rng.normal(0.0, 15.0, (hh, ww))).astype(np.float32)
+    ys, xs = np.meshgrid(np.arange(2, hh - 2), np.arange(2, ww - 2), indexing="ij")
+    ys, xs = ys.ravel(), xs.ravel()
+    got = _block_ncc(m, grey, e, ys, xs, 2, 3)
+    blocks = lambda a: a.astype(np.float64).reshape(hh // 2, 2, ww // 2, 2).sum(axis=(1, 3))  # noqa: E731
+    n, g, eb = blocks(m), blocks(grey * m), blocks(e * m)
+    want = np.empty(ys.size)
+    for i, (y, x) in enumerate(zip(ys // 2, xs // 2)):
+        win = (slice(y - 1, y + 2), slice(x - 1, x + 2))
+        wgt, has = n[win], n[win] > 0
+        gm, em = g[win][has] / wgt[has], eb[win][has] / wgt[has]
+        wgt = wgt[has]
+        mg, me = np.average(gm, weights=wgt), np.average(em, weights=wgt)
+        vg, ve = np.average((gm - mg) ** 2, weights=wgt), np.average((em - me) ** 2, weights=wgt)
+        cov = np.average((gm - mg) * (em - me), weights=wgt)
+        want[i] = cov / np.sqrt(vg * ve)
+    assert np.allclose(got, want, atol=2e-3)
+    assert 0.2 < want.mean() < 0.9  # the frame follows the background, with noise
+
+
 def test_the_leg_step_leaves_unseen_background_and_wide_shadows_alone():
     # where the room was filled in (someone stood there through training) its texture is a
     # guess: a flat shadow hanging from foreground there stays a shadow; so does one wider than
@@ -317,6 +348,7 @@ def test_the_leg_step_leaves_unseen_background_and_wide_shadows_alone():
         {"leg_foot": 1.0},
         {"leg_width": 0.0},
         {"leg_window": 4},
+        {"leg_scale": 0},
     ],
 )
 def test_body_shadow_config_rejects_bad_values(bad):

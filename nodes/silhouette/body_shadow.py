@@ -61,6 +61,11 @@ class BodyShadowConfig:
         shadow is a leg (the shoes stand in their cast shadow); in [0, 1).
     leg_window : int, default=7
         Side of the square window of the correlation, pixels (odd, >= 3).
+    leg_scale : int, default=2
+        The correlation is worked out on blocks of this many pixels a side (each block's mean grey
+        level over its shadow pixels, weighted by their number), over a window of about
+        ``leg_window`` pixels (an odd number of blocks, at least 3): a quarter of the pixels at 2.
+        Trousers do not keep the floor's pattern at either scale. 1: on the pixels.
     """
 
     span_px: int = 15
@@ -71,6 +76,7 @@ class BodyShadowConfig:
     leg_width: float = 0.15
     leg_foot: float = 0.05
     leg_window: int = 7
+    leg_scale: int = 2
 
     def __post_init__(self) -> None:
         if self.span_px < 0:
@@ -87,6 +93,8 @@ class BodyShadowConfig:
             raise ValueError(f"body shadow leg_width must be > 0, got {self.leg_width}")
         if not 0.0 <= self.leg_foot < 1.0:
             raise ValueError(f"body shadow leg_foot must be in [0, 1), got {self.leg_foot}")
+        if self.leg_scale < 1:
+            raise ValueError(f"body shadow leg_scale must be >= 1 (1: pixels), got {self.leg_scale}")
         if self.leg_window < 3 or self.leg_window % 2 == 0:
             raise ValueError(f"body shadow leg_window must be odd and >= 3, got {self.leg_window}")
 
@@ -196,6 +204,8 @@ def _legs(
     h, w = fg.shape
     r = config.leg_window // 2
     k = (config.leg_window, config.leg_window)
+    scale = config.leg_scale
+    block_k = max(3, (config.leg_window // scale) | 1)  # the window in blocks: odd, about as wide
 
     def box(a: np.ndarray, at: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
         # the window sums read at the candidates: the moments below are per pixel, so the same
@@ -262,6 +272,11 @@ def _legs(
         # candidates' box with a margin of the window's half side: the sums over the whole frame
         by0, by1 = max(int(gy.min()) - r, 0), min(int(gy.max()) + r + 1, h)
         bx0, bx1 = max(int(gx.min()) - r, 0), min(int(gx.max()) + r + 1, w)
+        if scale > 1:
+            # the box on whole blocks: its near corner down to the block grid, a part block at
+            # the frame's far edge left out (its candidates read the last whole block)
+            by0, bx0 = by0 - by0 % scale, bx0 - bx0 % scale
+            by1, bx1 = by0 + max((by1 - by0) // scale, 1) * scale, bx0 + max((bx1 - bx0) // scale, 1) * scale
         m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
         crop = frame[by0:by1, bx0:bx1].astype(np.float32)
         grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
@@ -269,6 +284,9 @@ def _legs(
         # centred: the moments below are differences of float32 sums, exact enough only near zero
         grey -= np.float32(grey.mean())
         e = e - np.float32(e.mean())
+        if scale > 1:
+            out.append((gy * w + gx)[_block_ncc(m, grey, e, gy - by0, gx - bx0, scale, block_k) < config.leg_ncc])
+            continue
         at = (gy - by0, gx - bx0)
         inv_n = 1.0 / np.maximum(box(m, at), 1.0)
         em, gm = e * m, grey * m
@@ -279,3 +297,50 @@ def _legs(
         ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
         out.append((gy * w + gx)[ncc < config.leg_ncc])
     return np.concatenate(out) if out else np.empty(0, np.intp)
+
+
+def _block_ncc(
+    m: np.ndarray, grey: np.ndarray, e: np.ndarray, ys: np.ndarray, xs: np.ndarray, scale: int, k: int
+) -> np.ndarray:
+    """The leg step's correlation on ``scale`` x ``scale`` blocks: of the blocks' mean grey levels
+    over their shadow pixels, frame against background, each block weighted by its shadow
+    pixels, over a ``k`` x ``k`` window of blocks (``BORDER_REFLECT``) around each candidate's.
+
+    Parameters
+    ----------
+    m : ndarray of shape (H, W), dtype float32
+        1 on the shadow pixels of the box, 0 elsewhere; H and W multiples of ``scale``.
+    grey, e : ndarray of shape (H, W), dtype float32
+        The frame's and the background's grey levels there (centred).
+    ys, xs : ndarray of shape (K,), dtype int
+        The candidates, pixels in the box (those past its last whole block read that block).
+    scale, k : int
+        Block side, pixels; window side, blocks (odd).
+
+    Returns
+    -------
+    ndarray of shape (K,), dtype float32
+        The correlation at each candidate, in [-1, 1].
+    """
+    bh, bw = m.shape[0] // scale, m.shape[1] // scale
+
+    def small(a: np.ndarray) -> np.ndarray:  # block means
+        return cv2.resize(a, (bw, bh), interpolation=cv2.INTER_AREA)
+
+    at = (np.minimum(ys // scale, bh - 1), np.minimum(xs // scale, bw - 1))
+
+    def box(a: np.ndarray) -> np.ndarray:
+        return cv2.boxFilter(a, -1, (k, k), normalize=False, borderType=cv2.BORDER_REFLECT)[at]
+
+    # per block: its shadow share n_b and the sums of the grey levels over its shadow pixels
+    # (all divided by the block's area, which cancels below); a block's mean grey over its shadow
+    # is g_b / n_b, and its weighted square n_b (g_b / n_b)^2 = g_b^2 / n_b
+    nb = small(m)
+    gb, eb = small(grey * m), small(e * m)
+    inv_nb = 1.0 / np.maximum(nb, np.float32(1e-6))
+    inv_n = 1.0 / np.maximum(box(nb), np.float32(1.0 / scale**2))
+    me, mi = box(eb) * inv_n, box(gb) * inv_n
+    ve = box(eb * eb * inv_nb) * inv_n - me * me
+    vi = box(gb * gb * inv_nb) * inv_n - mi * mi
+    cov = box(gb * eb * inv_nb) * inv_n - mi * me
+    return cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
