@@ -292,12 +292,15 @@ def test_leg_correlation_on_blocks_is_the_weighted_correlation_of_the_blocks_sha
 
     rng = np.random.default_rng(3)
     hh, ww = 24, 30
-    m = (rng.random((hh, ww)) < 0.7).astype(np.float32)
-    e = rng.normal(0.0, 20.0, (hh, ww)).astype(np.float32)
-    grey = (0.5 * e + rng.normal(0.0, 15.0, (hh, ww))).astype(np.float32)
+    sh = np.where(rng.random((hh, ww)) < 0.7, 255, 0).astype(np.uint8)  # a 0 / 255 mask, as the step's
+    m = sh / 255.0
+    e = rng.normal(400.0, 60.0, (hh, ww)).astype(np.float32)
+    frame = np.clip(np.rint((0.2 * e + rng.normal(0.0, 15.0, (hh, ww)))[..., None] * [0.3, 0.4, 0.3]), 0, 255)
+    frame = frame.astype(np.uint8)
+    grey = frame.sum(axis=2)
     ys, xs = np.meshgrid(np.arange(2, hh - 2), np.arange(2, ww - 2), indexing="ij")
     ys, xs = ys.ravel(), xs.ravel()
-    got = _block_ncc(m, grey, e, ys, xs, 2, 3)
+    got = _block_ncc(sh, frame, e, ys, xs, 2, 3)
     blocks = lambda a: a.astype(np.float64).reshape(hh // 2, 2, ww // 2, 2).sum(axis=(1, 3))  # noqa: E731
     n, g, eb = blocks(m), blocks(grey * m), blocks(e * m)
     want = np.empty(ys.size)

@@ -277,6 +277,10 @@ def _legs(
             # the frame's far edge left out (its candidates read the last whole block)
             by0, bx0 = by0 - by0 % scale, bx0 - bx0 % scale
             by1, bx1 = by0 + max((by1 - by0) // scale, 1) * scale, bx0 + max((bx1 - bx0) // scale, 1) * scale
+            box_sl = (slice(by0, by1), slice(bx0, bx1))
+            ncc = _block_ncc(sh[box_sl], frame[box_sl], background[box_sl], gy - by0, gx - bx0, scale, block_k)
+            out.append((gy * w + gx)[ncc < config.leg_ncc])
+            continue
         m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
         crop = frame[by0:by1, bx0:bx1].astype(np.float32)
         grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
@@ -284,9 +288,6 @@ def _legs(
         # centred: the moments below are differences of float32 sums, exact enough only near zero
         grey -= np.float32(grey.mean())
         e = e - np.float32(e.mean())
-        if scale > 1:
-            out.append((gy * w + gx)[_block_ncc(m, grey, e, gy - by0, gx - bx0, scale, block_k) < config.leg_ncc])
-            continue
         at = (gy - by0, gx - bx0)
         inv_n = 1.0 / np.maximum(box(m, at), 1.0)
         em, gm = e * m, grey * m
@@ -299,8 +300,12 @@ def _legs(
     return np.concatenate(out) if out else np.empty(0, np.intp)
 
 
+#: the grey sum of a BGR pixel, as a ``cv2.transform`` matrix
+_GREY_SUM = np.ones((1, 3), np.float32)
+
+
 def _block_ncc(
-    m: np.ndarray, grey: np.ndarray, e: np.ndarray, ys: np.ndarray, xs: np.ndarray, scale: int, k: int
+    m: np.ndarray, frame: np.ndarray, e: np.ndarray, ys: np.ndarray, xs: np.ndarray, scale: int, k: int
 ) -> np.ndarray:
     """The leg step's correlation on ``scale`` x ``scale`` blocks: of the blocks' mean grey levels
     over their shadow pixels, frame against background, each block weighted by its shadow
@@ -308,10 +313,13 @@ def _block_ncc(
 
     Parameters
     ----------
-    m : ndarray of shape (H, W), dtype float32
-        1 on the shadow pixels of the box, 0 elsewhere; H and W multiples of ``scale``.
-    grey, e : ndarray of shape (H, W), dtype float32
-        The frame's and the background's grey levels there (centred).
+    m : ndarray of shape (H, W), dtype uint8 or float32
+        The same non-zero weight (1, or 255 of a 0 / 255 mask) on the shadow pixels of the box, 0
+        elsewhere; H and W multiples of ``scale``.
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        The frame there (its grey level: the sum of the three channels).
+    e : ndarray of shape (H, W), dtype float32
+        The background's grey levels there.
     ys, xs : ndarray of shape (K,), dtype int
         The candidates, pixels in the box (those past its last whole block read that block).
     scale, k : int
@@ -332,13 +340,20 @@ def _block_ncc(
     def box(a: np.ndarray) -> np.ndarray:
         return cv2.boxFilter(a, -1, (k, k), normalize=False, borderType=cv2.BORDER_REFLECT)[at]
 
-    # per block: its shadow share n_b and the sums of the grey levels over its shadow pixels
-    # (all divided by the block's area, which cancels below); a block's mean grey over its shadow
+    mf = m.astype(np.float32)
+    grey = cv2.transform(frame.astype(np.float32), _GREY_SUM)
+    # per block: its shadow weight n_b and the sums of the grey levels over its shadow pixels
+    # (all in the block's mean: the scale cancels below); a block's mean grey over its shadow
     # is g_b / n_b, and its weighted square n_b (g_b / n_b)^2 = g_b^2 / n_b
-    nb = small(m)
-    gb, eb = small(grey * m), small(e * m)
-    inv_nb = 1.0 / np.maximum(nb, np.float32(1e-6))
-    inv_n = 1.0 / np.maximum(box(nb), np.float32(1.0 / scale**2))
+    nb = small(mf)
+    gb, eb = small(cv2.multiply(grey, mf)), small(cv2.multiply(e, mf))
+    # centred on the box's mean over its shadow (g_b - c n_b is the block of (grey - c) m): the
+    # moments below are differences of float32 sums, exact enough only near zero
+    total = np.float32(nb.sum())
+    gb -= nb * (gb.sum() / total)
+    eb -= nb * (eb.sum() / total)
+    inv_nb = 1.0 / np.maximum(nb, np.float32(1e-6) * total)
+    inv_n = 1.0 / np.maximum(box(nb), np.float32(1e-6) * total)
     me, mi = box(eb) * inv_n, box(gb) * inv_n
     ve = box(eb * eb * inv_nb) * inv_n - me * me
     vi = box(gb * gb * inv_nb) * inv_n - mi * mi
