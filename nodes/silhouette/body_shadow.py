@@ -222,33 +222,33 @@ def _legs(
     sx, sy, sc = pts[keep, 0, 0], sy[keep], sc[keep]
     if sc.size == 0:
         return np.empty(0, np.intp)
-    # the rows from the foreground row above the first start to just above the lowest
-    # foreground row of the starts' regions (a hanging pixel lies above its region's feet band),
-    # in the columns of the starts (a hanging pixel's start is in its column)
-    y0, y1 = int(sy.min()) - 1, int(bottom[sc].max())
-    # the columns that hold a start, ascending (np.unique's values; its sort costs several times more)
-    cols = np.flatnonzero(np.bincount(sx, minlength=w))
-    f = fg[y0:y1, cols] != 0
-    s = sh[y0:y1, cols] != 0
-    rows = np.arange(y1 - y0, dtype=np.int16)[:, None]
-    # down each column: the last foreground row above a pixel and the last row of neither
-    # (int16: rows of a frame; half the memory of int32 to scan)
-    up = np.maximum.accumulate(np.where(f, rows, np.int16(-1)), axis=0)
-    gap = np.maximum.accumulate(np.where(f | s, np.int16(-1), rows), axis=0)
-    hang = s & (up > gap)
+    # Down from each start: the run of shadow straight below the foreground (a pixel hangs from
+    # the foreground above it when only shadow lies between; fg ends the run, and a pixel below
+    # that hangs from the next start), within the region's depth (the start itself is one row
+    # below the foreground) and above its feet band. Runs from different starts never overlap,
+    # and the starts are a few hundred: a (starts, depth) table instead of scans down whole columns.
+    height_s = height_s[keep]
+    reach = config.leg_depth * height_s
+    d = np.arange(int(reach.max()))  # rows below the start; a pixel there is d + 1 below the foreground
+    ys = sy[:, None] + d
+    inside = ys < h
+    ys = np.minimum(ys, h - 1)
+    hang = sh[ys, sx[:, None]] != 0
+    hang &= inside
+    np.logical_and.accumulate(hang, axis=1, out=hang)
+    hang &= d + 1 <= reach[:, None]
+    hang &= bottom[sc][:, None] - ys > config.leg_foot * height_s[:, None]
     if unseen is not None:
-        hang &= ~unseen[y0:y1, cols]
-    ys, xi = np.nonzero(hang)
-    if ys.size == 0:
+        hang &= ~unseen[ys, sx[:, None]]
+    si, di = np.nonzero(hang)
+    if si.size == 0:
         return np.empty(0, np.intp)
-    xs = cols[xi]
-    c = comp[ys + y0, xs]
+    # in raster order, as the steps below take them
+    flat = np.sort((sy[si] + di) * w + sx[si])
+    ys, xs = np.divmod(flat, w)
+    c = comp[ys, xs]
     height = bottom[c] - top[c] + 1
-    # within the region's depth below the foreground above, and above its feet band
-    ok = (ys - up[ys, xi] <= config.leg_depth * height) & (bottom[c] - (ys + y0) > config.leg_foot * height)
-    ys, xs, c, height = ys[ok], xs[ok], c[ok], height[ok]
-    if ys.size == 0:
-        return np.empty(0, np.intp)
+    y0 = 0
     # the length of the run of shadow each lies in along its row (on the rows that hold one):
     # the rows side by side, each between two unset pixels, so that no run crosses a row's end;
     # a run starts after a rise of the flat row and ends at the next fall
