@@ -246,10 +246,12 @@ def test_dark_clothes_inside_a_body_are_foreground_cast_shadows_stay_shadows():
     assert class_fractions(on, person_mask(110.0) & ~band)[FOREGROUND] > 0.99
 
 
-def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_texture():
+@pytest.mark.parametrize("scale", [1, 2])
+def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_texture(scale):
     """Trousers of the floor's colour, darker, hang from the torso: shadow by colour, but flat,
     where a cast shadow under the same torso keeps the floor's pattern. The floor's pattern is
-    too weak for the model's own texture test (``shadow_texture_k``), not for the leg step's.
+    too weak for the model's own texture test (``shadow_texture_k``), not for the leg step's, on
+    the pixels or on 2 x 2 blocks (``leg_scale``).
     """
     rng = np.random.default_rng(5)
     hh, ww = 120, 160
@@ -278,7 +280,7 @@ def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_te
 
     off = labels(BodyShadowConfig(leg_ncc=-1.0))
     assert (off[legs] == SHADOW).mean() > 0.9 and (off[cast] == SHADOW).mean() > 0.9
-    on = labels(BodyShadowConfig())
+    on = labels(BodyShadowConfig(leg_scale=scale))
     assert (on[legs] == FOREGROUND).mean() > 0.75  # a flat window correlates by chance now and then
     assert (on[cast] == SHADOW).mean() > 0.9
 

@@ -61,11 +61,12 @@ class BodyShadowConfig:
         shadow is a leg (the shoes stand in their cast shadow); in [0, 1).
     leg_window : int, default=7
         Side of the square window of the correlation, pixels (odd, >= 3).
-    leg_scale : int, default=2
+    leg_scale : int, default=1
         The correlation is worked out on blocks of this many pixels a side (each block's mean grey
         level over its shadow pixels, weighted by their number), over a window of about
-        ``leg_window`` pixels (an odd number of blocks, at least 3): a quarter of the pixels at 2.
-        Trousers do not keep the floor's pattern at either scale. 1: on the pixels.
+        ``leg_window`` pixels (an odd number of blocks, at least 3): at 2, a quarter of the
+        pixels, for real-time graphs (trousers do not keep the floor's pattern at either scale).
+        1: on the pixels.
     """
 
     span_px: int = 15
@@ -76,7 +77,7 @@ class BodyShadowConfig:
     leg_width: float = 0.15
     leg_foot: float = 0.05
     leg_window: int = 7
-    leg_scale: int = 2
+    leg_scale: int = 1
 
     def __post_init__(self) -> None:
         if self.span_px < 0:
