@@ -56,7 +56,10 @@ deterministic graph: every frame through every node.
    the per-node figures as ``real_<node>_*`` (medians over the clips) beside the simulator's figures
    of the same run; ``real_partner_frac_vs_sim``, ``real_partner_frac_steady_vs_sim`` and
    ``real_tracker_frac_steady_vs_sim`` the ratios of the clips' fractions to the simulator's (the
-   figures to read on a loaded machine).
+   figures to read on a loaded machine). Per clip also ``clip_frames`` (the file's frames) and
+   ``plays`` (``--frames`` over them): a clip shorter than the run is looped, and at each loop both
+   people jump back to their first places, a cut after which the tracks start again (counted in
+   ``tracker_starts``; UT-Interaction's clips have 100-180 frames, so 600 frames hold 3-6 cuts).
 
 The machine is shared: ``load_avg_1min`` is the load when the bench started; run it a few times.
 
@@ -260,6 +263,17 @@ def _times(bag: Path, topic: str) -> tuple[np.ndarray, np.ndarray]:
 
 def _pct(x: np.ndarray, q: float) -> float:
     return round(float(np.percentile(x, q)), 1) if len(x) else float("nan")
+
+
+def _clip_frames(clip: Path) -> int:
+    """Frames of a video file as its container gives them (0: unknown)."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(clip))
+    try:
+        return max(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)), 0)
+    finally:
+        cap.release()
 
 
 def realtime_figures(bag: Path, warmup_s: float) -> dict[str, float]:
@@ -476,6 +490,9 @@ def main() -> None:
             )
             for c in args.input
         }
+        for c in args.input:  # the loop's cuts: each one restarts the tracks
+            n = _clip_frames(Path(c))
+            real[Path(c).stem].update({"clip_frames": n, "plays": round(args.frames / n, 2) if n else None})
         out["real"] = real
         for k in (*REAL_FIGURES, *STEADY_FIGURES):
             out[f"real_{k}"] = round(float(np.median([r[k] for r in real.values()])), 3)

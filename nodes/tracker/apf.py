@@ -404,6 +404,7 @@ class AnnealedParticleFilter:
         n_layers: int | None = None,
         min_std: np.ndarray | None = None,
         max_std: np.ndarray | None = None,
+        first_layer: int = 0,
     ) -> Generator[np.ndarray, np.ndarray, Estimate]:
         """:meth:`step` as a generator, for a caller that evaluates the likelihood itself (of
         several people's particles at once): it yields each layer's (N, DOF) particles, is sent
@@ -413,6 +414,10 @@ class AnnealedParticleFilter:
         ----------
         predict_fn, n_layers, min_std, max_std
             As :meth:`step`.
+        first_layer : int, default=0
+            Index of the first of these layers in a longer schedule that an earlier frame began
+            (the diffusion shrinks by ``shrink`` per layer from there): a search spread over
+            several frames continues where the last one stopped.
 
         Yields
         ------
@@ -458,7 +463,9 @@ class AnnealedParticleFilter:
             idx = systematic_resample(w, self.rng)
             P = P[idx]
             if m < M - 1:
-                std = np.clip(self.diffusion * weighted_std(P, np.full(len(P), 1.0 / len(P))), lo, hi) * self.shrink**m
+                std = np.clip(
+                    self.diffusion * weighted_std(P, np.full(len(P), 1.0 / len(P))), lo, hi
+                ) * self.shrink ** (m + first_layer)
                 P = clip_to_limits(P + self.rng.normal(size=P.shape) * std)
         self.particles = P
         return Estimate(mean, est_best, ess, est_ll, P, betas, surv, n_evals)
@@ -544,6 +551,7 @@ class ParticleFilter:
         n_layers: int | None = None,
         min_std: np.ndarray | None = None,
         max_std: np.ndarray | None = None,
+        first_layer: int = 0,
     ) -> Generator[np.ndarray, np.ndarray, Estimate]:
         """:meth:`step` as a generator (as :meth:`AnnealedParticleFilter.steps`: one layer).
 
@@ -551,6 +559,8 @@ class ParticleFilter:
         ----------
         predict_fn, n_layers, min_std, max_std
             As :meth:`step`.
+        first_layer : int, default=0
+            Unused (one layer: no schedule to continue); for the annealed filter's signature.
 
         Yields
         ------

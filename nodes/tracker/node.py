@@ -22,7 +22,9 @@ started (``budget_starts``: first searches, on the longer schedule) and CPU time
 frames: ``search_cpu_ms`` (the people's tracking, the node's messaging aside), ``layers_cpu_ms``
 (the annealing layers alone) and ``handler_cpu_ms`` (the whole frame, its message included);
 ``budget_over`` counts the frames whose handling took more than the budget (at the floors of the
-search, or on a track's first search).
+search, or on a track's first search). Under a budget a track's first search is spread over frames
+(``start_layers``): in one frame its 20 layers, against 3 at the budget's floors, held that frame up
+and the real-time queues dropped the frames behind it.
 """
 
 from __future__ import annotations
@@ -138,6 +140,16 @@ class TrackerNode(Node):
             "may take: beyond it the layers, then the particles, are cut (to 3 and 32 at least; the "
             "costs measured as it runs; the means in the stats as budget_particles / budget_layers "
             "over budget_frames); 0: always layers x particles",
+            min=0.0,
+            max=100.0,
+        ),
+        "start_layers": Param(
+            float,
+            3.0,
+            "with frame_budget only: a track's first search (20 layers) runs at most this many times "
+            "the frame's planned layers on one frame, and the rest on the next frames, so that a start "
+            "does not hold up the frames behind it (at the budget's floors, 9 of its 20 layers a "
+            "frame); 0: all on its first frame",
             min=0.0,
             max=100.0,
         ),
@@ -342,6 +354,9 @@ class TrackerNode(Node):
         people: list[TrackedBody] = []
         in_view = [s for s in self.p["people"] if any(p.side == s for p in sil.people)]
         layers, particles = self.budget.plan(len(in_view), self.fps)
+        cap = self.p["start_layers"]
+        budgeted = self.budget.config.share > 0 and self.fps > 0
+        max_start_layers = max(1, round(cap * layers)) if budgeted and cap > 0 else None
         # the budget holds the whole handler, in the process's CPU time (module budget)
         cpu0 = time.process_time()
         # the frame's edges once for all its people
@@ -352,8 +367,6 @@ class TrackerNode(Node):
             try:
                 tr = self._tracker(side, camera)
                 tr.filter.n_layers, tr.filter.n_particles = layers, particles
-                # a track's first search runs its own, longer schedule
-                run = layers if tr.tracking else tr.config.init.layers
                 self.tally("budget_starts", not tr.tracking)
                 self.tally("budget_frames")
                 self.tally("budget_layers", layers)
@@ -366,13 +379,16 @@ class TrackerNode(Node):
                         "tracking the part the silhouette node assigned to it",
                     )
                 other = next((s for s in sil.people if s.side != side and s.side in SIDES), None)
-                search = tr.begin(image, mask, tuple(other.bbox) if other is not None else None, edges)
+                search = tr.begin(
+                    image, mask, tuple(other.bbox) if other is not None else None, edges, max_start_layers
+                )
             except ValueError as exc:  # one bad region (PlacementError) is one bad frame: counted, logged
                 self.tally("regions_not_tracked")
                 self._warn_once(f"error:{side}", f"frame {sil.seq}: {side} person not tracked: {exc}")
                 continue
             if search is not None:
-                begun.append((side, shape, tr, search, run))
+                # a track's first search runs its own, longer schedule (spread over frames in real time)
+                begun.append((side, shape, tr, search, search.layers or layers))
         # the people's searches side by side: their particles weighed at once, layer by layer
         cpu1 = time.process_time()
         ests = search_jointly([b[2] for b in begun], [b[3] for b in begun])

@@ -88,8 +88,10 @@ class Search:
         The filter's ``steps``: yields (N, 28) particles, is sent their log-density
         (:meth:`Tracker.posterior`), returns the Estimate.
     centre, sig : ndarray of shape (28,) or None
-        The temporal term's centre and width on a track's first frame (None: around the previous
-        estimate).
+        The temporal term's centre and width on a track's first frame and the frames that continue
+        its first search (None: around the previous estimate).
+    layers : int
+        Annealing layers the search runs (0: as the filter's ``n_layers``).
     """
 
     obs: list[Observation]
@@ -97,6 +99,7 @@ class Search:
     steps: Generator[np.ndarray, np.ndarray, Estimate]
     centre: np.ndarray | None = None
     sig: np.ndarray | None = None
+    layers: int = 0
 
 
 class _RandomWalk:
@@ -316,6 +319,10 @@ class Tracker:
         )
         self.lost_detector = LostDetector()
         self.prev: np.ndarray | None = None
+        #: a first search spread over frames (``begin``'s ``max_layers``): its layers still to run,
+        #: and its temporal term's centre and width
+        self.first_left = 0
+        self._first_prior: tuple[np.ndarray, np.ndarray] | None = None
         self.n_frames = 0
         #: CPU seconds of the last frame's search (the prediction and the annealing layers)
         self.search_cpu_s = 0.0
@@ -345,6 +352,7 @@ class Tracker:
     def reset(self) -> None:
         """Forget the track; the next frame with a person re-initialises it."""
         self.prev = None
+        self.first_left = 0
         self.predictor.reset()
         self.lost_detector.reset()
 
@@ -440,6 +448,7 @@ class Tracker:
         mask: np.ndarray | Sequence[np.ndarray],
         towards: tuple[int, int, int, int] | None = None,
         edges: np.ndarray | None = None,
+        max_layers: int | None = None,
     ) -> Search | None:
         """:meth:`update` in parts, for a caller that weighs several people's particles at once
         (``likelihood.evaluate_joint``): the frame's observations and the search, not yet run.
@@ -450,6 +459,12 @@ class Tracker:
         ----------
         image, mask, towards, edges
             As :meth:`update`.
+        max_layers : int or None, default=None
+            At most this many annealing layers for a track's first search on this frame (a frame
+            budget in real time); the rest of its ``InitConfig.layers`` run on the next frames,
+            continuing its schedule on their observations before the track is followed with the
+            prior. None: the whole first search on this frame (the annealed filter only: the
+            plain one has a single layer).
 
         Returns
         -------
@@ -464,12 +479,14 @@ class Tracker:
         obs = self._observations(image, mask, edges)
         if obs[0].empty:
             return None
+        if self.tracking and self.first_left > 0:
+            return self._continue_first_search(obs, max_layers)
         if self.tracking:
             apf = self.config.apf
             scale = 1.0 if apf.plain else apf.predict_scale
             steps = self.filter.steps(lambda P, rng: self.predictor(P, rng, scale=scale))
             return Search(obs, False, steps)
-        return self._first_search(obs, mask, towards)
+        return self._first_search(obs, mask, towards, max_layers)
 
     def posterior(self, search: Search, X: np.ndarray, terms: np.ndarray, ground: np.ndarray) -> np.ndarray:
         """The annealed density of the search's frame from the image costs of the poses.
@@ -519,9 +536,11 @@ class Tracker:
         obs: list[Observation],
         mask: np.ndarray | Sequence[np.ndarray],
         towards: tuple[int, int, int, int] | None = None,
+        max_layers: int | None = None,
     ) -> Search:
         """Start a track: particles around the reference view's silhouette guess (the body scaled
-        to its stature unless ``dims`` was given), searched with the first search's longer schedule.
+        to its stature unless ``dims`` was given), searched with the first search's longer schedule
+        (its first ``max_layers`` layers on this frame when given: :meth:`begin`).
         """
         ref_mask = mask[0] if _per_camera(mask, len(self.cameras)) else mask
         bbox = bbox_from_mask(np.asarray(ref_mask, bool))
@@ -535,8 +554,28 @@ class Tracker:
         self.filter.initialise(P0)
         self.predictor.reset()
         wide = INIT_STD * init.spread
-        steps = self.filter.steps(None, n_layers=init.layers, min_std=init.min_std * wide, max_std=init.max_std * wide)
-        return Search(obs, True, steps, P0[0], wide)
+        n = init.layers
+        if max_layers is not None and not self.config.apf.plain:
+            n = max(1, min(n, int(max_layers)))
+        self.first_left, self._first_prior = init.layers - n, (P0[0], wide)
+        steps = self.filter.steps(None, n_layers=n, min_std=init.min_std * wide, max_std=init.max_std * wide)
+        return Search(obs, True, steps, P0[0], wide, n)
+
+    def _continue_first_search(self, obs: list[Observation], max_layers: int | None) -> Search:
+        """The next layers of a first search begun on an earlier frame (:meth:`begin`): no
+        prediction (the particles go on from its last layer; the person moved a frame's worth,
+        well within the first search's spread), the first search's diffusion bounds and temporal
+        term, its schedule continued.
+        """
+        init = self.config.init
+        centre, wide = self._first_prior
+        n = self.first_left if max_layers is None else max(1, min(self.first_left, int(max_layers)))
+        done = init.layers - self.first_left
+        self.first_left -= n
+        steps = self.filter.steps(
+            None, n_layers=n, min_std=init.min_std * wide, max_std=init.max_std * wide, first_layer=done
+        )
+        return Search(obs, False, steps, centre, wide, n)
 
     def _finish(
         self, est: Estimate, obs: list[Observation], start: bool, joints: np.ndarray | None = None
