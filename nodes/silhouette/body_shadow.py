@@ -249,18 +249,17 @@ def _legs(
     ys, xs = np.divmod(flat, w)
     c = comp[ys, xs]
     height = bottom[c] - top[c] + 1
-    y0 = 0
     # the length of the run of shadow each lies in along its row (on the rows that hold one):
     # the rows side by side, each between two unset pixels, so that no run crosses a row's end;
     # a run starts after a rise of the flat row and ends at the next fall
     band = np.flatnonzero(np.bincount(ys))  # ascending (ys are sorted; np.unique's sort costs more)
     sr = np.zeros((band.size, w + 2), np.int8)
-    sr[:, 1:-1] = sh[band + y0] != 0
+    sr[:, 1:-1] = sh[band] != 0
     step = np.diff(sr.ravel())
     rise, fall = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
     run = np.searchsorted(rise, np.searchsorted(band, ys) * (w + 2) + xs + 1) - 1
     ok = fall[run] - rise[run] <= config.leg_width * height
-    ys, xs, c = ys[ok] + y0, xs[ok], c[ok]
+    ys, xs, c = ys[ok], xs[ok], c[ok]
     if ys.size == 0:
         return np.empty(0, np.intp)
     out = []
