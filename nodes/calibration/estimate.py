@@ -28,7 +28,9 @@ only from the human height prior: with K people it is known to about s_H / sqrt(
 
 Uncertainty: the covariance of the Gauss-Newton approximation at the solution, ``(J^T J)^-1`` of
 the normalised residuals (priors included), times the reduced chi-square when it exceeds 1; a group
-of near-duplicate scene segments (one edge found at several scales) counts once in it.
+of near-duplicate scene segments (one edge found at several scales) counts once in it. Where the
+lines fix the rotation and focal length first and the people the scale only, the lines' uncertainty
+is carried into the height's (``CalibrationConfig.propagate_lines``).
 Starts: a grid over tilt and field of view (vectorised), the best few refined by
 ``scipy.optimize.least_squares`` (trust region reflective).
 """
@@ -119,6 +121,11 @@ class CalibrationConfig:
         ``split_*`` figures. The joint fit otherwise. The defaults take any square frame's fit (on
         the simulator tighter bounds sent well-fixed frames to the joint fit). None: always the
         joint fit.
+    propagate_lines : bool, default=True
+        In that two-stage fit, carry the lines' uncertainty of (focal length, tilt, roll) into the
+        reported uncertainty of the height (and the statures): the height fitted with the rotation
+        held fixed is only as sure as that rotation (a horizon a few pixels off moves it by several
+        per cent). False: the people's fit's own uncertainty, as if the lines were exact.
     split_halves : bool, default=True
         Fit the camera again on each half of the observations (split at their median time, the
         scene's lines with both) and report how far each lands from the whole
@@ -162,6 +169,7 @@ class CalibrationConfig:
     split_halves: bool = True
     lines_focal_log_std: float = 0.5
     max_track_spread: float | None = 0.15
+    propagate_lines: bool = True
 
 
 @dataclass(frozen=True)
@@ -183,7 +191,7 @@ class CameraEstimate:
     tilt_std_deg, roll_std_deg : float
         Std of the tilt and the roll, degrees.
     height_std : float
-        Relative std of the height.
+        Relative std of the height (with the lines' uncertainty of the rotation where they fix it).
     distance : float
         Horizontal distance from the camera to the median foot position, metres (the world origin
         is put there, as in the simulator's scene).
@@ -583,10 +591,13 @@ class LinesCamera:
         (log f, tilt, roll): focal length in pixels, radians.
     sd : ndarray of shape (3,)
         Their stds (Gauss-Newton, times the reduced chi-square of the segments when over 1).
+    cov : ndarray of shape (3, 3) or None, default=None
+        Their covariance (the same approximation; the stds are the roots of its diagonal).
     """
 
     x: np.ndarray
     sd: np.ndarray
+    cov: np.ndarray | None = None
 
 
 def _line_residuals(
@@ -638,7 +649,9 @@ def fit_lines(
     _LINES_FITS[key] = fit
     while len(_LINES_FITS) > _LINES_FITS_KEPT:
         _LINES_FITS.pop(next(iter(_LINES_FITS)))
-    return None if fit is None else LinesCamera(fit.x.copy(), fit.sd.copy())
+    return (
+        None if fit is None else LinesCamera(fit.x.copy(), fit.sd.copy(), None if fit.cov is None else fit.cov.copy())
+    )
 
 
 #: the last few lines-only fits, by their lines, frame size and config (:func:`fit_lines`)
@@ -665,7 +678,7 @@ def _fit_lines(lines: LineFamilies, size: tuple[int, int], config: CalibrationCo
     cov = _covariance(best, weights)
     if cov is None:
         return None
-    return LinesCamera(best.x[:3].copy(), np.sqrt(np.abs(np.diag(cov)))[:3])
+    return LinesCamera(best.x[:3].copy(), np.sqrt(np.abs(np.diag(cov)))[:3], cov[:3, :3].copy())
 
 
 def _covariance(res: Any, weights: np.ndarray) -> np.ndarray | None:
@@ -726,6 +739,38 @@ def _solve_people(
     res = least_squares(fun, z0, loss="soft_l1", method="trf", x_scale="jac", max_nfev=200)
     res.x = np.concatenate([cam, res.x])
     return res
+
+
+def _propagated(
+    x: np.ndarray,
+    cam_cov: np.ndarray,
+    head: np.ndarray,
+    foot: np.ndarray,
+    k: np.ndarray,
+    scale: np.ndarray,
+    size: tuple[int, int],
+    config: CalibrationConfig,
+    f0: float,
+    nk: int,
+) -> np.ndarray:
+    """(1 + nk, 1 + nk) covariance that the lines' uncertainty of (log f, tilt, roll) adds to the
+    people's fit of (log h_c, log H_k) made with them fixed: ``D cam_cov D^T`` with ``D`` the
+    solution's derivative by the fixed parameters (implicit function, Gauss-Newton, soft-L1 weights).
+    """
+
+    def res(v: np.ndarray) -> np.ndarray:
+        return _residuals(v, head, foot, k, scale, size, config, f0, nk)
+
+    r0 = res(x)
+    w = np.sqrt(1.0 / np.sqrt(1.0 + r0 * r0))  # soft L1: the square root of rho' of each residual
+    eps = 1e-6
+    J = np.column_stack([(res(x + eps * np.eye(len(x))[i]) - r0) / eps for i in range(len(x))]) * w[:, None]
+    Jc, Jz = J[:, :3], J[:, 3:]
+    try:
+        D = -np.linalg.solve(Jz.T @ Jz, Jz.T @ Jc)
+    except np.linalg.LinAlgError:
+        return np.zeros((len(x) - 3, len(x) - 3))
+    return D @ cam_cov @ D.T
 
 
 def _without_family(lines: LineFamilies, j: int) -> LineFamilies:
@@ -940,6 +985,8 @@ def fit_camera(
     cov = _covariance(best, weights)
     if cov is None:
         cov = np.full((n, n), np.inf)
+    if fixed is not None and config.propagate_lines and fixed.cov is not None:
+        cov = cov + _propagated(best.x, fixed.cov, head, foot, k, scale, (W, H), config, f0, nk)
     sd = np.sqrt(np.abs(np.diag(cov)))
     if fixed is not None:
         sd = np.concatenate([fixed.sd, sd])
