@@ -84,6 +84,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("camera", "width"),  # real time: frames 320 wide, no sample model, a time budget per frame
         ("silhouette", "dynamic"),
         ("silhouette", "fit_in_background"),
+        ("silhouette", "body_shadow_leg_scale"),  # real time: the leg check on 2 x 2 blocks
         ("tracker", "frame_budget"),
         ("calibration", "detect_frames"),
         ("calibration", "every"),

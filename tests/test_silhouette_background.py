@@ -246,10 +246,12 @@ def test_dark_clothes_inside_a_body_are_foreground_cast_shadows_stay_shadows():
     assert class_fractions(on, person_mask(110.0) & ~band)[FOREGROUND] > 0.99
 
 
-def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_texture():
+@pytest.mark.parametrize("scale", [1, 2])
+def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_texture(scale):
     """Trousers of the floor's colour, darker, hang from the torso: shadow by colour, but flat,
     where a cast shadow under the same torso keeps the floor's pattern. The floor's pattern is
-    too weak for the model's own texture test (``shadow_texture_k``), not for the leg step's.
+    too weak for the model's own texture test (``shadow_texture_k``), not for the leg step's, on
+    the pixels or on 2 x 2 blocks (``leg_scale``).
     """
     rng = np.random.default_rng(5)
     hh, ww = 120, 160
@@ -278,9 +280,43 @@ def test_legs_below_a_body_are_foreground_a_cast_shadow_there_keeps_the_floor_te
 
     off = labels(BodyShadowConfig(leg_ncc=-1.0))
     assert (off[legs] == SHADOW).mean() > 0.9 and (off[cast] == SHADOW).mean() > 0.9
-    on = labels(BodyShadowConfig())
+    on = labels(BodyShadowConfig(leg_scale=scale))
     assert (on[legs] == FOREGROUND).mean() > 0.75  # a flat window correlates by chance now and then
     assert (on[cast] == SHADOW).mean() > 0.9
+
+
+def test_leg_correlation_on_blocks_is_the_weighted_correlation_of_the_blocks_shadow_means():
+    """``leg_scale`` 2: at each candidate, the correlation of the 2 x 2 blocks' mean grey levels over
+    their shadow pixels, frame against background, weighted by those pixels' number, over the 3 x 3
+    blocks around the candidate's (brute force in float64, away from the box's edges).
+    """
+    from counterpart.nodes.silhouette.body_shadow import _block_ncc
+
+    rng = np.random.default_rng(3)
+    hh, ww = 24, 30
+    sh = np.where(rng.random((hh, ww)) < 0.7, 255, 0).astype(np.uint8)  # a 0 / 255 mask, as the step's
+    m = sh / 255.0
+    e = rng.normal(400.0, 60.0, (hh, ww)).astype(np.float32)
+    frame = np.clip(np.rint((0.2 * e + rng.normal(0.0, 15.0, (hh, ww)))[..., None] * [0.3, 0.4, 0.3]), 0, 255)
+    frame = frame.astype(np.uint8)
+    grey = frame.sum(axis=2)
+    ys, xs = np.meshgrid(np.arange(2, hh - 2), np.arange(2, ww - 2), indexing="ij")
+    ys, xs = ys.ravel(), xs.ravel()
+    got = _block_ncc(sh, frame, e, ys, xs, 2, 3)
+    blocks = lambda a: a.astype(np.float64).reshape(hh // 2, 2, ww // 2, 2).sum(axis=(1, 3))  # noqa: E731
+    n, g, eb = blocks(m), blocks(grey * m), blocks(e * m)
+    want = np.empty(ys.size)
+    for i, (y, x) in enumerate(zip(ys // 2, xs // 2)):
+        win = (slice(y - 1, y + 2), slice(x - 1, x + 2))
+        wgt, has = n[win], n[win] > 0
+        gm, em = g[win][has] / wgt[has], eb[win][has] / wgt[has]
+        wgt = wgt[has]
+        mg, me = np.average(gm, weights=wgt), np.average(em, weights=wgt)
+        vg, ve = np.average((gm - mg) ** 2, weights=wgt), np.average((em - me) ** 2, weights=wgt)
+        cov = np.average((gm - mg) * (em - me), weights=wgt)
+        want[i] = cov / np.sqrt(vg * ve)
+    assert np.allclose(got, want, atol=2e-3)
+    assert 0.2 < want.mean() < 0.9  # the frame follows the background, with noise
 
 
 def test_the_leg_step_leaves_unseen_background_and_wide_shadows_alone():
@@ -317,6 +353,7 @@ def test_the_leg_step_leaves_unseen_background_and_wide_shadows_alone():
         {"leg_foot": 1.0},
         {"leg_width": 0.0},
         {"leg_window": 4},
+        {"leg_scale": 0},
     ],
 )
 def test_body_shadow_config_rejects_bad_values(bad):

@@ -356,6 +356,40 @@ def test_texture_test_over_a_frame_in_shadow_checks_only_its_textured_pixels() -
     assert mask.sum() < 24 * 20
 
 
+def test_texture_prefilter_is_the_background_windows_variance_and_drops_no_turned_pixel_here() -> None:
+    """``texture_prefilter``: the model keeps, per pixel, whether the variance of E's grey sum over
+    the whole window exceeds that fraction of the texture floor (the brute-force windowed variance,
+    reflect-padded); only the shadow pixels there are tested. On a plain floor with a textured rug
+    that is the rug (and its rim) alone, and the shirt on the rug is turned as without the prefilter.
+    """
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    rng = np.random.default_rng(5)
+    floor = np.full((H, W, 3), 140.0, np.float32)
+    rug = (slice(80, 108), slice(120, 156))
+    tex = np.repeat(np.repeat(rng.uniform(80, 200, (7, 9)), 4, 0), 4, 1)
+    floor[rug] = tex[..., None] * np.float32([0.9, 1.0, 1.1])
+    train = [np.clip(np.rint(floor + rng.normal(0.0, 2.0, floor.shape)), 0, 255).astype(np.uint8) for _ in range(20)]
+    f = 0.6 * floor + rng.normal(0.0, 2.0, floor.shape)
+    f[84:104, 124:148] = 0.6 * floor[84:104, 124:148].mean(axis=(0, 1)) + rng.normal(0.0, 2.0, (20, 24, 3))
+    f = np.clip(np.rint(f), 0, 255).astype(np.uint8)
+    turned = {}
+    for c in (0.5, 0.0):
+        model = HorprasertBackground(shadows=ShadowConfig(shadow_ncc=0.4, texture_prefilter=c)).fit(train)
+        labels = model.classify(f)
+        turned[c] = set(model.shadow_texture_mismatch(labels).tolist())
+        if c == 0.0:
+            assert model._bg_textured is None
+            continue
+        e = np.pad(model.grey_.astype(np.float64), 3, mode="symmetric")  # BORDER_REFLECT
+        var = sliding_window_view(e, (7, 7)).var(axis=(2, 3))
+        floor_var = (model.spread_.astype(np.float64) ** 2).sum(axis=2) * model.shadows.shadow_texture_k**2 * c
+        near = np.abs(var - floor_var) < 1e-3 * floor_var + 1e-2
+        assert np.array_equal(model._bg_textured[~near], (var > floor_var)[~near])
+        assert model._bg_textured[84:104, 124:152].all() and not model._bg_textured[:70].any()
+    assert len(turned[0.5]) > 100 and turned[0.5] == turned[0.0]
+
+
 def test_texture_test_beside_the_veto_gives_the_labels_and_models_of_the_veto_after_it() -> None:
     """The subtractor runs the shadows' texture test (in the worker thread when threaded) beside the
     samples' veto of the other foreground, then vetoes the pixels the test turned: labels, samples,

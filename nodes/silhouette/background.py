@@ -262,6 +262,16 @@ class ShadowConfig:
         the foreground; 8 leaves them shadows.
     shadow_window : int, default 7
         Side of the square window of the texture test, pixels (odd, >= 3).
+    texture_prefilter : float, default 0.5
+        When shadow covers much of the frame (more pixels than the frame over the window's area: a
+        sunlit street, the real clips), only the shadow pixels whose whole window of the
+        background is textured too, its variance above this fraction of the texture floor
+        (``shadow_texture_k``), are tested: that variance only changes when the model learns, so
+        it is kept with the model (worked out with each update while such frames come), and the
+        test's windows are gathered at those pixels alone instead of box-filtered over the frame.
+        The variance over a window's shadow pixels alone exceeds the whole window's mostly at a
+        shadow's edge; 0.5 keeps nearly every pixel that the full test finds textured. Sparse
+        shadow is tested in full. 0: no prefilter.
     """
 
     min_shadow_brightness: float = 0.4
@@ -270,8 +280,11 @@ class ShadowConfig:
     shadow_ncc: float = 0.4
     shadow_texture_k: float = 8.0
     shadow_window: int = 7
+    texture_prefilter: float = 0.5
 
     def __post_init__(self) -> None:
+        if self.texture_prefilter < 0.0:
+            raise ValueError(f"texture_prefilter must be >= 0 (0: off), got {self.texture_prefilter}")
         if not 0.0 <= self.min_shadow_brightness < 1.0:
             raise ValueError(f"min_shadow_brightness must be in [0, 1), got {self.min_shadow_brightness}")
         if self.max_highlight_brightness <= 1.0:
@@ -434,6 +447,14 @@ class HorprasertBackground:
         # (H + 2 r, W + 2 r) float32 grey sum of E, reflect-padded by r = shadow_window // 2
         self._e_pad: np.ndarray | None = None
         self._pad_flat: np.ndarray | None = None  # padded flat index -> frame flat index (texture test)
+        # (H, W) bool: E's whole shadow_window is textured (``ShadowConfig.texture_prefilter``),
+        # for the E of colour-terms refresh number ``_bg_textured_at`` (None: not worked out)
+        self._bg_textured: np.ndarray | None = None
+        self._bg_textured_at = -1
+        self._terms_refreshed = 0  # calls of ``_refresh_colour_terms``: E's version
+        # whether the last texture test found shadow over much of the frame (its prefilter's
+        # mask is then kept up to date by the updates)
+        self._texture_wide = False
         self._mu: np.ndarray | None = None  # (3, H, W) float32 expected colour planes E
         self._var: np.ndarray | None = None  # (3, H, W) float32 variance planes s^2
         self.a_: np.ndarray | None = None
@@ -803,16 +824,21 @@ class HorprasertBackground:
             return none
         planes = self._last_alpha[2]
         is_sh = labels == SHADOW
-        idx = np.flatnonzero(is_sh)  # on bool: several times faster than on the uint8 mask
-        if idx.size == 0:
-            return none
         sh = is_sh.view(np.uint8)
         r = self.shadows.shadow_window // 2
         h, w = sh.shape
+        wide = np.count_nonzero(is_sh) * (2 * r + 1) ** 2 > h * w
+        self._texture_wide = wide
+        bg_textured = self._textured_background() if wide else None
+        # with shadow over much of the frame, only where the background's whole window is
+        # textured (``texture_prefilter``)
+        idx = np.flatnonzero(is_sh if bg_textured is None else is_sh & bg_textured)  # on bool: several times faster
+        if idx.size == 0:
+            return none
         if idx.size * (2 * r + 1) ** 2 > h * w:
             # shadow over much of the frame (a change of light): filtering the frame is cheaper
             # than gathering each pixel's window
-            return self._shadow_texture_mismatch(planes, sh)
+            return self._shadow_texture_mismatch(planes, sh, bg_textured)
         # The shadow pixels are a few percent of the frame (and speckle): each one's window is
         # gathered from frames padded as the box filter would (BORDER_REFLECT), the background's
         # texture first, and the frame's only where that is textured (a few hundred pixels).
@@ -876,10 +902,12 @@ class HorprasertBackground:
         cov = np.einsum("ij,ij->i", gm, e) * inv_n - mi * me
         return cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
 
-    def _shadow_texture_mismatch(self, planes: list[np.ndarray], sh: np.ndarray) -> np.ndarray:
+    def _shadow_texture_mismatch(
+        self, planes: list[np.ndarray], sh: np.ndarray, bg_textured: np.ndarray | None
+    ) -> np.ndarray:
         """The texture test of ``shadow_texture_mismatch`` with box filters over the frame, for
-        shadow ``sh`` (H, W) 0 / 1 over much of it; returns the ascending flat indices of the
-        pixels to relabel (K,) int64.
+        shadow ``sh`` (H, W) 0 / 1 over much of it, at the pixels of ``bg_textured`` (H, W) bool
+        alone (None: all); returns the ascending flat indices of the pixels to relabel (K,) int64.
         """
         k = (self.shadows.shadow_window, self.shadows.shadow_window)
         e = self.grey_  # E's grey sum, the same sums as the sparse path's
@@ -894,6 +922,8 @@ class HorprasertBackground:
         floor += var[2]
         floor *= np.float32(self.shadows.shadow_texture_k**2)
         textured = (sh > 0) & (ve > floor)
+        if bg_textured is not None:
+            textured &= bg_textured
         idx = np.flatnonzero(textured)
         h, w = sh.shape
         r = self.shadows.shadow_window // 2
@@ -1176,6 +1206,33 @@ class HorprasertBackground:
             # fixed until the next update, so this runs with the update (in its worker thread)
             r = self.shadows.shadow_window // 2
             self._e_pad = cv2.copyMakeBorder(cv2.add(cv2.add(mu[0], mu[1]), mu[2]), r, r, r, r, cv2.BORDER_REFLECT)
+        self._terms_refreshed += 1
+        if self._texture_wide:
+            # the next frame most likely has shadow over much of it too: its texture test's
+            # prefilter, worked out here (in the update's worker thread) rather than by it
+            self._textured_background()
+
+    def _textured_background(self) -> np.ndarray | None:
+        """(H, W) bool: the variance of E's grey sum over each pixel's whole ``shadow_window``
+        exceeds ``texture_prefilter`` times the texture test's floor there; None with no
+        prefilter. Kept until E changes (``_refresh_colour_terms``).
+        """
+        if self.shadows.texture_prefilter <= 0.0:
+            return None
+        if self._bg_textured_at == self._terms_refreshed:
+            return self._bg_textured
+        e = self.grey_
+        k = (self.shadows.shadow_window, self.shadows.shadow_window)
+        # centred on the frame's mean: the variance is a difference of float32 means, exact
+        # enough only near zero
+        c = cv2.subtract(e, float(cv2.mean(e)[0]))
+        mean = cv2.boxFilter(c, -1, k, borderType=cv2.BORDER_REFLECT)
+        var = cv2.boxFilter(cv2.multiply(c, c), -1, k, borderType=cv2.BORDER_REFLECT)
+        var -= cv2.multiply(mean, mean)
+        floor = cv2.add(cv2.add(self._var[0], self._var[1]), self._var[2])
+        floor *= np.float32(self.shadows.shadow_texture_k**2 * self.shadows.texture_prefilter)
+        self._bg_textured, self._bg_textured_at = var > floor, self._terms_refreshed
+        return self._bg_textured
 
     def _refresh_thresholds(self) -> None:
         t = self.thresholds_

@@ -209,6 +209,14 @@ class Silhouette(Node):
             min=-1.0,
             max=1.0,
         ),
+        "body_shadow_leg_scale": Param(
+            int,
+            1,
+            "horprasert: the leg step's correlation on blocks of this many pixels a side (2: a "
+            "quarter of the pixels, for real-time graphs; the CDnet figures are for 1)",
+            min=1,
+            max=16,
+        ),
         "fit_in_background": Param(
             bool,
             False,
@@ -264,7 +272,9 @@ class Silhouette(Node):
                 "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
                 "dynamic": p["dynamic"],
                 "shadow_ncc": p["shadow_ncc"],
-                "body_shadow": BodyShadowConfig(span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"]),
+                "body_shadow": BodyShadowConfig(
+                    span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"], leg_scale=p["body_shadow_leg_scale"]
+                ),
                 "fit_in_background": p["fit_in_background"] and not self.replay,
             }
         elif p["backend"] in ("mog2", "knn") and mono:
