@@ -422,11 +422,7 @@ def _vanishing_points(x: np.ndarray, n_people: int, lines: LineFamilies, size: t
     """
     X = np.asarray(x, np.float64)
     B = X.reshape(-1, X.shape[-1])
-    W, H = size
-    K = np.zeros((len(B), 3, 3))
-    K[:, 0, 0] = K[:, 1, 1] = np.exp(B[:, 0])
-    K[:, 0, 2], K[:, 1, 2], K[:, 2, 2] = (W - 1) / 2.0, (H - 1) / 2.0, 1.0
-    KR = K @ _rotations(B[:, 1], B[:, 2])
+    KR = _intrinsics(np.exp(B[:, 0]), size) @ _rotations(B[:, 1], B[:, 2])
     phi = B[:, 4 + n_people :]
     dirs = np.zeros((len(B), len(lines.vertical), 3))
     dirs[:, lines.vertical, 1] = 1.0
