@@ -440,8 +440,7 @@ def cone_endpoints(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.nda
     ValueError
         If ``P`` is not of shape (N, DOF) or (DOF,).
     """
-    pts = frames(P, dims)[0]
-    return pts[:, SEGMENT_ANCHORS], dims.segment_radii()
+    return anchor_points(P, dims)[:, SEGMENT_ANCHORS], dims.segment_radii()
 
 
 def lowest_point(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> np.ndarray:

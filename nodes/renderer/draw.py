@@ -27,7 +27,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
-from counterpart.body.kinematics import SEGMENT_ANCHORS, anchor_points
+from counterpart.body.kinematics import cone_endpoints
 from counterpart.body.raster import cone_rims
 from counterpart.body.skeleton import BONES, JOINT_INDEX, N_JOINTS
 from counterpart.body.spline import evaluate_closed_bspline
@@ -128,9 +128,8 @@ def _cones_of(joints: bytes) -> tuple[np.ndarray, np.ndarray]:
     """
     X = np.frombuffer(joints, np.float64).reshape(N_JOINTS, 3)
     P = inverse_kinematics(X)
-    dims = dims_from_joints(X)
-    # cone_endpoints' points, without the body parts' rotation matrices it also builds
-    return anchor_points(P, dims)[0, SEGMENT_ANCHORS], dims.segment_radii()
+    ends, radii = cone_endpoints(P, dims_from_joints(X))
+    return ends[0], radii
 
 
 @lru_cache(maxsize=8)
