@@ -549,6 +549,7 @@ def test_the_batched_residuals_and_starts_are_the_single_ones_to_the_bit() -> No
         _Batched,
         _line_residuals,
         _line_scale,
+        _People,
         _relative_heights,
         _residuals,
     )
@@ -558,7 +559,7 @@ def test_the_batched_residuals_and_starts_are_the_single_ones_to_the_bit() -> No
     lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
     cfg = CalibrationConfig()
     scale = np.full((len(heads), 2), 3.0)
-    args = (heads, feet, ids, scale, (W, H), cfg, 300.0, 3, lines, _line_scale(lines, cfg))
+    args = (_People(heads, feet, ids, scale, (W, H), 300.0, 3), cfg, lines, _line_scale(lines, cfg))
     rng = np.random.default_rng(0)
     X = np.column_stack(
         [
@@ -573,7 +574,7 @@ def test_the_batched_residuals_and_starts_are_the_single_ones_to_the_bit() -> No
     batch = _residuals(X, *args)
     assert batch.shape == (9, len(_residuals(X[0], *args)))
     assert all(np.array_equal(batch[i], _residuals(X[i], *args)) for i in range(9))
-    no_lines = args[:8] + (None, None)
+    no_lines = args[:2] + (None, None)
     assert all(np.array_equal(_residuals(X[:, :7], *no_lines)[i], _residuals(X[i, :7], *no_lines)) for i in range(9))
     Y = X[:, [0, 1, 2, 7, 8]]
     largs = (lines, _line_scale(lines, cfg), (W, H), cfg, 300.0)

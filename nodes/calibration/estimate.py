@@ -430,22 +430,47 @@ def _vanishing_points(x: np.ndarray, n_people: int, lines: LineFamilies, size: t
     return (dirs @ KR.transpose(0, 2, 1))[:, lines.family].reshape(*X.shape[:-1], len(lines.family), 3)
 
 
+@dataclass(frozen=True, eq=False)
+class _People:
+    """What a fit explains of the people in view.
+
+    Attributes
+    ----------
+    head, foot : ndarray of shape (N, 2)
+        Head and foot points of the N observations, pixels.
+    track : ndarray of shape (N,), dtype int
+        The person (0 .. n_people - 1) of each observation.
+    scale : ndarray of shape (N, 2)
+        Std of each head point, pixels.
+    size : tuple of (int, int)
+        Frame (width, height), pixels.
+    f0 : float
+        The focal length's prior, pixels.
+    n_people : int
+        Number of people (K).
+    """
+
+    head: np.ndarray
+    foot: np.ndarray
+    track: np.ndarray
+    scale: np.ndarray
+    size: tuple[int, int]
+    f0: float
+    n_people: int
+
+
 def _residuals(
     x: np.ndarray,
-    head: np.ndarray,
-    foot: np.ndarray,
-    track: np.ndarray,
-    scale: np.ndarray,
-    size: tuple[int, int],
+    people: _People,
     cfg: CalibrationConfig,
-    f0: float,
-    n_people: int,
     lines: LineFamilies | None = None,
     line_scale: np.ndarray | None = None,
 ) -> np.ndarray:
     """Normalised residuals (M,) of the fit at ``x`` (P,): the people's heads (2N), the statures (K),
     the camera's priors (2), then the segments and the right angles; (B, M) for B vectors ``x`` (B, P).
     """
+    head, foot, track, scale, size = people.head, people.foot, people.track, people.scale, people.size
+    f0, n_people = people.f0, people.n_people
     X = np.asarray(x, np.float64)
     B = X.reshape(-1, X.shape[-1])
     r = ((_project_heads(B[:, : 4 + n_people], head, foot, track, size) - head) / scale).reshape(len(B), -1)
@@ -553,25 +578,16 @@ def _line_scale(lines: LineFamilies, config: CalibrationConfig) -> np.ndarray:
     return np.maximum(config.line_noise_px / length, np.sin(np.radians(config.min_line_noise_deg)))
 
 
-def _solve(
-    head: np.ndarray,
-    foot: np.ndarray,
-    k: np.ndarray,
-    scale: np.ndarray,
-    size: tuple[int, int],
-    config: CalibrationConfig,
-    f0: float,
-    nk: int,
-    lines: LineFamilies | None,
-) -> Any:
+def _solve(people: _People, config: CalibrationConfig, lines: LineFamilies | None) -> Any:
     """The robust fit from the best ``config.n_starts`` of the start grid: scipy's result with the
     least cost, or None when no start puts every person above the ground.
     """
     if lines is not None and not len(lines.segments):
         lines = None
     line_scale = _line_scale(lines, config) if lines is not None else None
+    head, foot, k, size, nk = people.head, people.foot, people.track, people.size, people.n_people
     W, H = size
-    args = (head, foot, k, scale, size, config, f0, nk, lines, line_scale)
+    args = (people, config, lines, line_scale)
     # every start of the grid at once
     tilt, fov = (v.ravel() for v in np.meshgrid(np.radians(config.grid_tilt_deg), config.grid_fov_deg, indexing="ij"))
     f = (W / 2.0) / np.tan(np.radians(fov) / 2)
@@ -788,22 +804,12 @@ def _covariance(res: Any, weights: np.ndarray) -> np.ndarray | None:
         return None
 
 
-def _solve_people(
-    head: np.ndarray,
-    foot: np.ndarray,
-    k: np.ndarray,
-    scale: np.ndarray,
-    size: tuple[int, int],
-    config: CalibrationConfig,
-    f0: float,
-    nk: int,
-    cam: np.ndarray,
-) -> Any:
+def _solve_people(people: _People, config: CalibrationConfig, cam: np.ndarray) -> Any:
     """The robust fit of the height and the statures with (log f, tilt, roll) = ``cam`` fixed: scipy's
     result with ``x`` the whole parameter vector, or None when the people are not above the ground.
     """
-    h = _relative_heights(float(np.exp(cam[0])), cam[1], cam[2], head, foot, size)
-    hk = np.array([np.median(h[k == j]) for j in range(nk)])
+    h = _relative_heights(float(np.exp(cam[0])), cam[1], cam[2], people.head, people.foot, people.size)
+    hk = np.array([np.median(h[people.track == j]) for j in range(people.n_people)])
     if not (hk > 0.05).all():
         return None
     hc = config.person_height / np.exp(np.mean(np.log(hk)))
@@ -811,32 +817,21 @@ def _solve_people(
 
     def fun(z: np.ndarray) -> np.ndarray:
         x = np.concatenate([np.broadcast_to(cam, (*np.shape(z)[:-1], len(cam))), z], -1)
-        return _residuals(x, head, foot, k, scale, size, config, f0, nk)
+        return _residuals(x, people, config)
 
     res = least_squares(fun, z0, loss="soft_l1", method="trf", x_scale="jac", max_nfev=200, workers=_Batched(fun, ()))
     res.x = np.concatenate([cam, res.x])
     return res
 
 
-def _propagated(
-    x: np.ndarray,
-    cam_cov: np.ndarray,
-    head: np.ndarray,
-    foot: np.ndarray,
-    k: np.ndarray,
-    scale: np.ndarray,
-    size: tuple[int, int],
-    config: CalibrationConfig,
-    f0: float,
-    nk: int,
-) -> np.ndarray:
+def _propagated(x: np.ndarray, cam_cov: np.ndarray, people: _People, config: CalibrationConfig) -> np.ndarray:
     """(1 + nk, 1 + nk) covariance that the lines' uncertainty of (log f, tilt, roll) adds to the
     people's fit of (log h_c, log H_k) made with them fixed: ``D cam_cov D^T`` with ``D`` the
     solution's derivative by the fixed parameters (implicit function, Gauss-Newton, soft-L1 weights).
     """
 
     def res(v: np.ndarray) -> np.ndarray:
-        return _residuals(v, head, foot, k, scale, size, config, f0, nk)
+        return _residuals(v, people, config)
 
     r0 = res(x)
     w = np.sqrt(1.0 / np.sqrt(1.0 + r0 * r0))  # soft L1: the square root of rho' of each residual
@@ -1006,12 +1001,13 @@ def fit_camera(
     # lines (the split below): with the lines' own prior on the focal length, so that it does not
     # count the two priors' difference as the people's
     joint_config = replace(config, focal_log_std=config.lines_focal_log_std) if fixed is not None else config
-    joint = _solve(head, foot, k, scale, (W, H), joint_config, f0, nk, lines)
+    people = _People(head, foot, k, scale, (W, H), f0, nk)
+    joint = _solve(people, joint_config, lines)
     best = joint
     if fixed is not None:
-        best = _solve_people(head, foot, k, scale, (W, H), config, f0, nk, fixed.x)
+        best = _solve_people(people, config, fixed.x)
         if best is None:
-            fixed, best = None, _solve(head, foot, k, scale, (W, H), config, f0, nk, lines)
+            fixed, best = None, _solve(people, config, lines)
     if best is None:
         return None
     # a family of segments that is not a set of parallel scene lines (edges of several things that
@@ -1026,7 +1022,7 @@ def fit_camera(
         and len(lines.vp)
     ):
         fits = [
-            (_solve(head, foot, k, scale, (W, H), config, f0, nk, fewer), fewer)
+            (_solve(people, config, fewer), fewer)
             for fewer in (_without_family(lines, j) for j in range(len(lines.vp)))
         ]
         fits = [(fit, fewer) for fit, fewer in fits if fit is not None]
@@ -1063,7 +1059,7 @@ def fit_camera(
     if cov is None:
         cov = np.full((n, n), np.inf)
     if fixed is not None and config.propagate_lines and fixed.cov is not None:
-        cov = cov + _propagated(best.x, fixed.cov, head, foot, k, scale, (W, H), config, f0, nk)
+        cov = cov + _propagated(best.x, fixed.cov, people, config)
     sd = np.sqrt(np.abs(np.diag(cov)))
     if fixed is not None:
         sd = np.concatenate([fixed.sd, sd])
