@@ -135,6 +135,38 @@ def test_beta_hits_survival_rate() -> None:
         choose_beta(ll, 1.5)
 
 
+def _beta_by_bisection(ll: np.ndarray, alpha: float, lo: float = 1e-3, hi: float = 1e6) -> float:
+    """The reference: 200 halvings of the log-beta bracket on ``survival_rate`` itself."""
+    a, b = np.log(lo), np.log(hi)
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        a, b = (m, b) if survival_rate(ll, np.exp(m)) > alpha else (a, m)
+    return float(np.exp(0.5 * (a + b)))
+
+
+def test_beta_matches_a_bisection_over_particle_counts_and_spreads() -> None:
+    # the real-time frame's few dozen particles to the offline 256; log-likelihood spreads from
+    # nearly flat to a collapse, and skewed shapes (a few good particles among many bad)
+    rng = np.random.default_rng(3)
+    worst = 0.0
+    for n in (8, 33, 64, 256):
+        for spread in (0.5, 5.0, 50.0, 500.0):
+            for shape in (0.3, 1.0, 3.0):
+                ll = -spread * rng.random(n) ** shape
+                for alpha in (0.2, 0.5, 0.8):
+                    ref = _beta_by_bisection(ll, alpha)
+                    if not 1.01e-3 < ref < 0.99e6:  # the bracket's ends: returned as they are
+                        continue
+                    worst = max(worst, abs(np.log(choose_beta(ll, alpha) / ref)))
+    assert worst < 2e-4
+    # beyond the bracket its ends come back
+    ll = -rng.random(64)
+    assert choose_beta(ll * 1e-9, 0.5) == 1e6  # nearly flat: even the largest beta survives too many
+    assert choose_beta(ll * 1e9, 0.5) == 1e-3  # a collapse: even the smallest survives too few
+    with pytest.raises(ValueError, match="grid point"):
+        choose_beta(ll, 0.5, refine=(1,))
+
+
 def test_annealing_schedule_and_limits() -> None:
     P = _pose()
     image, mask = _render(P)
