@@ -233,7 +233,7 @@ def make_observation(
     ValueError
         If the mask is not 2-D, or the image or the edges and the mask differ in size.
     """
-    mask = np.asarray(mask).astype(bool)
+    mask = np.asarray(mask, dtype=bool)  # no copy of a bool mask
     if mask.ndim != 2:
         raise ValueError(f"mask has shape {mask.shape}; expected (H, W) foreground of one person")
     if image is not None and image.shape[:2] != mask.shape:
@@ -251,11 +251,13 @@ def make_observation(
     edge = np.zeros(1, np.float32)  # an empty mask: no window, every point reads nothing
     if win.size:
         edge = np.append(edge_map(None, win, edges=crop, **edge_kw).ravel(), np.float32(0))
-    ys, xs = np.nonzero(win)  # the mask's pixels in the same (row-major) order as over the whole mask
+    # the mask's pixels in the same (row-major) order as over the whole mask, as flat indices of the
+    # window: only the picked ones are turned into rows and columns
+    at = np.flatnonzero(win)
     rng = np.random.default_rng(0) if rng is None else rng
-    if len(xs) and n_cover:
-        pick = rng.choice(len(xs), size=min(n_cover, len(xs)), replace=False)
-        cover = np.stack([xs[pick] + x0, ys[pick] + y0], axis=1).astype(np.float32)
+    if len(at) and n_cover:
+        ys, xs = np.divmod(at[rng.choice(len(at), size=min(n_cover, len(at)), replace=False)], win.shape[1])
+        cover = np.stack([xs + x0, ys + y0], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)
     return Observation(fg, edge, cover, x1 - x0, y1 - y0, _cost_map(fg, edge), x0, y0)
