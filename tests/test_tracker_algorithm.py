@@ -167,22 +167,6 @@ def test_beta_matches_a_bisection_over_particle_counts_and_spreads() -> None:
         choose_beta(ll, 0.5, refine=(1,))
 
 
-def test_betas_of_several_sets_at_once_are_each_sets_own() -> None:
-    from counterpart.nodes.tracker.apf import choose_betas
-
-    rng = np.random.default_rng(5)
-    for n in (8, 33, 256):
-        for spread in (1e-12, 0.5, 50.0, 1e5):  # flat (hi), ordinary, a collapse (lo)
-            for alpha in (0.2, 0.5, 0.8):
-                ll = -spread * rng.random((3, n)) ** rng.choice([0.3, 1.0, 3.0])
-                ll[rng.integers(3)] = -1.0  # a set with every particle alike
-                got = choose_betas(ll, alpha)
-                assert got.shape == (3,)
-                assert np.array_equal(got, [choose_beta(row, alpha) for row in ll]), (n, spread, alpha)
-    with pytest.raises(ValueError, match="expected \\(sets, particles\\)"):
-        choose_betas(np.zeros(4), 0.5)
-
-
 def test_annealing_schedule_and_limits() -> None:
     P = _pose()
     image, mask = _render(P)

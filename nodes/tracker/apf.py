@@ -189,69 +189,6 @@ def choose_beta(
     return float(np.exp(a + f * (b - a)))
 
 
-def choose_betas(
-    ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, grid: int = 24, refine: tuple[int, ...] = (8, 8)
-) -> np.ndarray:
-    """:func:`choose_beta` of several particle sets of one size at once (one frame's people, whose
-    layers run side by side): each round's (sets, points, N) array in one evaluation, the same
-    numbers as :func:`choose_beta` set by set.
-
-    Parameters
-    ----------
-    ll : ndarray of shape (P, N)
-        Log-likelihoods of each set's particles.
-    survival, lo, hi, grid, refine
-        As :func:`choose_beta`.
-
-    Returns
-    -------
-    ndarray of shape (P,)
-        Each set's beta.
-
-    Raises
-    ------
-    ValueError
-        If ``survival`` is not in (0, 1) or ``ll`` is not 2-D.
-    """
-    if not 0 < survival < 1:
-        raise ValueError(f"survival={survival!r}: the target survival rate must lie in (0, 1)")
-    ll = np.asarray(ll, dtype=np.float64)
-    if ll.ndim != 2:
-        raise ValueError(f"ll has shape {ll.shape}; expected (sets, particles)")
-    out = np.full(len(ll), hi)
-    top = ll.max(axis=1)
-    spread = top - ll.min(axis=1)
-    rows = np.flatnonzero(np.isfinite(spread) & (spread > 0))  # the others: every beta gives D = 1
-    if not len(rows):
-        return out
-    d = ll[rows] - top[rows, None]
-    target = np.log(survival * d.shape[1])
-    logb, betas = _bracket_grid(lo, hi, grid)
-    logb, betas = np.broadcast_to(logb, (len(rows), grid)), np.broadcast_to(betas, (len(rows), grid))
-    for r in range(len(refine) + 1):
-        w = np.exp(betas[:, :, None] * d[:, None, :])  # (sets, points, N)
-        s1 = w.sum(axis=2)
-        w *= w
-        g = 2.0 * np.log(s1) - np.log(w.sum(axis=2))  # log(N D), falling in beta
-        if r == 0:
-            low, high = g[:, 0] <= target, g[:, -1] >= target  # the bracket's ends
-            out[rows[low]], out[rows[high & ~low]] = lo, hi
-            keep = ~(low | high)
-            if not keep.all():
-                rows, d, g, logb = rows[keep], d[keep], g[keep], logb[keep]
-                if not len(rows):
-                    return out
-        k = np.array([min(max(int(np.searchsorted(-gi, -target)), 1), g.shape[1] - 1) for gi in g])
-        at = np.arange(len(rows))
-        a, b, ga, gb = logb[at, k - 1], logb[at, k], g[at, k - 1], g[at, k]
-        if r < len(refine):
-            logb = a[:, None] + (b - a)[:, None] * _unit_steps(refine[r])
-            betas = np.exp(logb)
-    f = np.where(ga > gb, (ga - target) / np.where(ga > gb, ga - gb, 1.0), 0.5)
-    out[rows] = np.exp(a + f * (b - a))
-    return out
-
-
 @lru_cache(maxsize=4)
 def _bracket_grid(lo: float, hi: float, grid: int) -> tuple[np.ndarray, np.ndarray]:
     """``choose_beta``'s first grid over the whole bracket [lo, hi]: log beta and beta, read-only."""
@@ -480,10 +417,7 @@ class AnnealedParticleFilter:
         Yields
         ------
         ndarray of shape (N, DOF)
-            The particles of the next layer to weigh; it is sent their (N,) log-likelihoods, or
-            (log-likelihoods, beta) where the caller chose the layer's beta itself
-            (:func:`choose_betas` of several filters' layers at once; the same number
-            :func:`choose_beta` gives for ``survival``).
+            The particles of the next layer to weigh.
 
         Returns
         -------
@@ -508,11 +442,9 @@ class AnnealedParticleFilter:
         betas, surv = np.empty(M), np.empty(M)
         n_evals = 0
         for m in range(M):
-            sent = yield P
-            # a caller that runs several filters' layers side by side sends (ll, beta), the betas of
-            # all of them chosen at once (``choose_betas``)
-            ll, beta = sent if isinstance(sent, tuple) else (sent, choose_beta(sent, self.survival))
+            ll = yield P
             n_evals += len(P)
+            beta = choose_beta(ll, self.survival)
             w = _normalised(ll, beta)
             betas[m], surv[m] = beta, 1.0 / (len(w) * np.dot(w, w))
             if m == M - 1:
@@ -668,7 +600,6 @@ __all__ = [
     "ParticleFilter",
     "Estimate",
     "choose_beta",
-    "choose_betas",
     "survival_rate",
     "systematic_resample",
     "run_steps",

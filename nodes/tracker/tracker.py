@@ -34,7 +34,7 @@ from counterpart.body.kinematics import anchor_points, forward_kinematics, row_d
 from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, N_JOINTS, BodyDims
 
-from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, choose_betas, run_steps
+from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, run_steps
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor, row_owners
@@ -637,15 +637,7 @@ def search_jointly(trackers: Sequence[Tracker], searches: Sequence[Search]) -> l
             [trackers[i].likelihood for i in ids], [todo[i] for i in ids], [searches[i].obs for i in ids]
         )
         dens = posteriors_jointly([trackers[i] for i in ids], [searches[i] for i in ids], [todo[i] for i in ids], costs)
-        sent: list = dens
-        filters = [trackers[i].filter for i in ids]
-        if (
-            len(ids) > 1
-            and all(isinstance(f, AnnealedParticleFilter) and f.survival == filters[0].survival for f in filters)
-            and len({len(d) for d in dens}) == 1
-        ):  # every person's layer beta in one pass
-            sent = list(zip(dens, choose_betas(np.stack(dens), filters[0].survival).tolist()))
-        for i, d in zip(ids, sent):
+        for i, d in zip(ids, dens):
             try:
                 todo[i] = searches[i].steps.send(d)
             except StopIteration as stop:
