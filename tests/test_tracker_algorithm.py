@@ -376,19 +376,19 @@ def _two_people(n: int) -> tuple[Camera, list[np.ndarray], list[np.ndarray], lis
     return stream.camera, frames, a, b
 
 
-@pytest.mark.parametrize("with_prior", [False, True], ids=["random-walk", "motion-prior"])
-def test_two_people_searched_side_by_side_get_what_each_search_alone_gets(with_prior: bool) -> None:
+# with a motion prior both people share, at a real-time frame's odd particle count
+@pytest.mark.parametrize(("with_prior", "particles"), [(False, 24), (True, 33)], ids=["random-walk", "motion-prior"])
+def test_two_people_searched_side_by_side_get_what_each_search_alone_gets(with_prior: bool, particles: int) -> None:
     from counterpart.nodes.tracker.likelihood import evaluate_joint
     from counterpart.nodes.tracker.prior import train_prior
     from counterpart.nodes.tracker.tracker import joints_jointly, search_jointly
 
     cam, frames, a, b = _two_people(6)
-    # with a motion prior shared by both people, their prior and temporal terms are taken in one pass
     prior = train_prior(["sim:handshake?seed=7"], n_states=3) if with_prior else None
 
     def pair() -> list[Tracker]:
         # a first search of 6 layers beside running ones of 3: the two schedules differ on the start
-        cfg = TrackerConfig(apf=APFConfig(n_layers=3, n_particles=24), init=InitConfig(layers=6))
+        cfg = TrackerConfig(apf=APFConfig(n_layers=3, n_particles=particles), init=InitConfig(layers=6))
         return [Tracker(cam, side, cfg, prior=prior, seed=s) for s, side in enumerate(("left", "right"))]
 
     alone, joint = pair(), pair()

@@ -22,9 +22,8 @@ from __future__ import annotations
 import json
 import os
 import sys
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -464,65 +463,17 @@ class PriorPredictor:
         ndarray of shape (N,)
             Log density per angle DOF, constants dropped.
         """
-        return self._log_prior(np.asarray(P, dtype=np.float64), self._log_weights(uniform), resid_std)
-
-    def _log_weights(self, uniform: float) -> np.ndarray:
-        """The log state weights of :meth:`log_prior`, (K,): made once a frame (for its alpha)."""
-        if self._logw is None or self._logw[0] is not self.alpha or self._logw[1] != uniform:
-            w = (1 - uniform) * self.predicted_states() + uniform / len(self._logdet)
-            self._logw = (self.alpha, uniform, np.log(np.maximum(w, 1e-300)))
-        return self._logw[2]
-
-    def _log_prior(self, P: np.ndarray, logw: np.ndarray, resid_std: float) -> np.ndarray:
-        """:meth:`log_prior` of poses P (N, 28) float64 with log state weights ``logw``: (K,), or
-        (N, K), one row per pose (several tracks' poses at once, :meth:`log_prior_jointly`).
-        """
-        A = P[:, ANGLE_DOFS]
+        A = np.asarray(P, dtype=np.float64)[:, ANGLE_DOFS]
         Y = (A - self.prior.pca_mean) @ self.prior.components.T  # (N, d)
         R = A - (Y @ self.prior.components + self.prior.pca_mean)
         maha = (Y[:, :, None] * Y[:, None, :]).reshape(len(Y), -1) @ self._q2 + Y @ self._q1 + self._q0
-        lk = logw - 0.5 * (maha + self._logdet)  # (N, K)
+        if self._logw is None or self._logw[0] is not self.alpha or self._logw[1] != uniform:  # once a frame
+            w = (1 - uniform) * self.predicted_states() + uniform / len(self._logdet)
+            self._logw = (self.alpha, uniform, np.log(np.maximum(w, 1e-300)))
+        lk = self._logw[2] - 0.5 * (maha + self._logdet)  # (N, K)
         m = lk.max(axis=1)
         lse = m + np.log(np.exp(lk - m[:, None]).sum(axis=1))
         return (lse - 0.5 * np.einsum("ni,ni->n", R, R) / resid_std**2) / len(ANGLE_DOFS)
-
-    @staticmethod
-    def log_prior_jointly(
-        predictors: Sequence[PriorPredictor],
-        poses: Sequence[np.ndarray],
-        resid_std: float = 0.15,
-        uniform: float = 0.5,
-    ) -> list[np.ndarray]:
-        """:meth:`log_prior` of several tracks' poses (one frame's people) in one pass, each under
-        its own state posterior: at the few dozen particles of a real-time frame the cost is the
-        number of numpy calls, not the particles. The predictors must share one prior.
-
-        Parameters
-        ----------
-        predictors : sequence of PriorPredictor
-            The tracks' predictors, of the same :class:`MotionPrior` object.
-        poses : sequence of ndarray of shape (N_i, 28)
-            Each track's poses.
-        resid_std, uniform : float
-            As :meth:`log_prior`.
-
-        Returns
-        -------
-        list of ndarray of shape (N_i,)
-            Each track's :meth:`log_prior`.
-
-        Raises
-        ------
-        ValueError
-            When the predictors do not share one prior.
-        """
-        if any(p.prior is not predictors[0].prior for p in predictors[1:]):
-            raise ValueError("log_prior_jointly: the predictors must share one MotionPrior")
-        counts = tuple(len(P) for P in poses)
-        logw = np.array([p._log_weights(uniform) for p in predictors])[row_owners(counts)]
-        out = predictors[0]._log_prior(np.concatenate(poses).astype(np.float64, copy=False), logw, resid_std)
-        ends = np.cumsum(counts).tolist()
-        return [out[e - n : e] for n, e in zip(counts, ends)]
 
     def __call__(self, P: np.ndarray, rng: np.random.Generator, scale: float = 1.0) -> np.ndarray:
         """Predict particles (N, 28) -> (N, 28); ``scale`` widens the random walk (re-initialisation)."""
@@ -536,25 +487,6 @@ class PriorPredictor:
             Y = self.prior.means[k] + np.einsum("nij,nj->ni", self._chol[k], z)
             out[rows[:, None], ANGLE_DOFS[None]] = self.prior.from_latent(Y)
         return clip_to_limits(out)
-
-
-@lru_cache(maxsize=16)
-def row_owners(counts: tuple[int, ...]) -> np.ndarray:
-    """Which of several stacked sets each row belongs to: ``counts[i]`` rows of ``i`` each, read-only.
-
-    Parameters
-    ----------
-    counts : tuple of int
-        The sets' sizes, in stacking order.
-
-    Returns
-    -------
-    ndarray of shape (sum(counts),), dtype intp
-        The owner of each row (index rows of per-set arrays with it to give each row its set's).
-    """
-    out = np.repeat(np.arange(len(counts)), counts)
-    out.flags.writeable = False
-    return out
 
 
 # ------------------------------------------------------------------------------------ data

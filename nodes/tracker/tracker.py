@@ -37,7 +37,7 @@ from counterpart.body.skeleton import DEFAULT_DIMS, N_JOINTS, BodyDims
 from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, run_steps
 from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
-from .prior import RW_FLOOR, MotionPrior, PriorPredictor, row_owners
+from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
 
 @dataclass
@@ -636,71 +636,13 @@ def search_jointly(trackers: Sequence[Tracker], searches: Sequence[Search]) -> l
         costs = evaluate_joint(
             [trackers[i].likelihood for i in ids], [todo[i] for i in ids], [searches[i].obs for i in ids]
         )
-        dens = posteriors_jointly([trackers[i] for i in ids], [searches[i] for i in ids], [todo[i] for i in ids], costs)
-        for i, d in zip(ids, dens):
+        for i, (terms, ground) in zip(ids, costs):
             try:
-                todo[i] = searches[i].steps.send(d)
+                todo[i] = searches[i].steps.send(trackers[i].posterior(searches[i], todo[i], terms, ground))
             except StopIteration as stop:
                 ests[i] = stop.value
                 del todo[i]
     return ests  # type: ignore[return-value]
-
-
-def posteriors_jointly(
-    trackers: Sequence[Tracker],
-    searches: Sequence[Search],
-    poses: Sequence[np.ndarray],
-    costs: Sequence[tuple[np.ndarray, np.ndarray]],
-) -> list[np.ndarray]:
-    """:meth:`Tracker.posterior` of several people's poses of one frame: the temporal and the
-    prior's terms of all of them in one pass each (the same numbers as one by one).
-
-    Parameters
-    ----------
-    trackers : sequence of Tracker
-        The people's trackers.
-    searches : sequence of Search
-        Their searches.
-    poses : sequence of ndarray of shape (N_i, 28)
-        The poses each search yielded.
-    costs : sequence of (terms (N_i, 3), ground (N_i,))
-        Their image costs (``likelihood.evaluate_joint``).
-
-    Returns
-    -------
-    list of ndarray of shape (N_i,)
-        Each person's annealed log-density.
-    """
-    post = trackers[0].config.posterior
-    centres = [tr.prev if s.centre is None else s.centre for tr, s in zip(trackers, searches)]
-    priors = [tr.predictor for tr in trackers]
-    if (
-        len(trackers) < 2
-        or any(tr.config.posterior != post for tr in trackers[1:])
-        or not post.w_temporal
-        or any(c is None for c in centres)
-        or not post.w_prior
-        or not all(isinstance(p, PriorPredictor) and p.prior is priors[0].prior for p in priors)
-    ):
-        return [tr.posterior(s, X, *c) for tr, s, X, c in zip(trackers, searches, poses, costs)]
-    counts = tuple(len(X) for X in poses)
-    X = np.concatenate(poses)
-    # the temporal term (Tracker._temporal) with each pose's person's centre and width as rows
-    sigs = [post.temporal_sigma * tr.predictor.std if s.sig is None else s.sig for tr, s in zip(trackers, searches)]
-    owner = row_owners(counts)
-    C = np.array(centres)[owner]
-    S = np.array(sigs)[owner]
-    d = (X - C) / S
-    d[:, YAW] = wrap_angle(X[:, YAW] - C[:, YAW]) / S[:, YAW]
-    temporal = -0.5 * post.w_temporal * (d * d).mean(axis=1)
-    prior = post.w_prior * np.concatenate(PriorPredictor.log_prior_jointly(priors, poses, post.resid_std))
-    out, start = [], 0
-    for tr, Xi, (terms, ground), n in zip(trackers, poses, costs, counts):
-        sl = slice(start, start + n)
-        start += n
-        tr._scored = (Xi, terms, ground)  # as Tracker.posterior: the frame's score (``_finish``)
-        out.append(tr.likelihood.combine(terms, ground) + temporal[sl] + prior[sl])
-    return out
 
 
 def joints_jointly(trackers: Sequence[Tracker], ests: Sequence[Estimate]) -> list[np.ndarray]:
@@ -791,7 +733,6 @@ __all__ = [
     "TrackResult",
     "Search",
     "search_jointly",
-    "posteriors_jointly",
     "joints_jointly",
     "track_sequence",
     "SIDES",
