@@ -794,8 +794,13 @@ class _Batch:
         base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
         # where each sample's cost map starts in the maps laid end to end: (N, 1, K)
         k = views[0].n_in
-        self.offset = np.repeat(base, len(views[0].s), axis=2)
-        self.offset[:, :, k:] += outline
+        offset = np.repeat(base, len(views[0].s), axis=2)
+        offset[:, :, k:] += outline
+        # the offsets, and the index in its window's map that a sample outside the window reads, as
+        # whole (N, S, K) arrays: the layers' where and add then run without broadcasting
+        shape = (len(offset), N_SEGMENTS, offset.shape[2])
+        self.offset = np.ascontiguousarray(np.broadcast_to(offset, shape))
+        self.outside = np.ascontiguousarray(np.broadcast_to(self.WH, shape))
         # the coverage samples' terms per pose (ox, oy (N, 1), G (N, 3, M), qq (N, 1, M)), where
         # every person has the same number M of them
         self.cover: tuple[np.ndarray, ...] | None = None
@@ -880,7 +885,7 @@ def evaluate_joint(
     inside = (ui >= 0) & (ui < b.W) & (vi >= 0) & (vi < b.H)
     vi *= b.W
     vi += ui
-    idx = np.where(inside, vi, b.WH).astype(np.intp)
+    idx = np.where(inside, vi, b.outside).astype(np.intp)
     idx += b.offset
     cost = b.maps[idx]  # (N, S, K)
     S_r = cost[:, :, :k].mean(axis=(1, 2))
