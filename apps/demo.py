@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -71,23 +72,63 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
 
 
+def _one_thread_each() -> None:
+    # two builds on two cores: each on one BLAS/OpenMP thread, or they spin against each other
+    import numpy  # noqa: F401  (loads the BLAS the limit applies to)
+    import scipy.linalg  # noqa: F401
+    import sklearn.utils  # noqa: F401  (loads OpenMP)
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
+
+
+def _build_prior() -> None:
+    from counterpart.nodes.tracker.prior import load_default_prior
+
+    load_default_prior(progress=True)
+
+
+def _build_responder_model(name: str) -> None:
+    from counterpart.nodes.responder.models import load_default
+
+    load_default(name, progress=lambda m: print(f"  responder {name}: {m}", file=sys.stderr, flush=True))
+
+
 def ensure_models(serve: bool = False) -> None:
     """Build the default model files the graph loads (and, with ``serve``, those the live page
     offers), when they are not cached yet.
+
+    Missing models are built side by side, one process per core (they are independent and each
+    is single-threaded Python for most of its time); cached ones are only loaded.
 
     Parameters
     ----------
     serve : bool, default=False
         Also build the models the live page offers.
     """
-    from counterpart.nodes.responder.models import load_default
-    from counterpart.nodes.tracker.prior import default_prior_path, load_default_prior
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
 
+    from counterpart.nodes.responder.models import default_model_path
+    from counterpart.nodes.tracker.prior import default_prior_path
+
+    names = RESPONDER_MODELS + (SERVE_MODELS if serve else ())
+    # the longest first, so that the short ones fill the other core
+    jobs = [(_build_responder_model, (n,)) for n in names[:1]] + [(_build_prior, ())]
+    jobs += [(_build_responder_model, (n,)) for n in names[1:]]
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
-    load_default_prior(progress=True)
-    for name in RESPONDER_MODELS + (SERVE_MODELS if serve else ()):
-        load_default(name, progress=lambda m, name=name: print(f"  responder {name}: {m}", file=sys.stderr))
+    missing = not default_prior_path().exists() or not all(default_model_path(n).exists() for n in names)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if not missing or cores < 2:
+        for fn, fn_args in jobs:
+            fn(*fn_args)
+        return
+    with ProcessPoolExecutor(
+        max_workers=min(cores, len(jobs)), mp_context=get_context("spawn"), initializer=_one_thread_each
+    ) as pool:
+        for future in [pool.submit(fn, *fn_args) for fn, fn_args in jobs]:
+            future.result()
 
 
 def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:
