@@ -47,7 +47,7 @@ def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
     """Flattened fg and edge maps (H*W + 1,) -> (2 (H*W + 1),) float32 ``(1 - fg)^2`` then
     ``(1 - edge)^2``: the per-sample costs of S_r and S_e.
     """
-    return np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32)
+    return np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32, copy=False)
 
 
 @dataclass(frozen=True)
@@ -415,7 +415,7 @@ class ConeLikelihood:
         uv = np.stack(
             [self.camera.fx * Xc[..., 0] * zi + self.camera.cx, self.camera.fy * Xc[..., 1] * zi + self.camera.cy],
             axis=-1,
-        ).astype(np.float32)
+        ).astype(np.float32, copy=False)
         c = uv[:, SEGMENT_ANCHORS]  # (N, S, 2, 2)
         rho = fr * zi[:, SEGMENT_ANCHORS]  # (N, S, 2)
         return c, rho, ok
@@ -456,12 +456,12 @@ class ConeLikelihood:
         ax, ay = c[:, :, 1, 0] - x0, c[:, :, 1, 1] - y0
         L = np.sqrt(ax * ax + ay * ay)
         ok = L > 1e-6
-        inv = np.where(ok, 1.0 / np.where(ok, L, 1.0), 0).astype(np.float32)
+        inv = np.where(ok, 1.0 / np.where(ok, L, 1.0), 0).astype(np.float32, copy=False)
         nx = np.where(ok, -ay * inv, np.float32(1.0))
         ny = ax * inv
         r0, dr = rho[..., 0], rho[..., 1] - rho[..., 0]
         # point = c0 + s a + (r0 + s dr) t n, per axis sum_j F_j G_j over (1, s, t, s t)
-        F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32)
+        F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32, copy=False)
         uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
         return uv[:, :, 0], uv[:, :, 1]
 
