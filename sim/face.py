@@ -37,6 +37,8 @@ from counterpart.sim.scenarios import SIGNAL_INDEX, conversation
 HEAD_RADII = (0.08, 0.102, 0.095)
 #: the neck pivot of nods and shakes, relative to the head centre (m)
 PIVOT = np.array([0.0, -0.10, -0.03])
+#: how far the sensor noise field reaches beyond the frame (px): its per-frame shifts
+NOISE_PAD = 64
 #: the width of the face across the cheeks (m): what sets the pixel scale
 FACE_WIDTH_M = 0.15
 
@@ -167,7 +169,11 @@ class FaceRenderer:
         self._background = np.clip(bg, 0, 255).astype(np.uint8)
         # side lighting, fixed in the image: brighter on the left
         ramp = np.linspace(1.12, 0.85, 2 * width, dtype=np.float32)
-        self._light = np.broadcast_to(ramp[None, :, None], (2 * height, 2 * width, 1))
+        self._light = np.ascontiguousarray(np.broadcast_to(ramp[None, :, None], (2 * height, 2 * width, 3)))
+        # sensor noise: a field drawn once, read at a random shift per frame (a new draw of
+        # every pixel per frame cost more than the rest of the frame)
+        nrng = np.random.default_rng([self.look.background_seed, 5])
+        self._noise = nrng.normal(0.0, self.noise, (height + NOISE_PAD, width + NOISE_PAD, 3)).astype(np.float32)
         self._skull = _sphere(HEAD_RADII)
         self._hair = _sphere(tuple(1.06 * r for r in HEAD_RADII))
         self._hair = self._hair[(self._hair[:, 1] > 0.035) | (self._hair[:, 2] < -0.02)]
@@ -288,12 +294,13 @@ class FaceRenderer:
             )[2]
             if normal > 0.15:
                 poly(uv, colour)
-        out = img.astype(np.float32) * (self._light * np.float32(light))
+        out = cv2.multiply(img, self._light, scale=float(light), dtype=cv2.CV_32F)
         out = cv2.GaussianBlur(out, (0, 0), 1.2)
         out = cv2.resize(out, (self.width, self.height), interpolation=cv2.INTER_AREA)
         if rng is not None:
             out *= float(1.0 + rng.normal(0.0, 0.004))
-            out += rng.normal(0.0, self.noise, out.shape).astype(np.float32)
+            dy, dx = rng.integers(0, NOISE_PAD, 2)
+            out += self._noise[dy : dy + self.height, dx : dx + self.width]
         out8 = np.clip(out, 0, 255).astype(np.uint8)
         if jpeg_quality:
             ok, buf = cv2.imencode(".jpg", out8, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
