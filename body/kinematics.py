@@ -297,7 +297,15 @@ def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> t
         *neg("root_roll"),
     )
     tor = R["torso"] = _rz(_rx(_ry(pel, *cs("torso_twist")), *cs("torso_flex")), *neg("torso_lateral"))
-    hed = R["head"] = _rz(_rx(_ry(tor, *cs("head_turn")), *cs("head_nod")), *neg("head_tilt"))
+    if rotations:
+        hed = R["head"] = _rz(_rx(_ry(tor, *cs("head_turn")), *cs("head_nod")), *neg("head_tilt"))
+        head_up = hed[1]
+    else:  # the points read the head's second column alone: _rz's second of _rx's first two
+        h0, h1, h2 = _ry(tor, *cs("head_turn"))
+        c, s = cs("head_nod")
+        h1 = h1 * c + h2 * s
+        c, s = neg("head_tilt")
+        head_up = h1 * c - h0 * s
 
     pts = np.empty((N, len(ANCHORS), 3))
     ax = ANCHOR_INDEX
@@ -307,9 +315,9 @@ def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> t
     pts[:, ax["neck"]] = neck
     pts[:, ax["chest"]] = neck - d.chest_drop * tor[1]
     pts[:, ax["torso_bottom"]] = pelvis - d.torso_bottom_drop * tor[1]
-    head = neck + d.neck_to_head * hed[1]
+    head = neck + d.neck_to_head * head_up
     pts[:, ax["head"]] = head
-    half = d.head_half_height * hed[1]
+    half = d.head_half_height * head_up
     pts[:, ax["chin"]] = head - half
     pts[:, ax["crown"]] = head + half
 
@@ -322,7 +330,12 @@ def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> t
     root = tuple(np.concatenate([t, t, p, p]) for t, p in zip(tor, pel))  # each limb's parent
     (c1, c2, c3, c4), (s1, s2, s3, s4) = (C4[:, k] for k in range(4)), (S4[:, k] for k in range(4))
     # upper arms and thighs, then forearms and shins
-    up = _ry(_rz(_rx(root, c1, -s1), c2, lim.sign * s2), c3, lim.neg_sign * s3)
+    if rotations:
+        up = _ry(_rz(_rx(root, c1, -s1), c2, lim.sign * s2), c3, lim.neg_sign * s3)
+    else:  # the points and the forearms' and shins' columns read its last two columns alone
+        a0, a1, a2 = _rz(_rx(root, c1, -s1), c2, lim.sign * s2)
+        s3 = lim.neg_sign * s3
+        up = (a0, a1, a0 * s3 + a2 * c3)  # _ry's columns 1 and 2; its column 0 left unturned, unread
     lo = _rx(up, c4, lim.bend * s4)
     # each limb's four anchors from its root outwards, (4 anchors, 4N rows, 3)
     J = np.empty((4, 4 * N, 3))

@@ -135,6 +135,38 @@ def test_beta_hits_survival_rate() -> None:
         choose_beta(ll, 1.5)
 
 
+def _beta_by_bisection(ll: np.ndarray, alpha: float, lo: float = 1e-3, hi: float = 1e6) -> float:
+    """The reference: 200 halvings of the log-beta bracket on ``survival_rate`` itself."""
+    a, b = np.log(lo), np.log(hi)
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        a, b = (m, b) if survival_rate(ll, np.exp(m)) > alpha else (a, m)
+    return float(np.exp(0.5 * (a + b)))
+
+
+def test_beta_matches_a_bisection_over_particle_counts_and_spreads() -> None:
+    # the real-time frame's few dozen particles to the offline 256; log-likelihood spreads from
+    # nearly flat to a collapse, and skewed shapes (a few good particles among many bad)
+    rng = np.random.default_rng(3)
+    worst = 0.0
+    for n in (8, 33, 64, 256):
+        for spread in (0.5, 5.0, 50.0, 500.0):
+            for shape in (0.3, 1.0, 3.0):
+                ll = -spread * rng.random(n) ** shape
+                for alpha in (0.2, 0.5, 0.8):
+                    ref = _beta_by_bisection(ll, alpha)
+                    if not 1.01e-3 < ref < 0.99e6:  # the bracket's ends: returned as they are
+                        continue
+                    worst = max(worst, abs(np.log(choose_beta(ll, alpha) / ref)))
+    assert worst < 2e-4
+    # beyond the bracket its ends come back
+    ll = -rng.random(64)
+    assert choose_beta(ll * 1e-9, 0.5) == 1e6  # nearly flat: even the largest beta survives too many
+    assert choose_beta(ll * 1e9, 0.5) == 1e-3  # a collapse: even the smallest survives too few
+    with pytest.raises(ValueError, match="grid point"):
+        choose_beta(ll, 0.5, refine=(1,))
+
+
 def test_annealing_schedule_and_limits() -> None:
     P = _pose()
     image, mask = _render(P)
@@ -165,17 +197,31 @@ def test_placement_from_bbox() -> None:
     assert abs(g[0] - 0.6) < 0.05 and abs(g[2] + 0.3) < 0.15
 
 
+#: (scenario, its seed, first frame): a stretch of each where person A walks, so that a tracker that
+#: does not follow falls behind (the pelvis moves 0.23-0.57 m over the 10 frames tracked)
+WALKS = (("handshake", 4, 20), ("handshake", 5, 20), ("push", 1, 10), ("push", 3, 50))
+
+
 def test_tracker_follows_rendered_sequence() -> None:
-    sc = make_scenario("handshake", seed=4)
-    P = sc.poses_a[::2][:20]
-    masks = rasterise_silhouettes(P, sc.dims_a, CAM)
-    out = track_sequence([None] * len(P), masks, CAM, side="left", config=SMALL, seed=0)
-    truth = forward_kinematics(P, sc.dims_a)
-    err = np.linalg.norm(out["joints"] - truth, axis=-1).mean(axis=1)
-    assert out["joints"].shape == (20, 14, 3)
-    assert err.mean() < 0.15, f"mean joint error {err.mean():.3f} m"
-    # stays with the person: the pelvis within 0.25 m of the truth on every frame
-    assert np.abs(out["poses"][:, [0, 2]] - P[:, [0, 2]]).max() < 0.25
+    # the filter is chaotic: one seed's error is luck (over 40 seeds of one scene it spreads
+    # 0.10-0.30 m), so the figure is the mean of four scenes, each with its own filter seed
+    err, behind, pelvis = [], [], []
+    for seed, (name, scenario_seed, start) in enumerate(WALKS):
+        sc = make_scenario(name, seed=scenario_seed)
+        P = sc.poses_a[start::2][:10]
+        masks = rasterise_silhouettes(P, sc.dims_a, CAM)
+        out = track_sequence([None] * len(P), masks, CAM, side="left", config=SMALL, seed=seed)
+        assert out["joints"].shape == (10, 14, 3)
+        truth = forward_kinematics(P, sc.dims_a)
+        err.append(np.linalg.norm(out["joints"] - truth, axis=-1).mean())
+        off = np.abs(out["poses"][:, [0, 2]] - P[:, [0, 2]]).max(axis=1)  # pelvis off the truth, m
+        pelvis.append(off.max())
+        # how far behind the walk the last frame is, as a share of the way walked (1: stood still)
+        behind.append(off[-1] / np.abs(P[-1, [0, 2]] - P[0, [0, 2]]).max())
+    assert np.mean(err) < 0.19, f"mean joint error {np.mean(err):.3f} m (per scene {np.round(err, 3)})"
+    assert np.mean(behind) < 0.75, f"the pelvis {np.round(behind, 2)} of the way walked behind"
+    # stays with the person: the pelvis within 0.35 m of the truth on every frame
+    assert max(pelvis) < 0.35, f"pelvis off by up to {np.round(pelvis, 3)} m"
 
 
 #: a second camera left of the scene, aimed at person A (as bench/tracker.py's ``--views 2``)
@@ -330,16 +376,20 @@ def _two_people(n: int) -> tuple[Camera, list[np.ndarray], list[np.ndarray], lis
     return stream.camera, frames, a, b
 
 
-def test_two_people_searched_side_by_side_get_what_each_search_alone_gets() -> None:
+# with a motion prior both people share, at a real-time frame's odd particle count
+@pytest.mark.parametrize(("with_prior", "particles"), [(False, 24), (True, 33)], ids=["random-walk", "motion-prior"])
+def test_two_people_searched_side_by_side_get_what_each_search_alone_gets(with_prior: bool, particles: int) -> None:
     from counterpart.nodes.tracker.likelihood import evaluate_joint
+    from counterpart.nodes.tracker.prior import train_prior
     from counterpart.nodes.tracker.tracker import joints_jointly, search_jointly
 
     cam, frames, a, b = _two_people(6)
+    prior = train_prior(["sim:handshake?seed=7"], n_states=3) if with_prior else None
 
     def pair() -> list[Tracker]:
         # a first search of 6 layers beside running ones of 3: the two schedules differ on the start
-        cfg = TrackerConfig(apf=APFConfig(n_layers=3, n_particles=24), init=InitConfig(layers=6))
-        return [Tracker(cam, side, cfg, seed=s) for s, side in enumerate(("left", "right"))]
+        cfg = TrackerConfig(apf=APFConfig(n_layers=3, n_particles=particles), init=InitConfig(layers=6))
+        return [Tracker(cam, side, cfg, prior=prior, seed=s) for s, side in enumerate(("left", "right"))]
 
     alone, joint = pair(), pair()
     b[0] = np.zeros_like(b[0])  # the right person comes in a frame later: its start beside a running track

@@ -122,14 +122,18 @@ def survival_rate(ll: np.ndarray, beta: float) -> float:
 
 
 def choose_beta(
-    ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, rounds: int = 5, grid: int = 16
+    ll: np.ndarray, survival: float, lo: float = 1e-3, hi: float = 1e6, grid: int = 24, refine: tuple[int, ...] = (8, 8)
 ) -> float:
     """The exponent beta whose weights exp(beta * ll) have survival rate ``survival``.
 
     D(beta) falls monotonically from 1 (beta = 0) towards 1/N, so a bracketing search on log beta
-    finds it: each of ``rounds`` rounds evaluates D at ``grid`` points of the bracket at once (one
-    (grid, N) array) and keeps the cell where D crosses ``survival``; 5 rounds of 16 pin log beta
-    to about 1e-5.
+    finds it. The first round evaluates log(N D) at ``grid`` points of the whole bracket at once
+    (one (grid, N) array), and each round of ``refine`` at that many points of the cell where it
+    crosses log(N survival); the last cell is closed by linear interpolation of log D in log beta,
+    which is smooth there. The defaults pin log beta about as finely as 5 rounds of 16 points
+    without interpolation (``tests/test_tracker_algorithm.py`` holds them to a bisection), in 3
+    array evaluations instead of 7: at the few dozen particles of a real-time frame the cost of
+    this function is its numpy calls, not their arithmetic.
 
     Parameters
     ----------
@@ -140,10 +144,11 @@ def choose_beta(
     lo, hi : float, default=1e-3, 1e6
         Bracket of beta; ``lo`` is returned when even it survives too few, ``hi`` when even it
         survives too many.
-    rounds : int, default=5
-        Rounds of the bracketing search.
-    grid : int, default=16
-        Points of the bracket evaluated per round.
+    grid : int, default=24
+        Points of the whole bracket evaluated in the first round (at least 2).
+    refine : tuple of int, default=(8, 8)
+        Points evaluated in each further round, across the cell the previous one found (each at
+        least 2).
 
     Returns
     -------
@@ -163,52 +168,42 @@ def choose_beta(
     if not np.isfinite(spread) or spread <= 0:
         return hi
     d = ll - top
-    n = len(d)
-
-    def rate(beta: float) -> float:  # survival_rate(ll, beta), sharing d
-        w = np.exp(beta * d)
-        w = w / w.sum()
-        return float(1.0 / (n * np.dot(w, w)))
-
-    if rate(lo) <= survival:
-        return lo
-    if rate(hi) >= survival:
-        return hi
-    a, b = np.log(lo), np.log(hi)
-    steps = _grid_steps(grid)
-    for r in range(rounds):
-        if r == 0:  # the whole bracket: the same grid every call
-            logb, betas = _first_grid(lo, hi, grid)
-        else:
-            # np.linspace(a, b, grid), without its argument handling (a call costs more than the
-            # arithmetic on the few hundred particles of a real-time frame); the same numbers
-            logb = steps * ((b - a) / (grid - 1))
-            logb += a
-            logb[-1] = b
+    target = np.log(survival * len(d))
+    logb, betas = _bracket_grid(lo, hi, grid)
+    for r in range(len(refine) + 1):
+        w = np.exp(np.multiply.outer(betas, d))  # (points, N)
+        s1 = w.sum(axis=1)
+        w *= w
+        g = 2.0 * np.log(s1) - np.log(w.sum(axis=1))  # log(N D) = log(S1^2 / S2), falling in beta
+        if r == 0:
+            if g[0] <= target:  # even lo survives too few
+                return lo
+            if g[-1] >= target:  # even hi survives too many
+                return hi
+        k = min(max(int(np.searchsorted(-g, -target)), 1), len(g) - 1)  # g[k-1] > target >= g[k]
+        a, b, ga, gb = logb[k - 1], logb[k], g[k - 1], g[k]
+        if r < len(refine):
+            logb = a + (b - a) * _unit_steps(refine[r])
             betas = np.exp(logb)
-        w = np.exp(betas[:, None] * d)  # (grid, N)
-        D = w.sum(axis=1) ** 2 / (n * (w * w).sum(axis=1))  # 1 / (N sum pi^2)
-        k = min(max(int(np.searchsorted(-D, -survival)), 1), grid - 1)  # D[k-1] > survival >= D[k]
-        a, b = logb[k - 1], logb[k]
-    return float(np.exp(0.5 * (a + b)))
+    f = (ga - target) / (ga - gb) if ga > gb else 0.5
+    return float(np.exp(a + f * (b - a)))
 
 
 @lru_cache(maxsize=4)
-def _first_grid(lo: float, hi: float, grid: int) -> tuple[np.ndarray, np.ndarray]:
+def _bracket_grid(lo: float, hi: float, grid: int) -> tuple[np.ndarray, np.ndarray]:
     """``choose_beta``'s first grid over the whole bracket [lo, hi]: log beta and beta, read-only."""
-    a, b = np.log(lo), np.log(hi)
-    logb = _grid_steps(grid) * ((b - a) / (grid - 1))
-    logb += a
-    logb[-1] = b
+    logb = np.log(lo) + (np.log(hi) - np.log(lo)) * _unit_steps(grid)
     betas = np.exp(logb)
     logb.flags.writeable = betas.flags.writeable = False
     return logb, betas
 
 
-@lru_cache(maxsize=4)
-def _grid_steps(grid: int) -> np.ndarray:
-    """0, 1, ..., grid - 1 as float64, read-only (``choose_beta``'s grid before scaling)."""
-    out = np.arange(grid, dtype=np.float64)
+@lru_cache(maxsize=8)
+def _unit_steps(n: int) -> np.ndarray:
+    """The n points evenly from 0 to 1, read-only (a grid across a bracket before scaling)."""
+    if n < 2:
+        raise ValueError(f"choose_beta: {n} grid point(s); a round needs at least 2")
+    out = np.linspace(0.0, 1.0, n)
     out.flags.writeable = False
     return out
 

@@ -47,7 +47,7 @@ def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
     """Flattened fg and edge maps (H*W + 1,) -> (2 (H*W + 1),) float32 ``(1 - fg)^2`` then
     ``(1 - edge)^2``: the per-sample costs of S_r and S_e.
     """
-    return np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32)
+    return np.concatenate([(1.0 - fg) ** 2, (1.0 - edge) ** 2]).astype(np.float32, copy=False)
 
 
 @dataclass(frozen=True)
@@ -233,7 +233,7 @@ def make_observation(
     ValueError
         If the mask is not 2-D, or the image or the edges and the mask differ in size.
     """
-    mask = np.asarray(mask).astype(bool)
+    mask = np.asarray(mask, dtype=bool)  # no copy of a bool mask
     if mask.ndim != 2:
         raise ValueError(f"mask has shape {mask.shape}; expected (H, W) foreground of one person")
     if image is not None and image.shape[:2] != mask.shape:
@@ -251,11 +251,13 @@ def make_observation(
     edge = np.zeros(1, np.float32)  # an empty mask: no window, every point reads nothing
     if win.size:
         edge = np.append(edge_map(None, win, edges=crop, **edge_kw).ravel(), np.float32(0))
-    ys, xs = np.nonzero(win)  # the mask's pixels in the same (row-major) order as over the whole mask
+    # the mask's pixels in the same (row-major) order as over the whole mask, as flat indices of the
+    # window: only the picked ones are turned into rows and columns
+    at = np.flatnonzero(win)
     rng = np.random.default_rng(0) if rng is None else rng
-    if len(xs) and n_cover:
-        pick = rng.choice(len(xs), size=min(n_cover, len(xs)), replace=False)
-        cover = np.stack([xs[pick] + x0, ys[pick] + y0], axis=1).astype(np.float32)
+    if len(at) and n_cover:
+        ys, xs = np.divmod(at[rng.choice(len(at), size=min(n_cover, len(at)), replace=False)], win.shape[1])
+        cover = np.stack([xs + x0, ys + y0], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)
     return Observation(fg, edge, cover, x1 - x0, y1 - y0, _cost_map(fg, edge), x0, y0)
@@ -413,7 +415,7 @@ class ConeLikelihood:
         uv = np.stack(
             [self.camera.fx * Xc[..., 0] * zi + self.camera.cx, self.camera.fy * Xc[..., 1] * zi + self.camera.cy],
             axis=-1,
-        ).astype(np.float32)
+        ).astype(np.float32, copy=False)
         c = uv[:, SEGMENT_ANCHORS]  # (N, S, 2, 2)
         rho = fr * zi[:, SEGMENT_ANCHORS]  # (N, S, 2)
         return c, rho, ok
@@ -454,12 +456,12 @@ class ConeLikelihood:
         ax, ay = c[:, :, 1, 0] - x0, c[:, :, 1, 1] - y0
         L = np.sqrt(ax * ax + ay * ay)
         ok = L > 1e-6
-        inv = np.where(ok, 1.0 / np.where(ok, L, 1.0), 0).astype(np.float32)
+        inv = np.where(ok, 1.0 / np.where(ok, L, 1.0), 0).astype(np.float32, copy=False)
         nx = np.where(ok, -ay * inv, np.float32(1.0))
         ny = ax * inv
         r0, dr = rho[..., 0], rho[..., 1] - rho[..., 0]
         # point = c0 + s a + (r0 + s dr) t n, per axis sum_j F_j G_j over (1, s, t, s t)
-        F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32)
+        F = np.stack([x0, ax, r0 * nx, dr * nx, y0, ay, r0 * ny, dr * ny], axis=-1).astype(np.float32, copy=False)
         uv = (F.reshape(-1, 4) @ self._G).reshape(*x0.shape, 2, -1)  # (N, S, 2, K)
         return uv[:, :, 0], uv[:, :, 1]
 
@@ -792,8 +794,13 @@ class _Batch:
         base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
         # where each sample's cost map starts in the maps laid end to end: (N, 1, K)
         k = views[0].n_in
-        self.offset = np.repeat(base, len(views[0].s), axis=2)
-        self.offset[:, :, k:] += outline
+        offset = np.repeat(base, len(views[0].s), axis=2)
+        offset[:, :, k:] += outline
+        # the offsets, and the index in its window's map that a sample outside the window reads, as
+        # whole (N, S, K) arrays: the layers' where and add then run without broadcasting
+        shape = (len(offset), N_SEGMENTS, offset.shape[2])
+        self.offset = np.ascontiguousarray(np.broadcast_to(offset, shape))
+        self.outside = np.ascontiguousarray(np.broadcast_to(self.WH, shape))
         # the coverage samples' terms per pose (ox, oy (N, 1), G (N, 3, M), qq (N, 1, M)), where
         # every person has the same number M of them
         self.cover: tuple[np.ndarray, ...] | None = None
@@ -878,7 +885,7 @@ def evaluate_joint(
     inside = (ui >= 0) & (ui < b.W) & (vi >= 0) & (vi < b.H)
     vi *= b.W
     vi += ui
-    idx = np.where(inside, vi, b.WH).astype(np.intp)
+    idx = np.where(inside, vi, b.outside).astype(np.intp)
     idx += b.offset
     cost = b.maps[idx]  # (N, S, K)
     S_r = cost[:, :, :k].mean(axis=(1, 2))
