@@ -133,8 +133,10 @@ def test_a_first_search_spread_over_frames_runs_its_whole_schedule_and_tracks() 
     np.testing.assert_array_equal(ja, _track(b, masks[:4], 8)[0])
 
 
-def _run(tmp_path: Path, budget: float, drop_frames: tuple[int, ...] = ()) -> tuple[list[dict], dict]:
-    out = tmp_path / f"pose{budget}{drop_frames}.jsonl"
+def _run(
+    tmp_path: Path, budget: float, drop_frames: tuple[int, ...] = (), min_layers: int = 3
+) -> tuple[list[dict], dict]:
+    out = tmp_path / f"pose{budget}{drop_frames}{min_layers}.jsonl"
     doc = {
         "nodes": {
             # frames at 100 kHz: no search fits in 10 us, so a budget cuts to its floors
@@ -152,12 +154,13 @@ def _run(tmp_path: Path, budget: float, drop_frames: tuple[int, ...] = ()) -> tu
                     "prior": "none",
                     "people": ["left", "right"],
                     "frame_budget": budget,
+                    "min_layers": min_layers,
                 },
             },
             "sink": {"run": "tests.topic_sink", "policy": "reliable", "params": {"topic": "pose", "path": str(out)}},
         }
     }
-    rc, log = run_launch(write_launch(tmp_path / f"graph{budget}{drop_frames}.yaml", doc), timeout=90)
+    rc, log = run_launch(write_launch(tmp_path / f"graph{budget}{drop_frames}{min_layers}.yaml", doc), timeout=90)
     assert rc == 0, log
     run_dir = Path(re.search(r"run directory (\S+)", log).group(1))
     stats = json.loads((run_dir / "stats" / "tracker.json").read_text())
@@ -179,6 +182,10 @@ def test_the_node_cuts_its_search_to_the_budget_and_reports_it(tmp_path: Path) -
     assert figs["budget_frames"] == 12
     assert figs["budget_particles"] == 2 * 64 + 10 * 32 and figs["budget_layers"] == 2 * 4 + 10 * 3
     assert figs["budget_over"] == 6  # 10 us a frame: every one over it, the floors included
+    # the real-time graph's floor of 2 layers (launch/demo.yaml)
+    poses, figs = _run(tmp_path, 1.0, min_layers=2)
+    assert [len(p["people"]) for p in poses] == [2] * 6
+    assert figs["budget_particles"] == 2 * 64 + 10 * 32 and figs["budget_layers"] == 2 * 4 + 10 * 2
 
 
 @pytest.mark.slow

@@ -137,11 +137,18 @@ class TrackerNode(Node):
             float,
             0.0,
             "share of the frame interval (1/fps) of CPU time the handling of a frame (all its people) "
-            "may take: beyond it the layers, then the particles, are cut (to 3 and 32 at least; the "
+            "may take: beyond it the layers, then the particles, are cut (to min_layers and 32 at least; the "
             "costs measured as it runs; the means in the stats as budget_particles / budget_layers "
             "over budget_frames); 0: always layers x particles",
             min=0.0,
             max=100.0,
+        ),
+        "min_layers": Param(
+            int,
+            3,
+            "with frame_budget only: the fewest annealing layers a frame is cut to before its particles are",
+            min=1,
+            max=100,
         ),
         "start_layers": Param(
             float,
@@ -237,7 +244,11 @@ class TrackerNode(Node):
         self.fps = 0.0  # the camera's frame rate, from the newest frame (or the silhouettes' stamps)
         self.rate = StampRate()
         self.fps_known = False  # a frame gave the rate
-        self.budget = FrameBudget(self.p["layers"], self.p["particles"], BudgetConfig(share=self.p["frame_budget"]))
+        self.budget = FrameBudget(
+            self.p["layers"],
+            self.p["particles"],
+            BudgetConfig(share=self.p["frame_budget"], min_layers=self.p["min_layers"]),
+        )
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
         """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not come."""
