@@ -178,9 +178,13 @@ def run_graph(
 
 
 def _cpu_at(cpu: CpuSamples, node: str, t_ns: int) -> float:
-    """The CPU seconds ``node`` had used at ``t_ns``, interpolated between the samples (NaN outside them)."""
+    """The CPU seconds ``node`` had used at ``t_ns``, interpolated between the samples; after its last
+    sample, that sample's (a node that publishes its last stats and exits between two samples, or
+    one that ended before the span's end, as the camera does, used at most a sampling interval more;
+    NaN before its first sample).
+    """
     pts = [(t, c[node]) for t, c in cpu if node in c]
-    if not pts or not pts[0][0] <= t_ns <= pts[-1][0]:
+    if not pts or t_ns < pts[0][0]:
         return float("nan")
     ts, cs = np.array(pts, dtype=np.float64).T
     return float(np.interp(t_ns, ts, cs))
