@@ -135,6 +135,7 @@ def estimated(tmp_path_factory: pytest.TempPathFactory) -> tuple[int, str, dict[
     return rc, log, infos, Path(run_dir.group(1)) if run_dir else tmp_path
 
 
+@pytest.mark.slow
 def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(estimated: tuple) -> None:
     rc, log, infos, _ = estimated
     assert rc == 0, log
@@ -170,6 +171,7 @@ def test_the_estimates_wait_beyond_their_share_of_a_core_and_the_burst() -> None
     assert never.due(0.0)  # share 0: no limit
 
 
+@pytest.mark.slow
 def test_a_deferred_estimate_still_moves_the_camera_towards_the_last_credible_one(estimated: tuple) -> None:
     # a hundredth of a core and no burst: after the first estimate every later one waits (a 3 s
     # clip), yet the published camera goes on, a bounded step each time, towards that estimate
