@@ -73,7 +73,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _one_thread_each() -> None:
-    # two builds on two cores: each on one BLAS/OpenMP thread, or they spin against each other
+    """A model-building worker's start: one BLAS/OpenMP thread (two builds on two cores would
+    otherwise spin their threads against each other).
+    """
     import numpy  # noqa: F401  (loads the BLAS the limit applies to)
     import scipy.linalg  # noqa: F401
     import sklearn.utils  # noqa: F401  (loads OpenMP)
@@ -83,12 +85,14 @@ def _one_thread_each() -> None:
 
 
 def _build_prior() -> None:
+    """Load or build the tracker's default motion prior (in a worker)."""
     from counterpart.nodes.tracker.prior import load_default_prior
 
     load_default_prior(progress=True)
 
 
 def _build_responder_model(name: str) -> None:
+    """Load or build the responder's default model ``name`` (in a worker)."""
     from counterpart.nodes.responder.models import load_default
 
     load_default(name, progress=lambda m: print(f"  responder {name}: {m}", file=sys.stderr, flush=True))
