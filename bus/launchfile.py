@@ -20,7 +20,8 @@ Format (every key but ``nodes`` optional)::
         params: {gain: 2.0}
         remap: {in: numbers, out: doubled} # port -> topic (default: topic = port name)
         policy: reliable                   # default queue policy of every input
-        inputs: {in: {policy: latest}}     # per-input policy
+        inputs: {in: {policy: latest}}     # per-input policy; {policy: latest, queue: 3}: keep the
+                                           # newest 3 in order (a node that is late at times catches up)
         restart: on-failure                # never | on-failure | always
         max_restarts: 5
         required: false                    # its exit stops the graph with its exit code
@@ -46,7 +47,7 @@ from .endpoints import TopicEndpoints, ipc_endpoints, tcp_endpoints
 from .node import STATS_PORT, Input, Node, Output, stats_topic
 from .params import ParamError
 from .runner import NodeLookupError, find_node_class
-from .transport import POLICIES
+from .transport import LATEST, POLICIES, QUEUED_HWM
 
 RESTART_POLICIES = ("never", "on-failure", "always")
 NODE_KEYS = {
@@ -90,6 +91,8 @@ class NodeDecl:
         Default queue policy of every input; None: the node's own.
     input_policies : dict of str to str
         Per-input queue policy.
+    input_queues : dict of str to int
+        Per-input queue length of a ``latest`` input (0: the newest message only).
     restart : {"never", "on-failure", "always"}
         Restart policy.
     max_restarts : int
@@ -110,6 +113,7 @@ class NodeDecl:
     remap: dict[str, str] = field(default_factory=dict)
     policy: str | None = None
     input_policies: dict[str, str] = field(default_factory=dict)
+    input_queues: dict[str, int] = field(default_factory=dict)
     restart: str = "never"
     max_restarts: int = 5
     required: bool = False
@@ -208,6 +212,20 @@ def find_launch_file(name: str | Path, relative_to: Path | None = None) -> Path:
 def _err(file: str, node: str | None, key: str, msg: str) -> LaunchError:
     where = f"{file}: node {node!r}: {key}" if node else f"{file}: {key}"
     return LaunchError(f"{where}: {msg}")
+
+
+def _queue(value: Any, policy: str, file: str, node: str, key: str) -> int:
+    """A ``latest`` input's queue length, checked: an integer in 0..QUEUED_HWM."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= QUEUED_HWM:
+        raise _err(
+            file,
+            node,
+            key,
+            f"{value!r} is not an integer in 0..{QUEUED_HWM} (messages a latest input keeps in order; 0: the newest only)",
+        )
+    if value and policy != LATEST:
+        raise _err(file, node, key, f"a queue applies to a latest input only (this one is {policy}: it loses nothing)")
+    return value
 
 
 def _mapping(value: Any, file: str, node: str | None, key: str) -> dict[str, Any]:
@@ -341,10 +359,13 @@ def _node_decl(file: str, name: str, body: dict[str, Any]) -> NodeDecl:
     if decl.policy is not None and decl.policy not in POLICIES:
         raise _err(file, name, "policy", f"{decl.policy!r} is not one of {', '.join(POLICIES)}")
     for port, v in _mapping(body.get("inputs"), file, name, "inputs").items():
-        pol = _mapping(v, file, name, f"inputs.{port}").get("policy")
+        entry = _mapping(v, file, name, f"inputs.{port}")
+        pol = entry.get("policy")
         if pol not in POLICIES:
             raise _err(file, name, f"inputs.{port}.policy", f"{pol!r} is not one of {', '.join(POLICIES)}")
         decl.input_policies[str(port)] = pol
+        if "queue" in entry:
+            decl.input_queues[str(port)] = _queue(entry["queue"], pol, file, name, f"inputs.{port}.queue")
     decl.restart = body.get("restart", "never")
     if decl.restart not in RESTART_POLICIES:
         raise _err(file, name, "restart", f"{decl.restart!r} is not one of {', '.join(RESTART_POLICIES)}")
@@ -579,6 +600,8 @@ def node_specs(graph: Graph, run_dir: Path) -> dict[str, dict[str, Any]]:
                 "policy": policy,
                 "publisher": graph.topics[topic]["node"],
             }
+            if port in decl.input_queues:
+                spec["inputs"][port]["queue"] = decl.input_queues[port]
         for port in list(graph.ports_out[name]) + [STATS_PORT]:
             topic = graph.output_topic(name, port)
             subs = graph.topics[topic]["subscribers"]

@@ -443,7 +443,7 @@ class Node:
                 ),
                 msg_type=inputs[port].type,
                 publisher=w.get("publisher"),
-                queue=inputs[port].queue,
+                queue=int(w.get("queue", inputs[port].queue)),
             )
             self._in_stats[port] = _PortStats()
         for port in list(outputs) + [STATS_PORT]:

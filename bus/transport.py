@@ -39,6 +39,8 @@ EOS_PREFIX = b"\x00eos:"
 RELIABLE = "reliable"
 LATEST = "latest"
 POLICIES = (RELIABLE, LATEST)
+#: send high-water mark of a publisher's queued socket: the longest queue a ``latest`` subscriber may keep
+QUEUED_HWM = 64
 #: a publisher's send counter cannot run ahead of the last one seen by more than this many messages
 #: plus MAX_SEND_RATE per second since then (far above what a Python publisher sends); a larger jump
 #: is a forged or corrupt counter, not a loss
@@ -94,7 +96,7 @@ class Publisher:
         Send high-water mark of the reliable socket, messages.
     latest_hwm : int, default=2
         Send high-water mark of the latest socket, messages.
-    queued_hwm : int, default=64
+    queued_hwm : int, default=QUEUED_HWM
         Send high-water mark of the queued socket, messages.
     barrier_timeout : float, default=30.0
         Longest wait for the expected subscribers, seconds.
@@ -124,7 +126,7 @@ class Publisher:
         expected_latest: int = 0,
         hwm: int = 16,
         latest_hwm: int = 2,
-        queued_hwm: int = 64,
+        queued_hwm: int = QUEUED_HWM,
         barrier_timeout: float = 30.0,
         should_stop: Callable[[], bool] = lambda: False,
         latched: bool = False,
@@ -191,6 +193,7 @@ class Publisher:
             self._check_barrier()
         while self.queued is not None and self.queued.poll(0, zmq.POLLIN):
             self.queued_subscribers += 1 if self.queued.recv()[:1] == b"\x01" else -1
+            self._check_barrier()
         if joined and self._latched_parts is not None:
             self._send_latest(self._latched_parts)
         return joined_reliable
@@ -206,7 +209,8 @@ class Publisher:
         return (
             self.subscribers >= self.expected
             and self.eos_listeners >= self.expected_latest
-            and self.latest_subscribers >= self.expected_latest
+            # a lossy subscriber with a queue reads the queued socket instead of the latest one
+            and self.latest_subscribers + self.queued_subscribers >= self.expected_latest
         )
 
     def poll_subscriptions(self) -> None:

@@ -112,6 +112,27 @@ def test_latest_policy_drops_under_a_slow_consumer_and_counts_the_drops(tmp_path
     assert end["drops"] > 200
 
 
+def test_a_latest_input_with_a_queue_catches_up_on_a_burst_and_joins_the_startup_barrier(tmp_path: Path) -> None:
+    # a burst of 40 at 300 Hz into a 20 ms consumer: with the newest message only it keeps a few; with
+    # a queue of 48 (launch file: inputs.in.queue) it keeps every one, in order, and nothing is dropped
+    for queue, kept_all in ((0, False), (48, True)):
+        doc = chain(tmp_path, count=40, delay_ms=20.0)
+        doc["nodes"]["source"]["params"]["rate"] = 300.0
+        doc["nodes"]["sink"]["inputs"] = {"in": {"policy": "latest", "queue": queue}}
+        # the queued subscriber counts at the startup barrier: without it the relay would wait out this
+        # timeout for a reader that never joins its latest socket, and the run would not end in time
+        doc["barrier_timeout"] = 600
+        (tmp_path / "sink.jsonl").unlink(missing_ok=True)
+        code, out = run_launch(write_launch(tmp_path / "g.yaml", doc), timeout=90)
+        assert code == 0, out
+        seqs = [r["seq"] for r in received(tmp_path / "sink.jsonl")]
+        end = read_jsonl(tmp_path / "sink.jsonl")[-1]
+        if kept_all:
+            assert seqs == list(range(40)) and end == {"event": "end", "drops": 0}
+        else:
+            assert len(seqs) < 30 and end["drops"] > 10
+
+
 def test_killed_node_with_restart_policy_comes_back(tmp_path: Path) -> None:
     doc = chain(tmp_path, count=100000)
     doc["nodes"]["source"]["params"]["rate"] = 200.0

@@ -57,6 +57,16 @@ CASES = [
     ),
     ("bad input policy", with_node("sink", inputs={"in": {"policy": "x"}}), "node 'sink': inputs.in.policy"),
     (
+        "queue not a count",
+        with_node("sink", inputs={"in": {"policy": "latest", "queue": 100}}),
+        "node 'sink': inputs.in.queue: 100 is not an integer in 0..64",
+    ),
+    (
+        "queue on a reliable input",
+        with_node("sink", inputs={"in": {"policy": "reliable", "queue": 3}}),
+        "node 'sink': inputs.in.queue: a queue applies to a latest input only",
+    ),
+    (
         "bad restart",
         with_node("sink", restart="maybe"),
         "node 'sink': restart: 'maybe' is not one of never, on-failure, always",
