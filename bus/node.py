@@ -557,6 +557,8 @@ class Node:
             deadline = self._sync.next_deadline() if self._sync is not None else None
             if deadline is not None:
                 timeout = max(0, min(timeout, int((deadline - time.monotonic()) * 1000) + 1))
+            if any(sub.pending for sub in self._in.values()):
+                timeout = 0  # messages already queued here wait for no socket
             ready = dict(poller.poll(timeout))
             due = [owners[s] for s in ready] + [p for p, sub in self._in.items() if sub.pending]
             for port in dict.fromkeys(due):

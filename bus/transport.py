@@ -15,6 +15,7 @@ socket in order and counts the gaps.
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from time import monotonic as _monotonic
@@ -531,7 +532,11 @@ class Subscriber:
         self._last_counter_time = self._eos_time = 0.0
         self.socket = ctx.socket(zmq.SUB)
         self.socket.setsockopt(zmq.LINGER, 0)
-        self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else queue if self.queued else 2)
+        # a queue is kept here, newest last (the oldest pushed out are counted by the send counter's
+        # gap): the socket's own queue is the publisher's whole queued one, so that one drain takes
+        # everything that came while the node was busy
+        self._backlog: deque[list[Any]] = deque(maxlen=max(queue, 1))
+        self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else QUEUED_HWM if self.queued else 2)
         self.socket.setsockopt(zmq.SUBSCRIBE, b"")
         if policy == RELIABLE:
             self.socket.connect(endpoints.reliable)
@@ -617,12 +622,25 @@ class Subscriber:
             frames.append(frame)
         return frames
 
+    def _next_queued(self) -> list[Any]:
+        """The oldest message of the queue, after taking in everything the socket holds (the
+        oldest beyond ``queue`` are dropped). Raises zmq.Again when there is none.
+        """
+        while True:
+            try:
+                self._backlog.append(self._recv(zmq.NOBLOCK))
+            except zmq.Again:
+                break
+        if not self._backlog:
+            raise zmq.Again()
+        return self._backlog.popleft()
+
     @property
     def pending(self) -> bool:
         """End of stream has arrived and will be returned once nothing more is in flight: call
         :meth:`receive` again even when no socket is readable.
         """
-        return self._pending_eos is not None
+        return self._pending_eos is not None or bool(self._backlog)
 
     def receive(self) -> Any | None:
         """The next message (reliable) or the newest one (latest).
@@ -641,7 +659,7 @@ class Subscriber:
                 self._eos_counter = read_header(frames[1], self.limits).get("n")
                 self._eos_time = _monotonic()
         try:
-            frames = self._recv(zmq.NOBLOCK)
+            frames = self._next_queued() if self.queued else self._recv(zmq.NOBLOCK)
         except zmq.Again:
             if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
                 msg, self._pending_eos = self._pending_eos, None
