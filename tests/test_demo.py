@@ -87,6 +87,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("silhouette", "body_shadow_leg_scale"),  # real time: the leg check on 2 x 2 blocks
         ("tracker", "frame_budget"),
         ("tracker", "min_layers"),  # real time: at the floors 2 layers of more particles, not 3
+        ("tracker", "frame_wall"),  # real time: under load fewer particles rather than dropped frames
         ("calibration", "detect_frames"),
         ("calibration", "every"),
         ("calibration", "cpu_share"),  # real time: the estimates' share of a core (lockstep: deterministic)

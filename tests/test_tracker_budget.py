@@ -71,6 +71,27 @@ def test_the_plan_converges_to_what_fits_beside_a_fixed_overhead() -> None:
     assert (layers, n) == (5, 256)  # whole layers: 5 of the 5.7 that fit
 
 
+def test_on_a_loaded_machine_the_wall_clock_share_cuts_the_search_to_keep_up() -> None:
+    # the same costs as above; the tracker gets a whole core, then a third of one (a frame's wall
+    # time three times its CPU time): with wall_share it converges to frames whose wall time fits
+    # wall_share of the interval, without it to the same CPU time (three times that wall time)
+    def run(config: BudgetConfig, core_share: float) -> tuple[float, float]:
+        b = FrameBudget(10, 256, config)
+        for _ in range(60):
+            layers, n = b.plan(1, 25.0)
+            search = layers * (0.001 + 20e-6 * n)
+            cpu = 0.005 + search
+            b.record(cpu, 1, layers, n, search, cpu / core_share)
+        return cpu, cpu / core_share
+
+    cpu_only, wall = BudgetConfig(share=0.5), BudgetConfig(share=0.5, wall_share=0.8)
+    assert run(wall, 1.0) == run(cpu_only, 1.0)  # idle: the CPU budget binds
+    cpu, elapsed = run(cpu_only, 1 / 3)
+    assert 0.015 < cpu < 0.021 and elapsed > 1 / 25  # about half the interval of CPU: more than one of wall
+    cpu, elapsed = run(wall, 1 / 3)
+    assert elapsed <= 0.8 / 25 and cpu > 0.8 / 25 / 3 * 0.75  # within 0.8 of it, not far below
+
+
 def test_the_rate_of_the_stamps_stands_in_for_the_frames_rate() -> None:
     r = StampRate()
     assert r.update(10, 0) == 0.0 and r.update(10, 5_000_000_000) == 0.0  # no stamp; one frame

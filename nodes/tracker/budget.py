@@ -20,6 +20,13 @@ whose cost hardly depends on how many particles they carry at a real-time frame'
 count the tracker has run (the full search of the first frames, the plans since); with one count
 only, the layer cost is taken as proportional to the particles. Everything is learnt as the
 tracker runs (exponential moving averages), so it follows the load and the size of the people.
+
+On a loaded machine the tracker gets less than a core, and a frame's CPU budget can take longer
+than a frame interval of wall-clock time, so that frames are dropped however well the budget is
+kept. With ``wall_share`` the budget is also held in wall-clock time: the CPU time a frame may
+take is at most ``wall_share / fps`` times the share of a core the tracker's frames have been
+getting (their CPU time over their wall-clock time), so that under load it searches fewer
+particles instead of losing frames; on an idle machine the CPU budget binds, as before.
 """
 
 from __future__ import annotations
@@ -48,6 +55,9 @@ class BudgetConfig:
         Weight of the newest measurement in the moving averages of the costs, in (0, 1].
     counts_kept : int
         Particle counts whose layer cost is kept for the fit of ``a`` and ``c`` (the most recent).
+    wall_share : float
+        Share of the frame interval of wall-clock time the handling of a frame may take, at the
+        share of a core the tracker has been getting; 0: the CPU budget alone.
     """
 
     share: float = 0.0
@@ -55,6 +65,7 @@ class BudgetConfig:
     min_particles: int = 32
     smoothing: float = 0.2
     counts_kept: int = 8
+    wall_share: float = 0.0
 
 
 class FrameBudget:
@@ -74,6 +85,9 @@ class FrameBudget:
         self.overhead_s: float | None = None
         #: particle count -> mean seconds of one annealing layer of one person at that count
         self.layer_s: dict[int, float] = {}
+        #: the share of a core the frames have been getting: their CPU time over their wall time
+        #: (None until measured)
+        self.cpu_rate: float | None = None
 
     def _ema(self, old: float | None, new: float) -> float:
         a = self.config.smoothing
@@ -133,7 +147,7 @@ class FrameBudget:
             return self.layers, self.particles
         a, c = self.layer_cost()
         # CPU seconds each person's layers may take
-        avail = cfg.share / fps / n_people - self.overhead_s
+        avail = self.frame_cpu_s(fps) / n_people - self.overhead_s
         full = a + c * self.particles
         m = int(avail / full) if avail > 0 else 0
         if m >= self.layers:
@@ -144,7 +158,35 @@ class FrameBudget:
         n = int((avail / min_m - a) / c) if avail > 0 else 0
         return min_m, max(min(cfg.min_particles, self.particles), min(n, self.particles))
 
-    def record(self, seconds: float, people: int, layers_run: int, particles: int, search_seconds: float) -> None:
+    def frame_cpu_s(self, fps: float) -> float:
+        """The CPU seconds the next frame may take: ``share / fps``, and with ``wall_share`` at
+        most ``wall_share / fps`` times the share of a core the frames have been getting.
+
+        Parameters
+        ----------
+        fps : float
+            The camera's frame rate, Hz (> 0).
+
+        Returns
+        -------
+        float
+            Seconds of CPU time.
+        """
+        cfg = self.config
+        budget = cfg.share / fps
+        if cfg.wall_share > 0 and self.cpu_rate is not None:
+            budget = min(budget, cfg.wall_share / fps * self.cpu_rate)
+        return budget
+
+    def record(
+        self,
+        seconds: float,
+        people: int,
+        layers_run: int,
+        particles: int,
+        search_seconds: float,
+        wall_seconds: float = 0.0,
+    ) -> None:
         """Learn the costs from one frame.
 
         Parameters
@@ -160,7 +202,11 @@ class FrameBudget:
             Particles per layer.
         search_seconds : float
             CPU time of the layers (the searches), s; the rest of ``seconds`` is the overhead.
+        wall_seconds : float, default=0.0
+            Wall-clock time of the whole frame, s (0: not measured).
         """
+        if wall_seconds > 0 and seconds > 0:
+            self.cpu_rate = self._ema(self.cpu_rate, min(seconds / wall_seconds, 1.0))
         if people <= 0 or layers_run <= 0 or particles <= 0:
             return
         self.overhead_s = self._ema(self.overhead_s, max(seconds - search_seconds, 0.0) / people)

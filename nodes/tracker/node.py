@@ -143,6 +143,16 @@ class TrackerNode(Node):
             min=0.0,
             max=100.0,
         ),
+        "frame_wall": Param(
+            float,
+            0.0,
+            "with frame_budget only: share of the frame interval of wall-clock time the handling of a "
+            "frame may take at the share of a core the tracker has been getting (its frames' CPU time over "
+            "their wall time): on a loaded machine it cuts the search further instead of dropping frames; "
+            "0: the CPU budget alone",
+            min=0.0,
+            max=100.0,
+        ),
         "min_layers": Param(
             int,
             3,
@@ -247,7 +257,9 @@ class TrackerNode(Node):
         self.budget = FrameBudget(
             self.p["layers"],
             self.p["particles"],
-            BudgetConfig(share=self.p["frame_budget"], min_layers=self.p["min_layers"]),
+            BudgetConfig(
+                share=self.p["frame_budget"], min_layers=self.p["min_layers"], wall_share=self.p["frame_wall"]
+            ),
         )
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
@@ -369,7 +381,7 @@ class TrackerNode(Node):
         budgeted = self.budget.config.share > 0 and self.fps > 0
         max_start_layers = max(1, round(cap * layers)) if budgeted and cap > 0 else None
         # the budget holds the whole handler, in the process's CPU time (module budget)
-        cpu0 = time.process_time()
+        cpu0, wall0 = time.process_time(), time.perf_counter()
         # the frame's edges once for all its people
         edges = frame_edges(image) if image is not None and len(in_view) > 1 else None
         begun: list[tuple[str, Any, Tracker, Search, int]] = []
@@ -423,7 +435,7 @@ class TrackerNode(Node):
         search_cpu = time.process_time() - cpu0
         self.publish("pose", Pose3D(stamp=sil.stamp, seq=sil.seq, fps=self.fps, people=people))
         cpu = time.process_time() - cpu0
-        self.budget.record(cpu, searched, layers_run, particles, layers_cpu)
+        self.budget.record(cpu, searched, layers_run, particles, layers_cpu, time.perf_counter() - wall0)
         self.tally("search_cpu_ms", search_cpu * 1e3)
         self.tally("layers_cpu_ms", layers_cpu * 1e3)
         self.tally("handler_cpu_ms", cpu * 1e3)
