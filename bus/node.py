@@ -76,7 +76,8 @@ class Input:
     awaits_end : bool, default=True
         Whether the node waits for this input's end of stream before it ends.
     queue : int, default=0
-        With the ``latest`` policy, keep up to this many messages in order instead of the newest only.
+        With the ``latest`` policy, keep up to this many messages in order instead of the newest only
+        (the newest ones; the launch file's ``inputs.PORT.queue`` overrides it).
     """
 
     type: type | None

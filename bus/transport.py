@@ -477,7 +477,9 @@ class Subscriber:
     queue : int, default=0
         Latest policy only: keep up to this many messages in order instead of only the newest, read
         from the publisher's queued socket (recorders that must never hold a publisher back but
-        should lose nothing while they keep up); what overflows is counted in ``drops``.
+        should lose nothing while they keep up; a real-time node that is late now and then and
+        catches up): each take keeps the newest ``queue`` of what has come, the older ones are
+        dropped and counted in ``drops``, so the lag stays bounded.
 
     Attributes
     ----------
@@ -533,8 +535,8 @@ class Subscriber:
         self.socket = ctx.socket(zmq.SUB)
         self.socket.setsockopt(zmq.LINGER, 0)
         # a queue is kept here, newest last (the oldest pushed out are counted by the send counter's
-        # gap): the socket's own queue is the publisher's whole queued one, so that one drain takes
-        # everything that came while the node was busy
+        # gap): the socket's own queue is as long as the publisher's queued one, so that a drain takes
+        # most of what came while the node was busy
         self._backlog: deque[list[Any]] = deque(maxlen=max(queue, 1))
         self.socket.setsockopt(zmq.RCVHWM, hwm if policy == RELIABLE else QUEUED_HWM if self.queued else 2)
         self.socket.setsockopt(zmq.SUBSCRIBE, b"")
@@ -628,9 +630,12 @@ class Subscriber:
         """
         while True:
             try:
-                self._backlog.append(self._recv(zmq.NOBLOCK))
+                frames = self._recv(zmq.NOBLOCK)
             except zmq.Again:
                 break
+            if len(self._backlog) == self._backlog.maxlen and self._last_counter is None:
+                self.drops += 1  # before the first message taken no send counter shows the gap
+            self._backlog.append(frames)
         if not self._backlog:
             raise zmq.Again()
         return self._backlog.popleft()
