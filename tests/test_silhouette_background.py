@@ -341,6 +341,31 @@ def test_the_leg_step_leaves_unseen_background_and_wide_shadows_alone():
     assert (reclaim_body_shadow(wide, config, frame, background)[30:33, 14:20] == SHADOW).all()
 
 
+def test_foreground_indices_from_the_caller_give_the_same_update_and_body_shadow(empty_frames):
+    """``update`` and ``reclaim_body_shadow`` take the FOREGROUND pixels' flat indices from a caller
+    that has them (the subtractor's veto): the model and the labels are those of finding them.
+    """
+    rng = np.random.default_rng(12)
+    found = HorprasertBackground().fit(empty_frames, robust=True)
+    given = HorprasertBackground().fit(empty_frames, robust=True)
+    config = BodyShadowConfig()
+    for k in range(6):
+        frame = render(rng, person_x=40.0 + 8 * k, shadow=True)
+        labels = found.apply(frame)
+        np.testing.assert_array_equal(given.apply(frame), labels)
+        fg_idx = np.flatnonzero(labels == FOREGROUND)
+        assert fg_idx.size > 100
+        grey = found.grey_
+        np.testing.assert_array_equal(
+            reclaim_body_shadow(labels, config, frame, grey, fg_idx=fg_idx),
+            reclaim_body_shadow(labels, config, frame, grey),
+        )
+        found.update(frame, labels)
+        given.update(frame, labels, fg_idx)
+        np.testing.assert_array_equal(given.mean_, found.mean_)
+        np.testing.assert_array_equal(given.spread_, found.spread_)
+
+
 @pytest.mark.parametrize(
     "bad",
     [

@@ -11,6 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
+from counterpart.nodes.silhouette.node import Silhouette
 from counterpart.sim.flat_scenes import SyntheticSequence, two_person_sequence
 from tests.launching import REPO, read_jsonl, run_launch, write_launch
 
@@ -178,3 +179,16 @@ def test_example_launch_file_runs_on_a_given_mjpg_video(tmp_path: Path, scene) -
     assert code == 0, text
     assert f"published {N} frames" in text and f"people found in {N - EMPTY_FRAMES} of {N} frames" in text
     assert "silhouette exited with 0" in text
+
+
+def test_opencv_threads_sets_the_process_pool_and_zero_leaves_it() -> None:
+    before = cv2.getNumThreads()
+    try:
+        cv2.setNumThreads(2)
+        Silhouette({"name": "silhouette", "params": {"opencv_threads": 1}}).setup()
+        assert cv2.getNumThreads() == 1
+        cv2.setNumThreads(2)
+        Silhouette({"name": "silhouette", "params": {}}).setup()
+        assert cv2.getNumThreads() == 2
+    finally:
+        cv2.setNumThreads(before)

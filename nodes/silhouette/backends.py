@@ -259,19 +259,28 @@ class HorprasertSubtractor:
             if self._unseen_fg is not None:
                 # no veto where the room was filled in (see ``HorprasertBackground.unseen_``)
                 cv2.max(labels, cv2.bitwise_and(stats, self._unseen_fg), dst=labels)
+        # the FOREGROUND pixels of these labels, found once for the update and the body-shadow
+        # step: the veto's own where the labels are the vetoed ones unchanged
+        learns = self._model.learns_next
+        if self.samples is not None and self._unseen_fg is None:
+            labels_fg = fg_idx
+        elif learns or self.body_shadow.span_px > 0:
+            labels_fg = np.flatnonzero(labels.reshape(-1) == FOREGROUND)  # on bool: faster than 0 / 255
+        else:
+            labels_fg = None
         # the leg step compares with the background grey levels this frame was classified against:
         # the update replaces that array (it does not write into it), so it is taken before
         grey = self._model.grey_
-        if self.threaded and self._model.learns_next:
-            self._deferred.submit(self._model.update, frame, labels.copy())
+        if self.threaded and learns:
+            self._deferred.submit(self._model.update, frame, labels.copy(), labels_fg)
         else:
             # in line too when the model does not learn from this frame (it only counts it)
-            self._model.update(frame, labels)
+            self._model.update(frame, labels, labels_fg)
         if self.samples is not None:
             # the frame is this call's own copy when threaded, and the statistics' labels are
             # not changed again: the samples' worker may read both as they are
             self.samples.learn(frame, stats, fg_idx, copy=not self.threaded)
-        labels = reclaim_body_shadow(labels, self.body_shadow, frame, grey, self._model.unseen_)
+        labels = reclaim_body_shadow(labels, self.body_shadow, frame, grey, self._model.unseen_, labels_fg)
         self.labels = labels
         return labels == FOREGROUND
 

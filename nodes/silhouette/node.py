@@ -225,6 +225,17 @@ class Silhouette(Node):
             "up the frames behind it (for live graphs; which frames the fit overlaps depends on "
             "timing, so lockstep replays leave it off)",
         ),
+        "opencv_threads": Param(
+            int,
+            0,
+            "OpenCV threads of this node's process (cv2.setNumThreads); 0: OpenCV's default (one "
+            "per core). 1 with the horprasert backend: its models' worker thread is the second "
+            "thread, and OpenCV's pool thread, which busy-waits after each call OpenCV "
+            "parallelises (the connected components), stops taking that thread's core; the "
+            "results are the same",
+            min=0,
+            max=256,
+        ),
         "mask_every": Param(int, 1, "publish the label mask every N frames by seq (1: every frame, 0: never)", min=0),
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
@@ -240,6 +251,8 @@ class Silhouette(Node):
 
     def setup(self) -> None:
         """Start without an extractor: one is made on the first frame, for its size and colour."""
+        if self.p["opencv_threads"] > 0:
+            cv2.setNumThreads(self.p["opencv_threads"])
         self.extractor: SilhouetteExtractor | None = None
         self.key: tuple[tuple[int, ...], bool] | None = None  # (frame size, mono) of the model
         self.found = 0

@@ -158,7 +158,6 @@ class SampleConsensus:
         self.random_state = random_state
         self.threaded = threaded
         self._samples: np.ndarray | None = None
-        self._norms: np.ndarray | None = None  # (H * W, N) int16: |S_k|_1 of each sample, kept by _write
         # (H * W,) uint64: per pixel the bytes B, G, R minimum, 0, B, G, R maximum, 0 over its
         # samples (``_box_bytes``), kept by _write; one 8-byte word a pixel gathers fast
         self._box: np.ndarray | None = None
@@ -266,10 +265,6 @@ class SampleConsensus:
                 s[np.asarray(foreground[j]).reshape(-1)] = flat_bg[np.asarray(foreground[j]).reshape(-1)]
             samples[:, :, k] = s
         self._samples = samples
-        # |S_k|_1, for the match radius: kept here as samples are written (in the learning's
-        # worker thread) rather than summed again for each foreground pixel in the test
-        self._norms = np.add(samples[:, 0], samples[:, 1], dtype=np.int16)
-        self._norms += samples[:, 2]
         self._box = np.zeros(h * w, np.uint64)
         self._set_box(np.arange(h * w))
         # d(x): the mean L1 distance of one background observation from another; consecutive
@@ -340,7 +335,10 @@ class SampleConsensus:
         n = self.n_samples
         rows = np.take(self._samples.reshape(-1, 3 * n), idx, axis=0)  # (K', 3 N) uint8
         dist = _l1(rows, colours, n)  # (K', N)
-        total = np.take(self._norms, idx, axis=0)  # (K', N) |S_k|_1
+        # |S_k|_1 from the rows at hand: a table of them kept beside the samples cost a scatter
+        # into a second large array on every write and a gather here (cache misses both)
+        total = np.add(rows[:, :n], rows[:, n : 2 * n], dtype=np.int16)  # (K', N)
+        total += rows[:, 2 * n :]
         # noise grows with brightness (shot noise, compression): R = R0 + rel * |S_k|_1, times
         # the blink gain; a dark pixel keeps a tight radius, where a fixed one would take a dark
         # shirt for a dark doorway. dist < R (1 + v) <=> dist / (1 + v) - rel |S_k| < R0.
@@ -521,8 +519,7 @@ class SampleConsensus:
         n = self.n_samples
         flat = self._samples.reshape(-1)
         at = pixels * (3 * n) + k
-        # a pixel drawn twice takes the last of its colours, in the samples and in the norms alike
-        self._norms.reshape(-1)[pixels * n + k] = np.add(colours[:, 0], colours[:, 1], dtype=np.int16) + colours[:, 2]
+        # a pixel drawn twice takes the last of its colours
         for c in range(3):
             flat[at] = colours[:, c]
             at += n
