@@ -41,10 +41,11 @@ from .launchfile import Graph, node_specs, stats_dir
 
 log = logging.getLogger("launch")
 
-#: one BLAS / OpenMP thread in each node unless the environment sets another number: every node is a
-#: process of its own, so the graph is parallel already, and a pool of threads per process (numpy's
-#: BLAS sizes one to the machine's cores) spins on the cores the other nodes need
-ONE_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+#: one BLAS / OpenMP / OpenCV thread in each node unless the environment sets another number: every
+#: node is a process of its own, so the graph is parallel already, and a pool of threads per process
+#: (numpy's BLAS and OpenCV size theirs to the machine's cores; OpenCV's spin-waits after each call
+#: it runs in parallel) spins on the cores the other nodes need
+ONE_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OPENCV_FOR_THREADS_NUM")
 INT_GRACE_S = 2.0
 TERM_GRACE_S = 1.5
 DRAIN_S = 10.0

@@ -7,6 +7,7 @@ import os
 import time
 from dataclasses import replace
 
+import cv2
 import numpy as np
 
 from counterpart.bus import Input, Node, Output, Param
@@ -73,7 +74,13 @@ class Sink(Node):
         self.f = open(self.p["path"], "a", buffering=1)
         self.f.write(
             json.dumps(
-                {"event": "start", "pid": os.getpid(), "nice": os.nice(0), "omp": os.environ.get("OMP_NUM_THREADS")}
+                {
+                    "event": "start",
+                    "pid": os.getpid(),
+                    "nice": os.nice(0),
+                    "omp": os.environ.get("OMP_NUM_THREADS"),
+                    "opencv": cv2.getNumThreads(),
+                }
             )
             + "\n"
         )

@@ -82,16 +82,16 @@ def test_a_node_given_nice_runs_at_that_much_lower_priority(tmp_path: Path) -> N
     assert len(received(tmp_path / "sink.jsonl")) == 50
 
 
-def test_each_node_gets_one_blas_thread_unless_the_environment_sets_another(tmp_path: Path) -> None:
+def test_each_node_gets_one_blas_and_opencv_thread_unless_the_environment_sets_another(tmp_path: Path) -> None:
     f = write_launch(tmp_path / "g.yaml", chain(tmp_path, count=5))
-    env = {
-        k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-    }
-    for given, seen in ((None, "1"), ("3", "3")):
-        code, out = run_launch(f, timeout=60, env=env if given is None else {**env, "OMP_NUM_THREADS": given})
+    unset = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OPENCV_FOR_THREADS_NUM")
+    env = {k: v for k, v in os.environ.items() if k not in unset}
+    for given, seen in ((None, ("1", 1)), ("3", ("3", 3))):
+        given_env = {} if given is None else {"OMP_NUM_THREADS": given, "OPENCV_FOR_THREADS_NUM": given}
+        code, out = run_launch(f, timeout=60, env={**env, **given_env})
         assert code == 0, out
         starts = [r for r in read_jsonl(tmp_path / "sink.jsonl") if r.get("event") == "start"]
-        assert starts[-1]["omp"] == seen  # (the sink appends: the last start is this run's)
+        assert (starts[-1]["omp"], starts[-1]["opencv"]) == seen  # (the sink appends: the last start is this run's)
 
 
 def test_latest_policy_drops_under_a_slow_consumer_and_counts_the_drops(tmp_path: Path) -> None:

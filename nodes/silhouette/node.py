@@ -229,7 +229,8 @@ class Silhouette(Node):
             int,
             0,
             "OpenCV threads of this node's process (cv2.setNumThreads); 0: OpenCV's default (one "
-            "per core). 1 with the horprasert backend: its models' worker thread is the second "
+            "per core; 1 in a launched graph, whose launcher sets OPENCV_FOR_THREADS_NUM=1 unless its "
+            "environment sets it). 1 with the horprasert backend: its models' worker thread is the second "
             "thread, and OpenCV's pool thread, which busy-waits after each call OpenCV "
             "parallelises (the connected components), stops taking that thread's core; the "
             "results are the same",
