@@ -260,7 +260,9 @@ def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
     got = comp.ready(now=0.1)
     assert [(b.frame.seq, b.partner.seq, b.partner_exact) for b in got] == [(2, 1, False), (3, 3, True)]
     assert comp.ready(now=0.2) == []  # frame 4 still waits
+    assert comp.next_deadline() == 0.5  # its arrival plus the timeout: the node's timer wakes then
     assert [b.frame.seq for b in comp.ready(now=0.6)] == [4]
+    assert comp.next_deadline() is None  # nothing waits
     assert comp.counts == {
         "rendered": 0,
         "partner_exact": 3,

@@ -402,6 +402,17 @@ class Compositor:
         self._paired = []
         return out
 
+    def next_deadline(self) -> float | None:
+        """When the first frame waiting for its partner stops waiting (:meth:`ready` then gives it).
+
+        Returns
+        -------
+        float or None
+            The time, seconds (monotonic clock); None when no frame waits for a partner (frames
+            that wait for the graph's camera wait for a message, not for a time).
+        """
+        return self.sync.next_deadline()
+
     def _bundle(self, frame: Any, partner: Any) -> Bundle:
         seq = int(frame.seq)
         exact = partner is not None
