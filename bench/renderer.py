@@ -11,10 +11,11 @@ renderer, in the bag's order and at its receive times (so the pairing is the sam
 and each frame's work is timed on this thread's CPU clock (``time.thread_time``, which a loaded
 machine stretches far less than wall time): ``render`` (compositing: the frame's copy, the
 silhouettes' splines, the partner's cones, the skeletons, the badges, the controls bar) and
-``video`` (writing it into a Motion-JPEG .avi, as the demo does). Every replay renders the same
+``video`` (writing it into a Motion-JPEG .avi, as the demo does), and the pairing of the
+messages (``pair``: taking each message and finding the frames ready, per frame). Every replay renders the same
 frames; ``digest`` (SHA-256 of all of them) says whether a change of the renderer kept every pixel.
 
-Last stdout line: one JSON object: ``frames``, ``render_ms`` and ``video_ms`` (median over the
+Last stdout line: one JSON object: ``frames``, ``render_ms``, ``video_ms`` and ``pair_ms`` (median over the
 repeats of the mean CPU ms per frame), ``render_ms_p95``, ``partner_drawn`` (frames with a partner
 in the picture), ``digest``. ``--profile`` prints cProfile's top functions of one more replay to
 stderr; ``--save`` writes the rendered frames (N, H, W, 3) uint8 for a pixel comparison.
@@ -131,8 +132,13 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
             if keep is not None:
                 keep.append(img)
 
+    pair_s = 0.0
     for topic, now, msg in msgs:
-        out(comp.ready(now))  # the node's timer: frames whose wait is over render first
+        t0 = time.thread_time()
+        ready = comp.ready(now)  # the node's timer: frames whose wait is over render first
+        pair_s += time.thread_time() - t0
+        out(ready)
+        t0 = time.thread_time()
         if topic == "frame":
             comp.add_frame(msg, now)
         elif topic == "partner":
@@ -143,7 +149,9 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
             comp.add_stats(msg)
         else:
             comp.add_side(topic, msg)
-        out(comp.ready(now))
+        ready = comp.ready(now)
+        pair_s += time.thread_time() - t0
+        out(ready)
     out(comp.ready(msgs[-1][1] + 1.0, flush=True))
     if writer is not None:
         writer.close()
@@ -152,6 +160,7 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
         "render_ms": 1e3 * float(np.mean(render_s)),
         "render_ms_p95": 1e3 * float(np.percentile(render_s, 95)),
         "video_ms": 1e3 * float(np.mean(video_s)),
+        "pair_ms": 1e3 * pair_s / max(len(render_s), 1),
         "partner_drawn": comp.counts["partner_drawn"],
         "digest": digest.hexdigest()[:16],
     }
@@ -194,7 +203,10 @@ def main() -> None:
         "frames": runs[0]["frames"],
         "partner_drawn": runs[0]["partner_drawn"],
         "digest": runs[0]["digest"],
-        **{k: round(float(np.median([r[k] for r in runs])), 3) for k in ("render_ms", "render_ms_p95", "video_ms")},
+        **{
+            k: round(float(np.median([r[k] for r in runs])), 3)
+            for k in ("render_ms", "render_ms_p95", "video_ms", "pair_ms")
+        },
         "render_ms_runs": [round(r["render_ms"], 3) for r in runs],
     }
     print(json.dumps(res))

@@ -26,7 +26,8 @@ from counterpart.messages import (
 from counterpart.nodes.renderer import draw
 from counterpart.nodes.renderer.compositor import Bundle, Compositor
 from counterpart.nodes.renderer.controls import parse_control
-from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames
+from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames, raw_mjpeg_works
+from tests.camera_sink import cv2_frames
 from tests.renderer_nodes import partner_joints, scene_frame
 
 CAM = default_camera(320, 240)
@@ -386,6 +387,16 @@ def test_video_writer_output_decodes_with_every_frame(tmp_path) -> None:
         assert np.abs(first.astype(int) - scene_frame(0)).mean() < 4  # lossy, but the same picture
     with pytest.raises(ValueError, match=r"\.mp4"):
         choose_codec(tmp_path / "x.mkv")
+    # Motion-JPEG frames encoded by libjpeg-turbo where OpenCV's FFmpeg takes them as they are:
+    # every row of an odd-height frame kept, the picture as close as FFmpeg's own encoder keeps it
+    odd = [cv2.GaussianBlur(scene_frame(s, 160, 121), (5, 5), 0) for s in range(6)]
+    with VideoWriter(tmp_path / "odd.avi", fps=30) as w:
+        for img in odd:
+            w.write(img)
+    back = cv2_frames(w.path)
+    if raw_mjpeg_works():
+        assert [f.shape for f in back] == [(121, 160, 3)] * 6
+    assert len(back) == 6 and all(np.abs(f.astype(int) - o[: f.shape[0]]).mean() < 2 for f, o in zip(back, odd))
     w = VideoWriter(tmp_path / "c.avi")
     w.write(scene_frame(0))
     with pytest.raises(ValueError, match="same size"):
