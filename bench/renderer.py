@@ -16,8 +16,10 @@ messages (``pair``: taking each message and finding the frames ready, per frame)
 frames; ``digest`` (SHA-256 of all of them) says whether a change of the renderer kept every pixel.
 
 Last stdout line: one JSON object: ``frames``, ``render_ms``, ``video_ms`` and ``pair_ms`` (median over the
-repeats of the mean CPU ms per frame), ``render_ms_p95``, ``partner_drawn`` (frames with a partner
-in the picture), ``digest``. ``--profile`` prints cProfile's top functions of one more replay to
+repeats of the mean CPU ms per frame), ``render_ms_p95``, ``render_ms_new_partner`` (the median
+frame that draws a partner message for the first time: its cones fitted and facets shaded, where a
+held partner's are kept; ``new_partners`` such frames), ``partner_drawn`` (frames with a partner in
+the picture), ``digest``. ``--profile`` prints cProfile's top functions of one more replay to
 stderr; ``--save`` writes the rendered frames (N, H, W, 3) uint8 for a pixel comparison.
 """
 
@@ -116,6 +118,9 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
     )
     writer = VideoWriter(video, 0.0) if video is not None else None
     render_s, video_s = [], []
+    #: per frame: whether a partner was drawn for the first time (its cones fitted, facets shaded)
+    new_partner: list[bool] = []
+    drawn_before: set[int] = set()
     digest = hashlib.sha256()
 
     def out(bundles: list[Any]) -> None:
@@ -127,6 +132,10 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
                 writer.write(img, b.frame.fps)
             t2 = time.thread_time()
             render_s.append(t1 - t0)
+            fresh = comp.partner_drawn and id(b.partner) not in drawn_before
+            new_partner.append(fresh)
+            if fresh:
+                drawn_before.add(id(b.partner))  # the messages stay alive in msgs: ids are not reused
             video_s.append(t2 - t1)
             digest.update(img.tobytes())
             if keep is not None:
@@ -159,6 +168,8 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
         "frames": len(render_s),
         "render_ms": 1e3 * float(np.mean(render_s)),
         "render_ms_p95": 1e3 * float(np.percentile(render_s, 95)),
+        "render_ms_new_partner": 1e3 * float(np.median(np.array(render_s)[new_partner])) if any(new_partner) else 0.0,
+        "new_partners": int(sum(new_partner)),
         "video_ms": 1e3 * float(np.mean(video_s)),
         "pair_ms": 1e3 * pair_s / max(len(render_s), 1),
         "partner_drawn": comp.counts["partner_drawn"],
@@ -202,10 +213,11 @@ def main() -> None:
         "bag": str(args.bag),
         "frames": runs[0]["frames"],
         "partner_drawn": runs[0]["partner_drawn"],
+        "new_partners": runs[0]["new_partners"],
         "digest": runs[0]["digest"],
         **{
             k: round(float(np.median([r[k] for r in runs])), 3)
-            for k in ("render_ms", "render_ms_p95", "video_ms", "pair_ms")
+            for k in ("render_ms", "render_ms_p95", "render_ms_new_partner", "video_ms", "pair_ms")
         },
         "render_ms_runs": [round(r["render_ms"], 3) for r in runs],
     }
