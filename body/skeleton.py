@@ -26,6 +26,7 @@ All lengths are metres.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields, replace
 from typing import NamedTuple
 
@@ -178,7 +179,7 @@ r_wrist, r_hand, r_thigh, r_knee, r_ankle, r_toe : float
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            if not np.isfinite(v) or v < 0:
+            if not math.isfinite(v) or v < 0:  # math: numpy's call on one number costs far more
                 raise ValueError(f"BodyDims.{f.name}={v!r}: must be a finite length >= 0 metres")
         if self.height <= 0:
             raise ValueError(f"BodyDims.height={self.height!r}: must be > 0 metres")

@@ -82,17 +82,6 @@ def test_a_held_partner_is_painted_the_same_and_a_new_camera_or_colour_repaints_
         draw.draw_partner_3d(blank(), joints, CAM, (255, 0, 0), shade=0.5)
 
 
-def test_the_facets_cross_products_and_norms_are_numpys_to_the_bit() -> None:
-    # the partner's facets use hand-written cross products and norms (numpy's cost more in call
-    # overhead than in arithmetic); the pixels stay the same only while they give the same bits
-    rng = np.random.default_rng(7)
-    for shape in ((5000, 3), (16, 16, 3), (16, 2, 3)):
-        a = rng.normal(size=shape) * rng.uniform(1e-3, 1e3, (*shape[:-1], 1))
-        b = rng.normal(size=shape)
-        assert np.array_equal(draw._cross(a, b), np.cross(a, b))
-        assert np.array_equal(draw._norm(a), np.linalg.norm(a, axis=-1, keepdims=True))
-
-
 def test_partner_pixels_cover_the_projected_cones_and_nothing_far_away() -> None:
     joints = partner_joints(0)
     ends, radii = draw.partner_cones(joints)

@@ -28,7 +28,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
-from counterpart.body.kinematics import cone_endpoints
+from counterpart.body.kinematics import cone_endpoints, cross3, norm3
 from counterpart.body.raster import cone_rims
 from counterpart.body.skeleton import BONES, JOINT_INDEX, N_JOINTS
 from counterpart.body.spline import evaluate_closed_bspline
@@ -142,23 +142,6 @@ def _cones_of(joints: bytes) -> tuple[np.ndarray, np.ndarray]:
     return ends[0], radii
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.cross`` of (..., 3) vectors, the same operations in the same order (so the same bits),
-    without its axis handling, which costs more than the arithmetic on a partner's facets.
-    """
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-def _norm(v: np.ndarray) -> np.ndarray:
-    """``np.linalg.norm(v, axis=-1, keepdims=True)`` of (..., 3) vectors: the squares summed in
-    the order numpy's reduction adds them, so the same bits, for less overhead.
-    """
-    sq = v * v
-    return np.sqrt(sq[..., 0] + sq[..., 1] + sq[..., 2])[..., None]
-
-
 @lru_cache(maxsize=8)
 def _quad_index(n_rim: int) -> np.ndarray:
     """(n_rim, 4, 2) (rim, point) indices of each side facet: a0, a1, b1, b0."""
@@ -255,18 +238,18 @@ def _facets(
     qi = _quad_index(n_rim)
     quads = rims[:, qi[..., 0], qi[..., 1]]  # (S, n, 4, 3)
     centroid = quads.mean(axis=2)
-    normal = _cross(quads[:, :, 1] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 0])
+    normal = cross3(quads[:, :, 1] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 0])
     radial = centroid - ends.mean(axis=1)[:, None]  # facet centroids sit at mid-axis
     normal *= np.where((normal * radial).sum(-1, keepdims=True) < 0, -1.0, 1.0)
     # flat ends: outward normals along -axis (start) and +axis (end)
     axis = ends[:, 1] - ends[:, 0]
-    axis /= np.maximum(_norm(axis), 1e-12)
+    axis /= np.maximum(norm3(axis), 1e-12)
     cap_normal = np.stack([-axis, axis], 1)  # (S, 2, 3)
     cap_centroid = ends
     # one flat list of facets: S*n quads then S*2 caps
     normals = np.concatenate([normal.reshape(-1, 3), cap_normal.reshape(-1, 3)])
     centroids = np.concatenate([centroid.reshape(-1, 3), cap_centroid.reshape(-1, 3)])
-    normals /= np.maximum(_norm(normals), 1e-12)
+    normals /= np.maximum(norm3(normals), 1e-12)
     facing = (normals * (eye - centroids)).sum(-1) > 0
     shade = ambient + (1.0 - ambient) * np.clip(normals @ l_dir, 0.0, None)
     # the quads' corners are rim points: each rim point is projected once
