@@ -53,8 +53,8 @@ from counterpart.body.skeleton import (
 
 def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.cross`` of 3-vectors: numpy's operations in numpy's order, so the same bits, without its
-    axis handling, which costs more than the arithmetic on a body's few vectors (the renderer and
-    the responder fit a body to every partner they draw or place).
+    axis handling, which costs more than the arithmetic on a body's few vectors (the renderer fits
+    a body to every partner it draws).
 
     Parameters
     ----------

@@ -178,8 +178,8 @@ r_wrist, r_hand, r_thigh, r_knee, r_ankle, r_toe : float
 
     def __post_init__(self) -> None:
         # the field names listed once (dataclasses.fields builds the list on every call) and
-        # math.isfinite (numpy's call on one number costs far more): a body is fitted to every
-        # partner the renderer and the responder draw or place
+        # math.isfinite (numpy's call on one number costs far more): the renderer fits a body to
+        # every partner it draws
         for name in _DIM_NAMES:
             v = getattr(self, name)
             if not math.isfinite(v) or v < 0:
