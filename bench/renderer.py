@@ -54,6 +54,9 @@ TOPICS = ["frame", "partner", "silhouettes", "pose", "signals", "camera_info", *
 
 def record(clip: Path, frames: int, bag: Path) -> None:
     """Run demo.yaml on ``clip`` in real time with a recorder of the renderer's inputs into ``bag``."""
+    from counterpart.apps.demo import ensure_models
+
+    ensure_models()  # the graph's model files, built once (as bench/e2e.py does)
     work = Path(tempfile.mkdtemp(prefix="bench-renderer-"))
     doc = {
         "include": [
