@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from counterpart.body.kinematics import rot_x, rot_z
+from counterpart.body.kinematics import cross3, norm3, rot_x, rot_z
 from counterpart.body.pose import DOF, DOF_INDEX
 from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, BodyDims
 
@@ -32,15 +32,14 @@ J = JOINT_INDEX
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.maximum(n, 1e-12)
+    return v / np.maximum(norm3(v), 1e-12)
 
 
 def _frame(left: np.ndarray, up: np.ndarray) -> np.ndarray:
     """(N,3) left and up hints -> (N,3,3) rotation with columns (left, up, forward), up exact."""
     y = _unit(up)
-    z = _unit(np.cross(left, y))
-    x = np.cross(y, z)
+    z = _unit(cross3(left, y))
+    x = cross3(y, z)
     return np.stack([x, y, z], axis=-1)
 
 
@@ -152,6 +151,24 @@ _LENGTHS = (
 )
 
 
+#: (bone, 2) joint indices of ``_LENGTHS``
+_LENGTH_ENDS = np.array([(J[a], J[b]) for a, b in _LENGTHS])
+#: the fraction between the two values that ``np.percentile(values, 5)`` of two values takes (its
+#: linear method's weight, as numpy computes it: the same bits, see :func:`_low_ankle`)
+_P5_OF_TWO = float(np.percentile([0.0, 1.0], 5))
+
+
+def _low_ankle(y: np.ndarray) -> float:
+    """``np.percentile(y, 5)`` of the ankle heights (N, 2); of one frame, numpy's linear
+    interpolation between its two values written out (the same operations on the same numbers:
+    ``lo + (hi - lo) * t``), at a fraction of its cost: the renderer fits one frame at a time.
+    """
+    if y.shape[0] != 1:
+        return float(np.percentile(y, 5))
+    lo, hi = sorted(y[0].tolist())
+    return lo + (hi - lo) * _P5_OF_TWO
+
+
 def _median0(a: np.ndarray) -> np.ndarray:
     """The median over the first axis; of one frame, that frame's values as they are (which is what
     ``np.median`` returns for them, at a fraction of its cost: the renderer fits one frame at a time).
@@ -175,8 +192,8 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     X = np.asarray(X, dtype=np.float64).reshape(-1, 14, 3)
     # every bone's median length over the frames in one call (per bone, the small numpy calls
     # cost more than the arithmetic: the renderer fits each partner it draws)
-    ends = np.array([(J[a], J[b]) for a, b in _LENGTHS])
-    med = _median0(np.linalg.norm(X[:, ends[:, 0]] - X[:, ends[:, 1]], axis=-1))
+    ends = _LENGTH_ENDS
+    med = _median0(norm3(X[:, ends[:, 0]] - X[:, ends[:, 1]])[..., 0])
     lengths = dict(zip(_LENGTHS, med.tolist()))
 
     def length(a: str, b: str) -> float:
@@ -187,9 +204,9 @@ def dims_from_joints(X: np.ndarray, base: BodyDims = DEFAULT_DIMS) -> BodyDims:
     k = (thigh + shin) / (base.thigh + base.shin)
     out = base.scaled(base.height * k)
     pelvis = 0.5 * (X[:, J["l_hip"]] + X[:, J["r_hip"]])
-    torso = float(_median0(np.linalg.norm(X[:, J["neck"]] - pelvis, axis=-1)))
+    torso = float(_median0(norm3(X[:, J["neck"]] - pelvis)[..., 0]))
     # Ankles are lowest while the foot is planted; a low percentile ignores the swing phase.
-    ankle = float(np.percentile(X[:, [J["l_ankle"], J["r_ankle"]], 1], 5))
+    ankle = _low_ankle(X[:, [J["l_ankle"], J["r_ankle"]], 1])
     ankle = max(ankle, 0.5 * out.ankle_height)
     vals = dict(
         thigh=thigh,

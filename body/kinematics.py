@@ -51,6 +51,44 @@ from counterpart.body.skeleton import (
 )
 
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of 3-vectors: numpy's operations in numpy's order, so the same bits, without its
+    axis handling, which costs more than the arithmetic on a body's few vectors (the renderer fits
+    a body to every partner it draws).
+
+    Parameters
+    ----------
+    a, b : ndarray of shape (..., 3)
+        The vectors (broadcast against each other).
+
+    Returns
+    -------
+    ndarray of shape (..., 3)
+        ``a x b``.
+    """
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def norm3(v: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(v, axis=-1, keepdims=True)`` of 3-vectors: the squares added in the order
+    numpy's reduction adds them, so the same bits, for less overhead.
+
+    Parameters
+    ----------
+    v : ndarray of shape (..., 3)
+        The vectors.
+
+    Returns
+    -------
+    ndarray of shape (..., 1)
+        Their lengths.
+    """
+    sq = v * v
+    return np.sqrt(sq[..., 0] + sq[..., 1] + sq[..., 2])[..., None]
+
+
 def rot_x(a: np.ndarray) -> np.ndarray:
     """(N,) radians -> (N, 3, 3) right-handed rotations about X.
 

@@ -26,6 +26,7 @@ All lengths are metres.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields, replace
 from typing import NamedTuple
 
@@ -176,10 +177,13 @@ r_wrist, r_hand, r_thigh, r_knee, r_ankle, r_toe : float
     r_toe: float = 0.03
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if not np.isfinite(v) or v < 0:
-                raise ValueError(f"BodyDims.{f.name}={v!r}: must be a finite length >= 0 metres")
+        # the field names listed once (dataclasses.fields builds the list on every call) and
+        # math.isfinite (numpy's call on one number costs far more): the renderer fits a body to
+        # every partner it draws
+        for name in _DIM_NAMES:
+            v = getattr(self, name)
+            if not math.isfinite(v) or v < 0:
+                raise ValueError(f"BodyDims.{name}={v!r}: must be a finite length >= 0 metres")
         if self.height <= 0:
             raise ValueError(f"BodyDims.height={self.height!r}: must be > 0 metres")
 
@@ -204,7 +208,7 @@ r_wrist, r_hand, r_thigh, r_knee, r_ankle, r_toe : float
         if not np.isfinite(height) or height <= 0:
             raise ValueError(f"height={height!r}: must be a positive number of metres")
         k = float(height) / self.height
-        return replace(self, **{f.name: getattr(self, f.name) * k for f in fields(self)})
+        return replace(self, **{name: getattr(self, name) * k for name in _DIM_NAMES})
 
     @property
     def hip_height(self) -> float:
@@ -222,4 +226,6 @@ r_wrist, r_hand, r_thigh, r_knee, r_ankle, r_toe : float
         return np.array([[getattr(self, s.r_start), getattr(self, s.r_end)] for s in SEGMENTS])
 
 
+#: the fields of BodyDims, in order
+_DIM_NAMES: tuple[str, ...] = tuple(f.name for f in fields(BodyDims))
 DEFAULT_DIMS = BodyDims()

@@ -33,7 +33,8 @@ def partner_joints(seq: int = 0) -> np.ndarray:
 
 class SceneSource(Node):
     """Publishes ``count`` frames of :func:`scene_frame` at ``rate`` Hz (0: unpaced) and, when
-    ``partner`` is true, a Partner of the same seq with :func:`partner_joints`.
+    ``partner`` is true, a Partner of the same seq with :func:`partner_joints` (of every
+    ``partner_every``-th frame only).
     """
 
     params = {
@@ -42,6 +43,9 @@ class SceneSource(Node):
         "width": Param(int, 160, "image width", min=16),
         "height": Param(int, 120, "image height", min=16),
         "partner": Param(bool, True, "also publish the partner"),
+        "partner_every": Param(
+            int, 1, "publish the partner of every Nth frame only (0: the port, never a partner)", min=0
+        ),
         "emotion": Param(str, "neutral", "the partner's emotion"),
         "strength": Param(float, 0.0, "the partner's emotion strength"),
     }
@@ -70,7 +74,7 @@ class SceneSource(Node):
                     source_time=seq / 25.0,
                 ),
             )
-            if p["partner"]:
+            if p["partner"] and p["partner_every"] and seq % p["partner_every"] == 0:
                 self.publish(
                     "partner",
                     Partner(

@@ -328,3 +328,23 @@ def test_inverse_kinematics_of_one_frame_is_the_batch_row_and_the_limbs_one_at_a
     assert np.array_equal(_median0(lengths), np.median(lengths, axis=0))
     assert np.array_equal(_median0(lengths[:, :3].T), np.median(lengths[:, :3].T, axis=0))
     assert dims_from_joints(X[2]).height > 1.0
+
+
+def test_cross3_norm3_and_the_ankle_percentile_are_numpys_to_the_bit() -> None:
+    """The body fit of every partner (renderer, responder) and the partner's facets use
+    hand-written cross products, norms and a one-frame percentile, cheaper than numpy's calls on so
+    few numbers; the partner's pixels stay the same only while they give numpy's bits.
+    """
+    from counterpart.body import ik
+    from counterpart.body.kinematics import cross3, norm3
+
+    rng = np.random.default_rng(7)
+    for shape in ((5000, 3), (16, 16, 3), (1, 13, 3)):
+        a = rng.normal(size=shape) * rng.uniform(1e-3, 1e3, (*shape[:-1], 1))
+        b = rng.normal(size=shape)
+        assert np.array_equal(cross3(a, b), np.cross(a, b))
+        assert np.array_equal(norm3(a), np.linalg.norm(a, axis=-1, keepdims=True))
+    y = rng.normal(size=(5000, 1, 2)) * rng.uniform(1e-3, 10, (5000, 1, 1))
+    assert all(ik._low_ankle(v) == float(np.percentile(v, 5)) for v in y)
+    many = rng.normal(size=(7, 2))
+    assert ik._low_ankle(many) == float(np.percentile(many, 5))

@@ -24,9 +24,10 @@ from counterpart.messages import (
     TrackedBody,
 )
 from counterpart.nodes.renderer import draw
-from counterpart.nodes.renderer.compositor import Bundle, Compositor
+from counterpart.nodes.renderer.compositor import Bundle, Compositor, _History
 from counterpart.nodes.renderer.controls import parse_control
-from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames
+from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames, raw_mjpeg_works
+from tests.camera_sink import cv2_frames
 from tests.renderer_nodes import partner_joints, scene_frame
 
 CAM = default_camera(320, 240)
@@ -227,6 +228,13 @@ def test_partner_colour_blends_by_strength() -> None:
     assert draw.partner_colour("happy", 0.0) == draw.EMOTION_COLOURS["neutral"]
     assert draw.partner_colour("angry", 1.0) == draw.EMOTION_COLOURS["angry"]
     assert draw.partner_colour("angry", 7.0) == draw.EMOTION_COLOURS["angry"]
+    # every strength gives the blend, rounded half to even (np.float32 and bad values included)
+    base = np.array(draw.EMOTION_COLOURS["neutral"], float)
+    for emotion in (*draw.EMOTION_COLOURS, "bored"):
+        target = np.array(draw.EMOTION_COLOURS.get(emotion, draw.EMOTION_COLOURS["neutral"]), float)
+        for s in [*np.linspace(-0.5, 1.5, 81), np.float32(0.3), float("nan"), float("inf"), -float("inf")]:
+            w = float(np.clip(s if np.isfinite(s) else 0.0, 0.0, 1.0))
+            assert draw.partner_colour(emotion, s) == tuple(int(np.rint(c)) for c in base + w * (target - base))
 
 
 def test_contact_sheet_tiles_in_rows() -> None:
@@ -260,7 +268,9 @@ def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
     got = comp.ready(now=0.1)
     assert [(b.frame.seq, b.partner.seq, b.partner_exact) for b in got] == [(2, 1, False), (3, 3, True)]
     assert comp.ready(now=0.2) == []  # frame 4 still waits
+    assert comp.next_deadline() == 0.5  # its arrival plus the timeout: the node's timer wakes then
     assert [b.frame.seq for b in comp.ready(now=0.6)] == [4]
+    assert comp.next_deadline() is None  # nothing waits
     assert comp.counts == {
         "rendered": 0,
         "partner_exact": 3,
@@ -315,6 +325,23 @@ def test_without_adaptive_wait_every_frame_waits_for_the_timeout() -> None:
     assert comp.partners_late  # measured, but not acted on
     assert [b.frame.seq for b in comp.ready(now=0.51)] == list(range(0, 11))  # 0 paired, 1..10 past the timeout
     assert comp.ready(now=0.52) == []
+
+
+def test_overlay_history_finds_the_newest_older_message_as_a_scan_of_what_it_keeps() -> None:
+    """The overlays' lookup (exact seq, else the highest seq below it) bisects a sorted list of
+    the seqs kept; in any order of arrival, repeats and a restart from 0 included, it finds what
+    a scan of the kept messages finds.
+    """
+    rng = np.random.default_rng(3)
+    hist = _History(8)
+    arrivals = [*range(20), *rng.integers(0, 40, 30).tolist(), *range(5)]  # a restart at the end
+    for k, seq in enumerate(arrivals):
+        hist.add(Pose3D(seq=seq, stamp=k))
+        assert sorted(hist.items) == hist.seqs and len(hist.seqs) <= 8
+        for q in range(-1, 45):
+            older = [s for s in hist.items if s <= q]
+            want = hist.items[max(older)] if older else None
+            assert hist.at_or_before(q) is want
 
 
 def test_pairing_without_partner_and_max_pending() -> None:
@@ -384,6 +411,16 @@ def test_video_writer_output_decodes_with_every_frame(tmp_path) -> None:
         assert np.abs(first.astype(int) - scene_frame(0)).mean() < 4  # lossy, but the same picture
     with pytest.raises(ValueError, match=r"\.mp4"):
         choose_codec(tmp_path / "x.mkv")
+    # Motion-JPEG frames encoded by libjpeg-turbo where OpenCV's FFmpeg takes them as they are:
+    # every row of an odd-height frame kept, the picture as close as FFmpeg's own encoder keeps it
+    odd = [cv2.GaussianBlur(scene_frame(s, 160, 121), (5, 5), 0) for s in range(6)]
+    with VideoWriter(tmp_path / "odd.avi", fps=30) as w:
+        for img in odd:
+            w.write(img)
+    back = cv2_frames(w.path)
+    if raw_mjpeg_works():
+        assert [f.shape for f in back] == [(121, 160, 3)] * 6
+    assert len(back) == 6 and all(np.abs(f.astype(int) - o[: f.shape[0]]).mean() < 2 for f, o in zip(back, odd))
     w = VideoWriter(tmp_path / "c.avi")
     w.write(scene_frame(0))
     with pytest.raises(ValueError, match="same size"):

@@ -85,6 +85,29 @@ def test_graph_writes_a_video_with_every_frame_and_the_partner_visible(tmp_path:
         assert records[seq]["sha1"] == hashlib.sha1(img.tobytes()).hexdigest()
 
 
+def test_a_frame_whose_partner_never_comes_is_rendered_when_its_wait_is_over(tmp_path: Path) -> None:
+    """The node's timer wakes for the first waiting frame's deadline (not on a fixed tick): every
+    frame comes out pair_timeout after it was captured, give or take the machine's delays.
+    """
+    timeout = 0.25
+    code, text = run_launch(
+        graph(
+            tmp_path,
+            {"count": 12, "rate": 10.0, "width": W, "height": H, "partner_every": 0},
+            {"pair_timeout": timeout, "adaptive_wait": False},
+        ),
+        timeout=60,
+    )
+    assert code == 0, text
+    assert "partner exact 0, held 0, missing 12" in text
+    records = read_jsonl(tmp_path / "rendered.jsonl")[:-1]
+    assert [r["seq"] for r in records] == list(range(12))
+    # the first frame also waits for the graph's camera; the last ones go out at end of stream
+    waited = np.array([(r["received"] - r["stamp"]) / 1e9 for r in records[1:-2]])
+    assert (waited >= timeout).all(), waited
+    assert np.median(waited) < timeout + 0.03, waited
+
+
 def test_ctrl_c_leaves_a_playable_video_with_every_rendered_frame(tmp_path: Path) -> None:
     snaps = tmp_path / "snaps"
     file = graph(

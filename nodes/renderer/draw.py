@@ -18,6 +18,7 @@ Pixel coordinates are (x = column, y = row); world coordinates are metres (Y up)
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from functools import lru_cache
 from typing import Any
@@ -27,7 +28,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.ik import dims_from_joints, inverse_kinematics
-from counterpart.body.kinematics import cone_endpoints
+from counterpart.body.kinematics import cone_endpoints, cross3, norm3
 from counterpart.body.raster import cone_rims
 from counterpart.body.skeleton import BONES, JOINT_INDEX, N_JOINTS
 from counterpart.body.spline import evaluate_closed_bspline
@@ -81,10 +82,19 @@ def partner_colour(emotion: str = "neutral", strength: float = 0.0) -> Colour:
     tuple of (int, int, int)
         BGR colour.
     """
-    base = np.array(EMOTION_COLOURS["neutral"], np.float64)
-    target = np.array(EMOTION_COLOURS.get(emotion, EMOTION_COLOURS["neutral"]), np.float64)
-    s = float(np.clip(strength if np.isfinite(strength) else 0.0, 0.0, 1.0))
-    return tuple(int(round(c)) for c in base + s * (target - base))  # type: ignore[return-value]
+    s = float(strength)
+    return _blend(emotion, s if math.isfinite(s) else 0.0)
+
+
+@lru_cache(maxsize=256)
+def _blend(emotion: str, strength: float) -> Colour:
+    """:func:`partner_colour` of a finite strength, kept: the renderer asks for the same colours on
+    every frame, and numpy's calls on three numbers cost more than the arithmetic.
+    """
+    s = min(max(strength, 0.0), 1.0)
+    base = EMOTION_COLOURS["neutral"]
+    target = EMOTION_COLOURS.get(emotion, base)
+    return tuple(int(round(b + s * (t - b))) for b, t in zip(base, target))  # type: ignore[return-value]
 
 
 # ------------------------------------------------------------------------------ 3D partner (cones)
@@ -228,18 +238,18 @@ def _facets(
     qi = _quad_index(n_rim)
     quads = rims[:, qi[..., 0], qi[..., 1]]  # (S, n, 4, 3)
     centroid = quads.mean(axis=2)
-    normal = np.cross(quads[:, :, 1] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 0])
+    normal = cross3(quads[:, :, 1] - quads[:, :, 0], quads[:, :, 3] - quads[:, :, 0])
     radial = centroid - ends.mean(axis=1)[:, None]  # facet centroids sit at mid-axis
     normal *= np.where((normal * radial).sum(-1, keepdims=True) < 0, -1.0, 1.0)
     # flat ends: outward normals along -axis (start) and +axis (end)
     axis = ends[:, 1] - ends[:, 0]
-    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
+    axis /= np.maximum(norm3(axis), 1e-12)
     cap_normal = np.stack([-axis, axis], 1)  # (S, 2, 3)
     cap_centroid = ends
     # one flat list of facets: S*n quads then S*2 caps
     normals = np.concatenate([normal.reshape(-1, 3), cap_normal.reshape(-1, 3)])
     centroids = np.concatenate([centroid.reshape(-1, 3), cap_centroid.reshape(-1, 3)])
-    normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
+    normals /= np.maximum(norm3(normals), 1e-12)
     facing = (normals * (eye - centroids)).sum(-1) > 0
     shade = ambient + (1.0 - ambient) * np.clip(normals @ l_dir, 0.0, None)
     # the quads' corners are rim points: each rim point is projected once
@@ -312,7 +322,7 @@ def draw_cones(
         If ``image`` is not a writable (H, W, 3) uint8 array.
     """
     _check_image(image)
-    return _paint(image, _cone_fill(ends, radii, camera, colour, light, n_rim, ambient))
+    return _paint(image, _split(_cone_fill(ends, radii, camera, colour, light, n_rim, ambient)))
 
 
 #: the facets to paint: fixed-point polygon corners (K, 2) int32, each facet's first corner (F + 1
@@ -342,16 +352,26 @@ def _cone_fill(
     return fixed, starts, colours
 
 
-def _paint(image: np.ndarray, fill: _Fill) -> np.ndarray:
-    """Paint the facets of ``fill`` (:data:`_Fill`) into ``image``, far to near; returns ``image``."""
+#: the facets to paint one by one, far to near: each one's fixed-point corners (k, 2) int32 and BGR colour
+_Facets = list[tuple[np.ndarray, list[int]]]
+
+
+def _split(fill: _Fill) -> _Facets:
+    """The facets of ``fill`` (:data:`_Fill`) one by one (views into its corners)."""
     fixed, starts, colours = fill
-    for a, b, c in zip(starts[:-1], starts[1:], colours):
-        cv2.fillConvexPoly(image, fixed[a:b], c, lineType=cv2.LINE_AA, shift=_SHIFT)
+    return [(fixed[a:b], c) for a, b, c in zip(starts[:-1], starts[1:], colours)]
+
+
+def _paint(image: np.ndarray, facets: _Facets) -> np.ndarray:
+    """Paint ``facets`` (:data:`_Facets`) into ``image`` in their order; returns ``image``."""
+    for corners, colour in facets:
+        cv2.fillConvexPoly(image, corners, colour, lineType=cv2.LINE_AA, shift=_SHIFT)
     return image
 
 
-#: the partners' facets last painted (:func:`draw_partner_3d`), by what they are made of
-_PARTNER_FILLS: dict[tuple, _Fill] = {}
+#: the partners' facets last painted (:func:`draw_partner_3d`), by what they are made of, split
+#: (a held partner's facets are not sliced out of its corners again on every frame)
+_PARTNER_FILLS: dict[tuple, _Facets] = {}
 #: how many of them are kept (the renderer draws a held partner on every frame until the next one)
 _PARTNER_FILLS_KEPT = 4
 
@@ -415,7 +435,7 @@ def draw_partner_3d(
     if fill is None:
         # a held partner (drawn on every frame until the next one comes) is projected and shaded once
         ends, radii = partner_cones(X)
-        fill = _cone_fill(ends, radii, camera, colour, light, kw.get("n_rim", 16), kw.get("ambient", 0.35))
+        fill = _split(_cone_fill(ends, radii, camera, colour, light, kw.get("n_rim", 16), kw.get("ambient", 0.35)))
         if len(_PARTNER_FILLS) >= _PARTNER_FILLS_KEPT:
             del _PARTNER_FILLS[next(iter(_PARTNER_FILLS))]
         _PARTNER_FILLS[key] = fill
@@ -523,11 +543,13 @@ def draw_skeleton(
     ok = np.isfinite(uv).all(-1)
     fixed = np.round(np.nan_to_num(uv) * _SCALE).astype(np.int32)
     lines = SKELETON_LINES + ((JOINT_INDEX["neck"], N_JOINTS),)
+    pts, ok = fixed.tolist(), ok.tolist()  # OpenCV takes Python ints at less cost than numpy's
     for a, b in lines:
         if ok[a] and ok[b]:
-            cv2.line(image, tuple(fixed[a]), tuple(fixed[b]), colour, thickness, cv2.LINE_AA, _SHIFT)
-    for j in np.flatnonzero(ok[:N_JOINTS]):
-        cv2.circle(image, tuple(fixed[j]), radius << _SHIFT, colour, -1, cv2.LINE_AA, _SHIFT)
+            cv2.line(image, pts[a], pts[b], colour, thickness, cv2.LINE_AA, _SHIFT)
+    for j in range(N_JOINTS):
+        if ok[j]:
+            cv2.circle(image, pts[j], radius << _SHIFT, colour, -1, cv2.LINE_AA, _SHIFT)
     return image
 
 
@@ -575,8 +597,8 @@ def draw_spline_outline(
     fixed = np.round(pts * _SCALE).astype(np.int32)
     cv2.polylines(image, [fixed], True, colour, thickness, cv2.LINE_AA, _SHIFT)
     if show_ctrl:
-        for p in np.round(np.asarray(ctrl, np.float64) * _SCALE).astype(np.int32):
-            cv2.circle(image, tuple(p), 1 << _SHIFT, colour, -1, cv2.LINE_AA, _SHIFT)
+        for p in np.round(np.asarray(ctrl, np.float64) * _SCALE).astype(np.int32).tolist():
+            cv2.circle(image, p, 1 << _SHIFT, colour, -1, cv2.LINE_AA, _SHIFT)
     ref = None if ref_point is None or np.size(ref_point) != 2 else np.asarray(ref_point, np.float64).reshape(2)
     if ref is not None and np.isfinite(ref).all():
         cv2.circle(image, tuple(np.round(ref * _SCALE).astype(np.int32)), 4 << _SHIFT, colour, 1, cv2.LINE_AA, _SHIFT)
@@ -826,7 +848,7 @@ def text_scale(image: np.ndarray, base: float) -> float:
     float
         The font scale.
     """
-    return base * float(np.clip(image.shape[1] / 320.0, 1.0, 3.0))
+    return base * min(max(image.shape[1] / 320.0, 1.0), 3.0)
 
 
 def draw_stats(

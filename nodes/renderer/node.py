@@ -49,6 +49,14 @@ from .video import VideoWriter, write_png
 from .web import LiveServer, is_loopback
 
 SIDE_INPUTS = {"silhouettes": Silhouettes, "pose": Pose3D, "signals": SocialSignals}
+#: seconds between the timer's calls while no frame waits for its partner (at most pair_timeout):
+#: how soon a control set on the web page takes effect
+IDLE_PERIOD_S = 0.05
+#: the timer's shortest period, seconds: the resolution of pair_timeout
+MIN_PERIOD_S = 0.01
+#: seconds the timer comes after a waiting frame's deadline: the loop's poll wakes to the
+#: millisecond, and a call a little early would find the frame still waiting
+DEADLINE_SLACK_S = 0.001
 #: seconds of the stream at its start that the ``*_after_1s`` figures leave out
 SETTLE_S = 1.0
 
@@ -163,8 +171,8 @@ class Renderer(Node):
             f"interaction models offered on the page, of {', '.join(INTERACTION_MODELS)}",
         ),
     }
-    #: how often waiting frames are looked at: the resolution of pair_timeout
-    timer_period = 0.01
+    #: the timer's first period, seconds; then :meth:`on_timer` sets the next one
+    timer_period = MIN_PERIOD_S
 
     @classmethod
     def validate_params(cls, given: dict[str, Any], where: str = "") -> dict[str, Any]:
@@ -251,6 +259,10 @@ class Renderer(Node):
         self.controls: queue.Queue[Control] = queue.Queue()
         self.stats_ports = set(p["stats_topics"])
         self.finished = False
+        # the timer wakes the loop for the frames whose wait for their partner is over: waking it
+        # every MIN_PERIOD_S whether a frame waits or not cost more CPU (the loop's socket polls and
+        # stats checks) than some of the drawing; between deadlines it only takes the controls
+        self.idle_period = min(IDLE_PERIOD_S, max(p["pair_timeout"], MIN_PERIOD_S))
         self.last_seq = -1
         self.last_partner: Partner | None = None
         self.server: LiveServer | None = None
@@ -293,6 +305,11 @@ class Renderer(Node):
     def on_timer(self) -> None:
         self._apply_controls()
         self._render_ready()
+        # the next call: when the first waiting frame times out, at most the idle period away; the
+        # idle period is at most pair_timeout, so a frame that arrives meanwhile is not overslept
+        deadline = self.comp.next_deadline()
+        wait = self.idle_period if deadline is None else deadline + DEADLINE_SLACK_S - time.monotonic()
+        self.timer_period = min(self.idle_period, max(wait, DEADLINE_SLACK_S))
 
     def on_end(self) -> None:
         self._finish()

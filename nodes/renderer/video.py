@@ -4,6 +4,13 @@ OpenCV wheels differ in the encoders their FFmpeg carries (many have no software
 some open an ``avc1`` writer that then fails). So each candidate codec is probed once per process:
 a few frames are written to a temporary file and read back; only a codec whose file decodes with
 the right frame count is used. Motion-JPEG in AVI is built into OpenCV and always works.
+
+Motion-JPEG frames are JPEG-encoded by ``cv2.imencode`` (libjpeg-turbo) and handed to FFmpeg's
+AVI muxer as they are (``VIDEOWRITER_PROP_RAW_VIDEO``) where this OpenCV can (probed as above):
+OpenCV's own MJPG writer encodes with FFmpeg's JPEG encoder, several times the CPU of
+libjpeg-turbo's per frame, which the real-time graph's renderer pays on every frame. At
+:data:`JPEG_QUALITY` the frames come out at least as close to the rendered ones, and the last row
+of an odd-height frame is kept (FFmpeg's 4:2:0 encoder drops it).
 """
 
 from __future__ import annotations
@@ -24,6 +31,8 @@ FALLBACK: tuple[str, str] = ("MJPG", ".avi")
 _PROBED: dict[str, bool] = {}
 #: frames per second of a video whose stream says nothing of its rate
 DEFAULT_FPS = 25.0
+#: JPEG quality (1-100) of the Motion-JPEG frames encoded by ``cv2.imencode``
+JPEG_QUALITY = 90
 
 
 def _quiet_opencv() -> int:
@@ -75,6 +84,65 @@ def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
                 ok = count_frames(path) == n
             else:
                 wr.release()
+    finally:
+        _restore_opencv(level)
+    _PROBED[key] = ok
+    return ok
+
+
+def _open_raw_mjpeg(path: str, fps: float, size: tuple[int, int]) -> cv2.VideoWriter | None:
+    """An FFmpeg AVI writer that takes encoded JPEG frames as they are, or None where this OpenCV
+    has no such mode.
+    """
+    prop = getattr(cv2, "VIDEOWRITER_PROP_RAW_VIDEO", None)
+    if prop is None:
+        return None
+    wr = cv2.VideoWriter(path, cv2.CAP_FFMPEG, cv2.VideoWriter_fourcc(*"MJPG"), fps, size, [prop, 1])
+    if wr.isOpened():
+        return wr
+    wr.release()
+    return None
+
+
+def _encode_jpeg(image: np.ndarray) -> np.ndarray:
+    """``image`` as JPEG bytes at :data:`JPEG_QUALITY`, one row (what a raw writer takes)."""
+    ok, buf = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
+    if not ok:
+        raise ValueError(f"cannot encode a {image.dtype} {image.shape} image as JPEG")
+    return buf.reshape(1, -1)
+
+
+def raw_mjpeg_works(n: int = 5) -> bool:
+    """Whether OpenCV here writes JPEG frames encoded by ``cv2.imencode`` into an AVI file that
+    decodes back to ``n`` frames of the right size (probed once per process, in a temporary folder).
+
+    Parameters
+    ----------
+    n : int, default=5
+        Frames (64 x 47 pixels: an odd height) written in the probe.
+
+    Returns
+    -------
+    bool
+        True when the probe file decodes back to ``n`` frames of 64 x 47 pixels.
+    """
+    key = "raw-MJPG.avi"
+    if key in _PROBED:
+        return _PROBED[key]
+    ok = False
+    level = _quiet_opencv()
+    try:
+        with tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
+            path = os.path.join(tmp, "probe.avi")
+            wr = _open_raw_mjpeg(path, 25.0, (64, 47))
+            if wr is not None:
+                for i in range(n):
+                    wr.write(_encode_jpeg(np.full((47, 64, 3), 30 * i, np.uint8)))
+                wr.release()
+                cap = cv2.VideoCapture(path)
+                first_ok, first = cap.read()
+                cap.release()
+                ok = first_ok and first.shape == (47, 64, 3) and count_frames(path) == n
     finally:
         _restore_opencv(level)
     _PROBED[key] = ok
@@ -179,6 +247,8 @@ class VideoWriter:
         self.size: tuple[int, int] | None = None
         self.frames = 0
         self._writer: cv2.VideoWriter | None = None
+        #: whether the writer takes JPEG frames encoded here (module docstring)
+        self._raw = False
         self._closed = False
 
     def write(self, image: np.ndarray, stream_fps: float = 0.0) -> None:
@@ -208,7 +278,11 @@ class VideoWriter:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             if not self.fps:
                 self.fps = float(stream_fps) if stream_fps > 0 else DEFAULT_FPS
-            self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (w, h))
+            if self.fourcc == FALLBACK[0] and raw_mjpeg_works():
+                self._writer = _open_raw_mjpeg(str(self.path), self.fps, (w, h))
+                self._raw = self._writer is not None
+            if self._writer is None:
+                self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (w, h))
             if not self._writer.isOpened():
                 raise OSError(f"cannot open video {self.path} for writing ({self.fourcc}, {w}x{h})")
             self.size = (w, h)
@@ -218,7 +292,7 @@ class VideoWriter:
                 f"frame of {w}x{h} pixels for video {self.path} of {self.size[0]}x{self.size[1]}; "
                 "every frame of a video must have the same size"
             )
-        self._writer.write(np.ascontiguousarray(image))
+        self._writer.write(_encode_jpeg(image) if self._raw else np.ascontiguousarray(image))
         self.frames += 1
 
     def close(self) -> int:
@@ -303,9 +377,11 @@ __all__ = [
     "VideoWriter",
     "choose_codec",
     "codec_works",
+    "raw_mjpeg_works",
     "count_frames",
     "write_png",
     "encode_image",
     "H264_CANDIDATES",
     "FALLBACK",
+    "JPEG_QUALITY",
 ]
