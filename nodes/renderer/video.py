@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import cv2
@@ -50,6 +51,20 @@ def _restore_opencv(level: int) -> None:
         cv2.utils.logging.setLogLevel(level)
 
 
+def _probed(key: str, probe: Callable[[str], bool]) -> bool:
+    """Whether ``probe(folder)`` holds, asked once per process (in a temporary folder, with
+    OpenCV's log silenced) and remembered under ``key``.
+    """
+    if key not in _PROBED:
+        level = _quiet_opencv()
+        try:
+            with tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
+                _PROBED[key] = probe(tmp)
+        finally:
+            _restore_opencv(level)
+    return _PROBED[key]
+
+
 def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
     """Whether OpenCV here writes ``fourcc`` into a ``suffix`` file that decodes back to ``n``
     frames (probed once per process, in a temporary folder).
@@ -68,26 +83,19 @@ def codec_works(fourcc: str, suffix: str, n: int = 5) -> bool:
     bool
         True when the probe file decodes back to ``n`` frames.
     """
-    key = f"{fourcc}{suffix}"
-    if key in _PROBED:
-        return _PROBED[key]
-    ok = False
-    level = _quiet_opencv()
-    try:
-        with tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
-            path = os.path.join(tmp, "probe" + suffix)
-            wr = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*fourcc), 25.0, (64, 48))
-            if wr.isOpened():
-                for i in range(n):
-                    wr.write(np.full((48, 64, 3), 30 * i, np.uint8))
-                wr.release()
-                ok = count_frames(path) == n
-            else:
-                wr.release()
-    finally:
-        _restore_opencv(level)
-    _PROBED[key] = ok
-    return ok
+
+    def probe(tmp: str) -> bool:
+        path = os.path.join(tmp, "probe" + suffix)
+        wr = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*fourcc), 25.0, (64, 48))
+        if not wr.isOpened():
+            wr.release()
+            return False
+        for i in range(n):
+            wr.write(np.full((48, 64, 3), 30 * i, np.uint8))
+        wr.release()
+        return count_frames(path) == n
+
+    return _probed(f"{fourcc}{suffix}", probe)
 
 
 def _open_raw_mjpeg(path: str, fps: float, size: tuple[int, int]) -> cv2.VideoWriter | None:
@@ -126,27 +134,21 @@ def raw_mjpeg_works(n: int = 5) -> bool:
     bool
         True when the probe file decodes back to ``n`` frames of 64 x 47 pixels.
     """
-    key = "raw-MJPG.avi"
-    if key in _PROBED:
-        return _PROBED[key]
-    ok = False
-    level = _quiet_opencv()
-    try:
-        with tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
-            path = os.path.join(tmp, "probe.avi")
-            wr = _open_raw_mjpeg(path, 25.0, (64, 47))
-            if wr is not None:
-                for i in range(n):
-                    wr.write(_encode_jpeg(np.full((47, 64, 3), 30 * i, np.uint8)))
-                wr.release()
-                cap = cv2.VideoCapture(path)
-                first_ok, first = cap.read()
-                cap.release()
-                ok = first_ok and first.shape == (47, 64, 3) and count_frames(path) == n
-    finally:
-        _restore_opencv(level)
-    _PROBED[key] = ok
-    return ok
+
+    def probe(tmp: str) -> bool:
+        path = os.path.join(tmp, "probe.avi")
+        wr = _open_raw_mjpeg(path, 25.0, (64, 47))
+        if wr is None:
+            return False
+        for i in range(n):
+            wr.write(_encode_jpeg(np.full((47, 64, 3), 30 * i, np.uint8)))
+        wr.release()
+        cap = cv2.VideoCapture(path)
+        first_ok, first = cap.read()
+        cap.release()
+        return bool(first_ok) and first.shape == (47, 64, 3) and count_frames(path) == n
+
+    return _probed("raw-MJPG.avi", probe)
 
 
 def count_frames(path: str | os.PathLike) -> int:
