@@ -360,6 +360,9 @@ def _node_decl(file: str, name: str, body: dict[str, Any]) -> NodeDecl:
         raise _err(file, name, "policy", f"{decl.policy!r} is not one of {', '.join(POLICIES)}")
     for port, v in _mapping(body.get("inputs"), file, name, "inputs").items():
         entry = _mapping(v, file, name, f"inputs.{port}")
+        extra = sorted(set(entry) - {"policy", "queue"})
+        if extra:
+            raise _err(file, name, f"inputs.{port}.{extra[0]}", "unknown key; expected policy, queue")
         pol = entry.get("policy")
         if pol not in POLICIES:
             raise _err(file, name, f"inputs.{port}.policy", f"{pol!r} is not one of {', '.join(POLICIES)}")

@@ -62,6 +62,11 @@ CASES = [
         "node 'sink': inputs.in.queue: 100 is not an integer in 0..64",
     ),
     (
+        "unknown input key",
+        with_node("sink", inputs={"in": {"policy": "latest", "queu": 3}}),
+        "node 'sink': inputs.in.queu: unknown key; expected policy, queue",
+    ),
+    (
         "queue on a reliable input",
         with_node("sink", inputs={"in": {"policy": "reliable", "queue": 3}}),
         "node 'sink': inputs.in.queue: a queue applies to a latest input only",
