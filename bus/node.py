@@ -558,10 +558,12 @@ class Node:
             deadline = self._sync.next_deadline() if self._sync is not None else None
             if deadline is not None:
                 timeout = max(0, min(timeout, int((deadline - time.monotonic()) * 1000) + 1))
-            if any(sub.pending for sub in self._in.values()):
+            # inputs with an end of stream or messages already queued here (polling changes neither)
+            pending = [p for p, sub in self._in.items() if sub.pending]
+            if pending:
                 timeout = 0  # messages already queued here wait for no socket
             ready = dict(poller.poll(timeout))
-            due = [owners[s] for s in ready] + [p for p, sub in self._in.items() if sub.pending]
+            due = [owners[s] for s in ready] + pending
             for port in dict.fromkeys(due):
                 sub = self._in[port]
                 msg = sub.receive()
