@@ -35,15 +35,13 @@ from typing import Any
 import cv2
 import numpy as np
 
+from . import kernels
 from .background import BACKGROUND, FOREGROUND
 from .deferred import DeferredStep
 
 #: opening that keeps solid foreground (not speckle) and the dilation around it, for the blinks
 _OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
-# 8-neighbourhood offsets (dy, dx) of ViBe's spatial diffusion
-_NEIGHBOUR_DY = np.array([-1, -1, -1, 0, 0, 1, 1, 1], np.int64)
-_NEIGHBOUR_DX = np.array([-1, 0, 1, -1, 1, -1, 0, 1], np.int64)
 
 
 class SampleConsensus:
@@ -453,14 +451,15 @@ class SampleConsensus:
         # region, where a colour seen again and again is background whichever model missed it.
         # Elsewhere a person whose colour happens to match would be learnt, match better the
         # next time, and spread.
-        self._update(frame, _Learnable(flat_labels, self._blink, self.learn_blink))
+        self._update(frame, flat_labels)
         self._feedback(fg_idx)
 
-    def _update(self, frame: np.ndarray, learn: _Learnable) -> None:
-        """ViBe's conservative update: each pixel to ``learn`` (read at flat indices), with probability
-        1/phi, writes its colour over a random sample of its own and, independently, of a random
-        8-neighbour that is learnt too. phi is ``subsampling`` in dynamic regions (blink level > 0)
-        and ``quiet_subsampling`` elsewhere.
+    def _update(self, frame: np.ndarray, flat_labels: np.ndarray) -> None:
+        """ViBe's conservative update: each learnable pixel (``kernels.learnable``: BACKGROUND in the
+        statistics' ``flat_labels`` (H * W,), or a blink level of at least ``learn_blink``), with
+        probability 1/phi, writes its colour over a random sample of its own and, independently, of
+        a random 8-neighbour that is learnable too. phi is ``subsampling`` in dynamic regions
+        (blink level > 0) and ``quiet_subsampling`` elsewhere.
         """
         h, w = self._shape
         npx = h * w
@@ -470,62 +469,28 @@ class SampleConsensus:
         # the dynamic region's pixels get draws of their own, up to a rate of 1 / subsampling
         active = np.flatnonzero(self._blink > 0.0) if self.quiet_subsampling > self.subsampling else None
         extra = 0.0 if active is None else active.size * (1.0 / self.subsampling - 1.0 / self.quiet_subsampling)
+        # the blink levels are read before this frame's feedback changes them
+        labels, blink, level = flat_labels, self._blink, np.float32(self.learn_blink)
+        samples, box = self._samples.reshape(h * w, -1), self._box.view(np.uint8).reshape(-1, 8)
         for own in (True, False):
             # draw phi-subsampled candidates (with replacement: a pixel drawn twice is harmless)
             cand = rng.integers(0, npx, size=m)
             if extra > 0.0:
                 more = int(extra) + int(rng.random() < extra - int(extra))
                 cand = np.concatenate([cand, active[rng.integers(0, active.size, size=more)]])
-            cand = cand[learn[cand]]
+            cand = kernels.learnable(cand, labels, blink, level)
             if cand.size == 0:
                 continue
             k = rng.integers(0, self.n_samples, size=cand.size)
-            colours = np.take(px, cand, axis=0)  # (M, 3)
+            # one compiled pass over the drawn pixels each (spread, write, box), without the GIL
             if own:
-                if self.spread_k > 0.0:
-                    self._follow_spread(colours, cand)
-                self._write(cand, k, colours)
+                rate = np.float32(self.spread_rate)
+                kernels.learn_own(samples, box, self._spread, px, cand, k, rate, self.spread_k > 0.0)
                 continue
-            j = rng.integers(0, 8, size=cand.size)
-            y, x = np.divmod(cand, w)
-            y += _NEIGHBOUR_DY[j]
-            x += _NEIGHBOUR_DX[j]
-            np.clip(y, 0, h - 1, out=y)
-            np.clip(x, 0, w - 1, out=x)
-            y *= w
-            nb = np.add(y, x, out=y)
             # only into background neighbours: ViBe's diffusion into foreground eats a person
             # who stands still from their rim; uncovered room (ghosts) is the statistics' job
-            ok = learn[nb]
-            self._write(nb[ok], k[ok], colours[ok])
-
-    def _follow_spread(self, colours: np.ndarray, cand: np.ndarray) -> None:
-        """d(x) += spread_rate (mean_k |I - S_k|_1 - d(x)) at the pixels ``cand`` (M,) drawn for an
-        update, whose observed background colours are ``colours`` (M, 3) uint8.
-        """
-        n = self.n_samples
-        rows = np.take(self._samples.reshape(-1, 3 * n), cand, axis=0)  # (M, 3 N) uint8
-        # sum over channels and samples at once: an exact integer sum, so the mean does not
-        # depend on the layout or the order of the additions
-        gap = cv2.reduce(cv2.absdiff(rows, np.repeat(colours, n, axis=1)), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)
-        d = self._spread[cand]
-        d += np.float32(self.spread_rate) * (gap[:, 0].astype(np.float32) / np.float32(n) - d)
-        self._spread[cand] = d
-
-    def _write(self, pixels: np.ndarray, k: np.ndarray, colours: np.ndarray) -> None:
-        """Store colours (M, 3) uint8 as sample ``k`` (M,) of the flat pixels ``pixels`` (M,)."""
-        # three 1-D scatters into the flat array: numpy's 2-index scatter with a slice between
-        # the indices is several times slower
-        n = self.n_samples
-        flat = self._samples.reshape(-1)
-        at = pixels * (3 * n) + k
-        # a pixel drawn twice takes the last of its colours
-        for c in range(3):
-            flat[at] = colours[:, c]
-            at += n
-        # the box of each written pixel's samples, over all of them again (a sample replaced may
-        # have been the only one at an end)
-        self._set_box(pixels)
+            j = rng.integers(0, 8, size=cand.size)
+            kernels.learn_neighbours(samples, box, px, cand, k, j, h, w, labels, blink, level)
 
     def _set_box(self, pixels: np.ndarray) -> None:
         """The box of the samples of the flat pixels ``pixels`` (M,), into ``_box``."""
@@ -590,18 +555,3 @@ def _l1(rows: np.ndarray, colours: np.ndarray, n: int) -> np.ndarray:
 def _box_bytes(words: np.ndarray) -> np.ndarray:
     """The (K, 8) uint8 bytes of ``_box`` words (K,) uint64: B, G, R minimum at 0-2, maximum at 4-6."""
     return np.ascontiguousarray(words).view(np.uint8).reshape(-1, 8)
-
-
-class _Learnable:
-    """Which pixels the samples may learn, read only where the update looks (a few thousand
-    pixels a frame, not the whole frame): the statistics' BACKGROUND, and any pixel whose blink
-    level is at least ``level``. Indexed by flat pixel indices, returns bool.
-    """
-
-    def __init__(self, flat_labels: np.ndarray, blink: np.ndarray, level: float) -> None:
-        self.flat_labels = flat_labels
-        self.blink = blink  # read before this frame's feedback changes it
-        self.level = level
-
-    def __getitem__(self, idx: np.ndarray) -> np.ndarray:
-        return (self.flat_labels[idx] == BACKGROUND) | (self.blink[idx] >= self.level)
