@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from counterpart.nodes.silhouette import kernels
-from counterpart.nodes.silhouette.background import BACKGROUND
+from counterpart.nodes.silhouette.background import BACKGROUND, FOREGROUND, HIGHLIGHT, SHADOW
 
 H, W, N = 24, 32, 20
 
@@ -55,8 +55,8 @@ def _state(seed: int) -> tuple[np.ndarray, ...]:
     return samples, box, spread, px, labels, blink, cand, k, j
 
 
-def test_background_is_zero_as_the_kernels_take_it() -> None:
-    assert BACKGROUND == 0
+def test_the_class_codes_are_those_the_kernels_take() -> None:
+    assert (BACKGROUND, SHADOW, HIGHLIGHT, FOREGROUND) == (0, 1, 2, 3)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -101,3 +101,124 @@ def test_learn_neighbours_equals_the_diffusion_in_numpy(seed: int) -> None:
     kernels.learn_neighbours(samples, box, px, cand, k, j, H, W, labels, blink, level)
     np.testing.assert_array_equal(samples, ref_s)
     np.testing.assert_array_equal(box, ref_b)
+
+
+def _classify_ref(frame: np.ndarray, w: np.ndarray, inv_var: np.ndarray, inv_den: np.ndarray, th: dict) -> tuple:
+    """``HorprasertBackground._distortions`` and ``classify`` as they were in OpenCV calls."""
+    planes = [p.astype(np.float32) for p in cv2.split(frame)]
+    mul, add = cv2.multiply, cv2.add
+    s = mul(planes[0], w[0])
+    t = mul(planes[1], w[1])
+    add(s, t, dst=s)
+    add(s, mul(planes[2], w[2], dst=t), dst=s)
+    alpha = mul(s, inv_den)
+    cd2 = mul(planes[0], planes[0])
+    mul(cd2, inv_var[0], dst=cd2)
+    for c in (1, 2):
+        mul(planes[c], planes[c], dst=t)
+        mul(t, inv_var[c], dst=t)
+        add(cd2, t, dst=cd2)
+    mul(s, alpha, dst=s)
+    cv2.subtract(cd2, s, dst=cd2)
+    cv2.max(cd2, 0.0, dst=cd2)
+    labels = cv2.add(cv2.bitwise_and(cv2.compare(alpha, 1.0, cv2.CMP_GE), 1), SHADOW)
+    band = cv2.bitwise_and(cv2.compare(alpha, th["hi"], cv2.CMP_LT), cv2.compare(alpha, th["lo"], cv2.CMP_GT))
+    cv2.bitwise_and(labels, cv2.bitwise_not(band), dst=labels)
+    fg = cv2.bitwise_or(cv2.compare(cd2, th["cd2"], cv2.CMP_GT), cv2.compare(alpha, th["min"], cv2.CMP_LT))
+    cv2.bitwise_or(fg, cv2.compare(alpha, th["max"], cv2.CMP_GT), dst=fg)
+    cv2.bitwise_or(labels, cv2.bitwise_and(fg, FOREGROUND), dst=labels)
+    return labels, alpha
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_classify_equals_the_distortions_and_thresholds_in_opencv(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    h, w = 48, 64
+    mu = rng.uniform(0, 255, (3, h, w)).astype(np.float32)
+    mu[:, 0, :4] = 0.0  # black background pixels: 1 / den is 0 there
+    var = rng.uniform(1, 200, (3, h, w)).astype(np.float32)
+    inv_var = (np.float32(1.0) / var).astype(np.float32)
+    wt = (mu * inv_var).astype(np.float32)
+    den = (mu[0] * wt[0] + mu[1] * wt[1] + mu[2] * wt[2]).astype(np.float32)
+    inv_den = np.where(den > 1e-6, np.float32(1.0) / np.maximum(den, 1e-6), 0).astype(np.float32)
+    # frames near the background (all classes occur) and exactly on it (alpha 1, CD^2 0)
+    frame = np.clip(mu.transpose(1, 2, 0) * rng.uniform(0.4, 1.6, (h, w, 1)) + rng.normal(0, 6, (h, w, 3)), 0, 255)
+    frame = frame.astype(np.uint8)
+    frame[-4:] = np.rint(mu.transpose(1, 2, 0)[-4:]).astype(np.uint8)
+    a = rng.uniform(0.02, 0.1, (h, w)).astype(np.float32)
+    th = {"hi": (1 + 2 * a).astype(np.float32), "lo": (1 - 2 * a).astype(np.float32)}
+    th["min"] = np.minimum(np.float32(0.5), th["lo"]).astype(np.float32)
+    th["max"] = np.maximum(np.float32(1.4), th["hi"]).astype(np.float32)
+    th["cd2"] = rng.uniform(0.5, 40, (h, w)).astype(np.float32)
+    want_labels, want_alpha = _classify_ref(frame, wt, inv_var, inv_den, th)
+    labels, alpha = np.empty((h, w), np.uint8), np.empty((h, w), np.float32)
+    flat = [a.reshape(-1) for a in (*cv2.split(frame), *wt, *inv_var, inv_den)]
+    flat += [th[k].reshape(-1) for k in ("hi", "lo", "min", "max", "cd2")]
+    kernels.classify(*flat, labels.reshape(-1), alpha.reshape(-1))
+    np.testing.assert_array_equal(alpha, want_alpha)
+    np.testing.assert_array_equal(labels, want_labels)
+    assert set(np.unique(labels)) == {0, 1, 2, 3}
+
+
+def _explained_ref(idx, px, samples, box, blink, spread, radius, spread_k, rel, min_matches) -> np.ndarray:
+    """``SampleConsensus.explained`` as it was in numpy and OpenCV calls."""
+    n = samples.shape[1] // 3
+    colours = np.take(px, idx, axis=0)
+    gain = 1.0 / (1.0 + np.take(blink, idx))
+    base = np.float32(radius)
+    if spread_k > 0.0:
+        base = np.maximum(base, np.float32(spread_k) * np.take(spread, idx))
+    b = np.take(box, idx, axis=0)
+    gap = cv2.add(cv2.subtract(b[:, :3], colours), cv2.subtract(colours, b[:, 4:7]))
+    near = np.add(gap[:, 0], gap[:, 1], dtype=np.int16)
+    near += gap[:, 2]
+    top = np.add(b[:, 4], b[:, 5], dtype=np.int16)
+    top += b[:, 6]
+    near = near * gain
+    near -= np.float32(rel) * top
+    near *= np.float32(1.0 - 1e-4)
+    near = np.flatnonzero(near < base + np.float32(1e-3))
+    out = np.zeros(idx.size, bool)
+    if near.size == 0:
+        return out
+    idx, colours, gain = idx[near], colours[near], gain[near]
+    if np.ndim(base):
+        base = base[near]
+    rows = np.take(samples, idx, axis=0)
+    diff = cv2.absdiff(rows, np.repeat(colours, n, axis=1))
+    dist = np.add(diff[:, :n], diff[:, n : 2 * n], dtype=np.int16)
+    dist += diff[:, 2 * n :]
+    total = np.add(rows[:, :n], rows[:, n : 2 * n], dtype=np.int16)
+    total += rows[:, 2 * n :]
+    lhs = dist * gain[:, None]
+    lhs -= np.float32(rel) * total
+    out[near] = np.einsum("ij->i", (lhs < np.reshape(base, (-1, 1))).view(np.uint8)) >= min_matches
+    return out
+
+
+@pytest.mark.parametrize("spread_k", [0.0, 0.75])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_explained_and_veto_equal_the_consensus_in_numpy(seed: int, spread_k: float) -> None:
+    rng = np.random.default_rng(seed)
+    p = H * W
+    base = rng.integers(20, 230, (p, 3, 1))
+    samples = np.clip(base + rng.integers(-6, 7, (p, 3, N)), 0, 255).astype(np.uint8).reshape(p, 3 * N)
+    box = np.zeros((p, 8), np.uint8)
+    _set_box_ref(samples, box, np.arange(p))
+    # colours near their samples (matches, near misses) and far from them
+    px = np.clip(base[:, :, 0] + rng.integers(-12, 13, (p, 3)) * rng.integers(1, 4, (p, 1)), 0, 255).astype(np.uint8)
+    blink = (rng.random(p) * 1.5 * (rng.random(p) < 0.5)).astype(np.float32)
+    spread = (rng.random(p) * 12).astype(np.float32)
+    terms = (samples, box, blink, spread, np.float32(0.5), np.float32(spread_k), np.float32(0.025), 2)
+    idx = np.sort(rng.choice(p, p // 2, replace=False))
+    want = _explained_ref(idx, px, *terms)
+    assert 0 < want.sum() < want.size
+    np.testing.assert_array_equal(kernels.explained(idx, px, *terms), want)
+    labels = rng.integers(0, 4, p).astype(np.uint8)
+    fg = np.flatnonzero(labels == FOREGROUND)
+    ok = _explained_ref(fg, px, *terms)
+    want_out = labels.copy()
+    want_out[fg[ok]] = BACKGROUND
+    out, fg_idx = kernels.veto(labels, px, *terms)
+    np.testing.assert_array_equal(out, want_out)
+    np.testing.assert_array_equal(fg_idx, fg[~ok])

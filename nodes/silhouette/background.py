@@ -74,6 +74,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from . import kernels
+
 BACKGROUND: int = 0
 SHADOW: int = 1
 HIGHLIGHT: int = 2
@@ -441,8 +443,8 @@ class HorprasertBackground:
         self._updates = 0  # update calls since the fit (one in adaptation.update_every learns)
         self._still: np.ndarray | None = None  # (H, W) uint16 length of each pixel's still foreground run
         self._still_ref: np.ndarray | None = None  # (3, H * W) float32 mean colour of that run
-        # (frame, its alpha, its float32 channel planes) of the last apply
-        self._last_alpha: tuple[np.ndarray, np.ndarray, list[np.ndarray]] | None = None
+        # (frame, its alpha, its float32 channel planes or None until made) of the last apply
+        self._last_alpha: tuple[np.ndarray, np.ndarray, list[np.ndarray] | None] | None = None
         self._w: np.ndarray | None = None
         # (H + 2 r, W + 2 r) float32 grey sum of E, reflect-padded by r = shadow_window // 2
         self._e_pad: np.ndarray | None = None
@@ -777,25 +779,29 @@ class HorprasertBackground:
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
-        alpha, cd2, planes = self._distortions(frame)
-        # for ``update`` on this frame: alpha for the global-drift step, the float channel planes
-        self._last_alpha = (frame, alpha, planes)
-        # Thresholds are precomputed in raw alpha / CD^2 units per pixel, saving the division. The
-        # comparisons give 0/255 masks and the classes are combined bitwise (OpenCV's compare and
-        # bitwise ops are cheaper than numpy's masked copies): SHADOW 1 where darker than the background, HIGHLIGHT 2
-        # where brighter, cleared to BACKGROUND 0 inside the brightness band, FOREGROUND 3 (= all
-        # bits) where the chromaticity or the darkening is too large.
-        labels = cv2.add(cv2.bitwise_and(cv2.compare(alpha, 1.0, cv2.CMP_GE), 1), SHADOW)
-        band = cv2.bitwise_and(
-            cv2.compare(alpha, self._alpha_hi, cv2.CMP_LT), cv2.compare(alpha, self._alpha_lo, cv2.CMP_GT)
-        )
-        cv2.bitwise_and(labels, cv2.bitwise_not(band), dst=labels)
-        fg = cv2.bitwise_or(
-            cv2.compare(cd2, self._cd2_max, cv2.CMP_GT), cv2.compare(alpha, self._alpha_min, cv2.CMP_LT)
-        )
-        cv2.bitwise_or(fg, cv2.compare(alpha, self._alpha_max, cv2.CMP_GT), dst=fg)
-        cv2.bitwise_or(labels, cv2.bitwise_and(fg, FOREGROUND), dst=labels)
+        # One compiled pass (``kernels.classify``, the distortions of ``_distortions`` and the
+        # thresholds, precomputed per pixel in raw alpha / CD^2 units): SHADOW 1 where darker than
+        # the background, HIGHLIGHT 2 where brighter, BACKGROUND 0 inside the brightness band,
+        # FOREGROUND 3 where the chromaticity or the darkening is too large.
+        h, w = self.shape
+        labels = np.empty((h, w), np.uint8)
+        alpha = np.empty((h, w), np.float32)
+        flat = [a.reshape(-1) for a in cv2.split(frame)]  # uint8 planes: SIMD-friendly loads
+        flat += [a.reshape(-1) for a in (*self._w, *self._inv_var)]
+        th = (self._inv_den, self._alpha_hi, self._alpha_lo, self._alpha_min, self._alpha_max, self._cd2_max)
+        kernels.classify(*flat, *(a.reshape(-1) for a in th), labels.reshape(-1), alpha.reshape(-1))
+        # for ``update`` and the texture test on this frame: alpha for the global-drift step; the
+        # float channel planes are made when one of them (in the worker thread) needs them
+        self._last_alpha = (frame, alpha, None)
         return labels
+
+    def _last_planes(self) -> list[np.ndarray]:
+        """The float32 channel planes (H, W) of the last classified frame, made once."""
+        frame, alpha, planes = self._last_alpha
+        if planes is None:
+            planes = _float_planes(frame)
+            self._last_alpha = (frame, alpha, planes)
+        return planes
 
     def shadow_texture_mismatch(self, labels: np.ndarray) -> np.ndarray:
         """The SHADOW pixels of the last ``classify`` that are textured and do not correlate with the
@@ -822,7 +828,7 @@ class HorprasertBackground:
         none = np.zeros(0, np.int64)
         if self.shadows.shadow_ncc <= -1.0:
             return none
-        planes = self._last_alpha[2]
+        planes = self._last_planes()
         is_sh = labels == SHADOW
         sh = is_sh.view(np.uint8)
         r = self.shadows.shadow_window // 2
@@ -1014,7 +1020,7 @@ class HorprasertBackground:
         k = ad.rate("shadow_learning_rate") / lr if lr > 0.0 else 0.0
         # cv2.accumulateWeighted is dst <- (1 - r) dst + r src under a mask, in place.
         last = self._last_alpha
-        planes = last[2] if last is not None and last[0] is frame else _float_planes(frame)
+        planes = self._last_planes() if last is not None and last[0] is frame else _float_planes(frame)
         for c, f in enumerate(planes):
             if slr > 0.0:
                 d = cv2.subtract(f, self._mu[c])

@@ -203,3 +203,206 @@ def learn_neighbours(
     for t in range(m):
         i = at[t]
         _put(samples, box, nb[t], k[i], px[cand[i]], n)
+
+
+@numba.njit(**_JIT)
+def classify(
+    b0: np.ndarray,
+    b1: np.ndarray,
+    b2: np.ndarray,
+    w0: np.ndarray,
+    w1: np.ndarray,
+    w2: np.ndarray,
+    v0: np.ndarray,
+    v1: np.ndarray,
+    v2: np.ndarray,
+    inv_den: np.ndarray,
+    alpha_hi: np.ndarray,
+    alpha_lo: np.ndarray,
+    alpha_min: np.ndarray,
+    alpha_max: np.ndarray,
+    cd2_max: np.ndarray,
+    labels: np.ndarray,
+    alpha: np.ndarray,
+) -> None:
+    """Horprasert's classes (eq. 9) from the raw distortions (eqs. 5-6), one pass over the frame.
+
+    S = (I_0 w_0 + I_1 w_1) + I_2 w_2 with w_c = E_c / s_c^2; alpha = S / sum_c (E_c / s_c)^2;
+    CD^2 = max(((I_0^2 v_0 + I_1^2 v_1) + I_2^2 v_2) - S alpha, 0) with v_c = 1 / s_c^2, float32
+    in that order. Class: FOREGROUND 3 where CD^2 > cd2_max, alpha < alpha_min or alpha >
+    alpha_max; else BACKGROUND 0 where alpha_lo < alpha < alpha_hi; else HIGHLIGHT 2 where
+    alpha >= 1 and SHADOW 1 where not. Flat arrays and no branches: the compiler runs it on SIMD
+    lanes.
+
+    Parameters
+    ----------
+    b0, b1, b2 : ndarray of shape (H * W,), dtype uint8
+        The frame's B, G, R planes, flat.
+    w0, w1, w2, v0, v1, v2 : ndarray of shape (H * W,), dtype float32
+        E_c / s_c^2 and 1 / s_c^2.
+    inv_den : ndarray of shape (H * W,), dtype float32
+        1 / sum_c (E_c / s_c)^2.
+    alpha_hi, alpha_lo, alpha_min, alpha_max, cd2_max : ndarray of shape (H * W,), dtype float32
+        Per-pixel thresholds in raw alpha and CD^2 units.
+    labels : ndarray of shape (H * W,), dtype uint8
+        Out: the classes.
+    alpha : ndarray of shape (H * W,), dtype float32
+        Out: the raw brightness distortion.
+    """
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    for p in range(inv_den.size):
+        i0 = np.float32(b0[p])
+        i1 = np.float32(b1[p])
+        i2 = np.float32(b2[p])
+        s = i0 * w0[p] + i1 * w1[p]
+        s = s + i2 * w2[p]
+        a = s * inv_den[p]
+        cd2 = (i0 * i0) * v0[p] + (i1 * i1) * v1[p]
+        cd2 = cd2 + (i2 * i2) * v2[p]
+        cd2 = max(cd2 - s * a, zero)
+        alpha[p] = a
+        fg = (cd2 > cd2_max[p]) | (a < alpha_min[p]) | (a > alpha_max[p])
+        band = (a < alpha_hi[p]) & (a > alpha_lo[p])
+        lab = (np.uint8(1) + np.uint8(a >= one)) * np.uint8(not band)
+        labels[p] = lab | (np.uint8(3) * np.uint8(fg))
+
+
+@numba.njit(**_JIT)
+def _explained_one(
+    p: int,
+    px: np.ndarray,
+    samples: np.ndarray,
+    box: np.ndarray,
+    blink: np.ndarray,
+    spread: np.ndarray,
+    radius: np.float32,
+    spread_k: np.float32,
+    rel: np.float32,
+    min_matches: int,
+) -> bool:
+    """ViBe's consensus at pixel p (see ``explained``)."""
+    n = samples.shape[1] // 3
+    gain = np.float32(1.0) / (np.float32(1.0) + blink[p])
+    base = radius
+    if spread_k > np.float32(0.0):
+        b = spread_k * spread[p]
+        if b > base:
+            base = b
+    # the box prefilter: a colour farther from the box of the samples than the widest radius
+    # matches none of them (with a margin over float32 rounding)
+    near = 0
+    top = 0
+    for c in range(3):
+        v = np.int32(px[p, c])
+        lo = np.int32(box[p, c])
+        hi = np.int32(box[p, 4 + c])
+        if lo > v:
+            near += lo - v
+        if v > hi:
+            near += v - hi
+        top += hi
+    f = np.float32(near) * gain
+    f = f - rel * np.float32(top)
+    f = f * np.float32(1.0 - 1e-4)
+    if not f < base + np.float32(1e-3):
+        return False
+    hits = 0
+    c0 = np.int32(px[p, 0])
+    c1 = np.int32(px[p, 1])
+    c2 = np.int32(px[p, 2])
+    for s in range(n):
+        s0 = np.int32(samples[p, s])
+        s1 = np.int32(samples[p, n + s])
+        s2 = np.int32(samples[p, 2 * n + s])
+        dist = abs(s0 - c0) + abs(s1 - c1) + abs(s2 - c2)
+        lhs = np.float32(dist) * gain
+        lhs = lhs - rel * np.float32(s0 + s1 + s2)
+        if lhs < base:
+            hits += 1
+    return hits >= min_matches
+
+
+@numba.njit(**_JIT)
+def explained(
+    idx: np.ndarray,
+    px: np.ndarray,
+    samples: np.ndarray,
+    box: np.ndarray,
+    blink: np.ndarray,
+    spread: np.ndarray,
+    radius: np.float32,
+    spread_k: np.float32,
+    rel: np.float32,
+    min_matches: int,
+) -> np.ndarray:
+    """ViBe's consensus with SuBSENSE's radius at the flat pixels ``idx``: at least
+    ``min_matches`` samples S_k with |I - S_k|_1 / (1 + v) - rel |S_k|_1 < max(radius,
+    spread_k d), float32 in that order.
+
+    Parameters
+    ----------
+    idx : ndarray of shape (K,), dtype int64
+        Flat pixel indices.
+    px : ndarray of shape (H * W, 3), dtype uint8
+        The frame's BGR pixels.
+    samples, box : ndarray
+        (H * W, 3 N) and (H * W, 8) uint8, as ``learn_own``'s.
+    blink, spread : ndarray of shape (H * W,), dtype float32
+        Blink levels v(x) and spreads d(x).
+    radius, spread_k, rel : float32
+        The model's ``radius``, ``spread_k`` and ``relative_radius``.
+    min_matches : int
+        #min.
+
+    Returns
+    -------
+    ndarray of shape (K,), dtype bool
+        True where the colour matches the pixel's samples.
+    """
+    out = np.empty(idx.size, np.bool_)
+    for i in range(idx.size):
+        out[i] = _explained_one(idx[i], px, samples, box, blink, spread, radius, spread_k, rel, min_matches)
+    return out
+
+
+@numba.njit(**_JIT)
+def veto(
+    labels: np.ndarray,
+    px: np.ndarray,
+    samples: np.ndarray,
+    box: np.ndarray,
+    blink: np.ndarray,
+    spread: np.ndarray,
+    radius: np.float32,
+    spread_k: np.float32,
+    rel: np.float32,
+    min_matches: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The labels with each FOREGROUND (3) pixel that ``explained`` matches turned BACKGROUND (0).
+
+    Parameters
+    ----------
+    labels : ndarray of shape (H * W,), dtype uint8
+        Horprasert classes (not changed).
+    px, samples, box, blink, spread, radius, spread_k, rel, min_matches :
+        As ``explained``'s.
+
+    Returns
+    -------
+    out : ndarray of shape (H * W,), dtype uint8
+        The vetoed labels (a new array).
+    fg_idx : ndarray of shape (K,), dtype int64
+        Ascending flat indices of its FOREGROUND pixels.
+    """
+    out = labels.copy()
+    fg = np.empty(labels.size, np.int64)
+    k = 0
+    for p in range(labels.size):
+        if labels[p] == 3:
+            if _explained_one(p, px, samples, box, blink, spread, radius, spread_k, rel, min_matches):
+                out[p] = 0
+            else:
+                fg[k] = p
+                k += 1
+    return out, fg[:k].copy()

@@ -36,7 +36,6 @@ import cv2
 import numpy as np
 
 from . import kernels
-from .background import BACKGROUND, FOREGROUND
 from .deferred import DeferredStep
 
 #: opening that keeps solid foreground (not speckle) and the dilation around it, for the blinks
@@ -157,7 +156,7 @@ class SampleConsensus:
         self.threaded = threaded
         self._samples: np.ndarray | None = None
         # (H * W,) uint64: per pixel the bytes B, G, R minimum, 0, B, G, R maximum, 0 over its
-        # samples (``_box_bytes``), kept by _write; one 8-byte word a pixel gathers fast
+        # samples, kept by the update's kernels; one 8-byte word a pixel gathers fast
         self._box: np.ndarray | None = None
         self._shape: tuple[int, int] = (0, 0)
         self._deferred = DeferredStep("sample-consensus")
@@ -302,49 +301,22 @@ class SampleConsensus:
             raise RuntimeError("SampleConsensus is not fitted: call fit(frames, background) first")
         if idx.size == 0:
             return np.zeros(0, bool)
-        colours = np.take(frame.reshape(-1, 3), idx, axis=0)  # (K, 3) uint8
-        gain = 1.0 / (1.0 + np.take(self._blink, idx))  # (K,) float32
-        base = np.float32(self.radius)
-        if self.spread_k > 0.0:
-            base = np.maximum(base, np.float32(self.spread_k) * np.take(self._spread, idx))
-        # Most pixels tested are a person, far from every sample: the L1 distance from the colour
-        # to the box of the pixel's samples is at most the distance to any sample, and the box's
-        # top corner's norm at least any sample's, so where that distance reaches the widest
-        # radius no sample matches. The margin covers float32 rounding in the exact test below;
-        # only the pixels near their box (about a tenth) go on to it, with the same result.
-        box = _box_bytes(np.take(self._box, idx))  # (K, 8) uint8
-        # saturating uint8 differences: max(lo - I, 0) + max(I - hi, 0), one of them 0
-        gap = cv2.add(cv2.subtract(box[:, :3], colours), cv2.subtract(colours, box[:, 4:7]))
-        near = np.add(gap[:, 0], gap[:, 1], dtype=np.int16)
-        near += gap[:, 2]
-        top = np.add(box[:, 4], box[:, 5], dtype=np.int16)
-        top += box[:, 6]
-        near = near * gain
-        near -= np.float32(self.relative_radius) * top
-        near *= np.float32(1.0 - 1e-4)
-        near = np.flatnonzero(near < base + np.float32(1e-3))
-        out = np.zeros(idx.size, bool)
-        if near.size == 0:
-            return out
-        if near.size < idx.size:
-            idx, colours, gain = idx[near], colours[near], gain[near]
-            if np.ndim(base):
-                base = base[near]
+        # one compiled pass (``kernels.explained``): the box prefilter, then the samples' test
+        return kernels.explained(idx, frame.reshape(-1, 3), *self._veto_terms())
+
+    def _veto_terms(self) -> tuple[Any, ...]:
+        """The model's arrays and constants as ``kernels.explained`` and ``kernels.veto`` take them."""
         n = self.n_samples
-        rows = np.take(self._samples.reshape(-1, 3 * n), idx, axis=0)  # (K', 3 N) uint8
-        dist = _l1(rows, colours, n)  # (K', N)
-        # |S_k|_1 from the rows at hand: a table of them kept beside the samples cost a scatter
-        # into a second large array on every write and a gather here (cache misses both)
-        total = np.add(rows[:, :n], rows[:, n : 2 * n], dtype=np.int16)  # (K', N)
-        total += rows[:, 2 * n :]
-        # noise grows with brightness (shot noise, compression): R = R0 + rel * |S_k|_1, times
-        # the blink gain; a dark pixel keeps a tight radius, where a fixed one would take a dark
-        # shirt for a dark doorway. dist < R (1 + v) <=> dist / (1 + v) - rel |S_k| < R0.
-        lhs = dist * gain[:, None]
-        lhs -= np.float32(self.relative_radius) * total
-        # matches counted as a sum of the 0 / 1 bytes (count_nonzero with an axis is 5x slower)
-        out[near] = np.einsum("ij->i", (lhs < np.reshape(base, (-1, 1))).view(np.uint8)) >= self.min_matches
-        return out
+        return (
+            self._samples.reshape(-1, 3 * n),
+            self._box.view(np.uint8).reshape(-1, 8),
+            self._blink,
+            self._spread,
+            np.float32(self.radius),
+            np.float32(self.spread_k),
+            np.float32(self.relative_radius),
+            self.min_matches,
+        )
 
     def apply(self, frame: np.ndarray, labels: np.ndarray) -> np.ndarray:
         """Veto the statistical model's foreground where the samples explain the colour, and learn.
@@ -399,13 +371,9 @@ class SampleConsensus:
                 f"frame and labels must be {self._shape} (the fitted size), got {frame.shape[:2]} and {labels.shape}"
             )
         self._deferred.join()
-        idx = np.flatnonzero(labels.reshape(-1) == FOREGROUND)
-        out = labels.copy()
-        if idx.size:
-            ok = self.explained(frame, idx)
-            out.reshape(-1)[idx[ok]] = BACKGROUND
-            return out, idx[~ok]
-        return out, idx
+        # one compiled pass over the labels: the FOREGROUND pixels, each tested as ``explained`` does
+        out, fg_idx = kernels.veto(np.ascontiguousarray(labels).reshape(-1), frame.reshape(-1, 3), *self._veto_terms())
+        return out.reshape(self._shape), fg_idx
 
     def learn(self, frame: np.ndarray, labels: np.ndarray, fg_idx: np.ndarray, copy: bool = True) -> None:
         """The second half of ``apply``: learn from the frame, in the worker thread when ``threaded``.
@@ -539,19 +507,3 @@ class SampleConsensus:
         cv2.max(v, 0.0, dst=v)
         self._prev_fg = fg.reshape(-1)
         self._prev_idx = fg_idx
-
-
-def _l1(rows: np.ndarray, colours: np.ndarray, n: int) -> np.ndarray:
-    """L1 distances (K, N) int16 between the samples ``rows`` (K, 3 N) uint8 (the B, G, R rows of
-    N samples, side by side) and the colours (K, 3) uint8 observed at the same pixels.
-    """
-    # |a - b| of uint8 in uint8 (OpenCV's saturating absdiff): no int16 copy of the samples
-    diff = cv2.absdiff(rows, np.repeat(colours, n, axis=1))
-    dist = np.add(diff[:, :n], diff[:, n : 2 * n], dtype=np.int16)
-    dist += diff[:, 2 * n :]
-    return dist
-
-
-def _box_bytes(words: np.ndarray) -> np.ndarray:
-    """The (K, 8) uint8 bytes of ``_box`` words (K,) uint64: B, G, R minimum at 0-2, maximum at 4-6."""
-    return np.ascontiguousarray(words).view(np.uint8).reshape(-1, 8)
