@@ -222,3 +222,53 @@ def test_explained_and_veto_equal_the_consensus_in_numpy(seed: int, spread_k: fl
     out, fg_idx = kernels.veto(labels, px, *terms)
     np.testing.assert_array_equal(out, want_out)
     np.testing.assert_array_equal(fg_idx, fg[~ok])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_region_rows_equals_numpys_unbuffered_min_and_max(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 7
+    comp = rng.integers(0, n, H * W).astype(np.int32)
+    idx = np.sort(rng.choice(H * W, 200, replace=False))
+    top, bottom = np.full(n, H, np.int64), np.full(n, -1, np.int64)
+    np.minimum.at(top, comp[idx], idx // W)
+    np.maximum.at(bottom, comp[idx], idx // W)
+    got_top, got_bottom = kernels.region_rows(comp, idx, W, n)
+    np.testing.assert_array_equal(got_top, top)
+    np.testing.assert_array_equal(got_bottom, bottom)
+
+
+@pytest.mark.parametrize("absorb_k", [4.0, 2.3])
+def test_advance_still_equals_the_still_runs_in_numpy(absorb_k: float) -> None:
+    rng = np.random.default_rng(3)
+    p = H * W
+    still = rng.integers(0, 5, p).astype(np.uint16)
+    still[:3] = 65535  # a run at its longest wraps as numpy's uint16 does
+    ref = rng.uniform(0, 255, (3, p)).astype(np.float32)
+    px = np.clip(ref.T + rng.normal(0, 12, (p, 3)), 0, 255).astype(np.uint8)
+    inv_s = (1.0 / rng.uniform(2, 8, (3, p))).astype(np.float32)
+    idx = np.sort(rng.choice(p, p // 3, replace=False))
+    idx[:3] = [0, 1, 2]
+    idx = np.unique(idx)
+    # numpy, as ``HorprasertBackground._advance_still_runs`` was
+    w_still, w_ref = still.copy(), ref.copy()
+    prev = w_still[idx]
+    w_still.fill(0)
+    obs = np.take(px, idx, axis=0).T.astype(np.float32)
+    refs = np.take(w_ref, idx, axis=1)
+    dev = np.abs(obs - refs)
+    dev *= np.take(inv_s, idx, axis=1)
+    n = np.where((prev > 0) & (dev.max(axis=0) <= absorb_k), prev + 1, 1).astype(np.uint16)
+    w_still[idx] = n
+    obs -= refs
+    with np.errstate(divide="ignore", invalid="ignore"):  # the wrapped run: n = 0
+        obs *= 1.0 / n.astype(np.float32)
+    refs += obs
+    for c in range(3):
+        w_ref[c][idx] = refs[c]
+    assert 0 < np.count_nonzero(n > 1) < n.size
+    got_n, got_refs = kernels.advance_still(still, ref, px, inv_s, idx, np.float32(absorb_k))
+    np.testing.assert_array_equal(got_n, n)
+    np.testing.assert_array_equal(got_refs, refs)
+    np.testing.assert_array_equal(still, w_still)
+    np.testing.assert_array_equal(ref, w_ref)

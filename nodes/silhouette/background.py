@@ -1101,25 +1101,15 @@ class HorprasertBackground:
         it. Runs off the foreground end. Returns the runs' lengths (K,) uint16 and their mean
         colours (3, K) float32.
         """
-        still = self._still.reshape(-1)
-        # Runs only live on foreground pixels (a few percent of the frame): work on those alone,
-        # the three channels at once as (3, K) gathers.
-        prev = still[idx]
-        still.fill(0)
-        obs = np.take(frame.reshape(-1, 3), idx, axis=0).T.astype(np.float32)  # (3, K)
-        refs = np.take(self._still_ref, idx, axis=1)  # (3, K)
-        dev = np.abs(obs - refs)
-        dev *= np.take(self._inv_s.reshape(3, -1), idx, axis=1)
-        n = np.where((prev > 0) & (dev.max(axis=0) <= self.ghosts.absorb_k), prev + 1, 1).astype(np.uint16)
-        still[idx] = n
-        # Running mean of the run: ref += (I - ref) / n (n = 1 on a restart copies the frame).
-        inv_n = 1.0 / n.astype(np.float32)
-        obs -= refs
-        obs *= inv_n
-        refs += obs
-        for c in range(3):  # a plane at a time: a third of the cost of one (3, K) fancy assignment
-            self._still_ref[c][idx] = refs[c]
-        return n, refs
+        # one compiled pass over the foreground pixels (``kernels.advance_still``)
+        return kernels.advance_still(
+            self._still.reshape(-1),
+            self._still_ref,
+            frame.reshape(-1, 3),
+            self._inv_s.reshape(3, -1),
+            idx,
+            np.float32(self.ghosts.absorb_k),
+        )
 
     def _matches_surround(self, run: np.ndarray, ys: np.ndarray, xs: np.ndarray, fg: np.ndarray) -> np.ndarray:
         """Whether each ripe run's mean colour ``run`` (3, K) at pixels (``ys``, ``xs``) matches the

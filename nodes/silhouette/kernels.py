@@ -21,7 +21,8 @@ import numpy as np
 NEIGHBOUR_DY = np.array([-1, -1, -1, 0, 0, 1, 1, 1], np.int64)
 NEIGHBOUR_DX = np.array([-1, 0, 1, -1, 1, -1, 0, 1], np.int64)
 
-_JIT = {"cache": True, "nogil": True}
+# error_model "numpy": a division by zero gives inf or nan as in the numpy formulations, not an exception
+_JIT = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 
 @numba.njit(**_JIT)
@@ -406,3 +407,93 @@ def veto(
                 fg[k] = p
                 k += 1
     return out, fg[:k].copy()
+
+
+@numba.njit(**_JIT)
+def region_rows(comp: np.ndarray, idx: np.ndarray, w: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each region's first and last row among the pixels ``idx``: top[r] = min, bottom[r] = max of
+    idx // w over the pixels of region r = comp[idx] (``np.minimum.at`` / ``np.maximum.at``).
+
+    Parameters
+    ----------
+    comp : ndarray of shape (H * W,), dtype int32
+        Region labels in [0, n).
+    idx : ndarray of shape (K,), dtype int64
+        Flat pixel indices.
+    w : int
+        Frame width.
+    n : int
+        Number of regions.
+
+    Returns
+    -------
+    top, bottom : ndarray of shape (n,), dtype int64
+        The rows; the frame height H (top) and -1 (bottom) where a region has none of the pixels.
+    """
+    top = np.full(n, comp.size // w, np.int64)
+    bottom = np.full(n, -1, np.int64)
+    for i in range(idx.size):
+        p = idx[i]
+        r = comp[p]
+        y = p // w
+        if y < top[r]:
+            top[r] = y
+        if y > bottom[r]:
+            bottom[r] = y
+    return top, bottom
+
+
+@numba.njit(**_JIT)
+def advance_still(
+    still: np.ndarray, still_ref: np.ndarray, px: np.ndarray, inv_s: np.ndarray, idx: np.ndarray, k: np.float32
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ghost step's still runs: at each foreground pixel p = idx[i] (ascending, unique) the run
+    goes on (n = still[p] + 1, uint16) where it had begun and every channel is within k spreads
+    of the run's mean, max_c |I_c - ref_c| / s_c <= k, and restarts (n = 1) where not; the mean
+    follows, ref += (I - ref) / n, float32 in that order. Runs off ``idx`` end (0).
+
+    Parameters
+    ----------
+    still : ndarray of shape (H * W,), dtype uint16
+        Run lengths (written in place).
+    still_ref : ndarray of shape (3, H * W), dtype float32
+        Runs' mean colours (written in place at ``idx``).
+    px : ndarray of shape (H * W, 3), dtype uint8
+        The frame's BGR pixels.
+    inv_s : ndarray of shape (3, H * W), dtype float32
+        1 / s_c.
+    idx : ndarray of shape (K,), dtype int64
+        The foreground's flat indices.
+    k : float32
+        ``absorb_k``.
+
+    Returns
+    -------
+    n : ndarray of shape (K,), dtype uint16
+        The runs' lengths.
+    refs : ndarray of shape (3, K), dtype float32
+        Their mean colours.
+    """
+    m = idx.size
+    prev = np.empty(m, np.uint16)
+    for i in range(m):
+        prev[i] = still[idx[i]]
+    still[:] = 0
+    n = np.empty(m, np.uint16)
+    refs = np.empty((3, m), np.float32)
+    for i in range(m):
+        p = idx[i]
+        dev = np.float32(0.0)
+        for c in range(3):
+            d = abs(np.float32(px[p, c]) - still_ref[c, p]) * inv_s[c, p]
+            dev = max(dev, d)
+        run = np.uint16(prev[i] + np.uint16(1)) if prev[i] > 0 and dev <= k else np.uint16(1)
+        n[i] = run
+        still[p] = run
+        inv_n = np.float32(1.0) / np.float32(run)
+        for c in range(3):
+            r = still_ref[c, p]
+            r = r + (np.float32(px[p, c]) - r) * inv_n
+            refs[c, i] = r
+            still_ref[c, p] = r
+    return n, refs
