@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from counterpart.nodes.silhouette import kernels
+from counterpart.nodes.silhouette import samples as samples_mod
 from counterpart.nodes.silhouette.background import BACKGROUND, FOREGROUND, HIGHLIGHT, SHADOW
 
 H, W, N = 24, 32, 20
@@ -272,3 +273,56 @@ def test_advance_still_equals_the_still_runs_in_numpy(absorb_k: float) -> None:
     np.testing.assert_array_equal(got_refs, refs)
     np.testing.assert_array_equal(still, w_still)
     np.testing.assert_array_equal(ref, w_ref)
+
+
+def _feedback_ref(v, prev_fg, prev_idx, fg_idx, h, w, decay, gain, top) -> np.ndarray:
+    """``SampleConsensus._feedback`` as it was in numpy and OpenCV calls; returns the new mask."""
+    fg = np.zeros((h, w), np.uint8)
+    fg.reshape(-1)[fg_idx] = 1
+    prev = prev_fg.reshape(h, w)
+    vv = v.reshape(h, w)
+    np.subtract(vv, np.float32(decay), out=vv)
+    both = np.concatenate((fg_idx, prev_idx))
+    if both.size:
+        ys, xs = np.divmod(both, w)
+        y0, y1 = max(0, int(ys.min()) - 4), min(h, int(ys.max()) + 5)
+        x0, x1 = max(0, int(xs.min()) - 4), min(w, int(xs.max()) + 5)
+        fg_c, prev_c = fg[y0:y1, x0:x1], prev[y0:y1, x0:x1]
+        blink = cv2.compare(fg_c, prev_c, cv2.CMP_NE)
+        solid = cv2.dilate(cv2.morphologyEx(prev_c, cv2.MORPH_OPEN, samples_mod._OPEN), samples_mod._NEAR)
+        cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
+        vc = vv[y0:y1, x0:x1]
+        cv2.add(vc, float(np.float32(gain + decay)), dst=vc, mask=blink)
+        cv2.min(vc, float(np.float32(top)), dst=vc)
+    cv2.max(vv, 0.0, dst=vv)
+    return fg.reshape(-1)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_feedback_equals_the_masks_and_morphology_in_opencv(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    h, w = 40, 56
+    v = (rng.random(h * w) * 1.6).astype(np.float32)
+    v[rng.random(h * w) < 0.3] = 0.0
+    masks = []
+    for _ in range(5):
+        # solid blobs that move (some at the frame's edges) and speckle
+        m = np.zeros((h, w), np.uint8)
+        for _ in range(3):
+            y, x = rng.integers(-4, h), rng.integers(-4, w)
+            m[max(y, 0) : y + rng.integers(3, 15), max(x, 0) : x + rng.integers(3, 12)] = 1
+        m[rng.random((h, w)) < 0.05] = 1
+        masks.append(m.reshape(-1))
+    masks.append(np.zeros(h * w, np.uint8))  # no foreground at all
+    prev_ref = np.zeros(h * w, np.uint8)
+    prev_idx = np.zeros(0, np.int64)
+    v_ref, prev_k = v.copy(), prev_ref.copy()
+    args = (*samples_mod._OFFSETS, np.float32(0.005), np.float32(0.105), np.float32(1.5))
+    for m in masks:
+        fg_idx = np.flatnonzero(m)
+        prev_ref = _feedback_ref(v_ref, prev_ref, prev_idx, fg_idx, h, w, 0.005, 0.1, 1.5)
+        prev_k = kernels.feedback(v, prev_k, prev_idx, fg_idx, h, w, *args)
+        prev_idx = fg_idx
+        np.testing.assert_array_equal(prev_k, prev_ref)
+        np.testing.assert_array_equal(v, v_ref)
+    assert np.count_nonzero(v) > 0

@@ -533,3 +533,107 @@ def advance_still(
             refs[c, i] = r
             still_ref[c, p] = r
     return n, refs
+
+
+@numba.njit(**_JIT)
+def feedback(
+    v: np.ndarray,
+    prev_fg: np.ndarray,
+    prev_idx: np.ndarray,
+    fg_idx: np.ndarray,
+    h: int,
+    w: int,
+    open_dy: np.ndarray,
+    open_dx: np.ndarray,
+    near_dy: np.ndarray,
+    near_dx: np.ndarray,
+    decay: np.float32,
+    rise: np.float32,
+    top: np.float32,
+) -> np.ndarray:
+    """SuBSENSE's blink levels: v <- v - decay everywhere; at the pixels whose foreground label
+    switched (fg != prev) outside the solid foreground of the last frame, v <- v + rise; then,
+    on the box of both frames' foreground with a margin of 4, v <- min(v, top); last
+    v <- max(v, 0); float32 in that order. The solid foreground is the last frame's mask opened
+    by the ``open`` element and dilated by the ``near`` element (offsets from its anchor, which
+    both elements hold; pixels outside the frame ignored, as OpenCV's default borders do),
+    worked out only where it is read: at the switched pixels.
+
+    Parameters
+    ----------
+    v : ndarray of shape (H * W,), dtype float32
+        Blink levels (written in place).
+    prev_fg : ndarray of shape (H * W,), dtype uint8
+        The last frame's foreground, 0 / 1.
+    prev_idx, fg_idx : ndarray of shape (K,), dtype int64
+        Ascending flat indices of the last and this frame's foreground.
+    h, w : int
+        Frame size.
+    open_dy, open_dx, near_dy, near_dx : ndarray of shape (E,), dtype int64
+        Offsets of the opening's and the dilation's structuring elements.
+    decay, rise, top : float32
+        ``blink_decay``, ``blink_gain + blink_decay`` and ``max_radius_gain - 1``.
+
+    Returns
+    -------
+    ndarray of shape (H * W,), dtype uint8
+        This frame's foreground, 0 / 1 (the next call's ``prev_fg``).
+    """
+    npx = h * w
+    fg = np.zeros(npx, np.uint8)
+    for i in range(fg_idx.size):
+        fg[fg_idx[i]] = 1
+    raised = np.zeros(npx, np.uint8)
+    y0, y1, x0, x1 = h, -1, w, -1
+    if fg_idx.size + prev_idx.size > 0:
+        for lst in (fg_idx, prev_idx):
+            for i in range(lst.size):
+                y, x = lst[i] // w, lst[i] % w
+                y0, y1, x0, x1 = min(y0, y), max(y1, y), min(x0, x), max(x1, x)
+        y0, y1 = max(0, y0 - 4), min(h, y1 + 5)
+        x0, x1 = max(0, x0 - 4), min(w, x1 + 5)
+        # erosion, then dilation, of the last foreground: both nonzero only at or beside it
+        er = np.zeros(npx, np.uint8)
+        for i in range(prev_idx.size):
+            y, x = prev_idx[i] // w, prev_idx[i] % w
+            keep = 1
+            for e in range(open_dy.size):
+                yy, xx = y + open_dy[e], x + open_dx[e]
+                if 0 <= yy < h and 0 <= xx < w and prev_fg[yy * w + xx] == 0:
+                    keep = 0
+            er[prev_idx[i]] = keep
+        opened = np.zeros(npx, np.uint8)
+        for i in range(prev_idx.size):
+            if er[prev_idx[i]]:
+                y, x = prev_idx[i] // w, prev_idx[i] % w
+                for e in range(open_dy.size):
+                    yy, xx = y - open_dy[e], x - open_dx[e]
+                    if 0 <= yy < h and 0 <= xx < w:
+                        opened[yy * w + xx] = 1
+        # the switched pixels (in one list and not the other) outside the dilated opening
+        for lst, other in ((fg_idx, prev_fg), (prev_idx, fg)):
+            for i in range(lst.size):
+                p = lst[i]
+                if other[p] != 0:
+                    continue
+                y, x = p // w, p % w
+                solid = False
+                for e in range(near_dy.size):
+                    yy, xx = y + near_dy[e], x + near_dx[e]
+                    if 0 <= yy < h and 0 <= xx < w and opened[yy * w + xx] != 0:
+                        solid = True
+                        break
+                if not solid:
+                    raised[p] = 1
+    zero = np.float32(0.0)
+    for y in range(h):
+        inside = y0 <= y < y1
+        for x in range(w):
+            p = y * w + x
+            a = v[p] - decay
+            if inside and x0 <= x < x1:
+                if raised[p]:
+                    a = a + rise
+                a = min(a, top)
+            v[p] = max(a, zero)
+    return fg

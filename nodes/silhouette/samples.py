@@ -41,6 +41,8 @@ from .deferred import DeferredStep
 #: opening that keeps solid foreground (not speckle) and the dilation around it, for the blinks
 _OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
 _NEAR = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
+# their offsets (dy, dx) from the centre, as ``kernels.feedback`` takes them
+_OFFSETS = tuple(np.nonzero(k)[i].astype(np.int64) - k.shape[i] // 2 for k in (_OPEN, _NEAR) for i in (0, 1))
 
 
 class SampleConsensus:
@@ -481,29 +483,19 @@ class SampleConsensus:
         which the opening removes.
         """
         h, w = self._shape
-        fg = np.zeros((h, w), np.uint8)
-        fg.reshape(-1)[fg_idx] = 1
-        prev = self._prev_fg.reshape(h, w)
-        v = self._blink.reshape(h, w)
-        np.subtract(v, np.float32(self.blink_decay), out=v)
-        # Switches happen only on this or the last frame's foreground: the masks are worked out
-        # on their bounding box, with a margin of zeros wider than the opening's reach (outside
-        # it the opening is 0, as the erosion's and dilation's borders take it to be)
-        both = np.concatenate((fg_idx, self._prev_idx))
-        if both.size:
-            ys, xs = np.divmod(both, w)
-            m = 4
-            y0, y1 = max(0, int(ys.min()) - m), min(h, int(ys.max()) + m + 1)
-            x0, x1 = max(0, int(xs.min()) - m), min(w, int(xs.max()) + m + 1)
-            fg_c, prev_c = fg[y0:y1, x0:x1], prev[y0:y1, x0:x1]
-            # OpenCV's 0 / 255 masks and masked float ops
-            blink = cv2.compare(fg_c, prev_c, cv2.CMP_NE)
-            solid = cv2.dilate(cv2.morphologyEx(prev_c, cv2.MORPH_OPEN, _OPEN), _NEAR)
-            cv2.bitwise_and(blink, cv2.compare(solid, 0, cv2.CMP_EQ), dst=blink)
-            vc = v[y0:y1, x0:x1]
-            cv2.add(vc, float(np.float32(self.blink_gain + self.blink_decay)), dst=vc, mask=blink)
-            # only the levels raised here can pass the top
-            cv2.min(vc, float(np.float32(self.max_radius_gain - 1.0)), dst=vc)
-        cv2.max(v, 0.0, dst=v)
-        self._prev_fg = fg.reshape(-1)
+        fg_idx = np.ascontiguousarray(fg_idx, np.int64)
+        # one compiled pass (``kernels.feedback``): the opening and its dilation only at the
+        # pixels that switched, the levels in one pass over the frame
+        self._prev_fg = kernels.feedback(
+            self._blink,
+            self._prev_fg,
+            self._prev_idx,
+            fg_idx,
+            h,
+            w,
+            *_OFFSETS,
+            np.float32(self.blink_decay),
+            np.float32(self.blink_gain + self.blink_decay),
+            np.float32(self.max_radius_gain - 1.0),
+        )
         self._prev_idx = fg_idx
