@@ -313,7 +313,7 @@ def test_feedback_equals_the_masks_and_morphology_in_opencv(seed: int) -> None:
             m[max(y, 0) : y + rng.integers(3, 15), max(x, 0) : x + rng.integers(3, 12)] = 1
         m[rng.random((h, w)) < 0.05] = 1
         masks.append(m.reshape(-1))
-    masks.append(np.zeros(h * w, np.uint8))  # no foreground at all
+    masks += [np.zeros(h * w, np.uint8)] * 2  # no foreground, then none in either frame
     prev_ref = np.zeros(h * w, np.uint8)
     prev_idx = np.zeros(0, np.int64)
     v_ref, prev_k = v.copy(), prev_ref.copy()

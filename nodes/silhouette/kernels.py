@@ -625,15 +625,22 @@ def feedback(
                         break
                 if not solid:
                     raised[p] = 1
+    if y1 < 0:
+        y0, y1, x0, x1 = h, h, 0, 0  # no foreground in either frame: no box in either frame: no box
     zero = np.float32(0.0)
-    for y in range(h):
-        inside = y0 <= y < y1
-        for x in range(w):
-            p = y * w + x
+    # outside the box only the decay: plain loops, which the compiler runs on SIMD lanes
+    for p in range(y0 * w):
+        v[p] = max(v[p] - decay, zero)
+    for y in range(y0, y1):
+        for p in range(y * w, y * w + x0):
+            v[p] = max(v[p] - decay, zero)
+        for p in range(y * w + x0, y * w + x1):
             a = v[p] - decay
-            if inside and x0 <= x < x1:
-                if raised[p]:
-                    a = a + rise
-                a = min(a, top)
-            v[p] = max(a, zero)
+            if raised[p]:
+                a = a + rise
+            v[p] = max(min(a, top), zero)
+        for p in range(y * w + x1, y * w + w):
+            v[p] = max(v[p] - decay, zero)
+    for p in range(y1 * w, npx):
+        v[p] = max(v[p] - decay, zero)
     return fg
