@@ -290,10 +290,9 @@ class HorprasertSubtractor:
         texture test; ``stats`` gets the texture test's FOREGROUND pixels in place.
 
         The veto of the classes' own foreground does not depend on the texture test, which only
-        turns shadows into foreground: when threaded, the test runs in the worker thread while
-        this thread vetoes, and the few pixels it turns are vetoed after. The match of a pixel
-        does not depend on which other pixels are tested with it, so the labels are those of the
-        veto after the test.
+        turns shadows into foreground: the few pixels the test turns are vetoed after. The match
+        of a pixel does not depend on which other pixels are tested with it, so the labels are
+        those of the veto after the test.
 
         Returns
         -------
@@ -302,13 +301,11 @@ class HorprasertSubtractor:
         fg_idx : ndarray of shape (K,), dtype int64
             Ascending flat indices of their FOREGROUND pixels, for ``SampleConsensus.learn``.
         """
-        if self.threaded:
-            self._deferred.submit(self._model.shadow_texture_mismatch, stats)
-            labels, fg_idx = self.samples.veto(frame, stats)
-            turned = self._deferred.join()
-        else:
-            turned = self._model.shadow_texture_mismatch(stats)
-            labels, fg_idx = self.samples.veto(frame, stats)
+        # The test runs in this thread, before the veto: the veto waits for the samples' learning
+        # from the last frame, which the worker thread is most likely still busy with. (In the
+        # worker, the test queued behind that learning, and this thread waited for both in turn.)
+        turned = self._model.shadow_texture_mismatch(stats)
+        labels, fg_idx = self.samples.veto(frame, stats)
         if turned.size:
             stats.reshape(-1)[turned] = FOREGROUND
             ok = self.samples.explained(frame, turned)
