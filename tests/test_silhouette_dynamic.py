@@ -391,10 +391,10 @@ def test_texture_prefilter_is_the_background_windows_variance_and_drops_no_turne
 
 
 def test_texture_test_beside_the_veto_gives_the_labels_and_models_of_the_veto_after_it() -> None:
-    """The subtractor runs the shadows' texture test (in the worker thread when threaded) beside the
-    samples' veto of the other foreground, then vetoes the pixels the test turned: labels, samples,
-    blink radius and statistics equal those of ``apply`` followed by ``veto`` and ``learn`` (the
-    order the steps depend on), on a textured floor where a dark shirt is turned from shadow.
+    """The subtractor runs the shadows' texture test and the samples' veto of the other foreground,
+    then vetoes the pixels the test turned (threaded or not): labels, samples, blink radius and
+    statistics equal those of ``apply`` followed by ``veto`` and ``learn`` (the order the steps
+    depend on), on a textured floor where a dark shirt is turned from shadow.
     """
     rng = np.random.default_rng(3)
     floor = np.repeat(np.repeat(rng.uniform(80, 200, (60, 80)), 4, 0), 4, 1)[..., None] * np.float32([0.9, 1.0, 1.1])
