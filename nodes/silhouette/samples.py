@@ -311,7 +311,7 @@ class SampleConsensus:
         n = self.n_samples
         return (
             self._samples.reshape(-1, 3 * n),
-            self._box.view(np.uint8).reshape(-1, 8),
+            _box_bytes(self._box),
             self._blink,
             self._spread,
             np.float32(self.radius),
@@ -441,7 +441,7 @@ class SampleConsensus:
         extra = 0.0 if active is None else active.size * (1.0 / self.subsampling - 1.0 / self.quiet_subsampling)
         # the blink levels are read before this frame's feedback changes them
         labels, blink, level = flat_labels, self._blink, np.float32(self.learn_blink)
-        samples, box = self._samples.reshape(h * w, -1), self._box.view(np.uint8).reshape(-1, 8)
+        samples, box = self._samples.reshape(h * w, -1), _box_bytes(self._box)
         for own in (True, False):
             # draw phi-subsampled candidates (with replacement: a pixel drawn twice is harmless)
             cand = rng.integers(0, npx, size=m)
@@ -499,3 +499,10 @@ class SampleConsensus:
             np.float32(self.max_radius_gain - 1.0),
         )
         self._prev_idx = fg_idx
+
+
+def _box_bytes(words: np.ndarray) -> np.ndarray:
+    """The (K, 8) uint8 bytes of ``_box`` words (K,) uint64: B, G, R minimum at 0-2, maximum at 4-6
+    (a view when ``words`` is contiguous, as the kernels that write it need).
+    """
+    return np.ascontiguousarray(words).view(np.uint8).reshape(-1, 8)
