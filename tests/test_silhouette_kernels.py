@@ -326,3 +326,11 @@ def test_feedback_equals_the_masks_and_morphology_in_opencv(seed: int) -> None:
         np.testing.assert_array_equal(prev_k, prev_ref)
         np.testing.assert_array_equal(v, v_ref)
     assert np.count_nonzero(v) > 0
+
+
+def test_warm_runs_every_kernel_on_the_models_argument_types() -> None:
+    kernels.warm()
+    for name in ("learnable", "learn_own", "learn_neighbours", "classify", "explained", "veto"):
+        assert getattr(kernels, name).signatures, name
+    for name in ("region_rows", "advance_still", "feedback"):
+        assert getattr(kernels, name).signatures, name

@@ -22,6 +22,7 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
+from . import kernels
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
 from .body_shadow import BodyShadowConfig, reclaim_body_shadow
 from .deferred import DeferredStep
@@ -202,6 +203,7 @@ class HorprasertSubtractor:
                 np.where(unseen, FOREGROUND, 0).astype(np.uint8) if unseen is not None and unseen.any() else None
             )
         self._buffer = []
+        kernels.warm()  # here (in the fit's thread when in the background), not on the first frames
         return self
 
     def apply(self, frame: np.ndarray) -> np.ndarray:

@@ -644,3 +644,31 @@ def feedback(
     for p in range(y1 * w, npx):
         v[p] = max(v[p] - decay, zero)
     return fg
+
+
+def warm() -> None:
+    """Load (or, on the first run of an install, compile) every kernel for the argument types the
+    models pass, on tiny inputs: called when a model is fitted, so that the first frames after
+    the training do not wait for it (tens of ms from the cache, seconds to compile).
+    """
+    h, w, n = 2, 4, 3
+    npx = h * w
+    samples = np.zeros((npx, 3 * n), np.uint8)
+    box = np.zeros((npx, 8), np.uint8)
+    px = np.zeros((npx, 3), np.uint8)
+    labels = np.zeros(npx, np.uint8)
+    f32 = np.zeros(npx, np.float32)
+    idx = np.arange(2, dtype=np.int64)
+    one, zero = np.float32(1.0), np.float32(0.0)
+    cand = learnable(idx, labels, f32.copy(), one)
+    learn_own(samples, box, f32.copy(), px, cand, idx, one, True)
+    learn_neighbours(samples, box, px, cand, idx, idx, h, w, labels, f32.copy(), one)
+    planes = [np.zeros(npx, np.uint8) for _ in range(3)] + [np.zeros(npx, np.float32) for _ in range(12)]
+    classify(*planes, labels.copy(), f32.copy())
+    terms = (samples, box, f32, f32, one, one, one, 2)
+    explained(idx, px, *terms)
+    veto(labels, px, *terms)
+    region_rows(np.zeros(npx, np.int32), idx, w, 1)
+    advance_still(np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one)
+    offsets = np.zeros(1, np.int64)
+    feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
