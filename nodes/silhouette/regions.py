@@ -76,7 +76,9 @@ class Person:
     id : int
         Stable identity (>= 0); the label image uses id + 1.
     side : {"left", "right"}
-        The image half of the centroid when first seen; never changes.
+        The image half of the centroid when first seen; a person who joins the one person seen
+        takes their side of them, and that person the other side (``PersonTracker._pair_sides``):
+        the only change of a side.
     bbox : tuple of int
         (x, y, w, h), pixels.
     area : int
