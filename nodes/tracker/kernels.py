@@ -7,18 +7,25 @@ test): at the few hundred particles of a real-time frame the cost of those calls
 temporaries, not the arithmetic, dominated.
 
 The kernel repeats the numpy formulation operation by operation in float32, so that its costs are
-those of the numpy code to the last bit where that code's result does not depend on the order of a
-sum: numba compiles without fast-math, so no multiply and add is fused behind our back, and the
-small matrix products of the numpy code (``pts @ R.T``, the sample points' ``F @ G``, the coverage
-test's ``F @ G``), which OpenBLAS's kernels accumulate as a chain of fused multiply-adds in the
-order of the inner index, are written as that chain (``_fma``). A sample point's pixel is its
-rounded position, so one rounding apart would move a point by a pixel, now and then.
+those of the numpy code to the last bit: numba compiles without fast-math (no multiply and add is
+fused behind our back); the small matrix products of the numpy code (``pts @ R.T``, the sample
+points' ``F @ G``, the coverage test's ``F @ G``), which OpenBLAS's float32 kernels accumulate as
+a chain of fused multiply-adds in the order of the inner index, are written as that chain
+(``_fma``); the means are summed in numpy's pairwise order (``_pairwise_sum``). It matters: a
+sample point's pixel is its rounded position, so a rounding apart would move a point by a pixel
+now and then, and the particle filter would go its own way from there. (With a BLAS that sums
+those products otherwise the numpy code itself would give such differences.)
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
 
 _F32_0 = np.float32(0.0)
 _F32_1 = np.float32(1.0)
@@ -30,12 +37,32 @@ _HALF = np.float32(0.5)
 _TWO = np.float32(2.0)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _fma(a: np.float32, b: np.float32, c: np.float32) -> np.float32:
-    """``a * b + c`` rounded once to float32 (a fused multiply-add): the float32 product is exact in
-    float64 and the float64 sum rounds to the same float32 but for a tie of the two roundings.
+@intrinsic
+def _fma(typingctx: Any, a: Any, b: Any, c: Any) -> tuple[Any, Any]:
+    """``a * b + c`` of float32s rounded once (LLVM's ``llvm.fma.f32``: one instruction where the
+    CPU has FMA, as OpenBLAS's float32 kernels use it; an exact library call where it has not).
     """
-    return np.float32(np.float64(a) * np.float64(b) + np.float64(c))
+    sig = types.float32(types.float32, types.float32, types.float32)
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        f = ir.FloatType()
+        return builder.call(builder.module.declare_intrinsic("llvm.fma", [f], ir.FunctionType(f, [f, f, f])), args)
+
+    return sig, codegen
+
+
+@intrinsic
+def _rint(typingctx: Any, a: Any) -> tuple[Any, Any]:
+    """float32 ``np.rint`` (to the nearest integer, ties to even), kept in float32 (numba's own
+    ``np.rint`` goes through float64).
+    """
+    sig = types.float32(types.float32)
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        f = ir.FloatType()
+        return builder.call(builder.module.declare_intrinsic("llvm.rint", [f], ir.FunctionType(f, [f])), args)
+
+    return sig, codegen
 
 
 @numba.njit(cache=True, nogil=True)
@@ -226,8 +253,8 @@ def cone_image_costs(
             for k in range(K):
                 pu = _fma(fu3, G[3, k], _fma(fu2, G[2, k], _fma(fu1, G[1, k], _fma(fu0, G[0, k], _F32_0))))
                 pv = _fma(fv3, G[3, k], _fma(fv2, G[2, k], _fma(fv1, G[1, k], _fma(fv0, G[0, k], _F32_0))))
-                ui = np.float32(np.rint(pu)) - x0w
-                vi = np.float32(np.rint(pv)) - y0w
+                ui = _rint(pu) - x0w
+                vi = _rint(pv) - y0w
                 if ui >= _F32_0 and ui < W and vi >= _F32_0 and vi < H:
                     i = np.int64(vi * W + ui)
                 else:
