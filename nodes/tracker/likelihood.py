@@ -41,8 +41,6 @@ from counterpart.body.camera import Camera
 from counterpart.body.kinematics import anchor_points, row_dims
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
-from .kernels import cone_image_costs
-
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
 #: (``r_toe`` above it)
 _FOOT_ANCHORS = np.array([ANCHOR_INDEX[n] for n in ("l_ankle", "r_ankle", "l_toe", "r_toe")])
@@ -605,6 +603,8 @@ class ConeLikelihood:
         ndarray of shape (N, 3)
             S_r, S_e, S_c; poses with an anchor behind the camera get 1.
         """
+        from .kernels import cone_image_costs  # numba's import: in the processes that weigh poses
+
         N = pts.shape[0]
         M = obs.cover_uv.shape[0] if self.w[2] else 0
         o, G, qq = self.cover_terms(obs.cover_uv) if M else (np.zeros(2, np.float32), _NO_G, _NO_QQ)
@@ -882,6 +882,8 @@ def evaluate_joint(
         ground = np.minimum((h / np.float32(v0.ground_sigma)) ** 2, np.float32(1.0))
     else:
         ground = np.zeros(len(pts), np.float32)
+    from .kernels import cone_image_costs  # numba's import: in the processes that weigh poses
+
     terms = np.empty((len(pts), 3), np.float32)
     cone_image_costs(
         pts,
