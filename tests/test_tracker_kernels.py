@@ -19,6 +19,7 @@ from counterpart.nodes.tracker.likelihood import (
     evaluate_joint,
     make_observation,
     pose_anchor_points,
+    warm_kernels,
 )
 
 
@@ -120,3 +121,17 @@ def test_pairwise_sum_is_numpys_float32_sum() -> None:
     for n in list(range(0, 140)) + [191, 192, 256, 257, 300, 600]:
         assert _pairwise_sum(x, 0, n) == np.add.reduce(x[:n]), n
         assert _pairwise_sum(x, 5, n - 5 if n > 5 else 0) == np.add.reduce(x[5:n]), n
+
+
+def test_warm_loads_the_one_signature_every_call_path_uses() -> None:
+    """``warm_kernels`` (the tracker node's start) compiles or loads what a tracker's frames then
+    run: the one person's path, the joint path and the estimates' kinematics add no other types.
+    """
+    from counterpart.body.kinematics_kernel import anchor_kernel
+    from counterpart.nodes.tracker.kernels import cone_image_costs
+
+    warm_kernels()
+    test_joint_kernel_equals_each_persons_numpy_costs()
+    test_kernel_costs_equal_the_numpy_formulation(0)
+    assert len(cone_image_costs.signatures) == 1
+    assert len(anchor_kernel.signatures) == 1

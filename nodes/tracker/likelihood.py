@@ -37,8 +37,9 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from counterpart.body.camera import Camera
+from counterpart.body.camera import Camera, default_camera
 from counterpart.body.kinematics import anchor_points, row_dims
+from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
@@ -915,8 +916,19 @@ def evaluate_joint(
     return out
 
 
+def warm_kernels() -> None:
+    """Load the compiled kernels the likelihood runs (the forward kinematics of the anchor points
+    and the image costs), compiling them on an install's first run, on one pose against a tiny
+    mask: called when a tracker node starts, so that its first frame does not wait for them.
+    """
+    mask = np.zeros((24, 32), bool)
+    mask[4:20, 12:20] = True
+    ConeLikelihood(default_camera(32, 24)).evaluate(neutral_pose()[None], make_observation(None, mask, n_cover=4))
+
+
 __all__ = [
     "evaluate_joint",
+    "warm_kernels",
     "Observation",
     "edge_map",
     "frame_edges",
