@@ -30,7 +30,9 @@ and the points (d = BodyDims, s = +1 for left, -1 for right)::
     head     = neck + R_head (0, d.neck_to_head, 0); chin/crown = head -/+ R_head (0, d.head_half_height, 0)
     chest    = neck - R_torso (0, d.chest_drop, 0); torso_bottom = pelvis - R_torso (0, d.torso_bottom_drop, 0)
 
-Every function is vectorised over the leading N axis (no Python loop over poses).
+Every function is vectorised over the leading N axis (no Python loop over poses); ``anchor_points``,
+which the tracker's likelihood calls many times a frame, runs the chain as a compiled loop over
+the poses (``kinematics_kernel.anchor_kernel``, the numpy chain's numbers to the last bit).
 """
 
 from __future__ import annotations
@@ -264,6 +266,16 @@ class RowDims:
         for name in _LENGTHS:
             setattr(self, name, np.repeat(np.array([getattr(d, name) for d in dims], np.float64), counts)[:, None])
         self._limbs: _Limbs | None = None
+        self._rows: tuple[np.ndarray, np.ndarray] | None = None
+
+    def kernel_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """The lengths (N, len(_LENGTHS)) of these rows, in ``_LENGTHS``' order, and the row of
+        each pose (N,): ``kinematics_kernel.anchor_kernel``'s tables.
+        """
+        if self._rows is None:
+            lengths = np.hstack([getattr(self, name) for name in _LENGTHS])
+            self._rows = (np.ascontiguousarray(lengths), np.arange(len(lengths), dtype=np.int64))
+        return self._rows
 
     def limbs(self) -> _Limbs:
         """The limbs' batch constants of these rows, made once."""
@@ -395,9 +407,36 @@ def _chain(P: np.ndarray, dims: BodyDims | RowDims, rotations: bool = True) -> t
     return pts, R
 
 
+#: the DOFs the chain reads, in the order of ``kinematics_kernel.anchor_kernel``'s ``ix`` (then the limbs' first)
+_KERNEL_DOFS = (
+    "root_yaw",
+    "root_pitch",
+    "root_roll",
+    "torso_twist",
+    "torso_flex",
+    "torso_lateral",
+    "head_turn",
+    "head_nod",
+    "head_tilt",
+)
+#: the anchors of the torso and the head, in the order of ``kinematics_kernel.anchor_kernel``'s ``at``
+_KERNEL_ANCHORS = ("pelvis", "neck", "chest", "torso_bottom", "head", "chin", "crown")
+
+
+_KIX = np.array([DOF_INDEX[n] for n in _KERNEL_DOFS], np.int64)
+_KAT = np.array([ANCHOR_INDEX[n] for n in _KERNEL_ANCHORS], np.int64)
+_KLIMB_AT = _LIMB_ANCHORS.astype(np.int64)
+
+
+@lru_cache(maxsize=16)
+def _body_rows(d: BodyDims, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``kinematics_kernel.anchor_kernel``'s lengths (1, len(_LENGTHS)) of one body and its rows (N,) of zeros."""
+    return np.array([[getattr(d, name) for name in _LENGTHS]], np.float64), np.zeros(n, np.int64)
+
+
 def anchor_points(P: np.ndarray, dims: BodyDims | RowDims = DEFAULT_DIMS) -> np.ndarray:
     """Anchor points: ``frames`` without building the rotation matrices (the tracker's likelihood
-    needs the points alone).
+    needs the points alone), by the compiled ``kinematics_kernel.anchor_kernel``: the numbers of ``_chain``.
 
     Parameters
     ----------
@@ -416,7 +455,16 @@ def anchor_points(P: np.ndarray, dims: BodyDims | RowDims = DEFAULT_DIMS) -> np.
     ValueError
         If ``P`` is not of shape (N, DOF) or (DOF,).
     """
-    return _chain(_as_poses(P), dims, rotations=False)[0]
+    P = np.ascontiguousarray(_as_poses(P), dtype=np.float64)
+    lengths, row = dims.kernel_rows() if isinstance(dims, RowDims) else _body_rows(dims, len(P))
+    out = np.empty((len(P), len(ANCHORS), 3))
+    # imported here: numba's slow import is paid by the processes that compute anchor points, not by
+    # every one that imports the body
+    from counterpart.body.kinematics_kernel import anchor_kernel
+
+    # numpy's cos and sin (the kernel's own may differ in the last bit)
+    anchor_kernel(P, np.cos(P), np.sin(P), lengths, row, _KIX, _LIMB_DOF0, _KAT, _KLIMB_AT, out)
+    return out
 
 
 def frames(P: np.ndarray, dims: BodyDims = DEFAULT_DIMS) -> tuple[np.ndarray, dict[str, np.ndarray]]:

@@ -303,6 +303,23 @@ def test_frames_follow_the_documented_matrix_chain() -> None:
     np.testing.assert_allclose(anchor_points(P, dims), pts, atol=0)
 
 
+def test_compiled_anchor_points_equal_the_numpy_chain_for_one_body_and_rows_of_several() -> None:
+    """The compiled kernel gives the numpy chain's points to the last bit, for one body and for
+    a batch of several people's poses (RowDims), any angle (beyond the joints' limits too).
+    """
+    from counterpart.body.kinematics import _chain, row_dims
+
+    rng = np.random.default_rng(11)
+    P = np.vstack([random_poses(50, seed=8), rng.uniform(-7, 7, (30, DOF))])
+    for dims in (D, D.scaled(1.55)):
+        assert np.array_equal(anchor_points(P, dims), _chain(P, dims, rotations=False)[0])
+    rows = row_dims((D.scaled(1.6), D, D.scaled(1.9)), (20, 35, 25))
+    got = anchor_points(P, rows)
+    assert np.array_equal(got, _chain(P, rows, rotations=False)[0])
+    assert np.array_equal(got[20:55], anchor_points(P[20:55], D))  # each row its own person's body
+    assert np.array_equal(anchor_points(P[3]), anchor_points(P[3:4]))  # a single pose is N = 1
+
+
 def test_inverse_kinematics_of_one_frame_is_the_batch_row_and_the_limbs_one_at_a_time() -> None:
     # the four limbs go through ik._limb as one batch of rows, and dims_from_joints skips the median
     # of a single frame: each must give the numbers of the per-limb, per-frame computation exactly

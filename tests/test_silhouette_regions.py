@@ -424,6 +424,26 @@ def test_a_leg_stepping_out_is_not_a_new_person_a_child_beside_them_is():
     assert [p.id for p in people] == [0, 1]
 
 
+def test_two_people_first_seen_as_one_region_part_into_two_with_sides_by_their_order():
+    """Two people already together when the camera starts (a handshake, one region, one track)
+    part and both stand in the left half of the frame: the one who steps away becomes a person of
+    their own (the pair's template no longer claims them), and the two are left and right of each
+    other, whichever half of the frame they stand in.
+    """
+    tracker = PersonTracker(min_area=50)
+    counts = []
+    for k in range(40):
+        xa, xb = (100.0, 118.0) if k < 10 else (100.0 - 3 * (k - 9), 118.0 + (k - 9))
+        _, people = tracker.update(scene(xa, xb, ha=150, hb=150))
+        counts.append(len(people))
+    assert counts[:10] == [1] * 10
+    assert counts[-10:] == [2] * 10
+    a, b = sorted(people, key=lambda p: p.centroid[0])
+    assert a.centroid[0] < 30 < 130 < b.centroid[0] < W / 2
+    assert (a.side, b.side) == ("left", "right")
+    assert b.id == 0  # the one who stayed keeps the pair's track
+
+
 def test_components_with_stats_match_opencvs_32_bit_labelling() -> None:
     rng = np.random.default_rng(3)
     yy, xx = np.indices((240, 320))

@@ -60,6 +60,11 @@ MERGE_KEEP_OVERLAP = 0.05
 #: this share of their height tall, is a part of them (``PersonTracker._enclosing_owner``)
 ENCLOSED_SHARE = 0.8
 ENCLOSED_MAX_HEIGHT = 0.5
+#: a left-over region at least this share of a person's piece tall, its feet on their feet row
+#: (``FEET_ROW``) and at least ``APART_GAP`` of their height of columns away from them, is a
+#: person of their own even inside their predicted mask (``_stands_apart``)
+WHOLE_HEIGHT = 0.75
+APART_GAP = 0.15
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,7 +76,9 @@ class Person:
     id : int
         Stable identity (>= 0); the label image uses id + 1.
     side : {"left", "right"}
-        The image half of the centroid when first seen; never changes.
+        The image half of the centroid when first seen; a person who joins the one person seen
+        takes their side of them, and that person the other side (``PersonTracker._pair_sides``):
+        the only change of a side.
     bbox : tuple of int
         (x, y, w, h), pixels.
     area : int
@@ -569,8 +576,9 @@ class PersonTracker:
 
     def _take_leftovers(self, frame: _Regions, match: _Matching) -> None:
         """Left-over regions: the legs or feet of an assigned person (``_stacked_owner``) or a
-        fragment of one (mostly inside their predicted mask) join them; the rest start new
-        people when they look like one.
+        fragment of one (mostly inside their predicted mask, unless it stands apart from them as a
+        whole person: ``_stands_apart``) join them; the rest start new people when they look like
+        one.
         """
         unowned: list[tuple[np.ndarray, int, int]] = []  # left-over regions no one claims
         for r in frame.regions:
@@ -583,7 +591,11 @@ class PersonTracker:
             if owner < 0 and self._tracks:
                 frac_region = frame.counts[:, r] / frame.region_area[r]
                 i = int(np.argmax(frac_region))
-                if frac_region[i] >= 0.5 and i in match.assigned:
+                if (
+                    frac_region[i] >= 0.5
+                    and i in match.assigned
+                    and not _stands_apart((crop, x0, y0), match.assigned[i])
+                ):
                     owner = i
             if owner < 0:
                 owner = self._enclosing_owner(crop, x0, y0, match)
@@ -693,6 +705,8 @@ class PersonTracker:
         labels = np.zeros((h_img, w_img), np.int32)
         people: list[Person] = []
         alive: list[_Track] = []
+        # before anyone's record of this frame is made: it may change the side of the one seen
+        pair_side = self._pair_sides(match)
         for i, t in enumerate(self._tracks):
             piece = match.assigned.get(i)
             if piece is None or not piece[0].any():
@@ -715,7 +729,7 @@ class PersonTracker:
         # New people are numbered left to right, so ids do not depend on the labelling order.
         match.fresh.sort(key=lambda f: f[1] + 0.5 * f[0].shape[1])
         for crop, x0, y0 in match.fresh:
-            t = self._new_track(crop, x0, y0, w_img)
+            t = self._new_track(crop, x0, y0, w_img, pair_side)
             people.append(self._observe(t, crop, x0, y0, False))
             alive.append(t)
             _paint(labels, crop, x0, y0, t.id + 1)
@@ -723,13 +737,33 @@ class PersonTracker:
         people.sort(key=lambda p: p.id)
         return labels, people
 
-    def _new_track(self, crop: np.ndarray, x0: int, y0: int, w_img: int) -> _Track:
-        """A new person's track from their first region (crop, x0, y0), with the next id."""
+    def _pair_sides(self, match: _Matching) -> str | None:
+        """The side of the one newcomer beside the one person seen this frame, by where they stand
+        beside them (None otherwise: a new person's side is their half of the frame).
+
+        A pair is left and right of each other: two people first seen as one region (already
+        together when the camera started) are one track until they part, and both may then stand
+        in the same half of the frame. The person seen before takes the side opposite the
+        newcomer's: the only time a side changes, before the two were ever told apart.
+        """
+        seen = [i for i, piece in match.assigned.items() if piece[0].any()]
+        if len(seen) != 1 or len(match.fresh) != 1:
+            return None
+        crop, x0, _ = match.fresh[0]
+        pc, px, _, _ = match.assigned[seen[0]]
+        newcomer_left = x0 + 0.5 * crop.shape[1] < px + 0.5 * pc.shape[1]
+        self._tracks[seen[0]].side = RIGHT if newcomer_left else LEFT
+        return LEFT if newcomer_left else RIGHT
+
+    def _new_track(self, crop: np.ndarray, x0: int, y0: int, w_img: int, side: str | None = None) -> _Track:
+        """A new person's track from their first region (crop, x0, y0), with the next id; ``side``
+        None: their half of the frame.
+        """
         ys, xs = np.nonzero(crop)
         c = np.array([xs.mean() + x0, ys.mean() + y0])
         t = _Track(
             id=self._next_id,
-            side=LEFT if c[0] < w_img / 2.0 else RIGHT,
+            side=side or (LEFT if c[0] < w_img / 2.0 else RIGHT),
             centroid=c,
             velocity=np.zeros(2),
             crop=crop,
@@ -889,6 +923,25 @@ def _shorter_on_same_row(part: tuple[np.ndarray, int, int], feet_row: float, hei
     """
     h = part[0].shape[0]
     return abs(part[2] + h - feet_row) <= FEET_ROW * height and h < FRAGMENT_HEIGHT * height
+
+
+def _stands_apart(part: tuple[np.ndarray, int, int], piece: _Piece) -> bool:
+    """Whether a left-over region (crop (h, w), x0, y0) is a whole person beside a person's piece
+    (crop, x0, y0, merged) of this frame: at least ``WHOLE_HEIGHT`` of the piece's height tall, its
+    feet on the piece's feet row (within ``FEET_ROW`` of that height) and ``APART_GAP`` of that
+    height or more of columns between them. A part of someone (an arm, a leg, a torn-off hand) is
+    shorter or touches them; a second person inside a template that held two people who came as
+    one region (a handshake when the camera started) stands beside them once they part.
+    """
+    crop, x0, y0 = part
+    pc, px, py, _ = piece
+    ph = pc.shape[0]
+    gap = max(px - (x0 + crop.shape[1]), x0 - (px + pc.shape[1]))
+    return (
+        crop.shape[0] >= WHOLE_HEIGHT * ph
+        and abs((y0 + crop.shape[0]) - (py + ph)) <= FEET_ROW * ph
+        and gap >= APART_GAP * ph
+    )
 
 
 def _crop_box(part: np.ndarray, x: int, y: int) -> tuple[np.ndarray, int, int]:

@@ -18,11 +18,14 @@ the calibrated camera ties the depth to the image row of the feet. The log-likel
 Several calibrated cameras (Deutscher et al. use three) combine in ``MultiViewLikelihood``: the
 image costs of every view are summed over one forward kinematics.
 
-Everything is vectorised over N particles x points: one forward kinematics call (``counterpart.body.kinematics.anchor_points``), one
-projection of the 23 anchor points, the sample points of all cones as one small matmul in float32,
-one flat gather from the frame's per-pixel cost map (``Observation.cost``) and the coverage test
-as a matmul plus in-place array arithmetic. Pixel units throughout; out-of-image points read 0
-(no foreground, no edge).
+One forward kinematics call for N particles (``counterpart.body.kinematics.anchor_points``), then
+the image costs in one compiled pass per particle (``kernels.cone_image_costs``): the projection of
+the 23 anchor points, the sample points of each cone, their lookups in the frame's per-pixel cost
+map (``Observation.cost``) and the coverage test. The kernel repeats, in float32 and operation by
+operation, the numpy formulation kept in ``ConeLikelihood.project`` / ``sample_points`` /
+``coverage_cost`` (the sample points as one small matmul, the coverage test as a matmul plus
+array arithmetic), and gives its costs to the last bit. Pixel units throughout; out-of-image
+points read 0 (no foreground, no edge).
 """
 
 from __future__ import annotations
@@ -34,13 +37,19 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from counterpart.body.camera import Camera
+from counterpart.body.camera import Camera, default_camera
 from counterpart.body.kinematics import anchor_points, row_dims
+from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import ANCHOR_INDEX, DEFAULT_DIMS, N_SEGMENTS, SEGMENT_ANCHORS, BodyDims
 
 #: anchors whose lowest point is the sole: the two ankles (``ankle_height`` above it), the two toes
 #: (``r_toe`` above it)
 _FOOT_ANCHORS = np.array([ANCHOR_INDEX[n] for n in ("l_ankle", "r_ankle", "l_toe", "r_toe")])
+
+
+#: the coverage tables of no sample
+_NO_G = np.zeros((3, 0), np.float32)
+_NO_QQ = np.zeros(0, np.float32)
 
 
 def _cost_map(fg: np.ndarray, edge: np.ndarray) -> np.ndarray:
@@ -362,6 +371,10 @@ class ConeLikelihood:
         self.f = np.float32(0.5 * (camera.fx + camera.fy))
         self.R = camera.R.astype(np.float32)
         self.tc = camera.t.astype(np.float32)
+        # the compiled kernel's view of the same: fx, fy, cx, cy as the float32 the numpy code rounds
+        # them to, and each cone's two anchors
+        self._intr = np.array([camera.fx, camera.fy, camera.cx, camera.cy], np.float32)
+        self._seg = np.ascontiguousarray(SEGMENT_ANCHORS, dtype=np.int64)
         self.n_evals = 0
         #: (cover_uv, its centre, its (3, M) matmul operand, its squared norms) of the last frame
         self._cover: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -591,26 +604,33 @@ class ConeLikelihood:
         ndarray of shape (N, 3)
             S_r, S_e, S_c; poses with an anchor behind the camera get 1.
         """
-        c, rho, ok = self._project(pts)
-        u, v = self._points_uv(c, rho)
-        W, H = obs.width, obs.height
-        k = self.n_in
-        # one gather from the cost map: interior samples read (1 - fg)^2, outline ones (1 - edge)^2
-        ui, vi = np.rint(u), np.rint(v)
-        if obs.x0 or obs.y0:  # to the window's pixels
-            ui -= np.float32(obs.x0)
-            vi -= np.float32(obs.y0)
-        inside = (ui >= 0) & (ui < W) & (vi >= 0) & (vi < H)
-        vi *= W
-        vi += ui
-        idx = np.where(inside, vi, np.float32(W * H)).astype(np.intp)
-        idx[:, :, k:] += W * H + 1
-        cost = obs.cost_map()[idx]  # (N, S, K)
-        S_r = cost[:, :, :k].mean(axis=(1, 2))
-        S_e = cost[:, :, k:].mean(axis=(1, 2))
-        S_c = self.coverage_cost(c, rho, obs.cover_uv) if self.w[2] else np.zeros_like(S_r)
-        out = np.stack([S_r, S_e, S_c], axis=1)
-        out[~ok] = 1.0
+        from .kernels import cone_image_costs  # numba's import: in the processes that weigh poses
+
+        N = pts.shape[0]
+        M = obs.cover_uv.shape[0] if self.w[2] else 0
+        o, G, qq = self.cover_terms(obs.cover_uv) if M else (np.zeros(2, np.float32), _NO_G, _NO_QQ)
+        out = np.empty((N, 3), np.float32)
+        cone_image_costs(
+            np.ascontiguousarray(pts, dtype=np.float32),
+            self.R,
+            self.tc,
+            self._intr,
+            (self.f * self.radii)[None],
+            self._seg,
+            self._G,
+            self.n_in,
+            np.array([[obs.x0, obs.y0, obs.width, obs.height]], np.float32),
+            np.array([[0, obs.width * obs.height + 1]], np.int64),
+            obs.cost_map(),
+            np.zeros(N, np.int64),
+            np.asarray(o, np.float32)[None],
+            np.ascontiguousarray(G),
+            qq,
+            np.zeros(1, np.int64),
+            np.array([M], np.int64),
+            M > 0,
+            out,
+        )
         self.n_evals += pts.shape[0]
         return out
 
@@ -767,47 +787,34 @@ def _same_view(a: ConeLikelihood, b: ConeLikelihood) -> bool:
 
 
 class _Batch:
-    """The per-pose constants of :func:`evaluate_joint` for one set of people of one frame: each
-    person's body (kinematics, radii, soles), window and the place of its cost map in the maps
-    laid end to end.
+    """The per-frame constants of :func:`evaluate_joint` for one set of people of one frame, as the
+    compiled kernel's per-person tables: each person's body (kinematics, radii, soles), window, the
+    place of its cost map in the maps laid end to end and its coverage samples, and each pose's
+    person.
     """
 
     def __init__(self, likelihoods: Sequence[MultiViewLikelihood], counts: list[int], o0: list[Observation]) -> None:
         views = [lk.views[0] for lk in likelihoods]
         # held, so that they are compared by identity (``serves``)
         self.likelihoods, self.counts, self.obs = list(likelihoods), list(counts), list(o0)
-
-        def rows(per_person: list[np.ndarray]) -> np.ndarray:
-            return np.repeat(np.stack(per_person), counts, axis=0)
-
         self.dims = row_dims(tuple(lk.dims for lk in likelihoods), tuple(counts))
-        self.sole_offset = rows([v.sole_offset for v in views])
-        self.fr = rows([v.f * v.radii for v in views])
+        self.sole_offset = np.repeat(np.stack([v.sole_offset for v in views]), counts, axis=0)
+        self.person = np.repeat(np.arange(len(views), dtype=np.int64), counts)
+        self.fr = np.stack([v.f * v.radii for v in views])  # (P, S, 2)
         maps = [o.cost_map() for o in o0]
         self.maps = np.concatenate(maps)
-        # window position and size per pose, exact in float32 (pixels), as (N, 1, 1)
-        per = np.array([(o.x0, o.y0, o.width, o.height) for o in o0], np.float32)
-        self.x0, self.y0, self.W, self.H = (np.repeat(per[:, i], counts)[:, None, None] for i in range(4))
-        self.WH = self.W * self.H
-        size = np.array([o.width * o.height for o in o0], np.intp)
-        outline = np.repeat(size + 1, counts)[:, None, None]  # the edge costs follow the fg costs
-        base = np.repeat(np.cumsum([0] + [len(m) for m in maps[:-1]]), counts)[:, None, None]
-        # where each sample's cost map starts in the maps laid end to end: (N, 1, K)
-        k = views[0].n_in
-        offset = np.repeat(base, len(views[0].s), axis=2)
-        offset[:, :, k:] += outline
-        # the offsets, and the index in its window's map that a sample outside the window reads, as
-        # whole (N, S, K) arrays: the layers' where and add then run without broadcasting
-        shape = (len(offset), N_SEGMENTS, offset.shape[2])
-        self.offset = np.ascontiguousarray(np.broadcast_to(offset, shape))
-        self.outside = np.ascontiguousarray(np.broadcast_to(self.WH, shape))
-        # the coverage samples' terms per pose (ox, oy (N, 1), G (N, 3, M), qq (N, 1, M)), where
-        # every person has the same number M of them
-        self.cover: tuple[np.ndarray, ...] | None = None
-        if len({len(o.cover_uv) for o in o0}) == 1:
-            terms = [v.cover_terms(o.cover_uv) for v, o in zip(views, o0)]
-            o = rows([t[0] for t in terms])
-            self.cover = (o[:, 0:1], o[:, 1:2], rows([t[1] for t in terms]), rows([t[2] for t in terms])[:, None])
+        self.win = np.array([(o.x0, o.y0, o.width, o.height) for o in o0], np.float32)
+        start = np.cumsum([0] + [len(m) for m in maps[:-1]]).astype(np.int64)
+        # the edge costs follow the fg costs in each map
+        self.base = np.stack([start, start + [o.width * o.height + 1 for o in o0]], axis=1)
+        with_cover = views[0].w[2] != 0
+        sizes = [len(o.cover_uv) if with_cover else 0 for o in o0]
+        terms = [v.cover_terms(o.cover_uv) if m else None for v, o, m in zip(views, o0, sizes)]
+        self.cover_o = np.array([t[0] if t else (0.0, 0.0) for t in terms], np.float32).reshape(-1, 2)
+        self.cover_G = np.ascontiguousarray(np.concatenate([_NO_G] + [t[1] for t in terms if t], axis=1))
+        self.cover_qq = np.concatenate([_NO_QQ] + [t[2] for t in terms if t]).astype(np.float32)
+        self.cover_len = np.array(sizes, np.int64)
+        self.cover_start = (np.cumsum(self.cover_len) - self.cover_len).astype(np.int64)
 
     def serves(self, likelihoods: Sequence[MultiViewLikelihood], counts: list[int], o0: list[Observation]) -> bool:
         """The same people (the same objects), particle counts and observations."""
@@ -829,12 +836,12 @@ def evaluate_joint(
     """``MultiViewLikelihood.evaluate`` of several people of one frame at once.
 
     The particles of all of them go through one forward kinematics (each with its own body, as
-    :class:`counterpart.body.kinematics.RowDims`), one projection, one set of sample points and
-    one gather from their cost maps laid end to end, and one coverage test (each pose against its
-    person's foreground samples; per person where their numbers of samples differ). At the few dozen particles per person of a real-time frame the cost
-    of these calls, not of the particles, dominates, so two people cost little more than one. The
-    numbers are those of each person's own ``evaluate``, up to the rounding of the float32 matrix
-    products of a larger batch. People of several views, or of other cameras or settings, are
+    :class:`counterpart.body.kinematics.RowDims`) and one call of the image-cost kernel over their
+    cost maps laid end to end (each pose against its person's body, window and foreground
+    samples). At the few dozen particles per person of a real-time frame the cost of the calls,
+    not of the particles, dominated, so two people cost little more than one. The kernel weighs
+    each pose alone: the numbers are those of each person's own ``evaluate``, up to the rounding of
+    the forward kinematics of a batch of several bodies. People of several views, or of other cameras or settings, are
     evaluated one by one.
 
     Parameters
@@ -876,45 +883,52 @@ def evaluate_joint(
         ground = np.minimum((h / np.float32(v0.ground_sigma)) ** 2, np.float32(1.0))
     else:
         ground = np.zeros(len(pts), np.float32)
-    c, rho, ok = v0._project(pts, b.fr)
-    k = v0.n_in
-    u, v = v0._points_uv(c, rho)
-    ui, vi = np.rint(u), np.rint(v)
-    ui -= b.x0
-    vi -= b.y0
-    inside = (ui >= 0) & (ui < b.W) & (vi >= 0) & (vi < b.H)
-    vi *= b.W
-    vi += ui
-    idx = np.where(inside, vi, b.outside).astype(np.intp)
-    idx += b.offset
-    cost = b.maps[idx]  # (N, S, K)
-    S_r = cost[:, :, :k].mean(axis=(1, 2))
-    S_e = cost[:, :, k:].mean(axis=(1, 2))
-    if not v0.w[2]:
-        S_c_all = np.zeros(len(pts), np.float32)
-    elif b.cover is not None:  # the same number of coverage samples for all: one pass
-        S_c_all = _coverage(c, rho, *b.cover)
-    else:
-        S_c_all = None
+    from .kernels import cone_image_costs  # numba's import: in the processes that weigh poses
+
+    terms = np.empty((len(pts), 3), np.float32)
+    cone_image_costs(
+        pts,
+        v0.R,
+        v0.tc,
+        v0._intr,
+        b.fr,
+        v0._seg,
+        v0._G,
+        v0.n_in,
+        b.win,
+        b.base,
+        b.maps,
+        b.person,
+        b.cover_o,
+        b.cover_G,
+        b.cover_qq,
+        b.cover_start,
+        b.cover_len,
+        bool(v0.w[2]),
+        terms,
+    )
     out, start = [], 0
-    if S_c_all is not None:  # every person's terms in one array, handed out as views
-        terms = np.stack([S_r, S_e, S_c_all], axis=1)
-        terms[~ok] = 1.0
-    for view, o, n in zip(views, o0, counts):
+    for view, n in zip(views, counts):  # every person's terms handed out as views of one array
         sl = slice(start, start + n)
         start += n
-        if S_c_all is not None:
-            t = terms[sl]
-        else:
-            t = np.stack([S_r[sl], S_e[sl], view.coverage_cost(c[sl], rho[sl], o.cover_uv)], axis=1)
-            t[~ok[sl]] = 1.0
         view.n_evals += n
-        out.append((t, ground[sl]))
+        out.append((terms[sl], ground[sl]))
     return out
+
+
+def warm_kernels() -> None:
+    """Load the compiled kernels the likelihood runs (the forward kinematics of the anchor points
+    and the image costs), compiling them on an install's first run, on one pose against a tiny
+    mask: called when a tracker node starts, so that its first frame does not wait for them.
+    """
+    mask = np.zeros((24, 32), bool)
+    mask[4:20, 12:20] = True
+    ConeLikelihood(default_camera(32, 24)).evaluate(neutral_pose()[None], make_observation(None, mask, n_cover=4))
 
 
 __all__ = [
     "evaluate_joint",
+    "warm_kernels",
     "Observation",
     "edge_map",
     "frame_edges",

@@ -41,7 +41,7 @@ from counterpart.bus import Input, Node, Output, PairedSet, Pairing, Param, Para
 from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, TrackedBody
 
 from .budget import BudgetConfig, FrameBudget, StampRate
-from .likelihood import frame_edges
+from .likelihood import frame_edges, warm_kernels
 from .prior import resolve_prior
 from .tracker import (
     SIDES,
@@ -243,6 +243,7 @@ class TrackerNode(Node):
         if self.p["prior"] == "default":
             self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
         self.prior = resolve_prior(self.p["prior"])
+        warm_kernels()  # compiled (an install's first run) or loaded now, not on the first frame
         self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
         #: frame size (w, h) and seq -> the camera for it (camera_info, or the "camera" parameter's)
         self.cameras = CameraSchedule()
