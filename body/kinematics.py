@@ -434,9 +434,15 @@ def _body_rows(d: BodyDims, n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.array([[getattr(d, name) for name in _LENGTHS]], np.float64), np.zeros(n, np.int64)
 
 
+#: the fewest poses whose anchor points ``anchor_points`` computes with the compiled kernel (a
+#: tracker's particles); fewer go through the numpy chain
+KERNEL_MIN_POSES = 16
+
+
 def anchor_points(P: np.ndarray, dims: BodyDims | RowDims = DEFAULT_DIMS) -> np.ndarray:
     """Anchor points: ``frames`` without building the rotation matrices (the tracker's likelihood
-    needs the points alone), by the compiled ``kinematics_kernel.anchor_kernel``: the numbers of ``_chain``.
+    needs the points alone), by the compiled ``kinematics_kernel.anchor_kernel`` from
+    ``KERNEL_MIN_POSES`` poses on: the numbers of ``_chain``.
 
     Parameters
     ----------
@@ -456,6 +462,10 @@ def anchor_points(P: np.ndarray, dims: BodyDims | RowDims = DEFAULT_DIMS) -> np.
         If ``P`` is not of shape (N, DOF) or (DOF,).
     """
     P = np.ascontiguousarray(_as_poses(P), dtype=np.float64)
+    if len(P) < KERNEL_MIN_POSES:
+        # the same numbers; a few bodies a frame (the renderer, the simulator, the responder) never
+        # wait for numba's import and the kernel's load
+        return _chain(P, dims, rotations=False)[0]
     lengths, row = dims.kernel_rows() if isinstance(dims, RowDims) else _body_rows(dims, len(P))
     out = np.empty((len(P), len(ANCHORS), 3))
     # imported here: numba's slow import is paid by the processes that compute anchor points, not by

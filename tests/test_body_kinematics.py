@@ -307,7 +307,7 @@ def test_compiled_anchor_points_equal_the_numpy_chain_for_one_body_and_rows_of_s
     """The compiled kernel gives the numpy chain's points to the last bit, for one body and for
     a batch of several people's poses (RowDims), any angle (beyond the joints' limits too).
     """
-    from counterpart.body.kinematics import _chain, row_dims
+    from counterpart.body.kinematics import KERNEL_MIN_POSES, _chain, row_dims
 
     rng = np.random.default_rng(11)
     P = np.vstack([random_poses(50, seed=8), rng.uniform(-7, 7, (30, DOF))])
@@ -318,6 +318,9 @@ def test_compiled_anchor_points_equal_the_numpy_chain_for_one_body_and_rows_of_s
     assert np.array_equal(got, _chain(P, rows, rotations=False)[0])
     assert np.array_equal(got[20:55], anchor_points(P[20:55], D))  # each row its own person's body
     assert np.array_equal(anchor_points(P[3]), anchor_points(P[3:4]))  # a single pose is N = 1
+    # a few poses (the numpy chain) and a batch (the kernel) agree row for row
+    few = P[: KERNEL_MIN_POSES - 1]
+    assert np.array_equal(anchor_points(few, D), anchor_points(P, D)[: len(few)])
 
 
 def test_inverse_kinematics_of_one_frame_is_the_batch_row_and_the_limbs_one_at_a_time() -> None:
