@@ -14,3 +14,16 @@ def demo_models(tmp_path_factory: pytest.TempPathFactory) -> Path:
     load them.
     """
     return tmp_path_factory.mktemp("demo-models")
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compiled_kernels() -> None:
+    """The numba kernels (the silhouette models', the tracker's likelihood) compiled into their
+    cache once, before the first test: on a fresh install the first node process to need them would
+    otherwise compile them for several seconds inside whichever graph test comes first.
+    """
+    from counterpart.nodes.silhouette.kernels import warm
+    from counterpart.nodes.tracker.likelihood import warm_kernels
+
+    warm()
+    warm_kernels()
