@@ -91,6 +91,17 @@ def _build_prior() -> None:
     load_default_prior(progress=True)
 
 
+def _compile_kernels() -> None:
+    """Load the nodes' numba kernels, compiling them into their cache on an install's first run (in
+    a worker): the graph's nodes then load them instead of compiling for seconds while the frames go on.
+    """
+    from counterpart.nodes.silhouette.kernels import warm
+    from counterpart.nodes.tracker.likelihood import warm_kernels
+
+    warm()
+    warm_kernels()
+
+
 def _build_responder_model(name: str) -> None:
     """Load or build the responder's default model ``name`` (in a worker)."""
     from counterpart.nodes.responder.models import load_default
@@ -100,7 +111,7 @@ def _build_responder_model(name: str) -> None:
 
 def ensure_models(serve: bool = False) -> None:
     """Build the default model files the graph loads (and, with ``serve``, those the live page
-    offers), when they are not cached yet.
+    offers), when they are not cached yet, and compile the nodes' kernels on an install's first run.
 
     Missing models are built side by side, one process per core (they are independent and each
     is single-threaded Python for most of its time); cached ones are only loaded.
@@ -119,7 +130,7 @@ def ensure_models(serve: bool = False) -> None:
     names = RESPONDER_MODELS + (SERVE_MODELS if serve else ())
     # the longest first, so that the short ones fill the other core
     jobs = [(_build_responder_model, (n,)) for n in names[:1]] + [(_build_prior, ())]
-    jobs += [(_build_responder_model, (n,)) for n in names[1:]]
+    jobs += [(_build_responder_model, (n,)) for n in names[1:]] + [(_compile_kernels, ())]
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
     missing = not default_prior_path().exists() or not all(default_model_path(n).exists() for n in names)
