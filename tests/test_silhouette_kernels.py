@@ -239,6 +239,92 @@ def test_region_rows_equals_numpys_unbuffered_min_and_max(seed: int) -> None:
     np.testing.assert_array_equal(got_bottom, bottom)
 
 
+def _leg_pixels_ref(pts, sh, comp, top, bottom, unseen, depth, foot, width):
+    """``body_shadow._legs`` before its correlation, as numpy (the code the kernel replaced)."""
+    h, w = sh.shape
+    sy = pts[:, 0, 1]
+    sc = comp[sy, pts[:, 0, 0]]
+    height_s = bottom[sc] - top[sc] + 1
+    keep = (depth * height_s >= 1) & (bottom[sc] - sy > foot * height_s)
+    sx, sy, sc = pts[keep, 0, 0], sy[keep], sc[keep]
+    if sc.size == 0:
+        return np.empty(0, np.int64), np.empty(0, np.int32)
+    height_s = height_s[keep]
+    reach = depth * height_s
+    d = np.arange(int(reach.max()))
+    ys = sy[:, None] + d
+    inside = ys < h
+    ys = np.minimum(ys, h - 1)
+    hang = sh[ys, sx[:, None]] != 0
+    hang &= inside
+    np.logical_and.accumulate(hang, axis=1, out=hang)
+    hang &= d + 1 <= reach[:, None]
+    hang &= bottom[sc][:, None] - ys > foot * height_s[:, None]
+    if unseen is not None:
+        hang &= ~unseen[ys, sx[:, None]]
+    si, di = np.nonzero(hang)
+    if si.size == 0:
+        return np.empty(0, np.int64), np.empty(0, np.int32)
+    flat = np.sort((sy[si] + di) * w + sx[si])
+    ys, xs = np.divmod(flat, w)
+    c = comp[ys, xs]
+    height = bottom[c] - top[c] + 1
+    band = np.flatnonzero(np.bincount(ys))
+    sr = np.zeros((band.size, w + 2), np.int8)
+    sr[:, 1:-1] = sh[band] != 0
+    step = np.diff(sr.ravel())
+    rise, fall = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
+    run = np.searchsorted(rise, np.searchsorted(band, ys) * (w + 2) + xs + 1) - 1
+    ok = fall[run] - rise[run] <= width * height
+    return flat[ok], c[ok]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("with_unseen", [False, True])
+def test_leg_pixels_equal_the_hang_table_and_row_runs_in_numpy(seed: int, with_unseen: bool) -> None:
+    rng = np.random.default_rng(seed)
+    h, w = 60, 80
+    # blobs of foreground with shadow below and beside them, some reaching the frame's edges
+    labels = np.zeros((h, w), np.uint8)
+    for _ in range(6):
+        y, x = int(rng.integers(0, h - 5)), int(rng.integers(0, w - 3))
+        bh, bw = int(rng.integers(5, 30)), int(rng.integers(3, 20))
+        labels[y : y + bh, x : x + bw] = FOREGROUND
+        sy = y + bh
+        labels[
+            sy : sy + int(rng.integers(1, 40)), x + int(rng.integers(-2, 3)) : x + bw + int(rng.integers(-2, 20))
+        ] = SHADOW
+    labels[rng.random((h, w)) < 0.05] = SHADOW  # holes and specks break runs
+    fg = cv2.compare(labels, FOREGROUND, cv2.CMP_EQ)
+    sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
+    n, comp = cv2.connectedComponents(cv2.bitwise_or(fg, sh), connectivity=8)
+    fg_idx = np.flatnonzero(labels.ravel() == FOREGROUND)
+    top, bottom = kernels.region_rows(comp.ravel(), fg_idx, w, n)
+    start = np.zeros_like(sh)
+    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
+    pts = cv2.findNonZero(start)
+    assert pts is not None
+    unseen = rng.random((h, w)) < 0.1 if with_unseen else None
+    for depth, foot, width in [(0.1, 0.05, 0.15), (1.0, 0.0, 0.5), (0.6, 0.3, 0.05)]:
+        want_flat, want_c = _leg_pixels_ref(pts, sh, comp, top, bottom, unseen, depth, foot, width)
+        got_flat, got_c = kernels.leg_pixels(
+            pts,
+            sh,
+            comp,
+            top,
+            bottom,
+            np.zeros((1, 1), bool) if unseen is None else unseen,
+            unseen is not None,
+            depth,
+            foot,
+            width,
+        )
+        np.testing.assert_array_equal(got_flat, want_flat)
+        np.testing.assert_array_equal(got_c, want_c)
+        assert got_flat.dtype == np.int64
+    assert want_flat.size > 0
+
+
 @pytest.mark.parametrize("absorb_k", [4.0, 2.3])
 def test_advance_still_equals_the_still_runs_in_numpy(absorb_k: float) -> None:
     rng = np.random.default_rng(3)
@@ -332,5 +418,5 @@ def test_warm_runs_every_kernel_on_the_models_argument_types() -> None:
     kernels.warm()
     for name in ("learnable", "learn_own", "learn_neighbours", "classify", "explained", "veto"):
         assert getattr(kernels, name).signatures, name
-    for name in ("region_rows", "advance_still", "feedback"):
+    for name in ("region_rows", "leg_pixels", "advance_still", "feedback"):
         assert getattr(kernels, name).signatures, name

@@ -215,59 +215,32 @@ def _legs(
         # float32 values as on the whole box, at a fraction of the work
         return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)[at]
 
-    # A leg pixel hangs below a start (shadow straight under foreground) of its region, at
-    # least one row down and at or below the start's row: regions too short for a one-row
-    # hang, and starts inside the feet band, have none (most regions of a frame: small blobs).
-    sy = pts[:, 0, 1]
-    sc = comp[sy, pts[:, 0, 0]]
-    height_s = bottom[sc] - top[sc] + 1
-    keep = (config.leg_depth * height_s >= 1) & (bottom[sc] - sy > config.leg_foot * height_s)
-    sx, sy, sc = pts[keep, 0, 0], sy[keep], sc[keep]
-    if sc.size == 0:
-        return np.empty(0, np.intp)
-    # Down from each start: the run of shadow straight below the foreground (a pixel hangs from
-    # the foreground above it when only shadow lies between; fg ends the run, and a pixel below
-    # that hangs from the next start), within the region's depth (the start itself is one row
-    # below the foreground) and above its feet band. Runs from different starts never overlap,
-    # and the starts are a few hundred: a (starts, depth) table instead of scans down whole columns.
-    height_s = height_s[keep]
-    reach = config.leg_depth * height_s
-    d = np.arange(int(reach.max()))  # rows below the start; a pixel there is d + 1 below the foreground
-    ys = sy[:, None] + d
-    inside = ys < h
-    ys = np.minimum(ys, h - 1)
-    hang = sh[ys, sx[:, None]] != 0
-    hang &= inside
-    np.logical_and.accumulate(hang, axis=1, out=hang)
-    hang &= d + 1 <= reach[:, None]
-    hang &= bottom[sc][:, None] - ys > config.leg_foot * height_s[:, None]
-    if unseen is not None:
-        hang &= ~unseen[ys, sx[:, None]]
-    si, di = np.nonzero(hang)
-    if si.size == 0:
-        return np.empty(0, np.intp)
-    # in raster order, as the steps below take them
-    flat = np.sort((sy[si] + di) * w + sx[si])
-    ys, xs = np.divmod(flat, w)
-    c = comp[ys, xs]
-    height = bottom[c] - top[c] + 1
-    # the length of the run of shadow each lies in along its row (on the rows that hold one):
-    # the rows side by side, each between two unset pixels, so that no run crosses a row's end;
-    # a run starts after a rise of the flat row and ends at the next fall
-    band = np.flatnonzero(np.bincount(ys))  # ascending (ys are sorted; np.unique's sort costs more)
-    sr = np.zeros((band.size, w + 2), np.int8)
-    sr[:, 1:-1] = sh[band] != 0
-    step = np.diff(sr.ravel())
-    rise, fall = np.flatnonzero(step == 1), np.flatnonzero(step == -1)
-    run = np.searchsorted(rise, np.searchsorted(band, ys) * (w + 2) + xs + 1) - 1
-    ok = fall[run] - rise[run] <= config.leg_width * height
-    ys, xs, c = ys[ok], xs[ok], c[ok]
-    if ys.size == 0:
+    # The hanging pixels, in one compiled pass over the starts: a leg pixel hangs below a start
+    # (shadow straight under foreground) of its region, down the run of shadow from it (fg ends
+    # the run, and a pixel below that hangs from the next start), within the region's depth and
+    # above its feet band; and lies in a run of shadow along its row no wider than the region's
+    # limit (pixels next to each other along a column or a row are in one region of 8-connected
+    # fg | sh). Returned in raster order, as the steps below take them.
+    no_unseen = unseen is None
+    flat, c = kernels.leg_pixels(
+        pts,
+        sh,
+        comp,
+        top,
+        bottom,
+        _NO_UNSEEN if no_unseen else unseen,
+        not no_unseen,
+        float(config.leg_depth),
+        float(config.leg_foot),
+        float(config.leg_width),
+    )
+    if flat.size == 0:
         return np.empty(0, np.intp)
     out = []
     # region by region, in the order of their labels, each one's pixels in raster order
     order = np.argsort(c, kind="stable")
-    ys, xs, c = ys[order], xs[order], c[order]
+    ys, xs = np.divmod(flat[order], w)
+    c = c[order]
     cut = np.flatnonzero(np.diff(c)) + 1
     for gy, gx in zip(np.split(ys, cut), np.split(xs, cut)):
         # normalised cross-correlation over the window's shadow pixels (of any region), on the
@@ -301,6 +274,9 @@ def _legs(
         out.append((gy * w + gx)[ncc < config.leg_ncc])
     return np.concatenate(out) if out else np.empty(0, np.intp)
 
+
+#: ``unseen`` when there is none (the kernel takes an array either way)
+_NO_UNSEEN = np.zeros((1, 1), bool)
 
 #: the grey sum of a BGR pixel, as a ``cv2.transform`` matrix
 _GREY_SUM = np.ones((1, 3), np.float32)

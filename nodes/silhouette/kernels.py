@@ -480,6 +480,100 @@ def region_rows(comp: np.ndarray, idx: np.ndarray, w: int, n: int) -> tuple[np.n
 
 
 @numba.njit(**_JIT)
+def leg_pixels(
+    pts: np.ndarray,
+    sh: np.ndarray,
+    comp: np.ndarray,
+    top: np.ndarray,
+    bottom: np.ndarray,
+    unseen: np.ndarray,
+    has_unseen: bool,
+    depth: float,
+    foot: float,
+    width: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The body-shadow leg step's hanging shadow pixels that lie in a narrow run along their row
+    (``body_shadow._legs`` before its correlation; the numpy formulation is in the tests).
+
+    From each start (x, y) of region c = comp[y, x], with height h_c = bottom[c] - top[c] + 1 and
+    only where depth h_c >= 1 and bottom[c] - y > foot h_c, the pixels (x, y + d), d = 0, 1, ...,
+    while they are shadow inside the frame and d + 1 <= depth h_c, that lie above the feet band,
+    bottom[c] - (y + d) > foot h_c, and are not unseen; of those, the ones whose run of shadow
+    along their row is at most width h_c' long (c' their own region). Float64 products as in numpy.
+
+    Parameters
+    ----------
+    pts : ndarray of shape (K, 1, 2), dtype int32
+        The starts, ``cv2.findNonZero``'s x, y.
+    sh : ndarray of shape (H, W), dtype uint8
+        Shadow mask (non-zero: shadow).
+    comp : ndarray of shape (H, W), dtype int32
+        Region labels of foreground | shadow.
+    top, bottom : ndarray of shape (n,), dtype int64
+        Each region's first and last foreground row.
+    unseen : ndarray of shape (H, W) (or any, when ``has_unseen`` is False), dtype bool
+        Pixels whose background was never seen: never legs.
+    has_unseen : bool
+        Whether ``unseen`` is given.
+    depth, foot, width : float
+        ``leg_depth``, ``leg_foot``, ``leg_width`` of the config (fractions of h_c).
+
+    Returns
+    -------
+    flat : ndarray of shape (M,), dtype int64
+        The pixels' flat indices, ascending.
+    c : ndarray of shape (M,), dtype int32
+        Their regions.
+    """
+    h, w = sh.shape
+    # at most min(depth h_c, rows left) pixels below a start
+    size = 0
+    for k in range(pts.shape[0]):
+        r = comp[pts[k, 0, 1], pts[k, 0, 0]]
+        size += min(int(depth * (bottom[r] - top[r] + 1)), h - pts[k, 0, 1])
+    hang = np.empty(max(size, 0), np.int64)
+    m = 0
+    for k in range(pts.shape[0]):
+        x = np.int64(pts[k, 0, 0])
+        y = np.int64(pts[k, 0, 1])
+        r = comp[y, x]
+        hs = bottom[r] - top[r] + 1
+        reach = depth * hs
+        limit = foot * hs
+        if not (reach >= 1 and bottom[r] - y > limit):
+            continue
+        d = 0
+        # the run down the column ends at the first pixel that is not shadow (or the frame's end);
+        # the depth, the feet band and unseen pixels only leave pixels out of it
+        while y + d < h and sh[y + d, x] != 0 and d + 1 <= reach:
+            yy = y + d
+            if bottom[r] - yy > limit and not (has_unseen and unseen[yy, x]):
+                hang[m] = yy * w + x
+                m += 1
+            d += 1
+    hang = np.sort(hang[:m])
+    flat = np.empty(m, np.int64)
+    c = np.empty(m, np.int32)
+    n = 0
+    for i in range(m):
+        p = hang[i]
+        y = p // w
+        x = p - y * w
+        r = comp[y, x]
+        x0 = x
+        while x0 > 0 and sh[y, x0 - 1] != 0:
+            x0 -= 1
+        x1 = x
+        while x1 < w - 1 and sh[y, x1 + 1] != 0:
+            x1 += 1
+        if x1 - x0 + 1 <= width * (bottom[r] - top[r] + 1):
+            flat[n] = p
+            c[n] = r
+            n += 1
+    return flat[:n], c[:n]
+
+
+@numba.njit(**_JIT)
 def advance_still(
     still: np.ndarray, still_ref: np.ndarray, px: np.ndarray, inv_s: np.ndarray, idx: np.ndarray, k: np.float32
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -669,6 +763,18 @@ def warm() -> None:
     explained(idx, px, *terms)
     veto(labels, px, *terms)
     region_rows(np.zeros(npx, np.int32), idx, w, 1)
+    leg_pixels(
+        np.zeros((1, 1, 2), np.int32),
+        labels.reshape(h, w),
+        np.zeros((h, w), np.int32),
+        idx,
+        idx,
+        np.zeros((h, w), bool),
+        True,
+        0.1,
+        0.05,
+        0.15,
+    )
     advance_still(np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one)
     offsets = np.zeros(1, np.int64)
     feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
