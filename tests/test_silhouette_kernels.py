@@ -239,6 +239,26 @@ def test_region_rows_equals_numpys_unbuffered_min_and_max(seed: int) -> None:
     np.testing.assert_array_equal(got_bottom, bottom)
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_shadow_masks_equal_opencvs_compares_or_and_the_starts(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    labels = rng.choice(np.array([BACKGROUND, SHADOW, HIGHLIGHT, FOREGROUND], np.uint8), (H, W), p=[0.4, 0.3, 0.1, 0.2])
+    fg = cv2.compare(labels, FOREGROUND, cv2.CMP_EQ)
+    sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
+    start = np.zeros_like(sh)
+    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
+    want = cv2.findNonZero(start)
+    got_fg, got_sh, got_either, got_starts = kernels.shadow_masks(labels, np.uint8(FOREGROUND), np.uint8(SHADOW))
+    np.testing.assert_array_equal(got_fg, fg)
+    np.testing.assert_array_equal(got_sh, sh)
+    np.testing.assert_array_equal(got_either, cv2.bitwise_or(fg, sh))
+    assert got_starts.dtype == want.dtype and want.shape[0] > 0
+    np.testing.assert_array_equal(got_starts, want)
+    # no foreground: no starts (findNonZero gives None, the kernel an empty array)
+    none = kernels.shadow_masks(np.full((H, W), SHADOW, np.uint8), np.uint8(FOREGROUND), np.uint8(SHADOW))[3]
+    assert none.shape == (0, 1, 2)
+
+
 def _leg_pixels_ref(pts, sh, comp, top, bottom, unseen, depth, foot, width):
     """``body_shadow._legs`` before its correlation, as numpy (the code the kernel replaced)."""
     h, w = sh.shape
@@ -418,5 +438,5 @@ def test_warm_runs_every_kernel_on_the_models_argument_types() -> None:
     kernels.warm()
     for name in ("learnable", "learn_own", "learn_neighbours", "classify", "explained", "veto"):
         assert getattr(kernels, name).signatures, name
-    for name in ("region_rows", "leg_pixels", "advance_still", "feedback"):
+    for name in ("region_rows", "shadow_masks", "leg_pixels", "advance_still", "feedback"):
         assert getattr(kernels, name).signatures, name

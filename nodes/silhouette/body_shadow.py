@@ -136,8 +136,9 @@ def reclaim_body_shadow(
     """
     if config.span_px == 0:
         return labels
-    fg = cv2.compare(labels, FOREGROUND, cv2.CMP_EQ)
-    sh = cv2.compare(labels, SHADOW, cv2.CMP_EQ)
+    # the 0 / 255 masks of foreground, shadow and either, and the leg step's starts (shadow
+    # pixels straight below foreground), in one compiled pass over the labels
+    fg, sh, either, pts = kernels.shadow_masks(labels, _FG_CODE, _SH_CODE)
     closed = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, np.ones((config.span_px, 1), np.uint8))
     if config.edge_px:
         side = 2 * config.edge_px + 1
@@ -147,11 +148,11 @@ def reclaim_body_shadow(
     legs = config.leg_ncc > -1.0 and frame is not None and background is not None
     # the legs' starts: shadow pixels straight below foreground (none: no leg, and the
     # regions need not be labelled for that step)
-    starts = _starts(fg, sh) if legs else None
+    starts = pts if legs and pts.shape[0] > 0 else None
     if cand.size == 0 and starts is None:
         return labels
     h, w = labels.shape
-    n, comp = cv2.connectedComponents(cv2.bitwise_or(fg, sh), connectivity=8)
+    n, comp = cv2.connectedComponents(either, connectivity=8)
     comp_flat = comp.ravel()
     if fg_idx is None:
         fg_idx = np.flatnonzero(labels.ravel() == FOREGROUND)  # on bool: several times faster than on fg's 0 / 255
@@ -170,16 +171,6 @@ def reclaim_body_shadow(
     return out
 
 
-def _starts(fg: np.ndarray, sh: np.ndarray) -> np.ndarray | None:
-    """Shadow pixels straight below foreground, ``cv2.findNonZero``'s (K, 1, 2) x, y; None: none.
-
-    ``fg``, ``sh``: (H, W) 0/255 masks.
-    """
-    start = np.zeros_like(sh)
-    cv2.bitwise_and(sh[1:], fg[:-1], dst=start[1:])
-    return cv2.findNonZero(start)
-
-
 def _legs(
     pts: np.ndarray,
     fg: np.ndarray,
@@ -194,7 +185,7 @@ def _legs(
 ) -> np.ndarray:
     """Flat indices of the shadow pixels that are legs (see the module docstring).
 
-    ``pts``: the starts (``_starts``); ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W)
+    ``pts``: the starts, (K, 1, 2) x, y (``kernels.shadow_masks``); ``fg``, ``sh``: (H, W) 0/255 masks; ``comp``: (H, W)
     region labels of fg | sh; ``top``, ``bottom``: (n,) each region's first and last foreground
     row.
 
@@ -274,6 +265,9 @@ def _legs(
         out.append((gy * w + gx)[ncc < config.leg_ncc])
     return np.concatenate(out) if out else np.empty(0, np.intp)
 
+
+#: the label codes as the masks' kernel takes them
+_FG_CODE, _SH_CODE = np.uint8(FOREGROUND), np.uint8(SHADOW)
 
 #: ``unseen`` when there is none (the kernel takes an array either way)
 _NO_UNSEEN = np.zeros((1, 1), bool)

@@ -480,6 +480,60 @@ def region_rows(comp: np.ndarray, idx: np.ndarray, w: int, n: int) -> tuple[np.n
 
 
 @numba.njit(**_JIT)
+def shadow_masks(
+    labels: np.ndarray, fg_code: np.uint8, sh_code: np.uint8
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The body-shadow step's masks in one pass: ``cv2.compare`` of the labels with the foreground
+    and shadow codes, their ``cv2.bitwise_or``, and the leg step's starts, the shadow pixels
+    straight below foreground, sh[y, x] & fg[y - 1, x] (``cv2.findNonZero`` of that, raster order).
+
+    Parameters
+    ----------
+    labels : ndarray of shape (H, W), dtype uint8
+        Class labels.
+    fg_code, sh_code : uint8
+        The foreground and shadow codes.
+
+    Returns
+    -------
+    fg, sh, either : ndarray of shape (H, W), dtype uint8
+        255 where the label is foreground, shadow, either; 0 elsewhere.
+    starts : ndarray of shape (K, 1, 2), dtype int32
+        The starts' x, y, as ``cv2.findNonZero`` gives them.
+    """
+    h, w = labels.shape
+    fg = np.empty((h, w), np.uint8)
+    sh = np.empty((h, w), np.uint8)
+    either = np.empty((h, w), np.uint8)
+    full = np.uint8(255)
+    zero = np.uint8(0)
+    for y in range(h):
+        for x in range(w):
+            v = labels[y, x]
+            f = full if v == fg_code else zero
+            s = full if v == sh_code else zero
+            fg[y, x] = f
+            sh[y, x] = s
+            either[y, x] = f | s
+    # the starts: a second pass over the rows below the first (a branch in the loop above would
+    # keep it from being vectorised)
+    k = 0
+    for y in range(1, h):
+        for x in range(w):
+            if sh[y, x] & fg[y - 1, x]:
+                k += 1
+    starts = np.empty((k, 1, 2), np.int32)
+    k = 0
+    for y in range(1, h):
+        for x in range(w):
+            if sh[y, x] & fg[y - 1, x]:
+                starts[k, 0, 0] = x
+                starts[k, 0, 1] = y
+                k += 1
+    return fg, sh, either, starts
+
+
+@numba.njit(**_JIT)
 def leg_pixels(
     pts: np.ndarray,
     sh: np.ndarray,
@@ -763,6 +817,7 @@ def warm() -> None:
     explained(idx, px, *terms)
     veto(labels, px, *terms)
     region_rows(np.zeros(npx, np.int32), idx, w, 1)
+    shadow_masks(labels.reshape(h, w), np.uint8(1), np.uint8(2))
     leg_pixels(
         np.zeros((1, 1, 2), np.int32),
         labels.reshape(h, w),
