@@ -248,8 +248,8 @@ def _legs(
             out.append((gy * w + gx)[ncc < config.leg_ncc])
             continue
         m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
-        crop = frame[by0:by1, bx0:bx1].astype(np.float32)
-        grey = crop[..., 0] + crop[..., 1] + crop[..., 2]
+        # the sum of three whole numbers below 256: exact in float32 in any order
+        grey = cv2.transform(frame[by0:by1, bx0:bx1].astype(np.float32), _GREY_SUM)
         e = background[by0:by1, bx0:bx1]
         # centred: the moments below are differences of float32 sums, exact enough only near zero
         grey -= np.float32(grey.mean())
