@@ -12,7 +12,7 @@ import pytest
 
 from counterpart.nodes.silhouette import kernels
 from counterpart.nodes.silhouette import samples as samples_mod
-from counterpart.nodes.silhouette.background import BACKGROUND, FOREGROUND, HIGHLIGHT, SHADOW
+from counterpart.nodes.silhouette.background import BACKGROUND, FOREGROUND, HIGHLIGHT, SHADOW, distortions
 
 H, W, N = 24, 32, 20
 
@@ -105,23 +105,9 @@ def test_learn_neighbours_equals_the_diffusion_in_numpy(seed: int) -> None:
 
 
 def _classify_ref(frame: np.ndarray, w: np.ndarray, inv_var: np.ndarray, inv_den: np.ndarray, th: dict) -> tuple:
-    """``HorprasertBackground._distortions`` and ``classify`` as they were in OpenCV calls."""
+    """``distortions`` and ``classify`` as they were in OpenCV calls."""
     planes = [p.astype(np.float32) for p in cv2.split(frame)]
-    mul, add = cv2.multiply, cv2.add
-    s = mul(planes[0], w[0])
-    t = mul(planes[1], w[1])
-    add(s, t, dst=s)
-    add(s, mul(planes[2], w[2], dst=t), dst=s)
-    alpha = mul(s, inv_den)
-    cd2 = mul(planes[0], planes[0])
-    mul(cd2, inv_var[0], dst=cd2)
-    for c in (1, 2):
-        mul(planes[c], planes[c], dst=t)
-        mul(t, inv_var[c], dst=t)
-        add(cd2, t, dst=cd2)
-    mul(s, alpha, dst=s)
-    cv2.subtract(cd2, s, dst=cd2)
-    cv2.max(cd2, 0.0, dst=cd2)
+    alpha, cd2 = distortions(planes, w, inv_var, inv_den)
     labels = cv2.add(cv2.bitwise_and(cv2.compare(alpha, 1.0, cv2.CMP_GE), 1), SHADOW)
     band = cv2.bitwise_and(cv2.compare(alpha, th["hi"], cv2.CMP_LT), cv2.compare(alpha, th["lo"], cv2.CMP_GT))
     cv2.bitwise_and(labels, cv2.bitwise_not(band), dst=labels)

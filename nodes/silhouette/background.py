@@ -381,6 +381,52 @@ _CONFIGS: dict[str, type] = {
 }
 
 
+def distortions(
+    planes: list[np.ndarray], w: np.ndarray, inv_var: np.ndarray, inv_den: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Horprasert's brightness and chromaticity distortions of a frame against the model.
+
+    Parameters
+    ----------
+    planes : list of 3 ndarray of shape (H, W), dtype float32
+        The frame's B, G, R planes.
+    w : ndarray of shape (3, H, W), dtype float32
+        E_c / s_c^2 per channel (the model's means over its variances).
+    inv_var : ndarray of shape (3, H, W), dtype float32
+        1 / s_c^2 per channel.
+    inv_den : ndarray of shape (H, W), dtype float32
+        1 / sum_c (E_c / s_c)^2.
+
+    Returns
+    -------
+    alpha, cd2 : ndarray of shape (H, W), dtype float32
+        The brightness distortion alpha (eq. 5) and the squared chromaticity distortion CD^2
+        (eq. 6), not yet normalised by a and b.
+    """
+    # S = sum_c I_c E_c / s_c^2, alpha = S / sum_c (E_c / s_c)^2 (eq. 5). Expanding the square
+    # of eq. 6, CD^2 = sum_c ((I_c - alpha E_c) / s_c)^2 = sum_c I_c^2 / s_c^2 - alpha S: six
+    # array passes fewer than forming the three differences.
+    # OpenCV's float ops (the same IEEE products and sums as numpy's) into reused buffers:
+    # fewer whole-frame temporaries, which cost more than the arithmetic
+    mul, add = cv2.multiply, cv2.add
+    s = mul(planes[0], w[0])
+    t = mul(planes[1], w[1])
+    add(s, t, dst=s)
+    add(s, mul(planes[2], w[2], dst=t), dst=s)
+    alpha = mul(s, inv_den)
+    cd2 = mul(planes[0], planes[0])
+    mul(cd2, inv_var[0], dst=cd2)
+    for c in (1, 2):
+        mul(planes[c], planes[c], dst=t)
+        mul(t, inv_var[c], dst=t)
+        add(cd2, t, dst=cd2)
+    mul(s, alpha, dst=s)
+    cv2.subtract(cd2, s, dst=cd2)
+    # float32 rounding of the difference can dip just below 0 where the colour matches exactly
+    cv2.max(cd2, 0.0, dst=cd2)
+    return alpha, cd2
+
+
 class HorprasertBackground:
     """Per-pixel colour background model with shadow/highlight classes (Horprasert et al. 1999).
 
@@ -1250,31 +1296,10 @@ class HorprasertBackground:
 
     def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32, and the frame's three float32
-        channel planes (H, W), left unchanged for ``update``.
+        channel planes (H, W), left unchanged for ``update`` (:func:`distortions`).
         """
         planes = _float_planes(frame)
-        w, inv_var = self._w, self._inv_var
-        # S = sum_c I_c E_c / s_c^2, alpha = S / sum_c (E_c / s_c)^2 (eq. 5). Expanding the square
-        # of eq. 6, CD^2 = sum_c ((I_c - alpha E_c) / s_c)^2 = sum_c I_c^2 / s_c^2 - alpha S: six
-        # array passes fewer than forming the three differences.
-        # OpenCV's float ops (the same IEEE products and sums as numpy's) into reused buffers:
-        # fewer whole-frame temporaries, which cost more than the arithmetic
-        mul, add = cv2.multiply, cv2.add
-        s = mul(planes[0], w[0])
-        t = mul(planes[1], w[1])
-        add(s, t, dst=s)
-        add(s, mul(planes[2], w[2], dst=t), dst=s)
-        alpha = mul(s, self._inv_den)
-        cd2 = mul(planes[0], planes[0])
-        mul(cd2, inv_var[0], dst=cd2)
-        for c in (1, 2):
-            mul(planes[c], planes[c], dst=t)
-            mul(t, inv_var[c], dst=t)
-            add(cd2, t, dst=cd2)
-        mul(s, alpha, dst=s)
-        cv2.subtract(cd2, s, dst=cd2)
-        # float32 rounding of the difference can dip just below 0 where the colour matches exactly
-        cv2.max(cd2, 0.0, dst=cd2)
+        alpha, cd2 = distortions(planes, self._w, self._inv_var, self._inv_den)
         return alpha, cd2, planes
 
     def _inlier_mask(self, planes: list[np.ndarray]) -> np.ndarray:
