@@ -296,7 +296,7 @@ def _matches(p: int, px: np.ndarray, samples: np.ndarray, gain: np.float32, base
 
 
 @numba.njit(**_JIT)
-def _consensus(
+def explained(
     idx: np.ndarray,
     px: np.ndarray,
     samples: np.ndarray,
@@ -308,10 +308,33 @@ def _consensus(
     rel: np.float32,
     min_matches: int,
 ) -> np.ndarray:
-    """``explained``'s test at ``idx`` in two passes: the box prefilter over all (the boxes are
-    small and read in order), then the samples of the few near their box (about a tenth), their
-    rows touched first (rows that miss the caches: independent loads overlap).
+    """ViBe's consensus with SuBSENSE's radius at the flat pixels ``idx``: at least
+    ``min_matches`` samples S_k with |I - S_k|_1 / (1 + v) - rel |S_k|_1 < max(radius,
+    spread_k d), float32 in that order.
+
+    Parameters
+    ----------
+    idx : ndarray of shape (K,), dtype int64
+        Flat pixel indices.
+    px : ndarray of shape (H * W, 3), dtype uint8
+        The frame's BGR pixels.
+    samples, box : ndarray
+        (H * W, 3 N) and (H * W, 8) uint8, as ``learn_own``'s.
+    blink, spread : ndarray of shape (H * W,), dtype float32
+        Blink levels v(x) and spreads d(x).
+    radius, spread_k, rel : float32
+        The model's ``radius``, ``spread_k`` and ``relative_radius``.
+    min_matches : int
+        #min.
+
+    Returns
+    -------
+    ndarray of shape (K,), dtype bool
+        True where the colour matches the pixel's samples.
     """
+    # two passes: the box prefilter over all (the boxes are small and read in order), then the
+    # samples of the few near their box (about a tenth), their rows touched first (rows that miss
+    # the caches: independent loads overlap)
     out = np.zeros(idx.size, np.bool_)
     at = np.empty(idx.size, np.int64)
     gains = np.empty(idx.size, np.float32)
@@ -357,46 +380,6 @@ def _consensus(
 
 
 @numba.njit(**_JIT)
-def explained(
-    idx: np.ndarray,
-    px: np.ndarray,
-    samples: np.ndarray,
-    box: np.ndarray,
-    blink: np.ndarray,
-    spread: np.ndarray,
-    radius: np.float32,
-    spread_k: np.float32,
-    rel: np.float32,
-    min_matches: int,
-) -> np.ndarray:
-    """ViBe's consensus with SuBSENSE's radius at the flat pixels ``idx``: at least
-    ``min_matches`` samples S_k with |I - S_k|_1 / (1 + v) - rel |S_k|_1 < max(radius,
-    spread_k d), float32 in that order.
-
-    Parameters
-    ----------
-    idx : ndarray of shape (K,), dtype int64
-        Flat pixel indices.
-    px : ndarray of shape (H * W, 3), dtype uint8
-        The frame's BGR pixels.
-    samples, box : ndarray
-        (H * W, 3 N) and (H * W, 8) uint8, as ``learn_own``'s.
-    blink, spread : ndarray of shape (H * W,), dtype float32
-        Blink levels v(x) and spreads d(x).
-    radius, spread_k, rel : float32
-        The model's ``radius``, ``spread_k`` and ``relative_radius``.
-    min_matches : int
-        #min.
-
-    Returns
-    -------
-    ndarray of shape (K,), dtype bool
-        True where the colour matches the pixel's samples.
-    """
-    return _consensus(idx, px, samples, box, blink, spread, radius, spread_k, rel, min_matches)
-
-
-@numba.njit(**_JIT)
 def veto(
     labels: np.ndarray,
     px: np.ndarray,
@@ -432,7 +415,7 @@ def veto(
             idx[k] = p
             k += 1
     idx = idx[:k]
-    ok = _consensus(idx, px, samples, box, blink, spread, radius, spread_k, rel, min_matches)
+    ok = explained(idx, px, samples, box, blink, spread, radius, spread_k, rel, min_matches)
     out = labels.copy()
     fg = np.empty(k, np.int64)
     m = 0
