@@ -19,7 +19,6 @@ resolution) starts the background model and the people afresh.
 
 from __future__ import annotations
 
-import threading
 import time
 from typing import Any
 
@@ -31,7 +30,6 @@ from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Frame, Silhouettes
 from counterpart.messages.silhouette import PersonShape
 
-from . import kernels
 from .backends import BACKEND_NAMES
 from .body_shadow import BodyShadowConfig
 from .people import PrefetchDetector
@@ -256,10 +254,6 @@ class Silhouette(Node):
         """Start without an extractor: one is made on the first frame, for its size and colour."""
         if self.p["opencv_threads"] > 0:
             cv2.setNumThreads(self.p["opencv_threads"])
-        if self.p["backend"] == "horprasert":
-            # the models' kernels loaded (an install's first run: compiled) while the training frames
-            # come; in the fit, where they are needed first, their load delayed the first people
-            threading.Thread(target=kernels.warm, name="kernels", daemon=True).start()
         self.extractor: SilhouetteExtractor | None = None
         self.key: tuple[tuple[int, ...], bool] | None = None  # (frame size, mono) of the model
         self.found = 0
