@@ -1,7 +1,8 @@
 """The compiled kernels of the background models equal the numpy formulations they replace.
 
 Each reference below is the numpy code the kernel replaced (the models' methods before the
-kernels), run on random inputs; the kernel's outputs must be bit-identical.
+kernels), run on random inputs; the kernel's outputs must be bit-identical (``texture_ncc``
+alone sums in float64: it must agree to float32 rounding, see its test).
 """
 
 from __future__ import annotations
@@ -331,6 +332,68 @@ def test_leg_pixels_equal_the_hang_table_and_row_runs_in_numpy(seed: int, with_u
     assert want_flat.size > 0
 
 
+def _texture_ncc_ref(idx, labels, e_pad, var, k2, frame, r):
+    """``HorprasertBackground.shadow_texture_mismatch``'s sparse path before the kernel: window
+    gathers and float32 einsum sums; returns (textured (K,) bool, ve (K,), floor (K,), ncc (K,)),
+    ncc at every pixel (the method took only the textured ones).
+    """
+    h, w = labels.shape
+    sh = (labels == SHADOW).view(np.uint8)
+    wp = w + 2 * r
+    ys, xs = np.divmod(idx, w)
+    off = (np.arange(2 * r + 1)[:, None] * wp + np.arange(2 * r + 1)[None, :]).reshape(-1)
+    win = (ys * wp + xs)[:, None] + off[None, :]
+    m = np.take(cv2.copyMakeBorder(sh, r, r, r, r, cv2.BORDER_REFLECT).reshape(-1), win).astype(np.float32)
+    e = np.take(e_pad, win)
+    inv_n = 1.0 / np.maximum(np.einsum("ij->i", m), 1.0)
+    em = e * m
+    me = np.einsum("ij->i", em) * inv_n
+    ve = np.einsum("ij,ij->i", em, e) * inv_n - me * me
+    v = var.reshape(3, -1)
+    floor = (v[0][idx] + v[1][idx] + v[2][idx]) * np.float32(k2)
+    planes = [
+        cv2.copyMakeBorder(p.astype(np.float32), r, r, r, r, cv2.BORDER_REFLECT).reshape(-1) for p in cv2.split(frame)
+    ]
+    grey = np.take(planes[0], win) + np.take(planes[1], win)
+    grey += np.take(planes[2], win)
+    gm = grey * m
+    mi = np.einsum("ij->i", gm) * inv_n
+    vi = np.einsum("ij,ij->i", gm, grey) * inv_n - mi * mi
+    cov = np.einsum("ij,ij->i", gm, e) * inv_n - mi * me
+    ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
+    return ve > floor, ve, floor, ncc
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_texture_ncc_equals_the_window_sums_in_numpy_to_float32_rounding(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    h, w, r = 24, 31, 3
+    # shadow in blobs and speckle, to the frame's edges (the windows read across them)
+    labels = rng.choice(np.array([BACKGROUND, SHADOW, FOREGROUND], np.uint8), (h, w), p=[0.3, 0.5, 0.2])
+    labels[rng.random((h, w)) < 0.2] = SHADOW
+    e = (rng.random((h, w)) * 600.0).astype(np.float32)
+    e[:, : w // 2] = cv2.GaussianBlur(e, (0, 0), 3.0)[:, : w // 2]  # half of it smooth: untextured
+    e_pad = cv2.copyMakeBorder(e, r, r, r, r, cv2.BORDER_REFLECT)
+    var = (rng.random((3, h, w)) * 60.0 + 1.0).astype(np.float32)
+    # the frame: a dimmed copy of E's texture with noise in one half, unrelated in the other
+    base = np.clip(e / 3.0 * 0.6 + rng.normal(0.0, 3.0, (h, w)), 0, 255)
+    base[h // 2 :] = rng.random((h - h // 2, w)) * 255
+    frame = np.repeat(base[:, :, None], 3, axis=2).astype(np.uint8)
+    idx = np.flatnonzero(labels == SHADOW)
+    k2 = np.float32(8.0**2)
+    textured, ve, floor, ncc_ref = _texture_ncc_ref(idx, labels, e_pad, var, k2, frame, r)
+    got = kernels.texture_ncc(idx, labels, np.uint8(SHADOW), e_pad, var, k2, frame, r)
+    assert got.shape == idx.shape and 0 < textured.sum() < textured.size
+    # textured where the numpy test was, but for a variance within float32 rounding of its floor
+    near = np.abs(ve - floor) <= 1e-5 * floor
+    np.testing.assert_array_equal(np.isfinite(got)[~near], textured[~near])
+    # the correlation to float32 rounding of its window sums, over both the related and the
+    # unrelated half (so both sides of the 0.4 threshold are met)
+    both = np.isfinite(got) & textured
+    np.testing.assert_allclose(got[both], ncc_ref[both], rtol=0, atol=2e-5)
+    assert (got[both] > 0.9).any() and (got[both] < 0.4).any()
+
+
 @pytest.mark.parametrize("absorb_k", [4.0, 2.3])
 def test_advance_still_equals_the_still_runs_in_numpy(absorb_k: float) -> None:
     rng = np.random.default_rng(3)
@@ -424,5 +487,5 @@ def test_warm_runs_every_kernel_on_the_models_argument_types() -> None:
     kernels.warm()
     for name in ("learnable", "learn_own", "learn_neighbours", "classify", "explained", "veto"):
         assert getattr(kernels, name).signatures, name
-    for name in ("region_rows", "shadow_masks", "leg_pixels", "advance_still", "feedback"):
+    for name in ("region_rows", "shadow_masks", "leg_pixels", "advance_still", "feedback", "texture_ncc"):
         assert getattr(kernels, name).signatures, name

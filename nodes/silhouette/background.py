@@ -874,11 +874,9 @@ class HorprasertBackground:
         none = np.zeros(0, np.int64)
         if self.shadows.shadow_ncc <= -1.0:
             return none
-        planes = self._last_planes()
         is_sh = labels == SHADOW
-        sh = is_sh.view(np.uint8)
         r = self.shadows.shadow_window // 2
-        h, w = sh.shape
+        h, w = is_sh.shape
         wide = np.count_nonzero(is_sh) * (2 * r + 1) ** 2 > h * w
         self._texture_wide = wide
         bg_textured = self._textured_background() if wide else None
@@ -890,35 +888,17 @@ class HorprasertBackground:
         if idx.size * (2 * r + 1) ** 2 > h * w:
             # shadow over much of the frame (a change of light): filtering the frame is cheaper
             # than gathering each pixel's window
-            return self._shadow_texture_mismatch(planes, sh, bg_textured)
-        # The shadow pixels are a few percent of the frame (and speckle): each one's window is
-        # gathered from frames padded as the box filter would (BORDER_REFLECT), the background's
-        # texture first, and the frame's only where that is textured (a few hundred pixels).
-        wp = w + 2 * r
-        ys, xs = np.divmod(idx, w)
-        off = (np.arange(2 * r + 1)[:, None] * wp + np.arange(2 * r + 1)[None, :]).reshape(-1)
-        win = (ys * wp + xs)[:, None] + off[None, :]  # (K, window) flat indices into the padded frame
-
-        def gather(a: np.ndarray, at: np.ndarray) -> np.ndarray:
-            return np.take(cv2.copyMakeBorder(a, r, r, r, r, cv2.BORDER_REFLECT).reshape(-1), at)
-
-        m = gather(sh, win).astype(np.float32)  # (K, window) 1 on shadow pixels
-        e = np.take(self._e_pad, win)
-        # row sums as einsum: numpy's reductions over short rows cost several times more
-        inv_n = 1.0 / np.maximum(np.einsum("ij->i", m), 1.0)
-        em = e * m
-        me = np.einsum("ij->i", em) * inv_n
-        ve = np.einsum("ij,ij->i", em, e) * inv_n - me * me
-        # noise of the grey sum (3 channels): its variance is the sum of the channel variances
-        var = self._var.reshape(3, -1)
-        floor = (var[0][idx] + var[1][idx] + var[2][idx]) * np.float32(self.shadows.shadow_texture_k**2)
-        textured = ve > floor
-        if not textured.any():
-            # no shadow pixel on a textured background: nothing to check (most frames of a plain room)
-            return none
-        win, m, e, me, ve, inv_n = win[textured], m[textured], e[textured], me[textured], ve[textured], inv_n[textured]
-        ncc = self._frame_ncc(planes, win, m, e, me, ve, inv_n)
-        return idx[textured][ncc < self.shadows.shadow_ncc]
+            return self._shadow_texture_mismatch(self._last_planes(), is_sh.view(np.uint8), bg_textured)
+        # The shadow pixels are a few percent of the frame (and speckle): one compiled pass over
+        # each one's window, the background's texture first and the frame's only where that is
+        # textured (a few hundred pixels). It reads the uint8 frame itself: the float planes are
+        # left to the update (in the worker thread).
+        k2 = np.float32(self.shadows.shadow_texture_k**2)
+        frame = np.ascontiguousarray(self._last_alpha[0])
+        ncc = kernels.texture_ncc(
+            idx, np.ascontiguousarray(labels), np.uint8(SHADOW), self._e_pad, self._var, k2, frame, r
+        )
+        return idx[ncc < self.shadows.shadow_ncc]
 
     def _frame_ncc(
         self,

@@ -9,7 +9,9 @@ per install, a process only loads it.
 
 Every kernel does the same integer and float32 operations, in the same order, as the numpy
 formulation it replaces (numba without fastmath follows IEEE), so the outputs are bit-identical;
-the tests check each against that formulation on random inputs.
+the tests check each against that formulation on random inputs. The one exception is
+``texture_ncc``: numpy summed its windows in float32 in its own (SIMD) order, which a loop cannot
+reproduce, so it sums in float64 and agrees to float32 rounding.
 """
 
 from __future__ import annotations
@@ -610,6 +612,114 @@ def leg_pixels(
     return flat[:n], c[:n]
 
 
+@numba.njit(**_INLINE)
+def _reflect_index(i: int, n: int) -> int:
+    """Index ``i`` into an axis of length ``n``, out-of-range ones mirrored as ``cv2.BORDER_REFLECT``
+    pads (-1 -> 0, n -> n - 1; OpenCV's ``borderInterpolate`` loop).
+    """
+    if n == 1:
+        return 0
+    while i < 0 or i >= n:
+        i = -i - 1 if i < 0 else 2 * n - 1 - i
+    return i
+
+
+@numba.njit(**_JIT)
+def texture_ncc(
+    idx: np.ndarray,
+    labels: np.ndarray,
+    sh_code: np.uint8,
+    e_pad: np.ndarray,
+    var: np.ndarray,
+    floor_k2: np.float32,
+    frame: np.ndarray,
+    r: int,
+) -> np.ndarray:
+    """The shadow texture test's correlation at the shadow pixels ``idx``.
+
+    Each over its (2r+1) x (2r+1) window's shadow pixels (the window read across the frame's
+    edges as ``cv2.BORDER_REFLECT`` pads): with m the window's shadow indicator, n = sum m, E
+    the background's grey sum (b + g + r of the mean) and I the frame's:
+
+        m(E) = sum m E / n,  var(E) = sum m E^2 / n - m(E)^2   (the same for I),
+        cov = sum m I E / n - m(I) m(E),
+        NCC = cov / sqrt(max(var(I), 0) max(var(E), 0) + 1e-6),
+
+    computed only where the background is textured there, var(E) > (s_b^2 + s_g^2 + s_r^2) k^2
+    (the noise of the grey sum; float32 as the numpy formulation); +inf elsewhere.
+
+    The window sums and moments are float64 (one pass per window): the numpy formulation they
+    replace summed in float32 in numpy's (SIMD-dependent) order, so the two agree to float32
+    rounding, not bit for bit.
+
+    Parameters
+    ----------
+    idx : ndarray of shape (K,), dtype int64
+        Flat indices of shadow pixels, ascending.
+    labels : ndarray of shape (H, W), dtype uint8
+        The frame's classes; ``sh_code`` marks the shadow.
+    sh_code : uint8
+        The shadow code.
+    e_pad : ndarray of shape (H + 2r, W + 2r), dtype float32
+        E's grey sum, padded by r on each side with ``cv2.BORDER_REFLECT``.
+    var : ndarray of shape (3, H, W), dtype float32
+        The background's per-channel variance s^2.
+    floor_k2 : float32
+        k^2, the texture floor's factor on the summed variance.
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        The frame.
+    r : int
+        Half the window side.
+
+    Returns
+    -------
+    ndarray of shape (K,), dtype float64
+        NCC at each pixel of ``idx``; +inf where the background is not textured.
+    """
+    h, w = labels.shape
+    out = np.empty(idx.size, np.float64)
+    for i in range(idx.size):
+        p = idx[i]
+        y = p // w
+        x = p - y * w
+        n = 0
+        se = 0.0
+        see = 0.0
+        for dy in range(-r, r + 1):
+            yy = _reflect_index(y + dy, h)
+            for dx in range(-r, r + 1):
+                xx = _reflect_index(x + dx, w)
+                if labels[yy, xx] == sh_code:
+                    ev = np.float64(e_pad[y + dy + r, x + dx + r])
+                    n += 1
+                    se += ev
+                    see += ev * ev
+        inv_n = 1.0 / max(n, 1)
+        me = se * inv_n
+        ve = see * inv_n - me * me
+        floor = (var[0, y, x] + var[1, y, x] + var[2, y, x]) * floor_k2
+        if not ve > floor:
+            out[i] = np.inf
+            continue
+        si = 0.0
+        sii = 0.0
+        sie = 0.0
+        for dy in range(-r, r + 1):
+            yy = _reflect_index(y + dy, h)
+            for dx in range(-r, r + 1):
+                xx = _reflect_index(x + dx, w)
+                if labels[yy, xx] == sh_code:
+                    g = np.float64(np.int64(frame[yy, xx, 0]) + np.int64(frame[yy, xx, 1]) + np.int64(frame[yy, xx, 2]))
+                    si += g
+                    sii += g * g
+                    sie += g * e_pad[y + dy + r, x + dx + r]
+        mi = si * inv_n
+        vi = sii * inv_n - mi * mi
+        cov = sie * inv_n - mi * me
+        out[i] = cov / np.sqrt(max(vi, 0.0) * max(ve, 0.0) + 1e-6)
+    return out
+
+
 @numba.njit(**_JIT)
 def advance_still(
     still: np.ndarray, still_ref: np.ndarray, px: np.ndarray, inv_s: np.ndarray, idx: np.ndarray, k: np.float32
@@ -816,3 +926,13 @@ def warm() -> None:
     advance_still(np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one)
     offsets = np.zeros(1, np.int64)
     feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
+    texture_ncc(
+        idx,
+        labels.reshape(h, w),
+        np.uint8(1),
+        np.zeros((h + 2, w + 2), np.float32),
+        np.zeros((3, h, w), np.float32),
+        one,
+        np.zeros((h, w, 3), np.uint8),
+        1,
+    )
