@@ -257,27 +257,31 @@ def _up_axis(mask_u8: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return c, (np.array([vx, vy]) if vy < 0 else np.array([-vx, -vy]))
 
 
-def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
-    """Outer boundary of the largest region of a mask, ordered as described in the module doc.
+def boundary_and_axis(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The first half of :func:`oriented_boundary`: the outer boundary of the mask's largest
+    region, counter-clockwise on screen but not yet started at the reference point, with the
+    region's centroid, its upward axis and each boundary point's distance along that axis.
 
     Parameters
     ----------
     mask : ndarray of shape (H, W)
         Bool or 0/non-zero.
-    ref_window : float
-        Half-width of the search for the locally highest point, as a fraction of the boundary length.
 
     Returns
     -------
     contour : ndarray of shape (K, 2), dtype float64
-        The boundary, pixels, starting at the reference point.
-    ref_point : ndarray of shape (2,), dtype float64
-        The reference point at the top of the head, pixels.
+        The boundary, pixels (x, y), K >= 3.
+    centroid : ndarray of shape (2,), dtype float64
+        The region's centroid, pixels.
+    up : ndarray of shape (2,), dtype float64
+        Unit upward axis (principal axis or vertical, see :func:`_up_axis`).
+    along : ndarray of shape (K,), dtype float64
+        (contour - centroid) @ up, pixels.
 
     Raises
     ------
     ValueError
-        If the mask is not 2-D, is empty, or its region is too small for a boundary.
+        As :func:`oriented_boundary`.
     """
     m = np.asarray(mask)
     if m.ndim != 2:
@@ -300,8 +304,34 @@ def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.nd
     region = np.zeros_like(m8)
     cv2.drawContours(region, [best], 0, 1, thickness=cv2.FILLED)
     c, up = _up_axis(region)
+    along = (p - c) @ up
+    return p, c, up, along
+
+
+def oriented_boundary(mask: np.ndarray, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """Outer boundary of the largest region of a mask, ordered as described in the module doc.
+
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W)
+        Bool or 0/non-zero.
+    ref_window : float
+        Half-width of the search for the locally highest point, as a fraction of the boundary length.
+
+    Returns
+    -------
+    contour : ndarray of shape (K, 2), dtype float64
+        The boundary, pixels, starting at the reference point.
+    ref_point : ndarray of shape (2,), dtype float64
+        The reference point at the top of the head, pixels.
+
+    Raises
+    ------
+    ValueError
+        If the mask is not 2-D, is empty, or its region is too small for a boundary.
+    """
+    p, c, up, along = boundary_and_axis(mask)
     rel = p - c
-    along = rel @ up
     perp = np.abs(rel[:, 0] * up[1] - rel[:, 1] * up[0])
     near = (perp <= 1.0) & (along > 0)
     if near.any():

@@ -11,7 +11,8 @@ import cv2
 import numpy as np
 import pytest
 
-from counterpart.nodes.silhouette import kernels
+from counterpart.body import spline
+from counterpart.nodes.silhouette import kernels, pipeline
 from counterpart.nodes.silhouette import samples as samples_mod
 from counterpart.nodes.silhouette.background import BACKGROUND, FOREGROUND, HIGHLIGHT, SHADOW, distortions
 
@@ -394,6 +395,52 @@ def test_texture_ncc_equals_the_window_sums_in_numpy_to_float32_rounding(seed: i
     assert (got[both] > 0.9).any() and (got[both] < 0.4).any()
 
 
+def _blob_masks(seed: int) -> list[np.ndarray]:
+    """Random silhouette-like masks: unions of ellipses (upright, lying, round), some touching the
+    crop's edges, some in pieces; and thin lines (boundaries that run back over themselves).
+    """
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(40):
+        h, w = int(rng.integers(8, 120)), int(rng.integers(8, 80))
+        m = np.zeros((h, w), np.uint8)
+        for _ in range(int(rng.integers(1, 5))):
+            centre = (int(rng.integers(0, w)), int(rng.integers(0, h)))
+            axes = (int(rng.integers(1, w // 2 + 2)), int(rng.integers(1, h // 2 + 2)))
+            cv2.ellipse(m, centre, axes, float(rng.uniform(0, 180)), 0, 360, 1, -1)
+        m[rng.random((h, w)) < 0.03] ^= 1
+        out.append(m.astype(bool))
+    for pts in ([(0, 0), (5, 5)], [(2, 0), (2, 9)], [(0, 3), (9, 3)], [(1, 1), (3, 1)]):
+        m = np.zeros((12, 12), np.uint8)
+        cv2.line(m, *pts, 1)
+        out.append(m.astype(bool))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_compiled_spline_equals_body_splines_numpy_fit(seed: int) -> None:
+    # pipeline.silhouette_spline: the boundary ordering and resampling by head_first_samples
+    fits = 0
+    for mask in _blob_masks(seed):
+        try:
+            want_ctrl, want_ref = spline.silhouette_spline(mask, 32)
+        except ValueError:
+            with pytest.raises(ValueError):
+                pipeline.silhouette_spline(mask, 32)
+            continue
+        for n in (32, 8):
+            want_ctrl, want_ref = spline.silhouette_spline(mask, n)
+            got_ctrl, got_ref = pipeline.silhouette_spline(mask, n)
+            np.testing.assert_array_equal(got_ctrl, want_ctrl)
+            np.testing.assert_array_equal(got_ref, want_ref)
+        fits += 1
+    assert fits >= 30
+    with pytest.raises(ValueError):
+        pipeline.silhouette_spline(np.zeros((10, 10), bool))
+    with pytest.raises(ValueError):
+        pipeline.silhouette_spline(np.ones((10, 10), bool), 3)
+
+
 @pytest.mark.parametrize("absorb_k", [4.0, 2.3])
 def test_advance_still_equals_the_still_runs_in_numpy(absorb_k: float) -> None:
     rng = np.random.default_rng(3)
@@ -487,5 +534,13 @@ def test_warm_runs_every_kernel_on_the_models_argument_types() -> None:
     kernels.warm()
     for name in ("learnable", "learn_own", "learn_neighbours", "classify", "explained", "veto"):
         assert getattr(kernels, name).signatures, name
-    for name in ("region_rows", "shadow_masks", "leg_pixels", "advance_still", "feedback", "texture_ncc"):
+    for name in (
+        "region_rows",
+        "shadow_masks",
+        "leg_pixels",
+        "advance_still",
+        "feedback",
+        "texture_ncc",
+        "head_first_samples",
+    ):
         assert getattr(kernels, name).signatures, name

@@ -887,6 +887,112 @@ def feedback(
     return fg
 
 
+@numba.njit(**_JIT)
+def head_first_samples(
+    p: np.ndarray, c: np.ndarray, up: np.ndarray, along: np.ndarray, w: int, m: int
+) -> tuple[int, float, np.ndarray]:
+    """The second half of ``body.spline.oriented_boundary`` and the arc-length resampling of
+    ``body.spline.resample_closed`` in one pass over the boundary, with the same float64 steps.
+
+    The reference crossing i0: of the points within one pixel of the upward axis,
+    perp = |(p - c)_x up_y - (p - c)_y up_x| <= 1 with along > 0, the one with the largest
+    along rounded to 6 decimals (rint(along 1e6) / 1e6, as ``np.round``), then the least perp,
+    then the lowest index; without any, the least perp among along > 0 (index 0 when none).
+    The start: the highest point (least y) within ``w`` points of i0, the nearest to it (the
+    earlier on ties). The boundary from the start, closed, is resampled at s_j = j (L / m),
+    L its length, by ``np.interp`` 's linear steps along the cumulative chord lengths
+    (points that repeat their predecessor dropped).
+
+    Parameters
+    ----------
+    p : ndarray of shape (K, 2), dtype float64
+        The boundary, counter-clockwise on screen, pixels (``body.spline.boundary_and_axis``).
+    c : ndarray of shape (2,), dtype float64
+        The region's centroid, pixels.
+    up : ndarray of shape (2,), dtype float64
+        Unit upward axis.
+    along : ndarray of shape (K,), dtype float64
+        (p - c) @ up (numpy's product, passed in: its sum may be fused).
+    w : int
+        Half-width of the search for the highest point, points.
+    m : int
+        Samples to return.
+
+    Returns
+    -------
+    start : int
+        Index into ``p`` of the reference point (the samples' first).
+    length : float
+        L, pixels; the samples are meaningless when it is not > 0.
+    samples : ndarray of shape (m, 2), dtype float64
+        The resampled boundary, pixels.
+    """
+    k = p.shape[0]
+    i0 = -1
+    best_r = 0.0
+    best_perp = 0.0
+    far = 0
+    far_perp = np.inf
+    for i in range(k):
+        perp = abs((p[i, 0] - c[0]) * up[1] - (p[i, 1] - c[1]) * up[0])
+        if along[i] > 0:
+            if perp < far_perp:
+                far_perp = perp
+                far = i
+            if perp <= 1.0:
+                r = np.rint(along[i] * 1e6) / 1e6
+                if i0 < 0 or r > best_r or (r == best_r and perp < best_perp):
+                    i0, best_r, best_perp = i, r, perp
+    if i0 < 0:
+        i0 = far
+    ymin = np.inf
+    for o in range(-w, w + 1):
+        ymin = min(ymin, p[(i0 + o) % k, 1])
+    best_off = 0
+    best_abs = w + 1
+    for o in range(-w, w + 1):
+        if p[(i0 + o) % k, 1] == ymin and abs(o) < best_abs:
+            best_abs = abs(o)
+            best_off = o
+    start = (i0 + best_off) % k
+    # the closed boundary from the start, its cumulative chord lengths, repeated points dropped
+    xs = np.empty(k + 1)
+    ys = np.empty(k + 1)
+    cum = np.empty(k + 1)
+    xs[0] = p[start, 0]
+    ys[0] = p[start, 1]
+    cum[0] = 0.0
+    n = 1
+    run = 0.0
+    for i in range(1, k + 1):
+        q = (start + i) % k
+        seg = np.hypot(p[q, 0] - p[(start + i - 1) % k, 0], p[q, 1] - p[(start + i - 1) % k, 1])
+        run = seg if i == 1 else run + seg
+        if seg > 1e-12:
+            xs[n] = p[q, 0]
+            ys[n] = p[q, 1]
+            cum[n] = run
+            n += 1
+    total = cum[n - 1]
+    out = np.zeros((m, 2))
+    if not total > 0.0:
+        return start, total, out
+    step = total / m
+    j = 0
+    for i in range(m):
+        s = np.float64(i) * step
+        while j + 1 < n and cum[j + 1] <= s:
+            j += 1
+        if j == n - 1 or cum[j] == s:
+            out[i, 0] = xs[j]
+            out[i, 1] = ys[j]
+        else:
+            d = s - cum[j]
+            out[i, 0] = (xs[j + 1] - xs[j]) / (cum[j + 1] - cum[j]) * d + xs[j]
+            out[i, 1] = (ys[j + 1] - ys[j]) / (cum[j + 1] - cum[j]) * d + ys[j]
+    return start, total, out
+
+
 def warm() -> None:
     """Load (or, on the first run of an install, compile) every kernel for the argument types the
     models pass, on tiny inputs: called when a model is fitted, so that the first frames after
@@ -926,6 +1032,8 @@ def warm() -> None:
     advance_still(np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one)
     offsets = np.zeros(1, np.int64)
     feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    head_first_samples(pts, pts[0], pts[1], pts[:, 0].copy(), 2, 4)
     texture_ncc(
         idx,
         labels.reshape(h, w),

@@ -17,9 +17,10 @@ from typing import Any
 import cv2
 import numpy as np
 
+from counterpart.body import spline
 from counterpart.body.camera import Camera, camera_for_size
-from counterpart.body.spline import silhouette_spline
 
+from . import kernels
 from .backends import HorprasertSubtractor, make_subtractor
 from .background import BACKGROUND
 from .regions import Person, PersonTracker, clean_mask
@@ -274,6 +275,47 @@ class SilhouetteExtractor:
             return p
         offset = np.array([x - 1, y - 1], np.float64)
         return dataclasses.replace(p, ctrl=ctrl + offset, ref_point=ref + offset)
+
+
+def silhouette_spline(mask: np.ndarray, n: int = 32, ref_window: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """``counterpart.body.spline.silhouette_spline``, the same numbers: its boundary ordering and
+    arc-length resampling (a few dozen numpy calls on a few hundred points, a good part of a
+    frame's outlines) as one compiled pass (``kernels.head_first_samples``).
+
+    ``body.spline`` itself stays free of numba: the renderer, the simulator and the responder
+    load it. The tests hold the two to the same control points and reference point.
+
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W)
+        Bool or 0/non-zero.
+    n : int
+        Number of control points (>= 4).
+    ref_window : float
+        Half-width of the search for the reference point, as a fraction of the boundary length.
+
+    Returns
+    -------
+    ctrl : ndarray of shape (n, 2), dtype float64
+        Control points, pixels.
+    ref_point : ndarray of shape (2,), dtype float64
+        The reference point, pixels.
+
+    Raises
+    ------
+    ValueError
+        As ``body.spline.silhouette_spline``.
+    """
+    if n < 4:
+        raise ValueError(f"a closed cubic B-spline needs n >= 4 control points, got n={n}")
+    p, c, up, along = spline.boundary_and_axis(mask)
+    p = np.ascontiguousarray(p)
+    k = len(p)
+    m = spline.SAMPLES_PER_CTRL * n
+    start, length, samples = kernels.head_first_samples(p, c, up, along, max(2, int(round(ref_window * k))), m)
+    if not length > 0.0:
+        raise ValueError("boundary has zero length: all points coincide")
+    return spline._fit_operator(m, n) @ samples, p[start].copy()
 
 
 def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
