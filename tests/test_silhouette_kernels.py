@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from counterpart.body import spline
-from counterpart.nodes.silhouette import kernels, pipeline
+from counterpart.nodes.silhouette import kernels, pipeline, regions
 from counterpart.nodes.silhouette import samples as samples_mod
 from counterpart.nodes.silhouette.background import BACKGROUND, FOREGROUND, HIGHLIGHT, SHADOW, distortions
 
@@ -439,6 +439,72 @@ def test_compiled_spline_equals_body_splines_numpy_fit(seed: int) -> None:
         pipeline.silhouette_spline(np.zeros((10, 10), bool))
     with pytest.raises(ValueError):
         pipeline.silhouette_spline(np.ones((10, 10), bool), 3)
+
+
+def _region_masks(seed: int, h: int = H, w: int = W) -> list[np.ndarray]:
+    """Foreground masks (h, w) bool: a few blobs and speckle in a random part of the frame (at its
+    edges too, on odd and even rows and columns), and the empty one.
+    """
+    rng = np.random.default_rng(seed)
+    out = [np.zeros((h, w), bool)]
+    for _ in range(12):
+        m = np.zeros((h, w), np.uint8)
+        x0, y0 = int(rng.integers(0, w - 4)), int(rng.integers(0, h - 4))
+        x1, y1 = int(rng.integers(x0 + 4, w + 1)), int(rng.integers(y0 + 4, h + 1))
+        part = m[y0:y1, x0:x1]
+        for _ in range(int(rng.integers(1, 6))):
+            centre = (int(rng.integers(0, x1 - x0)), int(rng.integers(0, y1 - y0)))
+            axes = (int(rng.integers(1, max(2, (x1 - x0) // 4))), int(rng.integers(1, max(2, (y1 - y0) // 3))))
+            cv2.ellipse(part, centre, axes, float(rng.uniform(0, 180)), 0, 360, 1, -1)
+        part[rng.random(part.shape) < 0.01] = 1
+        out.append(m.astype(bool))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_overlap_counts_and_mask_moments_equal_bincount_and_opencvs_moments(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for m in _region_masks(seed):
+        n, comp, _, _ = regions.components_with_stats(m.view(np.uint8))
+        for dtype in (np.uint16, np.int32):
+            comp = comp.astype(dtype)
+            for _ in range(5):
+                # a template anywhere, partly off the frame, contiguous or a view
+                big = rng.random((30, 24)) < 0.6
+                crop = big[: int(rng.integers(1, 30)), : int(rng.integers(1, 24))]
+                x0, y0 = int(rng.integers(-10, W)), int(rng.integers(-10, H))
+                ch, cw = crop.shape
+                ax0, ay0, ax1, ay1 = max(x0, 0), max(y0, 0), min(x0 + cw, W), min(y0 + ch, H)
+                want = np.zeros(n, np.int64)
+                if ax1 > ax0 and ay1 > ay0:
+                    sub = comp[ay0:ay1, ax0:ax1][crop[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0]]
+                    want = np.bincount(sub, minlength=n)
+                np.testing.assert_array_equal(kernels.overlap_counts(comp, crop, x0, y0, n), want)
+                mo = cv2.moments(np.ascontiguousarray(crop).view(np.uint8), binaryImage=True)
+                assert kernels.mask_moments(crop) == (mo["m00"], mo["m10"], mo["m01"])
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("threads", [1, 2])
+def test_components_in_box_equal_those_of_the_whole_frame(seed: int, threads: int) -> None:
+    # the labels' order, the stats and the centroids to the bit (row 0, the background, aside)
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(threads)
+    try:
+        boxed = 0
+        for m in _region_masks(seed, 120, 160):
+            m8 = m.view(np.uint8)
+            _, _, bw, bh = cv2.boundingRect(m8)
+            boxed += 0 < bw * bh < 0.5 * m.size
+            n, comp, stats, cents = regions.components_with_stats(m8)
+            n2, comp2, stats2, cents2 = regions.components_in_box(m8)
+            assert n2 == n and comp2.dtype == comp.dtype
+            np.testing.assert_array_equal(comp2, comp)
+            np.testing.assert_array_equal(stats2[1:], stats[1:])
+            np.testing.assert_array_equal(cents2[1:], cents[1:])
+        assert boxed >= 4
+    finally:
+        cv2.setNumThreads(before)
 
 
 @pytest.mark.parametrize("absorb_k", [4.0, 2.3])

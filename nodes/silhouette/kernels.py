@@ -993,6 +993,66 @@ def head_first_samples(
     return start, total, out
 
 
+@numba.njit(**_JIT)
+def overlap_counts(comp: np.ndarray, crop: np.ndarray, x0: int, y0: int, n: int) -> np.ndarray:
+    """Pixels of each region under a mask placed in the frame: counts[r] = #{p : crop[p] and
+    comp[p + (y0, x0)] = r} over the part of the crop inside the frame
+    (``np.bincount(comp[window][crop_window], minlength=n)``).
+
+    Parameters
+    ----------
+    comp : ndarray of shape (H, W), dtype uint16 or int32
+        Region labels in [0, n).
+    crop : ndarray of shape (h, w), dtype bool
+        The mask, its top-left pixel at (x0, y0) of the frame (either may be off the frame).
+    x0, y0 : int
+        The crop's position, pixels.
+    n : int
+        Number of regions.
+
+    Returns
+    -------
+    ndarray of shape (n,), dtype int64
+        The counts.
+    """
+    h_img, w_img = comp.shape
+    ch, cw = crop.shape
+    out = np.zeros(n, np.int64)
+    for yy in range(max(y0, 0), min(y0 + ch, h_img)):
+        for xx in range(max(x0, 0), min(x0 + cw, w_img)):
+            if crop[yy - y0, xx - x0]:
+                out[comp[yy, xx]] += 1
+    return out
+
+
+@numba.njit(**_JIT)
+def mask_moments(crop: np.ndarray) -> tuple[float, float, float]:
+    """A mask's raw moments m00, m10, m01 (pixel count and sums of x and of y, whole numbers):
+    the same values as ``cv2.moments(crop, binaryImage=True)``'s, exact in float64.
+
+    Parameters
+    ----------
+    crop : ndarray of shape (h, w), dtype bool
+        The mask.
+
+    Returns
+    -------
+    m00, m10, m01 : float
+        Count, sum of x, sum of y over the set pixels.
+    """
+    h, w = crop.shape
+    n = 0
+    sx = 0
+    sy = 0
+    for y in range(h):
+        for x in range(w):
+            if crop[y, x]:
+                n += 1
+                sx += x
+                sy += y
+    return float(n), float(sx), float(sy)
+
+
 def warm() -> None:
     """Load (or, on the first run of an install, compile) every kernel for the argument types the
     models pass, on tiny inputs: called when a model is fitted, so that the first frames after
@@ -1033,6 +1093,12 @@ def warm() -> None:
     offsets = np.zeros(1, np.int64)
     feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    # the tracker's masks: whole arrays (compares) and crops of them (views)
+    crop = np.ones((h, 2 * w), bool)
+    for c in (crop, crop[:, ::2]):
+        for comp in (np.zeros((h, w), np.uint16), np.zeros((h, w), np.int32)):
+            overlap_counts(comp, c, -1, 0, 1)
+        mask_moments(c)
     head_first_samples(pts, pts[0], pts[1], pts[:, 0].copy(), 2, 4)
     texture_ncc(
         idx,

@@ -19,6 +19,8 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from . import kernels
+
 LEFT = "left"
 RIGHT = "right"
 _INFEASIBLE = 1e6
@@ -156,6 +158,45 @@ def components_with_stats(m8: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, 
         x, y of each label's centroid.
     """
     return cv2.connectedComponentsWithStats(m8, connectivity=8, ltype=label_type(*m8.shape))
+
+
+def components_in_box(m8: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """``components_with_stats`` of a mask, labelled inside the bounding box of its set pixels
+    (the people, often a third of the frame): the same labels, and the same stats and centroids of
+    every region; row 0 (the background) is the box's, not the frame's.
+
+    OpenCV labels 2 x 2 blocks in raster order and numbers the regions by the first block of
+    each, so a box whose corner is on even coordinates keeps the frame's blocks and the labels'
+    order. The centroids are OpenCV's sums over the pixels' coordinates divided by the area: the
+    box's sums (whole numbers, recovered exactly from its centroids) are shifted by the box's
+    corner and divided again, the same quotient as over the frame.
+
+    Parameters
+    ----------
+    m8 : ndarray of shape (H, W), dtype uint8
+        The mask (non-zero: foreground).
+
+    Returns
+    -------
+    As ``components_with_stats``, labels (H, W) of the whole frame.
+    """
+    h, w = m8.shape
+    x, y, bw, bh = cv2.boundingRect(m8)
+    x0, y0 = x & ~1, y & ~1
+    if bw == 0 or (x + bw - x0) * (y + bh - y0) > 0.75 * h * w:  # empty, or nothing to gain
+        return components_with_stats(m8)
+    n, lab, stats, cents = cv2.connectedComponentsWithStats(
+        m8[y0 : y + bh, x0 : x + bw], connectivity=8, ltype=label_type(h, w)
+    )
+    comp = np.zeros((h, w), lab.dtype)
+    comp[y0 : y + bh, x0 : x + bw] = lab
+    stats[1:, cv2.CC_STAT_LEFT] += x0
+    stats[1:, cv2.CC_STAT_TOP] += y0
+    area = stats[1:, cv2.CC_STAT_AREA].astype(np.float64)
+    sums = np.rint(cents[1:] * area[:, None])  # exact: the sums are whole numbers far below 2^52
+    cents[1:, 0] = (sums[:, 0] + area * x0) / area
+    cents[1:, 1] = (sums[:, 1] + area * y0) / area
+    return n, comp, stats, cents
 
 
 def _as_u8(m: np.ndarray) -> np.ndarray:
@@ -480,7 +521,7 @@ class PersonTracker:
     def _label_regions(self, m: np.ndarray) -> _Regions:
         """The mask's connected regions and their overlap with each track's predicted mask."""
         h_img, w_img = m.shape
-        n, comp, stats, cents = components_with_stats(_as_u8(m))
+        n, comp, stats, cents = components_in_box(_as_u8(m))
         regions = [r for r in range(1, n) if stats[r, cv2.CC_STAT_AREA] >= self.min_area]
         tracks = self._tracks
         counts = np.zeros((len(tracks), n), np.int64)
@@ -489,8 +530,8 @@ class PersonTracker:
             ch, cw = t.crop.shape
             ax0, ay0, ax1, ay1 = max(x0, 0), max(y0, 0), min(x0 + cw, w_img), min(y0 + ch, h_img)
             if ax1 > ax0 and ay1 > ay0:
-                sub = comp[ay0:ay1, ax0:ax1][t.crop[ay0 - y0 : ay1 - y0, ax0 - x0 : ax1 - x0]]
-                counts[i] = np.bincount(sub, minlength=n)
+                # one compiled pass over the template (a gather and a bincount in numpy)
+                counts[i] = kernels.overlap_counts(comp, t.crop, int(x0), int(y0), n)
         # regions below min_area are no one's: as if the clean-up had removed them (the pipeline
         # leaves that to this one labelling pass instead of labelling the mask twice)
         small = stats[:, cv2.CC_STAT_AREA] < self.min_area
@@ -718,10 +759,14 @@ class PersonTracker:
             crop, x0, y0, merged = piece
             # a region grown well past the person's usual size may hold an emerging newcomer:
             # keep the template of their own shape until it is split off or the size settles
-            grown = not merged and self._established(t, w_img, h_img) and crop.sum() > NEWCOMER_FREEZE * t.usual_area
+            grown = (
+                not merged
+                and self._established(t, w_img, h_img)
+                and np.count_nonzero(crop) > NEWCOMER_FREEZE * t.usual_area
+            )
             t.frozen = t.frozen + 1 if grown else 0
             if t.frozen > NEWCOMER_PATIENCE:  # no newcomer after all: they did change size
-                t.frozen, t.usual_area = 0, float(crop.sum())
+                t.frozen, t.usual_area = 0, float(np.count_nonzero(crop))
             person = self._observe(t, crop, x0, y0, merged, t.frozen > 0, match.within.get(i))
             people.append(person)
             alive.append(t)
@@ -875,9 +920,9 @@ class PersonTracker:
         """
         # the centroid from the pixel sums (whole numbers, exact in float64: the means of the
         # pixels' coordinates to the last bit), without listing the pixels
-        mo = cv2.moments(crop.view(np.uint8), binaryImage=True)
-        area = int(mo["m00"])
-        c = np.array([mo["m10"] / mo["m00"] + x0, mo["m01"] / mo["m00"] + y0])
+        m00, m10, m01 = kernels.mask_moments(crop)  # cv2.moments' first three, to the bit
+        area = int(m00)
+        c = np.array([m10 / m00 + x0, m01 / m00 + y0])
         # In a merge, a piece much smaller than the person's template (they are mostly hidden or
         # the split is uncertain) says little about where they are: keep the prediction then.
         # A grown region kept out of the template: its centroid is pulled by what joined it.
