@@ -507,6 +507,56 @@ def test_components_in_box_equal_those_of_the_whole_frame(seed: int, threads: in
         cv2.setNumThreads(before)
 
 
+def _leg_ncc_ref(flat, sh, frame, background, r):
+    """The leg step's scale-1 correlation before ``kernels.leg_ncc``: float32 box filters
+    (BORDER_REFLECT) over the candidates' box, centred on its means.
+    """
+    h, w = sh.shape
+    gy, gx = np.divmod(flat, w)
+    by0, by1 = max(int(gy.min()) - r, 0), min(int(gy.max()) + r + 1, h)
+    bx0, bx1 = max(int(gx.min()) - r, 0), min(int(gx.max()) + r + 1, w)
+    k = (2 * r + 1, 2 * r + 1)
+    at = (gy - by0, gx - bx0)
+
+    def box(a):
+        return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)[at]
+
+    m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
+    grey = cv2.transform(frame[by0:by1, bx0:bx1].astype(np.float32), np.ones((1, 3), np.float32))
+    e = background[by0:by1, bx0:bx1]
+    grey -= np.float32(grey.mean())
+    e = e - np.float32(e.mean())
+    inv_n = 1.0 / np.maximum(box(m), 1.0)
+    em, gm = e * m, grey * m
+    me, mi = box(em) * inv_n, box(gm) * inv_n
+    ve = box(em * e) * inv_n - me * me
+    vi = box(gm * grey) * inv_n - mi * mi
+    cov = box(gm * e) * inv_n - mi * me
+    return cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_leg_ncc_equals_the_box_filters_in_opencv_to_float32_rounding(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    h, w, r = 40, 36, 3
+    sh = np.where(rng.random((h, w)) < 0.6, 255, 0).astype(np.uint8)
+    background = (rng.random((h, w)) * 700.0).astype(np.float32)
+    # the frame: a dimmed copy of the background's texture on the left, unrelated on the right
+    base = np.clip(background / 3.0 * 0.5 + rng.normal(0.0, 4.0, (h, w)), 0, 255)
+    base[:, w // 2 :] = rng.random((h, w - w // 2)) * 255
+    frame = np.repeat(base[:, :, None], 3, axis=2).astype(np.uint8)
+    # a background view into a padded array, as the model hands it over
+    padded = cv2.copyMakeBorder(background, 2, 2, 2, 2, cv2.BORDER_REFLECT)
+    view = padded[2:-2, 2:-2]
+    # candidates over the whole frame (its edges too) and in a corner box
+    for flat in (np.sort(rng.choice(h * w, 60, replace=False)), np.array([0, 1, w, w + 1, 2 * w + 3], np.int64)):
+        flat = flat.astype(np.int64)
+        want = _leg_ncc_ref(flat, sh, frame, background, r)
+        got = kernels.leg_ncc(flat, sh, frame, view, r)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-5)
+    assert (got > 0.5).any() or (want > 0.5).any()
+
+
 @pytest.mark.parametrize("absorb_k", [4.0, 2.3])
 def test_advance_still_equals_the_still_runs_in_numpy(absorb_k: float) -> None:
     rng = np.random.default_rng(3)

@@ -192,19 +192,14 @@ def _legs(
     A leg is a run of shadow down a column from the foreground, and a run along a row: pixels
     next to each other along a column or a row are in one region (of 8-connected fg | sh), so
     both runs can be measured on the whole masks, over the rows the starts reach, and only the
-    limits are each region's (from its foreground height). The correlation is worked out for each
-    region on its own box (a few per frame).
+    limits are each region's (from its foreground height). The correlation is one compiled pass
+    over each candidate's window (``kernels.leg_ncc``), or on blocks (``leg_scale`` > 1) on each
+    region's own box (a few per frame).
     """
     h, w = fg.shape
     r = config.leg_window // 2
-    k = (config.leg_window, config.leg_window)
     scale = config.leg_scale
     block_k = max(3, (config.leg_window // scale) | 1)  # the window in blocks: odd, about as wide
-
-    def box(a: np.ndarray, at: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-        # the window sums read at the candidates: the moments below are per pixel, so the same
-        # float32 values as on the whole box, at a fraction of the work
-        return cv2.boxFilter(a, -1, k, normalize=False, borderType=cv2.BORDER_REFLECT)[at]
 
     # The hanging pixels, in one compiled pass over the starts: a leg pixel hangs below a start
     # (shadow straight under foreground) of its region, down the run of shadow from it (fg ends
@@ -227,6 +222,11 @@ def _legs(
     )
     if flat.size == 0:
         return np.empty(0, np.intp)
+    if scale == 1:
+        # normalised cross-correlation over the window's shadow pixels (of any region): one
+        # compiled pass over each candidate's window (the region boxes' box filters before)
+        ncc = kernels.leg_ncc(flat, sh, np.ascontiguousarray(frame), background, r)
+        return flat[ncc < config.leg_ncc]
     out = []
     # region by region, in the order of their labels, each one's pixels in raster order
     order = np.argsort(c, kind="stable")
@@ -234,34 +234,15 @@ def _legs(
     c = c[order]
     cut = np.flatnonzero(np.diff(c)) + 1
     for gy, gx in zip(np.split(ys, cut), np.split(xs, cut)):
-        # normalised cross-correlation over the window's shadow pixels (of any region), on the
-        # candidates' box with a margin of the window's half side: the sums over the whole frame
+        # on the candidates' box with a margin of the window's half side
         by0, by1 = max(int(gy.min()) - r, 0), min(int(gy.max()) + r + 1, h)
         bx0, bx1 = max(int(gx.min()) - r, 0), min(int(gx.max()) + r + 1, w)
-        if scale > 1:
-            # the box on whole blocks: its near corner down to the block grid, a part block at
-            # the frame's far edge left out (its candidates read the last whole block)
-            by0, bx0 = by0 - by0 % scale, bx0 - bx0 % scale
-            by1, bx1 = by0 + max((by1 - by0) // scale, 1) * scale, bx0 + max((bx1 - bx0) // scale, 1) * scale
-            box_sl = (slice(by0, by1), slice(bx0, bx1))
-            ncc = _block_ncc(sh[box_sl], frame[box_sl], background[box_sl], gy - by0, gx - bx0, scale, block_k)
-            out.append((gy * w + gx)[ncc < config.leg_ncc])
-            continue
-        m = (sh[by0:by1, bx0:bx1] != 0).astype(np.float32)
-        # the sum of three whole numbers below 256: exact in float32 in any order
-        grey = cv2.transform(frame[by0:by1, bx0:bx1].astype(np.float32), _GREY_SUM)
-        e = background[by0:by1, bx0:bx1]
-        # centred: the moments below are differences of float32 sums, exact enough only near zero
-        grey -= np.float32(grey.mean())
-        e = e - np.float32(e.mean())
-        at = (gy - by0, gx - bx0)
-        inv_n = 1.0 / np.maximum(box(m, at), 1.0)
-        em, gm = e * m, grey * m
-        me, mi = box(em, at) * inv_n, box(gm, at) * inv_n
-        ve = box(em * e, at) * inv_n - me * me
-        vi = box(gm * grey, at) * inv_n - mi * mi
-        cov = box(gm * e, at) * inv_n - mi * me
-        ncc = cov / np.sqrt(np.maximum(vi, 0.0) * np.maximum(ve, 0.0) + 1e-6)
+        # the box on whole blocks: its near corner down to the block grid, a part block at
+        # the frame's far edge left out (its candidates read the last whole block)
+        by0, bx0 = by0 - by0 % scale, bx0 - bx0 % scale
+        by1, bx1 = by0 + max((by1 - by0) // scale, 1) * scale, bx0 + max((bx1 - bx0) // scale, 1) * scale
+        box_sl = (slice(by0, by1), slice(bx0, bx1))
+        ncc = _block_ncc(sh[box_sl], frame[box_sl], background[box_sl], gy - by0, gx - bx0, scale, block_k)
         out.append((gy * w + gx)[ncc < config.leg_ncc])
     return np.concatenate(out) if out else np.empty(0, np.intp)
 

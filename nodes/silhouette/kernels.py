@@ -11,7 +11,8 @@ Every kernel does the same integer and float32 operations, in the same order, as
 formulation it replaces (numba without fastmath follows IEEE), so the outputs are bit-identical;
 the tests check each against that formulation on random inputs. The one exception is
 ``texture_ncc``: numpy summed its windows in float32 in its own (SIMD) order, which a loop cannot
-reproduce, so it sums in float64 and agrees to float32 rounding.
+reproduce, so it sums in float64 and agrees to float32 rounding; ``leg_ncc`` likewise (OpenCV's
+float32 box filters before).
 """
 
 from __future__ import annotations
@@ -1053,6 +1054,74 @@ def mask_moments(crop: np.ndarray) -> tuple[float, float, float]:
     return float(n), float(sx), float(sy)
 
 
+@numba.njit(**_JIT)
+def leg_ncc(flat: np.ndarray, sh: np.ndarray, frame: np.ndarray, background: np.ndarray, r: int) -> np.ndarray:
+    """The body-shadow leg step's correlation at the pixels ``flat``.
+
+    Each over its (2r+1) x (2r+1) window's shadow pixels (read across the frame's edges as
+    ``cv2.BORDER_REFLECT`` pads): with m the window's shadow indicator, n = sum m, E the
+    background's grey level and I the frame's (b + g + r):
+
+        m(E) = sum m E / n,  var(E) = sum m E^2 / n - m(E)^2   (the same for I),
+        cov = sum m I E / n - m(I) m(E),
+        NCC = cov / sqrt(max(var(I), 0) max(var(E), 0) + 1e-6).
+
+    Float64 window sums, one pass per pixel: the numpy formulation it replaces took float32 box
+    filters of the region's box, centred on its means, so the two agree to float32 rounding.
+
+    Parameters
+    ----------
+    flat : ndarray of shape (K,), dtype int64
+        Flat pixel indices.
+    sh : ndarray of shape (H, W), dtype uint8
+        Non-zero on the shadow pixels.
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        The frame.
+    background : ndarray of shape (H, W), dtype float32
+        The background's grey levels E.
+    r : int
+        Half the window side.
+
+    Returns
+    -------
+    ndarray of shape (K,), dtype float64
+        NCC at each pixel.
+    """
+    h, w = sh.shape
+    out = np.empty(flat.size, np.float64)
+    for i in range(flat.size):
+        p = flat[i]
+        y = p // w
+        x = p - y * w
+        n = 0
+        se = 0.0
+        see = 0.0
+        si = 0.0
+        sii = 0.0
+        sie = 0.0
+        for dy in range(-r, r + 1):
+            yy = _reflect_index(y + dy, h)
+            for dx in range(-r, r + 1):
+                xx = _reflect_index(x + dx, w)
+                if sh[yy, xx] != 0:
+                    ev = np.float64(background[yy, xx])
+                    g = np.float64(np.int64(frame[yy, xx, 0]) + np.int64(frame[yy, xx, 1]) + np.int64(frame[yy, xx, 2]))
+                    n += 1
+                    se += ev
+                    see += ev * ev
+                    si += g
+                    sii += g * g
+                    sie += g * ev
+        inv_n = 1.0 / max(n, 1)
+        me = se * inv_n
+        mi = si * inv_n
+        ve = see * inv_n - me * me
+        vi = sii * inv_n - mi * mi
+        cov = sie * inv_n - mi * me
+        out[i] = cov / np.sqrt(max(vi, 0.0) * max(ve, 0.0) + 1e-6)
+    return out
+
+
 def warm() -> None:
     """Load (or, on the first run of an install, compile) every kernel for the argument types the
     models pass, on tiny inputs: called when a model is fitted, so that the first frames after
@@ -1092,6 +1161,10 @@ def warm() -> None:
     advance_still(np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one)
     offsets = np.zeros(1, np.int64)
     feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
+    # the background's grey levels: a view into the padded array (``HorprasertBackground.grey_``)
+    leg_ncc(
+        idx, labels.reshape(h, w), np.zeros((h, w, 3), np.uint8), np.zeros((h + 2, w + 2), np.float32)[1:-1, 1:-1], 1
+    )
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     # the tracker's masks: whole arrays (compares) and crops of them (views)
     crop = np.ones((h, 2 * w), bool)
