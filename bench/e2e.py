@@ -231,7 +231,10 @@ def cpu_figures(bag: Path, cpu: CpuSamples, warmup_s: float) -> dict[str, object
             if np.isfinite(ms):
                 out["nodes"][node] = round(ms, 1)
                 total += ms
-    fps = next((m.fps for _, _, m in BagReader(bag).messages(["pose"], decode_messages=True) if m.fps > 0), 0.0)
+    # the camera's rate as the tracker passes it on: its first poses can carry the rate of the
+    # silhouettes' stamps instead (before a frame has come with them), spaced by the background's fit
+    rates = [m.fps for _, _, m in BagReader(bag).messages(["pose"], decode_messages=True) if m.fps > 0]
+    fps = float(np.median(rates)) if rates else 0.0
     out["cpu_ms_per_frame"] = round(total, 1)
     out["cores_needed"] = round(total * fps / 1e3, 2)
     return out

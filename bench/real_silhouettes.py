@@ -78,6 +78,8 @@ DATA = (
 #: first scored frame: the node reports people from the first frame, but the people found on the
 #: very first frames matter less than a stable answer afterwards (the issue's measure)
 FIRST_SCORED = 10
+#: frames the background is trained on (``--train-frames``)
+TRAIN_FRAMES = 30
 #: a person is scored on a frame when at least this many of their keypoints are visible
 MIN_VISIBLE = 4
 VIS = 0.5
@@ -278,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--every", type=int, default=1, help="use every K-th clip of the split (quick looks)")
     ap.add_argument("--max-clips", type=int, default=None)
     ap.add_argument("--only", default="", help="comma-separated clip stems (e.g. 0_1_4) to run alone")
-    ap.add_argument("--train-frames", type=int, default=30)
+    ap.add_argument("--train-frames", type=int, default=TRAIN_FRAMES)
     ap.add_argument("--threads", type=int, default=1, help="OpenCV threads")
     ap.add_argument("--no-baseline", action="store_true", help="skip the baseline (tuning runs)")
     ap.add_argument("--out", help="also write the JSON report to this file")

@@ -51,6 +51,19 @@ person 0 the left one at frame 0) on every frame the video decodes:
   pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20, pck10_box, pck20_box,
   joints scored].
 
+Silhouettes (``--no-silhouettes`` skips them): ``people_found`` and ``keypoint_coverage`` as
+``bench/real_silhouettes.py`` defines them (the silhouette node's extractor with its defaults, the
+background trained on each clip's first frames with the people in view, scored from frame 10), over
+every clip of the report split (odd first number), the tune split's under ``silhouette_details``.
+
+Speed (``--speed-frames``, default 600; 0 skips it): the real-time demo graph (``launch/demo.yaml``,
+as ``bench/e2e.py`` runs it) on each of the ``--reference`` clips at its own 30 fps, looped to that many
+frames with both people tracked, and on the simulator in the same run: ``fps`` (median over the
+clips of the sustained frame rate through the graph), ``latency_p95_ms`` (median of the steady-state
+p95 capture-to-render latency, after the first 3 s), ``fps_sim`` and ``latency_p95_ms_sim``; per clip,
+with the share of frames the tracker and the partner kept up with and the cores the graph needed,
+under ``speed_details``.
+
 Camera calibration from the people (``--calib-seeds``, default 50; 0 skips it): ``calib_height_err``,
 ``calib_tilt_err_deg``, ``calib_focal_err`` (medians of the absolute errors) and ``calib_within``
 (share of seeds within 10% / 3 degrees / 10%) on the simulator with random cameras, from each
@@ -61,7 +74,8 @@ default camera's, the true head/foot points', the share the calibration node wou
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
-[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-demo] [--tracks DIR]``
+[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-demo] [--tracks DIR]
+[--no-silhouettes] [--speed-frames N] [--calib-seeds N]``
 (``--tracks``: keep the tracks, and reuse those already there). Last stdout line: one JSON object.
 """
 
@@ -503,6 +517,72 @@ def run_demos(clips: list[Path], work: Path, timeout: float, reference: int) -> 
     return result
 
 
+def run_silhouettes() -> dict[str, Any]:
+    """The silhouette part: ``bench/real_silhouettes.py``'s figures of the silhouette node's
+    extractor (its defaults) over every clip of the set, ``people_found`` and ``keypoint_coverage``
+    on the report split (top level) and the tune split (``silhouette_details``).
+    """
+    from real_silhouettes import TRAIN_FRAMES as train_frames
+    from real_silhouettes import clip_paths, run_clip, summarise
+
+    out: dict[str, Any] = {"people_found": None, "keypoint_coverage": None}
+    details: dict[str, Any] = {"train_frames": train_frames, "split": "tune: even first number; report: odd"}
+    for split in ("tune", "report"):
+        paths = clip_paths(split)
+        rows = []
+        for p in paths:
+            rows.append(run_clip(p, True, train_frames))
+            print(f"silhouettes {split} {p.stem}: {json.dumps(summarise(rows[-1:])['people_found'])}", file=sys.stderr)
+        if not rows:
+            continue
+        s = summarise(rows)
+        details[split] = {
+            k: s[k] for k in ("people_found", "keypoint_coverage", "extra_people", "misses", "fps", "clips")
+        }
+        if split == "report":
+            out.update(people_found=s["people_found"], keypoint_coverage=s["keypoint_coverage"])
+    out["silhouette_details"] = details
+    return out
+
+
+def run_speed(clips: list[Path], frames: int, warmup_s: float = 3.0) -> dict[str, Any]:
+    """The speed part: the real-time demo graph (``launch/demo.yaml``, as ``bench/e2e.py`` runs it)
+    on each of ``clips`` at its own frame rate, looped to ``frames`` frames with both people tracked,
+    and on the simulator beside them in the same run. ``fps``: the median over the clips of the
+    sustained frame rate through the graph; ``latency_p95_ms``: the median of the steady-state p95
+    capture-to-render latency (after ``warmup_s``); the simulator's as ``fps_sim`` and
+    ``latency_p95_ms_sim``; per clip and the steady shares under ``speed_details``.
+    """
+    from e2e import realtime
+
+    from counterpart.apps.demo import ensure_models
+
+    ensure_models()
+    work = Path(tempfile.mkdtemp(prefix="cp-real-speed-"))
+    keys = ("fps_sustained", "source_fps", "latency_p95_steady_ms", "tracker_frac_steady", "partner_frac_steady")
+    keys += ("cores_needed", "drop_frac")
+    runs: dict[str, dict[str, Any]] = {}
+    for clip in clips:
+        sets = {"camera.source": str(clip.resolve()), "camera.loop": True, "tracker.people": ["left", "right"]}
+        r = realtime(work, f"rt-{clip.stem}", "demo.yaml", frames, warmup_s, sets)
+        runs[clip.stem] = {k: r.get(k) for k in keys}
+    sim = realtime(work, "rt-sim", "demo.yaml", frames, warmup_s)
+    real = list(runs.values())
+    return {
+        "fps": round(float(np.median([r["fps_sustained"] for r in real])), 2) if real else None,
+        "latency_p95_ms": round(float(np.median([r["latency_p95_steady_ms"] for r in real])), 1) if real else None,
+        "fps_sim": sim["fps_sustained"],
+        "latency_p95_ms_sim": sim["latency_p95_steady_ms"],
+        "speed_details": {
+            "graph": "launch/demo.yaml in real time, two people tracked, each clip looped",
+            "frames": frames,
+            "load_avg_1min": round(os.getloadavg()[0], 2),
+            "clips": runs,
+            "sim": {k: sim.get(k) for k in keys},
+        },
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--clips", default="12", help="'all' or how many clips, spread over the set (default 12)")
@@ -534,6 +614,15 @@ def main() -> None:
         default=50,
         help="simulated random cameras for the calibration figures (bench/self_calibration.py); 0 skips",
     )
+    ap.add_argument(
+        "--no-silhouettes", action="store_true", help="skip the silhouette part (people_found, keypoint_coverage)"
+    )
+    ap.add_argument(
+        "--speed-frames",
+        type=int,
+        default=600,
+        help="frames of each reference clip played in real time for the speed figures (fps, latency_p95_ms); 0 skips",
+    )
     args = ap.parse_args()
     if not CLIPS.is_dir():
         sys.exit(f"bench/real_video.py: {CLIPS} not found (the shared data, see ../shared/data/README.md)")
@@ -546,6 +635,10 @@ def main() -> None:
         if args.pck_classes:
             pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
         result.update(run_pck(pck, work, args.jobs))
+    if not args.no_silhouettes:
+        result.update(run_silhouettes())
+    if args.speed_frames and args.reference:
+        result.update(run_speed(clips[: args.reference], args.speed_frames))
     if args.calib_seeds:  # the camera from the people: simulator truth, and the spread on these clips
         from self_calibration import real_figures, sim_figures
 
