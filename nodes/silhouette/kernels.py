@@ -625,6 +625,18 @@ def _reflect_index(i: int, n: int) -> int:
     return i
 
 
+@numba.njit(**_INLINE)
+def _window_ncc(inv_n: float, me: float, ve: float, si: float, sii: float, sie: float) -> float:
+    """NCC of a window from its sums over n pixels (``inv_n`` = 1 / max(n, 1)): the background's
+    mean and variance ``me``, ``ve``, and the frame's sum, sum of squares and cross sum with the
+    background ``si``, ``sii``, ``sie`` (the formula in :func:`texture_ncc`).
+    """
+    mi = si * inv_n
+    vi = sii * inv_n - mi * mi
+    cov = sie * inv_n - mi * me
+    return cov / np.sqrt(max(vi, 0.0) * max(ve, 0.0) + 1e-6)
+
+
 @numba.njit(**_JIT)
 def texture_ncc(
     idx: np.ndarray,
@@ -714,10 +726,7 @@ def texture_ncc(
                     si += g
                     sii += g * g
                     sie += g * e_pad[y + dy + r, x + dx + r]
-        mi = si * inv_n
-        vi = sii * inv_n - mi * mi
-        cov = sie * inv_n - mi * me
-        out[i] = cov / np.sqrt(max(vi, 0.0) * max(ve, 0.0) + 1e-6)
+        out[i] = _window_ncc(inv_n, me, ve, si, sii, sie)
     return out
 
 
@@ -1114,11 +1123,8 @@ def leg_ncc(flat: np.ndarray, sh: np.ndarray, frame: np.ndarray, background: np.
                     sie += g * ev
         inv_n = 1.0 / max(n, 1)
         me = se * inv_n
-        mi = si * inv_n
         ve = see * inv_n - me * me
-        vi = sii * inv_n - mi * mi
-        cov = sie * inv_n - mi * me
-        out[i] = cov / np.sqrt(max(vi, 0.0) * max(ve, 0.0) + 1e-6)
+        out[i] = _window_ncc(inv_n, me, ve, si, sii, sie)
     return out
 
 
