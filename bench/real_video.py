@@ -545,22 +545,30 @@ def run_silhouettes() -> dict[str, Any]:
     return out
 
 
-def run_speed(clips: list[Path], frames: int, warmup_s: float = 3.0) -> dict[str, Any]:
+def run_speed(clips: list[Path], frames: int, work: Path, warmup_s: float = 3.0) -> dict[str, Any]:
     """The speed part: the real-time demo graph (``launch/demo.yaml``, as ``bench/e2e.py`` runs it)
     on each of ``clips`` at its own frame rate, looped to ``frames`` frames with both people tracked,
     and on the simulator beside them in the same run. ``fps``: the median over the clips of the
     sustained frame rate through the graph; ``latency_p95_ms``: the median of the steady-state p95
     capture-to-render latency (after ``warmup_s``); the simulator's as ``fps_sim`` and
-    ``latency_p95_ms_sim``; per clip and the steady shares under ``speed_details``.
+    ``latency_p95_ms_sim``; per clip and the steady shares under ``speed_details``. The graphs' bags
+    go under ``work``.
     """
     from e2e import realtime
 
     from counterpart.apps.demo import ensure_models
 
     ensure_models()
-    work = Path(tempfile.mkdtemp(prefix="cp-real-speed-"))
-    keys = ("fps_sustained", "source_fps", "latency_p95_steady_ms", "tracker_frac_steady", "partner_frac_steady")
-    keys += ("cores_needed", "drop_frac")
+    work.mkdir(parents=True, exist_ok=True)
+    keys = (
+        "fps_sustained",
+        "source_fps",
+        "latency_p95_steady_ms",
+        "tracker_frac_steady",
+        "partner_frac_steady",
+        "cores_needed",
+        "drop_frac",
+    )
     runs: dict[str, dict[str, Any]] = {}
     for clip in clips:
         sets = {"camera.source": str(clip.resolve()), "camera.loop": True, "tracker.people": ["left", "right"]}
@@ -638,7 +646,7 @@ def main() -> None:
     if not args.no_silhouettes:
         result.update(run_silhouettes())
     if args.speed_frames and args.reference:
-        result.update(run_speed(clips[: args.reference], args.speed_frames))
+        result.update(run_speed(clips[: args.reference], args.speed_frames, work / "speed"))
     if args.calib_seeds:  # the camera from the people: simulator truth, and the spread on these clips
         from self_calibration import real_figures, sim_figures
 
