@@ -1,7 +1,7 @@
 """``counterpart demo``: the whole graph end to end on the built-in scene (or your video, or a camera).
 
 1. builds the default models if they are not cached yet (progress on stderr);
-2. launches ``launch/lockstep.yaml`` on the simulator's handshake or on ``--input FILE`` (a recording:
+2. launches ``launch/lockstep.yaml`` on the simulator's handshake or on ``--input FILE`` (a recording, a video file or a folder of frames:
    every frame through all six nodes, however slow the machine), ``launch/demo.yaml`` with
    ``--realtime`` or ``--serve`` (real time: a node that cannot keep up drops frames), or
    ``launch/live.yaml`` with ``--live``;
@@ -43,7 +43,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         The command's parser.
     """
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--input", metavar="FILE", help="run on your own video file instead of the built-in scene")
+    src.add_argument(
+        "--input",
+        metavar="FILE",
+        help="run on your own recording instead of the built-in scene: a video file, or a folder of numbered "
+        "PNG or JPEG frames (played at 25 fps)",
+    )
     src.add_argument("--live", action="store_true", help="use the V4L2 camera (launch/live.yaml)")
     p.add_argument(
         "--realtime",
@@ -197,7 +202,11 @@ def _graph_file(args: argparse.Namespace) -> tuple[str, list[str]]:
     """
     if args.live:
         return "live.yaml", [f"camera.source={args.device}"]
-    source = Path(args.input).resolve() if args.input else f"sim:{args.scenario}?seed={args.seed}"
+    if args.input:
+        path = Path(args.input).resolve()
+        source = f"folder:{path}" if path.is_dir() else str(path)
+    else:
+        source = f"sim:{args.scenario}?seed={args.seed}"
     return ("demo.yaml" if args.realtime or args.serve else "lockstep.yaml"), [f"camera.source={source}"]
 
 
@@ -256,8 +265,8 @@ def main(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    if args.input and not Path(args.input).is_file():
-        print(f"counterpart demo: --input {args.input}: no such file", file=sys.stderr)
+    if args.input and not Path(args.input).exists():
+        print(f"counterpart demo: --input {args.input}: no such file or folder", file=sys.stderr)
         return 2
     out = Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)

@@ -48,7 +48,7 @@ class FrameProgress:
 
 
 def add_video_arguments(p: argparse.ArgumentParser, out_help: str, max_frames_help: str) -> None:
-    """Add the arguments of a command over one video file: ``video``, ``--out``, ``--train-frames``, ``--max-frames``.
+    """Add the arguments of a command over one recording (a video file or a folder of frames): ``video``, ``--out``, ``--train-frames``, ``--max-frames``.
 
     Parameters
     ----------
@@ -59,7 +59,7 @@ def add_video_arguments(p: argparse.ArgumentParser, out_help: str, max_frames_he
     max_frames_help : str
         Help text of ``--max-frames``.
     """
-    p.add_argument("video", help="the video file (anything OpenCV decodes)")
+    p.add_argument("video", help="the video file (anything OpenCV decodes), or a folder of numbered PNG or JPEG frames")
     p.add_argument("--out", required=True, help=out_help)
     p.add_argument(
         "--train-frames",

@@ -122,3 +122,24 @@ def test_every_short_input_ends_by_itself_and_says_why_it_drew_no_partner(
     else:  # the background is learnt from the 5 frames there are (the people stand still in them)
         assert "background learnt from 5 frames" in res.stderr, res.stderr[-3000:]
         assert res.returncode == (0 if stats["partner_drawn"] else 1)
+
+
+@pytest.mark.timeout(300)
+def test_a_folder_of_frames_is_an_input_too(clip: Path, env: dict[str, str], tmp_path: Path) -> None:
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    cap = cv2.VideoCapture(str(clip))
+    n = 0
+    while n < 12:
+        ok, frame = cap.read()
+        assert ok
+        cv2.imwrite(str(folder / f"{n:04d}.png"), frame)
+        n += 1
+    cap.release()
+    out = tmp_path / "out"
+    res, stats = _demo(env, out, "--input", str(folder), timeout=240)
+    assert res.returncode in (0, 1) and (stats["frames_in"], stats["frames_out"]) == (12, 12), res.stderr[-3000:]
+    assert stats["fps_in"] == stats["fps_out"] == 25.0  # a folder declares no rate: the camera's 25
+    assert _video_frames_and_fps(out) == (12, 25.0)
+    res, _ = _demo(env, tmp_path / "out2", "--input", str(tmp_path / "missing"), timeout=60)
+    assert res.returncode == 2 and "no such file or folder" in res.stderr

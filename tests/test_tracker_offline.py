@@ -82,7 +82,7 @@ def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarr
     video, _, _ = recording
     out = tmp_path / "poses.npz"
     r = _track(str(tmp_path / "missing.avi"), "--out", str(out))
-    assert r.returncode == 2 and "video file not found" in r.stderr
+    assert r.returncode == 2 and "video file or image folder not found" in r.stderr
     junk = tmp_path / "junk.avi"
     junk.write_bytes(b"not a video" * 100)
     r = _track(str(junk), "--out", str(out))

@@ -30,14 +30,13 @@ from urllib.parse import parse_qsl
 import cv2
 import numpy as np
 
+from counterpart.body.image_sequence import IMAGE_PATTERN, list_images
 from counterpart.bus.plugins import PluginError, simulator
 
 log = logging.getLogger(__name__)
 
 #: waits between retries of a failed live read (seconds); after the last one the stream ends
 RETRY_DELAYS_S: tuple[float, ...] = (0.1, 0.2, 0.4, 0.8)
-
-IMAGE_PATTERN = "*.png|*.jpg"
 
 
 class SourceError(ValueError):
@@ -265,10 +264,7 @@ class ImageFolderSource:
         if not self.folder.is_dir():
             what = "is a file, not a folder" if self.folder.exists() else "does not exist"
             raise SourceError(f"image folder '{self.folder}' {what} (working directory {Path.cwd()}); check the path")
-        names: set[str] = set()
-        for pat in filter(None, (s.strip() for s in self.pattern.split("|"))):
-            names.update(glob.glob(os.path.join(glob.escape(str(self.folder)), pat)))
-        self.files = sorted(Path(n) for n in names if os.path.isfile(n))
+        self.files = list_images(self.folder, self.pattern)
         if not self.files:
             raise SourceError(
                 f"image folder '{self.folder}' has no file matching '{self.pattern}'; check the folder and pattern"

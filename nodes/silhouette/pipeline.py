@@ -19,6 +19,7 @@ import numpy as np
 
 from counterpart.body import spline
 from counterpart.body.camera import Camera, camera_for_size
+from counterpart.body.image_sequence import ImageSequenceCapture
 
 from . import kernels
 from .backends import HorprasertSubtractor, make_subtractor
@@ -318,10 +319,13 @@ def silhouette_spline(mask: np.ndarray, n: int = 32, ref_window: float = 0.05) -
     return spline._fit_operator(m, n) @ samples, p[start].copy()
 
 
-def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture:
+def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture | ImageSequenceCapture:
+    """A video file, or a folder of numbered images read as one (``body.image_sequence``)."""
     p = os.fspath(path)
+    if os.path.isdir(p):
+        return ImageSequenceCapture(p)
     if not os.path.isfile(p):
-        raise FileNotFoundError(f"video file not found: {p!r}")
+        raise FileNotFoundError(f"video file or image folder not found: {p!r}")
     cap = cv2.VideoCapture(p)
     if not cap.isOpened():
         cap.release()
@@ -335,7 +339,7 @@ def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> 
     Parameters
     ----------
     path : str or os.PathLike
-        The video file.
+        The video file, or a folder of numbered PNG or JPEG frames.
     max_frames : int or None, default=None
         Frames to read at most (None: all).
 
@@ -347,7 +351,7 @@ def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> 
     Raises
     ------
     FileNotFoundError
-        For a missing file.
+        For a missing file or folder.
     ValueError
         For one OpenCV cannot decode.
     """
@@ -372,7 +376,7 @@ def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
     Parameters
     ----------
     path : str or os.PathLike
-        The video file.
+        The video file, or a folder of numbered PNG or JPEG frames.
 
     Returns
     -------
@@ -384,7 +388,7 @@ def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
     Raises
     ------
     FileNotFoundError
-        For a missing file.
+        For a missing file or folder.
     ValueError
         For one OpenCV cannot open.
     """
@@ -411,7 +415,7 @@ def iter_video(
     Parameters
     ----------
     path : str or os.PathLike
-        The video file.
+        The video file, or a folder of numbered PNG or JPEG frames.
     extractor : SilhouetteExtractor
         The extractor to run.
     max_frames : int or None, default=None
@@ -433,7 +437,7 @@ def iter_video(
     Raises
     ------
     FileNotFoundError
-        For a missing file.
+        For a missing file or folder.
     ValueError
         For one OpenCV cannot decode (fewer than 2 training frames, or no frame at all).
     """
@@ -528,7 +532,7 @@ def extract_video(
     Parameters
     ----------
     path : str or os.PathLike
-        The video file.
+        The video file, or a folder of numbered PNG or JPEG frames.
     out_npz : str or os.PathLike
         The file to write.
     max_frames : int or None, default=None
@@ -548,7 +552,7 @@ def extract_video(
     Raises
     ------
     FileNotFoundError
-        For a missing file.
+        For a missing file or folder.
     ValueError
         For one OpenCV cannot decode.
     """
