@@ -49,6 +49,11 @@ _MOVED_FRAC = 0.01
 #: fraction of its pixels changed between the two (a person fills about half of their box: a
 #: walker who has left it changes far more)
 _SAME_FRAC = 0.2
+#: the least share of a box that must differ from its temporal median for those pixels to be taken
+#: as the person in it, and the share of them back to the median that shows the person has left
+#: (``_walked_off``)
+_PERSON_SHARE = 0.05
+_GONE_FRAC = 0.5
 #: the bottom fraction of a person's box that holds their feet, and their shadow on the ground
 _FEET_BAND = 0.25
 #: the score a still person (``_still_person``) reaches at least once
@@ -160,21 +165,64 @@ def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tup
     return boxes[keep], scores[keep], moved[keep]
 
 
-def _boxes_for(frames: np.ndarray, j: int, found: dict[int, _Found], step: int) -> tuple[np.ndarray, np.ndarray]:
+def _boxes_for(
+    frames: np.ndarray, j: int, found: dict[int, _Found], step: int, walkers: set[tuple[int, int]]
+) -> tuple[np.ndarray, np.ndarray]:
     """The boxes (K, 4) in which frame j is searched for people, and whether each holds a person
     standing still (K,) bool. They are the boxes detected within ``step`` frames of j, and the
     boxes of a still person (``_still_person``) detected further away whose content frame j
     still shows (fewer than ``_SAME_FRAC`` of the box's pixels changed by more than
-    ``_MOVED_GREY``). ``found``: detection frame -> (boxes (K, 4), scores (K,), moved (K,)).
+    ``_MOVED_GREY``), unless the person walked off (``walkers``: (frame, index) of the boxes
+    ``_walked_off`` holds). ``found``: detection frame -> (boxes (K, 4), scores (K,), moved (K,)).
     """
     out, still = [], []
     for k, (boxes, scores, moved) in found.items():
-        for b, s, m in zip(boxes, scores, moved):
-            stays = _still_person(found, k, b, s, m) and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
+        for i, (b, s, m) in enumerate(zip(boxes, scores, moved)):
+            stays = (
+                (k, i) not in walkers
+                and _still_person(found, k, b, s, m)
+                and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
+            )
             if abs(j - k) <= step or stays:
                 out.append(b)
                 still.append(stays)
     return np.array(out, np.int32).reshape(-1, 4), np.array(still, bool)
+
+
+def _walked_off(frames: np.ndarray, found: dict[int, _Found], k: int, box: np.ndarray, step: int) -> bool:
+    """Whether the person in box (x, y, w, h) of frame k walked through it: no detection more than
+    ``step`` frames away is on the same place (IoU >= 0.5), and the room behind them is back on every
+    frame that far away (at least ``step`` of them).
+
+    The person's pixels are those of the box that differ from its temporal median in frame k (by
+    more than ``_MOVED_GREY``, any channel; eroded by a pixel: the rim of someone swaying about
+    their median outline is not a body); the room is back on a frame where at least
+    ``_GONE_FRAC`` of them are within ``_MOVED_GREY`` of the median again. A walker fills a small
+    part of a box found on them and leaves it within a second: over the whole box their leaving
+    changes too few pixels to tell (``_SAME_FRAC``), and their box, carried to every frame as a
+    still person's, took the road they crossed out of the room. Someone found on the same place
+    again later (or earlier) stays there, however they moved in between (the median there can be
+    their usual pose, which their pixels in a turn differ from). Someone who came before k and
+    stays is not back to the room after it (and the frames before they came show the room, which
+    their box need not be carried to), and someone who stood in the median differs from it in too
+    few pixels (``_PERSON_SHARE``) to be judged.
+    """
+    x, y, w, h = (int(v) for v in box)
+    far = [j for j in range(len(frames)) if abs(j - k) > step]
+    if len(far) < step or any(
+        abs(j - k) > step and _iou(box, other) >= 0.5 for j, (boxes, _, _) in found.items() for other in boxes
+    ):
+        return False
+    blk = frames[:, y : y + h, x : x + w]
+    if blk.size == 0:
+        return False
+    median = np.median(blk, axis=0).astype(np.int16)
+    person = np.abs(blk[k].astype(np.int16) - median).max(axis=2) > _MOVED_GREY
+    person = cv2.erode(person.view(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    if person.mean() < _PERSON_SHARE:
+        return False
+    back = np.abs(blk[far].astype(np.int16) - median).max(axis=3) <= _MOVED_GREY
+    return bool((back[:, person].mean(axis=1) >= _GONE_FRAC).all())
 
 
 def _still_person(found: dict[int, _Found], k: int, box: np.ndarray, score: float, moved: bool) -> bool:
@@ -309,7 +357,13 @@ def fit_around_people(
         still = np.array([_still_person(every, k, *f) for f in zip(boxes, scores, moved)], bool)
         if still.any():
             found[k] = (boxes[still], scores[still], moved[still])
-    near = [_boxes_for(stack, j, found, step) for j in range(n)]
+    walkers = {
+        (k, i)
+        for k, (boxes, _, _) in found.items()
+        for i, b in enumerate(boxes)
+        if _walked_off(stack, found, k, b, step)
+    }
+    near = [_boxes_for(stack, j, found, step, walkers) for j in range(n)]
     if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)
         return np.zeros((n, h, w), bool)
