@@ -46,6 +46,15 @@ def run_launch(file: Path, *extra: str, timeout: float = 60, env: dict[str, str]
     return proc.returncode, out
 
 
+def run_cli(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    """``counterpart ARGS...`` in a process of its own, from the repository root, output captured
+    as text (``timeout`` is a hang guard only).
+    """
+    return subprocess.run(
+        [sys.executable, "-m", "counterpart.bus.cli", *args], cwd=REPO, capture_output=True, text=True, timeout=timeout
+    )
+
+
 def descendants(pid: int) -> list[psutil.Process]:
     try:
         return psutil.Process(pid).children(recursive=True)

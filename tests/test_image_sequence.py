@@ -5,8 +5,6 @@ commands and the demo taking such a folder wherever they take a video file.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import cv2
@@ -16,7 +14,7 @@ import pytest
 from counterpart.body.image_sequence import ImageSequenceCapture, list_images
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames, video_info
 from counterpart.sim.flat_scenes import two_person_sequence
-from tests.launching import REPO
+from tests.launching import run_cli
 
 
 @pytest.fixture(scope="module")
@@ -67,23 +65,7 @@ def test_silhouettes_of_a_folder_are_those_of_its_frames(handshake, tmp_path: Pa
     folder = tmp_path / "frames"
     _write(folder, handshake.frames)
     out = tmp_path / "people.npz"
-    r = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "counterpart.bus.cli",
-            "silhouettes",
-            str(folder),
-            "--out",
-            str(out),
-            "--train-frames",
-            "20",
-        ],
-        cwd=REPO,
-        capture_output=True,
-        text=True,
-        timeout=600,  # a hang guard only: the run takes seconds
-    )
+    r = run_cli("silhouettes", str(folder), "--out", str(out), "--train-frames", "20")
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout.strip().splitlines()[-1])["n_frames"] == len(handshake.frames)
     d = np.load(out)
@@ -93,11 +75,5 @@ def test_silhouettes_of_a_folder_are_those_of_its_frames(handshake, tmp_path: Pa
     boxes = [(k, p.id, *p.bbox) for k, f in enumerate(handshake.frames) for p in ex.process(f).people]
     assert len(boxes) >= 30
     assert [tuple(int(v) for v in row) for row in np.column_stack([d["frame"], d["id"], d["bbox"]])] == boxes
-    r = subprocess.run(
-        [sys.executable, "-m", "counterpart.bus.cli", "silhouettes", str(tmp_path / "none"), "--out", str(out)],
-        cwd=REPO,
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    r = run_cli("silhouettes", str(tmp_path / "none"), "--out", str(out), timeout=60)
     assert r.returncode == 2 and "video file or image folder not found" in r.stderr and "none" in r.stderr

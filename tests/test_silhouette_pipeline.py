@@ -132,10 +132,9 @@ def test_vtest_several_people_in_later_frames_and_saved_rows(tmp_path):
 
 def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_path):
     import json
-    import subprocess
-    import sys
 
     from counterpart.sim.cli import open_writer
+    from tests.launching import run_cli
 
     video = tmp_path / "handshake.avi"
     writer, _ = open_writer(str(video), 25.0, (handshake.frames.shape[2], handshake.frames.shape[1]))
@@ -143,22 +142,8 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
         writer.write(frame)
     writer.release()
     out = tmp_path / "people.npz"
-    r = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "counterpart.bus.cli",
-            "silhouettes",
-            str(video),
-            "--out",
-            str(out),
-            "--train-frames",
-            "20",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,  # a hang guard only: the run takes seconds, but once passed 120 s at load 33
-    )
+    # the timeout is a hang guard only: the run takes seconds, but once passed 120 s at load 33
+    r = run_cli("silhouettes", str(video), "--out", str(out), "--train-frames", "20")
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     n = len(handshake.frames)
@@ -167,22 +152,7 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
     assert bool(d["complete"]) and int(d["n_frames"]) == n
     per_frame = np.bincount(d["frame"], minlength=n)
     assert (per_frame[:20] == 0).all() and np.mean(per_frame[20:] == 2) > 0.9  # the empty room, then two
-    r = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "counterpart.bus.cli",
-            "silhouettes",
-            str(video),
-            "--out",
-            str(out),
-            "--train-frames",
-            "0",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    r = run_cli("silhouettes", str(video), "--out", str(out), "--train-frames", "0", timeout=60)
     assert r.returncode == 2 and "--train-frames must be at least 1" in r.stderr
 
     def stop_after_30(done: int, declared: int) -> None:
