@@ -16,8 +16,9 @@ room where they stood as ghosts. Here they are found first and kept out of the s
    filled in from around it). The model then separates each person from the rest of their box,
    frame by frame, and a second fit leaves out only the people themselves (grown by a rim), so
    the room beside them is learnt from its own pixels. Walkers need none of this (the median
-   copes with them); a detection on the still room is not trusted without a sure score or
-   movement in its box.
+   copes with them), and a walker's box is kept to the frames near its own (``_walked_off``: a
+   loose box on a thin walker, carried to every frame, took the road they crossed out of the
+   room); a detection on the still room is not trusted without a sure score or movement in its box.
 
 Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h) int.
 """
