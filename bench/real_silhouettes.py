@@ -1,7 +1,7 @@
 """Silhouettes on real two-person video: are both people found whole, on the right side.
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
-           [--max-clips N] [--only STEM,...] [--no-baseline] [--threads 1] [--out FILE]
+           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
 mostly still from the first frame, static elevated camera), with reference 2D keypoints of both
@@ -49,6 +49,14 @@ hips) stands right of person 1's is one the reference got wrong (``reference_rev
 share of the scored frames); ``people_found_reference_ordered`` is ``people_found`` without them,
 reported beside it, not instead of it.
 
+A shaken camera (a pole in the wind, a tripod on a wooden floor, a hand): each clip again, its
+decoded frames moved by ``counterpart.sim.camera_shake`` (a sway of ``--shake-px`` pixels and a tremor of half that,
+seeded by the clip's name; no second compression) and its reference keypoints with them, through
+ours as it is (``*_shaken``: the shake followed, ``nodes/silhouette/shake.py``) and with the shake
+left unfollowed (``*_shaken_unfollowed``, the algorithm for a still camera): ``people_found_shaken``,
+``keypoint_coverage_shaken`` and the same ``_unfollowed``; ``shake_err_px_median`` and ``_p95``, the
+error of the followed shift against the true one per frame (pixels); ``fps_shaken``.
+
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
 """
@@ -70,6 +78,7 @@ import cv2
 import numpy as np
 
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.sim.camera_shake import shake_path, shaken
 
 DATA = (
     Path(os.environ.get("COUNTERPART_SHARED_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data")
@@ -205,26 +214,41 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
     return out
 
 
-def run_clip(path: Path, ours: bool, train_frames: int) -> dict[str, Any]:
-    """Fit and process one clip as the node does; returns its summed counts and timings."""
+def run_clip(path: Path, ours: bool, train_frames: int, shake_px: float = 0.0, follow: bool = True) -> dict[str, Any]:
+    """Fit and process one clip as the node does; returns its summed counts and timings.
+
+    ``shake_px`` > 0: the clip shaken by ``sim.camera_shake`` (seeded by its name; the reference keypoints moved with
+    it), with the extractor following the shake (``follow``) or not; the counts then also hold
+    the error of the followed shift against the true one (``shake_err``, pixels, per frame).
+    """
     frames = read_frames(path)
     ref = np.load(DATA / "keypoints" / f"{path.stem}.npz")
     kp, vis = ref["kp"], ref["vis"]
     n = min(len(frames), len(kp))
+    true_shift = None
+    if shake_px > 0:
+        true_shift = shake_path(len(frames), shake_px, [int(v) for v in path.stem.split("_")])
+        frames = shaken(frames, true_shift)
+        kp = kp + true_shift[: len(kp), None, None, :]
     base = {} if ours else BASELINE
-    ex = SilhouetteExtractor(
-        backend_params={"train_frames": train_frames, **base.get("backend_params", {})},
-        tracker_params=base.get("tracker_params"),
-    )
+    backend = {"train_frames": train_frames, **base.get("backend_params", {})}
+    if not follow:
+        backend["shake"] = False
+    ex = SilhouetteExtractor(backend_params=backend, tracker_params=base.get("tracker_params"))
     t0 = time.perf_counter()
     ex.fit_background(list(frames[:train_frames]), robust=True)
     fit_s = time.perf_counter() - t0
-    tot: dict[str, Any] = {}
+    tot: dict[str, Any] = {"shake_err": []}
     proc_s = 0.0
     for t in range(n):
         t0 = time.perf_counter()
         r = ex.process(frames[t])
         proc_s += time.perf_counter() - t0
+        if true_shift is not None and follow:
+            # the model is on the first training frame's pixels: the shift to find is relative to it
+            est = ex.subtractor.shake.last
+            want = true_shift[t] - true_shift[0]
+            tot["shake_err"].append(float(np.hypot(*(want - (est if est is not None else 0.0)))))
         if t < FIRST_SCORED:
             continue
         if reference_collapsed(kp[t], vis[t]):
@@ -239,6 +263,9 @@ def run_clip(path: Path, ours: bool, train_frames: int) -> dict[str, Any]:
     return tot
 
 
+#: amplitude of the shaken pass's camera shake, pixels (``--shake-px``)
+SHAKE_PX = 2.0
+
 #: the issue's bar for each person's keypoint coverage (``person_clips_covered``)
 PERSON_COVERAGE = 0.9
 
@@ -252,7 +279,8 @@ def _person_coverage(counts: dict[str, Any], k: int) -> float | None:
 
 
 def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
-    s = {k: sum(r.get(k, 0) for r in rows) for k in set().union(*rows)}
+    err = np.concatenate([np.asarray(r.get("shake_err", []), float) for r in rows])
+    s = {k: sum(r.get(k, 0) for r in rows) for k in set().union(*rows) if k != "shake_err"}
     # each person of each clip on their own (the issue's "each person's keypoints")
     per_person = [_person_coverage(r, k) for r in rows for k in range(2)]
     covered = [c >= PERSON_COVERAGE for c in per_person if c is not None]
@@ -271,6 +299,14 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "fit_s": round(s["fit_s"] / len(rows), 3),
         "fps": round(s["frames"] / max(s["process_s"], 1e-9), 1),
         "clips": len(rows),
+        **(
+            {
+                "shake_err_px_median": round(float(np.median(err)), 3),
+                "shake_err_px_p95": round(float(np.percentile(err, 95)), 3),
+            }
+            if len(err)
+            else {}
+        ),
     }
 
 
@@ -283,6 +319,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--train-frames", type=int, default=TRAIN_FRAMES)
     ap.add_argument("--threads", type=int, default=1, help="OpenCV threads")
     ap.add_argument("--no-baseline", action="store_true", help="skip the baseline (tuning runs)")
+    ap.add_argument(
+        "--shake-px",
+        type=float,
+        default=SHAKE_PX,
+        help="amplitude of the camera shake of the shaken pass, pixels (0: no shaken pass)",
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -291,6 +333,8 @@ def main(argv: list[str] | None = None) -> int:
     cv2.setNumThreads(args.threads)
     splits = ("tune", "report") if args.clips == "all" else (args.clips,)
     methods = {"ours": True} if args.no_baseline else {"ours": True, "baseline": False}
+    # the shaken pass: ours following the shake, and ours with it off (the still-camera algorithm)
+    shaken_methods = {"shaken": True, "shaken_unfollowed": False} if args.shake_px > 0 else {}
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
         "train_frames": args.train_frames,
@@ -302,11 +346,15 @@ def main(argv: list[str] | None = None) -> int:
         paths = clip_paths(split)[:: args.every][: args.max_clips]
         if args.only:
             paths = [p for p in paths if p.stem in args.only.split(",")]
-        rows: dict[str, list[dict[str, Any]]] = {m: [] for m in methods}
+        rows: dict[str, list[dict[str, Any]]] = {m: [] for m in (*methods, *shaken_methods)}
         for p in paths:
             line = {}
             for m, is_ours in methods.items():
                 r = run_clip(p, is_ours, args.train_frames)
+                rows[m].append(r)
+                line[m] = summarise([r])
+            for m, follow in shaken_methods.items():
+                r = run_clip(p, True, args.train_frames, args.shake_px, follow)
                 rows[m].append(r)
                 line[m] = summarise([r])
             report["clips"][p.stem] = {
@@ -314,11 +362,19 @@ def main(argv: list[str] | None = None) -> int:
                     k: line[m][k]
                     for k in ("people_found", "keypoint_coverage", "keypoint_coverage_person", "extra_people", "misses")
                 }
-                for m in methods
+                for m in line
             }
             print(p.stem, json.dumps(report["clips"][p.stem]), flush=True)
-        report[split] = {m: summarise(rows[m]) for m in methods}
+        report[split] = {m: summarise(rows[m]) for m in rows}
     main_split = "report" if "report" in splits else splits[0]
+    for m in shaken_methods:
+        for k in ("people_found", "keypoint_coverage", "extra_people", "person_clips_covered"):
+            report[f"{k}_{m}"] = report[main_split][m][k]
+    if shaken_methods:
+        report["shake_px"] = args.shake_px
+        report["shake_err_px_median"] = report[main_split]["shaken"]["shake_err_px_median"]
+        report["shake_err_px_p95"] = report[main_split]["shaken"]["shake_err_px_p95"]
+        report["fps_shaken"] = report[main_split]["shaken"]["fps"]
     for m in methods:
         suffix = "" if m == "ours" else "_baseline"
         for k in (

@@ -28,6 +28,7 @@ from .body_shadow import BodyShadowConfig, reclaim_body_shadow
 from .deferred import DeferredStep
 from .people import fit_around_people
 from .samples import SampleConsensus
+from .shake import ShakeConfig, ShakeEstimator, align, align_stack, unalign_labels
 
 BACKEND_NAMES: tuple[str, ...] = ("horprasert", "mog2", "knn", "cnt", "gsoc")
 
@@ -79,6 +80,12 @@ class HorprasertSubtractor:
         Which shadow labels inside a body (dark clothes, hair) are published as foreground
         (``body_shadow.reclaim_body_shadow``); None: ``BodyShadowConfig()`` (the node's default),
         ``BodyShadowConfig(span_px=0)``: none. The model learns from the labels before this step.
+    shake : ShakeConfig or None, default=None
+        Follow camera shake (``shake.ShakeEstimator``): each frame's shift against the model is
+        estimated, with the pixels of the last frame's foreground left out, and the frame is
+        resampled onto the model's pixels before it is classified (the labels are moved back onto
+        the frame's); the training frames are aligned on the first. None: ``ShakeConfig()``;
+        ``False``: off (a camera known to be still).
     fit_in_background : bool, default=False
         Fit on the collected training frames in a thread of its own and return at once: the
         frames that come while it runs get no foreground (``ready`` False) and are not learnt; the
@@ -107,6 +114,7 @@ class HorprasertSubtractor:
         sample_params: dict[str, Any] | None = None,
         threaded: bool = True,
         body_shadow: BodyShadowConfig | None = None,
+        shake: ShakeConfig | None | bool = None,
         fit_in_background: bool = False,
         **model_params: Any,
     ) -> None:
@@ -131,6 +139,11 @@ class HorprasertSubtractor:
         self._fitting: Future | None = None  # the fit running in the background, until collected
         self.threaded = threaded
         self.body_shadow = BodyShadowConfig() if body_shadow is None else body_shadow
+        if shake is True:
+            shake = None
+        self.shake = None if shake is False else ShakeEstimator(shake)
+        #: model pixels to leave out of the next frame's shift: the last frame's foreground, dilated
+        self._moving: np.ndarray | None = None
         self._deferred = DeferredStep("horprasert-update")
         if self.samples is not None:
             # one worker thread learns for both models, the update first (the next frame's
@@ -184,6 +197,9 @@ class HorprasertSubtractor:
             self, fitted.
         """
         stack = as_frame_stack(frames)
+        if self.shake is not None:
+            stack = align_stack(stack, self.shake.config)
+            self.shake.last, self._moving = None, None
         robust = self.robust if robust is None else robust
         if robust and self.people_aware:
             fit_around_people(self.model, stack, detector=self.detector)
@@ -252,6 +268,11 @@ class HorprasertSubtractor:
             frame = frame.copy()
         # the last frame's update (in the worker) writes the arrays the classes are computed from
         self._deferred.join()
+        shift = None
+        if self.shake is not None:
+            shift = self.shake.shift(self._model.mean_, frame, self._moving)
+            if shift is not None:
+                frame = align(frame, shift)  # a new array: the copy above is not needed for it
         if self.samples is None:
             stats = self._model.apply(frame)
             labels = stats
@@ -283,6 +304,10 @@ class HorprasertSubtractor:
             # not changed again: the samples' worker may read both as they are
             self.samples.learn(frame, stats, fg_idx, copy=not self.threaded)
         labels = reclaim_body_shadow(labels, self.body_shadow, frame, grey, self._model.unseen_, labels_fg)
+        if self.shake is not None:
+            self._moving = moving_pixels(labels)
+            if shift is not None:
+                labels = unalign_labels(labels, shift, BACKGROUND)
         self.labels = labels
         return labels == FOREGROUND
 
@@ -314,6 +339,23 @@ class HorprasertSubtractor:
             labels.reshape(-1)[turned] = np.where(ok, BACKGROUND, FOREGROUND)
             fg_idx = np.sort(np.concatenate([fg_idx, turned[~ok]]))
         return labels, fg_idx
+
+
+#: a person moves this many pixels between frames at most, for the shift's leave-out mask
+_MOVING_PX = 8
+
+
+def moving_pixels(labels: np.ndarray) -> np.ndarray | None:
+    """The pixels a frame's shift is not estimated on: the last frame's FOREGROUND regions (opened:
+    the thin lines along the room's edges that a frame classified against a shifted room shows are
+    not people) grown by the distance a person moves in a frame; None when there are none.
+    """
+    fg = (labels == FOREGROUND).view(np.uint8)
+    fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5)))
+    if not cv2.countNonZero(fg):
+        return None
+    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * _MOVING_PX + 1, 2 * _MOVING_PX + 1))
+    return cv2.dilate(fg, k).view(bool)
 
 
 class OpenCVSubtractor:

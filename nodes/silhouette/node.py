@@ -181,6 +181,13 @@ class Silhouette(Node):
             "spread) beside the statistics, so that leaves, water and flicker are background; "
             "false: the statistics alone",
         ),
+        "shake": Param(
+            bool,
+            True,
+            "horprasert: follow camera shake (a camera on a pole in the wind, a tripod on a "
+            "wooden floor, a hand): each frame's shift against the background is found and "
+            "the frame compared on the background's pixels; false: a camera known to be still",
+        ),
         "shadow_ncc": Param(
             float,
             0.4,
@@ -285,6 +292,7 @@ class Silhouette(Node):
                 "people_aware": p["people_aware"],
                 "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
                 "dynamic": p["dynamic"],
+                "shake": None if p["shake"] else False,
                 "shadow_ncc": p["shadow_ncc"],
                 "body_shadow": BodyShadowConfig(
                     span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"], leg_scale=p["body_shadow_leg_scale"]
