@@ -341,21 +341,17 @@ class HorprasertSubtractor:
         return labels, fg_idx
 
 
-#: a person moves this many pixels between frames at most, for the shift's leave-out mask
-_MOVING_PX = 8
-
-
 def moving_pixels(labels: np.ndarray) -> np.ndarray | None:
-    """The pixels a frame's shift is not estimated on: the last frame's FOREGROUND regions (opened:
-    the thin lines along the room's edges that a frame classified against a shifted room shows are
-    not people) grown by the distance a person moves in a frame; None when there are none.
+    """The pixels a frame's shift is not estimated on (grown there by ``ShakeConfig.grow_px``): the
+    last frame's FOREGROUND regions, opened (the thin lines along the room's edges that a frame
+    classified against a shifted room shows are not people); None when there are none.
     """
     fg = (labels == FOREGROUND).view(np.uint8)
-    fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5)))
-    if not cv2.countNonZero(fg):
-        return None
-    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * _MOVING_PX + 1, 2 * _MOVING_PX + 1))
-    return cv2.dilate(fg, k).view(bool)
+    fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, _OPEN)
+    return fg.view(bool) if cv2.countNonZero(fg) else None
+
+
+_OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
 class OpenCVSubtractor:

@@ -61,8 +61,11 @@ class ShakeConfig:
         several pixels off, the last one is the finest.
     points : int, default=3000
         Pixels of the room the refinement compares (those of the strongest gradients).
-    refresh : int, default=25
+    refresh : int, default=100
         Frames between two readings of the reference (the model's mean changes slowly).
+    grow_px : int, default=8
+        The pixels left out of a shift (``ignore``) are grown by this many pixels first: how far
+        a person moves between two frames.
     prior : float, default=0.015
         Std of a zero-mean Gaussian prior on the shift, as a share of the frame's width (5 pixels
         at 320 wide): a shaken camera stays about one place, and along a direction in which the
@@ -85,7 +88,8 @@ class ShakeConfig:
     tolerance_px: float = 0.02
     sigmas: tuple[float, ...] = (3.0, 1.0)
     points: int = 3000
-    refresh: int = 25
+    refresh: int = 100
+    grow_px: int = 8
     prior: float = 0.015
     tukey_c: float = 4.685
     min_inliers: float = 0.3
@@ -102,6 +106,8 @@ class ShakeConfig:
             raise ValueError(f"points must be >= 20, got {self.points}")
         if self.refresh < 1:
             raise ValueError(f"refresh must be >= 1 frame, got {self.refresh}")
+        if self.grow_px < 0:
+            raise ValueError(f"grow_px must be >= 0 pixels, got {self.grow_px}")
         if self.tolerance_px <= 0.0:
             raise ValueError(f"tolerance_px must be > 0 pixels, got {self.tolerance_px}")
         if self.iterations < 0:
@@ -118,9 +124,9 @@ class ShakeConfig:
 
 def grey(frame: np.ndarray) -> np.ndarray:
     """(H, W) float32 grey levels of a uint8 BGR frame (H, W, 3) or of a float (H, W, 3) mean image."""
-    if frame.dtype != np.float32:
-        frame = frame.astype(np.float32)
-    return cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    if frame.dtype == np.uint8:
+        return cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)
+    return cv2.cvtColor(np.ascontiguousarray(frame, np.float32), cv2.COLOR_BGR2GRAY)
 
 
 def _translate(image: np.ndarray, t: np.ndarray, interpolation: int, border: int, value: float = 0.0) -> np.ndarray:
@@ -143,10 +149,9 @@ _USUAL_RATE = 0.05
 #: points this much closer to the reference (median absolute residual): people who are not left
 #: out make a peak of their own
 _JOLT_MARGIN = 0.8
-#: a training frame's pixel this far from the frames' median (grey levels) moved, and the pixels
-#: this near it (pixels) with it: left out of its shift (:func:`align_stack`)
+#: a training frame's pixel this far from the frames' median (grey levels) moved: left out of its
+#: shift (:func:`align_stack`)
 _MOVED_GREY = 25.0
-_MOVED_GROW_PX = 4
 
 
 def _sample(image: np.ndarray, xy: np.ndarray) -> np.ndarray:
@@ -212,6 +217,19 @@ class _Reference:
             self.levels.append(_Level(sigma, img[yy, xx], np.stack([gx[yy, xx], gy[yy, xx]], 1)))
         self.small = cv2.pyrDown(cv2.pyrDown(reference))
         self.window = cv2.createHanningWindow((self.small.shape[1], self.small.shape[0]), cv2.CV_32F)
+        self._corners: dict[int, np.ndarray] = {}
+
+    def box_corners(self, grow: int) -> np.ndarray:
+        """(4, M) flat indices, in an (H + 1, W + 1) integral image, of the corners (y0 x0, y0 x1,
+        y1 x0, y1 x1) of the square of half-side ``grow`` pixels about each candidate point.
+        """
+        if grow not in self._corners:
+            h, w = self.shape
+            px = self.points.astype(np.intp)
+            x0, x1 = np.clip(px[:, 0] - grow, 0, w), np.clip(px[:, 0] + grow + 1, 0, w)
+            y0, y1 = np.clip(px[:, 1] - grow, 0, h), np.clip(px[:, 1] + grow + 1, 0, h)
+            self._corners[grow] = np.stack([y0 * (w + 1) + x0, y0 * (w + 1) + x1, y1 * (w + 1) + x0, y1 * (w + 1) + x1])
+        return self._corners[grow]
 
 
 def _gauss_newton(
@@ -281,8 +299,9 @@ def estimate_shift(
     start : ndarray of shape (2,) or None, default=None
         The last frame's shift, pixels; None: no shift.
     ignore : ndarray of shape (H, W), dtype bool, or None, default=None
-        Reference pixels left out (where people were on the last frame: they do not move with
-        the room, and on a plain floor they would hold most of the texture).
+        Reference pixels left out, with those within ``grow_px`` of them (where people were on
+        the last frame: they do not move with the room, and on a plain floor they would hold
+        most of the texture).
     config : ShakeConfig or None, default=None
         Estimation settings; None: ``ShakeConfig()``.
 
@@ -303,6 +322,15 @@ def estimate_shift(
         raise ValueError(f"reference {ref.shape}, frame {frame.shape} and ignore must have one shape")
     found = _estimate(ref, frame, start, ignore, cfg, None)
     return None if found is None else found[0]
+
+
+def _clear_of(mask: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """(N,) bool: the points with no pixel of ``mask`` (H, W) in their box, from its integral image
+    (the points alone are looked at, not a grown mask); ``corners`` (4, N) are the flat indices of
+    each box's corners in that image (:meth:`_Reference.box_corners`).
+    """
+    ii = cv2.integral(mask.view(np.uint8)).reshape(-1)
+    return (ii[corners[3]] - ii[corners[2]] - ii[corners[1]] + ii[corners[0]]) == 0
 
 
 def _mad(r: np.ndarray) -> float:
@@ -328,9 +356,9 @@ def _estimate(
     t0 = np.zeros(2) if start is None else np.asarray(start, np.float64)
     points = ref.points
     keep: np.ndarray | slice = slice(None)
-    if ignore is not None and ignore.any():
-        px = points.astype(np.int32)
-        keep = ~ignore[px[:, 1], px[:, 0]]
+    people = ignore is not None and ignore.any()
+    if people:
+        keep = _clear_of(ignore, ref.box_corners(cfg.grow_px))
         points = points[keep]
     points = points[: cfg.points]
     n = len(points)
@@ -344,11 +372,15 @@ def _estimate(
         if mad <= quiet:
             return t0, mad
     small = cv2.pyrDown(cv2.pyrDown(frame))
-    if ignore is not None and ignore.any():
+    if people:
         # the people replaced by the room as the last shift puts it: their motion makes no peak
-        small_ignore = cv2.resize(ignore.view(np.uint8), small.shape[::-1], interpolation=cv2.INTER_AREA) > 0
+        grow = 2 * (cfg.grow_px // 4) + 1
+        small_ignore = cv2.dilate(
+            cv2.resize(ignore.view(np.uint8), small.shape[::-1], interpolation=cv2.INTER_AREA),
+            np.ones((grow, grow), np.uint8),
+        )
         moved = _translate(ref.small, -t0 / 4.0, cv2.INTER_LINEAR, cv2.BORDER_REPLICATE)
-        small = np.where(small_ignore, moved, small)
+        small = np.where(small_ignore > 0, moved, small)
     (sx, sy), _ = cv2.phaseCorrelate(ref.small, small.astype(np.float32), ref.window)
     blurred = [cv2.GaussianBlur(frame, (0, 0), lv.sigma) for lv in ref.levels[:-1]] + [finest]
     limit = cfg.max_shift * w
@@ -443,14 +475,12 @@ def align_stack(frames: np.ndarray, config: ShakeConfig | None = None) -> np.nda
         shifts.append(shifts[-1] if t is None else t)
     median = np.median(np.stack([align(g, t) for g, t in zip(greys, shifts)]), axis=0).astype(np.float32)
     ref = _Reference(median, cfg)
-    k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * _MOVED_GROW_PX + 1,) * 2)
     out = frames
     for i, (g, t) in enumerate(zip(greys, shifts)):
         # a person differs from the median both where the frame is and where the first pass put
         # it; the room's edges in one of the two only, where that one is off
         differs = (np.abs(g - median) > _MOVED_GREY) & (np.abs(align(g, t) - median) > _MOVED_GREY)
-        moved = cv2.dilate(differs.view(np.uint8), k).view(bool)
-        t2 = estimate_shift(ref, g, t, moved, cfg)
+        t2 = estimate_shift(ref, g, t, differs, cfg)
         if t2 is not None and np.hypot(*t2) >= cfg.min_shift_px:
             if out is frames:
                 out = frames.copy()
