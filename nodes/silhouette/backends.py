@@ -84,7 +84,8 @@ class HorprasertSubtractor:
         Follow camera shake (``shake.ShakeEstimator``): each frame's shift against the model is
         estimated, with the pixels of the last frame's foreground left out, and the frame is
         resampled onto the model's pixels before it is classified (the labels are moved back onto
-        the frame's); the training frames are aligned on the first. None: ``ShakeConfig()``;
+        the frame's); the training frames are aligned on one another (``shake.align_stack``).
+        None: ``ShakeConfig()``;
         ``False``: off (a camera known to be still).
     fit_in_background : bool, default=False
         Fit on the collected training frames in a thread of its own and return at once: the
@@ -142,7 +143,7 @@ class HorprasertSubtractor:
         if shake is True:
             shake = None
         self.shake = None if shake is False else ShakeEstimator(shake)
-        #: model pixels to leave out of the next frame's shift: the last frame's foreground, dilated
+        #: model pixels to leave out of the next frame's shift (:func:`moving_pixels`)
         self._moving: np.ndarray | None = None
         self._deferred = DeferredStep("horprasert-update")
         if self.samples is not None:
@@ -341,6 +342,10 @@ class HorprasertSubtractor:
         return labels, fg_idx
 
 
+#: the opening of :func:`moving_pixels`
+_OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+
+
 def moving_pixels(labels: np.ndarray) -> np.ndarray | None:
     """The pixels a frame's shift is not estimated on (grown there by ``ShakeConfig.grow_px``): the
     last frame's FOREGROUND regions, opened (the thin lines along the room's edges that a frame
@@ -349,9 +354,6 @@ def moving_pixels(labels: np.ndarray) -> np.ndarray | None:
     fg = (labels == FOREGROUND).view(np.uint8)
     fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, _OPEN)
     return fg.view(bool) if cv2.countNonZero(fg) else None
-
-
-_OPEN = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
 
 
 class OpenCVSubtractor:

@@ -49,9 +49,9 @@ class ShakeConfig:
     max_shift : float, default=0.06
         Largest shift followed, as a share of the frame's width (19 pixels at 320 wide): a larger
         one is a camera that was moved, not shaken, and the frame is left as it is.
-    min_shift_px : float, default=0.3
-        Shifts shorter than this (pixels) are taken as none: the frame is classified as it is,
-        so a still camera's results do not change.
+    min_shift_px : float, default=0.5
+        Shifts shorter than this (pixels) are taken as none: the frame is classified as it is
+        (resampling blurs a frame a little, which costs more than so small a shift).
     iterations : int, default=6
         Gauss-Newton steps of the refinement at each blur.
     tolerance_px : float, default=0.02
@@ -83,7 +83,7 @@ class ShakeConfig:
     """
 
     max_shift: float = 0.06
-    min_shift_px: float = 0.3
+    min_shift_px: float = 0.5
     iterations: int = 6
     tolerance_px: float = 0.02
     sigmas: tuple[float, ...] = (3.0, 1.0)
@@ -309,7 +309,8 @@ def estimate_shift(
     -------
     ndarray of shape (2,) or None
         float64 (tx, ty), pixels: the room point at reference pixel x is at frame pixel x + t;
-        None when no shift can be told (a shift beyond ``max_shift``, too few pixels that agree).
+        zero where no shift fits the room clearly better than none (``support``); None when no
+        shift can be told (one beyond ``max_shift``, too little of the room in view or agreeing).
 
     Raises
     ------
@@ -348,7 +349,7 @@ def _estimate(
 ) -> tuple[np.ndarray, float] | None:
     """:func:`estimate_shift`, with the median absolute residual of the room's points at the shift;
     where that residual at ``start`` is at most ``quiet`` (grey levels), ``start`` at once (the
-    camera has not moved since: the common case, at a twentieth of the cost).
+    camera has not moved since: the common case, with no search).
     """
     h, w = frame.shape
     if min(h, w) < 32:
