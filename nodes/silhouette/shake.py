@@ -365,13 +365,15 @@ def _estimate(
     n = len(points)
     if n < _MIN_POINTS:  # people close to the camera hide the room: no shift to tell
         return None
-    values = [lv.values[keep][:n] for lv in ref.levels]
-    grads = [lv.grad[keep][:n] for lv in ref.levels]
     finest = cv2.GaussianBlur(frame, (0, 0), ref.levels[-1].sigma)
+    finest_values = ref.levels[-1].values[keep][:n]
     if quiet is not None:
-        mad = _mad(_sample(finest, points + t0.astype(np.float32)) - values[-1])
+        mad = _mad(_sample(finest, points + t0.astype(np.float32)) - finest_values)
         if mad <= quiet:
             return t0, mad
+    # the search's own inputs, only where there is a search (most frames take the quiet path)
+    values = [lv.values[keep][:n] for lv in ref.levels[:-1]] + [finest_values]
+    grads = [lv.grad[keep][:n] for lv in ref.levels]
     small = cv2.pyrDown(cv2.pyrDown(frame))
     if people:
         # the people replaced by the room as the last shift puts it: their motion makes no peak
