@@ -1,7 +1,8 @@
 """Silhouettes on real two-person video: are both people found whole, on the right side.
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
-           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--threads 1] [--out FILE]
+           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--threads 1]
+           [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
 mostly still from the first frame, static elevated camera), with reference 2D keypoints of both
@@ -56,6 +57,13 @@ ours as it is (``*_shaken``: the shake followed, ``nodes/silhouette/shake.py``) 
 left unfollowed (``*_shaken_unfollowed``, the algorithm for a still camera): ``people_found_shaken``,
 ``keypoint_coverage_shaken`` and the same ``_unfollowed``; ``shake_err_px_median`` and ``_p95``, the
 error of the followed shift against the true one per frame (pixels); ``fps_shaken``.
+
+A grey or infrared camera (three equal channels, however they come): each clip again made grey,
+through ours as it is (``*_grey``: the background found monochrome, its shadows and highlights
+bounded tightly, ``background.ShadowConfig.mono_min_shadow_brightness``) and with the bounds of
+colour footage (``*_grey_colour_bounds``, the algorithm as it was before: a person a shade darker
+or lighter than the room a shadow or a highlight): ``people_found_grey``, ``keypoint_coverage_grey``,
+``extra_people_grey``, ``person_clips_covered_grey`` and the same ``_colour_bounds``.
 
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
@@ -214,12 +222,21 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
     return out
 
 
-def run_clip(path: Path, ours: bool, train_frames: int, shake_px: float = 0.0, follow: bool = True) -> dict[str, Any]:
+def run_clip(
+    path: Path,
+    ours: bool,
+    train_frames: int,
+    shake_px: float = 0.0,
+    grey: bool = False,
+    backend: dict[str, Any] | None = None,
+) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
 
     ``shake_px`` > 0: the clip shaken by ``sim.camera_shake`` (seeded by its name; the reference keypoints moved with
-    it), with the extractor following the shake (``follow``) or not; the counts then also hold
+    it); unless ``backend`` turns the following off (``shake`` False), the counts then also hold
     the error of the followed shift against the true one (``shake_err``, pixels, per frame).
+    ``grey``: the clip's frames made grey (three equal channels, as a grey or infrared camera's
+    come). ``backend``: subtractor parameters over ours (or the baseline's).
     """
     frames = read_frames(path)
     ref = np.load(DATA / "keypoints" / f"{path.stem}.npz")
@@ -230,11 +247,12 @@ def run_clip(path: Path, ours: bool, train_frames: int, shake_px: float = 0.0, f
         true_shift = shake_path(len(frames), shake_px, [int(v) for v in path.stem.split("_")])
         frames = shaken(frames, true_shift)
         kp = kp + true_shift[: len(kp), None, None, :]
+    if grey:
+        frames = np.stack([cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames])
     base = {} if ours else BASELINE
-    backend = {"train_frames": train_frames, **base.get("backend_params", {})}
-    if not follow:
-        backend["shake"] = False
-    ex = SilhouetteExtractor(backend_params=backend, tracker_params=base.get("tracker_params"))
+    params = {"train_frames": train_frames, **base.get("backend_params", {}), **(backend or {})}
+    follow = params.get("shake", True) is not False
+    ex = SilhouetteExtractor(backend_params=params, tracker_params=base.get("tracker_params"))
     t0 = time.perf_counter()
     ex.fit_background(list(frames[:train_frames]), robust=True)
     fit_s = time.perf_counter() - t0
@@ -265,6 +283,22 @@ def run_clip(path: Path, ours: bool, train_frames: int, shake_px: float = 0.0, f
 
 #: amplitude of the shaken pass's camera shake, pixels (``--shake-px``)
 SHAKE_PX = 2.0
+
+
+def extra_passes(shake_px: float, grey: bool) -> dict[str, dict[str, Any]]:
+    """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
+    shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
+    and with colour footage's shadow bounds (``grey``).
+    """
+    out: dict[str, dict[str, Any]] = {}
+    if shake_px > 0:
+        out["shaken"] = {"shake_px": shake_px}
+        out["shaken_unfollowed"] = {"shake_px": shake_px, "backend": {"shake": False}}
+    if grey:
+        out["grey"] = {"grey": True}
+        out["grey_colour_bounds"] = {"grey": True, "backend": {"mono_chroma_deg": 0.0}}
+    return out
+
 
 #: the issue's bar for each person's keypoint coverage (``person_clips_covered``)
 PERSON_COVERAGE = 0.9
@@ -325,6 +359,7 @@ def main(argv: list[str] | None = None) -> int:
         default=SHAKE_PX,
         help="amplitude of the camera shake of the shaken pass, pixels (0: no shaken pass)",
     )
+    ap.add_argument("--no-grey", action="store_true", help="no grey pass")
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -333,8 +368,7 @@ def main(argv: list[str] | None = None) -> int:
     cv2.setNumThreads(args.threads)
     splits = ("tune", "report") if args.clips == "all" else (args.clips,)
     methods = {"ours": True} if args.no_baseline else {"ours": True, "baseline": False}
-    # the shaken pass: ours following the shake, and ours with it off (the still-camera algorithm)
-    shaken_methods = {"shaken": True, "shaken_unfollowed": False} if args.shake_px > 0 else {}
+    passes = extra_passes(args.shake_px, not args.no_grey)
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
         "train_frames": args.train_frames,
@@ -346,15 +380,15 @@ def main(argv: list[str] | None = None) -> int:
         paths = clip_paths(split)[:: args.every][: args.max_clips]
         if args.only:
             paths = [p for p in paths if p.stem in args.only.split(",")]
-        rows: dict[str, list[dict[str, Any]]] = {m: [] for m in (*methods, *shaken_methods)}
+        rows: dict[str, list[dict[str, Any]]] = {m: [] for m in (*methods, *passes)}
         for p in paths:
             line = {}
             for m, is_ours in methods.items():
                 r = run_clip(p, is_ours, args.train_frames)
                 rows[m].append(r)
                 line[m] = summarise([r])
-            for m, follow in shaken_methods.items():
-                r = run_clip(p, True, args.train_frames, args.shake_px, follow)
+            for m, kw in passes.items():
+                r = run_clip(p, True, args.train_frames, **kw)
                 rows[m].append(r)
                 line[m] = summarise([r])
             report["clips"][p.stem] = {
@@ -367,10 +401,10 @@ def main(argv: list[str] | None = None) -> int:
             print(p.stem, json.dumps(report["clips"][p.stem]), flush=True)
         report[split] = {m: summarise(rows[m]) for m in rows}
     main_split = "report" if "report" in splits else splits[0]
-    for m in shaken_methods:
+    for m in passes:
         for k in ("people_found", "keypoint_coverage", "extra_people", "person_clips_covered"):
             report[f"{k}_{m}"] = report[main_split][m][k]
-    if shaken_methods:
+    if "shaken" in passes:
         report["shake_px"] = args.shake_px
         report["shake_err_px_median"] = report[main_split]["shaken"]["shake_err_px_median"]
         report["shake_err_px_p95"] = report[main_split]["shaken"]["shake_err_px_p95"]

@@ -19,6 +19,10 @@ clothes, hair) back as foreground (node ``body_shadow_px: 0``; the default is 15
 default is 0.5: a shadow hanging from foreground that does not keep the floor's texture is a leg). Ours with the node defaults has the sample-consensus model and the shadow texture test
 on (``dynamic: true, shadow_ncc: 0.4``). ``shadow_f1`` (ours; ``shadow_f1_mog2`` / ``_knn``
 theirs): the SHADOW class of the raw pixels against label 50, where the ground truth marks shadows.
+A grey or infrared camera: each sequence again made grey (three equal channels), ours as it is
+(``f1_ours_grey``: the background found monochrome, shadows and highlights bounded tightly) and
+with colour footage's shadow bounds (``f1_ours_grey_colour_bounds``: as it was before), and MOG2
+without shadow detection (``f1_mog2_grey``).
 Top-level key ``real``: one object per sequence.
 
 People in view from the first frame (``real_people_start``): each CDnet sequence started at every
@@ -121,6 +125,11 @@ NO_BODY_SHADOW = "horprasert-no-body-shadow"
 #: ours without the body-shadow rule's leg step (node ``body_shadow_leg_ncc: -1``,
 #: ``BodyShadowConfig(leg_ncc=-1)``); reported as ``*_ours_no_legs``
 NO_LEGS = "horprasert-no-legs"
+#: ours on the sequence made grey (three equal channels, a grey or infrared camera): as it is (the
+#: background found monochrome) and with colour footage's shadow bounds (``mono_chroma_deg: 0``, as
+#: before); MOG2 on the grey frames (no shadow detection, as the node runs it on grey frames);
+#: reported as ``*_ours_grey``, ``*_ours_grey_colour_bounds``, ``*_mog2_grey``
+GREY, GREY_COLOUR_BOUNDS, MOG2_GREY = "horprasert-grey", "horprasert-grey-colour-bounds", "mog2-grey"
 #: CDnet ground-truth labels (changedetection.net): positives, negatives (static, hard shadow)
 GT_FG, GT_SHADOW, GT_STATIC = 255, 50, 0
 
@@ -363,8 +372,17 @@ def load_cdnet(seq_dir: str) -> tuple[np.ndarray, np.ndarray, int, int]:
 
 
 def evaluate_real(frames: np.ndarray, gt: np.ndarray, first: int, backend: str) -> dict[str, Any]:
-    """See ``_evaluate_real``; ``backend`` AUTO_AREA is ours with ``min_area=None``."""
-    if backend == AUTO_AREA:
+    """See ``_evaluate_real``; ``backend`` AUTO_AREA is ours with ``min_area=None``, GREY,
+    GREY_COLOUR_BOUNDS and MOG2_GREY run on the frames made grey.
+    """
+    if backend in (GREY, GREY_COLOUR_BOUNDS, MOG2_GREY):
+        frames = np.stack([cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames])
+    if backend == MOG2_GREY:
+        ex = SilhouetteExtractor(backend="mog2", backend_params={"detectShadows": False})
+    elif backend in (GREY, GREY_COLOUR_BOUNDS):
+        params = {"train_frames": TRAIN_FRAMES, **({"mono_chroma_deg": 0.0} if backend == GREY_COLOUR_BOUNDS else {})}
+        ex = SilhouetteExtractor(backend_params=params)
+    elif backend == AUTO_AREA:
         ex = SilhouetteExtractor(min_area=None, backend_params={"train_frames": TRAIN_FRAMES})
     elif backend in (NO_BODY_SHADOW, NO_LEGS):
         config = BodyShadowConfig(span_px=0) if backend == NO_BODY_SHADOW else BodyShadowConfig(leg_ncc=-1.0)
@@ -439,7 +457,7 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
             "split": "tune: first half of the evaluated frames; figures: second half",
         }
         has_shadow = bool(np.any(gt[first - 1 :] == GT_SHADOW))
-        for b in (*REAL_BACKENDS, AUTO_AREA, NO_BODY_SHADOW, NO_LEGS):
+        for b in (*REAL_BACKENDS, AUTO_AREA, NO_BODY_SHADOW, NO_LEGS, GREY, GREY_COLOUR_BOUNDS, MOG2_GREY):
             t0 = time.perf_counter()
             ev = evaluate_real(frames, gt, first, b)
             tag = {
@@ -447,6 +465,9 @@ def real_evaluation(seq_names: list[str] | None = None) -> dict[str, Any] | None
                 AUTO_AREA: "ours_auto_area",
                 NO_BODY_SHADOW: "ours_no_body_shadow",
                 NO_LEGS: "ours_no_legs",
+                GREY: "ours_grey",
+                GREY_COLOUR_BOUNDS: "ours_grey_colour_bounds",
+                MOG2_GREY: "mog2_grey",
             }.get(b, b)
             for half, suffix in (("report", ""), ("tune", "_tune")):
                 c = ev[half]

@@ -23,8 +23,10 @@ from counterpart.nodes.silhouette.background import (
     ShadowConfig,
     ThresholdConfig,
     _surround_near_candidates,
+    chroma_spread_deg,
 )
 from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig, reclaim_body_shadow
+from tests.real_clips import UT_CLIP, clip_with_keypoints, keypoints_inside
 
 H, W = 120, 160
 YY, XX = np.mgrid[0:H, 0:W]
@@ -463,3 +465,81 @@ def test_ghost_surround_on_frames_whose_sides_are_not_multiples_of_4(shape):
         np.testing.assert_allclose(cnt, whole(bg)[ys // 4, xs // 4], rtol=1e-5, atol=1e-6)
         for c in range(3):
             np.testing.assert_allclose(near[c], whole(mu[c] * bg)[ys // 4, xs // 4], rtol=1e-5, atol=1e-3)
+
+
+def grey3(frames: np.ndarray) -> np.ndarray:
+    """Frames (..., H, W, 3) made grey: three equal channels, as a grey or infrared camera's come."""
+    g = np.rint(frames.astype(np.float32) @ np.float32([0.114, 0.587, 0.299]))
+    return np.repeat(g[..., None], 3, axis=-1).astype(np.uint8)
+
+
+def test_chroma_spread_tells_grey_and_tinted_footage_from_colour(empty_frames):
+    colour = empty_frames[0]
+    grey = grey3(colour)
+    ok, jpeg = cv2.imencode(".jpg", grey, [cv2.IMWRITE_JPEG_QUALITY, 60])
+    through_codec = cv2.imdecode(jpeg, cv2.IMREAD_COLOR)
+    # a night-vision camera's green tint: every colour still on one line through black
+    tinted = np.clip(grey * np.float32([0.8, 1.0, 0.85]), 0, 255).astype(np.uint8)
+    assert chroma_spread_deg(grey) == 0.0
+    assert chroma_spread_deg(through_codec) < 0.5
+    assert chroma_spread_deg(tinted) < 0.5
+    assert chroma_spread_deg(colour) > 5.0
+    assert chroma_spread_deg(np.zeros((8, 8, 3), np.uint8)) == 0.0
+
+
+def grey_scene_labels(mono_chroma_deg: float) -> tuple[np.ndarray, dict[str, np.ndarray], bool]:
+    """Labels of a grey frame with a person a quarter darker than the room, another a fifth brighter,
+    and a cast shadow that takes off 8% (each keeping the room's texture, as a shadow does), from a
+    model fitted on grey frames; the regions; whether the model took the footage as monochrome.
+    """
+    rng = np.random.default_rng(5)
+    frames = grey3(np.stack([render(rng) for _ in range(30)]))
+    model = HorprasertBackground(shadows=ShadowConfig(mono_chroma_deg=mono_chroma_deg)).fit(frames)
+    dark, light = person_mask(45.0), person_mask(115.0)
+    shadow = np.zeros((H, W), bool)
+    shadow[100:118, 60:100] = True
+    f = BG.copy()
+    f[dark] *= 0.75
+    f[light] *= 1.2
+    f[shadow] *= 0.92
+    f = grey3(np.clip(np.rint(f + rng.normal(0.0, 2.5, f.shape)), 0, 255))
+    return model.apply(f), {"dark": dark, "light": light, "shadow": shadow}, model.monochrome_
+
+
+def test_on_grey_footage_people_a_shade_darker_or_lighter_than_the_room_are_foreground():
+    labels, regions, monochrome = grey_scene_labels(ShadowConfig().mono_chroma_deg)
+    assert monochrome
+    assert class_fractions(labels, regions["dark"])[FOREGROUND] > 0.98
+    assert class_fractions(labels, regions["light"])[FOREGROUND] > 0.98
+    assert class_fractions(labels, regions["shadow"])[SHADOW] > 0.9
+    # taken as colour footage, brightness within the shadow and highlight bounds hides them both
+    labels, regions, monochrome = grey_scene_labels(0.0)
+    assert not monochrome
+    assert class_fractions(labels, regions["dark"])[SHADOW] > 0.9
+    assert class_fractions(labels, regions["light"])[HIGHLIGHT] > 0.9
+
+
+def test_colour_footage_keeps_its_shadow_bounds(empty_frames):
+    model = HorprasertBackground().fit(empty_frames)
+    assert not model.monochrome_
+    s = ShadowConfig()
+    assert model.shadow_bounds() == (
+        s.min_shadow_brightness,
+        s.unseen_min_shadow_brightness,
+        s.max_highlight_brightness,
+    )
+    with pytest.raises(ValueError, match="mono_min_shadow_brightness"):
+        ShadowConfig(mono_min_shadow_brightness=1.0)
+    with pytest.raises(ValueError, match="mono_max_highlight_brightness"):
+        ShadowConfig(mono_max_highlight_brightness=0.9)
+    with pytest.raises(ValueError, match="mono_chroma_deg"):
+        ShadowConfig(mono_chroma_deg=-1.0)
+
+
+@pytest.mark.skipif(not UT_CLIP.exists(), reason=f"{UT_CLIP} not found (the shared real data is absent)")
+def test_a_real_clip_in_grey_keeps_its_people():
+    frames, kp, vis = clip_with_keypoints()
+    grey = grey3(frames)
+    assert keypoints_inside(grey, kp, vis) > 0.93
+    # without the monochrome bounds most of the people were shadow and highlight
+    assert keypoints_inside(grey, kp, vis, mono_chroma_deg=0.0) < 0.6

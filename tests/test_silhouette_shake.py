@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from counterpart.nodes.silhouette.backends import make_subtractor
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 from counterpart.nodes.silhouette.shake import (
     ShakeConfig,
     ShakeEstimator,
@@ -26,7 +25,7 @@ from counterpart.nodes.silhouette.shake import (
 )
 from counterpart.sim.camera_shake import shake_path, shaken
 from counterpart.sim.flat_scenes import textured_background
-from tests.shared_data import DATA
+from tests.real_clips import UT_CLIP, clip_with_keypoints, keypoints_inside
 
 H, W = 240, 320
 _YY, _XX = np.mgrid[0:H, 0:W]
@@ -149,32 +148,13 @@ def test_bad_shake_settings_name_the_setting() -> None:
         shake_path(10, -1.0, 0)
 
 
-UT_CLIP = DATA / "ut_interaction" / "set1" / "3_1_3.avi"
-
-
-def keypoints_inside(frames: np.ndarray, kp: np.ndarray, vis: np.ndarray, follow: bool) -> float:
-    """Share of the visible reference keypoints (frames 10 on) inside some person's region."""
-    ex = SilhouetteExtractor(backend_params={"shake": None if follow else False})
-    ex.fit_background(list(frames[:30]))
-    inside = []
-    for i, f in enumerate(frames):
-        labels = ex.process(f).labels
-        if i < 10 or i >= len(kp):
-            continue
-        xy = np.rint(kp[i][vis[i] >= 0.5]).astype(int)
-        ok = (xy[:, 0] >= 0) & (xy[:, 0] < f.shape[1]) & (xy[:, 1] >= 0) & (xy[:, 1] < f.shape[0])
-        inside.extend(labels[xy[ok, 1], xy[ok, 0]] > 0)
-    return float(np.mean(inside))
-
-
 @pytest.mark.skipif(not UT_CLIP.exists(), reason=f"{UT_CLIP} not found (the shared real data is absent)")
 def test_a_real_clip_shaken_keeps_its_people() -> None:
-    frames = read_frames(UT_CLIP)
-    ref = np.load(DATA / "ut_interaction" / "keypoints" / f"{UT_CLIP.stem}.npz")
+    frames, kp, vis = clip_with_keypoints()
     shift = shake_path(len(frames), 2.0, 3)
-    kp = ref["kp"] + shift[: len(ref["kp"]), None, None, :]
+    kp = kp + shift[: len(kp), None, None, :]
     moved = shaken(frames, shift)
-    followed = keypoints_inside(moved, kp, ref["vis"], True)
-    unfollowed = keypoints_inside(moved, kp, ref["vis"], False)
+    followed = keypoints_inside(moved, kp, vis)
+    unfollowed = keypoints_inside(moved, kp, vis, shake=False)
     assert followed > 0.95
     assert followed > unfollowed + 0.05

@@ -34,6 +34,16 @@ brighter than its background is foreground, not a highlight (a change of light b
 surface by tens of percent; a white shirt on a grey floor, which has the floor's chromaticity
 too, by far more), just as one darker than ``min_shadow_brightness`` is not a shadow.
 
+Monochrome footage (a grey or infrared camera, a tinted black-and-white video, three equal
+channels however it comes) has no chromaticity to tell with: every colour lies on one line through
+the origin, CD is noise, and any person darker than the room down to ``min_shadow_brightness`` would
+be a shadow, any lighter one up to ``max_highlight_brightness`` a highlight. Training frames whose
+colours spread less than ``mono_chroma_deg`` in chromaticity (:func:`chroma_spread_deg`) are taken
+as monochrome (``monochrome_``): their shadows and highlights are then bounded by the much tighter
+``mono_min_shadow_brightness`` and ``mono_max_highlight_brightness`` (a cast shadow that is deeper
+is foreground with its person, a price that colour footage does not pay), and a still region is
+absorbed as a ghost only when it matches the room's brightness closely.
+
 Shadows keep the texture of the surface they fall on; clothing does not (Jacques, Jung & Musse,
 "Background subtraction and shadow detection in grayscale video sequences", SIBGRAPI 2005, eq. 4).
 A pixel labelled shadow whose background neighbourhood is textured (its local standard deviation
@@ -274,6 +284,14 @@ class ShadowConfig:
         The variance over a window's shadow pixels alone exceeds the whole window's mostly at a
         shadow's edge; 0.5 keeps nearly every pixel that the full test finds textured. Sparse
         shadow is tested in full. 0: no prefilter.
+    mono_chroma_deg : float, default 1.0
+        Training frames whose colours spread less than this in chromaticity
+        (:func:`chroma_spread_deg`, degrees) are monochrome; 0: never. Colour footage of a drab scene spreads a few degrees;
+        grey frames, even through a codec, a few tenths.
+    mono_min_shadow_brightness, mono_max_highlight_brightness : float, default 0.85, 1.08
+        ``min_shadow_brightness`` and ``max_highlight_brightness`` (and at least the former for
+        ``unseen_min_shadow_brightness``) on monochrome footage, where brightness alone tells a
+        shadow from a person. In [0, 1) and > 1.
     """
 
     min_shadow_brightness: float = 0.4
@@ -283,8 +301,17 @@ class ShadowConfig:
     shadow_texture_k: float = 8.0
     shadow_window: int = 7
     texture_prefilter: float = 0.5
+    mono_chroma_deg: float = 1.0
+    mono_min_shadow_brightness: float = 0.85
+    mono_max_highlight_brightness: float = 1.08
 
     def __post_init__(self) -> None:
+        if self.mono_chroma_deg < 0.0:
+            raise ValueError(f"mono_chroma_deg must be >= 0 (0: never monochrome), got {self.mono_chroma_deg}")
+        if not 0.0 <= self.mono_min_shadow_brightness < 1.0:
+            raise ValueError(f"mono_min_shadow_brightness must be in [0, 1), got {self.mono_min_shadow_brightness}")
+        if self.mono_max_highlight_brightness <= 1.0:
+            raise ValueError(f"mono_max_highlight_brightness must be > 1, got {self.mono_max_highlight_brightness}")
         if self.texture_prefilter < 0.0:
             raise ValueError(f"texture_prefilter must be >= 0 (0: off), got {self.texture_prefilter}")
         if not 0.0 <= self.min_shadow_brightness < 1.0:
@@ -381,6 +408,33 @@ _CONFIGS: dict[str, type] = {
 }
 
 
+def chroma_spread_deg(image: np.ndarray, min_level: float = 20.0) -> float:
+    """How far the colours of an image spread in chromaticity: the 90th percentile of the angle
+    between each pixel's colour vector and the median direction, degrees.
+
+    Parameters
+    ----------
+    image : ndarray of shape (..., 3)
+        BGR pixels: a frame (H, W, 3) or a stack of them (N, H, W, 3).
+    min_level : float, default=20.0
+        Pixels whose mean level is under this are left out: near black, a colour's direction is noise.
+
+    Returns
+    -------
+    float
+        Degrees; 0 for three equal channels (and for an image with no pixel bright enough), a
+        few tenths for a grey image through a codec, several degrees for colour footage.
+    """
+    c = np.asarray(image, np.float32).reshape(-1, 3)[::7]
+    c = c[c.mean(axis=1) >= min_level]
+    if not len(c):
+        return 0.0
+    u = c / np.linalg.norm(c, axis=1, keepdims=True)
+    m = np.median(u, axis=0)
+    m /= max(float(np.linalg.norm(m)), 1e-12)
+    return float(np.degrees(np.arccos(np.clip(np.percentile(u @ m, 10.0), -1.0, 1.0))))
+
+
 def distortions(
     planes: list[np.ndarray], w: np.ndarray, inv_var: np.ndarray, inv_den: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -458,6 +512,9 @@ class HorprasertBackground:
         tau_cd, tau_alpha1, tau_alpha2, tau_alpha_lo as fitted.
     unseen_ : ndarray of shape (H, W), dtype bool
         Pixels no training sample showed (``fit(exclude=...)``), filled in.
+    monochrome_ : bool
+        The training frames had no colour to tell shadows by (``ShadowConfig.mono_chroma_deg``):
+        :meth:`shadow_bounds` gives the tighter monochrome bounds.
 
     Raises
     ------
@@ -483,6 +540,7 @@ class HorprasertBackground:
         self.training = training
         self.ghosts = ghosts
         self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
+        self.monochrome_ = False
         self._unseen_u8: np.ndarray | None = None
         self.absorb_frames_: int = 0
         self._absorb_runs = 0  # absorb_frames_ in frames learnt from (one in adaptation.update_every)
@@ -616,6 +674,8 @@ class HorprasertBackground:
             if exclude.shape != stack.shape[:3]:
                 raise ValueError(f"exclude must be (N, H, W) bool of shape {stack.shape[:3]}, got {exclude.shape}")
             free = ~exclude
+        # the frames' own colours (a mean filled in around people who stood still has fewer)
+        self.monochrome_ = chroma_spread_deg(stack[:: max(1, len(stack) // 4)]) < self.shadows.mono_chroma_deg
         mean, spread, unseen = self._colour_statistics(stack, robust, free)
         self._start_model(mean, spread, unseen, robust)
         inliers = self._fit_distortion_rms(stack, robust, free, unseen)
@@ -741,7 +801,7 @@ class HorprasertBackground:
         tau_a2 = min(float(lo_q), -_MIN_TAU) if cfg.tau_alpha2 is None else float(cfg.tau_alpha2)
         if cfg.tau_alpha_lo is None:
             # Reported at the median a; applied per pixel (see _refresh_thresholds).
-            tau_lo = min((self.shadows.min_shadow_brightness - 1.0) / med_a, tau_a2 - 1.0)
+            tau_lo = min((self.shadow_bounds()[0] - 1.0) / med_a, tau_a2 - 1.0)
         else:
             tau_lo = float(cfg.tau_alpha_lo)
         if not (tau_lo < tau_a2 < 0.0 < tau_a1) or tau_cd <= 0.0:
@@ -1154,7 +1214,9 @@ class HorprasertBackground:
         s_near = near.sum(axis=0) + 1.0
         chroma = np.abs(run / s_run - near / s_near).sum(axis=0)
         ratio = s_run / s_near
-        sel = (cnt >= 0.1) & (chroma <= _GHOST_CHROMA) & (ratio > _GHOST_BRIGHTNESS[0]) & (ratio < _GHOST_BRIGHTNESS[1])
+        # without colour, brightness alone tells a still person from the room they hide
+        lo, hi = _UNSEEN_GHOST_BRIGHTNESS if self.monochrome_ else _GHOST_BRIGHTNESS
+        sel = (cnt >= 0.1) & (chroma <= _GHOST_CHROMA) & (ratio > lo) & (ratio < hi)
         if self.unseen_ is not None:
             tight = self.unseen_[ys, xs]
             sel &= ~tight | (
@@ -1180,6 +1242,23 @@ class HorprasertBackground:
         labels = self.apply(frame)
         self.update(frame, labels)
         return labels
+
+    def shadow_bounds(self) -> tuple[float, float, float]:
+        """The brightness bounds of the shadow and highlight classes for this footage, as multiples
+        of the background's brightness (raw alpha): ``ShadowConfig``'s, or on monochrome footage
+        (``monochrome_``) its tighter ``mono_`` ones.
+
+        Returns
+        -------
+        darkest, darkest_unseen, brightest : float
+            Darkest shadow, darkest shadow at the ``unseen_`` pixels, brightest highlight.
+        """
+        s = self.shadows
+        if not self.monochrome_:
+            return s.min_shadow_brightness, s.unseen_min_shadow_brightness, s.max_highlight_brightness
+        darkest = max(s.min_shadow_brightness, s.mono_min_shadow_brightness)
+        brightest = min(s.max_highlight_brightness, s.mono_max_highlight_brightness)
+        return darkest, max(s.unseen_min_shadow_brightness, darkest), brightest
 
     def get_params(self) -> dict[str, Any]:
         """The constructor's parameters (scikit-learn style).
@@ -1264,15 +1343,16 @@ class HorprasertBackground:
         t = self.thresholds_
         self._alpha_hi = (1.0 + t["tau_alpha1"] * self.a_).astype(np.float32)
         self._alpha_lo = (1.0 + t["tau_alpha2"] * self.a_).astype(np.float32)
+        darkest, darkest_unseen, brightest = self.shadow_bounds()
         if self.thresholds.tau_alpha_lo is None:
-            floor = np.full(self.a_.shape, np.float32(self.shadows.min_shadow_brightness))
+            floor = np.full(self.a_.shape, np.float32(darkest))
             if self.unseen_ is not None:
-                floor[self.unseen_] = self.shadows.unseen_min_shadow_brightness
+                floor[self.unseen_] = darkest_unseen
             self._alpha_min = np.minimum(floor, self._alpha_lo)
         else:
             self._alpha_min = (1.0 + t["tau_alpha_lo"] * self.a_).astype(np.float32)
         self._cd2_max = ((t["tau_cd"] * self.b_) ** 2).astype(np.float32)
-        self._alpha_max = np.maximum(np.float32(self.shadows.max_highlight_brightness), self._alpha_hi)
+        self._alpha_max = np.maximum(np.float32(brightest), self._alpha_hi)
 
     def _distortions(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """Raw alpha (eq. 5) and CD^2 (eq. 6), each (H, W) float32, and the frame's three float32

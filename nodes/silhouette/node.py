@@ -11,10 +11,12 @@ Run in a graph (``run: counterpart.nodes.silhouette``) or alone::
 
     python -m counterpart.nodes.silhouette --param backend=mog2 --param train_frames=50
 
-Grey (mono8) frames are converted to three equal channels; as chromaticity cannot tell a shadow
-from a darker person there, shadow detection is off for them (every change from the background is
-foreground). A frame of another size or encoding than the ones before (a camera restarted at a new
-resolution) starts the background model and the people afresh.
+Grey (mono8) frames are converted to three equal channels. Chromaticity cannot tell a shadow from
+a darker person there: the Horprasert model finds such footage monochrome, as it does any grey or
+tinted video however it comes, and bounds its shadows and highlights tightly
+(``background.ShadowConfig.mono_min_shadow_brightness``); MOG2 and KNN detect no shadows on them.
+A frame of another size or encoding than the ones before (a camera restarted at a new resolution)
+starts the background model and the people afresh.
 """
 
 from __future__ import annotations
@@ -301,8 +303,6 @@ class Silhouette(Node):
             }
         elif p["backend"] in ("mog2", "knn") and mono:
             backend_params = {"detectShadows": False}
-        # without colour a shadow cannot be told from a darker person (Horprasert's test is on
-        # chromaticity): on grey frames every change from the background is foreground
         camera = Camera.from_dict(p["camera"]) if p["camera"] else None
         return SilhouetteExtractor(
             backend=p["backend"],
@@ -313,7 +313,6 @@ class Silhouette(Node):
             open_px=p["open_px"],
             close_px=p["close_px"],
             fill_holes=p["fill_holes"],
-            shadows=not mono,
             backend_params=backend_params,
         )
 

@@ -414,9 +414,7 @@ def _person_pixels(
     # is the person's cast shadow: it is not left out, so that it stays a shadow there. The room
     # under it is learnt shadowed; when it is uncovered the model absorbs the ghost.
     feet = box_mask(frame.shape[:2], _feet_bands(box_list), 0.0)
-    shade = (
-        feet & (alpha < 1.0) & (alpha >= model.shadows.min_shadow_brightness) & (cd_hat <= model.thresholds_["tau_cd"])
-    )
+    shade = feet & (alpha < 1.0) & (alpha >= model.shadow_bounds()[0]) & (cd_hat <= model.thresholds_["tau_cd"])
     changed &= ~shade
     r = max(1, int(round(grow * float(np.median(box_list[:, 3])))))
     return _solid_regions(changed & boxes & (~model.unseen_ | still), r) & boxes

@@ -120,8 +120,9 @@ class SilhouetteExtractor:
     fill_holes : bool, default=True
         Fill holes in the mask (``regions.clean_mask``).
     shadows : bool, default=True
-        Shadow and highlight pixels count as background (True) or as foreground (False: for grey images,
-        where chromaticity cannot tell a shadow from a darker person).
+        Shadow and highlight pixels count as background (True) or as foreground (False: every change
+        from the background). Grey footage needs neither: the Horprasert model finds it monochrome
+        and bounds its shadows tightly (``background.ShadowConfig``).
     backend_params : dict or None, default=None
         Keyword parameters of the subtractor (e.g. train_frames, learning_rate).
     tracker_params : dict or None, default=None
