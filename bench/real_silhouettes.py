@@ -1,8 +1,8 @@
 """Silhouettes on real two-person video: are both people found whole, on the right side.
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
-           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--threads 1]
-           [--out FILE]
+           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7]
+           [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
 mostly still from the first frame, static elevated camera), with reference 2D keypoints of both
@@ -64,6 +64,14 @@ bounded tightly, ``background.ShadowConfig.mono_min_shadow_brightness``) and wit
 colour footage (``*_grey_colour_bounds``, the algorithm as it was before: a person a shade darker
 or lighter than the room a shadow or a highlight): ``people_found_grey``, ``keypoint_coverage_grey``,
 ``extra_people_grey``, ``person_clips_covered_grey`` and the same ``_colour_bounds``.
+
+A light switched on (or off) mid-clip: each clip again, its frames from frame 50 on times ``--light``
+(1.7: beyond the brightest highlight a colour model takes; clipped at 255), through ours as it is
+(``*_lit``: the model re-exposed at once, ``background.AdaptationConfig.exposure_step``) and with the
+exposure not followed (``*_lit_unfollowed``, as it was before: the room foreground from then on):
+``people_found_lit``, ``keypoint_coverage_lit``, ``extra_people_lit`` and the same ``_unfollowed``;
+``people_share_lit`` (and ``_unfollowed``): the mean share of the frame in people's regions from frame
+50 on, against ``people_share``, ours on the clips as they are.
 
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
@@ -228,6 +236,7 @@ def run_clip(
     train_frames: int,
     shake_px: float = 0.0,
     grey: bool = False,
+    light: float = 1.0,
     backend: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
@@ -236,7 +245,8 @@ def run_clip(
     it); unless ``backend`` turns the following off (``shake`` False), the counts then also hold
     the error of the followed shift against the true one (``shake_err``, pixels, per frame).
     ``grey``: the clip's frames made grey (three equal channels, as a grey or infrared camera's
-    come). ``backend``: subtractor parameters over ours (or the baseline's).
+    come). ``light``: the light's gain from frame ``LIGHT_FRAME`` on (a light switched on or off).
+    ``backend``: subtractor parameters over ours (or the baseline's).
     """
     frames = read_frames(path)
     ref = np.load(DATA / "keypoints" / f"{path.stem}.npz")
@@ -249,6 +259,9 @@ def run_clip(
         kp = kp + true_shift[: len(kp), None, None, :]
     if grey:
         frames = np.stack([cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames])
+    if light != 1.0:
+        lit = frames[LIGHT_FRAME:].astype(np.float32) * np.float32(light)
+        frames = np.concatenate([frames[:LIGHT_FRAME], np.clip(np.rint(lit), 0, 255).astype(np.uint8)])
     base = {} if ours else BASELINE
     params = {"train_frames": train_frames, **base.get("backend_params", {}), **(backend or {})}
     follow = params.get("shake", True) is not False
@@ -262,6 +275,9 @@ def run_clip(
         t0 = time.perf_counter()
         r = ex.process(frames[t])
         proc_s += time.perf_counter() - t0
+        if t >= LIGHT_FRAME:
+            tot["share_sum"] = tot.get("share_sum", 0.0) + float(np.count_nonzero(r.labels)) / r.labels.size
+            tot["share_n"] = tot.get("share_n", 0) + 1
         if true_shift is not None and follow:
             # the model is on the first training frame's pixels: the shift to find is relative to it
             est = ex.subtractor.shake.last
@@ -285,12 +301,16 @@ def run_clip(
 SHAKE_PX = 2.0
 
 
-def extra_passes(shake_px: float, grey: bool) -> dict[str, dict[str, Any]]:
+def extra_passes(shake_px: float, grey: bool, light: float) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
-    and with colour footage's shadow bounds (``grey``).
+    and with colour footage's shadow bounds (``grey``); the clips lit by ``light`` from frame
+    ``LIGHT_FRAME`` on, the new exposure followed and not (``light`` other than 1).
     """
     out: dict[str, dict[str, Any]] = {}
+    if light != 1.0:
+        out["lit"] = {"light": light}
+        out["lit_unfollowed"] = {"light": light, "backend": {"exposure_step": 0.0}}
     if shake_px > 0:
         out["shaken"] = {"shake_px": shake_px}
         out["shaken_unfollowed"] = {"shake_px": shake_px, "backend": {"shake": False}}
@@ -299,6 +319,10 @@ def extra_passes(shake_px: float, grey: bool) -> dict[str, dict[str, Any]]:
         out["grey_colour_bounds"] = {"grey": True, "backend": {"mono_chroma_deg": 0.0}}
     return out
 
+
+#: the light's gain of the lit pass (``--light``), and the frame it changes on
+LIGHT = 1.7
+LIGHT_FRAME = 50
 
 #: the issue's bar for each person's keypoint coverage (``person_clips_covered``)
 PERSON_COVERAGE = 0.9
@@ -325,6 +349,7 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "keypoint_coverage_person": [_person_coverage(s, k) for k in range(2)],
         "person_clips_covered": round(float(np.mean(covered)), 4) if covered else None,
         "extra_people": round((s["reported"] - s["matched"]) / max(s["scored"], 1), 3),
+        "people_share": round(s.get("share_sum", 0.0) / max(s.get("share_n", 0), 1), 4),
         "reference_collapsed": round(s["collapsed"] / max(s["collapsed"] + s["scored"], 1), 3),
         "reference_reversed": round(s["reversed"] / max(s["scored"], 1), 4),
         "people_found_reference_ordered": round((s["found"] - s["found_reversed"]) / max(ordered, 1), 4),
@@ -360,6 +385,12 @@ def main(argv: list[str] | None = None) -> int:
         help="amplitude of the camera shake of the shaken pass, pixels (0: no shaken pass)",
     )
     ap.add_argument("--no-grey", action="store_true", help="no grey pass")
+    ap.add_argument(
+        "--light",
+        type=float,
+        default=LIGHT,
+        help=f"gain of the light from frame {LIGHT_FRAME} on in the lit pass (1: no lit pass)",
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -368,7 +399,7 @@ def main(argv: list[str] | None = None) -> int:
     cv2.setNumThreads(args.threads)
     splits = ("tune", "report") if args.clips == "all" else (args.clips,)
     methods = {"ours": True} if args.no_baseline else {"ours": True, "baseline": False}
-    passes = extra_passes(args.shake_px, not args.no_grey)
+    passes = extra_passes(args.shake_px, not args.no_grey, args.light)
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
         "train_frames": args.train_frames,
@@ -402,8 +433,10 @@ def main(argv: list[str] | None = None) -> int:
         report[split] = {m: summarise(rows[m]) for m in rows}
     main_split = "report" if "report" in splits else splits[0]
     for m in passes:
-        for k in ("people_found", "keypoint_coverage", "extra_people", "person_clips_covered"):
+        for k in ("people_found", "keypoint_coverage", "extra_people", "person_clips_covered", "people_share"):
             report[f"{k}_{m}"] = report[main_split][m][k]
+    if "lit" in passes:
+        report["light"] = args.light
     if "shaken" in passes:
         report["shake_px"] = args.shake_px
         report["shake_err_px_median"] = report[main_split]["shaken"]["shake_err_px_median"]
@@ -418,6 +451,7 @@ def main(argv: list[str] | None = None) -> int:
             "people_found_reference_ordered",
             "reference_reversed",
             "person_clips_covered",
+            "people_share",
             "misses",
             "fps",
             "fit_s",

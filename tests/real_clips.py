@@ -23,15 +23,26 @@ def clip_with_keypoints(path: Any = UT_CLIP) -> tuple[np.ndarray, np.ndarray, np
     return read_frames(path), ref["kp"], ref["vis"]
 
 
+def labels_of(frames: np.ndarray, **backend_params: Any) -> list[np.ndarray]:
+    """Each frame's people labels (H, W) int32, the background fitted on the first 30 frames with
+    ``backend_params``.
+    """
+    ex = SilhouetteExtractor(backend_params=backend_params)
+    ex.fit_background(list(frames[:30]))
+    return [ex.process(f).labels for f in frames]
+
+
+def people_share(frames: np.ndarray, first: int, **backend_params: Any) -> float:
+    """Mean share of the frame's pixels in people's regions, from frame ``first`` on."""
+    return float(np.mean([(labels > 0).mean() for labels in labels_of(frames, **backend_params)[first:]]))
+
+
 def keypoints_inside(frames: np.ndarray, kp: np.ndarray, vis: np.ndarray, **backend_params: Any) -> float:
     """Share of the visible reference keypoints (visibility >= 0.5, frames 10 on) inside some
     person's region, the background fitted on the first 30 frames with ``backend_params``.
     """
-    ex = SilhouetteExtractor(backend_params=backend_params)
-    ex.fit_background(list(frames[:30]))
     inside = []
-    for i, f in enumerate(frames):
-        labels = ex.process(f).labels
+    for i, (f, labels) in enumerate(zip(frames, labels_of(frames, **backend_params))):
         if i < 10 or i >= len(kp):
             continue
         xy = np.rint(kp[i][vis[i] >= 0.5]).astype(int)

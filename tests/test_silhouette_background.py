@@ -26,7 +26,7 @@ from counterpart.nodes.silhouette.background import (
     chroma_spread_deg,
 )
 from counterpart.nodes.silhouette.body_shadow import BodyShadowConfig, reclaim_body_shadow
-from tests.real_clips import UT_CLIP, clip_with_keypoints, keypoints_inside
+from tests.real_clips import UT_CLIP, clip_with_keypoints, keypoints_inside, people_share
 
 H, W = 120, 160
 YY, XX = np.mgrid[0:H, 0:W]
@@ -543,3 +543,59 @@ def test_a_real_clip_in_grey_keeps_its_people():
     assert keypoints_inside(grey, kp, vis) > 0.93
     # without the monochrome bounds most of the people were shadow and highlight
     assert keypoints_inside(grey, kp, vis, mono_chroma_deg=0.0) < 0.6
+
+
+def lit_stream_labels(gain: float, exposure_step: float) -> tuple[np.ndarray, np.ndarray, list[float | None]]:
+    """Labels of 10 frames after the light changes by ``gain`` all over (a person in view), from a
+    model fitted on the empty scene; the person's mask; the gains ``follow_exposure`` applied.
+    """
+    rng = np.random.default_rng(7)
+    model = HorprasertBackground(adaptation=AdaptationConfig(exposure_step=exposure_step))
+    model.fit(np.stack([render(rng) for _ in range(30)]))
+    applied, labels = [], []
+    for _ in range(10):
+        frame = render(rng, person_x=80.0, gains=(gain, gain, gain))
+        applied.append(model.follow_exposure(frame))
+        labels.append(model.apply(frame))
+        model.update(frame, labels[-1])
+    return np.stack(labels), person_mask(80.0), applied
+
+
+@pytest.mark.parametrize("gain", [1.6, 0.3])
+def test_a_light_switched_on_or_off_re_exposes_the_model_at_once(gain):
+    labels, person, applied = lit_stream_labels(gain, AdaptationConfig().exposure_step)
+    assert applied[0] == pytest.approx(gain, rel=0.02) and applied[1:] == [None] * 9
+    for lab in labels:
+        assert class_fractions(lab, person)[FOREGROUND] > 0.98
+        assert class_fractions(lab, ~person)[FOREGROUND] < 0.01
+    # not followed: the whole room is foreground, frame after frame
+    labels, _, applied = lit_stream_labels(gain, 0.0)
+    assert applied == [None] * 10
+    assert min(class_fractions(lab, ~person)[FOREGROUND] for lab in labels) > 0.9
+
+
+def test_a_steady_light_is_never_re_exposed_whatever_the_people_do():
+    rng = np.random.default_rng(8)
+    model = HorprasertBackground().fit(np.stack([render(rng) for _ in range(30)]))
+    applied = []
+    for k in range(40):
+        frame = render(rng, person_x=20.0 + 3 * k, shadow=k % 2 == 0)
+        # a second, large person as dark as a coat fills a third of the frame on some frames
+        if k % 5 == 0:
+            frame[:, :55] = 30
+        applied.append(model.follow_exposure(frame))
+        model.update(frame, model.apply(frame))
+    assert applied == [None] * 40
+    with pytest.raises(ValueError, match="exposure_step"):
+        AdaptationConfig(exposure_step=1.0)
+
+
+@pytest.mark.skipif(not UT_CLIP.exists(), reason=f"{UT_CLIP} not found (the shared real data is absent)")
+def test_a_real_clip_whose_light_is_switched_on_keeps_its_people_and_not_the_room():
+    frames, kp, vis = clip_with_keypoints()
+    lit = frames.astype(np.float32)
+    lit[50:] *= 1.7
+    lit = np.clip(np.rint(lit), 0, 255).astype(np.uint8)
+    assert keypoints_inside(lit, kp, vis) > 0.95
+    followed, unfollowed = (people_share(lit, 50, exposure_step=step) for step in (0.05, 0.0))
+    assert followed < 1.5 * people_share(frames, 50) and unfollowed > 0.9

@@ -274,6 +274,7 @@ class HorprasertSubtractor:
             shift = self.shake.shift(self._model.mean_, frame, self._moving)
             if shift is not None:
                 frame = align(frame, shift)  # a new array: the copy above is not needed for it
+        self._model.follow_exposure(frame)
         if self.samples is None:
             stats = self._model.apply(frame)
             labels = stats

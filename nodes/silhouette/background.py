@@ -108,6 +108,12 @@ _UNSEEN_GHOST_CHROMA = 0.03
 _UNSEEN_GHOST_BRIGHTNESS = (0.88, 1.12)
 # An excluded sample in the robust median pass: above every (doubled) grey level or deviation.
 _EXCLUDED = np.uint16(np.iinfo(np.uint16).max)
+#: pixels of the room sampled for the scene-wide exposure (``follow_exposure``); the share of
+#: them that must be left when the last frame's foreground is taken out, else all count
+_EXPOSURE_SAMPLES = 4096
+_EXPOSURE_MIN_LEFT = 0.3
+#: the mean levels a sampled pixel's background may have: away from black and from saturation
+_EXPOSURE_LEVELS = (20.0, 235.0)
 # Bytes of float32 work memory per row block in the robust median pass.
 _BLOCK_BYTES = 64 * 1024 * 1024
 
@@ -210,12 +216,20 @@ class AdaptationConfig:
         with about the same memory (1 - n r against (1 - r)^n over n frames). The ghost runs
         (``GhostConfig.absorb_frames``) count the frames learnt from. 1: every frame. With 2 the
         update costs half as much per frame.
+    exposure_step : float, default 0.05
+        A frame whose room is brighter or darker than the model by more than this share, all over
+        (the median ratio of their brightness on a sample of the room's pixels, the last frame's
+        foreground left out: a light switched, the sun out from a cloud, the camera's exposure
+        changed), re-exposes the model at once (``HorprasertBackground.follow_exposure``): a
+        change that sudden outruns any learning rate, and left alone it would make the whole room
+        foreground for good. 0: never.
     """
 
     learning_rate: float = 0.05
     spread_learning_rate: float = 0.0
     shadow_learning_rate: float = 0.01
     update_every: int = 2
+    exposure_step: float = 0.05
 
     def __post_init__(self) -> None:
         for name in ("learning_rate", "spread_learning_rate", "shadow_learning_rate"):
@@ -224,6 +238,8 @@ class AdaptationConfig:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
         if self.update_every < 1:
             raise ValueError(f"update_every must be >= 1 frame, got {self.update_every}")
+        if not 0.0 <= self.exposure_step < 1.0:
+            raise ValueError(f"exposure_step must be in [0, 1) (0: never), got {self.exposure_step}")
 
     def rate(self, name: str) -> float:
         """The rate ``name`` (``learning_rate``, ``spread_learning_rate`` or ``shadow_learning_rate``)
@@ -541,6 +557,8 @@ class HorprasertBackground:
         self.ghosts = ghosts
         self.unseen_: np.ndarray | None = None  # (H, W) bool pixels filled in from their surroundings
         self.monochrome_ = False
+        self._exposure_idx: np.ndarray | None = None  # flat indices of the room's exposure sample
+        self._exposure_fg: np.ndarray | None = None  # which of them the last update's labels call foreground
         self._unseen_u8: np.ndarray | None = None
         self.absorb_frames_: int = 0
         self._absorb_runs = 0  # absorb_frames_ in frames learnt from (one in adaptation.update_every)
@@ -720,6 +738,13 @@ class HorprasertBackground:
         self._absorb_runs = -(-self.absorb_frames_ // self.adaptation.update_every)
         self._updates = 0  # update calls since the fit
         self._last_alpha = None
+        level = mean.mean(axis=-1)
+        room = (~unseen & (level >= _EXPOSURE_LEVELS[0]) & (level <= _EXPOSURE_LEVELS[1])).reshape(-1)
+        candidates = np.flatnonzero(room)
+        n = min(_EXPOSURE_SAMPLES, candidates.size)
+        pick = np.random.default_rng(0).choice(candidates.size, n, replace=False) if n else np.zeros(0, np.int64)
+        self._exposure_idx = np.sort(candidates[pick])
+        self._exposure_fg = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
         self._still_ref = np.zeros((3, self._mu[0].size), np.float32)
         self.a_ = None
@@ -1082,6 +1107,7 @@ class HorprasertBackground:
         if labels.shape != self.shape:
             raise ValueError(f"labels must have shape {self.shape}, got {labels.shape}")
         labels = np.asarray(labels, np.uint8)  # apply's own labels pass through without a copy
+        self._exposure_fg = labels.reshape(-1)[self._exposure_idx] == FOREGROUND
         learns = self.learns_next
         self._updates += 1
         if not learns:
@@ -1227,7 +1253,7 @@ class HorprasertBackground:
         return sel
 
     def apply_update(self, frame: np.ndarray) -> np.ndarray:
-        """``apply`` then ``update`` with its labels.
+        """``follow_exposure``, ``apply``, then ``update`` with its labels: one frame of a stream.
 
         Parameters
         ----------
@@ -1239,9 +1265,54 @@ class HorprasertBackground:
         ndarray of shape (H, W), dtype uint8
             The labels of ``apply``.
         """
+        self.follow_exposure(frame)
         labels = self.apply(frame)
         self.update(frame, labels)
         return labels
+
+    def follow_exposure(self, frame: np.ndarray) -> float | None:
+        """Re-expose the model when the whole room of a frame is brighter or darker than it by more
+        than ``AdaptationConfig.exposure_step`` (see there): E times the gain g, and s too where g
+        > 1 (a camera's gain amplifies its noise; in the dark a sensor's noise does not fall with
+        the signal); a, b and the thresholds are relative and stay; the ghost runs' colours times g. g is the median of frame over model brightness (sum of the
+        channels) at a fixed sample of the room's pixels, those the last update's labels called
+        foreground left out (all counted where that leaves too few: a change of light makes the
+        whole room foreground until it is followed). Call it on each frame of a stream before it
+        is classified (``apply_update`` and the node's subtractor do), not on training frames.
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3), dtype uint8
+            BGR frame of the training size.
+
+        Returns
+        -------
+        float or None
+            The gain applied; None when the frame's exposure is the model's (or following is off).
+        """
+        self._require_fitted()
+        _check_frame(frame, self.shape)
+        idx = self._exposure_idx
+        if self.adaptation.exposure_step <= 0.0 or idx is None or idx.size == 0:
+            return None
+        seen = frame.reshape(-1, 3)[idx].astype(np.float32)
+        model = self._mu.reshape(3, -1)[:, idx].T
+        keep = seen.max(axis=1) < 250.0  # a saturated pixel says only that it got brighter
+        if self._exposure_fg is not None:
+            room = keep & ~self._exposure_fg
+            if room.sum() >= _EXPOSURE_MIN_LEFT * idx.size:
+                keep = room
+        if keep.sum() < _EXPOSURE_MIN_LEFT * idx.size:
+            return None
+        g = float(np.median(seen[keep].sum(axis=1) / model[keep].sum(axis=1)))
+        if abs(np.log(g)) <= np.log1p(self.adaptation.exposure_step):
+            return None
+        self._mu *= np.float32(g)
+        if g > 1.0:
+            self._var *= np.float32(g * g)
+        self._still_ref *= np.float32(g)
+        self._refresh_colour_terms(spread_changed=True)
+        return g
 
     def shadow_bounds(self) -> tuple[float, float, float]:
         """The brightness bounds of the shadow and highlight classes for this footage, as multiples
