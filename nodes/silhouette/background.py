@@ -1272,13 +1272,14 @@ class HorprasertBackground:
 
     def follow_exposure(self, frame: np.ndarray) -> float | None:
         """Re-expose the model when the whole room of a frame is brighter or darker than it by more
-        than ``AdaptationConfig.exposure_step`` (see there): E times the gain g, and s too where g
-        > 1 (a camera's gain amplifies its noise; in the dark a sensor's noise does not fall with
-        the signal); a, b and the thresholds are relative and stay; the ghost runs' colours times g. g is the median of frame over model brightness (sum of the
-        channels) at a fixed sample of the room's pixels, those the last update's labels called
-        foreground left out (all counted where that leaves too few: a change of light makes the
-        whole room foreground until it is followed). Call it on each frame of a stream before it
-        is classified (``apply_update`` and the node's subtractor do), not on training frames.
+        than ``AdaptationConfig.exposure_step`` (see there): E times the gain g, and s too where
+        g > 1 (a camera's gain amplifies its noise; in the dark a sensor's noise does not fall
+        with the signal); a, b and the thresholds are relative and stay; the ghost runs' colours
+        times g. g is the median of frame over model brightness (sum of the channels) at a fixed
+        sample of the room's pixels, those the last update's labels called foreground left out
+        (all counted where that leaves too few: a change of light makes the whole room foreground
+        until it is followed). Call it on each frame of a stream before it is classified
+        (``apply_update`` and the node's subtractor do), not on training frames.
 
         Parameters
         ----------
