@@ -274,7 +274,8 @@ class HorprasertSubtractor:
             shift = self.shake.shift(self._model.mean_, frame, self._moving)
             if shift is not None:
                 frame = align(frame, shift)  # a new array: the copy above is not needed for it
-        self._model.follow_exposure(frame)
+        if self._model.follow_exposure(frame) is not None and self.shake is not None:
+            self.shake.renew()  # its reference is the model's brightness as it was
         if self.samples is None:
             stats = self._model.apply(frame)
             labels = stats

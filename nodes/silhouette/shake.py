@@ -517,6 +517,12 @@ class ShakeEstimator:
         #: the room's usual median absolute residual at a found shift (grey levels), None until known
         self._usual: float | None = None
 
+    def renew(self) -> None:
+        """Read the reference again on the next frame, before ``refresh`` frames have passed: the
+        background changed all over (re-exposed to a new light).
+        """
+        self._ref = None
+
     def shift(self, reference: np.ndarray, frame: np.ndarray, ignore: np.ndarray | None = None) -> np.ndarray | None:
         """The frame's shift to follow, or None to classify it as it is.
 
