@@ -1296,16 +1296,19 @@ class HorprasertBackground:
         idx = self._exposure_idx
         if self.adaptation.exposure_step <= 0.0 or idx is None or idx.size == 0:
             return None
-        seen = frame.reshape(-1, 3)[idx].astype(np.float32)
-        model = self._mu.reshape(3, -1)[:, idx].T
-        keep = seen.max(axis=1) < 250.0  # a saturated pixel says only that it got brighter
+        # one gather per channel: reductions over a last axis of 3 cost more than the rest here
+        flat = frame.reshape(-1)
+        b, gr, r = (flat[3 * idx + c] for c in range(3))
+        keep = np.maximum(np.maximum(b, gr), r) < 250  # a saturated pixel says only that it got brighter
         if self._exposure_fg is not None:
             room = keep & ~self._exposure_fg
-            if room.sum() >= _EXPOSURE_MIN_LEFT * idx.size:
+            if np.count_nonzero(room) >= _EXPOSURE_MIN_LEFT * idx.size:
                 keep = room
-        if keep.sum() < _EXPOSURE_MIN_LEFT * idx.size:
+        if np.count_nonzero(keep) < _EXPOSURE_MIN_LEFT * idx.size:
             return None
-        g = float(np.median(seen[keep].sum(axis=1) / model[keep].sum(axis=1)))
+        seen = b.astype(np.float32) + gr + r
+        model = self._mu[0].reshape(-1)[idx] + self._mu[1].reshape(-1)[idx] + self._mu[2].reshape(-1)[idx]
+        g = float(np.median(seen[keep] / model[keep]))
         if abs(np.log(g)) <= np.log1p(self.adaptation.exposure_step):
             return None
         self._mu *= np.float32(g)
