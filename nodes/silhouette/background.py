@@ -559,6 +559,7 @@ class HorprasertBackground:
         self.monochrome_ = False
         self._exposure_idx: np.ndarray | None = None  # flat indices of the room's exposure sample
         self._exposure_fg: np.ndarray | None = None  # which of them the last update's labels call foreground
+        self._exposure_bytes: np.ndarray | None = None  # (3, n) their B, G, R positions in a flat frame
         self._unseen_u8: np.ndarray | None = None
         self.absorb_frames_: int = 0
         self._absorb_runs = 0  # absorb_frames_ in frames learnt from (one in adaptation.update_every)
@@ -744,6 +745,7 @@ class HorprasertBackground:
         n = min(_EXPOSURE_SAMPLES, candidates.size)
         pick = np.random.default_rng(0).choice(candidates.size, n, replace=False) if n else np.zeros(0, np.int64)
         self._exposure_idx = np.sort(candidates[pick])
+        self._exposure_bytes = 3 * self._exposure_idx + np.arange(3)[:, None]  # (3, n) into a flat BGR frame
         self._exposure_fg = None
         self._still = np.zeros(self._mu.shape[1:], np.uint16)
         self._still_ref = np.zeros((3, self._mu[0].size), np.float32)
@@ -1297,8 +1299,7 @@ class HorprasertBackground:
         if self.adaptation.exposure_step <= 0.0 or idx is None or idx.size == 0:
             return None
         # one gather per channel: reductions over a last axis of 3 cost more than the rest here
-        flat = frame.reshape(-1)
-        b, gr, r = (flat[3 * idx + c] for c in range(3))
+        b, gr, r = frame.reshape(-1)[self._exposure_bytes]
         keep = np.maximum(np.maximum(b, gr), r) < 250  # a saturated pixel says only that it got brighter
         if self._exposure_fg is not None:
             room = keep & ~self._exposure_fg
