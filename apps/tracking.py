@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -19,7 +20,7 @@ from counterpart.body.camera import Camera, camera_for_size
 from counterpart.body.pose import DOF
 from counterpart.nodes.tracker.init import PlacementError
 from counterpart.nodes.tracker.prior import MotionPrior
-from counterpart.nodes.tracker.tracker import SIDES, APFConfig, Tracker, TrackerConfig, people_problem
+from counterpart.nodes.tracker.tracker import SIDES, Tracker, TrackerConfig, people_problem
 
 if TYPE_CHECKING:
     from counterpart.nodes.silhouette.pipeline import FrameResult
@@ -40,6 +41,7 @@ def track_video(
     train_frames: int = 30,
     seed: int = 0,
     progress: Progress | None = None,
+    tracker: TrackerConfig | None = None,
     **silhouette_params: Any,
 ) -> dict[str, Any]:
     """Track the people of a video in 3D and save every frame's estimate.
@@ -55,6 +57,8 @@ def track_video(
             (side k gets seed + k, as in the node).
         max_frames, train_frames: frames to track at most; frames the background is fitted on.
         progress: called after every frame with (frames done, frames the file declares or 0).
+        tracker: the trackers' settings (None: the defaults); its annealing layers and particles
+            are ``layers`` and ``particles``.
         silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
 
     Returns
@@ -89,7 +93,8 @@ def track_video(
             if size is None:
                 camera = camera_for_size(camera, frame.shape[1], frame.shape[0])
                 size = frame.shape[:2]
-                config = TrackerConfig(apf=APFConfig(n_layers=layers, n_particles=particles))
+                base = tracker or TrackerConfig()
+                config = replace(base, apf=replace(base.apf, n_layers=layers, n_particles=particles))
                 trackers = {s: Tracker(camera, s, config, prior=prior, seed=seed + SIDES.index(s)) for s in sides}
             rows.append(_track_frame(frame, result, sides, trackers))
             if progress is not None:

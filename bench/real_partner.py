@@ -66,7 +66,7 @@ from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
-from counterpart.nodes.responder.staging import Reach, Stage, silhouette_reach, stature
+from counterpart.nodes.responder.staging import Stage, observed_silhouette
 
 VIS = 0.5
 HOLD_FRAMES = 15  # the responder node's default hold_frames
@@ -169,38 +169,6 @@ def silhouette_people(clip: Path) -> list[list[Any]]:
     return [list(result.people) for _, result in iter_video(clip, SilhouetteExtractor(), None, TRAIN_FRAMES)]
 
 
-def observed_reach(
-    people: list[Any], person_id: int, side: str, joints: np.ndarray, direction: float
-) -> tuple[Reach | None, tuple[float, float, float, float] | None]:
-    """What the observed person's silhouette says of their reach towards the partner
-    (``silhouette_reach``) and its box (a region shared with the other person is split: theirs), as
-    the responder node finds them: of the silhouettes on their side, the one with the tracked person's id, else the
-    first (and the other person's region, ``nearest_other``); None without one.
-    """
-    mine = [q for q in people if q.side == side]
-    shape = next((q for q in mine if q.id == person_id), mine[0] if mine else None)
-    if shape is None or direction == 0.0:
-        return None, None
-    box = tuple(shape.bbox)  # a region shared with the other person is split: this box is theirs
-    touching = bool(getattr(shape, "merged", False))
-    other = nearest_other(people, side, shape.centroid)
-    reach = silhouette_reach(
-        shape.bbox, shape.centroid, direction, stature(joints), shape.ctrl, touching=touching, other=other
-    )
-    return reach, box
-
-
-def nearest_other(people: list[Any], side: str, centroid: Any) -> tuple[float, float] | None:
-    """The centroid ``(x, y)`` (pixels) of the silhouette off the observed ``side`` nearest the observed
-    one's ``centroid`` across the picture (the other person's), as the responder node finds it; None without one.
-    """
-    theirs = [q for q in people if q.side != side]
-    if not theirs:
-        return None
-    q = min(theirs, key=lambda q: abs(float(q.centroid[0]) - float(centroid[0])))
-    return float(q.centroid[0]), float(q.centroid[1])
-
-
 def staged_partner(
     track_npz: Path, side: int, people: list[list[Any]] | None = None
 ) -> tuple[np.ndarray, np.ndarray, Camera, float]:
@@ -218,6 +186,7 @@ def staged_partner(
     joints, lost = d["joints"][:, side].astype(np.float64), d["lost"][:, side]
     others = np.where(d["lost"][:, 1 - side, None, None], np.nan, d["joints"][:, 1 - side].astype(np.float64))
     ids = d["ids"][:, side]
+    frame_height = int(d["frame_size"][0])
     model, stage = load_default("dual-hmm"), Stage()
     model.reset()
     partner = np.full_like(joints, np.nan)
@@ -232,7 +201,9 @@ def staged_partner(
         other = others[t] if np.isfinite(others[t]).all() else None
         direction = stage.side or towards
         silhouette, box = (
-            observed_reach(people[t], int(ids[t]), SIDES[side], joints[t], direction)
+            observed_silhouette(
+                people[t], int(ids[t]), SIDES[side], joints[t], direction, camera if CAMERA else None, frame_height
+            )
             if people is not None and t < len(people)
             else (None, None)
         )

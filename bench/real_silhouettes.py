@@ -1,7 +1,7 @@
 """Silhouettes on real two-person video: are both people found whole, on the right side.
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
-           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7]
+           [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7] [--no-cut]
            [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
@@ -65,6 +65,14 @@ colour footage (``*_grey_colour_bounds``, the algorithm as it was before: a pers
 or lighter than the room a shadow or a highlight): ``people_found_grey``, ``keypoint_coverage_grey``,
 ``extra_people_grey``, ``person_clips_covered_grey`` and the same ``_colour_bounds``.
 
+A camera near the people (a webcam in a room, a camera at a door): each clip again, its frames
+cut off above the people's knees (``cut_row``: the 10th percentile over frames and people of their
+mid-thigh rows), the joints below the cut not scored, through ours as it is (``*_cut``: people cut
+off by the frame's bottom edge looked for in the frame continued below, ``people.CUT_OFF_BELOW``)
+and without that (``*_cut_uncontinued``, the detector as it was before): ``people_found_cut``,
+``keypoint_coverage_cut``, ``extra_people_cut``, ``person_clips_covered_cut`` and the same
+``_uncontinued``.
+
 A light switched on (or off) mid-clip: each clip again, its frames from frame 50 on times ``--light``
 (1.7: beyond the brightest highlight a colour model takes; clipped at 255), through ours as it is
 (``*_lit``: the model re-exposed at once, ``background.AdaptationConfig.exposure_step``) and with the
@@ -93,6 +101,8 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
+from counterpart.body.people_detector import PeopleDetector
+from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 from counterpart.sim.camera_shake import shake_path, shaken
 
@@ -230,6 +240,34 @@ def score_frame(labels: np.ndarray, people: list, kp: np.ndarray, vis: np.ndarra
     return out
 
 
+#: the cut pass keeps each frame of a clip above this percentile, over its frames and people, of
+#: the rows of their mid-thighs (``cut_row``)
+CUT_PERCENTILE = 10
+_THIGHS = [JOINT_INDEX[j] for j in ("l_hip", "r_hip", "l_knee", "r_knee")]
+
+
+def cut_row(kp: np.ndarray, vis: np.ndarray) -> int:
+    """The row at which the cut pass ends a clip's frames, as a camera nearer the people would:
+    the ``CUT_PERCENTILE``-th percentile over frames and people of the mean row of their visible
+    hips and knees (both people cut off above the knees on most frames), even (lossless codecs
+    of the cut copies want it).
+
+    kp (T, 2, 14, 2) pixels, vis (T, 2, 14).
+    """
+    rows = np.where(vis[:, :, _THIGHS] >= VIS, kp[:, :, _THIGHS, 1], np.nan).reshape(-1, len(_THIGHS))
+    rows = rows[np.isfinite(rows).any(axis=1)]
+    r = int(np.percentile(np.nanmean(rows, axis=1), CUT_PERCENTILE))
+    return r - r % 2
+
+
+def cut_frames(frames: np.ndarray, kp: np.ndarray, vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cut pass's clip: its frames above :func:`cut_row`, and the visibilities with the
+    joints below it (out of the picture) made 0, so that they are not scored.
+    """
+    r = cut_row(kp, vis)
+    return np.ascontiguousarray(frames[:, :r]), np.where(kp[..., 1] < r, vis, 0.0)
+
+
 def run_clip(
     path: Path,
     ours: bool,
@@ -237,6 +275,7 @@ def run_clip(
     shake_px: float = 0.0,
     grey: bool = False,
     light: float = 1.0,
+    cut: bool = False,
     backend: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
@@ -246,6 +285,7 @@ def run_clip(
     the error of the followed shift against the true one (``shake_err``, pixels, per frame).
     ``grey``: the clip's frames made grey (three equal channels, as a grey or infrared camera's
     come). ``light``: the light's gain from frame ``LIGHT_FRAME`` on (a light switched on or off).
+    ``cut``: the clip cut off above the people's knees (:func:`cut_frames`).
     ``backend``: subtractor parameters over ours (or the baseline's).
     """
     frames = read_frames(path)
@@ -257,6 +297,8 @@ def run_clip(
         true_shift = shake_path(len(frames), shake_px, [int(v) for v in path.stem.split("_")])
         frames = shaken(frames, true_shift)
         kp = kp + true_shift[: len(kp), None, None, :]
+    if cut:
+        frames, vis = cut_frames(frames, kp, vis)
     if grey:
         frames = np.stack([cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames])
     if light != 1.0:
@@ -301,13 +343,17 @@ def run_clip(
 SHAKE_PX = 2.0
 
 
-def extra_passes(shake_px: float, grey: bool, light: float) -> dict[str, dict[str, Any]]:
+def extra_passes(shake_px: float, grey: bool, light: float, cut: bool = True) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
     and with colour footage's shadow bounds (``grey``); the clips lit by ``light`` from frame
-    ``LIGHT_FRAME`` on, the new exposure followed and not (``light`` other than 1).
+    ``LIGHT_FRAME`` on, the new exposure followed and not (``light`` other than 1); the clips cut
+    off above the knees, with people cut off by the frame looked for and not (``cut``).
     """
     out: dict[str, dict[str, Any]] = {}
+    if cut:
+        out["cut"] = {"cut": True}
+        out["cut_uncontinued"] = {"cut": True, "backend": {"detector": PeopleDetector()}}
     if light != 1.0:
         out["lit"] = {"light": light}
         out["lit_unfollowed"] = {"light": light, "backend": {"exposure_step": 0.0}}
@@ -391,6 +437,7 @@ def main(argv: list[str] | None = None) -> int:
         default=LIGHT,
         help=f"gain of the light from frame {LIGHT_FRAME} on in the lit pass (1: no lit pass)",
     )
+    ap.add_argument("--no-cut", action="store_true", help="no cut pass")
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -399,7 +446,7 @@ def main(argv: list[str] | None = None) -> int:
     cv2.setNumThreads(args.threads)
     splits = ("tune", "report") if args.clips == "all" else (args.clips,)
     methods = {"ours": True} if args.no_baseline else {"ours": True, "baseline": False}
-    passes = extra_passes(args.shake_px, not args.no_grey, args.light)
+    passes = extra_passes(args.shake_px, not args.no_grey, args.light, not args.no_cut)
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
         "train_frames": args.train_frames,

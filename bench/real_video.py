@@ -51,6 +51,18 @@ person 0 the left one at frame 0) on every frame the video decodes:
   pass (``track_s``, ``box_s``), and ``by_joint``: per joint, [pck10, pck20, pck10_box, pck20_box,
   joints scored].
 
+People cut off by the frame (``--no-cut`` skips it): each clip again, cut off above the people's
+knees (``real_silhouettes.cut_row``; a lossless copy, ``cut_copy``) as a camera nearer them would
+see them, tracked the same way: ``pck10_cut``, ``pck20_cut`` on the reference joints still in the
+picture; ``scale_cut``, the median over frames of the tracked body's projected height (nose to
+mid-ankle) over the reference's h; the same as it was before (``CUT_BEFORE``: the tracker's window
+ending at the frame, its first search from the box in view, the silhouettes' people detector without
+the frame continued below): ``*_cut_before``; and the whole clips' tracks scored on the same joints,
+``pck10_uncut_same_joints``, ``pck20_uncut_same_joints``; and the partner staged beside the
+person cut off (``real_partner``, the moment of the interaction found on the joints in the
+picture): ``partner_distance_ok_cut``, ``partner_overlap_cut``, ``partner_in_picture_cut``,
+``handshake_hand_h_cut``, ``push_back_m_cut``. Report and tune splits as above.
+
 Silhouettes (``--no-silhouettes`` skips them): ``people_found`` and ``keypoint_coverage`` as
 ``bench/real_silhouettes.py`` defines them (the silhouette node's extractor with its defaults, the
 background trained on each clip's first frames with the people in view, scored from frame 10), over
@@ -74,7 +86,7 @@ default camera's, the true head/foot points', the share the calibration node wou
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
-[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-demo] [--tracks DIR]
+[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-cut] [--no-demo] [--tracks DIR]
 [--no-silhouettes] [--speed-frames N] [--calib-seeds N]``
 (``--tracks``: keep the tracks, and reuse those already there). Last stdout line: one JSON object.
 """
@@ -100,14 +112,19 @@ from real_partner import (  # bench/ is on sys.path as a script
     interaction_class,
     partner_clip,
     partner_figures,
+    silhouette_people,
 )
-from real_silhouettes import VIS, reference_collapsed
+from real_silhouettes import VIS, cut_row, reference_collapsed
 
 from counterpart.body.camera import Camera
 from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_JOINTS
 from counterpart.nodes.responder.frames import actor_frame
+from counterpart.nodes.silhouette.pipeline import read_frames
+from counterpart.nodes.tracker.likelihood import LikelihoodConfig
+from counterpart.nodes.tracker.tracker import InitConfig, TrackerConfig
 
 REPO = Path(__file__).resolve().parents[1]
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -290,9 +307,10 @@ def template_pixels(template: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return boxes[:, :, None, :2] + template * boxes[:, :, None, 2:]
 
 
-def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
+def pck_clip(clip: Path, work: Path, cut: bool = False) -> dict[str, Any]:
     """Track one clip offline and gather what the PCK needs: the projected estimates, the boxes,
-    the reference and which of its joints count; plus timings and the excluded frames.
+    the reference and which of its joints count; plus timings and the excluded frames; ``cut``:
+    the cut pass too (``cut_clip``).
     """
     from counterpart.apps.tracking import track_video
     from counterpart.nodes.tracker.prior import resolve_prior
@@ -321,6 +339,7 @@ def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
     scored = (vis >= VIS) & ~collapsed[:, None, None]
     h = reference_height(kp)
     return {
+        **({"cut": cut_clip(clip, work, kp, scored, h)} if cut else {}),
         "est": est[:n],
         "boxes": boxes[:n],
         "kp": kp,
@@ -333,6 +352,99 @@ def pck_clip(clip: Path, work: Path) -> dict[str, Any]:
         "ids_agree": int((ids[:n] == box_ids[:n]).all(axis=1).sum()),
         "partner": partner_clip(clip, work / f"{clip.stem}-track.npz", kp, vis, h),
     }
+
+
+#: the cut pass as it was before people cut off by the frame were looked after: the tracker's
+#: window ending at the frame and its first search from the box in view, the silhouettes'
+#: detector without the frame continued below (the reference in the same run)
+CUT_BEFORE = {
+    "tracker": TrackerConfig(init=InitConfig(cut_off=False), likelihood=LikelihoodConfig(past_border=0.0)),
+    "backend_params": {"detector": PeopleDetector()},
+}
+
+
+#: the partner's figures (``real_partner.partner_figures``) also given for the cut pass
+CUT_PARTNER = ("partner_distance_ok", "partner_overlap", "partner_in_picture", "handshake_hand_h", "push_back_m")
+
+
+def cut_copy(clip: Path, work: Path, kp: np.ndarray, vis: np.ndarray) -> tuple[Path, int]:
+    """The clip cut off above the people's knees (``real_silhouettes.cut_row``) as a lossless copy
+    in ``work`` (FFV1, the clip's frame rate), and the row it ends at.
+    """
+    r = cut_row(kp, vis)
+    path = work / f"{clip.stem}-cut.avi"
+    if not path.exists():
+        fps = cv2.VideoCapture(str(clip)).get(cv2.CAP_PROP_FPS) or 30.0
+        frames = read_frames(clip)
+        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, (frames.shape[2], r))
+        for f in frames:
+            writer.write(np.ascontiguousarray(f[:r]))
+        writer.release()
+    return path, r
+
+
+def cut_clip(clip: Path, work: Path, kp: np.ndarray, scored: np.ndarray, h: np.ndarray) -> dict[str, Any]:
+    """The cut pass of one clip: tracked as it is and as before (``CUT_BEFORE``), its PCK counts on
+    the reference joints still in the picture (of those ``scored`` on the whole clip), their
+    ``scored`` mask, and the tracked body's scale: its projected height (nose to mid-ankle) over
+    the reference's, per frame where both are known.
+    """
+    from counterpart.apps.tracking import track_video
+    from counterpart.nodes.tracker.prior import resolve_prior
+
+    ref = np.load(KEYPOINTS / f"{clip.stem}.npz")
+    path, r = cut_copy(clip, work, ref["kp"], ref["vis"])
+    out: dict[str, Any] = {"scored": scored & (kp[..., 1] < r)}
+    ankles = scored[:, :, HEAD] & scored[:, :, ANKLES].all(axis=-1)
+    for name, extra in (("", {}), ("_before", CUT_BEFORE)):
+        npz = work / f"{clip.stem}-cut{name}-track.npz"
+        if not npz.exists():
+            track_video(
+                path,
+                npz,
+                people=SIDES,
+                prior=resolve_prior("default"),
+                layers=LAYERS,
+                particles=PARTICLES,
+                train_frames=TRAIN_FRAMES,
+                **extra,
+            )
+        est = tracked_pixels(npz)[0][: len(kp)]
+        est = np.concatenate([est, np.full((len(kp) - len(est), *est.shape[1:]), np.nan)])
+        out["counts" + name] = pck_counts(est, kp, out["scored"], h)
+        tall = np.linalg.norm(est[:, :, HEAD] - est[:, :, ANKLES].mean(axis=2), axis=-1) / h
+        out["scale" + name] = tall[ankles & np.isfinite(tall)].tolist()
+    # the partner the responder stages beside the person cut off (the moment of the interaction is
+    # looked for on the joints in the picture)
+    visible = np.where(kp[..., 1] < r, ref["vis"][: len(kp)], 0.0)
+    people = silhouette_people(path)
+    out["partner"] = partner_clip(clip, work / f"{clip.stem}-cut-track.npz", kp, visible, h, people)
+    return out
+
+
+def cut_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The cut pass's figures pooled over the clips' rows (``pck_clip`` with ``cut``): ``pck10_cut``,
+    ``pck20_cut`` and ``_before``, the same joints of the whole clips' tracks
+    (``pck10_uncut_same_joints``, ...), and the median ``scale_cut`` and ``scale_cut_before``.
+    """
+    out: dict[str, Any] = {}
+    uncut = [pck_counts(r["est"], r["kp"], r["cut"]["scored"], r["h"]) for r in rows]
+    for name, counts in (
+        ("_cut", [r["cut"]["counts"] for r in rows]),
+        ("_cut_before", [r["cut"]["counts_before"] for r in rows]),
+        ("_uncut_same_joints", uncut),
+    ):
+        n = max(sum(c["n"] for c in counts), 1)
+        for a in ALPHAS:
+            out[f"pck{round(a * 100)}{name}"] = round(sum(c[f"hit{round(a * 100)}"] for c in counts) / n, 4)
+    for name in ("", "_before"):
+        scale = [v for r in rows for v in r["cut"]["scale" + name]]
+        out["scale_cut" + name] = round(float(np.median(scale)), 3) if scale else None
+    out["cut_joints"] = sum(int(r["cut"]["scored"].sum()) for r in rows)
+    partner = partner_figures([r["cut"]["partner"] for r in rows])
+    for k in CUT_PARTNER:
+        out[f"{k}_cut"] = partner[k]
+    return out
 
 
 def pck_figures(rows: list[dict[str, Any]], template: np.ndarray, per_frame: bool) -> dict[str, Any]:
@@ -378,14 +490,15 @@ def pck_by_joint(rows: list[dict[str, Any]], template: np.ndarray) -> dict[str, 
     return {name: [*np.round(hits[:, j] / max(n[j], 1), 3).tolist(), int(n[j])] for j, name in enumerate(JOINTS)}
 
 
-def run_pck(clips: list[Path], work: Path, jobs: int = 1) -> dict[str, Any]:
+def run_pck(clips: list[Path], work: Path, jobs: int = 1, cut: bool = True) -> dict[str, Any]:
     """The tracking-accuracy part: the top-level figures (report split), ``tune`` and ``pck_details``;
     ``jobs`` clips tracked at once in worker processes (each clip's run is seeded: the figures
-    do not depend on it).
+    do not depend on it); ``cut``: with the cut pass (``cut_figures``).
     """
     rows: dict[str, dict[str, Any]] = {}
     with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
-        done = pool.map(pck_clip, clips, [work] * len(clips)) if pool else (pck_clip(c, work) for c in clips)
+        n = len(clips)
+        done = pool.map(pck_clip, clips, [work] * n, [cut] * n) if pool else (pck_clip(c, work, cut) for c in clips)
         for clip, r in zip(clips, done):
             rows[clip.stem] = r
             print(
@@ -419,6 +532,7 @@ def run_pck(clips: list[Path], work: Path, jobs: int = 1) -> dict[str, Any]:
                 **pck_figures([r], template, False),
                 **{k: r["partner"][k] for k in ("hand_h", "back_m") if k in r["partner"]},
                 "partner_overlap_frames": r["partner"]["overlap"],
+                **({k: v for k, v in cut_figures([r]).items() if k.endswith(("_cut", "_cut_before"))} if cut else {}),
             }
             for stem, r in rows.items()
         },
@@ -430,6 +544,7 @@ def run_pck(clips: list[Path], work: Path, jobs: int = 1) -> dict[str, Any]:
             **pck_figures(split_rows, template, False),
             "pck_clips": len(split_rows),
             **partner_figures([r["partner"] for r in split_rows]),
+            **(cut_figures(split_rows) if cut else {}),
         }
         details[split] = {
             "per_frame_matching": pck_figures(split_rows, template, True),
@@ -607,6 +722,7 @@ def main() -> None:
         help="only clips of these interaction classes in the tracking part, e.g. '0,5' (handshake, push)",
     )
     ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
+    ap.add_argument("--no-cut", action="store_true", help="skip the tracking part's cut pass")
     ap.add_argument("--jobs", type=int, default=1, help="clips of the tracking part tracked at once (processes)")
     ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
     ap.add_argument(
@@ -642,7 +758,7 @@ def main() -> None:
         pck = clip_list(args.pck_clips or args.clips)
         if args.pck_classes:
             pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
-        result.update(run_pck(pck, work, args.jobs))
+        result.update(run_pck(pck, work, args.jobs, not args.no_cut))
     if not args.no_silhouettes:
         result.update(run_silhouettes())
     if args.speed_frames and args.reference:

@@ -12,12 +12,16 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["PeopleDetector"]
+__all__ = ["PeopleDetector", "box_iou"]
 
 #: the person inside a detection window of OpenCV's HOG people detector (trained on 64 x 128
 #: INRIA windows, the person about 96 pixels tall in the middle): (x0, y0, x1, y1) as fractions
 #: of the window, generous in x for arms held out
 _PERSON_IN_WINDOW = (0.1, 0.0, 0.9, 0.95)
+#: the least share of a person found in the frame continued below (``below_frac``) that lies below
+#: the frame, for them to be cut off by it: the box of someone who stands on its bottom rows
+#: reaches a little past them (that person is the plain search's to find, or not)
+_CUT_OFF = 0.1
 
 
 class PeopleDetector:
@@ -37,11 +41,19 @@ class PeopleDetector:
     pad_frac : float, default=0.15
         Padding added on every side, as a fraction of the frame height, with the frame's median
         colour (a replicated or mirrored border draws false edges); in [0, 1].
+    below_frac : float, default=0.0
+        People cut off by the frame's bottom edge (near the camera: their legs out of the
+        picture) are looked for again in the frame continued below by this fraction of its
+        height, its last row repeated, so that their legs go on as they leave the picture (the
+        detector's window needs legs). Only the people found there who reach well below the
+        frame (a tenth of their height) and overlap no one found in the frame as it is are
+        added, their boxes cut at the frame's bottom; 0: not looked for (the detector's cost is
+        then one pass); in [0, 2].
 
     Raises
     ------
     ValueError
-        If ``scale``, ``stride`` or ``pad_frac`` is out of range.
+        If ``scale``, ``stride``, ``pad_frac`` or ``below_frac`` is out of range.
     """
 
     def __init__(
@@ -51,6 +63,7 @@ class PeopleDetector:
         scale: float = 1.05,
         stride: int = 8,
         pad_frac: float = 0.15,
+        below_frac: float = 0.0,
     ) -> None:
         if scale <= 1.0:
             raise ValueError(f"scale must be > 1, got {scale}")
@@ -58,11 +71,14 @@ class PeopleDetector:
             raise ValueError(f"stride must be a positive multiple of 8 pixels, got {stride}")
         if not 0.0 <= pad_frac <= 1.0:
             raise ValueError(f"pad_frac must be in [0, 1], got {pad_frac}")
+        if not 0.0 <= below_frac <= 2.0:
+            raise ValueError(f"below_frac must be in [0, 2], got {below_frac}")
         self.hit_threshold = hit_threshold
         self.min_score = min_score
         self.scale = scale
         self.stride = stride
         self.pad_frac = pad_frac
+        self.below_frac = below_frac
         self._hog = cv2.HOGDescriptor()
         self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
 
@@ -89,9 +105,26 @@ class PeopleDetector:
         """
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
             raise ValueError(f"frame must be uint8 (H, W, 3) BGR, got {frame.shape} {frame.dtype}")
+        h = frame.shape[0]
+        colour = [float(v) for v in np.median(frame[::4, ::4].reshape(-1, 3), axis=0)]
+        boxes, scores = self._people(frame, colour)
+        below = int(round(self.below_frac * h))
+        if below > 0:
+            continued = cv2.copyMakeBorder(frame, 0, below, 0, 0, cv2.BORDER_REPLICATE)
+            more, more_scores = self._people(continued, colour)
+            cut = (more[:, 1] + more[:, 3] - h >= _CUT_OFF * more[:, 3]) & (more[:, 1] < h - 1)
+            cut &= np.array([all(box_iou(b, o) < 0.3 for o in boxes) for b in more], bool)
+            more[:, 3] = np.minimum(more[:, 1] + more[:, 3], h) - more[:, 1]
+            boxes = np.concatenate([boxes, more[cut]])
+            scores = np.concatenate([scores, more_scores[cut]])
+        return boxes, scores
+
+    def _people(self, frame: np.ndarray, colour: list[float]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`detect` of one image, padded with ``colour``: boxes (K, 4) int32 clipped to it,
+        scores (K,) float32.
+        """
         h, w = frame.shape[:2]
         pad = int(round(self.pad_frac * h))
-        colour = [float(v) for v in np.median(frame[::4, ::4].reshape(-1, 3), axis=0)]
         padded = cv2.copyMakeBorder(frame, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=colour)
         if min(padded.shape[:2]) < 128 or padded.shape[1] < 64:
             return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
@@ -116,3 +149,12 @@ class PeopleDetector:
         boxes = np.stack([x0, y0, x1 - x0, y1 - y0], axis=1).round().astype(np.int32)
         ok = (boxes[:, 2] > 0) & (boxes[:, 3] > 0)
         return boxes[ok], scores[ok]
+
+
+def box_iou(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two boxes (x, y, w, h); 0 for two empty ones."""
+    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
+    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
+    inter = float(max(0, x1 - x0) * max(0, y1 - y0))
+    union = float(a[2] * a[3] + b[2] * b[3]) - inter
+    return inter / union if union > 0 else 0.0

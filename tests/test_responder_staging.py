@@ -9,6 +9,7 @@ import pytest
 
 from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.messages.silhouette import PersonShape
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.reach import ReachConfig, reach, two_bone_ik
@@ -16,10 +17,12 @@ from counterpart.nodes.responder.staging import (
     Reach,
     Stage,
     StageConfig,
+    observed_silhouette,
     silhouette_reach,
     silhouette_tip_px,
     stature,
     touching_hand_px,
+    whole_box,
 )
 from tests.pose_source import facing
 from tests.responder_fixtures import CAM, box_overlap, planted_pair
@@ -559,3 +562,34 @@ def test_the_partner_takes_a_hand_held_out_within_its_reach_and_not_one_out_of_i
     )
     far, pull = reach(obs, par, offered=np.array([-1.5, 1.0, 2.0]))  # 2.4 m away: the model's hands as they are
     assert pull == 0.0 and np.array_equal(far, par)
+
+
+def test_a_box_cut_off_by_the_frame_reaches_down_to_the_tracked_feet() -> None:
+    X = person(0.3, 2.0)
+    uv = CAM.project(X)
+    soles = X[[JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]] * [1.0, 0.0, 1.0]
+    head, feet = float(uv[JOINT_INDEX["head"], 1]), float(CAM.project(soles)[:, 1].max())
+    rows = int(round(0.5 * (head + feet)))  # the frame ends halfway down the person
+    box = (100.0, head, 50.0, rows - head)
+    x, y, w, h = whole_box(box, rows, X, CAM)
+    assert (x, y, w) == box[:3] and y + h == pytest.approx(feet, abs=1.0)
+    assert whole_box(box, rows + 1, X, CAM) == box  # clear of the bottom edge: as it is
+    assert whole_box(box, rows, X, None) == box  # no camera: as it is
+    # their reach measured on the box cut off is the reach of the whole person: the arm held out
+    # at 0.55 of their height, 0.4 of it beyond the body's edge
+    tall = feet - head
+    ctrl = outline(100.0, head, tall, 0.55, 0.4 * tall)
+    cut = ctrl.copy()
+    cut[:, 1] = np.minimum(cut[:, 1], rows - 1)
+    centroid = (110.0, head + 0.3 * tall)
+    shape = PersonShape(
+        id=3, side="left", ctrl=cut, centroid=np.array(centroid), bbox=(100, int(head), 150, rows - int(head))
+    )
+    whole = silhouette_reach((100, head, 150, tall), centroid, 1.0, stature(X), ctrl)
+    got, got_box = observed_silhouette([shape], 3, "left", X, 1.0, CAM, rows)
+    assert got_box[3] == pytest.approx(feet - int(head), abs=1.0)
+    assert got.extent_m == pytest.approx(whole.extent_m, rel=0.02) and got.height_m == pytest.approx(
+        whole.height_m, rel=0.02
+    )
+    # without the camera, the part in view is taken for the whole person: the reach comes out far too long
+    assert observed_silhouette([shape], 3, "left", X, 1.0, None, rows)[0].extent_m > 1.5 * whole.extent_m

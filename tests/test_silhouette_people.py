@@ -18,7 +18,13 @@ from counterpart.nodes.silhouette.background import (
     HorprasertBackground,
     _median_mad,
 )
-from counterpart.nodes.silhouette.people import PeopleDetector, PrefetchDetector, box_mask, fit_around_people
+from counterpart.nodes.silhouette.people import (
+    PeopleDetector,
+    PrefetchDetector,
+    box_mask,
+    fit_around_people,
+    people_detector,
+)
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 from tests.shared_data import DATA
 from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W
@@ -337,3 +343,29 @@ def test_real_people_standing_from_the_first_frame_are_found_whole(ut_clip):
             total += len(xy)
         assert len(rb.people) != 2 or t > 15  # the baseline finds no one at first
     assert inside / total > 0.9
+
+
+#: a clip whose first person (the reference's person 0; it misses the other on the first frames)
+#: stands still at first, and the row that cuts them off above the knees
+CUT_CLIP, CUT_ROWS = UT / "set1" / "55_10_4.avi", 122
+
+
+def test_people_cut_off_by_the_frames_bottom_edge_are_found_in_the_frame_continued():
+    if not CUT_CLIP.is_file():
+        pytest.skip(f"real clip {CUT_CLIP} not present (../shared/data)")
+    frames = read_frames(CUT_CLIP, 10)[:, :CUT_ROWS]
+    ref = np.load(UT / "keypoints" / f"{CUT_CLIP.stem}.npz")
+    kp, vis = ref["kp"][:10, 0], ref["vis"][:10, 0]
+    assert (kp[:, [9, 12], 1] > CUT_ROWS).all()  # their knees are out of the picture
+    plain, continued = PeopleDetector(), people_detector()
+    found = 0
+    for t, frame in enumerate(frames):
+        assert len(plain.detect(frame)[0]) == 0  # the detector's window needs legs
+        boxes, _ = continued.detect(frame)
+        assert (boxes[:, 1] >= 0).all() and (boxes[:, 1] + boxes[:, 3] == CUT_ROWS).all()  # cut at the bottom
+        # a box holds their head and shoulders
+        top = kp[t, :3][vis[t, :3] >= 0.5]
+        found += any(((top >= (x, y)) & (top <= (x + w, y + h))).all() for x, y, w, h in boxes)
+    assert found >= 8, found
+    with pytest.raises(ValueError, match="below_frac"):
+        PeopleDetector(below_frac=-0.1)

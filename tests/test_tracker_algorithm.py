@@ -15,6 +15,7 @@ from counterpart.nodes.tracker.apf import AnnealedParticleFilter, choose_beta, s
 from counterpart.nodes.tracker.init import bbox_from_mask, facing_yaw, place_from_bbox
 from counterpart.nodes.tracker.likelihood import (
     ConeLikelihood,
+    LikelihoodConfig,
     MultiViewLikelihood,
     Observation,
     edge_map,
@@ -412,3 +413,67 @@ def test_two_people_searched_side_by_side_get_what_each_search_alone_gets(with_p
         ts, gs = tr.likelihood.evaluate(p, o)
         np.testing.assert_allclose(tj, ts, atol=1e-6)
         np.testing.assert_allclose(gj, gs, atol=1e-6)
+
+
+def _cut_off(P: np.ndarray, rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """A frame and mask of pose P with the frame ending at ``rows`` (the person's legs below it)."""
+    mask = rasterise_silhouettes(P[None], DEFAULT_DIMS, CAM)[0][:rows]
+    return np.where(mask, 90, 200).astype(np.uint8), mask
+
+
+def _projected_height(joints: np.ndarray) -> float:
+    """Pixels from the head to the mid-ankle of (14, 3) joints seen by CAM."""
+    p = CAM.project(joints.astype(np.float64))
+    return float(np.linalg.norm(p[0] - p[[10, 13]].mean(axis=0)))
+
+
+#: a person near the camera (3 m away: 181 pixels tall in a 240-row frame) cut off mid-thigh
+NEAR_ROWS = 160
+
+
+def _near(x: float, yaw: float) -> np.ndarray:
+    P = neutral_pose(DEFAULT_DIMS, x=x, z=1.0, yaw=yaw)
+    P[12], P[15] = 0.6, 0.5  # an arm forward: the box is wider than the body
+    return P
+
+
+def test_observation_goes_on_past_the_border_a_person_is_cut_off_by() -> None:
+    P = _near(-0.3, 0.4)
+    image, mask = _cut_off(P, NEAR_ROWS)
+    obs = make_observation(image, mask)
+    x, y, w, h = bbox_from_mask(mask)
+    # the window reaches below the frame by the part in view's height, the mask's last row repeated
+    assert obs.y0 + obs.height >= NEAR_ROWS + h
+    fg = obs.fg[:-1].reshape(obs.height, obs.width)
+    last = NEAR_ROWS - 1 - obs.y0
+    assert fg[last].any()
+    np.testing.assert_array_equal(fg[last + 1 :], np.repeat(fg[last : last + 1], obs.height - last - 1, axis=0))
+    assert (obs.cover_uv[:, 1] < NEAR_ROWS).all()  # the coverage samples stay in the picture
+    # the true body costs little; with the window ending at the frame its legs read "no person"
+    L = ConeLikelihood(CAM)
+    ours = float(L.terms(P[None], obs).sum())
+    ended = float(L.terms(P[None], make_observation(image, mask, past_border=0.0)).sum())
+    assert ours < 0.2 and ended > 0.5, (ours, ended)
+    # a person clear of the borders keeps the window it had
+    whole = rasterise_silhouettes(P[None], DEFAULT_DIMS, default_camera())[0]
+    image_w = np.where(whole, 90, 200).astype(np.uint8)
+    a, b = make_observation(image_w, whole), make_observation(image_w, whole, past_border=0.0)
+    assert (a.x0, a.y0, a.width, a.height) == (b.x0, b.y0, b.width, b.height)
+
+
+def test_track_of_a_person_cut_off_by_the_frame_keeps_their_size() -> None:
+    before = TrackerConfig(apf=SMALL.apf, init=InitConfig(cut_off=False), likelihood=LikelihoodConfig(past_border=0.0))
+    ratio: dict[str, list[float]] = {"ours": [], "before": []}
+    for seed, (x, yaw) in enumerate(((-0.3, 0.4), (0.4, -1.2), (0.0, 1.5), (-0.5, -0.3))):
+        P = _near(x, yaw)
+        image, mask = _cut_off(P, NEAR_ROWS)
+        truth = _projected_height(forward_kinematics(P)[0])
+        for name, config in (("ours", SMALL), ("before", before)):
+            tracker = Tracker(CAM, "left", config, seed=seed)
+            for _ in range(3):
+                result = tracker.update(image, mask)
+            ratio[name].append(_projected_height(result.joints) / truth)
+    ours, old = np.array(ratio["ours"]), np.array(ratio["before"])
+    # the body stands on below the frame at the person's size; before, it was squeezed into the part in view
+    assert abs(np.median(ours) - 1) < 0.15 and (abs(ours - 1) < 0.3).all(), ours
+    assert (old < 0.75).all(), old

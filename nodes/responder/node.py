@@ -38,7 +38,7 @@ from counterpart.messages import (
 
 from .emotion import StyleFilter
 from .reach import ReachConfig, reach
-from .staging import Stage, StageConfig, silhouette_reach, stature
+from .staging import Stage, StageConfig, observed_silhouette
 
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
@@ -295,31 +295,24 @@ class Responder(Node):
         people = list(getattr(self.latest.get("pose"), "people", ()))
         other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
         side = {"left": 1.0, "right": -1.0}.get(body.side, 0.0)
-        silhouette = None
-        shapes = list(getattr(self.latest.get("silhouettes"), "people", ()))
-        mine = [q for q in shapes if q.side == body.side]
-        shape = next((q for q in mine if q.id == body.id), mine[0] if mine else None)
+        silhouettes = self.latest.get("silhouettes")
         direction = (self.stage.side if self.stage is not None else 0.0) or side
-        if shape is not None and direction != 0.0:
-            # the other person's region, nearest across the picture: a hand held out to them lies between the two
-            theirs = [q for q in shapes if q.side != body.side]
-            near = min(theirs, key=lambda q: abs(float(q.centroid[0]) - float(shape.centroid[0])), default=None)
-            silhouette = silhouette_reach(
-                shape.bbox,
-                shape.centroid,
-                direction,
-                stature(body.joints),
-                shape.ctrl,
-                touching=shape.merged,
-                other=None if near is None else (float(near.centroid[0]), float(near.centroid[1])),
-            )
+        camera = self._camera(seq)
+        silhouette, box = observed_silhouette(
+            list(getattr(silhouettes, "people", ())),
+            body.id,
+            body.side,
+            body.joints,
+            direction,
+            camera,
+            int(getattr(silhouettes, "height", 0)),
+        )
         return {
             "other": None if other is None else np.asarray(other.joints),
             "side": side,
             "silhouette": silhouette,
-            "camera": self._camera(seq),
-            # a region shared with the other person is split: the box is this person's part (as bench/real_partner.py)
-            "box": None if shape is None else tuple(shape.bbox),
+            "camera": camera,
+            "box": box,
         }
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:

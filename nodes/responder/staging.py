@@ -444,6 +444,102 @@ def silhouette_reach(
     return Reach(extent, height, direction * cx / h * stature_m, touching, centre, other)
 
 
+def whole_box(
+    box: tuple[float, float, float, float], frame_height: int, joints: np.ndarray, camera: Camera | None
+) -> tuple[float, float, float, float]:
+    """A person's box, continued below the frame where its bottom edge cuts them off (someone near
+    the camera): down to the lowest row the tracked body's ankles stand on, so that the heights
+    and reaches measured in fractions of the box (:func:`silhouette_reach`) are fractions of the
+    whole person. Unchanged for a box clear of the bottom edge, or without a camera.
+
+    Parameters
+    ----------
+    box : tuple of float
+        The silhouette's box ``(x, y, w, h)``, pixels.
+    frame_height : int
+        The frame's height, pixels (0: not known).
+    joints : ndarray of shape (14, 3)
+        The tracked body's world joints, metres, Y up.
+    camera : Camera or None
+        The camera of the frame.
+
+    Returns
+    -------
+    tuple of float
+        ``(x, y, w, h)``, pixels.
+    """
+    x, y, w, h = (float(v) for v in box)
+    if camera is None or frame_height <= 0 or y + h < frame_height:
+        return x, y, w, h
+    soles = np.asarray(joints, np.float64)[_ANKLES] * [1.0, 0.0, 1.0]
+    feet = float(np.max(camera.project(soles)[:, 1]))
+    if not np.isfinite(feet) or feet <= y + h:
+        return x, y, w, h
+    return x, y, w, feet - y
+
+
+def observed_silhouette(
+    shapes: list,
+    person_id: int,
+    side: str,
+    joints: np.ndarray,
+    direction: float,
+    camera: Camera | None = None,
+    frame_height: int = 0,
+) -> tuple[Reach | None, tuple[float, float, float, float] | None]:
+    """The observed person's silhouette among a frame's, and what it says of their reach towards
+    the partner (:func:`silhouette_reach`), as the responder node finds them.
+
+    Of the silhouettes on their ``side``, the one with the tracked person's id, else the first;
+    its box continued below the frame where the frame cuts them off (:func:`whole_box`); the other
+    person's region is the one off their side nearest theirs across the picture (a hand held out
+    to them lies between the two). A region shared with the other person is split: its box is theirs.
+
+    Parameters
+    ----------
+    shapes : list of silhouette.PersonShape
+        The frame's silhouettes.
+    person_id : int
+        The tracked person's id.
+    side : str
+        Their side of the frame.
+    joints : ndarray of shape (14, 3)
+        Their tracked world joints, metres.
+    direction : float
+        +1: the partner stands towards image right, -1: left, 0: not known (no reach).
+    camera : Camera or None, default=None
+        The camera of the frame (:func:`whole_box`).
+    frame_height : int, default=0
+        The frame's height, pixels (0: not known).
+
+    Returns
+    -------
+    reach : Reach or None
+        None without a silhouette on their side or a direction.
+    box : tuple of float or None
+        Their box ``(x, y, w, h)``, pixels; None without a silhouette.
+    """
+    mine = [q for q in shapes if q.side == side]
+    shape = next((q for q in mine if q.id == person_id), mine[0] if mine else None)
+    if shape is None:
+        return None, None
+    box = whole_box(tuple(shape.bbox), frame_height, joints, camera)
+    if direction == 0.0:
+        return None, box
+    theirs = [q for q in shapes if q.side != side]
+    near = min(theirs, key=lambda q: abs(float(q.centroid[0]) - float(shape.centroid[0])), default=None)
+    reach = silhouette_reach(
+        box,
+        shape.centroid,
+        direction,
+        stature(joints),
+        shape.ctrl,
+        touching=bool(getattr(shape, "merged", False)),
+        other=None if near is None else (float(near.centroid[0]), float(near.centroid[1])),
+    )
+    return reach, box
+
+
 def touching_hand_px(
     silhouette: Reach, box: tuple[float, float, float, float], meet: float, box_frac: float
 ) -> tuple[float, float] | None:

@@ -63,7 +63,7 @@ class HorprasertSubtractor:
     people_aware : bool, default=True
         With ``robust``, fit around the people the detector finds (``people.fit_around_people``).
     detector : object or None, default=None
-        People detector; None: ``people.PeopleDetector()``, OpenCV's HOG people detector.
+        People detector; None: ``people.people_detector()``, OpenCV's HOG people detector.
     dynamic : bool, default=True
         A ``samples.SampleConsensus`` model (ViBe-like sample sets with a blink-adapted radius) sits
         beside the statistics, and a pixel they call foreground is background when its colour is one

@@ -9,7 +9,9 @@ room where they stood as ghosts. Here they are found first and kept out of the s
    of some clips and finds them on one or two, which a search of every fifth frame can miss. The
    frame is padded with its median colour first, so that people whose head or feet touch the
    image border, the usual case for an elevated camera close to the people, still fit the
-   detector's window with its margins.
+   detector's window with its margins. People cut off by the frame's bottom edge (near the
+   camera, their legs out of the picture) are looked for again in the frame continued below
+   (``CUT_OFF_BELOW``): the detector's window needs legs.
 2. ``fit_around_people``: a first fit leaves the people's boxes out of the frames near those they
    were found in, and out of every frame that still shows a person who stands still
    (``HorprasertBackground.fit`` with ``exclude``; the room seen behind them in too few frames is
@@ -31,7 +33,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import cv2
 import numpy as np
 
-from counterpart.body.people_detector import PeopleDetector
+from counterpart.body.people_detector import PeopleDetector, box_iou
 
 from .background import FOREGROUND, HorprasertBackground, as_frame_stack
 
@@ -59,8 +61,18 @@ _GONE_FRAC = 0.5
 _FEET_BAND = 0.25
 #: the score a still person (``_still_person``) reaches at least once
 _STILL_SCORE = 0.75
+#: how far below the frame people cut off by its bottom edge are looked for, as a fraction of its
+#: height (``PeopleDetector``'s ``below_frac``)
+CUT_OFF_BELOW = 0.8
 #: one frame's confirmed detections: boxes (K, 4), scores (K,), moved (K,) bool (``_confirmed``)
 _Found = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def people_detector() -> PeopleDetector:
+    """The detector of the people in the training frames: OpenCV's HOG people detector, people cut
+    off by the frame's bottom edge included (``CUT_OFF_BELOW``).
+    """
+    return PeopleDetector(below_frac=CUT_OFF_BELOW)
 
 
 class PrefetchDetector:
@@ -73,11 +85,11 @@ class PrefetchDetector:
     Parameters
     ----------
     detector : PeopleDetector or None, default=None
-        The detector; None: ``PeopleDetector()``.
+        The detector; None: :func:`people_detector`.
     """
 
     def __init__(self, detector: PeopleDetector | None = None) -> None:
-        self.detector = detector or PeopleDetector()
+        self.detector = detector or people_detector()
         self._pool: ThreadPoolExecutor | None = None
         #: frame content digest -> its detection
         self._pending: dict[bytes, Future] = {}
@@ -211,7 +223,7 @@ def _walked_off(frames: np.ndarray, found: dict[int, _Found], k: int, box: np.nd
     x, y, w, h = (int(v) for v in box)
     far = [j for j in range(len(frames)) if abs(j - k) > step]
     if len(far) < step or any(
-        abs(j - k) > step and _iou(box, other) >= 0.5 for j, (boxes, _, _) in found.items() for other in boxes
+        abs(j - k) > step and box_iou(box, other) >= 0.5 for j, (boxes, _, _) in found.items() for other in boxes
     ):
         return False
     blk = frames[:, y : y + h, x : x + w]
@@ -239,17 +251,9 @@ def _still_person(found: dict[int, _Found], k: int, box: np.ndarray, score: floa
         for j, (boxes, scores, _) in found.items()
         if j != k
         for other, s in zip(boxes, scores)
-        if _iou(box, other) >= 0.5
+        if box_iou(box, other) >= 0.5
     ]
     return (bool(again) or bool(moved)) and max(again + [score]) >= _STILL_SCORE
-
-
-def _iou(a: np.ndarray, b: np.ndarray) -> float:
-    """Intersection over union of two boxes (x, y, w, h)."""
-    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
-    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
-    inter = max(0, x1 - x0) * max(0, y1 - y0)
-    return float(inter) / float(a[2] * a[3] + b[2] * b[3] - inter)
 
 
 def _changed_fraction(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> float:
@@ -316,7 +320,7 @@ def fit_around_people(
     frames : ndarray of shape (N, H, W, 3) or list of ndarray of shape (H, W, 3)
         uint8 BGR training frames, N >= 2.
     detector : PeopleDetector or None, default=None
-        People detector; None: ``PeopleDetector()``.
+        People detector; None: :func:`people_detector`.
     detect_every : int, default=5
         The detector's boxes on every this many-th frame (and the last) are used; on the other
         frames (searched too) only those of someone these frames did not show. A frame is searched for
@@ -338,7 +342,7 @@ def fit_around_people(
     """
     stack = as_frame_stack(frames)
     n, h, w = stack.shape[:3]
-    det = detector or PeopleDetector()
+    det = detector or people_detector()
     step = max(1, int(detect_every))
     at = sorted(set(range(0, n, step)) | {n - 1})
     found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores, moved)
@@ -350,7 +354,7 @@ def fit_around_people(
     extra: dict[int, _Found] = {}
     for k in sorted(set(range(n)) - set(at)):
         boxes, scores, moved = _confirmed(stack, *det.detect(stack[k]))
-        new = np.array([all(_iou(b, o) < 0.5 for o in known) for b in boxes], bool)
+        new = np.array([all(box_iou(b, o) < 0.5 for o in known) for b in boxes], bool)
         if new.any():
             extra[k] = (boxes[new], scores[new], moved[new])
     every = {**found, **extra}

@@ -17,6 +17,9 @@ from counterpart.body.skeleton import DEFAULT_DIMS, BodyDims
 
 #: heading (root_yaw, radians) assumed for a person on each side of the frame
 SIDE_YAW = {"left": np.pi / 2, "right": -np.pi / 2, "centre": 0.0}
+#: the heights a person cut off by the frame's bottom edge is tried at, in multiples of the part in
+#: view: 1 (the box ends at the feet) to 4 (the frame cuts the chest)
+BELOW_FACTORS = 1.05 ** np.arange(29)
 #: std of the wider first search: metres for the root, radians for the angles
 INIT_STD = np.r_[[0.08, 0.03, 0.15], [0.6, 0.05, 0.05], [0.1] * 6, [0.25] * 16]
 
@@ -87,44 +90,28 @@ def place_from_bbox(
     return g, height
 
 
-def initial_particles(
+def guess_pose(
     bbox: tuple[int, int, int, int],
     side: str,
     camera: Camera,
-    n: int,
-    rng: np.random.Generator,
     base: BodyDims = DEFAULT_DIMS,
-    spread: float = 1.0,
     towards: tuple[int, int, int, int] | None = None,
+    yaw: float | None = None,
 ) -> tuple[np.ndarray, BodyDims]:
-    """Particles for a new track and the body dimensions scaled to the measured stature.
-
-    The first particle is the un-jittered guess; the rest are spread by ``INIT_STD * spread``.
+    """The silhouette's guess of a new track: a relaxed standing pose placed from the box, and
+    the body scaled to the stature it measures (``place_from_bbox``).
 
     Parameters
     ----------
-    bbox : tuple of int (x, y, w, h)
-        The person's bounding box, pixels.
-    side : str
-        Side of the frame the person stands on, a key of ``SIDE_YAW`` (sets the heading).
-    camera : Camera
-        The camera that saw the person.
-    n : int
-        Number of particles.
-    rng : numpy.random.Generator
-        Source of the jitter.
-    base : BodyDims, default=DEFAULT_DIMS
-        Body dimensions scaled to the measured stature.
-    spread : float, default=1.0
-        Multiplier of ``INIT_STD``.
-    towards : tuple of int (x, y, w, h) or None
-        The bounding box of the person this one interacts with: the heading faces that person's
-        ground point (``facing_yaw``) instead of the side's ``SIDE_YAW``.
+    bbox, side, camera, base, towards
+        As :func:`initial_particles`.
+    yaw : float or None, default=None
+        The heading (radians, ``body.pose``: 0 faces +Z); None: from ``side`` and ``towards``.
 
     Returns
     -------
-    particles : ndarray of shape (n, 28)
-        Pose vectors (body.pose), clipped to the joint limits.
+    pose : ndarray of shape (28,)
+        The guess.
     dims : BodyDims
         ``base`` scaled to the measured stature.
 
@@ -143,11 +130,101 @@ def initial_particles(
     # stands about half a hip width plus an ankle radius further along the line of sight.
     away = np.array([g[0] - camera.centre[0], 0.0, g[2] - camera.centre[2]])
     g = g + away / max(float(np.linalg.norm(away)), 1e-9) * (dims.hip_width / 2 + dims.r_ankle)
-    yaw = SIDE_YAW[side] if towards is None else facing_yaw(g, towards, camera, SIDE_YAW[side])
-    P0 = neutral_pose(dims, x=float(g[0]), z=float(g[2]), yaw=yaw)
+    if yaw is None:
+        yaw = SIDE_YAW[side] if towards is None else facing_yaw(g, towards, camera, SIDE_YAW[side])
+    return neutral_pose(dims, x=float(g[0]), z=float(g[2]), yaw=yaw), dims
+
+
+def camera_yaw(pose: np.ndarray, camera: Camera) -> float:
+    """The heading (radians) that turns a pose's body to face the camera (someone at a webcam)."""
+    return float(np.arctan2(camera.centre[0] - pose[0], camera.centre[2] - pose[2]))
+
+
+def initial_particles(
+    bbox: tuple[int, int, int, int],
+    side: str,
+    camera: Camera,
+    n: int,
+    rng: np.random.Generator,
+    base: BodyDims = DEFAULT_DIMS,
+    spread: float = 1.0,
+    towards: tuple[int, int, int, int] | None = None,
+    yaw: float | None = None,
+) -> tuple[np.ndarray, BodyDims]:
+    """Particles for a new track and the body dimensions scaled to the measured stature.
+
+    The first particle is the un-jittered guess (:func:`guess_pose`); the rest are spread by
+    ``INIT_STD * spread``.
+
+    Parameters
+    ----------
+    bbox : tuple of int (x, y, w, h)
+        The person's bounding box, pixels (for a person cut off by the frame's bottom edge, the
+        whole person's: :func:`boxes_below`).
+    side : str
+        Side of the frame the person stands on, a key of ``SIDE_YAW`` (sets the heading).
+    camera : Camera
+        The camera that saw the person.
+    n : int
+        Number of particles.
+    rng : numpy.random.Generator
+        Source of the jitter.
+    base : BodyDims, default=DEFAULT_DIMS
+        Body dimensions scaled to the measured stature.
+    spread : float, default=1.0
+        Multiplier of ``INIT_STD``.
+    towards : tuple of int (x, y, w, h) or None
+        The bounding box of the person this one interacts with: the heading faces that person's
+        ground point (``facing_yaw``) instead of the side's ``SIDE_YAW``.
+    yaw : float or None, default=None
+        The heading (radians), overriding ``side`` and ``towards``.
+
+    Returns
+    -------
+    particles : ndarray of shape (n, 28)
+        Pose vectors (body.pose), clipped to the joint limits.
+    dims : BodyDims
+        ``base`` scaled to the measured stature.
+
+    Raises
+    ------
+    ValueError
+        If ``side`` is not a key of ``SIDE_YAW``.
+    PlacementError
+        When the bbox bottom lies at or above the horizon.
+    """
+    P0, dims = guess_pose(bbox, side, camera, base, towards, yaw)
     P = P0 + rng.normal(size=(n, DOF)) * INIT_STD * spread
     P[0] = P0
     return clip_to_limits(P), dims
+
+
+def cut_off_below(bbox: tuple[int, int, int, int], frame_height: int) -> bool:
+    """Whether a person's box reaches the frame's bottom row: their feet are out of the picture."""
+    return bbox[1] + bbox[3] >= frame_height
+
+
+def boxes_below(mask: np.ndarray, factors: np.ndarray = BELOW_FACTORS) -> list[tuple[int, int, int, int]]:
+    """The boxes a whole person cut off by the frame's bottom edge may have: the part in view's
+    box made ``factors`` times as tall, reaching below the frame (:data:`BELOW_FACTORS`), and
+    centred on the mask's median column (an arm held out widens the box to one side).
+
+    Parameters
+    ----------
+    mask : ndarray of shape (H, W), dtype bool
+        The person's pixels (not empty).
+    factors : ndarray of shape (K,)
+        Heights in multiples of the part in view.
+
+    Returns
+    -------
+    list of tuple of int (x, y, w, h)
+        K boxes, pixels.
+    """
+    x, y, w, h = bbox_from_mask(mask)
+    centre = float(np.median(np.nonzero(mask)[1]))
+    x = int(round(centre - 0.5 * (w - 1)))
+    return [(x, y, w, int(round(h * m))) for m in factors]
 
 
 def facing_yaw(ground: np.ndarray, other: tuple[int, int, int, int], camera: Camera, default: float) -> float:

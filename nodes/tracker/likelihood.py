@@ -24,8 +24,9 @@ the 23 anchor points, the sample points of each cone, their lookups in the frame
 map (``Observation.cost``) and the coverage test. The kernel repeats, in float32 and operation by
 operation, the numpy formulation kept in ``ConeLikelihood.project`` / ``sample_points`` /
 ``coverage_cost`` (the sample points as one small matmul, the coverage test as a matmul plus
-array arithmetic), and gives its costs to the last bit. Pixel units throughout; out-of-image
-points read 0 (no foreground, no edge).
+array arithmetic), and gives its costs to the last bit. Pixel units throughout; points outside
+a person's window read 0 (no foreground, no edge); the window goes on past the frame's borders
+where the person is cut off by them (``make_observation``).
 """
 
 from __future__ import annotations
@@ -65,8 +66,8 @@ class Observation:
 
     The maps cover a window of the image around the person (``make_observation``: the mask's
     bounding box with a margin that holds every pixel of the smoothed edge map), so that they cost
-    a person's area rather than the frame's; outside the window, as outside the image, a point
-    reads no foreground and no edge.
+    a person's area rather than the frame's; outside the window a point reads no foreground and
+    no edge.
 
     Parameters
     ----------
@@ -83,7 +84,8 @@ class Observation:
         Per-pixel costs ``(1 - fg)^2`` then ``(1 - edge)^2`` (outside the window: 1), so that S_r
         and S_e are one gather; None: derived from fg and edge.
     x0, y0 : int
-        Image position of the window's top-left pixel (0, 0: the window is the image).
+        Image position of the window's top-left pixel (0, 0: the window is the image; negative
+        where it goes on past the frame's top or left border, ``make_observation``).
     """
 
     fg: np.ndarray
@@ -202,12 +204,37 @@ def _window(mask: np.ndarray, margin: int) -> tuple[int, int, int, int]:
     )
 
 
+def _past_border(mask: np.ndarray, margin: int, past_border: float) -> tuple[int, int, int, int]:
+    """Rows above and below, columns left and right, that the window of a mask goes on past the
+    frame's borders (``make_observation``): 0 where the mask keeps clear of a border, else
+    ``past_border`` times the mask's extent across it (at least the window's ``margin``).
+    """
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if not len(rows) or past_border <= 0:
+        return 0, 0, 0, 0
+    H, W = mask.shape
+    down = max(int(round(past_border * (rows[-1] - rows[0] + 1))), margin)
+    across = max(int(round(past_border * (cols[-1] - cols[0] + 1))), margin)
+    return (
+        down if rows[0] == 0 else 0,
+        down if rows[-1] == H - 1 else 0,
+        across if cols[0] == 0 else 0,
+        across if cols[-1] == W - 1 else 0,
+    )
+
+
+def _continue(a: np.ndarray, top: int, bottom: int, left: int, right: int) -> np.ndarray:
+    """A bool window continued past the frame's borders by repeating its border rows and columns."""
+    return cv2.copyMakeBorder(a.view(np.uint8), top, bottom, left, right, cv2.BORDER_REPLICATE).view(bool)
+
+
 def make_observation(
     image: np.ndarray | None,
     mask: np.ndarray,
     n_cover: int = 32,
     rng: np.random.Generator | None = None,
     edges: np.ndarray | None = None,
+    past_border: float = 1.0,
     **edge_kw,
 ) -> Observation:
     """Build the per-frame maps once (Deutscher: computed once per frame, read by every particle).
@@ -215,6 +242,14 @@ def make_observation(
     The maps cover the mask's bounding box grown by a margin (``dilate_px`` + twice the blur's
     radius + 1) beyond which the edge map and its smoothing read nothing but zeros, so the window's
     maps hold the same values as maps of the whole frame would.
+
+    A person cut off by the frame (legs below its bottom edge: someone near the camera, a webcam
+    on a desk) would make every body part beyond the edge read "no foreground, no edge", and the
+    fit would squeeze the whole body into the part in view. Where the mask touches a border, the
+    window therefore goes on past it, by ``past_border`` times the mask's extent across that
+    border, with the mask and the frame's edges continued as they meet the border (its last row
+    or column repeated): a limb that leaves the picture is taken to go on as it left. The coverage
+    samples stay in the picture.
 
     Parameters
     ----------
@@ -229,6 +264,9 @@ def make_observation(
     edges : ndarray of shape (H, W), dtype bool, or None
         The frame's Canny edges (:func:`frame_edges`), when several people of one frame share them;
         None: computed from ``image``.
+    past_border : float, default=1.0
+        How far the window goes on past a frame border the mask touches, in multiples of the
+        mask's extent across it (0: not at all).
     **edge_kw
         Keyword parameters of :func:`edge_map` (``canny``, ``dilate_px``, ``blur_sigma``).
 
@@ -253,13 +291,19 @@ def make_observation(
         edges = frame_edges(image, edge_kw.get("canny", (40, 120)))
     dilate_px = int(edge_kw.get("dilate_px", 5))
     radius = int(round(3 * edge_kw.get("blur_sigma", 1.5)))
-    x0, y0, x1, y1 = _window(mask, dilate_px + 2 * radius + 1)
+    margin = dilate_px + 2 * radius + 1
+    x0, y0, x1, y1 = _window(mask, margin)
     win = mask[y0:y1, x0:x1]
-    fg = np.append(win.ravel().astype(np.float32), np.float32(0))
     crop = None if edges is None else edges[y0:y1, x0:x1]
+    top, bottom, left, right = _past_border(mask, margin, past_border)
+    maps_win, maps_crop = win, crop
+    if top or bottom or left or right:
+        maps_win = _continue(win, top, bottom, left, right)
+        maps_crop = None if crop is None else _continue(crop, top, bottom, left, right)
+    fg = np.append(maps_win.ravel().astype(np.float32), np.float32(0))
     edge = np.zeros(1, np.float32)  # an empty mask: no window, every point reads nothing
     if win.size:
-        edge = np.append(edge_map(None, win, edges=crop, **edge_kw).ravel(), np.float32(0))
+        edge = np.append(edge_map(None, maps_win, edges=maps_crop, **edge_kw).ravel(), np.float32(0))
     # the mask's pixels in the same (row-major) order as over the whole mask, as flat indices of the
     # window: only the picked ones are turned into rows and columns
     at = np.flatnonzero(win)
@@ -269,7 +313,8 @@ def make_observation(
         cover = np.stack([xs + x0, ys + y0], axis=1).astype(np.float32)
     else:
         cover = np.zeros((0, 2), np.float32)
-    return Observation(fg, edge, cover, x1 - x0, y1 - y0, _cost_map(fg, edge), x0, y0)
+    h, w = maps_win.shape
+    return Observation(fg, edge, cover, w, h, _cost_map(fg, edge), x0 - left, y0 - top)
 
 
 def pose_anchor_points(P: np.ndarray, dims: BodyDims) -> np.ndarray:
@@ -319,6 +364,10 @@ class LikelihoodConfig:
         plane fixes it (the image row of the foot and the calibrated camera give the distance).
     ground_sigma : float
         Width of the ground-contact cost, metres (default 0.05).
+    past_border : float
+        How far a person's observation window goes on past a frame border their mask touches,
+        in multiples of the mask's extent across it (``make_observation``; 0: a body part beyond
+        the border reads no foreground and no edge, as before).
     """
 
     n_along: int = 4
@@ -330,6 +379,7 @@ class LikelihoodConfig:
     gain: float = 1.0
     w_ground: float = 1.0
     ground_sigma: float = 0.05
+    past_border: float = 1.0
 
 
 class ConeLikelihood:

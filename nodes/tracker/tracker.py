@@ -35,7 +35,17 @@ from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, N_JOINTS, BodyDims
 
 from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, run_steps
-from .init import INIT_STD, LostDetector, bbox_from_mask, initial_particles
+from .init import (
+    INIT_STD,
+    LostDetector,
+    PlacementError,
+    bbox_from_mask,
+    boxes_below,
+    camera_yaw,
+    cut_off_below,
+    guess_pose,
+    initial_particles,
+)
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
 from .prior import RW_FLOOR, MotionPrior, PriorPredictor
 
@@ -147,6 +157,11 @@ def _per_camera(x: object, n: int) -> bool:
     return isinstance(x, (list, tuple)) and len(x) == n
 
 
+#: the headings a person cut off by the frame is tried at (``Tracker._whole_person``): these
+#: fractions of the turn from their side's heading to facing the camera
+TURNS = np.linspace(0.0, 1.0, 5)
+
+
 @dataclass(frozen=True)
 class APFConfig:
     """The search of each frame of a running track: the annealed particle filter (``apf``).
@@ -196,12 +211,17 @@ class InitConfig:
         radians); the same width sets the temporal term of the first frame.
     min_std, max_std : float
         Bounds of the first search's diffusion std in multiples of that spread.
+    cut_off : bool
+        A person cut off by the frame's bottom edge starts from the whole person's box that fits
+        the part in view best (``Tracker._whole_person``); False: from the box in view, as if it
+        ended at the feet.
     """
 
     layers: int = 20
     spread: float = 0.5
     min_std: float = 0.01
     max_std: float = 1.0
+    cut_off: bool = True
 
 
 @dataclass(frozen=True)
@@ -384,8 +404,9 @@ class Tracker:
     ) -> list[Observation]:
         """One Observation per camera from one frame and mask (one camera) or sequences of them."""
         n = len(self.cameras)
+        past = self.config.likelihood.past_border
         if n == 1 and not _per_camera(mask, 1):
-            return [make_observation(image, mask, rng=self.rng, edges=edges)]
+            return [make_observation(image, mask, rng=self.rng, edges=edges, past_border=past)]
         if not _per_camera(mask, n):
             raise ValueError(
                 f"the tracker has {n} cameras: give a list of {n} masks, one per camera "
@@ -397,7 +418,7 @@ class Tracker:
                 f"the tracker has {n} cameras: give a list of {n} frames (or None), one per "
                 f"camera (got {type(image).__name__})"
             )
-        return [make_observation(im, m, rng=self.rng) for im, m in zip(images, mask)]
+        return [make_observation(im, m, rng=self.rng, past_border=past) for im, m in zip(images, mask)]
 
     def update(
         self,
@@ -540,13 +561,24 @@ class Tracker:
     ) -> Search:
         """Start a track: particles around the reference view's silhouette guess (the body scaled
         to its stature unless ``dims`` was given), searched with the first search's longer schedule
-        (its first ``max_layers`` layers on this frame when given: :meth:`begin`).
+        (its first ``max_layers`` layers on this frame when given: :meth:`begin`). A person cut off
+        by the frame's bottom edge starts from their whole box (:meth:`_whole_person`).
         """
-        ref_mask = mask[0] if _per_camera(mask, len(self.cameras)) else mask
-        bbox = bbox_from_mask(np.asarray(ref_mask, bool))
+        ref_mask = np.asarray(mask[0] if _per_camera(mask, len(self.cameras)) else mask, bool)
+        bbox = bbox_from_mask(ref_mask)
         init = self.config.init
+        yaw = None
+        if init.cut_off and cut_off_below(bbox, ref_mask.shape[0]):
+            bbox, yaw = self._whole_person(ref_mask, obs, towards)
         P0, dims = initial_particles(
-            bbox, self.side, self.camera, self.filter.n_particles, self.rng, spread=init.spread, towards=towards
+            bbox,
+            self.side,
+            self.camera,
+            self.filter.n_particles,
+            self.rng,
+            spread=init.spread,
+            towards=towards,
+            yaw=yaw,
         )
         if self.fixed_dims is None:
             self.dims = dims
@@ -560,6 +592,36 @@ class Tracker:
         self.first_left, self._first_prior = init.layers - n, (P0[0], wide)
         steps = self.filter.steps(None, n_layers=n, min_std=init.min_std * wide, max_std=init.max_std * wide)
         return Search(obs, True, steps, P0[0], wide, n)
+
+    def _whole_person(
+        self, mask: np.ndarray, obs: list[Observation], towards: tuple[int, int, int, int] | None
+    ) -> tuple[tuple[int, int, int, int], float | None]:
+        """The whole box of a person cut off by the frame's bottom edge, and their heading.
+
+        The box's bottom is then not the feet, and the body placed on it would be squeezed into
+        the part in view. Each box of ``init.boxes_below`` places a standing body at headings from
+        the one the side gives (``towards``) to facing the camera (someone at a webcam; ``TURNS``);
+        the body whose part in view fits the observation best (the likelihood, its window continued
+        past the frame: ``make_observation``) gives the box and the heading (None: the side's).
+        """
+        boxes = boxes_below(mask)
+        best: tuple[float, tuple[int, int, int, int], float | None] = (-np.inf, boxes[0], None)
+        dims = self.fixed_dims
+        for box in boxes:
+            try:
+                P, body = guess_pose(box, self.side, self.camera, dims or DEFAULT_DIMS, towards)
+            except PlacementError:
+                continue
+            # headings from the side's to the camera's, by the shorter way round
+            turn = wrap_angle(camera_yaw(P, self.camera) - P[YAW])
+            X = np.repeat(P[None], len(TURNS), axis=0)
+            X[:, YAW] = wrap_angle(P[YAW] + TURNS * turn)
+            likelihood = MultiViewLikelihood(self.cameras, dims or body, self.config.likelihood)
+            ll = likelihood.combine(*likelihood.evaluate(X, obs))
+            k = int(np.argmax(ll))
+            if ll[k] > best[0]:
+                best = (float(ll[k]), box, None if k == 0 else float(X[k, YAW]))
+        return best[1], best[2]
 
     def _continue_first_search(self, obs: list[Observation], max_layers: int | None) -> Search:
         """The next layers of a first search begun on an earlier frame (:meth:`begin`): no
