@@ -89,8 +89,11 @@ def calibrate_video(
         got = len(obs) if obs is not None else 0
         raise ValueError(
             f"{os.fspath(path)!r}: only {got} views of whole upright people in {n} frames, "
-            f"{config.min_observations} needed to estimate the camera; use a longer video in which "
-            "people stand or walk fully in view, or give a calibration file"
+            f"{config.min_observations} needed to estimate the camera"
+            + (
+                (obs.feet_out_hint() if obs is not None else "")
+                or "; use a longer video in which people stand or walk fully in view, or give a calibration file"
+            )
         )
     return est, {"n_frames": n, "observations": len(obs), "fps": fps, "frame_size": list(shape)}
 

@@ -6,6 +6,7 @@ command reads; a video without people is refused with the reason.
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -69,3 +70,23 @@ def test_a_video_without_people_is_refused_with_the_reason(tmp_path: Path) -> No
     assert not out.exists()
     res = _cli("calibrate", str(tmp_path / "missing.avi"), "--out", str(out))
     assert res.returncode == 2 and "missing.avi" in res.stderr
+
+
+def test_people_cut_off_above_their_feet_are_refused_with_the_reason_and_the_way_out(
+    clip: Path, tmp_path: Path
+) -> None:
+    # the simulated people stand from about row 100 down to row 220: the frames cut at row 170
+    cut = tmp_path / "cut.avi"
+    cap = cv2.VideoCapture(str(clip))
+    w = cv2.VideoWriter(str(cut), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (320, 170))
+    ok, frame = cap.read()
+    while ok:
+        w.write(np.ascontiguousarray(frame[:170]))
+        ok, frame = cap.read()
+    w.release()
+    out = tmp_path / "camera.yaml"
+    res = _cli("calibrate", str(cut), "--out", str(out))
+    assert res.returncode == 2, res.stderr[-2000:]
+    assert re.search(r"feet were out of the picture in (9\d|100)% of their views", res.stderr), res.stderr[-2000:]
+    assert "recording of this camera where people stand or walk in full view" in res.stderr
+    assert not out.exists()

@@ -301,7 +301,8 @@ class Calibration(Node):
         if self.latest is not None:
             self.log.info("last estimate: %s", self.latest.describe())
         elif self.p["estimate"] and not self.p["file"]:
-            self.log.warning("no credible camera estimate from the people in view; the default camera was used")
+            hint = self.observations.feet_out_hint() if self.observations is not None else ""
+            self.log.warning("no credible camera estimate from the people in view; the default camera was used%s", hint)
 
 
 NODE = Calibration

@@ -140,9 +140,31 @@ class PeopleObservations:
         self._tracks: list[tuple[float, float, int, int]] = []
         self._next_track = 0
         self._frame = 0
+        #: people's regions given to :meth:`add`, and those of them cut off by the frame's bottom edge
+        self.regions_seen = 0
+        self.feet_out = 0
 
     def __len__(self) -> int:
         return len(self._rows)
+
+    def feet_out_hint(self, share: float = 0.5) -> str:
+        """Why the people gave too little to calibrate from, where it is that their feet were out of
+        the picture (a camera near them, or looking over their heads): in at least ``share`` of
+        the regions seen. Empty otherwise.
+
+        Returns
+        -------
+        str
+            A sentence to add to a message, starting with "; ", or "".
+        """
+        if not self.regions_seen or self.feet_out < share * self.regions_seen:
+            return ""
+        return (
+            f"; the people's feet were out of the picture in {100 * self.feet_out / self.regions_seen:.0f}% "
+            "of their views (a camera near them, or looking over their heads), and the camera is "
+            "estimated from where people stand: give a calibration file, e.g. from `counterpart "
+            "calibrate` on a recording of this camera where people stand or walk in full view"
+        )
 
     @property
     def span_s(self) -> float:
@@ -173,6 +195,8 @@ class PeopleObservations:
         self._upright = []
         with_labels = labels is not None and np.shape(labels) == (self.size[1], self.size[0])
         for p in people:
+            self.regions_seen += 1
+            self.feet_out += int(p.bbox[1]) + int(p.bbox[3]) >= self.size[1]
             if not usable(p.bbox, *self.size, merged=bool(p.merged)):
                 if with_labels and not p.merged:
                     for k, (h, f) in enumerate(upright_parts(labels, int(p.id) + 1, p.bbox, self.size)):
