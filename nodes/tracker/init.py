@@ -188,10 +188,8 @@ def initial_particles(
 
     Raises
     ------
-    ValueError
-        If ``side`` is not a key of ``SIDE_YAW``.
-    PlacementError
-        When the bbox bottom lies at or above the horizon.
+    ValueError, PlacementError
+        As :func:`guess_pose`.
     """
     P0, dims = guess_pose(bbox, side, camera, base, towards, yaw)
     P = P0 + rng.normal(size=(n, DOF)) * INIT_STD * spread
