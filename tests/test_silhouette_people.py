@@ -8,6 +8,7 @@ the detector there is a stand-in that returns the person's box. Real footage: UT
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -367,5 +368,13 @@ def test_people_cut_off_by_the_frames_bottom_edge_are_found_in_the_frame_continu
         top = kp[t, :3][vis[t, :3] >= 0.5]
         found += any(((top >= (x, y)) & (top <= (x + w, y + h))).all() for x, y, w, h in boxes)
     assert found >= 8, found
+    # a bigger frame is searched shrunk (its people near the camera are large): the same person, in
+    # the picture's coordinates
+    for t in (0, 5):
+        big = cv2.resize(frames[t], None, fx=3, fy=3, interpolation=cv2.INTER_CUBIC)
+        boxes, _ = continued.detect(big)
+        top = 3 * kp[t, :3][vis[t, :3] >= 0.5]
+        assert any(((top >= (x, y)) & (top <= (x + w, y + h))).all() for x, y, w, h in boxes), boxes
+        assert (boxes[:, 1] + boxes[:, 3] == big.shape[0]).all()
     with pytest.raises(ValueError, match="below_frac"):
         PeopleDetector(below_frac=-0.1)
