@@ -122,7 +122,7 @@ from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_JOINTS
 from counterpart.nodes.responder.frames import actor_frame
-from counterpart.nodes.silhouette.pipeline import read_frames
+from counterpart.nodes.silhouette.pipeline import read_frames, video_info
 from counterpart.nodes.tracker.likelihood import LikelihoodConfig
 from counterpart.nodes.tracker.tracker import InitConfig, TrackerConfig
 
@@ -374,7 +374,7 @@ def cut_copy(clip: Path, work: Path, kp: np.ndarray, vis: np.ndarray) -> tuple[P
     r = cut_row(kp, vis)
     path = work / f"{clip.stem}-cut.avi"
     if not path.exists():
-        fps = cv2.VideoCapture(str(clip)).get(cv2.CAP_PROP_FPS) or 30.0
+        fps = video_info(clip)[0] or 30.0
         frames = read_frames(clip)
         writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, (frames.shape[2], r))
         for f in frames:
