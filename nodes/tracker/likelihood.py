@@ -188,38 +188,44 @@ def edge_map(
     return np.clip(sm / np.float32(_blur_peak(ksize, blur_sigma)), 0.0, 1.0)
 
 
-def _window(mask: np.ndarray, margin: int) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1): the bounding box of the mask's pixels grown by ``margin`` and clipped to
-    the image; (0, 0, 0, 0) for an empty mask.
-    """
+def _extent(mask: np.ndarray) -> tuple[int, int, int, int] | None:
+    """(first row, last row, first column, last column) of the mask's pixels; None when empty."""
     rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
     if not len(rows):
-        return 0, 0, 0, 0
-    H, W = mask.shape
-    return (
-        max(int(cols[0]) - margin, 0),
-        max(int(rows[0]) - margin, 0),
-        min(int(cols[-1]) + margin + 1, W),
-        min(int(rows[-1]) + margin + 1, H),
-    )
+        return None
+    return int(rows[0]), int(rows[-1]), int(cols[0]), int(cols[-1])
 
 
-def _past_border(mask: np.ndarray, margin: int, past_border: float) -> tuple[int, int, int, int]:
-    """Rows above and below, columns left and right, that the window of a mask goes on past the
-    frame's borders (``make_observation``): 0 where the mask keeps clear of a border, else
-    ``past_border`` times the mask's extent across it (at least the window's ``margin``).
+def _window(extent: tuple[int, int, int, int] | None, shape: tuple[int, int], margin: int) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1): the bounding box of a mask's pixels (``_extent``) grown by ``margin`` and
+    clipped to the image of ``shape`` (H, W); (0, 0, 0, 0) for an empty mask.
     """
-    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
-    if not len(rows) or past_border <= 0:
+    if extent is None:
         return 0, 0, 0, 0
-    H, W = mask.shape
-    down = max(int(round(past_border * (rows[-1] - rows[0] + 1))), margin)
-    across = max(int(round(past_border * (cols[-1] - cols[0] + 1))), margin)
+    r0, r1, c0, c1 = extent
+    H, W = shape
+    return max(c0 - margin, 0), max(r0 - margin, 0), min(c1 + margin + 1, W), min(r1 + margin + 1, H)
+
+
+def _past_border(
+    extent: tuple[int, int, int, int] | None, shape: tuple[int, int], margin: int, past_border: float
+) -> tuple[int, int, int, int]:
+    """Rows above and below, columns left and right, that the window of a mask (``_extent``, in an
+    image of ``shape``) goes on past the frame's borders (``make_observation``): 0 where the mask
+    keeps clear of a border, else ``past_border`` times the mask's extent across it (at least the
+    window's ``margin``).
+    """
+    if extent is None or past_border <= 0:
+        return 0, 0, 0, 0
+    r0, r1, c0, c1 = extent
+    H, W = shape
+    down = max(int(round(past_border * (r1 - r0 + 1))), margin)
+    across = max(int(round(past_border * (c1 - c0 + 1))), margin)
     return (
-        down if rows[0] == 0 else 0,
-        down if rows[-1] == H - 1 else 0,
-        across if cols[0] == 0 else 0,
-        across if cols[-1] == W - 1 else 0,
+        down if r0 == 0 else 0,
+        down if r1 == H - 1 else 0,
+        across if c0 == 0 else 0,
+        across if c1 == W - 1 else 0,
     )
 
 
@@ -292,10 +298,11 @@ def make_observation(
     dilate_px = int(edge_kw.get("dilate_px", 5))
     radius = int(round(3 * edge_kw.get("blur_sigma", 1.5)))
     margin = dilate_px + 2 * radius + 1
-    x0, y0, x1, y1 = _window(mask, margin)
+    extent = _extent(mask)
+    x0, y0, x1, y1 = _window(extent, mask.shape, margin)
     win = mask[y0:y1, x0:x1]
     crop = None if edges is None else edges[y0:y1, x0:x1]
-    top, bottom, left, right = _past_border(mask, margin, past_border)
+    top, bottom, left, right = _past_border(extent, mask.shape, margin, past_border)
     maps_win, maps_crop = win, crop
     if top or bottom or left or right:
         maps_win = _continue(win, top, bottom, left, right)
