@@ -19,6 +19,14 @@ partner is projected with the camera the tracking recorded. Figures:
 - ``partner_overlap_real``: for reference, the same share as ``partner_overlap`` for the real second
   person's reference box against the observed person's (same frames);
 - ``partner_in_picture``: share of frames with a partner of which some joint is inside the picture;
+- ``partner_scale``: median over the frames with a partner of its height as drawn (``drawn_height``:
+  the rows from the crown of its head to its soles, projected) over the height of the observed
+  person's silhouette box on that frame (where the region is theirs alone): how big the partner
+  looks beside the person in the picture; ``partner_scale_real``, the reference in the same run:
+  the real second person's silhouette box height over the observed person's (frames where each has
+  a region of their own); ``partner_bones_spread``: median over clips of the spread (95th minus 5th
+  percentile over frames, over the median) of the partner's body length in metres (the sum of its
+  bones from ankle to head, the legs' averaged): 0 for a partner that keeps one body;
 - handshake clips (class 0, observed: the left person): at the moment the real hands meet (the
   frame where the two people's reference wrists are nearest), the pixel distance from the partner's
   nearer projected wrist to the observed person's reference wrist nearest the other person, over
@@ -63,10 +71,10 @@ import numpy as np
 from real_silhouettes import reference_collapsed  # bench/ is on sys.path as a script
 
 from counterpart.body.camera import Camera
-from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.body.skeleton import JOINT_INDEX, bone_lengths
 from counterpart.nodes.responder.frames import actor_frame
 from counterpart.nodes.responder.models import load_default
-from counterpart.nodes.responder.staging import Stage, observed_silhouette
+from counterpart.nodes.responder.staging import HEAD_TOP_M, Stage, observed_silhouette
 
 VIS = 0.5
 HOLD_FRAMES = 15  # the responder node's default hold_frames
@@ -77,6 +85,10 @@ MIN_M, MAX_M = 0.5, 1.2
 #: frames before the moment of a push whose gap stands for it where the observed person is lost then
 MOMENT_SLACK = 3
 WRISTS = [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]
+HEAD, ANKLES = JOINT_INDEX["head"], [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
+#: each leg's thigh and shin (``bone_lengths``' entries of the knee and the ankle)
+LEG_L = [JOINT_INDEX[j] for j in ("l_knee", "l_ankle")]
+LEG_R = [JOINT_INDEX[j] for j in ("r_knee", "r_ankle")]
 TORSO = [JOINT_INDEX[j] for j in ("l_shoulder", "r_shoulder", "l_hip", "r_hip")]
 HANDSHAKE, PUSH = 0, 5
 #: the stage has the graph's camera (the responder node's camera_info, as the demo graphs wire it)
@@ -178,7 +190,8 @@ def staged_partner(
     side's name gives the side to stand on, and the observed person's silhouette on each frame
     (``people``, from ``silhouette_people``; None: none) their reach and offered hand.
     Returns partner (T, 14, 3) world metres (NaN: none), observed (T, 14, 3) (NaN: lost or
-    missing), the camera of the tracking, and the clip's fps.
+    missing), the camera of the tracking, the clip's fps, and the observed person's silhouette box
+    (T, 4) (x, y, w, h) pixels as the stage had it (NaN: none, or shared with someone else).
     """
     d = np.load(track_npz)
     camera = Camera.from_dict(json.loads(str(d["camera"])))
@@ -190,6 +203,7 @@ def staged_partner(
     model, stage = load_default("dual-hmm"), Stage()
     model.reset()
     partner = np.full_like(joints, np.nan)
+    boxes = np.full((len(joints), 4), np.nan)
     observed = np.where(lost[:, None, None], np.nan, joints)
     towards = 1.0 if side == 0 else -1.0  # the left person's partner stands to their right (image right)
     last = -(10**9)
@@ -208,6 +222,8 @@ def staged_partner(
             else (None, None)
         )
         dt = (t - last) / fps if last >= 0 else 1.0 / fps
+        if box is not None:
+            boxes[t] = box
         staged = stage(
             joints[t],
             model.step(joints[t]),
@@ -220,7 +236,18 @@ def staged_partner(
         )
         partner[t] = stage.finish(joints[t], staged)[0]  # its arms (guard or reach), kept clear last
         last = t
-    return partner, observed, camera, fps
+    return partner, observed, camera, fps, boxes
+
+
+def drawn_height(camera: Camera, joints: np.ndarray) -> np.ndarray:
+    """A body's height as drawn, pixels: the rows from the crown of its head (``HEAD_TOP_M`` above the
+    head joint) to its soles (the lowest ankle put on the ground), for joints (T, 14, 3) metres.
+    """
+    X = np.asarray(joints, np.float64)
+    crown = X[:, HEAD] + [0.0, HEAD_TOP_M, 0.0]
+    sole = X[np.arange(len(X)), np.asarray(ANKLES)[np.argmin(X[:, ANKLES, 1], axis=1)]] * [1.0, 0.0, 1.0]
+    rows = camera.project(np.stack([crown, sole], axis=1))[..., 1]
+    return np.abs(rows[:, 1] - rows[:, 0])
 
 
 def _box(points: np.ndarray) -> np.ndarray | None:
@@ -253,9 +280,9 @@ def partner_clip(
     moment = contact(kp, vis, h, label) if label in (HANDSHAKE, PUSH) else None
     side = moment[1] if moment is not None and label == PUSH else 0
     people = silhouette_people(clip) if people is None else people
-    partner, observed, camera, fps = staged_partner(track_npz, side, people)
+    partner, observed, camera, fps, boxes = staged_partner(track_npz, side, people)
     n = min(len(partner), len(kp))
-    partner, observed = partner[:n], observed[:n]
+    partner, observed, boxes = partner[:n], observed[:n], boxes[:n]
     has = np.isfinite(partner).all(axis=(1, 2))
     both = has & np.isfinite(observed).all(axis=(1, 2))
     gap = np.full(n, np.nan)
@@ -263,6 +290,15 @@ def partner_clip(
         gap[both] = np.linalg.norm((actor_frame(partner[both])[0] - actor_frame(observed[both])[0])[:, [0, 2]], axis=1)
     uv = camera.project(np.where(has[:, None, None], partner, 0.0))
     overlap = overlap_all = in_picture = real_overlap = two = 0
+    # how big the partner looks beside the person, and the real second person (alone in their region)
+    mine_h = np.full(n, np.nan)
+    mine_h[has] = drawn_height(camera, partner[has])
+    scale = (mine_h / boxes[:, 3])[has & np.isfinite(boxes[:, 3])].tolist()
+    other_id = np.load(track_npz)["ids"][:n, 1 - side]
+    other_h = np.array(
+        [next((q.bbox[3] for q in people[t] if q.id == other_id[t] and not q.merged), np.nan) for t in range(n)], float
+    )
+    scale_real = (other_h / boxes[:, 3])[np.isfinite(other_h) & np.isfinite(boxes[:, 3])].tolist()
     for t in np.flatnonzero(has):
         in_picture += bool(camera.in_image(uv[t]).any())
         ref = _box(np.where((vis[t, side] >= VIS)[:, None], kp[t, side], np.nan))
@@ -285,6 +321,9 @@ def partner_clip(
         "real_overlap": int(real_overlap),
         "in_picture": int(in_picture),
         "label": label,
+        "scale": scale,
+        "scale_real": scale_real,
+        "bones_spread": body_length_spread(partner[has]),
     }
     if moment is not None and moment[0] < n:
         t, p, wrist = moment
@@ -304,6 +343,23 @@ def partner_clip(
     return out
 
 
+def body_length_spread(joints: np.ndarray) -> float | None:
+    """The spread of a body's length over frames: (95th - 5th percentile) / median of the sum of its
+    bones from ankle to head (legs averaged), for joints (T, 14, 3) metres; None without frames.
+    """
+    if not len(joints):
+        return None
+    b = bone_lengths(joints)
+    legs = 0.5 * (b[:, LEG_L].sum(axis=1) + b[:, LEG_R].sum(axis=1))
+    length = legs + b[:, [JOINT_INDEX["neck"], JOINT_INDEX["head"]]].sum(axis=1)
+    lo, mid, hi = np.percentile(length, [5, 50, 95])
+    return float((hi - lo) / mid)
+
+
+def _median(values: list[float]) -> float | None:
+    return round(float(np.median(values)), 3) if values else None
+
+
 def partner_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Pool ``partner_clip`` rows into the bench's figures."""
     frames = sum(r["frames"] for r in rows)
@@ -316,6 +372,9 @@ def partner_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "partner_overlap_real": round(sum(r["real_overlap"] for r in rows) / max(apart, 1), 4),
         "partner_overlap_all": round(sum(r["overlap_all"] for r in rows) / max(frames, 1), 4),
         "partner_in_picture": round(sum(r["in_picture"] for r in rows) / max(frames, 1), 4),
+        "partner_scale": _median([v for r in rows for v in r["scale"]]),
+        "partner_scale_real": _median([v for r in rows for v in r["scale_real"]]),
+        "partner_bones_spread": _median([r["bones_spread"] for r in rows if r["bones_spread"] is not None]),
         "handshake_clips": len(hands),
         "handshake_hand_h": round(float(np.median(hands)), 3) if hands else None,
         "handshake_hand_ok": round(float(np.mean([x <= HAND_H for x in hands])), 3) if hands else None,

@@ -61,7 +61,7 @@ the frame continued below): ``*_cut_before``; and the whole clips' tracks scored
 ``pck10_uncut_same_joints``, ``pck20_uncut_same_joints``; and the partner staged beside the
 person cut off (``real_partner``, the moment of the interaction found on the joints in the
 picture): ``partner_distance_ok_cut``, ``partner_overlap_cut``, ``partner_in_picture_cut``,
-``handshake_hand_h_cut``, ``push_back_m_cut``. Report and tune splits as above.
+``partner_scale_cut``, ``handshake_hand_h_cut``, ``push_back_m_cut``. Report and tune splits as above.
 
 Silhouettes (``--no-silhouettes`` skips them): ``people_found`` and ``keypoint_coverage`` as
 ``bench/real_silhouettes.py`` defines them (the silhouette node's extractor with its defaults, the
@@ -364,7 +364,14 @@ CUT_BEFORE = {
 
 
 #: the partner's figures (``real_partner.partner_figures``) also given for the cut pass
-CUT_PARTNER = ("partner_distance_ok", "partner_overlap", "partner_in_picture", "handshake_hand_h", "push_back_m")
+CUT_PARTNER = (
+    "partner_distance_ok",
+    "partner_overlap",
+    "partner_in_picture",
+    "partner_scale",
+    "handshake_hand_h",
+    "push_back_m",
+)
 
 
 def cut_copy(clip: Path, work: Path, kp: np.ndarray, vis: np.ndarray) -> tuple[Path, int]:

@@ -57,6 +57,64 @@ PARENT: tuple[int, ...] = (1, -1, 1, 2, 3, 1, 5, 6, -1, 8, 9, -1, 11, 12)
 # Bones between joints (child, parent) that keep a fixed length under every pose.
 BONES: tuple[tuple[int, int], ...] = tuple((j, p) for j, p in enumerate(PARENT) if p >= 0)
 
+#: the joints in an order in which every parent comes before its children (the pelvis root first)
+TREE_ORDER: tuple[int, ...] = (1, 8, 11, 0, 2, 5, 9, 12, 3, 6, 10, 13, 4, 7)
+
+
+def bone_lengths(X: np.ndarray) -> np.ndarray:
+    """Each joint's distance from its parent (from the pelvis root, the mid-hip point, where ``PARENT``
+    is -1).
+
+    Parameters
+    ----------
+    X : ndarray of shape (..., 14, 3)
+        Joints, metres.
+
+    Returns
+    -------
+    ndarray of shape (..., 14)
+        Lengths, metres.
+    """
+    X = np.asarray(X, np.float64)
+    return np.linalg.norm(X - _parents(X), axis=-1)
+
+
+def with_bone_lengths(X: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The same pose on other bones: every bone keeps its direction and takes the given length,
+    from the pelvis root (the mid-hip point, which stays where it is) out to the hands and feet.
+
+    Parameters
+    ----------
+    X : ndarray of shape (..., 14, 3)
+        Joints, metres.
+    lengths : ndarray of shape (14,) or (..., 14)
+        Each joint's distance from its parent, metres (:func:`bone_lengths`).
+
+    Returns
+    -------
+    ndarray of shape (..., 14, 3)
+        New joints, metres. A bone of zero length in ``X`` keeps zero length.
+    """
+    X = np.asarray(X, np.float64)
+    L = np.broadcast_to(np.asarray(lengths, np.float64), X.shape[:-1])
+    d = X - _parents(X)
+    n = np.linalg.norm(d, axis=-1, keepdims=True)
+    unit = np.divide(d, n, out=np.zeros_like(d), where=n > 0)
+    out = np.empty_like(X)
+    root = 0.5 * (X[..., JOINT_INDEX["l_hip"], :] + X[..., JOINT_INDEX["r_hip"], :])
+    for j in TREE_ORDER:
+        base = root if PARENT[j] < 0 else out[..., PARENT[j], :]
+        out[..., j, :] = base + unit[..., j, :] * L[..., j, None]
+    return out
+
+
+def _parents(X: np.ndarray) -> np.ndarray:
+    """Each joint's parent's position (the pelvis root for the root's children), shape of ``X``."""
+    root = 0.5 * (X[..., JOINT_INDEX["l_hip"], :] + X[..., JOINT_INDEX["r_hip"], :])
+    idx = np.maximum(np.asarray(PARENT), 0)
+    return np.where((np.asarray(PARENT) < 0)[:, None], root[..., None, :], X[..., idx, :])
+
+
 # Extra anchor points used by the cones, after the 14 joints in the FK point array.
 EXTRA_ANCHORS: tuple[str, ...] = (
     "pelvis",  # root: mid-point of the hip joints

@@ -31,6 +31,8 @@ from counterpart.body.skeleton import (
     PARENT,
     SEGMENTS,
     BodyDims,
+    bone_lengths,
+    with_bone_lengths,
 )
 
 J = JOINT_INDEX
@@ -368,3 +370,25 @@ def test_cross3_norm3_and_the_ankle_percentile_are_numpys_to_the_bit() -> None:
     assert all(ik._low_ankle(v) == float(np.percentile(v, 5)) for v in y)
     many = rng.normal(size=(7, 2))
     assert ik._low_ankle(many) == float(np.percentile(many, 5))
+
+
+def test_a_pose_put_on_another_body_keeps_its_bone_directions_and_takes_that_bodys_lengths() -> None:
+    rng = np.random.default_rng(3)
+    P = np.tile(neutral_pose(x=0.4, z=-1.0, yaw=0.7), (6, 1))
+    P[:, DOF_INDEX["r_shoulder_flex"]] = rng.uniform(0.0, 2.0, 6)
+    P[:, DOF_INDEX["l_knee_flex"]] = rng.uniform(0.0, 1.2, 6)
+    small, tall = forward_kinematics(P, D.scaled(1.5)), forward_kinematics(P, D.scaled(1.9))
+    # the poses of the small body on the tall body's bones: the tall body, joint for joint
+    target = bone_lengths(tall)[0]
+    np.testing.assert_allclose(with_bone_lengths(small, target), tall, atol=1e-9)
+    # limbs that stretch and shrink from frame to frame (a generated pose) get one body
+    stretched = small * rng.uniform(0.9, 1.1, (6, 1, 1))
+    out = with_bone_lengths(stretched, target)
+    np.testing.assert_allclose(bone_lengths(out), np.tile(target, (6, 1)), atol=1e-9)
+    for j, parent in BONES:  # each bone points where it pointed
+        a, b = stretched[:, j] - stretched[:, parent], out[:, j] - out[:, parent]
+        cos = (a * b).sum(-1) / np.linalg.norm(a, axis=-1) / np.linalg.norm(b, axis=-1)
+        assert cos.min() > 1 - 1e-9, JOINTS[j]
+    # the pelvis (mid-hip) stays where it was
+    mid = lambda X: 0.5 * (X[:, J["l_hip"]] + X[:, J["r_hip"]])  # noqa: E731
+    np.testing.assert_allclose(mid(out), mid(stretched), atol=1e-9)

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from counterpart.body.camera import Camera
-from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.body.kinematics import forward_kinematics
+from counterpart.body.pose import DOF_INDEX, neutral_pose
+from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, bone_lengths
 from counterpart.messages.silhouette import PersonShape
 from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
 from counterpart.nodes.responder.frames import actor_frame
@@ -173,6 +175,40 @@ def test_bad_limits_are_refused_naming_them() -> None:
         StageConfig(min_distance_m=1.5, max_distance_m=1.0)
     with pytest.raises(ValueError, match="take_min_m"):
         StageConfig(take_min_m=-0.1)
+    with pytest.raises(ValueError, match="bones='tall'"):
+        StageConfig(bones="tall")
+
+
+def drawn_height(X: np.ndarray) -> float:
+    """Projected height in ``CAM`` of joints X (14, 3), head to mid-ankle, pixels."""
+    uv = CAM.project(X)
+    return float(np.linalg.norm(uv[JOINT_INDEX["head"]] - uv[[JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]].mean(0)))
+
+
+def test_the_partner_keeps_one_body_of_the_observed_persons_build_and_is_drawn_at_their_size() -> None:
+    rng = np.random.default_rng(0)
+    T = 40
+    P = np.tile(neutral_pose(x=0.0, z=0.0, yaw=np.pi / 2), (T, 1))
+    P[:, DOF_INDEX["r_shoulder_flex"]] = np.linspace(0.0, 1.5, T)
+    observed = forward_kinematics(P, DEFAULT_DIMS.scaled(1.9))
+    Q = np.tile(neutral_pose(x=0.8, z=0.0, yaw=-np.pi / 2), (T, 1))
+    Q[:, DOF_INDEX["l_shoulder_flex"]] = np.linspace(0.0, 1.5, T)
+    # a model's partner: a smaller build whose limbs stretch and shrink from frame to frame
+    model = forward_kinematics(Q, DEFAULT_DIMS.scaled(1.5))
+    hips = 0.5 * (model[:, [JOINT_INDEX["l_hip"]]] + model[:, [JOINT_INDEX["r_hip"]]])
+    model = hips + (model - hips) * rng.uniform(0.9, 1.1, (T, 1, 1))
+    ratios = {}
+    for bones in ("observed", "model"):
+        stage = Stage(StageConfig(bones=bones))
+        out = np.array([stage(observed[t], model[t], 0.04, camera=CAM) for t in range(T)])
+        ratios[bones] = [drawn_height(out[t]) / drawn_height(observed[t]) for t in range(T)]
+        if bones == "observed":  # every frame on the observed person's bones
+            np.testing.assert_allclose(bone_lengths(out), bone_lengths(observed), atol=1e-6)
+        else:
+            np.testing.assert_allclose(bone_lengths(out), bone_lengths(model), atol=1e-6)
+    # beside them at their depth, drawn at their size; as the model gave it, a head shorter and changing
+    assert np.abs(np.array(ratios["observed"]) - 1.0).max() < 0.03
+    assert np.median(ratios["model"]) < 0.85 and np.ptp(ratios["model"]) > 0.1
 
 
 def test_the_dual_hmm_gives_a_body_for_a_person_unlike_any_of_training() -> None:

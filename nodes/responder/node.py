@@ -38,7 +38,7 @@ from counterpart.messages import (
 
 from .emotion import StyleFilter
 from .reach import ReachConfig, reach
-from .staging import Stage, StageConfig, observed_silhouette
+from .staging import BONES, Stage, StageConfig, observed_silhouette
 
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
@@ -115,6 +115,13 @@ class Responder(Node):
             True,
             "the partner stands beside the observed person across the camera's view, at their depth, on "
             "the real second person's side (else towards the middle of the picture); false: in the model's direction",
+        ),
+        "bones": Param(
+            str,
+            "observed",
+            "the partner's bone lengths: the observed person's (one body of their build, drawn at their size "
+            "beside them whatever the camera's error) or the model's as it generates them",
+            choices=BONES,
         ),
         "contact_m": Param(
             float,
@@ -204,6 +211,7 @@ class Responder(Node):
                         recoil_m=self.p["recoil_m"],
                         beside=self.p["beside"],
                         offer_m=self.p["offer_m"],
+                        bones=self.p["bones"],
                     )
                 )
             if self.p["reach_m"] > 0:

@@ -5,7 +5,9 @@ An interaction model places the partner relative to the observed person's frame
 estimated facing, a tracker's jump moves their origin), and a model's placement that is right
 for the training pairs can then put the partner inside the observed person or metres away.
 :class:`Stage` corrects the generated pose as a whole, a rigid move on the ground plane, so the
-model's posture and gestures are kept:
+model's posture and gestures are kept. First the pose is put on the observed person's bones, bone by
+bone (``bones``): a model's generated joints do not keep one body from frame to frame, and a partner
+of the person's build at their depth is drawn at their size in the picture. Then:
 
 1. the partner stands beside the observed person as the camera sees them (``beside``): its ground
    offset from the person, p - o (p, o the mid-hips dropped to the floor,
@@ -81,7 +83,7 @@ from typing import NamedTuple
 import numpy as np
 
 from counterpart.body.camera import Camera
-from counterpart.body.skeleton import JOINT_INDEX
+from counterpart.body.skeleton import JOINT_INDEX, bone_lengths, with_bone_lengths
 
 from .frames import actor_frame
 from .reach import ARMS, ReachConfig, reach, two_bone_ik
@@ -109,6 +111,10 @@ HEAD_TOP_M = 0.12
 #: to the mid-hip, this fraction of the way from the body's midline out to its shoulder, and this far
 #: in front of the chest (metres)
 GUARD_DOWN, GUARD_OUT, GUARD_FRONT_M = 0.35, 0.5, 0.12
+#: where the partner's bone lengths come from (:attr:`StageConfig.bones`)
+BONES = ("observed", "model")
+#: the share of the way the partner's bone lengths move to the observed person's per frame
+BONE_RATE = 0.2
 #: the hand contact's distances where the caller gives none (:meth:`Stage.finish`)
 REACH = ReachConfig()
 
@@ -215,6 +221,13 @@ class StageConfig:
         With a camera and the observed person's silhouette box, the most of the partner's own
         projected box that may lie inside that box (a silhouette with an arm held out, or shared
         with another person's, is so much larger than the partner that the union stays large).
+    bones : {"observed", "model"}, default="observed"
+        The partner's bone lengths. "observed": the observed person's (smoothed over frames,
+        ``BONE_RATE``), the model's pose kept bone by bone (:func:`counterpart.body.skeleton.with_bone_lengths`):
+        a model's generated joints do not keep one body (their limbs stretch and shrink from frame
+        to frame), and a partner of the observed person's build standing at their depth is drawn at
+        their size in the picture whatever the camera's error, as the tracked body was fitted to
+        the picture through the same camera. "model": as the model gives them.
 
     Raises
     ------
@@ -251,6 +264,7 @@ class StageConfig:
     tip_in_picture: bool = True
     tip_back: float = 0.07
     take_min_m: float = 1.0
+    bones: str = "observed"
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m <= self.max_distance_m:
@@ -275,6 +289,8 @@ class StageConfig:
             raise ValueError(f"tip_back={self.tip_back} and take_min_m={self.take_min_m} must be >= 0")
         if not (0.0 <= self.clear_iou <= 1.0 and 0.0 <= self.clear_inside <= 1.0):
             raise ValueError(f"clear_iou={self.clear_iou} and clear_inside={self.clear_inside} must be in [0, 1]")
+        if self.bones not in BONES:
+            raise ValueError(f"bones={self.bones!r}: choose one of {BONES}")
         if self.side_margin_m < 0 or self.offer_m < 0:
             raise ValueError(f"side_margin_m={self.side_margin_m} and offer_m={self.offer_m} must be >= 0")
 
@@ -765,6 +781,16 @@ class Stage:
         self.pushes = 0  # pushes the partner recoiled from
         self.offered_: np.ndarray | None = None
         self._scene: tuple[Camera | None, tuple[float, float, float, float] | None, np.ndarray] | None = None
+        self._bones: np.ndarray | None = None  # the partner's bone lengths (bones="observed"), metres
+
+    def _on_bones(self, observed: np.ndarray, partner: np.ndarray) -> np.ndarray:
+        """The partner's pose on its bones (:attr:`StageConfig.bones`)."""
+        if self.config.bones == "model":
+            return partner
+        lengths = bone_lengths(observed)
+        if np.isfinite(lengths).all():
+            self._bones = lengths if self._bones is None else self._bones + BONE_RATE * (lengths - self._bones)
+        return partner if self._bones is None else with_bone_lengths(partner, self._bones)
 
     @property
     def pushed(self) -> bool:
@@ -986,7 +1012,7 @@ class Stage:
         """
         c = self.config
         X = np.asarray(observed, np.float64)
-        P = np.asarray(partner, np.float64)
+        P = self._on_bones(X, np.asarray(partner, np.float64))
         o3, facing = actor_frame(X)
         p3, _ = actor_frame(P)
         o, p = o3[[0, 2]], p3[[0, 2]]
