@@ -430,7 +430,8 @@ def main() -> None:
             cached.write_bytes(pickle.dumps(silhouette_people(clip)))
         people = pickle.loads(cached.read_bytes())
         rows[clip.stem] = partner_clip(clip, track, kp, vis, rv.reference_height(kp), people)
-        print(f"partner {clip.stem}: {rows[clip.stem]} ({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
+        shown = {k: _median(v) if isinstance(v, list) else v for k, v in rows[clip.stem].items()}  # lists: medians
+        print(f"partner {clip.stem}: {shown} ({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)
     splits = {s: [rows[c.stem] for c in clips if rv.split_of(c) == s] for s in ("report", "tune")}
     result: dict[str, Any] = {
         "split": "report: clips whose first number is odd (top level); tune: even",
