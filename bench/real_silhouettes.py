@@ -2,6 +2,7 @@
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
            [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7] [--no-cut]
+           [--white-balance 1.06,1,0.95]
            [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
@@ -80,6 +81,14 @@ exposure not followed (``*_lit_unfollowed``, as it was before: the room foregrou
 ``people_found_lit``, ``keypoint_coverage_lit``, ``extra_people_lit`` and the same ``_unfollowed``;
 ``people_share_lit`` (and ``_unfollowed``): the mean share of the frame in people's regions from frame
 50 on, against ``people_share``, ours on the clips as they are.
+
+A camera's white balance turning mid-clip (its automatic white balance as someone in a coloured coat
+comes in): each clip again, its frames from frame 50 on times ``--white-balance``'s gains of B, G
+and R (1.06, 1, 0.95: a cast of about 5%, which changes the brightness by well under the exposure
+step), through ours as it is (``*_wb``: each channel re-exposed by its own gain,
+``background.AdaptationConfig.white_balance_step``) and with the channels only followed together
+(``*_wb_unfollowed``, as it was before): ``people_found_wb``, ``keypoint_coverage_wb``,
+``extra_people_wb``, ``people_share_wb`` and the same ``_unfollowed``.
 
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
@@ -277,6 +286,7 @@ def run_clip(
     light: float = 1.0,
     cut: bool = False,
     backend: dict[str, Any] | None = None,
+    white_balance: tuple[float, float, float] | None = None,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
 
@@ -285,7 +295,8 @@ def run_clip(
     the error of the followed shift against the true one (``shake_err``, pixels, per frame).
     ``grey``: the clip's frames made grey (three equal channels, as a grey or infrared camera's
     come). ``light``: the light's gain from frame ``LIGHT_FRAME`` on (a light switched on or off).
-    ``cut``: the clip cut off above the people's knees (:func:`cut_frames`).
+    ``cut``: the clip cut off above the people's knees (:func:`cut_frames`). ``white_balance``: the
+    gains of B, G and R from frame ``LIGHT_FRAME`` on (the camera's white balance turning).
     ``backend``: subtractor parameters over ours (or the baseline's).
     """
     frames = read_frames(path)
@@ -301,8 +312,9 @@ def run_clip(
         frames, vis = cut_frames(frames, kp, vis)
     if grey:
         frames = np.stack([cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames])
-    if light != 1.0:
-        lit = frames[LIGHT_FRAME:].astype(np.float32) * np.float32(light)
+    if light != 1.0 or white_balance is not None:
+        gains = np.float32(light) * np.asarray(white_balance or (1.0, 1.0, 1.0), np.float32)
+        lit = frames[LIGHT_FRAME:].astype(np.float32) * gains
         frames = np.concatenate([frames[:LIGHT_FRAME], np.clip(np.rint(lit), 0, 255).astype(np.uint8)])
     base = {} if ours else BASELINE
     params = {"train_frames": train_frames, **base.get("backend_params", {}), **(backend or {})}
@@ -343,12 +355,16 @@ def run_clip(
 SHAKE_PX = 2.0
 
 
-def extra_passes(shake_px: float, grey: bool, light: float, cut: bool = True) -> dict[str, dict[str, Any]]:
+def extra_passes(
+    shake_px: float, grey: bool, light: float, cut: bool = True, white_balance: tuple[float, float, float] | None = None
+) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
     and with colour footage's shadow bounds (``grey``); the clips lit by ``light`` from frame
     ``LIGHT_FRAME`` on, the new exposure followed and not (``light`` other than 1); the clips cut
-    off above the knees, with people cut off by the frame looked for and not (``cut``).
+    off above the knees, with people cut off by the frame looked for and not (``cut``); the clips
+    whose white balance turns by ``white_balance`` from ``LIGHT_FRAME`` on, each channel followed
+    and the channels only together (not None).
     """
     out: dict[str, dict[str, Any]] = {}
     if cut:
@@ -357,6 +373,9 @@ def extra_passes(shake_px: float, grey: bool, light: float, cut: bool = True) ->
     if light != 1.0:
         out["lit"] = {"light": light}
         out["lit_unfollowed"] = {"light": light, "backend": {"exposure_step": 0.0}}
+    if white_balance is not None:
+        out["wb"] = {"white_balance": white_balance}
+        out["wb_unfollowed"] = {"white_balance": white_balance, "backend": {"white_balance_step": 0.0}}
     if shake_px > 0:
         out["shaken"] = {"shake_px": shake_px}
         out["shaken_unfollowed"] = {"shake_px": shake_px, "backend": {"shake": False}}
@@ -369,6 +388,8 @@ def extra_passes(shake_px: float, grey: bool, light: float, cut: bool = True) ->
 #: the light's gain of the lit pass (``--light``), and the frame it changes on
 LIGHT = 1.7
 LIGHT_FRAME = 50
+#: the gains of B, G and R of the white-balance pass (``--white-balance``), from ``LIGHT_FRAME`` on
+WHITE_BALANCE = (1.06, 1.0, 0.95)
 
 #: the issue's bar for each person's keypoint coverage (``person_clips_covered``)
 PERSON_COVERAGE = 0.9
@@ -438,6 +459,11 @@ def main(argv: list[str] | None = None) -> int:
         help=f"gain of the light from frame {LIGHT_FRAME} on in the lit pass (1: no lit pass)",
     )
     ap.add_argument("--no-cut", action="store_true", help="no cut pass")
+    ap.add_argument(
+        "--white-balance",
+        default=",".join(str(v) for v in WHITE_BALANCE),
+        help=f"gains of B,G,R from frame {LIGHT_FRAME} on in the white-balance pass ('1,1,1': no such pass)",
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -446,7 +472,10 @@ def main(argv: list[str] | None = None) -> int:
     cv2.setNumThreads(args.threads)
     splits = ("tune", "report") if args.clips == "all" else (args.clips,)
     methods = {"ours": True} if args.no_baseline else {"ours": True, "baseline": False}
-    passes = extra_passes(args.shake_px, not args.no_grey, args.light, not args.no_cut)
+    wb = tuple(float(v) for v in args.white_balance.split(","))
+    if len(wb) != 3 or min(wb) <= 0:
+        ap.error(f"--white-balance {args.white_balance!r}: give three positive gains B,G,R, e.g. 1.06,1,0.95")
+    passes = extra_passes(args.shake_px, not args.no_grey, args.light, not args.no_cut, None if wb == (1, 1, 1) else wb)
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
         "train_frames": args.train_frames,
@@ -484,6 +513,8 @@ def main(argv: list[str] | None = None) -> int:
             report[f"{k}_{m}"] = report[main_split][m][k]
     if "lit" in passes:
         report["light"] = args.light
+    if "wb" in passes:
+        report["white_balance"] = list(wb)
     if "shaken" in passes:
         report["shake_px"] = args.shake_px
         report["shake_err_px_median"] = report[main_split]["shaken"]["shake_err_px_median"]

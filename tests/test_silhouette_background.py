@@ -590,6 +590,54 @@ def test_a_steady_light_is_never_re_exposed_whatever_the_people_do():
         AdaptationConfig(exposure_step=1.0)
 
 
+def white_balance_stream(gains: tuple[float, float, float], white_balance_step: float) -> tuple[float, float, list]:
+    """The most of the room and the least of the person called foreground over 10 frames after the
+    camera's white balance changes by ``gains`` (B, G, R), a person in view, and what
+    ``follow_exposure`` applied.
+    """
+    rng = np.random.default_rng(7)
+    model = HorprasertBackground(adaptation=AdaptationConfig(white_balance_step=white_balance_step))
+    model.fit(np.stack([render(rng) for _ in range(30)]))
+    person, room, applied = [], [], []
+    for _ in range(10):
+        frame = render(rng, person_x=80.0, gains=gains)
+        applied.append(model.follow_exposure(frame))
+        labels = model.apply(frame)
+        model.update(frame, labels)
+        person.append(class_fractions(labels, person_mask(80.0))[FOREGROUND])
+        room.append(class_fractions(labels, ~person_mask(80.0))[FOREGROUND])
+    return max(room), min(person), applied
+
+
+@pytest.mark.parametrize("gains", [(1.06, 1.0, 0.95), (0.94, 1.0, 1.06)])
+def test_a_change_of_white_balance_is_followed_channel_by_channel_at_once(gains):
+    room, person, applied = white_balance_stream(gains, AdaptationConfig().white_balance_step)
+    # the brightness barely changes (under the exposure step): the colour balance is what is followed
+    assert applied[0] is not None and applied[1:] == [None] * 9
+    assert room < 0.01 and person > 0.98
+    # not followed: a slight cast all over turns a third of the room into foreground
+    room, person, applied = white_balance_stream(gains, 0.0)
+    assert applied == [None] * 10 and room > 0.25
+
+
+def test_a_steady_colour_balance_is_never_followed():
+    room, person, applied = white_balance_stream((1.0, 1.0, 1.0), AdaptationConfig().white_balance_step)
+    assert applied == [None] * 10 and room < 0.01 and person > 0.98
+    with pytest.raises(ValueError, match="white_balance_step"):
+        AdaptationConfig(white_balance_step=-0.1)
+
+
+@pytest.mark.skipif(not UT_CLIP.exists(), reason=f"{UT_CLIP} not found (the shared real data is absent)")
+def test_a_real_clip_whose_white_balance_turns_keeps_the_room_out_of_its_people():
+    frames, kp, vis = clip_with_keypoints()
+    cast = frames.astype(np.float32)
+    cast[50:] *= np.array([1.06, 1.0, 0.95], np.float32)
+    cast = np.clip(np.rint(cast), 0, 255).astype(np.uint8)
+    assert keypoints_inside(cast, kp, vis) > 0.95
+    followed, unfollowed = (people_share(cast, 50, white_balance_step=step) for step in (0.03, 0.0))
+    assert followed < 1.1 * people_share(frames, 50) and unfollowed > 2 * people_share(frames, 50)
+
+
 @pytest.mark.skipif(not UT_CLIP.exists(), reason=f"{UT_CLIP} not found (the shared real data is absent)")
 def test_a_real_clip_whose_light_is_switched_on_keeps_its_people_and_not_the_room():
     frames, kp, vis = clip_with_keypoints()

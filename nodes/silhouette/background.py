@@ -114,6 +114,9 @@ _EXPOSURE_SAMPLES = 4096
 _EXPOSURE_MIN_LEFT = 0.3
 #: the mean levels a sampled pixel's background may have: away from black and from saturation
 _EXPOSURE_LEVELS = (20.0, 235.0)
+#: the least level of a sample's background in every channel for the channels' own gains: a dark
+#: channel's ratio is mostly its noise
+_EXPOSURE_CHANNEL_LEVEL = 10.0
 # Bytes of float32 work memory per row block in the robust median pass.
 _BLOCK_BYTES = 64 * 1024 * 1024
 
@@ -223,6 +226,14 @@ class AdaptationConfig:
         changed), re-exposes the model at once (``HorprasertBackground.follow_exposure``): a
         change that sudden outruns any learning rate, and left alone it would make the whole room
         foreground for good. 0: never.
+    white_balance_step : float, default 0.03
+        A frame whose room's colour balance differs from the model's by more than this share (one
+        channel's gain over the three channels' together: a camera's automatic white balance
+        turning as someone in a coloured coat comes in, a lamp of another colour switched on)
+        re-exposes each channel of the model by its own gain. A cast that is slight but all over
+        shifts every pixel's chromaticity by about as much as the room's noise, too little for
+        the exposure step and too much for the learning rate, which learns only what stays
+        background. 0: the channels only together (``exposure_step``).
     """
 
     learning_rate: float = 0.05
@@ -230,6 +241,7 @@ class AdaptationConfig:
     shadow_learning_rate: float = 0.01
     update_every: int = 2
     exposure_step: float = 0.05
+    white_balance_step: float = 0.03
 
     def __post_init__(self) -> None:
         for name in ("learning_rate", "spread_learning_rate", "shadow_learning_rate"):
@@ -240,6 +252,8 @@ class AdaptationConfig:
             raise ValueError(f"update_every must be >= 1 frame, got {self.update_every}")
         if not 0.0 <= self.exposure_step < 1.0:
             raise ValueError(f"exposure_step must be in [0, 1) (0: never), got {self.exposure_step}")
+        if not 0.0 <= self.white_balance_step < 1.0:
+            raise ValueError(f"white_balance_step must be in [0, 1) (0: never), got {self.white_balance_step}")
 
     def rate(self, name: str) -> float:
         """The rate ``name`` (``learning_rate``, ``spread_learning_rate`` or ``shadow_learning_rate``)
@@ -1280,7 +1294,10 @@ class HorprasertBackground:
         times g. g is the median of frame over model brightness (sum of the channels) at a fixed
         sample of the room's pixels, those the last update's labels called foreground left out
         (all counted where that leaves too few: a change of light makes the whole room foreground
-        until it is followed). Call it on each frame of a stream before it is classified
+        until it is followed). Where a channel's own gain g_c (the median of its ratio, at the
+        samples where none of the model's channels is dark) differs from g by more than
+        ``AdaptationConfig.white_balance_step``, each channel is re-exposed by its g_c instead (a
+        change of white balance). Call it on each frame of a stream before it is classified
         (``apply_update`` and the node's subtractor do), not on training frames.
 
         Parameters
@@ -1291,7 +1308,8 @@ class HorprasertBackground:
         Returns
         -------
         float or None
-            The gain applied; None when the frame's exposure is the model's (or following is off).
+            The gain applied (of the three channels together); None when the frame's exposure and
+            colour balance are the model's (or following is off).
         """
         self._require_fitted()
         _check_frame(frame, self.shape)
@@ -1308,14 +1326,23 @@ class HorprasertBackground:
         if np.count_nonzero(keep) < _EXPOSURE_MIN_LEFT * idx.size:
             return None
         seen = b.astype(np.float32) + gr + r
-        model = self._mu[0].reshape(-1)[idx] + self._mu[1].reshape(-1)[idx] + self._mu[2].reshape(-1)[idx]
+        mu = self._mu.reshape(3, -1)[:, idx]
+        model = mu[0] + mu[1] + mu[2]
         g = float(np.median(seen[keep] / model[keep]))
-        if abs(np.log(g)) <= np.log1p(self.adaptation.exposure_step):
-            return None
-        self._mu *= np.float32(g)
-        if g > 1.0:
-            self._var *= np.float32(g * g)
-        self._still_ref *= np.float32(g)
+        gains = np.full(3, g, np.float32)
+        cast = False
+        if self.adaptation.white_balance_step > 0.0:
+            lit = keep & (mu.min(axis=0) >= _EXPOSURE_CHANNEL_LEVEL)
+            if np.count_nonzero(lit) >= _EXPOSURE_MIN_LEFT * idx.size:
+                gains = np.median(np.stack((b, gr, r))[:, lit] / mu[:, lit], axis=1).astype(np.float32)
+                cast = bool(np.abs(np.log(gains / g)).max() > np.log1p(self.adaptation.white_balance_step))
+        if not cast:
+            if abs(np.log(g)) <= np.log1p(self.adaptation.exposure_step):
+                return None
+            gains[:] = g
+        self._mu *= gains[:, None, None]
+        self._var *= np.maximum(gains, 1.0)[:, None, None] ** 2
+        self._still_ref *= gains[:, None]
         self._refresh_colour_terms(spread_changed=True)
         return g
 
