@@ -1316,8 +1316,9 @@ class HorprasertBackground:
         idx = self._exposure_idx
         if self.adaptation.exposure_step <= 0.0 or idx is None or idx.size == 0:
             return None
-        # one gather per channel: reductions over a last axis of 3 cost more than the rest here
-        b, gr, r = frame.reshape(-1)[self._exposure_bytes]
+        # one gather of the three channels: reductions over a last axis of 3 cost more than the rest here
+        channels = frame.reshape(-1)[self._exposure_bytes]  # (3, n) B, G, R
+        b, gr, r = channels
         keep = np.maximum(np.maximum(b, gr), r) < 250  # a saturated pixel says only that it got brighter
         if self._exposure_fg is not None:
             room = keep & ~self._exposure_fg
@@ -1332,10 +1333,16 @@ class HorprasertBackground:
         gains = np.full(3, g, np.float32)
         cast = False
         if self.adaptation.white_balance_step > 0.0:
+            step = np.log1p(self.adaptation.white_balance_step)
             lit = keep & (mu.min(axis=0) >= _EXPOSURE_CHANNEL_LEVEL)
-            if np.count_nonzero(lit) >= _EXPOSURE_MIN_LEFT * idx.size:
-                gains = np.median(np.stack((b, gr, r))[:, lit] / mu[:, lit], axis=1).astype(np.float32)
-                cast = bool(np.abs(np.log(gains / g)).max() > np.log1p(self.adaptation.white_balance_step))
+            frame_bgr = channels.astype(np.float32)
+            # the channels' mean gains first (two sums a channel): a steady colour balance stops here
+            rough = (frame_bgr @ lit) / np.maximum(mu @ lit, 1e-6)
+            if np.count_nonzero(lit) >= _EXPOSURE_MIN_LEFT * idx.size and (
+                np.abs(np.log(np.maximum(rough, 1e-6) / g)).max() > 0.5 * step
+            ):
+                gains = np.median(frame_bgr[:, lit] / mu[:, lit], axis=1).astype(np.float32)
+                cast = bool(np.abs(np.log(gains / g)).max() > step)
         if not cast:
             if abs(np.log(g)) <= np.log1p(self.adaptation.exposure_step):
                 return None
