@@ -233,7 +233,8 @@ class AdaptationConfig:
         re-exposes each channel of the model by its own gain. A cast that is slight but all over
         shifts every pixel's chromaticity by about as much as the room's noise, too little for
         the exposure step and too much for the learning rate, which learns only what stays
-        background. 0: the channels only together (``exposure_step``).
+        background. 0: the channels only together (``exposure_step``; with that 0, neither is
+        followed).
     """
 
     learning_rate: float = 0.05
