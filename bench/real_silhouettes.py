@@ -2,7 +2,7 @@
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
            [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7] [--no-cut]
-           [--white-balance 1.06,1,0.95]
+           [--white-balance 1.06,1,0.95] [--no-infrared]
            [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
@@ -90,6 +90,16 @@ step), through ours as it is (``*_wb``: each channel re-exposed by its own gain,
 (``*_wb_unfollowed``, as it was before): ``people_found_wb``, ``keypoint_coverage_wb``,
 ``extra_people_wb``, ``people_share_wb`` and the same ``_unfollowed``.
 
+A day/night camera turning to infrared mid-clip (a room getting dark): each clip again, its frames
+from frame 50 on grey and lit as the camera's own infrared lamps light a room (``sim.infrared``:
+brighter and flatter), through ours as it is (``*_ir``: the switch from colour to monochrome seen,
+``colour_switch``, and the background learnt again from the frames after it, which are held back
+meanwhile as a recording's first frames are) and without (``*_ir_unfollowed``, as it was before:
+the colour model kept): ``people_found_ir``, ``keypoint_coverage_ir``, ``extra_people_ir``,
+``people_share_ir`` and the same ``_unfollowed``; ``people_found_late_ir`` (and ``_unfollowed``):
+people found on the frames from frame 50 on alone; ``relearns_ir``: the switches seen (one per
+clip long enough to show one is right).
+
 The last stdout line is one JSON object with the figures: top level the report split's
 ``people_found``, ``keypoint_coverage`` (ours) and ``*_baseline``; per split and per clip below.
 """
@@ -112,8 +122,10 @@ import numpy as np
 
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.skeleton import JOINT_INDEX
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.nodes.silhouette.colour_switch import ColourSwitchConfig
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, process_frames, read_frames
 from counterpart.sim.camera_shake import shake_path, shaken
+from counterpart.sim.infrared import infrared_frames
 
 DATA = (
     Path(os.environ.get("COUNTERPART_SHARED_DATA") or Path(__file__).resolve().parents[2] / "shared" / "data")
@@ -287,6 +299,8 @@ def run_clip(
     cut: bool = False,
     backend: dict[str, Any] | None = None,
     white_balance: tuple[float, float, float] | None = None,
+    infrared: bool = False,
+    colour_switch: ColourSwitchConfig | None = None,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
 
@@ -297,7 +311,9 @@ def run_clip(
     come). ``light``: the light's gain from frame ``LIGHT_FRAME`` on (a light switched on or off).
     ``cut``: the clip cut off above the people's knees (:func:`cut_frames`). ``white_balance``: the
     gains of B, G and R from frame ``LIGHT_FRAME`` on (the camera's white balance turning).
-    ``backend``: subtractor parameters over ours (or the baseline's).
+    ``infrared``: the frames from ``LIGHT_FRAME`` on as a day/night camera's infrared picture
+    (``sim.infrared.infrared_frames``). ``backend``: subtractor parameters over ours (or the baseline's);
+    ``colour_switch``: the extractor's (None: its default).
     """
     frames = read_frames(path)
     ref = np.load(DATA / "keypoints" / f"{path.stem}.npz")
@@ -316,19 +332,27 @@ def run_clip(
         gains = np.float32(light) * np.asarray(white_balance or (1.0, 1.0, 1.0), np.float32)
         lit = frames[LIGHT_FRAME:].astype(np.float32) * gains
         frames = np.concatenate([frames[:LIGHT_FRAME], np.clip(np.rint(lit), 0, 255).astype(np.uint8)])
+    if infrared:
+        frames = np.concatenate([frames[:LIGHT_FRAME], infrared_frames(frames[LIGHT_FRAME:])])
     base = {} if ours else BASELINE
     params = {"train_frames": train_frames, **base.get("backend_params", {}), **(backend or {})}
     follow = params.get("shake", True) is not False
-    ex = SilhouetteExtractor(backend_params=params, tracker_params=base.get("tracker_params"))
+    ex = SilhouetteExtractor(
+        backend_params=params, tracker_params=base.get("tracker_params"), colour_switch=colour_switch
+    )
     t0 = time.perf_counter()
     ex.fit_background(list(frames[:train_frames]), robust=True)
     fit_s = time.perf_counter() - t0
     tot: dict[str, Any] = {"shake_err": []}
     proc_s = 0.0
+    # the frames as a recording's go through the graph: a switch to infrared is learnt again, from
+    # the frames after it held back meanwhile (time of the whole loop, refits included)
+    results = process_frames(ex, frames[:n], train_frames)
     for t in range(n):
         t0 = time.perf_counter()
-        r = ex.process(frames[t])
+        r = next(results)[1]
         proc_s += time.perf_counter() - t0
+        tot["relearns"] = tot.get("relearns", 0) + int(r.relearn)
         if t >= LIGHT_FRAME:
             tot["share_sum"] = tot.get("share_sum", 0.0) + float(np.count_nonzero(r.labels)) / r.labels.size
             tot["share_n"] = tot.get("share_n", 0) + 1
@@ -344,6 +368,8 @@ def run_clip(
             continue
         for key, v in score_frame(r.labels, r.people, kp[t], vis[t]).items():
             tot[key] = tot.get(key, 0) + v
+            if t >= LIGHT_FRAME and key in ("found", "scored"):
+                tot[f"{key}_late"] = tot.get(f"{key}_late", 0) + v
     tot.setdefault("collapsed", 0)
     tot["fit_s"] = fit_s
     tot["process_s"] = proc_s
@@ -356,7 +382,12 @@ SHAKE_PX = 2.0
 
 
 def extra_passes(
-    shake_px: float, grey: bool, light: float, cut: bool = True, white_balance: tuple[float, float, float] | None = None
+    shake_px: float,
+    grey: bool,
+    light: float,
+    cut: bool = True,
+    white_balance: tuple[float, float, float] | None = None,
+    infrared: bool = True,
 ) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
@@ -364,7 +395,8 @@ def extra_passes(
     ``LIGHT_FRAME`` on, the new exposure followed and not (``light`` other than 1); the clips cut
     off above the knees, with people cut off by the frame looked for and not (``cut``); the clips
     whose white balance turns by ``white_balance`` from ``LIGHT_FRAME`` on, each channel followed
-    and the channels only together (not None).
+    and the channels only together (not None); the clips turned infrared from ``LIGHT_FRAME`` on,
+    the background learnt again and not (``infrared``).
     """
     out: dict[str, dict[str, Any]] = {}
     if cut:
@@ -376,6 +408,9 @@ def extra_passes(
     if white_balance is not None:
         out["wb"] = {"white_balance": white_balance}
         out["wb_unfollowed"] = {"white_balance": white_balance, "backend": {"white_balance_step": 0.0}}
+    if infrared:
+        out["ir"] = {"infrared": True}
+        out["ir_unfollowed"] = {"infrared": True, "colour_switch": ColourSwitchConfig(frames=0)}
     if shake_px > 0:
         out["shaken"] = {"shake_px": shake_px}
         out["shaken_unfollowed"] = {"shake_px": shake_px, "backend": {"shake": False}}
@@ -421,6 +456,9 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "reference_reversed": round(s["reversed"] / max(s["scored"], 1), 4),
         "people_found_reference_ordered": round((s["found"] - s["found_reversed"]) / max(ordered, 1), 4),
         "missed_frames": s["scored"] - s["found"],
+        # from the frame the lit, white-balance and infrared passes change on
+        "people_found_late": round(s.get("found_late", 0) / max(s.get("scored_late", 0), 1), 4),
+        "relearns": s.get("relearns", 0),
         "misses": {c: s.get(f"miss_{c}", 0) for c in MISS_CAUSES},
         "fit_s": round(s["fit_s"] / len(rows), 3),
         "fps": round(s["frames"] / max(s["process_s"], 1e-9), 1),
@@ -459,6 +497,7 @@ def main(argv: list[str] | None = None) -> int:
         help=f"gain of the light from frame {LIGHT_FRAME} on in the lit pass (1: no lit pass)",
     )
     ap.add_argument("--no-cut", action="store_true", help="no cut pass")
+    ap.add_argument("--no-infrared", action="store_true", help="no infrared pass")
     ap.add_argument(
         "--white-balance",
         default=",".join(str(v) for v in WHITE_BALANCE),
@@ -475,7 +514,14 @@ def main(argv: list[str] | None = None) -> int:
     wb = tuple(float(v) for v in args.white_balance.split(","))
     if len(wb) != 3 or min(wb) <= 0:
         ap.error(f"--white-balance {args.white_balance!r}: give three positive gains B,G,R, e.g. 1.06,1,0.95")
-    passes = extra_passes(args.shake_px, not args.no_grey, args.light, not args.no_cut, None if wb == (1, 1, 1) else wb)
+    passes = extra_passes(
+        args.shake_px,
+        not args.no_grey,
+        args.light,
+        not args.no_cut,
+        None if wb == (1, 1, 1) else wb,
+        not args.no_infrared,
+    )
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
         "train_frames": args.train_frames,
@@ -515,6 +561,10 @@ def main(argv: list[str] | None = None) -> int:
         report["light"] = args.light
     if "wb" in passes:
         report["white_balance"] = list(wb)
+    if "ir" in passes:
+        for m in ("ir", "ir_unfollowed"):
+            report[f"people_found_late_{m}"] = report[main_split][m]["people_found_late"]
+        report["relearns_ir"] = report[main_split]["ir"]["relearns"]
     if "shaken" in passes:
         report["shake_px"] = args.shake_px
         report["shake_err_px_median"] = report[main_split]["shaken"]["shake_err_px_median"]

@@ -192,3 +192,48 @@ def test_opencv_threads_sets_the_process_pool_and_zero_leaves_it() -> None:
         assert cv2.getNumThreads() == 2
     finally:
         cv2.setNumThreads(before)
+
+
+def test_a_camera_turning_monochrome_mid_stream_is_learnt_again_and_its_frames_replayed(tmp_path: Path) -> None:
+    """A day/night camera turning to infrared (grey frames) in an empty room that two people then
+    walk into: the node sees the switch, learns the background again from the frames from there,
+    held back meanwhile as at the start (``replay_training``), and finds the people on grey frames
+    as on a grey stream's; with the switch not followed the colour model finds neither.
+    """
+    empty, switch = 40, 20
+    seq = two_person_sequence(n_frames=20, size=(120, 160), empty_frames=empty, shadow_factor=1.0)
+    folder = tmp_path / "frames_in"
+    folder.mkdir()
+    for i, f in enumerate(seq.frames):
+        grey = cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+        cv2.imwrite(str(folder / f"f{i:03d}.png"), f if i < switch else grey)
+    n = len(seq.frames)
+
+    def people(params: dict[str, Any], out: Path) -> tuple[list[dict[str, Any]], str]:
+        out.mkdir()
+        code, text = run_launch(
+            graph(out, f"folder:{folder}", {"train_frames": TRAIN, "replay_training": True, **params}), timeout=60
+        )
+        assert code == 0, text
+        frames, sils = records(out / "frames.jsonl"), records(out / "sil.jsonl")
+        assert [(r["seq"], r["stamp"]) for r in sils] == [(r["seq"], r["stamp"]) for r in frames] and len(sils) == n
+        return sils, text
+
+    sils, text = people({}, tmp_path / "followed")
+    # seen on the fifth grey frame, once
+    assert f"frame {switch + 4}: the camera switched to monochrome frames" in text
+    run_dir = Path(re.search(r"run directory (\S+)", text).group(1))
+    assert json.loads((run_dir / "stats" / "silhouette.json").read_text())["figures"]["relearns"] == 1
+    assert all(r["people"] == [] for r in sils[:empty])
+    # the two walkers on the grey frames, before they meet; the left one (dark red, high contrast in
+    # grey) within 2 px, as on a grey stream (test_mono8_frames_without_shadows_and_thinned_mask)
+    for r in sils[empty : empty + 6]:
+        k = r["seq"]
+        assert [(p["id"], p["side"]) for p in r["people"]] == [(0, "left"), (1, "right")], f"frame {k}"
+        x, y, w, h = truth_box(seq.person_masks[k, 0])
+        assert [abs(a - b) <= 2 for a, b in zip(r["people"][0]["bbox"], (x, y, w, h))] == [True] * 4, f"frame {k}"
+        assert r["people"][1]["height"] >= 0.6 * truth_box(seq.person_masks[k, 1])[3]
+    # not followed: the colour model finds all of the grey room changed, and no walker in it
+    kept, text = people({"colour_switch_frames": 0}, tmp_path / "kept")
+    assert "switched" not in text
+    assert not any(r["people"] for r in kept[empty : empty + 6])

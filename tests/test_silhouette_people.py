@@ -378,3 +378,32 @@ def test_people_cut_off_by_the_frames_bottom_edge_are_found_in_the_frame_continu
         assert (boxes[:, 1] + boxes[:, 3] == big.shape[0]).all()
     with pytest.raises(ValueError, match="below_frac"):
         PeopleDetector(below_frac=-0.1)
+
+
+@pytest.mark.parametrize(("scenario", "seed"), [("handshake", 0), ("conversation", 5)])
+def test_hinted_people_are_kept_out_of_the_fit_where_the_detector_finds_none(scenario: str, seed: int) -> None:
+    """The simulator's people, in view through the training frames and barely moving, which OpenCV's
+    detector does not find: the plain fit learns them as the room; with their boxes of the first
+    frame as hints (the people seen just before the background had to be learnt again) the room
+    around them is learnt, on the training frames and after.
+    """
+    from counterpart.sim.stream import open_stream
+
+    st = open_stream(scenario, seed=seed, frames=40)
+    frames, masks = zip(*((f, t.masks.any(axis=0)) for f, t in (st.renderer.render(i) for i in range(st.n_frames))))
+    frames, masks = np.stack(frames), np.stack(masks)
+    boxes = cv2.connectedComponentsWithStats(masks[0].view(np.uint8))[2][1:, :4]  # each person's box
+    assert len(boxes) >= 1
+
+    def fitted(hints: np.ndarray | None) -> tuple[list[float], list[float]]:
+        model = HorprasertBackground()
+        fit_around_people(model, frames[:20], hints=hints)
+        found = [model.apply(frames[k]) for k in (0, 19, 30)]
+        recall = [float((f != BACKGROUND)[masks[k]].mean()) for f, k in zip(found, (0, 19, 30))]
+        room = [float((f == FOREGROUND)[~masks[k]].mean()) for f, k in zip(found, (0, 19, 30))]
+        return recall, room
+
+    recall, _ = fitted(None)
+    assert max(recall[:2]) < 0.2  # the people learnt as the room, on the training frames
+    recall, room = fitted(boxes)
+    assert min(recall) > 0.9 and max(room) < 0.02

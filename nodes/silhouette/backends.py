@@ -134,6 +134,8 @@ class HorprasertSubtractor:
         except TypeError as exc:
             raise ValueError(f"horprasert: unknown sample_params parameter ({exc})") from None
         self.labels: np.ndarray | None = None
+        #: boxes (K, 4) of people known to stand in the first training frame (``fit_around_people``)
+        self.hints: np.ndarray | None = None
         self._unseen_fg: np.ndarray | None = None  # FOREGROUND where the fit filled the room in
         self._buffer: list[np.ndarray] = []
         self.fit_in_background = fit_in_background
@@ -165,6 +167,14 @@ class HorprasertSubtractor:
     @property
     def ready(self) -> bool:
         return self._model.is_fitted and self._fitting is None
+
+    @property
+    def colour_kind(self) -> tuple[bool, float]:
+        """Whether the fitted model is of monochrome footage, and its bound of such footage
+        (``ShadowConfig.mono_chroma_deg``, degrees); both are set by the fit alone, so no pending
+        update is waited for.
+        """
+        return self._model.monochrome_, self._model.shadows.mono_chroma_deg
 
     @property
     def fitting(self) -> bool:
@@ -203,7 +213,7 @@ class HorprasertSubtractor:
             self.shake.last, self._moving = None, None
         robust = self.robust if robust is None else robust
         if robust and self.people_aware:
-            fit_around_people(self.model, stack, detector=self.detector)
+            fit_around_people(self.model, stack, detector=self.detector, hints=self.hints)
         else:
             self.model.fit(stack, robust=robust)
         if self.samples is not None:

@@ -439,7 +439,7 @@ _CONFIGS: dict[str, type] = {
 }
 
 
-def chroma_spread_deg(image: np.ndarray, min_level: float = 20.0) -> float:
+def chroma_spread_deg(image: np.ndarray, min_level: float = 20.0, every: int = 7) -> float:
     """How far the colours of an image spread in chromaticity: the 90th percentile of the angle
     between each pixel's colour vector and the median direction, degrees.
 
@@ -449,6 +449,8 @@ def chroma_spread_deg(image: np.ndarray, min_level: float = 20.0) -> float:
         BGR pixels: a frame (H, W, 3) or a stack of them (N, H, W, 3).
     min_level : float, default=20.0
         Pixels whose mean level is under this are left out: near black, a colour's direction is noise.
+    every : int, default=7
+        Every this many-th pixel is looked at (1: all, for pixels already sampled).
 
     Returns
     -------
@@ -456,7 +458,7 @@ def chroma_spread_deg(image: np.ndarray, min_level: float = 20.0) -> float:
         Degrees; 0 for three equal channels (and for an image with no pixel bright enough), a
         few tenths for a grey image through a codec, several degrees for colour footage.
     """
-    c = np.asarray(image, np.float32).reshape(-1, 3)[::7]
+    c = np.asarray(image).reshape(-1, 3)[::every].astype(np.float32)
     c = c[c.mean(axis=1) >= min_level]
     if not len(c):
         return 0.0

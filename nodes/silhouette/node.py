@@ -16,7 +16,10 @@ a darker person there: the Horprasert model finds such footage monochrome, as it
 tinted video however it comes, and bounds its shadows and highlights tightly
 (``background.ShadowConfig.mono_min_shadow_brightness``); MOG2 and KNN detect no shadows on them.
 A frame of another size or encoding than the ones before (a camera restarted at a new resolution)
-starts the background model and the people afresh.
+starts the background model and the people afresh; so do bgr8 frames turning monochrome, or back to
+colour (``colour_switch_frames``: a day/night camera turning to infrared), the new model learnt with
+the people last seen kept out of it, and with ``replay_training`` the frames from the switch held
+back until it is learnt.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from counterpart.messages.silhouette import PersonShape
 
 from .backends import BACKEND_NAMES
 from .body_shadow import BodyShadowConfig
+from .colour_switch import ColourSwitchConfig
 from .people import PrefetchDetector
 from .pipeline import FrameResult, SilhouetteExtractor
 from .regions import Person
@@ -250,6 +254,16 @@ class Silhouette(Node):
         "open_px": Param(int, 3, "opening of the foreground mask (pixels, 0: none)", min=0, max=101),
         "close_px": Param(int, 7, "closing of the foreground mask (pixels, 0: none)", min=0, max=101),
         "fill_holes": Param(bool, True, "fill holes inside each region"),
+        "colour_switch_frames": Param(
+            int,
+            5,
+            "horprasert: frames in a row of the other kind than the background model, colour or "
+            "monochrome, after which the camera is taken to have switched (a day/night camera "
+            "turning to infrared as the room gets dark, and back) and the background is learnt "
+            "again from the frames from there, as at the start; 0: never",
+            min=0,
+            max=100_000,
+        ),
         "replay_training": Param(
             bool,
             False,
@@ -305,6 +319,7 @@ class Silhouette(Node):
             backend_params = {"detectShadows": False}
         camera = Camera.from_dict(p["camera"]) if p["camera"] else None
         return SilhouetteExtractor(
+            colour_switch=ColourSwitchConfig(frames=p["colour_switch_frames"]),
             backend=p["backend"],
             n_ctrl=p["n_ctrl"],
             min_area=p["min_area"] or None,
@@ -384,7 +399,21 @@ class Silhouette(Node):
             if len(self.held) >= self.p["train_frames"]:
                 self._release_held()
             return
-        self._publish(msg, self._extract(image, mono))
+        result = self._extract(image, mono)
+        if result.relearn:
+            self.tally("relearns")
+            self.log.warning(
+                "frame %d: the camera switched to %s frames (a day/night camera, or a cut in the recording): "
+                "learning the background again from them%s",
+                msg.seq,
+                "monochrome" if self.extractor.colour_switch.switched_to_mono else "colour",
+                ", this frame's and the next ones' people found once it is learnt" if self.replay else "",
+            )
+            if self.replay:
+                # held as the stream's first frames are: a new model learns from them, then they go out
+                self.held.append((msg, image, mono))
+                return
+        self._publish(msg, result)
 
     def _release_held(self) -> None:
         """Learn the background from the held frames (all of them, however few the stream gave),
@@ -394,7 +423,10 @@ class Silhouette(Node):
             return
         held, self.held = self.held, []
         mono = held[0][2]
-        self.extractor, self.key = self._new_extractor(mono), (held[0][1].shape[:2], mono)
+        if self._key_changed(held[0][1], mono):
+            self.extractor, self.key = self._new_extractor(mono), (held[0][1].shape[:2], mono)
+        # else the camera switched between colour and monochrome: its extractor was restarted, with
+        # the people it last saw as the new fit's hints
         if len(held) >= 2:
             self.extractor.fit_background([img for _, img, _ in held], robust=self.p["robust"])
             self.log.info("background learnt from %d frames", len(held))

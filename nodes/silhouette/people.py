@@ -178,8 +178,26 @@ def _confirmed(frames: np.ndarray, boxes: np.ndarray, scores: np.ndarray) -> tup
     return boxes[keep], scores[keep], moved[keep]
 
 
+def _with_hints(found: _Found, hints: np.ndarray) -> _Found:
+    """A frame's confirmed detections with the hinted boxes (K, 4) that none of them holds (IoU <
+    0.5) added as sure ones (score 1, moved: a still person whether or not found again).
+    """
+    boxes, scores, moved = found
+    new = hints[[all(box_iou(h, b) < 0.5 for b in boxes) for h in hints]]
+    return (
+        np.concatenate([boxes.reshape(-1, 4), new]).astype(np.int32),
+        np.concatenate([scores, np.ones(len(new), scores.dtype)]),
+        np.concatenate([moved, np.ones(len(new), bool)]),
+    )
+
+
 def _boxes_for(
-    frames: np.ndarray, j: int, found: dict[int, _Found], step: int, walkers: set[tuple[int, int]]
+    frames: np.ndarray,
+    j: int,
+    found: dict[int, _Found],
+    step: int,
+    walkers: set[tuple[int, int]],
+    hinted: frozenset[tuple[int, int]] = frozenset(),
 ) -> tuple[np.ndarray, np.ndarray]:
     """The boxes (K, 4) in which frame j is searched for people, and whether each holds a person
     standing still (K,) bool. They are the boxes detected within ``step`` frames of j, and the
@@ -187,6 +205,8 @@ def _boxes_for(
     still shows (fewer than ``_SAME_FRAC`` of the box's pixels changed by more than
     ``_MOVED_GREY``), unless the person walked off (``walkers``: (frame, index) of the boxes
     ``_walked_off`` holds). ``found``: detection frame -> (boxes (K, 4), scores (K,), moved (K,)).
+    ``hinted``: (frame, index) of the hints' boxes, carried to every frame: someone kicking or
+    waving changes much of their box while they stay in it.
     """
     out, still = [], []
     for k, (boxes, scores, moved) in found.items():
@@ -194,7 +214,7 @@ def _boxes_for(
             stays = (
                 (k, i) not in walkers
                 and _still_person(found, k, b, s, m)
-                and _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC
+                and ((k, i) in hinted or _changed_fraction(frames[j], frames[k], b) < _SAME_FRAC)
             )
             if abs(j - k) <= step or stays:
                 out.append(b)
@@ -310,6 +330,7 @@ def fit_around_people(
     detect_every: int = 5,
     box_grow: float = 0.05,
     person_grow: float = 0.03,
+    hints: np.ndarray | None = None,
 ) -> np.ndarray:
     """Fit ``model`` (robustly) on training frames in which people may stand still.
 
@@ -332,6 +353,12 @@ def fit_around_people(
     person_grow : float, default=0.03
         The second fit leaves out each person's pixels grown by this fraction of their box height
         (the model's outline of a person misses a blurred rim).
+    hints : ndarray of shape (K, 4) or None, default=None
+        Boxes (x, y, w, h) of people known to stand in the first frame, whatever the detector finds
+        (the people found just before the background had to be learnt again,
+        ``SilhouetteExtractor.restart_background``): sure detections of frame 0, taken for a still
+        person's and carried to every frame (the second fit then leaves out the pixels that are
+        theirs there, and learns the room in the rest of the box).
 
     Returns
     -------
@@ -346,6 +373,11 @@ def fit_around_people(
     step = max(1, int(detect_every))
     at = sorted(set(range(0, n, step)) | {n - 1})
     found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores, moved)
+    hinted: frozenset[tuple[int, int]] = frozenset()
+    if hints is not None and len(hints):
+        before = len(found[0][0])
+        found[0] = _with_hints(found[0], np.asarray(hints, np.int32).reshape(-1, 4))
+        hinted = frozenset((0, i) for i in range(before, len(found[0][0])))
     # The frames between are searched too, for someone the schedule's frames did not show: the
     # detector may find a still person on a frame or two only. Only those new boxes are kept (more
     # boxes of the people already found would only widen the holes in the room).
@@ -362,13 +394,15 @@ def fit_around_people(
         still = np.array([_still_person(every, k, *f) for f in zip(boxes, scores, moved)], bool)
         if still.any():
             found[k] = (boxes[still], scores[still], moved[still])
+    # a hinted person is never taken for a walker: someone kicking or dancing on the spot stays,
+    # though the pixels that tell a walker (those off the box's median) all move
     walkers = {
         (k, i)
         for k, (boxes, _, _) in found.items()
         for i, b in enumerate(boxes)
-        if _walked_off(stack, found, k, b, step)
+        if (k, i) not in hinted and _walked_off(stack, found, k, b, step)
     }
-    near = [_boxes_for(stack, j, found, step, walkers) for j in range(n)]
+    near = [_boxes_for(stack, j, found, step, walkers, hinted) for j in range(n)]
     if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)
         return np.zeros((n, h, w), bool)

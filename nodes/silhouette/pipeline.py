@@ -10,7 +10,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-from collections.abc import Callable, Iterator
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,6 +25,7 @@ from counterpart.body.image_sequence import ImageSequenceCapture
 from . import kernels
 from .backends import HorprasertSubtractor, make_subtractor
 from .background import BACKGROUND
+from .colour_switch import ColourSwitch, ColourSwitchConfig
 from .regions import Person, PersonTracker, clean_mask
 
 #: a standing adult, metres: the smallest person is one this tall at ``max_distance_m``
@@ -88,6 +90,9 @@ class FrameResult:
         FOREGROUND), or None if the backend gives none.
     ready : bool
         False while the background model is still learning (no people reported).
+    relearn : bool, default=False
+        The camera switched between colour and monochrome on this frame (``colour_switch``): the
+        background is learnt again from it and the next frames, and the people are new.
     """
 
     index: int
@@ -95,6 +100,7 @@ class FrameResult:
     people: list[Person]
     classes: np.ndarray | None
     ready: bool
+    relearn: bool = False
 
 
 class SilhouetteExtractor:
@@ -130,6 +136,11 @@ class SilhouetteExtractor:
     outlines : bool, default=True
         Fit each person's B-spline outline (False: people without ``ctrl``/``ref_point``, for callers
         that need the masks alone, such as learning an avatar; it saves most of the time).
+    colour_switch : ColourSwitchConfig or None, default=None
+        With the Horprasert backend: when the camera switches between colour and monochrome
+        frames (``colour_switch``, a day/night camera turning to infrared), the background is
+        learnt again (:meth:`restart_background`; ``FrameResult.relearn``). None:
+        ``ColourSwitchConfig()``; ``ColourSwitchConfig(frames=0)``: never.
 
     Raises
     ------
@@ -152,6 +163,7 @@ class SilhouetteExtractor:
         backend_params: dict[str, Any] | None = None,
         tracker_params: dict[str, Any] | None = None,
         outlines: bool = True,
+        colour_switch: ColourSwitchConfig | None = None,
     ) -> None:
         if n_ctrl < 4:
             raise ValueError(f"n_ctrl must be >= 4 control points, got {n_ctrl}")
@@ -181,6 +193,10 @@ class SilhouetteExtractor:
             raise ValueError(f"tracker_params: unknown parameter ({exc})") from None
         self._index = 0
         self._auto_size: tuple[int, int] | None = None
+        self.colour_switch = ColourSwitch(colour_switch)
+        #: the people's boxes (K, 4) of the last frames, as many as a switch takes to be seen: the
+        #: oldest is of the last frame before it, the hints of the background learnt again
+        self._recent_boxes: deque[np.ndarray] = deque(maxlen=max(1, self.colour_switch.config.frames))
 
     def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> SilhouetteExtractor:
         """Train the Horprasert model now (e.g. on the first seconds of a recording).
@@ -216,6 +232,23 @@ class SilhouetteExtractor:
         """Forget the people (new ids from 0); the background model is kept."""
         self.tracker.reset()
 
+    def restart_background(self, hints: np.ndarray | None = None) -> None:
+        """Forget the background model and the people: a new model of the same parameters learns
+        from the next frames (its ``train_frames``, or :meth:`fit_background`), and ids start at 0.
+
+        Parameters
+        ----------
+        hints : ndarray of shape (K, 4) or None, default=None
+            Boxes (x, y, w, h) of people standing in the first of those frames (the Horprasert
+            model's people-aware fit learns the room around them, ``people.fit_around_people``).
+        """
+        self.subtractor = make_subtractor(self.backend, **self.backend_params)
+        if isinstance(self.subtractor, HorprasertSubtractor):
+            self.subtractor.hints = hints
+        self.tracker.reset()
+        self.colour_switch.reset()
+        self._recent_boxes.clear()
+
     def learn(self, frame: np.ndarray) -> FrameResult:
         """Feed one frame to the background model only: no clean-up, no people, no tracks (a stream's
         first frames, while an online backend is still warming up).
@@ -246,8 +279,18 @@ class SilhouetteExtractor:
         Returns
         -------
         FrameResult
-            The frame's labels and people (none while the background model is not ready).
+            The frame's labels and people (none while the background model is not ready); on a
+            switch of the camera between colour and monochrome (``colour_switch``) none, with
+            ``relearn``, and this frame is the new model's first training frame.
         """
+        sub = self.subtractor
+        relearn = (
+            isinstance(sub, HorprasertSubtractor) and sub.ready and self.colour_switch.update(frame, *sub.colour_kind)
+        )
+        if relearn:
+            # the people of the last frame before the switch stand where they stood as it began
+            full = len(self._recent_boxes) == self._recent_boxes.maxlen
+            self.restart_background(self._recent_boxes[0] if full else None)
         fg = self.subtractor.apply(frame)
         classes = self.subtractor.labels
         if not self.shadows and classes is not None:
@@ -255,7 +298,7 @@ class SilhouetteExtractor:
         index = self._index
         self._index += 1
         if not self.subtractor.ready:
-            return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], classes, False)
+            return FrameResult(index, np.zeros(frame.shape[:2], np.int32), [], classes, False, relearn)
         if self.min_area is None and self._auto_size != frame.shape[:2]:
             self._auto_size = frame.shape[:2]
             self.tracker.min_area = person_min_area(frame.shape[1], frame.shape[0], self.camera, self.max_distance_m)
@@ -264,6 +307,7 @@ class SilhouetteExtractor:
         labels, people = self.tracker.update(mask)
         if self.outlines:
             people = [self._with_spline(labels, p) for p in people]
+        self._recent_boxes.append(np.array([p.bbox for p in people], np.int32).reshape(-1, 4))
         return FrameResult(index, labels, people, classes, True)
 
     def _with_spline(self, labels: np.ndarray, p: Person) -> Person:
@@ -411,7 +455,8 @@ def iter_video(
 
     With the Horprasert backend the background is first fitted (robustly: people may be in view)
     on the first ``train_frames`` frames, then the video is read again from its first frame, so
-    every frame gets a result.
+    every frame gets a result; where the camera switches between colour and monochrome it is
+    fitted again on the frames from there (:func:`process_frames`).
 
     Parameters
     ----------
@@ -457,20 +502,77 @@ def iter_video(
         cap.release()
         cap = _open_video(path)
     n = 0
-    try:
-        for _ in range(start):
-            if not cap.grab():
-                return
+
+    def frames() -> Iterator[np.ndarray]:
+        nonlocal n
         while max_frames is None or n < max_frames:
             ok, frame = cap.read()
             if not ok:
                 break
-            yield frame, extractor.process(frame)
             n += 1
+            yield frame
+
+    try:
+        for _ in range(start):
+            if not cap.grab():
+                return
+        yield from process_frames(extractor, frames(), train_frames)
     finally:
         cap.release()
     if n == 0:
         raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
+
+
+def process_frames(
+    extractor: SilhouetteExtractor, frames: Iterable[np.ndarray], train_frames: int = 30
+) -> Iterator[tuple[np.ndarray, FrameResult]]:
+    """Yield each frame with the extractor's result, in order, learning the background again where
+    the camera switches between colour and monochrome (``FrameResult.relearn``): that frame and the
+    ``train_frames - 1`` after it are held back, the background is fitted on them
+    (:meth:`SilhouetteExtractor.fit_background`, robustly) and they are processed then, so that
+    they get the people of the new model, as a recording's first frames do.
+
+    Parameters
+    ----------
+    extractor : SilhouetteExtractor
+        The extractor, its background already fitted (or an online backend).
+    frames : iterable of ndarray of shape (H, W, 3), dtype uint8
+        BGR frames.
+    train_frames : int, default=30
+        Frames the background is fitted on again after a switch.
+
+    Yields
+    ------
+    frame : ndarray of shape (H, W, 3), dtype uint8
+        BGR frame.
+    result : FrameResult
+        Its result; the first frame after a switch has ``relearn``.
+    """
+    held: list[np.ndarray] = []
+    for frame in frames:
+        if held:
+            held.append(frame)
+            if len(held) >= train_frames:
+                yield from _refitted(extractor, held)
+                held = []
+            continue
+        result = extractor.process(frame)
+        if result.relearn:
+            held = [frame]
+            continue
+        yield frame, result
+    yield from _refitted(extractor, held)
+
+
+def _refitted(extractor: SilhouetteExtractor, held: list[np.ndarray]) -> Iterator[tuple[np.ndarray, FrameResult]]:
+    """The held frames processed after a fit on them (the first marked ``relearn``); with fewer
+    than 2 (a stream that ended) only learnt, without people.
+    """
+    if len(held) >= 2:
+        extractor.fit_background(held, robust=True)
+    for i, frame in enumerate(held):
+        result = extractor.process(frame) if len(held) >= 2 else extractor.learn(frame)
+        yield frame, dataclasses.replace(result, relearn=True) if i == 0 else result
 
 
 def _save_people(
