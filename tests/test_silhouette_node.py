@@ -128,6 +128,18 @@ def test_lockstep_one_silhouettes_per_frame_people_match_truth(tmp_path: Path, s
     assert figures["fit_ms"] > 0
 
 
+def assert_grey_walkers(sils: list[dict[str, Any]], seq: SyntheticSequence) -> None:
+    """The two walkers of ``seq`` on grey frames, before they meet: the left one (dark red, high
+    contrast in grey) within 2 px of the truth's box, the right one at least 0.6 of its height.
+    """
+    for r in sils:
+        k = r["seq"]
+        assert [(p["id"], p["side"]) for p in r["people"]] == [(0, "left"), (1, "right")], f"frame {k}"
+        x, y, w, h = truth_box(seq.person_masks[k, 0])
+        assert [abs(a - b) <= 2 for a, b in zip(r["people"][0]["bbox"], (x, y, w, h))] == [True] * 4, f"frame {k}"
+        assert r["people"][1]["height"] >= 0.6 * truth_box(seq.person_masks[k, 1])[3]
+
+
 def test_mono8_frames_without_shadows_and_thinned_mask(tmp_path: Path) -> None:
     # grey frames: darker people and shadows look alike, so this scene has no cast shadows
     seq = two_person_sequence(n_frames=N - EMPTY_FRAMES, size=(120, 160), empty_frames=EMPTY_FRAMES, shadow_factor=1.0)
@@ -142,13 +154,7 @@ def test_mono8_frames_without_shadows_and_thinned_mask(tmp_path: Path) -> None:
     assert all(r["people"] == [] for r in sils[:EMPTY_FRAMES])
     # the mask only on every 4th seq; an empty array otherwise
     assert [r["seq"] for r in sils if r["labels"] != []] == list(range(0, N, 4))
-    # the two walkers, before they meet; the left one (dark red, high contrast in grey) within 2 px
-    for r in sils[EMPTY_FRAMES : EMPTY_FRAMES + 10]:
-        k = r["seq"]
-        assert [(p["id"], p["side"]) for p in r["people"]] == [(0, "left"), (1, "right")], f"frame {k}"
-        x, y, w, h = truth_box(seq.person_masks[k, 0])
-        assert [abs(a - b) <= 2 for a, b in zip(r["people"][0]["bbox"], (x, y, w, h))] == [True] * 4, f"frame {k}"
-        assert r["people"][1]["height"] >= 0.6 * truth_box(seq.person_masks[k, 1])[3]
+    assert_grey_walkers(sils[EMPTY_FRAMES : EMPTY_FRAMES + 10], seq)
 
 
 def test_unknown_backend_refused_before_start_naming_it(tmp_path: Path, scene) -> None:
@@ -225,14 +231,8 @@ def test_a_camera_turning_monochrome_mid_stream_is_learnt_again_and_its_frames_r
     run_dir = Path(re.search(r"run directory (\S+)", text).group(1))
     assert json.loads((run_dir / "stats" / "silhouette.json").read_text())["figures"]["relearns"] == 1
     assert all(r["people"] == [] for r in sils[:empty])
-    # the two walkers on the grey frames, before they meet; the left one (dark red, high contrast in
-    # grey) within 2 px, as on a grey stream (test_mono8_frames_without_shadows_and_thinned_mask)
-    for r in sils[empty : empty + 6]:
-        k = r["seq"]
-        assert [(p["id"], p["side"]) for p in r["people"]] == [(0, "left"), (1, "right")], f"frame {k}"
-        x, y, w, h = truth_box(seq.person_masks[k, 0])
-        assert [abs(a - b) <= 2 for a, b in zip(r["people"][0]["bbox"], (x, y, w, h))] == [True] * 4, f"frame {k}"
-        assert r["people"][1]["height"] >= 0.6 * truth_box(seq.person_masks[k, 1])[3]
+    # the two walkers on the grey frames, before they meet, as on a grey stream's
+    assert_grey_walkers(sils[empty : empty + 6], seq)
     # not followed: the colour model finds all of the grey room changed, and no walker in it
     kept, text = people({"colour_switch_frames": 0}, tmp_path / "kept")
     assert "switched" not in text
