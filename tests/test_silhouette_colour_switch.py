@@ -73,7 +73,7 @@ def test_frames_are_told_monochrome_or_colour_only_when_clear(handshake):
 
 def test_the_switch_is_taken_on_the_fifth_clear_frame_in_a_row(handshake):
     colour, mono = handshake[0][10], grey(handshake[0][10:11])[0]
-    sw = ColourSwitch()
+    sw = ColourSwitch(ColourSwitchConfig(every=1))
     assert [sw.update(mono, False, 1.0) for _ in range(4)] == [False] * 4
     assert sw.update(colour, False, 1.0) is False  # one frame of the model's kind starts the count again
     assert [sw.update(mono, False, 1.0) for _ in range(5)] == [False] * 4 + [True]
@@ -81,22 +81,29 @@ def test_the_switch_is_taken_on_the_fifth_clear_frame_in_a_row(handshake):
     # back to colour, against a monochrome model
     assert [sw.update(colour, True, 1.0) for _ in range(5)] == [False] * 4 + [True]
     assert sw.switched_to_mono is False
-    # off, and against a model that is never monochrome (its bound 0)
+    # the default looks at every third frame of the model's kind, then at every frame: the switch
+    # is taken 5 to 7 frames after it came
+    sw = ColourSwitch()
+    assert not any(sw.update(colour, False, 1.0) for _ in range(7))
+    taken = [sw.update(mono, False, 1.0) for _ in range(8)]
+    assert taken.count(True) == 1 and 4 <= taken.index(True) <= 6
     assert not any(ColourSwitch(ColourSwitchConfig(frames=0)).update(mono, False, 1.0) for _ in range(10))
     assert not any(ColourSwitch().update(mono, False, 0.0) for _ in range(10))
     with pytest.raises(ValueError, match="frames"):
         ColourSwitchConfig(frames=-1)
     with pytest.raises(ValueError, match="margin"):
         ColourSwitchConfig(margin=0.5)
+    with pytest.raises(ValueError, match="every"):
+        ColourSwitchConfig(every=0)
 
 
 def test_a_room_turning_infrared_is_learnt_again_and_its_people_found(handshake):
     frames, masks = handshake
     ir = np.concatenate([frames[:SWITCH], infrared_frames(frames[SWITCH:])])
     relearns, labels = run(ir)
-    # seen on the fifth infrared frame, once
-    assert relearns == [SWITCH + 4]
-    late = slice(SWITCH + 5, None)  # the frames the new model was learnt from and those after
+    # seen once, on the fifth to seventh infrared frame
+    assert len(relearns) == 1 and SWITCH + 4 <= relearns[0] <= SWITCH + 6
+    late = slice(SWITCH + 7, None)  # the frames the new model was learnt from and those after
     after = np.median(iou(labels, masks)[late])
     # as well as on footage infrared from the first frame (brightness alone tells people there)
     assert after > np.median(iou(run(infrared_frames(frames))[1], masks)[late]) - 0.15
@@ -113,8 +120,10 @@ def test_a_room_turning_back_to_colour_is_learnt_again(handshake):
     frames, masks = handshake
     back = np.concatenate([infrared_frames(frames[:SWITCH]), frames[SWITCH:]])
     relearns, labels = run(back)
-    assert relearns == [SWITCH + 4]
-    assert np.median(iou(labels, masks)[SWITCH + 5 :]) > 0.75
+    assert len(relearns) == 1 and SWITCH + 4 <= relearns[0] <= SWITCH + 6
+    # the infrared model kept finds the colour room changed, not the people
+    after = np.median(iou(labels, masks)[SWITCH + 7 :])
+    assert after > 0.6 and after > np.median(iou(run(back, ColourSwitchConfig(frames=0))[1], masks)[SWITCH + 7 :]) + 0.4
 
 
 @pytest.mark.skipif(not UT_CLIP.exists(), reason=f"{UT_CLIP} not found (the shared real data is absent)")

@@ -226,8 +226,9 @@ def test_a_camera_turning_monochrome_mid_stream_is_learnt_again_and_its_frames_r
         return sils, text
 
     sils, text = people({}, tmp_path / "followed")
-    # seen on the fifth grey frame, once
-    assert f"frame {switch + 4}: the camera switched to monochrome frames" in text
+    # seen once, on the fifth to seventh grey frame
+    seen = [int(k) for k in re.findall(r"frame (\d+): the camera switched to monochrome frames", text)]
+    assert len(seen) == 1 and switch + 4 <= seen[0] <= switch + 6, text
     run_dir = Path(re.search(r"run directory (\S+)", text).group(1))
     assert json.loads((run_dir / "stats" / "silhouette.json").read_text())["figures"]["relearns"] == 1
     assert all(r["people"] == [] for r in sils[:empty])

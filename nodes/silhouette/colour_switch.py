@@ -21,8 +21,7 @@ import numpy as np
 
 from .background import chroma_spread_deg
 
-#: pixels of a frame looked at (a regular grid): the spread of a thousand pixels is steady, and
-#: the look costs a few per cent of a frame's work
+#: pixels of a frame looked at (a regular grid): the spread of a thousand pixels is steady
 _SAMPLE_PIXELS = 1_000
 #: share of the sampled pixels that must be bright enough to have a colour (``chroma_spread_deg``'s
 #: ``min_level``): a dark or fading frame tells neither
@@ -40,6 +39,10 @@ class ColourSwitchConfig:
         Frames in a row of the other kind than the background model before the switch is taken
         (a sixth of a second at 30 fps: the few frames a camera takes to switch, and no single
         odd frame); 0: never.
+    every : int, default=3
+        While the frames are of the model's kind, only every this many-th is looked at (the look
+        costs a few per cent of a frame's work otherwise); from one of the other kind on, every
+        frame, so the switch is taken ``frames`` to ``frames + every - 1`` frames after it came (>= 1).
     margin : float, default=2.0
         How far a frame's spread in chromaticity must lie from the model's bound b
         (``ShadowConfig.mono_chroma_deg``, degrees) to tell its kind: monochrome under b / margin,
@@ -50,15 +53,18 @@ class ColourSwitchConfig:
     Raises
     ------
     ValueError
-        For ``frames`` < 0 or ``margin`` < 1.
+        For ``frames`` < 0, ``margin`` < 1 or ``every`` < 1.
     """
 
     frames: int = 5
     margin: float = 2.0
+    every: int = 3
 
     def __post_init__(self) -> None:
         if self.frames < 0:
             raise ValueError(f"colour switch frames must be >= 0 (0: never), got {self.frames}")
+        if self.every < 1:
+            raise ValueError(f"colour switch every must be >= 1, got {self.every}")
         if self.margin < 1.0:
             raise ValueError(f"colour switch margin must be >= 1, got {self.margin}")
 
@@ -109,6 +115,8 @@ class ColourSwitch:
         self.config = config or ColourSwitchConfig()
         #: frames in a row of the other kind than the model so far
         self.run = 0
+        #: frames since the last look, while the run is 0
+        self._since = 0
         #: the kind of frames the last switch was to: True monochrome, False colour (None: none yet)
         self.switched_to_mono: bool | None = None
 
@@ -129,10 +137,16 @@ class ColourSwitch:
         -------
         bool
             True on the ``config.frames``-th frame in a row of the other kind (then the count
-            starts again); False otherwise, and always with ``config.frames`` 0.
+            starts again); False otherwise (and on the frames not looked at, ``config.every``),
+            and always with ``config.frames`` 0.
         """
         if self.config.frames == 0 or mono_deg <= 0.0:
             return False
+        if self.run == 0:
+            self._since += 1
+            if self._since < self.config.every:
+                return False
+        self._since = 0
         kind = frame_kind(frame, mono_deg, self.config.margin)
         if kind is None or kind == model_mono:
             # an undecided frame breaks the run too: the switch is taken on clear frames only
@@ -148,3 +162,4 @@ class ColourSwitch:
     def reset(self) -> None:
         """Forget the run (a new background model); ``switched_to_mono`` stays."""
         self.run = 0
+        self._since = 0

@@ -64,6 +64,9 @@ _STILL_SCORE = 0.75
 #: how far below the frame people cut off by its bottom edge are looked for, as a fraction of its
 #: height (``PeopleDetector``'s ``below_frac``)
 CUT_OFF_BELOW = 0.8
+#: the largest share of the frame hinted boxes may cover: more is a whole room taken for people (a
+#: model that no longer fitted the room), and carried to every frame it would leave too little room
+_MAX_HINTED_SHARE = 0.5
 #: one frame's confirmed detections: boxes (K, 4), scores (K,), moved (K,) bool (``_confirmed``)
 _Found = tuple[np.ndarray, np.ndarray, np.ndarray]
 
@@ -358,7 +361,8 @@ def fit_around_people(
         (the people found just before the background had to be learnt again,
         ``SilhouetteExtractor.restart_background``): sure detections of frame 0, taken for a still
         person's and carried to every frame (the second fit then leaves out the pixels that are
-        theirs there, and learns the room in the rest of the box).
+        theirs there, and learns the room in the rest of the box); none where together they cover
+        over ``_MAX_HINTED_SHARE`` of the frame.
 
     Returns
     -------
@@ -374,7 +378,7 @@ def fit_around_people(
     at = sorted(set(range(0, n, step)) | {n - 1})
     found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores, moved)
     hinted: frozenset[tuple[int, int]] = frozenset()
-    if hints is not None and len(hints):
+    if hints is not None and len(hints) and box_mask((h, w), np.asarray(hints)).mean() <= _MAX_HINTED_SHARE:
         before = len(found[0][0])
         found[0] = _with_hints(found[0], np.asarray(hints, np.int32).reshape(-1, 4))
         hinted = frozenset((0, i) for i in range(before, len(found[0][0])))

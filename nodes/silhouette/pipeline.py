@@ -28,6 +28,9 @@ from .background import BACKGROUND
 from .colour_switch import ColourSwitch, ColourSwitchConfig
 from .regions import Person, PersonTracker, clean_mask
 
+#: frames before a switch between colour and monochrome whose people's boxes together are the
+#: hints of the background learnt again (a person the model missed on one is found on another)
+HINT_FRAMES = 5
 #: a standing adult, metres: the smallest person is one this tall at ``max_distance_m``
 PERSON_HEIGHT_M = 1.7
 #: a person's region over the square of their height: about 0.4 h wide, filling 60% of that box
@@ -194,9 +197,10 @@ class SilhouetteExtractor:
         self._index = 0
         self._auto_size: tuple[int, int] | None = None
         self.colour_switch = ColourSwitch(colour_switch)
-        #: the people's boxes (K, 4) of the last frames, as many as a switch takes to be seen: the
-        #: oldest is of the last frame before it, the hints of the background learnt again
-        self._recent_boxes: deque[np.ndarray] = deque(maxlen=max(1, self.colour_switch.config.frames))
+        #: the people's boxes (K, 4) of the last frames: as many as a switch can take to be seen,
+        #: and ``HINT_FRAMES`` before them, whose boxes are the hints of the background learnt again
+        sw = self.colour_switch.config
+        self._recent_boxes: deque[np.ndarray] = deque(maxlen=sw.frames + sw.every - 1 + HINT_FRAMES)
 
     def fit_background(self, frames: np.ndarray | list[np.ndarray], robust: bool = True) -> SilhouetteExtractor:
         """Train the Horprasert model now (e.g. on the first seconds of a recording).
@@ -288,9 +292,11 @@ class SilhouetteExtractor:
             isinstance(sub, HorprasertSubtractor) and sub.ready and self.colour_switch.update(frame, *sub.colour_kind)
         )
         if relearn:
-            # the people of the last frame before the switch stand where they stood as it began
-            full = len(self._recent_boxes) == self._recent_boxes.maxlen
-            self.restart_background(self._recent_boxes[0] if full else None)
+            # the people of the last frames before the switch stand where they stood as it began
+            before = list(self._recent_boxes)[
+                : max(0, len(self._recent_boxes) - (self._recent_boxes.maxlen - HINT_FRAMES))
+            ]
+            self.restart_background(np.concatenate(before) if before else None)
         fg = self.subtractor.apply(frame)
         classes = self.subtractor.labels
         if not self.shadows and classes is not None:
