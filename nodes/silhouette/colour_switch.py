@@ -39,16 +39,16 @@ class ColourSwitchConfig:
         Frames in a row of the other kind than the background model before the switch is taken
         (a sixth of a second at 30 fps: the few frames a camera takes to switch, and no single
         odd frame); 0: never.
-    every : int, default=3
-        While the frames are of the model's kind, only every this many-th is looked at (the look
-        costs a few per cent of a frame's work otherwise); from one of the other kind on, every
-        frame, so the switch is taken ``frames`` to ``frames + every - 1`` frames after it came (>= 1).
     margin : float, default=2.0
         How far a frame's spread in chromaticity must lie from the model's bound b
         (``ShadowConfig.mono_chroma_deg``, degrees) to tell its kind: monochrome under b / margin,
         colour from b * margin on, neither between (>= 1). A drab colour scene spreads little more
         than b on some frames, a grey one through a codec a few tenths of a degree: the model learnt
         again from either is of the kind the frames told, so it never switches straight back.
+    every : int, default=3
+        While the frames are of the model's kind, only every this many-th is looked at (the look
+        costs a few per cent of a frame's work otherwise); from one of the other kind on, every
+        frame, so the switch is taken ``frames`` to ``frames + every - 1`` frames after it came (>= 1).
 
     Raises
     ------
