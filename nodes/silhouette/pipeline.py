@@ -292,11 +292,7 @@ class SilhouetteExtractor:
             isinstance(sub, HorprasertSubtractor) and sub.ready and self.colour_switch.update(frame, *sub.colour_kind)
         )
         if relearn:
-            # the people of the last frames before the switch stand where they stood as it began
-            before = list(self._recent_boxes)[
-                : max(0, len(self._recent_boxes) - (self._recent_boxes.maxlen - HINT_FRAMES))
-            ]
-            self.restart_background(np.concatenate(before) if before else None)
+            self.restart_background(self._hints())
         fg = self.subtractor.apply(frame)
         classes = self.subtractor.labels
         if not self.shadows and classes is not None:
@@ -315,6 +311,14 @@ class SilhouetteExtractor:
             people = [self._with_spline(labels, p) for p in people]
         self._recent_boxes.append(np.array([p.bbox for p in people], np.int32).reshape(-1, 4))
         return FrameResult(index, labels, people, classes, True)
+
+    def _hints(self) -> np.ndarray | None:
+        """The people's boxes (K, 4) of the ``HINT_FRAMES`` frames before those a switch can take to
+        be seen (fewer after a short stream; None without any): they stand where they stood as it began.
+        """
+        recent = list(self._recent_boxes)
+        before = recent[: max(0, len(recent) - (self._recent_boxes.maxlen - HINT_FRAMES))]
+        return np.concatenate(before) if before else None
 
     def _with_spline(self, labels: np.ndarray, p: Person) -> Person:
         x, y, w, h = p.bbox
