@@ -4,7 +4,9 @@ the people in it.
 Focal length, tilt, roll and height above the ground from the heads and feet of the upright people
 (``counterpart.apps.calibration.calibrate_video``), printed with their uncertainty (one standard
 deviation); the file is a calibration every node and command that takes a camera reads
-(``calibration.file``, ``counterpart demo --camera``, ``counterpart track --camera``). Progress goes
+(``calibration.file``, ``counterpart demo --camera``, ``counterpart track --camera``). Whether the
+graph's calibration node would use the estimate itself (``graph_would_use``) is printed and in the
+summary. Progress goes
 to stderr; the last stdout line is a JSON summary. Exit code 0 on success, 2 on bad input (or too
 few people seen), 130 when interrupted.
 """
@@ -35,7 +37,7 @@ def main(args: argparse.Namespace) -> int:
 
     from counterpart.nodes.calibration.estimate import CalibrationConfig
 
-    from .calibration import calibrate_video, camera_file_text
+    from .calibration import calibrate_video, camera_file_text, graph_would_use
 
     if not positive(args, ("train_frames", "max_frames"), "calibrate"):
         return 2
@@ -56,7 +58,16 @@ def main(args: argparse.Namespace) -> int:
         with open(args.out, "w", encoding="utf-8") as f:
             f.write(text)
         print(f"[calibrate] {est.describe()}", file=sys.stderr, flush=True)
-        return {**summary, "estimate": est.summary(), "out": args.out}
+        used = graph_would_use(est)
+        if not used:
+            print(
+                "[calibrate] not sure enough for the graph's calibration node, which would keep its default camera "
+                "(more frames, people walking in depth, or the room's straight lines in view narrow it); the file "
+                "holds the estimate all the same",
+                file=sys.stderr,
+                flush=True,
+            )
+        return {**summary, "estimate": est.summary(), "graph_would_use": used, "out": args.out}
 
     return run_offline("calibrate", args.out, work)
 

@@ -17,6 +17,7 @@ from counterpart.body.camera import Camera
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people
+from counterpart.nodes.calibration.smooth import credible
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]
@@ -98,6 +99,34 @@ def calibrate_video(
     return est, {"n_frames": n, "observations": len(obs), "fps": fps, "frame_size": list(shape)}
 
 
+def graph_would_use(est: CameraEstimate) -> bool:
+    """Whether the calibration node, with its default bounds, would publish this estimate (moving
+    the graph's camera to it) rather than keep the default camera.
+
+    Parameters
+    ----------
+    est : CameraEstimate
+        The estimate.
+
+    Returns
+    -------
+    bool
+        ``counterpart.nodes.calibration.smooth.credible`` with the node's default parameters.
+    """
+    from counterpart.nodes.calibration.node import Calibration
+
+    p = {name: param.default for name, param in Calibration.params.items()}
+    return credible(
+        est,
+        p["max_height_std"],
+        p["max_focal_std"],
+        p["max_tilt_std_deg"],
+        p["min_depth_spread"],
+        p["min_horizon_segments"],
+        (p["max_split_height"], p["max_split_tilt_deg"], p["max_split_focal"]),
+    )
+
+
 def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
     """A calibration file (YAML, ``Camera.to_dict``, which ``counterpart.body.camera.load_camera_file`` reads),
     with the estimate and its uncertainty as comments.
@@ -129,4 +158,4 @@ def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
     return "\n".join(head) + "\n" + yaml.safe_dump(d, default_flow_style=None, sort_keys=False)
 
 
-__all__ = ["calibrate_video", "camera_file_text"]
+__all__ = ["calibrate_video", "camera_file_text", "graph_would_use"]

@@ -2,8 +2,11 @@
 
 The silhouette node's background model and the tracker's annealed particle filter, frame by frame,
 without the bus (``counterpart.apps.tracking.track_video``); the layout of the output file is in its
-docstring. Progress goes to stderr; Ctrl-C writes the frames done so far (``complete`` False).
-Exit code 0 on success, 2 on bad input, 130 when interrupted.
+docstring. Without a calibration file the camera is first estimated from the people in the video's
+first ``--calibration-frames`` frames, as ``counterpart calibrate`` does, and used where the graph's
+calibration node would publish it (``counterpart.apps.calibration.graph_would_use``); otherwise, as
+in the graph, the default camera. Progress goes to stderr; Ctrl-C writes the frames done so far
+(``complete`` False). Exit code 0 on success, 2 on bad input, 130 when interrupted.
 """
 
 from __future__ import annotations
@@ -19,6 +22,10 @@ from counterpart.nodes.tracker.tracker import SIDES
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "offline: the 3D body of the people of a video file"
+#: ``--camera`` values that name no file
+ESTIMATE, DEFAULT = "estimate", "default"
+#: frames the camera is estimated from (10 s at 30 fps: people seen standing and moving)
+CALIBRATION_FRAMES = 300
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,16 +40,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--people",
         nargs="+",
-        default=["left"],
+        default=list(SIDES),
         choices=SIDES,
-        help="sides of the frame to track: left, right or both (default: left)",
+        help="sides of the frame to track: left, right or both (default: both)",
     )
     p.add_argument(
         "--camera",
-        default=None,
-        metavar="FILE",
+        default=ESTIMATE,
+        metavar="FILE|estimate|default",
         help="calibration, JSON or YAML: {fx, fy, cx, cy, width, height, R, t} or {eye, target, "
-        "fov_deg, width, height} (default: the simulator's camera at the video's size)",
+        "fov_deg, width, height}; 'estimate' (the default): estimated from the people in the video, as the "
+        "graph's calibration node does, and used where the node would use it, else the default camera; "
+        "'default': the simulator's camera at the video's size",
+    )
+    p.add_argument(
+        "--calibration-frames",
+        type=int,
+        default=CALIBRATION_FRAMES,
+        help=f"with --camera estimate: the first frames the camera is estimated from (default {CALIBRATION_FRAMES})",
     )
     p.add_argument(
         "--prior",
@@ -96,14 +111,18 @@ def main(args: argparse.Namespace) -> int:
     """
     from .tracking import track_video
 
-    if not positive(args, ("layers", "particles", "train_frames", "max_frames"), "track"):
+    if not positive(args, ("layers", "particles", "train_frames", "max_frames", "calibration_frames"), "track"):
         return 2
 
     def work() -> dict:
         from counterpart.nodes.silhouette.pipeline import video_info
 
-        camera = load_camera(args.camera) if args.camera else None
+        named = args.camera not in (ESTIMATE, DEFAULT)
+        camera = load_camera(args.camera) if named else None
         video_info(args.video)  # a missing or undecodable video is said before a minute of building a prior
+        source = "file" if named else DEFAULT
+        if args.camera == ESTIMATE:
+            camera, source = estimated_camera(args)
         if args.prior == "default":
             print(
                 "[track] loading the default motion prior (built from the simulator on first use, about a minute)",
@@ -122,10 +141,49 @@ def main(args: argparse.Namespace) -> int:
             train_frames=args.train_frames,
             seed=args.seed,
             progress=FrameProgress("track"),
+            camera_source=source,
             backend=args.backend,
         )
 
     return run_offline("track", args.out, work)
+
+
+def estimated_camera(args: argparse.Namespace) -> tuple[Camera | None, str]:
+    """The camera of ``args.video`` from the people in its first ``args.calibration_frames``
+    frames, where the graph's calibration node would use it; the reason is printed either way.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of :func:`add_arguments`.
+
+    Returns
+    -------
+    camera : Camera or None
+        The estimated camera, or None (the default camera).
+    source : str
+        "estimated" or "default".
+    """
+    from .calibration import calibrate_video, graph_would_use
+
+    frames = min(args.calibration_frames, args.max_frames or args.calibration_frames)
+    try:
+        est, _ = calibrate_video(
+            args.video, frames, args.train_frames, progress=FrameProgress("track: camera"), backend=args.backend
+        )
+    except ValueError as exc:
+        print(f"[track] the default camera: no estimate of this video's camera ({exc})", file=sys.stderr, flush=True)
+        return None, DEFAULT
+    if not graph_would_use(est):
+        print(
+            f"[track] the default camera: the estimate from the people is not sure enough to use ({est.describe()}); "
+            "give a calibration file with --camera for a better one",
+            file=sys.stderr,
+            flush=True,
+        )
+        return None, DEFAULT
+    print(f"[track] camera estimated from the people: {est.describe()}", file=sys.stderr, flush=True)
+    return est.camera(), "estimated"
 
 
 if __name__ == "__main__":

@@ -32,7 +32,7 @@ Progress = Callable[[int, int], None]
 def track_video(
     path: str | os.PathLike[str],
     out_npz: str | os.PathLike[str],
-    people: Sequence[str] = ("left",),
+    people: Sequence[str] = SIDES,
     camera: Camera | None = None,
     prior: MotionPrior | None = None,
     layers: int = 10,
@@ -42,6 +42,7 @@ def track_video(
     seed: int = 0,
     progress: Progress | None = None,
     tracker: TrackerConfig | None = None,
+    camera_source: str | None = None,
     **silhouette_params: Any,
 ) -> dict[str, Any]:
     """Track the people of a video in 3D and save every frame's estimate.
@@ -50,8 +51,11 @@ def track_video(
         path: the video file.
         out_npz: the output (np.savez_compressed); written also when the run is interrupted
             (KeyboardInterrupt) or a frame fails, with the frames done so far (``complete`` False).
-        people: sides of the frame to track, one or two of "left" / "right" (as the tracker node).
+        people: sides of the frame to track, one or two of "left" / "right" (as the tracker node;
+            default both).
         camera: the calibration; None: the simulator's default camera at the video's frame size.
+        camera_source: where the camera came from ("file", "estimated", "default"), kept in the
+            file's ``params`` (None: "default" without a camera, "given" with one).
         prior: the motion prior (None: random walk).
         layers, particles: annealing layers and particles per layer; ``seed``: of the filters
             (side k gets seed + k, as in the node).
@@ -64,7 +68,7 @@ def track_video(
     Returns
     -------
         A summary: n_frames, tracked (frames with an estimate, per side), not_placed (frames whose
-        region could not be placed, per side), fps, frame_size, out_npz.
+        region could not be placed, per side), fps, frame_size, camera_source, out_npz.
 
     The file holds T frames x P sides: ``sides`` (P,) str, ``joints`` (T, P, 14, 3) float32 metres
     (NaN where the side is not tracked), ``poses`` and ``best_poses`` (T, P, 28), ``ess``,
@@ -82,6 +86,7 @@ def track_video(
     if problem:
         raise ValueError(f"people={problem}")
     sides = list(people)
+    source = camera_source or ("given" if camera is not None else "default")
     extractor = SilhouetteExtractor(**silhouette_params)
     fps, declared = video_info(path)
     trackers: dict[str, Tracker] = {}
@@ -118,6 +123,7 @@ def track_video(
                     "train_frames": train_frames,
                     "max_frames": max_frames,
                     "prior": prior is not None,
+                    "camera_source": source,
                     **silhouette_params,
                 },
             )
@@ -129,6 +135,7 @@ def track_video(
         "not_placed": not_placed,
         "fps": fps,
         "frame_size": list(size or (0, 0)),
+        "camera_source": source,
         "out_npz": os.fspath(out_npz),
     }
 

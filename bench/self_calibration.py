@@ -18,7 +18,7 @@ and the lines of the scene, one estimate at the end:
   focal length left out: at low tilt no view of people fixes it);
 - ``calib_estimated``: share of seeds with an estimate at all (enough views of whole upright people);
 - ``calib_credible``: share of seeds whose estimate the calibration node would publish (the horizon
-  seen: ``counterpart.nodes.calibration.smooth.credible`` with the node's default bounds);
+  seen: ``counterpart.apps.calibration.graph_would_use``, the node's default bounds);
   ``calib_within_published``: share within the limits of the camera the graph ends up with (the
   estimate where credible, the default camera elsewhere); ``calib_credible_wrong``: the seeds whose
   estimate is credible but outside the limits (the graph publishes a wrong camera);
@@ -77,14 +77,13 @@ sys.path.insert(0, str(REPO))
 
 from room_lines import room_lines  # noqa: E402
 
+from counterpart.apps.calibration import graph_would_use  # noqa: E402
 from counterpart.body.camera import Camera, default_camera  # noqa: E402
 from counterpart.body.people_detector import PeopleDetector  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
 from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
 from counterpart.nodes.calibration.lines import scene_lines  # noqa: E402
-from counterpart.nodes.calibration.node import Calibration  # noqa: E402
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people  # noqa: E402
-from counterpart.nodes.calibration.smooth import credible  # noqa: E402
 from counterpart.sim.camera import RandomCameraConfig  # noqa: E402
 
 CLIPS = REPO.parent / "shared" / "data" / "ut_interaction" / "set1"
@@ -92,11 +91,6 @@ TRAIN_FRAMES = 20  # as launch/lockstep.yaml's silhouette node
 LIMITS = {"height": 0.10, "tilt": 3.0, "focal": 0.10}
 #: bands of the true tilt, degrees (from, to): at 0 people on a ground plane do not fix the focal length
 TILT_BANDS = ((0.0, 10.0), (10.0, 20.0), (20.0, 35.1))
-#: the calibration node's default bounds of a credible estimate
-BOUNDS = {
-    k: Calibration.params[k].default
-    for k in ("max_height_std", "max_focal_std", "max_tilt_std_deg", "min_depth_spread", "min_horizon_segments")
-}
 
 
 def tilt_deg(camera: Camera) -> float:
@@ -196,7 +190,7 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
     room = room_lines(truth, inputs["seed"])
     room_est = estimate_camera(head, foot, track, size, t, lines=room)
     oracle_room = estimate_camera(th, tf, tk, size, tt, lines=room)
-    ok = est is not None and credible(est, *BOUNDS.values())
+    ok = est is not None and graph_would_use(est)
     default = default_camera(*size)
     published = estimate_errors(est, truth) if ok else errors(default.centre[1], tilt_deg(default), default.fx, truth)
     return {
@@ -371,7 +365,7 @@ def real_figures(clips: list[Path]) -> dict[str, Any]:
             "focal_std": round(est.focal_std, 3),
             "depth_spread": round(est.depth_spread, 3),
             "horizon_segments": est.horizon_segments,
-            "credible": bool(credible(est, *BOUNDS.values())),
+            "credible": bool(graph_would_use(est)),
             "size": [est.width, est.height_px],
         }
         print(f"[calib] {clip.stem}: {est.describe()} ({time.monotonic() - t0:.1f} s)", file=sys.stderr, flush=True)

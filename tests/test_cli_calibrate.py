@@ -47,6 +47,9 @@ def test_calibrate_writes_a_camera_file_with_the_estimate_and_its_uncertainty(cl
     for key in ("focal", "tilt_deg", "roll_deg", "height", "focal_std", "tilt_std_deg", "height_std"):
         assert np.isfinite(est[key]), key
     assert "[calibrate] focal" in res.stderr and "+-" in res.stderr  # the estimate, with its uncertainty
+    # 60 frames of a camera near level leave the focal length uncertain beyond the calibration node's
+    # bound (max_focal_std 0.2): the graph would keep its default camera, and the command says so
+    assert est["focal_std"] > 0.2 and summary["graph_would_use"] is False and "not sure enough" in res.stderr
     # the file is a calibration: the same camera read back, for these frames and scaled to others
     cam = load_camera_file(str(out))
     assert (cam.width, cam.height) == (320, 240)

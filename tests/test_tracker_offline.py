@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from counterpart.apps.tracking import track_video
+from counterpart.body.camera import Camera
 from counterpart.nodes.tracker.prior import MotionPrior, train_prior
 from counterpart.sim.cli import open_writer
 from counterpart.sim.stream import open_stream
@@ -53,9 +54,8 @@ def test_track_follows_both_people_of_a_video(recording: tuple[Path, np.ndarray,
         str(video),
         "--out",
         str(out),
-        "--people",
-        "left",
-        "right",
+        "--camera",
+        "default",  # the simulator's, the truth's: the joints are compared in its world frame
         "--train-frames",
         str(EMPTY),
         "--prior",
@@ -68,6 +68,7 @@ def test_track_follows_both_people_of_a_video(recording: tuple[Path, np.ndarray,
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     assert summary["n_frames"] == EMPTY + SCENE and summary["tracked"] == {"left": SCENE, "right": SCENE}
+    assert summary["camera_source"] == "default"
     d = np.load(out)
     assert list(d["sides"]) == ["left", "right"] and bool(d["complete"])
     assert d["joints"].shape == (EMPTY + SCENE, 2, 14, 3) and d["poses"].shape == (EMPTY + SCENE, 2, 28)
@@ -76,6 +77,35 @@ def test_track_follows_both_people_of_a_video(recording: tuple[Path, np.ndarray,
     err = np.linalg.norm(d["joints"][EMPTY:] - truth, axis=-1).mean(axis=(0, 2))
     assert (err < 0.1).all(), f"mean joint error per person {err} m"
     assert json.loads(str(d["camera"]))["width"] == 320
+
+
+def test_track_estimates_the_camera_of_a_video_from_its_people(
+    recording: tuple[Path, np.ndarray, Path], tmp_path: Path
+) -> None:
+    """Without a calibration file the camera is estimated from the people, as the graph's
+    calibration node does, and tracked with: a camera 2.9 m high looking 22 degrees down, far from
+    the default level one at 1.6 m, is found and recorded.
+    """
+    _, _, prior = recording
+    stream = open_stream("push", seed=8, camera="random", frames=75)
+    video = tmp_path / "steep.avi"
+    writer, _ = open_writer(str(video), stream.fps, stream.size)
+    for i in range(stream.n_frames):
+        writer.write(stream.render(i)[0])
+    writer.release()
+    out = tmp_path / "poses.npz"
+    r = _track(str(video), "--out", str(out), "--prior", str(prior), "--layers", "3", "--particles", "64",
+               "--train-frames", "20")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "camera estimated from the people" in r.stderr
+    summary = json.loads(r.stdout.strip().splitlines()[-1])
+    d = np.load(out)
+    assert summary["camera_source"] == json.loads(str(d["params"]))["camera_source"] == "estimated"
+    assert summary["tracked"]["left"] > 0 and summary["tracked"]["right"] > 0  # both sides by default
+    used, truth = Camera.from_dict(json.loads(str(d["camera"]))), stream.camera
+    assert abs(used.centre[1] / truth.centre[1] - 1.0) < 0.10
+    tilt = [np.degrees(np.arcsin(-c.R[2, 1])) for c in (used, truth)]
+    assert abs(tilt[0] - tilt[1]) < 3.0 and tilt[1] > 20.0
 
 
 def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
@@ -98,6 +128,8 @@ def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarr
     assert r.returncode == 2 and "calibrated for 640x360" in r.stderr
     r = _track(str(video), "--out", str(out), "--people", "left", "left", "--prior", "none")
     assert r.returncode == 2 and "distinct sides" in r.stderr
+    r = _track(str(video), "--out", str(out), "--calibration-frames", "0", "--prior", "none")
+    assert r.returncode == 2 and "--calibration-frames must be at least 1" in r.stderr
     assert not out.exists()  # nothing half-written
 
 
@@ -121,5 +153,5 @@ def test_an_interrupted_run_keeps_the_frames_done(recording: tuple[Path, np.ndar
             progress=stop_after_25,
         )
     d = np.load(out)
-    assert int(d["n_frames"]) == 25 and not bool(d["complete"]) and d["joints"].shape == (25, 1, 14, 3)
+    assert int(d["n_frames"]) == 25 and not bool(d["complete"]) and d["joints"].shape == (25, 2, 14, 3)
     assert np.isfinite(d["joints"][EMPTY:25]).all()
