@@ -11,6 +11,7 @@ import pytest
 
 from counterpart.nodes.silhouette.colour_switch import ColourSwitch, ColourSwitchConfig, frame_kind
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, process_frames
+from counterpart.nodes.silhouette.switch_replay import SwitchReplay
 from counterpart.sim.infrared import infrared_frames
 from counterpart.sim.stream import open_stream
 from tests.real_clips import UT_CLIP, clip_with_keypoints
@@ -41,6 +42,7 @@ def run(frames: np.ndarray, config: ColourSwitchConfig | None = None) -> tuple[l
     ex.fit_background(list(frames[:TRAIN]))
     out = list(process_frames(ex, frames, TRAIN))
     assert len(out) == len(frames) and all(np.array_equal(f, g) for (f, _), g in zip(out, frames))  # in order
+    assert [r.index for _, r in out] == list(range(len(frames)))  # held back and given again, each its own
     return [i for i, (_, r) in enumerate(out) if r.relearn], [r.labels for _, r in out]
 
 
@@ -101,10 +103,13 @@ def test_a_room_turning_infrared_is_learnt_again_and_its_people_found(handshake)
     frames, masks = handshake
     ir = np.concatenate([frames[:SWITCH], infrared_frames(frames[SWITCH:])])
     relearns, labels = run(ir)
-    # seen once, on the fifth to seventh infrared frame
-    assert len(relearns) == 1 and SWITCH + 4 <= relearns[0] <= SWITCH + 6
+    # seen once (on the fifth to seventh infrared frame), the infrared frames held back from the
+    # first looked at (every third frame is, while they are of the model's kind) get the new model's people
+    assert len(relearns) == 1 and SWITCH <= relearns[0] <= SWITCH + 2
     late = slice(SWITCH + 7, None)  # the frames the new model was learnt from and those after
     after = np.median(iou(labels, masks)[late])
+    # those before the switch was taken too, where the colour model's labels went out before
+    assert np.median(iou(labels, masks)[SWITCH + 3 : SWITCH + 7]) > after - 0.1
     # as well as on footage infrared from the first frame (brightness alone tells people there)
     assert after > np.median(iou(run(infrared_frames(frames))[1], masks)[late]) - 0.15
     # kept as it was: the colour model calls much of the infrared room foreground, not the people
@@ -120,7 +125,7 @@ def test_a_room_turning_back_to_colour_is_learnt_again(handshake):
     frames, masks = handshake
     back = np.concatenate([infrared_frames(frames[:SWITCH]), frames[SWITCH:]])
     relearns, labels = run(back)
-    assert len(relearns) == 1 and SWITCH + 4 <= relearns[0] <= SWITCH + 6
+    assert len(relearns) == 1 and SWITCH <= relearns[0] <= SWITCH + 2
     # the infrared model kept finds the colour room changed, not the people
     after = np.median(iou(labels, masks)[SWITCH + 7 :])
     assert after > 0.6 and after > np.median(iou(run(back, ColourSwitchConfig(frames=0))[1], masks)[SWITCH + 7 :]) + 0.4
@@ -145,3 +150,27 @@ def test_a_real_clip_turning_infrared_keeps_its_people():
     # near footage infrared from the first frame, and far above the colour model kept
     assert followed > 0.75 and followed > inside(infrared_frames(frames)) - 0.15
     assert followed > 2 * inside(ir, ColourSwitchConfig(frames=0))
+
+
+def test_a_few_grey_frames_are_held_and_then_go_out_as_they_were(handshake):
+    """Three grey frames amid colour ones (too few for a switch) are held back while they could
+    start one, then go out, in order, with the colour model's people as if never held.
+    """
+    frames, _ = handshake
+    blip = frames.copy()
+    blip[SWITCH : SWITCH + 3] = grey(frames[SWITCH : SWITCH + 3])
+    ex = SilhouetteExtractor(backend_params={"train_frames": TRAIN})
+    ex.fit_background(list(blip[:TRAIN]))
+    replay: SwitchReplay[int] = SwitchReplay(ex, TRAIN)
+    out = [replay.push(i, f) for i, f in enumerate(blip[: SWITCH + 6])]
+    held = [i for i, done in enumerate(out) if not done]
+    assert held and set(held) <= set(range(SWITCH, SWITCH + 3))  # from the first grey frame looked at
+    released = [r for done in out for r in done]
+    assert [i for i, _ in released] == list(range(SWITCH + 6)) and not any(r.relearn for _, r in released)
+    assert [r.index for _, r in released] == list(range(SWITCH + 6)) and replay.flush() == []
+    plain = SilhouetteExtractor(backend_params={"train_frames": TRAIN})
+    plain.fit_background(list(blip[:TRAIN]))
+    for (_, r), f in zip(released, blip):
+        assert np.array_equal(r.labels, plain.process(f).labels)
+    with pytest.raises(ValueError, match="cannot take back"):
+        ex.rewind(ex.n_frames + 1)

@@ -228,16 +228,22 @@ def test_a_camera_turning_monochrome_mid_stream_is_learnt_again(tmp_path: Path, 
         return sils, text
 
     sils, text = people({}, tmp_path / "followed")
-    # seen once, on the fifth to seventh grey frame
+    # seen once, on the fifth to seventh grey frame; a replay holds the grey frames back from the
+    # first looked at (every third frame is, while they are of the model's kind), so that they all
+    # get the new model's people, and names that frame
     seen = [int(k) for k in re.findall(r"frame (\d+): the camera switched to monochrome frames", text)]
-    assert len(seen) == 1 and switch + 4 <= seen[0] <= switch + 6, text
+    first = (switch, switch + 2) if replay else (switch + 4, switch + 6)
+    assert len(seen) == 1 and first[0] <= seen[0] <= first[1], text
     run_dir = Path(re.search(r"run directory (\S+)", text).group(1))
     assert json.loads((run_dir / "stats" / "silhouette.json").read_text())["figures"]["relearns"] == 1
     assert all(r["people"] == [] for r in sils[:empty])
-    # the two walkers on the grey frames, before they meet, as on a grey stream's
-    assert_grey_walkers(sils[empty : empty + 6], seq)
+    # the two walkers on the grey frames, before they meet (from frame 44 their hands reach out and
+    # their true boxes overlap, where their split depends on the frames the model has seen), as on
+    # a grey stream's
+    apart = slice(empty, empty + 4)
+    assert_grey_walkers(sils[apart], seq)
     if replay:
         # not followed: the colour model finds all of the grey room changed, and no walker in it
         kept, text = people({"colour_switch_frames": 0}, tmp_path / "kept")
         assert "switched" not in text
-        assert not any(r["people"] for r in kept[empty : empty + 6])
+        assert not any(r["people"] for r in kept[apart])

@@ -18,8 +18,9 @@ tinted video however it comes, and bounds its shadows and highlights tightly
 A frame of another size or encoding than the ones before (a camera restarted at a new resolution)
 starts the background model and the people afresh; so do bgr8 frames turning monochrome, or back to
 colour (``colour_switch_frames``: a day/night camera turning to infrared), the new model learnt with
-the people last seen kept out of it, and with ``replay_training`` the frames from the switch held
-back until it is learnt.
+the people last seen kept out of it, and with ``replay_training`` the frames of the new kind held
+back until it is learnt (``switch_replay.SwitchReplay``), so that none goes out with the old
+model's labels.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from .colour_switch import ColourSwitchConfig
 from .people import PrefetchDetector
 from .pipeline import FrameResult, SilhouetteExtractor
 from .regions import Person
+from .switch_replay import SwitchReplay
 
 _NO_CTRL = np.zeros((0, 2), np.float32)
 _NO_POINT = np.full(2, np.nan, np.float32)
@@ -285,6 +287,9 @@ class Silhouette(Node):
         #: frames held back while the background is learnt (replay_training), with their images
         self.held: list[tuple[Frame, np.ndarray, bool]] = []
         self.replay = self.p["replay_training"] and self.p["backend"] == "horprasert"
+        #: with replay_training, once the background is learnt: the frames around a switch
+        #: between colour and monochrome held back until the new model is learnt
+        self.switch: SwitchReplay[Frame] | None = None
         #: the people detector of the training frames, started on each as it comes (horprasert,
         #: robust and people_aware; None otherwise)
         self.prefetch: PrefetchDetector | None = None
@@ -393,32 +398,37 @@ class Silhouette(Node):
             return
         mono = image.shape != msg.image.shape
         if self.replay and (self.held or self._key_changed(image, mono) or not self.extractor.subtractor.ready):
+            if self.switch is not None:
+                self._release_switch()  # frames of the stream before it changed go out first
             if self.held and (image.shape[:2], mono) != (self.held[0][1].shape[:2], self.held[0][2]):
                 self._release_held()  # the camera changed its frames: what was held is a stream of its own
             self.held.append((msg, image, mono))
             if len(self.held) >= self.p["train_frames"]:
                 self._release_held()
             return
+        if self.replay:
+            if self.switch is None or self.switch.extractor is not self.extractor:
+                self.switch = SwitchReplay(self.extractor, self.p["train_frames"])
+            for held_msg, result in self.switch.push(msg, image):
+                self._publish(held_msg, result)
+            return
         result = self._extract(image, mono)
-        if result.relearn:
-            self.tally("relearns")
-            self.log.warning(
-                "frame %d: the camera switched to %s frames (a day/night camera, or a cut in the recording): "
-                "learning the background again from them%s",
-                msg.seq,
-                "monochrome" if self.extractor.colour_switch.switched_to_mono else "colour",
-                ", this frame's and the next ones' people found once it is learnt" if self.replay else "",
-            )
-            if self.replay:
-                # held as the stream's first frames are: a new model learns from them, then they go out
-                self.held.append((msg, image, mono))
-                return
         self._publish(msg, result)
+
+    def _release_switch(self) -> None:
+        """Publish the frames held around a switch between colour and monochrome (the stream
+        ended or changed), and forget the switch replay.
+        """
+        if self.switch is not None:
+            for held_msg, result in self.switch.flush():
+                self._publish(held_msg, result)
+            self.switch = None
 
     def _release_held(self) -> None:
         """Learn the background from the held frames (all of them, however few the stream gave),
         then find the people in each and publish them in order.
         """
+        self._release_switch()
         if not self.held:
             return
         held, self.held = self.held, []
@@ -443,6 +453,16 @@ class Silhouette(Node):
                 self._publish(msg, self.extractor.learn(image))
 
     def _publish(self, msg: Frame, result: FrameResult) -> None:
+        if result.relearn:
+            self.tally("relearns")
+            self.log.warning(
+                "frame %d: the camera switched to %s frames (a day/night camera, or a cut in the recording): %s",
+                msg.seq,
+                "monochrome" if self.extractor.colour_switch.switched_to_mono else "colour",
+                "the background learnt again from the frames from here, and their people found with it"
+                if self.replay
+                else "learning the background again from them, no people until it is learnt",
+            )
         h, w = msg.image.shape[:2]
         every = self.p["mask_every"]
         labels = np.zeros(0, np.uint8)

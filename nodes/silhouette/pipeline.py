@@ -27,6 +27,7 @@ from .backends import HorprasertSubtractor, make_subtractor
 from .background import BACKGROUND
 from .colour_switch import ColourSwitch, ColourSwitchConfig
 from .regions import Person, PersonTracker, clean_mask
+from .switch_replay import SwitchReplay
 
 #: frames before a switch between colour and monochrome whose people's boxes together are the
 #: hints of the background learnt again (a person the model missed on one is found on another)
@@ -95,7 +96,9 @@ class FrameResult:
         False while the background model is still learning (no people reported).
     relearn : bool, default=False
         The camera switched between colour and monochrome on this frame (``colour_switch``): the
-        background is learnt again from it and the next frames, and the people are new.
+        background is learnt again from it and the next frames, and the people are new (a replay
+        that holds frames back, ``switch_replay.SwitchReplay``, marks the first frame given the
+        new model's people instead).
     """
 
     index: int
@@ -252,6 +255,20 @@ class SilhouetteExtractor:
         self.tracker.reset()
         self.colour_switch.reset()
         self._recent_boxes.clear()
+
+    def rewind(self, frames: int) -> None:
+        """Take back the last ``frames`` frames processed: they will be given again (a replay
+        holding them back around a switch between colour and monochrome, ``SwitchReplay``), and
+        keep their indices.
+
+        Parameters
+        ----------
+        frames : int
+            Frames to take back, 0 to :attr:`n_frames`.
+        """
+        if not 0 <= frames <= self._index:
+            raise ValueError(f"cannot take back {frames} frames of {self._index} processed")
+        self._index -= frames
 
     def learn(self, frame: np.ndarray) -> FrameResult:
         """Feed one frame to the background model only: no clean-up, no people, no tracks (a stream's
@@ -537,10 +554,11 @@ def process_frames(
     extractor: SilhouetteExtractor, frames: Iterable[np.ndarray], train_frames: int = 30
 ) -> Iterator[tuple[np.ndarray, FrameResult]]:
     """Yield each frame with the extractor's result, in order, learning the background again where
-    the camera switches between colour and monochrome (``FrameResult.relearn``): that frame and the
-    ``train_frames - 1`` after it are held back, the background is fitted on them
-    (:meth:`SilhouetteExtractor.fit_background`, robustly) and they are processed then, so that
-    they get the people of the new model, as a recording's first frames do.
+    the camera switches between colour and monochrome (``FrameResult.relearn``): the frames of the
+    other kind from the first seen and the ``train_frames`` from the switch are held back, the
+    background is fitted on them (:meth:`SilhouetteExtractor.fit_background`, robustly) and they
+    are processed then, so that they get the people of the new model, as a recording's first
+    frames do (``switch_replay.SwitchReplay``).
 
     Parameters
     ----------
@@ -556,33 +574,13 @@ def process_frames(
     frame : ndarray of shape (H, W, 3), dtype uint8
         BGR frame.
     result : FrameResult
-        Its result; the first frame after a switch has ``relearn``.
+        Its result (``index`` its place in ``frames``); the first frame given the new model's
+        people after a switch has ``relearn``.
     """
-    held: list[np.ndarray] = []
+    replay: SwitchReplay[np.ndarray] = SwitchReplay(extractor, train_frames)
     for frame in frames:
-        if held:
-            held.append(frame)
-            if len(held) >= train_frames:
-                yield from _refitted(extractor, held)
-                held = []
-            continue
-        result = extractor.process(frame)
-        if result.relearn:
-            held = [frame]
-            continue
-        yield frame, result
-    yield from _refitted(extractor, held)
-
-
-def _refitted(extractor: SilhouetteExtractor, held: list[np.ndarray]) -> Iterator[tuple[np.ndarray, FrameResult]]:
-    """The held frames processed after a fit on them (the first marked ``relearn``); with fewer
-    than 2 (a stream that ended) only learnt, without people.
-    """
-    if len(held) >= 2:
-        extractor.fit_background(held, robust=True)
-    for i, frame in enumerate(held):
-        result = extractor.process(frame) if len(held) >= 2 else extractor.learn(frame)
-        yield frame, dataclasses.replace(result, relearn=True) if i == 0 else result
+        yield from replay.push(frame, frame)
+    yield from replay.flush()
 
 
 def _save_people(
