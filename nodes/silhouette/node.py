@@ -398,8 +398,7 @@ class Silhouette(Node):
             return
         mono = image.shape != msg.image.shape
         if self.replay and (self.held or self._key_changed(image, mono) or not self.extractor.subtractor.ready):
-            if self.switch is not None:
-                self._release_switch()  # frames of the stream before it changed go out first
+            self._release_switch()  # frames of the stream before it changed go out first
             if self.held and (image.shape[:2], mono) != (self.held[0][1].shape[:2], self.held[0][2]):
                 self._release_held()  # the camera changed its frames: what was held is a stream of its own
             self.held.append((msg, image, mono))

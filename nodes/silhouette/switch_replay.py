@@ -10,9 +10,8 @@ back: :class:`SwitchReplay` holds the frames of the other kind while their run l
 switch on as many as the new model learns from; the new model is fitted on the latter (robustly,
 as a recording's first frames are) and they all go out then, in order, with its people. The fit
 leaves out the run before the switch, so that the model is learnt from the frames a live graph's
-is: learnt mid-interaction, it keeps a person who stands still out of the room or not depending
-on a few frames more or less (measured on the real clips, starting the fit at the run's first
-frame instead moved single clips both ways by up to half their frames, and the mean not at all).
+is: learnt mid-interaction, whether it keeps a person who stands still out of the room turns on
+a few frames more or less, and starting it earlier traded some clips for others.
 """
 
 from __future__ import annotations
