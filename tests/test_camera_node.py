@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -75,6 +76,24 @@ def test_lockstep_delivers_every_frame_bit_exact(tmp_path: Path, prefetch: int) 
     assert [r["source_time"] for r in got] == pytest.approx([i / 25.0 for i in range(40)])
     stamps = [r["stamp"] for r in got]
     assert stamps == sorted(stamps) and all(r["received"] >= r["stamp"] for r in got)
+
+
+def test_a_long_replay_logs_its_progress(tmp_path: Path) -> None:
+    """A lockstep replay says how far it has come, of how many, and how long is left (here after
+    every frame, as ``progress_s`` is tiny, of which the node's log lets the first 10 through); a
+    short one at the default every 10 s says nothing of it.
+    """
+    path = write_video(tmp_path / "clip.avi", n=40, size=(160, 120), fps=25.0)
+    code, text, records = launch(
+        tmp_path, {"source": str(path), "pacing": "lockstep", "progress_s": 1e-6, "start_frame": 10}
+    )
+    assert code == 0, text
+    assert len(frame_records(records)) == 30
+    done = [int(k) for k in re.findall(r"frame (\d+) of 30 \(\d+%\) published, [\d.]+ frames/s", text)]
+    assert done == list(range(1, 11)), text
+    assert "frame 3 of 30 (10%) published" in text and re.search(r"about \d+ s left", text)
+    code, text, _ = launch(tmp_path, {"source": str(path), "pacing": "lockstep"})
+    assert code == 0 and "frames/s" not in text, text
 
 
 @pytest.mark.skipif(not VTEST.exists(), reason=f"real video {VTEST} absent (see ../shared/data/README.md)")

@@ -12,7 +12,7 @@ import pytest
 
 from counterpart.bus import ParamError
 from counterpart.nodes.camera.node import Camera
-from counterpart.nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size
+from counterpart.nodes.camera.pacing import Pacer, Prefetch, convert, frames, output_size, replay_progress
 from counterpart.nodes.camera.sources import (
     ImageFolderSource,
     SimulatorSource,
@@ -308,3 +308,12 @@ def test_prefetch_keeps_order_forwards_errors_and_stops() -> None:
     assert next(it) == 1
     it.close()  # returns although the producer never ends; it stopped within depth + 2 items
     assert len(produced) <= 5
+
+
+def test_replay_progress_says_how_far_of_how_many_and_the_time_left() -> None:
+    assert replay_progress(300, 1296, 30.6) == (
+        "frame 300 of 1296 (23%) published, 9.8 frames/s, about 1 min 42 s left"
+    )
+    assert replay_progress(300, None, 30.6) == "frame 300 published, 9.8 frames/s"  # a looping replay
+    assert replay_progress(40, 40, 4.0) == "frame 40 of 40 (100%) published, 10.0 frames/s"
+    assert replay_progress(0, 40, 0.0) == "frame 0 of 40 (0%) published, 0.0 frames/s"

@@ -24,7 +24,7 @@ import numpy as np
 from counterpart.bus import Node, Output, Param, ParamError
 from counterpart.messages import Frame
 
-from .pacing import PACING_MODES, Pacer, Prefetch, convert, frames, output_size
+from .pacing import PACING_MODES, Pacer, Prefetch, convert, frames, output_size, replay_progress
 from .sources import SourceError, make_source, parse_uri
 
 #: exit code of a camera whose source failed (after logging it and sending end of stream)
@@ -75,6 +75,13 @@ class Camera(Node):
         "start_frame": Param(int, 0, "skip this many frames of the source first", min=0),
         "prefetch": Param(
             int, 4, "frames an unpaced replay decodes ahead in a thread (0: decode inline)", min=0, max=64
+        ),
+        "progress_s": Param(
+            float,
+            10.0,
+            "an unpaced replay (lockstep, fast) logs the frames published so far, of how many, the rate and "
+            "the time left, every this many seconds (0: never)",
+            min=0.0,
         ),
     }
 
@@ -156,6 +163,11 @@ class Camera(Node):
             # unpaced replay: decode (and convert) ahead in a thread so that it overlaps sending
             stream = self.prefetch = Prefetch(stream, p["prefetch"])
         seq = 0
+        every_s = p["progress_s"] if not src.live and not pacer.paced else 0.0
+        total = None if p["loop"] or src.frame_count is None else max(0, src.frame_count - p["start_frame"])
+        if total is not None and p["max_frames"]:
+            total = min(total, p["max_frames"])
+        started = due = time.monotonic()
         try:
             while not self.stopping:
                 if not pacer.wait(seq, lambda: self.stopping):
@@ -177,6 +189,9 @@ class Camera(Node):
                     ),
                 )
                 seq += 1
+                if every_s and time.monotonic() >= due + every_s:
+                    due = time.monotonic()
+                    self.log.info("%s: %s", src.uri, replay_progress(seq, total, due - started))
         except (SourceError, ValueError) as exc:
             return self._fail(f"source {src.uri} failed at frame {seq}: {exc}")
         finally:

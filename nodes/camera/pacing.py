@@ -304,3 +304,31 @@ def convert(image: np.ndarray, size: tuple[int, int] | None = None, gray: bool =
     if gray:
         return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY), "mono8"
     return image, "bgr8"
+
+
+def replay_progress(done: int, total: int | None, elapsed_s: float) -> str:
+    """One line of a replay's progress, for the log of a long lockstep run.
+
+    Parameters
+    ----------
+    done : int
+        Frames published so far.
+    total : int or None
+        Frames the replay will publish (None: not known, or looping).
+    elapsed_s : float
+        Seconds since the first frame was published.
+
+    Returns
+    -------
+    str
+        "frame 300 of 1296 (23%) published, 9.8 frames/s, about 1 min 42 s left", without the
+        share and the time left when the total is not known.
+    """
+    rate = done / elapsed_s if elapsed_s > 0 else 0.0
+    if total is None or total <= 0:
+        return f"frame {done} published, {rate:.1f} frames/s"
+    text = f"frame {done} of {total} ({100 * done // total}%) published, {rate:.1f} frames/s"
+    if rate > 0 and done < total:
+        left = round((total - done) / rate)
+        text += f", about {f'{left // 60} min ' if left >= 60 else ''}{left % 60} s left"
+    return text
