@@ -556,9 +556,9 @@ def process_frames(
     """Yield each frame with the extractor's result, in order, learning the background again where
     the camera switches between colour and monochrome (``FrameResult.relearn``): the frames of the
     other kind from the first seen and the ``train_frames`` from the switch are held back, the
-    background is fitted on them (:meth:`SilhouetteExtractor.fit_background`, robustly) and they
-    are processed then, so that they get the people of the new model, as a recording's first
-    frames do (``switch_replay.SwitchReplay``).
+    background is fitted on the latter (:meth:`SilhouetteExtractor.fit_background`, robustly) and
+    they are all processed then, so that they get the people of the new model, as a recording's
+    first frames do (``switch_replay.SwitchReplay``).
 
     Parameters
     ----------
@@ -574,8 +574,8 @@ def process_frames(
     frame : ndarray of shape (H, W, 3), dtype uint8
         BGR frame.
     result : FrameResult
-        Its result (``index`` its place in ``frames``); the first frame given the new model's
-        people after a switch has ``relearn``.
+        Its result (``index`` one more than the frame's before it, held back or not); the first
+        frame given the new model's people after a switch has ``relearn``.
     """
     replay: SwitchReplay[np.ndarray] = SwitchReplay(extractor, train_frames)
     for frame in frames:
