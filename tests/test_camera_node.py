@@ -90,7 +90,7 @@ def test_a_long_replay_logs_its_progress(tmp_path: Path) -> None:
     assert code == 0, text
     assert len(frame_records(records)) == 30
     done = [int(k) for k in re.findall(r"frame (\d+) of 30 \(\d+%\) published, [\d.]+ frames/s", text)]
-    assert done == list(range(1, 11)), text
+    assert done[:10] == list(range(1, 11)), text  # more only where 30 frames took over 10 s
     assert "frame 3 of 30 (10%) published" in text and re.search(r"about \d+ s left", text)
     code, text, _ = launch(tmp_path, {"source": str(path), "pacing": "lockstep"})
     assert code == 0 and "frames/s" not in text, text
