@@ -140,6 +140,20 @@ def test_image_folder_gray_resized_with_start_and_loop(tmp_path: Path) -> None:
     assert [r["source_time"] for r in got] == pytest.approx([i / 25.0 for i in order])
 
 
+def test_max_side_scales_a_large_source_down_and_says_so(tmp_path: Path) -> None:
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    img = np.random.default_rng(5).integers(0, 256, (48, 64, 3), dtype=np.uint8)
+    for i in range(3):
+        cv2.imwrite(str(folder / f"f{i:03d}.png"), img)
+    for max_side, shape in ((32, [24, 32, 3]), (64, [48, 64, 3])):
+        code, text, records = launch(tmp_path, {"source": f"folder:{folder}", "pacing": "fast", "max_side": max_side})
+        assert code == 0, text
+        got = frame_records(records)
+        assert len(got) == 3 and all(r["shape"] == shape for r in got), (max_side, got)
+        assert ("scaled down to camera.max_side 32" in text) == (max_side == 32), text
+
+
 def test_corrupt_file_logs_clear_error_and_graph_ends(tmp_path: Path) -> None:
     bad = tmp_path / "broken.avi"
     bad.write_bytes(np.random.default_rng(4).integers(0, 256, 50_000, dtype=np.uint8).tobytes())

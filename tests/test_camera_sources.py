@@ -270,6 +270,10 @@ def test_convert_resize_and_gray() -> None:
     assert output_size((80, 60), width=40) == (40, 30)
     assert output_size((80, 60), height=120) == (160, 120)
     assert output_size((80, 60), 33, 17) == (33, 17)
+    assert output_size((1920, 1080), max_side=640) == (640, 360)
+    assert output_size((1080, 1920), max_side=640) == (360, 640)  # portrait: the height is the longer side
+    assert output_size((80, 60), max_side=80) == (80, 60)  # not over it: kept
+    assert output_size((1920, 1080), width=1280, max_side=640) == (1280, 720)  # an asked width wins
     out, enc = convert(img, (40, 30), gray=True)
     assert enc == "mono8" and out.shape == (30, 40) and out.dtype == np.uint8
     assert np.array_equal(

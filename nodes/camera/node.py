@@ -69,6 +69,14 @@ class Camera(Node):
         ),
         "width": Param(int, 0, "output width in pixels (0: the source's, or scaled with height)", min=0, max=16384),
         "height": Param(int, 0, "output height in pixels (0: the source's, or scaled with width)", min=0, max=16384),
+        "max_side": Param(
+            int,
+            0,
+            "with width and height 0: a source whose longer side is over this many pixels is scaled down to it, "
+            "keeping its aspect ratio (0: never)",
+            min=0,
+            max=16384,
+        ),
         "gray": Param(bool, False, "publish mono8 instead of bgr8"),
         "loop": Param(bool, False, "start again at start_frame at the end of a replay"),
         "max_frames": Param(int, 0, "stop after this many frames (0: no limit)", min=0),
@@ -132,7 +140,7 @@ class Camera(Node):
         except SourceError as exc:
             return self._fail(f"parameter 'source': {exc}")
         src = self.source
-        size = output_size(src.size, p["width"], p["height"])
+        size = output_size(src.size, p["width"], p["height"], p["max_side"])
         mode = "fast" if src.live and p["pacing"] in ("realtime", "rate") else p["pacing"]
         try:
             pacer = Pacer(mode, src.fps, p["rate"])
@@ -146,7 +154,7 @@ class Camera(Node):
             )
         self.figures["source_fps"] = float(src.fps)
         self.log.info(
-            "%s: %dx%d at %.3g fps (%s frames) -> %dx%d %s, pacing %s",
+            "%s: %dx%d at %.3g fps (%s frames) -> %dx%d %s, pacing %s%s",
             src.uri,
             *src.size,
             src.fps,
@@ -154,6 +162,9 @@ class Camera(Node):
             *size,
             "mono8" if p["gray"] else "bgr8",
             mode,
+            f" (scaled down to camera.max_side {p['max_side']}; 0 keeps the source's size)"
+            if size != output_size(src.size, p["width"], p["height"])
+            else "",
         )
         stream: Iterator[tuple[np.ndarray, str, float]] = (
             (*convert(image, size, p["gray"]), t)

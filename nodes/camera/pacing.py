@@ -252,7 +252,7 @@ class Prefetch:
 AREA_MIN_SHRINK = 2.0
 
 
-def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple[int, int]:
+def output_size(size: tuple[int, int], width: int = 0, height: int = 0, max_side: int = 0) -> tuple[int, int]:
     """The size of the output for a source.
 
     Parameters
@@ -261,6 +261,9 @@ def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple
         The source's (width, height), pixels.
     width, height : int, default=0
         Both 0 keeps the size, one of them scales keeping the aspect ratio, both give that size exactly.
+    max_side : int, default=0
+        With ``width`` and ``height`` both 0, a source whose longer side is over this many pixels is
+        scaled down to it, keeping the aspect ratio (0: never).
 
     Returns
     -------
@@ -274,6 +277,12 @@ def output_size(size: tuple[int, int], width: int = 0, height: int = 0) -> tuple
         return int(width), max(1, round(h0 * width / w0))
     if height:
         return max(1, round(w0 * height / h0)), int(height)
+    if max_side and max(w0, h0) > max_side:
+        return (
+            (int(max_side), max(1, round(h0 * max_side / w0)))
+            if w0 >= h0
+            else (max(1, round(w0 * max_side / h0)), int(max_side))
+        )
     return int(w0), int(h0)
 
 
