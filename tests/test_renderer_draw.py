@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from dataclasses import replace
 
 import cv2
@@ -518,3 +520,28 @@ def test_the_partner_painted_is_its_facets_far_to_near_in_fixed_point() -> None:
         assert starts == np.cumsum([0] + [len(p) for p in polys]).tolist()
         assert np.array_equal(fixed, np.round(np.concatenate(polys) * draw._SCALE).astype(np.int32))
         assert colours == np.clip(np.array([200.0, 150.0, 100.0]) * shade[:, None], 0, 255).astype(int).tolist()
+
+
+def test_codec_probe_keeps_ffmpeg_messages_off_stderr_and_passes_other_lines(tmp_path) -> None:
+    # the file descriptor is the process's own, so the probe runs in a fresh interpreter; its real
+    # H.264 probes too, whatever their outcome on this machine's OpenCV
+    script = tmp_path / "probe.py"
+    script.write_text(
+        "import logging, os, sys\n"
+        "from counterpart.nodes.renderer import video\n"
+        f"logging.basicConfig(level=logging.DEBUG, format='%(message)s', filename={str(tmp_path / 'debug.log')!r})\n"
+        "def probe(tmp):\n"
+        "    os.write(2, b'[h264_v4l2m2m @ 0x55d0c0] Could not find a valid device\\n')\n"
+        "    os.write(2, b'OpenCV: FFMPEG: fallback to use tag avc1\\n')\n"
+        "    os.write(2, b'another thread said this\\n')\n"
+        "    return True\n"
+        "print(video._probed('made-up', probe), video.codec_works('avc1', '.mp4'), video.codec_works('H264', '.mp4'))\n"
+        "print('after', file=sys.stderr)\n"
+    )
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split()[0] == "True"
+    assert run.stderr.splitlines() == ["another thread said this", "after"], run.stderr
+    debug = (tmp_path / "debug.log").read_text()
+    assert "codec probe: [h264_v4l2m2m @ 0x55d0c0] Could not find a valid device" in debug
+    assert "codec probe: OpenCV: FFMPEG: fallback to use tag avc1" in debug

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import cv2
@@ -51,14 +53,51 @@ def _restore_opencv(level: int) -> None:
         cv2.utils.logging.setLogLevel(level)
 
 
+def _from_codec_library(line: str) -> bool:
+    """Whether a line on stderr is FFmpeg's (``[h264_v4l2m2m @ 0x55...] ...``) or OpenCV's FFmpeg
+    backend's (``OpenCV: FFMPEG: ...``).
+    """
+    return (line.startswith("[") and " @ 0x" in line.split("]", 1)[0]) or line.startswith("OpenCV: FFMPEG:")
+
+
+@contextmanager
+def _codec_messages_to_debug() -> Iterator[None]:
+    """Take what FFmpeg prints on the process's stderr (file descriptor 2, beyond Python's reach
+    otherwise) while a codec is probed: a failed candidate prints errors ("Could not find a valid
+    device") that read as the run's failure, where the fallback is expected and said in one line.
+    Its lines go to this module's debug log; any other line written meanwhile goes back to stderr.
+    """
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no stderr to take over
+        yield
+        return
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            caught.seek(0)
+            lines = caught.read().decode(errors="replace").splitlines()
+    for line in lines:
+        if _from_codec_library(line):
+            log.debug("codec probe: %s", line)
+        else:
+            print(line, file=sys.stderr)
+
+
 def _probed(key: str, probe: Callable[[str], bool]) -> bool:
     """Whether ``probe(folder)`` holds, asked once per process (in a temporary folder, with
-    OpenCV's log silenced) and remembered under ``key``.
+    OpenCV's log silenced and FFmpeg's messages sent to the debug log) and remembered under ``key``.
     """
     if key not in _PROBED:
         level = _quiet_opencv()
         try:
-            with tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
+            with _codec_messages_to_debug(), tempfile.TemporaryDirectory(prefix="cp-codec-") as tmp:
                 _PROBED[key] = probe(tmp)
         finally:
             _restore_opencv(level)
