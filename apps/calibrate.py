@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from counterpart.apps.offline import FrameProgress, add_video_arguments, positive, run_offline
+from counterpart.apps.offline import FrameProgress, add_fov_argument, add_video_arguments, positive, run_offline
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "offline: the camera of a video file, estimated from the people in it"
@@ -31,13 +31,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="mean height of the people's outlines, hair and shoes included, metres (the prior that sets the scale)",
     )
     p.add_argument("--person-height-std", type=float, default=0.09, help="its standard deviation, metres")
+    add_fov_argument(p)
 
 
 def main(args: argparse.Namespace) -> int:
-
-    from counterpart.nodes.calibration.estimate import CalibrationConfig
-
-    from .calibration import calibrate_video, camera_file_text, graph_would_use
+    from .calibration import calibrate_video, camera_file_text, estimate_config, graph_would_use
 
     if not positive(args, ("train_frames", "max_frames"), "calibrate"):
         return 2
@@ -47,9 +45,13 @@ def main(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    try:
+        config = estimate_config(args.fov, person_height=args.person_height, person_height_std=args.person_height_std)
+    except ValueError as exc:
+        print(f"counterpart calibrate: {exc}", file=sys.stderr)
+        return 2
 
     def work() -> dict:
-        config = CalibrationConfig(person_height=args.person_height, person_height_std=args.person_height_std)
         est, summary = calibrate_video(
             args.video, args.max_frames, args.train_frames, config, progress=FrameProgress("calibrate")
         )

@@ -23,6 +23,35 @@ from counterpart.nodes.calibration.smooth import credible
 Progress = Callable[[int, int], None]
 
 
+def estimate_config(fov_deg: float = 0.0, **priors: float) -> CalibrationConfig:
+    """The estimate's settings for a command's options.
+
+    Parameters
+    ----------
+    fov_deg : float, default=0.0
+        The camera's horizontal field of view, degrees (``--fov``); 0: unknown.
+    **priors : float
+        Other fields of ``CalibrationConfig`` (``person_height``, ``person_height_std``).
+
+    Returns
+    -------
+    CalibrationConfig
+        The settings.
+
+    Raises
+    ------
+    ValueError
+        Naming ``--fov`` where it is neither 0 nor in (1, 170) degrees.
+    """
+    config = CalibrationConfig(**priors)
+    if not fov_deg:
+        return config
+    try:
+        return config.with_known_fov(fov_deg)
+    except ValueError as exc:
+        raise ValueError(f"--fov: {exc}") from None
+
+
 def calibrate_video(
     path: str | os.PathLike[str],
     max_frames: int | None = None,

@@ -70,6 +70,24 @@ def add_video_arguments(p: argparse.ArgumentParser, out_help: str, max_frames_he
     p.add_argument("--max-frames", type=int, default=None, help=max_frames_help)
 
 
+def add_fov_argument(p: argparse.ArgumentParser) -> None:
+    """Add ``--fov DEG``, the camera's horizontal field of view where the user knows it, to a parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The parser (of the subcommand).
+    """
+    p.add_argument(
+        "--fov",
+        type=float,
+        default=0.0,
+        metavar="DEG",
+        help="the camera's horizontal field of view in degrees where known (its spec sheet): the focal length "
+        "is then kept within about 5%% of it, where people alone cannot fix it (default 0: estimated)",
+    )
+
+
 def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> bool:
     """Check that every named option that is set is at least 1.
 

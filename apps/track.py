@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from counterpart.apps.offline import FrameProgress, add_video_arguments, positive, run_offline
+from counterpart.apps.offline import FrameProgress, add_fov_argument, add_video_arguments, positive, run_offline
 from counterpart.body.camera import Camera, load_camera_file
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 from counterpart.nodes.tracker.prior import resolve_prior
@@ -59,6 +59,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=CALIBRATION_FRAMES,
         help=f"with --camera estimate: the first frames the camera is estimated from (default {CALIBRATION_FRAMES})",
     )
+    add_fov_argument(p)
     p.add_argument(
         "--prior",
         default="default",
@@ -109,9 +110,21 @@ def main(args: argparse.Namespace) -> int:
     int
         Exit code: 0 on success, 2 on bad input, 130 when interrupted.
     """
+    from .calibration import estimate_config
     from .tracking import track_video
 
     if not positive(args, ("layers", "particles", "train_frames", "max_frames", "calibration_frames"), "track"):
+        return 2
+    if args.fov and args.camera != ESTIMATE:
+        print(
+            f"counterpart track: --fov is for --camera estimate; the camera {args.camera!r} has its own focal length",
+            file=sys.stderr,
+        )
+        return 2
+    try:
+        estimate_config(args.fov)
+    except ValueError as exc:
+        print(f"counterpart track: {exc}", file=sys.stderr)
         return 2
 
     def work() -> dict:
@@ -164,12 +177,17 @@ def estimated_camera(args: argparse.Namespace) -> tuple[Camera | None, str]:
     source : str
         "estimated" or "default".
     """
-    from .calibration import calibrate_video, graph_would_use
+    from .calibration import calibrate_video, estimate_config, graph_would_use
 
     frames = min(args.calibration_frames, args.max_frames or args.calibration_frames)
     try:
         est, _ = calibrate_video(
-            args.video, frames, args.train_frames, progress=FrameProgress("track: camera"), backend=args.backend
+            args.video,
+            frames,
+            args.train_frames,
+            estimate_config(args.fov),
+            progress=FrameProgress("track: camera"),
+            backend=args.backend,
         )
     except ValueError as exc:
         print(f"[track] the default camera: no estimate of this video's camera ({exc})", file=sys.stderr, flush=True)

@@ -36,6 +36,9 @@ and the lines of the scene, one estimate at the end:
   the estimate and the true points with the room's true lines (``room_``, ``truth_room_``),
   the share within all three limits, within the height and tilt limits, within the focal limit, and
   the median focal error; the estimate's credible share;
+- ``calib_within_known_fov`` (and ``calib_known_fov``: the medians too): the estimate given the camera's
+  horizontal field of view to the whole degree, as a user reads it off a spec sheet (``--fov``,
+  ``calibration.fov_deg``): the focal length no longer left to the lines where they cannot fix it;
 - the reference in the same run: the default camera's errors (``calib_default_*``), what the graph
   uses without calibration.
 
@@ -81,7 +84,7 @@ from counterpart.apps.calibration import graph_would_use  # noqa: E402
 from counterpart.body.camera import Camera, default_camera  # noqa: E402
 from counterpart.body.people_detector import PeopleDetector  # noqa: E402
 from counterpart.body.skeleton import JOINT_INDEX  # noqa: E402
-from counterpart.nodes.calibration.estimate import CameraEstimate, estimate_camera  # noqa: E402
+from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate, estimate_camera  # noqa: E402
 from counterpart.nodes.calibration.lines import scene_lines  # noqa: E402
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people  # noqa: E402
 from counterpart.sim.camera import RandomCameraConfig  # noqa: E402
@@ -190,6 +193,9 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
     room = room_lines(truth, inputs["seed"])
     room_est = estimate_camera(head, foot, track, size, t, lines=room)
     oracle_room = estimate_camera(th, tf, tk, size, tt, lines=room)
+    # a user's spec sheet: the horizontal view to the whole degree
+    fov = round(float(np.degrees(2.0 * np.arctan(size[0] / 2.0 / truth.fx))))
+    known_fov = estimate_camera(head, foot, track, size, t, CalibrationConfig().with_known_fov(fov), lines)
     ok = est is not None and graph_would_use(est)
     default = default_camera(*size)
     published = estimate_errors(est, truth) if ok else errors(default.centre[1], tilt_deg(default), default.fx, truth)
@@ -206,6 +212,7 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
         "truth_points_lines": estimate_errors(oracle_lines, truth),
         "room_lines": estimate_errors(room_est, truth),
         "truth_points_room_lines": estimate_errors(oracle_room, truth),
+        "known_fov": estimate_errors(known_fov, truth),
         "default": errors(default.centre[1], tilt_deg(default), default.fx, truth),
     }
 
@@ -307,6 +314,8 @@ def sim_figures(
         "calib_truth_points_lines": summary([r["truth_points_lines"] for r in rows], ""),
         "calib_room_lines": summary([r["room_lines"] for r in rows], ""),
         "calib_truth_points_room_lines": summary([r["truth_points_room_lines"] for r in rows], ""),
+        "calib_known_fov": summary([r["known_fov"] for r in rows], ""),
+        "calib_within_known_fov": summary([r["known_fov"] for r in rows], "")["within"],
         **summary([r["default"] for r in rows], "calib_default_"),
         "calib_seeds": seeds,
         "calib_first_seed": first_seed,
@@ -336,6 +345,7 @@ def sim_figures(
                 "truth_points_lines",
                 "room_lines",
                 "truth_points_room_lines",
+                "known_fov",
             )
         }
         for r in rows

@@ -84,6 +84,16 @@ def test_at_zero_tilt_the_focal_length_is_reported_unknown() -> None:
     assert est.focal_std > 0.25, est.describe()  # the prior's width, not a made-up precision
 
 
+def test_a_known_field_of_view_fixes_the_focal_length_at_zero_tilt() -> None:
+    cam = _camera(1.6, 0.0, 45.0)
+    heads, feet, ids, t = _walkers(cam, seed=5)
+    est = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig().with_known_fov(46.0))
+    assert abs(est.focal / cam.fx - 1) < 0.05 and est.focal_std < 0.06, est.describe()
+    assert abs(est.tilt_deg) < 1.0 and abs(est.height / 1.6 - 1) < 0.10, est.describe()
+    with pytest.raises(ValueError, match="field of view 0.5 degrees"):
+        CalibrationConfig().with_known_fov(0.5)
+
+
 def test_too_few_observations_give_no_estimate_and_bad_shapes_are_named() -> None:
     cam = _camera(2.0, 15.0, 55.0)
     heads, feet, ids, t = _walkers(cam, seed=1, n_people=1, frames=10)

@@ -60,6 +60,21 @@ def test_calibrate_writes_a_camera_file_with_the_estimate_and_its_uncertainty(cl
     assert truth["camera_K"][0, 0] > 0  # the simulator's own camera is in its truth file, for comparison
 
 
+@pytest.mark.slow
+def test_a_known_field_of_view_fixes_the_focal_length_the_people_leave_open(clip: Path, tmp_path: Path) -> None:
+    # the clip above, whose 60 frames leave the focal length open, with the lens's view as a spec sheet gives it
+    fx = float(np.load(clip.parent / "truth.npz")["camera_K"][0, 0])
+    fov = round(float(np.degrees(2 * np.arctan(160.0 / fx))))
+    res = _cli("calibrate", str(clip), "--out", str(tmp_path / "camera.yaml"), "--fov", str(fov))
+    assert res.returncode == 0, res.stderr[-2000:]
+    est = json.loads(res.stdout.strip().splitlines()[-1])["estimate"]
+    assert abs(est["focal"] / fx - 1) < 0.05 and est["focal_std"] < 0.06, est
+    for bad in ("0.5", "200"):
+        res = _cli("calibrate", str(clip), "--out", str(tmp_path / "x.yaml"), "--fov", bad)
+        assert res.returncode == 2 and f"--fov: field of view {float(bad)!r} degrees" in res.stderr, res.stderr
+    assert not (tmp_path / "x.yaml").exists()
+
+
 def test_a_video_without_people_is_refused_with_the_reason(tmp_path: Path) -> None:
     video = tmp_path / "empty.avi"
     w = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (160, 120))

@@ -48,6 +48,11 @@ from counterpart.body.camera import Camera
 
 from .lines import LineFamilies, duplicate_weights, segment_angles
 
+#: std of the focal length's prior (log f) for a field of view the user gives
+#: (:meth:`CalibrationConfig.with_known_fov`): a spec sheet's figure is for a lens model, a crop or
+#: a video mode may narrow it a little
+KNOWN_FOV_STD = 0.05
+
 
 @dataclass(frozen=True)
 class CalibrationConfig:
@@ -170,6 +175,36 @@ class CalibrationConfig:
     lines_focal_log_std: float = 0.5
     max_track_spread: float | None = 0.15
     propagate_lines: bool = True
+
+    def with_known_fov(self, fov_deg: float, rel_std: float = KNOWN_FOV_STD) -> CalibrationConfig:
+        """These settings for a camera whose horizontal field of view is known (its spec sheet, a
+        lens's focal length over the sensor's width): the prior on the focal length, in the joint fit
+        and in the lines' fit alike, centred on it and ``rel_std`` wide. Where neither the people nor
+        the scene's lines fix the focal length (a camera nearly level, or facing a wall square, so
+        that one horizontal vanishing point lies near infinity), it is then the lens's.
+
+        Parameters
+        ----------
+        fov_deg : float
+            The horizontal field of view, degrees, in (1, 170).
+        rel_std : float, default=KNOWN_FOV_STD
+            Std of the prior on log f (relative): how sure the figure is.
+
+        Returns
+        -------
+        CalibrationConfig
+            A copy with ``fov_deg``, ``focal_log_std`` and ``lines_focal_log_std`` set.
+
+        Raises
+        ------
+        ValueError
+            A field of view outside (1, 170) degrees, or a ``rel_std`` that is not positive.
+        """
+        if not 1.0 < fov_deg < 170.0:
+            raise ValueError(f"field of view {fov_deg!r} degrees: the camera's horizontal view must be in (1, 170)")
+        if not rel_std > 0:
+            raise ValueError(f"rel_std {rel_std!r}: must be > 0")
+        return replace(self, fov_deg=float(fov_deg), focal_log_std=rel_std, lines_focal_log_std=rel_std)
 
 
 @dataclass(frozen=True)

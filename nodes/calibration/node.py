@@ -10,7 +10,8 @@ node's people and estimates the camera from them and from the straight lines of 
 (``counterpart.nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
 upright people against a prior on human height; on a frame where the silhouettes hold no upright
 person, as when people standing still are absorbed into the background, from the people
-detector's boxes, on ``detect_frames`` frames at most). Until an estimate is credible (people seen over
+detector's boxes, on ``detect_frames`` frames at most; with ``fov_deg``, the camera's horizontal field
+of view where the user knows it, the focal length is held near it). Until an estimate is credible (people seen over
 ``min_seconds``; uncertainties under the ``max_*_std`` bounds; the estimates from the two halves
 of the window near the whole's, ``max_split_*``; the horizon seen, by people at different depths or by scene lines
 converging on it) the default camera stays; then the published
@@ -39,7 +40,7 @@ from counterpart.body.people_detector import PeopleDetector
 from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import CameraInfo, Frame, Silhouettes
 
-from .estimate import CameraEstimate
+from .estimate import CalibrationConfig, CameraEstimate
 from .observe import PeopleObservations, SceneFrames, detect_people
 from .pacing import EstimatePacing, PacingConfig
 from .smooth import CameraSmoother, credible
@@ -52,6 +53,12 @@ def _check_file(value: str) -> str | None:
         load_camera_file(value)
     except ValueError as exc:
         return str(exc)
+    return None
+
+
+def _check_fov(value: float) -> str | None:
+    if value and not value > 1.0:
+        return f"{value!r}: a horizontal field of view in degrees, over 1 (0: unknown)"
     return None
 
 
@@ -84,6 +91,15 @@ class Calibration(Node):
             False,
             "without a file: estimate the camera from the people in view "
             "(subscribes to silhouettes) and refine it while the graph runs",
+        ),
+        "fov_deg": Param(
+            float,
+            0.0,
+            "estimate: the camera's horizontal field of view in degrees where known (its spec sheet); "
+            "the focal length is then kept within about 5% of it; 0: unknown, estimated",
+            min=0.0,
+            max=169.9,
+            check=_check_fov,
         ),
         "every": Param(int, 10, "estimate: frames between two estimates", min=1),
         "cpu_share": Param(
@@ -176,6 +192,8 @@ class Calibration(Node):
         #: frames kept for the scene's lines and the people detector until their people come (seq -> image)
         self.images: dict[int, np.ndarray] = {}
         self.detector = PeopleDetector() if self.p["estimate"] and self.p["detect_frames"] else None
+        fov = self.p["fov_deg"]
+        self.config = CalibrationConfig().with_known_fov(fov) if fov else CalibrationConfig()
 
     def on_frame(self, msg: Frame) -> None:
         """Publish the camera when the frames change size; keep the frames the scene's lines need.
@@ -263,7 +281,7 @@ class Calibration(Node):
                 self._step_towards(self.latest, msg)
             return
         cpu0 = time.thread_time()
-        est = self.observations.estimate(lines=self.scene.families())
+        est = self.observations.estimate(self.config, lines=self.scene.families())
         self.pacing.spend(time.thread_time() - cpu0)
         if est is None or not credible(
             est,
