@@ -56,7 +56,7 @@ def main(args: argparse.Namespace) -> int:
             args.video, args.max_frames, args.train_frames, config, progress=FrameProgress("calibrate")
         )
         camera = est.camera()
-        text = camera_file_text(camera, est, args.video)
+        text = camera_file_text(camera, est, args.video, args.fov)
         with open(args.out, "w", encoding="utf-8") as f:
             f.write(text)
         print(f"[calibrate] {est.describe()}", file=sys.stderr, flush=True)
@@ -69,7 +69,13 @@ def main(args: argparse.Namespace) -> int:
                 file=sys.stderr,
                 flush=True,
             )
-        return {**summary, "estimate": est.summary(), "graph_would_use": used, "out": args.out}
+        return {
+            **summary,
+            "estimate": est.summary(),
+            "fov_given_deg": args.fov or None,
+            "graph_would_use": used,
+            "out": args.out,
+        }
 
     return run_offline("calibrate", args.out, work)
 

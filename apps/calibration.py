@@ -156,7 +156,7 @@ def graph_would_use(est: CameraEstimate) -> bool:
     )
 
 
-def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
+def camera_file_text(camera: Camera, est: CameraEstimate, video: str, fov_given: float = 0.0) -> str:
     """A calibration file (YAML, ``Camera.to_dict``, which ``counterpart.body.camera.load_camera_file`` reads),
     with the estimate and its uncertainty as comments.
 
@@ -168,6 +168,8 @@ def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
         The estimate, written as comments (description and one-std uncertainties).
     video : str
         The video the camera was estimated from, named in the first comment.
+    fov_given : float, default=0.0
+        The horizontal field of view the user gave (``--fov``), degrees, said in a comment; 0: none.
 
     Returns
     -------
@@ -183,6 +185,8 @@ def camera_file_text(camera: Camera, est: CameraEstimate, video: str) -> str:
         f"{est.roll_std_deg:.1f} deg, height {100 * est.height_std:.0f}%; people's heights "
         + ", ".join(f"{h:.2f} m" for h in est.people_heights),
     ]
+    if fov_given:
+        head.append(f"# the horizontal field of view given (--fov): {fov_given:g} deg")
     d = camera.to_dict()
     return "\n".join(head) + "\n" + yaml.safe_dump(d, default_flow_style=None, sort_keys=False)
 

@@ -67,8 +67,13 @@ def test_a_known_field_of_view_fixes_the_focal_length_the_people_leave_open(clip
     fov = round(float(np.degrees(2 * np.arctan(160.0 / fx))))
     res = _cli("calibrate", str(clip), "--out", str(tmp_path / "camera.yaml"), "--fov", str(fov))
     assert res.returncode == 0, res.stderr[-2000:]
-    est = json.loads(res.stdout.strip().splitlines()[-1])["estimate"]
+    summary = json.loads(res.stdout.strip().splitlines()[-1])
+    est = summary["estimate"]
     assert abs(est["focal"] / fx - 1) < 0.05 and est["focal_std"] < 0.06, est
+    assert (
+        summary["fov_given_deg"] == fov
+        and f"field of view given (--fov): {fov} deg" in (tmp_path / "camera.yaml").read_text()
+    )
     for bad in ("0.5", "200"):
         res = _cli("calibrate", str(clip), "--out", str(tmp_path / "x.yaml"), "--fov", bad)
         assert res.returncode == 2 and f"--fov: field of view {float(bad)!r} degrees" in res.stderr, res.stderr
