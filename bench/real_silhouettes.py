@@ -2,7 +2,7 @@
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
            [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7] [--no-cut]
-           [--white-balance 1.06,1,0.95] [--no-infrared]
+           [--white-balance 1.06,1,0.95] [--no-infrared] [--noise 6]
            [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
@@ -58,6 +58,12 @@ ours as it is (``*_shaken``: the shake followed, ``nodes/silhouette/shake.py``) 
 left unfollowed (``*_shaken_unfollowed``, the algorithm for a still camera): ``people_found_shaken``,
 ``keypoint_coverage_shaken`` and the same ``_unfollowed``; ``shake_err_px_median`` and ``_p95``, the
 error of the followed shift against the true one per frame (pixels); ``fps_shaken``.
+
+A noisy camera (a webcam in a dim room, a small sensor): each clip again with Gaussian noise of
+``--noise`` grey levels added to every pixel of every frame, through ours as it is (``*_noisy``: the
+camera's noise measured on the training frames and its frames smoothed, ``nodes/silhouette/denoise.py``)
+and without the smoothing (``*_noisy_unsmoothed``): ``people_found_noisy``, ``keypoint_coverage_noisy``,
+``extra_people_noisy``, ``person_clips_covered_noisy`` and the same ``_unsmoothed``.
 
 A grey or infrared camera (three equal channels, however they come): each clip again made grey,
 through ours as it is (``*_grey``: the background found monochrome, its shadows and highlights
@@ -301,6 +307,7 @@ def run_clip(
     white_balance: tuple[float, float, float] | None = None,
     infrared: bool = False,
     colour_switch: ColourSwitchConfig | None = None,
+    noise: float = 0.0,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
 
@@ -311,6 +318,8 @@ def run_clip(
     come). ``light``: the light's gain from frame ``LIGHT_FRAME`` on (a light switched on or off).
     ``cut``: the clip cut off above the people's knees (:func:`cut_frames`). ``white_balance``: the
     gains of B, G and R from frame ``LIGHT_FRAME`` on (the camera's white balance turning).
+    ``noise``: Gaussian noise of that std (grey levels) added to every pixel of every frame, as a
+    camera in low light gives (seeded by the clip's name and the frame).
     ``infrared``: the frames from ``LIGHT_FRAME`` on as a day/night camera's infrared picture
     (``sim.infrared.infrared_frames``). ``backend``: subtractor parameters over ours (or the baseline's);
     ``colour_switch``: the extractor's (None: its default).
@@ -334,6 +343,14 @@ def run_clip(
         frames = np.concatenate([frames[:LIGHT_FRAME], np.clip(np.rint(lit), 0, 255).astype(np.uint8)])
     if infrared:
         frames = np.concatenate([frames[:LIGHT_FRAME], infrared_frames(frames[LIGHT_FRAME:])])
+    if noise > 0:
+        seed = [int(v) for v in path.stem.split("_")]
+        frames = np.stack(
+            [
+                np.clip(f + np.random.default_rng([*seed, t]).normal(0.0, noise, f.shape), 0, 255).astype(np.uint8)
+                for t, f in enumerate(frames)
+            ]
+        )
     base = {} if ours else BASELINE
     params = {"train_frames": train_frames, **base.get("backend_params", {}), **(backend or {})}
     follow = params.get("shake", True) is not False
@@ -379,6 +396,8 @@ def run_clip(
 
 #: amplitude of the shaken pass's camera shake, pixels (``--shake-px``)
 SHAKE_PX = 2.0
+#: std of the noisy pass's noise, grey levels (``--noise``): a webcam in a dim room
+NOISE = 6.0
 
 
 def extra_passes(
@@ -388,6 +407,7 @@ def extra_passes(
     cut: bool = True,
     white_balance: tuple[float, float, float] | None = None,
     infrared: bool = True,
+    noise: float = 0.0,
 ) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
@@ -396,7 +416,8 @@ def extra_passes(
     off above the knees, with people cut off by the frame looked for and not (``cut``); the clips
     whose white balance turns by ``white_balance`` from ``LIGHT_FRAME`` on, each channel followed
     and the channels only together (not None); the clips turned infrared from ``LIGHT_FRAME`` on,
-    the background learnt again and not (``infrared``).
+    the background learnt again and not (``infrared``); the clips with a noisy camera's noise of
+    ``noise`` grey levels, its frames smoothed and not (``noise`` > 0).
     """
     out: dict[str, dict[str, Any]] = {}
     if cut:
@@ -411,9 +432,13 @@ def extra_passes(
     if infrared:
         out["ir"] = {"infrared": True}
         out["ir_unfollowed"] = {"infrared": True, "colour_switch": ColourSwitchConfig(frames=0)}
+    if noise > 0:
+        out["noisy"] = {"noise": noise}
+        out["noisy_unsmoothed"] = {"noise": noise, "backend": {"denoise": False}}
     if shake_px > 0:
         out["shaken"] = {"shake_px": shake_px}
-        out["shaken_unfollowed"] = {"shake_px": shake_px, "backend": {"shake": False}}
+        # the frames as they come: the shake left in the training frames would read as noise and be smoothed
+        out["shaken_unfollowed"] = {"shake_px": shake_px, "backend": {"shake": False, "denoise": False}}
     if grey:
         out["grey"] = {"grey": True}
         out["grey_colour_bounds"] = {"grey": True, "backend": {"mono_chroma_deg": 0.0}}
@@ -503,6 +528,12 @@ def main(argv: list[str] | None = None) -> int:
         default=",".join(str(v) for v in WHITE_BALANCE),
         help=f"gains of B,G,R from frame {LIGHT_FRAME} on in the white-balance pass ('1,1,1': no such pass)",
     )
+    ap.add_argument(
+        "--noise",
+        type=float,
+        default=NOISE,
+        help="std of the noise added to every frame of the noisy pass, grey levels (0: no noisy pass)",
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -521,6 +552,7 @@ def main(argv: list[str] | None = None) -> int:
         not args.no_cut,
         None if wb == (1, 1, 1) else wb,
         not args.no_infrared,
+        args.noise,
     )
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
@@ -557,6 +589,8 @@ def main(argv: list[str] | None = None) -> int:
     for m in passes:
         for k in ("people_found", "keypoint_coverage", "extra_people", "person_clips_covered", "people_share"):
             report[f"{k}_{m}"] = report[main_split][m][k]
+    if "noisy" in passes:
+        report["noise"] = args.noise
     if "lit" in passes:
         report["light"] = args.light
     if "wb" in passes:

@@ -117,7 +117,15 @@ def foreground_outside_person(follow: bool) -> tuple[float, float]:
     frames, masks = scene(60)
     shift = shake_path(len(frames), 2.0, 11)
     moved, moved_masks = shaken(frames, shift), shaken(masks.view(np.uint8), shift).view(bool)
-    sub = make_subtractor("horprasert", train_frames=30, people_aware=False, shake=None if follow else False)
+    # unfollowed, the frames go in as they come: the shake left in the training frames would read as
+    # a noisy camera's noise, and smoothing them would hide part of the room's edges
+    sub = make_subtractor(
+        "horprasert",
+        train_frames=30,
+        people_aware=False,
+        shake=None if follow else False,
+        denoise=None if follow else False,
+    )
     room, person = [], []
     for f, m in zip(moved, moved_masks):
         fg = sub.apply(f)

@@ -26,6 +26,7 @@ from . import kernels
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
 from .body_shadow import BodyShadowConfig, reclaim_body_shadow
 from .deferred import DeferredStep
+from .denoise import DenoiseConfig, frame_noise, smooth, smoothing_sigma
 from .people import fit_around_people
 from .samples import SampleConsensus
 from .shake import ShakeConfig, ShakeEstimator, align, align_stack, unalign_labels
@@ -87,6 +88,10 @@ class HorprasertSubtractor:
         the frame's); the training frames are aligned on one another (``shake.align_stack``).
         None: ``ShakeConfig()``;
         ``False``: off (a camera known to be still).
+    denoise : DenoiseConfig or None or bool, default=None
+        Smooth the frames of a noisy camera before they are compared (``denoise``): the noise is
+        measured on the training frames, and frames noisier than its floor are smoothed, at the fit
+        and after it, by ``smoothing_sigma_`` pixels. None: ``DenoiseConfig()``; ``False``: never.
     fit_in_background : bool, default=False
         Fit on the collected training frames in a thread of its own and return at once: the
         frames that come while it runs get no foreground (``ready`` False) and are not learnt; the
@@ -116,6 +121,7 @@ class HorprasertSubtractor:
         threaded: bool = True,
         body_shadow: BodyShadowConfig | None = None,
         shake: ShakeConfig | None | bool = None,
+        denoise: DenoiseConfig | None | bool = None,
         fit_in_background: bool = False,
         **model_params: Any,
     ) -> None:
@@ -145,6 +151,11 @@ class HorprasertSubtractor:
         if shake is True:
             shake = None
         self.shake = None if shake is False else ShakeEstimator(shake)
+        self.denoise = None if denoise is False else (DenoiseConfig() if denoise in (None, True) else denoise)
+        #: the camera's noise over the training frames (grey levels, ``denoise.frame_noise``) and the
+        #: Gaussian (pixels) every frame is smoothed by before it is compared (0: none), set by the fit
+        self.noise_ = 0.0
+        self.smoothing_sigma_ = 0.0
         #: model pixels to leave out of the next frame's shift (:func:`moving_pixels`)
         self._moving: np.ndarray | None = None
         self._deferred = DeferredStep("horprasert-update")
@@ -211,6 +222,11 @@ class HorprasertSubtractor:
         if self.shake is not None:
             stack = align_stack(stack, self.shake.config)
             self.shake.last, self._moving = None, None
+        # measured on the aligned frames: a shake left in them would pass for noise at every edge
+        self.noise_ = frame_noise(stack)
+        self.smoothing_sigma_ = 0.0 if self.denoise is None else smoothing_sigma(self.noise_, self.denoise)
+        if self.smoothing_sigma_ > 0:
+            stack = np.stack([smooth(f, self.smoothing_sigma_) for f in stack])
         robust = self.robust if robust is None else robust
         if robust and self.people_aware:
             fit_around_people(self.model, stack, detector=self.detector, hints=self.hints)
@@ -272,7 +288,9 @@ class HorprasertSubtractor:
                 self.labels = np.full(frame.shape[:2], BACKGROUND, np.uint8)
                 return np.zeros(frame.shape[:2], bool)
             self.fit(self._buffer)
-        if self.threaded:
+        if self.smoothing_sigma_ > 0:
+            frame = smooth(frame, self.smoothing_sigma_)  # a new array, the worker's own
+        elif self.threaded:
             # the worker reads the frame after this returns, when the caller may have reused it;
             # the same copy goes to apply, whose per-frame terms update reuses (they are keyed
             # by the frame object)

@@ -165,6 +165,10 @@ def _check_frame(frame: np.ndarray, shape: tuple[int, int]) -> None:
         raise ValueError(f"frame must be a uint8 BGR array of shape {(*shape, 3)} (the training size), got {got}")
 
 
+class NoRoomSeen(ValueError):
+    """The samples left out of a fit (``exclude``) leave no pixel seen as the room in enough frames."""
+
+
 @dataclass(frozen=True)
 class ThresholdConfig:
     """How the classification thresholds of eq. 9 are chosen.
@@ -732,7 +736,7 @@ class HorprasertBackground:
             mean, spread, n_free = _mean_std(stack, free)
         unseen = n_free < min(max(3.0, self.training.min_free_frac * n), n)
         if unseen.all():
-            raise ValueError("exclude leaves no pixel with enough background samples to learn from")
+            raise NoRoomSeen("exclude leaves no pixel with enough background samples to learn from")
         if unseen.any():
             mean, spread = _fill_unseen(mean, spread, unseen, self.training.unseen_spread_gain)
         return mean, spread, unseen

@@ -196,6 +196,14 @@ class Silhouette(Node):
             "wooden floor, a hand): each frame's shift against the background is found and "
             "the frame compared on the background's pixels; false: a camera known to be still",
         ),
+        "denoise": Param(
+            bool,
+            True,
+            "horprasert: a camera whose noise over the training frames is over 3 grey levels (low "
+            "light, a small sensor) has its frames smoothed before they are compared, by a Gaussian "
+            "of a third of a pixel per grey level of noise (up to 2 pixels), so that people do not fall "
+            "apart into pieces; false: never",
+        ),
         "shadow_ncc": Param(
             float,
             0.4,
@@ -301,6 +309,20 @@ class Silhouette(Node):
             self._warned.add(kind)
             self.log.warning(text, *args)
 
+    def _say_smoothing(self) -> None:
+        """Say, once a background is learnt, whether the camera was found noisy and its frames are smoothed."""
+        sub = self.extractor.subtractor
+        sigma = getattr(sub, "smoothing_sigma_", 0.0)
+        self.figures["camera_noise"] = round(float(getattr(sub, "noise_", 0.0)), 2)
+        self.figures["smoothing_px"] = round(float(sigma), 2)
+        if sigma > 0:
+            self.log.info(
+                "a noisy camera (%.1f grey levels over the training frames): each frame is smoothed by a "
+                "Gaussian of %.1f pixels before it is compared (silhouette.denoise: false for none)",
+                sub.noise_,
+                sigma,
+            )
+
     def _new_extractor(self, mono: bool) -> SilhouetteExtractor:
         p = self.p
         backend_params: dict[str, Any] = {}
@@ -314,6 +336,7 @@ class Silhouette(Node):
                 "absorb_frames": None if p["absorb_frames"] < 0 else p["absorb_frames"],
                 "dynamic": p["dynamic"],
                 "shake": None if p["shake"] else False,
+                "denoise": None if p["denoise"] else False,
                 "shadow_ncc": p["shadow_ncc"],
                 "body_shadow": BodyShadowConfig(
                     span_px=p["body_shadow_px"], leg_ncc=p["body_shadow_leg_ncc"], leg_scale=p["body_shadow_leg_scale"]
@@ -367,6 +390,7 @@ class Silhouette(Node):
         if training and self._fit_started is None and getattr(ex.subtractor, "fitting", False):
             self._fit_started = t0  # this frame's call started the fit in the background
         if training and ex.subtractor.ready:  # this frame's call learnt the background (or took it up)
+            self._say_smoothing()
             now = time.perf_counter()
             self.tally("fit_ms", round((now - t0) * 1e3, 1))
             # from the last training frame to the first frame with the model: the fit's own time
@@ -439,6 +463,7 @@ class Silhouette(Node):
         if len(held) >= 2:
             self.extractor.fit_background([img for _, img, _ in held], robust=self.p["robust"])
             self.log.info("background learnt from %d frames", len(held))
+            self._say_smoothing()
         else:
             self._warn_once(
                 "short",

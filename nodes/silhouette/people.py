@@ -35,7 +35,7 @@ import numpy as np
 
 from counterpart.body.people_detector import PeopleDetector, box_iou
 
-from .background import FOREGROUND, HorprasertBackground, as_frame_stack
+from .background import FOREGROUND, HorprasertBackground, NoRoomSeen, as_frame_stack
 
 #: in a box whose room was filled in from around it, a pixel this much darker or brighter than
 #: the filled-in room (raw brightness distortion) is taken for the person: the guess is good to
@@ -411,7 +411,13 @@ def fit_around_people(
         model.fit(stack, robust=True)
         return np.zeros((n, h, w), bool)
     boxes = np.stack([box_mask((h, w), b, box_grow) for b, _ in near])
-    model.fit(stack, robust=True, exclude=boxes)
+    try:
+        model.fit(stack, robust=True, exclude=boxes)
+    except NoRoomSeen:
+        # boxes over the whole frame in most frames (a crowd, or the detector's false boxes on a
+        # noisy picture) leave no room to learn around them: the plain robust fit, as with no one found
+        model.fit(stack, robust=True)
+        return np.zeros((n, h, w), bool)
     if not model.unseen_.any():
         # everyone found moved enough for the room behind them to be seen in most frames (the
         # robust median copes with them): the fit without their boxes is the answer
