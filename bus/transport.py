@@ -46,6 +46,10 @@ QUEUED_HWM = 64
 #: plus MAX_SEND_RATE per second since then (far above what a Python publisher sends); a larger jump
 #: is a forged or corrupt counter, not a loss
 COUNTER_SLACK = 10_000
+#: milliseconds an end of stream that came ahead of the lossy socket's messages waits for them
+EOS_GRACE_MS = 20
+#: the same when none of them has come yet (:meth:`Subscriber._eos_grace_ms`)
+EOS_GRACE_FIRST_MS = 2000
 MAX_SEND_RATE = 1_000_000
 #: bytes: frames below this are copied into ZeroMQ, larger ones go out zero-copy. A zero-copy frame
 #: costs pyzmq a wake-up of its garbage-collector thread (which takes the GIL) once ZeroMQ has sent
@@ -666,7 +670,7 @@ class Subscriber:
         try:
             frames = self._next_queued() if self.queued else self._recv(zmq.NOBLOCK)
         except zmq.Again:
-            if self._pending_eos is not None and not self.socket.poll(20, zmq.POLLIN):
+            if self._pending_eos is not None and not self.socket.poll(self._eos_grace_ms(), zmq.POLLIN):
                 msg, self._pending_eos = self._pending_eos, None
                 last, n = self._last_counter, self._eos_counter
                 # the end may have been read before the messages still queued ahead of it: no time
@@ -705,6 +709,15 @@ class Subscriber:
             return msg
         self.count += 1
         return msg
+
+    def _eos_grace_ms(self) -> int:
+        """How long an end of stream that overtook the lossy socket waits for what is in flight there:
+        ``EOS_GRACE_MS``; ``EOS_GRACE_FIRST_MS`` when nothing came on it yet though the end says
+        messages were sent (the first of a burst is always queued for a subscriber that was there
+        before it, so it is on its way, late only on a loaded machine).
+        """
+        n = self._eos_counter
+        return EOS_GRACE_FIRST_MS if self._last_counter is None and type(n) is int and n > 0 else EOS_GRACE_MS
 
     def _finish(self) -> None:
         """End of stream: unsubscribing tells the publisher we read to the end (it waits for that)."""
