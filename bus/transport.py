@@ -46,11 +46,11 @@ QUEUED_HWM = 64
 #: plus MAX_SEND_RATE per second since then (far above what a Python publisher sends); a larger jump
 #: is a forged or corrupt counter, not a loss
 COUNTER_SLACK = 10_000
+MAX_SEND_RATE = 1_000_000
 #: milliseconds an end of stream that came ahead of the lossy socket's messages waits for them
 EOS_GRACE_MS = 20
 #: the same when none of them has come yet (:meth:`Subscriber._eos_grace_ms`)
 EOS_GRACE_FIRST_MS = 2000
-MAX_SEND_RATE = 1_000_000
 #: bytes: frames below this are copied into ZeroMQ, larger ones go out zero-copy. A zero-copy frame
 #: costs pyzmq a wake-up of its garbage-collector thread (which takes the GIL) once ZeroMQ has sent
 #: it; that outweighs copying a 320x240 gray image (76,800 B) but not a 640x480 BGR one (921,600 B).

@@ -414,8 +414,8 @@ def fit_around_people(
     try:
         model.fit(stack, robust=True, exclude=boxes)
     except NoRoomSeen:
-        # boxes over the whole frame in most frames (a crowd, or the detector's false boxes on a
-        # noisy picture) leave no room to learn around them: the plain robust fit, as with no one found
+        # boxes over the whole frame in most frames (people standing still across a narrow frame, a
+        # crowd) leave no room to learn around them: the plain robust fit, as with no one found
         model.fit(stack, robust=True)
         return np.zeros((n, h, w), bool)
     if not model.unseen_.any():
