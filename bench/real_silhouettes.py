@@ -2,7 +2,7 @@
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
            [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7] [--no-cut]
-           [--white-balance 1.06,1,0.95] [--no-infrared] [--noise 6]
+           [--white-balance 1.06,1,0.95] [--no-infrared] [--noise 6] [--shrink 0.35]
            [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
@@ -64,6 +64,13 @@ A noisy camera (a webcam in a dim room, a small sensor): each clip again with Ga
 camera's noise measured on the training frames and its frames smoothed, ``nodes/silhouette/denoise.py``)
 and without the smoothing (``*_noisy_unsmoothed``): ``people_found_noisy``, ``keypoint_coverage_noisy``,
 ``extra_people_noisy``, ``person_clips_covered_noisy`` and the same ``_unsmoothed``.
+
+Small people (a small video, people far from the camera): each clip again scaled by ``--shrink``
+(0.35: the people 35-100 pixels tall, some shorter than the HOG detector's window), through ours as
+it is (``*_small``: a training frame in which the detector finds no one searched again enlarged,
+``PeopleDetector``'s ``enlarge``) and without that search (``*_small_unenlarged``):
+``people_found_small``, ``keypoint_coverage_small``, ``extra_people_small``,
+``person_clips_covered_small`` and the same ``_unenlarged``.
 
 A grey or infrared camera (three equal channels, however they come): each clip again made grey,
 through ours as it is (``*_grey``: the background found monochrome, its shadows and highlights
@@ -129,6 +136,7 @@ import numpy as np
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.silhouette.colour_switch import ColourSwitchConfig
+from counterpart.nodes.silhouette.people import CUT_OFF_BELOW
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, process_frames, read_frames
 from counterpart.sim.camera_shake import shake_path, shaken
 from counterpart.sim.infrared import infrared_frames
@@ -308,6 +316,7 @@ def run_clip(
     infrared: bool = False,
     colour_switch: ColourSwitchConfig | None = None,
     noise: float = 0.0,
+    shrink: float = 1.0,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
 
@@ -319,7 +328,8 @@ def run_clip(
     ``cut``: the clip cut off above the people's knees (:func:`cut_frames`). ``white_balance``: the
     gains of B, G and R from frame ``LIGHT_FRAME`` on (the camera's white balance turning).
     ``noise``: Gaussian noise of that std (grey levels) added to every pixel of every frame, as a
-    camera in low light gives (seeded by the clip's name and the frame).
+    camera in low light gives (seeded by the clip's name and the frame). ``shrink`` < 1: the clip's
+    frames and its reference keypoints scaled by it (people far from the camera, a small video).
     ``infrared``: the frames from ``LIGHT_FRAME`` on as a day/night camera's infrared picture
     (``sim.infrared.infrared_frames``). ``backend``: subtractor parameters over ours (or the baseline's);
     ``colour_switch``: the extractor's (None: its default).
@@ -327,6 +337,9 @@ def run_clip(
     frames = read_frames(path)
     ref = np.load(DATA / "keypoints" / f"{path.stem}.npz")
     kp, vis = ref["kp"], ref["vis"]
+    if shrink != 1.0:
+        frames = np.stack([cv2.resize(f, None, fx=shrink, fy=shrink, interpolation=cv2.INTER_AREA) for f in frames])
+        kp = kp * shrink
     n = min(len(frames), len(kp))
     true_shift = None
     if shake_px > 0:
@@ -398,6 +411,8 @@ def run_clip(
 SHAKE_PX = 2.0
 #: std of the noisy pass's noise, grey levels (``--noise``): a webcam in a dim room
 NOISE = 6.0
+#: the scale of the small pass's clips (``--shrink``): their people 35-100 pixels tall
+SHRINK = 0.35
 
 
 def extra_passes(
@@ -408,6 +423,7 @@ def extra_passes(
     white_balance: tuple[float, float, float] | None = None,
     infrared: bool = True,
     noise: float = 0.0,
+    shrink: float = 1.0,
 ) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
@@ -417,7 +433,9 @@ def extra_passes(
     whose white balance turns by ``white_balance`` from ``LIGHT_FRAME`` on, each channel followed
     and the channels only together (not None); the clips turned infrared from ``LIGHT_FRAME`` on,
     the background learnt again and not (``infrared``); the clips with a noisy camera's noise of
-    ``noise`` grey levels, its frames smoothed and not (``noise`` > 0).
+    ``noise`` grey levels, its frames smoothed and not (``noise`` > 0); the clips scaled by
+    ``shrink``, frames in which the detector finds no one searched again enlarged and not
+    (``shrink`` < 1).
     """
     out: dict[str, dict[str, Any]] = {}
     if cut:
@@ -435,6 +453,9 @@ def extra_passes(
     if noise > 0:
         out["noisy"] = {"noise": noise}
         out["noisy_unsmoothed"] = {"noise": noise, "backend": {"denoise": False}}
+    if shrink < 1.0:
+        out["small"] = {"shrink": shrink}
+        out["small_unenlarged"] = {"shrink": shrink, "backend": {"detector": PeopleDetector(below_frac=CUT_OFF_BELOW)}}
     if shake_px > 0:
         out["shaken"] = {"shake_px": shake_px}
         # the frames as they come: the shake left in the training frames would read as noise and be smoothed
@@ -534,6 +555,12 @@ def main(argv: list[str] | None = None) -> int:
         default=NOISE,
         help="std of the noise added to every frame of the noisy pass, grey levels (0: no noisy pass)",
     )
+    ap.add_argument(
+        "--shrink",
+        type=float,
+        default=SHRINK,
+        help="scale of the clips of the small pass, in (0, 1] (1: no small pass)",
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -545,6 +572,8 @@ def main(argv: list[str] | None = None) -> int:
     wb = tuple(float(v) for v in args.white_balance.split(","))
     if len(wb) != 3 or min(wb) <= 0:
         ap.error(f"--white-balance {args.white_balance!r}: give three positive gains B,G,R, e.g. 1.06,1,0.95")
+    if not 0.0 < args.shrink <= 1.0:
+        ap.error(f"--shrink {args.shrink}: give a scale in (0, 1], e.g. 0.35 (1: no small pass)")
     passes = extra_passes(
         args.shake_px,
         not args.no_grey,
@@ -553,6 +582,7 @@ def main(argv: list[str] | None = None) -> int:
         None if wb == (1, 1, 1) else wb,
         not args.no_infrared,
         args.noise,
+        args.shrink,
     )
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
@@ -591,6 +621,8 @@ def main(argv: list[str] | None = None) -> int:
             report[f"{k}_{m}"] = report[main_split][m][k]
     if "noisy" in passes:
         report["noise"] = args.noise
+    if "small" in passes:
+        report["shrink"] = args.shrink
     if "lit" in passes:
         report["light"] = args.light
     if "wb" in passes:

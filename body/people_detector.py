@@ -26,6 +26,12 @@ _CUT_OFF = 0.1
 #: shrunk to this first (its people near the camera are large; at 1080 rows the search would cost
 #: several times the plain one)
 _CUT_OFF_ROWS = 360
+#: rows of the detector's window: no one shorter than its person (``_PERSON_IN_WINDOW``) is found
+#: in a frame at its own scale
+_WINDOW_ROWS = 128
+#: the most rows of a frame enlarged to find people too short for the window (``enlarge``): a
+#: bigger frame is enlarged less, or not at all (the search's cost grows with its pixels)
+_ENLARGED_ROWS = 720
 
 
 class PeopleDetector:
@@ -54,11 +60,16 @@ class PeopleDetector:
         tenth of their height) and overlap no one found in the frame as it is are added, their
         boxes cut at the frame's bottom; 0: not looked for (the detector's cost is then one
         pass); in [0, 2].
+    enlarge : float, default=1.0
+        In a frame where no one is found, the frame enlarged by this factor is searched again for
+        people too short for the detector's window at the frame's own scale (under about 120
+        pixels: people far from the camera, or a small video), at those sizes only; 1: not
+        searched. In [1, 4].
 
     Raises
     ------
     ValueError
-        If ``scale``, ``stride``, ``pad_frac`` or ``below_frac`` is out of range.
+        If ``scale``, ``stride``, ``pad_frac``, ``below_frac`` or ``enlarge`` is out of range.
     """
 
     def __init__(
@@ -69,6 +80,7 @@ class PeopleDetector:
         stride: int = 8,
         pad_frac: float = 0.15,
         below_frac: float = 0.0,
+        enlarge: float = 1.0,
     ) -> None:
         if scale <= 1.0:
             raise ValueError(f"scale must be > 1, got {scale}")
@@ -78,14 +90,19 @@ class PeopleDetector:
             raise ValueError(f"pad_frac must be in [0, 1], got {pad_frac}")
         if not 0.0 <= below_frac <= 2.0:
             raise ValueError(f"below_frac must be in [0, 2], got {below_frac}")
+        if not 1.0 <= enlarge <= 4.0:
+            raise ValueError(f"enlarge must be in [1, 4], got {enlarge}")
         self.hit_threshold = hit_threshold
         self.min_score = min_score
         self.scale = scale
         self.stride = stride
         self.pad_frac = pad_frac
         self.below_frac = below_frac
-        self._hog = cv2.HOGDescriptor()
-        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+        self.enlarge = enlarge
+        self._hog = _people_hog()
+        # the enlarged frame's pyramid stops where its scale reaches the frame's own: the sizes the
+        # plain search covers are not searched twice
+        self._small_hog = _people_hog(int(np.ceil(np.log(enlarge) / np.log(scale)))) if enlarge > 1.0 else None
 
     def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """People in a frame.
@@ -117,7 +134,23 @@ class PeopleDetector:
             new = np.array([all(box_iou(b, o) < 0.3 for o in boxes) for b in more], bool).reshape(-1)
             boxes = np.concatenate([boxes, more[new]])
             scores = np.concatenate([scores, more_scores[new]])
+        if not len(boxes) and self._small_hog is not None:
+            boxes, scores = self._small(frame, colour)
         return boxes, scores
+
+    def _small(self, frame: np.ndarray, colour: list[float]) -> tuple[np.ndarray, np.ndarray]:
+        """The people too short for the detector's window (``enlarge``), found in the frame enlarged:
+        boxes (K, 4) int32 in the frame's pixels, scores (K,) float32.
+        """
+        s = min(self.enlarge, _ENLARGED_ROWS / frame.shape[0])
+        if s <= 1.0:
+            return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
+        big = cv2.resize(frame, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
+        boxes, scores = self._people(big, colour, self._small_hog)
+        boxes = np.round(boxes / s).astype(np.int32)
+        # a window the frame's own pyramid holds would have been found there
+        short = boxes[:, 3] < (_PERSON_IN_WINDOW[3] - _PERSON_IN_WINDOW[1]) * _WINDOW_ROWS
+        return boxes[short].reshape(-1, 4), scores[short]
 
     def _cut_off(self, frame: np.ndarray, colour: list[float]) -> tuple[np.ndarray, np.ndarray]:
         """The people cut off by the frame's bottom edge (``below_frac``): boxes (K, 4) int32, cut at
@@ -136,16 +169,18 @@ class PeopleDetector:
         x1, y1 = np.clip(more[:, 0] + more[:, 2], 0, w), np.full(len(more), float(h))
         return np.stack([x0, y0, x1 - x0, y1 - y0], axis=1).round().astype(np.int32).reshape(-1, 4), scores
 
-    def _people(self, frame: np.ndarray, colour: list[float]) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`detect` of one image, padded with ``colour``: boxes (K, 4) int32 clipped to it,
-        scores (K,) float32.
+    def _people(
+        self, frame: np.ndarray, colour: list[float], hog: cv2.HOGDescriptor | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`detect` of one image, padded with ``colour``, by ``hog`` (None: the plain
+        search's): boxes (K, 4) int32 clipped to it, scores (K,) float32.
         """
         h, w = frame.shape[:2]
         pad = int(round(self.pad_frac * h))
         padded = cv2.copyMakeBorder(frame, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=colour)
-        if min(padded.shape[:2]) < 128 or padded.shape[1] < 64:
+        if min(padded.shape[:2]) < _WINDOW_ROWS or padded.shape[1] < 64:
             return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
-        rects, weights = self._hog.detectMultiScale(
+        rects, weights = (hog or self._hog).detectMultiScale(
             padded,
             hitThreshold=self.hit_threshold,
             winStride=(self.stride, self.stride),
@@ -166,6 +201,30 @@ class PeopleDetector:
         boxes = np.stack([x0, y0, x1 - x0, y1 - y0], axis=1).round().astype(np.int32)
         ok = (boxes[:, 2] > 0) & (boxes[:, 3] > 0)
         return boxes[ok], scores[ok]
+
+
+def _people_hog(levels: int | None = None) -> cv2.HOGDescriptor:
+    """OpenCV's HOG with its default people SVM, its scale pyramid cut to ``levels`` (None: the
+    default 64, every scale down to the window's).
+    """
+    hog = cv2.HOGDescriptor()
+    if levels is not None:
+        hog = cv2.HOGDescriptor(
+            hog.winSize,
+            hog.blockSize,
+            hog.blockStride,
+            hog.cellSize,
+            hog.nbins,
+            hog.derivAperture,
+            hog.winSigma,
+            hog.histogramNormType,
+            hog.L2HysThreshold,
+            hog.gammaCorrection,
+            levels,
+            hog.signedGradient,
+        )
+    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    return hog
 
 
 def box_iou(a: np.ndarray, b: np.ndarray) -> float:

@@ -20,6 +20,7 @@ from counterpart.nodes.silhouette.background import (
     _median_mad,
 )
 from counterpart.nodes.silhouette.people import (
+    CUT_OFF_BELOW,
     PeopleDetector,
     PrefetchDetector,
     box_mask,
@@ -378,6 +379,50 @@ def test_people_cut_off_by_the_frames_bottom_edge_are_found_in_the_frame_continu
         assert (boxes[:, 1] + boxes[:, 3] == big.shape[0]).all()
     with pytest.raises(ValueError, match="below_frac"):
         PeopleDetector(below_frac=-0.1)
+
+
+#: a clip whose people, scaled by ``SMALL_SCALE``, are too short for the detector's window (its
+#: frames too: 87 rows)
+SMALL_CLIP, SMALL_SCALE = UT / "set1" / "37_7_4.avi", 0.35
+
+
+def test_people_too_short_for_the_detectors_window_are_found_in_the_frame_enlarged(ut_clip):
+    if not SMALL_CLIP.is_file():
+        pytest.skip(f"real clip {SMALL_CLIP} not present (../shared/data)")
+    ref = np.load(UT / "keypoints" / f"{SMALL_CLIP.stem}.npz")
+    kp, vis = SMALL_SCALE * ref["kp"], ref["vis"]
+    frames = np.stack(
+        [
+            cv2.resize(f, None, fx=SMALL_SCALE, fy=SMALL_SCALE, interpolation=cv2.INTER_AREA)
+            for f in read_frames(SMALL_CLIP, 50)
+        ]
+    )
+    plain, enlarged = PeopleDetector(below_frac=CUT_OFF_BELOW), people_detector()
+    for t in range(0, 30, 5):
+        assert len(plain.detect(frames[t])[0]) == 0
+        boxes, _ = enlarged.detect(frames[t])
+        assert (boxes[:, 3] < 122).all()  # shorter than the window's person
+        for k in range(2):
+            c = kp[t, k][vis[t, k] >= 0.5].mean(axis=0)
+            assert any(x <= c[0] <= x + w and y <= c[1] <= y + h for x, y, w, h in boxes), (t, k, boxes.tolist())
+    # standing from the first frame, both are then learnt around and found whole; without the
+    # enlarged search they are learnt as the room
+    sides = {}
+    for name, det in (("plain", plain), ("enlarged", enlarged)):
+        ex = SilhouetteExtractor(backend_params={"train_frames": 30, "detector": det})
+        ex.fit_background(list(frames[:30]), robust=True)
+        sides[name] = [[p.side for p in ex.process(f).people] for f in frames]
+    assert all(s == ["left", "right"] for s in sides["enlarged"][10:]), sides["enlarged"]
+    assert not any(s == ["left", "right"] for s in sides["plain"][10:])
+    # where people are found at the frame's own scale, the search is the plain one's
+    for f in ut_clip[0][:3]:
+        (b1, s1), (b2, s2) = plain.detect(f), enlarged.detect(f)
+        assert len(b1) >= 2
+        np.testing.assert_array_equal(b1, b2)
+        np.testing.assert_array_equal(s1, s2)
+    for bad in (0.5, 5.0):
+        with pytest.raises(ValueError, match="enlarge"):
+            PeopleDetector(enlarge=bad)
 
 
 @pytest.mark.parametrize(("scenario", "seed"), [("handshake", 0), ("conversation", 5)])

@@ -11,7 +11,9 @@ room where they stood as ghosts. Here they are found first and kept out of the s
    image border, the usual case for an elevated camera close to the people, still fit the
    detector's window with its margins. People cut off by the frame's bottom edge (near the
    camera, their legs out of the picture) are looked for again in the frame continued below
-   (``CUT_OFF_BELOW``): the detector's window needs legs.
+   (``CUT_OFF_BELOW``): the detector's window needs legs. A frame in which no one is found is
+   searched again enlarged (``ENLARGE``), for people too short for the detector's window (a
+   small video, people far from the camera).
 2. ``fit_around_people``: a first fit leaves the people's boxes out of the frames near those they
    were found in, and out of every frame that still shows a person who stands still
    (``HorprasertBackground.fit`` with ``exclude``; the room seen behind them in too few frames is
@@ -64,6 +66,9 @@ _STILL_SCORE = 0.75
 #: how far below the frame people cut off by its bottom edge are looked for, as a fraction of its
 #: height (``PeopleDetector``'s ``below_frac``)
 CUT_OFF_BELOW = 0.8
+#: how much a frame in which no one is found is enlarged to look for people too short for the
+#: detector's window (``PeopleDetector``'s ``enlarge``): 2 finds people down to about 60 pixels
+ENLARGE = 2.0
 #: the largest share of the frame hinted boxes may cover: more is a whole room taken for people (a
 #: model that no longer fitted the room), and carried to every frame it would leave too little room
 _MAX_HINTED_SHARE = 0.5
@@ -73,9 +78,10 @@ _Found = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 def people_detector() -> PeopleDetector:
     """The detector of the people in the training frames: OpenCV's HOG people detector, people cut
-    off by the frame's bottom edge included (``CUT_OFF_BELOW``).
+    off by the frame's bottom edge (``CUT_OFF_BELOW``) and people too short for its window
+    (``ENLARGE``) included.
     """
-    return PeopleDetector(below_frac=CUT_OFF_BELOW)
+    return PeopleDetector(below_frac=CUT_OFF_BELOW, enlarge=ENLARGE)
 
 
 class PrefetchDetector:
