@@ -43,6 +43,7 @@ def track_video(
     progress: Progress | None = None,
     tracker: TrackerConfig | None = None,
     camera_source: str | None = None,
+    fps: float | None = None,
     **silhouette_params: Any,
 ) -> dict[str, Any]:
     """Track the people of a video in 3D and save every frame's estimate.
@@ -63,6 +64,8 @@ def track_video(
         progress: called after every frame with (frames done, frames the file declares or 0).
         tracker: the trackers' settings (None: the defaults); its annealing layers and particles
             are ``layers`` and ``particles``.
+        fps: the frame rate the trackers are told, Hz (None: the video's; 0: unknown, taken as the
+            motion prior's): a slower video is searched wider between frames (``Tracker``'s fps).
         silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
 
     Returns
@@ -88,7 +91,8 @@ def track_video(
     sides = list(people)
     source = camera_source or ("given" if camera is not None else "default")
     extractor = SilhouetteExtractor(**silhouette_params)
-    fps, declared = video_info(path)
+    video_fps, declared = video_info(path)
+    told_fps = video_fps if fps is None else fps
     trackers: dict[str, Tracker] = {}
     rows: list[dict[str, np.ndarray]] = []
     size: tuple[int, int] | None = None
@@ -100,7 +104,9 @@ def track_video(
                 size = frame.shape[:2]
                 base = tracker or TrackerConfig()
                 config = replace(base, apf=replace(base.apf, n_layers=layers, n_particles=particles))
-                trackers = {s: Tracker(camera, s, config, prior=prior, seed=seed + SIDES.index(s)) for s in sides}
+                trackers = {
+                    s: Tracker(camera, s, config, prior=prior, seed=seed + SIDES.index(s), fps=told_fps) for s in sides
+                }
             rows.append(_track_frame(frame, result, sides, trackers))
             if progress is not None:
                 progress(len(rows), declared)
@@ -112,7 +118,7 @@ def track_video(
                 rows,
                 sides,
                 size,
-                fps,
+                video_fps,
                 complete,
                 camera,
                 {
@@ -124,6 +130,7 @@ def track_video(
                     "max_frames": max_frames,
                     "prior": prior is not None,
                     "camera_source": source,
+                    "tracker_fps": told_fps,
                     **silhouette_params,
                 },
             )
@@ -133,7 +140,7 @@ def track_video(
         "n_frames": len(rows),
         "tracked": tracked,
         "not_placed": not_placed,
-        "fps": fps,
+        "fps": video_fps,
         "frame_size": list(size or (0, 0)),
         "camera_source": source,
         "out_npz": os.fspath(out_npz),

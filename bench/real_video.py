@@ -63,6 +63,13 @@ person cut off (``real_partner``, the moment of the interaction found on the joi
 picture): ``partner_distance_ok_cut``, ``partner_overlap_cut``, ``partner_in_picture_cut``,
 ``partner_scale_cut``, ``handshake_hand_h_cut``, ``push_back_m_cut``. Report and tune splits as above.
 
+A slower camera (``--slow-step K``, default 3; 0 skips it): each clip again with every K-th frame
+only, a lossless copy at 1/K of its frame rate (10 fps for K = 3: a webcam in low light, many
+surveillance recordings), tracked with that rate told to the trackers (their motion prior's steps
+taken over the longer interval, ``tracker.prior.PriorPredictor``): ``pck10_slow``, ``pck20_slow``;
+told nothing, as if the frames came at the prior's rate: ``*_slow_unscaled``; and the whole clips'
+tracks on the same frames, ``pck10_full_rate_same_frames``, ``pck20_full_rate_same_frames``.
+
 Silhouettes (``--no-silhouettes`` skips them): ``people_found`` and ``keypoint_coverage`` as
 ``bench/real_silhouettes.py`` defines them (the silhouette node's extractor with its defaults, the
 background trained on each clip's first frames with the people in view, scored from frame 10), over
@@ -86,7 +93,7 @@ default camera's, the true head/foot points', the share the calibration node wou
 The clips: ``../shared/data/ut_interaction/set1`` (read its README). Nothing is tuned here; the
 default picks every fifth clip of the 60 (12 clips, all six interaction classes), ``--clips all``
 runs every one. Usage: ``python bench/real_video.py [--clips all|N] [--timeout S] [--reference K]
-[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-cut] [--no-demo] [--tracks DIR]
+[--pck-clips all|N] [--pck-classes 0,5] [--jobs J] [--no-pck] [--no-cut] [--slow-step K] [--no-demo] [--tracks DIR]
 [--no-silhouettes] [--speed-frames N] [--calib-seeds N]``
 (``--tracks``: keep the tracks, and reuse those already there). Last stdout line: one JSON object.
 """
@@ -133,6 +140,8 @@ KEYPOINTS = CLIPS.parent / "keypoints"
 SIDES = ("left", "right")
 #: as the lockstep graph (launch/lockstep.yaml) configures the silhouette and tracker nodes
 TRAIN_FRAMES, LAYERS, PARTICLES = 20, 10, 256
+#: the slow pass keeps every this many-th frame (``--slow-step``): the clips' 30 fps become 10
+SLOW_STEP = 3
 HEAD, ANKLES = JOINT_INDEX["head"], [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
 ALPHAS = (0.1, 0.2)
 #: the default body's head centre above its mid-ankle, metres
@@ -307,10 +316,10 @@ def template_pixels(template: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return boxes[:, :, None, :2] + template * boxes[:, :, None, 2:]
 
 
-def pck_clip(clip: Path, work: Path, cut: bool = False) -> dict[str, Any]:
+def pck_clip(clip: Path, work: Path, cut: bool = False, slow_step: int = 0) -> dict[str, Any]:
     """Track one clip offline and gather what the PCK needs: the projected estimates, the boxes,
     the reference and which of its joints count; plus timings and the excluded frames; ``cut``:
-    the cut pass too (``cut_clip``).
+    the cut pass too (``cut_clip``); ``slow_step`` > 1: the slow pass too (``slow_clip``).
     """
     from counterpart.apps.tracking import track_video
     from counterpart.nodes.tracker.prior import resolve_prior
@@ -340,6 +349,7 @@ def pck_clip(clip: Path, work: Path, cut: bool = False) -> dict[str, Any]:
     h = reference_height(kp)
     return {
         **({"cut": cut_clip(clip, work, kp, scored, h)} if cut else {}),
+        **({"slow": slow_clip(clip, work, slow_step, kp, scored, h)} if slow_step > 1 else {}),
         "est": est[:n],
         "boxes": boxes[:n],
         "kp": kp,
@@ -429,6 +439,67 @@ def cut_clip(clip: Path, work: Path, kp: np.ndarray, scored: np.ndarray, h: np.n
     return out
 
 
+def slow_clip(clip: Path, work: Path, step: int, kp: np.ndarray, scored: np.ndarray, h: np.ndarray) -> dict[str, Any]:
+    """The slow pass of one clip: every ``step``-th frame as a lossless copy at 1/``step`` of its
+    frame rate (a camera that delivers fewer frames, e.g. a webcam in low light), tracked with the
+    rate told to the trackers and not (``_unscaled``: as if at the motion prior's rate); their PCK
+    counts on the reference of the frames kept, and the frames kept.
+    """
+    from counterpart.apps.tracking import track_video
+    from counterpart.nodes.tracker.prior import resolve_prior
+
+    path = work / f"{clip.stem}-slow{step}.avi"
+    if not path.exists():
+        fps = video_info(clip)[0] or 30.0
+        frames = read_frames(clip)
+        writer = cv2.VideoWriter(
+            str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps / step, (frames.shape[2], frames.shape[1])
+        )
+        for f in frames[::step]:
+            writer.write(f)
+        writer.release()
+    kept = np.arange(0, len(kp), step)
+    out: dict[str, Any] = {"kept": kept}
+    for name, told in (("", None), ("_unscaled", 0.0)):
+        npz = work / f"{clip.stem}-slow{step}{name}-track.npz"
+        if not npz.exists():
+            track_video(
+                path,
+                npz,
+                people=SIDES,
+                prior=resolve_prior("default"),
+                layers=LAYERS,
+                particles=PARTICLES,
+                train_frames=TRAIN_FRAMES,
+                fps=told,
+            )
+        est = tracked_pixels(npz)[0][: len(kept)]
+        est = np.concatenate([est, np.full((len(kept) - len(est), *est.shape[1:]), np.nan)])
+        out["counts" + name] = pck_counts(est, kp[kept], scored[kept], h[kept])
+    return out
+
+
+def slow_figures(rows: list[dict[str, Any]], step: int) -> dict[str, Any]:
+    """The slow pass's figures pooled over the clips' rows (``pck_clip`` with ``slow_step``):
+    ``pck10_slow``, ``pck20_slow``, ``_unscaled``, and the whole clips' tracks on the same frames
+    (``pck10_full_rate_same_frames``, ...).
+    """
+    out: dict[str, Any] = {"slow_step": step}
+    full = []
+    for r in rows:
+        kept = r["slow"]["kept"]
+        full.append(pck_counts(r["est"][kept], r["kp"][kept], r["scored"][kept], r["h"][kept]))
+    for name, counts in (
+        ("_slow", [r["slow"]["counts"] for r in rows]),
+        ("_slow_unscaled", [r["slow"]["counts_unscaled"] for r in rows]),
+        ("_full_rate_same_frames", full),
+    ):
+        n = max(sum(c["n"] for c in counts), 1)
+        for a in ALPHAS:
+            out[f"pck{round(a * 100)}{name}"] = round(sum(c[f"hit{round(a * 100)}"] for c in counts) / n, 4)
+    return out
+
+
 def cut_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The cut pass's figures pooled over the clips' rows (``pck_clip`` with ``cut``): ``pck10_cut``,
     ``pck20_cut`` and ``_before``, the same joints of the whole clips' tracks
@@ -497,15 +568,20 @@ def pck_by_joint(rows: list[dict[str, Any]], template: np.ndarray) -> dict[str, 
     return {name: [*np.round(hits[:, j] / max(n[j], 1), 3).tolist(), int(n[j])] for j, name in enumerate(JOINTS)}
 
 
-def run_pck(clips: list[Path], work: Path, jobs: int = 1, cut: bool = True) -> dict[str, Any]:
+def run_pck(clips: list[Path], work: Path, jobs: int = 1, cut: bool = True, slow_step: int = 0) -> dict[str, Any]:
     """The tracking-accuracy part: the top-level figures (report split), ``tune`` and ``pck_details``;
     ``jobs`` clips tracked at once in worker processes (each clip's run is seeded: the figures
-    do not depend on it); ``cut``: with the cut pass (``cut_figures``).
+    do not depend on it); ``cut``: with the cut pass (``cut_figures``); ``slow_step`` > 1: with the
+    slow pass (``slow_figures``).
     """
     rows: dict[str, dict[str, Any]] = {}
     with ProcessPoolExecutor(jobs) if jobs > 1 else nullcontext() as pool:
         n = len(clips)
-        done = pool.map(pck_clip, clips, [work] * n, [cut] * n) if pool else (pck_clip(c, work, cut) for c in clips)
+        done = (
+            pool.map(pck_clip, clips, [work] * n, [cut] * n, [slow_step] * n)
+            if pool
+            else (pck_clip(c, work, cut, slow_step) for c in clips)
+        )
         for clip, r in zip(clips, done):
             rows[clip.stem] = r
             print(
@@ -552,6 +628,7 @@ def run_pck(clips: list[Path], work: Path, jobs: int = 1, cut: bool = True) -> d
             "pck_clips": len(split_rows),
             **partner_figures([r["partner"] for r in split_rows]),
             **(cut_figures(split_rows) if cut else {}),
+            **(slow_figures(split_rows, slow_step) if slow_step > 1 else {}),
         }
         details[split] = {
             "per_frame_matching": pck_figures(split_rows, template, True),
@@ -730,6 +807,13 @@ def main() -> None:
     )
     ap.add_argument("--no-pck", action="store_true", help="skip the tracking-accuracy part")
     ap.add_argument("--no-cut", action="store_true", help="skip the tracking part's cut pass")
+    ap.add_argument(
+        "--slow-step",
+        type=int,
+        default=SLOW_STEP,
+        help="the tracking part's slow pass keeps every K-th frame of each clip, at 1/K of its frame rate "
+        f"(default {SLOW_STEP}: 10 fps; 0 or 1: no slow pass)",
+    )
     ap.add_argument("--jobs", type=int, default=1, help="clips of the tracking part tracked at once (processes)")
     ap.add_argument("--no-demo", action="store_true", help="skip the demo runs (only the tracking part)")
     ap.add_argument(
@@ -765,7 +849,7 @@ def main() -> None:
         pck = clip_list(args.pck_clips or args.clips)
         if args.pck_classes:
             pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
-        result.update(run_pck(pck, work, args.jobs, not args.no_cut))
+        result.update(run_pck(pck, work, args.jobs, not args.no_cut, args.slow_step))
     if not args.no_silhouettes:
         result.update(run_silhouettes())
     if args.speed_frames and args.reference:

@@ -11,7 +11,15 @@ import pytest
 
 from counterpart.body.pose import DOF, LOWER, UPPER, YAW
 from counterpart.nodes.tracker import cli_learn
-from counterpart.nodes.tracker.prior import MotionPrior, default_prior_path, load_sequences, train_prior
+from counterpart.nodes.tracker.prior import (
+    PRIOR_FPS,
+    MotionPrior,
+    default_prior_path,
+    frame_steps,
+    load_sequences,
+    train_prior,
+    transitions_over,
+)
 from tests.shared_data import DATA
 
 
@@ -66,6 +74,51 @@ def test_predictor_follows_the_hmm(prior: MotionPrior) -> None:
     # most particles take a small random-walk step; about hmm_weight of them jump to an HMM sample
     assert 0.1 < np.mean(np.abs(out[:, 12:] - P[:, 12:]).max(axis=1) > 0.2) < 0.35
     assert np.median(moved) < 0.2
+
+
+def test_a_slower_video_is_searched_over_its_longer_steps(prior: MotionPrior) -> None:
+    """The prior is learnt at 25 fps; a video at a third of that moves three of its frames
+    between two of its own. Told the rate, the random walk's 2-std band holds the true steps
+    between frames as often as at the prior's own rate; told nothing, it misses many more.
+    """
+    seqs, _ = load_sequences(["sim:push?seed=8", "sim:pull?seed=8"])  # 25 fps, unseen by the prior
+
+    def covered(fps: float, step: int) -> float:
+        steps = np.concatenate([np.abs(np.diff(s[::step], axis=0)) for s in seqs])
+        return float(np.mean(steps <= 2 * prior.predictor(fps).std))
+
+    at_rate, slow_told, slow_untold = covered(PRIOR_FPS, 1), covered(PRIOR_FPS / 3, 3), covered(0.0, 3)
+    assert slow_told >= at_rate - 0.01, (slow_told, at_rate)
+    assert slow_untold < at_rate - 0.04, (slow_untold, at_rate)
+    # a faster video keeps the prior's own search (the UT clips' 30 fps, where it was tuned)
+    for fps in (30.0, 60.0, 0.0):
+        np.testing.assert_array_equal(prior.predictor(fps).std, prior.predictor(PRIOR_FPS).std)
+        np.testing.assert_array_equal(prior.predictor(fps).transmat, prior.transmat)
+    # the chain's transitions: three of its steps, and a fractional number between whole ones
+    A = prior.transmat
+    slow = prior.predictor(PRIOR_FPS / 3)
+    np.testing.assert_allclose(slow.transmat, A @ A @ A, atol=1e-12)
+    half = transitions_over(A, 1.5)
+    np.testing.assert_allclose(half, 0.5 * A + 0.5 * A @ A, atol=1e-12)
+    np.testing.assert_allclose(half.sum(axis=1), 1.0, atol=1e-9)
+    assert (half >= 0).all()
+    assert frame_steps(25.0, 10.0) == 2.5 and frame_steps(25.0, 30.0) == 1.0 and frame_steps(25.0, 0.0) == 1.0
+
+
+def test_the_priors_frame_rate_is_kept_in_its_file(prior: MotionPrior, tmp_path: Path) -> None:
+    assert prior.fps == PRIOR_FPS
+    q = train_prior(["sim:wave?seed=7"], n_states=3, fps=12.5)
+    assert MotionPrior.load(q.save(tmp_path / "slow.npz")).fps == 12.5
+    # a file written before the rate was kept is the default's 25 fps
+    with np.load(tmp_path / "slow.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["meta"]))
+    del meta["fps"]
+    arrays["meta"] = json.dumps(meta)
+    np.savez(tmp_path / "older.npz", **arrays)
+    assert MotionPrior.load(tmp_path / "older.npz").fps == PRIOR_FPS
+    with pytest.raises(ValueError, match="fps"):
+        MotionPrior(fps=0.0)
 
 
 def test_cli_trains_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

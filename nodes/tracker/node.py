@@ -286,7 +286,7 @@ class TrackerNode(Node):
         if side not in self.trackers:
             config = TrackerConfig(apf=APFConfig(n_layers=self.p["layers"], n_particles=self.p["particles"]))
             self.trackers[side] = Tracker(
-                camera, side, config, prior=self.prior, seed=self.p["seed"] + SIDES.index(side)
+                camera, side, config, prior=self.prior, seed=self.p["seed"] + SIDES.index(side), fps=self.fps
             )
         return self.trackers[side]
 

@@ -39,6 +39,8 @@ ANGLE_DOFS: np.ndarray = np.arange(4, DOF)
 #: stop the tracker from following a person who does
 RW_FLOOR = np.where(np.arange(DOF) < 3, 0.005, 0.01)
 RW_FLOOR[YAW] = 0.02
+#: frame rate (Hz) of a prior file that does not say its own (the training default)
+PRIOR_FPS = 25.0
 #: simulator scenarios and seeds of the default prior (the benches use seeds 0-9: kept apart)
 DEFAULT_TRAINING = tuple(
     f"sim:{n}?seed={s}"
@@ -63,6 +65,9 @@ class MotionPrior:
         Multiplier of the learned per-frame std of the random walk.
     seed : int, default=0
         Seed of the HMM fit.
+    fps : float, default=PRIOR_FPS
+        Frame rate of the training sequences, Hz: the random walk's per-frame std and the HMM's
+        transitions are per frame at this rate (``predictor`` carries them to another).
 
     Attributes
     ----------
@@ -96,6 +101,7 @@ class MotionPrior:
     hmm_weight: float = 0.2
     rw_scale: float = 1.5
     seed: int = 0
+    fps: float = PRIOR_FPS
     # learned
     pca_mean: np.ndarray = field(default_factory=lambda: np.zeros(0))
     components: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -114,6 +120,8 @@ class MotionPrior:
             raise ValueError(f"energy={self.energy!r}: the PCA variance fraction must lie in (0, 1]")
         if not 0 <= self.hmm_weight <= 1:
             raise ValueError(f"hmm_weight={self.hmm_weight!r}: must lie in [0, 1]")
+        if not self.fps > 0:
+            raise ValueError(f"fps={self.fps!r}: the training sequences' frame rate must be > 0 Hz")
 
     @property
     def fitted(self) -> bool:
@@ -243,8 +251,13 @@ class MotionPrior:
         d = Y.shape[1]
         return -0.5 * ((z**2).sum(-1) + logdet + d * np.log(2 * np.pi))
 
-    def predictor(self) -> PriorPredictor:
+    def predictor(self, fps: float = 0.0) -> PriorPredictor:
         """A fresh per-track predictor (its own state posterior).
+
+        Parameters
+        ----------
+        fps : float, default=0.0
+            Frame rate of the video tracked, Hz (0: unknown, taken as the prior's own).
 
         Returns
         -------
@@ -257,7 +270,7 @@ class MotionPrior:
             When the prior is not fitted.
         """
         self._require()
-        return PriorPredictor(self)
+        return PriorPredictor(self, fps)
 
     def _require(self) -> None:
         if not self.fitted:
@@ -281,6 +294,7 @@ class MotionPrior:
             "dofs": [int(i) for i in ANGLE_DOFS],
             "hmm_weight": float(self.hmm_weight),
             "rw_scale": float(self.rw_scale),
+            "fps": float(self.fps),
             "sources": list(self.sources),
             "n_frames": self.n_frames,
         }
@@ -366,6 +380,7 @@ class MotionPrior:
             energy=meta["energy"],
             hmm_weight=meta["hmm_weight"],
             rw_scale=meta["rw_scale"],
+            fps=float(meta.get("fps", PRIOR_FPS)),
             sources=meta["sources"],
             n_frames=meta["n_frames"],
             **arrays,
@@ -378,21 +393,33 @@ class PriorPredictor:
     Call ``update(pose)`` with each frame's estimate, and use the object as
     ``predict_fn(particles (N, 28), rng) -> (N, 28)``.
 
+    A video slower than the prior's frame rate moves further between its frames: with ``r`` the
+    prior's frames per frame of the video (``frame_steps``), the random walk's std is ``r`` times
+    the prior's (people move smoothly over a tenth of a second, so a step grows with the interval)
+    and the transitions are those of ``r`` of the prior's frames (``transitions_over``). A faster
+    video keeps the prior's own: its search is never narrower than at the rate it was tuned at.
+
     Parameters
     ----------
     prior : MotionPrior
         A fitted prior.
+    fps : float, default=0.0
+        Frame rate of the video tracked, Hz (0: unknown, taken as the prior's own).
 
     Attributes
     ----------
     alpha : ndarray of shape (K,)
         Filtered HMM state posterior.
     std : ndarray of shape (28,)
-        Random-walk std per DOF (``rw_std`` floored, times ``rw_scale``).
+        Random-walk std per DOF (``rw_std`` floored, times ``rw_scale`` and the frame steps).
+    transmat : ndarray of shape (K, K)
+        The HMM's transitions from one frame of the video to the next.
     """
 
-    def __init__(self, prior: MotionPrior) -> None:
+    def __init__(self, prior: MotionPrior, fps: float = 0.0) -> None:
         self.prior = prior
+        steps = frame_steps(prior.fps, fps)
+        self.transmat = transitions_over(prior.transmat, steps)
         self.alpha = prior.startprob.copy()
         self._chol = np.linalg.cholesky(prior.covars)
         # Mahalanobis distances of all states as matmuls (``log_prior``):
@@ -404,7 +431,7 @@ class PriorPredictor:
         self._q1 = -2 * Smu.T  # (d, K)
         self._q0 = np.einsum("ki,ki->k", Smu, prior.means)  # (K,)
         self._logdet = 2 * np.log(np.diagonal(self._chol, axis1=1, axis2=2)).sum(-1)
-        self.std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale
+        self.std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale * steps
         #: (alpha, uniform, log state weights) of ``log_prior``, for the frame's alpha
         self._logw: tuple[np.ndarray, float, np.ndarray] | None = None
 
@@ -425,7 +452,7 @@ class PriorPredictor:
             The filtered state posterior ``alpha``.
         """
         ll = self.prior.state_loglik(self.prior.to_latent(np.asarray(pose)[None]))[0]
-        a = np.log(np.maximum(self.alpha @ self.prior.transmat, 1e-300)) + ll
+        a = np.log(np.maximum(self.alpha @ self.transmat, 1e-300)) + ll
         a = np.exp(a - a.max())
         self.alpha = a / a.sum()
         return self.alpha
@@ -438,7 +465,7 @@ class PriorPredictor:
         ndarray of shape (K,)
             State weights.
         """
-        return self.alpha @ self.prior.transmat
+        return self.alpha @ self.transmat
 
     def log_prior(self, P: np.ndarray, resid_std: float = 0.15, uniform: float = 0.5) -> np.ndarray:
         """Log density of the poses' joint angles under the prior, per angle DOF.
@@ -487,6 +514,47 @@ class PriorPredictor:
             Y = self.prior.means[k] + np.einsum("nij,nj->ni", self._chol[k], z)
             out[rows[:, None], ANGLE_DOFS[None]] = self.prior.from_latent(Y)
         return clip_to_limits(out)
+
+
+def frame_steps(prior_fps: float, fps: float) -> float:
+    """How many of a prior's frames one frame of a video spans, never under one.
+
+    Parameters
+    ----------
+    prior_fps : float
+        The prior's frame rate, Hz.
+    fps : float
+        The video's, Hz (0 or less: unknown).
+
+    Returns
+    -------
+    float
+        ``max(1, prior_fps / fps)``; 1 for an unknown rate.
+    """
+    return max(1.0, prior_fps / fps) if fps > 0 else 1.0
+
+
+def transitions_over(transmat: np.ndarray, steps: float) -> np.ndarray:
+    """A Markov chain's transitions over ``steps`` of its frames, a fractional number of them taken
+    between the whole numbers on either side: ``(1 - f) A^n + f A^(n+1)`` with ``n + f = steps``
+    (a stochastic matrix, as a fractional matrix power need not be).
+
+    Parameters
+    ----------
+    transmat : ndarray of shape (K, K)
+        Row-stochastic transition matrix A of one frame.
+    steps : float
+        Frames, >= 0.
+
+    Returns
+    -------
+    ndarray of shape (K, K)
+        The row-stochastic transitions over ``steps`` frames.
+    """
+    n = int(np.floor(steps))
+    f = steps - n
+    An = np.linalg.matrix_power(transmat, n)
+    return An if f == 0 else (1.0 - f) * An + f * (An @ transmat)
 
 
 # ------------------------------------------------------------------------------------ data
@@ -612,7 +680,7 @@ def train_prior(
     seqs, names = load_sequences(sources, fps)
     if progress:
         print(f"tracker prior: {len(seqs)} sequences from {len(sources)} source(s)", file=sys.stderr)
-    return MotionPrior(n_states=n_states, energy=energy, seed=seed).fit(seqs, names, progress=progress)
+    return MotionPrior(n_states=n_states, energy=energy, seed=seed, fps=fps).fit(seqs, names, progress=progress)
 
 
 def default_prior_path() -> Path:

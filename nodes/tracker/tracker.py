@@ -47,7 +47,7 @@ from .init import (
     initial_particles,
 )
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
-from .prior import RW_FLOOR, MotionPrior, PriorPredictor
+from .prior import PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps
 
 
 @dataclass
@@ -290,6 +290,10 @@ class Tracker:
         Body dimensions (default: scaled to the stature measured at initialisation).
     seed : int
         Seed of all random numbers.
+    fps : float
+        Frame rate of the frames, Hz (0: unknown): a video slower than the prior's is searched
+        wider, and its prior steps over as many of the prior's frames
+        (``prior.PriorPredictor``; without a prior, the random walk alike).
 
     Raises
     ------
@@ -307,6 +311,7 @@ class Tracker:
         prior: MotionPrior | None = None,
         dims: BodyDims | None = None,
         seed: int = 0,
+        fps: float = 0.0,
     ) -> None:
         self.cameras = [camera] if isinstance(camera, Camera) else list(camera)
         if not self.cameras or not all(isinstance(c, Camera) for c in self.cameras):
@@ -318,7 +323,7 @@ class Tracker:
         self.config = config
         self.rng = np.random.default_rng(seed)
         self.predictor: PriorPredictor | _RandomWalk = (
-            prior.predictor() if prior is not None else _RandomWalk(RW_FLOOR * 3.0)
+            prior.predictor(fps) if prior is not None else _RandomWalk(RW_FLOOR * 3.0 * frame_steps(PRIOR_FPS, fps))
         )
         self.fixed_dims = dims
         self.dims: BodyDims = dims or DEFAULT_DIMS
