@@ -12,6 +12,7 @@ import pytest
 from counterpart.body.pose import DOF, LOWER, UPPER, YAW
 from counterpart.nodes.tracker import cli_learn
 from counterpart.nodes.tracker.prior import (
+    MAX_FRAME_STEPS,
     PRIOR_FPS,
     MotionPrior,
     default_prior_path,
@@ -103,6 +104,7 @@ def test_a_slower_video_is_searched_over_its_longer_steps(prior: MotionPrior) ->
     np.testing.assert_allclose(half.sum(axis=1), 1.0, atol=1e-9)
     assert (half >= 0).all()
     assert frame_steps(25.0, 10.0) == 2.5 and frame_steps(25.0, 30.0) == 1.0 and frame_steps(25.0, 0.0) == 1.0
+    assert frame_steps(25.0, 1.0) == MAX_FRAME_STEPS  # a header's wrong rate does not blow the search up
 
 
 def test_the_priors_frame_rate_is_kept_in_its_file(prior: MotionPrior, tmp_path: Path) -> None:

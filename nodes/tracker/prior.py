@@ -41,6 +41,10 @@ RW_FLOOR = np.where(np.arange(DOF) < 3, 0.005, 0.01)
 RW_FLOOR[YAW] = 0.02
 #: frame rate (Hz) of a prior file that does not say its own (the training default)
 PRIOR_FPS = 25.0
+#: the most prior frames one frame of a video is taken to span: a slower video (under 5 fps at
+#: 25), or a file whose header gives a wrong rate, is searched as at this many (the walk's
+#: spread grows with the steps, and over a fifth of a second people no longer move smoothly)
+MAX_FRAME_STEPS = 5.0
 #: simulator scenarios and seeds of the default prior (the benches use seeds 0-9: kept apart)
 DEFAULT_TRAINING = tuple(
     f"sim:{n}?seed={s}"
@@ -517,7 +521,8 @@ class PriorPredictor:
 
 
 def frame_steps(prior_fps: float, fps: float) -> float:
-    """How many of a prior's frames one frame of a video spans, never under one.
+    """How many of a prior's frames one frame of a video spans, never under one nor over
+    ``MAX_FRAME_STEPS``.
 
     Parameters
     ----------
@@ -529,9 +534,9 @@ def frame_steps(prior_fps: float, fps: float) -> float:
     Returns
     -------
     float
-        ``max(1, prior_fps / fps)``; 1 for an unknown rate.
+        ``prior_fps / fps`` in [1, ``MAX_FRAME_STEPS``]; 1 for an unknown rate.
     """
-    return max(1.0, prior_fps / fps) if fps > 0 else 1.0
+    return min(MAX_FRAME_STEPS, max(1.0, prior_fps / fps)) if fps > 0 else 1.0
 
 
 def transitions_over(transmat: np.ndarray, steps: float) -> np.ndarray:
