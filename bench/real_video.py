@@ -67,8 +67,10 @@ A slower camera (``--slow-step K``, default 3; 0 skips it): each clip again with
 only, a lossless copy at 1/K of its frame rate (10 fps for K = 3: a webcam in low light, many
 surveillance recordings), tracked with that rate told to the trackers (their motion prior's steps
 taken over the longer interval, ``tracker.prior.PriorPredictor``): ``pck10_slow``, ``pck20_slow``;
-told nothing, as if the frames came at the prior's rate: ``*_slow_unscaled``; and the whole clips'
-tracks on the same frames, ``pck10_full_rate_same_frames``, ``pck20_full_rate_same_frames``.
+told nothing, as if the frames came at the prior's rate: ``*_slow_unscaled``; the whole clips'
+tracks on the same frames, ``pck10_full_rate_same_frames``, ``pck20_full_rate_same_frames``; and the
+partner staged beside the first track: ``partner_distance_ok_slow``, ``partner_overlap_slow``,
+``partner_in_picture_slow``, ``partner_scale_slow``, ``handshake_hand_h_slow``, ``push_back_m_slow``.
 
 Silhouettes (``--no-silhouettes`` skips them): ``people_found`` and ``keypoint_coverage`` as
 ``bench/real_silhouettes.py`` defines them (the silhouette node's extractor with its defaults, the
@@ -373,8 +375,8 @@ CUT_BEFORE = {
 }
 
 
-#: the partner's figures (``real_partner.partner_figures``) also given for the cut pass
-CUT_PARTNER = (
+#: the partner's figures (``real_partner.partner_figures``) also given for the cut and slow passes
+PASS_PARTNER = (
     "partner_distance_ok",
     "partner_overlap",
     "partner_in_picture",
@@ -443,7 +445,8 @@ def slow_clip(clip: Path, work: Path, step: int, kp: np.ndarray, scored: np.ndar
     """The slow pass of one clip: every ``step``-th frame as a lossless copy at 1/``step`` of its
     frame rate (a camera that delivers fewer frames, e.g. a webcam in low light), tracked with the
     rate told to the trackers and not (``_unscaled``: as if at the motion prior's rate); their PCK
-    counts on the reference of the frames kept, and the frames kept.
+    counts on the reference of the frames kept, the frames kept, and the partner staged beside
+    the first track (``partner_clip``).
     """
     from counterpart.apps.tracking import track_video
     from counterpart.nodes.tracker.prior import resolve_prior
@@ -476,13 +479,16 @@ def slow_clip(clip: Path, work: Path, step: int, kp: np.ndarray, scored: np.ndar
         est = tracked_pixels(npz)[0][: len(kept)]
         est = np.concatenate([est, np.full((len(kept) - len(est), *est.shape[1:]), np.nan)])
         out["counts" + name] = pck_counts(est, kp[kept], scored[kept], h[kept])
+    vis = np.load(KEYPOINTS / f"{clip.stem}.npz")["vis"][: len(kp)][kept]
+    npz = work / f"{clip.stem}-slow{step}-track.npz"
+    out["partner"] = partner_clip(clip, npz, kp[kept], vis, h[kept], silhouette_people(path))
     return out
 
 
 def slow_figures(rows: list[dict[str, Any]], step: int) -> dict[str, Any]:
     """The slow pass's figures pooled over the clips' rows (``pck_clip`` with ``slow_step``):
-    ``pck10_slow``, ``pck20_slow``, ``_unscaled``, and the whole clips' tracks on the same frames
-    (``pck10_full_rate_same_frames``, ...).
+    ``pck10_slow``, ``pck20_slow``, ``_unscaled``, the whole clips' tracks on the same frames
+    (``pck10_full_rate_same_frames``, ...), and the partner's (``partner_distance_ok_slow``, ...).
     """
     out: dict[str, Any] = {"slow_step": step}
     full = []
@@ -497,6 +503,9 @@ def slow_figures(rows: list[dict[str, Any]], step: int) -> dict[str, Any]:
         n = max(sum(c["n"] for c in counts), 1)
         for a in ALPHAS:
             out[f"pck{round(a * 100)}{name}"] = round(sum(c[f"hit{round(a * 100)}"] for c in counts) / n, 4)
+    partner = partner_figures([r["slow"]["partner"] for r in rows])
+    for k in PASS_PARTNER:
+        out[f"{k}_slow"] = partner[k]
     return out
 
 
@@ -520,7 +529,7 @@ def cut_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
         out["scale_cut" + name] = round(float(np.median(scale)), 3) if scale else None
     out["cut_joints"] = sum(int(r["cut"]["scored"].sum()) for r in rows)
     partner = partner_figures([r["cut"]["partner"] for r in rows])
-    for k in CUT_PARTNER:
+    for k in PASS_PARTNER:
         out[f"{k}_cut"] = partner[k]
     return out
 
