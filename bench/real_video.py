@@ -393,13 +393,39 @@ def cut_copy(clip: Path, work: Path, kp: np.ndarray, vis: np.ndarray) -> tuple[P
     r = cut_row(kp, vis)
     path = work / f"{clip.stem}-cut.avi"
     if not path.exists():
-        fps = video_info(clip)[0] or 30.0
-        frames = read_frames(clip)
-        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, (frames.shape[2], r))
-        for f in frames:
-            writer.write(np.ascontiguousarray(f[:r]))
-        writer.release()
+        lossless_copy(read_frames(clip)[:, :r], path, video_info(clip)[0] or 30.0)
     return path, r
+
+
+def lossless_copy(frames: np.ndarray, path: Path, fps: float) -> None:
+    """Write frames (T, H, W, 3) uint8 BGR to ``path`` as FFV1 at ``fps``."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps, (frames.shape[2], frames.shape[1]))
+    for f in frames:
+        writer.write(np.ascontiguousarray(f))
+    writer.release()
+
+
+def pass_estimates(path: Path, npz: Path, n: int, **extra: Any) -> np.ndarray:
+    """A pass's copy of a clip tracked as the tracking part tracks (kept in ``npz``, and read from
+    it when there), its joints projected (``tracked_pixels``) over ``n`` frames, NaN past those
+    tracked; ``extra``: ``track_video``'s keyword arguments over the part's.
+    """
+    from counterpart.apps.tracking import track_video
+    from counterpart.nodes.tracker.prior import resolve_prior
+
+    if not npz.exists():
+        track_video(
+            path,
+            npz,
+            people=SIDES,
+            prior=resolve_prior("default"),
+            layers=LAYERS,
+            particles=PARTICLES,
+            train_frames=TRAIN_FRAMES,
+            **extra,
+        )
+    est = tracked_pixels(npz)[0][:n]
+    return np.concatenate([est, np.full((n - len(est), *est.shape[1:]), np.nan)])
 
 
 def cut_clip(clip: Path, work: Path, kp: np.ndarray, scored: np.ndarray, h: np.ndarray) -> dict[str, Any]:
@@ -408,28 +434,12 @@ def cut_clip(clip: Path, work: Path, kp: np.ndarray, scored: np.ndarray, h: np.n
     ``scored`` mask, and the tracked body's scale: its projected height (nose to mid-ankle) over
     the reference's, per frame where both are known.
     """
-    from counterpart.apps.tracking import track_video
-    from counterpart.nodes.tracker.prior import resolve_prior
-
     ref = np.load(KEYPOINTS / f"{clip.stem}.npz")
     path, r = cut_copy(clip, work, ref["kp"], ref["vis"])
     out: dict[str, Any] = {"scored": scored & (kp[..., 1] < r)}
     ankles = scored[:, :, HEAD] & scored[:, :, ANKLES].all(axis=-1)
     for name, extra in (("", {}), ("_before", CUT_BEFORE)):
-        npz = work / f"{clip.stem}-cut{name}-track.npz"
-        if not npz.exists():
-            track_video(
-                path,
-                npz,
-                people=SIDES,
-                prior=resolve_prior("default"),
-                layers=LAYERS,
-                particles=PARTICLES,
-                train_frames=TRAIN_FRAMES,
-                **extra,
-            )
-        est = tracked_pixels(npz)[0][: len(kp)]
-        est = np.concatenate([est, np.full((len(kp) - len(est), *est.shape[1:]), np.nan)])
+        est = pass_estimates(path, work / f"{clip.stem}-cut{name}-track.npz", len(kp), **extra)
         out["counts" + name] = pck_counts(est, kp, out["scored"], h)
         tall = np.linalg.norm(est[:, :, HEAD] - est[:, :, ANKLES].mean(axis=2), axis=-1) / h
         out["scale" + name] = tall[ankles & np.isfinite(tall)].tolist()
@@ -448,36 +458,13 @@ def slow_clip(clip: Path, work: Path, step: int, kp: np.ndarray, scored: np.ndar
     counts on the reference of the frames kept, the frames kept, and the partner staged beside
     the first track (``partner_clip``).
     """
-    from counterpart.apps.tracking import track_video
-    from counterpart.nodes.tracker.prior import resolve_prior
-
     path = work / f"{clip.stem}-slow{step}.avi"
     if not path.exists():
-        fps = video_info(clip)[0] or 30.0
-        frames = read_frames(clip)
-        writer = cv2.VideoWriter(
-            str(path), cv2.VideoWriter_fourcc(*"FFV1"), fps / step, (frames.shape[2], frames.shape[1])
-        )
-        for f in frames[::step]:
-            writer.write(f)
-        writer.release()
+        lossless_copy(read_frames(clip)[::step], path, (video_info(clip)[0] or 30.0) / step)
     kept = np.arange(0, len(kp), step)
     out: dict[str, Any] = {"kept": kept}
     for name, told in (("", None), ("_unscaled", 0.0)):
-        npz = work / f"{clip.stem}-slow{step}{name}-track.npz"
-        if not npz.exists():
-            track_video(
-                path,
-                npz,
-                people=SIDES,
-                prior=resolve_prior("default"),
-                layers=LAYERS,
-                particles=PARTICLES,
-                train_frames=TRAIN_FRAMES,
-                fps=told,
-            )
-        est = tracked_pixels(npz)[0][: len(kept)]
-        est = np.concatenate([est, np.full((len(kept) - len(est), *est.shape[1:]), np.nan)])
+        est = pass_estimates(path, work / f"{clip.stem}-slow{step}{name}-track.npz", len(kept), fps=told)
         out["counts" + name] = pck_counts(est, kp[kept], scored[kept], h[kept])
     vis = np.load(KEYPOINTS / f"{clip.stem}.npz")["vis"][: len(kp)][kept]
     npz = work / f"{clip.stem}-slow{step}-track.npz"
@@ -490,23 +477,35 @@ def slow_figures(rows: list[dict[str, Any]], step: int) -> dict[str, Any]:
     ``pck10_slow``, ``pck20_slow``, ``_unscaled``, the whole clips' tracks on the same frames
     (``pck10_full_rate_same_frames``, ...), and the partner's (``partner_distance_ok_slow``, ...).
     """
-    out: dict[str, Any] = {"slow_step": step}
     full = []
     for r in rows:
         kept = r["slow"]["kept"]
         full.append(pck_counts(r["est"][kept], r["kp"][kept], r["scored"][kept], r["h"][kept]))
-    for name, counts in (
-        ("_slow", [r["slow"]["counts"] for r in rows]),
-        ("_slow_unscaled", [r["slow"]["counts_unscaled"] for r in rows]),
-        ("_full_rate_same_frames", full),
-    ):
-        n = max(sum(c["n"] for c in counts), 1)
+    return {
+        "slow_step": step,
+        **pass_figures(
+            rows,
+            "slow",
+            {
+                "_slow": [r["slow"]["counts"] for r in rows],
+                "_slow_unscaled": [r["slow"]["counts_unscaled"] for r in rows],
+                "_full_rate_same_frames": full,
+            },
+        ),
+    }
+
+
+def pass_figures(rows: list[dict[str, Any]], name: str, counts: dict[str, list[dict[str, int]]]) -> dict[str, Any]:
+    """A pass's PCK of each set of per-clip ``counts`` pooled (``pck10`` + its suffix, ...) and its
+    partner's figures (``PASS_PARTNER``, suffixed ``_`` + ``name``) from the clips' ``rows[name]``.
+    """
+    out: dict[str, Any] = {}
+    for suffix, clip_counts in counts.items():
+        n = max(sum(c["n"] for c in clip_counts), 1)
         for a in ALPHAS:
-            out[f"pck{round(a * 100)}{name}"] = round(sum(c[f"hit{round(a * 100)}"] for c in counts) / n, 4)
-    partner = partner_figures([r["slow"]["partner"] for r in rows])
-    for k in PASS_PARTNER:
-        out[f"{k}_slow"] = partner[k]
-    return out
+            out[f"pck{round(a * 100)}{suffix}"] = round(sum(c[f"hit{round(a * 100)}"] for c in clip_counts) / n, 4)
+    partner = partner_figures([r[name]["partner"] for r in rows])
+    return {**out, **{f"{k}_{name}": partner[k] for k in PASS_PARTNER}}
 
 
 def cut_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -514,23 +513,20 @@ def cut_figures(rows: list[dict[str, Any]]) -> dict[str, Any]:
     ``pck20_cut`` and ``_before``, the same joints of the whole clips' tracks
     (``pck10_uncut_same_joints``, ...), and the median ``scale_cut`` and ``scale_cut_before``.
     """
-    out: dict[str, Any] = {}
     uncut = [pck_counts(r["est"], r["kp"], r["cut"]["scored"], r["h"]) for r in rows]
-    for name, counts in (
-        ("_cut", [r["cut"]["counts"] for r in rows]),
-        ("_cut_before", [r["cut"]["counts_before"] for r in rows]),
-        ("_uncut_same_joints", uncut),
-    ):
-        n = max(sum(c["n"] for c in counts), 1)
-        for a in ALPHAS:
-            out[f"pck{round(a * 100)}{name}"] = round(sum(c[f"hit{round(a * 100)}"] for c in counts) / n, 4)
+    out = pass_figures(
+        rows,
+        "cut",
+        {
+            "_cut": [r["cut"]["counts"] for r in rows],
+            "_cut_before": [r["cut"]["counts_before"] for r in rows],
+            "_uncut_same_joints": uncut,
+        },
+    )
     for name in ("", "_before"):
         scale = [v for r in rows for v in r["cut"]["scale" + name]]
         out["scale_cut" + name] = round(float(np.median(scale)), 3) if scale else None
     out["cut_joints"] = sum(int(r["cut"]["scored"].sum()) for r in rows)
-    partner = partner_figures([r["cut"]["partner"] for r in rows])
-    for k in PASS_PARTNER:
-        out[f"{k}_cut"] = partner[k]
     return out
 
 
@@ -858,6 +854,11 @@ def main() -> None:
         pck = clip_list(args.pck_clips or args.clips)
         if args.pck_classes:
             pck = [c for c in pck if interaction_class(c) in {int(k) for k in args.pck_classes.split(",")}]
+        if not pck:
+            ap.error(
+                f"--pck-classes {args.pck_classes}: none of the {args.pck_clips or args.clips} clips chosen is of "
+                "these classes; give more clips (--pck-clips all)"
+            )
         result.update(run_pck(pck, work, args.jobs, not args.no_cut, args.slow_step))
     if not args.no_silhouettes:
         result.update(run_silhouettes())
