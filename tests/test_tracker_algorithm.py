@@ -225,6 +225,26 @@ def test_tracker_follows_rendered_sequence() -> None:
     assert max(pelvis) < 0.35, f"pelvis off by up to {np.round(pelvis, 3)} m"
 
 
+@pytest.mark.parametrize("with_prior", [False, True])
+def test_a_gap_of_dropped_frames_widens_the_prediction_and_the_search_bounds(with_prior: bool) -> None:
+    from counterpart.nodes.tracker.prior import train_prior
+
+    prior = train_prior(["sim:wave?seed=7"], n_states=3) if with_prior else None
+    tr = Tracker(CAM, "left", SMALL, prior=prior, fps=25.0)
+    std, lo, hi = tr.predictor.std.copy(), tr.filter.min_std.copy(), tr.filter.max_std.copy()
+    tr.set_gap(2)
+    np.testing.assert_allclose(tr.predictor.std, 2 * std)
+    np.testing.assert_allclose(tr.filter.min_std, 2 * lo)
+    np.testing.assert_allclose(tr.filter.max_std, 2 * hi)
+    tr.set_gap(1)
+    np.testing.assert_allclose(tr.predictor.std, std)
+    np.testing.assert_allclose(tr.filter.max_std, hi)
+    # a 10 fps video's tracker starts out 2.5 times as wide as the 25 fps one
+    slow = Tracker(CAM, "left", SMALL, prior=prior, fps=10.0)
+    np.testing.assert_allclose(slow.predictor.std, 2.5 * std)
+    np.testing.assert_allclose(slow.filter.max_std, 2.5 * hi)
+
+
 #: a second camera left of the scene, aimed at person A (as bench/tracker.py's ``--views 2``)
 SIDE_CAM = Camera.look_at((-3.8, 2.0, 1.2), (-0.5, 0.9, 0.0), 55.0, 320, 240)
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import re
 import time
 from pathlib import Path
 
@@ -27,6 +29,7 @@ class SimPeople(Node):
         "merged": Param(bool, False, "flag the people as merged"),
         "fps": Param(float, 0.0, "the frames' rate, Hz (0: unknown)", min=0.0),
         "drop_frames": Param(list, [], "seqs whose frame is not published (their silhouettes are)"),
+        "skip": Param(list, [], "seqs of which nothing is published (dropped before the tracker)"),
     }
 
     def generate(self) -> None:
@@ -34,6 +37,8 @@ class SimPeople(Node):
 
         stream = open_stream("handshake", seed=2, frames=self.p["frames"])
         for i in range(stream.n_frames):
+            if i in self.p["skip"]:
+                continue
             image, truth = stream.render_with_truth(i)
             stamp = time.monotonic_ns()
             labels = np.zeros(image.shape[:2], np.uint8)
@@ -99,6 +104,21 @@ def test_one_pose_per_frame_for_two_people(tmp_path: Path) -> None:
         left, right = (np.array(b["joints"], float) for b in p["people"])
         assert left[:, 0].mean() < right[:, 0].mean()
         assert left[0, 1] > 1.3 and left[[10, 13], 1].min() < 0.3
+
+
+def test_frames_dropped_before_the_tracker_are_stepped_over(tmp_path: Path) -> None:
+    """A live graph drops frames its slowest node cannot take: the tracker gets seqs 0, 1, 4, 5, 6,
+    7, counts the two it never saw, and its tracks go on through the longer step.
+    """
+    f, out = _graph(tmp_path, {"frames": 8, "skip": [2, 3], "fps": 25.0}, {"people": ["left", "right"]})
+    rc, log = run_launch(f, timeout=90)
+    assert rc == 0, log
+    poses = _poses(out)
+    assert [p["seq"] for p in poses] == [0, 1, 4, 5, 6, 7]
+    assert all(len(p["people"]) == 2 and not any(b["lost"] for b in p["people"]) for p in poses)
+    run_dir = Path(re.search(r"run directory (\S+)", log).group(1))
+    figures = json.loads((run_dir / "stats" / "tracker.json").read_text())["figures"]
+    assert figures["frames_stepped_over"] == 2
 
 
 def test_nobody_in_view_and_merged_people(tmp_path: Path) -> None:

@@ -107,6 +107,24 @@ def test_a_slower_video_is_searched_over_its_longer_steps(prior: MotionPrior) ->
     assert frame_steps(25.0, 1.0) == MAX_FRAME_STEPS  # a header's wrong rate does not blow the search up
 
 
+def test_frames_dropped_before_the_tracker_are_a_longer_step(prior: MotionPrior) -> None:
+    """Two frames dropped at 25 fps make the next step one of three frames, as at a third of the
+    rate; the step after is one frame again; the cap holds for a long gap.
+    """
+    pred, slow = prior.predictor(PRIOR_FPS), prior.predictor(PRIOR_FPS / 3)
+    base = pred.std.copy()
+    pred.set_gap(3)
+    np.testing.assert_allclose(pred.std, slow.std)
+    np.testing.assert_allclose(pred.transmat, slow.transmat)
+    pred.set_gap(1)
+    np.testing.assert_array_equal(pred.std, base)
+    np.testing.assert_allclose(pred.transmat, prior.transmat)
+    pred.set_gap(100)
+    np.testing.assert_allclose(pred.std, base * MAX_FRAME_STEPS)
+    slow.set_gap(2)  # at a third of the rate, two frames are six of the prior's: capped at five
+    np.testing.assert_allclose(slow.std, base * MAX_FRAME_STEPS)
+
+
 def test_the_priors_frame_rate_is_kept_in_its_file(prior: MotionPrior, tmp_path: Path) -> None:
     assert prior.fps == PRIOR_FPS
     q = train_prior(["sim:wave?seed=7"], n_states=3, fps=12.5)

@@ -255,6 +255,9 @@ class TrackerNode(Node):
         self.fps = 0.0  # the camera's frame rate, from the newest frame (or the silhouettes' stamps)
         self.rate = StampRate()
         self.fps_known = False  # a frame gave the rate
+        #: the seq of the last frame tracked: frames dropped before this node (a live camera faster
+        #: than the graph) are a longer step for the tracks (``Tracker.set_gap``)
+        self.last_seq: int | None = None
         self.budget = FrameBudget(
             self.p["layers"],
             self.p["particles"],
@@ -377,6 +380,10 @@ class TrackerNode(Node):
         size = (camera.width, camera.height)
         people: list[TrackedBody] = []
         in_view = [s for s in self.p["people"] if any(p.side == s for p in sil.people)]
+        gap = sil.seq - self.last_seq if self.last_seq is not None and sil.seq > self.last_seq else 1
+        self.last_seq = sil.seq
+        if gap > 1:  # frames that never reached this node: the tracks step over them
+            self.tally("frames_stepped_over", gap - 1)
         layers, particles = self.budget.plan(len(in_view), self.fps)
         cap = self.p["start_layers"]
         budgeted = self.budget.config.share > 0 and self.fps > 0
@@ -391,6 +398,7 @@ class TrackerNode(Node):
             try:
                 tr = self._tracker(side, camera)
                 tr.filter.n_layers, tr.filter.n_particles = layers, particles
+                tr.set_gap(gap)
                 self.tally("budget_starts", not tr.tracking)
                 self.tally("budget_frames")
                 self.tally("budget_layers", layers)

@@ -422,8 +422,8 @@ class PriorPredictor:
 
     def __init__(self, prior: MotionPrior, fps: float = 0.0) -> None:
         self.prior = prior
-        steps = frame_steps(prior.fps, fps)
-        self.transmat = transitions_over(prior.transmat, steps)
+        #: the prior's frames one frame of the video spans (``frame_steps``)
+        self.frame_steps = frame_steps(prior.fps, fps)
         self.alpha = prior.startprob.copy()
         self._chol = np.linalg.cholesky(prior.covars)
         # Mahalanobis distances of all states as matmuls (``log_prior``):
@@ -435,9 +435,29 @@ class PriorPredictor:
         self._q1 = -2 * Smu.T  # (d, K)
         self._q0 = np.einsum("ki,ki->k", Smu, prior.means)  # (K,)
         self._logdet = 2 * np.log(np.diagonal(self._chol, axis1=1, axis2=2)).sum(-1)
-        self.std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale * steps
+        self._rw_std = np.maximum(prior.rw_std, RW_FLOOR) * prior.rw_scale
         #: (alpha, uniform, log state weights) of ``log_prior``, for the frame's alpha
         self._logw: tuple[np.ndarray, float, np.ndarray] | None = None
+        self._steps: float | None = None
+        self.set_gap(1)
+
+    def set_gap(self, frames: int) -> None:
+        """The next frame comes ``frames`` frames of the video after the last one tracked (more than
+        one where frames were dropped): the random walk and the transitions span as many of the
+        prior's frames (``frame_steps`` times ``frames``, at most ``MAX_FRAME_STEPS``).
+
+        Parameters
+        ----------
+        frames : int
+            Frames of the video since the last one tracked, >= 1.
+        """
+        steps = min(MAX_FRAME_STEPS, self.frame_steps * max(1, int(frames)))
+        if steps == self._steps:
+            return
+        self._steps = steps
+        self.std = self._rw_std * steps
+        self.transmat = transitions_over(self.prior.transmat, steps)
+        self._logw = None
 
     def reset(self) -> None:
         self.alpha = self.prior.startprob.copy()

@@ -47,7 +47,7 @@ from .init import (
     initial_particles,
 )
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
-from .prior import PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps
+from .prior import MAX_FRAME_STEPS, PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps
 
 
 @dataclass
@@ -113,10 +113,17 @@ class Search:
 
 
 class _RandomWalk:
-    """predict_fn of a tracker without a learned prior: x + N(0, diag(std^2))."""
+    """predict_fn of a tracker without a learned prior: x + N(0, diag(std^2)), ``std`` per frame at
+    ``PRIOR_FPS`` times the frames of that rate since the last one tracked (``frame_steps`` per
+    frame of the video, times the frames ``set_gap`` gives, at most ``MAX_FRAME_STEPS``).
+    """
 
-    def __init__(self, std: np.ndarray) -> None:
-        self.std = std
+    def __init__(self, std: np.ndarray, frame_steps: float = 1.0) -> None:
+        self._rw_std, self.frame_steps = std, frame_steps
+        self.set_gap(1)
+
+    def set_gap(self, frames: int) -> None:
+        self.std = self._rw_std * min(MAX_FRAME_STEPS, self.frame_steps * max(1, int(frames)))
 
     def update(self, pose: np.ndarray) -> None:
         pass
@@ -323,7 +330,7 @@ class Tracker:
         self.config = config
         self.rng = np.random.default_rng(seed)
         self.predictor: PriorPredictor | _RandomWalk = (
-            prior.predictor(fps) if prior is not None else _RandomWalk(RW_FLOOR * 3.0 * frame_steps(PRIOR_FPS, fps))
+            prior.predictor(fps) if prior is not None else _RandomWalk(RW_FLOOR * 3.0, frame_steps(PRIOR_FPS, fps))
         )
         self.fixed_dims = dims
         self.dims: BodyDims = dims or DEFAULT_DIMS
@@ -361,6 +368,22 @@ class Tracker:
     def _likelihood(self) -> MultiViewLikelihood:
         """The observation model of the current cameras and body dimensions."""
         return MultiViewLikelihood(self.cameras, self.dims, self.config.likelihood)
+
+    def set_gap(self, frames: int) -> None:
+        """The next frame comes ``frames`` frames after the last one given (more than one where the
+        frames between were dropped before the tracker): the prediction and the search's bounds
+        span them (``PriorPredictor.set_gap``).
+
+        Parameters
+        ----------
+        frames : int
+            Frames since the last one given, >= 1.
+        """
+        self.predictor.set_gap(frames)
+        if isinstance(self.filter, AnnealedParticleFilter):
+            apf = self.config.apf
+            self.filter.max_std = self.predictor.std * apf.max_std
+            self.filter.min_std = self.predictor.std * apf.min_std
 
     def set_camera(self, camera: Camera) -> None:
         """A refined calibration of the same single view (the calibration node's estimate moving by
