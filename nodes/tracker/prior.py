@@ -451,7 +451,7 @@ class PriorPredictor:
         frames : int
             Frames of the video since the last one tracked, >= 1.
         """
-        steps = min(MAX_FRAME_STEPS, self.frame_steps * max(1, int(frames)))
+        steps = gap_steps(self.frame_steps, frames)
         if steps == self._steps:
             return
         self._steps = steps
@@ -557,6 +557,25 @@ def frame_steps(prior_fps: float, fps: float) -> float:
         ``prior_fps / fps`` in [1, ``MAX_FRAME_STEPS``]; 1 for an unknown rate.
     """
     return min(MAX_FRAME_STEPS, max(1.0, prior_fps / fps)) if fps > 0 else 1.0
+
+
+def gap_steps(frame_steps: float, frames: int) -> float:
+    """The prior's frames a step of ``frames`` video frames spans, each ``frame_steps`` of them
+    (:func:`frame_steps`), at most ``MAX_FRAME_STEPS``.
+
+    Parameters
+    ----------
+    frame_steps : float
+        Prior frames per video frame, >= 1.
+    frames : int
+        Video frames the step spans (1 without a gap; less counts as 1).
+
+    Returns
+    -------
+    float
+        ``min(MAX_FRAME_STEPS, frame_steps * max(1, frames))``.
+    """
+    return min(MAX_FRAME_STEPS, frame_steps * max(1, int(frames)))
 
 
 def transitions_over(transmat: np.ndarray, steps: float) -> np.ndarray:

@@ -47,7 +47,7 @@ from .init import (
     initial_particles,
 )
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
-from .prior import MAX_FRAME_STEPS, PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps
+from .prior import PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps, gap_steps
 
 
 @dataclass
@@ -115,7 +115,7 @@ class Search:
 class _RandomWalk:
     """predict_fn of a tracker without a learned prior: x + N(0, diag(std^2)), ``std`` per frame at
     ``PRIOR_FPS`` times the frames of that rate since the last one tracked (``frame_steps`` per
-    frame of the video, times the frames ``set_gap`` gives, at most ``MAX_FRAME_STEPS``).
+    frame of the video, times the frames ``set_gap`` gives, at most ``prior.MAX_FRAME_STEPS``: ``prior.gap_steps``).
     """
 
     def __init__(self, std: np.ndarray, frame_steps: float = 1.0) -> None:
@@ -123,7 +123,7 @@ class _RandomWalk:
         self.set_gap(1)
 
     def set_gap(self, frames: int) -> None:
-        self.std = self._rw_std * min(MAX_FRAME_STEPS, self.frame_steps * max(1, int(frames)))
+        self.std = self._rw_std * gap_steps(self.frame_steps, frames)
 
     def update(self, pose: np.ndarray) -> None:
         pass
