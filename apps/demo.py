@@ -237,6 +237,40 @@ def report(run_dir: Path, out: Path) -> RunSummary:
     return summary
 
 
+#: name endings of video files: an ``--out`` that ends so names a video, not the demo's folder
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm")
+
+
+def out_folder_problem(out: Path) -> str | None:
+    """Why ``out`` cannot be the demo's output folder, or None.
+
+    The demo writes a folder (its video, contact sheet and statistics). A name ending like a
+    video file (``--out result.mp4``) would become a folder of that name with the video inside,
+    which no one looking for ``result.mp4`` finds; an existing file cannot be made a folder.
+
+    Parameters
+    ----------
+    out : Path
+        The ``--out`` path.
+
+    Returns
+    -------
+    str or None
+        The reason and the way out, or None where the folder can be used (it exists, or can be made).
+    """
+    if out.exists() and not out.is_dir():
+        return (
+            "is a file; --out is the folder the demo writes into (its video is demo.mp4 or demo.avi "
+            "there): give a folder, e.g. --out out"
+        )
+    if not out.exists() and out.suffix.lower() in VIDEO_SUFFIXES:
+        return (
+            "names a video file; --out is the folder the demo writes into (its video is demo.mp4 or "
+            f"demo.avi there, with a contact sheet and the statistics): give a folder, e.g. --out {out.with_suffix('').name}"
+        )
+    return None
+
+
 def main(args: argparse.Namespace) -> int:
     """``counterpart demo``: run the graph, then write the video's contact sheet and the statistics.
 
@@ -269,6 +303,10 @@ def main(args: argparse.Namespace) -> int:
         print(f"counterpart demo: --input {args.input}: no such file or folder", file=sys.stderr)
         return 2
     out = Path(args.out).resolve()
+    problem = out_folder_problem(out)
+    if problem:
+        print(f"counterpart demo: --out {args.out}: {problem}", file=sys.stderr)
+        return 2
     out.mkdir(parents=True, exist_ok=True)
     print("counterpart demo: preparing the default models (cached after the first run)", file=sys.stderr)
     ensure_models(serve=args.serve)

@@ -143,3 +143,18 @@ def test_a_folder_of_frames_is_an_input_too(clip: Path, env: dict[str, str], tmp
     assert _video_frames_and_fps(out) == (12, 25.0)
     res, _ = _demo(env, tmp_path / "out2", "--input", str(tmp_path / "missing"), timeout=60)
     assert res.returncode == 2 and "no such file or folder" in res.stderr
+
+
+def test_an_out_that_is_no_folder_is_refused_before_anything_runs(env: dict[str, str], tmp_path: Path) -> None:
+    """``--out`` is the folder the demo writes into: a video's name or an existing file is refused
+    with the reason and the way out, before a model is loaded, and nothing is made.
+    """
+    video_name = tmp_path / "result.mp4"
+    a_file = tmp_path / "notes.txt"
+    a_file.write_text("kept")
+    for out, says in ((video_name, "names a video file"), (a_file, "is a file")):
+        res, _ = _demo(env, out, "--frames", "5", timeout=60)
+        assert res.returncode == 2, res.stderr[-2000:]
+        assert says in res.stderr and "give a folder" in res.stderr and "Traceback" not in res.stderr
+        assert "preparing the default models" not in res.stderr
+    assert not video_name.exists() and a_file.read_text() == "kept"

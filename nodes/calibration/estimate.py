@@ -667,20 +667,32 @@ def _refine_best(fun: Any, starts: list[tuple[float, np.ndarray]], args: tuple, 
         hi = np.full(len(x0), np.inf)
         lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
         x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
-        res = least_squares(
+        res = _robust_fit(fun, x0, args, (lo, hi))
+        if best is None or res.cost < best.cost:
+            best = res
+    return best
+
+
+def _robust_fit(fun: Any, x0: np.ndarray, args: tuple = (), bounds: tuple = (-np.inf, np.inf)) -> Any:
+    """``scipy.optimize.least_squares`` of ``fun(x, *args)`` from ``x0`` with the soft-L1 loss (trust
+    region reflective, at most 200 evaluations, the Jacobian batched by :class:`_Batched`).
+
+    A trial step far off (a loosely held stature, a foot ray grazing the horizon) can give
+    residuals whose squares overflow; the fit rejects such a step as it should, so numpy's
+    overflow warnings are silenced here rather than printed to a user among the estimate's lines.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        return least_squares(
             fun,
             x0,
             args=args,
-            bounds=(lo, hi),
+            bounds=bounds,
             loss="soft_l1",
             method="trf",
             x_scale="jac",
             max_nfev=200,
             workers=_Batched(fun, args),
         )
-        if best is None or res.cost < best.cost:
-            best = res
-    return best
 
 
 class _Batched:
@@ -854,7 +866,7 @@ def _solve_people(people: _People, config: CalibrationConfig, cam: np.ndarray) -
         x = np.concatenate([np.broadcast_to(cam, (*np.shape(z)[:-1], len(cam))), z], -1)
         return _residuals(x, people, config)
 
-    res = least_squares(fun, z0, loss="soft_l1", method="trf", x_scale="jac", max_nfev=200, workers=_Batched(fun, ()))
+    res = _robust_fit(fun, z0)
     res.x = np.concatenate([cam, res.x])
     return res
 
