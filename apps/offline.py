@@ -1,6 +1,7 @@
 """What the long offline commands (``counterpart track``, ``silhouettes``, ``calibrate``, ``learn avatar``)
-share: the video arguments, progress lines, argument checks, and one way to end (exit 0 and a JSON
-summary, 2 on bad input with the reason, 130 on Ctrl-C saying what was kept).
+share: the video arguments, progress lines, argument checks, the output path checked before the work,
+and one way to end (exit 0 and a JSON summary, 2 on bad input with the reason, 130 on Ctrl-C saying
+what was kept).
 """
 
 from __future__ import annotations
@@ -113,8 +114,44 @@ def positive(args: argparse.Namespace, names: tuple[str, ...], command: str) -> 
     return True
 
 
+def npz_name(out: str) -> str:
+    """``out`` as numpy's ``savez`` writes it: with ``.npz`` added where it does not end so (the
+    summary and the messages then name the file that is written); an existing folder as it is
+    (:func:`out_problem` refuses it: ``results/`` is not a wish for ``results.npz``).
+    """
+    return out if out.endswith(".npz") or os.path.isdir(out) else out + ".npz"
+
+
+def out_problem(out: str) -> str | None:
+    """Why the output file ``out`` cannot be written, or None: said before a long run, which would
+    otherwise be lost when it ends.
+
+    Parameters
+    ----------
+    out : str
+        The ``--out`` path.
+
+    Returns
+    -------
+    str or None
+        The reason and the way out.
+    """
+    path = os.path.abspath(out)
+    folder = os.path.dirname(path)
+    if os.path.isdir(path):
+        return f"--out {out}: is a folder; give the name of a file (in it, or elsewhere) to write"
+    if not os.path.isdir(folder):
+        return (
+            f"--out {out}: its folder {folder} does not exist; make it first (mkdir -p {folder}) or give another path"
+        )
+    if not os.access(folder, os.W_OK):
+        return f"--out {out}: the folder {folder} is not writable; give a path in a folder you can write to"
+    return None
+
+
 def run_offline(command: str, out: str, work: Callable[[], dict[str, Any]]) -> int:
-    """Run ``work`` (it writes ``out``) and print its summary as JSON.
+    """Run ``work`` (it writes ``out``) and print its summary as JSON; an ``out`` that cannot be
+    written (:func:`out_problem`) is refused first.
 
     Parameters
     ----------
@@ -128,9 +165,13 @@ def run_offline(command: str, out: str, work: Callable[[], dict[str, Any]]) -> i
     Returns
     -------
     int
-        Exit status: 0 on success; 2 with the reason on a ValueError or OSError; 130 on Ctrl-C,
-        saying whether ``out`` holds the frames done.
+        Exit status: 0 on success; 2 with the reason on a ValueError or OSError, or an ``out`` that
+        cannot be written; 130 on Ctrl-C, saying whether ``out`` holds the frames done.
     """
+    problem = out_problem(out)
+    if problem:
+        print(f"counterpart {command}: {problem}", file=sys.stderr)
+        return 2
     try:
         summary = work()
     except (ValueError, OSError) as exc:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from counterpart.apps.offline import FrameProgress, add_video_arguments, positive, run_offline
+from counterpart.apps.offline import FrameProgress, add_video_arguments, npz_name, positive, run_offline
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 
 #: the one-line help of this command in `counterpart --help`
@@ -36,6 +36,7 @@ def main(args: argparse.Namespace) -> int:
 
     if not positive(args, ("train_frames", "max_frames"), "silhouettes"):
         return 2
+    args.out = npz_name(args.out)
     return run_offline(
         "silhouettes",
         args.out,

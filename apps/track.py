@@ -14,7 +14,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from counterpart.apps.offline import FrameProgress, add_fov_argument, add_video_arguments, positive, run_offline
+from counterpart.apps.offline import (
+    FrameProgress,
+    add_fov_argument,
+    add_video_arguments,
+    npz_name,
+    positive,
+    run_offline,
+)
 from counterpart.body.camera import Camera, load_camera_file
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 from counterpart.nodes.tracker.prior import resolve_prior
@@ -115,6 +122,7 @@ def main(args: argparse.Namespace) -> int:
 
     if not positive(args, ("layers", "particles", "train_frames", "max_frames", "calibration_frames"), "track"):
         return 2
+    args.out = npz_name(args.out)
     if args.fov and args.camera != ESTIMATE:
         print(
             f"counterpart track: --fov is for --camera estimate; the camera {args.camera!r} has its own focal length",

@@ -389,6 +389,11 @@ def load_camera_file(path: str) -> Camera:
             data = yaml.safe_load(f)
     except OSError as exc:
         raise ValueError(f"calibration file {path!r}: cannot read it ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ValueError(
+            f"calibration file {path!r}: not a text file (a calibration is JSON or YAML text, as "
+            "`counterpart calibrate` writes; a video or an image cannot be one)"
+        ) from None
     except yaml.YAMLError as exc:
         raise ValueError(f"calibration file {path!r}: not JSON or YAML ({exc})") from None
     if not isinstance(data, dict) or not data:

@@ -142,18 +142,23 @@ def test_silhouettes_command_on_a_video_and_an_interrupted_run(handshake, tmp_pa
         writer.write(frame)
     writer.release()
     out = tmp_path / "people.npz"
-    # the timeout is a hang guard only: the run takes seconds, but once passed 120 s at load 33
-    r = run_cli("silhouettes", str(video), "--out", str(out), "--train-frames", "20")
+    # the timeout is a hang guard only: the run takes seconds, but once passed 120 s at load 33;
+    # --out without .npz: numpy adds it, and the summary names the file written
+    r = run_cli("silhouettes", str(video), "--out", str(tmp_path / "people"), "--train-frames", "20")
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     n = len(handshake.frames)
-    assert summary["n_frames"] == n and summary["max_people"] == 2
+    assert summary["n_frames"] == n and summary["max_people"] == 2 and summary["out_npz"] == str(out)
     d = np.load(out)
     assert bool(d["complete"]) and int(d["n_frames"]) == n
     per_frame = np.bincount(d["frame"], minlength=n)
     assert (per_frame[:20] == 0).all() and np.mean(per_frame[20:] == 2) > 0.9  # the empty room, then two
     r = run_cli("silhouettes", str(video), "--out", str(out), "--train-frames", "0", timeout=60)
     assert r.returncode == 2 and "--train-frames must be at least 1" in r.stderr
+    # an output that cannot be written is said before the work, not after it
+    for bad, says in ((tmp_path, "is a folder"), (tmp_path / "no" / "people.npz", "does not exist; make it first")):
+        r = run_cli("silhouettes", str(video), "--out", str(bad), timeout=60)
+        assert r.returncode == 2 and says in r.stderr and "[silhouettes] frame" not in r.stderr, r.stderr
 
     def stop_after_30(done: int, declared: int) -> None:
         if done == 30:

@@ -130,6 +130,13 @@ def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarr
     assert r.returncode == 2 and "distinct sides" in r.stderr
     r = _track(str(video), "--out", str(out), "--calibration-frames", "0", "--prior", "none")
     assert r.returncode == 2 and "--calibration-frames must be at least 1" in r.stderr
+    # a video given as the calibration: said as such, not as a text codec's complaint
+    r = _track(str(video), "--out", str(out), "--camera", str(video), "--prior", "none")
+    assert r.returncode == 2 and "not a text file" in r.stderr and "codec" not in r.stderr, r.stderr
+    # an output that cannot be written: said before the camera is estimated and the people tracked
+    for bad, says in ((tmp_path, "is a folder"), (tmp_path / "no" / "poses.npz", "does not exist; make it first")):
+        r = _track(str(video), "--out", str(bad), "--prior", "none")
+        assert r.returncode == 2 and says in r.stderr and "[track]" not in r.stderr, r.stderr
     assert not out.exists()  # nothing half-written
 
 
