@@ -44,7 +44,7 @@ from mcap.exceptions import EndOfFile, McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
-from mcap.writer import CompressionType, Writer
+from mcap.writer import MCAP0_MAGIC, CompressionType, Writer
 
 from counterpart.messages import REGISTRY, decode, describe, encode
 from counterpart.messages.codec import DEFAULT_LIMITS, DecodeError, array_index, read_header
@@ -427,6 +427,14 @@ class BagReader:
         self.path = Path(path)
         if not self.path.is_file():
             raise FileNotFoundError(f"bag {self.path} does not exist")
+        with open(self.path, "rb") as f:
+            head = f.read(len(MCAP0_MAGIC))
+        # a bag cut short may hold part of the magic, or nothing; any other start is another file
+        if not MCAP0_MAGIC.startswith(head):
+            raise ValueError(
+                f"{self.path} is not a bag: bags are MCAP files (as `counterpart bag record` writes them), "
+                "and this file does not start as one"
+            )
         self.complete: bool | None = None
         self.recovered = 0
         self.error: str = ""

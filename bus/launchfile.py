@@ -271,7 +271,9 @@ def load(
     if file_path in _seen:
         raise LaunchError(f"{file}: include cycle through {' -> '.join(map(str, _seen))}")
     try:
-        doc = yaml.safe_load(file_path.read_text()) or {}
+        doc = yaml.safe_load(file_path.read_text(encoding="utf-8")) or {}
+    except UnicodeDecodeError:
+        raise LaunchError(f"{file}: not a launch file: not text (a launch file is YAML, as in launch/)") from None
     except yaml.YAMLError as exc:
         raise LaunchError(f"{file}: not valid YAML: {exc}") from None
     if not isinstance(doc, dict):

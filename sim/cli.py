@@ -224,6 +224,12 @@ def main(args: argparse.Namespace) -> int:
     if not args.out:
         print("counterpart sim: --out DIR is required (or --list)", file=sys.stderr)
         return 2
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        print(
+            f"counterpart sim: --out {args.out}: is a file; --out is the folder the scene is written into",
+            file=sys.stderr,
+        )
+        return 2
     from counterpart.sim.stream import open_stream
 
     kw: dict[str, Any] = {

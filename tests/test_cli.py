@@ -114,3 +114,21 @@ def test_nodes_run_alone_find_each_other_by_topic(tmp_path: Path) -> None:
 def test_run_reports_a_bad_parameter() -> None:
     res = cli("run", "tests.graph_nodes:Counter", "--param", "count=lots")
     assert res.returncode == 2 and "parameter 'count': expected int" in res.stderr
+
+
+def test_a_file_of_the_wrong_kind_is_named_as_such(tmp_path: Path) -> None:
+    """A video where a bag, a launch file or the simulator's output folder belongs: each command
+    says what the file is not, exits with its error code, and prints no traceback.
+    """
+    from tests.launching import run_cli
+
+    video = tmp_path / "clip.avi"
+    video.write_bytes(b"RIFF\x5e\x7b\x01\x00AVI LIST" + bytes(range(256)) * 8)
+    for args, code, says in (
+        (("bag", "info", str(video)), 1, "is not a bag: bags are MCAP files"),
+        (("launch", str(video)), 2, "not a launch file: not text"),
+        (("sim", "--scenario", "handshake", "--frames", "3", "--out", str(video)), 2, "is a file; --out is the folder"),
+    ):
+        r = run_cli(*args, timeout=60)
+        assert r.returncode == code and says in r.stderr and "Traceback" not in r.stderr, (args, r.stderr[-2000:])
+    assert video.read_bytes()[:4] == b"RIFF"  # nothing written over it
