@@ -354,7 +354,8 @@ def main(args: argparse.Namespace) -> int:
     summary = report(launcher.run_dir, out)
     problem = summary.problem()
     if code:
-        print(f"counterpart demo: the graph ended with exit code {code}", file=sys.stderr)
+        why = "".join(f"\n  {name}: {reason}" for name, reason in launcher.failures().items())
+        print(f"counterpart demo: the graph ended with exit code {code}{why}", file=sys.stderr)
     elif problem:
         print(f"counterpart demo: {problem}", file=sys.stderr)
         code = 1

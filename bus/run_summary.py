@@ -16,9 +16,31 @@ from typing import Any
 from counterpart.messages import NodeStats, TopicStats
 
 from .launchfile import stats_dir
+from .runner import failure_file
 
 #: share of output frames without a partner above which the summary warns
 MISSING_WARN = 0.1
+
+
+def read_failure(run_dir: Path, node: str) -> str:
+    """Why ``node`` failed in the run ``run_dir``, as it left it (its last error line), or "".
+
+    Parameters
+    ----------
+    run_dir : Path
+        The launch's run directory.
+    node : str
+        The node's name.
+
+    Returns
+    -------
+    str
+        The reason, or "" where the node left none.
+    """
+    try:
+        return failure_file(stats_dir(run_dir) / f"{node}.json").read_text(encoding="utf-8").strip()
+    except OSError:
+        return ""
 
 
 def read_stats(run_dir: Path) -> dict[str, NodeStats]:

@@ -11,6 +11,7 @@ import logging
 import os
 import sys
 import traceback
+from pathlib import Path
 from typing import Any
 
 from .logs import RepeatFilter
@@ -141,6 +142,48 @@ def setup_logging(name: str) -> None:
             atexit.register(repeats.flush_held)
 
 
+def failure_file(stats_file: str | Path) -> Path:
+    """The file beside a node's statistics (``NODE.json``) where it leaves why it failed
+    (``NODE.error``: its last error line), for the launcher and the summary to say.
+
+    Parameters
+    ----------
+    stats_file : str or Path
+        The node's ``stats_file``.
+
+    Returns
+    -------
+    Path
+        ``NODE.error`` in the same folder.
+    """
+    return Path(stats_file).with_suffix(".error")
+
+
+class _LastError(logging.Handler):
+    """Keeps the last error line a node logged (a traceback's last line: the exception)."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.ERROR)
+        self.message = ""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        lines = [line.strip() for line in self.format(record).strip().splitlines() if line.strip()]
+        if lines:
+            self.message = lines[-1]
+
+
+def _leave_failure(spec: dict[str, Any], code: int, last: _LastError) -> None:
+    """Write why the node failed (its last error line) beside its statistics, where the launcher
+    names a statistics file; nothing for a clean end, an interrupt or a failure it logged no error for.
+    """
+    if code in (0, 130) or not last.message or not spec.get("stats_file"):
+        return
+    try:
+        failure_file(spec["stats_file"]).write_text(last.message, encoding="utf-8")
+    except OSError:  # the run folder is gone: the log line above said it all the same
+        pass
+
+
 def run_spec(spec: dict[str, Any]) -> int:
     """Run a node from a launcher spec.
 
@@ -157,6 +200,15 @@ def run_spec(spec: dict[str, Any]) -> int:
     """
     setup_logging(spec["name"])
     log = logging.getLogger(spec["name"])
+    last = _LastError()
+    logging.getLogger().addHandler(last)
+    code = _run_node(spec, log)
+    _leave_failure(spec, code, last)
+    return code
+
+
+def _run_node(spec: dict[str, Any], log: logging.Logger) -> int:
+    """:func:`run_spec`'s node: made and run, its exit code."""
     try:
         cls = find_node_class(spec["module"])
         node = cls(spec)

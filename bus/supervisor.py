@@ -38,6 +38,7 @@ from typing import Any
 
 from .endpoints import base_dir, new_run_dir
 from .launchfile import Graph, node_specs, stats_dir
+from .run_summary import read_failure
 
 log = logging.getLogger("launch")
 
@@ -274,6 +275,27 @@ class Launcher:
                 signal.signal(s, h)
         return code
 
+    def failures(self) -> dict[str, str]:
+        """The nodes that failed (ended by themselves with an exit code other than 0 and 130), each
+        with why: the last error line it logged, or its exit code. Nodes the launcher stopped are
+        not among them.
+
+        Returns
+        -------
+        dict of str to str
+            Node name -> reason, in the launch file's order.
+        """
+        return {
+            p.name: read_failure(self.run_dir, p.name) or f"exit code {p.exit_code}"
+            for p in self.procs.values()
+            if p.exit_code is not None and p.exit_code > 0 and p.exit_code != 130
+        }
+
+    def _why(self, name: str) -> str:
+        """'; REASON' where node ``name`` left why it failed, else ''."""
+        reason = read_failure(self.run_dir, name)
+        return f"; {reason}" if reason else ""
+
     def _supervise(self) -> int:
         # once the graph is ending (a required node ended, a node failed to start): its exit code,
         # how long the others get to end by themselves on end of stream, and what to say after that
@@ -310,14 +332,20 @@ class Launcher:
                             delay,
                         )
                         continue
-                    (log.warning if failed else log.info)("%s exited with %d", p.name, p.exit_code)
+                    why = self._why(p.name) if failed else ""
+                    (log.warning if failed else log.info)("%s exited with %d%s", p.name, p.exit_code, why)
                     if p.required and failed:
-                        log.error("required node %s failed (exit code %d): stopping the graph", p.name, p.exit_code)
+                        log.error(
+                            "required node %s failed (exit code %d%s): stopping the graph", p.name, p.exit_code, why
+                        )
                         return p.exit_code
                     if early and not end_code:
                         # the nodes that took its end of stream end by themselves meanwhile
                         log.error(
-                            "%s failed before its first message (exit code %d): stopping the graph", p.name, p.exit_code
+                            "%s failed before its first message (exit code %d%s): stopping the graph",
+                            p.name,
+                            p.exit_code,
+                            why,
                         )
                         end_code, end_deadline, end_why = p.exit_code, now + EARLY_GRACE_S, ""
                         self._int_grace = EARLY_INT_GRACE_S

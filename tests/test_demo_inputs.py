@@ -116,6 +116,10 @@ def test_every_short_input_ends_by_itself_and_says_why_it_drew_no_partner(
     assert stats["frames_in"] == stats["frames_out"] == frames, res.stderr[-3000:]
     if frames == 0:  # the camera's error and exit code (3: its source failed) end the demo
         assert res.returncode == 3 and "is past the end of" in res.stderr, res.stderr[-3000:]
+        # and the demo's last words say which node failed and why, below the statistics
+        last = res.stderr.strip().splitlines()[-2:]
+        assert last[0] == "counterpart demo: the graph ended with exit code 3", res.stderr[-3000:]
+        assert last[1].startswith("  camera: ") and "is past the end of" in last[1], last
     elif frames == 1:  # nothing to learn a background from: no people, no partner, and the run says so
         assert res.returncode == 1 and stats["partner_present"] == 0.0
         assert "no partner was drawn on any of the 1 frames" in res.stderr, res.stderr[-3000:]
