@@ -129,3 +129,19 @@ def test_emotion_strength_ranks_and_modulates() -> None:
     assert wrist(y) > 1.15 * wrist(tr.a)
     with pytest.raises(ValueError, match="strength"):
         m.style_gains("angry", 1.5)
+
+
+def test_a_default_models_name_given_as_a_file_is_pointed_to_its_default_form(tmp_path) -> None:
+    """``--model dual-hmm`` where no such file is: the message says ``default:dual-hmm`` is the
+    default model; a missing file of any other name only says how to train one.
+    """
+    from counterpart.nodes.responder.models import load_model
+
+    with pytest.raises(
+        FileNotFoundError, match=r"dual-hmm: no such model file .*for the default model, default:dual-hmm"
+    ):
+        load_model("dual-hmm")
+    missing = str(tmp_path / "mine.npz")
+    with pytest.raises(FileNotFoundError, match="no such model file") as info:
+        load_model(missing)
+    assert "default:" not in str(info.value)

@@ -154,7 +154,8 @@ def read_meta(path: str | os.PathLike[str]) -> dict[str, Any]:
 def _open(path: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     p = os.fspath(path)
     if not os.path.exists(p):
-        raise FileNotFoundError(f"{p}: no such model file (train one with 'counterpart learn responder')")
+        hint = f"; for the default model, default:{p}" if p in MODEL_NAMES else ""
+        raise FileNotFoundError(f"{p}: no such model file (train one with 'counterpart learn responder'{hint})")
     try:
         with np.load(p, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
