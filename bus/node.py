@@ -260,6 +260,9 @@ class Node:
         self._out_stats: dict[str, _PortStats] = {}
         self._proc_ms: list[float] = []
         self._last_stats = time.monotonic()
+        #: the inputs' and outputs' stats and (mean, max) processing ms of the last stats window in
+        #: which the node did anything (:meth:`_maybe_stats`)
+        self._busy_window: tuple[list[TopicStats], list[TopicStats], tuple[float, float]] | None = None
         self._stats_seq = 0
         self._ppid = os.getppid()
         self._running = False  # set by the first message published or handled
@@ -505,6 +508,17 @@ class Node:
             self.figures.update(self._sync.stats.figures())
         proc = self._proc_ms
         self._proc_ms = []
+        proc_ms = (float(np.mean(proc)), float(np.max(proc))) if proc else (0.0, 0.0)
+        idle = not proc and all(t.rate_hz == 0 for t in ins + outs)
+        if force and idle and self._busy_window is not None:
+            # the last word, after an idle spell (the stream ended just after the last periodic
+            # stats), keeps the last busy window's rates, latencies and processing times: a run's
+            # summary shows what the node did, not its idle last second (the counts are the run's)
+            b_ins, b_outs, proc_ms = self._busy_window
+            ins = [dataclasses.replace(t, rate_hz=b.rate_hz, latency_ms=b.latency_ms) for t, b in zip(ins, b_ins)]
+            outs = [dataclasses.replace(t, rate_hz=b.rate_hz) for t, b in zip(outs, b_outs)]
+        elif not idle:
+            self._busy_window = (ins, outs, proc_ms)
         msg = NodeStats(
             stamp=time.monotonic_ns(),
             seq=self._stats_seq,
@@ -513,8 +527,8 @@ class Node:
             uptime_s=now - self._started,
             inputs=ins,
             outputs=outs,
-            proc_ms_mean=float(np.mean(proc)) if proc else 0.0,
-            proc_ms_max=float(np.max(proc)) if proc else 0.0,
+            proc_ms_mean=proc_ms[0],
+            proc_ms_max=proc_ms[1],
             decode_errors=errors,
             figures=dict(self.figures),
         )

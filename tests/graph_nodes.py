@@ -28,6 +28,7 @@ class Counter(Node):
         "count": Param(int, 100, "how many numbers", min=0),
         "rate": Param(float, 0.0, "messages per second, 0 for as fast as possible", min=0),
         "payload_bytes": Param(int, 0, "bytes of array payload per message", min=0),
+        "hold_s": Param(float, 0.0, "seconds to wait after the last number before the end of stream", min=0),
     }
 
     def generate(self) -> None:
@@ -41,6 +42,9 @@ class Counter(Node):
             if period:
                 t_next += period
                 time.sleep(max(0.0, t_next - time.monotonic()))
+        end = time.monotonic() + self.p["hold_s"]
+        while not self.stopping and time.monotonic() < end:
+            time.sleep(0.05)
 
 
 class Relay(Node):
