@@ -154,6 +154,19 @@ def test_cli_trains_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     assert "does not exist" in capsys.readouterr().err
 
 
+def test_a_small_recording_trains_a_prior_or_says_what_to_change(capsys: pytest.CaptureFixture[str]) -> None:
+    """One simulated handshake (466 frames): hmmlearn's fit with the fixed covariance floor fails on
+    it (a state's covariance not positive definite); the floor scaled to the data's spread gives a
+    usable 10-state prior, and 30 states, too many for so few frames, are refused with what to change.
+    """
+    seqs, names = load_sequences(["sim:handshake"])
+    prior = MotionPrior(n_states=10).fit(seqs, names)
+    assert np.isfinite(prior.means).all() and (np.linalg.eigvalsh(prior.covars) > 0).all()
+    np.testing.assert_allclose(prior.transmat.sum(1), 1.0, atol=1e-6)
+    with pytest.raises(ValueError, match=r"30-state HMM could not be fitted to 466 frames .*fewer states"):
+        MotionPrior(n_states=30).fit(seqs, names)
+
+
 def test_default_path_follows_env(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setenv("COUNTERPART_MODELS", str(tmp_path))
     assert default_prior_path() == tmp_path / "tracker_prior.npz"

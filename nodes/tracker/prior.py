@@ -159,7 +159,6 @@ class MotionPrior:
             When no sequences are given, one has the wrong shape, or there are fewer than
             ``2 * n_states`` frames.
         """
-        from hmmlearn.hmm import GaussianHMM
         from sklearn.decomposition import PCA
 
         seqs = [np.asarray(s, dtype=np.float64) for s in sequences]
@@ -183,10 +182,7 @@ class MotionPrior:
                 f"a {self.n_states}-state HMM",
                 file=sys.stderr,
             )
-        hmm = GaussianHMM(
-            n_components=self.n_states, covariance_type="full", n_iter=25, min_covar=1e-4, random_state=self.seed
-        )
-        hmm.fit(Y, lengths=[len(s) for s in seqs])
+        hmm = _fit_hmm(Y, [len(s) for s in seqs], self.n_states, self.seed)
         self.startprob, self.transmat = hmm.startprob_, hmm.transmat_
         # a state fitted to few frames can end with a singular covariance; a floor keeps every state
         # usable for sampling and scoring (Cholesky needs positive definite matrices)
@@ -688,6 +684,44 @@ def load_sequences(sources: Iterable[str], fps: float = 25.0) -> tuple[list[np.n
         else:
             raise ValueError(f"training data {p}: unknown kind; give sim:NAME, a .bvh, a .npz or a folder")
     return seqs, names
+
+
+#: floors on the HMM's covariances tried in turn (:func:`_fit_hmm`): an absolute one, then shares of
+#: the mean variance of the PCA coefficients
+_MIN_COVAR = 1e-4
+_MIN_COVAR_SHARES = (0.02, 0.1)
+
+
+def _fit_hmm(Y: np.ndarray, lengths: list[int], n_states: int, seed: int) -> Any:
+    """The ``GaussianHMM`` of hmmlearn (full covariances, 25 EM iterations) fitted to the PCA
+    coefficients ``Y`` (N, d) of sequences of ``lengths`` frames.
+
+    On a small recording a state can gather a few frames along one smooth stretch of motion, and
+    its covariance becomes one that hmmlearn refuses as not positive definite; the fit is then tried
+    again with a floor on the covariances scaled to the data's spread (``_MIN_COVAR_SHARES`` of its
+    mean variance). Data on which the first fit succeeds get the same model as before.
+
+    Raises
+    ------
+    ValueError
+        When no floor gives a fit: what to change (more frames, fewer states).
+    """
+    from hmmlearn.hmm import GaussianHMM
+
+    spread = float(Y.var(axis=0).mean())
+    floors = (_MIN_COVAR, *(share * spread for share in _MIN_COVAR_SHARES))
+    for min_covar in floors:
+        hmm = GaussianHMM(
+            n_components=n_states, covariance_type="full", n_iter=25, min_covar=min_covar, random_state=seed
+        )
+        try:
+            return hmm.fit(Y, lengths=lengths)
+        except ValueError as exc:
+            why = str(exc)
+    raise ValueError(
+        f"MotionPrior.fit: a {n_states}-state HMM could not be fitted to {len(Y)} frames ({why}); "
+        "give more frames of motion, or fewer states (counterpart learn tracker-prior --states)"
+    )
 
 
 def train_prior(
