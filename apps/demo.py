@@ -19,6 +19,7 @@ import argparse
 import json
 import logging
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -309,7 +310,15 @@ def main(args: argparse.Namespace) -> int:
         return 2
     out.mkdir(parents=True, exist_ok=True)
     print("counterpart demo: preparing the default models (cached after the first run)", file=sys.stderr)
-    ensure_models(serve=args.serve)
+    try:
+        ensure_models(serve=args.serve)
+    except KeyboardInterrupt:
+        print(
+            "counterpart demo: interrupted while the default models were built; those finished are kept "
+            "and the next run builds the rest",
+            file=sys.stderr,
+        )
+        return 130
     video = out / "demo.mp4"
     file, sets = _graph_file(args)
     sets += [
@@ -353,7 +362,10 @@ def main(args: argparse.Namespace) -> int:
         code = code or 1
     summary = report(launcher.run_dir, out)
     problem = summary.problem()
-    if code:
+    if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+        kept = "; the video and the statistics hold the frames done" if videos else ""
+        print(f"counterpart demo: stopped (Ctrl-C or a stop signal){kept}", file=sys.stderr)
+    elif code:
         why = "".join(f"\n  {name}: {reason}" for name, reason in launcher.failures().items())
         print(f"counterpart demo: the graph ended with exit code {code}{why}", file=sys.stderr)
     elif problem:

@@ -219,6 +219,9 @@ def _run_node(spec: dict[str, Any], log: logging.Logger) -> int:
         return node.run()
     except KeyboardInterrupt:
         return 130
+    except ParamError as exc:  # a parameter found bad only in setup (a port in use): said, not a crash
+        log.error("%s", exc)
+        return 2
     except Exception:
         log.error("crashed:\n%s", traceback.format_exc())
         return 1

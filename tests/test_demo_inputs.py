@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 
 from tests.launching import REPO
@@ -162,3 +165,75 @@ def test_an_out_that_is_no_folder_is_refused_before_anything_runs(env: dict[str,
         assert says in res.stderr and "give a folder" in res.stderr and "Traceback" not in res.stderr
         assert "preparing the default models" not in res.stderr
     assert not video_name.exists() and a_file.read_text() == "kept"
+
+
+@pytest.mark.timeout(300)
+def test_a_demo_stopped_by_ctrl_c_says_so_and_keeps_the_frames_done(
+    clip: Path, env: dict[str, str], tmp_path: Path
+) -> None:
+    """A looping replay in real time, interrupted as Ctrl-C does: the demo says it was stopped (not
+    that the graph failed), exits 130, and the video holds the frames done.
+    """
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(out), "--input", str(clip)]
+        + ["--realtime", "--set", "camera.loop=true"],
+        cwd=REPO,
+        env=env,
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / "demo_stats.json").exists() and time.monotonic() < deadline:
+            # the renderer writes frames once the graph runs; its video grows on disk
+            if any(p.stat().st_size > 10_000 for p in out.glob("demo.*") if p.suffix in (".mp4", ".avi")):
+                break
+            time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err[-3000:]
+    assert "counterpart demo: stopped (Ctrl-C or a stop signal)" in err and "ended with exit code" not in err
+    n, _ = _video_frames_and_fps(out)
+    assert n > 0
+
+
+@pytest.mark.timeout(120)
+def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during the first run's
+    model building: the demo says what happened, exits 130, and leaves only whole model files.
+    """
+    models = tmp_path / "models"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "counterpart.bus.cli", "demo", "--out", str(tmp_path / "out")],
+        cwd=REPO,
+        env={**env, "COUNTERPART_MODELS": str(models)},
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        said = []
+        for line in proc.stderr:  # the first model's builder at work: the longest of them
+            said.append(line)
+            if "simulating training data" in line:
+                break
+        os.killpg(proc.pid, signal.SIGINT)
+        _, rest = proc.communicate(timeout=60)
+        err = "".join(said) + rest
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err[-3000:]
+    assert "interrupted while the default models were built" in err and "Traceback" not in err, err[-3000:]
+    for f in models.glob("*"):  # nothing half-written: each file there loads
+        assert f.suffix == ".npz" and not f.name.endswith(".tmp.npz"), sorted(p.name for p in models.iterdir())
+        with np.load(f) as z:
+            assert z.files

@@ -9,6 +9,9 @@ from __future__ import annotations
 import http.client
 import json
 import shutil
+import socket
+import subprocess
+import sys
 import time
 import urllib.error
 import urllib.request
@@ -287,3 +290,23 @@ def test_in_a_headless_browser(live: dict[str, Any]) -> None:
         assert wait_for(lambda: red_in_page() > 300, timeout=10), "the page's video does not show the red partner"
     finally:
         driver.quit()
+
+
+def test_a_port_in_use_is_said_and_ends_the_renderer_with_2() -> None:
+    """Another program holds the page's port: the renderer says which port and how to choose
+    another, and ends with 2 (a bad parameter) instead of a traceback.
+    """
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen(1)
+        port = held.getsockname()[1]
+        r = subprocess.run(
+            [sys.executable, "-m", "counterpart.bus.cli", "run", "counterpart.nodes.renderer"]
+            + ["--param", "serve=true", "--param", f"port={port}"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    assert r.returncode == 2, r.stderr[-2000:]
+    assert f"parameter 'port': cannot serve the web page on 127.0.0.1:{port}" in r.stderr
+    assert "choose another port" in r.stderr and "Traceback" not in r.stderr

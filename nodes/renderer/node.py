@@ -269,9 +269,14 @@ class Renderer(Node):
         if p["serve"]:
             if not is_loopback(p["host"]):
                 self.log.warning("serving on %s: anyone who can reach it can watch and change the controls", p["host"])
-            self.server = LiveServer(
-                p["host"], p["port"], self._on_web_control, self._state, self._stats, p["jpeg_quality"]
-            ).start()
+            try:
+                self.server = LiveServer(
+                    p["host"], p["port"], self._on_web_control, self._state, self._stats, p["jpeg_quality"]
+                ).start()
+            except OSError as exc:  # a port in use (another demo's page, another program): said, not a crash
+                raise ParamError(
+                    f"parameter 'port': {exc}; choose another port (counterpart demo --port N), or 0 for any free one"
+                ) from None
             self.log.info("live page at %s", self.server.url)
             if p["port_file"]:
                 Path(p["port_file"]).write_text(f"{self.server.port}\n")
