@@ -218,6 +218,9 @@ def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
         stdout=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        # as from a terminal: a test run started in the background (a CI script's job) ignores
+        # SIGINT, and its children would inherit that
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         said = []
