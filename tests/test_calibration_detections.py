@@ -227,7 +227,7 @@ def test_people_smaller_than_a_fifth_of_the_frame_are_found_on_the_finer_runs() 
     assert np.all(ground[:, :, 1] - crown[:, :, 1] < 0.2 * H)
     detector = PeopleDetector()
     obs, scene = PeopleObservations(*stream.size), SceneFrames(every=6)
-    found = {0.2: 0, 0.15: 0}
+    found = dict.fromkeys(obs.smallest, 0)
     for i in range(0, 75, 2):
         frame = stream.render(i)[0]
         assert obs.wants_detections(obs.add([], i / stream.fps))
@@ -263,3 +263,29 @@ def test_the_detector_seeks_smaller_people_while_it_finds_no_one() -> None:
     for bad in [(), (0.0,), (0.2, 1.5)]:
         with pytest.raises(ValueError):
             PeopleObservations(W, H, smallest=bad)
+
+
+def test_a_still_person_found_again_after_frames_unseen_keeps_their_id() -> None:
+    # simulator tuning seed 23 (a conversation): the detector found a person on five frames, then
+    # again forty frames later where they still stood; as a new person, neither spell had the
+    # views a person needs to count (``CalibrationConfig.min_person_views``)
+    obs = PeopleObservations(W, H, detect_every=None, max_detections=100)
+    box = np.array([100.0, 50.0, 40.0, 95.0])
+
+    def frame(*boxes: np.ndarray) -> None:
+        obs.add([], len(obs) / 25.0)
+        obs.add_detections(np.reshape(boxes, (-1, 4)), np.ones(len(boxes)), len(obs) / 25.0)
+
+    for _ in range(3):
+        frame(box)
+    for _ in range(30):
+        frame()
+    frame(box + [4.0, 0.0, 0.0, 0.0])  # where they stood: the same person
+    frame(box + [30.0, 0.0, 0.0, 0.0])  # 0.3 of their height along, the frame after: still them
+    for _ in range(30):
+        frame()
+    frame(box + [60.0, 0.0, 0.0, 0.0])  # 0.3 of their height from where they were last seen: someone else
+    frame(box * [1.0, 1.0, 1.0, 0.8])  # where the first stood, 0.8 of their height: someone else
+    _, _, track, _ = obs.arrays()
+    assert len(track) == 7
+    assert (track[:5] == track[0]).all() and len(set(track[4:])) == 3, track

@@ -22,8 +22,10 @@ moving or not). The detector's window holds a person at a fixed share of its hei
 2005: a 96-pixel person in a 128-pixel window), so the head and the feet lie at fixed shares of its
 box (:data:`HEAD_IN_BOX`, :data:`FOOT_IN_BOX`); its smallest window is 128 pixels tall, so the
 frame is enlarged first (:func:`detect_people`) for people a fifth of a small frame's height, and
-on every other run for people 0.15 of it (people standing still far from the camera; on a still
-scene the runs at one scale all find the same people), while the runs at a fifth find no one.
+while the runs at a fifth find no one, the runs take turns with people 0.15 of it (standing still
+far from the camera) and 0.3 of it (standing still near it, whom the frame enlarged for a fifth
+may show the detector as no one or as their upper half alone; on a still scene the runs at one
+scale all find the same people).
 """
 
 from __future__ import annotations
@@ -51,12 +53,23 @@ FOOT_IN_BOX = 0.92
 BOX_ASPECT = 2.375
 #: the least detector score a box needs to count as a person's view
 MIN_DETECTION_SCORE = 0.3
+#: a box reaching within this share of its height of the frame's top or bottom is taken as cut by
+#: it: the detector gives a person cut off at the knees by the frame's bottom a box of a whole,
+#: smaller person, its feet on the last rows
+EDGE_SHARE = 0.03
 #: ids of the detector's people start here (negated), apart from the silhouettes' ids and their bodies'
 DETECTION_ID = 1_000_000
 #: a detection continues a person seen this many frames before at most, when its centre is within
 #: this share of the box height of theirs and its height within this share of theirs
 TRACK_GAP_FRAMES = 10
 TRACK_SHARE = 0.3
+#: a detection also continues a person last seen longer ago when it stands where they stood: its
+#: centre and its height within this share of the box height of theirs (a person standing still,
+#: found again after frames the detector missed them; as a new person, each spell of theirs would
+#: have too few views to count)
+STILL_SHARE = 0.1
+#: the detector's people remembered at most, the least recently seen forgotten first
+MAX_TRACKS = 32
 
 
 def detect_people(detector: PeopleDetector, frame: np.ndarray, smallest: float = 0.2) -> tuple[np.ndarray, np.ndarray]:
@@ -104,14 +117,18 @@ class PeopleObservations:
         on those people left out): a person who stands still beside one who moves is absorbed
         into the background and gives no region, and is seen only through the detector. None:
         only on frames without an upright person.
-    smallest : tuple of float, default=(0.2, 0.15)
+    smallest : tuple of float, default=(0.2, 0.15, 0.3)
         Height of the smallest person the detector seeks (:func:`detect_people`), as a share of the
         frame's height (:attr:`next_smallest`): the first value; while the last run at it found no
-        one, the runs take turns over all the values. People standing still far from the camera
-        are smaller than a fifth of the frame, and on a still scene every run at one scale finds
-        the same people (none); a run at 0.15 costs about (0.2 / 0.15)^2 = 1.8 times one at a
-        fifth, and finds fewer of the people it can see at a fifth, so it is not used while those
-        runs find someone.
+        one, the runs take turns over all the values. On a still scene every run at one scale finds
+        the same people, so where they find no one the others are tried. People standing still far
+        from the camera are smaller than a fifth of the frame (0.15; a run there costs about
+        (0.2 / 0.15)^2 = 1.8 times one at a fifth, and finds fewer of the people it can see at a
+        fifth, so it is not used while those runs find someone). People standing still near the
+        camera, most of the frame tall, the frame enlarged for a fifth may give no box or only
+        their upper half's, and enlarged less (0.3) their whole one (which frames of a still person
+        the detector finds depends on how much the frame is enlarged: its windows then fall
+        elsewhere on them).
     """
 
     def __init__(
@@ -121,7 +138,7 @@ class PeopleObservations:
         max_observations: int = 1500,
         max_detections: int = 60,
         detect_every: int | None = 3,
-        smallest: tuple[float, ...] = (0.2, 0.15),
+        smallest: tuple[float, ...] = (0.2, 0.15, 0.3),
     ) -> None:
         self.size = (int(width), int(height))
         self.max_observations = int(max_observations)
@@ -248,11 +265,13 @@ class PeopleObservations:
         A box counts when its score is ``min_score`` or more, it does not touch the left or right
         border, and its head and foot points, at :data:`HEAD_IN_BOX` and :data:`FOOT_IN_BOX` of its
         height in its middle column, are inside the frame (a box cut by the top or the bottom of the
-        frame has the height :data:`BOX_ASPECT` times its width: the detector's window reaches past
-        the frame where the person's head or feet are near its border). A box continues the detector's
-        person whose last box (at most ``TRACK_GAP_FRAMES`` frames before) is nearest in x within
-        ``TRACK_SHARE`` of the box height and of a height within that share; others start a new
-        person (ids ``-(DETECTION_ID + k)``).
+        frame, or within :data:`EDGE_SHARE` of its height of them, has the height :data:`BOX_ASPECT`
+        times its width: the detector's window reaches past the frame where the person's head or
+        feet are near its border). A box continues the detector's person whose last box (at most
+        ``TRACK_GAP_FRAMES`` frames before) is nearest in x within ``TRACK_SHARE`` of the box height
+        and of a height within that share, or, seen longer ago, within ``STILL_SHARE`` (a person
+        standing still whom the detector missed for a while); others start a new person (ids
+        ``-(DETECTION_ID + k)``).
 
         Parameters
         ----------
@@ -277,9 +296,9 @@ class PeopleObservations:
         sc = np.asarray(scores, np.float64).reshape(-1)
         x, y, w, h = b.T
         # a box cut by the top or the bottom of the frame keeps its width, which gives its height
-        cut = (y <= 0) | (y + h >= H)
-        full = np.where(cut, BOX_ASPECT * w, h)
-        top = np.where(y <= 0, y + h - full, y)
+        at_top, at_bottom = y <= EDGE_SHARE * h, y + h >= H - EDGE_SHARE * h
+        full = np.where(at_top | at_bottom, BOX_ASPECT * w, h)
+        top = np.where(at_top, y + h - full, y)
         ok = (sc >= min_score) & (x > 0) & (x + w < W) & (full >= 20)
         ok &= (top + HEAD_IN_BOX * full > 0) & (top + FOOT_IN_BOX * full < H - 1)
         if at_first:
@@ -290,19 +309,20 @@ class PeopleObservations:
                 (np.abs(x + w / 2 - (ux + uw / 2)) < 0.5 * np.maximum(w, uw))
                 & (np.abs(top + full / 2 - (uy + uh / 2)) < 0.5 * np.maximum(full, uh))
             )
-        recent = [t for t in self._tracks if self._frame - t[3] <= TRACK_GAP_FRAMES]
+        known = list(self._tracks)
         seen: list[tuple[float, float, int, int]] = []
         for cx, y0, bh in zip(x[ok] + w[ok] / 2, top[ok], full[ok]):
-            near = [t for t in recent if abs(t[0] - cx) < TRACK_SHARE * bh and abs(t[1] - bh) < TRACK_SHARE * bh]
+            share = [TRACK_SHARE if self._frame - t[3] <= TRACK_GAP_FRAMES else STILL_SHARE for t in known]
+            near = [t for t, s in zip(known, share) if abs(t[0] - cx) < s * bh and abs(t[1] - bh) < s * bh]
             if near:
                 pid = min(near, key=lambda t: abs(t[0] - cx))[2]
-                recent = [t for t in recent if t[2] != pid]
+                known = [t for t in known if t[2] != pid]
             else:
                 pid = -(DETECTION_ID + self._next_track)
                 self._next_track += 1
             seen.append((float(cx), float(bh), pid, self._frame))
             self._rows.append((cx, y0 + HEAD_IN_BOX * bh, cx, y0 + FOOT_IN_BOX * bh, pid, float(time_s)))
-        self._tracks = seen + recent
+        self._tracks = (seen + known)[:MAX_TRACKS]
         self._bound()
         return len(seen)
 
