@@ -78,10 +78,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", action="append", metavar="NODE.PARAM=VALUE", help="override a node parameter")
 
 
-def _one_thread_each() -> None:
+def _builder_start() -> None:
     """A model-building worker's start: one BLAS/OpenMP thread (two builds on two cores would
-    otherwise spin their threads against each other).
+    otherwise spin their threads against each other), and Ctrl-C left to the demo, which stops the
+    workers (a worker interrupted in its task would print its traceback).
     """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     import numpy  # noqa: F401  (loads the BLAS the limit applies to)
     import scipy.linalg  # noqa: F401
     import sklearn.utils  # noqa: F401  (loads OpenMP)
@@ -127,7 +129,6 @@ def ensure_models(serve: bool = False) -> None:
     serve : bool, default=False
         Also build the models the live page offers.
     """
-    from concurrent.futures import ProcessPoolExecutor
     from multiprocessing import get_context
 
     from counterpart.nodes.responder.models import default_model_path
@@ -145,11 +146,22 @@ def ensure_models(serve: bool = False) -> None:
         for fn, fn_args in jobs:
             fn(*fn_args)
         return
-    with ProcessPoolExecutor(
-        max_workers=min(cores, len(jobs)), mp_context=get_context("spawn"), initializer=_one_thread_each
-    ) as pool:
-        for future in [pool.submit(fn, *fn_args) for fn, fn_args in jobs]:
-            future.result()
+    pool = get_context("spawn").Pool(min(cores, len(jobs)), initializer=_builder_start)
+    try:
+        for result in [pool.apply_async(fn, fn_args) for fn, fn_args in jobs]:
+            result.get()
+    except BaseException:
+        # Ctrl-C in a terminal reaches the builders too; a SIGINT to this process alone, or a
+        # failed build, would leave the others at work for minutes: they are stopped, and what a
+        # stopped one was writing is dropped (the files finished are whole: written by rename)
+        pool.terminate()
+        pool.join()
+        for folder in {default_prior_path().parent, *(default_model_path(n).parent for n in names)}:
+            for part in folder.glob("*.tmp.npz"):
+                part.unlink(missing_ok=True)
+        raise
+    pool.close()
+    pool.join()
 
 
 def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:

@@ -202,12 +202,27 @@ def test_a_demo_stopped_by_ctrl_c_says_so_and_keeps_the_frames_done(
     assert n > 0
 
 
+def _session_processes(sid: int) -> list[int]:
+    """Pids of the live processes of session ``sid`` (from /proc)."""
+    pids = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == sid and fields[0] != "Z":
+            pids.append(int(stat.parent.name))
+    return pids
+
+
 @pytest.mark.timeout(120)
+@pytest.mark.parametrize("to_group", [True, False], ids=["terminal", "demo-alone"])
 def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
-    env: dict[str, str], tmp_path: Path
+    env: dict[str, str], tmp_path: Path, to_group: bool
 ) -> None:
-    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during the first run's
-    model building: the demo says what happened, exits 130, and leaves only whole model files.
+    """Ctrl-C during the first run's model building, as a terminal sends it (SIGINT to the whole
+    process group) or to the demo's process alone (``kill -INT``): the demo says what happened,
+    exits 130 at once, stops its builders and leaves only whole model files.
     """
     models = tmp_path / "models"
     proc = subprocess.Popen(
@@ -228,13 +243,22 @@ def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
             said.append(line)
             if "simulating training data" in line:
                 break
-        os.killpg(proc.pid, signal.SIGINT)
-        _, rest = proc.communicate(timeout=60)
+        (os.killpg if to_group else os.kill)(proc.pid, signal.SIGINT)
+        _, rest = proc.communicate(timeout=30)
         err = "".join(said) + rest
+        deadline = time.monotonic() + 10
+        while _session_processes(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        left = _session_processes(proc.pid)
     finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
+        for pid in _session_processes(proc.pid):
+            os.kill(pid, signal.SIGKILL)
     assert proc.returncode == 130, err[-3000:]
+    assert not left, f"builders still at work: {left}"
+    # the model whose builder was at work was not finished after the signal
+    from counterpart.apps.demo import RESPONDER_MODELS
+
+    assert not any(models.glob(f"*{RESPONDER_MODELS[0]}*.npz")), sorted(p.name for p in models.iterdir())
     assert "interrupted while the default models were built" in err and "Traceback" not in err, err[-3000:]
     for f in models.glob("*"):  # nothing half-written: each file there loads
         assert f.suffix == ".npz" and not f.name.endswith(".tmp.npz"), sorted(p.name for p in models.iterdir())
