@@ -124,11 +124,11 @@ class PeopleObservations:
         the same people, so where they find no one the others are tried. People standing still far
         from the camera are smaller than a fifth of the frame (0.15; a run there costs about
         (0.2 / 0.15)^2 = 1.8 times one at a fifth, and finds fewer of the people it can see at a
-        fifth, so it is not used while those runs find someone). People standing still near the
-        camera, most of the frame tall, the frame enlarged for a fifth may give no box or only
-        their upper half's, and enlarged less (0.3) their whole one (which frames of a still person
-        the detector finds depends on how much the frame is enlarged: its windows then fall
-        elsewhere on them).
+        fifth, so it is not used while those runs find someone). For people standing still near
+        the camera, most of the frame tall, the runs at a fifth may give no box or only their upper
+        half's, and the runs at 0.3 (the frame enlarged less) their whole one: whether the detector
+        finds a still person depends on how much the frame is enlarged, as its windows then fall
+        elsewhere on them.
     """
 
     def __init__(
