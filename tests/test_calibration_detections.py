@@ -266,8 +266,8 @@ def test_the_detector_seeks_smaller_people_while_it_finds_no_one() -> None:
 
 
 def test_a_still_person_found_again_after_frames_unseen_keeps_their_id() -> None:
-    # simulator tuning seed 23 (a conversation): the detector found a person on five frames, then
-    # again forty frames later where they still stood; as a new person, neither spell had the
+    # simulator tuning seed 23 (a conversation): the detector found a person on four frames, then
+    # again fifty frames later where they still stood; as a new person, neither spell had the five
     # views a person needs to count (``CalibrationConfig.min_person_views``)
     obs = PeopleObservations(W, H, detect_every=None, max_detections=100)
     box = np.array([100.0, 50.0, 40.0, 95.0])
@@ -281,10 +281,10 @@ def test_a_still_person_found_again_after_frames_unseen_keeps_their_id() -> None
     for _ in range(30):
         frame()
     frame(box + [4.0, 0.0, 0.0, 0.0])  # where they stood: the same person
-    frame(box + [30.0, 0.0, 0.0, 0.0])  # 0.3 of their height along, the frame after: still them
+    frame(box + [30.0, 0.0, 0.0, 0.0])  # 0.27 of their height along, the frame after: still them
     for _ in range(30):
         frame()
-    frame(box + [60.0, 0.0, 0.0, 0.0])  # 0.3 of their height from where they were last seen: someone else
+    frame(box + [60.0, 0.0, 0.0, 0.0])  # 0.32 of their height from where they were last seen: someone else
     frame(box * [1.0, 1.0, 1.0, 0.8])  # where the first stood, 0.8 of their height: someone else
     _, _, track, _ = obs.arrays()
     assert len(track) == 7
