@@ -21,6 +21,7 @@ import logging
 import os
 import signal
 import sys
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from counterpart.bus.run_summary import RunSummary, read_stats, stats_json, stats_table, summarise
@@ -81,7 +82,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _builder_start() -> None:
     """A model-building worker's start: one BLAS/OpenMP thread (two builds on two cores would
     otherwise spin their threads against each other), and Ctrl-C left to the demo, which stops the
-    workers (a worker interrupted in its task would print its traceback).
+    workers and says so once.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     import numpy  # noqa: F401  (loads the BLAS the limit applies to)
@@ -129,7 +130,8 @@ def ensure_models(serve: bool = False) -> None:
     serve : bool, default=False
         Also build the models the live page offers.
     """
-    from multiprocessing import get_context
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import active_children, get_context
 
     from counterpart.nodes.responder.models import default_model_path
     from counterpart.nodes.tracker.prior import default_prior_path
@@ -146,22 +148,26 @@ def ensure_models(serve: bool = False) -> None:
         for fn, fn_args in jobs:
             fn(*fn_args)
         return
-    pool = get_context("spawn").Pool(min(cores, len(jobs)), initializer=_builder_start)
+    # a builder that dies (killed, out of memory) fails its future at once, where a
+    # multiprocessing.Pool would wait for its result for ever
+    pool = ProcessPoolExecutor(min(cores, len(jobs)), mp_context=get_context("spawn"), initializer=_builder_start)
     try:
-        for result in [pool.apply_async(fn, fn_args) for fn, fn_args in jobs]:
-            result.get()
+        for future in [pool.submit(fn, *fn_args) for fn, fn_args in jobs]:
+            future.result()
     except BaseException:
-        # Ctrl-C in a terminal reaches the builders too; a SIGINT to this process alone, or a
-        # failed build, would leave the others at work for minutes: they are stopped, and what a
-        # stopped one was writing is dropped (the files finished are whole: written by rename)
-        pool.terminate()
-        pool.join()
+        # Ctrl-C, a SIGINT to this process alone, or a failed build: the other builders would go on
+        # for minutes (the pool's shutdown waits for every job given to it): they are stopped (the
+        # only processes this one has started so far), and what a stopped one was writing is
+        # dropped (the files finished are whole: written by rename)
+        pool.shutdown(wait=False, cancel_futures=True)
+        for worker in active_children():
+            worker.terminate()
+            worker.join()
         for folder in {default_prior_path().parent, *(default_model_path(n).parent for n in names)}:
             for part in folder.glob("*.tmp.npz"):
                 part.unlink(missing_ok=True)
         raise
-    pool.close()
-    pool.join()
+    pool.shutdown()
 
 
 def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:
@@ -331,6 +337,13 @@ def main(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
+    except BrokenProcessPool:
+        print(
+            "counterpart demo: a process building the default models died (killed, or out of memory); "
+            "those finished are kept and the next run builds the rest",
+            file=sys.stderr,
+        )
+        return 1
     video = out / "demo.mp4"
     file, sets = _graph_file(args)
     sets += [

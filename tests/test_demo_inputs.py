@@ -215,14 +215,36 @@ def _session_processes(sid: int) -> list[int]:
     return pids
 
 
+def _builders(pid: int) -> list[int]:
+    """Pids of the model builders of the demo ``pid``: its multiprocessing workers."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+            cmd = (stat.parent / "cmdline").read_bytes()
+        except OSError:
+            continue
+        if ppid == pid and b"spawn_main" in cmd:
+            found.append(int(stat.parent.name))
+    return found
+
+
 @pytest.mark.timeout(120)
-@pytest.mark.parametrize("to_group", [True, False], ids=["terminal", "demo-alone"])
+@pytest.mark.parametrize(
+    "stop, code, says",
+    [
+        ("terminal", 130, "interrupted while the default models were built"),
+        ("demo-alone", 130, "interrupted while the default models were built"),
+        ("builder-killed", 1, "a process building the default models died"),
+    ],
+)
 def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
-    env: dict[str, str], tmp_path: Path, to_group: bool
+    env: dict[str, str], tmp_path: Path, stop: str, code: int, says: str
 ) -> None:
     """Ctrl-C during the first run's model building, as a terminal sends it (SIGINT to the whole
-    process group) or to the demo's process alone (``kill -INT``): the demo says what happened,
-    exits 130 at once, stops its builders and leaves only whole model files.
+    process group) or to the demo's process alone (``kill -INT``), or a builder killed (as by the
+    kernel out of memory): the demo says what happened, ends at once with 130 (1 for the killed
+    builder), stops its builders and leaves only whole model files.
     """
     models = tmp_path / "models"
     proc = subprocess.Popen(
@@ -243,7 +265,12 @@ def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
             said.append(line)
             if "simulating training data" in line:
                 break
-        (os.killpg if to_group else os.kill)(proc.pid, signal.SIGINT)
+        if stop == "terminal":
+            os.killpg(proc.pid, signal.SIGINT)
+        elif stop == "demo-alone":
+            os.kill(proc.pid, signal.SIGINT)
+        else:
+            os.kill(_builders(proc.pid)[0], signal.SIGKILL)
         _, rest = proc.communicate(timeout=30)
         err = "".join(said) + rest
         deadline = time.monotonic() + 10
@@ -253,13 +280,13 @@ def test_ctrl_c_while_the_models_are_built_says_so_and_keeps_those_finished(
     finally:
         for pid in _session_processes(proc.pid):
             os.kill(pid, signal.SIGKILL)
-    assert proc.returncode == 130, err[-3000:]
+    assert proc.returncode == code, err[-3000:]
     assert not left, f"builders still at work: {left}"
     # the model whose builder was at work was not finished after the signal
     from counterpart.apps.demo import RESPONDER_MODELS
 
     assert not any(models.glob(f"*{RESPONDER_MODELS[0]}*.npz")), sorted(p.name for p in models.iterdir())
-    assert "interrupted while the default models were built" in err and "Traceback" not in err, err[-3000:]
+    assert says in err and "Traceback" not in err, err[-3000:]
     for f in models.glob("*"):  # nothing half-written: each file there loads
         assert f.suffix == ".npz" and not f.name.endswith(".tmp.npz"), sorted(p.name for p in models.iterdir())
         with np.load(f) as z:
