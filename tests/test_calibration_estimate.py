@@ -5,6 +5,8 @@ points projected and perturbed by a pixel of noise.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
@@ -12,13 +14,17 @@ import pytest
 from counterpart.body.camera import Camera
 from counterpart.nodes.calibration.estimate import CalibrationConfig, estimate_camera, head_foot, rotation, usable
 from counterpart.nodes.calibration.lines import (
+    LSD_SCALES,
+    MIN_LENGTH,
     LineFamilies,
     detect_segments,
     find_families,
     find_manhattan_families,
+    refine_segments,
     scene_lines,
+    segment_angles,
 )
-from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible
+from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible, statures_plausible
 
 W, H = 320, 240
 
@@ -208,6 +214,22 @@ def test_an_estimate_whose_halves_disagree_is_not_credible() -> None:
     assert blind.split_height == 0.0 and credible(blind, 0.2, 0.5, 8.0, 0.12)  # the uncertainty alone lets it pass
 
 
+def test_an_estimate_with_a_person_of_implausible_height_is_not_credible() -> None:
+    # a fit keeps a person whose fitted height is far off the prior when the rest are too few (on
+    # the simulator: an upper half and a head and shoulders, 2.68 and 1.28 m, beside one person);
+    # the camera's height then rests on one person, whatever the uncertainty says
+    cam = _camera(2.5, 20.0, 50.0)
+    heads, feet, ids, t = _walkers(cam, seed=20)
+    good = estimate_camera(heads, feet, ids, (W, H), t)
+    assert credible(good, 0.2, 0.5, 8.0, 0.12) and statures_plausible(good)
+    bounds = (1.75 - 3 * 0.09 + 0.01, 1.75 + 3 * 0.09 - 0.01)
+    assert credible(replace(good, people_heights=bounds), 0.2, 0.5, 8.0, 0.12)
+    for heights in [(2.68, 1.75, 1.28), (1.75, 2.05), (1.45,)]:
+        assert not statures_plausible(replace(good, people_heights=heights))
+        assert not credible(replace(good, people_heights=heights), 0.2, 0.5, 8.0, 0.12)
+    assert statures_plausible(replace(good, people_heights=(1.28,)), CalibrationConfig(max_stature_sd=None))
+
+
 @pytest.mark.parametrize("tilt", [2.0, 6.0])
 def test_square_floor_lines_fix_the_focal_length_of_a_level_camera(tilt: float) -> None:
     # a camera nearly level, seeing a floor laid out square at 30 degrees to it: the two plank
@@ -317,6 +339,49 @@ def _median_view(name: str, seed: int) -> tuple[Camera, np.ndarray, list[tuple[i
             ys, xs = np.nonzero(m)
             boxes.append((xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1))
     return stream.camera, np.median(np.stack(frames), axis=0).astype(np.uint8), boxes
+
+
+def test_an_aliased_edge_cut_into_pieces_is_refitted_along_its_whole_length() -> None:
+    # a straight edge at 0.6 degrees, point-sampled (steps one pixel high every 95 pixels), ending at
+    # x = 220; LSD gives some of it as a piece along one step, flat: refitted along the whole edge,
+    # every piece has its direction, and none runs on past the edge's end
+    rng = np.random.default_rng(0)
+    yy, xx = np.mgrid[:H, :W]
+    edge = 120 + np.tan(np.radians(0.6)) * (xx - 160)
+    image = np.where(xx >= 220, 130, np.where(yy >= edge, 90, 170)).astype(np.float64)
+    image = np.clip(image + rng.normal(0, 2, image.shape), 0, 255).astype(np.uint8)
+    segments = detect_segments(image, min_length=10.0, scale=LSD_SCALES)
+    d = segments[:, 2:] - segments[:, :2]
+    segments = segments[np.abs(d[:, 1]) < 0.1 * np.abs(d[:, 0])]  # the edge's, not the step to the grey
+    angle = np.degrees(np.arctan(d[:, 1] / d[:, 0]))[np.abs(d[:, 1]) < 0.1 * np.abs(d[:, 0])]
+    assert np.abs(angle - 0.6).max() > 0.5  # a piece along one step
+    refined = refine_segments(image, segments)
+    r = refined[:, 2:] - refined[:, :2]
+    assert np.abs(np.degrees(np.arctan(r[:, 1] / r[:, 0])) - 0.6).max() < 0.1
+    assert (
+        refined[:, [0, 2]].max() < 222
+        and (np.hypot(*r.T) >= np.hypot(*d[np.abs(d[:, 1]) < 0.1 * np.abs(d[:, 0])].T)).all()
+    )
+    assert refine_segments(image, np.zeros((0, 4))).shape == (0, 4)
+
+
+@pytest.mark.parametrize(("name", "seed"), [("handshake", 48), ("push", 4)])
+def test_the_room_lines_refitted_point_at_their_vanishing_points(name: str, seed: int) -> None:
+    # the simulator's room (tuning seeds): against the true camera's three vanishing points, the
+    # segments' directions after the refit are several times closer, and the segments longer
+    cam, image, boxes = _median_view(name, seed)
+    segments = detect_segments(image, boxes, min_length=MIN_LENGTH, scale=LSD_SCALES)
+    refined = refine_segments(image, segments)
+
+    def off_deg(s: np.ndarray) -> np.ndarray:
+        sines = [segment_angles(s, np.tile(cam.K @ cam.R @ d, (len(s), 1))) for d in np.eye(3)]
+        return np.degrees(np.arcsin(np.clip(np.abs(sines), 0, 1))).min(axis=0)
+
+    room = off_deg(segments) < 3.0  # the room's lines, not the texture's
+    assert room.sum() > 50
+    assert np.median(off_deg(refined)[room]) < 0.4 * np.median(off_deg(segments)[room])
+    length = np.hypot(*(segments[:, 2:] - segments[:, :2]).T)
+    assert np.median(np.hypot(*(refined[:, 2:] - refined[:, :2]).T)[room]) > 2 * np.median(length[room])
 
 
 def test_segments_pooled_over_scales_are_the_union_of_each_scale() -> None:
@@ -526,15 +591,18 @@ def test_a_fragment_of_a_person_does_not_set_the_scale_on_the_simulator() -> Non
 
 def test_the_height_is_as_unsure_as_the_rotation_the_lines_give() -> None:
     # tuning seed 21 (pull; camera 2.89 m high, tilt 0.2 degrees): the room shows two horizontal
-    # families only, and the horizon they give lies a few pixels low; with the rotation from the
+    # families only; with their horizon 4 pixels low (every segment moved down: as the aliased pieces
+    # of its lines put it before they were refitted, lines.refine_segments) and the rotation from the
     # lines held fixed, even the people's true points (crown over mid-ankle) put the height 10%
-    # low. Its reported std must own the lines' part of that, not the people's fit's alone.
+    # off. Its reported std must own the lines' part of that, not the people's fit's alone.
     from counterpart.body.skeleton import JOINT_INDEX
     from counterpart.sim.stream import open_stream
 
     cam, image, boxes = _median_view("pull", 21)
-    lines = scene_lines(image, boxes)
-    assert lines.square
+    found = scene_lines(image, boxes)
+    assert found.square
+    low = [0.0, 4.0, 0.0, 4.0]
+    lines = replace(found, segments=found.segments + low, vp=found.vp + np.outer(found.vp[:, 2], low[:3]))
     stream = open_stream("pull", seed=21, camera="random", frames=75)
     J = stream.scenario.joints()
     head = cam.project(J[:, :, JOINT_INDEX["head"]] + [0.0, 0.11, 0.0]).reshape(-1, 2)

@@ -1,8 +1,10 @@
 """Straight lines of the scene for the camera estimate: families of parallel scene lines and their
 vanishing points (the ground's horizon, the vertical).
 
-Line segments of a frame (OpenCV's LSD, von Gioi et al. 2010), without those on the people, are
-grouped by the vanishing point they converge to (a segment agrees with a vanishing point when the
+Line segments of a frame (OpenCV's LSD, von Gioi et al. 2010), without those on the people, each
+refitted along its whole edge (:func:`refine_segments`: LSD's pieces of a long edge of a small,
+aliased frame read a degree or two off its direction), are grouped by the vanishing point they
+converge to (a segment agrees with a vanishing point when the
 line from its midpoint to that point is within ``angle_deg`` of its own direction).
 :func:`scene_lines` groups them by the three vanishing points of one square frame of the room (two
 ground directions at right angles and the vertical, searched jointly with the camera's focal length
@@ -115,6 +117,143 @@ def detect_segments(
         inside = (s[:, [0, 2]] >= x) & (s[:, [0, 2]] <= x + w) & (s[:, [1, 3]] >= y) & (s[:, [1, 3]] <= y + h)
         keep &= ~inside.all(axis=1)
     return s[keep]
+
+
+@dataclass(frozen=True)
+class RefineConfig:
+    """How :func:`refine_segments` follows an edge.
+
+    Parameters
+    ----------
+    reach_px : float, default=2.0
+        Half-width of the band searched across each line for its edge, pixels.
+    max_gap_px : int, default=4
+        Longest gap bridged along an edge, pixels.
+    min_strength : float, default=0.5
+        Least gradient across the line of an edge sample, as a share of its median on the segment.
+    """
+
+    reach_px: float = 2.0
+    max_gap_px: int = 4
+    min_strength: float = 0.5
+
+
+def refine_segments(image: np.ndarray, segments: np.ndarray, config: RefineConfig = RefineConfig()) -> np.ndarray:
+    """Each segment refitted to its whole edge: followed along its line both ways while the edge goes
+    on, and its line fitted by least squares to the edge's subpixel positions there.
+
+    LSD cuts a long straight edge of a small frame into pieces, and each piece's direction is only as
+    good as its few pixels: a nearly horizontal edge of an aliased or compressed frame runs in steps,
+    and a piece 40 pixels long lying along one step reads one or two degrees off (the wall's lines
+    far from a camera that faces it, whose vanishing point is far to one side and fixes the focal
+    length only through such small angles). Along the whole edge the steps average out.
+
+    For each segment, the gradient across its line (the image lightly smoothed, Sobel) is sampled
+    every pixel along the line's whole length in the frame, at offsets within ``reach_px`` across it.
+    A sample belongs to the edge where its strongest gradient of the segment's polarity is at least
+    ``min_strength`` of the segment's median and lies inside the band; the edge is the run of such
+    samples, with gaps of at most ``max_gap_px``, that holds the segment's middle. The edge position
+    at each sample is the parabola peak of the gradient across the line (subpixel); a straight line
+    is fitted to them, weighted by the gradient, samples more than a pixel off left out (three
+    rounds). A segment whose edge has fewer than five samples is returned as it was.
+
+    Parameters
+    ----------
+    image : ndarray of shape (H, W, 3) or (H, W), dtype uint8
+        BGR or grey image the segments were found in.
+    segments : ndarray of shape (N, 4)
+        Segments x1, y1, x2, y2, pixels.
+    config : RefineConfig, default=RefineConfig()
+        The band, the gaps bridged and the edge's least strength.
+
+    Returns
+    -------
+    ndarray of shape (N, 4), dtype float64
+        The refitted segments, in the order given: the fitted line between the ends of its edge.
+    """
+    s = np.asarray(segments, np.float64).reshape(-1, 4)
+    if not len(s):
+        return s.copy()
+    grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+    H, W = grey.shape
+    g = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), 0.7)
+    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3) / 8.0
+    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3) / 8.0
+    u, n, mid, length = _segment_frames(s)
+    offs = np.arange(-config.reach_px, config.reach_px + 1e-9, 0.5)
+    # every segment's whole line in the frame, sampled at once: (N, T, O) positions about its middle
+    reach = float(np.ceil(np.hypot(W, H)))
+    t = np.arange(-reach, reach + 1.0)
+    pts = mid[:, None, None] + t[None, :, None, None] * u[:, None, None] + offs[None, None, :, None] * n[:, None, None]
+    xs, ys = pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32)
+    inside = ((xs >= 1) & (xs <= W - 2) & (ys >= 1) & (ys <= H - 2)).all(axis=-1)
+    across = _bilinear(gx, xs, ys) * n[:, None, None, 0] + _bilinear(gy, xs, ys) * n[:, None, None, 1]
+    out = s.copy()
+    for i in np.flatnonzero(length >= 1.0):
+        out[i] = _refit_edge(s[i], across[i], t, inside[i], offs, config)
+    return out
+
+
+def _segment_frames(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Unit directions (N, 2), unit normals (N, 2), middles (N, 2) and lengths (N,) of segments (N, 4)."""
+    d = segments[:, 2:] - segments[:, :2]
+    length = np.linalg.norm(d, axis=1)
+    u = d / np.maximum(length, 1e-12)[:, None]
+    return u, np.column_stack([-u[:, 1], u[:, 0]]), 0.5 * (segments[:, :2] + segments[:, 2:]), length
+
+
+def _bilinear(image: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """``image`` (float32) at the points (``xs``, ``ys``) of any shape, bilinear.
+
+    ``cv2.remap``'s maps must be under 32767 rows and columns: the points go in rows of 4096.
+    """
+    m = xs.size
+    rows = -(-m // 4096)
+    mx, my = np.zeros((2, rows * 4096), np.float32)
+    mx[:m], my[:m] = xs.ravel(), ys.ravel()
+    out = cv2.remap(image, mx.reshape(rows, 4096), my.reshape(rows, 4096), cv2.INTER_LINEAR)
+    return out.ravel()[:m].reshape(xs.shape)
+
+
+def _refit_edge(
+    segment: np.ndarray, across: np.ndarray, t: np.ndarray, inside: np.ndarray, offs: np.ndarray, config: RefineConfig
+) -> np.ndarray:
+    """:func:`refine_segments` of one segment (4,) from the gradient across its line, ``across`` (T, O),
+    sampled at ``t`` (T,) pixels along it from its middle (``inside``: within the frame) and ``offs``
+    (O,) pixels across.
+    """
+    u, n, mid, length = (v[0] for v in _segment_frames(segment[None]))
+    on = inside & (np.abs(t) <= 0.5 * length)
+    if not on.any():
+        return segment
+    g = across if np.median(across[on, len(offs) // 2]) >= 0 else -across
+    k = np.argmax(g, axis=1)
+    peak = g[np.arange(len(t)), k]
+    strength = float(np.median(peak[on]))
+    if not strength > 0:
+        return segment
+    idx = np.flatnonzero(inside & (peak >= config.min_strength * strength) & (k > 0) & (k < len(offs) - 1))
+    if len(idx) < 5:
+        return segment
+    run = np.concatenate([[0], np.cumsum(np.diff(t[idx]) > config.max_gap_px + 1)])
+    idx = idx[run == run[np.argmin(np.abs(t[idx]))]]
+    if len(idx) < 5:
+        return segment
+    a, b, e = g[idx, k[idx] - 1], peak[idx], g[idx, k[idx] + 1]
+    den = a - 2.0 * b + e
+    sub = np.divide(0.5 * (a - e), den, out=np.zeros_like(den), where=np.abs(den) > 1e-9)
+    pos = offs[k[idx]] + 0.5 * np.clip(sub, -1.0, 1.0)
+    tt = t[idx]
+    keep = np.ones(len(tt), bool)
+    for _ in range(3):
+        A = np.column_stack([tt[keep], np.ones(int(keep.sum()))]) * b[keep, None]
+        slope, offset = np.linalg.lstsq(A, pos[keep] * b[keep], rcond=None)[0]
+        new = np.abs(pos - (slope * tt + offset)) < 1.0
+        if new.sum() < 5 or (new == keep).all():
+            break
+        keep = new
+    t1, t2 = tt[keep].min(), tt[keep].max()
+    return np.concatenate([mid + t1 * u + (slope * t1 + offset) * n, mid + t2 * u + (slope * t2 + offset) * n])
 
 
 def duplicate_groups(
@@ -467,7 +606,8 @@ def find_manhattan_families(
 
 def scene_lines(image: np.ndarray, boxes: Iterable[Any] = ()) -> LineFamilies:
     """The line families of a view of the scene: its segments (:func:`detect_segments`, the
-    people's boxes out, down to ``MIN_LENGTH`` pixels, pooled over ``LSD_SCALES``) grouped by the
+    people's boxes out, down to ``MIN_LENGTH`` pixels, pooled over ``LSD_SCALES``, each refitted
+    along its whole edge by :func:`refine_segments`) grouped by the
     three vanishing points of one square frame (:func:`find_manhattan_families`); by
     :func:`find_families` instead when that frame explains under ``MANHATTAN_SHARE`` of the segment
     length the latter groups (a scene that is not laid out square).
@@ -485,7 +625,8 @@ def scene_lines(image: np.ndarray, boxes: Iterable[Any] = ()) -> LineFamilies:
         The families.
     """
     H, W = image.shape[:2]
-    segments = detect_segments(image, boxes, min_length=MIN_LENGTH, scale=LSD_SCALES)
+    segments = refine_segments(image, detect_segments(image, boxes, min_length=MIN_LENGTH, scale=LSD_SCALES))
+    segments = segments[np.hypot(*(segments[:, 2:] - segments[:, :2]).T) >= MIN_LENGTH]
     square = find_manhattan_families(segments, (W, H))
     free = find_families(segments, (H - 1) / 2.0)
     return square if _grouped_length(square) >= MANHATTAN_SHARE * _grouped_length(free) else free
@@ -497,11 +638,13 @@ def _grouped_length(lines: LineFamilies) -> float:
 
 __all__ = [
     "LineFamilies",
+    "RefineConfig",
     "detect_segments",
     "duplicate_groups",
     "duplicate_weights",
     "find_families",
     "find_manhattan_families",
+    "refine_segments",
     "scene_lines",
     "segment_angles",
 ]

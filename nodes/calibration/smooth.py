@@ -111,7 +111,38 @@ def credible(
         and est.split_height <= max_split[0]
         and est.split_tilt_deg <= max_split[1]
         and est.split_focal <= max_split[2]
+        and statures_plausible(est)
     )
+
+
+def statures_plausible(est: CameraEstimate, config: CalibrationConfig | None = None) -> bool:
+    """Whether every person of an estimate has a fitted height within ``config.max_stature_sd`` prior
+    stds of the prior's centre (``config.person_height``, ``person_height_std``).
+
+    A fit keeps such a person when the others are too few to go on without them
+    (``CalibrationConfig.max_stature_sd``). People of 1.3 and 2.7 m in one scene are fragments of
+    people (an upper half, a head and shoulders) at the ground where the region ends, not people
+    standing there; the camera's height then rests on the one whose fitted height is the prior's,
+    whatever their views, and the fit's uncertainty, which takes the observations as they come,
+    does not say so.
+
+    Parameters
+    ----------
+    est : CameraEstimate
+        The estimate (``people_heights``, metres).
+    config : CalibrationConfig or None, default=None
+        The prior on people's height and the bound, in its stds (None: the defaults).
+
+    Returns
+    -------
+    bool
+        True when every fitted height is within the bound (or no bound is set).
+    """
+    config = config or CalibrationConfig()
+    if config.max_stature_sd is None:
+        return True
+    h = np.asarray(est.people_heights, np.float64)
+    return bool((np.abs(h - config.person_height) <= config.max_stature_sd * config.person_height_std).all())
 
 
 class CameraSmoother:
@@ -155,4 +186,4 @@ class CameraSmoother:
         return self.camera
 
 
-__all__ = ["CameraSmoother", "camera_from_parameters", "camera_parameters", "credible"]
+__all__ = ["CameraSmoother", "camera_from_parameters", "camera_parameters", "credible", "statures_plausible"]
