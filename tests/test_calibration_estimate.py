@@ -119,6 +119,29 @@ def test_head_and_foot_of_a_region_and_which_regions_count() -> None:
     assert not usable((40, 20, 21, 81), W, H, merged=True)
 
 
+def test_the_head_of_a_person_waving_is_their_head_not_their_hand() -> None:
+    # an outline with a hand held up beside the head, its top 14 pixels above the crown (a person
+    # waving: on the simulator's wave scenes, heads taken at the region's top read their people up
+    # to a fifth too tall); the outline's reference point is the top of the head, which the head
+    # point follows
+    from counterpart.nodes.silhouette.pipeline import silhouette_spline
+
+    mask = np.zeros((140, 80), np.uint8)
+    cv2.ellipse(mask, (40, 32), (8, 11), 0, 0, 360, 1, -1)  # head, crown at row 21
+    cv2.rectangle(mask, (28, 42), (52, 90), 1, -1)  # trunk
+    cv2.rectangle(mask, (30, 90), (38, 130), 1, -1)  # legs, soles at row 130
+    cv2.rectangle(mask, (42, 90), (50, 130), 1, -1)
+    cv2.rectangle(mask, (53, 7), (58, 50), 1, -1)  # the arm held up, hand at row 7
+    ys, xs = np.nonzero(mask)
+    bbox = (xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1)
+    ctrl, ref = silhouette_spline(mask.astype(bool))
+    head, foot = head_foot(bbox, ctrl, ref)
+    assert abs(head[1] - 20.5) <= 1.0 and abs(head[0] - 40) <= 3, (head, ref)
+    assert foot[1] == 130.5
+    assert head_foot(bbox, ctrl, None)[0][1] == 6.5  # without the outline's reference: the region's top
+    assert head_foot(bbox, ctrl, np.array([np.nan, np.nan]))[0][1] == 6.5  # a region without an outline
+
+
 def test_the_published_camera_moves_to_an_estimate_by_bounded_steps() -> None:
     start = _camera(1.6, 10.0, 55.0, distance=4.0)
     cam = _camera(2.8, 25.0, 45.0, roll_deg=2.0)

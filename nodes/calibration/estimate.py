@@ -354,8 +354,9 @@ def rotation(tilt: float, roll: float) -> np.ndarray:
 def head_foot(bbox: Any, ctrl: np.ndarray | None, ref_point: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """A person region's head and foot image points, pixels.
 
-    Head: the reference point at the top of the head (``ref_point``; the middle of the bbox top
-    without it), on the region's upper edge. Foot: the region's lower edge, at the mean x of the
+    Head: the reference point at the top of the head (``ref_point``: the outline's highest point
+    near its upward axis), at its pixel's upper edge: a hand held up beside the head tops the box,
+    not the head. Without it (or NaN), the middle of the box's top. Foot: the region's lower edge, at the mean x of the
     outline's control points in its lowest tenth (between the feet; the bbox middle without an
     outline).
 
@@ -377,7 +378,9 @@ def head_foot(bbox: Any, ctrl: np.ndarray | None, ref_point: np.ndarray | None) 
     """
     x, y, w, h = (float(v) for v in bbox)
     top, bottom = y - 0.5, y + h - 0.5
-    hx = float(ref_point[0]) if ref_point is not None and np.size(ref_point) == 2 else x + (w - 1) / 2
+    hx = x + (w - 1) / 2
+    if ref_point is not None and np.size(ref_point) == 2 and np.isfinite(ref_point).all():
+        hx, top = float(ref_point[0]), max(top, float(ref_point[1]) - 0.5)
     fx = x + (w - 1) / 2
     if ctrl is not None and np.size(ctrl) >= 6:
         c = np.asarray(ctrl, np.float64).reshape(-1, 2)

@@ -181,17 +181,32 @@ def refine_segments(image: np.ndarray, segments: np.ndarray, config: RefineConfi
     gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3) / 8.0
     u, n, mid, length = _segment_frames(s)
     offs = np.arange(-config.reach_px, config.reach_px + 1e-9, 0.5)
-    # every segment's whole line in the frame, sampled at once: (N, T, O) positions about its middle
-    reach = float(np.ceil(np.hypot(W, H)))
-    t = np.arange(-reach, reach + 1.0)
-    pts = mid[:, None, None] + t[None, :, None, None] * u[:, None, None] + offs[None, None, :, None] * n[:, None, None]
-    xs, ys = pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32)
-    inside = ((xs >= 1) & (xs <= W - 2) & (ys >= 1) & (ys <= H - 2)).all(axis=-1)
-    across = _bilinear(gx, xs, ys) * n[:, None, None, 0] + _bilinear(gy, xs, ys) * n[:, None, None, 1]
+    t_lo, t_hi = _span_in_frame(mid, u, W, H)
     out = s.copy()
-    for i in np.flatnonzero(length >= 1.0):
-        out[i] = _refit_edge(s[i], across[i], t, inside[i], offs, config)
+    for i in np.flatnonzero((length >= 1.0) & (t_hi >= t_lo)):
+        # the segment's whole line in the frame, every pixel along it from its middle
+        t = np.arange(np.ceil(t_lo[i]), np.floor(t_hi[i]) + 1.0)
+        pts = mid[i] + t[:, None, None] * u[i] + offs[None, :, None] * n[i]
+        xs, ys = pts[..., 0].astype(np.float32), pts[..., 1].astype(np.float32)
+        inside = ((xs >= 1) & (xs <= W - 2) & (ys >= 1) & (ys <= H - 2)).all(axis=-1)
+        across = _bilinear(gx, xs, ys) * n[i, 0] + _bilinear(gy, xs, ys) * n[i, 1]
+        out[i] = _refit_edge(s[i], across, t, inside, offs, config)
     return out
+
+
+def _span_in_frame(mid: np.ndarray, u: np.ndarray, W: int, H: int) -> tuple[np.ndarray, np.ndarray]:
+    """(N,) least and greatest t at which the lines ``mid + t u`` (N, 2) lie within the frame's
+    pixels 1 to W - 2 and 1 to H - 2 (a line that misses it: the least above the greatest).
+    """
+    lo, hi = np.full(len(mid), -np.inf), np.full(len(mid), np.inf)
+    for axis, size in ((0, W), (1, H)):
+        d, c = u[:, axis], mid[:, axis]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a, b = (1.0 - c) / d, (size - 2.0 - c) / d
+        moving = np.abs(d) > 1e-12
+        lo = np.where(moving, np.maximum(lo, np.minimum(a, b)), np.where((c >= 1) & (c <= size - 2), lo, np.inf))
+        hi = np.where(moving, np.minimum(hi, np.maximum(a, b)), hi)
+    return lo, hi
 
 
 def _segment_frames(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
