@@ -60,7 +60,7 @@ def main(args: argparse.Namespace) -> int:
         with open(args.out, "w", encoding="utf-8") as f:
             f.write(text)
         print(f"[calibrate] {est.describe()}", file=sys.stderr, flush=True)
-        used = graph_would_use(est)
+        used = graph_would_use(est, config)
         if not used:
             print(
                 "[calibrate] not sure enough for the graph's calibration node, which would keep its default camera "

@@ -128,7 +128,7 @@ def calibrate_video(
     return est, {"n_frames": n, "observations": len(obs), "fps": fps, "frame_size": list(shape)}
 
 
-def graph_would_use(est: CameraEstimate) -> bool:
+def graph_would_use(est: CameraEstimate, config: CalibrationConfig | None = None) -> bool:
     """Whether the calibration node, with its default bounds, would publish this estimate (moving
     the graph's camera to it) rather than keep the default camera.
 
@@ -136,6 +136,9 @@ def graph_would_use(est: CameraEstimate) -> bool:
     ----------
     est : CameraEstimate
         The estimate.
+    config : CalibrationConfig or None, default=None
+        The settings it was made with (its prior on people's height: ``--person-height``); None:
+        the defaults, as the node's.
 
     Returns
     -------
@@ -153,6 +156,7 @@ def graph_would_use(est: CameraEstimate) -> bool:
         p["min_depth_spread"],
         p["min_horizon_segments"],
         (p["max_split_height"], p["max_split_tilt_deg"], p["max_split_focal"]),
+        config,
     )
 
 

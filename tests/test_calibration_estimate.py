@@ -251,6 +251,10 @@ def test_an_estimate_with_a_person_of_implausible_height_is_not_credible() -> No
         assert not statures_plausible(replace(good, people_heights=heights))
         assert not credible(replace(good, people_heights=heights), 0.2, 0.5, 8.0, 0.12)
     assert statures_plausible(replace(good, people_heights=(1.28,)), CalibrationConfig(max_stature_sd=None))
+    # against the prior the estimate was made with (counterpart calibrate --person-height 1.22: children)
+    children = replace(good, people_heights=(1.2, 1.25))
+    small = CalibrationConfig(person_height=1.22, person_height_std=0.07)
+    assert not credible(children, 0.2, 0.5, 8.0, 0.12) and credible(children, 0.2, 0.5, 8.0, 0.12, config=small)
 
 
 @pytest.mark.parametrize("tilt", [2.0, 6.0])

@@ -356,9 +356,9 @@ def head_foot(bbox: Any, ctrl: np.ndarray | None, ref_point: np.ndarray | None) 
 
     Head: the reference point at the top of the head (``ref_point``: the outline's highest point
     near its upward axis), at its pixel's upper edge: a hand held up beside the head tops the box,
-    not the head. Without it (or NaN), the middle of the box's top. Foot: the region's lower edge, at the mean x of the
-    outline's control points in its lowest tenth (between the feet; the bbox middle without an
-    outline).
+    not the head. Without it (or NaN), the middle of the box's top. Foot: the region's lower edge,
+    at the mean x of the outline's control points in its lowest tenth (between the feet; the bbox
+    middle without an outline).
 
     Parameters
     ----------

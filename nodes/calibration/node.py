@@ -291,6 +291,7 @@ class Calibration(Node):
             self.p["min_depth_spread"],
             self.p["min_horizon_segments"],
             (self.p["max_split_height"], self.p["max_split_tilt_deg"], self.p["max_split_focal"]),
+            self.config,
         ):
             self.tally("estimates_not_credible")
             self.log.debug(

@@ -67,6 +67,7 @@ def credible(
     min_depth_spread: float,
     min_horizon_segments: int = 12,
     max_split: tuple[float, float, float] = (0.10, 1.5, 0.20),
+    config: CalibrationConfig | None = None,
 ) -> bool:
     """Whether an estimate is sure enough to move the published camera: its uncertainties under the
     bounds, the halves of its window in agreement with it, and the horizon seen, by people at
@@ -94,6 +95,9 @@ def credible(
         from the two halves of the window may land from the whole (log height, degrees, log focal);
         the uncertainty alone is too small where one cue (a line family, the right-angle prior)
         fixes a parameter that the people disagree with.
+    config : CalibrationConfig or None, default=None
+        The settings the estimate was made with: every person's fitted height must be plausible
+        under its prior on people's height (:func:`statures_plausible`). None: the defaults.
 
     Returns
     -------
@@ -111,7 +115,7 @@ def credible(
         and est.split_height <= max_split[0]
         and est.split_tilt_deg <= max_split[1]
         and est.split_focal <= max_split[2]
-        and statures_plausible(est)
+        and statures_plausible(est, config)
     )
 
 
