@@ -250,6 +250,26 @@ def test_a_true_line_family_of_many_segments_is_kept() -> None:
     assert abs(est.tilt_deg - 20.0) < 1.5 and abs(est.focal / cam.fx - 1) < 0.10, est.describe()
 
 
+def test_a_walker_leaning_their_own_way_is_not_read_as_the_camera() -> None:
+    # two of six walkers read with their heads a tenth of their height to one side all along their
+    # paths (two people walking side by side taken as one region: one's head, both's feet, as on
+    # PETS 2009's view): read as the camera's lean, that pulls the focal length off by 15%; each
+    # walker's own lean, fitted with the camera, takes most of it up
+    cam = _camera(2.5, 12.0, 60.0)
+    heads, feet, ids, t = _walkers(cam, seed=20)
+    pair = ids <= 1
+    heads[pair, 0] += 0.12 * (feet[pair, 1] - heads[pair, 1])
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    blind = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(person_lean_std=None))
+    assert abs(est.focal / cam.fx - 1) < 0.10 < abs(blind.focal / cam.fx - 1), (est.describe(), blind.describe())
+    assert abs(est.tilt_deg - 12.0) < 0.6 * abs(blind.tilt_deg - 12.0), (est.describe(), blind.describe())
+    # people who lean only as the camera makes them: the same estimate with or without
+    heads, feet, ids, t = _walkers(cam, seed=20)
+    est = estimate_camera(heads, feet, ids, (W, H), t)
+    blind = estimate_camera(heads, feet, ids, (W, H), t, CalibrationConfig(person_lean_std=None))
+    assert abs(est.focal / blind.focal - 1) < 0.02 and abs(est.tilt_deg - blind.tilt_deg) < 0.2
+
+
 def test_people_walking_in_depth_show_the_horizon() -> None:
     cam = _camera(2.5, 20.0, 50.0)
     heads, feet, ids, t = _walkers(cam, seed=20)
@@ -705,7 +725,12 @@ def test_the_batched_residuals_and_starts_are_the_single_ones_to_the_bit() -> No
     lines = find_manhattan_families(_floor(cam, seed=8, yaw_deg=20.0), (W, H))
     cfg = CalibrationConfig()
     scale = np.full((len(heads), 2), 3.0)
-    args = (_People(heads, feet, ids, scale, (W, H), 300.0, 3), cfg, lines, _line_scale(lines, cfg))
+    args = (
+        _People(heads, feet, ids, scale, (W, H), 300.0, 3, feet[:, 1] - heads[:, 1], np.full(3, 0.03)),
+        cfg,
+        lines,
+        _line_scale(lines, cfg),
+    )
     rng = np.random.default_rng(0)
     X = np.column_stack(
         [

@@ -143,6 +143,15 @@ class CalibrationConfig:
         ``focal_log_std``: where one horizontal family's vanishing point is far off, the lines fix
         the focal length weakly, and a prior as tight as the people's pulled their estimate
         towards the prior's 55 degrees (chosen on the tuning seeds 0-49).
+    person_lean_std : float or None, default=0.03
+        Std of the prior on each person's own lean, as a share of their height (a posture, a bag,
+        two people walking side by side taken as one region: one's head over both's feet), fitted
+        with the camera for each person seen in ``lean_min_places`` places or more
+        (:func:`_person_leans`). None: every head-foot line leans as the camera makes it lean.
+    lean_min_places : int, default=4
+        Places (cells a quarter of the person's height across) a person's feet must be seen in for
+        their own lean to be fitted: of a person in one place, their lean and the camera's cannot be
+        told apart.
     max_track_spread : float or None, default=0.15
         A person (track id) whose log pixel heights scatter about a line in the foot row by more
         than this (median absolute deviation) is left out: not one whole upright body but a
@@ -177,6 +186,8 @@ class CalibrationConfig:
     lines_focal_log_std: float = 0.5
     max_track_spread: float | None = 0.15
     propagate_lines: bool = True
+    person_lean_std: float | None = 0.03
+    lean_min_places: int = 4
 
     def with_known_fov(self, fov_deg: float, rel_std: float = KNOWN_FOV_STD) -> CalibrationConfig:
         """These settings for a camera whose horizontal field of view is known (its spec sheet, a
@@ -488,6 +499,10 @@ class _People:
         The focal length's prior, pixels.
     n_people : int
         Number of people (K).
+    pix : ndarray of shape (N,)
+        Head-to-foot height of each observation, pixels.
+    lean_std : ndarray of shape (K,)
+        Std of each person's own lean's prior (:func:`_person_leans`), shares of their height; 0: none.
     """
 
     head: np.ndarray
@@ -497,6 +512,8 @@ class _People:
     size: tuple[int, int]
     f0: float
     n_people: int
+    pix: np.ndarray
+    lean_std: np.ndarray
 
 
 def _residuals(
@@ -507,26 +524,58 @@ def _residuals(
     line_scale: np.ndarray | None = None,
 ) -> np.ndarray:
     """Normalised residuals (M,) of the fit at ``x`` (P,): the people's heads (2N), the statures (K),
-    the camera's priors (2), then the segments and the right angles; (B, M) for B vectors ``x`` (B, P).
+    the people's leans (K, :func:`_person_leans`), the camera's priors (2), then the segments and the
+    right angles; (B, M) for B vectors ``x`` (B, P).
     """
     head, foot, track, scale, size = people.head, people.foot, people.track, people.scale, people.size
     f0, n_people = people.f0, people.n_people
     X = np.asarray(x, np.float64)
     B = X.reshape(-1, X.shape[-1])
-    r = ((_project_heads(B[:, : 4 + n_people], head, foot, track, size) - head) / scale).reshape(len(B), -1)
+    r = ((_project_heads(B[:, : 4 + n_people], head, foot, track, size) - head) / scale).reshape(len(B), -1, 2)
+    lean = _person_leans(r[..., 0], people)
+    r[..., 0] += lean[:, people.track] * (people.pix / scale[:, 0])
+    r = r.reshape(len(B), -1)
     statures = (B[:, 4 : 4 + n_people] - np.log(cfg.person_height)) / (cfg.person_height_std / cfg.person_height)
     # the camera's priors stay Gaussian; a stature's stays robust (a fragment of a person, or a
     # ghost, tracked as a person of its own must not set the scale)
     camera = _gaussian_under_soft_l1(
         np.stack([(B[:, 0] - np.log(f0)) / cfg.focal_log_std, B[:, 2] / np.radians(cfg.roll_std_deg)], -1)
     )
-    priors = np.concatenate([statures, camera], -1)
+    priors = np.concatenate([statures, lean / np.where(people.lean_std > 0, people.lean_std, 1.0), camera], -1)
     if lines is None or not len(lines.segments):
         out = np.concatenate([r, priors], -1)
     else:
         rl = segment_angles(lines.segments, _vanishing_points(B, n_people, lines, size)) / line_scale
         out = np.concatenate([r, priors, rl, _manhattan(B[:, 4 + n_people :], cfg.manhattan_std_deg)], -1)
     return out.reshape(*X.shape[:-1], -1)
+
+
+def _person_leans(rx: np.ndarray, people: _People) -> np.ndarray:
+    """(B, K) each person's own lean, in shares of their height, that best explains the heads' x
+    residuals ``rx`` (B, N) of B cameras under its Gaussian prior (``people.lean_std``; none where
+    0): a posture, a bag, two people walking side by side taken as one whose head is one's and whose
+    feet are both's (their head-foot line leans by a tenth of their height, whatever the camera).
+    Only for people seen in several places: there the camera's lean of their head-foot line changes
+    along their path and their own does not; of a person in one place, the two cannot be told
+    apart, and their lean stays the camera's.
+
+    The lean is linear in the residuals, so it is solved for in closed form at each camera (variable
+    projection) rather than fitted as K more parameters; each residual weighs as its soft-L1 loss
+    weighs it at zero lean (an arm held out does not set a lean).
+    """
+    c = people.pix / people.scale[:, 0]  # a unit lean, in each residual's std
+    w = 1.0 / np.sqrt(1.0 + rx * rx)
+    # sums per person in one fixed order (a matrix product's would differ in the last bits between
+    # a batch of cameras and one, and so would the Jacobian)
+    order = np.argsort(people.track, kind="stable")
+    starts = np.searchsorted(people.track[order], np.arange(people.n_people))
+
+    def per(v: np.ndarray) -> np.ndarray:
+        return np.add.reduceat(v[..., order], starts, axis=-1)
+
+    with np.errstate(divide="ignore"):
+        precision = np.where(people.lean_std > 0, 1.0 / people.lean_std**2, np.inf)
+    return -per(w * c * rx) / (per(w * c * c) + precision)
 
 
 def _gaussian_under_soft_l1(q: np.ndarray) -> np.ndarray:
@@ -1071,7 +1120,15 @@ def fit_camera(
     # lines (the split below): with the lines' own prior on the focal length, so that it does not
     # count the two priors' difference as the people's
     joint_config = replace(config, focal_log_std=config.lines_focal_log_std) if fixed is not None else config
-    people = _People(head, foot, k, scale, (W, H), f0, nk)
+    lean_std = np.zeros(nk)
+    if config.person_lean_std:
+        for j in range(nk):
+            m = k == j
+            # places: cells a quarter of the person's height across
+            cells = np.floor(foot[m] / max(1.0, 0.25 * float(np.median(pix[m]))))
+            if len(np.unique(cells, axis=0)) >= config.lean_min_places:
+                lean_std[j] = config.person_lean_std
+    people = _People(head, foot, k, scale, (W, H), f0, nk, pix, lean_std)
     joint = _solve(people, joint_config, lines)
     best = joint
     if fixed is not None:
@@ -1127,8 +1184,9 @@ def fit_camera(
     inlier = np.hypot(r[:, 0], r[:, 1]) < 3.0
     weights = np.ones(len(best.fun))
     if fixed is None and lines is not None:
-        # the joint fit's residuals: people (2N), statures (K), camera priors (2), then the segments
-        start = 2 * len(head) + nk + 2
+        # the joint fit's residuals: people (2N), statures and leans (2K), camera priors (2), then the
+        # segments
+        start = 2 * len(head) + 2 * nk + 2
         weights[start : start + len(lines.segments)] = duplicate_weights(lines.segments)
     cov = _covariance(best, weights)
     if cov is None:
