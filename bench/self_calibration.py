@@ -58,10 +58,10 @@ file is): ``../shared/data/video/vtest.avi``, OpenCV's sample pedestrian video, 
 2009's sequence S2.L1 (a camera on a building over a campus path, people walking at many depths for
 80 s). ``counterpart calibrate``'s estimate against that view's calibration (:data:`PETS_CAMERA`):
 ``calib_pets_height_err`` and ``calib_pets_focal_err`` (relative), ``calib_pets_tilt_err_deg``,
-``calib_pets_credible`` (whether the node would publish it). Three of the estimator's rules came
-from looking at this video (each person's own lean, a person in one place counted as one view, the
-test that drops a line family counting the family's own scatter); they were kept because they left
-the simulator's figures as they were; nothing was tuned to its numbers.
+``calib_pets_credible`` (whether the node would publish it). Two of the estimator's rules came
+from looking at this video (each walker's own lean; the test that drops a line family counting the
+family's own scatter); they were kept because they left the simulator's figures and the UT clips'
+estimates as they were; no setting was chosen on its numbers.
 
 Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]
 [--inputs-cache DIR] [--no-pets]``; last stdout line: one JSON object. ``--inputs-cache`` keeps each seed's costly

@@ -21,6 +21,13 @@ holds both cues of the literature at once: its direction across the head-foot li
 vanishing point (tilt, roll and focal together), its length along it the consistency of a person's
 height at different depths, which places the horizon (the vanishing line of the ground).
 
+A person seen in several places may lean their own way besides (a posture, a bag, two people
+walking side by side taken as one region): their predicted head moves across by l_k times their
+pixel height, with the prior sum_k (l_k / s_l)^2; the l_k are linear in the residuals and solved
+for in closed form at each camera (``_person_leans``). Along a path the camera's lean of a
+head-foot line changes and a person's own does not, so the vertical vanishing point stays fixed by
+the people's paths, not by how each of them stands.
+
 At zero tilt the focal length is not observable from heads and feet at all (scaling f and every
 depth together gives the same image), so the weak prior on f (the default camera's 55 degrees)
 decides it there, and the reported uncertainty of f is wide. The scale of the scene (h_c) comes
@@ -38,6 +45,7 @@ Starts: a grid over tilt and field of view (vectorised), the best few refined by
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -105,9 +113,9 @@ class CalibrationConfig:
         cost (half its robust chi-square) by more than this: segments that meet at a point that is
         not the image of one horizontal scene direction; one family at a time, the one whose leaving
         out gains most. Left out, the family's segments still count, about a vanishing point of
-        their own (:func:`_free_family_cost`): leaving out a family of many segments always lowers the
-        cost by their own scatter, and on a real view (PETS 2009's) every family went. None: keep every family. Not for the families of one square frame
-        (``LineFamilies.square``): found jointly, none is a chance meeting, and with their many
+        their own (:func:`_free_family_cost`): else leaving out a family of many segments lowers
+        the cost by their own scatter alone, and on a real view (PETS 2009's) every family went.
+        None: keep every family. Not for the families of one square frame (``LineFamilies.square``): found jointly, none is a chance meeting, and with their many
         segments a true family that the people's lean disagrees with gains more than this.
     max_stature_sd : float or None, default=3.0
         A person whose fitted stature is further than this many prior stds from the prior's centre
@@ -515,6 +523,12 @@ class _People:
     pix: np.ndarray
     lean_std: np.ndarray
 
+    @cached_property
+    def by_person(self) -> tuple[np.ndarray, np.ndarray]:
+        """The observations' order grouped by person (stable) and where each person starts in it."""
+        order = np.argsort(self.track, kind="stable")
+        return order, np.searchsorted(self.track[order], np.arange(self.n_people))
+
 
 def _residuals(
     x: np.ndarray,
@@ -563,12 +577,13 @@ def _person_leans(rx: np.ndarray, people: _People) -> np.ndarray:
     projection) rather than fitted as K more parameters; each residual weighs as its soft-L1 loss
     weighs it at zero lean (an arm held out does not set a lean).
     """
+    if not people.lean_std.any():
+        return np.zeros((len(rx), people.n_people))
     c = people.pix / people.scale[:, 0]  # a unit lean, in each residual's std
     w = 1.0 / np.sqrt(1.0 + rx * rx)
     # sums per person in one fixed order (a matrix product's would differ in the last bits between
     # a batch of cameras and one, and so would the Jacobian)
-    order = np.argsort(people.track, kind="stable")
-    starts = np.searchsorted(people.track[order], np.arange(people.n_people))
+    order, starts = people.by_person
 
     def per(v: np.ndarray) -> np.ndarray:
         return np.add.reduceat(v[..., order], starts, axis=-1)
@@ -958,6 +973,17 @@ def _without_family(lines: LineFamilies, j: int) -> LineFamilies:
     )
 
 
+def _places(foot: np.ndarray, pix: np.ndarray, k: np.ndarray, nk: int) -> np.ndarray:
+    """(K,) places each person's feet were seen in: cells a quarter of their median pixel height
+    across (``foot`` (N, 2) pixels, ``pix`` (N,) pixel heights, ``k`` (N,) persons 0 .. nk - 1).
+    """
+    out = np.zeros(nk, int)
+    for j in range(nk):
+        m = k == j
+        out[j] = len(np.unique(np.floor(foot[m] / max(1.0, 0.25 * float(np.median(pix[m])))), axis=0))
+    return out
+
+
 def _free_family_cost(lines: LineFamilies, j: int, scale: np.ndarray) -> float:
     """The robust cost (as ``least_squares`` reports it) of family ``j``'s segments about their own
     best vanishing point, free of any camera: what they cost where the family is left out of the
@@ -1120,14 +1146,7 @@ def fit_camera(
     # lines (the split below): with the lines' own prior on the focal length, so that it does not
     # count the two priors' difference as the people's
     joint_config = replace(config, focal_log_std=config.lines_focal_log_std) if fixed is not None else config
-    lean_std = np.zeros(nk)
-    if config.person_lean_std:
-        for j in range(nk):
-            m = k == j
-            # places: cells a quarter of the person's height across
-            cells = np.floor(foot[m] / max(1.0, 0.25 * float(np.median(pix[m]))))
-            if len(np.unique(cells, axis=0)) >= config.lean_min_places:
-                lean_std[j] = config.person_lean_std
+    lean_std = np.where(_places(foot, pix, k, nk) >= config.lean_min_places, config.person_lean_std or 0.0, 0.0)
     people = _People(head, foot, k, scale, (W, H), f0, nk, pix, lean_std)
     joint = _solve(people, joint_config, lines)
     best = joint
