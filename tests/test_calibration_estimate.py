@@ -210,9 +210,9 @@ def test_people_at_one_depth_need_the_scene_lines_for_the_horizon(height: float,
 
 
 def _scene_segments(cam: Camera, seed: int, n: int = 120, noise: float = 0.7) -> np.ndarray:
-    """(2n, 4) segments of a street: n posts' vertical edges (0.3-0.8 m) and n kerb pieces (0.5-1.5
-    m) along one ground direction 30 degrees off the view, all over the ground in view (``noise``
-    px on each end).
+    """(2n, 4) segments of a street: n posts' vertical edges and n kerb pieces along one ground
+    direction 30 degrees off the view (each 0.3-1.5 m), all over the ground in view (``noise`` px on
+    each end).
     """
     rng = np.random.default_rng(seed)
     along = np.array([np.cos(np.radians(30.0)), 0.0, np.sin(np.radians(30.0))])
