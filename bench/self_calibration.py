@@ -64,11 +64,11 @@ family's own scatter); they were kept because they left the simulator's figures 
 estimates as they were; no setting was chosen on its numbers.
 
 Usage: ``python bench/self_calibration.py [--seeds 50] [--seconds 3] [--jobs 1] [--clips 12|all|0]
-[--inputs-cache DIR] [--no-pets]``; last stdout line: one JSON object. ``--inputs-cache`` keeps each seed's costly
-inputs (:func:`sim_inputs`: the silhouettes' and the detector's observations, the median view of the
-scene and the people's boxes on it, the truth) so that a change to the estimator or to the scene
-lines' detection and grouping is measured in seconds; it is stale once anything upstream of
-the estimate changes. ``bench/real_video.py`` reports the simulator figures under the same names.
+[--inputs-cache DIR] [--no-pets]``; last stdout line: one JSON object. ``--inputs-cache`` keeps each
+seed's costly inputs (:func:`sim_inputs`: the silhouettes' and the detector's observations, the
+median view of the scene and the people's boxes on it, the truth) so that a change to the estimator
+or to the scene lines' detection and grouping is measured in seconds; it is stale once anything
+upstream of the estimate changes. ``bench/real_video.py`` reports the simulator figures under the same names.
 """
 
 from __future__ import annotations
