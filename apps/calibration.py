@@ -16,7 +16,7 @@ from typing import Any
 from counterpart.body.camera import Camera
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate
-from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames, detect_people
+from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames
 from counterpart.nodes.calibration.smooth import credible
 
 #: progress(frames done, frames the file declares or 0)
@@ -107,8 +107,8 @@ def calibrate_video(
         if obs is None:
             shape = frame.shape[:2]
             obs = PeopleObservations(frame.shape[1], frame.shape[0], max_observations=4000)
-        if obs.wants_detections(obs.add(result.people, n / (fps or 25.0), result.labels)):
-            obs.add_detections(*detect_people(detector, frame, obs.next_smallest), n / (fps or 25.0))
+        time_s = n / (fps or 25.0)
+        obs.add_frame(frame, time_s, obs.add(result.people, time_s, result.labels), detector)
         if scene.wants(n):
             scene.add(frame, result.people)
         n += 1

@@ -10,7 +10,8 @@ node's people and estimates the camera from them and from the straight lines of 
 (``counterpart.nodes.calibration.estimate``: focal length, tilt, roll and height from the heads and feet of
 upright people against a prior on human height; on a frame where the silhouettes hold no upright
 person, as when people standing still are absorbed into the background, from the people
-detector's boxes, on ``detect_frames`` frames at most; with ``fov_deg``, the camera's horizontal field
+detector's boxes and, where it finds no one, the bodies grown from where the frames changed
+(``counterpart.nodes.calibration.still``), on ``detect_frames`` frames at most; with ``fov_deg``, the camera's horizontal field
 of view where the user knows it, the focal length is held near it). Until an estimate is credible (people seen over
 ``min_seconds``; uncertainties under the ``max_*_std`` bounds; the estimates from the two halves
 of the window near the whole's, ``max_split_*``; the horizon seen, by people at different depths or by scene lines
@@ -41,7 +42,7 @@ from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import CameraInfo, Frame, Silhouettes
 
 from .estimate import CalibrationConfig, CameraEstimate
-from .observe import PeopleObservations, SceneFrames, detect_people
+from .observe import PeopleObservations, SceneFrames
 from .pacing import EstimatePacing, PacingConfig
 from .smooth import CameraSmoother, credible
 
@@ -154,8 +155,9 @@ class Calibration(Node):
             int,
             60,
             "estimate: on a frame whose silhouettes hold no upright person (people absorbed into the "
-            "background), the people detector's boxes give the heads and feet, on this many frames "
-            "at most (about 0.15 s of one core each); 0: never",
+            "background), the people detector's boxes give the heads and feet, and where it finds no "
+            "one the bodies grown from where the frames changed, on this many frames at most (about "
+            "0.15-0.3 s of one core each); 0: never",
             min=0,
         ),
     }
@@ -263,10 +265,8 @@ class Calibration(Node):
         image = self.images.pop(msg.seq, None)
         if image is not None and image.shape[:2] != (size[1], size[0]):
             image = None
-        if image is not None and self.detector is not None and self.observations.wants_detections(added):
-            added += self.observations.add_detections(
-                *detect_people(self.detector, image, self.observations.next_smallest), time_s
-            )
+        if image is not None:
+            added += self.observations.add_frame(image, time_s, added, self.detector)
         self.tally("people_observed", added)
         if image is not None and self.scene.wants(msg.seq):
             self.scene.add(image, msg.people)

@@ -25,7 +25,10 @@ frame is enlarged first (:func:`detect_people`) for people a fifth of a small fr
 while the runs at a fifth find no one, the runs take turns with people 0.15 of it (standing still
 far from the camera) and 0.3 of it (standing still near it, whom the frame enlarged for a fifth
 may show the detector as no one or as their upper half alone; on a still scene the runs at one
-scale all find the same people).
+scale all find the same people). On a frame where neither the regions nor the detector gave anyone,
+the people standing still are grown from where the frames changed lately (their gestures) down to
+their feet (:meth:`PeopleObservations.add_still`, ``still.StillPeople``): the detector misses many
+people seen side on or far away.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ from counterpart.body.people_detector import PeopleDetector
 
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
 from .lines import LineFamilies, scene_lines
+from .still import StillPeople
 from .upright import upright_parts
 
 #: the head's and the feet's rows in a box of ``PeopleDetector.detect``, as shares of its height
@@ -129,6 +133,9 @@ class PeopleObservations:
         half's, and the runs at 0.3 (the frame enlarged less) their whole one: whether the detector
         finds a still person depends on how much the frame is enlarged, as its windows then fall
         elsewhere on them.
+    still : bool, default=True
+        Grow the people standing still from where the frames changed (:meth:`add_still`) on the
+        frames the detector runs on and finds no one.
     """
 
     def __init__(
@@ -139,6 +146,7 @@ class PeopleObservations:
         max_detections: int = 60,
         detect_every: int | None = 3,
         smallest: tuple[float, ...] = (0.2, 0.15, 0.3),
+        still: bool = True,
     ) -> None:
         self.size = (int(width), int(height))
         self.max_observations = int(max_observations)
@@ -147,7 +155,8 @@ class PeopleObservations:
         self.smallest = tuple(float(v) for v in smallest)
         if not self.smallest or not all(0.0 < v <= 1.0 for v in self.smallest):
             raise ValueError(f"smallest must be shares of the frame height in (0, 1], got {smallest}")
-        #: boxes (x, y, w, h) of the upright people of the frame last given to :meth:`add`
+        #: boxes (x, y, w, h) of the upright people of the frame last given to :meth:`add`, and the
+        #: detector's people on it
         self._upright: list[tuple[float, float, float, float]] = []
         self.detections_run = 0
         #: whether the detector's last run at ``smallest[0]`` found anyone
@@ -160,6 +169,7 @@ class PeopleObservations:
         #: people's regions given to :meth:`add`, and those of them cut off by the frame's bottom edge
         self.regions_seen = 0
         self.feet_out = 0
+        self.still = StillPeople(width, height) if still else None
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -309,9 +319,83 @@ class PeopleObservations:
                 (np.abs(x + w / 2 - (ux + uw / 2)) < 0.5 * np.maximum(w, uw))
                 & (np.abs(top + full / 2 - (uy + uh / 2)) < 0.5 * np.maximum(full, uh))
             )
+        n = self._add_found(
+            [
+                (np.array([cx, y0 + HEAD_IN_BOX * bh]), np.array([cx, y0 + FOOT_IN_BOX * bh]))
+                for cx, y0, bh in zip(x[ok] + w[ok] / 2, top[ok], full[ok])
+            ],
+            time_s,
+        )
+        self._upright.extend(zip(x[ok], top[ok], w[ok], full[ok]))
+        return n
+
+    def add_frame(self, frame: np.ndarray, time_s: float, added: int, detector: PeopleDetector | None) -> int:
+        """What a frame's pixels give, after :meth:`add` gave ``added`` observations of its
+        regions: its changes are noted (:meth:`note_frame`); where :meth:`wants_detections`, the
+        people detector's boxes (:func:`detect_people` at :attr:`next_smallest`) are added, and where
+        neither its regions nor the detector gave anyone, the people standing still
+        (:meth:`add_still`).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame, the one last given to :meth:`add`.
+        time_s : float
+            Time the frame was seen, seconds.
+        added : int
+            What :meth:`add` returned for it.
+        detector : PeopleDetector or None
+            The people detector; None: neither it nor the still people are looked for.
+
+        Returns
+        -------
+        int
+            How many observations were added.
+        """
+        self.note_frame(frame, time_s)
+        if detector is None or not self.wants_detections(added):
+            return 0
+        n = self.add_detections(*detect_people(detector, frame, self.next_smallest), time_s)
+        return n + self.add_still(frame, time_s)
+
+    def note_frame(self, frame: np.ndarray, time_s: float) -> None:
+        """Note where a frame changed, for :meth:`add_still` (every frame, or as many as can be given).
+
+        Parameters
+        ----------
+        frame : ndarray of shape (H, W, 3)
+            uint8 BGR frame of the size given.
+        time_s : float
+            Time the frame was seen, seconds.
+        """
+        if self.still is not None:
+            self.still.observe(frame, time_s)
+
+    def add_still(self, frame: np.ndarray, time_s: float) -> int:
+        """Add the people standing still grown from where the frames changed lately
+        (``still.StillPeople``) on the frame last given to :meth:`add` and :meth:`note_frame`, where
+        neither its regions nor the detector's boxes of it (:meth:`add_detections`) gave anyone: where
+        they did, what moved is mostly the people they gave, and a body grown from it often their
+        trail or their raised arm.
+
+        Returns
+        -------
+        int
+            How many observations were added.
+        """
+        if self.still is None or self._upright:
+            return 0
+        return self._add_found(self.still.find(frame, time_s), time_s)
+
+    def _add_found(self, found: list[tuple[np.ndarray, np.ndarray]], time_s: float) -> int:
+        """Add people found on the frame last given to :meth:`add` by their head and foot points,
+        each continuing the found person before it who stood where they stand (see
+        :meth:`add_detections`; a person's size is the detector's box height that holds them).
+        """
         known = list(self._tracks)
         seen: list[tuple[float, float, int, int]] = []
-        for cx, y0, bh in zip(x[ok] + w[ok] / 2, top[ok], full[ok]):
+        for head, foot in found:
+            cx, bh = 0.5 * (head[0] + foot[0]), (foot[1] - head[1]) / (FOOT_IN_BOX - HEAD_IN_BOX)
             share = [TRACK_SHARE if self._frame - t[3] <= TRACK_GAP_FRAMES else STILL_SHARE for t in known]
             near = [t for t, s in zip(known, share) if abs(t[0] - cx) < s * bh and abs(t[1] - bh) < s * bh]
             if near:
@@ -321,7 +405,7 @@ class PeopleObservations:
                 pid = -(DETECTION_ID + self._next_track)
                 self._next_track += 1
             seen.append((float(cx), float(bh), pid, self._frame))
-            self._rows.append((cx, y0 + HEAD_IN_BOX * bh, cx, y0 + FOOT_IN_BOX * bh, pid, float(time_s)))
+            self._rows.append((head[0], head[1], foot[0], foot[1], pid, float(time_s)))
         self._tracks = (seen + known)[:MAX_TRACKS]
         self._bound()
         return len(seen)
