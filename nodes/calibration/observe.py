@@ -331,10 +331,10 @@ class PeopleObservations:
 
     def add_frame(self, frame: np.ndarray, time_s: float, added: int, detector: PeopleDetector | None) -> int:
         """What a frame's pixels give, after :meth:`add` gave ``added`` observations of its
-        regions: its changes are noted (:meth:`note_frame`); where :meth:`wants_detections`, the
-        people detector's boxes (:func:`detect_people` at :attr:`next_smallest`) are added, and where
-        neither its regions nor the detector gave anyone, the people standing still
-        (:meth:`add_still`).
+        regions: where it changed is noted (``still.StillPeople.observe``); where
+        :meth:`wants_detections`, the people detector's boxes (:func:`detect_people` at
+        :attr:`next_smallest`) are added, and where neither its regions nor the detector gave
+        anyone, the people standing still (:meth:`add_still`).
 
         Parameters
         ----------
@@ -352,28 +352,16 @@ class PeopleObservations:
         int
             How many observations were added.
         """
-        self.note_frame(frame, time_s)
+        if self.still is not None:
+            self.still.observe(frame, time_s)
         if detector is None or not self.wants_detections(added):
             return 0
         n = self.add_detections(*detect_people(detector, frame, self.next_smallest), time_s)
         return n + self.add_still(frame, time_s)
 
-    def note_frame(self, frame: np.ndarray, time_s: float) -> None:
-        """Note where a frame changed, for :meth:`add_still` (every frame, or as many as can be given).
-
-        Parameters
-        ----------
-        frame : ndarray of shape (H, W, 3)
-            uint8 BGR frame of the size given.
-        time_s : float
-            Time the frame was seen, seconds.
-        """
-        if self.still is not None:
-            self.still.observe(frame, time_s)
-
     def add_still(self, frame: np.ndarray, time_s: float) -> int:
         """Add the people standing still grown from where the frames changed lately
-        (``still.StillPeople``) on the frame last given to :meth:`add` and :meth:`note_frame`, where
+        (``still.StillPeople``) on the frame last given to :meth:`add` and :meth:`add_frame`, where
         neither its regions nor the detector's boxes of it (:meth:`add_detections`) gave anyone: where
         they did, what moved is mostly the people they gave, and a body grown from it often their
         trail or their raised arm.

@@ -7,10 +7,13 @@ as fragments. The people detector finds some of them and misses others (a body s
 person far from the camera). Where something moved is where someone is: the pixels that changed
 over the last seconds mark part of each person (:class:`StillPeople` keeps, for every pixel, when
 it last changed), and GrabCut (Rother, Kolmogorov & Blake 2004, "GrabCut": colour models of the
-person and of the scene, and a graph cut between them) given a band below and around each moving
-part grows it to the whole body, down to the feet that never moved: the floor beside and the wall
-behind them are the scene's colours, seen outside the band. The standing bodies in what it grows
-(``upright.upright_parts``: tall and narrow, whole) give the head and foot points.
+person and of the scene, and a graph cut between them) given a band around each moving part, from
+well above it (the head over a moving hand) down to the frame's bottom, grows it to the whole body,
+down to the feet that never moved: the floor beside and the wall behind them are the scene's
+colours, seen outside the band. The standing bodies in what it grows (``upright.upright_parts``:
+tall and narrow, whole) give the head and foot points, but for a body that moved as a whole (a
+walker: what grows from the trail is the trail) and one whose gestures reach below its feet (cut
+at the waist, the legs taken for the scene).
 
 Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h).
 """
