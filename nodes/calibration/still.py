@@ -188,6 +188,9 @@ class StillPeople:
         self.runs += 1
         bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
         image = np.ascontiguousarray(self._shrunk(frame)[y0:y1, x0:x1])
+        # GrabCut starts its colour models by k-means from OpenCV's global random state: seeded, the
+        # same frames give the same bodies whatever ran before in the process
+        cv2.setRNGSeed(0)
         cv2.grabCut(image, crop, None, bgd, fgd, self.config.iterations, cv2.GC_INIT_WITH_MASK)
         grown = np.zeros((H, W), np.uint8)
         grown[y0:y1, x0:x1] = (crop == cv2.GC_FGD) | (crop == cv2.GC_PR_FGD)
