@@ -147,9 +147,12 @@ class StillPeople:
         ndarray of shape (K, 4)
             int (x, y, w, h) of each part at least ``min_part_share`` of the frame tall.
         """
+        return self._parts(self.moved(time_s))
+
+    def _parts(self, moved: np.ndarray) -> np.ndarray:
         H = self.size[1]
         k = max(3, H // 40)
-        joined = cv2.morphologyEx(self.moved(time_s).astype(np.uint8), cv2.MORPH_CLOSE, np.ones((k, k), np.uint8))
+        joined = cv2.morphologyEx(moved.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((k, k), np.uint8))
         _, _, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
         boxes = stats[1:, :4]
         return boxes[boxes[:, 3] >= self.config.min_part_share * H]
@@ -171,7 +174,8 @@ class StillPeople:
             right.
         """
         W, H = self.size
-        parts = self.moving_parts(time_s)
+        moved = self.moved(time_s)
+        parts = self._parts(moved)
         if not len(parts):
             return []
         mask = np.full((H, W), cv2.GC_BGD, np.uint8)
@@ -195,7 +199,6 @@ class StillPeople:
         grown = np.zeros((H, W), np.uint8)
         grown[y0:y1, x0:x1] = (crop == cv2.GC_FGD) | (crop == cv2.GC_PR_FGD)
         n, cc, stats, _ = cv2.connectedComponentsWithStats(grown, connectivity=8)
-        moved = self.moved(time_s)
         out: list[tuple[np.ndarray, np.ndarray]] = []
         for j in range(1, n):
             bx, by, bw, bh = stats[j, :4]
