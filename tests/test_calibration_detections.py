@@ -167,14 +167,16 @@ def test_a_person_seen_only_a_few_times_does_not_set_the_scale() -> None:
         ids.append(7)
     head, foot, track = np.vstack(heads), np.vstack(feet), np.array(ids)
     t = np.concatenate([np.arange(60) / 25.0, np.arange(60) / 25.0, [0.0, 1.0, 2.0]])
-    kept = estimate_camera(head, foot, track, (W, H), t, CalibrationConfig(min_person_views=1, max_stature_sd=None))
+    kept = estimate_camera(
+        head, foot, track, (W, H), t, CalibrationConfig(min_person_views=1, max_stature_sd=None, max_stature_ratio=None)
+    )
     est = estimate_camera(head, foot, track, (W, H), t)
     assert est is not None and kept is not None
     assert est.n_people == 2 and kept.n_people == 3
     assert abs(est.height / 2.5 - 1) < 0.05, est.describe()
     assert abs(kept.height / 2.5 - 1) > abs(est.height / 2.5 - 1), kept.describe()
     # kept by its views, it is dropped for its stature, far from any adult's, and the fit made again
-    refit = estimate_camera(head, foot, track, (W, H), t, CalibrationConfig(min_person_views=1))
+    refit = estimate_camera(head, foot, track, (W, H), t, CalibrationConfig(min_person_views=1, max_stature_ratio=None))
     assert refit.n_people == 2 and abs(refit.height / 2.5 - 1) < 0.05, refit.describe()
 
 

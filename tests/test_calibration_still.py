@@ -17,7 +17,8 @@ from counterpart.nodes.calibration.still import StillConfig, StillPeople
 
 def _conversation() -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Simulator tuning seed 35 (a conversation; the camera 2.4 m high): its 75 frames, and each
-    person's crown and ankles' ground point on them, (75, 2, 2) pixels each."""
+    person's crown and ankles' ground point on them, (75, 2, 2) pixels each.
+    """
     from counterpart.sim.stream import open_stream
 
     stream = open_stream("conversation", seed=35, camera="random", frames=75)
@@ -57,7 +58,8 @@ def test_two_people_talking_are_grown_from_their_gestures_to_their_feet() -> Non
 
 def _walk(frames: int = 30) -> list[np.ndarray]:
     """A textured block the shape of a person (30 x 100 px) walking 1 px a frame across a textured
-    floor and wall: all of it moves."""
+    floor and wall: all of it moves.
+    """
     rng = np.random.default_rng(0)
     scene = np.zeros((240, 320, 3), np.uint8)
     scene[:120] = (190, 200, 205)

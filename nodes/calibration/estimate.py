@@ -117,6 +117,13 @@ class CalibrationConfig:
         the cost by their own scatter alone, and on a real view (PETS 2009's) every family went.
         None: keep every family. Not for the families of one square frame (``LineFamilies.square``): found jointly, none is a chance meeting, and with their many
         segments a true family that the people's lean disagrees with gains more than this.
+    max_stature_ratio : float or None, default=1.3
+        When the fitted statures of the people differ by more than this ratio, only the group of
+        people whose statures lie within it of each other and who were seen most (their independent
+        views: observations per ``correlation_s``) is kept, and the camera fitted again. Two adults'
+        outlines seldom differ by more (1.55 and 1.92 m: 1.24); a body cut at the waist or a
+        fragment does, and it pulls the scale of the whole scene towards its own. None: keep
+        everyone.
     max_stature_sd : float or None, default=3.0
         A person whose fitted stature is further than this many prior stds from the prior's centre
         is dropped and the camera fitted again (once; kept when the rest are too few): a fragment of
@@ -196,6 +203,7 @@ class CalibrationConfig:
     propagate_lines: bool = True
     person_lean_std: float | None = 0.03
     lean_min_places: int = 4
+    max_stature_ratio: float | None = 1.3
 
     def with_known_fov(self, fov_deg: float, rel_std: float = KNOWN_FOV_STD) -> CalibrationConfig:
         """These settings for a camera whose horizontal field of view is known (its spec sheet, a
@@ -889,6 +897,31 @@ def _fit_lines(lines: LineFamilies, size: tuple[int, int], config: CalibrationCo
     return LinesCamera(best.x[:3].copy(), np.sqrt(np.abs(np.diag(cov)))[:3], cov[:3, :3].copy())
 
 
+def _consistent_people(log_statures: np.ndarray, views: np.ndarray, ratio: float | None) -> np.ndarray | None:
+    """The people whose fitted statures agree: of the groups whose statures lie within ``ratio`` of
+    each other, the one seen most.
+
+    Parameters
+    ----------
+    log_statures : ndarray of shape (K,)
+        Fitted log statures of the K people, log metres.
+    views : ndarray of shape (K,)
+        Independent views of each (observations per correlation time).
+    ratio : float or None
+        Largest ratio of two statures in a group (``CalibrationConfig.max_stature_ratio``).
+
+    Returns
+    -------
+    ndarray of int or None
+        Indices of the group's people, ascending; None with fewer than two people or no ``ratio``.
+    """
+    if ratio is None or len(log_statures) < 2:
+        return None
+    low = log_statures[:, None]
+    inside = (log_statures[None, :] >= low) & (log_statures[None, :] <= low + np.log(ratio))
+    return np.flatnonzero(inside[int(np.argmax(inside @ views))])
+
+
 def _covariance(res: Any, weights: np.ndarray) -> np.ndarray | None:
     """The Gauss-Newton covariance of a robust fit, each residual counted with its weight.
 
@@ -1186,6 +1219,15 @@ def fit_camera(
             break
         best, lines = fit, (fewer if len(fewer.segments) else None)
     x = best.x
+    group = _consistent_people(x[4 : 4 + nk], np.bincount(k, minlength=nk) / per, config.max_stature_ratio)
+    if group is not None and len(group) < nk:
+        # people whose statures no two adults' differences explain: some are not whole people (a
+        # torso, whose lowest point is its waist, reads as a giant far off or a dwarf nearby), and
+        # the rest of them decide the scale only as a compromise with those
+        keep = np.isin(k, group)
+        refit = fit_camera(head[keep], foot[keep], track[keep], size, time_s[keep], config, lines)
+        if refit is not None:
+            return refit
     off = np.abs(x[4 : 4 + nk] - np.log(config.person_height)) / (config.person_height_std / config.person_height)
     if (
         config.max_stature_sd is not None
