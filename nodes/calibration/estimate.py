@@ -124,6 +124,11 @@ class CalibrationConfig:
         outlines seldom differ by more (1.55 and 1.92 m: 1.24); a body cut at the waist or a
         fragment does, and it pulls the scale of the whole scene towards its own. None: keep
         everyone.
+    nested_share : float or None, default=0.25
+        A person (track id) who stood in one place and lies within a taller one who did is left
+        out (:func:`_nested_tracks`; this share of the taller one's pixel height is the margin): a
+        part of that person (the people detector's box on the upper body, a head and raised arm),
+        whose lowest point is not on the ground. None: keep every person.
     max_stature_sd : float or None, default=3.0
         A person whose fitted stature is further than this many prior stds from the prior's centre
         is dropped and the camera fitted again (once; kept when the rest are too few): a fragment of
@@ -204,6 +209,7 @@ class CalibrationConfig:
     person_lean_std: float | None = 0.03
     lean_min_places: int = 4
     max_stature_ratio: float | None = 1.3
+    nested_share: float | None = 0.25
 
     def with_known_fov(self, fov_deg: float, rel_std: float = KNOWN_FOV_STD) -> CalibrationConfig:
         """These settings for a camera whose horizontal field of view is known (its spec sheet, a
@@ -1095,6 +1101,56 @@ def _inconsistent_tracks(
     return np.array(bad, track.dtype)
 
 
+def _nested_tracks(
+    head: np.ndarray, foot: np.ndarray, track: np.ndarray, ok: np.ndarray, share: float | None
+) -> np.ndarray:
+    """Ids of the tracks that lie within a taller one in the image: parts of that person.
+
+    Of two tracks that each stood in one place (their foot points within ``share`` of their pixel
+    height of their median, in the median), track a lies within track b when, with their median
+    head and foot points, a is shorter than b and, in shares of b's pixel height: a's middle is
+    within ``share`` of b's across, a's top at most ``share`` above b's (a raised hand), and a's
+    bottom at least ``share`` above b's. The people detector's box on a person's upper body and
+    the silhouettes' head and raised arm of a person standing still are such parts; their lowest
+    point is not on the ground. Of people who walk, the median points are nowhere they stood.
+
+    Parameters
+    ----------
+    head, foot : ndarray of shape (N, 2)
+        Image points, pixels.
+    track : ndarray of shape (N,)
+        Person ids.
+    ok : ndarray of shape (N,), bool
+        The observations to look at.
+    share : float or None
+        The share of the taller track's pixel height; None: no track is dropped.
+
+    Returns
+    -------
+    ndarray
+        The ids of the tracks to drop.
+    """
+    ids = np.unique(track[ok])
+    if share is None or len(ids) < 2:
+        return np.zeros(0, track.dtype)
+    points = np.hstack([head, foot])
+    med = np.array([np.median(points[ok & (track == k)], axis=0) for k in ids])
+    x, top, bottom = 0.5 * (med[:, 0] + med[:, 2]), med[:, 1], med[:, 3]
+    # where a person walks, their median points are nowhere they stood
+    moved = np.array([np.median(np.hypot(*(foot[ok & (track == k)] - m[2:]).T)) for k, m in zip(ids, med)])
+    still = moved < share * (bottom - top)
+    reach = share * (bottom - top)[None, :]
+    # [a, b]: a within b
+    within = (
+        (still[:, None] & still[None, :])
+        & ((bottom - top)[:, None] < (bottom - top)[None, :])
+        & (np.abs(x[:, None] - x[None, :]) < reach)
+        & (top[:, None] > top[None, :] - reach)
+        & (bottom[:, None] < bottom[None, :] - reach)
+    )
+    return ids[within.any(axis=1)]
+
+
 def fit_camera(
     head: np.ndarray,
     foot: np.ndarray,
@@ -1143,6 +1199,7 @@ def fit_camera(
     ids, count = np.unique(track[ok], return_counts=True)
     ok &= np.isin(track, ids[count >= config.min_person_views])
     ok &= ~np.isin(track, _inconsistent_tracks(head, foot, track, ok, config.max_track_spread))
+    ok &= ~np.isin(track, _nested_tracks(head, foot, track, ok, config.nested_share))
     head, foot, track = head[ok], foot[ok], track[ok]
     time_s = (np.arange(len(ok)) / 25.0 if time_s is None else np.asarray(time_s, np.float64).reshape(-1))[ok]
     if len(head) < config.min_observations:
