@@ -93,8 +93,9 @@ class CalibrationConfig:
         The least std of a head point, pixels.
     correlation_s : float, default=1.0
         Seconds over which one person's observations are counted as one.
-    min_observations : int, default=20
-        Fewer usable observations give no estimate.
+    min_observations : int, default=15
+        Fewer usable observations give no estimate (three people, each seen ``min_person_views``
+        times: a far view of a few small people gives few whole ones).
     line_noise_px, min_line_noise_deg : float, default=1.5, 0.5
         Std of a scene segment's direction: this many pixels across its length, at least this many
         degrees.
@@ -190,7 +191,7 @@ class CalibrationConfig:
     min_tilt_deg: float = -5.0
     min_pixel_noise: float = 1.0
     correlation_s: float = 1.0
-    min_observations: int = 20
+    min_observations: int = 15
     line_noise_px: float = 1.5
     min_line_noise_deg: float = 0.5
     grid_tilt_deg: tuple[float, ...] = tuple(np.arange(-5.0, 50.1, 5.0).tolist())
