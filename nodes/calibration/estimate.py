@@ -121,7 +121,8 @@ class CalibrationConfig:
     max_stature_ratio : float or None, default=1.3
         When the fitted statures of the people differ by more than this ratio, only the group of
         people whose statures lie within it of each other and who were seen most (their independent
-        views: observations per ``correlation_s``) is kept, and the camera fitted again. Two adults'
+        views: observations within ``correlation_s`` of each other count as one) is kept, and the
+        camera fitted again. Two adults'
         outlines seldom differ by more (1.55 and 1.92 m: 1.24); a body cut at the waist or a
         fragment does, and it pulls the scale of the whole scene towards its own. None: keep
         everyone.
@@ -913,7 +914,7 @@ def _consistent_people(log_statures: np.ndarray, views: np.ndarray, ratio: float
     log_statures : ndarray of shape (K,)
         Fitted log statures of the K people, log metres.
     views : ndarray of shape (K,)
-        Independent views of each (observations per correlation time).
+        Independent views of each (observations within the correlation time counted as one).
     ratio : float or None
         Largest ratio of two statures in a group (``CalibrationConfig.max_stature_ratio``).
 
@@ -1107,13 +1108,14 @@ def _nested_tracks(
 ) -> np.ndarray:
     """Ids of the tracks that lie within a taller one in the image: parts of that person.
 
-    Of two tracks that each stood in one place (their foot points within ``share`` of their pixel
-    height of their median, in the median), track a lies within track b when, with their median
-    head and foot points, a is shorter than b and, in shares of b's pixel height: a's middle is
-    within ``share`` of b's across, a's top at most ``share`` above b's (a raised hand), and a's
-    bottom at least ``share`` above b's. The people detector's box on a person's upper body and
-    the silhouettes' head and raised arm of a person standing still are such parts; their lowest
-    point is not on the ground. Of people who walk, the median points are nowhere they stood.
+    Of two tracks that each stood in one place (the median distance of their foot points from
+    their median one under ``share`` of their pixel height), track a lies within track b when,
+    with their median head and foot points, a is shorter than b and, in shares of b's pixel
+    height: a's middle is within ``share`` of b's across, a's top at most ``share`` above b's (a
+    raised hand), and a's bottom at least ``share`` above b's. The people detector's box on a
+    person's upper body and the silhouettes' head and raised arm of a person standing still are
+    such parts; their lowest point is not on the ground. Of people who walk, the median points
+    are nowhere they stood.
 
     Parameters
     ----------
