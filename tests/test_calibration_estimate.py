@@ -24,6 +24,7 @@ from counterpart.nodes.calibration.lines import (
     scene_lines,
     segment_angles,
 )
+from counterpart.nodes.calibration.observe import PeopleObservations
 from counterpart.nodes.calibration.smooth import CameraSmoother, camera_parameters, credible, statures_plausible
 
 W, H = 320, 240
@@ -651,11 +652,11 @@ def test_a_track_whose_heights_do_not_follow_its_foot_row_is_left_out() -> None:
     assert est is not None and abs(est.height / 2.2 - 1) < 0.05
 
 
-def _silhouette_observations(scenario: str, seed: int):
+def _silhouette_observations(scenario: str, seed: int) -> tuple[PeopleObservations, LineFamilies | None, float]:
     """The people's observations of the silhouettes (no detector) over the first 3 s of a simulated
     scene with a random camera, its scene lines, and the camera's true height.
     """
-    from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames
+    from counterpart.nodes.calibration.observe import SceneFrames
     from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
     from counterpart.sim.stream import open_stream
 
