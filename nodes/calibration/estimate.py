@@ -1137,10 +1137,11 @@ def _nested_tracks(
     if share is None or len(ids) < 2:
         return np.zeros(0, track.dtype)
     points = np.hstack([head, foot])
-    med = np.array([np.median(points[ok & (track == k)], axis=0) for k in ids])
+    each = [ok & (track == k) for k in ids]
+    med = np.array([np.median(points[m], axis=0) for m in each])
     x, top, bottom = 0.5 * (med[:, 0] + med[:, 2]), med[:, 1], med[:, 3]
     # where a person walks, their median points are nowhere they stood
-    moved = np.array([np.median(np.hypot(*(foot[ok & (track == k)] - m[2:]).T)) for k, m in zip(ids, med)])
+    moved = np.array([np.median(np.hypot(*(foot[m] - c[2:]).T)) for m, c in zip(each, med)])
     still = moved < share * (bottom - top)
     reach = share * (bottom - top)[None, :]
     # [a, b]: a within b
@@ -1279,27 +1280,21 @@ def fit_camera(
             break
         best, lines = fit, (fewer if len(fewer.segments) else None)
     x = best.x
-    group = _consistent_people(x[4 : 4 + nk], np.bincount(k, minlength=nk) / per, config.max_stature_ratio)
-    if group is not None and len(group) < nk:
+    off = np.abs(x[4 : 4 + nk] - np.log(config.person_height)) / (config.person_height_std / config.person_height)
+    for chosen in (
         # people whose statures no two adults' differences explain: some are not whole people (a
         # torso, whose lowest point is its waist, reads as a giant far off or a dwarf nearby), and
         # the rest of them decide the scale only as a compromise with those
-        keep = np.isin(k, group)
-        refit = fit_camera(head[keep], foot[keep], track[keep], size, time_s[keep], config, lines)
-        if refit is not None:
-            return refit
-    off = np.abs(x[4 : 4 + nk] - np.log(config.person_height)) / (config.person_height_std / config.person_height)
-    if (
-        config.max_stature_sd is not None
-        and (off > config.max_stature_sd).any()
-        and (off <= config.max_stature_sd).any()
-    ):
+        _consistent_people(x[4 : 4 + nk], np.bincount(k, minlength=nk) / per, config.max_stature_ratio),
         # a "person" of a stature far from any adult's is a fragment of one (a torso, a lower leg)
-        # or a ghost, whose lowest point need not be on the ground: fit again without it
-        keep = np.isin(k, np.flatnonzero(off <= config.max_stature_sd))
-        refit = fit_camera(head[keep], foot[keep], track[keep], size, time_s[keep], config, lines)
-        if refit is not None:
-            return refit
+        # or a ghost, whose lowest point need not be on the ground
+        None if config.max_stature_sd is None else np.flatnonzero(off <= config.max_stature_sd),
+    ):
+        if chosen is not None and 0 < len(chosen) < nk:
+            keep = np.isin(k, chosen)
+            refit = fit_camera(head[keep], foot[keep], track[keep], size, time_s[keep], config, lines)
+            if refit is not None:
+                return refit
     n = best.jac.shape[1]
     r = best.fun[: 2 * len(head)].reshape(-1, 2) * np.sqrt(per[k])[:, None]  # per observation, in its own std
     inlier = np.hypot(r[:, 0], r[:, 1]) < 3.0
