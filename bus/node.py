@@ -130,12 +130,31 @@ def stats_topic(node_name: str) -> str:
 
 
 class _PortStats:
-    """Counters of one port over the current stats period."""
+    """Counters of one port over the run and over the current stats period."""
 
     def __init__(self) -> None:
         self.count = 0
         self.period_count = 0
         self.latencies: list[float] = []
+        self._first = self._last = 0.0
+
+    def add(self) -> None:
+        """Count one message, now."""
+        now = time.monotonic()
+        if not self.count:
+            self._first = now
+        self._last = now
+        self.count += 1
+        self.period_count += 1
+
+    def run_rate(self) -> float:
+        """Messages per second from the run's first message to its last (0 before the second).
+
+        A run's last statistics give this rate: a window's rate understates a stream that ended
+        early in the window, and over-states nothing the run did.
+        """
+        span = self._last - self._first
+        return (self.count - 1) / span if self.count > 1 and span > 0 else 0.0
 
     def snapshot(self, period: float) -> tuple[float, float]:
         rate = self.period_count / period if period > 0 else 0.0
@@ -262,7 +281,7 @@ class Node:
         self._last_stats = time.monotonic()
         #: the inputs' and outputs' stats and (mean, max) processing ms of the last stats window in
         #: which the node did anything (:meth:`_maybe_stats`)
-        self._busy_window: tuple[list[TopicStats], list[TopicStats], tuple[float, float]] | None = None
+        self._busy_window: tuple[list[TopicStats], tuple[float, float]] | None = None
         self._stats_seq = 0
         self._ppid = os.getppid()
         self._running = False  # set by the first message published or handled
@@ -398,9 +417,7 @@ class Node:
         self.figures[name] = self.figures.get(name, 0) + n
 
     def _count_out(self, port: str, seq: Any) -> None:
-        st = self._out_stats[port]
-        st.count += 1
-        st.period_count += 1
+        self._out_stats[port].add()
         if not self._running:
             self._mark_running()
         if type(seq) is int and seq > self._last_seq:
@@ -511,14 +528,16 @@ class Node:
         proc_ms = (float(np.mean(proc)), float(np.max(proc))) if proc else (0.0, 0.0)
         idle = not proc and all(t.rate_hz == 0 for t in ins + outs)
         if force and idle and self._busy_window is not None:
-            # the last word, after an idle spell (the stream ended just after the last periodic
-            # stats), keeps the last busy window's rates, latencies and processing times: a run's
-            # summary shows what the node did, not its idle last second (the counts are the run's)
-            b_ins, b_outs, proc_ms = self._busy_window
-            ins = [dataclasses.replace(t, rate_hz=b.rate_hz, latency_ms=b.latency_ms) for t, b in zip(ins, b_ins)]
-            outs = [dataclasses.replace(t, rate_hz=b.rate_hz) for t, b in zip(outs, b_outs)]
+            # the last word, after an idle spell (the stream ended before the last window), keeps
+            # the last busy window's latencies and processing times: a run's summary shows what
+            # the node did, not its idle last second
+            b_ins, proc_ms = self._busy_window
+            ins = [dataclasses.replace(t, latency_ms=b.latency_ms) for t, b in zip(ins, b_ins)]
         elif not idle:
-            self._busy_window = (ins, outs, proc_ms)
+            self._busy_window = (ins, proc_ms)
+        if force:  # and its rates are the run's, from each port's first message to its last
+            ins = [dataclasses.replace(t, rate_hz=self._in_stats[t.port].run_rate()) for t in ins]
+            outs = [dataclasses.replace(t, rate_hz=self._out_stats[t.port].run_rate()) for t in outs]
         msg = NodeStats(
             stamp=time.monotonic_ns(),
             seq=self._stats_seq,
@@ -590,7 +609,7 @@ class Node:
                         self._on_sets(self._sync.end(port))
                     continue
                 st = self._in_stats[port]
-                st.period_count += 1
+                st.add()
                 stamp = getattr(msg, "stamp", 0)
                 if stamp:
                     st.latencies.append((time.monotonic_ns() - stamp) / 1e6)

@@ -15,7 +15,9 @@ N = "tests.graph_nodes:"
 def test_the_last_statistics_after_an_idle_spell_keep_the_last_busy_ones(tmp_path: Path) -> None:
     """The source sends for a second, then waits 2.5 s before its end of stream: the sink's last
     statistics (written at its end, over a window in which nothing came) still give its rate and
-    its processing time per message, as the summary's table shows them, and the run's counts.
+    its processing time per message, as the summary's table shows them, and the run's counts. The
+    rate is the run's: a window that held only the stream's last message and then a second of quiet
+    once gave 1 Hz here.
     """
     home = Path(tempfile.mkdtemp(prefix="cps", dir="/tmp"))
     doc = {
