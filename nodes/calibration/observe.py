@@ -44,7 +44,7 @@ from counterpart.body.people_detector import PeopleDetector
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
 from .lines import LineFamilies, scene_lines
 from .still import StillPeople
-from .upright import upright_parts
+from .upright import head_under_spike, upright_parts
 
 #: the head's and the feet's rows in a box of ``PeopleDetector.detect``, as shares of its height
 #: from its top: where the top and the bottom of a person's outline lie in it (measured on the
@@ -233,6 +233,11 @@ class PeopleObservations:
             ctrl = p.ctrl if p.ctrl is not None and np.size(p.ctrl) else None
             ref = p.ref_point if p.ref_point is not None and np.size(p.ref_point) == 2 else None
             h, f = head_foot(p.bbox, ctrl, ref)
+            if with_labels:
+                x, y, w, hh = (int(v) for v in p.bbox)
+                spiked = head_under_spike(labels[y : y + hh, x : x + w] == int(p.id) + 1)
+                if spiked is not None:
+                    h = spiked + [x, y]
             self._upright.append(tuple(float(v) for v in p.bbox))
             self._rows.append((h[0], h[1], f[0], f[1], int(p.id), float(time_s)))
             n += 1
