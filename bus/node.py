@@ -279,8 +279,8 @@ class Node:
         self._out_stats: dict[str, _PortStats] = {}
         self._proc_ms: list[float] = []
         self._last_stats = time.monotonic()
-        #: the inputs' and outputs' stats and (mean, max) processing ms of the last stats window in
-        #: which the node did anything (:meth:`_maybe_stats`)
+        #: the inputs' stats and (mean, max) processing ms of the last stats window in which the
+        #: node did anything (:meth:`_maybe_stats`)
         self._busy_window: tuple[list[TopicStats], tuple[float, float]] | None = None
         self._stats_seq = 0
         self._ppid = os.getppid()

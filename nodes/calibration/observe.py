@@ -4,7 +4,9 @@ bench share.
 
 A person region (the silhouette node's ``PersonShape``, or ``counterpart.nodes.silhouette.regions.Person``:
 anything with ``id``, ``bbox``, ``ctrl``, ``ref_point``, ``merged``) gives one observation when it
-can be an upright person (``estimate.usable``). A region that cannot because it is too wide (two
+can be an upright person (``estimate.usable``); with the frame's label image, its head point is
+the top of the head under a hand held up or a line of the room joined over it
+(``upright.head_under_spike``). A region that cannot because it is too wide (two
 people joined by an arm, a shadow or a faint line of the room; a person with an arm held out) gives
 the standing bodies in its pixels when the frame's label image is given (``upright.upright_parts``),
 each under an id of its own. A region shared between two tracks (``merged``) gives none: its pixels

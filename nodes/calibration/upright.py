@@ -10,6 +10,10 @@ tall as a share of the region) keeps the first and removes the second (Soille, "
 Image Analysis", 2003, ch. 4: openings by line segments keep the structures the segment fits in);
 the connected parts left that are tall and narrow are the standing bodies.
 
+The same holds upside down at the head (:func:`head_under_spike`): a hand held up over it, or a line
+of the room joined to it, is thin where the head is wide, and an opening with a horizontal line
+finds the head's top under it.
+
 Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h).
 """
 
