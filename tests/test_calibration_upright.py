@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 
 from counterpart.nodes.calibration.observe import PeopleObservations
-from counterpart.nodes.calibration.upright import head_under_spike, upright_parts
+from counterpart.nodes.calibration.upright import upright_parts
 
 W, H = 320, 240
 
@@ -70,30 +70,3 @@ def test_a_joined_region_counts_only_with_the_label_image() -> None:
     cv2.line(labels, (40, 160), (110, 150), 1, 3)
     whole = (0, 0, W, H)
     assert len(upright_parts(labels, 1, whole, (W, H))) == 2
-
-
-def test_a_hand_held_up_or_a_line_of_the_room_over_the_head_leaves_the_head_where_it_is() -> None:
-    """A person 150 pixels tall, with a 5-pixel arm raised 30 pixels over their head, or with a
-    2-pixel line of the room from their head up to a poster's corner: the head point is the head's
-    top, as without either, not the top of the region.
-    """
-    foot, height = (160, 200), 150
-    top = foot[1] - height + 1  # the head's top row
-    bare = np.zeros((H, W), np.uint8)
-    _body(bare, *foot, height, 1)
-    raised = bare.copy()
-    cv2.rectangle(raised, (foot[0] + 2, top - 30), (foot[0] + 6, top + 25), 1, -1)
-    line = bare.copy()
-    cv2.line(line, (foot[0] - 5, top + 5), (foot[0] - 40, top - 25), 1, 2)
-    for labels, moved in ((bare, False), (raised, True), (line, True)):
-        ys, xs = np.nonzero(labels)
-        box = (int(xs.min()), int(ys.min()), int(np.ptp(xs)) + 1, int(np.ptp(ys)) + 1)
-        crop = labels[box[1] : box[1] + box[3], box[0] : box[0] + box[2]] == 1
-        head = head_under_spike(crop)
-        assert (head is not None) == moved
-        region = SimpleNamespace(id=0, bbox=box, ctrl=None, ref_point=None, merged=False)
-        obs = PeopleObservations(W, H)
-        assert obs.add([region], 0.0, labels) == 1
-        seen, _, _, _ = obs.arrays()
-        # the top of the head, within the crown's few rows narrower than the opening's line
-        assert top - 0.5 <= seen[0, 1] <= top + 2.5 and abs(seen[0, 0] - foot[0]) <= 3, (moved, seen)

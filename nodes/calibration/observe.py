@@ -4,9 +4,7 @@ bench share.
 
 A person region (the silhouette node's ``PersonShape``, or ``counterpart.nodes.silhouette.regions.Person``:
 anything with ``id``, ``bbox``, ``ctrl``, ``ref_point``, ``merged``) gives one observation when it
-can be an upright person (``estimate.usable``); with the frame's label image, its head point is
-the top of the head under a hand held up or a line of the room joined over it
-(``upright.head_under_spike``). A region that cannot because it is too wide (two
+can be an upright person (``estimate.usable``). A region that cannot because it is too wide (two
 people joined by an arm, a shadow or a faint line of the room; a person with an arm held out) gives
 the standing bodies in its pixels when the frame's label image is given (``upright.upright_parts``),
 each under an id of its own. A region shared between two tracks (``merged``) gives none: its pixels
@@ -46,7 +44,7 @@ from counterpart.body.people_detector import PeopleDetector
 from .estimate import CalibrationConfig, CameraEstimate, estimate_camera, head_foot, usable
 from .lines import LineFamilies, scene_lines
 from .still import StillPeople
-from .upright import head_under_spike, upright_parts
+from .upright import upright_parts
 
 #: the head's and the feet's rows in a box of ``PeopleDetector.detect``, as shares of its height
 #: from its top: where the top and the bottom of a person's outline lie in it (measured on the
@@ -235,11 +233,6 @@ class PeopleObservations:
             ctrl = p.ctrl if p.ctrl is not None and np.size(p.ctrl) else None
             ref = p.ref_point if p.ref_point is not None and np.size(p.ref_point) == 2 else None
             h, f = head_foot(p.bbox, ctrl, ref)
-            if with_labels:
-                x, y, w, hh = (int(v) for v in p.bbox)
-                spiked = head_under_spike(labels[y : y + hh, x : x + w] == int(p.id) + 1)
-                if spiked is not None:
-                    h = spiked + [x, y]
             self._upright.append(tuple(float(v) for v in p.bbox))
             self._rows.append((h[0], h[1], f[0], f[1], int(p.id), float(time_s)))
             n += 1

@@ -10,10 +10,6 @@ tall as a share of the region) keeps the first and removes the second (Soille, "
 Image Analysis", 2003, ch. 4: openings by line segments keep the structures the segment fits in);
 the connected parts left that are tall and narrow are the standing bodies.
 
-The same holds upside down at the head (:func:`head_under_spike`): a hand held up over it, or a line
-of the room joined to it, is thin where the head is wide, and an opening with a horizontal line
-finds the head's top under it.
-
 Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h).
 """
 
@@ -33,13 +29,6 @@ OPEN_SHARE = 0.08
 MIN_PART_SHARE = 0.6
 #: share of a part's height, at its top and bottom, whose pixels give the head's and feet's x
 END_SHARE = 0.05
-#: the horizontal line of the opening that finds a head under something thin, as a share of the
-#: region's height: wider than an arm held up or a line of the room joined to the outline is thick
-#: (about 5-6% of a person's height), narrower than a head is wide (about 8-11%)
-SPIKE_SHARE = 0.065
-#: regions shorter than this (pixels) are not looked at for a head under something thin: the
-#: opening's line would be under 3 pixels, no narrower than their heads
-SPIKE_MIN_HEIGHT = 45
 
 
 def upright_parts(
@@ -80,56 +69,13 @@ def upright_parts(
         px, py, pw, ph = stats[j, :4]
         if ph < MIN_PART_SHARE * tallest or not usable((x + px, y + py, pw, ph), *size):
             continue
-        part = cc == j
-        ys, xs = np.nonzero(part)
+        ys, xs = np.nonzero(cc == j)
         band = max(1, int(round(END_SHARE * ph)))
         top, bottom = ys.min(), ys.max()
-        head = head_under_spike(part)
-        if head is None:
-            head = np.array([xs[ys < top + band].mean(), top - 0.5])
-        head = head + [x, y]
+        head = np.array([xs[ys < top + band].mean() + x, top + y - 0.5])
         foot = np.array([xs[ys > bottom - band].mean() + x, bottom + y + 0.5])
         out.append((head, foot))
     return sorted(out, key=lambda hf: hf[1][0])
 
 
-def head_under_spike(mask: np.ndarray) -> np.ndarray | None:
-    """The top of a person's head where something thin rises above it in their pixels.
-
-    A hand held up over the head, or a line of the room (a poster's edge, a wall's corner) that the
-    silhouette joined to the head, tops the region, and a head point at the region's top makes the
-    person too tall. An opening with a horizontal line :data:`SPIKE_SHARE` of the region's height
-    wide (wider than an arm, narrower than a head; Soille 2003, ch. 4, as :func:`upright_parts`)
-    removes what is thin and keeps the head. Only where what it removes above the head is taller
-    than the line is wide is the head moved: on a bare head it takes the crown's top rows, and the
-    head stays where it was.
-
-    Parameters
-    ----------
-    mask : ndarray of shape (H, W), bool
-        The person's pixels, in the region's box.
-
-    Returns
-    -------
-    ndarray of shape (2,) or None
-        The head point (x, y) in the mask's pixels, at the upper edge of its top row, the mean x of
-        its top rows; None where nothing thin rises above the head, or the region is shorter than
-        :data:`SPIKE_MIN_HEIGHT`.
-    """
-    rows = np.flatnonzero(mask.any(axis=1))
-    if len(rows) == 0:
-        return None
-    top, h = rows[0], rows[-1] - rows[0] + 1
-    if h < SPIKE_MIN_HEIGHT:
-        return None
-    k = int(round(SPIKE_SHARE * h))
-    opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((1, k), np.uint8))
-    kept = np.flatnonzero(opened.any(axis=1))
-    if len(kept) == 0 or kept[0] - top <= k or kept[0] - top > h // 2:
-        return None
-    band = max(1, int(round(END_SHARE * h)))
-    ys, xs = np.nonzero(opened[kept[0] : kept[0] + band])
-    return np.array([xs.mean(), kept[0] - 0.5])
-
-
-__all__ = ["head_under_spike", "upright_parts"]
+__all__ = ["upright_parts"]
