@@ -53,8 +53,8 @@ statures disagree or who lie within another (``CalibrationConfig.max_stature_rat
 seeds 4000-4049 were first run on the final one. A later rule that found the head under a hand
 held up (an opening with a horizontal line) was tried on 0-49, 1000-1049 and 2000-2049 and then
 run on 3000-5049; it was not kept (on one UT clip, the three views it moved let a fragment count
-as a person, and the estimate went to a bound). Seeds 5000-5049 chose nothing: they are kept as fresh seeds, to check a change chosen
-on the others, never to choose one.
+as a person, and the estimate went to a bound). Seeds 5000-5049 chose nothing: they are kept as
+fresh seeds, to check a change chosen on the others, never to choose one.
 
 Real clips (``real_figures``): UT-Interaction set 1 (``../shared/data/ut_interaction/set1``), one
 static elevated camera; each clip is a crop of its frames around the people, so its principal point
