@@ -820,3 +820,30 @@ def test_a_part_of_a_person_standing_still_is_not_taken_for_a_person() -> None:
     # and nothing is dropped
     step = np.column_stack([46.0 * t, np.zeros(len(t))])
     assert _nested_tracks(head + step, foot + step, ids, np.ones(len(ids), bool), 0.25).tolist() == []
+
+
+def _two_valleys(x: np.ndarray) -> np.ndarray:
+    # over (a, tilt): a valley inside the tilt's bounds (near 0.29 rad, cost 0.07) and a lower one
+    # on its -5 degree bound (cost 0.005), a ridge between them; ``a`` is pulled to 0
+    a, t = x[..., 0], x[..., 1]
+    return np.stack([20.0 * (t - 0.3) * (t + 0.1), t + np.radians(5.0), a], -1)
+
+
+@pytest.mark.parametrize("n_starts", [1, 2])
+def test_a_fit_that_ends_on_the_tilt_bound_gives_way_to_one_inside(n_starts: int) -> None:
+    # UT-Interaction clip 25_5_4: with a lower-body fragment seen five times among three people,
+    # the cheapest fit put the camera 0.30 m up looking up at the -5 degree bound, every person
+    # then of a plausible stature; which start the solver refined first decided between that
+    # and the camera the lines and the people agree on (1.46 m, 7.6 degrees down)
+    from counterpart.nodes.calibration.estimate import _refine_best
+
+    config = CalibrationConfig(n_starts=n_starts)
+    low = np.radians(config.min_tilt_deg)
+    to_bound = _refine_best(_two_valleys, [(0.0, np.array([0.5, -0.05]))], (), config)
+    inside = _refine_best(_two_valleys, [(0.0, np.array([0.5, 0.2]))], (), config)
+    assert abs(to_bound.x[1] - low) < 1e-6 and abs(inside.x[1] - 0.29) < 0.02
+    assert to_bound.cost < inside.cost
+    # the start that runs onto the bound is the cheaper one, refined first; with one start
+    # refined, the next is tried only because that fit ended on the bound
+    best = _refine_best(_two_valleys, [(0.0, np.array([0.5, -0.05])), (1.0, np.array([0.5, 0.2]))], (), config)
+    np.testing.assert_allclose(best.x, inside.x, atol=1e-6)

@@ -103,7 +103,8 @@ class CalibrationConfig:
         Start values tried, degrees (the best ``n_starts`` are refined); default tilts -5 to 50 in
         steps of 5, fields of view 30 to 95.
     n_starts : int, default=3
-        Refined starts.
+        Refined starts (up to twice as many where every fit ends on a bound of the tilt:
+        :func:`_refine_best`).
     manhattan_std_deg : float or None, default=3.0
         Std of the prior that two horizontal line families run at right angles on the ground, degrees
         (rooms, streets and buildings are mostly laid out square: Coughlan & Yuille's "Manhattan
@@ -729,6 +730,13 @@ def _solve(people: _People, config: CalibrationConfig, lines: LineFamilies | Non
 def _refine_best(fun: Any, starts: list[tuple[float, np.ndarray]], args: tuple, config: CalibrationConfig) -> Any:
     """The best least-squares fit (soft L1) from the ``config.n_starts`` cheapest starts.
 
+    A fit that ends on a bound of the tilt is one the rest of the evidence contradicts, not a better
+    one: a fragment of a person (a lower body seen five times) can cost less as a whole person seen
+    by a camera at the ground looking up than as what it is under the camera that the lines and the
+    other people agree on. Of the refined fits, the cheapest inside the bounds is taken; where every
+    one ended on a bound, up to ``config.n_starts`` more starts are refined, and only if all of
+    them end there too is the cheapest of all taken.
+
     Parameters
     ----------
     fun : callable
@@ -743,19 +751,27 @@ def _refine_best(fun: Any, starts: list[tuple[float, np.ndarray]], args: tuple, 
     Returns
     -------
     scipy.optimize.OptimizeResult
-        The refined fit of lowest cost.
+        The refined fit of lowest cost inside the tilt's bounds, else of lowest cost.
     """
     starts.sort(key=lambda s: s[0])
-    best = None
-    for _, x0 in starts[: config.n_starts]:
+    fits, inside = [], []
+    for i, (_, x0) in enumerate(starts[: 2 * config.n_starts]):
+        if i >= config.n_starts and inside:
+            break
         lo = np.full(len(x0), -np.inf)
         hi = np.full(len(x0), np.inf)
         lo[1], hi[1] = np.radians(config.min_tilt_deg), np.radians(config.max_tilt_deg)
         x0[1] = np.clip(x0[1], lo[1] + 1e-6, hi[1] - 1e-6)
         res = _robust_fit(fun, x0, args, (lo, hi))
-        if best is None or res.cost < best.cost:
-            best = res
-    return best
+        fits.append(res)
+        if not _on_tilt_bound(res.x, config):
+            inside.append(res)
+    return min(inside or fits, key=lambda r: r.cost)
+
+
+def _on_tilt_bound(x: np.ndarray, config: CalibrationConfig) -> bool:
+    """Whether the tilt ``x[1]`` (radians) lies within 1e-3 of either of ``config``'s bounds."""
+    return not np.radians(config.min_tilt_deg) + 1e-3 < x[1] < np.radians(config.max_tilt_deg) - 1e-3
 
 
 def _robust_fit(fun: Any, x0: np.ndarray, args: tuple = (), bounds: tuple = (-np.inf, np.inf)) -> Any:
@@ -1276,7 +1292,7 @@ def fit_camera(
         cost, fit, fewer = min(fits, key=lambda v: v[0])
         # a fit that ends on the tilt's bound is one the rest contradicts (the people's lean taken
         # for a camera looking up), not a better one
-        if best.cost - cost <= config.family_outlier_cost or fit.x[1] <= np.radians(config.min_tilt_deg) + 1e-3:
+        if best.cost - cost <= config.family_outlier_cost or _on_tilt_bound(fit.x, config):
             break
         best, lines = fit, (fewer if len(fewer.segments) else None)
     x = best.x
