@@ -11,7 +11,8 @@ import numpy as np
 
 from counterpart.body.camera import Camera, camera_to_info
 from counterpart.bus import Input, Node, Output, Param
-from counterpart.messages import CameraInfo, Control, Partner, Pose3D
+from counterpart.messages import CameraInfo, Control, Partner, Pose3D, SocialSignals
+from counterpart.messages.labeller import PersonSignals
 from counterpart.messages.tracker import TrackedBody
 from tests.responder_fixtures import planted_pair
 
@@ -26,14 +27,20 @@ def bearing_camera(joints: np.ndarray, bearing_deg: float) -> Camera:
 
 
 class PoseSource(Node):
-    """Publishes person A of a planted pair as Pose3D, ``frames`` frames; before frame
+    """Publishes person A of a planted pair as Pose3D, ``frames`` frames at 25 fps (or the same
+    seconds at ``fps``), and, from ``nod_s``, A's nod as SocialSignals; before frame
     ``control_at`` it publishes a Control (angry, strength 1, listener model when ``switch``). With
     each pose it publishes a camera 4 m from person A at ``bearing_deg`` round them (0: from +Z),
     for frames from seq 0 (a source's ``generate`` does not serve late subscribers their latched
     message, as a calibration node's loop does: sent on every frame, it reaches them).
     """
 
-    outputs = {"pose": Output(Pose3D), "control": Output(Control), "camera_info": Output(CameraInfo, latched=True)}
+    outputs = {
+        "pose": Output(Pose3D),
+        "control": Output(Control),
+        "camera_info": Output(CameraInfo, latched=True),
+        "signals": Output(SocialSignals),
+    }
     params = {
         "frames": Param(int, 60, "frames", min=1),
         "control_at": Param(int, 30, "frame of the control", min=0),
@@ -41,12 +48,15 @@ class PoseSource(Node):
         "gap_at": Param(int, -1, "first frame without the person (-1: none)"),
         "gap": Param(int, 0, "frames without the person from gap_at", min=0),
         "bearing_deg": Param(float, 0.0, "the camera's bearing round person A, degrees"),
+        "fps": Param(float, 0.0, "the pair resampled to this rate, said in each pose (0: its own 25, unsaid)", min=0),
+        "nod_s": Param(float, -1.0, "A nods for half a second from this second on (signals before each pose)"),
     }
 
     def generate(self) -> None:
         tr = planted_pair(7, T=self.p["frames"])
+        tr = tr.resample(self.p["fps"]) if self.p["fps"] > 0 else tr
         camera = bearing_camera(tr.a[0], self.p["bearing_deg"])
-        for t in range(self.p["frames"]):
+        for t in range(len(tr.a)):
             if self.stopping:
                 return
             if t == self.p["control_at"]:
@@ -66,6 +76,10 @@ class PoseSource(Node):
                 )
                 time.sleep(0.5)
             gone = 0 <= t - self.p["gap_at"] < self.p["gap"]
+            if self.p["nod_s"] >= 0:
+                nod = 0.0 <= t / (self.p["fps"] or tr.fps) - self.p["nod_s"] < 0.5
+                signals = [PersonSignals(id=1, names=["nod"], scores=np.float32([nod]), labels=np.int8([nod]))]
+                self.publish("signals", SocialSignals(stamp=time.monotonic_ns(), seq=t, people=signals))
             self.publish("camera_info", camera_to_info(camera, time.monotonic_ns()))
             self.publish(
                 "pose",
@@ -73,6 +87,7 @@ class PoseSource(Node):
                     stamp=time.monotonic_ns(),
                     seq=t,
                     people=[] if gone else [TrackedBody(id=1, side="left", joints=tr.a[t])],
+                    fps=self.p["fps"],
                 ),
             )
             time.sleep(0.005)

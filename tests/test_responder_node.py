@@ -157,3 +157,38 @@ def test_inputs_follow_the_use_params(tmp_path: Path) -> None:
     )
     with pytest.raises(LaunchError, match="inputs.pose"):
         check(load(f))
+
+
+def test_the_model_keeps_its_own_frame_rate_whatever_the_cameras(tmp_path: Path, models_dir: Path) -> None:
+    # A nods at 1 s, seen at the model's 25 fps and at 50 fps: the listener answers 0.4 s later
+    # (offset_s) for 1 s (response_s) at both (stepped once per input frame, 50 fps would halve both)
+    nodes: dict[str, dict] = {}
+    for name, fps in (("at25", 0.0), ("at50", 50.0)):
+        topics = {port: f"{name}/{port}" for port in ("pose", "control", "signals", "partner")}
+        nodes[f"{name}_source"] = {
+            "run": "tests.responder_nodes:PoseSource",
+            "params": {"frames": 75, "control_at": 1000, "fps": fps, "nod_s": 1.0},
+            "remap": {port: t for port, t in topics.items() if port != "partner"}
+            | {"camera_info": f"{name}/camera_info"},
+        }
+        nodes[name] = {
+            "run": "counterpart.nodes.responder",
+            "params": {"model": "listener", "use_signals": True},
+            "remap": topics,
+        }
+        nodes[f"{name}_sink"] = {
+            "run": "tests.responder_nodes:PartnerSink",
+            "params": {"path": str(tmp_path / f"{name}.jsonl")},
+            "remap": {"partner": topics["partner"]},
+        }
+    g = write_launch(tmp_path / "g.yaml", {"policy": "reliable", "nodes": nodes})
+    code, out = run_launch(g, timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
+    assert code == 0, out
+    for name, fps in (("at25", 25.0), ("at50", 50.0)):
+        rows = read_jsonl(tmp_path / f"{name}.jsonl")
+        nodding = [r["seq"] / fps for r in rows if r["behaviour"] == "nod"]
+        assert len(rows) == round(3 * fps) - (fps == 50) and nodding, (name, [r["behaviour"] for r in rows])
+        # within a frame of the model's (it reads the signals on its own frames) and one of the input's
+        # (the signals and the poses travel on separate sockets)
+        late = 1 / 25 + 1 / fps + 1e-6
+        assert -1e-6 <= nodding[0] - 1.4 <= late and -1e-6 <= nodding[-1] + 1 / fps - 2.4 <= late, (name, nodding)

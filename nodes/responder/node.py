@@ -37,6 +37,7 @@ from counterpart.messages import (
 )
 
 from .emotion import StyleFilter
+from .model_clock import AtModelRate, ModelClock
 from .reach import ReachConfig, reach
 from .staging import BONES, Stage, StageConfig, observed_silhouette
 
@@ -221,6 +222,7 @@ class Responder(Node):
         self._unseen: set[str] = set()  # styles the gpdm model never saw, already reported
         self.cameras = CameraSchedule()  # the graph's cameras from camera_info, each from its seq on
         self._view: tuple[int, int] | None = None  # the frame size of the newest camera_info
+        self._rate: AtModelRate | None = None  # the model stepped on its own frames; None: afresh on the next
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -253,6 +255,7 @@ class Responder(Node):
             self.model = msg.model
             self.models[msg.model].reset()
             self._reset_stage()
+            self._rate = None
         if msg.speaker is not None:
             self.speaker = msg.speaker
         if msg.interest is not None:
@@ -323,6 +326,16 @@ class Responder(Node):
             "box": box,
         }
 
+    def _at_model_rate(self, m: Any, step: Any, observed: np.ndarray | None, driver: Any) -> Any:
+        """The model ``m``'s output for this input frame, ``step`` (observed joints in, partner out)
+        run on the model's own frames since the last input (:class:`AtModelRate`).
+        """
+        if self._rate is None:
+            self._rate = AtModelRate(
+                ModelClock(float(getattr(m, "fps_", 0.0) or getattr(m, "fps", 0.0) or DEFAULT_FPS))
+            )
+        return self._rate(step, observed, driver.seq / float(getattr(driver, "fps", 0.0) or DEFAULT_FPS))
+
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
         """The model's partner moved to where a partner stands beside the observed ``body`` (``stage``)
         and its hand onto the observed hand it comes near or that is held out (``reach_m``), its arms
@@ -346,9 +359,9 @@ class Responder(Node):
             self.tally("hand_reached")
         return joints
 
-    def _avatar(self, texture: Any, listener: Any) -> dict[str, Any]:
+    def _avatar(self, texture: Any, listener: Any, driver: Any) -> dict[str, Any]:
         """The video-texture avatar's Partner fields, driven by the listener rules
-        (:func:`counterpart.nodes.responder.avatar_driver.avatar_partner`).
+        (:func:`counterpart.nodes.responder.avatar_driver.avatar_partner`) on the listener's frames.
         """
         from .avatar_driver import avatar_partner
         from .models import default_model_path
@@ -362,15 +375,16 @@ class Responder(Node):
             if self.p["model"] == "video-texture" and self.p["model_file"] != "default"
             else default_model_path("video-texture")
         )
-        fields = avatar_partner(
-            texture,
-            listener,
-            heard,
-            None if body is None else body.joints,
-            self.speaker,
-            self.interest,
-            os.path.abspath(file),
-        )  # the renderer may run from another folder
+        fields = dict(
+            self._at_model_rate(
+                listener,
+                lambda x: avatar_partner(
+                    texture, listener, heard, x, self.speaker, self.interest, os.path.abspath(file)
+                ),  # the renderer may run from another folder
+                None if body is None else body.joints,
+                driver,
+            )
+        )  # a copy: the model's output may be held for the next frame
         if body is not None:  # the avatar stands where a partner stands, as the listener's body does
             fields["joints"] = self._staged(body, fields["joints"], self.latest["pose"])
         return dict(fields, observed_id=-1 if body is None else body.id)
@@ -463,10 +477,11 @@ class Responder(Node):
                 # another person than the one answered so far: the model's state belongs to that one
                 m.reset()
                 self._reset_stage()
+                self._rate = None
                 self.tally("observed_switches")
             if self.model == "gpdm":  # the style is the model's own input (Taubert et al.), not a filter
                 self._gpdm_style(m)
-            joints = self._staged(body, m.step(body.joints), driver)
+            joints = self._staged(body, self._at_model_rate(m, m.step, body.joints, driver), driver)
             if self.model == "dual-hmm":
                 joints = self.style(joints, self.emotion, self.strength)
             out.update(joints=joints, observed_id=body.id, behaviour="respond", confidence=float(np.max(m.posterior_)))
@@ -478,7 +493,9 @@ class Responder(Node):
             speaking = {}
             if person is not None and self.speaker == "person":
                 speaking = {n: bool(v == 1) for n, v in zip(person.names, np.asarray(person.labels))}
-            joints = m.step(speaking, None if body is None else body.joints)
+            joints = self._at_model_rate(
+                m, lambda x: m.step(speaking, x), None if body is None else body.joints, driver
+            )
             if body is not None and np.shape(joints) == (14, 3):
                 joints = self._staged(body, joints, self.latest["pose"])
             out.update(
@@ -491,7 +508,7 @@ class Responder(Node):
             lm = self._model("listener")
             if lm is None:
                 return nobody()
-            out.update(self._avatar(m, lm))
+            out.update(self._avatar(m, lm, driver))
         else:  # joint-shape
             shape = self._pick(list(driver.people))
             if shape is None or shape.height <= 0:
