@@ -86,6 +86,7 @@ class Proc:
     restarts: int = 0
     next_start: float | None = 0.0
     exit_code: int | None = None
+    stopped: bool = False  # ended by the launcher's stop, not by itself
     history: list[int] = field(default_factory=list)
     running_file: Path | None = None
 
@@ -204,6 +205,7 @@ class Launcher:
         p.started = time.monotonic()
         p.next_start = None
         p.exit_code = None
+        p.stopped = False
         log.info("started %s (pid %d)", p.name, p.popen.pid)
 
     def _signal_all(self, sig: int) -> None:
@@ -221,7 +223,10 @@ class Launcher:
         """SIGINT, then SIGTERM, then SIGKILL to every process group; returns when all are reaped,
         having logged how each node still running ended.
         """
-        stopped = {p.name for p in self._alive()}
+        alive = self._alive()
+        for p in alive:
+            p.stopped = True
+        stopped = {p.name for p in alive}
         for sig, grace in ((signal.SIGINT, self._int_grace), (signal.SIGTERM, TERM_GRACE_S), (signal.SIGKILL, 1.0)):
             if not self._alive():
                 break
@@ -288,7 +293,7 @@ class Launcher:
         return {
             p.name: read_failure(self.run_dir, p.name) or f"exit code {p.exit_code}"
             for p in self.procs.values()
-            if p.exit_code is not None and p.exit_code > 0 and p.exit_code != 130
+            if p.exit_code is not None and p.exit_code > 0 and p.exit_code != 130 and not p.stopped
         }
 
     def _why(self, name: str) -> str:

@@ -10,6 +10,7 @@ import logging
 import os
 import re
 import shutil
+import signal
 import socket
 import stat
 import subprocess
@@ -25,9 +26,10 @@ import pytest
 import zmq
 
 from counterpart.bus.bag_nodes import Recorder
+from counterpart.bus.cli_launch import load_checked
 from counterpart.bus.endpoints import RunDirError, ipc_endpoints, private_dir
 from counterpart.bus.logs import BURST, WINDOW_S, RepeatFilter
-from counterpart.bus.supervisor import prune_run_dirs
+from counterpart.bus.supervisor import Launcher, prune_run_dirs
 from counterpart.bus.transport import LATEST, RELIABLE, Publisher, Subscriber
 from counterpart.messages import EndOfStream, Frame, NodeStats, PersonShape, Silhouettes, decode, encode
 from tests.faulting import fuzz_silhouette_and_labeller, recorder_stalls_camera
@@ -91,6 +93,29 @@ def test_a_node_failing_before_its_first_message_ends_the_graph_within_5_s(
         assert wait_for(lambda: _all_gone(kids), 5)
     finally:
         kill_tree(proc)
+
+
+def test_the_nodes_the_launcher_stops_are_not_named_as_failed(
+    tmp_path: Path, home: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A node still in a long setup when the graph ends (a model loading) leaves only on the stop's
+    second signal, with 143: the graph's failure is the source's alone (``counterpart demo`` names
+    the failed nodes under its exit code).
+    """
+    doc = {
+        "nodes": {
+            "source": {"run": F + "FailAtStart", "params": {"delay": 1.0}, "remap": {"out": "numbers"}},
+            "slow": {"run": F + "SlowSetup", "remap": {"in": "numbers"}},
+        }
+    }
+    monkeypatch.setenv("COUNTERPART_HOME", str(home))
+    launcher = Launcher(load_checked(str(write_launch(tmp_path / "g.yaml", doc)), None, None))
+    try:
+        assert launcher.run() == 3
+    finally:
+        launcher.cleanup()
+    assert launcher.procs["slow"].exit_code == 128 + signal.SIGTERM  # it ignored the first signal
+    assert launcher.failures() == {"source": "cannot open the device"}
 
 
 def test_a_camera_that_cannot_decode_its_file_ends_the_graph(tmp_path: Path, home: Path) -> None:
