@@ -117,10 +117,16 @@ def main(args: argparse.Namespace) -> int:
     int
         Exit code: 0 on success, 2 on bad input, 130 when interrupted.
     """
+    from counterpart.nodes.tracker.tracker import people_problem
+
     from .calibration import estimate_config
     from .tracking import track_video
 
     if not positive(args, ("layers", "particles", "train_frames", "max_frames", "calibration_frames"), "track"):
+        return 2
+    problem = people_problem(list(args.people))
+    if problem:  # said before the camera is estimated from the video
+        print(f"counterpart track: --people {problem}", file=sys.stderr)
         return 2
     args.out = npz_name(args.out)
     if args.fov and args.camera != ESTIMATE:
