@@ -43,8 +43,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from sklearn.cluster import KMeans
-from sklearn.decomposition import PCA
 
 from .shapes import ShapeTrack, mirror_ctrl
 
@@ -232,6 +230,9 @@ class JointShapeModel:
             raise ValueError("JointShapeModel.fit: no frames where both people are in view")
         self.n_ctrl_ = (seqs[0].shape[1] - 3) // 4
         X = np.concatenate(seqs)
+        from sklearn.cluster import KMeans  # here: a loaded model needs only its arrays; sklearn is slow to import
+        from sklearn.decomposition import PCA
+
         pca = PCA(self.energy, svd_solver="full").fit(X)
         self.mean_, self.components_ = pca.mean_, pca.components_
         Y = [(s - self.mean_) @ self.components_.T for s in seqs]

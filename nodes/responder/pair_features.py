@@ -16,7 +16,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.decomposition import PCA
 
 from counterpart.body.trajectory import TwoPersonTrajectory
 
@@ -61,6 +60,8 @@ class WhitenedPCA:
         WhitenedPCA
             The fitted PCA.
         """
+        from sklearn.decomposition import PCA  # here: a loaded model needs only its arrays; sklearn is slow to import
+
         p = PCA(energy, whiten=True, svd_solver="full").fit(X)
         return cls(p.mean_, p.components_, np.sqrt(p.explained_variance_))
 
