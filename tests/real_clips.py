@@ -4,6 +4,7 @@ reference keypoints, and the share of those keypoints the silhouettes cover.
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -32,20 +33,35 @@ def labels_of(frames: np.ndarray, **backend_params: Any) -> list[np.ndarray]:
     return [ex.process(f).labels for f in frames]
 
 
-def people_share(frames: np.ndarray, first: int, **backend_params: Any) -> float:
-    """Mean share of the frame's pixels in people's regions, from frame ``first`` on."""
-    return float(np.mean([(labels > 0).mean() for labels in labels_of(frames, **backend_params)[first:]]))
+@cache
+def clip_labels() -> list[np.ndarray]:
+    """``labels_of`` the frames of ``UT_CLIP`` with the default parameters (made once: several tests
+    compare against them).
+    """
+    return labels_of(clip_with_keypoints()[0])
+
+
+def people_share(labels: list[np.ndarray], first: int) -> float:
+    """Mean share of the frame's pixels in people's regions (``labels_of``), from frame ``first`` on."""
+    return float(np.mean([(frame > 0).mean() for frame in labels[first:]]))
 
 
 def keypoints_inside(frames: np.ndarray, kp: np.ndarray, vis: np.ndarray, **backend_params: Any) -> float:
     """Share of the visible reference keypoints (visibility >= 0.5, frames 10 on) inside some
     person's region, the background fitted on the first 30 frames with ``backend_params``.
     """
+    return labels_cover(labels_of(frames, **backend_params), kp, vis)
+
+
+def labels_cover(labels: list[np.ndarray], kp: np.ndarray, vis: np.ndarray) -> float:
+    """Share of the visible reference keypoints (visibility >= 0.5, frames 10 on) inside some
+    person's region of ``labels`` (``labels_of``).
+    """
     inside = []
-    for i, (f, labels) in enumerate(zip(frames, labels_of(frames, **backend_params))):
+    for i, frame in enumerate(labels):
         if i < 10 or i >= len(kp):
             continue
         xy = np.rint(kp[i][vis[i] >= 0.5]).astype(int)
-        ok = (xy[:, 0] >= 0) & (xy[:, 0] < f.shape[1]) & (xy[:, 1] >= 0) & (xy[:, 1] < f.shape[0])
-        inside.extend(labels[xy[ok, 1], xy[ok, 0]] > 0)
+        ok = (xy[:, 0] >= 0) & (xy[:, 0] < frame.shape[1]) & (xy[:, 1] >= 0) & (xy[:, 1] < frame.shape[0])
+        inside.extend(frame[xy[ok, 1], xy[ok, 0]] > 0)
     return float(np.mean(inside))
