@@ -2,7 +2,7 @@
 
 Usage: python bench/real_silhouettes.py [--clips report|tune|all] [--every K] [--train-frames 30]
            [--max-clips N] [--only STEM,...] [--no-baseline] [--shake-px 2] [--no-grey] [--light 1.7] [--no-cut]
-           [--white-balance 1.06,1,0.95] [--no-infrared] [--noise 6] [--shrink 0.35]
+           [--white-balance 1.06,1,0.95] [--no-infrared] [--noise 6] [--shrink 0.35] [--jpeg 25]
            [--threads 1] [--out FILE]
 
 Data: ``../shared/data/ut_interaction`` (set 1 of UT-Interaction: 60 clips, two people in view and
@@ -71,6 +71,10 @@ it is (``*_small``: a training frame in which the detector finds no one searched
 ``PeopleDetector``'s ``enlarge``) and without that search (``*_small_unenlarged``):
 ``people_found_small``, ``keypoint_coverage_small``, ``extra_people_small``,
 ``person_clips_covered_small`` and the same ``_unenlarged``.
+
+Heavy compression (a cheap webcam's MJPEG, a stream at a low bit rate): each clip again with every
+frame saved as a JPEG of quality ``--jpeg`` (25) and read back, on top of its own compression:
+``people_found_jpeg``, ``keypoint_coverage_jpeg``, ``extra_people_jpeg``, ``person_clips_covered_jpeg``.
 
 A grey or infrared camera (three equal channels, however they come): each clip again made grey,
 through ours as it is (``*_grey``: the background found monochrome, its shadows and highlights
@@ -317,6 +321,7 @@ def run_clip(
     colour_switch: ColourSwitchConfig | None = None,
     noise: float = 0.0,
     shrink: float = 1.0,
+    jpeg: int = 0,
 ) -> dict[str, Any]:
     """Fit and process one clip as the node does; returns its summed counts and timings.
 
@@ -330,6 +335,8 @@ def run_clip(
     ``noise``: Gaussian noise of that std (grey levels) added to every pixel of every frame, as a
     camera in low light gives (seeded by the clip's name and the frame). ``shrink`` < 1: the clip's
     frames and its reference keypoints scaled by it (people far from the camera, a small video).
+    ``jpeg`` > 0: every frame compressed again as a JPEG of that quality (a cheap webcam's MJPEG, a
+    stream at a low bit rate: blocks and ringing on top of the clip's own compression).
     ``infrared``: the frames from ``LIGHT_FRAME`` on as a day/night camera's infrared picture
     (``sim.infrared.infrared_frames``). ``backend``: subtractor parameters over ours (or the baseline's);
     ``colour_switch``: the extractor's (None: its default).
@@ -362,6 +369,13 @@ def run_clip(
             [
                 np.clip(f + np.random.default_rng([*seed, t]).normal(0.0, noise, f.shape), 0, 255).astype(np.uint8)
                 for t, f in enumerate(frames)
+            ]
+        )
+    if jpeg > 0:
+        frames = np.stack(
+            [
+                cv2.imdecode(cv2.imencode(".jpg", f, [cv2.IMWRITE_JPEG_QUALITY, jpeg])[1], cv2.IMREAD_COLOR)
+                for f in frames
             ]
         )
     base = {} if ours else BASELINE
@@ -413,6 +427,8 @@ SHAKE_PX = 2.0
 NOISE = 6.0
 #: the scale of the small pass's clips (``--shrink``): their people 35-100 pixels tall
 SHRINK = 0.35
+#: the JPEG quality of the compressed pass (``--jpeg``): a cheap webcam's MJPEG
+JPEG = 25
 
 
 def extra_passes(
@@ -424,6 +440,7 @@ def extra_passes(
     infrared: bool = True,
     noise: float = 0.0,
     shrink: float = 1.0,
+    jpeg: int = 0,
 ) -> dict[str, dict[str, Any]]:
     """The passes of ours on altered clips, by name: :func:`run_clip`'s keyword arguments. The
     shaken clips with the shake followed and not (``shake_px`` > 0); the grey clips as they are
@@ -435,7 +452,7 @@ def extra_passes(
     the background learnt again and not (``infrared``); the clips with a noisy camera's noise of
     ``noise`` grey levels, its frames smoothed and not (``noise`` > 0); the clips scaled by
     ``shrink``, frames in which the detector finds no one searched again enlarged and not
-    (``shrink`` < 1).
+    (``shrink`` < 1); the clips compressed again as JPEGs of quality ``jpeg`` (> 0).
     """
     out: dict[str, dict[str, Any]] = {}
     if cut:
@@ -456,6 +473,8 @@ def extra_passes(
     if shrink < 1.0:
         out["small"] = {"shrink": shrink}
         out["small_unenlarged"] = {"shrink": shrink, "backend": {"detector": PeopleDetector(below_frac=CUT_OFF_BELOW)}}
+    if jpeg > 0:
+        out["jpeg"] = {"jpeg": jpeg}
     if shake_px > 0:
         out["shaken"] = {"shake_px": shake_px}
         # the frames as they come: the shake left in the training frames would read as noise and be smoothed
@@ -561,6 +580,12 @@ def main(argv: list[str] | None = None) -> int:
         default=SHRINK,
         help="scale of the clips of the small pass, in (0, 1] (1: no small pass)",
     )
+    ap.add_argument(
+        "--jpeg",
+        type=int,
+        default=JPEG,
+        help="JPEG quality every frame of the compressed pass is saved at again, 1-100 (0: no compressed pass)",
+    )
     ap.add_argument("--out", help="also write the JSON report to this file")
     args = ap.parse_args(argv)
     if not (DATA / "set1").is_dir():
@@ -574,6 +599,8 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--white-balance {args.white_balance!r}: give three positive gains B,G,R, e.g. 1.06,1,0.95")
     if not 0.0 < args.shrink <= 1.0:
         ap.error(f"--shrink {args.shrink}: give a scale in (0, 1], e.g. 0.35 (1: no small pass)")
+    if not 0 <= args.jpeg <= 100:
+        ap.error(f"--jpeg {args.jpeg}: give a JPEG quality in 1-100, e.g. 25 (0: no compressed pass)")
     passes = extra_passes(
         args.shake_px,
         not args.no_grey,
@@ -583,6 +610,7 @@ def main(argv: list[str] | None = None) -> int:
         not args.no_infrared,
         args.noise,
         args.shrink,
+        args.jpeg,
     )
     report: dict[str, Any] = {
         "bench": "real_silhouettes",
@@ -623,6 +651,8 @@ def main(argv: list[str] | None = None) -> int:
         report["noise"] = args.noise
     if "small" in passes:
         report["shrink"] = args.shrink
+    if "jpeg" in passes:
+        report["jpeg_quality"] = args.jpeg
     if "lit" in passes:
         report["light"] = args.light
     if "wb" in passes:
