@@ -40,7 +40,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", interest: int = 3) -> np.ndarray:
-    """The partner's joints for one person of ``traj`` (3D models: dual-hmm, gpdm, listener).
+    """The partner's joints for one person of ``traj`` (3D models: dual-hmm, gpdm, listener), the model
+    stepped on its own frames (``AtModelRate``) whatever the trajectory's frame rate.
 
     Parameters
     ----------
@@ -63,20 +64,26 @@ def generate(model: object, traj: TwoPersonTrajectory, observed: str = "a", inte
     ValueError
         If the model does not generate 3D joints, or the listener model gets a file without signals.
     """
+    from counterpart.nodes.responder.model_clock import AtModelRate
+
     obs = traj.a if observed == "a" else traj.b
     name = getattr(model, "name", "")
-    if name in ("dual-hmm", "gpdm"):
-        return model.predict(obs)
+    if name not in ("dual-hmm", "gpdm", "listener"):
+        raise ValueError(f"model {name!r} does not generate 3D joints; use dual-hmm, gpdm or listener")
+    steps = [model.step] * len(obs)
     if name == "listener":
         if traj.signals_a is None:
             raise ValueError("the listener model needs the observed person's signals in the input file")
         sig = traj.signals_a if observed == "a" else traj.signals_b
-        model.reset()
         model.interest = interest
-        return np.stack(
-            [model.step({n: bool(v == 1) for n, v in zip(traj.signal_names, row)}, x) for row, x in zip(sig, obs)]
-        )
-    raise ValueError(f"model {name!r} does not generate 3D joints; use dual-hmm, gpdm or listener")
+        heard = [{n: bool(v == 1) for n, v in zip(traj.signal_names, row)} for row in sig]
+        steps = [lambda x, h=h: model.step(h, x) for h in heard]
+    # as the responder node: the model steps on its own frames whatever the file's frame rate
+    rate = AtModelRate.for_model(model, traj.fps)
+    model.reset()
+    out = np.stack([rate(step, x, t / traj.fps) for t, (step, x) in enumerate(zip(steps, obs))])
+    model.reset()
+    return out
 
 
 def main(args: argparse.Namespace) -> int:

@@ -73,7 +73,7 @@ from real_silhouettes import reference_collapsed  # bench/ is on sys.path as a s
 from counterpart.body.camera import Camera
 from counterpart.body.skeleton import JOINT_INDEX, bone_lengths
 from counterpart.nodes.responder.frames import actor_frame
-from counterpart.nodes.responder.model_clock import AtModelRate, ModelClock
+from counterpart.nodes.responder.model_clock import AtModelRate
 from counterpart.nodes.responder.models import load_default
 from counterpart.nodes.responder.staging import HEAD_TOP_M, Stage, observed_silhouette
 
@@ -203,7 +203,7 @@ def staged_partner(
     frame_height = int(d["frame_size"][0])
     model, stage = load_default("dual-hmm"), Stage()
     model.reset()
-    rate = AtModelRate(ModelClock(model.fps_))  # the node steps the model on its own frames
+    rate = AtModelRate.for_model(model, fps)  # the node steps the model on its own frames
     partner = np.full_like(joints, np.nan)
     boxes = np.full((len(joints), 4), np.nan)
     observed = np.where(lost[:, None, None], np.nan, joints)

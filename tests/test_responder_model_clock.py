@@ -4,6 +4,8 @@ joints interpolated to them.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -59,3 +61,21 @@ def test_a_model_at_25_fps_fed_at_50_steps_on_every_other_input_on_its_own_frame
     assert out == [1, 1, 2, 2, 3, 3, 4, 4, 5, 5]  # the last output holds where no model frame fell
     np.testing.assert_allclose([x[0, 0] for x in seen], [0, 2, 4, 6, 8])
     assert rate(step, X[0], 0.0) == 6  # time going back: afresh, one step at once
+
+
+def test_counterpart_respond_steps_the_model_on_its_own_frames_for_a_file_at_another_rate() -> None:
+    # a listener (25 fps) answers a nod at 1 s: the file at 50 fps gives, on the frames the two
+    # share, the partner the file at 25 fps gives (stepped once per frame it nodded at 1.2 s)
+    from counterpart.apps.respond import generate
+    from counterpart.nodes.responder.listener import ListenerModel
+    from tests.responder_fixtures import planted_pair
+
+    pair = planted_pair(7, T=75)
+    nod = ((np.arange(75) >= 25) & (np.arange(75) < 37)).astype(np.int8)[:, None]
+    at25 = replace(pair, signals_a=nod, signals_b=np.zeros_like(nod), signal_names=("nod",))
+    at50 = at25.resample(50.0)
+    model = ListenerModel().fit({"interested": [(("S:nod",), ("L:nod",), 0.9)]})
+    out25, out50 = generate(model, at25), generate(model, at50)
+    assert out25.shape == (75, 14, 3) and out50.shape == (149, 14, 3)
+    np.testing.assert_allclose(out50[::2], out25, atol=1e-5)
+    assert np.abs(out25[36] - out25[34]).max() > 0.01  # the head nods from frame 35 (1.4 s)

@@ -110,6 +110,13 @@ class AtModelRate:
     clock: ModelClock
     _last: tuple[float, np.ndarray | None, Any] | None = field(default=None, init=False)  # time, joints, output
 
+    @classmethod
+    def for_model(cls, model: Any, default_fps: float) -> AtModelRate:
+        """The stepper of a loaded model at its training frame rate (its ``fps_``, the listener's
+        ``fps``), ``default_fps`` where it has none.
+        """
+        return cls(ModelClock(float(getattr(model, "fps_", 0.0) or getattr(model, "fps", 0.0) or default_fps)))
+
     def reset(self) -> None:
         """Forget the time and the last input: the next one steps the model once, at once."""
         self.clock.reset()

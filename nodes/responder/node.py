@@ -37,7 +37,7 @@ from counterpart.messages import (
 )
 
 from .emotion import StyleFilter
-from .model_clock import AtModelRate, ModelClock
+from .model_clock import AtModelRate
 from .reach import ReachConfig, reach
 from .staging import BONES, Stage, StageConfig, observed_silhouette
 
@@ -331,9 +331,7 @@ class Responder(Node):
         run on the model's own frames since the last input (:class:`AtModelRate`).
         """
         if self._rate is None:
-            self._rate = AtModelRate(
-                ModelClock(float(getattr(m, "fps_", 0.0) or getattr(m, "fps", 0.0) or DEFAULT_FPS))
-            )
+            self._rate = AtModelRate.for_model(m, DEFAULT_FPS)
         return self._rate(step, observed, driver.seq / float(getattr(driver, "fps", 0.0) or DEFAULT_FPS))
 
     def _staged(self, body: Any, joints: np.ndarray, driver: Any) -> np.ndarray:
