@@ -104,7 +104,7 @@ def test_the_nodes_the_launcher_stops_are_not_named_as_failed(
     """
     doc = {
         "nodes": {
-            "source": {"run": F + "FailAtStart", "params": {"delay": 1.0}, "remap": {"out": "numbers"}},
+            "source": {"run": F + "FailAtStart", "params": {"delay": 2.0}, "remap": {"out": "numbers"}},
             "slow": {"run": F + "SlowSetup", "remap": {"in": "numbers"}},
         }
     }
@@ -114,7 +114,9 @@ def test_the_nodes_the_launcher_stops_are_not_named_as_failed(
         assert launcher.run() == 3
     finally:
         launcher.cleanup()
-    assert launcher.procs["slow"].exit_code == 128 + signal.SIGTERM  # it ignored the first signal
+    # it ignored the first signal and left on the second (143), or, on a machine so loaded that the
+    # stop came before it could take signals, on the first
+    assert launcher.procs["slow"].exit_code in (128 + signal.SIGTERM, 128 + signal.SIGINT)
     assert launcher.failures() == {"source": "cannot open the device"}
 
 
