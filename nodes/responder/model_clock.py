@@ -61,10 +61,11 @@ class ModelClock:
             input (0) to this one (1), ascending; ``[1.0]`` for the first input; empty where no model
             frame falls within the interval (input faster than the model).
         """
-        if self._phase is None or not dt_s > 0:
-            first = self._phase is None
-            self._phase = 0.0 if first else self._phase
-            return np.ones(1) if first else np.empty(0)
+        if self._phase is None:
+            self._phase = 0.0
+            return np.ones(1)
+        if not dt_s > 0:
+            return np.empty(0)
         span = dt_s * self.fps  # the interval in model frames
         # a model frame falls at 1 - phase, 2 - phase, ... model frames into the interval; the
         # tolerance keeps equal rates at exactly one step per input despite rounding
