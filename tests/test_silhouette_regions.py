@@ -424,6 +424,26 @@ def test_a_leg_stepping_out_is_not_a_new_person_a_child_beside_them_is():
     assert [p.id for p in people] == [0, 1]
 
 
+def test_a_piece_torn_off_beside_a_person_is_no_one_the_same_piece_apart_is_someone():
+    """A short region that comes out at a person's side, within their rows and touching their box
+    (the blocks a heavily compressed video smears round an outline, a shadow at their side:
+    UT-Interaction 43_8_4 as a JPEG of quality 25), is not a new person, frame after frame; the
+    same region standing apart from them, a person further back, is.
+    """
+    for gap, want in ((2, [0, 1]), (20, [0, 1, 2])):
+        tracker = PersonTracker(min_area=50)
+        for k in range(30):
+            m = np.zeros((H, W), np.uint8)
+            draw_person(m, 80, 150)
+            draw_person(m, 240, 150)
+            right = 80 + int(150 * 0.14)  # the right edge of the first person's body
+            if k >= 10:
+                cv2.rectangle(m, (right + gap, 80), (right + gap + 12, 80 + 50), 1, -1)
+            labels, people = tracker.update(m.astype(bool))
+        assert [p.id for p in people] == want, (gap, people)
+        assert (labels[100, right + gap + 6] > 0) == (gap == 20)
+
+
 def test_two_people_first_seen_as_one_region_part_into_two_with_sides_by_their_order():
     """Two people already together when the camera starts (a handshake, one region, one track)
     part and both stand in the left half of the frame: the one who steps away becomes a person of

@@ -54,6 +54,10 @@ STACK_UPRIGHT = 0.45
 #: row, and shorter than this share of their height, is a part of someone (``_ground_owner``)
 FEET_ROW = 0.1
 FRAGMENT_HEIGHT = 0.4
+#: a new region less than ``FRAGMENT_HEIGHT`` of a tracked person's height tall, within their rows
+#: and at most this share of their height of columns from their box, is torn off them
+#: (``PersonTracker._beside_owner``)
+BESIDE_GAP = 0.1
 #: someone who was part of a merged region last frame still claims it with this share of their
 #: predicted pixels on it (``min_overlap`` otherwise): hidden in a hug, their template, of their
 #: shape before the people met, overlaps the merged region less and less as it changes shape
@@ -619,7 +623,8 @@ class PersonTracker:
         """Left-over regions: the legs or feet of an assigned person (``_stacked_owner``) or a
         fragment of one (mostly inside their predicted mask, unless it stands apart from them as a
         whole person: ``_stands_apart``) join them; the rest start new people when they look like
-        one.
+        one and are not a short piece on someone's feet row (``_ground_owner``) or at their side
+        (``_beside_owner``).
         """
         unowned: list[tuple[np.ndarray, int, int]] = []  # left-over regions no one claims
         for r in frame.regions:
@@ -651,6 +656,8 @@ class PersonTracker:
                 continue
             owner = self._ground_owner(*g, match)
             if owner is None:
+                owner = self._beside_owner(*g, match)
+            if owner is None:
                 match.fresh.append(g)
             elif owner >= 0:
                 match.assigned[owner] = (*_union(match.assigned[owner][:3], g), match.assigned[owner][3])
@@ -677,6 +684,28 @@ class PersonTracker:
             if gap < best_gap:
                 best, best_gap = (i if gap <= STACK_GAP * height else -1), gap
         return best
+
+    def _beside_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int | None:
+        """Whether an upright left-over group (crop (h, w), x0, y0) that stands on no one's feet
+        row is a whole new person (None) or a piece torn off one beside it (-1: dropped).
+
+        The background model tears pieces off people at their sides: an arm held out, the shadow
+        at their side, the blocks a heavily compressed video smears round their outline. Such a
+        piece lies within a person's rows (``FEET_ROW`` of their height above their top to as
+        much below their feet), at most ``BESIDE_GAP`` of their height of columns from their box,
+        and is less than ``FRAGMENT_HEIGHT`` of their height tall. As a person of its own it would
+        keep a track for as long as pieces come off there. It is not joined to them: a shadow or
+        a codec's blocks would then be theirs.
+        """
+        h, w = crop.shape
+        for i, (pc, px, py, _) in match.assigned.items():
+            ph, pw = pc.shape
+            height = max(self._tracks[i].height, float(ph))
+            within_rows = y0 >= py - FEET_ROW * height and y0 + h <= py + ph + FEET_ROW * height
+            gap = max(px - (x0 + w), x0 - (px + pw), 0)
+            if h < FRAGMENT_HEIGHT * height and within_rows and gap <= BESIDE_GAP * height:
+                return -1
+        return None
 
     def _stacked_owner(self, crop: np.ndarray, x0: int, y0: int, match: _Matching) -> int:
         """The index of the assigned track whose legs or feet, or head and shoulders, a left-over
