@@ -30,7 +30,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize
 
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.body.trajectory import TwoPersonTrajectory
@@ -108,6 +107,10 @@ def rank_svm(D: np.ndarray, S: np.ndarray, C: float = 1.0, C_sim: float = 1.0) -
     ndarray of shape (F,)
         The ranking weights w.
     """
+    # here, not at the top: a responder that loads its model never fits one, and scipy.optimize
+    # is a good share of a node's start
+    from scipy.optimize import minimize
+
     F = D.shape[1] if len(D) else S.shape[1]
 
     def f(w: np.ndarray) -> tuple[float, np.ndarray]:
