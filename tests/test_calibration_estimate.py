@@ -6,6 +6,7 @@ points projected and perturbed by a pixel of noise.
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -79,6 +80,41 @@ def test_a_tilted_camera_is_recovered_within_its_uncertainty(
     g_true = cam.ground_point(*feet[:2].T)
     g_est = ref.ground_point(*feet[:2].T)
     assert abs(np.linalg.norm(g_est[0] - g_est[1]) / np.linalg.norm(g_true[0] - g_true[1]) - 1) < 0.15
+
+
+def test_the_same_observations_are_not_fitted_again() -> None:
+    # the node estimates every few frames; where no one new was seen the fit is the last one, and a
+    # new observation, another setting or other lines give a new fit
+    cam = _camera(2.5, 20.0, 50.0)
+    heads, feet, ids, t = _walkers(cam, seed=3, n_people=3, frames=30)
+    obs = PeopleObservations(W, H)
+
+    def frame(i: int) -> None:
+        people = []
+        for h, f, pid in zip(heads[t == t[i]], feet[t == t[i]], ids[t == t[i]]):
+            tall = f[1] - h[1]
+            people.append(
+                SimpleNamespace(
+                    id=int(pid),
+                    bbox=(f[0] - 0.15 * tall, h[1], 0.3 * tall, tall),
+                    ctrl=None,
+                    ref_point=None,
+                    merged=False,
+                )
+            )
+        assert obs.add(people, float(t[i])) == len(people)
+
+    for i in range(29):
+        frame(i)
+    first = obs.estimate()
+    assert first is not None and obs.estimate() is first and obs.estimate(CalibrationConfig()) is first
+    wider = obs.estimate(CalibrationConfig(fov_deg=70.0))
+    assert wider is not first and obs.estimate(CalibrationConfig(fov_deg=70.0)) is wider
+    frame(29)
+    more = obs.estimate()
+    assert more is not first and more.n_observations == first.n_observations + 3
+    head, foot, track, times = obs.arrays()
+    assert more.describe() == estimate_camera(head, foot, track, (W, H), times).describe()
 
 
 def test_at_zero_tilt_the_focal_length_is_reported_unknown() -> None:

@@ -170,6 +170,8 @@ class PeopleObservations:
         self.regions_seen = 0
         self.feet_out = 0
         self.still = StillPeople(width, height) if still else None
+        #: the last estimate and what it was made from: (rows, config, lines, estimate)
+        self._last: tuple[tuple, CalibrationConfig, LineFamilies | None, CameraEstimate | None] | None = None
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -437,8 +439,16 @@ class PeopleObservations:
         CameraEstimate or None
             The estimate; None with too few observations.
         """
+        config = config or CalibrationConfig()
+        rows = tuple(self._rows)
+        # the node estimates every few frames, the same observations again where no one new was
+        # seen (people merged, out of view): the fit is a function of them alone
+        if self._last is not None and self._last[0] == rows and self._last[1] == config and self._last[2] is lines:
+            return self._last[3]
         head, foot, track, t = self.arrays()
-        return estimate_camera(head, foot, track, self.size, t, config or CalibrationConfig(), lines)
+        est = estimate_camera(head, foot, track, self.size, t, config, lines)
+        self._last = (rows, config, lines, est)
+        return est
 
 
 class SceneFrames:
