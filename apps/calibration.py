@@ -10,14 +10,20 @@ boxes on a frame without any: ``counterpart.nodes.calibration.observe``) and the
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Iterable
+from itertools import islice
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from counterpart.body.camera import Camera
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.nodes.calibration.estimate import CalibrationConfig, CameraEstimate
 from counterpart.nodes.calibration.observe import PeopleObservations, SceneFrames
 from counterpart.nodes.calibration.smooth import credible
+
+if TYPE_CHECKING:
+    from counterpart.nodes.silhouette.pipeline import FrameResult
 
 #: progress(frames done, frames the file declares or 0)
 Progress = Callable[[int, int], None]
@@ -58,6 +64,7 @@ def calibrate_video(
     train_frames: int = 30,
     config: CalibrationConfig | None = None,
     progress: Progress | None = None,
+    frames: Iterable[tuple[np.ndarray, FrameResult]] | None = None,
     **silhouette_params: Any,
 ) -> tuple[CameraEstimate, dict[str, Any]]:
     """Estimate the camera of a video from the people in it.
@@ -74,8 +81,11 @@ def calibrate_video(
         Priors and noise model of the estimate (None: the defaults).
     progress : callable or None
         Called after every frame with (frames done, frames the file declares or 0).
+    frames : iterable of (ndarray, FrameResult) or None, default=None
+        The video's frames from its first, with the silhouette extractor's results (a pass shared
+        with another reader: ``counterpart.apps.shared_pass``); None: the extractor is run here.
     **silhouette_params : Any
-        Keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
+        Keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...), where ``frames`` is None.
 
     Returns
     -------
@@ -97,13 +107,16 @@ def calibrate_video(
     config = config or CalibrationConfig()
 
     fps, declared = video_info(path)
-    extractor = SilhouetteExtractor(**silhouette_params)
+    if frames is None:
+        frames = iter_video(path, SilhouetteExtractor(**silhouette_params), max_frames, train_frames)
+    elif max_frames is not None:
+        frames = islice(frames, max_frames)
     obs: PeopleObservations | None = None
     scene = SceneFrames()
     detector = PeopleDetector()
     n = 0
     shape = (0, 0)
-    for frame, result in iter_video(path, extractor, max_frames, train_frames):
+    for frame, result in frames:
         if obs is None:
             shape = frame.shape[:2]
             obs = PeopleObservations(frame.shape[1], frame.shape[0], max_observations=4000)

@@ -22,6 +22,7 @@ from counterpart.apps.offline import (
     positive,
     run_offline,
 )
+from counterpart.apps.shared_pass import SharedPass
 from counterpart.body.camera import Camera, load_camera_file
 from counterpart.nodes.silhouette.backends import BACKEND_NAMES
 from counterpart.nodes.tracker.prior import resolve_prior
@@ -142,14 +143,19 @@ def main(args: argparse.Namespace) -> int:
         return 2
 
     def work() -> dict:
-        from counterpart.nodes.silhouette.pipeline import video_info
+        from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
 
         named = args.camera not in (ESTIMATE, DEFAULT)
         camera = load_camera(args.camera) if named else None
         video_info(args.video)  # a missing or undecodable video is said before a minute of building a prior
         source = "file" if named else DEFAULT
+        frames = None
         if args.camera == ESTIMATE:
-            camera, source = estimated_camera(args)
+            # the camera's frames are tracked too: one pass of the silhouettes for both
+            extractor = SilhouetteExtractor(backend=args.backend)
+            shared = SharedPass(iter_video(args.video, extractor, args.max_frames, args.train_frames))
+            camera, source = estimated_camera(args, shared)
+            frames = shared.again()
         if args.prior == "default":
             print(
                 "[track] loading the default motion prior (built from the simulator on first use, about a minute)",
@@ -169,13 +175,14 @@ def main(args: argparse.Namespace) -> int:
             seed=args.seed,
             progress=FrameProgress("track"),
             camera_source=source,
+            frames=frames,
             backend=args.backend,
         )
 
     return run_offline("track", args.out, work)
 
 
-def estimated_camera(args: argparse.Namespace) -> tuple[Camera | None, str]:
+def estimated_camera(args: argparse.Namespace, shared: SharedPass | None = None) -> tuple[Camera | None, str]:
     """The camera of ``args.video`` from the people in its first ``args.calibration_frames``
     frames, where the graph's calibration node would use it; the reason is printed either way.
 
@@ -183,6 +190,9 @@ def estimated_camera(args: argparse.Namespace) -> tuple[Camera | None, str]:
     ----------
     args : argparse.Namespace
         The parsed options of :func:`add_arguments`.
+    shared : SharedPass or None, default=None
+        The silhouettes' pass over the video, its first frames kept for the tracking; None: a pass
+        of its own.
 
     Returns
     -------
@@ -193,14 +203,15 @@ def estimated_camera(args: argparse.Namespace) -> tuple[Camera | None, str]:
     """
     from .calibration import calibrate_video, estimate_config, graph_would_use
 
-    frames = min(args.calibration_frames, args.max_frames or args.calibration_frames)
+    n = min(args.calibration_frames, args.max_frames or args.calibration_frames)
     try:
         est, _ = calibrate_video(
             args.video,
-            frames,
+            n,
             args.train_frames,
             estimate_config(args.fov),
             progress=FrameProgress("track: camera"),
+            frames=shared.first(n) if shared is not None else None,
             backend=args.backend,
         )
     except ValueError as exc:

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
+from itertools import islice
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -44,6 +45,7 @@ def track_video(
     tracker: TrackerConfig | None = None,
     camera_source: str | None = None,
     fps: float | None = None,
+    frames: Iterable[tuple[np.ndarray, FrameResult]] | None = None,
     **silhouette_params: Any,
 ) -> dict[str, Any]:
     """Track the people of a video in 3D and save every frame's estimate.
@@ -66,7 +68,11 @@ def track_video(
             are ``layers`` and ``particles``.
         fps: the frame rate the trackers are told, Hz (None: the video's; 0: unknown, taken as the
             motion prior's): a slower video is searched wider between frames (``Tracker``'s fps).
-        silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...).
+        frames: the video's frames from its first, with the silhouette extractor's results (a pass
+            shared with another reader: ``counterpart.apps.shared_pass``); None: the extractor is
+            run here.
+        silhouette_params: keyword parameters of ``SilhouetteExtractor`` (backend, min_area, ...),
+            where ``frames`` is None.
 
     Returns
     -------
@@ -90,15 +96,18 @@ def track_video(
         raise ValueError(f"people={problem}")
     sides = list(people)
     source = camera_source or ("given" if camera is not None else "default")
-    extractor = SilhouetteExtractor(**silhouette_params)
     video_fps, declared = video_info(path)
+    if frames is None:
+        frames = iter_video(path, SilhouetteExtractor(**silhouette_params), max_frames, train_frames)
+    elif max_frames is not None:
+        frames = islice(frames, max_frames)
     told_fps = video_fps if fps is None else fps
     trackers: dict[str, Tracker] = {}
     rows: list[dict[str, np.ndarray]] = []
     size: tuple[int, int] | None = None
     complete = False
     try:
-        for frame, result in iter_video(path, extractor, max_frames, train_frames):
+        for frame, result in frames:
             if size is None:
                 camera = camera_for_size(camera, frame.shape[1], frame.shape[0])
                 size = frame.shape[:2]

@@ -10,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from counterpart.apps.shared_pass import SharedPass, item_bytes
 from counterpart.apps.tracking import track_video
 from counterpart.body.camera import Camera
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
 from counterpart.nodes.tracker.prior import MotionPrior, train_prior
 from counterpart.sim.cli import open_writer
 from counterpart.sim.stream import open_stream
@@ -106,6 +108,36 @@ def test_track_estimates_the_camera_of_a_video_from_its_people(
     assert abs(used.centre[1] / truth.centre[1] - 1.0) < 0.10
     tilt = [np.degrees(np.arcsin(-c.R[2, 1])) for c in (used, truth)]
     assert abs(tilt[0] - tilt[1]) < 3.0 and tilt[1] > 20.0
+
+
+def test_the_camera_and_the_tracking_share_one_pass_of_the_silhouettes(
+    recording: tuple[Path, np.ndarray, Path],
+) -> None:
+    """``counterpart track`` estimates the camera from the first frames and tracks every frame: the
+    silhouettes of one pass, the first frames kept for the tracking, give the same people and
+    joints as a pass of the tracking's own.
+    """
+    video, _, _ = recording
+    n = EMPTY + 10
+    shared = SharedPass(iter_video(video, SilhouetteExtractor(), None, EMPTY))
+    seen = [(frame, result) for frame, result in shared.first(n)]
+    assert len(seen) == n and sum(len(r.people) for _, r in seen) > 0
+    again = shared.again()
+    assert again is not None
+    own = iter_video(video, SilhouetteExtractor(), None, EMPTY)
+    k = 0
+    for (frame, result), (frame_own, result_own) in zip(again, own, strict=True):
+        assert np.array_equal(frame, frame_own) and np.array_equal(result.labels, result_own.labels), k
+        assert [p.bbox for p in result.people] == [p.bbox for p in result_own.people], k
+        k += 1
+    assert k == EMPTY + SCENE
+    # frames that would not fit the memory it may take are not kept: the video is read again
+    over = SharedPass(iter_video(video, SilhouetteExtractor(), None, EMPTY), max_bytes=5 * item_bytes(seen[0]))
+    assert len(list(over.first(n))) == n and over.again() is None
+    # nor are they where the first reader stopped early
+    early = SharedPass(iter_video(video, SilhouetteExtractor(), None, EMPTY))
+    next(early.first(n))
+    assert early.again() is None
 
 
 def test_track_refuses_bad_input_with_the_reason(recording: tuple[Path, np.ndarray, Path], tmp_path: Path) -> None:
