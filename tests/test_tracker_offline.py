@@ -114,13 +114,13 @@ def test_the_camera_and_the_tracking_share_one_pass_of_the_silhouettes(
     recording: tuple[Path, np.ndarray, Path],
 ) -> None:
     """``counterpart track`` estimates the camera from the first frames and tracks every frame: the
-    silhouettes of one pass, the first frames kept for the tracking, give the same people and
-    joints as a pass of the tracking's own.
+    silhouettes of one pass, the first frames kept for the tracking, give the tracking the same
+    frames, labels and people as a pass of its own (and so the same joints: the tracker is seeded).
     """
     video, _, _ = recording
     n = EMPTY + 10
     shared = SharedPass(iter_video(video, SilhouetteExtractor(), None, EMPTY))
-    seen = [(frame, result) for frame, result in shared.first(n)]
+    seen = list(shared.first(n))
     assert len(seen) == n and sum(len(r.people) for _, r in seen) > 0
     again = shared.again()
     assert again is not None
