@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterable
-from itertools import islice
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -102,15 +101,14 @@ def calibrate_video(
         For an undecodable video, and when too few upright people were seen to estimate anything
         (the message says how many).
     """
-    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+    from counterpart.nodes.silhouette.pipeline import video_info
+
+    from .shared_pass import video_silhouettes
 
     config = config or CalibrationConfig()
 
     fps, declared = video_info(path)
-    if frames is None:
-        frames = iter_video(path, SilhouetteExtractor(**silhouette_params), max_frames, train_frames)
-    elif max_frames is not None:
-        frames = islice(frames, max_frames)
+    frames = video_silhouettes(path, frames, max_frames, train_frames, **silhouette_params)
     obs: PeopleObservations | None = None
     scene = SceneFrames()
     detector = PeopleDetector()

@@ -9,8 +9,9 @@ budget) and given to the second reader again, followed by the rest of the same p
 
 from __future__ import annotations
 
+import os
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from itertools import islice
 from typing import Any
 
@@ -19,6 +20,25 @@ import numpy as np
 #: the most bytes of frames and results kept for the second reader (frames of 640 x 480 take
 #: about 2.5 MB each with their results: some 200 of them); more, and the video is read again
 MAX_KEPT_BYTES = 512 * 2**20
+
+
+def video_silhouettes(
+    path: str | os.PathLike[str],
+    frames: Iterable[Any] | None,
+    max_frames: int | None,
+    train_frames: int,
+    **silhouette_params: Any,
+) -> Iterable[Any]:
+    """A video's frames with the silhouette extractor's results, at most ``max_frames`` of them:
+    ``frames`` where a pass is shared (:class:`SharedPass`), else a pass of their own
+    (``iter_video`` with an extractor of ``silhouette_params``, its background fitted on the first
+    ``train_frames``).
+    """
+    if frames is None:
+        from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
+
+        return iter_video(path, SilhouetteExtractor(**silhouette_params), max_frames, train_frames)
+    return frames if max_frames is None else islice(frames, max_frames)
 
 
 def item_bytes(item: Any) -> int:
@@ -94,4 +114,4 @@ class SharedPass:
         return items()
 
 
-__all__ = ["MAX_KEPT_BYTES", "SharedPass", "item_bytes"]
+__all__ = ["MAX_KEPT_BYTES", "SharedPass", "item_bytes", "video_silhouettes"]

@@ -12,7 +12,6 @@ import json
 import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
-from itertools import islice
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -89,7 +88,9 @@ def track_video(
     Raises FileNotFoundError / ValueError (a missing or undecodable video, bad people, a camera
     calibrated for another frame size) before anything is written.
     """
-    from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+    from counterpart.nodes.silhouette.pipeline import video_info
+
+    from .shared_pass import video_silhouettes
 
     problem = people_problem(list(people))
     if problem:
@@ -97,10 +98,7 @@ def track_video(
     sides = list(people)
     source = camera_source or ("given" if camera is not None else "default")
     video_fps, declared = video_info(path)
-    if frames is None:
-        frames = iter_video(path, SilhouetteExtractor(**silhouette_params), max_frames, train_frames)
-    elif max_frames is not None:
-        frames = islice(frames, max_frames)
+    frames = video_silhouettes(path, frames, max_frames, train_frames, **silhouette_params)
     told_fps = video_fps if fps is None else fps
     trackers: dict[str, Tracker] = {}
     rows: list[dict[str, np.ndarray]] = []
