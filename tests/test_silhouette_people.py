@@ -21,11 +21,13 @@ from counterpart.nodes.silhouette.background import (
 )
 from counterpart.nodes.silhouette.people import (
     CUT_OFF_BELOW,
+    ENLARGE,
     PeopleDetector,
     PrefetchDetector,
     box_mask,
     fit_around_people,
     people_detector,
+    searched_fully,
 )
 from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
 from tests.shared_data import DATA
@@ -61,7 +63,7 @@ class BoxDetector:
         self.boxes = np.array(boxes, np.int32).reshape(-1, 4)
         self.score = score
 
-    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, frame: np.ndarray, plain: bool = False) -> tuple[np.ndarray, np.ndarray]:
         return self.boxes, np.full(len(self.boxes), self.score, np.float32)
 
 
@@ -151,7 +153,7 @@ class OnceDetector(BoxDetector):
         super().__init__(boxes, score)
         self.frame = frame
 
-    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, frame: np.ndarray, plain: bool = False) -> tuple[np.ndarray, np.ndarray]:
         if np.array_equal(frame, self.frame):
             return super().detect(frame)
         return np.zeros((0, 4), np.int32), np.zeros(0, np.float32)
@@ -180,7 +182,7 @@ class SomeFramesDetector(BoxDetector):
         super().__init__(boxes)
         self.frames, self.scores = frames, scores
 
-    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, frame: np.ndarray, plain: bool = False) -> tuple[np.ndarray, np.ndarray]:
         for f, s in zip(self.frames, self.scores):
             if np.array_equal(frame, f):
                 return self.boxes, np.full(len(self.boxes), s, np.float32)
@@ -212,7 +214,7 @@ class WalkerDetector:
     def __init__(self, frames: np.ndarray, xs: list[float]) -> None:
         self.frames, self.xs = frames, xs
 
-    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, frame: np.ndarray, plain: bool = False) -> tuple[np.ndarray, np.ndarray]:
         k = next(i for i, f in enumerate(self.frames) if np.array_equal(f, frame))
         box = np.array([[int(self.xs[k]) - 24, 20, 48, 82]], np.int32)
         return box, np.array([0.9], np.float32)
@@ -292,34 +294,42 @@ def test_hog_detector_finds_both_standing_people_on_real_footage(ut_clip):
 
 
 def test_prefetched_detections_are_the_detectors_frame_for_frame(ut_clip):
-    """Frames submitted as they come are detected in a worker thread; the fit asks for copies of
-    them (the model stacks its training frames) and gets the same boxes as a detector run then.
+    """Frames submitted as they come are detected in a worker thread, searched as the fit will ask
+    (fully on every few frames, at their own scale between: ``searched_fully``); the fit asks for
+    copies of them (the model stacks its training frames) and gets the same boxes as a detector run
+    then. The last frame, not known for the last when it came, is searched fully then.
     """
-    frames = ut_clip[0][:6]
+    frames = ut_clip[0][:8]
 
     class Counting(PeopleDetector):
-        calls = 0
+        calls: list[bool] = []
 
-        def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            Counting.calls += 1
-            return super().detect(frame)
+        def detect(self, frame: np.ndarray, plain: bool = False) -> tuple[np.ndarray, np.ndarray]:
+            Counting.calls.append(plain)
+            return super().detect(frame, plain)
 
-    pre = PrefetchDetector(Counting())
-    for f in frames[:4]:
+    pre = PrefetchDetector(Counting(), every=3)
+    for f in frames[:6]:
         pre.submit(f)
-    distinct = len({f.tobytes() for f in frames})
-    assert len({f.tobytes() for f in frames[:4]}) < 4  # the clip repeats frames
-    assert len(pre._pending) == len({f.tobytes() for f in frames[:4]})  # a repeated frame once
-    direct = PeopleDetector()
-    for f in np.stack(frames):  # copies, and two frames never submitted
-        (b1, s1), (b2, s2) = pre.detect(f), direct.detect(f)
+    assert len({f.tobytes() for f in frames[:6]}) < 6  # the clip repeats frames
+    submitted = {(f.tobytes(), k % 3 != 0) for k, f in enumerate(frames[:6])}
+    assert len(pre._pending) == len(submitted)  # a repeated frame once
+    assert [searched_fully(k, 8, 3) for k in range(8)] == [True, False, False, True, False, False, True, True]
+    direct = PeopleDetector(below_frac=CUT_OFF_BELOW, enlarge=ENLARGE)
+    asked = set()
+    for k, f in enumerate(np.stack(frames)):  # copies, and two frames never submitted
+        plain = not searched_fully(k, len(frames), 3)
+        asked.add((f.tobytes(), plain))
+        (b1, s1), (b2, s2) = pre.detect(f, plain), direct.detect(f, plain)
         np.testing.assert_array_equal(b1, b2)
         np.testing.assert_array_equal(s1, s2)
         assert len(b1) >= 2
-    assert Counting.calls == distinct  # a repeated frame, submitted or not, is detected once
+    # a repeated frame, submitted or not, is detected once for each way it is searched
+    assert len(Counting.calls) == len(submitted | asked)
+    assert Counting.calls.count(False) == len({f.tobytes() for f in frames[[0, 3, 6, 7]]})
     pre.submit(frames[0])
     pre.clear()
-    assert not pre._pending
+    assert not pre._pending and pre._submitted == 0
 
 
 def test_real_people_standing_from_the_first_frame_are_found_whole(ut_clip):
@@ -363,6 +373,7 @@ def test_people_cut_off_by_the_frames_bottom_edge_are_found_in_the_frame_continu
     found = 0
     for t, frame in enumerate(frames):
         assert len(plain.detect(frame)[0]) == 0  # the detector's window needs legs
+        assert len(continued.detect(frame, plain=True)[0]) == 0  # the frame as it is only
         boxes, _ = continued.detect(frame)
         assert (boxes[:, 1] >= 0).all() and (boxes[:, 1] + boxes[:, 3] == CUT_ROWS).all()  # cut at the bottom
         # a box holds their head and shoulders
@@ -400,6 +411,7 @@ def test_people_too_short_for_the_detectors_window_are_found_in_the_frame_enlarg
     plain, enlarged = PeopleDetector(below_frac=CUT_OFF_BELOW), people_detector()
     for t in range(0, 30, 5):
         assert len(plain.detect(frames[t])[0]) == 0
+        assert len(enlarged.detect(frames[t], plain=True)[0]) == 0  # the frame as it is only
         boxes, _ = enlarged.detect(frames[t])
         assert (boxes[:, 3] < 122).all()  # shorter than the window's person
         for k in range(2):

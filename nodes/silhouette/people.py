@@ -74,6 +74,9 @@ ENLARGE = 2.0
 _MAX_HINTED_SHARE = 0.5
 #: one frame's confirmed detections: boxes (K, 4), scores (K,), moved (K,) bool (``_confirmed``)
 _Found = tuple[np.ndarray, np.ndarray, np.ndarray]
+#: training frames are searched with every search of the detector on every this many-th frame
+#: (``fit_around_people``'s ``detect_every``), at their own scale only between
+DETECT_EVERY = 5
 
 
 def people_detector() -> PeopleDetector:
@@ -88,49 +91,61 @@ class PrefetchDetector:
     """A people detector that starts on each training frame as it comes (``submit``), in a worker
     thread, so that a live graph finds the people of its training frames while the frames are
     still coming instead of all at once after the last one (OpenCV lets go of the GIL while it
-    detects). ``detect`` of a frame submitted before waits for its result; of another, it detects
-    at once. The results are those of the wrapped detector, frame for frame.
+    detects). Each frame is searched as :func:`fit_around_people` will ask: fully on every
+    ``every``-th frame submitted from the first, at its own scale only on the others
+    (:func:`searched_fully`). ``detect`` of a frame submitted before, searched so, waits for its
+    result; of another, it detects at once. The results are those of the wrapped detector, frame for
+    frame.
 
     Parameters
     ----------
     detector : PeopleDetector or None, default=None
         The detector; None: :func:`people_detector`.
+    every : int, default=DETECT_EVERY
+        :func:`fit_around_people`'s ``detect_every``.
     """
 
-    def __init__(self, detector: PeopleDetector | None = None) -> None:
+    def __init__(self, detector: PeopleDetector | None = None, every: int = DETECT_EVERY) -> None:
         self.detector = detector or people_detector()
+        self.every = every
         self._pool: ThreadPoolExecutor | None = None
-        #: frame content digest -> its detection
-        self._pending: dict[bytes, Future] = {}
+        #: (frame content digest, plain) -> its detection
+        self._pending: dict[tuple[bytes, bool], Future] = {}
+        #: frames submitted since the last ``clear``
+        self._submitted = 0
 
     @staticmethod
-    def _key(frame: np.ndarray) -> bytes:
+    def _key(frame: np.ndarray, plain: bool) -> tuple[bytes, bool]:
         # by content: the background model stacks copies of the frames it was given
-        return hashlib.blake2b(np.ascontiguousarray(frame).data, digest_size=16).digest() + bytes(
-            str(frame.shape), "ascii"
-        )
+        digest = hashlib.blake2b(np.ascontiguousarray(frame).data, digest_size=16).digest()
+        return digest + bytes(str(frame.shape), "ascii"), plain
 
     def submit(self, frame: np.ndarray) -> None:
-        """Start the detection of one frame in the worker thread.
+        """Start the detection of the next training frame in the worker thread.
 
         Parameters
         ----------
         frame : ndarray of shape (H, W, 3)
             uint8 BGR frame (copied).
         """
-        key = self._key(frame)
+        # the last training frame is searched fully too, but which one is last is not known yet:
+        # the fit searches it again if it was searched at its own scale only
+        key = self._key(frame, plain=not searched_fully(self._submitted, None, self.every))
+        self._submitted += 1
         if key not in self._pending:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="people")
-            self._pending[key] = self._pool.submit(self.detector.detect, frame.copy())
+            self._pending[key] = self._pool.submit(self.detector.detect, frame.copy(), key[1])
 
-    def detect(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, frame: np.ndarray, plain: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """People in a frame, waiting for a submitted frame's result.
 
         Parameters
         ----------
         frame : ndarray of shape (H, W, 3)
             uint8 BGR frame.
+        plain : bool, default=False
+            As ``PeopleDetector.detect``'s.
 
         Returns
         -------
@@ -139,17 +154,41 @@ class PrefetchDetector:
         """
         # kept until ``clear``: a clip's repeated frames (a frame rate doubled by duplicates)
         # are asked for once each and detected once
-        key = self._key(frame)
+        key = self._key(frame, plain)
         fut = self._pending.get(key)
         if fut is None:
             fut = Future()
-            fut.set_result(self.detector.detect(frame))
+            fut.set_result(self.detector.detect(frame, plain))
             self._pending[key] = fut
         return fut.result()
 
     def clear(self) -> None:
         """Forget the frames submitted and their results (detections still running finish unread)."""
         self._pending.clear()
+        self._submitted = 0
+
+
+def searched_fully(k: int, n: int | None, every: int = DETECT_EVERY) -> bool:
+    """Whether :func:`fit_around_people` searches training frame ``k`` of ``n`` (None: not known
+    yet) with every search of the detector, or at its own scale only
+    (``PeopleDetector.detect(plain=True)``): fully on every ``every``-th frame from the first and
+    on the last.
+
+    Parameters
+    ----------
+    k : int
+        Index of the frame among the training frames, from 0.
+    n : int or None
+        Number of training frames; None: frame ``k`` is not taken for the last.
+    every : int, default=DETECT_EVERY
+        The schedule's step (``detect_every``); < 1 counts as 1.
+
+    Returns
+    -------
+    bool
+        True for a full search.
+    """
+    return k % max(1, int(every)) == 0 or (n is not None and k == n - 1)
 
 
 def moving_fraction(frames: np.ndarray, box: np.ndarray) -> float:
@@ -336,7 +375,7 @@ def fit_around_people(
     model: HorprasertBackground,
     frames: np.ndarray | list[np.ndarray],
     detector: PeopleDetector | None = None,
-    detect_every: int = 5,
+    detect_every: int = DETECT_EVERY,
     box_grow: float = 0.05,
     person_grow: float = 0.03,
     hints: np.ndarray | None = None,
@@ -350,10 +389,11 @@ def fit_around_people(
     frames : ndarray of shape (N, H, W, 3) or list of ndarray of shape (H, W, 3)
         uint8 BGR training frames, N >= 2.
     detector : PeopleDetector or None, default=None
-        People detector; None: :func:`people_detector`.
-    detect_every : int, default=5
+        People detector (``detect(frame, plain)``); None: :func:`people_detector`.
+    detect_every : int, default=DETECT_EVERY
         The detector's boxes on every this many-th frame (and the last) are used; on the other
-        frames (searched too) only those of someone these frames did not show. A frame is searched for
+        frames (searched too, at their own scale only: ``plain``) only those of someone these frames
+        did not show. A frame is searched for
         people in the boxes found within this many frames of it, and in any other box whose
         content it shares (someone standing there still: the detector misses people now and then,
         in a turn or with an arm across the body), but not where a walker was.
@@ -381,7 +421,7 @@ def fit_around_people(
     n, h, w = stack.shape[:3]
     det = detector or people_detector()
     step = max(1, int(detect_every))
-    at = sorted(set(range(0, n, step)) | {n - 1})
+    at = [k for k in range(n) if searched_fully(k, n, step)]
     found = {k: _confirmed(stack, *det.detect(stack[k])) for k in at}  # k -> (boxes, scores, moved)
     hinted: frozenset[tuple[int, int]] = frozenset()
     if hints is not None and len(hints) and box_mask((h, w), np.asarray(hints)).mean() <= _MAX_HINTED_SHARE:
@@ -390,12 +430,14 @@ def fit_around_people(
         hinted = frozenset((0, i) for i in range(before, len(found[0][0])))
     # The frames between are searched too, for someone the schedule's frames did not show: the
     # detector may find a still person on a frame or two only. Only those new boxes are kept (more
-    # boxes of the people already found would only widen the holes in the room).
+    # boxes of the people already found would only widen the holes in the room). At the frame's
+    # own scale only: the searches of the frame continued below and enlarged, three quarters of the
+    # detector's time, found no one there on the real clips whom the schedule's frames missed.
     # Walkers need none of them (the median copes), so a new box is kept only for a still person.
     known = [b for boxes, _, _ in found.values() for b in boxes]
     extra: dict[int, _Found] = {}
     for k in sorted(set(range(n)) - set(at)):
-        boxes, scores, moved = _confirmed(stack, *det.detect(stack[k]))
+        boxes, scores, moved = _confirmed(stack, *det.detect(stack[k], plain=True))
         new = np.array([all(box_iou(b, o) < 0.5 for o in known) for b in boxes], bool)
         if new.any():
             extra[k] = (boxes[new], scores[new], moved[new])
