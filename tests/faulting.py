@@ -91,6 +91,7 @@ def recorder_stalls_camera(workdir: Path, lossless: bool, stopped_s: float = 3.0
     Returns whether the camera stalled while the recorder was stopped (fewer than 10 frames out)
     and the recorder's output.
     """
+    workdir.mkdir(parents=True, exist_ok=True)
     home = Path(tempfile.mkdtemp(prefix="cpr", dir="/tmp"))  # short: unix socket paths are limited
     doc = {
         "policy": "latest",
