@@ -122,9 +122,9 @@ def _masks_part(
 
     ex = SilhouetteExtractor(outlines=labelling)
     if labelling:
+        from counterpart.body.image_sequence import video_info
         from counterpart.nodes.labeller.labeller import PersonObservation, SocialLabeller
         from counterpart.nodes.labeller.signals import SIGNALS, UNKNOWN
-        from counterpart.nodes.silhouette.pipeline import video_info
 
         labeller = SocialLabeller(video_info(path)[0] or 25.0)
     progress = FrameProgress(f"learn avatar{part}")
@@ -205,8 +205,8 @@ def video_recording(
         When no frame decodes, the label file does not match the video's frame count or the person
         is found on no frame (and for a bad label file, see :func:`read_label_file`).
     """
+    from counterpart.body.image_sequence import video_info
     from counterpart.nodes.labeller.signals import SIGNALS
-    from counterpart.nodes.silhouette.pipeline import video_info
 
     say = say or (lambda s: None)
     p = os.fspath(path)

@@ -101,7 +101,7 @@ def calibrate_video(
         For an undecodable video, and when too few upright people were seen to estimate anything
         (the message says how many).
     """
-    from counterpart.nodes.silhouette.pipeline import video_info
+    from counterpart.body.image_sequence import video_info
 
     from .shared_pass import video_silhouettes
 

@@ -13,7 +13,7 @@ import argparse
 import sys
 
 from counterpart.apps.offline import FrameProgress, add_video_arguments, npz_name, positive, run_offline
-from counterpart.nodes.silhouette.backends import BACKEND_NAMES
+from counterpart.nodes.silhouette import BACKEND_NAMES
 
 #: the one-line help of this command in `counterpart --help`
 HELP = "offline: the people's silhouettes of a video file"
@@ -32,15 +32,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from counterpart.nodes.silhouette.pipeline import extract_video
-
     if not positive(args, ("train_frames", "max_frames"), "silhouettes"):
         return 2
     args.out = npz_name(args.out)
-    return run_offline(
-        "silhouettes",
-        args.out,
-        lambda: extract_video(
+
+    def work() -> dict:
+        from counterpart.body.image_sequence import video_info
+
+        video_info(args.video)  # a missing or undecodable video is said before the algorithms are loaded
+        from counterpart.nodes.silhouette.pipeline import extract_video
+
+        return extract_video(
             args.video,
             args.out,
             max_frames=args.max_frames,
@@ -49,8 +51,9 @@ def main(args: argparse.Namespace) -> int:
             backend=args.backend,
             min_area=args.min_area or None,
             n_ctrl=args.n_ctrl,
-        ),
-    )
+        )
+
+    return run_offline("silhouettes", args.out, work)
 
 
 if __name__ == "__main__":

@@ -24,7 +24,7 @@ from counterpart.apps.offline import (
 )
 from counterpart.apps.shared_pass import SharedPass
 from counterpart.body.camera import Camera, load_camera_file
-from counterpart.nodes.silhouette.backends import BACKEND_NAMES
+from counterpart.nodes.silhouette import BACKEND_NAMES
 from counterpart.nodes.tracker.prior import resolve_prior
 from counterpart.nodes.tracker.tracker import SIDES
 
@@ -143,11 +143,13 @@ def main(args: argparse.Namespace) -> int:
         return 2
 
     def work() -> dict:
-        from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video, video_info
+        from counterpart.body.image_sequence import video_info
 
         named = args.camera not in (ESTIMATE, DEFAULT)
         camera = load_camera(args.camera) if named else None
         video_info(args.video)  # a missing or undecodable video is said before a minute of building a prior
+        from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, iter_video
+
         source = "file" if named else DEFAULT
         frames = None
         if args.camera == ESTIMATE:

@@ -88,7 +88,7 @@ def track_video(
     Raises FileNotFoundError / ValueError (a missing or undecodable video, bad people, a camera
     calibrated for another frame size) before anything is written.
     """
-    from counterpart.nodes.silhouette.pipeline import video_info
+    from counterpart.body.image_sequence import video_info
 
     from .shared_pass import video_silhouettes
 

@@ -137,11 +137,12 @@ if __package__ in (None, ""):  # run as a script: make the repository importable
 import cv2
 import numpy as np
 
+from counterpart.body.image_sequence import read_frames
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.skeleton import JOINT_INDEX
 from counterpart.nodes.silhouette.colour_switch import ColourSwitchConfig
 from counterpart.nodes.silhouette.people import CUT_OFF_BELOW
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, process_frames, read_frames
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, process_frames
 from counterpart.sim.camera_shake import shake_path, shaken
 from counterpart.sim.infrared import infrared_frames
 

@@ -126,12 +126,12 @@ from real_partner import (  # bench/ is on sys.path as a script
 from real_silhouettes import VIS, cut_row, reference_collapsed
 
 from counterpart.body.camera import Camera
+from counterpart.body.image_sequence import read_frames, video_info
 from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.people_detector import PeopleDetector
 from counterpart.body.pose import neutral_pose
 from counterpart.body.skeleton import DEFAULT_DIMS, JOINT_INDEX, JOINTS, N_JOINTS
 from counterpart.nodes.responder.frames import actor_frame
-from counterpart.nodes.silhouette.pipeline import read_frames, video_info
 from counterpart.nodes.tracker.likelihood import LikelihoodConfig
 from counterpart.nodes.tracker.tracker import InitConfig, TrackerConfig
 

@@ -2,10 +2,11 @@
 ground truth (CDnet, PETS, many lab recordings), for every command and node that takes a recording.
 
 The camera node's folder source (``counterpart.nodes.camera.sources.ImageFolderSource``) and the
-offline commands' reader (``counterpart.nodes.silhouette.pipeline``) share the file listing, so
-both take the same frames in the same order. :class:`ImageSequenceCapture` answers the part of
-``cv2.VideoCapture``'s interface that a sequential reader uses, so code written for a video file
-reads a folder unchanged.
+offline commands' reader (:func:`open_video`, :func:`read_frames`, :func:`video_info`) share the
+file listing, so both take the same frames in the same order. :class:`ImageSequenceCapture`
+answers the part of ``cv2.VideoCapture``'s interface that a sequential reader uses, so code
+written for a video file reads a folder unchanged. The offline readers live here, below the nodes,
+so that a command checks its video (missing, undecodable) before it imports any algorithm.
 """
 
 from __future__ import annotations
@@ -131,4 +132,102 @@ class ImageSequenceCapture:
         self._index = len(self.files) + 1
 
 
-__all__ = ["IMAGE_PATTERN", "ImageSequenceCapture", "list_images"]
+__all__ = ["IMAGE_PATTERN", "ImageSequenceCapture", "list_images", "open_video", "read_frames", "video_info"]
+
+
+def open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture | ImageSequenceCapture:
+    """A video file, or a folder of numbered images read as one (:class:`ImageSequenceCapture`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file or the folder.
+
+    Returns
+    -------
+    cv2.VideoCapture or ImageSequenceCapture
+        The opened reader.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file or folder.
+    ValueError
+        For a file OpenCV cannot open.
+    """
+    p = os.fspath(path)
+    if os.path.isdir(p):
+        return ImageSequenceCapture(p)
+    if not os.path.isfile(p):
+        raise FileNotFoundError(f"video file or image folder not found: {p!r}")
+    cap = cv2.VideoCapture(p)
+    if not cap.isOpened():
+        cap.release()
+        raise ValueError(f"cannot read video {p!r}: OpenCV could not open it (unknown format or codec)")
+    return cap
+
+
+def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> np.ndarray:
+    """The first frames of a video that decode.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file, or a folder of numbered PNG or JPEG frames.
+    max_frames : int or None, default=None
+        Frames to read at most (None: all).
+
+    Returns
+    -------
+    ndarray of shape (N, H, W, 3), dtype uint8
+        BGR frames.
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file or folder.
+    ValueError
+        For one OpenCV cannot decode.
+    """
+    cap = open_video(path)
+    frames = []
+    try:
+        while max_frames is None or len(frames) < max_frames:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            frames.append(frame)
+    finally:
+        cap.release()
+    if not frames:
+        raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
+    return np.stack(frames)
+
+
+def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
+    """The frame rate and frame count a video file declares.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The video file, or a folder of numbered PNG or JPEG frames.
+
+    Returns
+    -------
+    fps : float
+        Declared frame rate, Hz (0 where it declares none).
+    n_frames : int
+        Declared frame count (0 where it declares none; a guide for progress, not a promise).
+
+    Raises
+    ------
+    FileNotFoundError
+        For a missing file or folder.
+    ValueError
+        For one OpenCV cannot open.
+    """
+    cap = open_video(path)
+    try:
+        return float(cap.get(cv2.CAP_PROP_FPS) or 0.0), max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
+    finally:
+        cap.release()

@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.body.image_sequence import read_frames
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from tests.shared_data import DATA
 
 #: one clip of set 1: a person walks up to another and points (both in view from the first frame)

@@ -11,8 +11,8 @@ import cv2
 import numpy as np
 import pytest
 
-from counterpart.body.image_sequence import ImageSequenceCapture, list_images
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames, video_info
+from counterpart.body.image_sequence import ImageSequenceCapture, list_images, read_frames, video_info
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.sim.flat_scenes import two_person_sequence
 from tests.launching import run_cli
 

@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
+from counterpart.body.image_sequence import read_frames
 from counterpart.nodes.silhouette.background import (
     BACKGROUND,
     FOREGROUND,
@@ -29,7 +30,7 @@ from counterpart.nodes.silhouette.people import (
     people_detector,
     searched_fully,
 )
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from tests.shared_data import DATA
 from tests.test_silhouette_background import PERSON_BGR, XX, YY, H, W
 from tests.test_silhouette_background import person_mask as ellipse

@@ -6,7 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor, read_frames
+from counterpart.body.image_sequence import read_frames
+from counterpart.nodes.silhouette.pipeline import SilhouetteExtractor
 from counterpart.nodes.silhouette.regions import Person, PersonTracker, clean_mask, components_with_stats
 from tests.shared_data import DATA
 

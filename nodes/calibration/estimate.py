@@ -49,7 +49,6 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
 from counterpart.body.camera import Camera
@@ -782,6 +781,10 @@ def _robust_fit(fun: Any, x0: np.ndarray, args: tuple = (), bounds: tuple = (-np
     residuals whose squares overflow; the fit rejects such a step as it should, so numpy's
     overflow warnings are silenced here rather than printed to a user among the estimate's lines.
     """
+    # here, not at the top: a command that only checks its options (``CalibrationConfig``), and a
+    # calibration node until its first estimate, do not wait for scipy.optimize's import
+    from scipy.optimize import least_squares
+
     with np.errstate(over="ignore", invalid="ignore"):
         return least_squares(
             fun,
@@ -1054,6 +1057,8 @@ def _free_family_cost(lines: LineFamilies, j: int, scale: np.ndarray) -> float:
         return np.array([np.sin(a[0]) * np.cos(a[1]), np.sin(a[0]) * np.sin(a[1]), np.cos(a[0])])
 
     a0 = np.array([np.arccos(np.clip(v[2], -1.0, 1.0)), np.arctan2(v[1], v[0])])
+    from scipy.optimize import least_squares  # as in _robust_fit
+
     with np.errstate(over="ignore", invalid="ignore"):
         res = least_squares(lambda a: segment_angles(seg, vp(a)) / sc, a0, loss="soft_l1", method="trf", max_nfev=50)
     return float(res.cost)

@@ -22,7 +22,7 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
-from . import kernels
+from . import BACKEND_NAMES, kernels
 from .background import BACKGROUND, FOREGROUND, SHADOW, HorprasertBackground, as_frame_stack
 from .body_shadow import BodyShadowConfig, reclaim_body_shadow
 from .deferred import DeferredStep
@@ -30,8 +30,6 @@ from .denoise import DenoiseConfig, frame_noise, smooth, smoothing_sigma
 from .people import fit_around_people
 from .samples import SampleConsensus
 from .shake import ShakeConfig, ShakeEstimator, align, align_stack, unalign_labels
-
-BACKEND_NAMES: tuple[str, ...] = ("horprasert", "mog2", "knn", "cnt", "gsoc")
 
 
 class Subtractor(Protocol):

@@ -15,12 +15,11 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import numpy as np
 
 from counterpart.body import spline
 from counterpart.body.camera import Camera, camera_for_size
-from counterpart.body.image_sequence import ImageSequenceCapture
+from counterpart.body.image_sequence import open_video, video_info
 
 from . import kernels
 from .backends import HorprasertSubtractor, make_subtractor
@@ -391,86 +390,6 @@ def silhouette_spline(mask: np.ndarray, n: int = 32, ref_window: float = 0.05) -
     return spline._fit_operator(m, n) @ samples, p[start].copy()
 
 
-def _open_video(path: str | os.PathLike[str]) -> cv2.VideoCapture | ImageSequenceCapture:
-    """A video file, or a folder of numbered images read as one (``body.image_sequence``)."""
-    p = os.fspath(path)
-    if os.path.isdir(p):
-        return ImageSequenceCapture(p)
-    if not os.path.isfile(p):
-        raise FileNotFoundError(f"video file or image folder not found: {p!r}")
-    cap = cv2.VideoCapture(p)
-    if not cap.isOpened():
-        cap.release()
-        raise ValueError(f"cannot read video {p!r}: OpenCV could not open it (unknown format or codec)")
-    return cap
-
-
-def read_frames(path: str | os.PathLike[str], max_frames: int | None = None) -> np.ndarray:
-    """The first frames of a video that decode.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The video file, or a folder of numbered PNG or JPEG frames.
-    max_frames : int or None, default=None
-        Frames to read at most (None: all).
-
-    Returns
-    -------
-    ndarray of shape (N, H, W, 3), dtype uint8
-        BGR frames.
-
-    Raises
-    ------
-    FileNotFoundError
-        For a missing file or folder.
-    ValueError
-        For one OpenCV cannot decode.
-    """
-    cap = _open_video(path)
-    frames = []
-    try:
-        while max_frames is None or len(frames) < max_frames:
-            ok, frame = cap.read()
-            if not ok:
-                break
-            frames.append(frame)
-    finally:
-        cap.release()
-    if not frames:
-        raise ValueError(f"cannot read video {os.fspath(path)!r}: no frame decodes")
-    return np.stack(frames)
-
-
-def video_info(path: str | os.PathLike[str]) -> tuple[float, int]:
-    """The frame rate and frame count a video file declares.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The video file, or a folder of numbered PNG or JPEG frames.
-
-    Returns
-    -------
-    fps : float
-        Declared frame rate, Hz (0 where it declares none).
-    n_frames : int
-        Declared frame count (0 where it declares none; a guide for progress, not a promise).
-
-    Raises
-    ------
-    FileNotFoundError
-        For a missing file or folder.
-    ValueError
-        For one OpenCV cannot open.
-    """
-    cap = _open_video(path)
-    try:
-        return float(cap.get(cv2.CAP_PROP_FPS) or 0.0), max(0, int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0))
-    finally:
-        cap.release()
-
-
 def iter_video(
     path: str | os.PathLike[str],
     extractor: SilhouetteExtractor,
@@ -514,7 +433,7 @@ def iter_video(
     ValueError
         For one OpenCV cannot decode (fewer than 2 training frames, or no frame at all).
     """
-    cap = _open_video(path)
+    cap = open_video(path)
     if isinstance(extractor.subtractor, HorprasertSubtractor):
         train = []
         while len(train) < train_frames:
@@ -527,7 +446,7 @@ def iter_video(
             raise ValueError(f"cannot read video {os.fspath(path)!r}: fewer than 2 frames decode")
         extractor.fit_background(train, robust=True)
         cap.release()
-        cap = _open_video(path)
+        cap = open_video(path)
     n = 0
 
     def frames() -> Iterator[np.ndarray]:
