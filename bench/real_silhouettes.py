@@ -624,6 +624,8 @@ def main(argv: list[str] | None = None) -> int:
         paths = clip_paths(split)[:: args.every][: args.max_clips]
         if args.only:
             paths = [p for p in paths if p.stem in args.only.split(",")]
+        if not paths:  # --only named no clip of this split
+            continue
         rows: dict[str, list[dict[str, Any]]] = {m: [] for m in (*methods, *passes)}
         for p in paths:
             line = {}
@@ -644,7 +646,10 @@ def main(argv: list[str] | None = None) -> int:
             }
             print(p.stem, json.dumps(report["clips"][p.stem]), flush=True)
         report[split] = {m: summarise(rows[m]) for m in rows}
-    main_split = "report" if "report" in splits else splits[0]
+    done = [split for split in splits if split in report]
+    if not done:
+        ap.error(f"--only {args.only!r}: no clip of the split(s) {', '.join(splits)} has that name")
+    main_split = "report" if "report" in done else done[0]
     for m in passes:
         for k in ("people_found", "keypoint_coverage", "extra_people", "person_clips_covered", "people_share"):
             report[f"{k}_{m}"] = report[main_split][m][k]
