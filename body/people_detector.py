@@ -113,7 +113,7 @@ class PeopleDetector:
             uint8 BGR frame.
         plain : bool, default=False
             Search the frame as it is only: neither the frame continued below (``below_frac``) nor
-            the frame enlarged (``enlarge``), which together cost about three times as much.
+            the frame enlarged (``enlarge``), which cost two to four times as much as it.
 
         Returns
         -------

@@ -432,7 +432,8 @@ def fit_around_people(
     # detector may find a still person on a frame or two only. Only those new boxes are kept (more
     # boxes of the people already found would only widen the holes in the room). At the frame's
     # own scale only: the searches of the frame continued below and enlarged, three quarters of the
-    # detector's time, found no one there on the real clips whom the schedule's frames missed.
+    # detector's time, changed what was learnt on none of the 60 real clips as they come (on 6 of
+    # the 120 cut off above the knees or shrunk to a third, no worse over them).
     # Walkers need none of them (the median copes), so a new box is kept only for a still person.
     known = [b for boxes, _, _ in found.values() for b in boxes]
     extra: dict[int, _Found] = {}
