@@ -26,7 +26,7 @@ model's labels.
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
@@ -36,13 +36,13 @@ from counterpart.bus import Input, Node, Output, Param
 from counterpart.messages import Frame, Silhouettes
 from counterpart.messages.silhouette import PersonShape
 
-from .backends import BACKEND_NAMES
-from .body_shadow import BodyShadowConfig
-from .colour_switch import ColourSwitchConfig
-from .people import PrefetchDetector
-from .pipeline import FrameResult, SilhouetteExtractor
-from .regions import Person
-from .switch_replay import SwitchReplay
+from . import BACKEND_NAMES
+
+if TYPE_CHECKING:
+    from .people import PrefetchDetector
+    from .pipeline import FrameResult, SilhouetteExtractor
+    from .regions import Person
+    from .switch_replay import SwitchReplay
 
 _NO_CTRL = np.zeros((0, 2), np.float32)
 _NO_POINT = np.full(2, np.nan, np.float32)
@@ -285,6 +285,10 @@ class Silhouette(Node):
 
     def setup(self) -> None:
         """Start without an extractor: one is made on the first frame, for its size and colour."""
+        # the algorithms (numba's kernels, scipy) are loaded as the node starts, not where a launcher
+        # imports this module to check the node's parameters (a second and more before every graph)
+        from . import pipeline  # noqa: F401
+
         if self.p["opencv_threads"] > 0:
             cv2.setNumThreads(self.p["opencv_threads"])
         self.extractor: SilhouetteExtractor | None = None
@@ -324,6 +328,11 @@ class Silhouette(Node):
             )
 
     def _new_extractor(self, mono: bool) -> SilhouetteExtractor:
+        from .body_shadow import BodyShadowConfig
+        from .colour_switch import ColourSwitchConfig
+        from .people import PrefetchDetector
+        from .pipeline import SilhouetteExtractor
+
         p = self.p
         backend_params: dict[str, Any] = {}
         if p["backend"] == "horprasert":
@@ -431,6 +440,8 @@ class Silhouette(Node):
             return
         if self.replay:
             if self.switch is None or self.switch.extractor is not self.extractor:
+                from .switch_replay import SwitchReplay
+
                 self.switch = SwitchReplay(self.extractor, self.p["train_frames"])
             for held_msg, result in self.switch.push(msg, image):
                 self._publish(held_msg, result)
