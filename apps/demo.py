@@ -102,13 +102,16 @@ def _build_prior() -> None:
 
 def _compile_kernels() -> None:
     """Load the nodes' numba kernels, compiling them into their cache on an install's first run (in
-    a worker): the graph's nodes then load them instead of compiling for seconds while the frames go on.
+    a worker): the graph's nodes then load them instead of compiling for seconds while the frames go
+    on. Remembered (``kernel_cache``), so that later runs need not load them to find out.
     """
+    from counterpart.apps.kernel_cache import remember_kernels
     from counterpart.nodes.silhouette.kernels import warm
     from counterpart.nodes.tracker.likelihood import warm_kernels
 
     warm()
     warm_kernels()
+    remember_kernels()
 
 
 def _build_responder_model(name: str) -> None:
@@ -133,13 +136,16 @@ def ensure_models(serve: bool = False) -> None:
     from concurrent.futures import ProcessPoolExecutor
     from multiprocessing import active_children, get_context
 
+    from counterpart.apps.kernel_cache import kernels_cached
     from counterpart.nodes.responder.models import default_model_path
     from counterpart.nodes.tracker.prior import default_prior_path
 
     names = RESPONDER_MODELS + (SERVE_MODELS if serve else ())
     # the longest first, so that the short ones fill the other core
     jobs = [(_build_responder_model, (n,)) for n in names[:1]] + [(_build_prior, ())]
-    jobs += [(_build_responder_model, (n,)) for n in names[1:]] + [(_compile_kernels, ())]
+    jobs += [(_build_responder_model, (n,)) for n in names[1:]]
+    if not kernels_cached():
+        jobs.append((_compile_kernels, ()))
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
     missing = not default_prior_path().exists() or not all(default_model_path(n).exists() for n in names)

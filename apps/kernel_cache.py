@@ -1,0 +1,79 @@
+"""Whether the nodes' numba kernels are compiled into numba's on-disk cache already.
+
+``counterpart demo`` compiles them before the graph starts on an install's first run (the nodes
+would otherwise compile for seconds while the frames go on). Loading them to find out costs more
+than a second on every later run, so what was compiled is remembered in a stamp in the cache's
+folder (numba keeps a ``NAME.nbi`` index per kernel in the ``__pycache__`` folder beside its
+module): the kernels' source files and those index files, with their sizes and modification
+times. Any change to either (a kernel edited, the cache deleted or grown) compiles and loads them
+again; a cache elsewhere (``NUMBA_CACHE_DIR``) is never taken as compiled.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import importlib.util
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+#: the modules whose kernels the graph's nodes run
+KERNEL_MODULES = (
+    "counterpart.nodes.silhouette.kernels",
+    "counterpart.nodes.tracker.kernels",
+    "counterpart.body.kinematics_kernel",
+)
+
+
+def _source(name: str) -> Path | None:
+    spec = importlib.util.find_spec(name)
+    return None if spec is None or spec.origin is None else Path(spec.origin)
+
+
+def stamp_path() -> Path | None:
+    """The stamp's file, in the cache folder of the first of ``KERNEL_MODULES``."""
+    source = _source(KERNEL_MODULES[0])
+    return None if source is None else source.parent / "__pycache__" / "counterpart-kernels.json"
+
+
+def _files(paths: list[Path]) -> list[list[Any]]:
+    return [[str(p), p.stat().st_mtime_ns, p.stat().st_size] for p in sorted(paths)]
+
+
+def cache_state() -> dict[str, Any] | None:
+    """The version of numba, and each kernel module's source file and cache index files (path,
+    modification time in ns, size); None where a module has no index file beside it (never
+    compiled, or cached elsewhere: ``NUMBA_CACHE_DIR``), which no stamp matches.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None
+    files: list[list[Any]] = []
+    for name in KERNEL_MODULES:
+        source = _source(name)
+        if source is None:
+            return None
+        index = list((source.parent / "__pycache__").glob(f"{source.stem}.*.nbi"))
+        if not index:
+            return None
+        files += _files([source, *index])
+    return {"numba": importlib.metadata.version("numba"), "files": files}
+
+
+def kernels_cached() -> bool:
+    """True when the stamp says the kernels were compiled into the cache as it is now."""
+    state, path = cache_state(), stamp_path()
+    try:
+        return state is not None and path is not None and json.loads(path.read_text()) == state
+    except (OSError, ValueError):
+        return False
+
+
+def remember_kernels() -> None:
+    """Write the stamp for the cache as it is now (after the kernels were loaded or compiled)."""
+    state, path = cache_state(), stamp_path()
+    if state is None or path is None:
+        return
+    part = path.with_suffix(".tmp")
+    part.write_text(json.dumps(state))
+    part.replace(path)
