@@ -15,6 +15,7 @@ import importlib.metadata
 import importlib.util
 import json
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -42,9 +43,9 @@ def _files(paths: list[Path]) -> list[list[Any]]:
 
 
 def cache_state() -> dict[str, Any] | None:
-    """The version of numba, and each kernel module's source file and cache index files (path,
-    modification time in ns, size); None where a module has no index file beside it (never
-    compiled, or cached elsewhere: ``NUMBA_CACHE_DIR``), which no stamp matches.
+    """The version of numba, and each kernel module's source file and this Python's cache index
+    files (path, modification time in ns, size); None where a module has no index file beside it
+    (never compiled, or cached elsewhere: ``NUMBA_CACHE_DIR``), which no stamp matches.
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
@@ -53,7 +54,9 @@ def cache_state() -> dict[str, Any] | None:
         source = _source(name)
         if source is None:
             return None
-        index = list((source.parent / "__pycache__").glob(f"{source.stem}.*.nbi"))
+        # this Python's index files only (numba names them NAME-LINE.pyXY.nbi)
+        tag = f"py{sys.version_info[0]}{sys.version_info[1]}"
+        index = list((source.parent / "__pycache__").glob(f"{source.stem}.*.{tag}.nbi"))
         if not index:
             return None
         files += _files([source, *index])

@@ -4,6 +4,7 @@ they are compiled (``counterpart.apps.kernel_cache``), on the real kernels and t
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -39,6 +40,14 @@ def test_the_kernels_count_as_compiled_once_loaded_and_until_their_cache_or_sour
     assert not kernel_cache.kernels_cached()
     kernel_cache.remember_kernels()
     assert kernel_cache.kernels_cached()
+    # another Python's index files (numba names them by its version) say nothing of this one's
+    source = Path(importlib.util.find_spec(kernel_cache.KERNEL_MODULES[0]).origin)
+    other = source.parent / "__pycache__" / f"{source.stem}.not_a_kernel-1.py20.nbi"
+    other.write_bytes(b"")
+    try:
+        assert kernel_cache.kernels_cached()
+    finally:
+        other.unlink()
 
 
 def test_a_cache_kept_elsewhere_is_never_taken_as_compiled(stamp: Path, monkeypatch: pytest.MonkeyPatch) -> None:
