@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -163,3 +165,18 @@ def test_replace_with_an_old_module_path_names_the_new_one(tmp_path: Path) -> No
     f = write_launch(tmp_path / "g.yaml", {"nodes": GOOD})
     with pytest.raises(LaunchError, match="write 'counterpart.nodes.camera'"):
         check(load(f, replace={"sink": "nodes.camera"}))
+
+
+def test_checking_the_shipped_graphs_loads_no_algorithm_library() -> None:
+    # the check imports every node's module for its parameters, before any node starts: in a process
+    # of its own, so that what this test session loaded before does not count
+    code = (
+        "import sys\n"
+        "from counterpart.bus.launchfile import check, find_launch_file, load\n"
+        "for name in ('lockstep.yaml', 'demo.yaml', 'live.yaml'):\n"
+        "    check(load(find_launch_file(name)))\n"
+        "print(' '.join(m for m in ('numba', 'scipy', 'sklearn', 'hmmlearn') if m in sys.modules))\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.strip() == "", f"loaded by the check: {res.stdout.strip()}"
