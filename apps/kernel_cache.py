@@ -73,10 +73,16 @@ def kernels_cached() -> bool:
 
 
 def remember_kernels() -> None:
-    """Write the stamp for the cache as it is now (after the kernels were loaded or compiled)."""
+    """Write the stamp for the cache as it is now (after the kernels were loaded or compiled); where
+    the folder cannot be written (an install read by others), nothing: the kernels are then loaded
+    on every run, as without the stamp.
+    """
     state, path = cache_state(), stamp_path()
     if state is None or path is None:
         return
     part = path.with_suffix(".tmp")
-    part.write_text(json.dumps(state))
-    part.replace(path)
+    try:
+        part.write_text(json.dumps(state))
+        part.replace(path)
+    except OSError:
+        part.unlink(missing_ok=True)

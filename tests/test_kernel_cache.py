@@ -59,3 +59,10 @@ def test_a_cache_kept_elsewhere_is_never_taken_as_compiled(stamp: Path, monkeypa
     kernel_cache.remember_kernels()  # writes nothing it could later match
     monkeypatch.delenv("NUMBA_CACHE_DIR")
     assert kernel_cache.kernels_cached()
+
+
+def test_a_stamp_that_cannot_be_written_is_left_out(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # a folder the demo cannot write in (here: one that is not there): the kernels load on every run
+    monkeypatch.setattr(kernel_cache, "stamp_path", lambda: tmp_path / "not-there" / "stamp.json")
+    kernel_cache.remember_kernels()
+    assert not kernel_cache.kernels_cached() and not (tmp_path / "not-there").exists()
