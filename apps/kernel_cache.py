@@ -39,7 +39,8 @@ def stamp_path() -> Path | None:
 
 
 def _files(paths: list[Path]) -> list[list[Any]]:
-    return [[str(p), p.stat().st_mtime_ns, p.stat().st_size] for p in sorted(paths)]
+    stats = [(p, p.stat()) for p in sorted(paths)]
+    return [[str(p), st.st_mtime_ns, st.st_size] for p, st in stats]
 
 
 def cache_state() -> dict[str, Any] | None:
@@ -49,13 +50,13 @@ def cache_state() -> dict[str, Any] | None:
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
+    # this Python's index files only (numba names them NAME-LINE.pyXY.nbi)
+    tag = f"py{sys.version_info[0]}{sys.version_info[1]}"
     files: list[list[Any]] = []
     for name in KERNEL_MODULES:
         source = _source(name)
         if source is None:
             return None
-        # this Python's index files only (numba names them NAME-LINE.pyXY.nbi)
-        tag = f"py{sys.version_info[0]}{sys.version_info[1]}"
         index = list((source.parent / "__pycache__").glob(f"{source.stem}.*.{tag}.nbi"))
         if not index:
             return None
