@@ -100,20 +100,6 @@ def _build_prior() -> None:
     load_default_prior(progress=True)
 
 
-def _compile_kernels() -> None:
-    """Load the nodes' numba kernels, compiling them into their cache on an install's first run (in
-    a worker): the graph's nodes then load them instead of compiling for seconds while the frames go
-    on. Remembered (``kernel_cache``), so that later runs need not load them to find out.
-    """
-    from counterpart.apps.kernel_cache import remember_kernels
-    from counterpart.nodes.silhouette.kernels import warm
-    from counterpart.nodes.tracker.likelihood import warm_kernels
-
-    warm()
-    warm_kernels()
-    remember_kernels()
-
-
 def _build_responder_model(name: str) -> None:
     """Load or build the responder's default model ``name`` (in a worker)."""
     from counterpart.nodes.responder.models import load_default
@@ -125,8 +111,9 @@ def ensure_models(serve: bool = False) -> None:
     """Build the default model files the graph loads (and, with ``serve``, those the live page
     offers), when they are not cached yet, and compile the nodes' kernels on an install's first run.
 
-    Missing models are built side by side, one process per core (they are independent and each
-    is single-threaded Python for most of its time); cached ones are only loaded.
+    Missing models, and the kernels' parts to compile, are built side by side, one process per core
+    (they are independent and each is single-threaded for most of its time); cached ones are only
+    loaded.
 
     Parameters
     ----------
@@ -136,7 +123,7 @@ def ensure_models(serve: bool = False) -> None:
     from concurrent.futures import ProcessPoolExecutor
     from multiprocessing import active_children, get_context
 
-    from counterpart.apps.kernel_cache import kernels_cached
+    from counterpart.apps.kernel_cache import COMPILE_PARTS, compile_kernels, kernels_cached, remember_kernels
     from counterpart.nodes.responder.models import default_model_path
     from counterpart.nodes.tracker.prior import default_prior_path
 
@@ -144,15 +131,21 @@ def ensure_models(serve: bool = False) -> None:
     # the longest first, so that the short ones fill the other core
     jobs = [(_build_responder_model, (n,)) for n in names[:1]] + [(_build_prior, ())]
     jobs += [(_build_responder_model, (n,)) for n in names[1:]]
-    if not kernels_cached():
-        jobs.append((_compile_kernels, ()))
+    # the nodes' numba kernels, compiled on an install's first run (in parts, side by side): the
+    # graph's nodes then load them instead of compiling for seconds while the frames go on; then
+    # remembered (``kernel_cache``), so that later runs need not load them to find out
+    compiling = not kernels_cached()
+    if compiling:
+        jobs += [(compile_kernels, (part, COMPILE_PARTS)) for part in range(COMPILE_PARTS)]
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
     missing = not default_prior_path().exists() or not all(default_model_path(n).exists() for n in names)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    if not missing or cores < 2:
+    if not (missing or compiling) or cores < 2:
         for fn, fn_args in jobs:
             fn(*fn_args)
+        if compiling:
+            remember_kernels()
         return
     # a builder that dies (killed, out of memory) fails its future at once, where a
     # multiprocessing.Pool would wait for its result for ever
@@ -174,6 +167,8 @@ def ensure_models(serve: bool = False) -> None:
                 part.unlink(missing_ok=True)
         raise
     pool.shutdown()
+    if compiling:
+        remember_kernels()
 
 
 def contact_sheet(video: Path, out: Path, n: int = 12, cols: int = 4) -> bool:

@@ -27,6 +27,34 @@ KERNEL_MODULES = (
 )
 
 
+#: processes an install's first compile of the kernels is shared between (:func:`compile_kernels`)
+COMPILE_PARTS = 2
+
+
+def compile_kernels(part: int = 0, parts: int = 1) -> None:
+    """Load the nodes' numba kernels, compiling into their cache those that are not there yet (an
+    install's first run): every ``parts``-th of the silhouette node's from the ``part``-th, and with
+    the last part the tracker's. Run one part in each of ``parts`` processes, they compile side by
+    side (numba compiles on one core; each kernel has its own cache files).
+
+    Parameters
+    ----------
+    part, parts : int, default=0, 1
+        Which part, of how many.
+
+    Raises
+    ------
+    ValueError
+        If ``part`` is not one of ``range(parts)``.
+    """
+    from counterpart.nodes.silhouette.kernels import warm
+    from counterpart.nodes.tracker.likelihood import warm_kernels
+
+    warm(part, parts)
+    if part == parts - 1:
+        warm_kernels()
+
+
 def _source(name: str) -> Path | None:
     spec = importlib.util.find_spec(name)
     return None if spec is None or spec.origin is None else Path(spec.origin)

@@ -20,10 +20,17 @@ def demo_models(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def compiled_kernels() -> None:
     """The numba kernels (the silhouette models', the tracker's likelihood) compiled into their
     cache once, before the first test: on a fresh install the first node process to need them would
-    otherwise compile them for several seconds inside whichever graph test comes first.
+    otherwise compile them for several seconds inside whichever graph test comes first. Where they
+    are not cached yet, the parts are compiled side by side, one process each, as the demo does.
     """
-    from counterpart.nodes.silhouette.kernels import warm
-    from counterpart.nodes.tracker.likelihood import warm_kernels
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
 
-    warm()
-    warm_kernels()
+    from counterpart.apps.kernel_cache import COMPILE_PARTS, compile_kernels, kernels_cached
+
+    if kernels_cached():
+        compile_kernels()  # only loads them
+        return
+    with ProcessPoolExecutor(COMPILE_PARTS, mp_context=get_context("spawn")) as pool:
+        for done in [pool.submit(compile_kernels, part, COMPILE_PARTS) for part in range(COMPILE_PARTS)]:
+            done.result()

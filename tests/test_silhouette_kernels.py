@@ -7,6 +7,10 @@ alone sums in float64: it must agree to float32 rounding, see its test).
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+
 import cv2
 import numpy as np
 import pytest
@@ -660,3 +664,27 @@ def test_warm_runs_every_kernel_on_the_models_argument_types() -> None:
         "head_first_samples",
     ):
         assert getattr(kernels, name).signatures, name
+
+
+def test_the_parts_of_warm_share_out_every_kernel_once() -> None:
+    # a process of its own: in this one the earlier tests have run the kernels already
+    code = """
+import json
+import numba
+from counterpart.nodes.silhouette import kernels as k
+
+jit = {n: f for n, f in vars(k).items() if isinstance(f, numba.core.registry.CPUDispatcher)}
+kernels = sorted(n for n, f in jit.items() if f.targetoptions.get("inline") != "always")
+ran = lambda: {n for n, f in jit.items() if f.signatures}
+k.warm(0, 2)
+first = ran()
+k.warm(1, 2)
+print(json.dumps([kernels, sorted(first), sorted(ran() - first)]))
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    every, first, second = json.loads(res.stdout.strip().splitlines()[-1])
+    assert first and second and not set(first) & set(second)
+    assert sorted(first + second) == every  # each kernel in one part, the helpers inlined into them
+    with pytest.raises(ValueError, match="part 2 of 2"):
+        kernels.warm(2, 2)

@@ -17,6 +17,8 @@ float32 box filters before).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numba
 import numpy as np
 
@@ -1128,10 +1130,10 @@ def leg_ncc(flat: np.ndarray, sh: np.ndarray, frame: np.ndarray, background: np.
     return out
 
 
-def warm() -> None:
-    """Load (or, on the first run of an install, compile) every kernel for the argument types the
-    models pass, on tiny inputs: called when a model is fitted, so that the first frames after
-    the training do not wait for it (tens of ms from the cache, seconds to compile).
+def _warm_calls() -> list[Callable[[], object]]:
+    """One call a kernel (the three that learn the samples together: they share ``learnable``'s
+    output), on tiny inputs of the argument types the models pass; the costliest to compile first,
+    so that every ``parts``-th of them from any start (:func:`warm`) takes about as long.
     """
     h, w, n = 2, 4, 3
     npx = h * w
@@ -1142,50 +1144,88 @@ def warm() -> None:
     f32 = np.zeros(npx, np.float32)
     idx = np.arange(2, dtype=np.int64)
     one, zero = np.float32(1.0), np.float32(0.0)
-    cand = learnable(idx, labels, f32.copy(), one)
-    learn_own(samples, box, f32.copy(), px, cand, idx, one, True)
-    learn_neighbours(samples, box, px, cand, idx, idx, h, w, labels, f32.copy(), one)
-    planes = [np.zeros(npx, np.uint8) for _ in range(3)] + [np.zeros(npx, np.float32) for _ in range(12)]
-    classify(*planes, labels.copy(), f32.copy())
     terms = (samples, box, f32, f32, one, one, one, 2)
-    explained(idx, px, *terms)
-    veto(labels, px, *terms)
-    region_rows(np.zeros(npx, np.int32), idx, w, 1)
-    shadow_masks(labels.reshape(h, w), np.uint8(1), np.uint8(2))
-    leg_pixels(
-        np.zeros((1, 1, 2), np.int32),
-        labels.reshape(h, w),
-        np.zeros((h, w), np.int32),
-        idx,
-        idx,
-        np.zeros((h, w), bool),
-        True,
-        0.1,
-        0.05,
-        0.15,
-    )
-    advance_still(np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one)
     offsets = np.zeros(1, np.int64)
-    feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one)
-    # the background's grey levels: a view into the padded array (``HorprasertBackground.grey_``)
-    leg_ncc(
-        idx, labels.reshape(h, w), np.zeros((h, w, 3), np.uint8), np.zeros((h + 2, w + 2), np.float32)[1:-1, 1:-1], 1
-    )
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     # the tracker's masks: whole arrays (compares) and crops of them (views)
     crop = np.ones((h, 2 * w), bool)
-    for c in (crop, crop[:, ::2]):
-        for comp in (np.zeros((h, w), np.uint16), np.zeros((h, w), np.int32)):
-            overlap_counts(comp, c, -1, 0, 1)
-        mask_moments(c)
-    head_first_samples(pts, pts[0], pts[1], pts[:, 0].copy(), 2, 4)
-    texture_ncc(
-        idx,
-        labels.reshape(h, w),
-        np.uint8(1),
-        np.zeros((h + 2, w + 2), np.float32),
-        np.zeros((3, h, w), np.float32),
-        one,
-        np.zeros((h, w, 3), np.uint8),
-        1,
-    )
+    crops = (crop, crop[:, ::2])
+
+    def learning() -> None:
+        cand = learnable(idx, labels, f32.copy(), one)
+        learn_own(samples, box, f32.copy(), px, cand, idx, one, True)
+        learn_neighbours(samples, box, px, cand, idx, idx, h, w, labels, f32.copy(), one)
+
+    def overlaps() -> None:
+        for c in crops:
+            for comp in (np.zeros((h, w), np.uint16), np.zeros((h, w), np.int32)):
+                overlap_counts(comp, c, -1, 0, 1)
+
+    planes = [np.zeros(npx, np.uint8) for _ in range(3)] + [np.zeros(npx, np.float32) for _ in range(12)]
+    return [
+        learning,
+        lambda: leg_pixels(
+            np.zeros((1, 1, 2), np.int32),
+            labels.reshape(h, w),
+            np.zeros((h, w), np.int32),
+            idx,
+            idx,
+            np.zeros((h, w), bool),
+            True,
+            0.1,
+            0.05,
+            0.15,
+        ),
+        lambda: feedback(f32.copy(), labels.copy(), idx, idx, h, w, offsets, offsets, offsets, offsets, zero, one, one),
+        overlaps,
+        lambda: head_first_samples(pts, pts[0], pts[1], pts[:, 0].copy(), 2, 4),
+        lambda: texture_ncc(
+            idx,
+            labels.reshape(h, w),
+            np.uint8(1),
+            np.zeros((h + 2, w + 2), np.float32),
+            np.zeros((3, h, w), np.float32),
+            one,
+            np.zeros((h, w, 3), np.uint8),
+            1,
+        ),
+        lambda: explained(idx, px, *terms),
+        # the background's grey levels: a view into the padded array (``HorprasertBackground.grey_``)
+        lambda: leg_ncc(
+            idx,
+            labels.reshape(h, w),
+            np.zeros((h, w, 3), np.uint8),
+            np.zeros((h + 2, w + 2), np.float32)[1:-1, 1:-1],
+            1,
+        ),
+        lambda: advance_still(
+            np.zeros(npx, np.uint16), np.zeros((3, npx), np.float32), px, np.ones((3, npx), np.float32), idx, one
+        ),
+        lambda: veto(labels, px, *terms),
+        lambda: shadow_masks(labels.reshape(h, w), np.uint8(1), np.uint8(2)),
+        lambda: classify(*planes, labels.copy(), f32.copy()),
+        lambda: region_rows(np.zeros(npx, np.int32), idx, w, 1),
+        lambda: [mask_moments(c) for c in crops],
+    ]
+
+
+def warm(part: int = 0, parts: int = 1) -> None:
+    """Load (or, on the first run of an install, compile) every kernel for the argument types the
+    models pass, on tiny inputs: called when a model is fitted, so that the first frames after
+    the training do not wait for it (tens of ms from the cache, seconds to compile).
+
+    Parameters
+    ----------
+    part, parts : int, default=0, 1
+        Only every ``parts``-th kernel from the ``part``-th: an install's first compile shared
+        between ``parts`` processes, each caching what it compiles.
+
+    Raises
+    ------
+    ValueError
+        If ``part`` is not one of ``range(parts)``.
+    """
+    if not 0 <= part < parts:
+        raise ValueError(f"part {part} of {parts}: must be one of 0..{parts - 1}")
+    for call in _warm_calls()[part::parts]:
+        call()
