@@ -91,13 +91,12 @@ def new_hmm(n: int, d: int, n_iter: int, min_covar: float, random_state: int, or
     hmmlearn GaussianHMM
         The unfitted model.
     """
-    from hmmlearn.hmm import GaussianHMM
+    from counterpart.body.gaussian_hmm import full_gaussian_hmm
 
     # the priors (a ridge of one pseudo-frame, a vanishing pull of the means to 0) keep the
     # M-step finite and positive definite for a state that Baum-Welch leaves (almost) empty
-    return GaussianHMM(
+    return full_gaussian_hmm(
         n_components=n,
-        covariance_type="full",
         n_iter=n_iter,
         min_covar=min_covar,
         covars_prior=min_covar * np.eye(d),

@@ -706,14 +706,12 @@ def _fit_hmm(Y: np.ndarray, lengths: list[int], n_states: int, seed: int) -> Any
     ValueError
         When no floor gives a fit: what to change (more frames, fewer states).
     """
-    from hmmlearn.hmm import GaussianHMM
+    from counterpart.body.gaussian_hmm import full_gaussian_hmm
 
     spread = float(Y.var(axis=0).mean())
     floors = (_MIN_COVAR, *(share * spread for share in _MIN_COVAR_SHARES))
     for min_covar in floors:
-        hmm = GaussianHMM(
-            n_components=n_states, covariance_type="full", n_iter=25, min_covar=min_covar, random_state=seed
-        )
+        hmm = full_gaussian_hmm(n_components=n_states, n_iter=25, min_covar=min_covar, random_state=seed)
         try:
             return hmm.fit(Y, lengths=lengths)
         except ValueError as exc:
