@@ -128,15 +128,16 @@ def ensure_models(serve: bool = False) -> None:
     from counterpart.nodes.tracker.prior import default_prior_path
 
     names = RESPONDER_MODELS + (SERVE_MODELS if serve else ())
-    # the longest first, so that the short ones fill the other core
-    jobs = [(_build_responder_model, (n,)) for n in names[:1]] + [(_build_prior, ())]
-    jobs += [(_build_responder_model, (n,)) for n in names[1:]]
+    # the longest first, so that the short ones fill the other core: the default responder model,
+    # the kernels' parts (about half as long each), the tracker's prior (less again)
+    jobs = [(_build_responder_model, (n,)) for n in names[:1]]
     # the nodes' numba kernels, compiled on an install's first run (in parts, side by side): the
     # graph's nodes then load them instead of compiling for seconds while the frames go on; then
     # remembered (``kernel_cache``), so that later runs need not load them to find out
     compiling = not kernels_cached()
     if compiling:
         jobs += [(compile_kernels, (part, COMPILE_PARTS)) for part in range(COMPILE_PARTS)]
+    jobs += [(_build_prior, ())] + [(_build_responder_model, (n,)) for n in names[1:]]
     if not default_prior_path().exists():
         print("  tracker motion prior (once)...", file=sys.stderr)
     missing = not default_prior_path().exists() or not all(default_model_path(n).exists() for n in names)
