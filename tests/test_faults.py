@@ -208,7 +208,11 @@ def test_fuzzed_input_to_real_nodes_is_counted_and_never_fatal(tmp_path: Path) -
     restarts = int(re.search(r"(\d+) restarts", out).group(1))
     lines = out.count("seq went back to")
     assert restarts > 200 and 1 <= lines <= BURST * (took // WINDOW_S + 2), (restarts, lines)
-    assert "more lines like 'seq went back to %d: the stream restarted" in out
+    # those held back are counted: at exit, or on the first line of the next window where the last
+    # window's burst was not used up again
+    at_exit = "more lines like 'seq went back to %d: the stream restarted" in out
+    inline = re.search(r"seq went back to \d+: the stream restarted[^\n]*\(\d+ more like this in the last", out)
+    assert at_exit or inline, out[-5000:]
 
 
 def _pair(root: Path, topic: str, policy: str = RELIABLE, **kw) -> tuple[zmq.Context, zmq.Socket, Subscriber]:
