@@ -160,7 +160,7 @@ def main(args: argparse.Namespace) -> int:
             frames = shared.again()
         if args.prior == "default":
             print(
-                "[track] loading the default motion prior (built from the simulator on first use, about a minute)",
+                "[track] loading the default motion prior (built from the simulator on first use, about 10 s)",
                 file=sys.stderr,
                 flush=True,
             )

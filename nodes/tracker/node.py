@@ -241,7 +241,7 @@ class TrackerNode(Node):
 
     def setup(self) -> None:
         if self.p["prior"] == "default":
-            self.log.info("loading the default motion prior (built from the simulator on first use, about a minute)")
+            self.log.info("loading the default motion prior (built from the simulator on first use, about 10 s)")
         self.prior = resolve_prior(self.p["prior"])
         warm_kernels()  # compiled (an install's first run) or loaded now, not on the first frame
         self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None
