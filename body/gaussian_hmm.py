@@ -22,6 +22,9 @@ from hmmlearn.hmm import GaussianHMM
 
 __all__ = ["FullGaussianHMM", "full_gaussian_hmm", "outer_statistic"]
 
+#: frames of :func:`outer_statistic`'s blocks
+_BLOCK = 2048
+
 
 def outer_statistic(posteriors: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Posterior-weighted outer products of the frames, per state (the full-covariance M-step's
@@ -39,7 +42,12 @@ def outer_statistic(posteriors: np.ndarray, X: np.ndarray) -> np.ndarray:
     ndarray of shape (K, d, d)
         ``sum_t gamma_t(k) x_t x_t^T`` for each state k.
     """
-    return np.einsum("tk,ti->kit", posteriors, X) @ X
+    out = np.zeros((posteriors.shape[1], X.shape[1], X.shape[1]))
+    # by blocks of frames: the weighted frames (K, d, block) of a long recording stay small
+    for a in range(0, len(X), _BLOCK):
+        x = X[a : a + _BLOCK]
+        out += np.einsum("tk,ti->kit", posteriors[a : a + _BLOCK], x) @ x
+    return out
 
 
 class FullGaussianHMM(GaussianHMM):
