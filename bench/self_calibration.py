@@ -26,7 +26,11 @@ and the lines of the scene, one estimate at the end:
   mid-ankle on the ground, from the simulator's joints) and no lines: the limit of the geometry of
   people alone, whatever the silhouettes; ``calib_truth_points_lines``: the true points with the
   scene's lines as the estimate has them (the limit of the estimator's cues, whatever the
-  silhouettes); ``calib_room_lines`` and ``calib_truth_points_room_lines``: the estimate's
+  silhouettes); ``calib_true_heads``: the estimate's observations, each one's head point replaced
+  by the true crown of the person it lies on (:func:`true_heads`), with the estimate's lines: how
+  much of the gap between the estimate and the true points the head points make (a hand held
+  up, a ghost of the room stuck on a head: the height, and with it the scale, goes wrong) and how
+  much the feet and the people seen; ``calib_room_lines`` and ``calib_truth_points_room_lines``: the estimate's
   observations, and the true points, with the room's *true* line families (``bench/room_lines.py``:
   every board edge, wall line and poster edge in view, from the simulator's geometry): how much of
   the shortfall is the line detector and its grouping, and how much the geometry (few families in
@@ -209,6 +213,37 @@ def sim_inputs(seed: int, seconds: float) -> dict[str, Any]:
     }
 
 
+def true_heads(observations: tuple, truth_points: tuple) -> np.ndarray:
+    """The observations' head points replaced by the true crowns of the people they lie on.
+
+    Parameters
+    ----------
+    observations : tuple of (head, foot, track, time_s)
+        The estimate's observations (:meth:`PeopleObservations.arrays`): (N, 2), (N, 2) pixels,
+        (N,) ids, (N,) seconds.
+    truth_points : tuple of (head, foot, track, time_s)
+        The true crowns and mid-ankles on the ground of every person on every frame, the same way.
+
+    Returns
+    -------
+    ndarray of shape (N, 2)
+        Each observation's head point: the crown of the true person of its frame whose crown and
+        foot lie nearest it in x (the sum of the two distances, pixels); its own head where no
+        true person is on its frame.
+    """
+    head, foot, _, t = (np.asarray(a, np.float64) for a in observations)
+    th, tf, _, tt = (np.asarray(a, np.float64) for a in truth_points)
+    head = head.reshape(-1, 2).copy()
+    if not len(head) or not len(th):
+        return head
+    cost = np.abs(foot[:, None, 0] - tf[None, :, 0]) + np.abs(head[:, None, 0] - th[None, :, 0])
+    cost[np.abs(t[:, None] - tt[None, :]) > 1e-6] = np.inf
+    j = np.argmin(cost, axis=1)
+    found = np.isfinite(cost[np.arange(len(j)), j])
+    head[found] = th[j[found]]
+    return head
+
+
 def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
     """One scene's estimate from its silhouettes, from its true head/foot points, and the errors of
     each (``inputs``: :func:`sim_inputs`).
@@ -220,6 +255,9 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
     th, tf, tk, tt = inputs["truth_points"]
     oracle = estimate_camera(th, tf, tk, size, tt)
     oracle_lines = estimate_camera(th, tf, tk, size, tt, lines=lines)
+    crowns = estimate_camera(
+        true_heads(inputs["observations"], inputs["truth_points"]), foot, track, size, t, lines=lines
+    )
     room = room_lines(truth, inputs["seed"])
     room_est = estimate_camera(head, foot, track, size, t, lines=room)
     oracle_room = estimate_camera(th, tf, tk, size, tt, lines=room)
@@ -240,6 +278,7 @@ def sim_row(inputs: dict[str, Any]) -> dict[str, Any]:
         "published": published,
         "truth_points": estimate_errors(oracle, truth),
         "truth_points_lines": estimate_errors(oracle_lines, truth),
+        "true_heads": estimate_errors(crowns, truth),
         "room_lines": estimate_errors(room_est, truth),
         "truth_points_room_lines": estimate_errors(oracle_room, truth),
         "known_fov": estimate_errors(known_fov, truth),
@@ -342,6 +381,7 @@ def sim_figures(
         "calib_credible_wrong": [r["seed"] for r in rows if r["credible"] and not within(r["errors"])],
         "calib_truth_points": summary([r["truth_points"] for r in rows], ""),
         "calib_truth_points_lines": summary([r["truth_points_lines"] for r in rows], ""),
+        "calib_true_heads": summary([r["true_heads"] for r in rows], ""),
         "calib_room_lines": summary([r["room_lines"] for r in rows], ""),
         "calib_truth_points_room_lines": summary([r["truth_points_room_lines"] for r in rows], ""),
         "calib_known_fov": summary([r["known_fov"] for r in rows], ""),
@@ -374,6 +414,7 @@ def sim_figures(
                 "credible",
                 "truth_points",
                 "truth_points_lines",
+                "true_heads",
                 "room_lines",
                 "truth_points_room_lines",
                 "known_fov",
