@@ -62,7 +62,9 @@ inside it (``estimate._refine_best``; chosen on that clip, unchanged on 0-2049);
 no longer hurt that clip, but a view-by-view look at 2000-2049 against the true crowns showed it
 moving correct heads down by 10-20% of the person's height on many views (24 of one seed's), so
 it stays out. Seeds 5000-5049 chose nothing: they are kept as fresh seeds, to check a change chosen
-on the others, never to choose one.
+on the others, never to choose one. A later session split the failures of every set, 5000-5049
+among them, by cause (``calib_true_heads``, and views looked at against the true crowns); the
+changes it tried were measured on all the sets and none was kept.
 
 Real clips (``real_figures``): UT-Interaction set 1 (``../shared/data/ut_interaction/set1``), one
 static elevated camera; each clip is a crop of its frames around the people, so its principal point
