@@ -25,7 +25,7 @@ from counterpart.apps.offline import (
 from counterpart.apps.shared_pass import SharedPass
 from counterpart.body.camera import Camera, load_camera_file
 from counterpart.nodes.silhouette import BACKEND_NAMES
-from counterpart.nodes.tracker.prior import resolve_prior
+from counterpart.nodes.tracker.prior import LOADING_DEFAULT_PRIOR, resolve_prior
 from counterpart.nodes.tracker.tracker import SIDES
 
 #: the one-line help of this command in `counterpart --help`
@@ -160,7 +160,7 @@ def main(args: argparse.Namespace) -> int:
             frames = shared.again()
         if args.prior == "default":
             print(
-                "[track] loading the default motion prior (built from the simulator on first use, about 10 s)",
+                f"[track] {LOADING_DEFAULT_PRIOR}",
                 file=sys.stderr,
                 flush=True,
             )

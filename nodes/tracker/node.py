@@ -42,7 +42,7 @@ from counterpart.messages import CameraInfo, Frame, Pose3D, Silhouettes, Tracked
 
 from .budget import BudgetConfig, FrameBudget, StampRate
 from .likelihood import frame_edges, warm_kernels
-from .prior import resolve_prior
+from .prior import LOADING_DEFAULT_PRIOR, resolve_prior
 from .tracker import (
     SIDES,
     APFConfig,
@@ -241,7 +241,7 @@ class TrackerNode(Node):
 
     def setup(self) -> None:
         if self.p["prior"] == "default":
-            self.log.info("loading the default motion prior (built from the simulator on first use, about 10 s)")
+            self.log.info(LOADING_DEFAULT_PRIOR)
         self.prior = resolve_prior(self.p["prior"])
         warm_kernels()  # compiled (an install's first run) or loaded now, not on the first frame
         self.calibration: Camera | None = Camera.from_dict(self.p["camera"]) if self.p["camera"] else None

@@ -759,6 +759,10 @@ def train_prior(
     return MotionPrior(n_states=n_states, energy=energy, seed=seed, fps=fps).fit(seqs, names, progress=progress)
 
 
+#: what the tracker node and ``counterpart track`` say before they load the default prior
+LOADING_DEFAULT_PRIOR = "loading the default motion prior (built from the simulator on first use, about 10 s)"
+
+
 def default_prior_path() -> Path:
     """``$COUNTERPART_MODELS/tracker_prior.npz``, default ``~/.cache/counterpart/models/``.
 
