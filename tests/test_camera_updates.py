@@ -7,7 +7,9 @@ from __future__ import annotations
 import numpy as np
 
 from counterpart.body.camera import Camera, CameraSchedule, default_camera
+from counterpart.body.kinematics import forward_kinematics
 from counterpart.body.raster import rasterise_silhouettes
+from counterpart.nodes.calibration.smooth import camera_from_parameters, camera_parameters
 from counterpart.nodes.tracker.tracker import APFConfig, Tracker, TrackerConfig
 from counterpart.sim.scenarios import make_scenario
 
@@ -50,3 +52,41 @@ def test_the_tracker_keeps_its_track_through_a_refined_camera() -> None:
     assert tr.camera is nudged and tr.likelihood.views[0].camera is nudged
     assert not any(r.initialised for r in results)  # not started again from the silhouette
     assert np.abs(results[-1].pose[[0, 2]] - P[-1, [0, 2]]).max() < 0.25
+
+
+def test_a_track_begun_under_a_camera_that_misreads_the_scene_gets_the_persons_size_as_the_camera_is_refined() -> None:
+    # the graph starts on the default camera (1.6 m high, 4 m away) while the real one is 3 m high,
+    # 3 m away, tilted 20 degrees and wider: the default reads the person as a metre tall (a
+    # body of the shortest stature, 1.4 m, is then drawn over them); the calibration then steps
+    # the camera to the real one, frame by frame
+    wrong = default_camera(320, 240)
+    right = camera_from_parameters(
+        np.array([np.log(200.0), np.radians(20.0), 0.0, np.log(3.0), np.log(3.0), 0.0]), 320, 240
+    )
+    sc = make_scenario("handshake", seed=4)
+    P = sc.poses_a[::2][:30]
+    masks = rasterise_silhouettes(P, sc.dims_a, right)
+    config = TrackerConfig(apf=APFConfig(n_layers=3, n_particles=64))
+    tr = Tracker(wrong, "left", config, seed=0)
+    start = tr.update(None, masks[0])
+    misread = tr.dims.height
+    a, b = camera_parameters(wrong), camera_parameters(right)
+    steps = [camera_from_parameters(a + (b - a) * k / 10, 320, 240) for k in range(1, 11)]
+    results = []
+    for k, m in enumerate(masks[1:]):
+        if k < len(steps):
+            tr.set_camera(steps[k])
+        results.append(tr.update(None, m))
+    assert start.initialised and not any(r.initialised for r in results)
+    # the stature the true camera reads, as a track begun under it measures it
+    fresh = Tracker(right, "left", config, seed=0)
+    fresh.update(None, masks[0])
+    assert abs(misread / fresh.dims.height - 1) > 0.15, (misread, fresh.dims.height)
+    assert abs(tr.dims.height / fresh.dims.height - 1) < 0.05, (tr.dims.height, fresh.dims.height)
+    # and it is drawn over the person: once the camera is the real one, the body's joints lie
+    # within 0.15 of the person's height in the picture of the true joints (median over joints and frames)
+    errors = []
+    for r, pose in zip(results[len(steps) :], P[len(steps) + 1 :]):
+        uv, true = (right.project(forward_kinematics(q, d)[0]) for q, d in ((r.pose, tr.dims), (pose, sc.dims_a)))
+        errors.append(np.median(np.linalg.norm(uv - true, axis=1)) / np.ptp(true[:, 1]))
+    assert np.median(errors) < 0.15, errors

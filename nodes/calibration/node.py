@@ -16,7 +16,7 @@ of view where the user knows it, the focal length is held near it). Until an est
 ``min_seconds``; uncertainties under the ``max_*_std`` bounds; the estimates from the two halves
 of the window near the whole's, ``max_split_*``; the horizon seen, by people at different depths or by scene lines
 converging on it) the default camera stays; then the published
-camera moves towards the estimate, re-estimated every ``every`` frames, by bounded steps
+camera moves towards the estimate, re-estimated every ``every`` frames, by a bounded step a frame
 (``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
 (``lead`` frames after the frame it was estimated on: every subscriber switches at that frame,
 however late the message reaches it, so a lockstep replay stays deterministic); with ``cpu_share``
@@ -124,8 +124,8 @@ class Calibration(Node):
         "max_step": Param(
             float,
             0.03,
-            "estimate: largest change of focal length and height per update "
-            "(relative; tilt and roll: this many radians)",
+            "estimate: largest change of focal length and height from one frame's camera to the "
+            "next (relative; tilt and roll: this many radians)",
             min=1e-4,
             max=1.0,
         ),
@@ -272,10 +272,13 @@ class Calibration(Node):
             self.scene.add(image, msg.people)
         self.n_sil += 1
         if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:
+            # the published camera goes on towards the last credible estimate a bounded step a frame:
+            # from the default camera, far from a real one (several times lower, say), a step every
+            # few frames would take minutes, the people drawn meanwhile at another camera's size
+            if self.latest is not None:
+                self._step_towards(self.latest, msg)
             return
         if not self.pacing.due(time_s):
-            # no new estimate, but the published camera goes on towards the last credible one at
-            # the usual pace (bounded steps: a few would otherwise take minutes)
             self.tally("estimates_deferred")
             if self.latest is not None:
                 self._step_towards(self.latest, msg)
@@ -305,8 +308,12 @@ class Calibration(Node):
         self._step_towards(est, msg)
 
     def _step_towards(self, est: CameraEstimate, msg: Silhouettes) -> None:
+        """Publish the camera a bounded step nearer ``est``, unless it is there already."""
         assert self.smoother is not None
+        before = self.smoother.params
         camera = self.smoother.step(est)
+        if np.array_equal(before, self.smoother.params):
+            return
         self.figures.update(
             {
                 "focal_px": camera.fx,

@@ -20,6 +20,9 @@ SIDE_YAW = {"left": np.pi / 2, "right": -np.pi / 2, "centre": 0.0}
 #: the heights a person cut off by the frame's bottom edge is tried at, in multiples of the part in
 #: view: 1 (the box ends at the feet) to 4 (the frame cuts the chest)
 BELOW_FACTORS = 1.05 ** np.arange(29)
+#: the statures (metres) a body placed from a box is given: a box cut short (a fragment, a camera
+#: that misreads the scene) measures someone shorter or taller than anyone
+STATURE_RANGE = (1.4, 2.1)
 #: std of the wider first search: metres for the root, radians for the angles
 INIT_STD = np.r_[[0.08, 0.03, 0.15], [0.6, 0.05, 0.05], [0.1] * 6, [0.25] * 16]
 
@@ -49,10 +52,50 @@ def bbox_from_mask(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     return int(xs.min()), int(ys.min()), int(xs.max() - xs.min() + 1), int(ys.max() - ys.min() + 1)
 
 
+def stand_at(u: float, top: float, bottom: float, camera: Camera) -> tuple[np.ndarray, float]:
+    """Ground point and stature of someone whose feet are at pixel (u, bottom) and whose top is on
+    row ``top``, as ``camera`` reads them: no bounds on the stature.
+
+    The feet stand where the ray through (u, bottom) meets the ground (``Camera.ground_point``); the
+    stature is the height of the vertical line through that point at its closest approach to the
+    ray through (u, top).
+
+    Parameters
+    ----------
+    u : float
+        Column of the feet and the top, pixels.
+    top, bottom : float
+        Rows of the top and of the feet, pixels.
+    camera : Camera
+        The camera.
+
+    Returns
+    -------
+    ground : ndarray of shape (3,)
+        Ground point, metres, world frame.
+    height : float
+        Stature, metres.
+
+    Raises
+    ------
+    PlacementError
+        When row ``bottom`` at column ``u`` lies at or above the horizon (no ground point).
+    """
+    g = camera.ground_point(np.float64(u), np.float64(bottom))
+    if not np.isfinite(g).all():
+        raise PlacementError(f"pixel ({u:.0f}, {bottom:.0f}) is at or above the horizon; cannot place the person")
+    d = camera.rays(np.float64(u), np.float64(top))
+    c = camera.centre
+    horiz = np.array([d[0], 0.0, d[2]])
+    s = np.dot(np.array([g[0] - c[0], 0.0, g[2] - c[2]]), horiz) / max(np.dot(horiz, horiz), 1e-12)
+    return g, float(c[1] + s * d[1])
+
+
 def place_from_bbox(
     bbox: tuple[int, int, int, int], camera: Camera, base: BodyDims = DEFAULT_DIMS
 ) -> tuple[np.ndarray, float]:
-    """Ground position and stature of a person from its bounding box.
+    """Ground position and stature of a person from its bounding box (:func:`stand_at` of its bottom
+    centre and top row, the stature within :data:`STATURE_RANGE`).
 
     Parameters
     ----------
@@ -68,7 +111,7 @@ def place_from_bbox(
     ground : ndarray of shape (3,)
         Ground point under the bbox's bottom centre, metres, world frame.
     height : float
-        Stature, metres, clamped to 1.4-2.1.
+        Stature, metres, clamped to :data:`STATURE_RANGE`.
 
     Raises
     ------
@@ -76,18 +119,13 @@ def place_from_bbox(
         When the bbox bottom lies at or above the horizon (no ground point).
     """
     x, y, w, h = bbox
-    u = x + 0.5 * (w - 1)
-    g = camera.ground_point(np.float64(u), np.float64(y + h - 1))
-    if not np.isfinite(g).all():
-        raise PlacementError(f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person")
-    # Height H at ground point g whose top (g + H up) projects to row y: solve v(H) = y on the ray.
-    d = camera.rays(np.float64(u), np.float64(y))
-    c = camera.centre
-    # closest approach of the ray c + s d to the vertical line through g
-    horiz = np.array([d[0], 0.0, d[2]])
-    s = np.dot(np.array([g[0] - c[0], 0.0, g[2] - c[2]]), horiz) / max(np.dot(horiz, horiz), 1e-12)
-    height = float(np.clip(c[1] + s * d[1], 1.4, 2.1))
-    return g, height
+    try:
+        g, height = stand_at(x + 0.5 * (w - 1), y, y + h - 1, camera)
+    except PlacementError:
+        raise PlacementError(
+            f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person"
+        ) from None
+    return g, float(np.clip(height, *STATURE_RANGE))
 
 
 def guess_pose(
@@ -308,6 +346,8 @@ __all__ = [
     "INIT_STD",
     "bbox_from_mask",
     "place_from_bbox",
+    "stand_at",
+    "STATURE_RANGE",
     "facing_yaw",
     "initial_particles",
     "LostDetector",

@@ -35,8 +35,10 @@ from counterpart.body.pose import DOF, YAW, wrap_angle
 from counterpart.body.skeleton import DEFAULT_DIMS, N_JOINTS, BodyDims
 
 from .apf import AnnealedParticleFilter, Estimate, ParticleFilter, run_steps
+from .camera_change import ground_move
 from .init import (
     INIT_STD,
+    STATURE_RANGE,
     LostDetector,
     PlacementError,
     bbox_from_mask,
@@ -45,6 +47,7 @@ from .init import (
     cut_off_below,
     guess_pose,
     initial_particles,
+    stand_at,
 )
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
 from .prior import PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps, gap_steps
@@ -334,6 +337,10 @@ class Tracker:
         )
         self.fixed_dims = dims
         self.dims: BodyDims = dims or DEFAULT_DIMS
+        #: the stature the track's first box measured, unbounded, carried through refined cameras
+        #: (``set_camera``): a body bounded under a camera that misread the picture gets the
+        #: person's size back once the camera reads it right
+        self.stature_seen = self.dims.height
         self.likelihood = self._likelihood()
         apf = config.apf
         self.filter = (
@@ -387,14 +394,36 @@ class Tracker:
 
     def set_camera(self, camera: Camera) -> None:
         """A refined calibration of the same single view (the calibration node's estimate moving by
-        small steps): the track goes on, projected with the new camera from the next frame.
+        small steps): the track goes on, projected with the new camera from the next frame, its
+        body moved to where the new camera sees the same picture (``camera_change``): on the
+        ground point under its feet' pixel, its stature scaled as the new camera reads its head
+        and foot rows (within ``STATURE_RANGE`` of the stature the track's box measured, unless
+        ``dims`` were given), turned with the line of sight. A body whose feet the new camera
+        puts at or above its horizon is let go (the next frame starts it again).
 
         Parameters
         ----------
         camera : Camera
             The refined camera.
         """
+        old = self.camera
         self.cameras, self.camera = [camera], camera
+        if self.tracking and camera is not old:
+            try:
+                move = ground_move(self.prev, self.dims, old, camera)
+            except PlacementError:
+                self.reset()
+            else:
+                scale = 1.0
+                if self.fixed_dims is None:
+                    self.stature_seen *= move.stature_ratio
+                    height = float(np.clip(self.stature_seen, *STATURE_RANGE))
+                    scale = height / self.dims.height
+                    self.dims = self.dims.scaled(height)
+                self.prev = move.apply(self.prev, scale)
+                self.filter.particles = move.apply(self.filter.particles, scale)
+                if self._first_prior is not None:
+                    self._first_prior = (move.apply(self._first_prior[0], scale), self._first_prior[1])
         self.likelihood = self._likelihood()
 
     def reset(self) -> None:
@@ -611,6 +640,7 @@ class Tracker:
         if self.fixed_dims is None:
             self.dims = dims
             self.likelihood = self._likelihood()
+            self.stature_seen = self._stature_seen(bbox, dims)
         self.filter.initialise(P0)
         self.predictor.reset()
         wide = INIT_STD * init.spread
@@ -620,6 +650,15 @@ class Tracker:
         self.first_left, self._first_prior = init.layers - n, (P0[0], wide)
         steps = self.filter.steps(None, n_layers=n, min_std=init.min_std * wide, max_std=init.max_std * wide)
         return Search(obs, True, steps, P0[0], wide, n)
+
+    def _stature_seen(self, bbox: tuple[int, int, int, int], dims: BodyDims) -> float:
+        """The unbounded stature of a first search's box (``dims.height`` where none can be read)."""
+        x, y, w, h = bbox
+        try:
+            _, height = stand_at(x + 0.5 * (w - 1), y, y + h - 1, self.camera)
+        except PlacementError:
+            return dims.height
+        return height if np.isfinite(height) and height > 0 else dims.height
 
     def _whole_person(
         self, mask: np.ndarray, obs: list[Observation], towards: tuple[int, int, int, int] | None
