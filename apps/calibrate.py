@@ -53,7 +53,11 @@ def main(args: argparse.Namespace) -> int:
 
     def work() -> dict:
         est, summary = calibrate_video(
-            args.video, args.max_frames, args.train_frames, config, progress=FrameProgress("calibrate")
+            args.video,
+            args.max_frames,
+            args.train_frames,
+            config,
+            progress=FrameProgress("calibrate", limit=args.max_frames),
         )
         camera = est.camera()
         text = camera_file_text(camera, est, args.video, args.fov)

@@ -18,7 +18,8 @@ from typing import Any
 class FrameProgress:
     """A ``progress(done, declared)`` callback that prints ``[label] frame i/N, x fps`` on stderr.
 
-    N is left out when the file declares no frame count.
+    N is the file's declared frame count, or ``limit`` where that is fewer; left out when neither
+    is known.
 
     Parameters
     ----------
@@ -26,11 +27,14 @@ class FrameProgress:
         Name printed in brackets.
     every : float, default=2.0
         Least time between two lines, seconds.
+    limit : int or None, default=None
+        The most frames the command will take (its ``--max-frames``); None: the whole file.
     """
 
-    def __init__(self, label: str, every: float = 2.0) -> None:
+    def __init__(self, label: str, every: float = 2.0, limit: int | None = None) -> None:
         self.label = label
         self.every = every
+        self.limit = limit
         self.t0: float | None = None
         self.first = 0
         self.last = 0.0
@@ -43,7 +47,8 @@ class FrameProgress:
             return
         if now - self.last >= self.every:
             self.last = now
-            of = f"/{declared}" if declared else ""
+            total = min(t for t in (declared, self.limit) if t) if declared or self.limit else 0
+            of = f"/{total}" if total else ""
             fps = (done - self.first) / (now - self.t0)
             print(f"[{self.label}] frame {done}{of}, {fps:.1f} fps", file=sys.stderr, flush=True)
 

@@ -47,7 +47,7 @@ def main(args: argparse.Namespace) -> int:
             args.out,
             max_frames=args.max_frames,
             train_frames=args.train_frames,
-            progress=FrameProgress("silhouettes"),
+            progress=FrameProgress("silhouettes", limit=args.max_frames),
             backend=args.backend,
             min_area=args.min_area or None,
             n_ctrl=args.n_ctrl,

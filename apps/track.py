@@ -175,7 +175,7 @@ def main(args: argparse.Namespace) -> int:
             max_frames=args.max_frames,
             train_frames=args.train_frames,
             seed=args.seed,
-            progress=FrameProgress("track"),
+            progress=FrameProgress("track", limit=args.max_frames),
             camera_source=source,
             frames=frames,
             backend=args.backend,
@@ -212,7 +212,7 @@ def estimated_camera(args: argparse.Namespace, shared: SharedPass | None = None)
             n,
             args.train_frames,
             estimate_config(args.fov),
-            progress=FrameProgress("track: camera"),
+            progress=FrameProgress("track: camera", limit=n),
             frames=shared.first(n) if shared is not None else None,
             backend=args.backend,
         )

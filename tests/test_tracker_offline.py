@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from counterpart.apps.offline import FrameProgress
 from counterpart.apps.shared_pass import SharedPass, item_bytes
 from counterpart.apps.tracking import track_video
 from counterpart.body.camera import Camera
@@ -195,3 +196,20 @@ def test_an_interrupted_run_keeps_the_frames_done(recording: tuple[Path, np.ndar
     d = np.load(out)
     assert int(d["n_frames"]) == 25 and not bool(d["complete"]) and d["joints"].shape == (25, 2, 14, 3)
     assert np.isfinite(d["joints"][EMPTY:25]).all()
+
+
+def test_progress_counts_to_the_frames_the_command_will_take(capsys: pytest.CaptureFixture[str]) -> None:
+    # `counterpart track video.avi --max-frames 300` on a file of 795 frames counts to 300
+    progress = FrameProgress("track", every=0.0, limit=300)
+    for done in (1, 2, 3):
+        progress(done, 795)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines and all(line.startswith("[track] frame ") and "/300," in line for line in lines), lines
+    whole = FrameProgress("track", every=0.0)
+    whole(1, 795)
+    whole(2, 795)
+    assert "frame 2/795," in capsys.readouterr().err
+    unknown = FrameProgress("track", every=0.0)  # a stream that declares no length, no cap: no total
+    unknown(1, 0)
+    unknown(2, 0)
+    assert "frame 2, " in capsys.readouterr().err
