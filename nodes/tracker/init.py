@@ -91,11 +91,43 @@ def stand_at(u: float, top: float, bottom: float, camera: Camera) -> tuple[np.nd
     return g, float(c[1] + s * d[1])
 
 
+def stand_in_box(bbox: tuple[int, int, int, int], camera: Camera) -> tuple[np.ndarray, float]:
+    """Ground point and unbounded stature of a person from its bounding box: :func:`stand_at` of
+    its bottom centre and top row.
+
+    Parameters
+    ----------
+    bbox : tuple of int (x, y, w, h)
+        The person's bounding box, pixels.
+    camera : Camera
+        The camera that saw the person.
+
+    Returns
+    -------
+    ground : ndarray of shape (3,)
+        Ground point under the bbox's bottom centre, metres, world frame.
+    height : float
+        Stature, metres.
+
+    Raises
+    ------
+    PlacementError
+        When the bbox bottom lies at or above the horizon (no ground point).
+    """
+    x, y, w, h = bbox
+    try:
+        return stand_at(x + 0.5 * (w - 1), y, y + h - 1, camera)
+    except PlacementError:
+        raise PlacementError(
+            f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person"
+        ) from None
+
+
 def place_from_bbox(
     bbox: tuple[int, int, int, int], camera: Camera, base: BodyDims = DEFAULT_DIMS
 ) -> tuple[np.ndarray, float]:
-    """Ground position and stature of a person from its bounding box (:func:`stand_at` of its bottom
-    centre and top row, the stature within :data:`STATURE_RANGE`).
+    """Ground position and stature of a person from its bounding box (:func:`stand_in_box`, the
+    stature within :data:`STATURE_RANGE`).
 
     Parameters
     ----------
@@ -118,13 +150,7 @@ def place_from_bbox(
     PlacementError
         When the bbox bottom lies at or above the horizon (no ground point).
     """
-    x, y, w, h = bbox
-    try:
-        g, height = stand_at(x + 0.5 * (w - 1), y, y + h - 1, camera)
-    except PlacementError:
-        raise PlacementError(
-            f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person"
-        ) from None
+    g, height = stand_in_box(bbox, camera)
     return g, float(np.clip(height, *STATURE_RANGE))
 
 
@@ -347,6 +373,7 @@ __all__ = [
     "bbox_from_mask",
     "place_from_bbox",
     "stand_at",
+    "stand_in_box",
     "STATURE_RANGE",
     "facing_yaw",
     "initial_particles",

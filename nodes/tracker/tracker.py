@@ -47,7 +47,7 @@ from .init import (
     cut_off_below,
     guess_pose,
     initial_particles,
-    stand_at,
+    stand_in_box,
 )
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
 from .prior import PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps, gap_steps
@@ -395,11 +395,12 @@ class Tracker:
     def set_camera(self, camera: Camera) -> None:
         """A refined calibration of the same single view (the calibration node's estimate moving by
         small steps): the track goes on, projected with the new camera from the next frame, its
-        body moved to where the new camera sees the same picture (``camera_change``): on the
-        ground point under its feet' pixel, its stature scaled as the new camera reads its head
-        and foot rows (within ``STATURE_RANGE`` of the stature the track's box measured, unless
-        ``dims`` were given), turned with the line of sight. A body whose feet the new camera
-        puts at or above its horizon is let go (the next frame starts it again).
+        body moved to where the new camera sees the same picture (``camera_change``): its feet
+        to the ground point of the same pixel, turned with the line of sight, and (unless ``dims``
+        were given) its stature the one its first box measured, unbounded, scaled as the new
+        camera reads its head and foot rows over the old one, then held within ``STATURE_RANGE``
+        as at the start. A body whose feet the new camera puts at or above its horizon is let go
+        (the next frame starts it again).
 
         Parameters
         ----------
@@ -653,9 +654,8 @@ class Tracker:
 
     def _stature_seen(self, bbox: tuple[int, int, int, int], dims: BodyDims) -> float:
         """The unbounded stature of a first search's box (``dims.height`` where none can be read)."""
-        x, y, w, h = bbox
         try:
-            _, height = stand_at(x + 0.5 * (w - 1), y, y + h - 1, self.camera)
+            _, height = stand_in_box(bbox, self.camera)
         except PlacementError:
             return dims.height
         return height if np.isfinite(height) and height > 0 else dims.height
