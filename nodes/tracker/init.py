@@ -91,43 +91,14 @@ def stand_at(u: float, top: float, bottom: float, camera: Camera) -> tuple[np.nd
     return g, float(c[1] + s * d[1])
 
 
-def stand_in_box(bbox: tuple[int, int, int, int], camera: Camera) -> tuple[np.ndarray, float]:
-    """Ground point and unbounded stature of a person from its bounding box: :func:`stand_at` of
-    its bottom centre and top row.
-
-    Parameters
-    ----------
-    bbox : tuple of int (x, y, w, h)
-        The person's bounding box, pixels.
-    camera : Camera
-        The camera that saw the person.
-
-    Returns
-    -------
-    ground : ndarray of shape (3,)
-        Ground point under the bbox's bottom centre, metres, world frame.
-    height : float
-        Stature, metres.
-
-    Raises
-    ------
-    PlacementError
-        When the bbox bottom lies at or above the horizon (no ground point).
-    """
-    x, y, w, h = bbox
-    try:
-        return stand_at(x + 0.5 * (w - 1), y, y + h - 1, camera)
-    except PlacementError:
-        raise PlacementError(
-            f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person"
-        ) from None
-
-
 def place_from_bbox(
-    bbox: tuple[int, int, int, int], camera: Camera, base: BodyDims = DEFAULT_DIMS
+    bbox: tuple[int, int, int, int],
+    camera: Camera,
+    base: BodyDims = DEFAULT_DIMS,
+    bounds: tuple[float, float] | None = STATURE_RANGE,
 ) -> tuple[np.ndarray, float]:
-    """Ground position and stature of a person from its bounding box (:func:`stand_in_box`, the
-    stature within :data:`STATURE_RANGE`).
+    """Ground position and stature of a person from its bounding box: :func:`stand_at` of its
+    bottom centre and top row.
 
     Parameters
     ----------
@@ -137,21 +108,29 @@ def place_from_bbox(
         The camera that saw the person.
     base : BodyDims, default=DEFAULT_DIMS
         Body dimensions (unused by the placement itself).
+    bounds : tuple of float or None, default=STATURE_RANGE
+        The least and greatest stature given, metres; None: unbounded.
 
     Returns
     -------
     ground : ndarray of shape (3,)
         Ground point under the bbox's bottom centre, metres, world frame.
     height : float
-        Stature, metres, clamped to :data:`STATURE_RANGE`.
+        Stature, metres, within ``bounds``.
 
     Raises
     ------
     PlacementError
         When the bbox bottom lies at or above the horizon (no ground point).
     """
-    g, height = stand_in_box(bbox, camera)
-    return g, float(np.clip(height, *STATURE_RANGE))
+    x, y, w, h = bbox
+    try:
+        g, height = stand_at(x + 0.5 * (w - 1), y, y + h - 1, camera)
+    except PlacementError:
+        raise PlacementError(
+            f"bbox {bbox}: its bottom row is at or above the horizon; cannot place the person"
+        ) from None
+    return g, float(height if bounds is None else np.clip(height, *bounds))
 
 
 def guess_pose(
@@ -373,7 +352,6 @@ __all__ = [
     "bbox_from_mask",
     "place_from_bbox",
     "stand_at",
-    "stand_in_box",
     "STATURE_RANGE",
     "facing_yaw",
     "initial_particles",

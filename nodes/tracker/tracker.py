@@ -47,7 +47,7 @@ from .init import (
     cut_off_below,
     guess_pose,
     initial_particles,
-    stand_in_box,
+    place_from_bbox,
 )
 from .likelihood import LikelihoodConfig, MultiViewLikelihood, Observation, evaluate_joint, make_observation
 from .prior import PRIOR_FPS, RW_FLOOR, MotionPrior, PriorPredictor, frame_steps, gap_steps
@@ -655,7 +655,7 @@ class Tracker:
     def _stature_seen(self, bbox: tuple[int, int, int, int], dims: BodyDims) -> float:
         """The unbounded stature of a first search's box (``dims.height`` where none can be read)."""
         try:
-            _, height = stand_in_box(bbox, self.camera)
+            _, height = place_from_bbox(bbox, self.camera, bounds=None)
         except PlacementError:
             return dims.height
         return height if np.isfinite(height) and height > 0 else dims.height
