@@ -143,6 +143,19 @@ def test_a_shaken_camera_gives_its_person_and_not_the_room_s_edges() -> None:
     assert person_followed > 0.9
 
 
+def test_frames_of_a_few_pixels_are_learnt_and_classified_without_a_shift() -> None:
+    # a stream of a few pixels a side (a fuzzer's frames crashed the silhouette node here): too
+    # small for a shift to be told, so none is looked for
+    rng = np.random.default_rng(3)
+    for h, w in ((2, 2), (5, 4), (31, 48)):
+        frames = rng.integers(0, 255, (12, h, w, 3), dtype=np.uint8)
+        assert align_stack(frames) is frames
+        assert ShakeEstimator().shift(frames[0].astype(np.float32), frames[1]) is None
+        sub = make_subtractor("horprasert", train_frames=10, people_aware=False)
+        fg = [sub.apply(f) for f in frames]
+        assert sub.ready and fg[-1].shape == (h, w)
+
+
 def test_bad_shake_settings_name_the_setting() -> None:
     with pytest.raises(ValueError, match="max_shift"):
         ShakeConfig(max_shift=0.7)

@@ -141,6 +141,8 @@ def _translate(image: np.ndarray, t: np.ndarray, interpolation: int, border: int
 _GRID = (8, 6)
 #: the fewest points a shift is told from
 _MIN_POINTS = 100
+#: frames with a shorter side have too few pixels for a shift to be told (and for the reference's grid)
+_MIN_SIDE = 32
 #: a frame whose room fits the last shift with a residual at most this many times the usual one
 #: keeps that shift without a search (:class:`ShakeEstimator`), and the usual residual's rate
 _QUIET = 1.3
@@ -352,7 +354,7 @@ def _estimate(
     camera has not moved since: the common case, with no search).
     """
     h, w = frame.shape
-    if min(h, w) < 32:
+    if min(h, w) < _MIN_SIDE:
         return None
     t0 = np.zeros(2) if start is None else np.asarray(start, np.float64)
     points = ref.points
@@ -470,6 +472,8 @@ def align_stack(frames: np.ndarray, config: ShakeConfig | None = None) -> np.nda
         The frames on the pixels of their median (``frames`` itself when none had to move).
     """
     cfg = config or ShakeConfig()
+    if min(frames.shape[1:3]) < _MIN_SIDE:
+        return frames
     greys = [grey(f) for f in frames]
     first = _Reference(greys[0], cfg)
     shifts = [np.zeros(2)]
@@ -540,6 +544,9 @@ class ShakeEstimator:
         ndarray of shape (2,) or None
             (tx, ty) pixels, or None when it is shorter than ``min_shift_px`` or cannot be told.
         """
+        if min(frame.shape[:2]) < _MIN_SIDE:
+            self.last = None
+            return None
         if self._ref is None or self._age >= self.config.refresh or self._ref.shape != frame.shape[:2]:
             ref = grey(reference) if reference.ndim == 3 else reference.astype(np.float32)
             self._ref, self._age = _Reference(ref, self.config), 0
