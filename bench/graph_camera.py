@@ -26,10 +26,15 @@ joint above the sole).
   still on its way, and says little);
 - ``bodies_graph``, ``bodies_offline``: the body-frames counted; ``ids_agree``: the share of the
   offline tracks' silhouette ids that the graph's silhouettes hold on that frame (the two passes of
-  the extractor are the same computation).
+  the extractor are the same computation); ``camera_updates``: the cameras the graph used (each
+  different from the one before);
+- ``runs_identical``: whether ``--runs`` (default 2) runs of the graph published the same poses on
+  every frame (a lockstep replay is deterministic however far behind the calibration node runs),
+  ``runs_frames_differing`` the frames on which some run's poses differ from the first's; the
+  figures above are the first run's.
 
-Usage: ``python bench/graph_camera.py [--video PATH] [--frames 300]``; skips, saying why, when the
-video is absent; last stdout line: one JSON object.
+Usage: ``python bench/graph_camera.py [--video PATH] [--frames 300] [--runs 2]``; skips, saying why,
+when the video is absent; last stdout line: one JSON object.
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ sys.path.append(str(REPO / "bench"))
 from e2e import run_graph  # noqa: E402
 
 from counterpart.apps.tracking import track_video  # noqa: E402
-from counterpart.body.camera import Camera, camera_for_size, camera_from_info  # noqa: E402
+from counterpart.body.camera import Camera, camera_for_size, camera_from_info, same_camera  # noqa: E402
 from counterpart.body.kinematics import forward_kinematics  # noqa: E402
 from counterpart.body.pose import neutral_pose  # noqa: E402
 from counterpart.body.skeleton import DEFAULT_DIMS  # noqa: E402
@@ -88,6 +93,8 @@ def read_graph(bag: Path, size: tuple[int, int]) -> tuple[dict, dict, list[tuple
         elif topic == "camera_info":
             cams.append((m.seq, camera_from_info(m)))
     cams.sort(key=lambda c: c[0])
+    # a lockstep calibration node says the same camera again on every frame it decides
+    cams = [c for k, c in enumerate(cams) if k == 0 or not same_camera(c[1], cams[k - 1][1])]
     return heights, bodies, cams or [(0, camera_for_size(None, *size))]
 
 
@@ -108,7 +115,7 @@ def settled_frame(cams: list[tuple[int, Camera]]) -> int:
     return int(seq)
 
 
-def figures(video: Path, frames: int, workdir: Path) -> dict[str, Any]:
+def figures(video: Path, frames: int, workdir: Path, runs: int = 2) -> dict[str, Any]:
     import cv2
 
     # the frames as the camera node hands them on (max_side 640), for the offline reference too
@@ -134,6 +141,21 @@ def figures(video: Path, frames: int, workdir: Path) -> dict[str, Any]:
         ["pose", "camera_info", "silhouettes"],
     )
     heights, bodies, cams = read_graph(bag, size)
+    differing: set[int] = set()
+    for k in range(1, runs):
+        again, _, _, _ = run_graph(
+            workdir,
+            f"graph-{k}",
+            "lockstep.yaml",
+            {"camera.source": str(video), "camera.max_frames": frames},
+            ["pose"],
+        )
+        other = read_graph(again, size)[1]
+        differing |= {
+            seq
+            for seq in set(bodies) | set(other)
+            if [(i, j.tobytes()) for i, j in bodies.get(seq, [])] != [(i, j.tobytes()) for i, j in other.get(seq, [])]
+        }
     settled = settled_frame(cams)
     graph = [
         (seq, fit(j, camera_at(cams, seq), heights[seq][i]))
@@ -177,6 +199,9 @@ def figures(video: Path, frames: int, workdir: Path) -> dict[str, Any]:
         "bodies_graph": len(graph),
         "bodies_offline": len(offline),
         "ids_agree": round(float(np.mean(agree)), 4) if agree else None,
+        "runs": runs,
+        "runs_identical": not differing if runs > 1 else None,
+        "runs_frames_differing": len(differing) if runs > 1 else None,
         "frames": frames,
         "graph_wall_s": round(wall, 1),
         "video": str(video),
@@ -187,6 +212,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--video", type=Path, default=VIDEO)
     ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--runs", type=int, default=2, help="runs of the graph compared (1: no comparison)")
     ap.add_argument("--keep", type=Path, default=None, help="keep the run's files (bag, frames, offline tracks) here")
     args = ap.parse_args()
     if not args.video.exists():
@@ -194,10 +220,10 @@ def main() -> None:
         return
     if args.keep is not None:
         args.keep.mkdir(parents=True, exist_ok=False)
-        print(json.dumps(figures(args.video, args.frames, args.keep)))
+        print(json.dumps(figures(args.video, args.frames, args.keep, args.runs)))
         return
     with tempfile.TemporaryDirectory() as tmp:
-        print(json.dumps(figures(args.video, args.frames, Path(tmp))))
+        print(json.dumps(figures(args.video, args.frames, Path(tmp), args.runs)))
 
 
 if __name__ == "__main__":

@@ -156,7 +156,7 @@ def replay(msgs: list[tuple[str, float, Any]], video: Path | None, keep: list[np
         elif topic == "partner":
             comp.add_partner(msg, now)
         elif topic == "camera_info":
-            comp.set_camera(camera_from_info(msg), msg.seq)
+            comp.set_camera(camera_from_info(msg), msg.seq, msg.undecided_from)
         elif topic in STATS:
             comp.add_stats(msg)
         else:

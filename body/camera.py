@@ -296,7 +296,7 @@ class Camera:
         return cls(**{k: d[k] for k in keys})
 
 
-def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "") -> Any:
+def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "", undecided_from: int = -1) -> Any:
     """The ``messages.CameraInfo`` of a camera (the calibration node publishes it).
 
     Parameters
@@ -309,6 +309,8 @@ def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "
         Message sequence number.
     source : str, default=""
         Message source name.
+    undecided_from : int, default=-1
+        The first frame seq whose camera is not decided yet; -1: none (``messages.CameraInfo``).
 
     Returns
     -------
@@ -329,6 +331,7 @@ def camera_to_info(camera: Camera, stamp: int = 0, seq: int = 0, source: str = "
         R=np.asarray(camera.R, np.float64),
         t=np.asarray(camera.t, np.float64),
         source=source,
+        undecided_from=undecided_from,
     )
 
 
@@ -474,14 +477,18 @@ class CameraSchedule:
 
     The calibration node publishes a refined camera for frames from a seq a little ahead of the one
     it was estimated on, so every subscriber switches at the same frame however late the message
-    comes to it (a lockstep replay stays deterministic). A frame before the first camera of its
-    size gets that first camera.
+    comes to it. A frame before the first camera of its size gets that first camera. In a lockstep
+    graph the node also says, on every frame, from which seq the camera is not decided yet
+    (``CameraInfo.undecided_from``): a subscriber that holds each frame until :meth:`decided` says so
+    uses the same camera for it in every run, however far behind the calibration node runs.
     """
 
     def __init__(self) -> None:
         self._by_size: dict[tuple[int, int], list[tuple[int, Camera]]] = {}
+        #: per size, the first seq whose camera is not decided yet (inf: none)
+        self._undecided: dict[tuple[int, int], float] = {}
 
-    def add(self, camera: Camera, from_seq: int = 0) -> None:
+    def add(self, camera: Camera, from_seq: int = 0, undecided_from: int = -1) -> None:
         """Use ``camera`` for frames of its size from ``from_seq`` on (replaces one from the same seq).
 
         Parameters
@@ -490,14 +497,40 @@ class CameraSchedule:
             The camera.
         from_seq : int, default=0
             First frame sequence number it holds for.
+        undecided_from : int, default=-1
+            The first frame seq whose camera is not decided yet (``CameraInfo.undecided_from``);
+            negative: none, as for a fixed camera or the estimate's last.
         """
-        entries = [e for e in self._by_size.get((camera.width, camera.height), []) if e[0] != from_seq]
-        entries.append((int(from_seq), camera))
-        entries.sort(key=lambda e: e[0])
-        self._by_size[(camera.width, camera.height)] = entries[-64:]
+        size = (camera.width, camera.height)
+        entries = [e for e in self._by_size.get(size, []) if e[0] != from_seq]
+        # the same camera again (a lockstep calibration node says every frame how far it has
+        # decided): one entry, so that the kept ones reach back as far as the changes do
+        if not (entries and entries[-1][0] < from_seq and same_camera(entries[-1][1], camera)):
+            entries.append((int(from_seq), camera))
+            entries.sort(key=lambda e: e[0])
+        self._by_size[size] = entries[-64:]
+        before = self._undecided.get(size, 0.0)
+        self._undecided[size] = float("inf") if undecided_from < 0 else max(before, float(undecided_from))
 
     def __contains__(self, size: tuple[int, int]) -> bool:
         return size in self._by_size
+
+    def decided(self, size: tuple[int, int], seq: int) -> bool:
+        """Whether the camera of frame ``seq`` of ``size`` is known and no later message can change it.
+
+        Parameters
+        ----------
+        size : tuple of (int, int)
+            Frame (width, height) in pixels.
+        seq : int
+            Frame sequence number.
+
+        Returns
+        -------
+        bool
+            False before any camera of that size came, or from the seq its camera is undecided.
+        """
+        return size in self._by_size and seq < self._undecided[size]
 
     def get(self, size: tuple[int, int], seq: int | None = None) -> Camera | None:
         """The camera for frame ``seq`` of ``size``.
@@ -521,6 +554,26 @@ class CameraSchedule:
             return entries[-1][1]
         held = [c for s, c in entries if s <= seq]
         return held[-1] if held else entries[0][1]
+
+
+def same_camera(a: Camera, b: Camera) -> bool:
+    """Whether two cameras project every point to the same pixel (the same numbers).
+
+    Parameters
+    ----------
+    a, b : Camera
+        The cameras.
+
+    Returns
+    -------
+    bool
+        True when their intrinsics, size, rotation and translation are equal.
+    """
+    return (
+        (a.fx, a.fy, a.cx, a.cy, a.width, a.height) == (b.fx, b.fy, b.cx, b.cy, b.width, b.height)
+        and np.array_equal(a.R, b.R)
+        and np.array_equal(a.t, b.t)
+    )
 
 
 def camera_param_problem(value: dict[str, Any]) -> str | None:

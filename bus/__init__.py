@@ -3,6 +3,7 @@
 from .node import LATEST, RELIABLE, Input, Node, Output, stats_topic
 from .pairing import PairedSet, Pairing, PairingStats, SeqSynchronizer
 from .params import Param, ParamError
+from .seq_history import SeqHistory
 
 __all__ = [
     "Node",
@@ -14,6 +15,7 @@ __all__ = [
     "PairedSet",
     "PairingStats",
     "SeqSynchronizer",
+    "SeqHistory",
     "RELIABLE",
     "LATEST",
     "stats_topic",

@@ -38,9 +38,9 @@ class Frame:
 @message("camera.CameraInfo", 1)
 class CameraInfo:
     """The calibration of the camera for frames of ``width`` x ``height`` pixels (as ROS's
-    CameraInfo), published once (latched) by the calibration node so that every node projects
-    with the same camera. Pinhole, OpenCV convention, no distortion: ``X_c = R X_w + t``; world Y up,
-    the ground plane y = 0. ``seq`` is the frame it was made for.
+    CameraInfo), published (latched) by the calibration node so that every node projects with the
+    same camera. Pinhole, OpenCV convention, no distortion: ``X_c = R X_w + t``; world Y up, the
+    ground plane y = 0. ``seq`` is the first frame it holds for.
 
     Attributes
     ----------
@@ -56,6 +56,12 @@ class CameraInfo:
         World-to-camera translation in metres.
     source : str
         Where it comes from (``default``, ``file:PATH``, ``estimated``).
+    undecided_from : int
+        The first frame seq whose camera is not decided yet: a later message for frames of this size
+        holds only from there on. A lockstep graph's calibration node says it on every frame, and
+        the nodes that use the camera hold such frames until a message decides them, so that a
+        replay is the same in every run. -1: every frame's camera is decided (a fixed camera, or
+        the estimate's last).
     """
 
     width: int = 0
@@ -67,3 +73,4 @@ class CameraInfo:
     R: np.ndarray = EMPTY
     t: np.ndarray = EMPTY
     source: str = ""
+    undecided_from: int = -1

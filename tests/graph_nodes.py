@@ -1,17 +1,18 @@
-"""Small nodes for the runtime's multi-process tests: a counter source, a relay and a recording sink."""
+"""Small nodes for the runtime's multi-process tests: a counter source, relays and a recording sink."""
 
 from __future__ import annotations
 
 import json
 import os
 import time
+from collections import deque
 from dataclasses import replace
 
 import cv2
 import numpy as np
 
 from counterpart.bus import Input, Node, Output, Param
-from counterpart.messages import message
+from counterpart.messages import CameraInfo, Pose3D, message
 
 
 @message("test.Number", 1)
@@ -61,6 +62,38 @@ class Relay(Node):
         if self.p["delay_ms"]:
             time.sleep(self.p["delay_ms"] / 1000)
         self.publish("out", replace(msg, value=msg.value * self.p["gain"]))
+
+
+class LateCamera(Node):
+    """Forwards the graph's first camera at once and each later one only once the poses of ``pose``
+    are ``frames`` past the frame it holds from: to the nodes subscribed here, the camera of a
+    calibration node that runs that far behind the tracker, whatever the machine's speed.
+    """
+
+    inputs = {"camera_info": Input(CameraInfo), "pose": Input(Pose3D)}
+    outputs = {"late_camera_info": Output(CameraInfo, "the same cameras, late", latched=True)}
+    params = {"frames": Param(int, 5, "how far past a camera's frame the poses are when it is forwarded", min=0)}
+
+    def setup(self) -> None:
+        self.held: deque[CameraInfo] = deque()
+        self.pose_seq = -1
+        self.first = True
+
+    def on_camera_info(self, msg: CameraInfo) -> None:
+        self.held.append(msg)
+        self._forward()
+
+    def on_pose(self, msg: Pose3D) -> None:
+        self.pose_seq = max(self.pose_seq, msg.seq)
+        self._forward()
+
+    def on_end(self) -> None:
+        self._forward(end=True)
+
+    def _forward(self, end: bool = False) -> None:
+        while self.held and (end or self.first or self.pose_seq >= self.held[0].seq + self.p["frames"]):
+            self.publish("late_camera_info", self.held.popleft())
+            self.first = False
 
 
 class Sink(Node):

@@ -28,6 +28,25 @@ def test_each_camera_holds_from_its_seq_whatever_order_it_came_in() -> None:
     assert s.get((160, 120), 0) is small  # before the first camera of a size: that first camera
 
 
+def test_a_camera_is_decided_for_a_frame_once_a_message_says_so_and_a_repeated_one_is_kept_once() -> None:
+    a, b = (Camera.look_at((0.0, h, 4.0), (0.0, 0.9, 0.0), 55.0, 320, 240) for h in (1.6, 1.7))
+    s = CameraSchedule()
+    assert not s.decided((320, 240), 0)  # nothing came
+    s.add(a, 0, undecided_from=25)  # a lockstep calibration node's first: frames 0-24 keep it
+    assert s.decided((320, 240), 24) and not s.decided((320, 240), 25)
+    for seq in range(25, 40):  # the same camera said again on every frame
+        s.add(Camera(a.fx, a.fy, a.cx, a.cy, a.width, a.height, a.R.copy(), a.t.copy()), seq, seq + 1)
+    assert s.decided((320, 240), 39) and not s.decided((320, 240), 40)
+    s.add(b, 40, 41)
+    assert len(s._by_size[(320, 240)]) == 2  # the repeats were one camera
+    assert [s.get((320, 240), q) for q in (0, 39, 40)] == [a, a, b]
+    s.add(b, 41)  # its last: every later frame's
+    assert s.decided((320, 240), 10**9) and not s.decided((160, 120), 0)
+    fixed = CameraSchedule()
+    fixed.add(a)  # a fixed camera (a file's, or from a node that does not say): decided for every frame
+    assert fixed.decided((320, 240), 10**6)
+
+
 def test_the_tracker_keeps_its_track_through_a_refined_camera() -> None:
     cam = default_camera()
     sc = make_scenario("handshake", seed=4)

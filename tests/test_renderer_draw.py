@@ -10,8 +10,9 @@ import cv2
 import numpy as np
 import pytest
 
-from counterpart.body.camera import camera_for_size, default_camera
+from counterpart.body.camera import Camera, camera_for_size, default_camera
 from counterpart.body.raster import rasterise_cones
+from counterpart.bus import SeqHistory
 from counterpart.messages import (
     Control,
     Frame,
@@ -26,7 +27,7 @@ from counterpart.messages import (
     TrackedBody,
 )
 from counterpart.nodes.renderer import draw
-from counterpart.nodes.renderer.compositor import Bundle, Compositor, _History
+from counterpart.nodes.renderer.compositor import Bundle, Compositor
 from counterpart.nodes.renderer.controls import parse_control
 from counterpart.nodes.renderer.video import VideoWriter, choose_codec, count_frames, raw_mjpeg_works
 from tests.camera_sink import cv2_frames
@@ -335,7 +336,7 @@ def test_overlay_history_finds_the_newest_older_message_as_a_scan_of_what_it_kee
     a scan of the kept messages finds.
     """
     rng = np.random.default_rng(3)
-    hist = _History(8)
+    hist = SeqHistory(8)
     arrivals = [*range(20), *rng.integers(0, 40, 30).tolist(), *range(5)]  # a restart at the end
     for k, seq in enumerate(arrivals):
         hist.add(Pose3D(seq=seq, stamp=k))
@@ -374,6 +375,29 @@ def test_render_draws_partner_at_the_scaled_camera_and_follows_strength() -> Non
     b0, r0 = img0[both][:, 0].mean(), img0[both][:, 2].mean()
     b1, r1 = img1[both][:, 0].mean(), img1[both][:, 2].mean()
     assert b0 > r0 and r1 > b1 + 50  # neutral blue-grey turned happy orange
+
+
+def test_frames_wait_until_the_graphs_camera_is_decided_for_them_and_are_drawn_with_it() -> None:
+    comp = Compositor(None, wait_camera=True, overlays={"controls": False, "stats": False})
+    for s in range(5):
+        comp.add_frame(_frame(s), now=0.0)
+        comp.add_partner(_partner(s))
+    assert comp.ready(now=0.0) == []  # no camera yet
+    low = camera_for_size(CAM, 160, 120)
+    high = Camera.look_at((1.0, 3.0, 3.5), (0.0, 0.9, 0.0), 55.0, 160, 120)
+    comp.set_camera(low, 0, undecided_from=2)  # a lockstep calibration node: frames 0-1 decided
+    assert [b.frame.seq for b in comp.ready(now=0.0)] == [0, 1]
+    comp.set_camera(high, 2, undecided_from=3)  # refined from frame 2 on, decided to frame 2
+    got = comp.ready(now=0.0)
+    assert [b.frame.seq for b in got] == [2]
+    drawn = (comp.render(got[0]) != scene_frame(2, 160, 120)).any(-1)
+    iou = {}
+    for name, cam in (("high", high), ("low", low)):
+        ref = changed(draw.draw_partner_3d(blank(120, 160), partner_joints(2), cam))
+        iou[name] = (drawn & ref).sum() / (drawn | ref).sum()
+    assert iou["high"] > 0.95 and iou["low"] < 0.85, iou
+    comp.set_camera(high, 3)  # its last: every later frame's
+    assert [b.frame.seq for b in comp.ready(now=0.0)] == [3, 4]
 
 
 def test_control_overlay_shows_the_control_values() -> None:

@@ -8,34 +8,10 @@ import numpy as np
 import pytest
 
 from counterpart.body.skeleton import JOINT_INDEX
-from counterpart.nodes.responder.dual_hmm import DualHMM, DualHMMConfig, FitConfig
-from counterpart.nodes.responder.emotion import EmotionModel
 from counterpart.nodes.responder.frames import actor_frame
-from counterpart.nodes.responder.listener import ListenerModel
-from counterpart.nodes.responder.models import save_model
 from tests.launching import read_jsonl, run_launch, write_launch
 from tests.responder_fixtures import planted_pair
 from tests.responder_nodes import bearing_camera
-
-
-@pytest.fixture(scope="module")
-def models_dir(tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("models")
-    save_model(
-        d / "responder-dual-hmm.npz",
-        DualHMM(DualHMMConfig(fit=FitConfig(n_states=8, n_iter=10, both_roles=False))).fit(
-            [planted_pair(s) for s in range(6)]
-        ),
-    )
-    # an emotion model whose angry style doubles the amplitude at full strength
-    em = EmotionModel().fit(
-        np.random.default_rng(0).normal(size=(8, 7)), ["neutral", "angry"] * 4, [0, 1] * 4, ["g"] * 8
-    )
-    em.k_amp_[:] = np.log(2.0)
-    em.k_speed_[:] = np.log(2.0)
-    save_model(d / "responder-emotion.npz", em)
-    save_model(d / "responder-listener.npz", ListenerModel().fit({"interested": [(("S:nod",), ("L:nod",), 0.9)]}))
-    return d
 
 
 def graph(tmp: Path, switch: str = "", responder: dict | None = None, **source: float) -> Path:

@@ -19,11 +19,16 @@ converging on it) the default camera stays; then the published
 camera moves towards the estimate, re-estimated every ``every`` frames, by a bounded step a frame
 (``max_step``: never a jump), with ``source: estimated`` and the seq of the frame it holds from
 (``lead`` frames after the frame it was estimated on: every subscriber switches at that frame,
-however late the message reaches it, so a lockstep replay stays deterministic); with ``cpu_share``
+however late the message reaches it). With ``lockstep`` (launch/lockstep.yaml) it also says on every
+frame from which seq the camera is not decided yet (``CameraInfo.undecided_from``), and the tracker, the
+renderer and the responder hold each frame until then: however far behind the others this node
+runs (the people detector on its first frames is slow), every frame gets the same camera in every
+run, so a lockstep replay stays deterministic; at the end it says that the last camera holds for
+every later frame. With ``cpu_share``
 (the real-time graph) the estimates take that share of a core on average after ``cpu_burst_s``, and
-between them the camera goes on stepping towards the last credible one. The tracker and the
-renderer subscribe to it, so the skeleton, the partner and the tracked body are all projected with
-the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
+between them the camera goes on stepping towards the last credible one. The tracker, the renderer
+and the responder subscribe to it, so the skeleton, the partner and the tracked body are all
+projected with the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
 counterpart.nodes.calibration``) or alone::
 
     python -m counterpart.nodes.calibration --param file=camera.yaml
@@ -113,6 +118,13 @@ class Calibration(Node):
             max=1.0,
         ),
         "cpu_burst_s": Param(float, 3.0, "estimate: CPU seconds the first estimates may take at once", min=0.0),
+        "lockstep": Param(
+            bool,
+            False,
+            "estimate: publish on every frame the seq from which the camera is not decided yet, so that the "
+            "nodes using it hold each frame until its camera is (a lockstep replay stays deterministic "
+            "however far behind this node runs); for graphs in which every frame's silhouettes come",
+        ),
         "lead": Param(
             int,
             25,
@@ -188,6 +200,11 @@ class Calibration(Node):
         self.smoother: CameraSmoother | None = None
         self.latest: CameraEstimate | None = None
         self.n_sil = 0
+        #: lockstep: the camera goes out on every frame with the first seq it does not decide yet
+        self.promising = self.p["lockstep"] and self.p["estimate"] and not self.p["file"]
+        self.last: tuple[int, int] = (0, 0)  # the newest silhouettes' (stamp, seq)
+        self.published: Camera | None = None  # the camera last published, and where it came from
+        self.source = ""
         self.fps = 0.0  # the frames' rate (their fps field): the people's times are the stream's
         self.scene = SceneFrames()
         self.pacing = EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"]))
@@ -232,12 +249,15 @@ class Calibration(Node):
         self.scene = SceneFrames()
         self.pacing = EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"]))
         self.smoother = CameraSmoother(camera, self.p["max_step"])
-        source = f"file:{self.p['file']}" if self.p["file"] else "default"
-        self.publish("camera_info", camera_to_info(camera, stamp, seq, source))
+        self.published, self.source = camera, f"file:{self.p['file']}" if self.p["file"] else "default"
+        # a refined camera holds from lead frames after the silhouettes it was estimated on at the
+        # soonest, so the frames before then keep this one whatever comes
+        undecided = seq + self.p["lead"] if self.promising else -1
+        self.publish("camera_info", camera_to_info(camera, stamp, seq, self.source, undecided))
         self.log.info(
             "camera for %dx%d frames (%s): f %.1f px, centre %.1f m above the ground",
             *size,
-            source,
+            self.source,
             camera.fx,
             camera.centre[1],
         )
@@ -271,18 +291,22 @@ class Calibration(Node):
         if image is not None and self.scene.wants(msg.seq):
             self.scene.add(image, msg.people)
         self.n_sil += 1
+        self.last = (msg.stamp, msg.seq)
+        self._step_towards(self._refine(time_s), msg)
+
+    def _refine(self, time_s: float) -> CameraEstimate | None:
+        """Estimate the camera every ``every`` frames (the CPU share allowing); the estimate the
+        published camera steps towards on this frame (None: it stays).
+        """
+        assert self.observations is not None
         if self.n_sil % self.p["every"] or self.observations.span_s < self.p["min_seconds"]:
             # the published camera goes on towards the last credible estimate a bounded step a frame:
             # from the default camera, far from a real one (several times lower, say), a step every
             # few frames would take minutes, the people drawn meanwhile at another camera's size
-            if self.latest is not None:
-                self._step_towards(self.latest, msg)
-            return
+            return self.latest
         if not self.pacing.due(time_s):
             self.tally("estimates_deferred")
-            if self.latest is not None:
-                self._step_towards(self.latest, msg)
-            return
+            return self.latest
         cpu0 = time.thread_time()
         est = self.observations.estimate(self.config, lines=self.scene.families())
         self.pacing.spend(time.thread_time() - cpu0)
@@ -300,30 +324,44 @@ class Calibration(Node):
             self.log.debug(
                 "estimate not credible yet: %s", est.describe() if est else f"{len(self.observations)} observations"
             )
-            return
+            return None
         if self.latest is None:
             self.log.info("first estimate: %s", est.describe())
         self.latest = est
         self.tally("estimates")
-        self._step_towards(est, msg)
+        return est
 
-    def _step_towards(self, est: CameraEstimate, msg: Silhouettes) -> None:
-        """Publish the camera a bounded step nearer ``est``, unless it is there already."""
-        assert self.smoother is not None
+    def _step_towards(self, est: CameraEstimate | None, msg: Silhouettes) -> None:
+        """Publish the camera a bounded step nearer ``est`` from ``lead`` frames on, when it moves;
+        in lockstep on every frame, with the first seq it does not decide.
+        """
+        assert self.smoother is not None and self.published is not None
         before = self.smoother.params
-        camera = self.smoother.step(est)
-        if np.array_equal(before, self.smoother.params):
-            return
-        self.figures.update(
-            {
-                "focal_px": camera.fx,
-                "height_m": float(camera.centre[1]),
-                "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1]))),
-            }
-        )
-        self.publish("camera_info", camera_to_info(camera, msg.stamp, msg.seq + self.p["lead"], "estimated"))
+        camera = self.smoother.step(est) if est is not None else self.published
+        moved = not np.array_equal(before, self.smoother.params)
+        if moved:
+            self.published, self.source = camera, "estimated"
+            self.figures.update(
+                {
+                    "focal_px": camera.fx,
+                    "height_m": float(camera.centre[1]),
+                    "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1]))),
+                }
+            )
+        if moved or self.promising:  # lockstep: the same camera, for the frames it now decides
+            self._publish(msg.stamp, msg.seq + self.p["lead"])
+
+    def _publish(self, stamp: int, from_seq: int, final: bool = False) -> None:
+        """The published camera from ``from_seq`` on; in lockstep, undecided from the frame after
+        it unless ``final``.
+        """
+        assert self.published is not None
+        undecided = from_seq + 1 if self.promising and not final else -1
+        self.publish("camera_info", camera_to_info(self.published, stamp, from_seq, self.source, undecided))
 
     def on_end(self) -> None:
+        if self.promising and self.published is not None:  # the last camera holds for every later frame
+            self._publish(self.last[0], self.last[1] + self.p["lead"], final=True)
         if self.latest is not None:
             self.log.info("last estimate: %s", self.latest.describe())
         elif self.p["estimate"] and not self.p["file"]:

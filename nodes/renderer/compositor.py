@@ -22,7 +22,6 @@ No processes here: :class:`Compositor` takes messages and returns images, so it 
 
 from __future__ import annotations
 
-import bisect
 import statistics
 import time
 from collections import OrderedDict, deque
@@ -34,6 +33,7 @@ import numpy as np
 
 from counterpart.body.camera import Camera, CameraSchedule, camera_for_size
 from counterpart.bus.pairing import PairedSet, Pairing, SeqSynchronizer
+from counterpart.bus.seq_history import SeqHistory
 
 from . import draw
 from .avatar import AvatarPainter
@@ -120,34 +120,6 @@ class ControlState:
         }
 
 
-class _History:
-    """The newest messages of one topic by seq (bounded), for exact or newest-older lookup."""
-
-    def __init__(self, size: int) -> None:
-        self.size = size
-        self.items: OrderedDict[int, Any] = OrderedDict()  # in the order they came
-        self.seqs: list[int] = []  # the same seqs, sorted: a lookup bisects instead of scanning
-        self.max_seq = -1
-
-    def add(self, msg: Any) -> None:
-        seq = int(msg.seq)
-        if seq not in self.items:
-            bisect.insort(self.seqs, seq)
-        self.items[seq] = msg
-        self.items.move_to_end(seq)
-        self.max_seq = max(self.max_seq, seq)
-        while len(self.items) > self.size:
-            self.seqs.remove(self.items.popitem(last=False)[0])
-
-    def exact(self, seq: int) -> Any:
-        return self.items.get(seq)
-
-    def at_or_before(self, seq: int) -> Any:
-        """The message of the highest seq at most ``seq`` (seqs are never negative), or None."""
-        i = bisect.bisect_right(self.seqs, seq)
-        return self.items[self.seqs[i - 1]] if i and self.seqs[i - 1] >= 0 else None
-
-
 def _size(frame: Any) -> tuple[int, int]:
     shape = np.shape(frame.image)
     return (int(shape[1]), int(shape[0])) if len(shape) >= 2 else (0, 0)
@@ -186,7 +158,8 @@ class Compositor:
         Partners whose delays decide ``adaptive`` waiting.
     wait_camera : bool, default=False
         Hold frames until :meth:`set_camera` gives the graph's camera for their size (the
-        calibration node's camera_info), so that nothing is drawn with another one.
+        calibration node's camera_info) and, in lockstep, has decided it for their seq, so that
+        nothing is drawn with another one.
     avatar_file : str, default=""
         The avatar file whose frames the video-texture partner shows ('': the one the partner
         message names).
@@ -244,8 +217,8 @@ class Compositor:
             )
         )
         self._paired: list[PairedSet] = []  # sets the pairing gave out, not rendered yet
-        self.partners = _History(self.history)
-        self.side = {k: _History(self.history) for k in ("silhouettes", "pose", "signals")}
+        self.partners = SeqHistory(self.history)
+        self.side = {k: SeqHistory(self.history) for k in ("silhouettes", "pose", "signals")}
         self.stats: dict[str, Any] = {}
         self.controls = ControlState()
         #: partner_drawn: frames on which a partner was drawn with part of it inside the picture
@@ -352,7 +325,7 @@ class Compositor:
         """
         self.stats[msg.node] = msg
 
-    def set_camera(self, camera: Camera, from_seq: int = 0) -> None:
+    def set_camera(self, camera: Camera, from_seq: int = 0, undecided_from: int = -1) -> None:
         """The graph's camera for frames of its size from ``from_seq`` on (camera_info, whose seq it
         is): every drawing uses it.
 
@@ -362,8 +335,11 @@ class Compositor:
             The graph's camera.
         from_seq : int, default=0
             The first frame seq it applies to.
+        undecided_from : int, default=-1
+            The first frame seq whose camera is not decided yet (with ``wait_camera``, such frames
+            wait); -1: none.
         """
-        self._cams.add(camera, from_seq)
+        self._cams.add(camera, from_seq, undecided_from)
 
     def set_control(self, msg: Any) -> None:
         """Apply a ``messages.Control`` (controls shown in the overlay; overlay switches).
@@ -400,7 +376,7 @@ class Compositor:
         self.sync.timeout = 0.0 if self.adaptive and self.partners_late else self.timeout
         while self.pending:
             frame, t = self.pending[0]
-            if self.wait_camera and not flush and _size(frame) not in self._cams:
+            if self.wait_camera and not flush and not self._cams.decided(_size(frame), int(frame.seq)):
                 break
             self.pending.popleft()
             self._paired += self.sync.add("frame", int(frame.seq), frame, now=t)

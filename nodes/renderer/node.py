@@ -299,7 +299,7 @@ class Renderer(Node):
             self.comp.add_side(port, msg)
         elif port == "camera_info":
             try:
-                self.comp.set_camera(camera_from_info(msg), msg.seq)
+                self.comp.set_camera(camera_from_info(msg), msg.seq, msg.undecided_from)
             except ValueError as exc:
                 self.log.warning("camera_info dropped: %s", exc)
         elif port in self.stats_ports:

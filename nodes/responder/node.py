@@ -9,20 +9,24 @@ clear of the observed person's silhouette in its picture). The model in force de
 drives the output: dual-hmm, gpdm, listener and video-texture produce one Partner per ``pose``
 (listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
 ``silhouettes``; the others are
-paired by ``seq`` (the latest of each kept). Control messages switch model, speaker, interest,
-emotion and strength at run time; ``None`` fields leave a setting unchanged.
+paired by ``seq`` (the latest of each kept; the silhouettes of the pose's own frame). A pose waits
+for its frame's silhouettes and, in a lockstep graph, for the calibration node to decide its frame's
+camera (``CameraInfo.undecided_from``), so that a replay answers every frame alike in every run.
+Control messages switch model, speaker, interest, emotion and strength at run time; ``None``
+fields leave a setting unchanged.
 """
 
 from __future__ import annotations
 
 import os
+from collections import deque
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from counterpart.body.camera import Camera, CameraSchedule, camera_from_info
-from counterpart.bus import Input, Node, Output, Param
+from counterpart.bus import Input, Node, Output, Param, SeqHistory
 from counterpart.messages import (
     EMOTIONS,
     INTERACTION_MODELS,
@@ -43,6 +47,9 @@ from .staging import BONES, Stage, StageConfig, observed_silhouette
 
 #: frames per second assumed for poses that do not carry their source's rate
 DEFAULT_FPS = 25.0
+#: poses held back for their frame's silhouettes and camera at most (a node that sends neither
+#: does not stop the partner): in lockstep the labeller's max_pending frames
+MAX_HELD = 100
 
 
 class Responder(Node):
@@ -53,7 +60,8 @@ class Responder(Node):
         "silhouettes": Input(Silhouettes, doc="people's B-spline silhouettes"),
         "signals": Input(SocialSignals, doc="the people's social signals"),
         "control": Input(Control, policy="latest", doc="run-time controls", awaits_end=False),
-        # every refined camera is kept (they hold from their seq on); the calibration node sends few
+        # every refined camera is kept (they hold from their seq on); in real time the calibration
+        # node sends few (in lockstep one a frame, on a reliable queue)
         "camera_info": Input(
             CameraInfo, policy="latest", queue=64, doc="the graph's camera (latched)", awaits_end=False
         ),
@@ -223,6 +231,8 @@ class Responder(Node):
         self.cameras = CameraSchedule()  # the graph's cameras from camera_info, each from its seq on
         self._view: tuple[int, int] | None = None  # the frame size of the newest camera_info
         self._rate: AtModelRate | None = None  # the model stepped on its own frames; None: afresh on the next
+        self.held: deque[Pose3D] = deque()  # poses waiting for their frame's silhouettes and camera
+        self.silhouettes = SeqHistory(64)  # the newest silhouettes by seq: each pose's own frame's
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -286,8 +296,9 @@ class Responder(Node):
         except ValueError as exc:
             self.log.warning("camera_info dropped: %s", exc)
             return
-        self.cameras.add(camera, msg.seq)
+        self.cameras.add(camera, msg.seq, msg.undecided_from)
         self._view = (camera.width, camera.height)
+        self._release()
 
     def _camera(self, seq: int) -> Camera | None:
         """The graph's camera for frame ``seq``; None before any camera_info came."""
@@ -306,7 +317,7 @@ class Responder(Node):
         people = list(getattr(self.latest.get("pose"), "people", ()))
         other = next((q for q in people if q.id != body.id and not q.lost and np.shape(q.joints) == (14, 3)), None)
         side = {"left": 1.0, "right": -1.0}.get(body.side, 0.0)
-        silhouettes = self.latest.get("silhouettes")
+        silhouettes = self.silhouettes.at_or_before(seq)
         direction = (self.stage.side if self.stage is not None else 0.0) or side
         camera = self._camera(seq)
         silhouette, box = observed_silhouette(
@@ -406,16 +417,37 @@ class Responder(Node):
         return side[0] if side else people[0]
 
     def on_pose(self, msg: Pose3D) -> None:
-        """Keep the latest poses; they drive the 3D models' partner.
+        """Keep the latest poses; they drive the 3D models' partner (once :meth:`_release` lets them).
 
         Parameters
         ----------
         msg : Pose3D
             Tracked 3D people.
         """
-        self.latest["pose"] = msg
-        if self.model in ("dual-hmm", "listener", "video-texture", "gpdm"):
-            self._emit(msg)
+        self.held.append(msg)
+        self._release()
+
+    def _release(self, end: bool = False) -> None:
+        """Answer the poses held back, in order, as far as each has what its partner depends on:
+        its frame's silhouettes (with ``use_silhouettes``) and, in lockstep, its frame's camera
+        decided (``CameraSchedule.decided``); at the ``end``, or beyond ``MAX_HELD``, whatever has
+        come. Every run of a lockstep replay then answers each frame with the same inputs.
+        """
+        while self.held:
+            seq = self.held[0].seq
+            ready = (self._view is None or self.cameras.decided(self._view, seq)) and (
+                "silhouettes" not in self._in or self.silhouettes.max_seq >= seq
+            )
+            if not (ready or end or len(self.held) > MAX_HELD):
+                return
+            msg = self.held.popleft()
+            self.latest["pose"] = msg
+            if self.model in ("dual-hmm", "listener", "video-texture", "gpdm"):
+                self._emit(msg)
+
+    def on_end(self) -> None:
+        """Answer the poses still held back."""
+        self._release(end=True)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
         """Keep the latest silhouettes; they drive the joint-shape model's partner.
@@ -426,8 +458,10 @@ class Responder(Node):
             The people's B-spline silhouettes.
         """
         self.latest["silhouettes"] = msg
+        self.silhouettes.add(msg)
         if self.model == "joint-shape":
             self._emit(msg)
+        self._release()
 
     def on_signals(self, msg: SocialSignals) -> None:
         """Keep the latest social signals; they drive the listener and video-texture models' partner when

@@ -267,13 +267,15 @@ class TrackerNode(Node):
         )
 
     def _camera(self, size: tuple[int, int], seq: int) -> Camera | None:
-        """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not come."""
+        """The camera for frame ``seq`` of ``size``; None while the graph's camera_info has not
+        decided it (in lockstep the calibration node says how far it has).
+        """
         if not self.p["camera_info"] and size not in self.cameras:
             try:  # made once per size: the trackers start again only when the camera changes
                 self.cameras.add(camera_for_size(self.calibration, *size))
             except ValueError as exc:
                 raise ValueError(f"parameter 'camera': {exc}") from None
-        return self.cameras.get(size, seq)
+        return self.cameras.get(size, seq) if self.cameras.decided(size, seq) else None
 
     def _tracker(self, side: str, camera: Camera) -> Tracker:
         if camera is not self.camera:
@@ -306,7 +308,7 @@ class TrackerNode(Node):
         except ValueError as exc:
             self._warn_once("info", f"camera_info dropped: {exc}")
             return
-        self.cameras.add(camera, msg.seq)  # a refined camera holds from its seq on
+        self.cameras.add(camera, msg.seq, msg.undecided_from)  # a refined camera holds from its seq on
         self._drain()
 
     def on_paired(self, paired: PairedSet) -> None:
