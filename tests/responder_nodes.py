@@ -50,6 +50,7 @@ class PoseSource(Node):
         "bearing_deg": Param(float, 0.0, "the camera's bearing round person A, degrees"),
         "fps": Param(float, 0.0, "the pair resampled to this rate, said in each pose (0: its own 25, unsaid)", min=0),
         "nod_s": Param(float, -1.0, "A nods for half a second from this second on (signals before each pose)"),
+        "signals_after": Param(bool, False, "each frame's signals 20 ms after its pose, as a labeller sends them"),
     }
 
     def generate(self) -> None:
@@ -76,10 +77,13 @@ class PoseSource(Node):
                 )
                 time.sleep(0.5)
             gone = 0 <= t - self.p["gap_at"] < self.p["gap"]
+            signals = None
             if self.p["nod_s"] >= 0:
                 nod = 0.0 <= t / (self.p["fps"] or tr.fps) - self.p["nod_s"] < 0.5
-                signals = [PersonSignals(id=1, names=["nod"], scores=np.float32([nod]), labels=np.int8([nod]))]
-                self.publish("signals", SocialSignals(stamp=time.monotonic_ns(), seq=t, people=signals))
+                people = [PersonSignals(id=1, names=["nod"], scores=np.float32([nod]), labels=np.int8([nod]))]
+                signals = SocialSignals(stamp=t, seq=t, people=people)
+            if signals is not None and not self.p["signals_after"]:
+                self.publish("signals", signals)
             self.publish("camera_info", camera_to_info(camera, time.monotonic_ns()))
             self.publish(
                 "pose",
@@ -90,6 +94,9 @@ class PoseSource(Node):
                     fps=self.p["fps"],
                 ),
             )
+            if signals is not None and self.p["signals_after"]:
+                time.sleep(0.02)
+                self.publish("signals", signals)
             time.sleep(0.005)
 
 

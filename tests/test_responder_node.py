@@ -168,3 +168,34 @@ def test_the_model_keeps_its_own_frame_rate_whatever_the_cameras(tmp_path: Path,
         # (the signals and the poses travel on separate sockets)
         late = 1 / 25 + 1 / fps + 1e-6
         assert -1e-6 <= nodding[0] - 1.4 <= late and -1e-6 <= nodding[-1] + 1 / fps - 2.4 <= late, (name, nodding)
+
+
+def test_the_listener_answers_each_pose_with_its_own_frames_signals_however_late_they_come(
+    tmp_path: Path, models_dir: Path
+) -> None:
+    # A nods at 1 s; one source sends each frame's signals before its pose, the other 20 ms after
+    # it, as a labeller does (it waits for the pose): the partners are the same, frame by frame
+    nodes: dict[str, dict] = {}
+    for name, after in (("before", False), ("after", True)):
+        topics = {port: f"{name}/{port}" for port in ("pose", "control", "signals", "partner", "camera_info")}
+        nodes[f"{name}_source"] = {
+            "run": "tests.responder_nodes:PoseSource",
+            "params": {"frames": 75, "control_at": 1000, "nod_s": 1.0, "signals_after": after},
+            "remap": {port: t for port, t in topics.items() if port != "partner"},
+        }
+        nodes[name] = {
+            "run": "counterpart.nodes.responder",
+            "params": {"model": "listener", "use_signals": True},
+            "remap": {port: t for port, t in topics.items() if port != "camera_info"},
+        }
+        nodes[f"{name}_sink"] = {
+            "run": "tests.responder_nodes:PartnerSink",
+            "params": {"path": str(tmp_path / f"{name}.jsonl")},
+            "remap": {"partner": topics["partner"]},
+        }
+    g = write_launch(tmp_path / "g.yaml", {"policy": "reliable", "nodes": nodes})
+    code, out = run_launch(g, timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
+    assert code == 0, out
+    before, after = (read_jsonl(tmp_path / f"{name}.jsonl") for name in ("before", "after"))
+    assert [r["seq"] for r in before] == list(range(75)) and any(r["behaviour"] == "nod" for r in before)
+    assert after == before

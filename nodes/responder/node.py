@@ -9,8 +9,9 @@ clear of the observed person's silhouette in its picture). The model in force de
 drives the output: dual-hmm, gpdm, listener and video-texture produce one Partner per ``pose``
 (listener, video-texture: per ``signals`` when there is no pose input), joint-shape one per
 ``silhouettes``; the others are
-paired by ``seq`` (the latest of each kept; the silhouettes of the pose's own frame). A pose waits
-for its frame's silhouettes and, in a lockstep graph, for the calibration node to decide its frame's
+paired by ``seq`` (the latest of each kept; the silhouettes and signals of the pose's own frame). A
+pose waits for its frame's silhouettes, for its signals where the model in force answers them
+(listener, video-texture) and, in a lockstep graph, for the calibration node to decide its frame's
 camera (``CameraInfo.undecided_from``), so that a replay answers every frame alike in every run.
 Control messages switch model, speaker, interest, emotion and strength at run time; ``None``
 fields leave a setting unchanged.
@@ -233,6 +234,7 @@ class Responder(Node):
         self._rate: AtModelRate | None = None  # the model stepped on its own frames; None: afresh on the next
         self.held: deque[Pose3D] = deque()  # poses waiting for their frame's silhouettes and camera
         self.silhouettes = SeqHistory(64)  # the newest silhouettes by seq: each pose's own frame's
+        self.signals = SeqHistory(64)  # and signals
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -376,7 +378,7 @@ class Responder(Node):
         from .models import default_model_path
 
         body = self._pick(list(self.latest["pose"].people)) if "pose" in self.latest else None
-        signals = self.latest.get("signals")
+        signals = self.signals.at_or_before(driver.seq)
         who = self._pick(list(signals.people)) if signals is not None else None
         heard = {} if who is None else {n: bool(v == 1) for n, v in zip(who.names, np.asarray(who.labels))}
         file = (
@@ -429,14 +431,18 @@ class Responder(Node):
 
     def _release(self, end: bool = False) -> None:
         """Answer the poses held back, in order, as far as each has what its partner depends on:
-        its frame's silhouettes (with ``use_silhouettes``) and, in lockstep, its frame's camera
-        decided (``CameraSchedule.decided``); at the ``end``, or beyond ``MAX_HELD``, whatever has
-        come. Every run of a lockstep replay then answers each frame with the same inputs.
+        its frame's silhouettes (with ``use_silhouettes``), its signals (with ``use_signals``, for
+        the models that answer them) and, in lockstep, its frame's camera decided
+        (``CameraSchedule.decided``); at the ``end``, or beyond ``MAX_HELD``, whatever has come.
+        Every run of a lockstep replay then answers each frame with the same inputs.
         """
         while self.held:
             seq = self.held[0].seq
-            ready = (self._view is None or self.cameras.decided(self._view, seq)) and (
-                "silhouettes" not in self._in or self.silhouettes.max_seq >= seq
+            signals = "signals" in self._in and self.model in ("listener", "video-texture")
+            ready = (
+                (self._view is None or self.cameras.decided(self._view, seq))
+                and ("silhouettes" not in self._in or self.silhouettes.max_seq >= seq)
+                and (not signals or self.signals.max_seq >= seq)
             )
             if not (ready or end or len(self.held) > MAX_HELD):
                 return
@@ -473,8 +479,10 @@ class Responder(Node):
             The people's social signals.
         """
         self.latest["signals"] = msg
+        self.signals.add(msg)
         if self.model in ("listener", "video-texture") and "pose" not in self._in:
             self._emit(msg)
+        self._release()
 
     # ------------------------------------------------------------------ output
     def _emit(self, driver: Any) -> None:
@@ -519,7 +527,7 @@ class Responder(Node):
             out.update(joints=joints, observed_id=body.id, behaviour="respond", confidence=float(np.max(m.posterior_)))
         elif self.model == "listener":
             m.interest = self.interest
-            sig = self.latest.get("signals")
+            sig = self.signals.at_or_before(driver.seq)
             body = self._pick(list(self.latest["pose"].people)) if "pose" in self.latest else None
             person = self._pick(list(sig.people)) if sig is not None else None  # the newest signals
             speaking = {}
