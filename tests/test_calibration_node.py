@@ -165,7 +165,7 @@ def test_the_estimate_from_the_people_moves_the_camera_by_bounded_steps(estimate
         tilt = [np.arcsin(-c.R[2, 1]) for c in (a, b)]
         assert abs(tilt[1] - tilt[0]) <= 0.02 + 1e-9
     assert not np.allclose(cams[-1].project(np.zeros(3)), cams[0].project(np.zeros(3)), atol=0.5)
-    assert re.search(r"all_credible\] INFO first estimate: focal", log), log
+    assert re.search(r"all_credible\] INFO first estimate \(frame \d+\): focal", log), log
 
 
 @pytest.mark.slow

@@ -24,7 +24,10 @@ frame from which seq the camera is not decided yet (``CameraInfo.undecided_from`
 renderer and the responder hold each frame until then: however far behind the others this node
 runs (the people detector on its first frames is slow), every frame gets the same camera in every
 run, so a lockstep replay stays deterministic; at the end it says that the last camera holds for
-every later frame. With ``cpu_share``
+every later frame. There, too, the first frames' camera waits for the first credible estimate
+(``wait_frames``): one that comes within them holds from the first frame, so a recording replayed
+is seen with its own camera from its start, not with the default one and then steps towards it.
+With ``cpu_share``
 (the real-time graph) the estimates take that share of a core on average after ``cpu_burst_s``, and
 between them the camera goes on stepping towards the last credible one. The tracker, the renderer
 and the responder subscribe to it, so the skeleton, the partner and the tracked body are all
@@ -125,6 +128,15 @@ class Calibration(Node):
             "nodes using it hold each frame until its camera is (a lockstep replay stays deterministic "
             "however far behind this node runs); for graphs in which every frame's silhouettes come",
         ),
+        "wait_frames": Param(
+            int,
+            45,
+            "lockstep: while no estimate is credible, only the frames this far behind the newest "
+            "silhouettes get the default camera, so a first estimate within them holds from the first "
+            "frame (the nodes using the camera hold them meanwhile: fewer than their max_pending); "
+            "0: the default camera from the first frame",
+            min=0,
+        ),
         "lead": Param(
             int,
             25,
@@ -203,6 +215,8 @@ class Calibration(Node):
         #: lockstep: the camera goes out on every frame with the first seq it does not decide yet
         self.promising = self.p["lockstep"] and self.p["estimate"] and not self.p["file"]
         self.last: tuple[int, int] = (0, 0)  # the newest silhouettes' (stamp, seq)
+        self.first_seq = 0  # the first frame of this size
+        self.undecided = 0  # lockstep: the first frame whose camera is not decided yet
         self.published: Camera | None = None  # the camera last published, and where it came from
         self.source = ""
         self.fps = 0.0  # the frames' rate (their fps field): the people's times are the stream's
@@ -251,9 +265,13 @@ class Calibration(Node):
         self.smoother = CameraSmoother(camera, self.p["max_step"])
         self.published, self.source = camera, f"file:{self.p['file']}" if self.p["file"] else "default"
         # a refined camera holds from lead frames after the silhouettes it was estimated on at the
-        # soonest, so the frames before then keep this one whatever comes
-        undecided = seq + self.p["lead"] if self.promising else -1
-        self.publish("camera_info", camera_to_info(camera, stamp, seq, self.source, undecided))
+        # soonest, so the frames before then keep this one whatever comes; unless the first frames
+        # wait for the first estimate
+        self.first_seq = seq
+        self.undecided = seq + (0 if self._waiting() else self.p["lead"])
+        self.publish(
+            "camera_info", camera_to_info(camera, stamp, seq, self.source, self.undecided if self.promising else -1)
+        )
         self.log.info(
             "camera for %dx%d frames (%s): f %.1f px, centre %.1f m above the ground",
             *size,
@@ -326,19 +344,34 @@ class Calibration(Node):
             )
             return None
         if self.latest is None:
-            self.log.info("first estimate: %s", est.describe())
+            self.log.info("first estimate (frame %d): %s", self.last[1], est.describe())
         self.latest = est
         self.tally("estimates")
         return est
 
+    def _waiting(self) -> bool:
+        """Whether the first frames' camera still waits for the first credible estimate (lockstep)."""
+        return self.promising and self.p["wait_frames"] > 0 and self.source == "default"
+
     def _step_towards(self, est: CameraEstimate | None, msg: Silhouettes) -> None:
         """Publish the camera a bounded step nearer ``est`` from ``lead`` frames on, when it moves;
-        in lockstep on every frame, with the first seq it does not decide.
+        in lockstep on every frame, with the first seq it does not decide: while the first frames
+        wait for the first estimate (``wait_frames``), that estimate itself from the first frame
+        when none is decided yet, else a step from the first frame that is not.
         """
         assert self.smoother is not None and self.published is not None
-        before = self.smoother.params
-        camera = self.smoother.step(est) if est is not None else self.published
-        moved = not np.array_equal(before, self.smoother.params)
+        waiting = self._waiting()
+        from_seq = msg.seq + self.p["lead"]
+        if est is not None and waiting and self.undecided == self.first_seq:
+            # no frame's camera decided yet: the estimate is every frame's, no step from the default
+            self.smoother = CameraSmoother(est.camera(), self.p["max_step"])
+            camera, moved, from_seq = self.smoother.camera, True, self.first_seq
+        else:
+            before = self.smoother.params
+            camera = self.smoother.step(est) if est is not None else self.published
+            moved = not np.array_equal(before, self.smoother.params)
+            if moved and waiting:
+                from_seq = self.undecided
         if moved:
             self.published, self.source = camera, "estimated"
             self.figures.update(
@@ -348,15 +381,24 @@ class Calibration(Node):
                     "tilt_deg": float(np.degrees(np.arcsin(-camera.R[2, 1]))),
                 }
             )
-        if moved or self.promising:  # lockstep: the same camera, for the frames it now decides
-            self._publish(msg.stamp, msg.seq + self.p["lead"])
+        decided = self.undecided
+        if self.promising:
+            if waiting and not moved:
+                # the default camera for the frames wait_frames behind, said as holding from the
+                # last of them, before any frame a first estimate could hold from
+                self.undecided = max(self.undecided, msg.seq + 1 - self.p["wait_frames"])
+                from_seq = self.undecided - 1
+            else:
+                self.undecided = max(self.undecided, msg.seq + self.p["lead"] + 1)
+        if moved or self.undecided > decided:
+            self._publish(msg.stamp, from_seq)
 
     def _publish(self, stamp: int, from_seq: int, final: bool = False) -> None:
-        """The published camera from ``from_seq`` on; in lockstep, undecided from the frame after
-        it unless ``final``.
+        """The published camera from ``from_seq`` on; in lockstep, with the first frame it does not
+        decide, unless ``final``.
         """
         assert self.published is not None
-        undecided = from_seq + 1 if self.promising and not final else -1
+        undecided = self.undecided if self.promising and not final else -1
         self.publish("camera_info", camera_to_info(self.published, stamp, from_seq, self.source, undecided))
 
     def on_end(self) -> None:

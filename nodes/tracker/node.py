@@ -171,7 +171,13 @@ class TrackerNode(Node):
             max=100.0,
         ),
         "seed": Param(int, 0, "seed of the particle filters"),
-        "max_pending": Param(int, 50, "frames kept while waiting for the other input", min=1),
+        "max_pending": Param(
+            int,
+            100,
+            "frames kept while waiting for the other input or for their camera to be decided (a lockstep "
+            "calibration node's wait_frames for its first estimate, and the frames read meanwhile)",
+            min=1,
+        ),
     }
 
     @classmethod
@@ -345,8 +351,9 @@ class TrackerNode(Node):
             self.log.warning("%d person region(s) could not be tracked (see the first warning)", n)
 
     def _drain(self) -> None:
-        """Track the paired frames in seq order, as far as the camera of their size is known; beyond
-        ``max_pending`` waiting frames the oldest go out without people.
+        """Track the paired frames in seq order, as far as the camera of their size is decided;
+        beyond ``max_pending`` waiting frames the oldest is tracked with the camera at hand
+        (counted as ``camera_not_waited``), or goes out without people where none has come.
         """
         for seq in sorted(self.paired):
             frame, sil = self.paired[seq]
@@ -364,6 +371,9 @@ class TrackerNode(Node):
             if camera is None and not give_up:
                 return
             del self.paired[seq]
+            if camera is None:
+                camera = self.cameras.get(size, seq)
+                self.tally("camera_not_waited", camera is not None)
             if camera is None:
                 self._publish_empty(sil)
             else:
