@@ -135,52 +135,16 @@ def test_inputs_follow_the_use_params(tmp_path: Path) -> None:
         check(load(f))
 
 
-def test_the_model_keeps_its_own_frame_rate_whatever_the_cameras(tmp_path: Path, models_dir: Path) -> None:
-    # A nods at 1 s, seen at the model's 25 fps and at 50 fps: the listener answers 0.4 s later
-    # (offset_s) for 1 s (response_s) at both (stepped once per input frame, 50 fps would halve both)
+def listeners(tmp_path: Path, models_dir: Path, sources: dict[str, dict]) -> dict[str, list[dict]]:
+    """One PoseSource (with ``sources[name]``'s parameters; A nods at 1 s, 75 frames), listener
+    responder and sink per name, all in one graph: each chain's partners.
+    """
     nodes: dict[str, dict] = {}
-    for name, fps in (("at25", 0.0), ("at50", 50.0)):
-        topics = {port: f"{name}/{port}" for port in ("pose", "control", "signals", "partner")}
-        nodes[f"{name}_source"] = {
-            "run": "tests.responder_nodes:PoseSource",
-            "params": {"frames": 75, "control_at": 1000, "fps": fps, "nod_s": 1.0},
-            "remap": {port: t for port, t in topics.items() if port != "partner"}
-            | {"camera_info": f"{name}/camera_info"},
-        }
-        nodes[name] = {
-            "run": "counterpart.nodes.responder",
-            "params": {"model": "listener", "use_signals": True},
-            "remap": topics,
-        }
-        nodes[f"{name}_sink"] = {
-            "run": "tests.responder_nodes:PartnerSink",
-            "params": {"path": str(tmp_path / f"{name}.jsonl")},
-            "remap": {"partner": topics["partner"]},
-        }
-    g = write_launch(tmp_path / "g.yaml", {"policy": "reliable", "nodes": nodes})
-    code, out = run_launch(g, timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
-    assert code == 0, out
-    for name, fps in (("at25", 25.0), ("at50", 50.0)):
-        rows = read_jsonl(tmp_path / f"{name}.jsonl")
-        nodding = [r["seq"] / fps for r in rows if r["behaviour"] == "nod"]
-        assert len(rows) == round(3 * fps) - (fps == 50) and nodding, (name, [r["behaviour"] for r in rows])
-        # within a frame of the model's (it reads the signals on its own frames) and one of the input's
-        # (the signals and the poses travel on separate sockets)
-        late = 1 / 25 + 1 / fps + 1e-6
-        assert -1e-6 <= nodding[0] - 1.4 <= late and -1e-6 <= nodding[-1] + 1 / fps - 2.4 <= late, (name, nodding)
-
-
-def test_the_listener_answers_each_pose_with_its_own_frames_signals_however_late_they_come(
-    tmp_path: Path, models_dir: Path
-) -> None:
-    # A nods at 1 s; one source sends each frame's signals before its pose, the other 20 ms after
-    # it, as a labeller does (it waits for the pose): the partners are the same, frame by frame
-    nodes: dict[str, dict] = {}
-    for name, after in (("before", False), ("after", True)):
+    for name, params in sources.items():
         topics = {port: f"{name}/{port}" for port in ("pose", "control", "signals", "partner", "camera_info")}
         nodes[f"{name}_source"] = {
             "run": "tests.responder_nodes:PoseSource",
-            "params": {"frames": 75, "control_at": 1000, "nod_s": 1.0, "signals_after": after},
+            "params": {"frames": 75, "control_at": 1000, "nod_s": 1.0, **params},
             "remap": {port: t for port, t in topics.items() if port != "partner"},
         }
         nodes[name] = {
@@ -196,6 +160,29 @@ def test_the_listener_answers_each_pose_with_its_own_frames_signals_however_late
     g = write_launch(tmp_path / "g.yaml", {"policy": "reliable", "nodes": nodes})
     code, out = run_launch(g, timeout=90, env={"COUNTERPART_MODELS": str(models_dir)})
     assert code == 0, out
-    before, after = (read_jsonl(tmp_path / f"{name}.jsonl") for name in ("before", "after"))
+    return {name: read_jsonl(tmp_path / f"{name}.jsonl") for name in sources}
+
+
+def test_the_model_keeps_its_own_frame_rate_whatever_the_cameras(tmp_path: Path, models_dir: Path) -> None:
+    # A nods at 1 s, seen at the model's 25 fps and at 50 fps: the listener answers 0.4 s later
+    # (offset_s) for 1 s (response_s) at both (stepped once per input frame, 50 fps would halve both)
+    partners = listeners(tmp_path, models_dir, {"at25": {"fps": 0.0}, "at50": {"fps": 50.0}})
+    for name, fps in (("at25", 25.0), ("at50", 50.0)):
+        rows = partners[name]
+        nodding = [r["seq"] / fps for r in rows if r["behaviour"] == "nod"]
+        assert len(rows) == round(3 * fps) - (fps == 50) and nodding, (name, [r["behaviour"] for r in rows])
+        # within a frame of the model's (it reads the signals on its own frames) and one of the input's
+        # (the signals and the poses travel on separate sockets)
+        late = 1 / 25 + 1 / fps + 1e-6
+        assert -1e-6 <= nodding[0] - 1.4 <= late and -1e-6 <= nodding[-1] + 1 / fps - 2.4 <= late, (name, nodding)
+
+
+def test_the_listener_answers_each_pose_with_its_own_frames_signals_however_late_they_come(
+    tmp_path: Path, models_dir: Path
+) -> None:
+    # A nods at 1 s; one source sends each frame's signals before its pose, the other 20 ms after
+    # it, as a labeller does (it waits for the pose): the partners are the same, frame by frame
+    partners = listeners(tmp_path, models_dir, {"before": {}, "after": {"signals_after": True}})
+    before, after = partners["before"], partners["after"]
     assert [r["seq"] for r in before] == list(range(75)) and any(r["behaviour"] == "nod" for r in before)
     assert after == before
