@@ -44,6 +44,19 @@ class SeqHistory:
         while len(self.items) > self.size:
             self.seqs.remove(self.items.popitem(last=False)[0])
 
+    def drop_before(self, seq: int) -> None:
+        """Forget the messages of seqs below ``seq`` (a consumer that has passed them).
+
+        Parameters
+        ----------
+        seq : int
+            The lowest seq kept.
+        """
+        i = bisect.bisect_left(self.seqs, seq)
+        for old in self.seqs[:i]:
+            del self.items[old]
+        del self.seqs[:i]
+
     def exact(self, seq: int) -> Any:
         """The message of ``seq``, or None."""
         return self.items.get(seq)

@@ -345,6 +345,10 @@ def test_overlay_history_finds_the_newest_older_message_as_a_scan_of_what_it_kee
             older = [s for s in hist.items if s <= q]
             want = hist.items[max(older)] if older else None
             assert hist.at_or_before(q) is want
+    kept = dict(hist.items)
+    hist.drop_before(3)  # a consumer past frame 2 forgets the older ones, and only those
+    assert hist.items == {s: m for s, m in kept.items() if s >= 3} and hist.seqs == sorted(hist.items)
+    assert hist.at_or_before(2) is None and hist.at_or_before(40) is kept[max(kept)]
 
 
 def test_pairing_without_partner_and_max_pending() -> None:

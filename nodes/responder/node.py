@@ -233,8 +233,10 @@ class Responder(Node):
         self._view: tuple[int, int] | None = None  # the frame size of the newest camera_info
         self._rate: AtModelRate | None = None  # the model stepped on its own frames; None: afresh on the next
         self.held: deque[Pose3D] = deque()  # poses waiting for their frame's silhouettes and camera
-        self.silhouettes = SeqHistory(64)  # the newest silhouettes by seq: each pose's own frame's
-        self.signals = SeqHistory(64)  # and signals
+        # the silhouettes and signals by seq, for each pose its own frame's: from the last pose
+        # answered on (a lockstep tracker may hold its poses many frames behind them)
+        self.silhouettes = SeqHistory(MAX_HELD + 64)
+        self.signals = SeqHistory(MAX_HELD + 64)
 
     # ------------------------------------------------------------------ models
     def _load(self, name: str, file: str = "default") -> Any:
@@ -450,6 +452,8 @@ class Responder(Node):
             self.latest["pose"] = msg
             if self.model in ("dual-hmm", "listener", "video-texture", "gpdm"):
                 self._emit(msg)
+            self.silhouettes.drop_before(msg.seq)
+            self.signals.drop_before(msg.seq)
 
     def on_end(self) -> None:
         """Answer the poses still held back."""
