@@ -460,21 +460,20 @@ class Responder(Node):
         self._release(end=True)
 
     def on_silhouettes(self, msg: Silhouettes) -> None:
-        """Keep the latest silhouettes; they drive the joint-shape model's partner.
+        """Keep the silhouettes by seq (each pose's own frame's); they drive the joint-shape model's partner.
 
         Parameters
         ----------
         msg : Silhouettes
             The people's B-spline silhouettes.
         """
-        self.latest["silhouettes"] = msg
         self.silhouettes.add(msg)
         if self.model == "joint-shape":
             self._emit(msg)
         self._release()
 
     def on_signals(self, msg: SocialSignals) -> None:
-        """Keep the latest social signals; they drive the listener and video-texture models' partner when
+        """Keep the social signals by seq; they drive the listener and video-texture models' partner when
         the node has no pose input.
 
         Parameters
@@ -482,7 +481,6 @@ class Responder(Node):
         msg : SocialSignals
             The people's social signals.
         """
-        self.latest["signals"] = msg
         self.signals.add(msg)
         if self.model in ("listener", "video-texture") and "pose" not in self._in:
             self._emit(msg)
