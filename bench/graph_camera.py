@@ -28,12 +28,19 @@ joint above the sole).
   offline tracks' silhouette ids that the graph's silhouettes hold on that frame (the two passes of
   the extractor are the same computation); ``camera_updates``: the cameras the graph used (each
   different from the one before);
+- the real-time graph (``launch/demo.yaml``, as ``counterpart demo --input VIDEO --realtime`` and
+  a live camera run it: frames at 320 pixels wide, each node drops what it cannot keep up with, the
+  calibration's estimates paced), over the whole video (``--realtime-frames``) once:
+  ``first_estimate_s_realtime``, the video's second from which its first estimated camera holds
+  (null where none came), ``misfit_realtime`` and ``fit_realtime`` over all its bodies, and
+  ``realtime_estimates``, ``realtime_estimates_not_credible``, ``realtime_estimates_deferred``: the
+  calibration node's tallies;
 - ``runs_identical``: whether ``--runs`` (default 2) runs of the graph published the same poses on
   every frame (a lockstep replay is deterministic however far behind the calibration node runs),
   ``runs_frames_differing`` the frames on which some run's poses differ from the first's; the
   figures above are the first run's.
 
-Usage: ``python bench/graph_camera.py [--video PATH] [--frames 300] [--runs 2]``; skips, saying why,
+Usage: ``python bench/graph_camera.py [--video PATH] [--frames 300] [--runs 2] [--realtime-frames 0|-1]``; skips, saying why,
 when the video is absent; last stdout line: one JSON object.
 """
 
@@ -44,6 +51,7 @@ import json
 import os
 import sys
 import tempfile
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -115,6 +123,65 @@ def settled_frame(cams: list[tuple[int, Camera]]) -> int:
     return int(seq)
 
 
+def graph_fits(
+    heights: dict[int, dict[int, float]],
+    bodies: dict[int, list[tuple[int, np.ndarray]]],
+    cams: list[tuple[int, Camera]],
+) -> list[tuple[int, float]]:
+    """(seq, fit) of every tracked body whose silhouette the graph holds, with the camera of its frame."""
+    return [
+        (seq, fit(j, camera_at(cams, seq), heights[seq][i]))
+        for seq, found in bodies.items()
+        for i, j in found
+        if i in heights.get(seq, {})
+    ]
+
+
+def misfit(fits: list[float]) -> float | None:
+    """The share of fits more than ``MISFIT`` off ``FIT_STANDING`` (None for none)."""
+    return round(float(np.mean(np.abs(np.asarray(fits) / FIT_STANDING - 1) > MISFIT)), 4) if fits else None
+
+
+def realtime_figures(video: Path, frames: int, workdir: Path, sets: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The real-time graph's fits and first estimate over ``frames`` frames (0: all) of ``video``,
+    with the launch file's parameters ``sets`` (NODE.PARAM: value) changed.
+    """
+    import cv2
+
+    cap = cv2.VideoCapture(str(video))
+    fps = cap.get(cv2.CAP_PROP_FPS) or 25.0
+    width, height = cap.get(cv2.CAP_PROP_FRAME_WIDTH), cap.get(cv2.CAP_PROP_FRAME_HEIGHT)
+    cap.release()
+    bag, wall, _, _ = run_graph(
+        workdir,
+        "realtime",
+        "demo.yaml",
+        {"camera.source": str(video), "camera.max_frames": frames, **(sets or {})},
+        ["pose", "camera_info", "silhouettes"],
+    )
+    size = (320, round(320 * height / width))  # demo.yaml's camera node: width 320
+    heights, bodies, cams = read_graph(bag, size)
+    estimated = [
+        m.seq
+        for topic, _, m in BagReader(bag).messages(decode_messages=True)
+        if topic == "camera_info" and m.source == "estimated"
+    ]
+    stats = json.loads((workdir / "realtime.home" / "latest" / "stats" / "calibration.json").read_text())
+    tally = stats.get("figures", {})
+    fits = [f for _, f in graph_fits(heights, bodies, cams)]
+    return {
+        "first_estimate_s_realtime": round(min(estimated) / fps, 2) if estimated else None,
+        "fit_realtime": round(float(np.median(fits)), 4) if fits else None,
+        "misfit_realtime": misfit(fits),
+        "bodies_realtime": len(fits),
+        "realtime_frames": len(heights),
+        "realtime_estimates": int(tally.get("estimates", 0)),
+        "realtime_estimates_not_credible": int(tally.get("estimates_not_credible", 0)),
+        "realtime_estimates_deferred": int(tally.get("estimates_deferred", 0)),
+        "realtime_wall_s": round(wall, 1),
+    }
+
+
 def figures(video: Path, frames: int, workdir: Path, runs: int = 2) -> dict[str, Any]:
     import cv2
 
@@ -157,12 +224,7 @@ def figures(video: Path, frames: int, workdir: Path, runs: int = 2) -> dict[str,
             if [(i, j.tobytes()) for i, j in bodies.get(seq, [])] != [(i, j.tobytes()) for i, j in other.get(seq, [])]
         }
     settled = settled_frame(cams)
-    graph = [
-        (seq, fit(j, camera_at(cams, seq), heights[seq][i]))
-        for seq, found in bodies.items()
-        for i, j in found
-        if i in heights.get(seq, {})
-    ]
+    graph = graph_fits(heights, bodies, cams)
     npz = workdir / "offline.npz"
     track_video(
         folder,
@@ -183,9 +245,6 @@ def figures(video: Path, frames: int, workdir: Path, runs: int = 2) -> dict[str,
             agree.append(i in heights.get(seq, {}))
             if agree[-1]:
                 offline.append(fit(d["joints"][seq, s], cams[-1][1], heights[seq][i]))
-
-    def misfit(x: list[float]) -> float | None:
-        return round(float(np.mean(np.abs(np.asarray(x) / FIT_STANDING - 1) > MISFIT)), 4) if x else None
 
     return {
         "fit_graph": round(float(np.median([f for _, f in graph])), 4),
@@ -213,17 +272,35 @@ def main() -> None:
     ap.add_argument("--video", type=Path, default=VIDEO)
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--runs", type=int, default=2, help="runs of the graph compared (1: no comparison)")
+    ap.add_argument(
+        "--realtime-frames",
+        type=int,
+        default=0,
+        help="frames of the real-time graph's run (0: the whole video; -1: no run)",
+    )
+    ap.add_argument(
+        "--realtime-set",
+        action="append",
+        default=[],
+        metavar="NODE.PARAM=VALUE",
+        help="change a parameter of the real-time graph (e.g. calibration.refit_growth=0 for the last release's pacing)",
+    )
     ap.add_argument("--keep", type=Path, default=None, help="keep the run's files (bag, frames, offline tracks) here")
     args = ap.parse_args()
+    if any("=" not in s for s in args.realtime_set):
+        ap.error(f"--realtime-set {args.realtime_set}: NODE.PARAM=VALUE expected")
+    sets = dict(s.split("=", 1) for s in args.realtime_set)  # the launcher reads each value as YAML
     if not args.video.exists():
         print(json.dumps({"skipped": f"{args.video} is absent (../shared/data, or COUNTERPART_SHARED_DATA)"}))
         return
     if args.keep is not None:
         args.keep.mkdir(parents=True, exist_ok=False)
-        print(json.dumps(figures(args.video, args.frames, args.keep, args.runs)))
-        return
-    with tempfile.TemporaryDirectory() as tmp:
-        print(json.dumps(figures(args.video, args.frames, Path(tmp), args.runs)))
+    with tempfile.TemporaryDirectory() if args.keep is None else nullcontext(str(args.keep)) as tmp:
+        out = figures(args.video, args.frames, Path(tmp), args.runs) if args.frames > 0 else {}
+        if args.realtime_frames >= 0:
+            out.update(realtime_figures(args.video, args.realtime_frames, Path(tmp), sets))
+            out["realtime_set"] = args.realtime_set
+        print(json.dumps(out))
 
 
 if __name__ == "__main__":

@@ -100,12 +100,16 @@ ALL_CREDIBLE = {
 }
 
 #: the estimating nodes of one graph (name: parameters): the defaults; every estimate taken as
-#: credible; the same with a hundredth of a core and no burst, so that every later estimate waits
-#: (these two from the silhouettes alone: the people detector is the first's, and slow)
+#: credible; the same with a hundredth of a core and no burst, so that every later estimate waits;
+#: the defaults with that pacing, without and with ``refit_growth`` (all but the first from the
+#: silhouettes alone: the people detector is the first's, and slow)
 ESTIMATORS: dict[str, dict[str, object]] = {
     "calibration": {},
     "all_credible": {**ALL_CREDIBLE, "max_step": 0.02, "detect_frames": 0},
     "deferred": {**ALL_CREDIBLE, "max_step": 0.02, "cpu_share": 0.01, "cpu_burst_s": 0.0, "detect_frames": 0},
+    # never credible (no horizon: see below), paced the same, and with the growth rule
+    "never_paced": {"cpu_share": 0.01, "cpu_burst_s": 0.0, "detect_frames": 0},
+    "never_growing": {"cpu_share": 0.01, "cpu_burst_s": 0.0, "detect_frames": 0, "refit_growth": 0.25},
 }
 
 
@@ -201,6 +205,39 @@ def test_the_estimates_wait_beyond_their_share_of_a_core_and_the_burst() -> None
     never = EstimatePacing(PacingConfig())
     never.spend(100.0)
     assert never.due(0.0)  # share 0: no limit
+
+
+def test_until_the_first_credible_estimate_one_is_due_whenever_the_people_observed_grew() -> None:
+    pacing = EstimatePacing(PacingConfig(share=0.01, burst_s=0.0, growth=0.5))
+    assert pacing.due(1.0, 20)
+    pacing.spend(2.0, 20)
+    # the share is spent many times over, but with half as many people again a new estimate is due
+    assert not pacing.due(2.0, 29) and pacing.due(2.0, 30)
+    pacing.spend(2.0, 30)
+    assert not pacing.due(3.0, 44) and pacing.due(3.0, 45)
+    pacing.credible(3.0)  # from the first credible estimate: the share, from then, with its burst
+    assert pacing.due(3.0, 45)
+    pacing.spend(1.0, 45)
+    assert not pacing.due(50.0, 1000) and pacing.due(103.0, 1000)
+    pacing.credible(103.0)  # said again: the count goes on
+    assert pacing.spent_s == pytest.approx(1.0)
+
+
+@pytest.mark.slow
+def test_estimates_that_are_not_credible_are_paced_by_the_people_observed(estimated: tuple) -> None:
+    # the same never credible estimates: paced by the CPU alone, all after the first wait; with the
+    # growth rule, one is due whenever the people observed grew by a quarter, and not before
+    rc, log, _, run_dir = estimated
+    assert rc == 0, log
+    paced, growing = (
+        json.loads((run_dir / "stats" / f"{n}.json").read_text())["figures"] for n in ("never_paced", "never_growing")
+    )
+    assert "estimates" not in paced and "estimates" not in growing, (paced, growing)
+    assert paced["estimates_not_credible"] == 1 and paced["estimates_deferred"] >= 3, paced
+    assert growing["estimates_not_credible"] > 1 and growing["estimates_deferred"] >= 1, growing
+    slots = paced["estimates_not_credible"] + paced["estimates_deferred"]
+    assert growing["estimates_not_credible"] + growing["estimates_deferred"] == slots, (paced, growing)
+    assert growing["people_observed"] == paced["people_observed"]
 
 
 @pytest.mark.slow

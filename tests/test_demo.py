@@ -92,6 +92,7 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("calibration", "every"),
         ("calibration", "cpu_share"),  # real time: the estimates' share of a core (lockstep: deterministic)
         ("calibration", "cpu_burst_s"),
+        ("calibration", "refit_growth"),  # real time: until the first credible estimate, by the people observed
         ("calibration", "lockstep"),  # lockstep: every frame waits for its camera to be decided
     }
     for name, decl in demo.nodes.items():

@@ -29,7 +29,9 @@ every later frame. There, too, the first frames' camera waits for the first cred
 is seen with its own camera from its start, not with the default one and then steps towards it.
 With ``cpu_share``
 (the real-time graph) the estimates take that share of a core on average after ``cpu_burst_s``, and
-between them the camera goes on stepping towards the last credible one. The tracker, the renderer
+between them the camera goes on stepping towards the last credible one; with ``refit_growth``, until
+the first credible estimate one is due whenever the people observed have grown by that share, the
+share left aside (``pacing``). The tracker, the renderer
 and the responder subscribe to it, so the skeleton, the partner and the tracked body are all
 projected with the same camera; the tracker's tracks go on through a refined camera. Run in a graph (``run:
 counterpart.nodes.calibration``) or alone::
@@ -121,6 +123,14 @@ class Calibration(Node):
             max=1.0,
         ),
         "cpu_burst_s": Param(float, 3.0, "estimate: CPU seconds the first estimates may take at once", min=0.0),
+        "refit_growth": Param(
+            float,
+            0.0,
+            "estimate: until the first credible estimate, a new one is due whenever the people observed "
+            "have grown by this share since the last, whatever cpu_share has spent (then cpu_share, with "
+            "a fresh burst); 0: cpu_share from the start",
+            min=0.0,
+        ),
         "lockstep": Param(
             bool,
             False,
@@ -221,12 +231,16 @@ class Calibration(Node):
         self.source = ""
         self.fps = 0.0  # the frames' rate (their fps field): the people's times are the stream's
         self.scene = SceneFrames()
-        self.pacing = EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"]))
+        self.pacing = self._pacing()
+        self.observed = 0  # views of upright people observed on frames of this size
         #: frames kept for the scene's lines and the people detector until their people come (seq -> image)
         self.images: dict[int, np.ndarray] = {}
         self.detector = PeopleDetector() if self.p["estimate"] and self.p["detect_frames"] else None
         fov = self.p["fov_deg"]
         self.config = CalibrationConfig().with_known_fov(fov) if fov else CalibrationConfig()
+
+    def _pacing(self) -> EstimatePacing:
+        return EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"], self.p["refit_growth"]))
 
     def on_frame(self, msg: Frame) -> None:
         """Publish the camera when the frames change size; keep the frames the scene's lines need.
@@ -261,7 +275,8 @@ class Calibration(Node):
         self.size = size
         self.observations = PeopleObservations(*size, max_detections=self.p["detect_frames"])
         self.scene = SceneFrames()
-        self.pacing = EstimatePacing(PacingConfig(self.p["cpu_share"], self.p["cpu_burst_s"]))
+        self.pacing = self._pacing()
+        self.observed = 0
         self.smoother = CameraSmoother(camera, self.p["max_step"])
         self.published, self.source = camera, f"file:{self.p['file']}" if self.p["file"] else "default"
         # a refined camera holds from lead frames after the silhouettes it was estimated on at the
@@ -306,6 +321,7 @@ class Calibration(Node):
         if image is not None:
             added += self.observations.add_frame(image, time_s, added, self.detector)
         self.tally("people_observed", added)
+        self.observed += added
         if image is not None and self.scene.wants(msg.seq):
             self.scene.add(image, msg.people)
         self.n_sil += 1
@@ -322,12 +338,12 @@ class Calibration(Node):
             # from the default camera, far from a real one (several times lower, say), a step every
             # few frames would take minutes, the people drawn meanwhile at another camera's size
             return self.latest
-        if not self.pacing.due(time_s):
+        if not self.pacing.due(time_s, self.observed):
             self.tally("estimates_deferred")
             return self.latest
         cpu0 = time.thread_time()
         est = self.observations.estimate(self.config, lines=self.scene.families())
-        self.pacing.spend(time.thread_time() - cpu0)
+        self.pacing.spend(time.thread_time() - cpu0, self.observed)
         if est is None or not credible(
             est,
             self.p["max_height_std"],
@@ -345,6 +361,7 @@ class Calibration(Node):
             return None
         if self.latest is None:
             self.log.info("first estimate (frame %d): %s", self.last[1], est.describe())
+            self.pacing.credible(time_s)
         self.latest = est
         self.tally("estimates")
         return est
