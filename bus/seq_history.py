@@ -44,15 +44,19 @@ class SeqHistory:
         while len(self.items) > self.size:
             self.seqs.remove(self.items.popitem(last=False)[0])
 
-    def drop_before(self, seq: int) -> None:
-        """Forget the messages of seqs below ``seq`` (a consumer that has passed them).
+    def forget_before(self, seq: int) -> None:
+        """Forget what no lookup of ``seq`` or a later seq can return (a consumer that has passed
+        ``seq``): the messages older than the newest one at or before it, which stays, as it is
+        still the one before any later seq that has none of its own.
 
         Parameters
         ----------
         seq : int
-            The lowest seq kept.
+            The seq passed.
         """
-        i = bisect.bisect_left(self.seqs, seq)
+        i = bisect.bisect_right(self.seqs, seq) - 1
+        if i <= 0:
+            return
         for old in self.seqs[:i]:
             del self.items[old]
         del self.seqs[:i]

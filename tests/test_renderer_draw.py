@@ -284,6 +284,26 @@ def test_pairing_waits_for_partner_or_newer_seq_or_timeout() -> None:
     }
 
 
+def test_frames_that_wait_long_for_their_partners_keep_their_own_overlays_and_what_they_pass_goes() -> None:
+    # lockstep: the silhouettes and poses of 100 frames come before the first partner (a responder
+    # holding its poses until their camera is decided); every frame still gets its own overlays
+    comp = Compositor(CAM, timeout=100.0)
+    for s in range(100):
+        comp.add_frame(_frame(s), now=0.0)
+        comp.add_side("silhouettes", Silhouettes(seq=s))
+        if s % 10:  # and a pose on most frames: the others show the newest before them
+            comp.add_side("pose", Pose3D(seq=s))
+    got = []
+    for s in range(100):
+        comp.add_partner(_partner(s), now=1.0)
+        got += comp.ready(now=1.0)
+    # frame 0 has no pose at or before it
+    assert [(b.frame.seq, b.silhouettes.seq, b.pose.seq if b.pose else None) for b in got] == [
+        (s, s, s if s % 10 else s - 1 if s else None) for s in range(100)
+    ]
+    assert len(comp.side["silhouettes"].items) == 1 and len(comp.side["pose"].items) == 1
+
+
 def test_adaptive_wait_renders_at_once_while_partners_are_late_and_waits_again_when_they_keep_up() -> None:
     comp = Compositor(CAM, timeout=0.1, adaptive=True, delay_window=5)
     # partners on time (20 ms after their frame): each frame waits for its own
@@ -330,6 +350,11 @@ def test_without_adaptive_wait_every_frame_waits_for_the_timeout() -> None:
     assert comp.ready(now=0.52) == []
 
 
+def _at_or_before(kept: dict, q: int) -> object:
+    older = [s for s in kept if s <= q]
+    return kept[max(older)] if older else None
+
+
 def test_overlay_history_finds_the_newest_older_message_as_a_scan_of_what_it_keeps() -> None:
     """The overlays' lookup (exact seq, else the highest seq below it) bisects a sorted list of
     the seqs kept; in any order of arrival, repeats and a restart from 0 included, it finds what
@@ -342,13 +367,17 @@ def test_overlay_history_finds_the_newest_older_message_as_a_scan_of_what_it_kee
         hist.add(Pose3D(seq=seq, stamp=k))
         assert sorted(hist.items) == hist.seqs and len(hist.seqs) <= 8
         for q in range(-1, 45):
-            older = [s for s in hist.items if s <= q]
-            want = hist.items[max(older)] if older else None
-            assert hist.at_or_before(q) is want
+            assert hist.at_or_before(q) is _at_or_before(hist.items, q)
     kept = dict(hist.items)
-    hist.drop_before(3)  # a consumer past frame 2 forgets the older ones, and only those
-    assert hist.items == {s: m for s, m in kept.items() if s >= 3} and hist.seqs == sorted(hist.items)
-    assert hist.at_or_before(2) is None and hist.at_or_before(40) is kept[max(kept)]
+    for q in (-1, 2, 3, max(kept) - 1, 50):
+        # a consumer past frame q forgets what no lookup from q on can return, and only that
+        hist = SeqHistory(8)
+        for msg in kept.values():
+            hist.add(msg)
+        hist.forget_before(q)
+        newest = max([s for s in kept if s <= q], default=min(kept))
+        assert hist.items == {s: m for s, m in kept.items() if s >= newest} and hist.seqs == sorted(hist.items)
+        assert all(hist.at_or_before(r) is _at_or_before(kept, r) for r in range(q, 45))
 
 
 def test_pairing_without_partner_and_max_pending() -> None:

@@ -151,7 +151,9 @@ class Compositor:
     max_pending : int, default=128
         Frames held at most; beyond it the oldest renders without waiting.
     history : int, default=64
-        Messages kept per side topic (and partners kept ahead of their frames).
+        Partners kept ahead of their frames; messages kept per side topic (and partners) beyond the
+        frames rendered: ``history + max_pending``, each frame rendered letting go of the older
+        ones that no later frame can use.
     adaptive : bool, default=False
         Skip the wait while the recent partners came later than ``timeout`` (module doc).
     delay_window : int, default=25
@@ -217,8 +219,10 @@ class Compositor:
             )
         )
         self._paired: list[PairedSet] = []  # sets the pairing gave out, not rendered yet
-        self.partners = SeqHistory(self.history)
-        self.side = {k: SeqHistory(self.history) for k in ("silhouettes", "pose", "signals")}
+        # a frame may wait for its partner while max_pending frames queue behind it, and the other
+        # topics run ahead of it meanwhile: each frame rendered lets go of what no later one can use
+        self.partners = SeqHistory(self.history + self.max_pending)
+        self.side = {k: SeqHistory(self.history + self.max_pending) for k in ("silhouettes", "pose", "signals")}
         self.stats: dict[str, Any] = {}
         self.controls = ControlState()
         #: partner_drawn: frames on which a partner was drawn with part of it inside the picture
@@ -406,6 +410,8 @@ class Compositor:
                 partner = self.partners.at_or_before(seq)
             self.counts["partner_exact" if exact else "partner_held" if partner is not None else "partner_missing"] += 1
         sides = {k: _first(h.exact(seq), h.at_or_before(seq)) for k, h in self.side.items()}
+        for h in (self.partners, *self.side.values()):
+            h.forget_before(seq)
         return Bundle(frame=frame, partner=partner, partner_exact=exact, **sides)
 
     # ------------------------------------------------------------------------------- drawing

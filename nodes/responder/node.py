@@ -452,8 +452,8 @@ class Responder(Node):
             self.latest["pose"] = msg
             if self.model in ("dual-hmm", "listener", "video-texture", "gpdm"):
                 self._emit(msg)
-            self.silhouettes.drop_before(msg.seq)
-            self.signals.drop_before(msg.seq)
+            self.silhouettes.forget_before(msg.seq)
+            self.signals.forget_before(msg.seq)
 
     def on_end(self) -> None:
         """Answer the poses still held back."""
