@@ -32,7 +32,9 @@ joint above the sole).
   a live camera run it: frames at 320 pixels wide, each node drops what it cannot keep up with, the
   calibration's estimates paced), over the whole video (``--realtime-frames``) once:
   ``first_estimate_s_realtime``, the video's second from which its first estimated camera holds
-  (null where none came), ``misfit_realtime`` and ``fit_realtime`` over all its bodies, and
+  (null where none came), ``misfit_realtime`` and ``fit_realtime`` over all its bodies,
+  ``people_per_frame_realtime`` (the silhouette node's people per frame: there is no truth, but
+  walkers missed show here), and
   ``realtime_estimates``, ``realtime_estimates_not_credible``, ``realtime_estimates_deferred``: the
   calibration node's tallies;
 - ``runs_identical``: whether ``--runs`` (default 2) runs of the graph published the same poses on
@@ -174,6 +176,7 @@ def realtime_figures(video: Path, frames: int, workdir: Path, sets: dict[str, An
         "fit_realtime": round(float(np.median(fits)), 4) if fits else None,
         "misfit_realtime": misfit(fits),
         "bodies_realtime": len(fits),
+        "people_per_frame_realtime": round(float(np.mean([len(h) for h in heights.values()])), 3) if heights else None,
         "realtime_frames": len(heights),
         "realtime_estimates": int(tally.get("estimates", 0)),
         "realtime_estimates_not_credible": int(tally.get("estimates_not_credible", 0)),
