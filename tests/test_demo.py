@@ -85,7 +85,6 @@ def test_the_real_time_demo_and_the_lockstep_replay_are_the_same_graph_with_othe
         ("silhouette", "dynamic"),
         ("silhouette", "fit_in_background"),
         ("silhouette", "body_shadow_leg_scale"),  # real time: the leg check on 2 x 2 blocks
-        ("silhouette", "min_area"),  # real time: the smallest person scaled to the 320-pixel frames
         ("tracker", "frame_budget"),
         ("tracker", "min_layers"),  # real time: at the floors 2 layers of more particles, not 3
         ("tracker", "frame_wall"),  # real time: under load fewer particles rather than dropped frames
