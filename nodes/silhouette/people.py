@@ -59,6 +59,10 @@ _SAME_FRAC = 0.2
 #: (``_walked_off``)
 _PERSON_SHARE = 0.05
 _GONE_FRAC = 0.5
+#: the least share of a still person's box a passer-by's pixels must fill for the detector to be
+#: asked whether it found the passer-by (``_found_on_passers_by``): someone standing still who
+#: moves a hand changes less of their box
+_PASSER_SHARE = 0.025
 #: the bottom fraction of a person's box that holds their feet, and their shadow on the ground
 _FEET_BAND = 0.25
 #: the score a still person (``_still_person``) reaches at least once
@@ -270,7 +274,9 @@ def _boxes_for(
     return np.array(out, np.int32).reshape(-1, 4), np.array(still, bool)
 
 
-def _walked_off(frames: np.ndarray, found: dict[int, _Found], k: int, box: np.ndarray, step: int) -> bool:
+def _walked_off(
+    frames: np.ndarray, found: dict[int, _Found], k: int, box: np.ndarray, step: int, min_share: float = _PERSON_SHARE
+) -> bool:
     """Whether the person in box (x, y, w, h) of frame k walked through it: no detection more than
     ``step`` frames away is on the same place (IoU >= 0.5), and the room behind them is back on every
     frame that far away (at least ``step`` of them).
@@ -286,7 +292,7 @@ def _walked_off(frames: np.ndarray, found: dict[int, _Found], k: int, box: np.nd
     their usual pose, which their pixels in a turn differ from). Someone who came before k and
     stays is not back to the room after it (and the frames before they came show the room, which
     their box need not be carried to), and someone who stood in the median differs from it in too
-    few pixels (``_PERSON_SHARE``) to be judged.
+    few pixels (``min_share`` of the box, ``_PERSON_SHARE`` unless the caller asks) to be judged.
     """
     x, y, w, h = (int(v) for v in box)
     far = [j for j in range(len(frames)) if abs(j - k) > step]
@@ -297,13 +303,55 @@ def _walked_off(frames: np.ndarray, found: dict[int, _Found], k: int, box: np.nd
     blk = frames[:, y : y + h, x : x + w]
     if blk.size == 0:
         return False
-    median = np.median(blk, axis=0).astype(np.int16)
-    person = np.abs(blk[k].astype(np.int16) - median).max(axis=2) > _MOVED_GREY
-    person = cv2.erode(person.view(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
-    if person.mean() < _PERSON_SHARE:
+    median, off = _off_median(blk, k)
+    person = cv2.erode(off.view(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    if person.mean() < min_share:
         return False
-    back = np.abs(blk[far].astype(np.int16) - median).max(axis=3) <= _MOVED_GREY
+    back = np.abs(blk[far].astype(np.int16) - median.astype(np.int16)).max(axis=3) <= _MOVED_GREY
     return bool((back[:, person].mean(axis=1) >= _GONE_FRAC).all())
+
+
+def _off_median(blk: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """A box's pixels over the training frames ``blk`` (N, h, w, 3) uint8: their temporal median
+    (h, w, 3) uint8, and those of frame k off it by more than ``_MOVED_GREY`` (any channel), (h, w)
+    bool.
+    """
+    median = np.median(blk, axis=0).astype(np.uint8)
+    return median, cv2.absdiff(blk[k], median).max(axis=2) > _MOVED_GREY
+
+
+def _found_on_passers_by(
+    detector: PeopleDetector, frames: np.ndarray, found: dict[int, _Found], step: int, judged: set[tuple[int, int]]
+) -> set[tuple[int, int]]:
+    """(frame, index) of the still people's detections (``_still_person``) that the detector owes to
+    someone passing through their box. ``judged``: the detections left as they are (walkers, hints).
+
+    A lamp post or a sign that the detector takes for a person with a walker beside it is sure
+    enough and moves enough to pass for a still person, and carried to every frame it would be
+    learnt as a hole in the room, filled in from around it: a ghost for as long as the camera runs.
+    The walker may fill too little of the large box for ``_walked_off`` to judge (under
+    ``_PERSON_SHARE``). Such a detection is the walker's when the walker's pixels, down to
+    ``_PASSER_SHARE`` of the box, are the room again on every frame away from it, and on its frame
+    with those pixels put back to the box's temporal median the detector no longer finds anyone
+    there (IoU >= 0.5). A person standing still who moved an arm is in the median too, and found
+    on it; the search runs for such detections only.
+    """
+    out: set[tuple[int, int]] = set()
+    for k, (boxes, scores, moved) in found.items():
+        for i, (b, s, m) in enumerate(zip(boxes, scores, moved)):
+            if (
+                (k, i) in judged
+                or not _still_person(found, k, b, s, m)
+                or not _walked_off(frames, found, k, b, step, _PASSER_SHARE)
+            ):
+                continue
+            x, y, w, h = (int(v) for v in b)
+            median, off = _off_median(frames[:, y : y + h, x : x + w], k)
+            still = frames[k].copy()
+            still[y : y + h, x : x + w][off] = median[off]
+            if not any(box_iou(b, o) >= 0.5 for o in detector.detect(still)[0]):
+                out.add((k, i))
+    return out
 
 
 def _still_person(found: dict[int, _Found], k: int, box: np.ndarray, score: float, moved: bool) -> bool:
@@ -455,6 +503,7 @@ def fit_around_people(
         for i, b in enumerate(boxes)
         if (k, i) not in hinted and _walked_off(stack, found, k, b, step)
     }
+    walkers |= _found_on_passers_by(det, stack, found, step, walkers | hinted)
     near = [_boxes_for(stack, j, found, step, walkers, hinted) for j in range(n)]
     if not any(len(b) for b, _ in near):
         model.fit(stack, robust=True)
