@@ -22,7 +22,10 @@ room where they stood as ghosts. Here they are found first and kept out of the s
    the room beside them is learnt from its own pixels. Walkers need none of this (the median
    copes with them), and a walker's box is kept to the frames near its own (``_walked_off``: a
    loose box on a thin walker, carried to every frame, took the road they crossed out of the
-   room); a detection on the still room is not trusted without a sure score or movement in its box.
+   room), and so is a detection the detector owes to a walker beside a thing of the room, such as a
+   lamp post (``_found_on_passers_by``: on the frame with the walker put back to the room, no one
+   is found there); a detection on the still room is not trusted without a sure score or movement
+   in its box.
 
 Image coordinates are pixels, x = column, y = row; boxes are (x, y, w, h) int.
 """
